@@ -1,0 +1,42 @@
+// Error measurement against the reference frame (untimed).
+//
+// count_depth_differences: one invocation per pixel; a pixel is wrong when
+// the mode's depth differs from the reference depth in any bit. Depth, not
+// colour or id, is compared because it does not depend on draw order.
+//
+// mark_visible_objects: sets bit (id - 1) of a bitset for every object id in
+// the reference id target, i.e. the objects that own at least one pixel.
+
+@group(0) @binding(0) var reference_depth: texture_2d<f32>;
+@group(0) @binding(1) var mode_depth: texture_2d<f32>;
+@group(0) @binding(2) var<storage, read_write> wrong_pixels: atomic<u32>;
+
+@compute @workgroup_size(8, 8)
+fn count_depth_differences(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(reference_depth);
+    if (id.x >= size.x || id.y >= size.y) {
+        return;
+    }
+    let p = vec2<i32>(id.xy);
+    let reference = textureLoad(reference_depth, p, 0).r;
+    let mode = textureLoad(mode_depth, p, 0).r;
+    if (bitcast<u32>(reference) != bitcast<u32>(mode)) {
+        atomicAdd(&wrong_pixels, 1u);
+    }
+}
+
+@group(0) @binding(0) var reference_ids: texture_2d<u32>;
+@group(0) @binding(1) var<storage, read_write> visible: array<atomic<u32>>;
+
+@compute @workgroup_size(8, 8)
+fn mark_visible_objects(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(reference_ids);
+    if (id.x >= size.x || id.y >= size.y) {
+        return;
+    }
+    let object = textureLoad(reference_ids, vec2<i32>(id.xy), 0).r;
+    if (object != 0u) {
+        let i = object - 1u;
+        atomicOr(&visible[i / 32u], 1u << (i % 32u));
+    }
+}

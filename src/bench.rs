@@ -1,0 +1,288 @@
+//! `occlu bench`: the whole flow of DESIGN.md, load → hierarchy → GPU →
+//! cull → measure → report, and the interleaved frame loop at its heart.
+//!
+//! The frame loop: for each frame of the path, the camera's per-object
+//! matrices are uploaded and the reference is rendered (both untimed); then
+//! every mode renders that frame (timed: from the start of its frame on the
+//! CPU until the GPU finished it); then one pass measures every mode's error
+//! (untimed). The order of the modes rotates from frame to frame, so no mode
+//! always runs right after the reference (whose work warms caches). Warm-up
+//! frames run the path's first frames and are not recorded.
+
+use std::time::{Duration, Instant};
+
+use crate::camera::generate::{DEFAULT_FRAMES, default_kind, generate};
+use crate::camera::path::{CameraPath, PathError};
+use crate::config::BenchPlan;
+use crate::cull::{Culler, FrameInput, MODES, ModeError, create};
+use crate::gpu::{
+    AdapterReport, FrameCtx, GpuContext, GpuError, GpuScene, GpuTimer, RenderTargets, Resolution, SceneRenderer,
+};
+use crate::hierarchy::{Hierarchy, HierarchyParams};
+use crate::measure::{ErrorMeter, FrameStats, ModeDescription, summarize};
+use crate::object_set::ObjectSet;
+use crate::report::{
+    PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneSummary, Summary, ToolInfo, write_results,
+};
+use crate::scene::{LoadOptions, Scene, SceneError};
+
+#[derive(Clone, Copy, Debug)]
+pub struct RunOptions {
+    pub warmup: u32,
+    pub resolution: Resolution,
+    /// Render the reference and measure every mode's error.
+    pub measure_error: bool,
+}
+
+pub struct RunOutput {
+    /// Frame-major, modes in the order given.
+    pub rows: Vec<FrameStats>,
+    pub upload_ms: f64,
+}
+
+/// Runs `cullers` over every frame of `path`. `progress` is called with
+/// (frames done, frames in all) including warm-up frames.
+pub fn run(
+    gpu: &GpuContext,
+    scene: &Scene,
+    path: &CameraPath,
+    cullers: &mut [Box<dyn Culler + '_>],
+    options: &RunOptions,
+    progress: &mut dyn FnMut(u32, u32),
+) -> Result<RunOutput, GpuError> {
+    let start = Instant::now();
+    let mut renderer = SceneRenderer::new(gpu, GpuScene::upload(gpu, scene)?);
+    let targets = RenderTargets::new(gpu, options.resolution, cullers.len());
+    gpu.wait_idle();
+    let upload_ms = ms(start.elapsed());
+
+    let needs_reference = options.measure_error || cullers.iter().any(|c| c.needs_reference());
+    let mut meter = needs_reference.then(|| ErrorMeter::new(gpu, &targets, scene.objects.len()));
+    let mut timer = GpuTimer::new(gpu, cullers.len());
+    let mut drawn: Vec<ObjectSet> = cullers.iter().map(|_| ObjectSet::new(scene.objects.len())).collect();
+    let mut frame_rows: Vec<Option<FrameStats>> = vec![None; cullers.len()];
+    let frames = path.frames;
+    let total = options.warmup + frames;
+    let mut rows = Vec::with_capacity(frames as usize * cullers.len());
+
+    for step in 0..total {
+        let recording = step >= options.warmup;
+        let frame = if recording {
+            step - options.warmup
+        } else {
+            step % frames
+        };
+        let camera = path.camera(frame, options.resolution.aspect());
+        renderer.set_camera(gpu, &camera);
+        // Flush the upload now, so no mode's timed submit carries it.
+        gpu.queue.submit([]);
+        gpu.wait_idle();
+        let visible = meter.as_mut().map(|m| m.render_reference(gpu, &renderer, &targets));
+
+        for turn in 0..cullers.len() {
+            let k = (turn + step as usize) % cullers.len();
+            let culler = &mut cullers[k];
+            let input = FrameInput {
+                frame,
+                camera: &camera,
+                reference_visible: if culler.needs_reference() {
+                    visible.as_ref()
+                } else {
+                    None
+                },
+            };
+            let frame_start = Instant::now();
+            let mut ctx = FrameCtx::begin(gpu, &renderer, &targets, k, timer.as_ref(), &mut drawn[k]);
+            let cull_start = Instant::now();
+            let traversal = culler.frame(&mut ctx, &input);
+            let cull_time = cull_start.elapsed();
+            let outcome = ctx.finish();
+            let frame_time = frame_start.elapsed();
+            frame_rows[k] = Some(FrameStats {
+                mode: culler.name().to_string(),
+                frame,
+                frame_ms: ms(frame_time),
+                cpu_ms: ms(cull_time.saturating_sub(outcome.gpu_ops)),
+                gpu_ms: None,
+                objects_drawn: outcome.counters.objects_drawn,
+                triangles_drawn: outcome.counters.triangles_drawn,
+                nodes_visited: traversal.nodes_visited,
+                nodes_culled_frustum: traversal.nodes_culled_frustum,
+                nodes_culled_occlusion: traversal.nodes_culled_occlusion,
+                queries: 0,
+                query_batches: 0,
+                queries_skipped: 0,
+                error_pixels: None,
+                missed_objects: None,
+                visible_objects: visible.as_ref().map(|v| v.len() as u64),
+            });
+        }
+
+        // End of frame, untimed: GPU times and errors of every mode.
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        if let Some(t) = &timer {
+            t.resolve(&mut encoder);
+        }
+        let wrong = match (&mut meter, options.measure_error) {
+            (Some(m), true) => Some(m.count_wrong_pixels(gpu, &targets, encoder)),
+            _ => {
+                gpu.queue.submit([encoder.finish()]);
+                None
+            }
+        };
+        let gpu_ms = timer.as_mut().map(|t| t.read_ms(gpu));
+        if recording {
+            for (k, slot) in frame_rows.iter_mut().enumerate() {
+                let mut row = slot.take().expect("every mode ran this frame");
+                row.gpu_ms = gpu_ms.as_ref().map(|t| t[k]);
+                if let (Some(wrong), Some(visible)) = (&wrong, &visible) {
+                    row.error_pixels = Some(wrong[k]);
+                    row.missed_objects = Some(visible.count_missing_from(&drawn[k]) as u64);
+                }
+                rows.push(row);
+            }
+        }
+        progress(step + 1, total);
+    }
+    Ok(RunOutput { rows, upload_ms })
+}
+
+/// Milliseconds, rounded to 0.1 µs (finer than any timer here resolves).
+fn ms(d: Duration) -> f64 {
+    (d.as_secs_f64() * 1e7).round() / 1e4
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Path(#[from] PathError),
+    #[error(transparent)]
+    Mode(#[from] ModeError),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Report(#[from] ReportError),
+}
+
+impl BenchError {
+    /// Whether the user's input was at fault (as opposed to the GPU).
+    pub fn is_input_error(&self) -> bool {
+        !matches!(self, BenchError::Gpu(_))
+    }
+}
+
+/// What `execute` reports as it goes.
+pub enum BenchEvent<'a> {
+    Loaded {
+        scene: &'a Scene,
+        hierarchy: &'a Hierarchy,
+        load_ms: f64,
+        build_ms: f64,
+    },
+    Adapter(&'a AdapterReport),
+    Frame {
+        done: u32,
+        total: u32,
+    },
+}
+
+pub struct BenchOutcome {
+    pub summary: Summary,
+    pub files: ResultFiles,
+}
+
+/// Loads the scene, builds the hierarchy, runs every mode and writes the
+/// result files.
+pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<BenchOutcome, BenchError> {
+    // A bad path file is reported before a long scene load, not after.
+    let path_file = plan.path.as_deref().map(CameraPath::load).transpose()?;
+    let start = Instant::now();
+    let scene = crate::scene::load(
+        &plan.scene,
+        &LoadOptions {
+            cluster_triangles: plan.cluster_triangles,
+        },
+    )?;
+    let load_ms = ms(start.elapsed());
+    let start = Instant::now();
+    let params = HierarchyParams::default();
+    let hierarchy = Hierarchy::build(&scene.objects, &params);
+    let build_ms = ms(start.elapsed());
+    events(BenchEvent::Loaded {
+        scene: &scene,
+        hierarchy: &hierarchy,
+        load_ms,
+        build_ms,
+    });
+
+    let path = match path_file {
+        Some(path) => path,
+        None => {
+            let kind = default_kind(&scene);
+            CameraPath::from_file(&generate(kind, &scene, DEFAULT_FRAMES), &format!("generated:{kind}"))?
+        }
+    };
+    let path = match plan.frames {
+        Some(n) => path.with_frames(n)?,
+        None => path,
+    };
+    let mut cullers = plan
+        .modes
+        .iter()
+        .map(|m| create(m, &scene, &hierarchy))
+        .collect::<Result<Vec<_>, _>>()?;
+
+    let gpu = GpuContext::new(plan.backend)?;
+    events(BenchEvent::Adapter(&gpu.adapter));
+    let options = RunOptions {
+        warmup: plan.warmup,
+        resolution: plan.resolution,
+        measure_error: plan.measure_error,
+    };
+    let output = run(&gpu, &scene, &path, &mut cullers, &options, &mut |done, total| {
+        events(BenchEvent::Frame { done, total })
+    })?;
+
+    let descriptions: Vec<ModeDescription> = cullers
+        .iter()
+        .map(|c| ModeDescription {
+            name: c.name().to_string(),
+            conservative: MODES.iter().any(|m| m.name == c.name() && m.conservative),
+            parameters: c.parameters(),
+        })
+        .collect();
+    let summary = Summary {
+        schema_version: SCHEMA_VERSION,
+        tool: ToolInfo::current(),
+        adapter: gpu.adapter.clone(),
+        scene: SceneSummary {
+            source: scene.source.clone(),
+            objects: scene.objects.len(),
+            meshes: scene.meshes.len(),
+            triangles: scene.triangles(),
+            vertices: scene.vertices.len(),
+            bounds_min: scene.bounds.min.to_array(),
+            bounds_max: scene.bounds.max.to_array(),
+            hierarchy: hierarchy.stats(),
+            hierarchy_params: params,
+            warnings: scene.warnings.clone(),
+            load_ms,
+            build_ms,
+            upload_ms: output.upload_ms,
+        },
+        path: PathSummary {
+            source: path.source.clone(),
+            keyframes: path.keyframes.len(),
+            near: path.near,
+        },
+        resolution: plan.resolution,
+        frames: path.frames,
+        warmup: plan.warmup,
+        error_measured: plan.measure_error,
+        modes: summarize(&output.rows, &descriptions, plan.resolution.pixels()),
+    };
+    let files = write_results(&plan.out, &summary, &output.rows)?;
+    Ok(BenchOutcome { summary, files })
+}

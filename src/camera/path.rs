@@ -1,0 +1,397 @@
+//! Camera paths: the JSON format (documented in README.md), its validation,
+//! and sampling one camera per frame.
+//!
+//! Positions follow a Catmull–Rom spline parameterised by keyframe time
+//! (tangents from neighbouring keyframes, one-sided at the ends), so uneven
+//! keyframe spacing gives no speed jumps; orientations are interpolated by
+//! shortest-arc slerp; the field of view linearly.
+
+use std::path::Path;
+
+use glam::{DQuat, DVec3};
+use serde::{Deserialize, Serialize};
+
+use super::{Camera, look_rotation};
+
+/// The file format, as written and read.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PathFile {
+    /// Number of frames sampled evenly from the first to the last keyframe.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames: Option<u32>,
+    /// Alternatively, frames per second of keyframe time.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fps: Option<f64>,
+    /// Near-plane distance in scene units (default 0.1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub near: Option<f64>,
+    /// Default vertical field of view in degrees (default 60).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fov_y_deg: Option<f64>,
+    /// Default up vector (default [0, 1, 0]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub up: Option<[f64; 3]>,
+    #[serde(default)]
+    pub interpolation: Interpolation,
+    pub keyframes: Vec<KeyframeFile>,
+}
+
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Interpolation {
+    #[default]
+    CatmullRom,
+    Linear,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct KeyframeFile {
+    /// Seconds (or any unit): strictly increasing.
+    pub time: f64,
+    pub position: [f64; 3],
+    /// Exactly one of `target` (a point looked at), `direction` (a view
+    /// vector) or `orientation` (camera-to-world quaternion x, y, z, w).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientation: Option<[f64; 4]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub up: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fov_y_deg: Option<f64>,
+}
+
+pub const DEFAULT_NEAR: f64 = 0.1;
+pub const DEFAULT_FOV_Y_DEG: f64 = 60.0;
+
+#[derive(Debug, thiserror::Error)]
+pub enum PathError {
+    #[error("{path}: {source}")]
+    Io { path: String, source: std::io::Error },
+    #[error("{path}: invalid camera path JSON: {message}")]
+    Json { path: String, message: String },
+    #[error("{path}: {message}")]
+    Invalid { path: String, message: String },
+    #[error("the frame count must be at least 1")]
+    ZeroFrames,
+}
+
+/// A validated keyframe.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Keyframe {
+    pub time: f64,
+    pub position: DVec3,
+    pub rotation: DQuat,
+    pub fov_y: f64,
+}
+
+/// A validated path: at least one keyframe, strictly increasing times.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraPath {
+    /// Where it came from (a file, or `generated:KIND`).
+    pub source: String,
+    pub keyframes: Vec<Keyframe>,
+    pub near: f64,
+    pub frames: u32,
+    pub interpolation: Interpolation,
+}
+
+impl CameraPath {
+    pub fn load(path: &Path) -> Result<CameraPath, PathError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| PathError::Io {
+            path: name.clone(),
+            source,
+        })?;
+        let file: PathFile = serde_json::from_str(&text).map_err(|e| PathError::Json {
+            path: name.clone(),
+            message: e.to_string(),
+        })?;
+        CameraPath::from_file(&file, &name)
+    }
+
+    pub fn from_file(file: &PathFile, source: &str) -> Result<CameraPath, PathError> {
+        let invalid = |message: String| PathError::Invalid {
+            path: source.to_string(),
+            message,
+        };
+        let near = file.near.unwrap_or(DEFAULT_NEAR);
+        if !(near.is_finite() && near > 0.0) {
+            return Err(invalid(format!("near must be a positive number, got {near}")));
+        }
+        let default_up = vec3(file.up.unwrap_or([0.0, 1.0, 0.0]), "up").map_err(&invalid)?;
+        let default_fov = file.fov_y_deg.unwrap_or(DEFAULT_FOV_Y_DEG);
+        if file.keyframes.is_empty() {
+            return Err(invalid("no keyframes".into()));
+        }
+        let mut keyframes = Vec::with_capacity(file.keyframes.len());
+        for (i, k) in file.keyframes.iter().enumerate() {
+            let at = |m: String| invalid(format!("keyframe {i}: {m}"));
+            if !k.time.is_finite() {
+                return Err(at(format!("time must be finite, got {}", k.time)));
+            }
+            if let Some(prev) = keyframes.last().map(|p: &Keyframe| p.time)
+                && k.time <= prev
+            {
+                return Err(at(format!(
+                    "time {} is not after the previous keyframe's {prev}",
+                    k.time
+                )));
+            }
+            let position = vec3(k.position, "position").map_err(&at)?;
+            let up = match k.up {
+                Some(u) => vec3(u, "up").map_err(&at)?,
+                None => default_up,
+            };
+            let rotation = match (k.target, k.direction, k.orientation) {
+                (Some(t), None, None) => {
+                    let forward = vec3(t, "target").map_err(&at)? - position;
+                    if forward.length_squared() == 0.0 {
+                        return Err(at("target equals position".into()));
+                    }
+                    look_rotation(forward, up)
+                }
+                (None, Some(d), None) => look_rotation(
+                    nonzero(vec3(d, "direction").map_err(&at)?, "direction").map_err(&at)?,
+                    up,
+                ),
+                (None, None, Some([x, y, z, w])) => {
+                    let q = DQuat::from_xyzw(x, y, z, w);
+                    if !q.is_finite() || q.length_squared() < 1e-12 {
+                        return Err(at("orientation must be a finite, non-zero quaternion".into()));
+                    }
+                    q.normalize()
+                }
+                _ => return Err(at("give exactly one of target, direction, orientation".into())),
+            };
+            let fov = k.fov_y_deg.unwrap_or(default_fov);
+            if !(fov > 0.0 && fov < 180.0) {
+                return Err(at(format!("fov_y_deg must be in (0, 180), got {fov}")));
+            }
+            keyframes.push(Keyframe {
+                time: k.time,
+                position,
+                rotation,
+                fov_y: fov.to_radians(),
+            });
+        }
+        let span = keyframes[keyframes.len() - 1].time - keyframes[0].time;
+        let frames = match (file.frames, file.fps) {
+            (Some(_), Some(_)) => return Err(invalid("give frames or fps, not both".into())),
+            (Some(0), None) => return Err(invalid("frames must be at least 1".into())),
+            (Some(n), None) => n,
+            (None, Some(fps)) if fps.is_finite() && fps > 0.0 => {
+                let n = (span * fps).floor() + 1.0;
+                if n > f64::from(u32::MAX) {
+                    return Err(invalid(format!("fps {fps} gives too many frames")));
+                }
+                n as u32
+            }
+            (None, Some(fps)) => return Err(invalid(format!("fps must be a positive number, got {fps}"))),
+            (None, None) => return Err(invalid("give frames or fps".into())),
+        };
+        Ok(CameraPath {
+            source: source.to_string(),
+            keyframes,
+            near,
+            frames,
+            interpolation: file.interpolation,
+        })
+    }
+
+    /// The same path sampled with a different number of frames.
+    pub fn with_frames(mut self, frames: u32) -> Result<CameraPath, PathError> {
+        if frames == 0 {
+            return Err(PathError::ZeroFrames);
+        }
+        self.frames = frames;
+        Ok(self)
+    }
+
+    /// The camera of frame `index` (0-based; clamped to the last frame).
+    pub fn camera(&self, index: u32, aspect: f64) -> Camera {
+        let keys = &self.keyframes;
+        let (t0, t1) = (keys[0].time, keys[keys.len() - 1].time);
+        let s = if self.frames > 1 {
+            f64::from(index.min(self.frames - 1)) / f64::from(self.frames - 1)
+        } else {
+            0.0
+        };
+        let t = t0 + (t1 - t0) * s;
+        // Segment i spans keys[i]..keys[i + 1].
+        let i = keys
+            .partition_point(|k| k.time <= t)
+            .saturating_sub(1)
+            .min(keys.len().saturating_sub(2));
+        let (eye, rotation, fov_y) = if keys.len() == 1 {
+            (keys[0].position, keys[0].rotation, keys[0].fov_y)
+        } else {
+            let (a, b) = (&keys[i], &keys[i + 1]);
+            let u = ((t - a.time) / (b.time - a.time)).clamp(0.0, 1.0);
+            let eye = match self.interpolation {
+                Interpolation::Linear => a.position.lerp(b.position, u),
+                Interpolation::CatmullRom => {
+                    let dt = b.time - a.time;
+                    let (m0, m1) = (self.tangent(i) * dt, self.tangent(i + 1) * dt);
+                    hermite(a.position, m0, b.position, m1, u)
+                }
+            };
+            (
+                eye,
+                a.rotation.slerp(b.rotation, u).normalize(),
+                a.fov_y + (b.fov_y - a.fov_y) * u,
+            )
+        };
+        Camera {
+            eye,
+            rotation,
+            fov_y,
+            near: self.near,
+            aspect,
+        }
+    }
+
+    /// Velocity at keyframe `i`: central difference, one-sided at the ends.
+    fn tangent(&self, i: usize) -> DVec3 {
+        let k = &self.keyframes;
+        let (lo, hi) = (i.saturating_sub(1), (i + 1).min(k.len() - 1));
+        (k[hi].position - k[lo].position) / (k[hi].time - k[lo].time)
+    }
+}
+
+fn hermite(p0: DVec3, m0: DVec3, p1: DVec3, m1: DVec3, u: f64) -> DVec3 {
+    let (u2, u3) = (u * u, u * u * u);
+    p0 * (2.0 * u3 - 3.0 * u2 + 1.0) + m0 * (u3 - 2.0 * u2 + u) + p1 * (-2.0 * u3 + 3.0 * u2) + m1 * (u3 - u2)
+}
+
+fn vec3(v: [f64; 3], what: &str) -> Result<DVec3, String> {
+    let v = DVec3::from(v);
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{what} must be finite, got {:?}", v.to_array()))
+    }
+}
+
+fn nonzero(v: DVec3, what: &str) -> Result<DVec3, String> {
+    if v.length_squared() > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{what} must not be zero"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(json: &str) -> Result<CameraPath, PathError> {
+        let file: PathFile = serde_json::from_str(json).map_err(|e| PathError::Json {
+            path: "t".into(),
+            message: e.to_string(),
+        })?;
+        CameraPath::from_file(&file, "t")
+    }
+
+    const TWO_KEYS: &str = r#"{"frames": 11, "keyframes": [
+        {"time": 0, "position": [0, 1, 0], "target": [0, 1, -10]},
+        {"time": 2, "position": [10, 1, 0], "target": [10, 1, -10], "fov_y_deg": 90}]}"#;
+
+    #[test]
+    fn samples_hit_keyframes_and_interpolate_between() {
+        let p = parse(TWO_KEYS).unwrap();
+        assert_eq!(p.frames, 11);
+        let first = p.camera(0, 1.0);
+        let last = p.camera(10, 1.0);
+        assert_eq!(first.eye, DVec3::new(0.0, 1.0, 0.0));
+        assert!((last.eye - DVec3::new(10.0, 1.0, 0.0)).length() < 1e-12);
+        assert!((first.forward() - DVec3::NEG_Z).length() < 1e-12);
+        assert!((last.fov_y - 90f64.to_radians()).abs() < 1e-12);
+        let mid = p.camera(5, 1.0);
+        assert!((mid.eye - DVec3::new(5.0, 1.0, 0.0)).length() < 1e-12);
+        assert!((mid.fov_y - 75f64.to_radians()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn catmull_rom_passes_through_inner_keyframes_smoothly() {
+        let p = parse(
+            r#"{"frames": 5, "keyframes": [
+            {"time": 0, "position": [0, 0, 0], "direction": [1, 0, 0]},
+            {"time": 1, "position": [1, 0, 1], "direction": [1, 0, 0]},
+            {"time": 2, "position": [2, 0, 0], "direction": [1, 0, 0]}]}"#,
+        )
+        .unwrap();
+        assert!((p.camera(2, 1.0).eye - DVec3::new(1.0, 0.0, 1.0)).length() < 1e-12);
+        // Velocity is continuous across the inner keyframe.
+        let key = p.keyframes[1].time;
+        let probe = |t: f64| {
+            let mut q = p.clone();
+            q.frames = 2001;
+            q.camera((t / 2.0 * 2000.0).round() as u32, 1.0).eye
+        };
+        let before = (probe(key) - probe(key - 0.001)) / 0.001;
+        let after = (probe(key + 0.001) - probe(key)) / 0.001;
+        assert!((before - after).length() < 0.01, "{before:?} vs {after:?}");
+    }
+
+    #[test]
+    fn fps_gives_frames_over_the_span() {
+        let p = parse(
+            r#"{"fps": 30, "keyframes": [
+            {"time": 0, "position": [0, 0, 0], "target": [0, 0, -1]},
+            {"time": 2, "position": [1, 0, 0], "target": [1, 0, -1]}]}"#,
+        )
+        .unwrap();
+        assert_eq!(p.frames, 61);
+    }
+
+    #[test]
+    fn straight_down_view_is_a_valid_camera() {
+        let p = parse(
+            r#"{"frames": 1, "keyframes": [
+            {"time": 0, "position": [0, 10, 0], "target": [0, 0, 0]}]}"#,
+        )
+        .unwrap();
+        let c = p.camera(0, 1.0);
+        assert!((c.forward() - DVec3::NEG_Y).length() < 1e-12);
+        assert!(c.rotation.is_finite());
+    }
+
+    #[test]
+    fn invalid_paths_say_what_is_wrong() {
+        let err = |json: &str| parse(json).expect_err(json).to_string();
+        let key = r#"{"time": 0, "position": [0, 0, 0], "target": [0, 0, -1]}"#;
+        assert!(err(r#"{"frames": 3, "keyframes": []}"#).contains("no keyframes"));
+        assert!(err(&format!(r#"{{"keyframes": [{key}]}}"#)).contains("give frames or fps"));
+        assert!(err(&format!(r#"{{"frames": 0, "keyframes": [{key}]}}"#)).contains("at least 1"));
+        assert!(err(&format!(r#"{{"frames": 2, "fps": 3, "keyframes": [{key}]}}"#)).contains("not both"));
+        assert!(err(&format!(r#"{{"frames": 2, "near": 0, "keyframes": [{key}]}}"#)).contains("near"));
+        assert!(
+            err(&format!(r#"{{"frames": 2, "keyframes": [{key}, {key}]}}"#))
+                .contains("keyframe 1: time 0 is not after")
+        );
+        assert!(err(r#"{"frames": 2, "keyframes": [{"time": 0, "position": [0, 0, 0]}]}"#).contains("exactly one of"));
+        assert!(
+            err(r#"{"frames": 2, "keyframes": [{"time": 0, "position": [0, 0, 0], "target": [0, 0, 0]}]}"#)
+                .contains("target equals position")
+        );
+        assert!(err(r#"{"frames": 2, "keyframes": [{"time": 0, "position": [0, 0, 0], "target": [0, 0, 1], "fov_y_deg": 180}]}"#).contains("fov_y_deg"));
+        assert!(err(r#"{"frames": 2, "keyframs": []}"#).contains("unknown field `keyframs`"));
+        assert!(
+            err(r#"{"frames": 2, "keyframes": [{"time": 0, "position": [0, 0], "target": [0, 0, 1]}]}"#)
+                .contains("invalid camera path JSON")
+        );
+    }
+
+    #[test]
+    fn written_files_read_back_identically() {
+        let file: PathFile = serde_json::from_str(TWO_KEYS).unwrap();
+        let text = serde_json::to_string_pretty(&file).unwrap();
+        let again: PathFile = serde_json::from_str(&text).unwrap();
+        assert_eq!(file, again);
+    }
+}

@@ -1,0 +1,37 @@
+//! `oracle`: draws exactly the objects that own a pixel of the reference
+//! frame, with no tests at all: the floor of any object-level culler (004's
+//! REF, "ideal precomputed culling"). Its time is the cost of drawing the
+//! visible set alone; no real mode can draw less and still be exact.
+
+use super::{Culler, FrameInput, TraversalStats};
+use crate::gpu::FrameCtx;
+
+#[derive(Default)]
+pub struct Oracle {
+    visible: Vec<u32>,
+}
+
+impl Oracle {
+    pub fn new() -> Self {
+        Oracle::default()
+    }
+}
+
+impl Culler for Oracle {
+    fn name(&self) -> &str {
+        "oracle"
+    }
+
+    fn needs_reference(&self) -> bool {
+        true
+    }
+
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        self.visible.clear();
+        if let Some(reference) = input.reference_visible {
+            self.visible.extend(reference.iter());
+        }
+        ctx.draw(&self.visible);
+        TraversalStats::default()
+    }
+}

@@ -1,0 +1,161 @@
+//! Headless wgpu: adapter choice, the scene on the GPU, render targets, and
+//! the per-frame operations every culling mode draws through ([`FrameCtx`]).
+
+mod frame;
+mod readback;
+mod renderer;
+mod targets;
+mod timing;
+
+use std::fmt;
+
+use serde::Serialize;
+
+pub use frame::{DrawCounters, FrameCtx, FrameOutcome};
+pub use readback::Readback;
+pub use renderer::{GpuScene, SceneRenderer};
+pub use targets::{RenderTargets, Resolution};
+pub use timing::GpuTimer;
+
+/// Which graphics API to use.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum BackendChoice {
+    /// The best adapter of any API; `WGPU_BACKEND` (e.g. `gl`) narrows it.
+    #[default]
+    Auto,
+    Vulkan,
+    Gl,
+    Metal,
+    Dx12,
+}
+
+impl BackendChoice {
+    fn backends(self) -> wgpu::Backends {
+        match self {
+            BackendChoice::Auto => wgpu::Backends::all().with_env(),
+            BackendChoice::Vulkan => wgpu::Backends::VULKAN,
+            BackendChoice::Gl => wgpu::Backends::GL,
+            BackendChoice::Metal => wgpu::Backends::METAL,
+            BackendChoice::Dx12 => wgpu::Backends::DX12,
+        }
+    }
+}
+
+impl fmt::Display for BackendChoice {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        let v = clap::ValueEnum::to_possible_value(self).expect("no skipped variants");
+        f.write_str(v.get_name())
+    }
+}
+
+/// What every result file records about the adapter that produced it.
+#[derive(Clone, Debug, Serialize, serde::Deserialize, PartialEq)]
+pub struct AdapterReport {
+    pub name: String,
+    pub backend: String,
+    pub device_type: String,
+    pub driver: String,
+    pub driver_info: String,
+    /// Whether per-frame GPU time comes from timestamp queries.
+    pub timestamps: bool,
+}
+
+impl fmt::Display for AdapterReport {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(f, "{} ({}, {}", self.name, self.backend, self.device_type)?;
+        if !self.driver_info.is_empty() {
+            write!(f, ", {}", self.driver_info)?;
+        }
+        f.write_str(")")
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error(
+        "no graphics adapter found for backend '{0}' (on Debian, Mesa's llvmpipe gives GL and mesa-vulkan-drivers gives Vulkan: scripts/install-deps)"
+    )]
+    NoAdapter(BackendChoice),
+    #[error("the adapter {adapter} refused a device: {message}")]
+    Device { adapter: String, message: String },
+    #[error("the scene needs a {what} of {need} bytes, but the adapter allows {limit}")]
+    TooLarge { what: &'static str, need: u64, limit: u64 },
+}
+
+/// The device and queue of the chosen adapter.
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter: AdapterReport,
+    /// Timestamp writes inside command encoders are available.
+    pub timestamps: bool,
+}
+
+impl GpuContext {
+    /// Opens the best adapter the choice allows: real GPUs before software
+    /// ones, and a native API before GL on the same device.
+    pub fn new(choice: BackendChoice) -> Result<GpuContext, GpuError> {
+        let backends = choice.backends();
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends,
+            flags: wgpu::InstanceFlags::default().with_env(),
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        let adapter = pollster::block_on(instance.enumerate_adapters(backends))
+            .into_iter()
+            .min_by_key(|a| {
+                let info = a.get_info();
+                (
+                    device_rank(info.device_type),
+                    u8::from(info.backend == wgpu::Backend::Gl),
+                )
+            })
+            .ok_or(GpuError::NoAdapter(choice))?;
+        let info = adapter.get_info();
+        let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let features = adapter.features() & wanted;
+        let timestamps = features == wanted;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("occlu"),
+            required_features: features,
+            // Large models need the adapter's full buffer sizes.
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: info.name.clone(),
+            message: e.to_string(),
+        })?;
+        Ok(GpuContext {
+            device,
+            queue,
+            adapter: AdapterReport {
+                name: info.name,
+                backend: info.backend.to_string(),
+                device_type: format!("{:?}", info.device_type),
+                driver: info.driver,
+                driver_info: info.driver_info,
+                timestamps,
+            },
+            timestamps,
+        })
+    }
+
+    /// Blocks until the GPU has finished everything submitted so far.
+    pub fn wait_idle(&self) {
+        // A lost device is reported by wgpu's own error handler; waiting on
+        // it cannot fail any other way here.
+        let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
+    }
+}
+
+fn device_rank(t: wgpu::DeviceType) -> u8 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    }
+}

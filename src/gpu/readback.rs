@@ -1,0 +1,38 @@
+//! GPU→CPU copies: one mappable buffer reused frame after frame.
+
+use super::GpuContext;
+
+pub struct Readback {
+    buffer: wgpu::Buffer,
+}
+
+impl Readback {
+    pub fn new(gpu: &GpuContext, label: &str, size: u64) -> Readback {
+        Readback {
+            buffer: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(4),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+        }
+    }
+
+    /// Encodes a copy of `size` bytes of `source` into this buffer.
+    pub fn copy_from(&self, encoder: &mut wgpu::CommandEncoder, source: &wgpu::Buffer, size: u64) {
+        encoder.copy_buffer_to_buffer(source, 0, &self.buffer, 0, size);
+    }
+
+    /// Waits for the GPU and returns the first `size` bytes as `T`s.
+    pub fn read<T: bytemuck::Pod>(&self, gpu: &GpuContext, size: u64, out: &mut Vec<T>) {
+        let slice = self.buffer.slice(..size);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        gpu.wait_idle();
+        out.clear();
+        {
+            let view = slice.get_mapped_range().expect("buffer was mapped by the wait above");
+            out.extend_from_slice(bytemuck::cast_slice(&view));
+        }
+        self.buffer.unmap();
+    }
+}

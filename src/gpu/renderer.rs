@@ -1,0 +1,303 @@
+//! The scene on the GPU and the two pipelines that draw it: `shaded` (what
+//! every mode renders, timed) and `reference` (depth and object ids for the
+//! error measure, untimed). Both share one vertex stage.
+
+use glam::{DAffine3, Mat4};
+use wgpu::util::DeviceExt;
+
+use super::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, RenderTargets};
+use super::{GpuContext, GpuError};
+use crate::camera::Camera;
+use crate::scene::Scene;
+
+/// The index range an object draws.
+#[derive(Clone, Copy, Debug)]
+pub struct DrawRange {
+    pub first_index: u32,
+    pub index_count: u32,
+}
+
+/// Geometry and per-object data in GPU buffers.
+pub struct GpuScene {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    /// One camera-relative model-view matrix per object, rewritten per frame.
+    object_data: wgpu::Buffer,
+    pub draws: Vec<DrawRange>,
+    transforms: Vec<DAffine3>,
+    /// Reused every frame, so the upload allocates nothing.
+    staging: Vec<Mat4>,
+}
+
+impl GpuScene {
+    pub fn upload(gpu: &GpuContext, scene: &Scene) -> Result<GpuScene, GpuError> {
+        let limits = gpu.device.limits();
+        let check = |what, need: u64, limit: u64| {
+            if need > limit {
+                Err(GpuError::TooLarge { what, need, limit })
+            } else {
+                Ok(())
+            }
+        };
+        let vertex_bytes = std::mem::size_of_val(scene.vertices.as_slice()) as u64;
+        let index_bytes = std::mem::size_of_val(scene.indices.as_slice()) as u64;
+        let object_bytes = (scene.objects.len() * std::mem::size_of::<Mat4>()) as u64;
+        check("vertex buffer", vertex_bytes, limits.max_buffer_size)?;
+        check("index buffer", index_bytes, limits.max_buffer_size)?;
+        check(
+            "per-object storage binding",
+            object_bytes,
+            limits.max_storage_buffer_binding_size,
+        )?;
+        let init = |label, contents: &[u8], usage| {
+            gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        Ok(GpuScene {
+            vertices: init(
+                "vertices",
+                bytemuck::cast_slice(&scene.vertices),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            indices: init(
+                "indices",
+                bytemuck::cast_slice(&scene.indices),
+                wgpu::BufferUsages::INDEX,
+            ),
+            object_data: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("object data"),
+                size: object_bytes,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            draws: scene
+                .objects
+                .iter()
+                .map(|o| {
+                    let m = &scene.meshes[o.mesh as usize];
+                    DrawRange {
+                        first_index: m.first_index,
+                        index_count: m.index_count,
+                    }
+                })
+                .collect(),
+            transforms: scene.objects.iter().map(|o| o.transform).collect(),
+            staging: Vec::with_capacity(scene.objects.len()),
+        })
+    }
+
+    pub fn object_count(&self) -> usize {
+        self.draws.len()
+    }
+}
+
+pub struct SceneRenderer {
+    pub scene: GpuScene,
+    camera: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    shaded: wgpu::RenderPipeline,
+    reference: wgpu::RenderPipeline,
+}
+
+impl SceneRenderer {
+    pub fn new(gpu: &GpuContext, scene: GpuScene) -> SceneRenderer {
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("scene.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/scene.wgsl").into()),
+        });
+        let camera = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("camera"),
+            size: std::mem::size_of::<Mat4>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::VERTEX,
+            ty,
+            count: None,
+        };
+        let buffer = |ty| wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &[
+                entry(0, buffer(wgpu::BufferBindingType::Uniform)),
+                entry(1, buffer(wgpu::BufferBindingType::Storage { read_only: true })),
+            ],
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: camera.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: scene.object_data.as_entire_binding(),
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |label, fragment_entry, format: wgpu::TextureFormat| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: 12,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                    })],
+                },
+                // No back-face culling: file winding is unreliable, and
+                // visibility must not depend on it.
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Greater),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fragment_entry),
+                    compilation_options: Default::default(),
+                    targets: &[Some(format.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        SceneRenderer {
+            shaded: pipeline("shaded", "fs_shaded", COLOR_FORMAT),
+            reference: pipeline("reference", "fs_object_id", ID_FORMAT),
+            scene,
+            camera,
+            bind_group,
+        }
+    }
+
+    /// Uploads the projection and every object's camera-relative model-view
+    /// matrix (computed in f64, rounded to f32 last).
+    pub fn set_camera(&mut self, gpu: &GpuContext, camera: &Camera) {
+        let scene = &mut self.scene;
+        scene.staging.clear();
+        scene.staging.extend(scene.transforms.iter().map(|t| {
+            let mv = camera.model_view(t);
+            glam::DMat4::from(mv).as_mat4()
+        }));
+        gpu.queue
+            .write_buffer(&scene.object_data, 0, bytemuck::cast_slice(&scene.staging));
+        let projection = camera.projection().as_mat4();
+        gpu.queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&projection));
+    }
+
+    /// Records a shaded pass into `depth` drawing `objects`, clearing first
+    /// when `clear` is set.
+    pub fn encode_shaded(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &RenderTargets,
+        depth: &wgpu::TextureView,
+        clear: bool,
+        objects: &[u32],
+    ) {
+        let color_load = if clear {
+            wgpu::LoadOp::Clear(wgpu::Color {
+                r: 0.62,
+                g: 0.74,
+                b: 0.86,
+                a: 1.0,
+            })
+        } else {
+            wgpu::LoadOp::Load
+        };
+        let mut pass = begin_pass(encoder, "shaded", &targets.color, color_load, depth, clear);
+        self.draw(&mut pass, &self.shaded, objects);
+    }
+
+    /// Records the reference pass: every object into the reference depth and
+    /// object-id targets.
+    pub fn encode_reference(&self, encoder: &mut wgpu::CommandEncoder, targets: &RenderTargets, all: &[u32]) {
+        let mut pass = begin_pass(
+            encoder,
+            "reference",
+            &targets.reference_ids,
+            wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+            &targets.reference_depth,
+            true,
+        );
+        self.draw(&mut pass, &self.reference, all);
+    }
+
+    fn draw(&self, pass: &mut wgpu::RenderPass, pipeline: &wgpu::RenderPipeline, objects: &[u32]) {
+        if objects.is_empty() {
+            return;
+        }
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
+        pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for &o in objects {
+            let d = self.scene.draws[o as usize];
+            pass.draw_indexed(d.first_index..d.first_index + d.index_count, 0, o..o + 1);
+        }
+    }
+}
+
+fn begin_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    color: &wgpu::TextureView,
+    color_load: wgpu::LoadOp<wgpu::Color>,
+    depth: &wgpu::TextureView,
+    clear_depth: bool,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: color,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: color_load,
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                // Reverse-Z: 0 is infinitely far.
+                load: if clear_depth {
+                    wgpu::LoadOp::Clear(0.0)
+                } else {
+                    wgpu::LoadOp::Load
+                },
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}

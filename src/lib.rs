@@ -1,0 +1,21 @@
+//! occlu: a benchmark and flythrough tool for occlusion culling.
+//!
+//! The data flows one way, one module per step (docs/ARCHITECTURE.md):
+//! [`scene`] loads or generates a [`scene::Scene`], [`hierarchy`] builds the
+//! bounding-volume tree, [`camera`] turns a path into cameras, [`gpu`] holds
+//! the device, the scene's buffers and the per-frame operations, [`cull`]
+//! holds one file per culling mode, [`measure`] computes error and
+//! statistics, [`report`] writes the result files, and [`bench`] runs the
+//! whole flow.
+
+pub mod bench;
+pub mod bounds;
+pub mod camera;
+pub mod config;
+pub mod cull;
+pub mod gpu;
+pub mod hierarchy;
+pub mod measure;
+pub mod object_set;
+pub mod report;
+pub mod scene;

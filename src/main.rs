@@ -1,0 +1,338 @@
+//! The `occlu` command line: parses arguments, calls the library, prints,
+//! and maps errors to one line and an exit code (2: bad input, 1: a failure
+//! while running).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::Context as _;
+use clap::{Args, Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use occlu::bench::{BenchError, BenchEvent, execute};
+use occlu::camera::generate::{DEFAULT_FRAMES, PathKind, default_kind, generate};
+use occlu::camera::path::{CameraPath, PathError};
+use occlu::config::{BenchConfig, ConfigError};
+use occlu::cull::MODES;
+use occlu::gpu::{BackendChoice, Resolution};
+use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::scene::builtin::SCENES;
+use occlu::scene::{LoadOptions, Scene, SceneError, SceneSpec, load};
+use serde::Serialize;
+
+#[derive(Parser)]
+#[command(
+    name = "occlu",
+    version,
+    about = "Benchmark occlusion culling: replay a camera path offscreen in each culling mode and report frame time next to image error.",
+    after_help = after_help()
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+fn after_help() -> String {
+    let modes: Vec<String> = MODES.iter().map(|m| format!("  {:<8} {}", m.name, m.summary)).collect();
+    let scenes: Vec<String> = SCENES.iter().map(|(n, s)| format!("  {n:<8} {s}")).collect();
+    format!(
+        "Modes:\n{}\n\nBuilt-in scenes (--scene NAME[:key=value,...]):\n{}\n\nExit status: 0 success, 2 bad input, 1 failure while running.",
+        modes.join("\n"),
+        scenes.join("\n")
+    )
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Replay a camera path in each culling mode; write frames.csv,
+    /// summary.json and report.md.
+    Bench(Box<BenchArgs>),
+    /// Print a model's objects, triangles, hierarchy, load time and warnings.
+    Info(InfoArgs),
+    /// Camera paths.
+    Path {
+        #[command(subcommand)]
+        command: PathCommand,
+    },
+}
+
+/// Where the scene comes from: a file, or a built-in scene (the city by default).
+#[derive(Args)]
+struct SceneArgs {
+    /// Model file: .obj, .gltf or .glb. Without one, the built-in city.
+    model: Option<PathBuf>,
+    /// Built-in scene, NAME[:key=value,...], e.g. city:blocks=4,seed=7.
+    #[arg(long, conflicts_with = "model")]
+    scene: Option<String>,
+    /// Meshes with more triangles than this are split into clusters [default: 4096].
+    #[arg(long, value_name = "N")]
+    cluster_triangles: Option<u32>,
+}
+
+impl SceneArgs {
+    fn spec(&self) -> SceneSpec {
+        match (&self.model, &self.scene) {
+            (Some(m), _) => SceneSpec::File(m.clone()),
+            (None, s) => SceneSpec::Builtin(s.clone().unwrap_or_else(|| "city".into())),
+        }
+    }
+
+    fn options(&self) -> LoadOptions {
+        LoadOptions {
+            cluster_triangles: self
+                .cluster_triangles
+                .unwrap_or(LoadOptions::default().cluster_triangles),
+        }
+    }
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Camera path (JSON); generated from the scene when omitted (the city:
+    /// a street-level walk; models: an orbit).
+    #[arg(long, value_name = "FILE")]
+    path: Option<PathBuf>,
+    /// Modes to run, comma-separated, or "all" [default: all].
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    modes: Option<Vec<String>>,
+    /// Frames to record; resamples the path [default: the path's].
+    #[arg(long, value_name = "N")]
+    frames: Option<u32>,
+    /// Frames run before recording starts [default: 3].
+    #[arg(long, value_name = "N")]
+    warmup: Option<u32>,
+    /// Render size [default: 800x600].
+    #[arg(long, value_name = "WxH")]
+    resolution: Option<Resolution>,
+    /// Graphics API; auto honours WGPU_BACKEND [default: auto].
+    #[arg(long, value_enum)]
+    backend: Option<BackendChoice>,
+    /// Run configuration (JSON, see configs/); flags override it.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Output directory [default: occlu-out].
+    #[arg(long, short, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Skip the reference render and error measure (faster; error columns stay empty).
+    #[arg(long)]
+    no_error: bool,
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Subcommand)]
+enum PathCommand {
+    /// Write a camera path generated from a scene's bounds.
+    Gen {
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// Path shape [default: walk for the built-in city, orbit otherwise].
+        #[arg(long, value_enum)]
+        kind: Option<PathKind>,
+        /// Frames of the path.
+        #[arg(long, default_value_t = DEFAULT_FRAMES, value_name = "N")]
+        frames: u32,
+        /// Output file.
+        #[arg(long, short, value_name = "FILE")]
+        output: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => {
+            // --help and --version.
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            let text = e.render().to_string();
+            let line = text.lines().next().unwrap_or("invalid arguments");
+            eprintln!("occlu: {}", line.trim_start_matches("error: ").trim());
+            return ExitCode::from(2);
+        }
+    };
+    let result = match cli.command {
+        Command::Bench(args) => bench(*args),
+        Command::Info(args) => info(args),
+        Command::Path {
+            command:
+                PathCommand::Gen {
+                    scene,
+                    kind,
+                    frames,
+                    output,
+                },
+        } => path_gen(scene, kind, frames, output),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("occlu: error: {e:#}");
+            ExitCode::from(if is_input_error(&e) { 2 } else { 1 })
+        }
+    }
+}
+
+fn is_input_error(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<BenchError>().is_some_and(BenchError::is_input_error)
+            || c.is::<SceneError>()
+            || c.is::<PathError>()
+            || c.is::<ConfigError>()
+    })
+}
+
+fn bench(args: BenchArgs) -> anyhow::Result<()> {
+    let flags = BenchConfig {
+        model: args.scene.model,
+        scene: args.scene.scene,
+        path: args.path,
+        modes: args.modes,
+        frames: args.frames,
+        warmup: args.warmup,
+        resolution: args.resolution,
+        backend: args.backend,
+        out: args.out,
+        error: args.no_error.then_some(false),
+        cluster_triangles: args.scene.cluster_triangles,
+    };
+    let file = match &args.config {
+        Some(path) => BenchConfig::load(path)?,
+        None => BenchConfig::default(),
+    };
+    let plan = flags.or(file).plan()?;
+    let bar = ProgressBar::hidden();
+    let outcome = execute(&plan, &mut |event| match event {
+        BenchEvent::Loaded {
+            scene,
+            hierarchy,
+            load_ms,
+            build_ms,
+        } => {
+            eprintln!(
+                "scene: {}: {} objects, {} triangles (load {load_ms:.0} ms, hierarchy of {} nodes {build_ms:.0} ms)",
+                scene.source,
+                scene.objects.len(),
+                scene.triangles(),
+                hierarchy.nodes.len()
+            );
+            for w in &scene.warnings {
+                eprintln!("warning: {w}");
+            }
+        }
+        BenchEvent::Adapter(adapter) => {
+            eprintln!("adapter: {adapter}");
+            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+            bar.set_style(
+                ProgressStyle::with_template("{prefix} [{bar:32}] {pos}/{len} frames, {elapsed} elapsed, eta {eta}")
+                    .expect("static template")
+                    .progress_chars("=> "),
+            );
+            bar.set_prefix(format!("{} modes", plan.modes.len()));
+        }
+        BenchEvent::Frame { done, total } => {
+            bar.set_length(u64::from(total));
+            bar.set_position(u64::from(done));
+        }
+    })?;
+    bar.finish_and_clear();
+    print!("{}", occlu::report::render_markdown(&outcome.summary));
+    eprintln!(
+        "results: {}, {}, {}",
+        outcome.files.report_md.display(),
+        outcome.files.summary_json.display(),
+        outcome.files.frames_csv.display()
+    );
+    Ok(())
+}
+
+/// `occlu info --json` output.
+#[derive(Serialize)]
+struct InfoReport<'a> {
+    source: &'a str,
+    objects: usize,
+    meshes: usize,
+    triangles: u64,
+    vertices: usize,
+    bounds_min: [f64; 3],
+    bounds_max: [f64; 3],
+    hierarchy: occlu::hierarchy::HierarchyStats,
+    load_ms: f64,
+    build_ms: f64,
+    warnings: &'a [String],
+}
+
+fn info(args: InfoArgs) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let scene = load(&args.scene.spec(), &args.scene.options())?;
+    let load_ms = start.elapsed().as_secs_f64() * 1e3;
+    let start = Instant::now();
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    let build_ms = start.elapsed().as_secs_f64() * 1e3;
+    let report = InfoReport {
+        source: &scene.source,
+        objects: scene.objects.len(),
+        meshes: scene.meshes.len(),
+        triangles: scene.triangles(),
+        vertices: scene.vertices.len(),
+        bounds_min: scene.bounds.min.to_array(),
+        bounds_max: scene.bounds.max.to_array(),
+        hierarchy: hierarchy.stats(),
+        load_ms,
+        build_ms,
+        warnings: &scene.warnings,
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
+    let h = report.hierarchy;
+    println!("source      {}", report.source);
+    println!("objects     {} ({} meshes)", report.objects, report.meshes);
+    println!("triangles   {}", report.triangles);
+    println!("vertices    {}", report.vertices);
+    println!("bounds      {:?} to {:?}", report.bounds_min, report.bounds_max);
+    println!(
+        "hierarchy   {} nodes, {} leaves, depth {}, at most {} objects per leaf",
+        h.nodes, h.leaves, h.depth, h.max_leaf_objects
+    );
+    println!("load        {load_ms:.1} ms");
+    println!("build       {build_ms:.1} ms");
+    if scene.warnings.is_empty() {
+        println!("warnings    none");
+    }
+    for w in &scene.warnings {
+        println!("warning     {w}");
+    }
+    Ok(())
+}
+
+fn path_gen(scene_args: SceneArgs, kind: Option<PathKind>, frames: u32, output: PathBuf) -> anyhow::Result<()> {
+    if frames == 0 {
+        return Err(PathError::ZeroFrames.into());
+    }
+    let scene: Scene = load(&scene_args.spec(), &scene_args.options())?;
+    let kind = kind.unwrap_or_else(|| default_kind(&scene));
+    let file = generate(kind, &scene, frames);
+    // Validate what is written, so a generated file always loads.
+    CameraPath::from_file(&file, &output.display().to_string())?;
+    let text = serde_json::to_string_pretty(&file)? + "\n";
+    std::fs::write(&output, text).with_context(|| output.display().to_string())?;
+    eprintln!(
+        "wrote {} ({kind}, {frames} frames, {} keyframes)",
+        output.display(),
+        file.keyframes.len()
+    );
+    Ok(())
+}

@@ -1,0 +1,42 @@
+//! Per-frame figures, the error measure, and summary statistics.
+
+mod reference;
+mod summary;
+
+use serde::{Deserialize, Serialize};
+
+pub use reference::ErrorMeter;
+pub use summary::{Distribution, ModeDescription, ModeSummary, summarize};
+
+/// One row of frames.csv: one mode, one frame. Columns are in field order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrameStats {
+    pub mode: String,
+    pub frame: u32,
+    /// Wall time from the start of the mode's frame on the CPU until the GPU
+    /// finished it.
+    pub frame_ms: f64,
+    /// Time the mode spent deciding what to draw: its frame minus the time
+    /// inside GPU operations.
+    pub cpu_ms: f64,
+    /// GPU time between the frame's first and last command (timestamp
+    /// queries); empty where the adapter has none.
+    pub gpu_ms: Option<f64>,
+    pub objects_drawn: u64,
+    pub triangles_drawn: u64,
+    pub nodes_visited: u64,
+    pub nodes_culled_frustum: u64,
+    pub nodes_culled_occlusion: u64,
+    /// Occlusion queries issued.
+    pub queries: u64,
+    /// GPU→CPU round trips for query results.
+    pub query_batches: u64,
+    /// Queries the Occupancy Map made unnecessary.
+    pub queries_skipped: u64,
+    /// Pixels whose depth differs from the reference; empty with --no-error.
+    pub error_pixels: Option<u64>,
+    /// Objects visible in the reference that the mode did not draw.
+    pub missed_objects: Option<u64>,
+    /// Objects visible in the reference frame (the oracle's draw count).
+    pub visible_objects: Option<u64>,
+}

@@ -1,0 +1,174 @@
+//! The reference frame and the error of each mode against it (untimed).
+//!
+//! Per frame: direct rendering into the reference depth and object-id
+//! targets, then a compute pass sets one bit per object id present (the
+//! reference visible set). After every mode has rendered, one compute pass
+//! per mode counts the pixels whose depth differs from the reference in any
+//! bit, and one read-back returns all counts.
+
+use crate::gpu::{GpuContext, Readback, RenderTargets, SceneRenderer};
+use crate::object_set::ObjectSet;
+
+const WORKGROUP: u32 = 8;
+
+pub struct ErrorMeter {
+    all_objects: Vec<u32>,
+    mark_visible: wgpu::ComputePipeline,
+    visible_group: wgpu::BindGroup,
+    visible_bits: wgpu::Buffer,
+    visible_readback: Readback,
+    count_wrong: wgpu::ComputePipeline,
+    /// One bind group per mode: its depth target and its counter slot.
+    wrong_groups: Vec<wgpu::BindGroup>,
+    wrong_counts: wgpu::Buffer,
+    wrong_readback: Readback,
+    /// Bytes between the counter slots of two modes.
+    slot_stride: u64,
+    words: Vec<u32>,
+}
+
+impl ErrorMeter {
+    pub fn new(gpu: &GpuContext, targets: &RenderTargets, objects: usize) -> ErrorMeter {
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("error.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/error.wgsl").into()),
+        });
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let storage = |label: &str, size: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let texture = |binding, view| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(view),
+        };
+
+        let mark_visible = pipeline("mark_visible_objects");
+        // Scenes are never empty, so this is at least one word.
+        let visible_bytes = objects.div_ceil(32) as u64 * 4;
+        let visible_bits = storage("reference visible set", visible_bytes);
+        let visible_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("mark visible"),
+            layout: &mark_visible.get_bind_group_layout(0),
+            entries: &[
+                texture(0, &targets.reference_ids),
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: visible_bits.as_entire_binding(),
+                },
+            ],
+        });
+
+        let count_wrong = pipeline("count_depth_differences");
+        let modes = targets.mode_depths.len();
+        let slot_stride = u64::from(device.limits().min_storage_buffer_offset_alignment).max(4);
+        let wrong_counts = storage("wrong pixel counts", slot_stride * modes.max(1) as u64);
+        let wrong_groups = targets
+            .mode_depths
+            .iter()
+            .enumerate()
+            .map(|(k, depth)| {
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("count wrong pixels"),
+                    layout: &count_wrong.get_bind_group_layout(0),
+                    entries: &[
+                        texture(0, &targets.reference_depth),
+                        texture(1, depth),
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                buffer: &wrong_counts,
+                                offset: slot_stride * k as u64,
+                                size: wgpu::BufferSize::new(4),
+                            }),
+                        },
+                    ],
+                })
+            })
+            .collect();
+        ErrorMeter {
+            all_objects: (0..objects as u32).collect(),
+            mark_visible,
+            visible_group,
+            visible_readback: Readback::new(gpu, "visible readback", visible_bytes),
+            visible_bits,
+            count_wrong,
+            wrong_groups,
+            wrong_readback: Readback::new(gpu, "wrong pixel readback", slot_stride * modes.max(1) as u64),
+            wrong_counts,
+            slot_stride,
+            words: Vec::new(),
+        }
+    }
+
+    /// Renders the reference frame for the current camera and returns the
+    /// set of objects that own at least one of its pixels.
+    pub fn render_reference(
+        &mut self,
+        gpu: &GpuContext,
+        renderer: &SceneRenderer,
+        targets: &RenderTargets,
+    ) -> ObjectSet {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        renderer.encode_reference(&mut encoder, targets, &self.all_objects);
+        encoder.clear_buffer(&self.visible_bits, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.mark_visible);
+            pass.set_bind_group(0, &self.visible_group, &[]);
+            dispatch_per_pixel(&mut pass, targets);
+        }
+        let bytes = self.visible_bits.size();
+        self.visible_readback.copy_from(&mut encoder, &self.visible_bits, bytes);
+        gpu.queue.submit([encoder.finish()]);
+        let mut words = Vec::new();
+        self.visible_readback.read(gpu, bytes, &mut words);
+        ObjectSet::from_words(words)
+    }
+
+    /// Counts, for every mode, the pixels whose depth differs from the
+    /// reference (`encoder` may carry other end-of-frame work).
+    pub fn count_wrong_pixels(
+        &mut self,
+        gpu: &GpuContext,
+        targets: &RenderTargets,
+        mut encoder: wgpu::CommandEncoder,
+    ) -> Vec<u64> {
+        encoder.clear_buffer(&self.wrong_counts, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.count_wrong);
+            for group in &self.wrong_groups {
+                pass.set_bind_group(0, group, &[]);
+                dispatch_per_pixel(&mut pass, targets);
+            }
+        }
+        let bytes = self.wrong_counts.size();
+        self.wrong_readback.copy_from(&mut encoder, &self.wrong_counts, bytes);
+        gpu.queue.submit([encoder.finish()]);
+        self.wrong_readback.read(gpu, bytes, &mut self.words);
+        let stride = (self.slot_stride / 4) as usize;
+        (0..self.wrong_groups.len())
+            .map(|k| u64::from(self.words[k * stride]))
+            .collect()
+    }
+}
+
+fn dispatch_per_pixel(pass: &mut wgpu::ComputePass, targets: &RenderTargets) {
+    let r = targets.resolution;
+    pass.dispatch_workgroups(r.width.div_ceil(WORKGROUP), r.height.div_ceil(WORKGROUP), 1);
+}

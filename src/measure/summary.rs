@@ -1,0 +1,218 @@
+//! Summary statistics of each column per mode, for summary.json and
+//! report.md.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use super::FrameStats;
+
+/// The distribution of one column over the recorded frames.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Distribution {
+    pub mean: f64,
+    /// Sample standard deviation (0 for one frame).
+    pub stddev: f64,
+    pub median: f64,
+    pub p95: f64,
+    pub p99: f64,
+    pub min: f64,
+    pub max: f64,
+    /// Median absolute deviation from the median (unscaled).
+    pub mad: f64,
+}
+
+impl Distribution {
+    /// `None` for no values. Percentiles interpolate linearly between order
+    /// statistics (Hyndman–Fan type 7, as numpy's default).
+    pub fn of(values: &[f64]) -> Option<Distribution> {
+        if values.is_empty() {
+            return None;
+        }
+        let mut sorted = values.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        let n = sorted.len() as f64;
+        let mean = sorted.iter().sum::<f64>() / n;
+        let var = if sorted.len() > 1 {
+            sorted.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
+        } else {
+            0.0
+        };
+        let median = percentile(&sorted, 0.5);
+        let mut deviations: Vec<f64> = sorted.iter().map(|v| (v - median).abs()).collect();
+        deviations.sort_by(f64::total_cmp);
+        Some(Distribution {
+            mean,
+            stddev: var.sqrt(),
+            median,
+            p95: percentile(&sorted, 0.95),
+            p99: percentile(&sorted, 0.99),
+            min: sorted[0],
+            max: sorted[sorted.len() - 1],
+            mad: percentile(&deviations, 0.5),
+        })
+    }
+}
+
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    let h = (sorted.len() - 1) as f64 * q;
+    let (lo, hi) = (h.floor() as usize, h.ceil() as usize);
+    sorted[lo] + (sorted[hi] - sorted[lo]) * (h - lo as f64)
+}
+
+/// Reads one column of a row; `None` where the row has no value.
+type Column = fn(&FrameStats) -> Option<f64>;
+
+/// The summarised columns of frames.csv, with how to read each.
+const COLUMNS: &[(&str, Column)] = &[
+    ("frame_ms", |r| Some(r.frame_ms)),
+    ("cpu_ms", |r| Some(r.cpu_ms)),
+    ("gpu_ms", |r| r.gpu_ms),
+    ("objects_drawn", |r| Some(r.objects_drawn as f64)),
+    ("triangles_drawn", |r| Some(r.triangles_drawn as f64)),
+    ("nodes_visited", |r| Some(r.nodes_visited as f64)),
+    ("nodes_culled_frustum", |r| Some(r.nodes_culled_frustum as f64)),
+    ("nodes_culled_occlusion", |r| Some(r.nodes_culled_occlusion as f64)),
+    ("queries", |r| Some(r.queries as f64)),
+    ("query_batches", |r| Some(r.query_batches as f64)),
+    ("queries_skipped", |r| Some(r.queries_skipped as f64)),
+    ("error_pixels", |r| r.error_pixels.map(|v| v as f64)),
+    ("missed_objects", |r| r.missed_objects.map(|v| v as f64)),
+];
+
+/// One mode's summary in summary.json.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModeSummary {
+    pub name: String,
+    /// Whether the mode promises zero error.
+    pub conservative: bool,
+    pub parameters: serde_json::Value,
+    pub frames: usize,
+    pub stats: BTreeMap<String, Distribution>,
+    /// Mean frame time of vfc over this mode's (> 1: faster than vfc).
+    pub speedup_vs_vfc: Option<f64>,
+    /// Mean frame time of this mode over the oracle's (≥ 1 for real modes).
+    pub ratio_to_oracle: Option<f64>,
+    pub error_pixels_total: Option<u64>,
+    pub frames_with_error: Option<u64>,
+    pub missed_objects_total: Option<u64>,
+    /// Mean fraction of the frame's pixels that are wrong.
+    pub error_fraction: Option<f64>,
+}
+
+/// What summarize needs to know of a mode besides its rows.
+pub struct ModeDescription {
+    pub name: String,
+    pub conservative: bool,
+    pub parameters: serde_json::Value,
+}
+
+/// Summaries in the order of `modes`; `pixels` is the frame size.
+pub fn summarize(rows: &[FrameStats], modes: &[ModeDescription], pixels: u64) -> Vec<ModeSummary> {
+    let mean_frame = |name: &str| {
+        let v: Vec<f64> = rows.iter().filter(|r| r.mode == name).map(|r| r.frame_ms).collect();
+        Distribution::of(&v).map(|d| d.mean)
+    };
+    let (vfc, oracle) = (mean_frame("vfc"), mean_frame("oracle"));
+    modes
+        .iter()
+        .map(|m| {
+            let mine: Vec<&FrameStats> = rows.iter().filter(|r| r.mode == m.name).collect();
+            let stats = COLUMNS
+                .iter()
+                .filter_map(|&(name, get)| {
+                    let v: Vec<f64> = mine.iter().filter_map(|r| get(r)).collect();
+                    Distribution::of(&v).map(|d| (name.to_string(), d))
+                })
+                .collect::<BTreeMap<_, _>>();
+            let mean = stats.get("frame_ms").map(|d| d.mean);
+            let errors: Option<Vec<u64>> = mine.iter().map(|r| r.error_pixels).collect();
+            let missed: Option<Vec<u64>> = mine.iter().map(|r| r.missed_objects).collect();
+            ModeSummary {
+                name: m.name.clone(),
+                conservative: m.conservative,
+                parameters: m.parameters.clone(),
+                frames: mine.len(),
+                speedup_vs_vfc: vfc.zip(mean).map(|(v, x)| v / x),
+                ratio_to_oracle: oracle.zip(mean).map(|(o, x)| x / o),
+                error_pixels_total: errors.as_ref().map(|e| e.iter().sum()),
+                frames_with_error: errors.as_ref().map(|e| e.iter().filter(|&&v| v > 0).count() as u64),
+                missed_objects_total: missed.map(|m| m.iter().sum()),
+                error_fraction: errors
+                    .filter(|e| !e.is_empty())
+                    .map(|e| e.iter().sum::<u64>() as f64 / (e.len() as f64 * pixels as f64)),
+                stats,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn distribution_matches_hand_computed_values() {
+        let d = Distribution::of(&[4.0, 1.0, 3.0, 2.0, 100.0]).unwrap();
+        assert_eq!(d.mean, 22.0);
+        assert_eq!(d.median, 3.0);
+        assert_eq!((d.min, d.max), (1.0, 100.0));
+        // |x - 3| = 1, 2, 0, 1, 97 → median 1.
+        assert_eq!(d.mad, 1.0);
+        // Type 7: h = 4·0.95 = 3.8 → 4 + 0.8·(100 − 4).
+        assert!((d.p95 - 80.8).abs() < 1e-12);
+        assert!(
+            (d.stddev
+                - (((18f64.powi(2) + 21f64.powi(2) + 19f64.powi(2) + 20f64.powi(2) + 78f64.powi(2)) / 4.0).sqrt()))
+            .abs()
+                < 1e-12
+        );
+        assert_eq!(Distribution::of(&[]), None);
+        assert_eq!(Distribution::of(&[7.0]).unwrap().stddev, 0.0);
+    }
+
+    fn row(mode: &str, frame_ms: f64, error: Option<u64>) -> FrameStats {
+        FrameStats {
+            mode: mode.into(),
+            frame: 0,
+            frame_ms,
+            cpu_ms: 0.0,
+            gpu_ms: None,
+            objects_drawn: 1,
+            triangles_drawn: 10,
+            nodes_visited: 0,
+            nodes_culled_frustum: 0,
+            nodes_culled_occlusion: 0,
+            queries: 0,
+            query_batches: 0,
+            queries_skipped: 0,
+            error_pixels: error,
+            missed_objects: error.map(|_| 0),
+            visible_objects: None,
+        }
+    }
+
+    #[test]
+    fn speedups_and_errors_are_relative_to_vfc_and_oracle() {
+        let rows = vec![
+            row("vfc", 30.0, Some(0)),
+            row("vfc", 50.0, Some(0)),
+            row("oracle", 10.0, Some(0)),
+            row("dr", 80.0, Some(5)),
+            row("dr", 80.0, Some(0)),
+        ];
+        let desc = |n: &str| ModeDescription {
+            name: n.into(),
+            conservative: true,
+            parameters: serde_json::json!({}),
+        };
+        let s = summarize(&rows, &[desc("dr"), desc("vfc"), desc("oracle")], 100);
+        assert_eq!(s[0].speedup_vs_vfc, Some(0.5));
+        assert_eq!(s[0].ratio_to_oracle, Some(8.0));
+        assert_eq!(s[0].error_pixels_total, Some(5));
+        assert_eq!(s[0].frames_with_error, Some(1));
+        assert_eq!(s[0].error_fraction, Some(5.0 / 200.0));
+        assert_eq!(s[1].speedup_vs_vfc, Some(1.0));
+        assert!(!s[0].stats.contains_key("gpu_ms"), "absent columns are left out");
+    }
+}

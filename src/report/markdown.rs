@@ -1,0 +1,114 @@
+//! report.md: the table a person reads first.
+
+use std::fmt::Write as _;
+
+use super::Summary;
+use crate::measure::ModeSummary;
+
+pub fn render(s: &Summary) -> String {
+    let mut md = String::new();
+    let w = &mut md;
+    let _ = writeln!(w, "# occlu bench: {}\n", s.scene.source);
+    let _ = writeln!(
+        w,
+        "{} objects, {} triangles, {} hierarchy nodes (depth {}); {} frames at {} after {} warm-up frames; path {}.\n",
+        s.scene.objects,
+        group(s.scene.triangles as f64),
+        s.scene.hierarchy.nodes,
+        s.scene.hierarchy.depth,
+        s.frames,
+        s.resolution,
+        s.warmup,
+        s.path.source
+    );
+    let _ = writeln!(w, "Adapter: {}.\n", s.adapter);
+    let _ = writeln!(
+        w,
+        "| mode | frame ms (mean ± σ) | median | p95 | triangles | queries | round trips | error px | missed | vs vfc | × oracle |"
+    );
+    let _ = writeln!(w, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for m in &s.modes {
+        let _ = writeln!(w, "{}", row(m));
+    }
+    let _ = writeln!(
+        w,
+        "\nframe ms: wall time from the start of a mode's frame on the CPU until the GPU finished it. \
+         triangles, queries and round trips are per-frame means. error px: pixels whose depth differs \
+         from direct rendering, summed over all frames; missed: visible objects not drawn, summed. \
+         vs vfc: mean frame time of vfc over the mode's; × oracle: the mode's over the oracle's."
+    );
+    let flagged: Vec<&str> = s
+        .modes
+        .iter()
+        .filter(|m| m.conservative && m.error_pixels_total.is_some_and(|e| e > 0))
+        .map(|m| m.name.as_str())
+        .collect();
+    if !flagged.is_empty() {
+        let _ = writeln!(
+            w,
+            "\n**Conservative modes with image error: {}.** A conservative mode must never change a pixel; this is a bug.",
+            flagged.join(", ")
+        );
+    }
+    if !s.error_measured {
+        let _ = writeln!(w, "\nImage error was not measured (--no-error).");
+    }
+    if !s.scene.warnings.is_empty() {
+        let _ = writeln!(w, "\nScene warnings:\n");
+        for warning in &s.scene.warnings {
+            let _ = writeln!(w, "- {warning}");
+        }
+    }
+    let _ = writeln!(
+        w,
+        "\nPer-frame figures: frames.csv. Every statistic: summary.json (schema {}).",
+        s.schema_version
+    );
+    md
+}
+
+fn row(m: &ModeSummary) -> String {
+    let stat = |col: &str| m.stats.get(col);
+    let ms = |v: f64| format!("{v:.2}");
+    let frame = stat("frame_ms");
+    let opt = |v: Option<String>| v.unwrap_or_else(|| "–".into());
+    format!(
+        "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+        m.name,
+        opt(frame.map(|d| format!("{} ± {}", ms(d.mean), ms(d.stddev)))),
+        opt(frame.map(|d| ms(d.median))),
+        opt(frame.map(|d| ms(d.p95))),
+        opt(stat("triangles_drawn").map(|d| group(d.mean))),
+        opt(stat("queries").map(|d| format!("{:.1}", d.mean))),
+        opt(stat("query_batches").map(|d| format!("{:.1}", d.mean))),
+        opt(m.error_pixels_total.map(|e| e.to_string())),
+        opt(m.missed_objects_total.map(|e| e.to_string())),
+        opt(m.speedup_vs_vfc.map(|v| format!("{v:.2}×"))),
+        opt(m.ratio_to_oracle.map(|v| format!("{v:.2}"))),
+    )
+}
+
+/// 1234567.8 → "1 234 568": thousands grouped with thin spaces.
+fn group(v: f64) -> String {
+    let digits = format!("{:.0}", v.max(0.0));
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push('\u{2009}');
+        }
+        out.push(c);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_grouped_by_thousands() {
+        assert_eq!(group(0.0), "0");
+        assert_eq!(group(999.4), "999");
+        assert_eq!(group(1234567.8), "1\u{2009}234\u{2009}568");
+    }
+}

@@ -1,0 +1,109 @@
+//! Result files of a bench run: frames.csv (one row per mode and frame),
+//! summary.json (machine-readable, versioned) and report.md (for people).
+
+mod markdown;
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::gpu::{AdapterReport, Resolution};
+use crate::hierarchy::{HierarchyParams, HierarchyStats};
+use crate::measure::{FrameStats, ModeSummary};
+
+pub use markdown::render as render_markdown;
+
+/// Bumped whenever a field of summary.json changes meaning or disappears
+/// (adding fields does not bump it).
+pub const SCHEMA_VERSION: u32 = 1;
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Summary {
+    pub schema_version: u32,
+    pub tool: ToolInfo,
+    pub adapter: AdapterReport,
+    pub scene: SceneSummary,
+    pub path: PathSummary,
+    pub resolution: Resolution,
+    pub frames: u32,
+    pub warmup: u32,
+    pub error_measured: bool,
+    pub modes: Vec<ModeSummary>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ToolInfo {
+    pub name: String,
+    pub version: String,
+}
+
+impl ToolInfo {
+    pub fn current() -> ToolInfo {
+        ToolInfo {
+            name: env!("CARGO_PKG_NAME").into(),
+            version: env!("CARGO_PKG_VERSION").into(),
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct SceneSummary {
+    pub source: String,
+    pub objects: usize,
+    pub meshes: usize,
+    pub triangles: u64,
+    pub vertices: usize,
+    pub bounds_min: [f64; 3],
+    pub bounds_max: [f64; 3],
+    pub hierarchy: HierarchyStats,
+    pub hierarchy_params: HierarchyParams,
+    pub warnings: Vec<String>,
+    pub load_ms: f64,
+    pub build_ms: f64,
+    pub upload_ms: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct PathSummary {
+    pub source: String,
+    pub keyframes: usize,
+    pub near: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct ReportError {
+    pub path: PathBuf,
+    pub source: std::io::Error,
+}
+
+/// The files a run wrote.
+pub struct ResultFiles {
+    pub frames_csv: PathBuf,
+    pub summary_json: PathBuf,
+    pub report_md: PathBuf,
+}
+
+pub fn write_results(out: &Path, summary: &Summary, rows: &[FrameStats]) -> Result<ResultFiles, ReportError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| ReportError { path, source }
+    };
+    std::fs::create_dir_all(out).map_err(io(out))?;
+    let files = ResultFiles {
+        frames_csv: out.join("frames.csv"),
+        summary_json: out.join("summary.json"),
+        report_md: out.join("report.md"),
+    };
+    let mut csv =
+        csv::Writer::from_path(&files.frames_csv).map_err(|e| io(&files.frames_csv)(std::io::Error::other(e)))?;
+    for row in rows {
+        csv.serialize(row)
+            .map_err(|e| io(&files.frames_csv)(std::io::Error::other(e)))?;
+    }
+    csv.flush().map_err(io(&files.frames_csv))?;
+    let json = serde_json::to_string_pretty(summary).expect("summary serialises: no maps with non-string keys");
+    std::fs::write(&files.summary_json, json + "\n").map_err(io(&files.summary_json))?;
+    std::fs::write(&files.report_md, render_markdown(summary)).map_err(io(&files.report_md))?;
+    Ok(files)
+}

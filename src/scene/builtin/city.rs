@@ -1,0 +1,340 @@
+//! `city`: a seeded procedural city in the spirit of the city models of
+//! papers 002 (§5.1.2: "three-hundred buildings. Each building contains some
+//! interior furniture, which is occluded at all times") and 003.
+//!
+//! A grid of `blocks`×`blocks` blocks, each holding 2×2 buildings of 2–14
+//! floors. Every building is a closed shell (walls, floor bands, pilasters,
+//! roof units) around one furniture object per floor, which the street can
+//! never see; cars stand in the lanes. Most triangles are furniture, so
+//! depth complexity is high: direct rendering pays for all of it, view-frustum
+//! culling for what lies in the frustum, and an exact occlusion culler for
+//! little more than the street walls.
+//!
+//! Units are metres, +Y is up; the city starts near the origin and grows
+//! towards +X and +Z.
+
+use glam::{DAffine3, DQuat, DVec3};
+
+use super::shapes::{cuboid, cylinder};
+use super::{Params, Rng, read_params};
+use crate::scene::{MeshGroup, SceneBuilder, TriangleSoup};
+
+/// Side of a lot; a block holds 2×2 lots.
+const LOT: f64 = 32.0;
+const BLOCK: f64 = 2.0 * LOT;
+const STREET: f64 = 16.0;
+/// Distance between the starts of neighbouring blocks.
+const PITCH: f64 = BLOCK + STREET;
+const FLOOR_HEIGHT: f64 = 3.5;
+/// Camera height of the street walk.
+pub const EYE_HEIGHT: f64 = 1.7;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CityParams {
+    /// Blocks per side.
+    pub blocks: u32,
+    pub seed: u64,
+}
+
+impl Default for CityParams {
+    /// 8×8 blocks: about 1.2 M triangles, a few hundred milliseconds of
+    /// direct rendering per frame on llvmpipe.
+    fn default() -> Self {
+        CityParams { blocks: 8, seed: 1 }
+    }
+}
+
+impl CityParams {
+    pub(super) fn from_params(params: &Params) -> Result<Self, String> {
+        let d = CityParams::default();
+        let (mut blocks, mut seed) = (u64::from(d.blocks), d.seed);
+        read_params(
+            params,
+            &mut [("blocks", &mut blocks, 1..=64), ("seed", &mut seed, 0..=u64::MAX)],
+        )?;
+        Ok(CityParams {
+            blocks: blocks as u32,
+            seed,
+        })
+    }
+
+    /// The canonical spec, with every parameter spelled out.
+    pub fn spec(&self) -> String {
+        format!("city:blocks={},seed={}", self.blocks, self.seed)
+    }
+}
+
+/// Centre line of street `k` (0..=blocks), on either axis.
+fn street(k: u32) -> f64 {
+    f64::from(k) * PITCH - STREET / 2.0
+}
+
+pub fn generate(p: &CityParams, builder: &mut SceneBuilder) {
+    let mut rng = Rng::new(p.seed);
+    let n = p.blocks;
+    ground(n, builder);
+    for bi in 0..n {
+        for bj in 0..n {
+            for lot in 0..4 {
+                let origin = DVec3::new(
+                    f64::from(bi) * PITCH + f64::from(lot % 2) * LOT,
+                    0.0,
+                    f64::from(bj) * PITCH + f64::from(lot / 2) * LOT,
+                );
+                building(&format!("b{bi}_{bj}_{lot}"), origin, &mut rng, builder);
+            }
+        }
+    }
+    cars(n, &mut rng, builder);
+    let (m, mx) = (n / 2, (n / 2).max(1));
+    let at = |x: f64, z: f64| DVec3::new(x, EYE_HEIGHT, z);
+    builder.set_walk_hint(vec![
+        at(street(0), street(m)),
+        at(street(mx), street(m)),
+        at(street(mx), street(n)),
+    ]);
+}
+
+fn add(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) {
+    let group = mesh(builder, name, soup);
+    builder.add_object(name, &group, DAffine3::IDENTITY);
+}
+
+fn mesh(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) -> MeshGroup {
+    builder
+        .add_mesh(name, &soup.positions, &soup.indices)
+        .expect("procedural geometry is finite and indexed in range")
+}
+
+/// Asphalt tiles (one per block and its streets) and raised sidewalks.
+fn ground(n: u32, builder: &mut SceneBuilder) {
+    for i in 0..=n {
+        for j in 0..=n {
+            let lo = |k: u32| f64::from(k) * PITCH - STREET;
+            let hi = |k: u32| {
+                if k == n {
+                    f64::from(k) * PITCH
+                } else {
+                    f64::from(k) * PITCH + BLOCK
+                }
+            };
+            let mut soup = TriangleSoup::default();
+            cuboid(&mut soup, DVec3::new(lo(i), -0.5, lo(j)), DVec3::new(hi(i), 0.0, hi(j)));
+            if i < n && j < n {
+                let o = DVec3::new(f64::from(i) * PITCH, 0.0, f64::from(j) * PITCH);
+                cuboid(&mut soup, o, o + DVec3::new(BLOCK, 0.15, BLOCK));
+            }
+            add(builder, &format!("ground{i}_{j}"), &soup);
+        }
+    }
+}
+
+/// A closed shell and one furniture object per floor.
+fn building(name: &str, lot: DVec3, rng: &mut Rng, builder: &mut SceneBuilder) {
+    let min = lot + DVec3::new(rng.range(2.0, 4.0), 0.0, rng.range(2.0, 4.0));
+    let max = lot + DVec3::new(LOT - rng.range(2.0, 4.0), 0.0, LOT - rng.range(2.0, 4.0));
+    let floors = rng.int(2, 14);
+    let height = f64::from(floors) * FLOOR_HEIGHT + 0.5;
+
+    let mut shell = TriangleSoup::default();
+    cuboid(&mut shell, min, DVec3::new(max.x, height, max.z));
+    for f in 1..=floors {
+        // A band around the building at every floor line.
+        let y = f64::from(f) * FLOOR_HEIGHT;
+        let out = DVec3::new(0.25, 0.0, 0.25);
+        cuboid(
+            &mut shell,
+            DVec3::new(min.x, y - 0.15, min.z) - out,
+            DVec3::new(max.x, y + 0.1, max.z) + out,
+        );
+    }
+    pilasters(&mut shell, min, max, height);
+    for _ in 0..rng.int(2, 5) {
+        let c = DVec3::new(
+            rng.range(min.x + 2.0, max.x - 4.0),
+            height,
+            rng.range(min.z + 2.0, max.z - 4.0),
+        );
+        cuboid(
+            &mut shell,
+            c,
+            c + DVec3::new(rng.range(1.0, 2.5), rng.range(0.8, 2.0), rng.range(1.0, 2.5)),
+        );
+    }
+    add(builder, &format!("{name}/shell"), &shell);
+
+    for f in 0..floors {
+        let y = f64::from(f) * FLOOR_HEIGHT;
+        let mut room = TriangleSoup::default();
+        cuboid(
+            &mut room,
+            DVec3::new(min.x + 0.3, y, min.z + 0.3),
+            DVec3::new(max.x - 0.3, y + 0.2, max.z - 0.3),
+        );
+        for _ in 0..rng.int(1, 4) {
+            let at = DVec3::new(
+                rng.range(min.x + 2.0, max.x - 4.0),
+                y + 0.2,
+                rng.range(min.z + 2.0, max.z - 4.0),
+            );
+            workplace(&mut room, at, rng);
+        }
+        add(builder, &format!("{name}/floor{f}"), &room);
+    }
+}
+
+/// Vertical pilasters every ~4 m along each facade.
+fn pilasters(shell: &mut TriangleSoup, min: DVec3, max: DVec3, height: f64) {
+    let (w, d) = (0.4, 0.3);
+    let count = |len: f64| ((len / 4.0) as u32).max(1);
+    let step_x = (max.x - min.x) / f64::from(count(max.x - min.x));
+    for k in 0..=count(max.x - min.x) {
+        let x = min.x + step_x * f64::from(k) - w / 2.0;
+        cuboid(shell, DVec3::new(x, 0.0, min.z - d), DVec3::new(x + w, height, min.z));
+        cuboid(shell, DVec3::new(x, 0.0, max.z), DVec3::new(x + w, height, max.z + d));
+    }
+    let step_z = (max.z - min.z) / f64::from(count(max.z - min.z));
+    for k in 0..=count(max.z - min.z) {
+        let z = min.z + step_z * f64::from(k) - w / 2.0;
+        cuboid(shell, DVec3::new(min.x - d, 0.0, z), DVec3::new(min.x, height, z + w));
+        cuboid(shell, DVec3::new(max.x, 0.0, z), DVec3::new(max.x + d, height, z + w));
+    }
+}
+
+/// A desk with a lamp and two chairs, `at` its floor-level corner.
+fn workplace(room: &mut TriangleSoup, at: DVec3, rng: &mut Rng) {
+    let (w, d, h) = (rng.range(1.4, 2.0), 0.8, 0.75);
+    table(room, at, w, d, h);
+    cylinder(room, at + DVec3::new(0.2, h, 0.2), DVec3::Y, 0.08, 0.5, 12);
+    for side in [0.3, w - 0.8] {
+        let seat = at + DVec3::new(side, 0.0, d + 0.2);
+        table(room, seat, 0.5, 0.5, 0.45);
+        cuboid(
+            room,
+            seat + DVec3::new(0.0, 0.45, 0.45),
+            seat + DVec3::new(0.5, 0.95, 0.5),
+        );
+    }
+}
+
+/// A top on four legs: 5 boxes.
+fn table(room: &mut TriangleSoup, at: DVec3, w: f64, d: f64, h: f64) {
+    let leg = 0.06;
+    cuboid(room, at + DVec3::new(0.0, h - 0.04, 0.0), at + DVec3::new(w, h, d));
+    for (x, z) in [(0.0, 0.0), (w - leg, 0.0), (0.0, d - leg), (w - leg, d - leg)] {
+        cuboid(
+            room,
+            at + DVec3::new(x, 0.0, z),
+            at + DVec3::new(x + leg, h - 0.04, z + leg),
+        );
+    }
+}
+
+/// Three car models, instanced along every street segment.
+fn cars(n: u32, rng: &mut Rng, builder: &mut SceneBuilder) {
+    let models: Vec<MeshGroup> = [(4.4, 1.8, 1.5), (3.6, 1.6, 1.45), (5.2, 2.0, 2.2)]
+        .iter()
+        .enumerate()
+        .map(|(k, &(length, width, height))| mesh(builder, &format!("car{k}"), &car(length, width, height)))
+        .collect();
+    let slot = 8.0;
+    for along_x in [true, false] {
+        for line in 0..=n {
+            for segment in 0..n {
+                let start = f64::from(segment) * PITCH;
+                let mut slots: Vec<u32> = (0..(BLOCK / slot) as u32).collect();
+                for _ in 0..rng.int(0, 4) {
+                    let s = slots.swap_remove(rng.int(0, slots.len() as u32 - 1) as usize);
+                    let lane = if rng.next_u64() & 1 == 0 { -4.0 } else { 4.0 };
+                    let along = start + (f64::from(s) + 0.5) * slot;
+                    let across = street(line) + lane;
+                    let (x, z, yaw) = if along_x {
+                        (along, across, if lane > 0.0 { 0.0 } else { std::f64::consts::PI })
+                    } else {
+                        (
+                            across,
+                            along,
+                            if lane > 0.0 {
+                                -std::f64::consts::FRAC_PI_2
+                            } else {
+                                std::f64::consts::FRAC_PI_2
+                            },
+                        )
+                    };
+                    let model = rng.int(0, models.len() as u32 - 1) as usize;
+                    let transform =
+                        DAffine3::from_rotation_translation(DQuat::from_rotation_y(yaw), DVec3::new(x, 0.0, z));
+                    let name = format!("car{}_{line}_{segment}_{s}", if along_x { "x" } else { "z" });
+                    builder.add_object(&name, &models[model], transform);
+                }
+            }
+        }
+    }
+}
+
+/// A car along +X centred on the origin: body, cabin and four wheels.
+fn car(length: f64, width: f64, height: f64) -> TriangleSoup {
+    let mut soup = TriangleSoup::default();
+    let r = 0.33;
+    let (l2, w2) = (length / 2.0, width / 2.0);
+    cuboid(
+        &mut soup,
+        DVec3::new(-l2, r * 0.8, -w2),
+        DVec3::new(l2, height * 0.55, w2),
+    );
+    cuboid(
+        &mut soup,
+        DVec3::new(-l2 * 0.55, height * 0.55, -w2 * 0.9),
+        DVec3::new(l2 * 0.45, height, w2 * 0.9),
+    );
+    for (x, z) in [
+        (-l2 * 0.65, -w2),
+        (l2 * 0.65, -w2),
+        (-l2 * 0.65, w2 - 0.25),
+        (l2 * 0.65, w2 - 0.25),
+    ] {
+        cylinder(&mut soup, DVec3::new(x, r, z), DVec3::Z, r, 0.25, 16);
+    }
+    soup
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::scene::{LoadOptions, SceneSpec, load};
+
+    #[test]
+    fn default_city_is_about_a_million_triangles_and_deterministic() {
+        let spec = SceneSpec::Builtin("city".into());
+        let a = load(&spec, &LoadOptions::default()).unwrap();
+        let tris = a.triangles();
+        assert!((1_000_000..=1_600_000).contains(&tris), "{tris} triangles");
+        assert_eq!(a.source, "builtin:city:blocks=8,seed=1");
+        let b = load(&spec, &LoadOptions::default()).unwrap();
+        assert_eq!(a.vertices, b.vertices);
+        assert_eq!(a.objects.len(), b.objects.len());
+    }
+
+    #[test]
+    fn furniture_lies_inside_its_shell() {
+        let s = load(
+            &SceneSpec::Builtin("city:blocks=2,seed=3".into()),
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        let shell = |name: &str| {
+            let building = name.split('/').next().unwrap();
+            s.objects
+                .iter()
+                .find(|o| o.name == format!("{building}/shell"))
+                .unwrap()
+                .bounds
+        };
+        let floors: Vec<_> = s.objects.iter().filter(|o| o.name.contains("/floor")).collect();
+        assert!(floors.len() >= 16 * 2);
+        for f in floors {
+            assert!(shell(&f.name).contains(&f.bounds), "{} pokes out of its shell", f.name);
+        }
+        assert!(s.objects.iter().any(|o| o.name.starts_with("carx")));
+        assert!(s.walk_hint.as_ref().is_some_and(|w| w.len() == 3));
+    }
+}

@@ -1,0 +1,263 @@
+//! glTF 2.0 (`.gltf` with external or embedded buffers, and `.glb`) through
+//! the gltf crate: the node hierarchy with its transforms, mesh instancing
+//! (a mesh used by several nodes is validated and clustered once) and every
+//! triangle primitive. Images are never decoded: visibility needs positions.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use base64::Engine as _;
+use glam::{DAffine3, DMat4, DVec3};
+use gltf::mesh::Mode;
+
+use super::{MeshGroup, SceneBuilder, SceneError};
+
+pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(), SceneError> {
+    let parse_error = |message: String| SceneError::Parse {
+        path: path.into(),
+        message,
+    };
+    // Validation also refuses files that require an extension not enabled
+    // in Cargo.toml (e.g. Draco compression), naming it.
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| {
+        let text = e.to_string();
+        let detail = text.trim_start_matches("invalid glTF: ").trim_end_matches([';', ' ']);
+        parse_error(format!("invalid glTF: {detail}"))
+    })?;
+    if gltf.extensions_used().any(|e| e == "EXT_mesh_gpu_instancing") {
+        builder.warn("EXT_mesh_gpu_instancing is not supported: each node is drawn once".into());
+    }
+    if gltf.skins().next().is_some()
+        || gltf
+            .meshes()
+            .flat_map(|m| m.primitives())
+            .any(|p| p.morph_targets().next().is_some())
+    {
+        builder.warn("skins and morph targets are ignored: meshes are drawn in their rest pose".into());
+    }
+    let buffers = gltf
+        .buffers()
+        .map(|b| buffer_data(path, &gltf, &b))
+        .collect::<Result<Vec<_>, _>>()?;
+
+    let roots: Vec<gltf::Node> = match gltf.default_scene().or_else(|| gltf.scenes().next()) {
+        Some(scene) => scene.nodes().collect(),
+        // No scene: every node that is nobody's child is a root.
+        None => {
+            let children: std::collections::HashSet<usize> =
+                gltf.nodes().flat_map(|n| n.children().map(|c| c.index())).collect();
+            gltf.nodes().filter(|n| !children.contains(&n.index())).collect()
+        }
+    };
+
+    let mut mesh_groups: HashMap<usize, Vec<MeshGroup>> = HashMap::new();
+    // Depth-first over the node tree; the depth guard stops cyclic files,
+    // which the glTF validator does not reject.
+    let mut stack: Vec<(gltf::Node, DMat4, usize)> = roots.into_iter().map(|n| (n, DMat4::IDENTITY, 0)).collect();
+    while let Some((node, parent, depth)) = stack.pop() {
+        if depth > MAX_NODE_DEPTH {
+            return Err(parse_error(format!(
+                "node hierarchy deeper than {MAX_NODE_DEPTH} levels (is it cyclic?)"
+            )));
+        }
+        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        let world = parent * local;
+        if let Some(mesh) = node.mesh() {
+            if let std::collections::hash_map::Entry::Vacant(slot) = mesh_groups.entry(mesh.index()) {
+                slot.insert(load_mesh(path, &mesh, &buffers, builder)?);
+            }
+            let node_name = node
+                .name()
+                .map(str::to_string)
+                .unwrap_or_else(|| format!("node{}", node.index()));
+            let groups = &mesh_groups[&mesh.index()];
+            let transform = DAffine3::from_mat4(world);
+            for (k, group) in groups.iter().enumerate() {
+                let name = if groups.len() > 1 {
+                    format!("{node_name}/{k}")
+                } else {
+                    node_name.clone()
+                };
+                builder.add_object(&name, group, transform);
+            }
+        }
+        stack.extend(node.children().map(|c| (c, world, depth + 1)));
+    }
+    Ok(())
+}
+
+const MAX_NODE_DEPTH: usize = 1024;
+
+/// One mesh group per triangle primitive of the mesh.
+fn load_mesh(
+    path: &Path,
+    mesh: &gltf::Mesh,
+    buffers: &[Vec<u8>],
+    builder: &mut SceneBuilder,
+) -> Result<Vec<MeshGroup>, SceneError> {
+    let mesh_name = mesh
+        .name()
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("mesh{}", mesh.index()));
+    let mut groups = Vec::new();
+    for primitive in mesh.primitives() {
+        let element = format!("mesh '{mesh_name}' primitive {}", primitive.index());
+        let error = |what: String| SceneError::Parse {
+            path: path.into(),
+            message: format!("{element}: {what}"),
+        };
+        let mode = primitive.mode();
+        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+            return Err(error(format!(
+                "primitive mode {mode:?} is not supported (occlu renders triangles; points and lines draw no depth)"
+            )));
+        }
+        let accessor = primitive
+            .get(&gltf::Semantic::Positions)
+            .ok_or_else(|| error("has no POSITION attribute".into()))?;
+        if accessor.data_type() != gltf::accessor::DataType::F32
+            || accessor.dimensions() != gltf::accessor::Dimensions::Vec3
+            || accessor.count() == 0
+        {
+            return Err(error(format!(
+                "POSITION must be a non-empty float VEC3 accessor (found {:?} {:?}, {} elements)",
+                accessor.data_type(),
+                accessor.dimensions(),
+                accessor.count()
+            )));
+        }
+        if let Some(indices) = primitive.indices()
+            && indices.count() == 0
+        {
+            return Err(error("has an empty index accessor".into()));
+        }
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+        let positions: Vec<DVec3> = reader
+            .read_positions()
+            .ok_or_else(|| error("POSITION data lies outside its buffer".into()))?
+            .map(|p| DVec3::from(p.map(f64::from)))
+            .collect();
+        let stream: Vec<u32> = match reader.read_indices() {
+            Some(indices) => indices.into_u32().collect(),
+            None if primitive.indices().is_some() => {
+                return Err(error("index data lies outside its buffer".into()));
+            }
+            None => (0..positions.len() as u32).collect(),
+        };
+        let triangles = triangle_list(mode, &stream);
+        let name = if mesh.primitives().len() > 1 {
+            format!("{mesh_name}/{}", primitive.index())
+        } else {
+            mesh_name.clone()
+        };
+        let group = builder
+            .add_mesh(&name, &positions, &triangles)
+            .map_err(|source| SceneError::Geometry {
+                path: path.into(),
+                source,
+            })?;
+        groups.push(group);
+    }
+    Ok(groups)
+}
+
+/// Expands strips and fans into a triangle list (winding is irrelevant: the
+/// renderer does not cull back faces, since culling must not depend on it).
+fn triangle_list(mode: Mode, stream: &[u32]) -> Vec<u32> {
+    let n = stream.len();
+    match mode {
+        Mode::TriangleStrip => (0..n.saturating_sub(2))
+            .flat_map(|i| {
+                if i % 2 == 0 {
+                    [stream[i], stream[i + 1], stream[i + 2]]
+                } else {
+                    [stream[i + 1], stream[i], stream[i + 2]]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => (1..n.saturating_sub(1))
+            .flat_map(|i| [stream[0], stream[i], stream[i + 1]])
+            .collect(),
+        // A trailing partial triangle is reported by validation.
+        _ => stream.to_vec(),
+    }
+}
+
+fn buffer_data(path: &Path, gltf: &gltf::Gltf, buffer: &gltf::Buffer) -> Result<Vec<u8>, SceneError> {
+    let error = |what: String| SceneError::Parse {
+        path: path.into(),
+        message: format!("buffer {}: {what}", buffer.index()),
+    };
+    let mut data = match buffer.source() {
+        gltf::buffer::Source::Bin => gltf
+            .blob
+            .clone()
+            .ok_or_else(|| error("refers to the GLB binary chunk, but the file has none".into()))?,
+        gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+            let (_, payload) = uri
+                .split_once(";base64,")
+                .ok_or_else(|| error("data URI is not base64".into()))?;
+            base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map_err(|e| error(format!("data URI does not decode: {e}")))?
+        }
+        gltf::buffer::Source::Uri(uri) => {
+            let file = path.parent().unwrap_or(Path::new(".")).join(percent_decode(uri));
+            std::fs::read(&file).map_err(|e| error(format!("{}: {e}", file.display())))?
+        }
+    };
+    if data.len() < buffer.length() {
+        return Err(error(format!(
+            "holds {} bytes, but declares {}",
+            data.len(),
+            buffer.length()
+        )));
+    }
+    data.truncate(buffer.length());
+    Ok(data)
+}
+
+/// URIs in glTF are percent-encoded (a space is `%20`).
+fn percent_decode(uri: &str) -> String {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = bytes
+            .get(i + 1..i + 3)
+            .and_then(|h| std::str::from_utf8(h).ok())
+            .and_then(|h| u8::from_str_radix(h, 16).ok());
+        match (bytes[i], hex) {
+            (b'%', Some(b)) => {
+                out.push(b);
+                i += 3;
+            }
+            (b, _) => {
+                out.push(b);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strips_and_fans_expand_to_triangle_lists() {
+        assert_eq!(
+            triangle_list(Mode::TriangleStrip, &[0, 1, 2, 3, 4]),
+            vec![0, 1, 2, 2, 1, 3, 2, 3, 4]
+        );
+        assert_eq!(triangle_list(Mode::TriangleFan, &[0, 1, 2, 3]), vec![0, 1, 2, 0, 2, 3]);
+        assert!(triangle_list(Mode::TriangleStrip, &[0, 1]).is_empty());
+    }
+
+    #[test]
+    fn percent_encoded_uris_decode() {
+        assert_eq!(percent_decode("my%20mesh.bin"), "my mesh.bin");
+        assert_eq!(percent_decode("100%.bin"), "100%.bin");
+    }
+}

@@ -1,0 +1,309 @@
+//! The scene model and its loaders.
+//!
+//! A [`Scene`] is a list of objects drawn from one shared vertex/index store.
+//! Every loader (OBJ, glTF, built-in) feeds triangles through one
+//! [`SceneBuilder`], which validates them ([`validate`]), splits large meshes
+//! into spatially coherent clusters ([`cluster`]) and instantiates them, so
+//! all sources obey the same rules.
+
+pub mod builtin;
+mod cluster;
+mod gltf;
+mod obj;
+mod validate;
+
+use std::path::{Path, PathBuf};
+
+use glam::{DAffine3, DVec3};
+
+use crate::bounds::Aabb;
+pub use validate::GeometryError;
+
+/// Default triangle budget of one cluster: meshes above it are split.
+pub const DEFAULT_CLUSTER_TRIANGLES: u32 = 4096;
+
+/// A contiguous range of the shared index buffer; vertex positions are in the
+/// mesh's local frame, centred on the mesh so that f32 keeps full precision.
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    pub first_index: u32,
+    pub index_count: u32,
+    /// Bounds of the local-space vertices.
+    pub bounds: Aabb,
+}
+
+impl Mesh {
+    pub fn triangles(&self) -> u32 {
+        self.index_count / 3
+    }
+}
+
+/// One drawable unit: a mesh placed in the world.
+#[derive(Clone, Debug)]
+pub struct Object {
+    pub name: String,
+    pub mesh: u32,
+    /// Local-to-world transform, in f64 (camera-relative matrices are derived
+    /// from it every frame).
+    pub transform: DAffine3,
+    /// World-space bounds.
+    pub bounds: Aabb,
+    pub triangles: u32,
+}
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Where the scene came from: a file path or `builtin:NAME:PARAMS`.
+    pub source: String,
+    pub vertices: Vec<[f32; 3]>,
+    /// Indices into `vertices` (already offset: no base vertex is needed).
+    pub indices: Vec<u32>,
+    pub meshes: Vec<Mesh>,
+    pub objects: Vec<Object>,
+    pub bounds: Aabb,
+    /// Problems that did not stop the load (degenerate triangles dropped, …).
+    pub warnings: Vec<String>,
+    /// A street-level polyline a procedural scene suggests for walks; `None`
+    /// for loaded models, which get a generic walk.
+    pub walk_hint: Option<Vec<DVec3>>,
+}
+
+impl Scene {
+    pub fn triangles(&self) -> u64 {
+        self.objects.iter().map(|o| u64::from(o.triangles)).sum()
+    }
+}
+
+/// Where a scene comes from, as the command line names it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SceneSpec {
+    File(PathBuf),
+    /// A built-in procedural scene, `NAME[:key=value,...]`.
+    Builtin(String),
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct LoadOptions {
+    /// Meshes with more triangles than this are split into clusters.
+    pub cluster_triangles: u32,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        LoadOptions {
+            cluster_triangles: DEFAULT_CLUSTER_TRIANGLES,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{}: unsupported model format (supported: .obj, .gltf, .glb)", path.display())]
+    UnsupportedFormat { path: PathBuf },
+    #[error("{}: {message}", path.display())]
+    Parse { path: PathBuf, message: String },
+    #[error("{}: {source}", path.display())]
+    Geometry { path: PathBuf, source: GeometryError },
+    #[error("{}: the model has no triangles to render", path.display())]
+    Empty { path: PathBuf },
+    #[error("built-in scene '{spec}': {message}")]
+    Builtin { spec: String, message: String },
+    #[error("--cluster-triangles must be at least 1")]
+    ZeroClusterSize,
+}
+
+/// Loads a scene from a file or builds a built-in one.
+pub fn load(spec: &SceneSpec, options: &LoadOptions) -> Result<Scene, SceneError> {
+    if options.cluster_triangles == 0 {
+        return Err(SceneError::ZeroClusterSize);
+    }
+    match spec {
+        SceneSpec::Builtin(name) => builtin::build(name, options),
+        SceneSpec::File(path) => load_file(path, options),
+    }
+}
+
+fn load_file(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let loader: fn(&Path, &[u8], &mut SceneBuilder) -> Result<(), SceneError> = match ext.as_deref() {
+        Some("obj") => obj::load,
+        Some("gltf") | Some("glb") => gltf::load,
+        _ => return Err(SceneError::UnsupportedFormat { path: path.into() }),
+    };
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        path: path.into(),
+        source,
+    })?;
+    let mut builder = SceneBuilder::new(path.display().to_string(), options.cluster_triangles);
+    loader(path, &bytes, &mut builder)?;
+    builder.finish().ok_or_else(|| SceneError::Empty { path: path.into() })
+}
+
+/// The clusters one source mesh was split into, ready to be instantiated.
+#[derive(Clone, Debug)]
+pub struct MeshGroup {
+    /// (mesh id, origin of the cluster's local frame in source-mesh space).
+    clusters: Vec<(u32, DVec3)>,
+}
+
+impl MeshGroup {
+    pub fn triangles(&self, builder: &SceneBuilder) -> u64 {
+        self.clusters
+            .iter()
+            .map(|&(m, _)| u64::from(builder.meshes[m as usize].triangles()))
+            .sum()
+    }
+}
+
+/// Accumulates validated, clustered meshes and their instances.
+pub struct SceneBuilder {
+    source: String,
+    cluster_triangles: u32,
+    vertices: Vec<[f32; 3]>,
+    indices: Vec<u32>,
+    meshes: Vec<Mesh>,
+    objects: Vec<Object>,
+    degenerate: Vec<(String, usize)>,
+    warnings: Vec<String>,
+    walk_hint: Option<Vec<DVec3>>,
+}
+
+impl SceneBuilder {
+    pub fn new(source: String, cluster_triangles: u32) -> Self {
+        SceneBuilder {
+            source,
+            cluster_triangles: cluster_triangles.max(1),
+            vertices: Vec::new(),
+            indices: Vec::new(),
+            meshes: Vec::new(),
+            objects: Vec::new(),
+            degenerate: Vec::new(),
+            warnings: Vec::new(),
+            walk_hint: None,
+        }
+    }
+
+    /// Validates one mesh (positions in its own frame, a triangle list) and
+    /// splits it into clusters of at most `cluster_triangles` triangles.
+    /// Degenerate triangles are dropped and counted; a mesh left with no
+    /// triangles gives an empty group.
+    pub fn add_mesh(&mut self, name: &str, positions: &[DVec3], indices: &[u32]) -> Result<MeshGroup, GeometryError> {
+        let triangles = validate::triangles(name, positions, indices)?;
+        if triangles.degenerate > 0 {
+            self.degenerate.push((name.to_string(), triangles.degenerate));
+        }
+        let clusters = cluster::split(positions, &triangles.indices, self.cluster_triangles);
+        let group = clusters
+            .into_iter()
+            .map(|c| {
+                let first_index = self.indices.len() as u32;
+                let base = self.vertices.len() as u32;
+                let origin = c.bounds.center();
+                self.vertices.extend(
+                    c.vertices
+                        .iter()
+                        .map(|&v| (positions[v as usize] - origin).as_vec3().to_array()),
+                );
+                self.indices.extend(c.indices.iter().map(|&i| base + i));
+                let local = Aabb::new(c.bounds.min - origin, c.bounds.max - origin);
+                self.meshes.push(Mesh {
+                    first_index,
+                    index_count: c.indices.len() as u32,
+                    bounds: local,
+                });
+                (self.meshes.len() as u32 - 1, origin)
+            })
+            .collect();
+        Ok(MeshGroup { clusters: group })
+    }
+
+    /// Places every cluster of `group` in the world under `transform`.
+    pub fn add_object(&mut self, name: &str, group: &MeshGroup, transform: DAffine3) {
+        let split = group.clusters.len() > 1;
+        for (i, &(mesh, origin)) in group.clusters.iter().enumerate() {
+            let m = &self.meshes[mesh as usize];
+            let transform = transform * DAffine3::from_translation(origin);
+            self.objects.push(Object {
+                name: if split { format!("{name}#{i}") } else { name.to_string() },
+                mesh,
+                bounds: m.bounds.transformed(&transform),
+                transform,
+                triangles: m.triangles(),
+            });
+        }
+    }
+
+    /// Records a problem that does not stop the load; it is reported by
+    /// `info` and in every result file.
+    pub fn warn(&mut self, warning: String) {
+        self.warnings.push(warning);
+    }
+
+    pub fn set_walk_hint(&mut self, walk: Vec<DVec3>) {
+        self.walk_hint = Some(walk);
+    }
+
+    pub fn object_count(&self) -> usize {
+        self.objects.len()
+    }
+
+    /// The finished scene, or `None` when nothing drawable was added.
+    pub fn finish(self) -> Option<Scene> {
+        if self.objects.is_empty() {
+            return None;
+        }
+        let bounds = self.objects.iter().fold(Aabb::EMPTY, |b, o| b.union(o.bounds));
+        let mut warnings = self.warnings;
+        let dropped: usize = self.degenerate.iter().map(|(_, n)| n).sum();
+        if dropped > 0 {
+            let worst: Vec<String> = self
+                .degenerate
+                .iter()
+                .take(3)
+                .map(|(name, n)| format!("'{name}': {n}"))
+                .collect();
+            let more = if self.degenerate.len() > 3 {
+                format!(", and {} more meshes", self.degenerate.len() - 3)
+            } else {
+                String::new()
+            };
+            warnings.push(format!(
+                "dropped {dropped} degenerate triangles ({}{more})",
+                worst.join(", ")
+            ));
+        }
+        Some(Scene {
+            source: self.source,
+            vertices: self.vertices,
+            indices: self.indices,
+            meshes: self.meshes,
+            objects: self.objects,
+            bounds,
+            warnings,
+            walk_hint: self.walk_hint,
+        })
+    }
+}
+
+/// Triangle soup helper for generated geometry: positions and indices grow
+/// together, indices relative to this soup.
+#[derive(Default, Clone, Debug)]
+pub struct TriangleSoup {
+    pub positions: Vec<DVec3>,
+    pub indices: Vec<u32>,
+}
+
+impl TriangleSoup {
+    pub fn triangles(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Appends vertices and triangles whose indices are relative to `positions`.
+    pub fn append(&mut self, positions: &[DVec3], indices: impl IntoIterator<Item = u32>) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(positions);
+        self.indices.extend(indices.into_iter().map(|i| base + i));
+    }
+}

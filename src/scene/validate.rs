@@ -1,0 +1,138 @@
+//! Geometry validation shared by every loader: bad input is an error naming
+//! the mesh and the element, degenerate triangles are dropped and counted.
+
+use glam::DVec3;
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GeometryError {
+    #[error("mesh '{mesh}': vertex {vertex} has a non-finite position {position:?}")]
+    NonFinitePosition {
+        mesh: String,
+        vertex: usize,
+        position: [f64; 3],
+    },
+    #[error("mesh '{mesh}': index {index} (entry {entry} of the index list) is out of range for {vertices} vertices")]
+    IndexOutOfRange {
+        mesh: String,
+        entry: usize,
+        index: u32,
+        vertices: usize,
+    },
+    #[error("mesh '{mesh}': {len} indices do not form whole triangles")]
+    PartialTriangle { mesh: String, len: usize },
+}
+
+/// The triangles of a mesh that survived validation.
+pub struct ValidTriangles {
+    pub indices: Vec<u32>,
+    pub degenerate: usize,
+}
+
+/// A triangle whose doubled area is below this fraction of its longest edge
+/// squared is a line or a point: it covers no pixels, so it is dropped.
+const DEGENERATE_RATIO: f64 = 1e-12;
+
+pub fn triangles(mesh: &str, positions: &[DVec3], indices: &[u32]) -> Result<ValidTriangles, GeometryError> {
+    if let Some((vertex, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+        return Err(GeometryError::NonFinitePosition {
+            mesh: mesh.to_string(),
+            vertex,
+            position: p.to_array(),
+        });
+    }
+    if !indices.len().is_multiple_of(3) {
+        return Err(GeometryError::PartialTriangle {
+            mesh: mesh.to_string(),
+            len: indices.len(),
+        });
+    }
+    if let Some((entry, &index)) = indices
+        .iter()
+        .enumerate()
+        .find(|&(_, &i)| i as usize >= positions.len())
+    {
+        return Err(GeometryError::IndexOutOfRange {
+            mesh: mesh.to_string(),
+            entry,
+            index,
+            vertices: positions.len(),
+        });
+    }
+    let mut kept = Vec::with_capacity(indices.len());
+    let mut degenerate = 0;
+    for t in indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| positions[i as usize]);
+        let (ab, ac, bc) = (b - a, c - a, c - b);
+        let longest = ab.length_squared().max(ac.length_squared()).max(bc.length_squared());
+        if ab.cross(ac).length() <= DEGENERATE_RATIO * longest || longest == 0.0 {
+            degenerate += 1;
+        } else {
+            kept.extend_from_slice(t);
+        }
+    }
+    Ok(ValidTriangles {
+        indices: kept,
+        degenerate,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad() -> Vec<DVec3> {
+        vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+        ]
+    }
+
+    #[test]
+    fn keeps_good_triangles_and_drops_degenerate_ones() {
+        let mut p = quad();
+        p.push(DVec3::new(2.0, 0.0, 0.0)); // collinear with 0 and 1
+        let v = triangles("q", &p, &[0, 1, 2, 0, 2, 3, 0, 1, 4, 2, 2, 3]).unwrap();
+        assert_eq!(v.indices, vec![0, 1, 2, 0, 2, 3]);
+        assert_eq!(v.degenerate, 2);
+    }
+
+    #[test]
+    fn nan_vertex_is_named() {
+        let mut p = quad();
+        p[2].y = f64::NAN;
+        let e = triangles("wall", &p, &[0, 1, 2]).err().unwrap();
+        assert!(matches!(e, GeometryError::NonFinitePosition { vertex: 2, .. }));
+        assert!(e.to_string().contains("mesh 'wall': vertex 2"));
+    }
+
+    #[test]
+    fn infinite_vertex_is_rejected() {
+        let mut p = quad();
+        p[0].x = f64::INFINITY;
+        assert!(triangles("m", &p, &[0, 1, 2]).is_err());
+    }
+
+    #[test]
+    fn index_out_of_range_is_named() {
+        let e = triangles("m", &quad(), &[0, 1, 7]).err().unwrap();
+        assert_eq!(
+            e,
+            GeometryError::IndexOutOfRange {
+                mesh: "m".into(),
+                entry: 2,
+                index: 7,
+                vertices: 4
+            }
+        );
+    }
+
+    #[test]
+    fn partial_triangle_is_rejected() {
+        assert!(matches!(
+            triangles("m", &quad(), &[0, 1]),
+            Err(GeometryError::PartialTriangle { len: 2, .. })
+        ));
+    }
+}

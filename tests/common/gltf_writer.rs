@@ -1,0 +1,151 @@
+//! A minimal glTF/GLB writer for test fixtures: meshes of positions and
+//! indices, nodes with transforms and children.
+
+use serde_json::{Value, json};
+
+/// Positions, optional indices and the glTF primitive mode (4: triangles,
+/// 5: strip, 1: lines).
+pub type Primitive<'a> = (&'a [[f32; 3]], Option<&'a [u32]>, u32);
+
+#[derive(Default)]
+pub struct GltfWriter {
+    bin: Vec<u8>,
+    buffer_views: Vec<Value>,
+    accessors: Vec<Value>,
+    pub meshes: Vec<Value>,
+    pub nodes: Vec<Value>,
+    pub extra: serde_json::Map<String, Value>,
+}
+
+impl GltfWriter {
+    fn view(&mut self, bytes: &[u8], target: u32) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        self.buffer_views.push(json!({
+            "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len(), "target": target
+        }));
+        self.bin.extend_from_slice(bytes);
+        self.buffer_views.len() - 1
+    }
+
+    pub fn positions(&mut self, p: &[[f32; 3]]) -> usize {
+        let bytes: Vec<u8> = p.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.view(&bytes, 34962);
+        let (mut min, mut max) = ([f32::MAX; 3], [f32::MIN; 3]);
+        for v in p {
+            for i in 0..3 {
+                min[i] = min[i].min(v[i]);
+                max[i] = max[i].max(v[i]);
+            }
+        }
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": 5126, "count": p.len(), "type": "VEC3",
+            "min": min, "max": max
+        }));
+        self.accessors.len() - 1
+    }
+
+    pub fn indices(&mut self, i: &[u32]) -> usize {
+        let bytes: Vec<u8> = i.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.view(&bytes, 34963);
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": 5125, "count": i.len(), "type": "SCALAR"
+        }));
+        self.accessors.len() - 1
+    }
+
+    /// A mesh with one primitive per (positions, indices, mode) triple.
+    pub fn mesh(&mut self, name: &str, primitives: &[Primitive]) -> usize {
+        let prims: Vec<Value> = primitives
+            .iter()
+            .map(|&(p, i, mode)| {
+                let pos = self.positions(p);
+                let mut prim = json!({"attributes": {"POSITION": pos}, "mode": mode});
+                if let Some(i) = i {
+                    prim["indices"] = json!(self.indices(i));
+                }
+                prim
+            })
+            .collect();
+        self.meshes.push(json!({"name": name, "primitives": prims}));
+        self.meshes.len() - 1
+    }
+
+    pub fn node(&mut self, node: Value) -> usize {
+        self.nodes.push(node);
+        self.nodes.len() - 1
+    }
+
+    fn document(&self, buffer: Value, roots: &[usize]) -> Value {
+        let mut doc = json!({
+            "asset": {"version": "2.0"},
+            "scene": 0,
+            "scenes": [{"nodes": roots}],
+            "nodes": self.nodes,
+            "meshes": self.meshes,
+            "accessors": self.accessors,
+            "bufferViews": self.buffer_views,
+            "buffers": [buffer],
+        });
+        for (k, v) in &self.extra {
+            doc[k] = v.clone();
+        }
+        doc
+    }
+
+    /// A binary .glb with `roots` as the scene's root nodes.
+    pub fn glb(&self, roots: &[usize]) -> Vec<u8> {
+        let mut json = self
+            .document(json!({"byteLength": self.bin.len()}), roots)
+            .to_string()
+            .into_bytes();
+        while !json.len().is_multiple_of(4) {
+            json.push(b' ');
+        }
+        let mut bin = self.bin.clone();
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        let total = 12 + 8 + json.len() + 8 + bin.len();
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&json);
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin);
+        out
+    }
+
+    /// A .gltf whose buffer is the external file `bin_name` (written by the
+    /// caller from [`GltfWriter::bin`]).
+    pub fn gltf_external(&self, roots: &[usize], bin_name: &str) -> String {
+        self.document(json!({"byteLength": self.bin.len(), "uri": bin_name}), roots)
+            .to_string()
+    }
+
+    pub fn bin(&self) -> &[u8] {
+        &self.bin
+    }
+}
+
+/// A unit cube at the origin: 8 vertices, 12 triangles.
+pub fn cube() -> (Vec<[f32; 3]>, Vec<u32>) {
+    let p = (0..8)
+        .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
+        .collect();
+    let faces = [
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+    ];
+    let i = faces.iter().flat_map(|&[a, b, c, d]| [a, b, c, a, c, d]).collect();
+    (p, i)
+}

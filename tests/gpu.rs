@@ -1,0 +1,325 @@
+//! Rendering and the error measure, on every backend present, checked
+//! against computations that share no code with the renderer.
+
+mod common;
+
+use std::cell::RefCell;
+
+use glam::{DAffine3, DVec3};
+use occlu::bench::{RunOptions, RunOutput, run};
+use occlu::camera::generate::{PathKind, generate};
+use occlu::camera::path::{CameraPath, Interpolation, KeyframeFile, PathFile};
+use occlu::cull::{Culler, FrameInput, TraversalStats, create};
+use occlu::gpu::{BackendChoice, FrameCtx, GpuContext, GpuError, Resolution};
+use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::object_set::ObjectSet;
+use occlu::scene::{LoadOptions, Scene, SceneBuilder, SceneSpec, load};
+
+/// A one-frame path: the camera at `eye` looking at `target`.
+fn still(eye: DVec3, target: DVec3, fov_y_deg: f64) -> CameraPath {
+    let file = PathFile {
+        frames: Some(1),
+        fps: None,
+        near: Some(0.1),
+        fov_y_deg: Some(fov_y_deg),
+        up: None,
+        interpolation: Interpolation::Linear,
+        keyframes: vec![KeyframeFile {
+            time: 0.0,
+            position: eye.to_array(),
+            target: Some(target.to_array()),
+            direction: None,
+            orientation: None,
+            up: None,
+            fov_y_deg: None,
+        }],
+    };
+    CameraPath::from_file(&file, "test").unwrap()
+}
+
+/// A scene of axis-aligned boxes, one object each.
+fn boxes(list: &[(DVec3, DVec3)]) -> Scene {
+    let mut b = SceneBuilder::new("test boxes".into(), 4096);
+    for (k, &(min, max)) in list.iter().enumerate() {
+        let corners: Vec<DVec3> = (0..8)
+            .map(|i| {
+                DVec3::new(
+                    if i & 1 == 0 { min.x } else { max.x },
+                    if i & 2 == 0 { min.y } else { max.y },
+                    if i & 4 == 0 { min.z } else { max.z },
+                )
+            })
+            .collect();
+        let faces = [
+            [0, 2, 6, 4],
+            [1, 5, 7, 3],
+            [0, 4, 5, 1],
+            [2, 3, 7, 6],
+            [0, 1, 3, 2],
+            [4, 6, 7, 5],
+        ];
+        let idx: Vec<u32> = faces.iter().flat_map(|&[a, b, c, d]| [a, b, c, a, c, d]).collect();
+        let group = b.add_mesh(&format!("box{k}"), &corners, &idx).unwrap();
+        b.add_object(&format!("box{k}"), &group, DAffine3::IDENTITY);
+    }
+    b.finish().unwrap()
+}
+
+/// Draws nothing: every visible pixel is an error.
+struct DrawNothing;
+impl Culler for DrawNothing {
+    fn name(&self) -> &str {
+        "nothing"
+    }
+    fn frame(&mut self, _: &mut FrameCtx, _: &FrameInput) -> TraversalStats {
+        TraversalStats::default()
+    }
+}
+
+/// Draws the reference visible set minus its first object: a culler that
+/// wrongly culls one visible object per frame.
+struct DropOneVisible(Vec<u32>);
+impl Culler for DropOneVisible {
+    fn name(&self) -> &str {
+        "drop-one"
+    }
+    fn needs_reference(&self) -> bool {
+        true
+    }
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        self.0.clear();
+        self.0.extend(input.reference_visible.unwrap().iter().skip(1));
+        ctx.draw(&self.0);
+        TraversalStats::default()
+    }
+}
+
+/// Records the reference visible set it is given, draws it.
+struct Recorder<'a>(&'a RefCell<Vec<ObjectSet>>);
+impl Culler for Recorder<'_> {
+    fn name(&self) -> &str {
+        "recorder"
+    }
+    fn needs_reference(&self) -> bool {
+        true
+    }
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        let visible = input.reference_visible.unwrap().clone();
+        ctx.draw(&visible.iter().collect::<Vec<_>>());
+        self.0.borrow_mut().push(visible);
+        TraversalStats::default()
+    }
+}
+
+fn run_modes(
+    gpu: &GpuContext,
+    scene: &Scene,
+    path: &CameraPath,
+    cullers: &mut [Box<dyn Culler + '_>],
+    resolution: Resolution,
+) -> RunOutput {
+    let options = RunOptions {
+        warmup: 0,
+        resolution,
+        measure_error: true,
+    };
+    run(gpu, scene, path, cullers, &options, &mut |_, _| {}).unwrap()
+}
+
+#[test]
+fn missing_quad_costs_exactly_its_rasterised_pixels() {
+    // A 2.06 × 1.54 quad (a thin box) 10 units ahead, 90° fov at 100×100:
+    // one unit at distance 10 is 5 pixels. Edges sit between pixel centres.
+    let (w, h) = (100u32, 100u32);
+    let scene = boxes(&[(DVec3::new(-1.03, -0.77, -10.0), DVec3::new(1.03, 0.77, -9.999))]);
+    let path = still(DVec3::ZERO, DVec3::NEG_Z, 90.0);
+    // Independent count: pixel centres whose ray hits the quad's front face.
+    let mut expected = 0;
+    for py in 0..h {
+        for px in 0..w {
+            let ndc_x = (f64::from(px) + 0.5) / f64::from(w) * 2.0 - 1.0;
+            let ndc_y = 1.0 - (f64::from(py) + 0.5) / f64::from(h) * 2.0;
+            let (x, y) = (ndc_x * 9.999, ndc_y * 9.999); // tan(45°) = 1
+            if x.abs() < 1.03 && y.abs() < 0.77 {
+                expected += 1;
+            }
+        }
+    }
+    assert_eq!(expected, 10 * 8);
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    for gpu in common::gpus() {
+        let mut cullers: Vec<Box<dyn Culler>> = vec![Box::new(DrawNothing), create("dr", &scene, &hierarchy).unwrap()];
+        let out = run_modes(&gpu, &scene, &path, &mut cullers, Resolution { width: w, height: h });
+        let (nothing, dr) = (&out.rows[0], &out.rows[1]);
+        assert_eq!(nothing.error_pixels, Some(expected), "{}", gpu.adapter);
+        assert_eq!(nothing.missed_objects, Some(1));
+        assert_eq!(nothing.visible_objects, Some(1));
+        assert_eq!(dr.error_pixels, Some(0), "{}", gpu.adapter);
+        assert_eq!((dr.objects_drawn, dr.triangles_drawn), (1, 12));
+    }
+}
+
+/// Nearest box hit along the ray through (sx, sy) of the image, by slab
+/// tests in f64: no triangles, no GPU, no shared code.
+fn ray_cast(list: &[(DVec3, DVec3)], eye: DVec3, fov_y: f64, aspect: f64, sx: f64, sy: f64) -> Option<usize> {
+    let t = (fov_y / 2.0).tan();
+    let dir = DVec3::new((sx * 2.0 - 1.0) * t * aspect, (1.0 - sy * 2.0) * t, -1.0);
+    let mut best: Option<(f64, usize)> = None;
+    for (k, &(min, max)) in list.iter().enumerate() {
+        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+        for a in 0..3 {
+            let (o, d) = (eye[a], dir[a]);
+            let (ta, tb) = ((min[a] - o) / d, (max[a] - o) / d);
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+        }
+        if t0 <= t1 && best.is_none_or(|(bt, _)| t0 < bt) {
+            best = Some((t0, k));
+        }
+    }
+    best.map(|(_, k)| k)
+}
+
+#[test]
+fn reference_visible_set_matches_cpu_ray_casting() {
+    // 60 seeded boxes in front of the camera, many hiding others.
+    let mut seed = 7u64;
+    let mut rand = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let list: Vec<(DVec3, DVec3)> = (0..60)
+        .map(|_| {
+            let c = DVec3::new(rand() * 16.0 - 8.0, rand() * 12.0 - 6.0, -5.0 - rand() * 25.0);
+            let e = DVec3::new(0.3 + rand() * 2.0, 0.3 + rand() * 2.0, 0.3 + rand() * 2.0);
+            (c - e, c + e)
+        })
+        .collect();
+    let scene = boxes(&list);
+    let (w, h, fov) = (160u32, 120u32, 70f64);
+    let path = still(DVec3::ZERO, DVec3::NEG_Z, fov);
+    let aspect = f64::from(w) / f64::from(h);
+    // Per object: pixels whose centre it owns, and whether it owns any of a
+    // 3×3 grid of samples inside some pixel (edges may go either way).
+    let mut centre_pixels = vec![0usize; list.len()];
+    let mut touches = vec![false; list.len()];
+    for py in 0..h {
+        for px in 0..w {
+            for (i, j) in (0..9).map(|s| (s % 3, s / 3)) {
+                let sx = (f64::from(px) + 0.05 + 0.45 * f64::from(i)) / f64::from(w);
+                let sy = (f64::from(py) + 0.05 + 0.45 * f64::from(j)) / f64::from(h);
+                if let Some(k) = ray_cast(&list, DVec3::ZERO, fov.to_radians(), aspect, sx, sy) {
+                    touches[k] = true;
+                    if (i, j) == (1, 1) {
+                        centre_pixels[k] += 1;
+                    }
+                }
+            }
+        }
+    }
+    let surely: Vec<usize> = (0..list.len()).filter(|&k| centre_pixels[k] >= 4).collect();
+    let hidden = touches.iter().filter(|&&t| !t).count();
+    assert!(
+        surely.len() >= 10 && hidden >= 5,
+        "a test with both visible and hidden boxes: {} / {hidden}",
+        surely.len()
+    );
+    for gpu in common::gpus() {
+        let seen = RefCell::new(Vec::new());
+        let mut cullers: Vec<Box<dyn Culler>> = vec![Box::new(Recorder(&seen))];
+        let out = run_modes(&gpu, &scene, &path, &mut cullers, Resolution { width: w, height: h });
+        assert_eq!(
+            out.rows[0].error_pixels,
+            Some(0),
+            "drawing the visible set changes no pixel"
+        );
+        let visible = &seen.borrow()[0];
+        for &k in &surely {
+            assert!(
+                visible.contains(k as u32),
+                "{}: box {k} owns {} pixels but is not visible",
+                gpu.adapter,
+                centre_pixels[k]
+            );
+        }
+        for k in visible.iter() {
+            assert!(
+                touches[k as usize],
+                "{}: box {k} is visible on the GPU but hidden by ray casting",
+                gpu.adapter
+            );
+        }
+    }
+}
+
+#[test]
+fn exact_modes_show_no_error_and_a_wrong_culler_is_caught() {
+    let scene = load(&SceneSpec::Builtin("city:blocks=2".into()), &LoadOptions::default()).unwrap();
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, 6), "walk").unwrap();
+    for gpu in common::gpus() {
+        let mut cullers: Vec<Box<dyn Culler + '_>> = ["dr", "vfc", "oracle"]
+            .iter()
+            .map(|m| create(m, &scene, &hierarchy).unwrap())
+            .collect();
+        cullers.push(Box::new(DropOneVisible(Vec::new())));
+        let out = run_modes(
+            &gpu,
+            &scene,
+            &path,
+            &mut cullers,
+            Resolution {
+                width: 160,
+                height: 120,
+            },
+        );
+        assert_eq!(out.rows.len(), 6 * 4);
+        let sum = |mode: &str, f: fn(&occlu::measure::FrameStats) -> u64| -> u64 {
+            out.rows.iter().filter(|r| r.mode == mode).map(f).sum()
+        };
+        for mode in ["dr", "vfc", "oracle"] {
+            assert_eq!(sum(mode, |r| r.error_pixels.unwrap()), 0, "{mode} on {}", gpu.adapter);
+            assert_eq!(sum(mode, |r| r.missed_objects.unwrap()), 0, "{mode} on {}", gpu.adapter);
+        }
+        assert!(
+            sum("drop-one", |r| r.error_pixels.unwrap()) > 0,
+            "the measure must see a dropped object"
+        );
+        assert_eq!(
+            sum("drop-one", |r| r.missed_objects.unwrap()),
+            6,
+            "one missed object per frame"
+        );
+        let (dr, vfc, oracle) = (
+            sum("dr", |r| r.triangles_drawn),
+            sum("vfc", |r| r.triangles_drawn),
+            sum("oracle", |r| r.triangles_drawn),
+        );
+        assert!(vfc * 10 < dr * 7, "vfc draws {vfc} of {dr} triangles");
+        assert!(oracle < vfc, "the oracle draws least");
+        assert_eq!(
+            sum("oracle", |r| r.objects_drawn),
+            sum("oracle", |r| r.visible_objects.unwrap())
+        );
+        assert!(
+            out.rows
+                .iter()
+                .all(|r| r.frame_ms > 0.0 && r.cpu_ms >= 0.0 && r.cpu_ms <= r.frame_ms)
+        );
+    }
+}
+
+#[test]
+fn missing_backend_is_a_clear_error() {
+    // No Metal adapter exists on Linux; on macOS there is no DX12.
+    let absent = if cfg!(target_os = "macos") {
+        BackendChoice::Dx12
+    } else {
+        BackendChoice::Metal
+    };
+    match GpuContext::new(absent) {
+        Err(e @ GpuError::NoAdapter(_)) => assert!(e.to_string().contains("no graphics adapter")),
+        Err(e) => panic!("unexpected error {e}"),
+        Ok(_) => panic!("{absent} should not exist here"),
+    }
+}

@@ -1,0 +1,252 @@
+//! OBJ and glTF loading: triangle counts, instancing, transforms, clustering
+//! and every kind of bad input.
+
+mod common;
+
+use common::gltf_writer::{GltfWriter, cube};
+use common::{THREE_OBJECTS_OBJ, occlu, stdout, write};
+use glam::DVec3;
+use occlu::scene::{LoadOptions, SceneSpec, load};
+use serde_json::json;
+
+fn load_file(path: &std::path::Path) -> Result<occlu::scene::Scene, occlu::scene::SceneError> {
+    load(&SceneSpec::File(path.into()), &LoadOptions::default())
+}
+
+#[test]
+fn obj_objects_and_groups_become_objects() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(dir.path(), "three.obj", THREE_OBJECTS_OBJ);
+    let s = load_file(&obj).unwrap();
+    let names: Vec<&str> = s.objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["quad", "tetra", "lone"]);
+    assert_eq!(s.objects.iter().map(|o| o.triangles).collect::<Vec<_>>(), [2, 4, 1]);
+    assert_eq!(s.triangles(), 7);
+    assert_eq!(s.bounds.min, DVec3::ZERO);
+    assert_eq!(s.bounds.max, DVec3::new(5.0, 1.0, 1.0));
+    assert!(s.warnings.is_empty());
+}
+
+#[test]
+fn info_reports_obj_triangle_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(dir.path(), "three.obj", THREE_OBJECTS_OBJ);
+    let out = occlu(&["info", obj.to_str().unwrap(), "--json"]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(v["triangles"], 7);
+    assert_eq!(v["objects"], 3);
+    assert!(v["hierarchy"]["nodes"].as_u64().unwrap() >= 1);
+}
+
+#[test]
+fn obj_usemtl_splits_are_merged_back_into_one_object() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(
+        dir.path(),
+        "m.obj",
+        "o box\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nusemtl a\nf 1 2 3\nusemtl b\nf 1 2 4\n",
+    );
+    let s = load_file(&obj).unwrap();
+    assert_eq!(s.objects.len(), 1);
+    assert_eq!(s.objects[0].triangles, 2);
+}
+
+#[test]
+fn degenerate_triangles_are_dropped_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(
+        dir.path(),
+        "d.obj",
+        "o d\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\nf 1 1 3\nl 1 2\n",
+    );
+    let s = load_file(&obj).unwrap();
+    assert_eq!(s.triangles(), 1);
+    assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("dropped 2 degenerate triangles ('d': 2)"))
+    );
+    assert!(s.warnings.iter().any(|w| w.contains("ignored 1 line/point elements")));
+}
+
+#[test]
+fn large_meshes_are_clustered_and_keep_every_triangle() {
+    // One 20×20 grid (800 triangles) with a 100-triangle cluster budget.
+    let mut text = String::from("o grid\n");
+    for z in 0..=20 {
+        for x in 0..=20 {
+            text += &format!("v {x} 0 {z}\n");
+        }
+    }
+    for z in 0..20 {
+        for x in 0..20 {
+            let v = |x: usize, z: usize| z * 21 + x + 1;
+            text += &format!("f {} {} {} {}\n", v(x, z), v(x + 1, z), v(x + 1, z + 1), v(x, z + 1));
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(dir.path(), "grid.obj", text);
+    let s = load(&SceneSpec::File(obj), &LoadOptions { cluster_triangles: 100 }).unwrap();
+    assert_eq!(s.triangles(), 800);
+    assert!(s.objects.len() >= 8, "{} clusters", s.objects.len());
+    assert!(
+        s.objects
+            .iter()
+            .all(|o| o.triangles <= 100 && o.name.starts_with("grid#"))
+    );
+    // Clusters tile the grid: their bounds together cover it, each a part.
+    let area: f64 = s
+        .objects
+        .iter()
+        .map(|o| o.bounds.extent().x * o.bounds.extent().z)
+        .sum();
+    assert!(area < 400.0 * 1.5, "clusters overlap too much: {area}");
+}
+
+/// A GLB with a cube mesh used by three nodes (one under a scaled parent)
+/// and a two-primitive mesh (a strip of 4 triangles, a list of 1).
+fn instanced_glb() -> Vec<u8> {
+    let mut w = GltfWriter::default();
+    let (p, i) = cube();
+    let cube_mesh = w.mesh("cube", &[(&p, Some(&i), 4)]);
+    let strip: Vec<[f32; 3]> = (0..6).map(|k| [k as f32, (k % 2) as f32, 0.0]).collect();
+    let tri = [[0.0, 0.0, 5.0], [1.0, 0.0, 5.0], [0.0, 1.0, 5.0]];
+    let two = w.mesh("two", &[(&strip, None, 5), (&tri, None, 4)]);
+    let a = w.node(json!({"name": "a", "mesh": cube_mesh, "translation": [10.0, 0.0, 0.0]}));
+    let b = w.node(json!({"name": "b", "mesh": cube_mesh, "translation": [0.0, 0.0, -10.0]}));
+    let child = w.node(json!({"name": "child", "mesh": cube_mesh, "translation": [1.0, 0.0, 0.0]}));
+    let parent = w.node(json!({"name": "parent", "children": [child], "scale": [2.0, 2.0, 2.0]}));
+    let t = w.node(json!({"name": "t", "mesh": two}));
+    w.glb(&[a, b, parent, t])
+}
+
+#[test]
+fn glb_instances_share_one_mesh_and_apply_node_transforms() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = write(dir.path(), "inst.glb", instanced_glb());
+    let s = load_file(&glb).unwrap();
+    // 3 cube instances (36) + strip (4) + triangle (1).
+    assert_eq!(s.triangles(), 41);
+    assert_eq!(s.objects.len(), 5);
+    let cubes: Vec<_> = s.objects.iter().filter(|o| o.triangles == 12).collect();
+    assert_eq!(cubes.len(), 3);
+    assert!(
+        cubes.windows(2).all(|w| w[0].mesh == w[1].mesh),
+        "instances share one mesh"
+    );
+    let child = s.objects.iter().find(|o| o.name == "child").unwrap();
+    // Parent scale 2 applies to the child's translation and size.
+    assert_eq!(child.bounds.min, DVec3::new(2.0, 0.0, 0.0));
+    assert_eq!(child.bounds.max, DVec3::new(4.0, 2.0, 2.0));
+    let a = s.objects.iter().find(|o| o.name == "a").unwrap();
+    assert_eq!(a.bounds.min, DVec3::new(10.0, 0.0, 0.0));
+
+    let out = occlu(&["info", glb.to_str().unwrap(), "--json"]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(v["triangles"], 41);
+    assert_eq!(v["meshes"], 3, "one cube mesh, two primitives of the other");
+}
+
+#[test]
+fn gltf_with_external_buffer_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut w = GltfWriter::default();
+    let (p, i) = cube();
+    let m = w.mesh("cube", &[(&p, Some(&i), 4)]);
+    let n = w.node(json!({"mesh": m}));
+    write(dir.path(), "my cube.bin", w.bin());
+    let gltf = write(dir.path(), "cube.gltf", w.gltf_external(&[n], "my%20cube.bin"));
+    assert_eq!(load_file(&gltf).unwrap().triangles(), 12);
+}
+
+/// Loads a GLB with one cube primitive after `edit` changes its JSON.
+fn edited_glb(edit: impl FnOnce(&mut GltfWriter)) -> Result<occlu::scene::Scene, occlu::scene::SceneError> {
+    let mut w = GltfWriter::default();
+    let (p, i) = cube();
+    w.mesh("cube", &[(&p, Some(&i), 4)]);
+    w.node(json!({"mesh": 0}));
+    edit(&mut w);
+    let dir = tempfile::tempdir().unwrap();
+    load_file(&write(dir.path(), "e.glb", w.glb(&[0])))
+}
+
+#[test]
+fn bad_gltf_input_is_a_clear_error() {
+    let msg = |r: Result<occlu::scene::Scene, occlu::scene::SceneError>| r.expect_err("must fail").to_string();
+    let lines = msg(edited_glb(|w| w.meshes[0]["primitives"][0]["mode"] = json!(1)));
+    assert!(
+        lines.contains("mesh 'cube' primitive 0: primitive mode Lines is not supported"),
+        "{lines}"
+    );
+    let required = msg(edited_glb(|w| {
+        w.extra
+            .insert("extensionsUsed".into(), json!(["KHR_draco_mesh_compression"]));
+        w.extra
+            .insert("extensionsRequired".into(), json!(["KHR_draco_mesh_compression"]));
+    }));
+    assert!(
+        required.contains("KHR_draco_mesh_compression") && required.contains("Unsupported extension"),
+        "{required}"
+    );
+    // A required material extension does not affect visibility: it loads.
+    edited_glb(|w| {
+        w.extra.insert("extensionsUsed".into(), json!(["KHR_materials_unlit"]));
+        w.extra
+            .insert("extensionsRequired".into(), json!(["KHR_materials_unlit"]));
+    })
+    .expect("material extensions are accepted");
+    let range = msg(edited_glb(|w| {
+        let (p, _) = cube();
+        let bad = [0u32, 1, 99];
+        w.meshes.clear();
+        w.mesh("bad", &[(&p, Some(&bad), 4)]);
+    }));
+    assert!(range.contains("mesh 'bad': index 99"), "{range}");
+    let nan = msg(edited_glb(|w| {
+        w.meshes.clear();
+        w.mesh(
+            "nan",
+            &[(&[[0.0, 0.0, 0.0], [1.0, f32::NAN, 0.0], [0.0, 1.0, 0.0]], None, 4)],
+        );
+    }));
+    assert!(nan.contains("mesh 'nan': vertex 1 has a non-finite position"), "{nan}");
+    let empty = msg(edited_glb(|w| {
+        w.nodes.clear();
+        w.node(json!({"name": "no mesh"}));
+    }));
+    assert!(empty.contains("no triangles"), "{empty}");
+
+    let dir = tempfile::tempdir().unwrap();
+    let junk = write(dir.path(), "junk.glb", b"glTF\x02\0\0\0garbage");
+    assert!(load_file(&junk).unwrap_err().to_string().contains("invalid glTF"));
+    let text = write(
+        dir.path(),
+        "t.gltf",
+        r#"{"asset": {"version": "2.0"}, "meshes": [{"primitives": []}]"#,
+    );
+    assert!(load_file(&text).unwrap_err().to_string().contains("invalid glTF"));
+}
+
+#[test]
+fn bad_obj_input_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let msg = |name: &str, text: &str| load_file(&write(dir.path(), name, text)).unwrap_err().to_string();
+    assert!(
+        msg("nan.obj", "o n\nv 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n")
+            .contains("mesh 'n': vertex 1 has a non-finite position")
+    );
+    assert!(msg("range.obj", "v 0 0 0\nv 1 0 0\nf 1 2 9\n").contains("invalid OBJ"));
+    assert!(msg("text.obj", "v 0 0 zero\nf 1 2 3\n").contains("invalid OBJ"));
+    assert!(msg("empty.obj", "").contains("no triangles"));
+    assert!(msg("points.obj", "v 0 0 0\np 1\n").contains("no triangles"));
+    let missing = load_file(&dir.path().join("absent.obj")).unwrap_err().to_string();
+    assert!(
+        missing.contains("absent.obj") && missing.contains("No such file"),
+        "{missing}"
+    );
+    let ply = load_file(&write(dir.path(), "m.ply", "ply")).unwrap_err().to_string();
+    assert!(ply.contains("unsupported model format"));
+}
