@@ -88,12 +88,6 @@ impl Aabb {
         }
         Aabb::from_points(self.corners().map(|c| transform.transform_point3(c)))
     }
-
-    /// Squared distance from `p` to the closest point of the box (0 inside).
-    pub fn distance_squared(&self, p: DVec3) -> f64 {
-        let d = (self.min - p).max(p - self.max).max(DVec3::ZERO);
-        d.length_squared()
-    }
 }
 
 #[cfg(test)]
@@ -126,14 +120,6 @@ mod tests {
             assert!(pts.iter().any(|p| p[axis] == w.min[axis]));
             assert!(pts.iter().any(|p| p[axis] == w.max[axis]));
         }
-    }
-
-    #[test]
-    fn distance_is_zero_inside_and_euclidean_outside() {
-        let b = Aabb::new(DVec3::ZERO, DVec3::ONE);
-        assert_eq!(b.distance_squared(DVec3::splat(0.5)), 0.0);
-        assert_eq!(b.distance_squared(DVec3::new(3.0, 0.5, 0.5)), 4.0);
-        assert_eq!(b.distance_squared(DVec3::new(2.0, 2.0, 0.5)), 2.0);
     }
 
     #[test]

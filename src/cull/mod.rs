@@ -9,8 +9,6 @@ mod dr;
 mod oracle;
 mod vfc;
 
-use serde::Serialize;
-
 use crate::camera::Camera;
 use crate::gpu::FrameCtx;
 use crate::hierarchy::Hierarchy;
@@ -31,7 +29,7 @@ pub struct FrameInput<'a> {
 }
 
 /// Hierarchy traversal counts of one frame (drawing is counted by `FrameCtx`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TraversalStats {
     pub nodes_visited: u64,
     pub nodes_culled_frustum: u64,

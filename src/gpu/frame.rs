@@ -66,10 +66,6 @@ impl<'a> FrameCtx<'a> {
         }
     }
 
-    pub fn object_count(&self) -> usize {
-        self.renderer.scene.object_count()
-    }
-
     /// Draws `objects`, shaded, into this mode's frame.
     pub fn draw(&mut self, objects: &[u32]) {
         let start = Instant::now();

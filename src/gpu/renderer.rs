@@ -88,10 +88,6 @@ impl GpuScene {
             staging: Vec::with_capacity(scene.objects.len()),
         })
     }
-
-    pub fn object_count(&self) -> usize {
-        self.draws.len()
-    }
 }
 
 pub struct SceneRenderer {

@@ -48,8 +48,6 @@ pub struct Node {
     /// The subtree's objects are `objects[first_object..first_object + object_count]`.
     pub first_object: u32,
     pub object_count: u32,
-    /// Triangles of every object in the subtree.
-    pub triangles: u64,
 }
 
 impl Node {
@@ -130,7 +128,6 @@ fn placeholder() -> Node {
         child_count: 0,
         first_object: 0,
         object_count: 0,
-        triangles: 0,
     }
 }
 
@@ -172,7 +169,6 @@ impl Builder<'_> {
             bounds,
             first_object: start as u32,
             object_count: (end - start) as u32,
-            triangles,
             ..placeholder()
         };
         let count = end - start;
@@ -313,8 +309,6 @@ mod tests {
                 .iter()
                 .fold(Aabb::EMPTY, |b, &o| b.union(objects[o as usize].bounds));
             assert_eq!(node.bounds, bounds, "node bounds are the union of its objects");
-            let tris: u64 = subtree.iter().map(|&o| u64::from(objects[o as usize].triangles)).sum();
-            assert_eq!(node.triangles, tris);
             if !node.is_leaf() {
                 let kids = &h.nodes[node.children()];
                 assert_eq!(kids.iter().map(|k| k.object_count).sum::<u32>(), node.object_count);

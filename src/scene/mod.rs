@@ -148,15 +148,6 @@ pub struct MeshGroup {
     clusters: Vec<(u32, DVec3)>,
 }
 
-impl MeshGroup {
-    pub fn triangles(&self, builder: &SceneBuilder) -> u64 {
-        self.clusters
-            .iter()
-            .map(|&(m, _)| u64::from(builder.meshes[m as usize].triangles()))
-            .sum()
-    }
-}
-
 /// Accumulates validated, clustered meshes and their instances.
 pub struct SceneBuilder {
     source: String,
@@ -243,10 +234,6 @@ impl SceneBuilder {
 
     pub fn set_walk_hint(&mut self, walk: Vec<DVec3>) {
         self.walk_hint = Some(walk);
-    }
-
-    pub fn object_count(&self) -> usize {
-        self.objects.len()
     }
 
     /// The finished scene, or `None` when nothing drawable was added.
