@@ -8,6 +8,8 @@
 
 struct Camera {
     projection: mat4x4<f32>,
+    // Projection times the world-to-camera rotation (used by boxes.wgsl).
+    view_projection: mat4x4<f32>,
 }
 
 struct Object {

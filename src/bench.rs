@@ -16,7 +16,8 @@ use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
 use crate::cull::{Culler, FrameInput, MODES, ModeError, create};
 use crate::gpu::{
-    AdapterReport, FrameCtx, GpuContext, GpuError, GpuScene, GpuTimer, RenderTargets, Resolution, SceneRenderer,
+    AdapterReport, FrameCtx, FrameResources, GpuContext, GpuError, GpuScene, GpuTimer, QueryPool, RenderTargets,
+    Resolution, SceneRenderer,
 };
 use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{ErrorMeter, FrameStats, ModeDescription, summarize};
@@ -59,6 +60,8 @@ pub fn run(
     let needs_reference = options.measure_error || cullers.iter().any(|c| c.needs_reference());
     let mut meter = needs_reference.then(|| ErrorMeter::new(gpu, &targets, scene.objects.len()));
     let mut timer = GpuTimer::new(gpu, cullers.len());
+    let mut queries = QueryPool::new(gpu, renderer.camera_uniform());
+    let mut draw_queue = Vec::new();
     let mut drawn: Vec<ObjectSet> = cullers.iter().map(|_| ObjectSet::new(scene.objects.len())).collect();
     let mut frame_rows: Vec<Option<FrameStats>> = vec![None; cullers.len()];
     let frames = path.frames;
@@ -92,7 +95,15 @@ pub fn run(
                 },
             };
             let frame_start = Instant::now();
-            let mut ctx = FrameCtx::begin(gpu, &renderer, &targets, k, timer.as_ref(), &mut drawn[k]);
+            let resources = FrameResources {
+                gpu,
+                renderer: &renderer,
+                targets: &targets,
+                queries: &mut queries,
+                timer: timer.as_ref(),
+                draw_queue: &mut draw_queue,
+            };
+            let mut ctx = FrameCtx::begin(resources, k, &camera, &mut drawn[k]);
             let cull_start = Instant::now();
             let traversal = culler.frame(&mut ctx, &input);
             let cull_time = cull_start.elapsed();
@@ -109,9 +120,10 @@ pub fn run(
                 nodes_visited: traversal.nodes_visited,
                 nodes_culled_frustum: traversal.nodes_culled_frustum,
                 nodes_culled_occlusion: traversal.nodes_culled_occlusion,
-                queries: 0,
-                query_batches: 0,
-                queries_skipped: 0,
+                queries: outcome.counters.queries,
+                query_batches: outcome.counters.query_batches,
+                queries_skipped: traversal.queries_skipped,
+                query_wait_ms: ms(outcome.counters.query_wait),
                 error_pixels: None,
                 missed_objects: None,
                 visible_objects: visible.as_ref().map(|v| v.len() as u64),
@@ -231,7 +243,7 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
     let mut cullers = plan
         .modes
         .iter()
-        .map(|m| create(m, &scene, &hierarchy))
+        .map(|m| create(m, &scene, &hierarchy, &plan.params))
         .collect::<Result<Vec<_>, _>>()?;
 
     let gpu = GpuContext::new(plan.backend)?;

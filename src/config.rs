@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::cull::{ModeError, parse_modes};
+use crate::cull::{ModeError, ModeParams, parse_modes};
 use crate::gpu::{BackendChoice, Resolution};
 use crate::scene::{DEFAULT_CLUSTER_TRIANGLES, SceneSpec};
 
@@ -34,6 +34,8 @@ pub struct BenchConfig {
     pub error: Option<bool>,
     /// Meshes above this many triangles are split into clusters.
     pub cluster_triangles: Option<u32>,
+    /// Mode parameters, `MODE.KEY=VALUE`.
+    pub params: Option<Vec<String>>,
 }
 
 pub const DEFAULT_WARMUP: u32 = 3;
@@ -60,6 +62,7 @@ pub struct BenchPlan {
     pub scene: SceneSpec,
     pub path: Option<PathBuf>,
     pub modes: Vec<&'static str>,
+    pub params: ModeParams,
     pub frames: Option<u32>,
     pub warmup: u32,
     pub resolution: Resolution,
@@ -109,6 +112,14 @@ impl BenchConfig {
             out: self.out.or(fallback.out),
             error: self.error.or(fallback.error),
             cluster_triangles: self.cluster_triangles.or(fallback.cluster_triangles),
+            // Per key, a flag wins over the file: later entries override.
+            params: match (fallback.params, self.params) {
+                (Some(mut file), Some(flags)) => {
+                    file.extend(flags);
+                    Some(file)
+                }
+                (file, flags) => flags.or(file),
+            },
         }
     }
 
@@ -122,10 +133,12 @@ impl BenchConfig {
         if self.frames == Some(0) {
             return Err(ConfigError::ZeroFrames);
         }
+        let modes = parse_modes(&self.modes.unwrap_or_else(|| vec!["all".into()]))?;
         Ok(BenchPlan {
             scene,
             path: self.path,
-            modes: parse_modes(&self.modes.unwrap_or_else(|| vec!["all".into()]))?,
+            params: ModeParams::parse(&self.params.unwrap_or_default(), &modes)?,
+            modes,
             frames: self.frames,
             warmup: self.warmup.unwrap_or(DEFAULT_WARMUP),
             resolution: self.resolution.unwrap_or(Resolution::DEFAULT),
@@ -161,11 +174,22 @@ mod tests {
         let flags = BenchConfig {
             model: Some("m.obj".into()),
             frames: Some(20),
+            params: Some(vec!["omq.factor=0.5".into()]),
             ..Default::default()
+        };
+        let file = BenchConfig {
+            params: Some(vec!["omq.factor=0.9".into(), "omq.om=32x24".into()]),
+            ..file
         };
         let p = flags.or(file).plan().unwrap();
         assert_eq!(p.scene, SceneSpec::File("m.obj".into()));
         assert_eq!((p.frames, p.warmup), (Some(20), 1));
+        assert_eq!(p.params.get::<f64>("omq", "factor"), Ok(0.5), "the flag wins");
+        assert_eq!(
+            p.params.get::<String>("omq", "om"),
+            Ok("32x24".into()),
+            "the file still counts"
+        );
     }
 
     #[test]

@@ -33,7 +33,18 @@ struct Cli {
 }
 
 fn after_help() -> String {
-    let modes: Vec<String> = MODES.iter().map(|m| format!("  {:<8} {}", m.name, m.summary)).collect();
+    let modes: Vec<String> = MODES
+        .iter()
+        .map(|m| {
+            let params = m.params.iter().map(|p| {
+                format!(
+                    "\n             --param {}.{}={}  {}",
+                    m.name, p.key, p.default, p.summary
+                )
+            });
+            format!("  {:<8} {}{}", m.name, m.summary, params.collect::<String>())
+        })
+        .collect();
     let scenes: Vec<String> = SCENES.iter().map(|(n, s)| format!("  {n:<8} {s}")).collect();
     format!(
         "Modes:\n{}\n\nBuilt-in scenes (--scene NAME[:key=value,...]):\n{}\n\nExit status: 0 success, 2 bad input, 1 failure while running.",
@@ -118,6 +129,9 @@ struct BenchArgs {
     /// Skip the reference render and error measure (faster; error columns stay empty).
     #[arg(long)]
     no_error: bool,
+    /// A mode parameter, MODE.KEY=VALUE (repeatable), e.g. omq.om=80x60.
+    #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
+    params: Vec<String>,
 }
 
 #[derive(Args)]
@@ -206,6 +220,7 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         out: args.out,
         error: args.no_error.then_some(false),
         cluster_triangles: args.scene.cluster_triangles,
+        params: (!args.params.is_empty()).then_some(args.params),
     };
     let file = match &args.config {
         Some(path) => BenchConfig::load(path)?,

@@ -82,7 +82,7 @@ fn bad_input_gets_one_clear_line() {
     fails_with(
         &bench_args(&["--modes", "dr,warp"], &out),
         2,
-        &["unknown mode 'warp'", "dr, vfc, oracle"],
+        &["unknown mode 'warp'", "dr, vfc, sq, omq, oracle"],
     );
     fails_with(
         &["bench", &s(&good_obj), "--frames", "0", "--out", &out],
@@ -99,6 +99,16 @@ fn bad_input_gets_one_clear_line() {
         &["bench", "--scene", "moon", "--out", &out],
         2,
         &["unknown scene 'moon'"],
+    );
+    fails_with(
+        &bench_args(&["--param", "omq.bogus=1"], &out),
+        2,
+        &["unknown parameter 'omq.bogus'", "omq.factor"],
+    );
+    fails_with(
+        &bench_args(&["--param", "omq.om=wide"], &out),
+        2,
+        &["parameter 'omq.om'", "'wide'"],
     );
     fails_with(&["bench", "--backend", "glide"], 2, &["invalid value 'glide'"]);
     fails_with(&["bench", "--bogus-flag"], 2, &["--bogus-flag"]);
@@ -145,7 +155,7 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
         .iter()
         .map(|m| m["name"].as_str().unwrap())
         .collect();
-    assert_eq!(modes, ["dr", "vfc", "oracle"]);
+    assert_eq!(modes, ["dr", "vfc", "sq", "omq", "oracle"]);
     for m in summary["modes"].as_array().unwrap() {
         assert_eq!(m["frames"], 2);
         assert_eq!(m["error_pixels_total"], 0, "{}", m["name"]);
@@ -174,7 +184,7 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
     ] {
         assert!(header.split(',').any(|c| c == column), "frames.csv lacks {column}");
     }
-    assert_eq!(lines.count(), 6, "2 frames × 3 modes");
+    assert_eq!(lines.count(), 10, "2 frames × 5 modes");
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| oracle |") && report.contains("Adapter:"));
 }

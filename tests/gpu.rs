@@ -5,65 +5,15 @@ mod common;
 
 use std::cell::RefCell;
 
-use glam::{DAffine3, DVec3};
-use occlu::bench::{RunOptions, RunOutput, run};
+use common::{boxes, run_modes, still};
+use glam::DVec3;
 use occlu::camera::generate::{PathKind, generate};
-use occlu::camera::path::{CameraPath, Interpolation, KeyframeFile, PathFile};
-use occlu::cull::{Culler, FrameInput, TraversalStats, create};
+use occlu::camera::path::CameraPath;
+use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create};
 use occlu::gpu::{BackendChoice, FrameCtx, GpuContext, GpuError, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::object_set::ObjectSet;
-use occlu::scene::{LoadOptions, Scene, SceneBuilder, SceneSpec, load};
-
-/// A one-frame path: the camera at `eye` looking at `target`.
-fn still(eye: DVec3, target: DVec3, fov_y_deg: f64) -> CameraPath {
-    let file = PathFile {
-        frames: Some(1),
-        fps: None,
-        near: Some(0.1),
-        fov_y_deg: Some(fov_y_deg),
-        up: None,
-        interpolation: Interpolation::Linear,
-        keyframes: vec![KeyframeFile {
-            time: 0.0,
-            position: eye.to_array(),
-            target: Some(target.to_array()),
-            direction: None,
-            orientation: None,
-            up: None,
-            fov_y_deg: None,
-        }],
-    };
-    CameraPath::from_file(&file, "test").unwrap()
-}
-
-/// A scene of axis-aligned boxes, one object each.
-fn boxes(list: &[(DVec3, DVec3)]) -> Scene {
-    let mut b = SceneBuilder::new("test boxes".into(), 4096);
-    for (k, &(min, max)) in list.iter().enumerate() {
-        let corners: Vec<DVec3> = (0..8)
-            .map(|i| {
-                DVec3::new(
-                    if i & 1 == 0 { min.x } else { max.x },
-                    if i & 2 == 0 { min.y } else { max.y },
-                    if i & 4 == 0 { min.z } else { max.z },
-                )
-            })
-            .collect();
-        let faces = [
-            [0, 2, 6, 4],
-            [1, 5, 7, 3],
-            [0, 4, 5, 1],
-            [2, 3, 7, 6],
-            [0, 1, 3, 2],
-            [4, 6, 7, 5],
-        ];
-        let idx: Vec<u32> = faces.iter().flat_map(|&[a, b, c, d]| [a, b, c, a, c, d]).collect();
-        let group = b.add_mesh(&format!("box{k}"), &corners, &idx).unwrap();
-        b.add_object(&format!("box{k}"), &group, DAffine3::IDENTITY);
-    }
-    b.finish().unwrap()
-}
+use occlu::scene::{LoadOptions, SceneSpec, load};
 
 /// Draws nothing: every visible pixel is an error.
 struct DrawNothing;
@@ -111,21 +61,6 @@ impl Culler for Recorder<'_> {
     }
 }
 
-fn run_modes(
-    gpu: &GpuContext,
-    scene: &Scene,
-    path: &CameraPath,
-    cullers: &mut [Box<dyn Culler + '_>],
-    resolution: Resolution,
-) -> RunOutput {
-    let options = RunOptions {
-        warmup: 0,
-        resolution,
-        measure_error: true,
-    };
-    run(gpu, scene, path, cullers, &options, &mut |_, _| {}).unwrap()
-}
-
 #[test]
 fn missing_quad_costs_exactly_its_rasterised_pixels() {
     // A 2.06 × 1.54 quad (a thin box) 10 units ahead, 90° fov at 100×100:
@@ -148,7 +83,10 @@ fn missing_quad_costs_exactly_its_rasterised_pixels() {
     assert_eq!(expected, 10 * 8);
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     for gpu in common::gpus() {
-        let mut cullers: Vec<Box<dyn Culler>> = vec![Box::new(DrawNothing), create("dr", &scene, &hierarchy).unwrap()];
+        let mut cullers: Vec<Box<dyn Culler>> = vec![
+            Box::new(DrawNothing),
+            create("dr", &scene, &hierarchy, &ModeParams::default()).unwrap(),
+        ];
         let out = run_modes(&gpu, &scene, &path, &mut cullers, Resolution { width: w, height: h });
         let (nothing, dr) = (&out.rows[0], &out.rows[1]);
         assert_eq!(nothing.error_pixels, Some(expected), "{}", gpu.adapter);
@@ -260,7 +198,7 @@ fn exact_modes_show_no_error_and_a_wrong_culler_is_caught() {
     for gpu in common::gpus() {
         let mut cullers: Vec<Box<dyn Culler + '_>> = ["dr", "vfc", "oracle"]
             .iter()
-            .map(|m| create(m, &scene, &hierarchy).unwrap())
+            .map(|m| create(m, &scene, &hierarchy, &ModeParams::default()).unwrap())
             .collect();
         cullers.push(Box::new(DropOneVisible(Vec::new())));
         let out = run_modes(

@@ -2,12 +2,20 @@
 //!
 //! A mode owns its state between frames (temporal coherence lives inside the
 //! mode) and touches the GPU only through [`FrameCtx`], which counts what it
-//! draws. To add a mode: write `cull/NAME.rs` implementing [`Culler`], add
-//! it to [`MODES`] and to [`create`].
+//! draws and queries. To add a mode: write `cull/NAME.rs` implementing
+//! [`Culler`], add it to [`MODES`] and to [`create`].
 
 mod dr;
+pub mod occupancy;
+mod omq;
 mod oracle;
+mod sq;
+mod traversal;
 mod vfc;
+
+use std::collections::BTreeMap;
+use std::fmt::Display;
+use std::str::FromStr;
 
 use crate::camera::Camera;
 use crate::gpu::FrameCtx;
@@ -16,7 +24,9 @@ use crate::object_set::ObjectSet;
 use crate::scene::Scene;
 
 pub use dr::DirectRendering;
+pub use omq::{OccupancyMapQueries, OmqParams};
 pub use oracle::Oracle;
+pub use sq::SingleQueries;
 pub use vfc::FrustumCulling;
 
 /// What a mode is told about the frame it renders.
@@ -34,6 +44,8 @@ pub struct TraversalStats {
     pub nodes_visited: u64,
     pub nodes_culled_frustum: u64,
     pub nodes_culled_occlusion: u64,
+    /// Queries made unnecessary (the Occupancy Map's empty-area rule).
+    pub queries_skipped: u64,
 }
 
 pub trait Culler {
@@ -60,6 +72,14 @@ pub struct ModeInfo {
     pub summary: &'static str,
     /// Whether the mode may never change a pixel (0 error required).
     pub conservative: bool,
+    /// Parameters it takes as `--param NAME.KEY=VALUE`.
+    pub params: &'static [ParamInfo],
+}
+
+pub struct ParamInfo {
+    pub key: &'static str,
+    pub default: &'static str,
+    pub summary: &'static str,
 }
 
 pub const MODES: &[ModeInfo] = &[
@@ -67,16 +87,47 @@ pub const MODES: &[ModeInfo] = &[
         name: "dr",
         summary: "direct rendering: every object, no culling (002 §5)",
         conservative: true,
+        params: &[],
     },
     ModeInfo {
         name: "vfc",
         summary: "hierarchical view-frustum culling with the fully-inside shortcut (002 §4.1)",
         conservative: true,
+        params: &[],
+    },
+    ModeInfo {
+        name: "sq",
+        summary: "front-to-back traversal, one occlusion query per node, each awaited (003 §5 b)",
+        conservative: true,
+        params: &[],
+    },
+    ModeInfo {
+        name: "omq",
+        summary: "Occupancy Map + multiple occlusion queries in three stages (003 §3-4)",
+        conservative: true,
+        params: &[
+            ParamInfo {
+                key: "om",
+                default: "64x48",
+                summary: "Occupancy Map cells across x down",
+            },
+            ParamInfo {
+                key: "initial_max_tests",
+                default: "4",
+                summary: "stage-2 batches in the first frame",
+            },
+            ParamInfo {
+                key: "factor",
+                default: "0.7",
+                summary: "next frame's max_tests = factor x this frame's batches",
+            },
+        ],
     },
     ModeInfo {
         name: "oracle",
         summary: "draws exactly the objects visible in the reference frame: the floor for object-level culling",
         conservative: true,
+        params: &[],
     },
 ];
 
@@ -86,6 +137,76 @@ pub enum ModeError {
     Unknown(String),
     #[error("no modes given")]
     Empty,
+    #[error("parameter '{0}' is not MODE.KEY=VALUE")]
+    MalformedParam(String),
+    #[error("unknown parameter '{key}' ({known})")]
+    UnknownParam { key: String, known: String },
+    #[error("parameter '{key}': {reason}")]
+    BadParam { key: String, reason: String },
+}
+
+/// Mode parameters given as `MODE.KEY=VALUE` (`--param`, a config's
+/// `params`), checked against the parameters the running modes declare.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ModeParams {
+    values: BTreeMap<String, String>,
+}
+
+impl ModeParams {
+    pub fn parse(items: &[String], modes: &[&str]) -> Result<ModeParams, ModeError> {
+        let mut values = BTreeMap::new();
+        for item in items {
+            let (key, value) = item
+                .split_once('=')
+                .filter(|(k, _)| k.contains('.'))
+                .ok_or_else(|| ModeError::MalformedParam(item.clone()))?;
+            let (mode, name) = key.split_once('.').expect("checked above");
+            let info = MODES.iter().find(|m| m.name == mode && modes.contains(&m.name));
+            if !info.is_some_and(|m| m.params.iter().any(|p| p.key == name)) {
+                let known = match info {
+                    Some(m) if m.params.is_empty() => format!("{mode} takes no parameters"),
+                    Some(m) => {
+                        let keys: Vec<String> = m.params.iter().map(|p| format!("{mode}.{}", p.key)).collect();
+                        format!("{mode} takes {}", keys.join(", "))
+                    }
+                    None => format!("mode '{mode}' is not being run"),
+                };
+                return Err(ModeError::UnknownParam {
+                    key: key.to_string(),
+                    known,
+                });
+            }
+            values.insert(key.to_string(), value.trim().to_string());
+        }
+        let params = ModeParams { values };
+        // Parse every typed value now, so a bad one is reported before a
+        // long scene load rather than after it.
+        for mode in modes {
+            if *mode == "omq" {
+                OmqParams::from_params(&params)?;
+            }
+        }
+        Ok(params)
+    }
+
+    /// The value of `mode.key`: the one given, or the default `MODES`
+    /// declares (the only place defaults are written).
+    pub fn get<T: FromStr>(&self, mode: &str, key: &str) -> Result<T, ModeError>
+    where
+        T::Err: Display,
+    {
+        let full = format!("{mode}.{key}");
+        let declared = MODES
+            .iter()
+            .find(|m| m.name == mode)
+            .and_then(|m| m.params.iter().find(|p| p.key == key))
+            .unwrap_or_else(|| panic!("{full} is not declared in MODES"));
+        let value = self.values.get(&full).map_or(declared.default, String::as_str);
+        value.parse().map_err(|e| ModeError::BadParam {
+            key: full,
+            reason: format!("'{value}': {e}"),
+        })
+    }
 }
 
 pub fn mode_names() -> Vec<&'static str> {
@@ -121,10 +242,21 @@ pub fn parse_modes(list: &[String]) -> Result<Vec<&'static str>, ModeError> {
 }
 
 /// Creates the culler of a mode named by [`parse_modes`].
-pub fn create<'a>(name: &str, scene: &'a Scene, hierarchy: &'a Hierarchy) -> Result<Box<dyn Culler + 'a>, ModeError> {
+pub fn create<'a>(
+    name: &str,
+    scene: &'a Scene,
+    hierarchy: &'a Hierarchy,
+    params: &ModeParams,
+) -> Result<Box<dyn Culler + 'a>, ModeError> {
     Ok(match name {
         "dr" => Box::new(DirectRendering::new(scene)),
         "vfc" => Box::new(FrustumCulling::new(scene, hierarchy)),
+        "sq" => Box::new(SingleQueries::new(scene, hierarchy)),
+        "omq" => Box::new(OccupancyMapQueries::new(
+            scene,
+            hierarchy,
+            OmqParams::from_params(params)?,
+        )),
         "oracle" => Box::new(Oracle::new()),
         other => return Err(ModeError::Unknown(other.to_string())),
     })
@@ -141,6 +273,28 @@ mod tests {
         assert_eq!(parse_modes(&s(&["all"])), Ok(mode_names()));
         assert_eq!(parse_modes(&s(&["dr,bogus"])), Err(ModeError::Unknown("bogus".into())));
         assert_eq!(parse_modes(&s(&[])), Err(ModeError::Empty));
-        assert!(ModeError::Unknown("x".into()).to_string().contains("dr, vfc, oracle"));
+        assert!(
+            ModeError::Unknown("x".into())
+                .to_string()
+                .contains("dr, vfc, sq, omq, oracle")
+        );
+    }
+
+    #[test]
+    fn parameters_are_checked_against_the_running_modes() {
+        let items = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+        let p = ModeParams::parse(&items(&["omq.om=80x60", "omq.factor=0.5"]), &["omq"]).unwrap();
+        assert_eq!(p.get("omq", "factor"), Ok(0.5));
+        assert_eq!(p.get("omq", "initial_max_tests"), Ok(4u32));
+        let err = |v: &[&str], modes: &[&str]| ModeParams::parse(&items(v), modes).unwrap_err().to_string();
+        assert!(err(&["omq.bogus=1"], &["omq"]).contains("omq takes omq.om, omq.initial_max_tests, omq.factor"));
+        assert!(err(&["omq.om=1x1"], &["vfc"]).contains("'omq' is not being run"));
+        assert!(err(&["vfc.x=1"], &["vfc"]).contains("vfc takes no parameters"));
+        assert!(err(&["omq"], &["omq"]).contains("not MODE.KEY=VALUE"));
+        assert!(
+            err(&["omq.factor=fast"], &["omq"]).contains("'fast'"),
+            "values are parsed up front"
+        );
+        assert!(err(&["omq.factor=-1"], &["omq"]).contains("positive"));
     }
 }

@@ -12,6 +12,7 @@
 //! an intersecting leaf are tested one by one, since a leaf holds up to a few
 //! objects here where the paper's leaves held one geometry node.
 
+use super::traversal::leaf_objects_in_frustum;
 use super::{Culler, FrameInput, TraversalStats};
 use crate::camera::Containment;
 use crate::gpu::FrameCtx;
@@ -56,13 +57,7 @@ impl Culler for FrustumCulling<'_> {
                 // Fully inside: the whole subtree is potentially visible.
                 Containment::Inside => self.visible.extend_from_slice(self.hierarchy.subtree_objects(node)),
                 Containment::Intersecting if node.is_leaf() => {
-                    let objects = &self.scene.objects;
-                    self.visible.extend(
-                        self.hierarchy
-                            .subtree_objects(node)
-                            .iter()
-                            .filter(|&&o| frustum.classify(&objects[o as usize].bounds) != Containment::Outside),
-                    );
+                    leaf_objects_in_frustum(self.scene, self.hierarchy, node, &frustum, &mut self.visible)
                 }
                 Containment::Intersecting => self.stack.extend(node.children().map(|c| c as u32)),
             }

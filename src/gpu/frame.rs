@@ -1,26 +1,36 @@
 //! [`FrameCtx`]: the operations a culling mode may perform on the GPU during
-//! one timed frame. Every mode goes through the same operations, which do the
-//! counting themselves, so no mode can draw without paying for it or report
+//! one timed frame: draw objects, and test boxes against what is drawn.
+//! Every mode goes through these operations, which do the counting
+//! themselves, so no mode can draw or query without paying for it or report
 //! its own figures.
 
 use std::time::{Duration, Instant};
 
+use super::queries::{BoxVisibility, QueryPool};
 use super::{GpuContext, GpuTimer, RenderTargets, SceneRenderer};
+use crate::bounds::Aabb;
+use crate::camera::Camera;
 use crate::object_set::ObjectSet;
 
-/// What a mode drew in one frame.
+/// What a mode did on the GPU in one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct DrawCounters {
+pub struct FrameCounters {
     /// Draw calls (an object drawn twice counts twice).
     pub objects_drawn: u64,
     pub triangles_drawn: u64,
+    /// Occlusion queries issued.
+    pub queries: u64,
+    /// Query batches: GPU→CPU round trips.
+    pub query_batches: u64,
+    /// Time spent waiting for query results.
+    pub query_wait: Duration,
 }
 
 /// Result of a finished frame.
 pub struct FrameOutcome {
-    pub counters: DrawCounters,
-    /// Time the mode spent inside `FrameCtx` operations (encoding, and in
-    /// later modes submitting and waiting), excluded from its CPU culling time.
+    pub counters: FrameCounters,
+    /// Time the mode spent inside `FrameCtx` operations (encoding, submitting,
+    /// waiting for results), excluded from its CPU culling time.
     pub gpu_ops: Duration,
 }
 
@@ -28,65 +38,116 @@ pub struct FrameCtx<'a> {
     gpu: &'a GpuContext,
     renderer: &'a SceneRenderer,
     targets: &'a RenderTargets,
+    queries: &'a mut QueryPool,
+    camera: &'a Camera,
     depth: &'a wgpu::TextureView,
     timer: Option<(&'a GpuTimer, usize)>,
     encoder: wgpu::CommandEncoder,
-    cleared: bool,
-    counters: DrawCounters,
+    /// Objects drawn but not yet encoded: they are encoded as one pass before
+    /// the next query batch or at the end of the frame.
+    queued: &'a mut Vec<u32>,
+    counters: FrameCounters,
     drawn: &'a mut ObjectSet,
     gpu_ops: Duration,
 }
 
+/// Everything a frame of one mode renders with.
+pub struct FrameResources<'a> {
+    pub gpu: &'a GpuContext,
+    pub renderer: &'a SceneRenderer,
+    pub targets: &'a RenderTargets,
+    pub queries: &'a mut QueryPool,
+    pub timer: Option<&'a GpuTimer>,
+    /// Scratch for queued draws, reused from frame to frame.
+    pub draw_queue: &'a mut Vec<u32>,
+}
+
 impl<'a> FrameCtx<'a> {
-    /// Starts a frame for mode `slot`: its own depth target and timer span.
+    /// Starts the frame of mode `slot` (its own depth target and timer
+    /// span) and clears its targets.
     pub(crate) fn begin(
-        gpu: &'a GpuContext,
-        renderer: &'a SceneRenderer,
-        targets: &'a RenderTargets,
+        resources: FrameResources<'a>,
         slot: usize,
-        timer: Option<&'a GpuTimer>,
+        camera: &'a Camera,
         drawn: &'a mut ObjectSet,
     ) -> FrameCtx<'a> {
+        let FrameResources {
+            gpu,
+            renderer,
+            targets,
+            queries,
+            timer,
+            draw_queue: queued,
+        } = resources;
         drawn.clear();
+        queued.clear();
+        let depth = &targets.mode_depths[slot];
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         if let Some(t) = timer {
             t.begin(&mut encoder, slot);
         }
+        renderer.encode_shaded(&mut encoder, targets, depth, true, &[]);
         FrameCtx {
             gpu,
             renderer,
             targets,
-            depth: &targets.mode_depths[slot],
+            queries,
+            camera,
+            depth,
             timer: timer.map(|t| (t, slot)),
             encoder,
-            cleared: false,
-            counters: DrawCounters::default(),
+            queued,
+            counters: FrameCounters::default(),
             drawn,
             gpu_ops: Duration::ZERO,
         }
     }
 
-    /// Draws `objects`, shaded, into this mode's frame.
+    /// Draws `objects`, shaded, into this mode's frame. Every draw is on the
+    /// depth buffer before any later [`FrameCtx::test_boxes`].
     pub fn draw(&mut self, objects: &[u32]) {
         let start = Instant::now();
-        self.renderer
-            .encode_shaded(&mut self.encoder, self.targets, self.depth, !self.cleared, objects);
-        self.cleared = true;
         for &o in objects {
             self.counters.objects_drawn += 1;
             self.counters.triangles_drawn += u64::from(self.renderer.scene.draws[o as usize].index_count / 3);
             self.drawn.insert(o);
         }
+        self.queued.extend_from_slice(objects);
         self.gpu_ops += start.elapsed();
     }
 
-    /// Submits the frame and waits until the GPU has finished it.
-    pub(crate) fn finish(mut self) -> FrameOutcome {
-        if !self.cleared {
-            // A frame that draws nothing still clears to an empty picture.
-            self.renderer
-                .encode_shaded(&mut self.encoder, self.targets, self.depth, true, &[]);
+    /// Tests `boxes` as one batch against the depth drawn so far: one
+    /// occlusion query per box, one round trip. Writes one result per box to
+    /// `out`; a box that reaches the near plane is visible without a query.
+    pub fn test_boxes(&mut self, boxes: &[Aabb], out: &mut Vec<BoxVisibility>) {
+        let start = Instant::now();
+        self.encode_queued_draws();
+        let encoder = std::mem::replace(
+            &mut self.encoder,
+            self.gpu.device.create_command_encoder(&Default::default()),
+        );
+        let cost = self
+            .queries
+            .test(self.gpu, encoder, self.depth, self.camera, boxes, out);
+        if cost.queries > 0 {
+            self.counters.queries += cost.queries;
+            self.counters.query_batches += 1;
+            self.counters.query_wait += cost.wait;
         }
+        self.gpu_ops += start.elapsed();
+    }
+
+    fn encode_queued_draws(&mut self) {
+        if !self.queued.is_empty() {
+            self.renderer
+                .encode_shaded(&mut self.encoder, self.targets, self.depth, false, self.queued);
+            self.queued.clear();
+        }
+    }
+
+    /// Submits the rest of the frame and waits until the GPU has finished it.
+    pub(crate) fn finish(mut self) -> FrameOutcome {
+        self.encode_queued_draws();
         if let Some((t, slot)) = self.timer {
             t.end(&mut self.encoder, slot);
         }

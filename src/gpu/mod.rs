@@ -1,7 +1,9 @@
-//! Headless wgpu: adapter choice, the scene on the GPU, render targets, and
-//! the per-frame operations every culling mode draws through ([`FrameCtx`]).
+//! Headless wgpu: adapter choice, the scene on the GPU, render targets,
+//! occlusion-query batches, and the per-frame operations every culling mode
+//! goes through ([`FrameCtx`]).
 
 mod frame;
+mod queries;
 mod readback;
 mod renderer;
 mod targets;
@@ -11,7 +13,8 @@ use std::fmt;
 
 use serde::Serialize;
 
-pub use frame::{DrawCounters, FrameCtx, FrameOutcome};
+pub use frame::{FrameCounters, FrameCtx, FrameOutcome, FrameResources};
+pub use queries::{BoxVisibility, QUERIES_PER_SET, QueryPool};
 pub use readback::Readback;
 pub use renderer::{GpuScene, SceneRenderer};
 pub use targets::{RenderTargets, Resolution};

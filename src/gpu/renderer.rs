@@ -107,7 +107,7 @@ impl SceneRenderer {
         });
         let camera = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("camera"),
-            size: std::mem::size_of::<Mat4>() as u64,
+            size: 2 * std::mem::size_of::<Mat4>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -192,8 +192,14 @@ impl SceneRenderer {
         }
     }
 
-    /// Uploads the projection and every object's camera-relative model-view
-    /// matrix (computed in f64, rounded to f32 last).
+    /// The uniform set by [`SceneRenderer::set_camera`]: the projection, and
+    /// projection × view rotation for eye-relative world positions.
+    pub fn camera_uniform(&self) -> &wgpu::Buffer {
+        &self.camera
+    }
+
+    /// Uploads the camera uniform and every object's camera-relative
+    /// model-view matrix (computed in f64, rounded to f32 last).
     pub fn set_camera(&mut self, gpu: &GpuContext, camera: &Camera) {
         let scene = &mut self.scene;
         scene.staging.clear();
@@ -203,8 +209,10 @@ impl SceneRenderer {
         }));
         gpu.queue
             .write_buffer(&scene.object_data, 0, bytemuck::cast_slice(&scene.staging));
-        let projection = camera.projection().as_mat4();
-        gpu.queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&projection));
+        let projection = camera.projection();
+        let view_projection = projection * glam::DMat4::from_mat3(camera.view_rotation());
+        let uniform = [projection.as_mat4(), view_projection.as_mat4()];
+        gpu.queue.write_buffer(&self.camera, 0, bytemuck::cast_slice(&uniform));
     }
 
     /// Records a shaded pass into `depth` drawing `objects`, clearing first

@@ -33,6 +33,8 @@ pub struct FrameStats {
     pub query_batches: u64,
     /// Queries the Occupancy Map made unnecessary.
     pub queries_skipped: u64,
+    /// Time spent waiting for query results (within frame_ms).
+    pub query_wait_ms: f64,
     /// Pixels whose depth differs from the reference; empty with --no-error.
     pub error_pixels: Option<u64>,
     /// Objects visible in the reference that the mode did not draw.

@@ -76,6 +76,7 @@ const COLUMNS: &[(&str, Column)] = &[
     ("queries", |r| Some(r.queries as f64)),
     ("query_batches", |r| Some(r.query_batches as f64)),
     ("queries_skipped", |r| Some(r.queries_skipped as f64)),
+    ("query_wait_ms", |r| Some(r.query_wait_ms)),
     ("error_pixels", |r| r.error_pixels.map(|v| v as f64)),
     ("missed_objects", |r| r.missed_objects.map(|v| v as f64)),
 ];
@@ -186,6 +187,7 @@ mod tests {
             queries: 0,
             query_batches: 0,
             queries_skipped: 0,
+            query_wait_ms: 0.0,
             error_pixels: error,
             missed_objects: error.map(|_| 0),
             visible_objects: None,

@@ -6,7 +6,12 @@ pub mod gltf_writer;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use occlu::gpu::{BackendChoice, GpuContext};
+use glam::{DAffine3, DVec3};
+use occlu::bench::{RunOptions, RunOutput, run};
+use occlu::camera::path::{CameraPath, Interpolation, KeyframeFile, PathFile};
+use occlu::cull::Culler;
+use occlu::gpu::{BackendChoice, GpuContext, Resolution};
+use occlu::scene::{Scene, SceneBuilder};
 
 /// Runs the `occlu` binary built for these tests.
 pub fn occlu(args: &[&str]) -> Output {
@@ -78,4 +83,70 @@ pub fn gpus() -> Vec<GpuContext> {
         "no Vulkan or GL adapter: install Mesa (scripts/install-deps) to run the GPU tests"
     );
     found
+}
+
+/// A one-frame path: the camera at `eye` looking at `target`.
+pub fn still(eye: DVec3, target: DVec3, fov_y_deg: f64) -> CameraPath {
+    let file = PathFile {
+        frames: Some(1),
+        fps: None,
+        near: Some(0.1),
+        fov_y_deg: Some(fov_y_deg),
+        up: None,
+        interpolation: Interpolation::Linear,
+        keyframes: vec![KeyframeFile {
+            time: 0.0,
+            position: eye.to_array(),
+            target: Some(target.to_array()),
+            direction: None,
+            orientation: None,
+            up: None,
+            fov_y_deg: None,
+        }],
+    };
+    CameraPath::from_file(&file, "test").unwrap()
+}
+
+/// A scene of axis-aligned boxes, one object each.
+pub fn boxes(list: &[(DVec3, DVec3)]) -> Scene {
+    let mut b = SceneBuilder::new("test boxes".into(), 4096);
+    for (k, &(min, max)) in list.iter().enumerate() {
+        let corners: Vec<DVec3> = (0..8)
+            .map(|i| {
+                DVec3::new(
+                    if i & 1 == 0 { min.x } else { max.x },
+                    if i & 2 == 0 { min.y } else { max.y },
+                    if i & 4 == 0 { min.z } else { max.z },
+                )
+            })
+            .collect();
+        let faces = [
+            [0, 2, 6, 4],
+            [1, 5, 7, 3],
+            [0, 4, 5, 1],
+            [2, 3, 7, 6],
+            [0, 1, 3, 2],
+            [4, 6, 7, 5],
+        ];
+        let idx: Vec<u32> = faces.iter().flat_map(|&[a, b, c, d]| [a, b, c, a, c, d]).collect();
+        let group = b.add_mesh(&format!("box{k}"), &corners, &idx).unwrap();
+        b.add_object(&format!("box{k}"), &group, DAffine3::IDENTITY);
+    }
+    b.finish().unwrap()
+}
+
+/// Runs `cullers` over `path` with error measurement and no warm-up.
+pub fn run_modes(
+    gpu: &GpuContext,
+    scene: &Scene,
+    path: &CameraPath,
+    cullers: &mut [Box<dyn Culler + '_>],
+    resolution: Resolution,
+) -> RunOutput {
+    let options = RunOptions {
+        warmup: 0,
+        resolution,
+        measure_error: true,
+    };
+    run(gpu, scene, path, cullers, &options, &mut |_, _| {}).unwrap()
 }

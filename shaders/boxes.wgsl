@@ -1,0 +1,43 @@
+// Bounding boxes for occlusion queries: depth test only, no colour, no
+// depth writes. One instance per box; the 36 vertices of a box are its 12
+// triangles, wound counter-clockwise seen from outside so back faces can be
+// culled (the eye is never inside a queried box: such boxes are visible
+// without a query).
+
+struct Camera {
+    projection: mat4x4<f32>,
+    // Projection times the world-to-camera rotation: for eye-relative
+    // world positions.
+    view_projection: mat4x4<f32>,
+}
+
+struct QueryBox {
+    // Eye-relative world coordinates, already expanded outward.
+    min: vec4<f32>,
+    max: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var<storage, read> boxes: array<QueryBox>;
+
+// Corner bit 0 picks max x, bit 1 max y, bit 2 max z.
+var<private> CORNERS: array<u32, 36> = array<u32, 36>(
+    0u, 6u, 2u, 0u, 4u, 6u, // -x
+    1u, 7u, 5u, 1u, 3u, 7u, // +x
+    0u, 5u, 4u, 0u, 1u, 5u, // -y
+    2u, 7u, 3u, 2u, 6u, 7u, // +y
+    0u, 3u, 1u, 0u, 2u, 3u, // -z
+    4u, 7u, 6u, 4u, 5u, 7u, // +z
+);
+
+@vertex
+fn vs_box(@builtin(vertex_index) vertex: u32, @builtin(instance_index) index: u32) -> @builtin(position) vec4<f32> {
+    let corner = CORNERS[vertex];
+    let b = boxes[index];
+    let p = vec3<f32>(
+        select(b.min.x, b.max.x, (corner & 1u) != 0u),
+        select(b.min.y, b.max.y, (corner & 2u) != 0u),
+        select(b.min.z, b.max.z, (corner & 4u) != 0u),
+    );
+    return camera.view_projection * vec4<f32>(p, 1.0);
+}

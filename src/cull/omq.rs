@@ -1,0 +1,224 @@
+//! `omq`: hierarchical occlusion culling with an Occupancy Map and multiple
+//! occlusion queries, paper 003 §3–4 (configuration (c) of §5).
+//!
+//! Three stages per frame, each following one listing of 003 §4.2:
+//!
+//! 1. Front to back, a node whose screen rectangle covers an empty cell of
+//!    the Occupancy Map cannot be hidden by anything drawn so far: it is
+//!    visible without a query (a leaf is drawn and marked in the map, an
+//!    inner node is opened). Nodes over full cells go to the pending list.
+//! 2. Up to `max_tests` batches: the map is cleared, pending nodes are taken
+//!    front to back and a node joins the batch's test list if its rectangle
+//!    still covers a cell no box of the list covers (then it is marked), so
+//!    no box of a batch can be tested against another's not-yet-drawn
+//!    geometry where it matters (003 §3.2, Figure 2). The list is queried in
+//!    one round trip; visible leaves are drawn, visible inner nodes' children
+//!    become pending.
+//! 3. The remaining pending nodes are queried in brute-force batches until
+//!    none are left.
+//!
+//! Then `max_tests = 7/10 · m` for the next frame, m being this frame's
+//! number of batches of stages 2 and 3 (003: "n_frame+1 = 7/10 · m_frame").
+//!
+//! Departures from the listings: children are tested against the frustum
+//! when they enter the queue or the pending list rather than when they leave
+//! it (the same nodes are culled, but stage 3 never queries a box outside the
+//! frustum); a leaf's objects are frustum-tested one by one before drawing,
+//! as in `vfc`; `max_tests` never drops below 1, so stage 2 always runs.
+//! Conservative like the paper: a node is culled only by a query that found
+//! its box hidden behind geometry that was really drawn.
+
+use serde::Serialize;
+
+use super::occupancy::{OccupancyMap, ScreenRect};
+use super::traversal::{DepthQueue, leaf_objects_in_frustum};
+use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
+use crate::bounds::Aabb;
+use crate::camera::{Camera, Containment, Frustum};
+use crate::gpu::{BoxVisibility, FrameCtx, Resolution};
+use crate::hierarchy::Hierarchy;
+use crate::scene::Scene;
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct OmqParams {
+    /// Occupancy Map cells across and down the screen.
+    pub om: Resolution,
+    /// Stage-2 batches allowed in the first frame.
+    pub initial_max_tests: u32,
+    /// max_tests of the next frame = factor · batches of this one (003: 7/10).
+    pub factor: f64,
+}
+
+impl OmqParams {
+    pub fn from_params(params: &ModeParams) -> Result<OmqParams, ModeError> {
+        let factor: f64 = params.get("omq", "factor")?;
+        if !(factor > 0.0 && factor.is_finite()) {
+            return Err(ModeError::BadParam {
+                key: "omq.factor".into(),
+                reason: format!("must be a positive number, got {factor}"),
+            });
+        }
+        Ok(OmqParams {
+            om: params.get("omq", "om")?,
+            initial_max_tests: params.get("omq", "initial_max_tests")?,
+            factor,
+        })
+    }
+}
+
+pub struct OccupancyMapQueries<'a> {
+    scene: &'a Scene,
+    hierarchy: &'a Hierarchy,
+    params: OmqParams,
+    /// Carried from frame to frame.
+    max_tests: u32,
+    om: OccupancyMap,
+    queue: DepthQueue,
+    pending: Vec<u32>,
+    test_list: Vec<u32>,
+    boxes: Vec<Aabb>,
+    results: Vec<BoxVisibility>,
+    objects: Vec<u32>,
+}
+
+impl<'a> OccupancyMapQueries<'a> {
+    pub fn new(scene: &'a Scene, hierarchy: &'a Hierarchy, params: OmqParams) -> Self {
+        OccupancyMapQueries {
+            scene,
+            hierarchy,
+            params,
+            max_tests: params.initial_max_tests.max(1),
+            om: OccupancyMap::new(params.om.width, params.om.height),
+            queue: DepthQueue::default(),
+            pending: Vec::new(),
+            test_list: Vec::new(),
+            boxes: Vec::new(),
+            results: Vec::new(),
+            objects: Vec::new(),
+        }
+    }
+
+    fn rect(&self, node: u32, camera: &Camera) -> ScreenRect {
+        let bounds = &self.hierarchy.nodes[node as usize].bounds;
+        ScreenRect::of_box(bounds, camera, self.om.cols(), self.om.rows())
+    }
+
+    /// Frustum-tests the children of `node`; those inside go to the depth
+    /// queue (`to_queue`) or the pending list.
+    fn open(&mut self, node: u32, frustum: &Frustum, eye: glam::DVec3, to_queue: bool, stats: &mut TraversalStats) {
+        let nodes = &self.hierarchy.nodes;
+        for child in nodes[node as usize].children() {
+            stats.nodes_visited += 1;
+            if frustum.classify(&nodes[child].bounds) == Containment::Outside {
+                stats.nodes_culled_frustum += 1;
+            } else if to_queue {
+                self.queue.push(child as u32, &nodes[child].bounds, eye);
+            } else {
+                self.pending.push(child as u32);
+            }
+        }
+    }
+
+    fn draw_leaf(&mut self, ctx: &mut FrameCtx, node: u32, frustum: &Frustum) {
+        self.objects.clear();
+        let n = &self.hierarchy.nodes[node as usize];
+        leaf_objects_in_frustum(self.scene, self.hierarchy, n, frustum, &mut self.objects);
+        ctx.draw(&self.objects);
+    }
+
+    /// One multiple occlusion query over the test list: visible leaves are
+    /// drawn, visible inner nodes' children become pending.
+    fn query_test_list(&mut self, ctx: &mut FrameCtx, frustum: &Frustum, eye: glam::DVec3, stats: &mut TraversalStats) {
+        self.boxes.clear();
+        let nodes = &self.hierarchy.nodes;
+        self.boxes
+            .extend(self.test_list.iter().map(|&n| nodes[n as usize].bounds));
+        ctx.test_boxes(&self.boxes, &mut self.results);
+        // By index: drawing and opening need `self` while the list is read.
+        for k in 0..self.test_list.len() {
+            let node = self.test_list[k];
+            if !self.results[k].is_visible() {
+                stats.nodes_culled_occlusion += 1;
+            } else if nodes[node as usize].is_leaf() {
+                self.draw_leaf(ctx, node, frustum);
+            } else {
+                self.open(node, frustum, eye, false, stats);
+            }
+        }
+        self.test_list.clear();
+    }
+}
+
+impl Culler for OccupancyMapQueries<'_> {
+    fn name(&self) -> &str {
+        "omq"
+    }
+
+    fn parameters(&self) -> serde_json::Value {
+        serde_json::to_value(self.params).expect("plain struct serialises")
+    }
+
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        let camera = input.camera;
+        let (frustum, eye) = (camera.frustum(), camera.eye);
+        let mut stats = TraversalStats {
+            nodes_visited: 1,
+            ..Default::default()
+        };
+        self.om.clear();
+        self.queue.clear();
+        self.pending.clear();
+        let root = &self.hierarchy.nodes[0];
+        if frustum.classify(&root.bounds) == Containment::Outside {
+            stats.nodes_culled_frustum += 1;
+            return stats;
+        }
+        self.queue.push(0, &root.bounds, eye);
+
+        // Stage 1: visible nodes in front, found by the Occupancy Map.
+        while let Some(node) = self.queue.pop() {
+            let rect = self.rect(node, camera);
+            if self.om.any_empty(&rect) {
+                stats.queries_skipped += 1;
+                if self.hierarchy.nodes[node as usize].is_leaf() {
+                    self.draw_leaf(ctx, node, &frustum);
+                    self.om.mark(&rect);
+                } else {
+                    self.open(node, &frustum, eye, true, &mut stats);
+                }
+            } else {
+                self.pending.push(node);
+            }
+        }
+
+        // Stage 2: batches arranged by a cleared Occupancy Map each.
+        let mut batches = 0;
+        while !self.pending.is_empty() && batches < self.max_tests {
+            for node in std::mem::take(&mut self.pending) {
+                self.queue.push(node, &self.hierarchy.nodes[node as usize].bounds, eye);
+            }
+            self.om.clear();
+            while let Some(node) = self.queue.pop() {
+                let rect = self.rect(node, camera);
+                if self.om.any_empty(&rect) {
+                    self.test_list.push(node);
+                    self.om.mark(&rect);
+                } else {
+                    self.pending.push(node);
+                }
+            }
+            self.query_test_list(ctx, &frustum, eye, &mut stats);
+            batches += 1;
+        }
+
+        // Stage 3: brute-force batches of everything still pending.
+        while !self.pending.is_empty() {
+            std::mem::swap(&mut self.test_list, &mut self.pending);
+            self.query_test_list(ctx, &frustum, eye, &mut stats);
+            batches += 1;
+        }
+
+        self.max_tests = ((self.params.factor * f64::from(batches)) as u32).max(1);
+        stats
+    }
+}

@@ -1,0 +1,75 @@
+//! `sq`: hierarchical occlusion culling with one occlusion query per node,
+//! each awaited before the traversal goes on (stop-and-wait). This is
+//! configuration (b) of paper 003 §5, "a single occlusion query for each
+//! node in the scene graph (without using an Occupancy Map)", the baseline
+//! the Occupancy Map and multiple queries were designed to beat.
+//!
+//! Traversal (003 §4.2): nodes front to back by their nearest box corner;
+//! a node outside the frustum is culled; otherwise its box is queried
+//! against everything drawn so far; a hidden node is culled with its
+//! subtree; a visible leaf is drawn; a visible inner node's children join
+//! the queue.
+
+use super::traversal::{DepthQueue, leaf_objects_in_frustum};
+use super::{Culler, FrameInput, TraversalStats};
+use crate::camera::Containment;
+use crate::gpu::{BoxVisibility, FrameCtx};
+use crate::hierarchy::Hierarchy;
+use crate::scene::Scene;
+
+pub struct SingleQueries<'a> {
+    scene: &'a Scene,
+    hierarchy: &'a Hierarchy,
+    queue: DepthQueue,
+    objects: Vec<u32>,
+    result: Vec<BoxVisibility>,
+}
+
+impl<'a> SingleQueries<'a> {
+    pub fn new(scene: &'a Scene, hierarchy: &'a Hierarchy) -> Self {
+        SingleQueries {
+            scene,
+            hierarchy,
+            queue: DepthQueue::default(),
+            objects: Vec::new(),
+            result: Vec::with_capacity(1),
+        }
+    }
+}
+
+impl Culler for SingleQueries<'_> {
+    fn name(&self) -> &str {
+        "sq"
+    }
+
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        let (frustum, eye) = (input.camera.frustum(), input.camera.eye);
+        let nodes = &self.hierarchy.nodes;
+        let mut stats = TraversalStats::default();
+        self.queue.clear();
+        self.queue.push(0, &nodes[0].bounds, eye);
+        while let Some(index) = self.queue.pop() {
+            let node = &nodes[index as usize];
+            stats.nodes_visited += 1;
+            if frustum.classify(&node.bounds) == Containment::Outside {
+                stats.nodes_culled_frustum += 1;
+                continue;
+            }
+            ctx.test_boxes(std::slice::from_ref(&node.bounds), &mut self.result);
+            if !self.result[0].is_visible() {
+                stats.nodes_culled_occlusion += 1;
+                continue;
+            }
+            if node.is_leaf() {
+                self.objects.clear();
+                leaf_objects_in_frustum(self.scene, self.hierarchy, node, &frustum, &mut self.objects);
+                ctx.draw(&self.objects);
+            } else {
+                for child in node.children() {
+                    self.queue.push(child as u32, &nodes[child].bounds, eye);
+                }
+            }
+        }
+        stats
+    }
+}
