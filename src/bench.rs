@@ -23,7 +23,8 @@ use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{ErrorMeter, FrameStats, ModeDescription, summarize};
 use crate::object_set::ObjectSet;
 use crate::report::{
-    PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneSummary, Summary, ToolInfo, write_results,
+    PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneSummary, Summary, ToolInfo, prepare_output,
+    write_results,
 };
 use crate::scene::{LoadOptions, Scene, SceneError};
 
@@ -51,6 +52,15 @@ pub fn run(
     options: &RunOptions,
     progress: &mut dyn FnMut(u32, u32),
 ) -> Result<RunOutput, GpuError> {
+    let side = gpu.device.limits().max_texture_dimension_2d;
+    let r = options.resolution;
+    if r.width > side || r.height > side {
+        return Err(GpuError::TooLarge {
+            what: "render target side",
+            need: u64::from(r.width.max(r.height)),
+            limit: u64::from(side),
+        });
+    }
     let start = Instant::now();
     let mut renderer = SceneRenderer::new(gpu, GpuScene::upload(gpu, scene)?);
     let targets = RenderTargets::new(gpu, options.resolution, cullers.len());
@@ -65,8 +75,9 @@ pub fn run(
     let mut drawn: Vec<ObjectSet> = cullers.iter().map(|_| ObjectSet::new(scene.objects.len())).collect();
     let mut frame_rows: Vec<Option<FrameStats>> = vec![None; cullers.len()];
     let frames = path.frames;
+    // Both are capped (MAX_FRAMES, MAX_WARMUP), so the sum cannot overflow.
     let total = options.warmup + frames;
-    let mut rows = Vec::with_capacity(frames as usize * cullers.len());
+    let mut rows = Vec::new();
 
     for step in 0..total {
         let recording = step >= options.warmup;
@@ -124,6 +135,7 @@ pub fn run(
                 query_batches: outcome.counters.query_batches,
                 queries_skipped: traversal.queries_skipped,
                 query_wait_ms: ms(outcome.counters.query_wait),
+                query_gpu_ms: outcome.counters.query_gpu.map(ms),
                 error_pixels: None,
                 missed_objects: None,
                 visible_objects: visible.as_ref().map(|v| v.len() as u64),
@@ -208,8 +220,10 @@ pub struct BenchOutcome {
 /// Loads the scene, builds the hierarchy, runs every mode and writes the
 /// result files.
 pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<BenchOutcome, BenchError> {
-    // A bad path file is reported before a long scene load, not after.
+    // A bad path file or output directory is reported before a long scene
+    // load, not after the run.
     let path_file = plan.path.as_deref().map(CameraPath::load).transpose()?;
+    prepare_output(&plan.out)?;
     let start = Instant::now();
     let scene = crate::scene::load(
         &plan.scene,

@@ -39,19 +39,23 @@ pub struct BenchConfig {
 }
 
 pub const DEFAULT_WARMUP: u32 = 3;
+/// Warm-up frames beyond this are surely a mistake.
+pub const MAX_WARMUP: u32 = 10_000;
 pub const DEFAULT_OUT: &str = "occlu-out";
 pub const DEFAULT_SCENE: &str = "city";
 
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    #[error("{path}: {source}")]
-    Io { path: String, source: std::io::Error },
+    #[error("{path}: {error}")]
+    Io { path: String, error: std::io::Error },
     #[error("{path}: invalid run configuration: {message}")]
     Json { path: String, message: String },
     #[error("give a model file or --scene, not both")]
     ModelAndScene,
-    #[error("--frames must be at least 1")]
-    ZeroFrames,
+    #[error("--frames must be in 1..={}", crate::camera::path::MAX_FRAMES)]
+    Frames,
+    #[error("--warmup must be at most {MAX_WARMUP}")]
+    Warmup,
     #[error(transparent)]
     Mode(#[from] ModeError),
 }
@@ -75,9 +79,9 @@ pub struct BenchPlan {
 impl BenchConfig {
     pub fn load(path: &Path) -> Result<BenchConfig, ConfigError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+        let text = std::fs::read_to_string(path).map_err(|error| ConfigError::Io {
             path: name.clone(),
-            source,
+            error,
         })?;
         let mut config: BenchConfig = serde_json::from_str(&text).map_err(|e| ConfigError::Json {
             path: name,
@@ -130,8 +134,14 @@ impl BenchConfig {
             (Some(model), None) => SceneSpec::File(model),
             (None, scene) => SceneSpec::Builtin(scene.unwrap_or_else(|| DEFAULT_SCENE.into())),
         };
-        if self.frames == Some(0) {
-            return Err(ConfigError::ZeroFrames);
+        if self
+            .frames
+            .is_some_and(|n| n == 0 || n > crate::camera::path::MAX_FRAMES)
+        {
+            return Err(ConfigError::Frames);
+        }
+        if self.warmup.is_some_and(|n| n > MAX_WARMUP) {
+            return Err(ConfigError::Warmup);
         }
         let modes = parse_modes(&self.modes.unwrap_or_else(|| vec!["all".into()]))?;
         Ok(BenchPlan {
@@ -204,7 +214,12 @@ mod tests {
             frames: Some(0),
             ..Default::default()
         };
-        assert!(matches!(zero.plan(), Err(ConfigError::ZeroFrames)));
+        assert!(matches!(zero.plan(), Err(ConfigError::Frames)));
+        let long = BenchConfig {
+            warmup: Some(u32::MAX),
+            ..Default::default()
+        };
+        assert!(matches!(long.plan(), Err(ConfigError::Warmup)));
     }
 
     #[test]

@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use anyhow::Context as _;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use occlu::bench::{BenchError, BenchEvent, execute};
@@ -16,6 +15,7 @@ use occlu::config::{BenchConfig, ConfigError};
 use occlu::cull::MODES;
 use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::report::ReportError;
 use occlu::scene::builtin::SCENES;
 use occlu::scene::{LoadOptions, Scene, SceneError, SceneSpec, load};
 use serde::Serialize;
@@ -204,6 +204,7 @@ fn is_input_error(e: &anyhow::Error) -> bool {
             || c.is::<SceneError>()
             || c.is::<PathError>()
             || c.is::<ConfigError>()
+            || c.is::<ReportError>()
     })
 }
 
@@ -334,8 +335,8 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
 }
 
 fn path_gen(scene_args: SceneArgs, kind: Option<PathKind>, frames: u32, output: PathBuf) -> anyhow::Result<()> {
-    if frames == 0 {
-        return Err(PathError::ZeroFrames.into());
+    if frames == 0 || frames > occlu::camera::path::MAX_FRAMES {
+        return Err(PathError::FrameCount.into());
     }
     let scene: Scene = load(&scene_args.spec(), &scene_args.options())?;
     let kind = kind.unwrap_or_else(|| default_kind(&scene));
@@ -343,7 +344,10 @@ fn path_gen(scene_args: SceneArgs, kind: Option<PathKind>, frames: u32, output: 
     // Validate what is written, so a generated file always loads.
     CameraPath::from_file(&file, &output.display().to_string())?;
     let text = serde_json::to_string_pretty(&file)? + "\n";
-    std::fs::write(&output, text).with_context(|| output.display().to_string())?;
+    std::fs::write(&output, text).map_err(|error| ReportError {
+        path: output.clone(),
+        error,
+    })?;
     eprintln!(
         "wrote {} ({kind}, {frames} frames, {} keyframes)",
         output.display(),

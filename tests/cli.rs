@@ -87,7 +87,7 @@ fn bad_input_gets_one_clear_line() {
     fails_with(
         &["bench", &s(&good_obj), "--frames", "0", "--out", &out],
         2,
-        &["--frames must be at least 1"],
+        &["--frames must be in 1..="],
     );
     fails_with(
         &["bench", "--resolution", "800x0", "--out", &out],
@@ -130,9 +130,28 @@ fn bad_input_gets_one_clear_line() {
             &d("x.json"),
         ],
         2,
-        &["at least 1"],
+        &["frame count must be in 1..="],
     );
-    assert!(!dir.path().join("out").exists(), "failed runs write no results");
+    for file in ["frames.csv", "summary.json", "report.md"] {
+        assert!(
+            !dir.path().join("out").join(file).exists(),
+            "failed runs write no {file}"
+        );
+    }
+    // Each error is said once, not repeated by its cause.
+    let missing = own_stderr(&occlu(&["info", &d("missing.obj")]));
+    assert_eq!(missing[0].matches("No such file").count(), 1, "{missing:?}");
+    fails_with(
+        &["bench", "--warmup", "4294967295", "--out", &out],
+        2,
+        &["--warmup must be at most"],
+    );
+    // An unwritable output directory is refused before any work.
+    let blocker = write(dir.path(), "blocker", "a file, not a directory");
+    let blocked = format!("{}/sub", blocker.display());
+    let started = std::time::Instant::now();
+    fails_with(&["bench", "--out", &blocked], 2, &["blocker"]);
+    assert!(started.elapsed().as_secs() < 5, "refused before loading the city");
 }
 
 #[test]

@@ -250,3 +250,65 @@ fn bad_obj_input_is_a_clear_error() {
     let ply = load_file(&write(dir.path(), "m.ply", "ply")).unwrap_err().to_string();
     assert!(ply.contains("unsupported model format"));
 }
+
+#[test]
+fn malformed_gltf_accessors_and_node_graphs_are_errors_not_panics() {
+    let msg = |r: Result<occlu::scene::Scene, occlu::scene::SceneError>| r.expect_err("must fail").to_string();
+    // Component types the index reader cannot take (it would panic).
+    let float = msg(edited_glb(|w| w.accessors[1]["componentType"] = json!(5126)));
+    assert!(
+        float.contains("indices must be a Scalar accessor of [U8, U16, U32]"),
+        "{float}"
+    );
+    // A stride shorter than the element (the reader would panic).
+    let stride = msg(edited_glb(|w| w.buffer_views[0]["byteStride"] = json!(4)));
+    assert!(
+        stride.contains("byteStride 4 is smaller than its 12-byte elements"),
+        "{stride}"
+    );
+    // An attribute naming a missing accessor (gltf-json's validator would panic).
+    let missing = msg(edited_glb(|w| {
+        w.meshes[0]["primitives"][0]["attributes"]["POSITION"] = json!(9)
+    }));
+    assert!(missing.contains("accessor 9 does not exist"), "{missing}");
+    // A sparse accessor claiming a billion elements (would allocate 24 GB).
+    let sparse = msg(edited_glb(|w| {
+        let a = &mut w.accessors[0];
+        a["count"] = json!(1_000_000_000u64);
+        a.as_object_mut().unwrap().remove("bufferView");
+        a["sparse"] =
+            json!({"count": 1, "indices": {"bufferView": 1, "componentType": 5125}, "values": {"bufferView": 0}});
+    }));
+    assert!(sparse.contains("do not fit the data the file holds"), "{sparse}");
+    // Shared children: each level would double the scene.
+    let dag = msg(edited_glb(|w| {
+        w.nodes.clear();
+        w.node(json!({"children": [1, 1]}));
+        w.node(json!({"mesh": 0}));
+    }));
+    assert!(dag.contains("node 1 is reached twice"), "{dag}");
+    let projective = msg(edited_glb(|w| {
+        w.nodes[0]["matrix"] = json!([1, 0, 0, 0.5, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
+    }));
+    assert!(projective.contains("matrix is not affine"), "{projective}");
+    let scaled = msg(edited_glb(|w| w.nodes[0]["scale"] = json!([1e30, 1e30, 1e30])));
+    assert!(scaled.contains("beyond ±1e18"), "{scaled}");
+}
+
+#[test]
+fn obj_objects_with_the_same_name_in_different_places_stay_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(
+        dir.path(),
+        "dup.obj",
+        "o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no b\nv 5 0 0\nv 6 0 0\nv 5 1 0\nf 4 5 6\no a\nv 100 0 0\nv 101 0 0\nv 100 1 0\nf 7 8 9\n",
+    );
+    let s = load_file(&obj).unwrap();
+    assert_eq!(s.objects.len(), 3);
+    assert!(
+        s.objects.iter().all(|o| o.bounds.extent().x <= 1.0),
+        "no object spans both places"
+    );
+    let far = load_file(&write(dir.path(), "far.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n"));
+    assert!(far.unwrap_err().to_string().contains("lies beyond ±1e18"));
+}

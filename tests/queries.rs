@@ -102,6 +102,13 @@ fn queries_see_what_is_drawn() {
         assert_eq!(row.queries, 5 + big.len() as u64, "unqueried boxes cost no query");
         assert_eq!(row.query_batches, 2, "one round trip per batch, however large");
         assert_eq!(row.error_pixels, Some(0));
+        if gpu.timestamps {
+            let (query, frame) = (row.query_gpu_ms.unwrap(), row.gpu_ms.unwrap());
+            assert!(
+                query > 0.0 && query <= frame,
+                "query passes {query} ms within the frame's {frame} ms"
+            );
+        }
     }
 }
 

@@ -69,9 +69,11 @@ impl Camera {
 /// `forward` (looking straight up or down), the world axis least aligned with
 /// `forward` stands in for it, so every direction gives a valid camera.
 pub fn look_rotation(forward: DVec3, up: DVec3) -> DQuat {
-    let f = forward.normalize();
+    // Scaled to unit size first, so huge or tiny vectors cannot overflow.
+    let unit = |v: DVec3| (v / v.abs().max_element()).normalize();
+    let (f, up) = (unit(forward), unit(up));
     let mut right = f.cross(up);
-    if right.length_squared() < 1e-12 * up.length_squared().max(1e-300) {
+    if right.length_squared() < 1e-12 {
         let a = f.abs();
         let fallback = if a.x <= a.y && a.x <= a.z {
             DVec3::X
@@ -198,9 +200,17 @@ mod tests {
 
     #[test]
     fn look_rotation_points_the_camera_and_survives_vertical_views() {
-        for f in [DVec3::X, DVec3::new(1.0, 2.0, -3.0), DVec3::Y, DVec3::NEG_Y] {
-            let q = look_rotation(f, DVec3::Y);
-            assert!((q * DVec3::NEG_Z - f.normalize()).length() < 1e-12, "{f:?}");
+        for f in [
+            DVec3::X,
+            DVec3::new(1.0, 2.0, -3.0),
+            DVec3::Y,
+            DVec3::NEG_Y,
+            DVec3::new(0.0, 0.0, -1e200),
+            DVec3::splat(1e-300),
+        ] {
+            let q = look_rotation(f, DVec3::new(0.0, 1e300, 0.0));
+            let expected = (f / f.abs().max_element()).normalize();
+            assert!((q * DVec3::NEG_Z - expected).length() < 1e-12, "{f:?}");
             assert!(q.is_finite() && q.is_normalized());
         }
     }

@@ -12,6 +12,7 @@ use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::{Camera, look_rotation};
+use crate::scene::{MAX_COORDINATE, within_range};
 
 /// The file format, as written and read.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -67,17 +68,26 @@ pub struct KeyframeFile {
 
 pub const DEFAULT_NEAR: f64 = 0.1;
 pub const DEFAULT_FOV_Y_DEG: f64 = 60.0;
+/// At 30 fps, nearly an hour of flythrough.
+pub const MAX_FRAMES: u32 = 100_000;
+/// Near planes outside this range make reverse-Z depth of the farthest
+/// renderable geometry (`MAX_COORDINATE`) leave f32's normal range, or cull
+/// everything.
+const NEAR_RANGE: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
+/// Fields of view, degrees: narrower or wider would make the projection
+/// degenerate in f32.
+const FOV_RANGE: std::ops::RangeInclusive<f64> = 1e-3..=179.9;
 
 #[derive(Debug, thiserror::Error)]
 pub enum PathError {
-    #[error("{path}: {source}")]
-    Io { path: String, source: std::io::Error },
+    #[error("{path}: {error}")]
+    Io { path: String, error: std::io::Error },
     #[error("{path}: invalid camera path JSON: {message}")]
     Json { path: String, message: String },
     #[error("{path}: {message}")]
     Invalid { path: String, message: String },
-    #[error("the frame count must be at least 1")]
-    ZeroFrames,
+    #[error("the frame count must be in 1..={MAX_FRAMES}")]
+    FrameCount,
 }
 
 /// A validated keyframe.
@@ -103,9 +113,9 @@ pub struct CameraPath {
 impl CameraPath {
     pub fn load(path: &Path) -> Result<CameraPath, PathError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| PathError::Io {
+        let text = std::fs::read_to_string(path).map_err(|error| PathError::Io {
             path: name.clone(),
-            source,
+            error,
         })?;
         let file: PathFile = serde_json::from_str(&text).map_err(|e| PathError::Json {
             path: name.clone(),
@@ -120,8 +130,12 @@ impl CameraPath {
             message,
         };
         let near = file.near.unwrap_or(DEFAULT_NEAR);
-        if !(near.is_finite() && near > 0.0) {
-            return Err(invalid(format!("near must be a positive number, got {near}")));
+        if !NEAR_RANGE.contains(&near) {
+            return Err(invalid(format!(
+                "near must be in {:e}..={:e}, got {near}",
+                NEAR_RANGE.start(),
+                NEAR_RANGE.end()
+            )));
         }
         let default_up = vec3(file.up.unwrap_or([0.0, 1.0, 0.0]), "up").map_err(&invalid)?;
         let default_fov = file.fov_y_deg.unwrap_or(DEFAULT_FOV_Y_DEG);
@@ -169,8 +183,12 @@ impl CameraPath {
                 _ => return Err(at("give exactly one of target, direction, orientation".into())),
             };
             let fov = k.fov_y_deg.unwrap_or(default_fov);
-            if !(fov > 0.0 && fov < 180.0) {
-                return Err(at(format!("fov_y_deg must be in (0, 180), got {fov}")));
+            if !FOV_RANGE.contains(&fov) {
+                return Err(at(format!(
+                    "fov_y_deg must be in {}..={}, got {fov}",
+                    FOV_RANGE.start(),
+                    FOV_RANGE.end()
+                )));
             }
             keyframes.push(Keyframe {
                 time: k.time,
@@ -180,14 +198,19 @@ impl CameraPath {
             });
         }
         let span = keyframes[keyframes.len() - 1].time - keyframes[0].time;
+        if !span.is_finite() {
+            return Err(invalid("the keyframe times span more than f64 can hold".into()));
+        }
         let frames = match (file.frames, file.fps) {
             (Some(_), Some(_)) => return Err(invalid("give frames or fps, not both".into())),
-            (Some(0), None) => return Err(invalid("frames must be at least 1".into())),
+            (Some(n), None) if n == 0 || n > MAX_FRAMES => {
+                return Err(invalid(format!("frames must be in 1..={MAX_FRAMES}, got {n}")));
+            }
             (Some(n), None) => n,
             (None, Some(fps)) if fps.is_finite() && fps > 0.0 => {
                 let n = (span * fps).floor() + 1.0;
-                if n > f64::from(u32::MAX) {
-                    return Err(invalid(format!("fps {fps} gives too many frames")));
+                if n > f64::from(MAX_FRAMES) {
+                    return Err(invalid(format!("fps {fps} gives {n} frames, more than {MAX_FRAMES}")));
                 }
                 n as u32
             }
@@ -205,8 +228,8 @@ impl CameraPath {
 
     /// The same path sampled with a different number of frames.
     pub fn with_frames(mut self, frames: u32) -> Result<CameraPath, PathError> {
-        if frames == 0 {
-            return Err(PathError::ZeroFrames);
+        if frames == 0 || frames > MAX_FRAMES {
+            return Err(PathError::FrameCount);
         }
         self.frames = frames;
         Ok(self)
@@ -235,8 +258,7 @@ impl CameraPath {
             let eye = match self.interpolation {
                 Interpolation::Linear => a.position.lerp(b.position, u),
                 Interpolation::CatmullRom => {
-                    let dt = b.time - a.time;
-                    let (m0, m1) = (self.tangent(i) * dt, self.tangent(i + 1) * dt);
+                    let (m0, m1) = (self.tangent(i, a.time, b.time), self.tangent(i + 1, a.time, b.time));
                     hermite(a.position, m0, b.position, m1, u)
                 }
             };
@@ -255,11 +277,13 @@ impl CameraPath {
         }
     }
 
-    /// Velocity at keyframe `i`: central difference, one-sided at the ends.
-    fn tangent(&self, i: usize) -> DVec3 {
+    /// Velocity at keyframe `i` (central difference, one-sided at the ends)
+    /// scaled to the segment `t0..t1`. The time ratio is formed first: it is
+    /// at most 1, so tiny keyframe gaps cannot overflow.
+    fn tangent(&self, i: usize, t0: f64, t1: f64) -> DVec3 {
         let k = &self.keyframes;
         let (lo, hi) = (i.saturating_sub(1), (i + 1).min(k.len() - 1));
-        (k[hi].position - k[lo].position) / (k[hi].time - k[lo].time)
+        (k[hi].position - k[lo].position) * ((t1 - t0) / (k[hi].time - k[lo].time))
     }
 }
 
@@ -270,10 +294,13 @@ fn hermite(p0: DVec3, m0: DVec3, p1: DVec3, m1: DVec3, u: f64) -> DVec3 {
 
 fn vec3(v: [f64; 3], what: &str) -> Result<DVec3, String> {
     let v = DVec3::from(v);
-    if v.is_finite() {
+    if within_range(v) {
         Ok(v)
     } else {
-        Err(format!("{what} must be finite, got {:?}", v.to_array()))
+        Err(format!(
+            "{what} must be finite and within ±{MAX_COORDINATE:e}, got {:?}",
+            v.to_array()
+        ))
     }
 }
 
@@ -367,9 +394,24 @@ mod tests {
         let key = r#"{"time": 0, "position": [0, 0, 0], "target": [0, 0, -1]}"#;
         assert!(err(r#"{"frames": 3, "keyframes": []}"#).contains("no keyframes"));
         assert!(err(&format!(r#"{{"keyframes": [{key}]}}"#)).contains("give frames or fps"));
-        assert!(err(&format!(r#"{{"frames": 0, "keyframes": [{key}]}}"#)).contains("at least 1"));
+        assert!(err(&format!(r#"{{"frames": 0, "keyframes": [{key}]}}"#)).contains("frames must be in 1..="));
         assert!(err(&format!(r#"{{"frames": 2, "fps": 3, "keyframes": [{key}]}}"#)).contains("not both"));
         assert!(err(&format!(r#"{{"frames": 2, "near": 0, "keyframes": [{key}]}}"#)).contains("near"));
+        assert!(err(&format!(r#"{{"frames": 2, "near": 1e-50, "keyframes": [{key}]}}"#)).contains("near"));
+        assert!(err(&format!(r#"{{"frames": 200000, "keyframes": [{key}]}}"#)).contains("frames must be in"));
+        assert!(
+            err(&format!(
+                r#"{{"fps": 1e300, "keyframes": [{key}, {key2}]}}"#,
+                key2 = key.replace("\"time\": 0", "\"time\": 1")
+            ))
+            .contains("more than")
+        );
+        assert!(err(r#"{"frames": 2, "keyframes": [{"time": -1e308, "position": [0, 0, 0], "target": [0, 0, -1]}, {"time": 1e308, "position": [1, 0, 0], "target": [0, 0, -1]}]}"#).contains("span"));
+        assert!(err(r#"{"frames": 2, "keyframes": [{"time": 0, "position": [0, 0, 0], "target": [0, 0, 1], "fov_y_deg": 1e-300}]}"#).contains("fov_y_deg"));
+        assert!(
+            err(r#"{"frames": 2, "keyframes": [{"time": 0, "position": [1e300, 0, 0], "target": [0, 0, 1]}]}"#)
+                .contains("within")
+        );
         assert!(
             err(&format!(r#"{{"frames": 2, "keyframes": [{key}, {key}]}}"#))
                 .contains("keyframe 1: time 0 is not after")

@@ -24,6 +24,8 @@ pub struct FrameCounters {
     pub query_batches: u64,
     /// Time spent waiting for query results.
     pub query_wait: Duration,
+    /// GPU time of the query passes (timestamps), where the adapter has them.
+    pub query_gpu: Option<Duration>,
 }
 
 /// Result of a finished frame.
@@ -133,6 +135,9 @@ impl<'a> FrameCtx<'a> {
             self.counters.queries += cost.queries;
             self.counters.query_batches += 1;
             self.counters.query_wait += cost.wait;
+            if let Some(gpu) = cost.gpu {
+                *self.counters.query_gpu.get_or_insert(Duration::ZERO) += gpu;
+            }
         }
         self.gpu_ops += start.elapsed();
     }

@@ -82,7 +82,7 @@ pub enum GpuError {
     NoAdapter(BackendChoice),
     #[error("the adapter {adapter} refused a device: {message}")]
     Device { adapter: String, message: String },
-    #[error("the scene needs a {what} of {need} bytes, but the adapter allows {limit}")]
+    #[error("the run needs a {what} of {need}, but the adapter allows {limit}")]
     TooLarge { what: &'static str, need: u64, limit: u64 },
 }
 

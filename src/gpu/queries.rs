@@ -54,6 +54,8 @@ pub struct QueryPool {
     boxes: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     sets: Vec<wgpu::QuerySet>,
+    /// Two timestamps around a batch's query passes, where supported.
+    timestamps: Option<(wgpu::QuerySet, f64)>,
     resolved: wgpu::Buffer,
     readback: Readback,
     /// Scratch, reused so a batch allocates nothing once warm.
@@ -67,7 +69,13 @@ pub struct BatchCost {
     pub queries: u64,
     /// Time from submitting the batch until its results were on the CPU.
     pub wait: Duration,
+    /// GPU time of the query passes alone (timestamps), where available.
+    pub gpu: Option<Duration>,
 }
+
+/// Where results start in the resolve buffer: after the two timestamps that
+/// bracket the query passes, at the 256-byte resolve alignment.
+const RESULTS_OFFSET: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
 
 impl QueryPool {
     /// `camera` is the uniform buffer the scene renderer fills per frame.
@@ -125,8 +133,16 @@ impl QueryPool {
             boxes,
             bind_group,
             sets: Vec::new(),
+            timestamps: gpu.timestamps.then(|| {
+                let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("query pass timestamps"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: 2,
+                });
+                (set, f64::from(gpu.queue.get_timestamp_period()))
+            }),
             resolved: result_buffer(gpu, QUERIES_PER_SET),
-            readback: Readback::new(gpu, "query readback", u64::from(QUERIES_PER_SET) * 8),
+            readback: Readback::new(gpu, "query readback", result_bytes(QUERIES_PER_SET)),
             staging: Vec::new(),
             queried: Vec::new(),
             samples: Vec::new(),
@@ -180,11 +196,15 @@ impl QueryPool {
             return BatchCost {
                 queries: 0,
                 wait: Duration::ZERO,
+                gpu: None,
             };
         }
         self.reserve(gpu, count);
         gpu.queue
             .write_buffer(&self.boxes, 0, bytemuck::cast_slice(&self.staging));
+        if let Some((set, _)) = &self.timestamps {
+            encoder.write_timestamp(set, 0);
+        }
         for (set_index, first) in (0..count).step_by(QUERIES_PER_SET as usize).enumerate() {
             let n = (count - first).min(QUERIES_PER_SET);
             let set = &self.sets[set_index];
@@ -212,20 +232,30 @@ impl QueryPool {
                     pass.end_occlusion_query();
                 }
             }
-            encoder.resolve_query_set(set, 0..n, &self.resolved, u64::from(first) * 8);
+            encoder.resolve_query_set(set, 0..n, &self.resolved, RESULTS_OFFSET + u64::from(first) * 8);
         }
-        let bytes = u64::from(count) * 8;
+        if let Some((set, _)) = &self.timestamps {
+            encoder.write_timestamp(set, 1);
+            encoder.resolve_query_set(set, 0..2, &self.resolved, 0);
+        }
+        let bytes = RESULTS_OFFSET + u64::from(count) * 8;
         self.readback.copy_from(&mut encoder, &self.resolved, bytes);
         let submitted = Instant::now();
         gpu.queue.submit([encoder.finish()]);
         self.readback.read(gpu, bytes, &mut self.samples);
         let wait = submitted.elapsed();
-        for (&i, &s) in self.queried.iter().zip(&self.samples) {
+        let results = &self.samples[(RESULTS_OFFSET / 8) as usize..];
+        for (&i, &s) in self.queried.iter().zip(results) {
             out[i] = BoxVisibility::Samples(s);
         }
+        let gpu_time = self.timestamps.as_ref().map(|&(_, period_ns)| {
+            let ticks = self.samples[1].saturating_sub(self.samples[0]);
+            Duration::from_nanos((ticks as f64 * period_ns) as u64)
+        });
         BatchCost {
             queries: u64::from(count),
             wait,
+            gpu: gpu_time,
         }
     }
 
@@ -235,7 +265,7 @@ impl QueryPool {
             let capacity = count.next_multiple_of(QUERIES_PER_SET);
             (self.boxes, self.bind_group) = box_buffer(gpu, &self.layout, &self.camera, capacity);
             self.resolved = result_buffer(gpu, capacity);
-            self.readback = Readback::new(gpu, "query readback", u64::from(capacity) * 8);
+            self.readback = Readback::new(gpu, "query readback", result_bytes(capacity));
             self.capacity = capacity;
         }
         while (self.sets.len() as u32) * QUERIES_PER_SET < count {
@@ -286,10 +316,14 @@ fn box_buffer(
     (boxes, bind_group)
 }
 
+fn result_bytes(capacity: u32) -> u64 {
+    RESULTS_OFFSET + u64::from(capacity) * 8
+}
+
 fn result_buffer(gpu: &GpuContext, capacity: u32) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("query results"),
-        size: u64::from(capacity) * 8,
+        size: result_bytes(capacity),
         usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     })

@@ -35,6 +35,9 @@ pub struct FrameStats {
     pub queries_skipped: u64,
     /// Time spent waiting for query results (within frame_ms).
     pub query_wait_ms: f64,
+    /// GPU time spent rasterising query boxes (within gpu_ms); empty without
+    /// timestamp queries or without queries.
+    pub query_gpu_ms: Option<f64>,
     /// Pixels whose depth differs from the reference; empty with --no-error.
     pub error_pixels: Option<u64>,
     /// Objects visible in the reference that the mode did not draw.

@@ -77,6 +77,7 @@ const COLUMNS: &[(&str, Column)] = &[
     ("query_batches", |r| Some(r.query_batches as f64)),
     ("queries_skipped", |r| Some(r.queries_skipped as f64)),
     ("query_wait_ms", |r| Some(r.query_wait_ms)),
+    ("query_gpu_ms", |r| r.query_gpu_ms),
     ("error_pixels", |r| r.error_pixels.map(|v| v as f64)),
     ("missed_objects", |r| r.missed_objects.map(|v| v as f64)),
 ];
@@ -188,6 +189,7 @@ mod tests {
             query_batches: 0,
             queries_skipped: 0,
             query_wait_ms: 0.0,
+            query_gpu_ms: None,
             error_pixels: error,
             missed_objects: error.map(|_| 0),
             visible_objects: None,

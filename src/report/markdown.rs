@@ -40,13 +40,16 @@ pub fn render(s: &Summary) -> String {
     let flagged: Vec<&str> = s
         .modes
         .iter()
-        .filter(|m| m.conservative && m.error_pixels_total.is_some_and(|e| e > 0))
+        .filter(|m| {
+            m.conservative
+                && (m.error_pixels_total.is_some_and(|e| e > 0) || m.missed_objects_total.is_some_and(|e| e > 0))
+        })
         .map(|m| m.name.as_str())
         .collect();
     if !flagged.is_empty() {
         let _ = writeln!(
             w,
-            "\n**Conservative modes with image error: {}.** A conservative mode must never change a pixel; this is a bug.",
+            "\n**Conservative modes with image error or missed objects: {}.** A conservative mode must draw every visible object and never change a pixel; this is a bug.",
             flagged.join(", ")
         );
     }

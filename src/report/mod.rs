@@ -71,10 +71,10 @@ pub struct PathSummary {
 }
 
 #[derive(Debug, thiserror::Error)]
-#[error("{}: {source}", path.display())]
+#[error("{}: {error}", path.display())]
 pub struct ReportError {
     pub path: PathBuf,
-    pub source: std::io::Error,
+    pub error: std::io::Error,
 }
 
 /// The files a run wrote.
@@ -84,10 +84,23 @@ pub struct ResultFiles {
     pub report_md: PathBuf,
 }
 
+/// Creates `out` and checks that files can be written there, so a bad
+/// `--out` fails before a long run rather than after it.
+pub fn prepare_output(out: &Path) -> Result<(), ReportError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |error| ReportError { path, error }
+    };
+    std::fs::create_dir_all(out).map_err(io(out))?;
+    let probe = out.join(".occlu-write-test");
+    std::fs::write(&probe, b"").map_err(io(&probe))?;
+    std::fs::remove_file(&probe).map_err(io(&probe))
+}
+
 pub fn write_results(out: &Path, summary: &Summary, rows: &[FrameStats]) -> Result<ResultFiles, ReportError> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
-        move |source| ReportError { path, source }
+        move |error| ReportError { path, error }
     };
     std::fs::create_dir_all(out).map_err(io(out))?;
     let files = ResultFiles {

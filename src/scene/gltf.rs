@@ -17,13 +17,20 @@ pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(),
         path: path.into(),
         message,
     };
-    // Validation also refuses files that require an extension not enabled
-    // in Cargo.toml (e.g. Draco compression), naming it.
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| {
+    let invalid = |e: gltf::Error| {
         let text = e.to_string();
         let detail = text.trim_start_matches("invalid glTF: ").trim_end_matches([';', ' ']);
         parse_error(format!("invalid glTF: {detail}"))
-    })?;
+    };
+    // gltf-json's validator indexes primitive accessors without a bounds
+    // check, so those are checked first; validation then also refuses files
+    // that require an extension not enabled in Cargo.toml (e.g. Draco).
+    let unvalidated = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
+    check_primitive_accessors(unvalidated.document.as_json()).map_err(parse_error)?;
+    let gltf = gltf::Gltf {
+        document: gltf::Document::from_json(unvalidated.document.into_json()).map_err(invalid)?,
+        blob: unvalidated.blob,
+    };
     if gltf.extensions_used().any(|e| e == "EXT_mesh_gpu_instancing") {
         builder.warn("EXT_mesh_gpu_instancing is not supported: each node is drawn once".into());
     }
@@ -40,7 +47,8 @@ pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(),
         .map(|b| buffer_data(path, &gltf, &b))
         .collect::<Result<Vec<_>, _>>()?;
 
-    let roots: Vec<gltf::Node> = match gltf.default_scene().or_else(|| gltf.scenes().next()) {
+    let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
+    let roots: Vec<gltf::Node> = match &scene {
         Some(scene) => scene.nodes().collect(),
         // No scene: every node that is nobody's child is a root.
         None => {
@@ -51,17 +59,26 @@ pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(),
     };
 
     let mut mesh_groups: HashMap<usize, Vec<MeshGroup>> = HashMap::new();
-    // Depth-first over the node tree; the depth guard stops cyclic files,
-    // which the glTF validator does not reject.
-    let mut stack: Vec<(gltf::Node, DMat4, usize)> = roots.into_iter().map(|n| (n, DMat4::IDENTITY, 0)).collect();
-    while let Some((node, parent, depth)) = stack.pop() {
-        if depth > MAX_NODE_DEPTH {
+    // Depth-first over the node trees. glTF requires disjoint trees; the
+    // validator does not check it, and a node reached twice (shared children,
+    // a cycle) would multiply the scene or never end, so it is an error.
+    let mut reached = vec![false; gltf.nodes().len()];
+    let mut stack: Vec<(gltf::Node, DMat4)> = roots.into_iter().map(|n| (n, DMat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let index = node.index();
+        if std::mem::replace(&mut reached[index], true) {
             return Err(parse_error(format!(
-                "node hierarchy deeper than {MAX_NODE_DEPTH} levels (is it cyclic?)"
+                "node {index} is reached twice: glTF node hierarchies must be trees"
             )));
         }
-        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
-        let world = parent * local;
+        let matrix = node.transform().matrix();
+        if matrix.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(parse_error(format!("node {index}: transform is not finite in f32")));
+        }
+        if matrix.iter().map(|column| column[3]).ne([0.0, 0.0, 0.0, 1.0]) {
+            return Err(parse_error(format!("node {index}: matrix is not affine")));
+        }
+        let world = parent * DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)));
         if let Some(mesh) = node.mesh() {
             if let std::collections::hash_map::Entry::Vacant(slot) = mesh_groups.entry(mesh.index()) {
                 slot.insert(load_mesh(path, &mesh, &buffers, builder)?);
@@ -69,7 +86,7 @@ pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(),
             let node_name = node
                 .name()
                 .map(str::to_string)
-                .unwrap_or_else(|| format!("node{}", node.index()));
+                .unwrap_or_else(|| format!("node{index}"));
             let groups = &mesh_groups[&mesh.index()];
             let transform = DAffine3::from_mat4(world);
             for (k, group) in groups.iter().enumerate() {
@@ -78,15 +95,100 @@ pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(),
                 } else {
                     node_name.clone()
                 };
-                builder.add_object(&name, group, transform);
+                builder
+                    .add_object(&name, group, transform)
+                    .map_err(|error| SceneError::Geometry {
+                        path: path.into(),
+                        error,
+                    })?;
             }
         }
-        stack.extend(node.children().map(|c| (c, world, depth + 1)));
+        stack.extend(node.children().map(|c| (c, world)));
+    }
+    if scene.is_none()
+        && let Some(lost) = gltf.nodes().find(|n| n.mesh().is_some() && !reached[n.index()])
+    {
+        return Err(parse_error(format!(
+            "node {} is in a cycle of child links and reachable from no root",
+            lost.index()
+        )));
     }
     Ok(())
 }
 
-const MAX_NODE_DEPTH: usize = 1024;
+/// Accessor indices of every primitive must exist.
+fn check_primitive_accessors(json: &gltf::json::Root) -> Result<(), String> {
+    let count = json.accessors.len();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let targets = primitive
+                .targets
+                .iter()
+                .flatten()
+                .flat_map(|t| [&t.positions, &t.normals, &t.tangents].into_iter().flatten());
+            let mut used = primitive
+                .attributes
+                .values()
+                .chain(primitive.indices.iter())
+                .chain(targets);
+            if let Some(bad) = used.find(|a| a.value() >= count) {
+                return Err(format!(
+                    "mesh {m} primitive {p}: accessor {} does not exist ({count} accessors)",
+                    bad.value()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Checks an accessor before the gltf reader touches it: the reader trusts
+/// strides, component types and counts, and would panic, or allocate for the
+/// declared count, on bad ones.
+fn check_accessor(
+    accessor: &gltf::Accessor,
+    what: &str,
+    types: &[gltf::accessor::DataType],
+    dimensions: gltf::accessor::Dimensions,
+    buffer_bytes: usize,
+) -> Result<(), String> {
+    let (data_type, dims, count) = (accessor.data_type(), accessor.dimensions(), accessor.count());
+    if !types.contains(&data_type) || dims != dimensions {
+        return Err(format!(
+            "{what} must be a {dimensions:?} accessor of {types:?} (found {data_type:?} {dims:?})"
+        ));
+    }
+    if count == 0 {
+        return Err(format!("{what} accessor is empty"));
+    }
+    let too_many = match accessor.view() {
+        Some(view) => {
+            if let Some(stride) = view.stride().filter(|&s| s < accessor.size()) {
+                return Err(format!(
+                    "{what}: byteStride {stride} is smaller than its {}-byte elements",
+                    accessor.size()
+                ));
+            }
+            count
+                .checked_mul(accessor.size())
+                .is_none_or(|bytes| bytes > view.length())
+        }
+        // A sparse accessor without data of its own: its count still cannot
+        // sensibly exceed the bytes the file carries.
+        None => count > buffer_bytes,
+    };
+    if too_many {
+        return Err(format!("{what}: {count} elements do not fit the data the file holds"));
+    }
+    if let Some(sparse) = accessor.sparse()
+        && (sparse.count() > count
+            || sparse.indices().view().stride().is_some()
+            || sparse.values().view().stride().is_some())
+    {
+        return Err(format!("{what}: malformed sparse storage"));
+    }
+    Ok(())
+}
 
 /// One mesh group per triangle primitive of the mesh.
 fn load_mesh(
@@ -95,10 +197,12 @@ fn load_mesh(
     buffers: &[Vec<u8>],
     builder: &mut SceneBuilder,
 ) -> Result<Vec<MeshGroup>, SceneError> {
+    use gltf::accessor::{DataType, Dimensions};
     let mesh_name = mesh
         .name()
         .map(str::to_string)
         .unwrap_or_else(|| format!("mesh{}", mesh.index()));
+    let buffer_bytes = buffers.iter().map(Vec::len).sum();
     let mut groups = Vec::new();
     for primitive in mesh.primitives() {
         let element = format!("mesh '{mesh_name}' primitive {}", primitive.index());
@@ -115,21 +219,10 @@ fn load_mesh(
         let accessor = primitive
             .get(&gltf::Semantic::Positions)
             .ok_or_else(|| error("has no POSITION attribute".into()))?;
-        if accessor.data_type() != gltf::accessor::DataType::F32
-            || accessor.dimensions() != gltf::accessor::Dimensions::Vec3
-            || accessor.count() == 0
-        {
-            return Err(error(format!(
-                "POSITION must be a non-empty float VEC3 accessor (found {:?} {:?}, {} elements)",
-                accessor.data_type(),
-                accessor.dimensions(),
-                accessor.count()
-            )));
-        }
-        if let Some(indices) = primitive.indices()
-            && indices.count() == 0
-        {
-            return Err(error("has an empty index accessor".into()));
+        check_accessor(&accessor, "POSITION", &[DataType::F32], Dimensions::Vec3, buffer_bytes).map_err(error)?;
+        if let Some(indices) = primitive.indices() {
+            let types = [DataType::U8, DataType::U16, DataType::U32];
+            check_accessor(&indices, "indices", &types, Dimensions::Scalar, buffer_bytes).map_err(error)?;
         }
         let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let positions: Vec<DVec3> = reader
@@ -144,6 +237,10 @@ fn load_mesh(
             }
             None => (0..positions.len() as u32).collect(),
         };
+        let declared = primitive.indices().map_or(positions.len(), |i| i.count());
+        if positions.len() != accessor.count() || stream.len() != declared {
+            return Err(error("accessor data is shorter than its declared count".into()));
+        }
         let triangles = triangle_list(mode, &stream);
         let name = if mesh.primitives().len() > 1 {
             format!("{mesh_name}/{}", primitive.index())
@@ -152,9 +249,9 @@ fn load_mesh(
         };
         let group = builder
             .add_mesh(&name, &positions, &triangles)
-            .map_err(|source| SceneError::Geometry {
+            .map_err(|error| SceneError::Geometry {
                 path: path.into(),
-                source,
+                error,
             })?;
         groups.push(group);
     }

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use glam::{DAffine3, DVec3};
 
 use crate::bounds::Aabb;
-pub use validate::GeometryError;
+pub use validate::{GeometryError, MAX_COORDINATE, within_range};
 
 /// Default triangle budget of one cluster: meshes above it are split.
 pub const DEFAULT_CLUSTER_TRIANGLES: u32 = 4096;
@@ -98,14 +98,17 @@ impl Default for LoadOptions {
 
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    // Fields are named `error`, not `source`: each message already says
+    // everything, and a `source` would be printed a second time by error
+    // chains.
+    #[error("{}: {error}", path.display())]
+    Io { path: PathBuf, error: std::io::Error },
     #[error("{}: unsupported model format (supported: .obj, .gltf, .glb)", path.display())]
     UnsupportedFormat { path: PathBuf },
     #[error("{}: {message}", path.display())]
     Parse { path: PathBuf, message: String },
-    #[error("{}: {source}", path.display())]
-    Geometry { path: PathBuf, source: GeometryError },
+    #[error("{}: {error}", path.display())]
+    Geometry { path: PathBuf, error: GeometryError },
     #[error("{}: the model has no triangles to render", path.display())]
     Empty { path: PathBuf },
     #[error("built-in scene '{spec}': {message}")]
@@ -132,9 +135,9 @@ fn load_file(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         Some("gltf") | Some("glb") => gltf::load,
         _ => return Err(SceneError::UnsupportedFormat { path: path.into() }),
     };
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+    let bytes = std::fs::read(path).map_err(|error| SceneError::Io {
         path: path.into(),
-        source,
+        error,
     })?;
     let mut builder = SceneBuilder::new(path.display().to_string(), options.cluster_triangles);
     loader(path, &bytes, &mut builder)?;
@@ -210,20 +213,29 @@ impl SceneBuilder {
         Ok(MeshGroup { clusters: group })
     }
 
-    /// Places every cluster of `group` in the world under `transform`.
-    pub fn add_object(&mut self, name: &str, group: &MeshGroup, transform: DAffine3) {
+    /// Places every cluster of `group` in the world under `transform`. A
+    /// transform that is not finite or puts geometry beyond
+    /// [`MAX_COORDINATE`] is an error naming the object.
+    pub fn add_object(&mut self, name: &str, group: &MeshGroup, transform: DAffine3) -> Result<(), GeometryError> {
         let split = group.clusters.len() > 1;
         for (i, &(mesh, origin)) in group.clusters.iter().enumerate() {
             let m = &self.meshes[mesh as usize];
             let transform = transform * DAffine3::from_translation(origin);
+            let bounds = m.bounds.transformed(&transform);
+            if !transform.is_finite() || !validate::within_range(bounds.min) || !validate::within_range(bounds.max) {
+                return Err(GeometryError::ObjectOutOfRange {
+                    object: name.to_string(),
+                });
+            }
             self.objects.push(Object {
                 name: if split { format!("{name}#{i}") } else { name.to_string() },
                 mesh,
-                bounds: m.bounds.transformed(&transform),
+                bounds,
                 transform,
                 triangles: m.triangles(),
             });
         }
+        Ok(())
     }
 
     /// Records a problem that does not stop the load; it is reported by

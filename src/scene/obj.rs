@@ -1,7 +1,6 @@
 //! Wavefront OBJ through tobj: each `o`/`g` becomes an object; materials,
 //! normals and texture coordinates are not needed and not loaded.
 
-use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::Path;
 
@@ -25,10 +24,10 @@ pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(),
         message: format!("invalid OBJ: {e}"),
     })?;
 
-    // tobj starts a new model at every `usemtl` too; an object is everything
-    // under one `o`/`g` name, so models sharing a name are merged.
+    // tobj starts a new model at every `usemtl` too: consecutive models with
+    // the same name are one `o`/`g` and are merged back. Two separate `o a`
+    // statements stay two objects.
     let mut names: Vec<String> = Vec::new();
-    let mut slots: HashMap<String, usize> = HashMap::new();
     let mut meshes: Vec<(Vec<DVec3>, Vec<u32>)> = Vec::new();
     for model in models {
         let name = if model.name.is_empty() {
@@ -36,12 +35,11 @@ pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(),
         } else {
             model.name
         };
-        let slot = *slots.entry(name.clone()).or_insert_with(|| {
+        if names.last() != Some(&name) {
             names.push(name);
             meshes.push(Default::default());
-            meshes.len() - 1
-        });
-        let (positions, indices) = &mut meshes[slot];
+        }
+        let (positions, indices) = meshes.last_mut().expect("pushed above");
         let base = positions.len() as u32;
         positions.extend(
             model
@@ -53,13 +51,12 @@ pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(),
         indices.extend(model.mesh.indices.iter().map(|&i| base + i));
     }
     for (name, (positions, indices)) in names.iter().zip(&meshes) {
-        let group = builder
-            .add_mesh(name, positions, indices)
-            .map_err(|source| SceneError::Geometry {
-                path: path.into(),
-                source,
-            })?;
-        builder.add_object(name, &group, DAffine3::IDENTITY);
+        let geometry = |error| SceneError::Geometry {
+            path: path.into(),
+            error,
+        };
+        let group = builder.add_mesh(name, positions, indices).map_err(geometry)?;
+        builder.add_object(name, &group, DAffine3::IDENTITY).map_err(geometry)?;
     }
     let skipped = count_line_and_point_elements(bytes);
     if skipped > 0 {

@@ -3,6 +3,15 @@
 
 use glam::DVec3;
 
+/// Coordinates beyond this are refused: the renderer works in f32
+/// (camera-relative), and 1e18 units leave ample room below f32's 3.4e38
+/// for every product the pipeline forms.
+pub const MAX_COORDINATE: f64 = 1e18;
+
+pub fn within_range(p: DVec3) -> bool {
+    p.is_finite() && p.abs().max_element() <= MAX_COORDINATE
+}
+
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum GeometryError {
     #[error("mesh '{mesh}': vertex {vertex} has a non-finite position {position:?}")]
@@ -11,6 +20,16 @@ pub enum GeometryError {
         vertex: usize,
         position: [f64; 3],
     },
+    #[error(
+        "mesh '{mesh}': vertex {vertex} at {position:?} lies beyond ±{MAX_COORDINATE:e}, which occlu cannot render"
+    )]
+    OutOfRange {
+        mesh: String,
+        vertex: usize,
+        position: [f64; 3],
+    },
+    #[error("object '{object}': its transform is not finite or places it beyond ±{MAX_COORDINATE:e}")]
+    ObjectOutOfRange { object: String },
     #[error("mesh '{mesh}': index {index} (entry {entry} of the index list) is out of range for {vertices} vertices")]
     IndexOutOfRange {
         mesh: String,
@@ -33,11 +52,12 @@ pub struct ValidTriangles {
 const DEGENERATE_RATIO: f64 = 1e-12;
 
 pub fn triangles(mesh: &str, positions: &[DVec3], indices: &[u32]) -> Result<ValidTriangles, GeometryError> {
-    if let Some((vertex, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
-        return Err(GeometryError::NonFinitePosition {
-            mesh: mesh.to_string(),
-            vertex,
-            position: p.to_array(),
+    if let Some((vertex, p)) = positions.iter().enumerate().find(|(_, p)| !within_range(**p)) {
+        let (mesh, position) = (mesh.to_string(), p.to_array());
+        return Err(if p.is_finite() {
+            GeometryError::OutOfRange { mesh, vertex, position }
+        } else {
+            GeometryError::NonFinitePosition { mesh, vertex, position }
         });
     }
     if !indices.len().is_multiple_of(3) {
@@ -108,10 +128,25 @@ mod tests {
     }
 
     #[test]
-    fn infinite_vertex_is_rejected() {
+    fn infinite_and_unrenderably_far_vertices_are_rejected() {
         let mut p = quad();
         p[0].x = f64::INFINITY;
-        assert!(triangles("m", &p, &[0, 1, 2]).is_err());
+        assert!(matches!(
+            triangles("m", &p, &[0, 1, 2]),
+            Err(GeometryError::NonFinitePosition { .. })
+        ));
+        p[0].x = 1e39;
+        let e = triangles("m", &p, &[0, 1, 2]).err().unwrap();
+        assert!(matches!(e, GeometryError::OutOfRange { vertex: 0, .. }), "{e}");
+        p[0].x = -1e17;
+        assert!(triangles("m", &p, &[0, 1, 2]).is_ok(), "far but renderable");
+    }
+
+    #[test]
+    fn huge_triangles_are_not_mistaken_for_degenerate_ones() {
+        let s = 1e17;
+        let p = vec![DVec3::ZERO, DVec3::new(s, 0.0, 0.0), DVec3::new(0.0, s, 0.0)];
+        assert_eq!(triangles("big", &p, &[0, 1, 2]).map(|v| v.degenerate), Ok(0));
     }
 
     #[test]

@@ -10,8 +10,8 @@ pub type Primitive<'a> = (&'a [[f32; 3]], Option<&'a [u32]>, u32);
 #[derive(Default)]
 pub struct GltfWriter {
     bin: Vec<u8>,
-    buffer_views: Vec<Value>,
-    accessors: Vec<Value>,
+    pub buffer_views: Vec<Value>,
+    pub accessors: Vec<Value>,
     pub meshes: Vec<Value>,
     pub nodes: Vec<Value>,
     pub extra: serde_json::Map<String, Value>,

@@ -130,7 +130,7 @@ pub fn boxes(list: &[(DVec3, DVec3)]) -> Scene {
         ];
         let idx: Vec<u32> = faces.iter().flat_map(|&[a, b, c, d]| [a, b, c, a, c, d]).collect();
         let group = b.add_mesh(&format!("box{k}"), &corners, &idx).unwrap();
-        b.add_object(&format!("box{k}"), &group, DAffine3::IDENTITY);
+        b.add_object(&format!("box{k}"), &group, DAffine3::IDENTITY).unwrap();
     }
     b.finish().unwrap()
 }

@@ -55,7 +55,10 @@ fn parse_spec(spec: &str) -> Result<(&str, Params<'_>), SceneError> {
 
 /// Reads integer parameters by name, rejecting unknown keys and bad values.
 fn read_params(params: &Params, keys: &mut [(&str, &mut u64, std::ops::RangeInclusive<u64>)]) -> Result<(), String> {
-    for &(key, value) in params {
+    for (i, &(key, value)) in params.iter().enumerate() {
+        if params[..i].iter().any(|&(k, _)| k == key) {
+            return Err(format!("parameter '{key}' is given twice"));
+        }
         let Some((_, slot, range)) = keys.iter_mut().find(|(k, _, _)| *k == key) else {
             let known: Vec<&str> = keys.iter().map(|(k, _, _)| *k).collect();
             return Err(format!("unknown parameter '{key}' (known: {})", known.join(", ")));
@@ -116,6 +119,7 @@ mod tests {
         assert!(msg("city:blocks=x").contains("whole number"));
         assert!(msg("city:blocks=0").contains("must be in"));
         assert!(msg("city:blocks").contains("not key=value"));
+        assert!(msg("city:blocks=1,blocks=2").contains("'blocks' is given twice"));
     }
 
     #[test]
