@@ -28,6 +28,7 @@
 //! Conservative like the paper: a node is culled only by a query that found
 //! its box hidden behind geometry that was really drawn.
 
+use glam::DVec3;
 use serde::Serialize;
 
 use super::occupancy::{OccupancyMap, ScreenRect};
@@ -64,6 +65,14 @@ impl OmqParams {
             factor,
         })
     }
+}
+
+/// Where opened nodes' children go: the front-to-back queue of the current
+/// stage, or the pending list of the next batch.
+#[derive(Clone, Copy)]
+enum Destination {
+    Queue,
+    Pending,
 }
 
 pub struct OccupancyMapQueries<'a> {
@@ -103,18 +112,18 @@ impl<'a> OccupancyMapQueries<'a> {
         ScreenRect::of_box(bounds, camera, self.om.cols(), self.om.rows())
     }
 
-    /// Frustum-tests the children of `node`; those inside go to the depth
-    /// queue (`to_queue`) or the pending list.
-    fn open(&mut self, node: u32, frustum: &Frustum, eye: glam::DVec3, to_queue: bool, stats: &mut TraversalStats) {
+    /// Frustum-tests the children of `node`; those inside go to `into`.
+    fn open(&mut self, node: u32, frustum: &Frustum, eye: DVec3, into: Destination, stats: &mut TraversalStats) {
         let nodes = &self.hierarchy.nodes;
         for child in nodes[node as usize].children() {
             stats.nodes_visited += 1;
             if frustum.classify(&nodes[child].bounds) == Containment::Outside {
                 stats.nodes_culled_frustum += 1;
-            } else if to_queue {
-                self.queue.push(child as u32, &nodes[child].bounds, eye);
             } else {
-                self.pending.push(child as u32);
+                match into {
+                    Destination::Queue => self.queue.push(child as u32, &nodes[child].bounds, eye),
+                    Destination::Pending => self.pending.push(child as u32),
+                }
             }
         }
     }
@@ -128,7 +137,7 @@ impl<'a> OccupancyMapQueries<'a> {
 
     /// One multiple occlusion query over the test list: visible leaves are
     /// drawn, visible inner nodes' children become pending.
-    fn query_test_list(&mut self, ctx: &mut FrameCtx, frustum: &Frustum, eye: glam::DVec3, stats: &mut TraversalStats) {
+    fn query_test_list(&mut self, ctx: &mut FrameCtx, frustum: &Frustum, eye: DVec3, stats: &mut TraversalStats) {
         self.boxes.clear();
         let nodes = &self.hierarchy.nodes;
         self.boxes
@@ -142,7 +151,7 @@ impl<'a> OccupancyMapQueries<'a> {
             } else if nodes[node as usize].is_leaf() {
                 self.draw_leaf(ctx, node, frustum);
             } else {
-                self.open(node, frustum, eye, false, stats);
+                self.open(node, frustum, eye, Destination::Pending, stats);
             }
         }
         self.test_list.clear();
@@ -184,7 +193,7 @@ impl Culler for OccupancyMapQueries<'_> {
                     self.draw_leaf(ctx, node, &frustum);
                     self.om.mark(&rect);
                 } else {
-                    self.open(node, &frustum, eye, true, &mut stats);
+                    self.open(node, &frustum, eye, Destination::Queue, &mut stats);
                 }
             } else {
                 self.pending.push(node);
