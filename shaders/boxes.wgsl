@@ -1,8 +1,9 @@
-// Bounding boxes for occlusion queries: depth test only, no colour, no
-// depth writes. One instance per box; the 36 vertices of a box are its 12
+// Bounding boxes for occlusion tests: depth test only, no colour, no depth
+// writes. One instance per box; the 36 vertices of a box are its 12
 // triangles, wound counter-clockwise seen from outside so back faces can be
-// culled (the eye is never inside a queried box: such boxes are visible
-// without a query).
+// culled (the eye is never inside a tested box: such boxes are visible
+// without a test). pixel_count.wgsl holds the fragment stage that counts
+// visible pixels per box.
 
 struct Camera {
     projection: mat4x4<f32>,
@@ -30,8 +31,14 @@ var<private> CORNERS: array<u32, 36> = array<u32, 36>(
     4u, 7u, 6u, 4u, 5u, 7u, // +z
 );
 
+struct BoxVertex {
+    @builtin(position) clip: vec4<f32>,
+    // Which box: the pixel counter to add to.
+    @location(0) @interpolate(flat) index: u32,
+}
+
 @vertex
-fn vs_box(@builtin(vertex_index) vertex: u32, @builtin(instance_index) index: u32) -> @builtin(position) vec4<f32> {
+fn vs_box(@builtin(vertex_index) vertex: u32, @builtin(instance_index) index: u32) -> BoxVertex {
     let corner = CORNERS[vertex];
     let b = boxes[index];
     let p = vec3<f32>(
@@ -39,5 +46,5 @@ fn vs_box(@builtin(vertex_index) vertex: u32, @builtin(instance_index) index: u3
         select(b.min.y, b.max.y, (corner & 2u) != 0u),
         select(b.min.z, b.max.z, (corner & 4u) != 0u),
     );
-    return camera.view_projection * vec4<f32>(p, 1.0);
+    return BoxVertex(camera.view_projection * vec4<f32>(p, 1.0), index);
 }

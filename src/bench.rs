@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use crate::camera::generate::{DEFAULT_FRAMES, default_kind, generate};
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
-use crate::cull::{Culler, FrameInput, MODES, ModeError, create};
+use crate::cull::{Culler, FrameInput, Labeled, MODES, ModeError, PreviousFrame, create};
 use crate::gpu::{
     AdapterReport, FrameCtx, FrameResources, GpuContext, GpuError, GpuScene, GpuTimer, QueryPool, RenderTargets,
     Resolution, SceneRenderer,
@@ -23,8 +23,8 @@ use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{ErrorMeter, FrameStats, ModeDescription, summarize};
 use crate::object_set::ObjectSet;
 use crate::report::{
-    PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneSummary, Summary, ToolInfo, prepare_output,
-    write_results,
+    PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneSummary, SkippedMode, Summary, SweepSummary, ToolInfo,
+    prepare_output, write_results,
 };
 use crate::scene::{LoadOptions, Scene, SceneError};
 
@@ -74,6 +74,7 @@ pub fn run(
     let mut draw_queue = Vec::new();
     let mut drawn: Vec<ObjectSet> = cullers.iter().map(|_| ObjectSet::new(scene.objects.len())).collect();
     let mut frame_rows: Vec<Option<FrameStats>> = vec![None; cullers.len()];
+    let mut previous: Vec<Option<PreviousFrame>> = vec![None; cullers.len()];
     let frames = path.frames;
     // Both are capped (MAX_FRAMES, MAX_WARMUP), so the sum cannot overflow.
     let total = options.warmup + frames;
@@ -99,11 +100,13 @@ pub fn run(
             let input = FrameInput {
                 frame,
                 camera: &camera,
+                resolution: options.resolution,
                 reference_visible: if culler.needs_reference() {
                     visible.as_ref()
                 } else {
                     None
                 },
+                previous: previous[k],
             };
             let frame_start = Instant::now();
             let resources = FrameResources {
@@ -134,6 +137,8 @@ pub fn run(
                 queries: outcome.counters.queries,
                 query_batches: outcome.counters.query_batches,
                 queries_skipped: traversal.queries_skipped,
+                nodes_culled_adaptive: traversal.nodes_culled_adaptive,
+                nodes_past_budget: traversal.nodes_past_budget,
                 query_wait_ms: ms(outcome.counters.query_wait),
                 query_gpu_ms: outcome.counters.query_gpu.map(ms),
                 error_pixels: None,
@@ -155,10 +160,14 @@ pub fn run(
             }
         };
         let gpu_ms = timer.as_mut().map(|t| t.read_ms(gpu));
-        if recording {
-            for (k, slot) in frame_rows.iter_mut().enumerate() {
-                let mut row = slot.take().expect("every mode ran this frame");
-                row.gpu_ms = gpu_ms.as_ref().map(|t| t[k]);
+        for (k, slot) in frame_rows.iter_mut().enumerate() {
+            let mut row = slot.take().expect("every mode ran this frame");
+            row.gpu_ms = gpu_ms.as_ref().map(|t| t[k]);
+            previous[k] = Some(PreviousFrame {
+                frame_ms: row.frame_ms,
+                render_ms: row.render_ms(),
+            });
+            if recording {
                 if let (Some(wrong), Some(visible)) = (&wrong, &visible) {
                     row.error_pixels = Some(wrong[k]);
                     row.missed_objects = Some(visible.count_missing_from(&drawn[k]) as u64);
@@ -206,6 +215,11 @@ pub enum BenchEvent<'a> {
         build_ms: f64,
     },
     Adapter(&'a AdapterReport),
+    /// A mode the adapter cannot run; the run goes on without it.
+    Skipped {
+        mode: &'a str,
+        reason: &'a str,
+    },
     Frame {
         done: u32,
         total: u32,
@@ -254,14 +268,41 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
         Some(n) => path.with_frames(n)?,
         None => path,
     };
-    let mut cullers = plan
-        .modes
-        .iter()
-        .map(|m| create(m, &scene, &hierarchy, &plan.params))
-        .collect::<Result<Vec<_>, _>>()?;
-
     let gpu = GpuContext::new(plan.backend)?;
     events(BenchEvent::Adapter(&gpu.adapter));
+    let mut skipped = Vec::new();
+    let mut runs = plan.runs();
+    runs.retain(|run| {
+        let info = MODES
+            .iter()
+            .find(|m| m.name == run.mode)
+            .expect("plans hold known modes");
+        let unsupported = info.needs_pixel_counts && !gpu.pixel_counts;
+        if unsupported && !skipped.iter().any(|s: &SkippedMode| s.mode == run.mode) {
+            let reason =
+                "the adapter cannot count visible pixels (needs SHADER_EARLY_DEPTH_TEST and fragment storage writes)";
+            events(BenchEvent::Skipped { mode: run.mode, reason });
+            skipped.push(SkippedMode {
+                mode: run.mode.to_string(),
+                reason: reason.to_string(),
+            });
+        }
+        !unsupported
+    });
+    let mut cullers = runs
+        .iter()
+        .map(|run| {
+            let culler = create(run.mode, &scene, &hierarchy, &run.params)?;
+            Ok(if run.label == run.mode {
+                culler
+            } else {
+                Box::new(Labeled {
+                    label: run.label.clone(),
+                    inner: culler,
+                }) as Box<dyn Culler>
+            })
+        })
+        .collect::<Result<Vec<_>, ModeError>>()?;
     let options = RunOptions {
         warmup: plan.warmup,
         resolution: plan.resolution,
@@ -271,12 +312,13 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
         events(BenchEvent::Frame { done, total })
     })?;
 
-    let descriptions: Vec<ModeDescription> = cullers
+    let descriptions: Vec<ModeDescription> = runs
         .iter()
-        .map(|c| ModeDescription {
-            name: c.name().to_string(),
-            conservative: MODES.iter().any(|m| m.name == c.name() && m.conservative),
-            parameters: c.parameters(),
+        .zip(&cullers)
+        .map(|(run, culler)| ModeDescription {
+            name: run.label.clone(),
+            conservative: MODES.iter().any(|m| m.name == run.mode && m.conservative),
+            parameters: culler.parameters(),
         })
         .collect();
     let summary = Summary {
@@ -308,6 +350,12 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
         warmup: plan.warmup,
         error_measured: plan.measure_error,
         modes: summarize(&output.rows, &descriptions, plan.resolution.pixels()),
+        skipped,
+        sweep: plan.sweep.as_ref().map(|s| SweepSummary {
+            mode: s.mode.to_string(),
+            key: s.key.clone(),
+            values: s.values.clone(),
+        }),
     };
     let files = write_results(&plan.out, &summary, &output.rows)?;
     Ok(BenchOutcome { summary, files })

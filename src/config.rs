@@ -36,6 +36,8 @@ pub struct BenchConfig {
     pub cluster_triangles: Option<u32>,
     /// Mode parameters, `MODE.KEY=VALUE`.
     pub params: Option<Vec<String>>,
+    /// One mode at several values of one parameter, `MODE.KEY=V1,V2,...`.
+    pub sweep: Option<String>,
 }
 
 pub const DEFAULT_WARMUP: u32 = 3;
@@ -58,6 +60,8 @@ pub enum ConfigError {
     Warmup,
     #[error(transparent)]
     Mode(#[from] ModeError),
+    #[error("--sweep '{0}' is not MODE.KEY=V1,V2,...")]
+    Sweep(String),
 }
 
 /// A complete, validated plan for one bench run.
@@ -67,6 +71,7 @@ pub struct BenchPlan {
     pub path: Option<PathBuf>,
     pub modes: Vec<&'static str>,
     pub params: ModeParams,
+    pub sweep: Option<Sweep>,
     pub frames: Option<u32>,
     pub warmup: u32,
     pub resolution: Resolution,
@@ -117,6 +122,7 @@ impl BenchConfig {
             error: self.error.or(fallback.error),
             cluster_triangles: self.cluster_triangles.or(fallback.cluster_triangles),
             // Per key, a flag wins over the file: later entries override.
+            sweep: self.sweep.or(fallback.sweep),
             params: match (fallback.params, self.params) {
                 (Some(mut file), Some(flags)) => {
                     file.extend(flags);
@@ -143,11 +149,24 @@ impl BenchConfig {
         if self.warmup.is_some_and(|n| n > MAX_WARMUP) {
             return Err(ConfigError::Warmup);
         }
-        let modes = parse_modes(&self.modes.unwrap_or_else(|| vec!["all".into()]))?;
+        let mut modes = parse_modes(&self.modes.unwrap_or_else(|| vec!["all".into()]))?;
+        let sweep = self.sweep.as_deref().map(Sweep::parse).transpose()?;
+        if let Some(s) = &sweep
+            && !modes.contains(&s.mode)
+        {
+            modes.push(s.mode);
+        }
+        let params = ModeParams::parse(&self.params.unwrap_or_default(), &modes)?;
+        if let Some(s) = &sweep {
+            for value in &s.values {
+                ModeParams::parse(&[format!("{}.{}={value}", s.mode, s.key)], &[s.mode])?;
+            }
+        }
         Ok(BenchPlan {
             scene,
             path: self.path,
-            params: ModeParams::parse(&self.params.unwrap_or_default(), &modes)?,
+            params,
+            sweep,
             modes,
             frames: self.frames,
             warmup: self.warmup.unwrap_or(DEFAULT_WARMUP),
@@ -157,6 +176,70 @@ impl BenchConfig {
             measure_error: self.error.unwrap_or(true),
             cluster_triangles: self.cluster_triangles.unwrap_or(DEFAULT_CLUSTER_TRIANGLES),
         })
+    }
+}
+
+/// One mode run at several values of one of its parameters, in the same
+/// interleaved run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sweep {
+    pub mode: &'static str,
+    pub key: String,
+    pub values: Vec<String>,
+}
+
+impl Sweep {
+    fn parse(spec: &str) -> Result<Sweep, ConfigError> {
+        let malformed = || ConfigError::Sweep(spec.to_string());
+        let (key, values) = spec.split_once('=').ok_or_else(malformed)?;
+        let (mode, param) = key.split_once('.').ok_or_else(malformed)?;
+        let mode = parse_modes(&[mode.to_string()])?
+            .into_iter()
+            .next()
+            .filter(|_| mode != "all")
+            .ok_or_else(malformed)?;
+        let values: Vec<String> = values.split(',').map(|v| v.trim().to_string()).collect();
+        if values.iter().any(String::is_empty) {
+            return Err(malformed());
+        }
+        Ok(Sweep {
+            mode,
+            key: param.to_string(),
+            values,
+        })
+    }
+}
+
+/// One culler of a plan: a mode, its label in the results, its parameters.
+pub struct ModeRun {
+    pub label: String,
+    pub mode: &'static str,
+    pub params: ModeParams,
+}
+
+impl BenchPlan {
+    /// Every culler to run: one per mode, or one per value for the swept
+    /// mode.
+    pub fn runs(&self) -> Vec<ModeRun> {
+        self.modes
+            .iter()
+            .flat_map(|&mode| match &self.sweep {
+                Some(s) if s.mode == mode => s
+                    .values
+                    .iter()
+                    .map(|v| ModeRun {
+                        label: format!("{mode}[{}={v}]", s.key),
+                        mode,
+                        params: self.params.with(&format!("{mode}.{}", s.key), v),
+                    })
+                    .collect(),
+                _ => vec![ModeRun {
+                    label: mode.to_string(),
+                    mode,
+                    params: self.params.clone(),
+                }],
+            })
+            .collect()
     }
 }
 
@@ -200,6 +283,37 @@ mod tests {
             Ok("32x24".into()),
             "the file still counts"
         );
+    }
+
+    #[test]
+    fn a_sweep_runs_its_mode_once_per_value() {
+        let plan = BenchConfig {
+            modes: Some(vec!["vfc".into()]),
+            sweep: Some("ac.threshold=0, 50,auto".into()),
+            ..Default::default()
+        }
+        .plan()
+        .unwrap();
+        let labels: Vec<String> = plan.runs().iter().map(|r| r.label.clone()).collect();
+        assert_eq!(
+            labels,
+            ["vfc", "ac[threshold=0]", "ac[threshold=50]", "ac[threshold=auto]"]
+        );
+        assert_eq!(plan.runs()[2].params.get::<String>("ac", "threshold"), Ok("50".into()));
+        let bad = |s: &str| {
+            BenchConfig {
+                sweep: Some(s.into()),
+                ..Default::default()
+            }
+            .plan()
+            .unwrap_err()
+            .to_string()
+        };
+        assert!(bad("ac.threshold").contains("not MODE.KEY=V1,V2"));
+        assert!(bad("ac.threshold=1,,2").contains("not MODE.KEY=V1,V2"));
+        assert!(bad("ac.threshold=1,-5").contains("parameter 'ac.threshold'"));
+        assert!(bad("ac.bogus=1").contains("unknown parameter 'ac.bogus'"));
+        assert!(bad("warp.x=1").contains("unknown mode 'warp'"));
     }
 
     #[test]

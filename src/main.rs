@@ -132,6 +132,10 @@ struct BenchArgs {
     /// A mode parameter, MODE.KEY=VALUE (repeatable), e.g. omq.om=80x60.
     #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
     params: Vec<String>,
+    /// Run one mode at several values of a parameter in the same run, e.g.
+    /// ac.threshold=0,100,1000 (labels like ac[threshold=100]).
+    #[arg(long, value_name = "MODE.KEY=V1,V2,...")]
+    sweep: Option<String>,
 }
 
 #[derive(Args)]
@@ -222,6 +226,7 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         error: args.no_error.then_some(false),
         cluster_triangles: args.scene.cluster_triangles,
         params: (!args.params.is_empty()).then_some(args.params),
+        sweep: args.sweep,
     };
     let file = match &args.config {
         Some(path) => BenchConfig::load(path)?,
@@ -247,6 +252,7 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
                 eprintln!("warning: {w}");
             }
         }
+        BenchEvent::Skipped { mode, reason } => eprintln!("skipped: {mode}: {reason}"),
         BenchEvent::Adapter(adapter) => {
             eprintln!("adapter: {adapter}");
             bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());

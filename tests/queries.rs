@@ -11,7 +11,7 @@ use glam::DVec3;
 use occlu::camera::generate::{PathKind, generate};
 use occlu::camera::path::CameraPath;
 use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create};
-use occlu::gpu::{BoxVisibility, FrameCtx, QUERIES_PER_SET, Resolution};
+use occlu::gpu::{BoxTest, BoxVisibility, FrameCtx, QUERIES_PER_SET, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::measure::FrameStats;
 use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
@@ -41,7 +41,7 @@ impl Culler for WallThenBatches<'_> {
         ctx.draw(&[0]);
         for batch in &self.batches {
             let mut out = Vec::new();
-            ctx.test_boxes(batch, &mut out);
+            ctx.test_boxes(batch, BoxTest::Occlusion, &mut out);
             self.results.borrow_mut().push(out);
         }
         TraversalStats::default()
@@ -238,5 +238,195 @@ fn query_modes_are_exact_on_the_city_and_omq_saves_round_trips() {
             let t = sum(mode, |r| r.triangles_drawn);
             assert!(t * 2 < vfc, "{mode} draws {t} triangles, vfc {vfc}");
         }
+    }
+}
+
+/// Pixel centres whose ray hits `target` no farther than `wall` (or misses
+/// the wall): the footprint the depth test lets through, by ray casting.
+fn cpu_footprint(target: (DVec3, DVec3), wall: (DVec3, DVec3), res: Resolution, fov_y: f64) -> u64 {
+    let hit = |(min, max): (DVec3, DVec3), dir: DVec3| -> Option<f64> {
+        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+        for a in 0..3 {
+            let (ta, tb) = (min[a] / dir[a], max[a] / dir[a]);
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+        }
+        (t0 <= t1).then_some(t0)
+    };
+    let t = (fov_y.to_radians() / 2.0).tan();
+    let aspect = f64::from(res.width) / f64::from(res.height);
+    let mut n = 0;
+    for py in 0..res.height {
+        for px in 0..res.width {
+            let sx = (f64::from(px) + 0.5) / f64::from(res.width) * 2.0 - 1.0;
+            let sy = 1.0 - (f64::from(py) + 0.5) / f64::from(res.height) * 2.0;
+            let dir = DVec3::new(sx * t * aspect, sy * t, -1.0);
+            if let Some(tb) = hit(target, dir)
+                && hit(wall, dir).is_none_or(|tw| tb <= tw)
+            {
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+#[test]
+fn pixel_counts_match_the_ray_cast_footprint_and_query_counts() {
+    let res = Resolution {
+        width: 160,
+        height: 120,
+    };
+    let wall = (DVec3::new(-5.0, -5.0, -10.1), DVec3::new(0.3, 5.0, -10.0));
+    let half_hidden = (DVec3::new(-1.0, -1.0, -14.0), DVec3::new(1.5, 1.0, -12.0));
+    let in_front = (DVec3::new(-0.8, 1.2, -7.0), DVec3::new(0.4, 2.0, -6.0));
+    let scene = boxes(&[wall]);
+    let path = still(DVec3::ZERO, DVec3::NEG_Z, 60.0);
+    let to_aabb = |(a, b): (DVec3, DVec3)| occlu::bounds::Aabb::new(a, b);
+    let expected = [
+        cpu_footprint(half_hidden, wall, res, 60.0),
+        cpu_footprint(in_front, wall, res, 60.0),
+    ];
+    assert!(expected[0] > 150 && expected[1] > 150, "both boxes show: {expected:?}");
+    for gpu in common::gpus() {
+        assert!(gpu.pixel_counts, "{} cannot count pixels", gpu.adapter);
+        let results = RefCell::new(Vec::new());
+        let batch = vec![to_aabb(half_hidden), to_aabb(in_front)];
+        let kinds = [
+            BoxTest::PixelCount { sampling: 1 },
+            BoxTest::Occlusion,
+            BoxTest::PixelCount { sampling: 2 },
+            BoxTest::PixelCount { sampling: 4 },
+        ];
+        let mut cullers: Vec<Box<dyn Culler>> = vec![Box::new(WallThenTests {
+            batch,
+            kinds: kinds.to_vec(),
+            results: &results,
+        })];
+        run_modes(&gpu, &scene, &path, &mut cullers, res);
+        let r = results.borrow();
+        let samples = |v: &BoxVisibility| match v {
+            BoxVisibility::Samples(n) => *n,
+            BoxVisibility::Unqueried => panic!("not tested"),
+        };
+        let counts: Vec<u64> = r[0].iter().map(samples).collect();
+        for (got, want) in counts.iter().zip(expected) {
+            // Boxes are grown by 1e-4 of their distance: at most a pixel or
+            // two along the silhouette may differ from the exact footprint.
+            assert!(
+                got.abs_diff(want) <= 2 + want / 100,
+                "{}: counted {got}, ray casting {want}",
+                gpu.adapter
+            );
+        }
+        if gpu.adapter.backend == "vulkan" {
+            let queried: Vec<u64> = r[1].iter().map(samples).collect();
+            assert_eq!(queried, counts, "Vulkan query sample counts equal the pixel counts");
+        }
+        for (k, sampled) in [(2u64, &r[2]), (4, &r[3])] {
+            for (s, full) in sampled.iter().map(samples).zip(&counts) {
+                let estimate = s * k;
+                assert!(
+                    estimate.abs_diff(*full) <= full / 4 + 2 * k,
+                    "sampling {k}: {s}·{k} vs {full}"
+                );
+            }
+        }
+    }
+}
+
+/// Draws the wall, then tests the same batch once per kind of test.
+struct WallThenTests<'a> {
+    batch: Vec<occlu::bounds::Aabb>,
+    kinds: Vec<BoxTest>,
+    results: &'a RefCell<Vec<Vec<BoxVisibility>>>,
+}
+
+impl Culler for WallThenTests<'_> {
+    fn name(&self) -> &str {
+        "wall-then-tests"
+    }
+    fn frame(&mut self, ctx: &mut FrameCtx, _: &FrameInput) -> TraversalStats {
+        ctx.draw(&[0]);
+        for &kind in &self.kinds {
+            let mut out = Vec::new();
+            ctx.test_boxes(&self.batch, kind, &mut out);
+            self.results.borrow_mut().push(out);
+        }
+        TraversalStats::default()
+    }
+}
+
+/// Runs modes labelled like a sweep (`ac[threshold=1e9]`) on the small city.
+fn city_runs(runs: &[(&str, &[&str])], frames: u32) -> Vec<Vec<FrameStats>> {
+    let scene = load(&SceneSpec::Builtin("city:blocks=2".into()), &LoadOptions::default()).unwrap();
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, frames), "walk").unwrap();
+    common::gpus()
+        .iter()
+        .map(|gpu| {
+            let mut cullers: Vec<Box<dyn Culler>> = runs
+                .iter()
+                .map(|&(label, params)| {
+                    let mode = label.split('[').next().unwrap();
+                    let items: Vec<String> = params.iter().map(|p| p.to_string()).collect();
+                    let params = ModeParams::parse(&items, &[mode]).unwrap();
+                    Box::new(occlu::cull::Labeled {
+                        label: label.to_string(),
+                        inner: create(mode, &scene, &hierarchy, &params).unwrap(),
+                    }) as Box<dyn Culler>
+                })
+                .collect();
+            run_modes(
+                gpu,
+                &scene,
+                &path,
+                &mut cullers,
+                Resolution {
+                    width: 160,
+                    height: 120,
+                },
+            )
+            .rows
+        })
+        .collect()
+}
+
+#[test]
+fn adaptive_culling_is_exact_at_threshold_zero_and_trades_error_above_it() {
+    let runs: &[(&str, &[&str])] = &[
+        ("omq", &[]),
+        ("vfc", &[]),
+        ("ac[exact]", &["ac.threshold=0", "ac.sampling=1", "ac.f_graphics=inf"]),
+        ("ac[default]", &[]),
+        ("ac[high]", &["ac.threshold=1e9", "ac.f_graphics=inf"]),
+        ("ac[no budget left]", &["ac.threshold=0", "ac.f_graphics=0"]),
+        ("ac[sampled]", &["ac.sampling=4", "ac.f_graphics=inf"]),
+    ];
+    for rows in city_runs(runs, 6) {
+        let of = |label: &str| -> Vec<&FrameStats> { rows.iter().filter(|r| r.mode == label).collect() };
+        let sum = |label: &str, f: fn(&FrameStats) -> u64| of(label).into_iter().map(f).sum::<u64>();
+        for label in ["ac[exact]", "ac[no budget left]"] {
+            assert_eq!(sum(label, |r| r.error_pixels.unwrap()), 0, "{label} is conservative");
+            assert_eq!(sum(label, |r| r.missed_objects.unwrap()), 0, "{label} is conservative");
+        }
+        assert!(
+            sum("ac[exact]", |r| r.queries) > 0,
+            "pixel counts are tests, one round trip each"
+        );
+        assert_eq!(sum("ac[exact]", |r| r.queries), sum("ac[exact]", |r| r.query_batches));
+        // A threshold no footprint reaches: error, and less drawn than omq.
+        assert!(sum("ac[high]", |r| r.error_pixels.unwrap()) > 0);
+        assert!(sum("ac[high]", |r| r.nodes_culled_adaptive) > 0);
+        assert!(sum("ac[high]", |r| r.triangles_drawn) < sum("omq", |r| r.triangles_drawn));
+        // No budget at all: after the first frame (which has no previous
+        // render time), everything is only frustum-culled, as vfc.
+        for (a, v) in of("ac[no budget left]").into_iter().zip(of("vfc")).skip(1) {
+            assert_eq!(a.triangles_drawn, v.triangles_drawn, "frame {}", a.frame);
+            assert!(a.nodes_past_budget > 0 && a.queries == 0);
+        }
+        // Sampled counts: not conservative, measured (finite, recorded).
+        assert!(of("ac[sampled]").iter().all(|r| r.error_pixels.is_some()));
+        assert!(of("ac[default]").iter().all(|r| r.error_pixels.is_some()));
     }
 }

@@ -5,6 +5,7 @@
 //! draws and queries. To add a mode: write `cull/NAME.rs` implementing
 //! [`Culler`], add it to [`MODES`] and to [`create`].
 
+mod ac;
 mod dr;
 pub mod occupancy;
 mod omq;
@@ -18,11 +19,12 @@ use std::fmt::Display;
 use std::str::FromStr;
 
 use crate::camera::Camera;
-use crate::gpu::FrameCtx;
+use crate::gpu::{FrameCtx, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
 
+pub use ac::{AcParams, AdaptiveCulling, EyeDistance, Threshold};
 pub use dr::DirectRendering;
 pub use omq::{OccupancyMapQueries, OmqParams};
 pub use oracle::Oracle;
@@ -33,9 +35,22 @@ pub use vfc::FrustumCulling;
 pub struct FrameInput<'a> {
     pub frame: u32,
     pub camera: &'a Camera,
+    pub resolution: Resolution,
     /// The objects that own at least one pixel of the reference frame; given
     /// only to modes whose [`Culler::needs_reference`] is true (the oracle).
     pub reference_visible: Option<&'a ObjectSet>,
+    /// What this mode's previous frame cost; `None` in its first frame.
+    pub previous: Option<PreviousFrame>,
+}
+
+/// A mode's own previous frame, as measured (cost-adaptive culling budgets
+/// from it, 002 Eq. 2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PreviousFrame {
+    pub frame_ms: f64,
+    /// Time spent drawing: GPU time outside box tests where timestamps
+    /// exist, else the frame minus culling CPU time and waits for results.
+    pub render_ms: f64,
 }
 
 /// Hierarchy traversal counts of one frame (drawing is counted by `FrameCtx`).
@@ -46,6 +61,12 @@ pub struct TraversalStats {
     pub nodes_culled_occlusion: u64,
     /// Queries made unnecessary (the Occupancy Map's empty-area rule).
     pub queries_skipped: u64,
+    /// Nodes visible but treated as occluded for their small contribution
+    /// (adaptive culling, 002 Eq. 1).
+    pub nodes_culled_adaptive: u64,
+    /// Nodes left when the culling budget ran out, only frustum-culled and
+    /// drawn (cost-adaptive culling, 002 Eq. 2).
+    pub nodes_past_budget: u64,
 }
 
 pub trait Culler {
@@ -74,6 +95,9 @@ pub struct ModeInfo {
     pub conservative: bool,
     /// Parameters it takes as `--param NAME.KEY=VALUE`.
     pub params: &'static [ParamInfo],
+    /// Whether it counts visible pixels per box (`GpuContext::pixel_counts`);
+    /// such a mode is skipped, with a message, on adapters without them.
+    pub needs_pixel_counts: bool,
 }
 
 pub struct ParamInfo {
@@ -88,18 +112,21 @@ pub const MODES: &[ModeInfo] = &[
         summary: "direct rendering: every object, no culling (002 §5)",
         conservative: true,
         params: &[],
+        needs_pixel_counts: false,
     },
     ModeInfo {
         name: "vfc",
         summary: "hierarchical view-frustum culling with the fully-inside shortcut (002 §4.1)",
         conservative: true,
         params: &[],
+        needs_pixel_counts: false,
     },
     ModeInfo {
         name: "sq",
         summary: "front-to-back traversal, one occlusion query per node, each awaited (003 §5 b)",
         conservative: true,
         params: &[],
+        needs_pixel_counts: false,
     },
     ModeInfo {
         name: "omq",
@@ -122,12 +149,42 @@ pub const MODES: &[ModeInfo] = &[
                 summary: "next frame's max_tests = factor x this frame's batches",
             },
         ],
+        needs_pixel_counts: false,
+    },
+    ModeInfo {
+        name: "ac",
+        summary: "V+O with adaptive culling (Eq. 1) and a cost-adaptive budget (Eq. 2) by visible-pixel counts (002 §4.2-4.4)",
+        conservative: false,
+        params: &[
+            ParamInfo {
+                key: "threshold",
+                default: "auto",
+                summary: "Eq. 1 threshold in pixels; auto = 100 px on 650x650 scaled to the viewport",
+            },
+            ParamInfo {
+                key: "sampling",
+                default: "1",
+                summary: "count every k-th row of spans (1: every pixel)",
+            },
+            ParamInfo {
+                key: "f_graphics",
+                default: "0.3333333333333333",
+                summary: "Eq. 2 culling budget = previous render time x this (inf: no budget)",
+            },
+            ParamInfo {
+                key: "eye_distance",
+                default: "near",
+                summary: "Dist(Eye) of Eq. 1: the near plane, or a distance",
+            },
+        ],
+        needs_pixel_counts: true,
     },
     ModeInfo {
         name: "oracle",
         summary: "draws exactly the objects visible in the reference frame: the floor for object-level culling",
         conservative: true,
         params: &[],
+        needs_pixel_counts: false,
     },
 ];
 
@@ -182,11 +239,20 @@ impl ModeParams {
         // Parse every typed value now, so a bad one is reported before a
         // long scene load rather than after it.
         for mode in modes {
-            if *mode == "omq" {
-                OmqParams::from_params(&params)?;
+            match *mode {
+                "omq" => drop(OmqParams::from_params(&params)?),
+                "ac" => drop(AcParams::from_params(&params)?),
+                _ => {}
             }
         }
         Ok(params)
+    }
+
+    /// These parameters with `key` (`MODE.KEY`) set to `value`.
+    pub fn with(&self, key: &str, value: &str) -> ModeParams {
+        let mut values = self.values.clone();
+        values.insert(key.to_string(), value.to_string());
+        ModeParams { values }
     }
 
     /// The value of `mode.key`: the one given, or the default `MODES`
@@ -241,6 +307,28 @@ pub fn parse_modes(list: &[String]) -> Result<Vec<&'static str>, ModeError> {
     Ok(modes)
 }
 
+/// A culler run under another name: one value of a parameter sweep, e.g.
+/// `ac[threshold=50]`.
+pub struct Labeled<'a> {
+    pub label: String,
+    pub inner: Box<dyn Culler + 'a>,
+}
+
+impl Culler for Labeled<'_> {
+    fn name(&self) -> &str {
+        &self.label
+    }
+    fn parameters(&self) -> serde_json::Value {
+        self.inner.parameters()
+    }
+    fn needs_reference(&self) -> bool {
+        self.inner.needs_reference()
+    }
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        self.inner.frame(ctx, input)
+    }
+}
+
 /// Creates the culler of a mode named by [`parse_modes`].
 pub fn create<'a>(
     name: &str,
@@ -257,6 +345,7 @@ pub fn create<'a>(
             hierarchy,
             OmqParams::from_params(params)?,
         )),
+        "ac" => Box::new(AdaptiveCulling::new(scene, hierarchy, AcParams::from_params(params)?)),
         "oracle" => Box::new(Oracle::new()),
         other => return Err(ModeError::Unknown(other.to_string())),
     })
@@ -276,7 +365,7 @@ mod tests {
         assert!(
             ModeError::Unknown("x".into())
                 .to_string()
-                .contains("dr, vfc, sq, omq, oracle")
+                .contains("dr, vfc, sq, omq, ac, oracle")
         );
     }
 

@@ -32,11 +32,11 @@ use glam::DVec3;
 use serde::Serialize;
 
 use super::occupancy::{OccupancyMap, ScreenRect};
-use super::traversal::{DepthQueue, leaf_objects_in_frustum};
+use super::traversal::{DepthQueue, leaf_objects_in_frustum, nearest_corner};
 use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
-use crate::gpu::{BoxVisibility, FrameCtx, Resolution};
+use crate::gpu::{BoxTest, BoxVisibility, FrameCtx, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::scene::Scene;
 
@@ -121,7 +121,7 @@ impl<'a> OccupancyMapQueries<'a> {
                 stats.nodes_culled_frustum += 1;
             } else {
                 match into {
-                    Destination::Queue => self.queue.push(child as u32, &nodes[child].bounds, eye),
+                    Destination::Queue => self.queue.push(child as u32, nearest_corner(&nodes[child].bounds, eye)),
                     Destination::Pending => self.pending.push(child as u32),
                 }
             }
@@ -142,7 +142,7 @@ impl<'a> OccupancyMapQueries<'a> {
         let nodes = &self.hierarchy.nodes;
         self.boxes
             .extend(self.test_list.iter().map(|&n| nodes[n as usize].bounds));
-        ctx.test_boxes(&self.boxes, &mut self.results);
+        ctx.test_boxes(&self.boxes, BoxTest::Occlusion, &mut self.results);
         // By index: drawing and opening need `self` while the list is read.
         for k in 0..self.test_list.len() {
             let node = self.test_list[k];
@@ -182,7 +182,7 @@ impl Culler for OccupancyMapQueries<'_> {
             stats.nodes_culled_frustum += 1;
             return stats;
         }
-        self.queue.push(0, &root.bounds, eye);
+        self.queue.push(0, nearest_corner(&root.bounds, eye));
 
         // Stage 1: visible nodes in front, found by the Occupancy Map.
         while let Some(node) = self.queue.pop() {
@@ -204,7 +204,8 @@ impl Culler for OccupancyMapQueries<'_> {
         let mut batches = 0;
         while !self.pending.is_empty() && batches < self.max_tests {
             for node in std::mem::take(&mut self.pending) {
-                self.queue.push(node, &self.hierarchy.nodes[node as usize].bounds, eye);
+                self.queue
+                    .push(node, nearest_corner(&self.hierarchy.nodes[node as usize].bounds, eye));
             }
             self.om.clear();
             while let Some(node) = self.queue.pop() {

@@ -10,10 +10,10 @@
 //! subtree; a visible leaf is drawn; a visible inner node's children join
 //! the queue.
 
-use super::traversal::{DepthQueue, leaf_objects_in_frustum};
+use super::traversal::{DepthQueue, leaf_objects_in_frustum, nearest_corner};
 use super::{Culler, FrameInput, TraversalStats};
 use crate::camera::Containment;
-use crate::gpu::{BoxVisibility, FrameCtx};
+use crate::gpu::{BoxTest, BoxVisibility, FrameCtx};
 use crate::hierarchy::Hierarchy;
 use crate::scene::Scene;
 
@@ -47,7 +47,7 @@ impl Culler for SingleQueries<'_> {
         let nodes = &self.hierarchy.nodes;
         let mut stats = TraversalStats::default();
         self.queue.clear();
-        self.queue.push(0, &nodes[0].bounds, eye);
+        self.queue.push(0, nearest_corner(&nodes[0].bounds, eye));
         while let Some(index) = self.queue.pop() {
             let node = &nodes[index as usize];
             stats.nodes_visited += 1;
@@ -55,7 +55,7 @@ impl Culler for SingleQueries<'_> {
                 stats.nodes_culled_frustum += 1;
                 continue;
             }
-            ctx.test_boxes(std::slice::from_ref(&node.bounds), &mut self.result);
+            ctx.test_boxes(std::slice::from_ref(&node.bounds), BoxTest::Occlusion, &mut self.result);
             if !self.result[0].is_visible() {
                 stats.nodes_culled_occlusion += 1;
                 continue;
@@ -66,7 +66,7 @@ impl Culler for SingleQueries<'_> {
                 ctx.draw(&self.objects);
             } else {
                 for child in node.children() {
-                    self.queue.push(child as u32, &nodes[child].bounds, eye);
+                    self.queue.push(child as u32, nearest_corner(&nodes[child].bounds, eye));
                 }
             }
         }

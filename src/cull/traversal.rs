@@ -6,32 +6,50 @@ use std::collections::BinaryHeap;
 
 use glam::DVec3;
 
+use super::TraversalStats;
 use crate::bounds::Aabb;
-use crate::camera::{Containment, Frustum};
+use crate::camera::{Camera, Containment, Frustum};
 use crate::hierarchy::{Hierarchy, Node};
 use crate::scene::Scene;
 
-/// Nodes ordered front to back by the distance from the eye to the nearest
-/// corner of their box, as 003 §4.2 sorts ("the closest corner of the
-/// node's BB to a given viewpoint is used for this sorting").
+/// Nodes ordered front to back by a key, nearest first: see
+/// [`nearest_corner`] (003) and [`view_depth`] (002).
 #[derive(Default)]
 pub struct DepthQueue {
     heap: BinaryHeap<Entry>,
 }
 
 struct Entry {
-    distance_squared: f64,
+    key: f64,
     node: u32,
+}
+
+/// 003 §4.2's order: "the closest corner of the node's BB to a given
+/// viewpoint is used for this sorting" (squared distance).
+pub fn nearest_corner(bounds: &Aabb, eye: DVec3) -> f64 {
+    bounds
+        .corners()
+        .iter()
+        .map(|c| c.distance_squared(eye))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// 002 §4.4's order: z_min, the depth of the box's nearest corner along the
+/// view direction.
+pub fn view_depth(bounds: &Aabb, camera: &Camera) -> f64 {
+    let view = camera.view_rotation();
+    bounds
+        .corners()
+        .iter()
+        .map(|&c| -(view * (c - camera.eye)).z)
+        .fold(f64::INFINITY, f64::min)
 }
 
 // Reversed, so the max-heap yields the nearest node; ties by node id keep
 // the order deterministic.
 impl Ord for Entry {
     fn cmp(&self, other: &Self) -> Ordering {
-        other
-            .distance_squared
-            .total_cmp(&self.distance_squared)
-            .then_with(|| other.node.cmp(&self.node))
+        other.key.total_cmp(&self.key).then_with(|| other.node.cmp(&self.node))
     }
 }
 
@@ -54,17 +72,40 @@ impl DepthQueue {
         self.heap.clear();
     }
 
-    pub fn push(&mut self, node: u32, bounds: &Aabb, eye: DVec3) {
-        let distance_squared = bounds
-            .corners()
-            .iter()
-            .map(|c| c.distance_squared(eye))
-            .fold(f64::INFINITY, f64::min);
-        self.heap.push(Entry { distance_squared, node });
+    pub fn push(&mut self, node: u32, key: f64) {
+        self.heap.push(Entry { key, node });
     }
 
     pub fn pop(&mut self) -> Option<u32> {
         self.heap.pop().map(|e| e.node)
+    }
+}
+
+/// View-frustum culling of the subtree under `node` (002 §4.1): appends
+/// the objects it does not exclude, accepting a fully-inside node's whole
+/// subtree without further tests.
+pub fn frustum_cull_subtree(
+    scene: &Scene,
+    hierarchy: &Hierarchy,
+    node: u32,
+    frustum: &Frustum,
+    stack: &mut Vec<u32>,
+    out: &mut Vec<u32>,
+    stats: &mut TraversalStats,
+) {
+    stack.clear();
+    stack.push(node);
+    while let Some(index) = stack.pop() {
+        let node = &hierarchy.nodes[index as usize];
+        stats.nodes_visited += 1;
+        match frustum.classify(&node.bounds) {
+            Containment::Outside => stats.nodes_culled_frustum += 1,
+            Containment::Inside => out.extend_from_slice(hierarchy.subtree_objects(node)),
+            Containment::Intersecting if node.is_leaf() => {
+                leaf_objects_in_frustum(scene, hierarchy, node, frustum, out)
+            }
+            Containment::Intersecting => stack.extend(node.children().map(|c| c as u32)),
+        }
     }
 }
 
@@ -93,15 +134,15 @@ mod tests {
         let eye = DVec3::ZERO;
         let mut q = DepthQueue::default();
         let at = |x: f64| Aabb::new(DVec3::new(x, 0.0, 0.0), DVec3::new(x + 1.0, 1.0, 1.0));
-        q.push(0, &at(10.0), eye);
-        q.push(1, &at(2.0), eye);
-        q.push(2, &at(5.0), eye);
+        let mut push = |node, b: &Aabb| q.push(node, nearest_corner(b, eye));
+        push(0, &at(10.0));
+        push(1, &at(2.0));
+        push(2, &at(5.0));
         // A huge box whose nearest corner is far: the paper's rule, not the
         // nearest point of the box, decides.
-        q.push(
+        push(
             3,
             &Aabb::new(DVec3::new(-100.0, -100.0, 3.0), DVec3::new(100.0, 100.0, 4.0)),
-            eye,
         );
         let order: Vec<u32> = std::iter::from_fn(|| q.pop()).collect();
         assert_eq!(order, [1, 2, 0, 3]);

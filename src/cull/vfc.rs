@@ -12,9 +12,8 @@
 //! an intersecting leaf are tested one by one, since a leaf holds up to a few
 //! objects here where the paper's leaves held one geometry node.
 
-use super::traversal::leaf_objects_in_frustum;
+use super::traversal::frustum_cull_subtree;
 use super::{Culler, FrameInput, TraversalStats};
-use crate::camera::Containment;
 use crate::gpu::FrameCtx;
 use crate::hierarchy::Hierarchy;
 use crate::scene::Scene;
@@ -47,21 +46,15 @@ impl Culler for FrustumCulling<'_> {
         let frustum = input.camera.frustum();
         let mut stats = TraversalStats::default();
         self.visible.clear();
-        self.stack.clear();
-        self.stack.push(0);
-        while let Some(index) = self.stack.pop() {
-            let node = &self.hierarchy.nodes[index as usize];
-            stats.nodes_visited += 1;
-            match frustum.classify(&node.bounds) {
-                Containment::Outside => stats.nodes_culled_frustum += 1,
-                // Fully inside: the whole subtree is potentially visible.
-                Containment::Inside => self.visible.extend_from_slice(self.hierarchy.subtree_objects(node)),
-                Containment::Intersecting if node.is_leaf() => {
-                    leaf_objects_in_frustum(self.scene, self.hierarchy, node, &frustum, &mut self.visible)
-                }
-                Containment::Intersecting => self.stack.extend(node.children().map(|c| c as u32)),
-            }
-        }
+        frustum_cull_subtree(
+            self.scene,
+            self.hierarchy,
+            0,
+            &frustum,
+            &mut self.stack,
+            &mut self.visible,
+            &mut stats,
+        );
         ctx.draw(&self.visible);
         stats
     }

@@ -6,7 +6,7 @@
 
 use std::time::{Duration, Instant};
 
-use super::queries::{BoxVisibility, QueryPool};
+use super::queries::{BoxTest, BoxVisibility, QueryPool, TestTarget};
 use super::{GpuContext, GpuTimer, RenderTargets, SceneRenderer};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
@@ -118,19 +118,21 @@ impl<'a> FrameCtx<'a> {
         self.gpu_ops += start.elapsed();
     }
 
-    /// Tests `boxes` as one batch against the depth drawn so far: one
-    /// occlusion query per box, one round trip. Writes one result per box to
-    /// `out`; a box that reaches the near plane is visible without a query.
-    pub fn test_boxes(&mut self, boxes: &[Aabb], out: &mut Vec<BoxVisibility>) {
+    /// Tests `boxes` as one batch against the depth drawn so far (occlusion
+    /// queries or pixel counts), one round trip. Writes one result per box
+    /// to `out`; a box that reaches the near plane is visible untested.
+    pub fn test_boxes(&mut self, boxes: &[Aabb], kind: BoxTest, out: &mut Vec<BoxVisibility>) {
         let start = Instant::now();
         self.encode_queued_draws();
         let encoder = std::mem::replace(
             &mut self.encoder,
             self.gpu.device.create_command_encoder(&Default::default()),
         );
-        let cost = self
-            .queries
-            .test(self.gpu, encoder, self.depth, self.camera, boxes, out);
+        let target = TestTarget {
+            depth: self.depth,
+            camera: self.camera,
+        };
+        let cost = self.queries.test(self.gpu, encoder, target, boxes, kind, out);
         if cost.queries > 0 {
             self.counters.queries += cost.queries;
             self.counters.query_batches += 1;

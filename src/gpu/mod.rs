@@ -14,7 +14,7 @@ use std::fmt;
 use serde::Serialize;
 
 pub use frame::{FrameCounters, FrameCtx, FrameOutcome, FrameResources};
-pub use queries::{BoxVisibility, QUERIES_PER_SET, QueryPool};
+pub use queries::{BoxTest, BoxVisibility, QUERIES_PER_SET, QueryPool};
 pub use readback::Readback;
 pub use renderer::{GpuScene, SceneRenderer};
 pub use targets::{RenderTargets, Resolution};
@@ -62,6 +62,9 @@ pub struct AdapterReport {
     pub driver_info: String,
     /// Whether per-frame GPU time comes from timestamp queries.
     pub timestamps: bool,
+    /// Whether visible pixels can be counted per box (forced early depth
+    /// test and storage writes in fragment shaders).
+    pub pixel_counts: bool,
 }
 
 impl fmt::Display for AdapterReport {
@@ -93,6 +96,8 @@ pub struct GpuContext {
     pub adapter: AdapterReport,
     /// Timestamp writes inside command encoders are available.
     pub timestamps: bool,
+    /// See [`AdapterReport::pixel_counts`].
+    pub pixel_counts: bool,
 }
 
 impl GpuContext {
@@ -116,9 +121,14 @@ impl GpuContext {
             })
             .ok_or(GpuError::NoAdapter(choice))?;
         let info = adapter.get_info();
-        let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
-        let features = adapter.features() & wanted;
-        let timestamps = features == wanted;
+        let timing = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let features = adapter.features() & (timing | wgpu::Features::SHADER_EARLY_DEPTH_TEST);
+        let timestamps = features.contains(timing);
+        let pixel_counts = features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST)
+            && adapter
+                .get_downlevel_capabilities()
+                .flags
+                .contains(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("occlu"),
             required_features: features,
@@ -140,8 +150,10 @@ impl GpuContext {
                 driver: info.driver,
                 driver_info: info.driver_info,
                 timestamps,
+                pixel_counts,
             },
             timestamps,
+            pixel_counts,
         })
     }
 

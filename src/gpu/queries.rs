@@ -1,12 +1,21 @@
-//! Occlusion queries on bounding boxes, one batch at a time: every box of a
-//! batch is drawn with depth test on and depth/colour writes off inside its
-//! own occlusion query, all results are resolved in one go and read back in
-//! one GPU→CPU round trip. A query set holds at most 4096 queries, so a
-//! larger batch spans several sets (still one round trip).
+//! Testing bounding boxes against the depth drawn so far, one batch at a
+//! time, in one of two ways:
+//!
+//! - **Occlusion queries**: every box is drawn inside its own occlusion
+//!   query (depth test on, depth and colour writes off); a query set holds
+//!   at most 4096 queries, so a larger batch spans several sets. GL reports
+//!   0/1 per query, Vulkan a sample count.
+//! - **Pixel counts**: all boxes in one instanced draw whose fragment stage
+//!   (forced early depth test) adds one per visible pixel to the box's
+//!   counter: counts on every backend, optionally sampled (002 §4.2).
+//!
+//! Either way a batch costs one GPU→CPU round trip: results (and two
+//! timestamps around the test passes) are resolved into one buffer and read
+//! back together.
 
 use std::time::{Duration, Instant};
 
-use glam::{DVec3, Vec4};
+use glam::Vec4;
 
 use super::targets::DEPTH_FORMAT;
 use super::{GpuContext, Readback};
@@ -21,13 +30,28 @@ pub const QUERIES_PER_SET: u32 = 4096;
 /// box and its wall) stays in front of it despite f32 rounding (~1e-7).
 const EXPANSION: f64 = 1e-4;
 
+/// Pixels per span of the sampled pixel count (002 §4.2: "spans of ten
+/// pixels").
+const SPAN: u32 = 10;
+
+/// How a batch of boxes is tested.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BoxTest {
+    /// One occlusion query per box.
+    Occlusion,
+    /// Visible pixels per box, counting only every `sampling`-th row of spans
+    /// (1: every pixel). Needs [`GpuContext::pixel_counts`].
+    PixelCount { sampling: u32 },
+}
+
 /// The result of testing one box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BoxVisibility {
-    /// The box reaches the near plane or holds the eye: visible, and no query
-    /// was issued (its projection is unbounded).
+    /// The box reaches the near plane or holds the eye: visible, and not
+    /// tested (its projection is unbounded).
     Unqueried,
-    /// Samples that passed the depth test: a count on Vulkan, 0 or 1 on GL.
+    /// Samples that passed the depth test: a count on Vulkan and for pixel
+    /// counts (of the sampled pixels only), 0 or 1 for queries on GL.
     Samples(u64),
 }
 
@@ -37,6 +61,27 @@ impl BoxVisibility {
     }
 }
 
+/// What a batch is tested against: a mode's depth target, seen by a camera.
+#[derive(Clone, Copy)]
+pub struct TestTarget<'a> {
+    pub depth: &'a wgpu::TextureView,
+    pub camera: &'a Camera,
+}
+
+/// What one batch cost.
+pub struct BatchCost {
+    /// Boxes actually tested (unqueried ones excluded).
+    pub queries: u64,
+    /// Time from submitting the batch until its results were on the CPU.
+    pub wait: Duration,
+    /// GPU time of the test passes alone (timestamps), where available.
+    pub gpu: Option<Duration>,
+}
+
+/// Where results start in the read-back buffer: after the two timestamps
+/// that bracket the test passes, at the 256-byte resolve alignment.
+const RESULTS_OFFSET: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
+
 /// Eye-relative corners, as the shader reads them.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -45,37 +90,43 @@ struct QueryBox {
     max: Vec4,
 }
 
-/// Pipelines and buffers for query batches, reused by every mode and frame.
-pub struct QueryPool {
+/// The uniform of pixel_count.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Sampling {
+    step: u32,
+    span: u32,
+    _pad: [u32; 2],
+}
+
+/// The pixel-count pipeline and its per-box counters.
+struct Counting {
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
+    sampling: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+}
+
+/// Pipelines and buffers for box tests, reused by every mode and frame.
+pub struct QueryPool {
+    occlusion: wgpu::RenderPipeline,
+    counting: Option<Counting>,
+    box_layout: wgpu::BindGroupLayout,
     camera: wgpu::Buffer,
     capacity: u32,
     boxes: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
+    box_group: wgpu::BindGroup,
     sets: Vec<wgpu::QuerySet>,
-    /// Two timestamps around a batch's query passes, where supported.
+    /// Two timestamps around a batch's test passes, where supported.
     timestamps: Option<(wgpu::QuerySet, f64)>,
     resolved: wgpu::Buffer,
     readback: Readback,
     /// Scratch, reused so a batch allocates nothing once warm.
     staging: Vec<QueryBox>,
-    queried: Vec<usize>,
-    samples: Vec<u64>,
+    tested: Vec<usize>,
+    words: Vec<u32>,
 }
-
-/// What one batch cost.
-pub struct BatchCost {
-    pub queries: u64,
-    /// Time from submitting the batch until its results were on the CPU.
-    pub wait: Duration,
-    /// GPU time of the query passes alone (timestamps), where available.
-    pub gpu: Option<Duration>,
-}
-
-/// Where results start in the resolve buffer: after the two timestamps that
-/// bracket the query passes, at the 256-byte resolve alignment.
-const RESULTS_OFFSET: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
 
 impl QueryPool {
     /// `camera` is the uniform buffer the scene renderer fills per frame.
@@ -85,111 +136,133 @@ impl QueryPool {
             label: Some("boxes.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/boxes.wgsl").into()),
         });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("query boxes"),
-            entries: &[
-                buffer_entry(0, wgpu::BufferBindingType::Uniform),
-                buffer_entry(1, wgpu::BufferBindingType::Storage { read_only: true }),
+        let box_layout = bind_group_layout(
+            gpu,
+            "boxes",
+            wgpu::ShaderStages::VERTEX,
+            &[
+                wgpu::BufferBindingType::Uniform,
+                wgpu::BufferBindingType::Storage { read_only: true },
             ],
+        );
+        // Only on adapters that have the feature: the module is invalid elsewhere.
+        let count_module = gpu.pixel_counts.then(|| {
+            device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("pixel_count.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/pixel_count.wgsl").into()),
+            })
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("query boxes"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("query boxes"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_box"),
+        let vertex = wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_box"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        };
+        let pipeline = |label, layouts: &[Option<&wgpu::BindGroupLayout>], fragment| {
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: layouts,
+                immediate_size: 0,
+            });
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&layout),
+                vertex: vertex.clone(),
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: Some(wgpu::Face::Back),
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    // Reverse-Z: nearer is greater. Equal passes, so a box
+                    // face on a surface is not judged hidden by it.
+                    depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment,
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let occlusion = pipeline("occlusion queries", &[Some(&box_layout)], None);
+        let counting = count_module.as_ref().map(|count_module| {
+            let layout = bind_group_layout(
+                gpu,
+                "pixel counts",
+                wgpu::ShaderStages::FRAGMENT,
+                &[
+                    wgpu::BufferBindingType::Storage { read_only: false },
+                    wgpu::BufferBindingType::Uniform,
+                ],
+            );
+            let fragment = wgpu::FragmentState {
+                module: count_module,
+                entry_point: Some("fs_count"),
                 compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState {
-                cull_mode: Some(wgpu::Face::Back),
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                // Reverse-Z: nearer is greater. Equal passes, so a box face
-                // on a surface is not judged hidden by it.
-                depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: None,
-            multiview_mask: None,
-            cache: None,
+                targets: &[],
+            };
+            let sampling = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("sampling"),
+                size: std::mem::size_of::<Sampling>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let (counts, bind_group) = count_buffer(gpu, &layout, &sampling, QUERIES_PER_SET);
+            Counting {
+                pipeline: pipeline("pixel counts", &[Some(&box_layout), Some(&layout)], Some(fragment)),
+                layout,
+                sampling,
+                counts,
+                bind_group,
+            }
         });
-        let (boxes, bind_group) = box_buffer(gpu, &layout, camera, QUERIES_PER_SET);
-        let mut pool = QueryPool {
-            pipeline,
-            layout,
+        let (boxes, box_group) = box_buffer(gpu, &box_layout, camera, QUERIES_PER_SET);
+        QueryPool {
+            occlusion,
+            counting,
+            box_layout,
             camera: camera.clone(),
             capacity: QUERIES_PER_SET,
             boxes,
-            bind_group,
-            sets: Vec::new(),
+            box_group,
+            sets: vec![query_set(gpu)],
             timestamps: gpu.timestamps.then(|| {
                 let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
-                    label: Some("query pass timestamps"),
+                    label: Some("box test timestamps"),
                     ty: wgpu::QueryType::Timestamp,
                     count: 2,
                 });
                 (set, f64::from(gpu.queue.get_timestamp_period()))
             }),
             resolved: result_buffer(gpu, QUERIES_PER_SET),
-            readback: Readback::new(gpu, "query readback", result_bytes(QUERIES_PER_SET)),
+            readback: Readback::new(gpu, "box test readback", result_bytes(QUERIES_PER_SET)),
             staging: Vec::new(),
-            queried: Vec::new(),
-            samples: Vec::new(),
-        };
-        pool.sets.push(query_set(gpu));
-        pool
+            tested: Vec::new(),
+            words: Vec::new(),
+        }
     }
 
     /// Tests `boxes` against `depth` after the work already in `encoder`:
     /// submits it with the batch, waits for the results, and writes one
     /// [`BoxVisibility`] per box to `out`.
+    ///
+    /// # Panics
+    /// On [`BoxTest::PixelCount`] when the adapter lacks pixel counts; modes
+    /// that count pixels declare it and are not run on such adapters.
     pub fn test(
         &mut self,
         gpu: &GpuContext,
         mut encoder: wgpu::CommandEncoder,
-        depth: &wgpu::TextureView,
-        camera: &Camera,
+        target: TestTarget,
         boxes: &[Aabb],
+        kind: BoxTest,
         out: &mut Vec<BoxVisibility>,
     ) -> BatchCost {
-        out.clear();
-        self.staging.clear();
-        self.queried.clear();
-        let view = camera.view_rotation();
-        for (i, b) in boxes.iter().enumerate() {
-            let (min, max) = (b.min - camera.eye, b.max - camera.eye);
-            let reach = min.abs().max(max.abs()).max_element();
-            let grow = DVec3::splat(EXPANSION * reach + f64::MIN_POSITIVE);
-            let (min, max) = (min - grow, max + grow);
-            // The box reaches the near plane when a corner is nearer than it
-            // along the view direction (this also covers holding the eye).
-            let nearest = Aabb::new(min, max)
-                .corners()
-                .iter()
-                .map(|&c| -(view * c).z)
-                .fold(f64::INFINITY, f64::min);
-            if nearest <= camera.near {
-                out.push(BoxVisibility::Unqueried);
-            } else {
-                out.push(BoxVisibility::Samples(0));
-                self.queried.push(i);
-                self.staging.push(QueryBox {
-                    min: min.as_vec3().extend(0.0),
-                    max: max.as_vec3().extend(0.0),
-                });
-            }
-        }
+        let depth = target.depth;
+        self.prepare(target.camera, boxes, out);
         let count = self.staging.len() as u32;
         if count == 0 {
             gpu.queue.submit([encoder.finish()]);
@@ -205,52 +278,43 @@ impl QueryPool {
         if let Some((set, _)) = &self.timestamps {
             encoder.write_timestamp(set, 0);
         }
-        for (set_index, first) in (0..count).step_by(QUERIES_PER_SET as usize).enumerate() {
-            let n = (count - first).min(QUERIES_PER_SET);
-            let set = &self.sets[set_index];
-            {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("occlusion queries"),
-                    color_attachments: &[],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: depth,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    timestamp_writes: None,
-                    occlusion_query_set: Some(set),
-                    multiview_mask: None,
-                });
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &self.bind_group, &[]);
-                for q in 0..n {
-                    pass.begin_occlusion_query(q);
-                    pass.draw(0..36, first + q..first + q + 1);
-                    pass.end_occlusion_query();
-                }
+        let result_bytes = match kind {
+            BoxTest::Occlusion => {
+                self.encode_occlusion_queries(&mut encoder, depth, count);
+                u64::from(count) * 8
             }
-            encoder.resolve_query_set(set, 0..n, &self.resolved, RESULTS_OFFSET + u64::from(first) * 8);
-        }
+            BoxTest::PixelCount { sampling } => {
+                self.encode_pixel_counts(gpu, &mut encoder, depth, count, sampling);
+                u64::from(count) * 4
+            }
+        };
         if let Some((set, _)) = &self.timestamps {
             encoder.write_timestamp(set, 1);
             encoder.resolve_query_set(set, 0..2, &self.resolved, 0);
         }
-        let bytes = RESULTS_OFFSET + u64::from(count) * 8;
-        self.readback.copy_from(&mut encoder, &self.resolved, bytes);
+        let source = match (kind, &self.counting) {
+            (BoxTest::PixelCount { .. }, Some(c)) => &c.counts,
+            _ => &self.resolved,
+        };
+        let source_offset = if kind == BoxTest::Occlusion { RESULTS_OFFSET } else { 0 };
+        self.readback.copy(&mut encoder, &self.resolved, 0, 0, 16);
+        self.readback
+            .copy(&mut encoder, source, source_offset, RESULTS_OFFSET, result_bytes);
         let submitted = Instant::now();
         gpu.queue.submit([encoder.finish()]);
-        self.readback.read(gpu, bytes, &mut self.samples);
+        self.readback.read(gpu, RESULTS_OFFSET + result_bytes, &mut self.words);
         let wait = submitted.elapsed();
-        let results = &self.samples[(RESULTS_OFFSET / 8) as usize..];
-        for (&i, &s) in self.queried.iter().zip(results) {
-            out[i] = BoxVisibility::Samples(s);
+
+        let results = &self.words[(RESULTS_OFFSET / 4) as usize..];
+        for (k, &i) in self.tested.iter().enumerate() {
+            out[i] = BoxVisibility::Samples(match kind {
+                BoxTest::Occlusion => u64::from(results[2 * k]) | (u64::from(results[2 * k + 1]) << 32),
+                BoxTest::PixelCount { .. } => u64::from(results[k]),
+            });
         }
         let gpu_time = self.timestamps.as_ref().map(|&(_, period_ns)| {
-            let ticks = self.samples[1].saturating_sub(self.samples[0]);
-            Duration::from_nanos((ticks as f64 * period_ns) as u64)
+            let tick = |i: usize| u64::from(self.words[2 * i]) | (u64::from(self.words[2 * i + 1]) << 32);
+            Duration::from_nanos((tick(1).saturating_sub(tick(0)) as f64 * period_ns) as u64)
         });
         BatchCost {
             queries: u64::from(count),
@@ -259,13 +323,93 @@ impl QueryPool {
         }
     }
 
+    /// Grows every box, marks the ones reaching the near plane visible
+    /// without a test, and stages the others eye-relative.
+    fn prepare(&mut self, camera: &Camera, boxes: &[Aabb], out: &mut Vec<BoxVisibility>) {
+        out.clear();
+        self.staging.clear();
+        self.tested.clear();
+        let view = camera.view_rotation();
+        for (i, b) in boxes.iter().enumerate() {
+            let (min, max) = (b.min - camera.eye, b.max - camera.eye);
+            let reach = min.abs().max(max.abs()).max_element();
+            let grow = glam::DVec3::splat(EXPANSION * reach + f64::MIN_POSITIVE);
+            let (min, max) = (min - grow, max + grow);
+            // The box reaches the near plane when a corner is nearer than it
+            // along the view direction (this also covers holding the eye).
+            let nearest = Aabb::new(min, max)
+                .corners()
+                .iter()
+                .map(|&c| -(view * c).z)
+                .fold(f64::INFINITY, f64::min);
+            if nearest <= camera.near {
+                out.push(BoxVisibility::Unqueried);
+            } else {
+                out.push(BoxVisibility::Samples(0));
+                self.tested.push(i);
+                self.staging.push(QueryBox {
+                    min: min.as_vec3().extend(0.0),
+                    max: max.as_vec3().extend(0.0),
+                });
+            }
+        }
+    }
+
+    fn encode_occlusion_queries(&self, encoder: &mut wgpu::CommandEncoder, depth: &wgpu::TextureView, count: u32) {
+        for (set_index, first) in (0..count).step_by(QUERIES_PER_SET as usize).enumerate() {
+            let n = (count - first).min(QUERIES_PER_SET);
+            let set = &self.sets[set_index];
+            {
+                let mut pass = depth_only_pass(encoder, "occlusion queries", depth, Some(set));
+                pass.set_pipeline(&self.occlusion);
+                pass.set_bind_group(0, &self.box_group, &[]);
+                for q in 0..n {
+                    pass.begin_occlusion_query(q);
+                    pass.draw(0..36, first + q..first + q + 1);
+                    pass.end_occlusion_query();
+                }
+            }
+            encoder.resolve_query_set(set, 0..n, &self.resolved, RESULTS_OFFSET + u64::from(first) * 8);
+        }
+    }
+
+    fn encode_pixel_counts(
+        &self,
+        gpu: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        depth: &wgpu::TextureView,
+        count: u32,
+        sampling: u32,
+    ) {
+        let counting = self
+            .counting
+            .as_ref()
+            .expect("pixel counts are only requested on adapters that have them");
+        let uniform = Sampling {
+            step: sampling.max(1),
+            span: SPAN,
+            _pad: [0; 2],
+        };
+        gpu.queue
+            .write_buffer(&counting.sampling, 0, bytemuck::bytes_of(&uniform));
+        encoder.clear_buffer(&counting.counts, 0, Some(u64::from(count) * 4));
+        let mut pass = depth_only_pass(encoder, "pixel counts", depth, None);
+        pass.set_pipeline(&counting.pipeline);
+        pass.set_bind_group(0, &self.box_group, &[]);
+        pass.set_bind_group(1, &counting.bind_group, &[]);
+        pass.draw(0..36, 0..count);
+    }
+
     /// Grows the buffers and query sets to hold `count` boxes.
     fn reserve(&mut self, gpu: &GpuContext, count: u32) {
         if count > self.capacity {
             let capacity = count.next_multiple_of(QUERIES_PER_SET);
-            (self.boxes, self.bind_group) = box_buffer(gpu, &self.layout, &self.camera, capacity);
+            (self.boxes, self.box_group) = box_buffer(gpu, &self.box_layout, &self.camera, capacity);
+            if let Some(c) = &mut self.counting {
+                (c.counts, c.bind_group) = count_buffer(gpu, &c.layout, &c.sampling, capacity);
+            }
             self.resolved = result_buffer(gpu, capacity);
-            self.readback = Readback::new(gpu, "query readback", result_bytes(capacity));
+            self.readback = Readback::new(gpu, "box test readback", result_bytes(capacity));
             self.capacity = capacity;
         }
         while (self.sets.len() as u32) * QUERIES_PER_SET < count {
@@ -274,17 +418,78 @@ impl QueryPool {
     }
 }
 
-fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
+fn depth_only_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    depth: &wgpu::TextureView,
+    queries: Option<&wgpu::QuerySet>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: queries,
+        multiview_mask: None,
+    })
+}
+
+fn bind_group_layout(
+    gpu: &GpuContext,
+    label: &str,
+    visibility: wgpu::ShaderStages,
+    buffers: &[wgpu::BufferBindingType],
+) -> wgpu::BindGroupLayout {
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = buffers
+        .iter()
+        .enumerate()
+        .map(|(binding, &ty)| wgpu::BindGroupLayoutEntry {
+            binding: binding as u32,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        })
+        .collect();
+    gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &entries,
+    })
+}
+
+fn bind_buffers(gpu: &GpuContext, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .enumerate()
+        .map(|(binding, b)| wgpu::BindGroupEntry {
+            binding: binding as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout,
+        entries: &entries,
+    })
+}
+
+fn storage_buffer(gpu: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | usage,
+        mapped_at_creation: false,
+    })
 }
 
 fn box_buffer(
@@ -293,27 +498,22 @@ fn box_buffer(
     camera: &wgpu::Buffer,
     capacity: u32,
 ) -> (wgpu::Buffer, wgpu::BindGroup) {
-    let boxes = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("query boxes"),
-        size: u64::from(capacity) * std::mem::size_of::<QueryBox>() as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("query boxes"),
-        layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: camera.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: boxes.as_entire_binding(),
-            },
-        ],
-    });
-    (boxes, bind_group)
+    let size = u64::from(capacity) * std::mem::size_of::<QueryBox>() as u64;
+    let boxes = storage_buffer(gpu, "test boxes", size, wgpu::BufferUsages::COPY_DST);
+    let group = bind_buffers(gpu, layout, &[camera, &boxes]);
+    (boxes, group)
+}
+
+fn count_buffer(
+    gpu: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    sampling: &wgpu::Buffer,
+    capacity: u32,
+) -> (wgpu::Buffer, wgpu::BindGroup) {
+    let usage = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+    let counts = storage_buffer(gpu, "pixel counts", u64::from(capacity) * 4, usage);
+    let group = bind_buffers(gpu, layout, &[&counts, sampling]);
+    (counts, group)
 }
 
 fn result_bytes(capacity: u32) -> u64 {

@@ -18,9 +18,17 @@ impl Readback {
         }
     }
 
-    /// Encodes a copy of `size` bytes of `source` into this buffer.
-    pub fn copy_from(&self, encoder: &mut wgpu::CommandEncoder, source: &wgpu::Buffer, size: u64) {
-        encoder.copy_buffer_to_buffer(source, 0, &self.buffer, 0, size);
+    /// Encodes a copy of `size` bytes of `source` from `source_offset` to
+    /// `offset` in this buffer.
+    pub fn copy(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        source: &wgpu::Buffer,
+        source_offset: u64,
+        offset: u64,
+        size: u64,
+    ) {
+        encoder.copy_buffer_to_buffer(source, source_offset, &self.buffer, offset, size);
     }
 
     /// Waits for the GPU and returns the first `size` bytes as `T`s.

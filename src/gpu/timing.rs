@@ -52,7 +52,7 @@ impl GpuTimer {
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
         encoder.resolve_query_set(&self.queries, 0..2 * self.spans, &self.resolved, 0);
         self.readback
-            .copy_from(encoder, &self.resolved, u64::from(self.spans) * 16);
+            .copy(encoder, &self.resolved, 0, 0, u64::from(self.spans) * 16);
     }
 
     /// Milliseconds of each span, after [`GpuTimer::resolve`] was submitted.

@@ -33,6 +33,10 @@ pub struct FrameStats {
     pub query_batches: u64,
     /// Queries the Occupancy Map made unnecessary.
     pub queries_skipped: u64,
+    /// Visible nodes treated as occluded for their small contribution (ac).
+    pub nodes_culled_adaptive: u64,
+    /// Nodes only frustum-culled because the culling budget ran out (ac).
+    pub nodes_past_budget: u64,
     /// Time spent waiting for query results (within frame_ms).
     pub query_wait_ms: f64,
     /// GPU time spent rasterising query boxes (within gpu_ms); empty without
@@ -44,4 +48,15 @@ pub struct FrameStats {
     pub missed_objects: Option<u64>,
     /// Objects visible in the reference frame (the oracle's draw count).
     pub visible_objects: Option<u64>,
+}
+
+impl FrameStats {
+    /// Drawing time: GPU time outside box tests where timestamps exist, else
+    /// the frame minus culling CPU time and waits for test results.
+    pub fn render_ms(&self) -> f64 {
+        match self.gpu_ms {
+            Some(gpu) => gpu - self.query_gpu_ms.unwrap_or(0.0),
+            None => self.frame_ms - self.cpu_ms - self.query_wait_ms,
+        }
+    }
 }

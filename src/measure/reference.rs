@@ -133,7 +133,8 @@ impl ErrorMeter {
             dispatch_per_pixel(&mut pass, targets);
         }
         let bytes = self.visible_bits.size();
-        self.visible_readback.copy_from(&mut encoder, &self.visible_bits, bytes);
+        self.visible_readback
+            .copy(&mut encoder, &self.visible_bits, 0, 0, bytes);
         gpu.queue.submit([encoder.finish()]);
         let mut words = Vec::new();
         self.visible_readback.read(gpu, bytes, &mut words);
@@ -158,7 +159,7 @@ impl ErrorMeter {
             }
         }
         let bytes = self.wrong_counts.size();
-        self.wrong_readback.copy_from(&mut encoder, &self.wrong_counts, bytes);
+        self.wrong_readback.copy(&mut encoder, &self.wrong_counts, 0, 0, bytes);
         gpu.queue.submit([encoder.finish()]);
         self.wrong_readback.read(gpu, bytes, &mut self.words);
         let stride = (self.slot_stride / 4) as usize;

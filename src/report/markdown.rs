@@ -2,7 +2,7 @@
 
 use std::fmt::Write as _;
 
-use super::Summary;
+use super::{Summary, SweepSummary};
 use crate::measure::ModeSummary;
 
 pub fn render(s: &Summary) -> String {
@@ -53,6 +53,12 @@ pub fn render(s: &Summary) -> String {
             flagged.join(", ")
         );
     }
+    if let Some(sweep) = &s.sweep {
+        sweep_table(w, s, sweep);
+    }
+    for skipped in &s.skipped {
+        let _ = writeln!(w, "\nSkipped {}: {}.", skipped.mode, skipped.reason);
+    }
     if !s.error_measured {
         let _ = writeln!(w, "\nImage error was not measured (--no-error).");
     }
@@ -68,6 +74,31 @@ pub fn render(s: &Summary) -> String {
         s.schema_version
     );
     md
+}
+
+/// Run time against error, one row per swept value.
+fn sweep_table(w: &mut String, s: &Summary, sweep: &SweepSummary) {
+    let _ = writeln!(
+        w,
+        "\n## {}.{}: run time against error\n\n| {} | frame ms (mean) | triangles | wrong pixels (% of frame) | missed objects / frame |\n|---:|---:|---:|---:|---:|",
+        sweep.mode, sweep.key, sweep.key
+    );
+    for value in &sweep.values {
+        let label = sweep.label(value);
+        let Some(m) = s.modes.iter().find(|m| m.name == label) else {
+            continue;
+        };
+        let mean = |col: &str| m.stats.get(col).map(|d| d.mean);
+        let opt = |v: Option<String>| v.unwrap_or_else(|| "–".into());
+        let _ = writeln!(
+            w,
+            "| {value} | {} | {} | {} | {} |",
+            opt(mean("frame_ms").map(|v| format!("{v:.2}"))),
+            opt(mean("triangles_drawn").map(group)),
+            opt(m.error_fraction.map(|f| format!("{:.4}", f * 100.0))),
+            opt(mean("missed_objects").map(|v| format!("{v:.2}"))),
+        );
+    }
 }
 
 fn row(m: &ModeSummary) -> String {

@@ -29,6 +29,30 @@ pub struct Summary {
     pub warmup: u32,
     pub error_measured: bool,
     pub modes: Vec<ModeSummary>,
+    /// Modes the adapter could not run, with why.
+    pub skipped: Vec<SkippedMode>,
+    /// The parameter sweep, if any: its mode summaries are labelled
+    /// `MODE[KEY=VALUE]`, in the order of `values`.
+    pub sweep: Option<SweepSummary>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct SkippedMode {
+    pub mode: String,
+    pub reason: String,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct SweepSummary {
+    pub mode: String,
+    pub key: String,
+    pub values: Vec<String>,
+}
+
+impl SweepSummary {
+    pub fn label(&self, value: &str) -> String {
+        format!("{}[{}={value}]", self.mode, self.key)
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
