@@ -65,6 +65,11 @@ enum Command {
         #[command(subcommand)]
         command: PathCommand,
     },
+    /// Draw a run's charts (and report.md) again from its frames.csv and summary.json.
+    Plot {
+        /// A bench output directory.
+        run_dir: PathBuf,
+    },
 }
 
 /// Where the scene comes from: a file, or a built-in scene (the city by default).
@@ -192,6 +197,7 @@ fn main() -> ExitCode {
                     output,
                 },
         } => path_gen(scene, kind, frames, output),
+        Command::Plot { run_dir } => plot(&run_dir),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -271,11 +277,27 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
     bar.finish_and_clear();
     print!("{}", occlu::report::render_markdown(&outcome.summary));
     eprintln!(
-        "results: {}, {}, {}",
+        "results: {}, {}, {} and {} charts in {}",
         outcome.files.report_md.display(),
         outcome.files.summary_json.display(),
-        outcome.files.frames_csv.display()
+        outcome.files.frames_csv.display(),
+        outcome.files.charts.len(),
+        plan.out.display()
     );
+    Ok(())
+}
+
+fn plot(run_dir: &std::path::Path) -> anyhow::Result<()> {
+    let (summary, rows) = occlu::report::read_results(run_dir)?;
+    let charts = occlu::report::charts::write_charts(run_dir, &summary, &rows)?;
+    let report = run_dir.join("report.md");
+    std::fs::write(&report, occlu::report::render_markdown(&summary)).map_err(|error| ReportError {
+        path: report.clone(),
+        error,
+    })?;
+    for chart in charts {
+        eprintln!("wrote {}", chart.display());
+    }
     Ok(())
 }
 

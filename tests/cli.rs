@@ -208,6 +208,22 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
     assert_eq!(lines.count(), 12, "2 frames × 6 modes");
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| oracle |") && report.contains("Adapter:"));
+    for chart in occlu::report::charts::CHARTS {
+        assert!(report.contains(&format!("]({chart})")), "report.md links {chart}");
+        let (width, height, colours) = png_colours(&out.join(chart));
+        assert_eq!((width, height), (1200, 700), "{chart}");
+        assert!(colours.len() > 50, "{chart} has only {} colours: is it blank?", colours.len());
+    }
+    // The data is drawn, not only axes: the lines of vfc and the oracle.
+    let (_, _, lines) = png_colours(&out.join("frame_time.png"));
+    assert!(lines.contains(&[31, 119, 180]) && lines.contains(&[20, 20, 20]), "mode lines missing");
+    // `occlu plot` draws them again from the files alone.
+    for chart in occlu::report::charts::CHARTS {
+        std::fs::remove_file(out.join(chart)).unwrap();
+    }
+    let plot = occlu(&["plot", out_s]);
+    assert!(plot.status.success(), "{:?}", own_stderr(&plot));
+    assert!(occlu::report::charts::CHARTS.iter().all(|c| out.join(c).exists()));
 }
 
 #[test]
@@ -282,4 +298,15 @@ fn help_explains_modes_and_scenes() {
     for needle in ["bench", "info", "path", "vfc", "oracle", "city", "Exit status"] {
         assert!(text.contains(needle), "--help lacks {needle}");
     }
+}
+
+/// Width, height and distinct colours of an RGB PNG.
+fn png_colours(path: &std::path::Path) -> (u32, u32, std::collections::HashSet<[u8; 3]>) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    let colours = buf[..info.buffer_size()].chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+    (info.width, info.height, colours)
 }

@@ -70,6 +70,12 @@ pub fn render(s: &Summary) -> String {
     }
     let _ = writeln!(
         w,
+        "\n## Charts\n\n![Frame time per frame](frame_time.png)\n\n![Triangles drawn per frame](triangles.png)\n\n\
+         ![Box tests and round trips per frame](queries.png)\n\n![Run time against image error](time_vs_error.png)\n\n\
+         ![Mean and p95 frame time per mode](summary.png)"
+    );
+    let _ = writeln!(
+        w,
         "\nPer-frame figures: frames.csv. Every statistic: summary.json (schema {}).",
         s.schema_version
     );

@@ -1,6 +1,7 @@
 //! Result files of a bench run: frames.csv (one row per mode and frame),
 //! summary.json (machine-readable, versioned) and report.md (for people).
 
+pub mod charts;
 mod markdown;
 
 use std::path::{Path, PathBuf};
@@ -106,6 +107,47 @@ pub struct ResultFiles {
     pub frames_csv: PathBuf,
     pub summary_json: PathBuf,
     pub report_md: PathBuf,
+    pub charts: Vec<PathBuf>,
+}
+
+/// Writes an 8-bit RGB image as PNG.
+pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ReportError> {
+    let fail = |error: std::io::Error| ReportError {
+        path: path.to_path_buf(),
+        error,
+    };
+    let file = std::fs::File::create(path).map_err(fail)?;
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(|e| fail(std::io::Error::other(e)))?;
+    writer
+        .write_image_data(rgb)
+        .map_err(|e| fail(std::io::Error::other(e)))?;
+    writer.finish().map_err(|e| fail(std::io::Error::other(e)))
+}
+
+/// Reads a run directory's summary.json and frames.csv (for `occlu plot`
+/// and `occlu compare`).
+pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportError> {
+    let io = |path: PathBuf| move |error| ReportError { path, error };
+    let json_path = dir.join("summary.json");
+    let text = std::fs::read_to_string(&json_path).map_err(io(json_path.clone()))?;
+    let summary: Summary = serde_json::from_str(&text)
+        .map_err(|e| io(json_path.clone())(std::io::Error::other(format!("not an occlu summary: {e}"))))?;
+    if summary.schema_version != SCHEMA_VERSION {
+        return Err(io(json_path)(std::io::Error::other(format!(
+            "schema_version {} is not the {SCHEMA_VERSION} this occlu reads",
+            summary.schema_version
+        ))));
+    }
+    let csv_path = dir.join("frames.csv");
+    let mut reader = csv::Reader::from_path(&csv_path).map_err(|e| io(csv_path.clone())(std::io::Error::other(e)))?;
+    let rows = reader
+        .deserialize()
+        .collect::<Result<Vec<FrameStats>, _>>()
+        .map_err(|e| io(csv_path)(std::io::Error::other(format!("not an occlu frames.csv: {e}"))))?;
+    Ok((summary, rows))
 }
 
 /// Creates `out` and checks that files can be written there, so a bad
@@ -131,6 +173,7 @@ pub fn write_results(out: &Path, summary: &Summary, rows: &[FrameStats]) -> Resu
         frames_csv: out.join("frames.csv"),
         summary_json: out.join("summary.json"),
         report_md: out.join("report.md"),
+        charts: Vec::new(),
     };
     let mut csv =
         csv::Writer::from_path(&files.frames_csv).map_err(|e| io(&files.frames_csv)(std::io::Error::other(e)))?;
@@ -142,5 +185,6 @@ pub fn write_results(out: &Path, summary: &Summary, rows: &[FrameStats]) -> Resu
     let json = serde_json::to_string_pretty(summary).expect("summary serialises: no maps with non-string keys");
     std::fs::write(&files.summary_json, json + "\n").map_err(io(&files.summary_json))?;
     std::fs::write(&files.report_md, render_markdown(summary)).map_err(io(&files.report_md))?;
-    Ok(files)
+    let charts = charts::write_charts(out, summary, rows)?;
+    Ok(ResultFiles { charts, ..files })
 }
