@@ -60,3 +60,11 @@ fn fs_shaded(in: VertexOut) -> @location(0) vec4<f32> {
 fn fs_object_id(in: VertexOut) -> @location(0) u32 {
     return in.object + 1u;
 }
+
+// Depth complexity: every fragment adds 1/255 to an additively blended
+// 8-bit target, so a pixel's value × 255 counts the surfaces drawn over it
+// (no depth test), saturating at 255.
+@fragment
+fn fs_heat(in: VertexOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(1.0 / 255.0, 0.0, 0.0, 1.0);
+}

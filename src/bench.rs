@@ -11,7 +11,8 @@
 
 use std::time::{Duration, Instant};
 
-use crate::camera::generate::{DEFAULT_FRAMES, default_kind, generate};
+use crate::camera::Camera;
+use crate::camera::generate::default_path;
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
 use crate::cull::{Culler, FrameInput, Labeled, MODES, ModeError, PreviousFrame, create};
@@ -52,34 +53,12 @@ pub fn run(
     options: &RunOptions,
     progress: &mut dyn FnMut(u32, u32),
 ) -> Result<RunOutput, GpuError> {
-    let side = gpu.device.limits().max_texture_dimension_2d;
-    let r = options.resolution;
-    if r.width > side || r.height > side {
-        return Err(GpuError::TooLarge {
-            what: "render target side",
-            need: u64::from(r.width.max(r.height)),
-            limit: u64::from(side),
-        });
-    }
-    let start = Instant::now();
-    let mut renderer = SceneRenderer::new(gpu, GpuScene::upload(gpu, scene)?);
-    let targets = RenderTargets::new(gpu, options.resolution, cullers.len());
-    gpu.wait_idle();
-    let upload_ms = ms(start.elapsed());
-
     let needs_reference = options.measure_error || cullers.iter().any(|c| c.needs_reference());
-    let mut meter = needs_reference.then(|| ErrorMeter::new(gpu, &targets, scene.objects.len()));
-    let mut timer = GpuTimer::new(gpu, cullers.len());
-    let mut queries = QueryPool::new(gpu, renderer.camera_uniform());
-    let mut draw_queue = Vec::new();
-    let mut drawn: Vec<ObjectSet> = cullers.iter().map(|_| ObjectSet::new(scene.objects.len())).collect();
-    let mut frame_rows: Vec<Option<FrameStats>> = vec![None; cullers.len()];
-    let mut previous: Vec<Option<PreviousFrame>> = vec![None; cullers.len()];
+    let mut session = Session::new(gpu, scene, cullers.len(), needs_reference, options)?;
     let frames = path.frames;
     // Both are capped (MAX_FRAMES, MAX_WARMUP), so the sum cannot overflow.
     let total = options.warmup + frames;
     let mut rows = Vec::new();
-
     for step in 0..total {
         let recording = step >= options.warmup;
         let frame = if recording {
@@ -88,42 +67,130 @@ pub fn run(
             step % frames
         };
         let camera = path.camera(frame, options.resolution.aspect());
-        renderer.set_camera(gpu, &camera);
+        // Rotating the order from frame to frame: no mode always runs right
+        // after the reference.
+        let frame_rows = session.frame(frame, &camera, cullers, step as usize);
+        if recording {
+            rows.extend(frame_rows);
+        }
+        progress(step + 1, total);
+    }
+    Ok(RunOutput {
+        rows,
+        upload_ms: session.upload_ms,
+    })
+}
+
+/// The GPU resources of a run, and what each mode carries from one frame to
+/// the next (its drawn set, its previous frame's cost).
+pub struct Session<'a> {
+    gpu: &'a GpuContext,
+    pub(crate) renderer: SceneRenderer,
+    pub(crate) targets: RenderTargets,
+    meter: Option<ErrorMeter>,
+    timer: Option<GpuTimer>,
+    queries: QueryPool,
+    draw_queue: Vec<u32>,
+    /// What each mode drew in the last frame.
+    pub(crate) drawn: Vec<ObjectSet>,
+    previous: Vec<Option<PreviousFrame>>,
+    options: RunOptions,
+    pub upload_ms: f64,
+}
+
+impl<'a> Session<'a> {
+    /// Uploads `scene` and creates targets for `modes` modes; the reference
+    /// is rendered each frame when `needs_reference`.
+    pub fn new(
+        gpu: &'a GpuContext,
+        scene: &Scene,
+        modes: usize,
+        needs_reference: bool,
+        options: &RunOptions,
+    ) -> Result<Session<'a>, GpuError> {
+        let side = gpu.device.limits().max_texture_dimension_2d;
+        let r = options.resolution;
+        if r.width > side || r.height > side {
+            return Err(GpuError::TooLarge {
+                what: "render target side",
+                need: u64::from(r.width.max(r.height)),
+                limit: u64::from(side),
+            });
+        }
+        let start = Instant::now();
+        let renderer = SceneRenderer::new(gpu, GpuScene::upload(gpu, scene)?);
+        let targets = RenderTargets::new(gpu, options.resolution, modes);
+        gpu.wait_idle();
+        let upload_ms = ms(start.elapsed());
+        Ok(Session {
+            gpu,
+            meter: needs_reference.then(|| ErrorMeter::new(gpu, &targets, scene.objects.len())),
+            timer: GpuTimer::new(gpu, modes),
+            queries: QueryPool::new(gpu, renderer.camera_uniform()),
+            draw_queue: Vec::new(),
+            drawn: (0..modes).map(|_| ObjectSet::new(scene.objects.len())).collect(),
+            previous: vec![None; modes],
+            options: *options,
+            upload_ms,
+            renderer,
+            targets,
+        })
+    }
+
+    /// Renders one frame in every mode, starting with mode `first % n`, and
+    /// returns one row per mode in the order of `cullers`.
+    ///
+    /// Untimed: the per-object matrix upload, the reference, GPU times and
+    /// errors. Timed, per mode: from the start of its frame on the CPU until
+    /// the GPU finished it.
+    pub fn frame(
+        &mut self,
+        frame: u32,
+        camera: &Camera,
+        cullers: &mut [Box<dyn Culler + '_>],
+        first: usize,
+    ) -> Vec<FrameStats> {
+        let gpu = self.gpu;
+        self.renderer.set_camera(gpu, camera);
         // Flush the upload now, so no mode's timed submit carries it.
         gpu.queue.submit([]);
         gpu.wait_idle();
-        let visible = meter.as_mut().map(|m| m.render_reference(gpu, &renderer, &targets));
+        let visible = self
+            .meter
+            .as_mut()
+            .map(|m| m.render_reference(gpu, &self.renderer, &self.targets));
 
+        let mut rows: Vec<Option<FrameStats>> = vec![None; cullers.len()];
         for turn in 0..cullers.len() {
-            let k = (turn + step as usize) % cullers.len();
+            let k = (turn + first) % cullers.len();
             let culler = &mut cullers[k];
             let input = FrameInput {
                 frame,
-                camera: &camera,
-                resolution: options.resolution,
+                camera,
+                resolution: self.options.resolution,
                 reference_visible: if culler.needs_reference() {
                     visible.as_ref()
                 } else {
                     None
                 },
-                previous: previous[k],
+                previous: self.previous[k],
             };
             let frame_start = Instant::now();
             let resources = FrameResources {
                 gpu,
-                renderer: &renderer,
-                targets: &targets,
-                queries: &mut queries,
-                timer: timer.as_ref(),
-                draw_queue: &mut draw_queue,
+                renderer: &self.renderer,
+                targets: &self.targets,
+                queries: &mut self.queries,
+                timer: self.timer.as_ref(),
+                draw_queue: &mut self.draw_queue,
             };
-            let mut ctx = FrameCtx::begin(resources, k, &camera, &mut drawn[k]);
+            let mut ctx = FrameCtx::begin(resources, k, camera, &mut self.drawn[k]);
             let cull_start = Instant::now();
             let traversal = culler.frame(&mut ctx, &input);
             let cull_time = cull_start.elapsed();
             let outcome = ctx.finish();
             let frame_time = frame_start.elapsed();
-            frame_rows[k] = Some(FrameStats {
+            rows[k] = Some(FrameStats {
                 mode: culler.name().to_string(),
                 frame,
                 frame_ms: ms(frame_time),
@@ -149,35 +216,34 @@ pub fn run(
 
         // End of frame, untimed: GPU times and errors of every mode.
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        if let Some(t) = &timer {
+        if let Some(t) = &self.timer {
             t.resolve(&mut encoder);
         }
-        let wrong = match (&mut meter, options.measure_error) {
-            (Some(m), true) => Some(m.count_wrong_pixels(gpu, &targets, encoder)),
+        let wrong = match (&mut self.meter, self.options.measure_error) {
+            (Some(m), true) => Some(m.count_wrong_pixels(gpu, &self.targets, encoder)),
             _ => {
                 gpu.queue.submit([encoder.finish()]);
                 None
             }
         };
-        let gpu_ms = timer.as_mut().map(|t| t.read_ms(gpu));
-        for (k, slot) in frame_rows.iter_mut().enumerate() {
-            let mut row = slot.take().expect("every mode ran this frame");
-            row.gpu_ms = gpu_ms.as_ref().map(|t| t[k]);
-            previous[k] = Some(PreviousFrame {
-                frame_ms: row.frame_ms,
-                render_ms: row.render_ms(),
-            });
-            if recording {
+        let gpu_ms = self.timer.as_mut().map(|t| t.read_ms(gpu));
+        rows.into_iter()
+            .enumerate()
+            .map(|(k, row)| {
+                let mut row = row.expect("every mode ran this frame");
+                row.gpu_ms = gpu_ms.as_ref().map(|t| t[k]);
                 if let (Some(wrong), Some(visible)) = (&wrong, &visible) {
                     row.error_pixels = Some(wrong[k]);
-                    row.missed_objects = Some(visible.count_missing_from(&drawn[k]) as u64);
+                    row.missed_objects = Some(visible.count_missing_from(&self.drawn[k]) as u64);
                 }
-                rows.push(row);
-            }
-        }
-        progress(step + 1, total);
+                self.previous[k] = Some(PreviousFrame {
+                    frame_ms: row.frame_ms,
+                    render_ms: row.render_ms(),
+                });
+                row
+            })
+            .collect()
     }
-    Ok(RunOutput { rows, upload_ms })
 }
 
 /// Milliseconds, rounded to 0.1 µs (finer than any timer here resolves).
@@ -259,10 +325,7 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
 
     let path = match path_file {
         Some(path) => path,
-        None => {
-            let kind = default_kind(&scene);
-            CameraPath::from_file(&generate(kind, &scene, DEFAULT_FRAMES), &format!("generated:{kind}"))?
-        }
+        None => default_path(&scene)?,
     };
     let path = match plan.frames {
         Some(n) => path.with_frames(n)?,

@@ -5,8 +5,8 @@
 //! bounding-volume tree, [`camera`] turns a path into cameras, [`gpu`] holds
 //! the device, the scene's buffers and the per-frame operations, [`cull`]
 //! holds one file per culling mode, [`measure`] computes error and
-//! statistics, [`report`] writes the result files, and [`bench`] runs the
-//! whole flow.
+//! statistics, [`report`] writes the result files and charts, [`bench`]
+//! runs the whole flow, and [`picture`] renders one frame to look at.
 
 pub mod bench;
 pub mod bounds;
@@ -17,5 +17,6 @@ pub mod gpu;
 pub mod hierarchy;
 pub mod measure;
 pub mod object_set;
+pub mod picture;
 pub mod report;
 pub mod scene;

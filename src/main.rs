@@ -12,10 +12,12 @@ use occlu::bench::{BenchError, BenchEvent, execute};
 use occlu::camera::generate::{DEFAULT_FRAMES, PathKind, default_kind, generate};
 use occlu::camera::path::{CameraPath, PathError};
 use occlu::config::{BenchConfig, ConfigError};
-use occlu::cull::MODES;
+use occlu::cull::{MODES, ModeError, ModeParams, create, parse_modes};
 use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::picture::{PictureError, PictureOptions};
 use occlu::report::ReportError;
+use occlu::report::compare::{CompareError, Metric};
 use occlu::scene::builtin::SCENES;
 use occlu::scene::{LoadOptions, Scene, SceneError, SceneSpec, load};
 use serde::Serialize;
@@ -65,10 +67,30 @@ enum Command {
         #[command(subcommand)]
         command: PathCommand,
     },
+    /// Render one frame of one mode to a PNG: what it drew, shaded (or its
+    /// depth complexity), optionally beside a bird's-eye view marking its
+    /// frustum and the boxes it culled.
+    Render(RenderArgs),
     /// Draw a run's charts (and report.md) again from its frames.csv and summary.json.
     Plot {
         /// A bench output directory.
         run_dir: PathBuf,
+    },
+    /// Compare two bench runs for CI: exit 1 when a counter (triangles,
+    /// queries, round trips, wrong pixels, missed objects) grows, or when the
+    /// mean frame time grows beyond --max-regression and beyond the measured
+    /// spread (median ± MAD).
+    Compare {
+        /// The reference run's output directory.
+        base: PathBuf,
+        /// The run to judge.
+        new: PathBuf,
+        /// Allowed growth of mean frame time, percent.
+        #[arg(long, default_value_t = 5.0, value_name = "PCT")]
+        max_regression: f64,
+        /// Metrics to gate on, comma-separated [default: all].
+        #[arg(long, value_enum, value_delimiter = ',')]
+        metric: Vec<Metric>,
     },
 }
 
@@ -144,6 +166,39 @@ struct BenchArgs {
 }
 
 #[derive(Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Camera path (JSON); generated from the scene when omitted.
+    #[arg(long, value_name = "FILE")]
+    path: Option<PathBuf>,
+    /// Frame of the path to render (0-based).
+    #[arg(long, value_name = "K")]
+    frame: u32,
+    /// The culling mode whose frame is rendered.
+    #[arg(long, value_name = "MODE")]
+    mode: String,
+    /// A mode parameter, MODE.KEY=VALUE (repeatable).
+    #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
+    params: Vec<String>,
+    /// Output PNG.
+    #[arg(long, short, value_name = "FILE")]
+    output: PathBuf,
+    /// Add a bird's-eye view: the frustum in red, culled objects' boxes in yellow.
+    #[arg(long)]
+    overview: bool,
+    /// Colour pixels by depth complexity (surfaces drawn over them) instead of shading.
+    #[arg(long)]
+    heat: bool,
+    /// Render size [default: 800x600].
+    #[arg(long, value_name = "WxH")]
+    resolution: Option<Resolution>,
+    /// Graphics API [default: auto].
+    #[arg(long, value_enum)]
+    backend: Option<BackendChoice>,
+}
+
+#[derive(Args)]
 struct InfoArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -186,8 +241,8 @@ fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        Command::Bench(args) => bench(*args),
-        Command::Info(args) => info(args),
+        Command::Bench(args) => bench(*args).map(|()| ExitCode::SUCCESS),
+        Command::Info(args) => info(args).map(|()| ExitCode::SUCCESS),
         Command::Path {
             command:
                 PathCommand::Gen {
@@ -196,11 +251,18 @@ fn main() -> ExitCode {
                     frames,
                     output,
                 },
-        } => path_gen(scene, kind, frames, output),
-        Command::Plot { run_dir } => plot(&run_dir),
+        } => path_gen(scene, kind, frames, output).map(|()| ExitCode::SUCCESS),
+        Command::Plot { run_dir } => plot(&run_dir).map(|()| ExitCode::SUCCESS),
+        Command::Render(args) => render(args).map(|()| ExitCode::SUCCESS),
+        Command::Compare {
+            base,
+            new,
+            max_regression,
+            metric,
+        } => compare(&base, &new, max_regression, &metric),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("occlu: error: {e:#}");
             ExitCode::from(if is_input_error(&e) { 2 } else { 1 })
@@ -215,6 +277,10 @@ fn is_input_error(e: &anyhow::Error) -> bool {
             || c.is::<PathError>()
             || c.is::<ConfigError>()
             || c.is::<ReportError>()
+            || c.is::<CompareError>()
+            || c.is::<ModeError>()
+            || c.downcast_ref::<PictureError>()
+                .is_some_and(PictureError::is_input_error)
     })
 }
 
@@ -283,6 +349,61 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         outcome.files.frames_csv.display(),
         outcome.files.charts.len(),
         plan.out.display()
+    );
+    Ok(())
+}
+
+fn compare(base: &std::path::Path, new: &std::path::Path, pct: f64, metrics: &[Metric]) -> anyhow::Result<ExitCode> {
+    let metrics = if metrics.is_empty() { &Metric::ALL[..] } else { metrics };
+    let comparison = occlu::report::compare::compare(base, new, pct, metrics)?;
+    print!("{}", occlu::report::compare::render(&comparison));
+    let regressions: Vec<String> = comparison
+        .regressions()
+        .map(|c| match (c.base, c.new) {
+            (Some(b), Some(n)) if b != 0.0 => format!("{} {} {:+.1}%", c.mode, c.metric, (n - b) / b * 100.0),
+            _ => format!("{} {}", c.mode, c.metric),
+        })
+        .collect();
+    if regressions.is_empty() {
+        eprintln!("no regression");
+        Ok(ExitCode::SUCCESS)
+    } else {
+        eprintln!("occlu: {} regressions: {}", regressions.len(), regressions.join(", "));
+        Ok(ExitCode::from(1))
+    }
+}
+
+fn render(args: RenderArgs) -> anyhow::Result<()> {
+    let modes = parse_modes(std::slice::from_ref(&args.mode))?;
+    let [mode] = modes[..] else {
+        anyhow::bail!(ModeError::Unknown(format!("{} (render takes one mode)", args.mode)));
+    };
+    let params = ModeParams::parse(&args.params, &modes)?;
+    let path_file = args.path.as_deref().map(CameraPath::load).transpose()?;
+    let scene = load(&args.scene.spec(), &args.scene.options())?;
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    let path = match path_file {
+        Some(p) => p,
+        None => occlu::camera::generate::default_path(&scene)?,
+    };
+    let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
+    let culler = create(mode, &scene, &hierarchy, &params)?;
+    let options = PictureOptions {
+        frame: args.frame,
+        resolution: args.resolution.unwrap_or(Resolution::DEFAULT),
+        overview: args.overview,
+        heat: args.heat,
+    };
+    let picture = occlu::picture::render(&gpu, &scene, &path, culler, &options)?;
+    occlu::report::write_png(&args.output, picture.width, picture.height, &picture.rgb)?;
+    eprintln!(
+        "wrote {} ({}x{}): {mode} drew {} objects at frame {}, culled {} inside the frustum",
+        args.output.display(),
+        picture.width,
+        picture.height,
+        picture.drawn,
+        args.frame,
+        picture.culled_in_frustum
     );
     Ok(())
 }

@@ -212,11 +212,18 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
         assert!(report.contains(&format!("]({chart})")), "report.md links {chart}");
         let (width, height, colours) = png_colours(&out.join(chart));
         assert_eq!((width, height), (1200, 700), "{chart}");
-        assert!(colours.len() > 50, "{chart} has only {} colours: is it blank?", colours.len());
+        assert!(
+            colours.len() > 50,
+            "{chart} has only {} colours: is it blank?",
+            colours.len()
+        );
     }
     // The data is drawn, not only axes: the lines of vfc and the oracle.
     let (_, _, lines) = png_colours(&out.join("frame_time.png"));
-    assert!(lines.contains(&[31, 119, 180]) && lines.contains(&[20, 20, 20]), "mode lines missing");
+    assert!(
+        lines.contains(&[31, 119, 180]) && lines.contains(&[20, 20, 20]),
+        "mode lines missing"
+    );
     // `occlu plot` draws them again from the files alone.
     for chart in occlu::report::charts::CHARTS {
         std::fs::remove_file(out.join(chart)).unwrap();
@@ -307,6 +314,166 @@ fn png_colours(path: &std::path::Path) -> (u32, u32, std::collections::HashSet<[
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).unwrap();
     assert_eq!(info.color_type, png::ColorType::Rgb);
-    let colours = buf[..info.buffer_size()].chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let colours = buf[..info.buffer_size()]
+        .chunks(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
     (info.width, info.height, colours)
+}
+
+/// Copies a run and rewrites its frames.csv with `edit` applied to each row.
+fn tampered_copy(run: &std::path::Path, to: &std::path::Path, edit: &dyn Fn(&mut occlu::measure::FrameStats)) {
+    std::fs::create_dir_all(to).unwrap();
+    std::fs::copy(run.join("summary.json"), to.join("summary.json")).unwrap();
+    let mut reader = csv::Reader::from_path(run.join("frames.csv")).unwrap();
+    let mut writer = csv::Writer::from_path(to.join("frames.csv")).unwrap();
+    for row in reader.deserialize() {
+        let mut row: occlu::measure::FrameStats = row.unwrap();
+        edit(&mut row);
+        writer.serialize(row).unwrap();
+    }
+    writer.flush().unwrap();
+}
+
+#[test]
+fn compare_passes_a_run_against_itself_and_names_regressions() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = dir.path().join("base");
+    // Enough warm frames for a stable median and MAD.
+    let run = occlu(&[
+        "bench",
+        "--scene",
+        "city:blocks=1",
+        "--frames",
+        "8",
+        "--warmup",
+        "2",
+        "--resolution",
+        "64x48",
+        "--modes",
+        "vfc,omq",
+        "--out",
+        base.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{:?}", own_stderr(&run));
+    // Frame times of a test run depend on the load of the machine; the
+    // verdicts under test must not. The base gets steady, known times.
+    let steady = dir.path().join("steady");
+    tampered_copy(&base, &steady, &|r| r.frame_ms = 10.0 + f64::from(r.frame % 3) * 0.1);
+    let b = steady.to_str().unwrap();
+    let same = occlu(&["compare", b, b]);
+    assert_eq!(same.status.code(), Some(0), "{:?}", own_stderr(&same));
+    assert!(stdout(&same).contains("omq") && stdout(&same).contains("same"));
+
+    let compare_with = |name: &str, edit: &dyn Fn(&mut occlu::measure::FrameStats), extra: &[&str]| {
+        let new = dir.path().join(name);
+        tampered_copy(&steady, &new, edit);
+        let mut args = vec!["compare", b, new.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        occlu(&args)
+    };
+    let more = compare_with(
+        "more",
+        &|r| {
+            if r.mode == "omq" {
+                r.triangles_drawn += 100
+            }
+        },
+        &[],
+    );
+    assert_eq!(more.status.code(), Some(1));
+    let line = own_stderr(&more).join(" ");
+    assert!(line.contains("omq triangles_drawn"), "{line}");
+
+    let slow = compare_with(
+        "slow",
+        &|r| {
+            if r.mode == "vfc" {
+                r.frame_ms *= 3.0
+            }
+        },
+        &[],
+    );
+    assert_eq!(slow.status.code(), Some(1));
+    assert!(own_stderr(&slow).join(" ").contains("vfc frame_ms"));
+
+    // 1% slower is within the default 5% threshold.
+    let noise = compare_with("noise", &|r| r.frame_ms *= 1.01, &[]);
+    assert_eq!(noise.status.code(), Some(0), "{:?}", own_stderr(&noise));
+
+    // Gating only on counters ignores the slower frames.
+    let counters = compare_with(
+        "counters",
+        &|r| r.frame_ms *= 3.0,
+        &["--metric", "triangles_drawn,error_pixels"],
+    );
+    assert_eq!(counters.status.code(), Some(0));
+
+    let fewer = compare_with("fewer", &|r| r.triangles_drawn /= 2, &[]);
+    assert_eq!(
+        fewer.status.code(),
+        Some(0),
+        "fewer triangles is better, not a regression"
+    );
+    assert!(stdout(&fewer).contains("better"));
+
+    fails_with(
+        &["compare", b, dir.path().join("absent").to_str().unwrap()],
+        2,
+        &["summary.json"],
+    );
+    fails_with(&["compare", b, b, "--max-regression=-3"], 2, &["--max-regression"]);
+    fails_with(&["compare", b, b, "--metric", "speed"], 2, &["invalid value 'speed'"]);
+}
+
+#[test]
+fn render_draws_a_frame_its_overview_and_its_depth_complexity() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let base = [
+        "render",
+        "--scene",
+        "city:blocks=2",
+        "--frame",
+        "3",
+        "--resolution",
+        "160x120",
+    ];
+    let with = |extra: &[&str]| {
+        let mut args = base.to_vec();
+        args.extend_from_slice(extra);
+        occlu(&args)
+    };
+    let overview = out("overview.png");
+    let r = with(&["--mode", "omq", "--overview", "-o", &overview]);
+    assert!(r.status.success(), "{:?}", own_stderr(&r));
+    let (w, h, colours) = png_colours(std::path::Path::new(&overview));
+    assert_eq!((w, h), (320, 120), "the view and the overview side by side");
+    let near = |c: &[u8; 3], want: [u8; 3]| c.iter().zip(want).all(|(&a, b)| a.abs_diff(b) <= 2);
+    assert!(
+        colours.iter().any(|c| near(c, [255, 217, 0])),
+        "yellow boxes of culled objects"
+    );
+    assert!(colours.iter().any(|c| near(c, [230, 26, 26])), "the red frustum");
+
+    let heat = out("heat.png");
+    let r = with(&["--mode", "vfc", "--heat", "-o", &heat]);
+    assert!(r.status.success(), "{:?}", own_stderr(&r));
+    let (w, h, colours) = png_colours(std::path::Path::new(&heat));
+    assert_eq!((w, h), (160, 120));
+    assert!(
+        colours.contains(&[0, 0, 0]) && colours.len() > 5,
+        "sky is black, surfaces are coloured"
+    );
+
+    let bad = |extra: &[&str], needle: &str| {
+        let mut args = vec!["render", "--scene", "city:blocks=1", "--resolution", "64x48", "-o"];
+        let target = out("bad.png");
+        args.push(&target);
+        args.extend_from_slice(extra);
+        fails_with(&args, 2, &[needle]);
+    };
+    bad(&["--frame", "500", "--mode", "vfc"], "beyond the path's 120 frames");
+    bad(&["--frame", "0", "--mode", "warp"], "unknown mode 'warp'");
+    bad(&["--frame", "0", "--mode", "vfc,omq"], "render takes one mode");
 }

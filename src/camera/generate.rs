@@ -7,7 +7,7 @@ use std::str::FromStr;
 use glam::DVec3;
 use serde::Serialize;
 
-use super::path::{DEFAULT_FOV_Y_DEG, Interpolation, KeyframeFile, PathFile};
+use super::path::{CameraPath, DEFAULT_FOV_Y_DEG, Interpolation, KeyframeFile, PathError, PathFile};
 use crate::scene::Scene;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -49,6 +49,12 @@ pub fn default_kind(scene: &Scene) -> PathKind {
     } else {
         PathKind::Orbit
     }
+}
+
+/// The path used when none is given: [`default_kind`], [`DEFAULT_FRAMES`].
+pub fn default_path(scene: &Scene) -> Result<CameraPath, PathError> {
+    let kind = default_kind(scene);
+    CameraPath::from_file(&generate(kind, scene, DEFAULT_FRAMES), &format!("generated:{kind}"))
 }
 
 pub fn generate(kind: PathKind, scene: &Scene, frames: u32) -> PathFile {

@@ -3,6 +3,7 @@
 //! goes through ([`FrameCtx`]).
 
 mod frame;
+mod picture;
 mod queries;
 mod readback;
 mod renderer;
@@ -14,6 +15,7 @@ use std::fmt;
 use serde::Serialize;
 
 pub use frame::{FrameCounters, FrameCtx, FrameOutcome, FrameResources};
+pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};
 pub use queries::{BoxTest, BoxVisibility, QUERIES_PER_SET, QueryPool};
 pub use readback::Readback;
 pub use renderer::{GpuScene, SceneRenderer};

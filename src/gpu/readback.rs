@@ -31,6 +31,23 @@ impl Readback {
         encoder.copy_buffer_to_buffer(source, source_offset, &self.buffer, offset, size);
     }
 
+    /// Encodes a copy of a whole 2D texture (`rows` rows of `row_bytes`,
+    /// padded as copies require) into this buffer.
+    pub fn copy_texture(&self, encoder: &mut wgpu::CommandEncoder, texture: &wgpu::Texture, row_bytes: u32, rows: u32) {
+        encoder.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row_bytes),
+                    rows_per_image: Some(rows),
+                },
+            },
+            texture.size(),
+        );
+    }
+
     /// Waits for the GPU and returns the first `size` bytes as `T`s.
     pub fn read<T: bytemuck::Pod>(&self, gpu: &GpuContext, size: u64, out: &mut Vec<T>) {
         let slice = self.buffer.slice(..size);

@@ -96,6 +96,8 @@ pub struct SceneRenderer {
     bind_group: wgpu::BindGroup,
     shaded: wgpu::RenderPipeline,
     reference: wgpu::RenderPipeline,
+    /// Counts surfaces per pixel (no depth test), for pictures.
+    heat: wgpu::RenderPipeline,
 }
 
 impl SceneRenderer {
@@ -148,7 +150,8 @@ impl SceneRenderer {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = |label, fragment_entry, format: wgpu::TextureFormat| {
+        // `depth`: test and write depth; otherwise `blend` accumulates.
+        let pipeline = |label, fragment_entry, target: wgpu::ColorTargetState, depth: bool| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&pipeline_layout),
@@ -165,7 +168,7 @@ impl SceneRenderer {
                 // No back-face culling: file winding is unreliable, and
                 // visibility must not depend on it.
                 primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
+                depth_stencil: depth.then(|| wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
                     depth_write_enabled: Some(true),
                     depth_compare: Some(wgpu::CompareFunction::Greater),
@@ -177,15 +180,32 @@ impl SceneRenderer {
                     module: &module,
                     entry_point: Some(fragment_entry),
                     compilation_options: Default::default(),
-                    targets: &[Some(format.into())],
+                    targets: &[Some(target)],
                 }),
                 multiview_mask: None,
                 cache: None,
             })
         };
         SceneRenderer {
-            shaded: pipeline("shaded", "fs_shaded", COLOR_FORMAT),
-            reference: pipeline("reference", "fs_object_id", ID_FORMAT),
+            shaded: pipeline("shaded", "fs_shaded", COLOR_FORMAT.into(), true),
+            reference: pipeline("reference", "fs_object_id", ID_FORMAT.into(), true),
+            heat: pipeline(
+                "depth complexity",
+                "fs_heat",
+                wgpu::ColorTargetState {
+                    format: COLOR_FORMAT,
+                    blend: Some(wgpu::BlendState {
+                        color: wgpu::BlendComponent {
+                            src_factor: wgpu::BlendFactor::One,
+                            dst_factor: wgpu::BlendFactor::One,
+                            operation: wgpu::BlendOperation::Add,
+                        },
+                        alpha: wgpu::BlendComponent::REPLACE,
+                    }),
+                    write_mask: wgpu::ColorWrites::ALL,
+                },
+                false,
+            ),
             scene,
             camera,
             bind_group,
@@ -251,6 +271,33 @@ impl SceneRenderer {
             true,
         );
         self.draw(&mut pass, &self.reference, all);
+    }
+
+    /// Records a pass counting, per pixel of `target`, the surfaces of
+    /// `objects` drawn over it (depth complexity, saturating at 255).
+    pub fn encode_depth_complexity(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        objects: &[u32],
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("depth complexity"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        self.draw(&mut pass, &self.heat, objects);
     }
 
     fn draw(&self, pass: &mut wgpu::RenderPass, pipeline: &wgpu::RenderPipeline, objects: &[u32]) {

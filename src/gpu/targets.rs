@@ -74,6 +74,8 @@ impl fmt::Display for Resolution {
 
 pub struct RenderTargets {
     pub resolution: Resolution,
+    /// The shaded picture every mode draws into (readable for pictures).
+    pub color_texture: wgpu::Texture,
     pub color: wgpu::TextureView,
     pub reference_depth: wgpu::TextureView,
     pub reference_ids: wgpu::TextureView,
@@ -100,9 +102,15 @@ impl RenderTargets {
         };
         let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
         let view = |t: wgpu::Texture| t.create_view(&Default::default());
+        let color_texture = texture(
+            "color",
+            COLOR_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
         RenderTargets {
             resolution,
-            color: view(texture("color", COLOR_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT)),
+            color: color_texture.create_view(&Default::default()),
+            color_texture,
             reference_depth: view(texture("reference depth", DEPTH_FORMAT, sampled)),
             reference_ids: view(texture("reference ids", ID_FORMAT, sampled)),
             mode_depths: (0..modes)

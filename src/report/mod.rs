@@ -2,6 +2,7 @@
 //! summary.json (machine-readable, versioned) and report.md (for people).
 
 pub mod charts;
+pub mod compare;
 mod markdown;
 
 use std::path::{Path, PathBuf};

@@ -1,0 +1,24 @@
+// Coloured line lists for the overview picture: frustum edges and the boxes
+// of culled objects, in eye-relative world coordinates of the viewing camera.
+
+struct Camera {
+    projection: mat4x4<f32>,
+    view_projection: mat4x4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+
+struct LineVertex {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) colour: vec3<f32>,
+}
+
+@vertex
+fn vs_line(@location(0) position: vec3<f32>, @location(1) colour: vec3<f32>) -> LineVertex {
+    return LineVertex(camera.view_projection * vec4<f32>(position, 1.0), colour);
+}
+
+@fragment
+fn fs_line(in: LineVertex) -> @location(0) vec4<f32> {
+    return vec4<f32>(in.colour, 1.0);
+}

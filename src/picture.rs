@@ -1,0 +1,263 @@
+//! `occlu render`: a picture of one frame of one mode.
+//!
+//! The mode renders the frame through the same [`Session`] a benchmark
+//! uses, after the two frames before it (so modes that carry state from
+//! frame to frame, like omq's `max_tests` or ac's budget, are in their
+//! usual state). The picture is what the mode drew, shaded; or, with
+//! `heat`, its depth complexity: how many surfaces it drew over each pixel
+//! (the IOC paper's Figure 1). With `overview`, a bird's-eye view of the
+//! whole scene is placed beside it, with the mode's frustum in red and the
+//! boxes of objects inside the frustum that the mode did not draw in yellow,
+//! as the papers' figures mark culled bounding volumes.
+
+use glam::DVec3;
+
+use crate::bench::{RunOptions, Session};
+use crate::bounds::Aabb;
+use crate::camera::path::CameraPath;
+use crate::camera::{Camera, Containment, look_rotation};
+use crate::cull::Culler;
+use crate::gpu::{GpuContext, GpuError, LinePainter, LineVertex, RenderTargets, Resolution, picture_target, read_rgb};
+use crate::scene::Scene;
+
+#[derive(Clone, Copy, Debug)]
+pub struct PictureOptions {
+    pub frame: u32,
+    pub resolution: Resolution,
+    pub overview: bool,
+    pub heat: bool,
+}
+
+/// An RGB image and what it shows.
+pub struct Picture {
+    pub width: u32,
+    pub height: u32,
+    pub rgb: Vec<u8>,
+    /// Objects the mode drew in the frame.
+    pub drawn: usize,
+    /// Objects inside the frustum it did not draw (the yellow boxes).
+    pub culled_in_frustum: usize,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum PictureError {
+    #[error("--frame {frame} is beyond the path's {frames} frames (0..={})", frames - 1)]
+    FrameOutOfRange { frame: u32, frames: u32 },
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+impl PictureError {
+    /// Whether the user's input was at fault (as opposed to the GPU).
+    pub fn is_input_error(&self) -> bool {
+        !matches!(self, PictureError::Gpu(_))
+    }
+}
+
+/// Frames run before the pictured one, for the mode's temporal state.
+const LEAD_IN: u32 = 2;
+
+const YELLOW: [f32; 3] = [1.0, 0.85, 0.0];
+const RED: [f32; 3] = [0.9, 0.1, 0.1];
+
+pub fn render(
+    gpu: &GpuContext,
+    scene: &Scene,
+    path: &CameraPath,
+    culler: Box<dyn Culler + '_>,
+    options: &PictureOptions,
+) -> Result<Picture, PictureError> {
+    if options.frame >= path.frames {
+        return Err(PictureError::FrameOutOfRange {
+            frame: options.frame,
+            frames: path.frames,
+        });
+    }
+    let resolution = options.resolution;
+    let run = RunOptions {
+        warmup: 0,
+        resolution,
+        measure_error: false,
+    };
+    let mut cullers = [culler];
+    let mut session = Session::new(gpu, scene, 1, cullers[0].needs_reference(), &run)?;
+    let camera = path.camera(options.frame, resolution.aspect());
+    for f in options.frame.saturating_sub(LEAD_IN)..=options.frame {
+        session.frame(f, &path.camera(f, resolution.aspect()), &mut cullers, 0);
+    }
+    let drawn: Vec<u32> = session.drawn[0].iter().collect();
+    let frustum = camera.frustum();
+    let culled: Vec<&Aabb> = scene
+        .objects
+        .iter()
+        .enumerate()
+        .filter(|&(i, o)| !session.drawn[0].contains(i as u32) && frustum.classify(&o.bounds) != Containment::Outside)
+        .map(|(_, o)| &o.bounds)
+        .collect();
+
+    let main = if options.heat {
+        let target = picture_target(gpu, resolution);
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let view = target.create_view(&Default::default());
+        session.renderer.encode_depth_complexity(&mut encoder, &view, &drawn);
+        gpu.queue.submit([encoder.finish()]);
+        let counts = read_rgb(gpu, &target, resolution);
+        heat_colours(&counts)
+    } else {
+        read_rgb(gpu, &session.targets.color_texture, resolution)
+    };
+
+    let (width, rgb) = if options.overview {
+        let above = overview_camera(scene, resolution);
+        session.renderer.set_camera(gpu, &above);
+        let targets = RenderTargets::new(gpu, resolution, 1);
+        let all: Vec<u32> = (0..scene.objects.len() as u32).collect();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        session
+            .renderer
+            .encode_shaded(&mut encoder, &targets, &targets.mode_depths[0], true, &all);
+        gpu.queue.submit([encoder.finish()]);
+        let mut lines = Vec::new();
+        for b in &culled {
+            box_lines(b, above.eye, YELLOW, &mut lines);
+        }
+        // The frustum has no far plane: draw it out to the farthest corner of
+        // the scene, so every yellow box lies inside the red lines.
+        let reach = scene
+            .bounds
+            .corners()
+            .iter()
+            .map(|c| c.distance(camera.eye))
+            .fold(0.0, f64::max);
+        frustum_lines(&camera, reach, above.eye, &mut lines);
+        LinePainter::new(gpu, session.renderer.camera_uniform()).draw(gpu, &targets.color, &lines);
+        let side = read_rgb(gpu, &targets.color_texture, resolution);
+        (resolution.width * 2, side_by_side(&main, &side, resolution))
+    } else {
+        (resolution.width, main)
+    };
+    Ok(Picture {
+        width,
+        height: resolution.height,
+        rgb,
+        drawn: drawn.len(),
+        culled_in_frustum: culled.len(),
+    })
+}
+
+/// Straight down on the whole scene, north (−Z) up, far enough that its
+/// bounds fit the view.
+fn overview_camera(scene: &Scene, resolution: Resolution) -> Camera {
+    let b = scene.bounds;
+    let (c, e) = (b.center(), b.extent());
+    let fov_y = 60f64.to_radians();
+    let t = (fov_y / 2.0).tan();
+    let height = (e.z / (2.0 * t)).max(e.x / (2.0 * t * resolution.aspect())).max(1e-3) * 1.1;
+    Camera {
+        eye: DVec3::new(c.x, b.max.y + height, c.z),
+        rotation: look_rotation(DVec3::NEG_Y, DVec3::NEG_Z),
+        fov_y,
+        near: height * 1e-3,
+        aspect: resolution.aspect(),
+    }
+}
+
+fn line(a: DVec3, b: DVec3, eye: DVec3, colour: [f32; 3], out: &mut Vec<LineVertex>) {
+    for p in [a, b] {
+        out.push(LineVertex {
+            position: (p - eye).as_vec3().to_array(),
+            colour,
+        });
+    }
+}
+
+/// The twelve edges of a box.
+fn box_lines(b: &Aabb, eye: DVec3, colour: [f32; 3], out: &mut Vec<LineVertex>) {
+    let c = b.corners();
+    // Corners differing in one bit share an edge.
+    for i in 0..8 {
+        for bit in [1, 2, 4] {
+            if i & bit == 0 {
+                line(c[i], c[i | bit], eye, colour, out);
+            }
+        }
+    }
+}
+
+/// The frustum of `camera` out to `reach`: four edges and the far rectangle.
+fn frustum_lines(camera: &Camera, reach: f64, eye: DVec3, out: &mut Vec<LineVertex>) {
+    let ty = (camera.fov_y / 2.0).tan();
+    let tx = ty * camera.aspect;
+    let far: Vec<DVec3> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .iter()
+        .map(|&(sx, sy)| camera.eye + camera.rotation * DVec3::new(sx * tx, sy * ty, -1.0) * reach)
+        .collect();
+    for k in 0..4 {
+        line(camera.eye, far[k], eye, RED, out);
+        line(far[k], far[(k + 1) % 4], eye, RED, out);
+    }
+}
+
+/// Surfaces per pixel (red channel, one step per surface) to a colour ramp:
+/// black for none, then blue, cyan, green, yellow, red and white for the
+/// deepest pixel of the picture.
+fn heat_colours(counts: &[u8]) -> Vec<u8> {
+    const RAMP: [[f32; 3]; 7] = [
+        [0.0, 0.0, 0.0],
+        [0.1, 0.1, 0.6],
+        [0.0, 0.6, 0.9],
+        [0.1, 0.8, 0.2],
+        [1.0, 0.9, 0.0],
+        [0.9, 0.1, 0.1],
+        [1.0, 1.0, 1.0],
+    ];
+    let deepest = counts.chunks(3).map(|p| p[0]).max().unwrap_or(0).max(1);
+    counts
+        .chunks(3)
+        .flat_map(|p| {
+            let t = (f32::from(p[0]) / f32::from(deepest)).sqrt() * (RAMP.len() - 1) as f32;
+            let (i, f) = (t.floor() as usize, t.fract());
+            let (a, b) = (RAMP[i.min(RAMP.len() - 1)], RAMP[(i + 1).min(RAMP.len() - 1)]);
+            let c = |k: usize| ((a[k] + (b[k] - a[k]) * f) * 255.0).round() as u8;
+            if p[0] == 0 { [0, 0, 0] } else { [c(0), c(1), c(2)] }
+        })
+        .collect()
+}
+
+fn side_by_side(left: &[u8], right: &[u8], r: Resolution) -> Vec<u8> {
+    let row = (r.width * 3) as usize;
+    left.chunks(row)
+        .zip(right.chunks(row))
+        .flat_map(|(a, b)| a.iter().chain(b).copied())
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_box_has_twelve_edges_and_a_frustum_eight() {
+        let mut lines = Vec::new();
+        box_lines(&Aabb::new(DVec3::ZERO, DVec3::ONE), DVec3::ZERO, YELLOW, &mut lines);
+        assert_eq!(lines.len(), 24);
+        let cam = Camera {
+            eye: DVec3::ZERO,
+            rotation: look_rotation(DVec3::NEG_Z, DVec3::Y),
+            fov_y: 1.0,
+            near: 0.1,
+            aspect: 1.0,
+        };
+        lines.clear();
+        frustum_lines(&cam, 10.0, DVec3::ZERO, &mut lines);
+        assert_eq!(lines.len(), 16);
+    }
+
+    #[test]
+    fn heat_ramp_is_black_for_nothing_and_white_for_the_deepest() {
+        let out = heat_colours(&[0, 0, 0, 1, 0, 0, 9, 0, 0]);
+        assert_eq!(&out[0..3], &[0, 0, 0]);
+        assert_ne!(&out[3..6], &[0, 0, 0]);
+        assert_eq!(&out[6..9], &[255, 255, 255]);
+    }
+}
