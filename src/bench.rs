@@ -24,8 +24,8 @@ use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{ErrorMeter, FrameStats, ModeDescription, summarize};
 use crate::object_set::ObjectSet;
 use crate::report::{
-    PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneSummary, SkippedMode, Summary, SweepSummary, ToolInfo,
-    prepare_output, write_results,
+    PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary, SkippedMode, Summary,
+    SweepSummary, ToolInfo, prepare_output, write_results,
 };
 use crate::scene::{LoadOptions, Scene, SceneError};
 
@@ -389,18 +389,8 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
         tool: ToolInfo::current(),
         adapter: gpu.adapter.clone(),
         scene: SceneSummary {
-            source: scene.source.clone(),
-            objects: scene.objects.len(),
-            meshes: scene.meshes.len(),
-            triangles: scene.triangles(),
-            vertices: scene.vertices.len(),
-            bounds_min: scene.bounds.min.to_array(),
-            bounds_max: scene.bounds.max.to_array(),
-            hierarchy: hierarchy.stats(),
+            facts: SceneFacts::of(&scene, &hierarchy, load_ms, build_ms),
             hierarchy_params: params,
-            warnings: scene.warnings.clone(),
-            load_ms,
-            build_ms,
             upload_ms: output.upload_ms,
         },
         path: PathSummary {

@@ -16,11 +16,10 @@ use occlu::cull::{MODES, ModeError, ModeParams, create, parse_modes};
 use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::picture::{PictureError, PictureOptions};
-use occlu::report::ReportError;
 use occlu::report::compare::{CompareError, Metric};
+use occlu::report::{ReportError, SceneFacts};
 use occlu::scene::builtin::SCENES;
 use occlu::scene::{LoadOptions, Scene, SceneError, SceneSpec, load};
-use serde::Serialize;
 
 #[derive(Parser)]
 #[command(
@@ -422,22 +421,6 @@ fn plot(run_dir: &std::path::Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `occlu info --json` output.
-#[derive(Serialize)]
-struct InfoReport<'a> {
-    source: &'a str,
-    objects: usize,
-    meshes: usize,
-    triangles: u64,
-    vertices: usize,
-    bounds_min: [f64; 3],
-    bounds_max: [f64; 3],
-    hierarchy: occlu::hierarchy::HierarchyStats,
-    load_ms: f64,
-    build_ms: f64,
-    warnings: &'a [String],
-}
-
 fn info(args: InfoArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let scene = load(&args.scene.spec(), &args.scene.options())?;
@@ -445,19 +428,7 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let build_ms = start.elapsed().as_secs_f64() * 1e3;
-    let report = InfoReport {
-        source: &scene.source,
-        objects: scene.objects.len(),
-        meshes: scene.meshes.len(),
-        triangles: scene.triangles(),
-        vertices: scene.vertices.len(),
-        bounds_min: scene.bounds.min.to_array(),
-        bounds_max: scene.bounds.max.to_array(),
-        hierarchy: hierarchy.stats(),
-        load_ms,
-        build_ms,
-        warnings: &scene.warnings,
-    };
+    let report = SceneFacts::of(&scene, &hierarchy, load_ms, build_ms);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());

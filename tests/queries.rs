@@ -27,21 +27,22 @@ fn cube(centre: DVec3, half: f64) -> occlu::bounds::Aabb {
     occlu::bounds::Aabb::new(centre - DVec3::splat(half), centre + DVec3::splat(half))
 }
 
-/// Draws the wall, then tests each batch of boxes in turn, recording results.
-struct WallThenBatches<'a> {
-    batches: Vec<Vec<occlu::bounds::Aabb>>,
+/// Draws the wall, then tests each batch with its kind of test, recording
+/// the results in order.
+struct WallThenTests<'a> {
+    tests: Vec<(Vec<occlu::bounds::Aabb>, BoxTest)>,
     results: &'a RefCell<Vec<Vec<BoxVisibility>>>,
 }
 
-impl Culler for WallThenBatches<'_> {
+impl Culler for WallThenTests<'_> {
     fn name(&self) -> &str {
-        "wall-then-batches"
+        "wall-then-tests"
     }
     fn frame(&mut self, ctx: &mut FrameCtx, _: &FrameInput) -> TraversalStats {
         ctx.draw(&[0]);
-        for batch in &self.batches {
+        for (batch, kind) in &self.tests {
             let mut out = Vec::new();
-            ctx.test_boxes(batch, BoxTest::Occlusion, &mut out);
+            ctx.test_boxes(batch, *kind, &mut out);
             self.results.borrow_mut().push(out);
         }
         TraversalStats::default()
@@ -74,8 +75,8 @@ fn queries_see_what_is_drawn() {
         .collect();
     for gpu in common::gpus() {
         let results = RefCell::new(Vec::new());
-        let mut cullers: Vec<Box<dyn Culler>> = vec![Box::new(WallThenBatches {
-            batches: vec![singles.clone(), big.clone()],
+        let mut cullers: Vec<Box<dyn Culler>> = vec![Box::new(WallThenTests {
+            tests: vec![(singles.clone(), BoxTest::Occlusion), (big.clone(), BoxTest::Occlusion)],
             results: &results,
         })];
         let out = run_modes(&gpu, &scene, &path, &mut cullers, RES);
@@ -299,8 +300,7 @@ fn pixel_counts_match_the_ray_cast_footprint_and_query_counts() {
             BoxTest::PixelCount { sampling: 4 },
         ];
         let mut cullers: Vec<Box<dyn Culler>> = vec![Box::new(WallThenTests {
-            batch,
-            kinds: kinds.to_vec(),
+            tests: kinds.iter().map(|&k| (batch.clone(), k)).collect(),
             results: &results,
         })];
         run_modes(&gpu, &scene, &path, &mut cullers, res);
@@ -332,28 +332,6 @@ fn pixel_counts_match_the_ray_cast_footprint_and_query_counts() {
                 );
             }
         }
-    }
-}
-
-/// Draws the wall, then tests the same batch once per kind of test.
-struct WallThenTests<'a> {
-    batch: Vec<occlu::bounds::Aabb>,
-    kinds: Vec<BoxTest>,
-    results: &'a RefCell<Vec<Vec<BoxVisibility>>>,
-}
-
-impl Culler for WallThenTests<'_> {
-    fn name(&self) -> &str {
-        "wall-then-tests"
-    }
-    fn frame(&mut self, ctx: &mut FrameCtx, _: &FrameInput) -> TraversalStats {
-        ctx.draw(&[0]);
-        for &kind in &self.kinds {
-            let mut out = Vec::new();
-            ctx.test_boxes(&self.batch, kind, &mut out);
-            self.results.borrow_mut().push(out);
-        }
-        TraversalStats::default()
     }
 }
 

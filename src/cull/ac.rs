@@ -53,9 +53,8 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-use super::traversal::{DepthQueue, frustum_cull_subtree, leaf_objects_in_frustum, view_depth};
+use super::traversal::{DepthQueue, children, draw_leaf, frustum_cull_subtree, in_frustum, view_depth};
 use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
-use crate::camera::Containment;
 use crate::gpu::{BoxTest, BoxVisibility, FrameCtx};
 use crate::hierarchy::Hierarchy;
 use crate::scene::Scene;
@@ -235,15 +234,14 @@ impl Culler for AdaptiveCulling<'_> {
         // InitDepthList: the uppermost nodes inside the frustum.
         self.depth_list.clear();
         let root = &nodes[0];
-        let firsts: &[u32] = if root.is_leaf() { &[0] } else { &[] };
-        for node in firsts.iter().copied().chain(root.children().map(|c| c as u32)) {
-            stats.nodes_visited += 1;
-            let bounds = &nodes[node as usize].bounds;
-            if frustum.classify(bounds) == Containment::Outside {
-                stats.nodes_culled_frustum += 1;
-            } else {
-                self.depth_list.push(node, view_depth(bounds, camera));
-            }
+        let uppermost: Vec<u32> = if root.is_leaf() {
+            vec![0]
+        } else {
+            children(root).collect()
+        };
+        for node in in_frustum(self.hierarchy, uppermost.into_iter(), &frustum, &mut stats) {
+            self.depth_list
+                .push(node, view_depth(&nodes[node as usize].bounds, camera));
         }
 
         while let Some(index) = self.depth_list.pop() {
@@ -289,18 +287,11 @@ impl Culler for AdaptiveCulling<'_> {
                 }
             }
             if node.is_leaf() {
-                self.objects.clear();
-                leaf_objects_in_frustum(self.scene, self.hierarchy, node, &frustum, &mut self.objects);
-                ctx.draw(&self.objects);
+                draw_leaf(ctx, self.scene, self.hierarchy, node, &frustum, &mut self.objects);
             } else {
-                for child in node.children() {
-                    stats.nodes_visited += 1;
-                    let bounds = &nodes[child].bounds;
-                    if frustum.classify(bounds) == Containment::Outside {
-                        stats.nodes_culled_frustum += 1;
-                    } else {
-                        self.depth_list.push(child as u32, view_depth(bounds, camera));
-                    }
+                for child in in_frustum(self.hierarchy, children(node), &frustum, &mut stats) {
+                    self.depth_list
+                        .push(child, view_depth(&nodes[child as usize].bounds, camera));
                 }
             }
         }

@@ -32,7 +32,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use super::occupancy::{OccupancyMap, ScreenRect};
-use super::traversal::{DepthQueue, leaf_objects_in_frustum, nearest_corner};
+use super::traversal::{DepthQueue, children, draw_leaf, in_frustum, nearest_corner};
 use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
@@ -114,25 +114,20 @@ impl<'a> OccupancyMapQueries<'a> {
 
     /// Frustum-tests the children of `node`; those inside go to `into`.
     fn open(&mut self, node: u32, frustum: &Frustum, eye: DVec3, into: Destination, stats: &mut TraversalStats) {
-        let nodes = &self.hierarchy.nodes;
-        for child in nodes[node as usize].children() {
-            stats.nodes_visited += 1;
-            if frustum.classify(&nodes[child].bounds) == Containment::Outside {
-                stats.nodes_culled_frustum += 1;
-            } else {
-                match into {
-                    Destination::Queue => self.queue.push(child as u32, nearest_corner(&nodes[child].bounds, eye)),
-                    Destination::Pending => self.pending.push(child as u32),
-                }
+        let hierarchy = self.hierarchy;
+        for child in in_frustum(hierarchy, children(&hierarchy.nodes[node as usize]), frustum, stats) {
+            match into {
+                Destination::Queue => self
+                    .queue
+                    .push(child, nearest_corner(&hierarchy.nodes[child as usize].bounds, eye)),
+                Destination::Pending => self.pending.push(child),
             }
         }
     }
 
     fn draw_leaf(&mut self, ctx: &mut FrameCtx, node: u32, frustum: &Frustum) {
-        self.objects.clear();
         let n = &self.hierarchy.nodes[node as usize];
-        leaf_objects_in_frustum(self.scene, self.hierarchy, n, frustum, &mut self.objects);
-        ctx.draw(&self.objects);
+        draw_leaf(ctx, self.scene, self.hierarchy, n, frustum, &mut self.objects);
     }
 
     /// One multiple occlusion query over the test list: visible leaves are

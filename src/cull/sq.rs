@@ -10,7 +10,7 @@
 //! subtree; a visible leaf is drawn; a visible inner node's children join
 //! the queue.
 
-use super::traversal::{DepthQueue, leaf_objects_in_frustum, nearest_corner};
+use super::traversal::{DepthQueue, draw_leaf, nearest_corner};
 use super::{Culler, FrameInput, TraversalStats};
 use crate::camera::Containment;
 use crate::gpu::{BoxTest, BoxVisibility, FrameCtx};
@@ -61,9 +61,7 @@ impl Culler for SingleQueries<'_> {
                 continue;
             }
             if node.is_leaf() {
-                self.objects.clear();
-                leaf_objects_in_frustum(self.scene, self.hierarchy, node, &frustum, &mut self.objects);
-                ctx.draw(&self.objects);
+                draw_leaf(ctx, self.scene, self.hierarchy, node, &frustum, &mut self.objects);
             } else {
                 for child in node.children() {
                     self.queue.push(child as u32, nearest_corner(&nodes[child].bounds, eye));

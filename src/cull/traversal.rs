@@ -9,6 +9,7 @@ use glam::DVec3;
 use super::TraversalStats;
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
+use crate::gpu::FrameCtx;
 use crate::hierarchy::{Hierarchy, Node};
 use crate::scene::Scene;
 
@@ -107,6 +108,42 @@ pub fn frustum_cull_subtree(
             Containment::Intersecting => stack.extend(node.children().map(|c| c as u32)),
         }
     }
+}
+
+/// The nodes of `candidates` the frustum does not exclude; each counts as
+/// visited, and those excluded as frustum-culled.
+pub fn in_frustum<'a>(
+    hierarchy: &'a Hierarchy,
+    candidates: impl Iterator<Item = u32> + 'a,
+    frustum: &'a Frustum,
+    stats: &'a mut TraversalStats,
+) -> impl Iterator<Item = u32> + 'a {
+    candidates.filter(move |&n| {
+        stats.nodes_visited += 1;
+        let outside = frustum.classify(&hierarchy.nodes[n as usize].bounds) == Containment::Outside;
+        stats.nodes_culled_frustum += u64::from(outside);
+        !outside
+    })
+}
+
+/// The children of `node`, as node ids.
+pub fn children(node: &Node) -> impl Iterator<Item = u32> + use<> {
+    node.children().map(|c| c as u32)
+}
+
+/// Draws the objects of leaf `node` that the frustum does not exclude;
+/// `scratch` is reused between calls.
+pub fn draw_leaf(
+    ctx: &mut FrameCtx,
+    scene: &Scene,
+    hierarchy: &Hierarchy,
+    node: &Node,
+    frustum: &Frustum,
+    scratch: &mut Vec<u32>,
+) {
+    scratch.clear();
+    leaf_objects_in_frustum(scene, hierarchy, node, frustum, scratch);
+    ctx.draw(scratch);
 }
 
 /// Appends the objects of leaf `node` that the frustum does not exclude.

@@ -3,7 +3,7 @@
 
 use wgpu::util::DeviceExt;
 
-use super::targets::{COLOR_FORMAT, Resolution};
+use super::targets::{COLOR_FORMAT, Resolution, texture_2d};
 use super::{GpuContext, Readback};
 
 /// One end of a line: eye-relative world position and colour (0..1).
@@ -107,20 +107,8 @@ impl LinePainter {
 
 /// A colour texture that can be drawn into and read back.
 pub fn picture_target(gpu: &GpuContext, resolution: Resolution) -> wgpu::Texture {
-    gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("picture"),
-        size: wgpu::Extent3d {
-            width: resolution.width,
-            height: resolution.height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: COLOR_FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+    texture_2d(gpu, "picture", resolution, COLOR_FORMAT, usage)
 }
 
 /// Reads an RGBA8 texture back as tightly packed RGB rows.

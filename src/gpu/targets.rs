@@ -82,24 +82,33 @@ pub struct RenderTargets {
     pub mode_depths: Vec<wgpu::TextureView>,
 }
 
+/// A plain 2D texture of the viewport's size.
+pub fn texture_2d(
+    gpu: &GpuContext,
+    label: &str,
+    resolution: Resolution,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: resolution.width,
+            height: resolution.height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
 impl RenderTargets {
     pub fn new(gpu: &GpuContext, resolution: Resolution, modes: usize) -> RenderTargets {
-        let texture = |label: &str, format, usage| {
-            gpu.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: resolution.width,
-                    height: resolution.height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
+        let texture = |label: &str, format, usage| texture_2d(gpu, label, resolution, format, usage);
         let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
         let view = |t: wgpu::Texture| t.create_view(&Default::default());
         let color_texture = texture(

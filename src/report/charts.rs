@@ -136,7 +136,7 @@ const OTHER_COLOURS: [RGBColor; 6] = [
 ];
 
 fn title(summary: &Summary, what: &str) -> String {
-    format!("{what} — {} at {}", summary.scene.source, summary.resolution)
+    format!("{what} — {} at {}", summary.scene.facts.source, summary.resolution)
 }
 
 /// Lines of `f` per frame for every mode, on a linear or log y axis.

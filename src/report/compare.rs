@@ -119,7 +119,14 @@ pub fn compare(
     }
     let (base_summary, base_rows) = read_results(base)?;
     let (new_summary, new_rows) = read_results(new)?;
-    let workload = |s: &Summary| (s.scene.source.clone(), s.path.source.clone(), s.resolution, s.frames);
+    let workload = |s: &Summary| {
+        (
+            s.scene.facts.source.clone(),
+            s.path.source.clone(),
+            s.resolution,
+            s.frames,
+        )
+    };
     let (a, b) = (workload(&base_summary), workload(&new_summary));
     if a != b {
         return Err(CompareError::Different(format!(

@@ -8,14 +8,14 @@ use crate::measure::ModeSummary;
 pub fn render(s: &Summary) -> String {
     let mut md = String::new();
     let w = &mut md;
-    let _ = writeln!(w, "# occlu bench: {}\n", s.scene.source);
+    let _ = writeln!(w, "# occlu bench: {}\n", s.scene.facts.source);
     let _ = writeln!(
         w,
         "{} objects, {} triangles, {} hierarchy nodes (depth {}); {} frames at {} after {} warm-up frames; path {}.\n",
-        s.scene.objects,
-        group(s.scene.triangles as f64),
-        s.scene.hierarchy.nodes,
-        s.scene.hierarchy.depth,
+        s.scene.facts.objects,
+        group(s.scene.facts.triangles as f64),
+        s.scene.facts.hierarchy.nodes,
+        s.scene.facts.hierarchy.depth,
         s.frames,
         s.resolution,
         s.warmup,
@@ -62,9 +62,9 @@ pub fn render(s: &Summary) -> String {
     if !s.error_measured {
         let _ = writeln!(w, "\nImage error was not measured (--no-error).");
     }
-    if !s.scene.warnings.is_empty() {
+    if !s.scene.facts.warnings.is_empty() {
         let _ = writeln!(w, "\nScene warnings:\n");
-        for warning in &s.scene.warnings {
+        for warning in &s.scene.facts.warnings {
             let _ = writeln!(w, "- {warning}");
         }
     }

@@ -10,8 +10,9 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::gpu::{AdapterReport, Resolution};
-use crate::hierarchy::{HierarchyParams, HierarchyStats};
+use crate::hierarchy::{Hierarchy, HierarchyParams, HierarchyStats};
 use crate::measure::{FrameStats, ModeSummary};
+use crate::scene::Scene;
 
 pub use markdown::render as render_markdown;
 
@@ -74,6 +75,15 @@ impl ToolInfo {
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct SceneSummary {
+    #[serde(flatten)]
+    pub facts: SceneFacts,
+    pub hierarchy_params: HierarchyParams,
+    pub upload_ms: f64,
+}
+
+/// What `occlu info` says of a scene, and summary.json records.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct SceneFacts {
     pub source: String,
     pub objects: usize,
     pub meshes: usize,
@@ -82,11 +92,27 @@ pub struct SceneSummary {
     pub bounds_min: [f64; 3],
     pub bounds_max: [f64; 3],
     pub hierarchy: HierarchyStats,
-    pub hierarchy_params: HierarchyParams,
     pub warnings: Vec<String>,
     pub load_ms: f64,
     pub build_ms: f64,
-    pub upload_ms: f64,
+}
+
+impl SceneFacts {
+    pub fn of(scene: &Scene, hierarchy: &Hierarchy, load_ms: f64, build_ms: f64) -> SceneFacts {
+        SceneFacts {
+            source: scene.source.clone(),
+            objects: scene.objects.len(),
+            meshes: scene.meshes.len(),
+            triangles: scene.triangles(),
+            vertices: scene.vertices.len(),
+            bounds_min: scene.bounds.min.to_array(),
+            bounds_max: scene.bounds.max.to_array(),
+            hierarchy: hierarchy.stats(),
+            warnings: scene.warnings.clone(),
+            load_ms,
+            build_ms,
+        }
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
