@@ -7,13 +7,10 @@ use std::cell::RefCell;
 
 use common::{boxes, run_modes, still};
 use glam::DVec3;
-use occlu::camera::generate::{PathKind, generate};
-use occlu::camera::path::CameraPath;
 use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create};
 use occlu::gpu::{BackendChoice, FrameCtx, GpuContext, GpuError, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::object_set::ObjectSet;
-use occlu::scene::{LoadOptions, SceneSpec, load};
 
 /// Draws nothing: every visible pixel is an error.
 struct DrawNothing;
@@ -192,25 +189,14 @@ fn reference_visible_set_matches_cpu_ray_casting() {
 
 #[test]
 fn exact_modes_show_no_error_and_a_wrong_culler_is_caught() {
-    let scene = load(&SceneSpec::Builtin("city:blocks=2".into()), &LoadOptions::default()).unwrap();
-    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-    let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, 6), "walk").unwrap();
+    let (scene, hierarchy, path) = common::small_city(6);
     for gpu in common::gpus() {
         let mut cullers: Vec<Box<dyn Culler + '_>> = ["dr", "vfc", "oracle"]
             .iter()
             .map(|m| create(m, &scene, &hierarchy, &ModeParams::default()).unwrap())
             .collect();
         cullers.push(Box::new(DropOneVisible(Vec::new())));
-        let out = run_modes(
-            &gpu,
-            &scene,
-            &path,
-            &mut cullers,
-            Resolution {
-                width: 160,
-                height: 120,
-            },
-        );
+        let out = run_modes(&gpu, &scene, &path, &mut cullers, common::SMALL);
         assert_eq!(out.rows.len(), 6 * 4);
         let sum = |mode: &str, f: fn(&occlu::measure::FrameStats) -> u64| -> u64 {
             out.rows.iter().filter(|r| r.mode == mode).map(f).sum()

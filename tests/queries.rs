@@ -8,13 +8,12 @@ use std::cell::RefCell;
 
 use common::{boxes, run_modes, still};
 use glam::DVec3;
-use occlu::camera::generate::{PathKind, generate};
 use occlu::camera::path::CameraPath;
 use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create};
 use occlu::gpu::{BoxTest, BoxVisibility, FrameCtx, QUERIES_PER_SET, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::measure::FrameStats;
-use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
+use occlu::scene::Scene;
 
 const RES: Resolution = Resolution { width: 128, height: 96 };
 
@@ -189,26 +188,14 @@ fn camera_inside_a_room_culls_what_is_outside() {
 
 #[test]
 fn query_modes_are_exact_on_the_city_and_omq_saves_round_trips() {
-    let scene = load(&SceneSpec::Builtin("city:blocks=2".into()), &LoadOptions::default()).unwrap();
-    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-    let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, 8), "walk").unwrap();
+    let (scene, hierarchy, path) = common::small_city(8);
     let modes = ["vfc", "sq", "omq", "oracle"];
     for gpu in common::gpus() {
         let mut cullers: Vec<Box<dyn Culler>> = modes
             .iter()
             .map(|m| create(m, &scene, &hierarchy, &ModeParams::default()).unwrap())
             .collect();
-        let rows = run_modes(
-            &gpu,
-            &scene,
-            &path,
-            &mut cullers,
-            Resolution {
-                width: 160,
-                height: 120,
-            },
-        )
-        .rows;
+        let rows = run_modes(&gpu, &scene, &path, &mut cullers, common::SMALL).rows;
         let sum =
             |mode: &str, f: fn(&FrameStats) -> u64| -> u64 { rows.iter().filter(|r| r.mode == mode).map(f).sum() };
         for r in &rows {
@@ -274,10 +261,7 @@ fn cpu_footprint(target: (DVec3, DVec3), wall: (DVec3, DVec3), res: Resolution, 
 
 #[test]
 fn pixel_counts_match_the_ray_cast_footprint_and_query_counts() {
-    let res = Resolution {
-        width: 160,
-        height: 120,
-    };
+    let res = common::SMALL;
     let wall = (DVec3::new(-5.0, -5.0, -10.1), DVec3::new(0.3, 5.0, -10.0));
     let half_hidden = (DVec3::new(-1.0, -1.0, -14.0), DVec3::new(1.5, 1.0, -12.0));
     let in_front = (DVec3::new(-0.8, 1.2, -7.0), DVec3::new(0.4, 2.0, -6.0));
@@ -337,9 +321,7 @@ fn pixel_counts_match_the_ray_cast_footprint_and_query_counts() {
 
 /// Runs modes labelled like a sweep (`ac[threshold=1e9]`) on the small city.
 fn city_runs(runs: &[(&str, &[&str])], frames: u32) -> Vec<Vec<FrameStats>> {
-    let scene = load(&SceneSpec::Builtin("city:blocks=2".into()), &LoadOptions::default()).unwrap();
-    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-    let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, frames), "walk").unwrap();
+    let (scene, hierarchy, path) = common::small_city(frames);
     common::gpus()
         .iter()
         .map(|gpu| {
@@ -355,17 +337,7 @@ fn city_runs(runs: &[(&str, &[&str])], frames: u32) -> Vec<Vec<FrameStats>> {
                     }) as Box<dyn Culler>
                 })
                 .collect();
-            run_modes(
-                gpu,
-                &scene,
-                &path,
-                &mut cullers,
-                Resolution {
-                    width: 160,
-                    height: 120,
-                },
-            )
-            .rows
+            run_modes(gpu, &scene, &path, &mut cullers, common::SMALL).rows
         })
         .collect()
 }

@@ -234,12 +234,9 @@ impl Culler for AdaptiveCulling<'_> {
         // InitDepthList: the uppermost nodes inside the frustum.
         self.depth_list.clear();
         let root = &nodes[0];
-        let uppermost: Vec<u32> = if root.is_leaf() {
-            vec![0]
-        } else {
-            children(root).collect()
-        };
-        for node in in_frustum(self.hierarchy, uppermost.into_iter(), &frustum, &mut stats) {
+        // The root itself only when it is a leaf (then it has no children).
+        let uppermost = std::iter::once(0).filter(|_| root.is_leaf()).chain(children(root));
+        for node in in_frustum(self.hierarchy, uppermost, &frustum, &mut stats) {
             self.depth_list
                 .push(node, view_depth(&nodes[node as usize].bounds, camera));
         }

@@ -138,6 +138,12 @@ pub fn cube() -> (Vec<[f32; 3]>, Vec<u32>) {
     let p = (0..8)
         .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
         .collect();
+    (p, cube_indices())
+}
+
+/// The 12 triangles of a box whose corners are numbered by bits (bit 0:
+/// max x, bit 1: max y, bit 2: max z).
+pub fn cube_indices() -> Vec<u32> {
     let faces = [
         [0, 2, 6, 4],
         [1, 5, 7, 3],
@@ -146,6 +152,5 @@ pub fn cube() -> (Vec<[f32; 3]>, Vec<u32>) {
         [0, 1, 3, 2],
         [4, 6, 7, 5],
     ];
-    let i = faces.iter().flat_map(|&[a, b, c, d]| [a, b, c, a, c, d]).collect();
-    (p, i)
+    faces.iter().flat_map(|&[a, b, c, d]| [a, b, c, a, c, d]).collect()
 }

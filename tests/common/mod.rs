@@ -8,10 +8,12 @@ use std::process::{Command, Output};
 
 use glam::{DAffine3, DVec3};
 use occlu::bench::{RunOptions, RunOutput, run};
+use occlu::camera::generate::{PathKind, generate};
 use occlu::camera::path::{CameraPath, Interpolation, KeyframeFile, PathFile};
 use occlu::cull::Culler;
 use occlu::gpu::{BackendChoice, GpuContext, Resolution};
-use occlu::scene::{Scene, SceneBuilder};
+use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::scene::{LoadOptions, Scene, SceneBuilder, SceneSpec, load};
 
 /// Runs the `occlu` binary built for these tests.
 pub fn occlu(args: &[&str]) -> Output {
@@ -120,15 +122,7 @@ pub fn boxes(list: &[(DVec3, DVec3)]) -> Scene {
                 )
             })
             .collect();
-        let faces = [
-            [0, 2, 6, 4],
-            [1, 5, 7, 3],
-            [0, 4, 5, 1],
-            [2, 3, 7, 6],
-            [0, 1, 3, 2],
-            [4, 6, 7, 5],
-        ];
-        let idx: Vec<u32> = faces.iter().flat_map(|&[a, b, c, d]| [a, b, c, a, c, d]).collect();
+        let idx = gltf_writer::cube_indices();
         let group = b.add_mesh(&format!("box{k}"), &corners, &idx).unwrap();
         b.add_object(&format!("box{k}"), &group, DAffine3::IDENTITY).unwrap();
     }
@@ -150,3 +144,18 @@ pub fn run_modes(
     };
     run(gpu, scene, path, cullers, &options, &mut |_, _| {}).unwrap()
 }
+
+/// The small built-in city (`city:blocks=2`), its hierarchy, and its street
+/// walk sampled at `frames` frames: the shared workload of the GPU tests.
+pub fn small_city(frames: u32) -> (Scene, Hierarchy, CameraPath) {
+    let scene = load(&SceneSpec::Builtin("city:blocks=2".into()), &LoadOptions::default()).unwrap();
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, frames), "walk").unwrap();
+    (scene, hierarchy, path)
+}
+
+/// The resolution the city tests render at.
+pub const SMALL: Resolution = Resolution {
+    width: 160,
+    height: 120,
+};
