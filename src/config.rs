@@ -90,7 +90,7 @@ impl BenchConfig {
         })?;
         let mut config: BenchConfig = serde_json::from_str(&text).map_err(|e| ConfigError::Json {
             path: name,
-            message: e.to_string(),
+            message: crate::text::one_line(&e.to_string()),
         })?;
         let base = path.parent().unwrap_or(Path::new(""));
         for p in [&mut config.model, &mut config.path, &mut config.out]

@@ -20,3 +20,4 @@ pub mod object_set;
 pub mod picture;
 pub mod report;
 pub mod scene;
+pub mod text;

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::gltf_writer::{GltfWriter, cube};
+use common::gltf_writer::{GltfWriter, cube, instanced_scene};
 use common::{THREE_OBJECTS_OBJ, occlu, stdout, write};
 use glam::DVec3;
 use occlu::scene::{LoadOptions, SceneSpec, load};
@@ -105,27 +105,11 @@ fn large_meshes_are_clustered_and_keep_every_triangle() {
     assert!(area < 400.0 * 1.5, "clusters overlap too much: {area}");
 }
 
-/// A GLB with a cube mesh used by three nodes (one under a scaled parent)
-/// and a two-primitive mesh (a strip of 4 triangles, a list of 1).
-fn instanced_glb() -> Vec<u8> {
-    let mut w = GltfWriter::default();
-    let (p, i) = cube();
-    let cube_mesh = w.mesh("cube", &[(&p, Some(&i), 4)]);
-    let strip: Vec<[f32; 3]> = (0..6).map(|k| [k as f32, (k % 2) as f32, 0.0]).collect();
-    let tri = [[0.0, 0.0, 5.0], [1.0, 0.0, 5.0], [0.0, 1.0, 5.0]];
-    let two = w.mesh("two", &[(&strip, None, 5), (&tri, None, 4)]);
-    let a = w.node(json!({"name": "a", "mesh": cube_mesh, "translation": [10.0, 0.0, 0.0]}));
-    let b = w.node(json!({"name": "b", "mesh": cube_mesh, "translation": [0.0, 0.0, -10.0]}));
-    let child = w.node(json!({"name": "child", "mesh": cube_mesh, "translation": [1.0, 0.0, 0.0]}));
-    let parent = w.node(json!({"name": "parent", "children": [child], "scale": [2.0, 2.0, 2.0]}));
-    let t = w.node(json!({"name": "t", "mesh": two}));
-    w.glb(&[a, b, parent, t])
-}
-
 #[test]
 fn glb_instances_share_one_mesh_and_apply_node_transforms() {
     let dir = tempfile::tempdir().unwrap();
-    let glb = write(dir.path(), "inst.glb", instanced_glb());
+    let (w, roots) = instanced_scene();
+    let glb = write(dir.path(), "inst.glb", w.glb(&roots));
     let s = load_file(&glb).unwrap();
     // 3 cube instances (36) + strip (4) + triangle (1).
     assert_eq!(s.triangles(), 41);

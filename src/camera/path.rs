@@ -8,11 +8,12 @@
 
 use std::path::Path;
 
-use glam::{DQuat, DVec3};
+use glam::{DQuat, DVec3, DVec4};
 use serde::{Deserialize, Serialize};
 
 use super::{Camera, look_rotation};
 use crate::scene::{MAX_COORDINATE, within_range};
+use crate::text::one_line;
 
 /// The file format, as written and read.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -117,11 +118,16 @@ impl CameraPath {
             path: name.clone(),
             error,
         })?;
-        let file: PathFile = serde_json::from_str(&text).map_err(|e| PathError::Json {
-            path: name.clone(),
-            message: e.to_string(),
+        CameraPath::parse(&text, &name)
+    }
+
+    /// Parses and validates path JSON; `source` names it in errors.
+    pub fn parse(text: &str, source: &str) -> Result<CameraPath, PathError> {
+        let file: PathFile = serde_json::from_str(text).map_err(|e| PathError::Json {
+            path: source.to_string(),
+            message: one_line(&e.to_string()),
         })?;
-        CameraPath::from_file(&file, &name)
+        CameraPath::from_file(&file, source)
     }
 
     pub fn from_file(file: &PathFile, source: &str) -> Result<CameraPath, PathError> {
@@ -173,12 +179,15 @@ impl CameraPath {
                     nonzero(vec3(d, "direction").map_err(&at)?, "direction").map_err(&at)?,
                     up,
                 ),
-                (None, None, Some([x, y, z, w])) => {
-                    let q = DQuat::from_xyzw(x, y, z, w);
-                    if !q.is_finite() || q.length_squared() < 1e-12 {
+                (None, None, Some(q)) => {
+                    let q = DVec4::from(q);
+                    // Scaled to unit size first, so huge or tiny components
+                    // cannot overflow or underflow.
+                    let largest = q.abs().max_element();
+                    if !q.is_finite() || largest == 0.0 {
                         return Err(at("orientation must be a finite, non-zero quaternion".into()));
                     }
-                    q.normalize()
+                    DQuat::from_vec4((q / largest).normalize())
                 }
                 _ => return Err(at("give exactly one of target, direction, orientation".into())),
             };
@@ -317,11 +326,21 @@ mod tests {
     use super::*;
 
     fn parse(json: &str) -> Result<CameraPath, PathError> {
-        let file: PathFile = serde_json::from_str(json).map_err(|e| PathError::Json {
-            path: "t".into(),
-            message: e.to_string(),
-        })?;
-        CameraPath::from_file(&file, "t")
+        CameraPath::parse(json, "t")
+    }
+
+    #[test]
+    fn huge_and_tiny_orientations_normalise() {
+        for q in ["[0, 0.5, 0, 1e308]", "[1e-310, 0, 0, 1e-310]"] {
+            let json =
+                format!(r#"{{"frames": 2, "keyframes": [{{"time": 0, "position": [0, 0, 0], "orientation": {q}}}]}}"#);
+            let r = parse(&json).unwrap().keyframes[0].rotation;
+            assert!(r.is_finite() && r.is_normalized(), "{q}: {r:?}");
+        }
+        assert!(
+            parse(r#"{"frames": 2, "keyframes": [{"time": 0, "position": [0, 0, 0], "orientation": [0, 0, 0, 0]}]}"#)
+                .is_err()
+        );
     }
 
     const TWO_KEYS: &str = r#"{"frames": 11, "keyframes": [

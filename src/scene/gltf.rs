@@ -11,6 +11,7 @@ use glam::{DAffine3, DMat4, DVec3};
 use gltf::mesh::Mode;
 
 use super::{MeshGroup, SceneBuilder, SceneError};
+use crate::text::one_line;
 
 pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(), SceneError> {
     let parse_error = |message: String| SceneError::Parse {
@@ -20,7 +21,7 @@ pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(),
     let invalid = |e: gltf::Error| {
         let text = e.to_string();
         let detail = text.trim_start_matches("invalid glTF: ").trim_end_matches([';', ' ']);
-        parse_error(format!("invalid glTF: {detail}"))
+        parse_error(format!("invalid glTF: {}", one_line(detail)))
     };
     // gltf-json's validator indexes primitive accessors without a bounds
     // check, so those are checked first; validation then also refuses files
@@ -200,7 +201,7 @@ fn load_mesh(
     use gltf::accessor::{DataType, Dimensions};
     let mesh_name = mesh
         .name()
-        .map(str::to_string)
+        .map(one_line)
         .unwrap_or_else(|| format!("mesh{}", mesh.index()));
     let buffer_bytes = buffers.iter().map(Vec::len).sum();
     let mut groups = Vec::new();

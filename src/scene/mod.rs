@@ -17,6 +17,7 @@ use std::path::{Path, PathBuf};
 use glam::{DAffine3, DVec3};
 
 use crate::bounds::Aabb;
+use crate::text::one_line;
 pub use validate::{GeometryError, MAX_COORDINATE, within_range};
 
 /// Default triangle budget of one cluster: meshes above it are split.
@@ -129,19 +130,36 @@ pub fn load(spec: &SceneSpec, options: &LoadOptions) -> Result<Scene, SceneError
 }
 
 fn load_file(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    let loader: fn(&Path, &[u8], &mut SceneBuilder) -> Result<(), SceneError> = match ext.as_deref() {
-        Some("obj") => obj::load,
-        Some("gltf") | Some("glb") => gltf::load,
-        _ => return Err(SceneError::UnsupportedFormat { path: path.into() }),
-    };
+    // The format is checked before reading, so a wrong file is not read whole.
+    loader_for(path)?;
     let bytes = std::fs::read(path).map_err(|error| SceneError::Io {
         path: path.into(),
         error,
     })?;
+    load_bytes(path, &bytes, options)
+}
+
+/// Parses a model already in memory; `path` names it in errors, chooses the
+/// format by its extension, and anchors a glTF's relative buffer URIs.
+pub fn load_bytes(path: &Path, bytes: &[u8], options: &LoadOptions) -> Result<Scene, SceneError> {
+    if options.cluster_triangles == 0 {
+        return Err(SceneError::ZeroClusterSize);
+    }
+    let loader = loader_for(path)?;
     let mut builder = SceneBuilder::new(path.display().to_string(), options.cluster_triangles);
-    loader(path, &bytes, &mut builder)?;
+    loader(path, bytes, &mut builder)?;
     builder.finish().ok_or_else(|| SceneError::Empty { path: path.into() })
+}
+
+type Loader = fn(&Path, &[u8], &mut SceneBuilder) -> Result<(), SceneError>;
+
+fn loader_for(path: &Path) -> Result<Loader, SceneError> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("obj") => Ok(obj::load),
+        Some("gltf") | Some("glb") => Ok(gltf::load),
+        _ => Err(SceneError::UnsupportedFormat { path: path.into() }),
+    }
 }
 
 /// The clusters one source mesh was split into, ready to be instantiated.
@@ -184,6 +202,7 @@ impl SceneBuilder {
     /// Degenerate triangles are dropped and counted; a mesh left with no
     /// triangles gives an empty group.
     pub fn add_mesh(&mut self, name: &str, positions: &[DVec3], indices: &[u32]) -> Result<MeshGroup, GeometryError> {
+        let name = &one_line(name);
         let triangles = validate::triangles(name, positions, indices)?;
         if triangles.degenerate > 0 {
             self.degenerate.push((name.to_string(), triangles.degenerate));
@@ -217,6 +236,7 @@ impl SceneBuilder {
     /// transform that is not finite or puts geometry beyond
     /// [`MAX_COORDINATE`] is an error naming the object.
     pub fn add_object(&mut self, name: &str, group: &MeshGroup, transform: DAffine3) -> Result<(), GeometryError> {
+        let name = &one_line(name);
         let split = group.clusters.len() > 1;
         for (i, &(mesh, origin)) in group.clusters.iter().enumerate() {
             let m = &self.meshes[mesh as usize];

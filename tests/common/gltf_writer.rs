@@ -1,6 +1,7 @@
 //! A minimal glTF/GLB writer for test fixtures: meshes of positions and
 //! indices, nodes with transforms and children.
 
+use base64::Engine;
 use serde_json::{Value, json};
 
 /// Positions, optional indices and the glTF primitive mode (4: triangles,
@@ -128,9 +129,35 @@ impl GltfWriter {
             .to_string()
     }
 
+    /// A self-contained .gltf: the buffer as a base64 data URI.
+    pub fn gltf_embedded(&self, roots: &[usize]) -> String {
+        let data = base64::engine::general_purpose::STANDARD.encode(&self.bin);
+        let uri = format!("data:application/octet-stream;base64,{data}");
+        self.document(json!({"byteLength": self.bin.len(), "uri": uri}), roots)
+            .to_string()
+    }
+
     pub fn bin(&self) -> &[u8] {
         &self.bin
     }
+}
+
+/// A cube mesh used by three nodes (one under a scaled parent) and a
+/// two-primitive mesh (a strip of 4 triangles, a list of 1): 41 triangles,
+/// 5 objects. Returns the writer and the scene's root nodes.
+pub fn instanced_scene() -> (GltfWriter, Vec<usize>) {
+    let mut w = GltfWriter::default();
+    let (p, i) = cube();
+    let cube_mesh = w.mesh("cube", &[(&p, Some(&i), 4)]);
+    let strip: Vec<[f32; 3]> = (0..6).map(|k| [k as f32, (k % 2) as f32, 0.0]).collect();
+    let tri = [[0.0, 0.0, 5.0], [1.0, 0.0, 5.0], [0.0, 1.0, 5.0]];
+    let two = w.mesh("two", &[(&strip, None, 5), (&tri, None, 4)]);
+    let a = w.node(json!({"name": "a", "mesh": cube_mesh, "translation": [10.0, 0.0, 0.0]}));
+    let b = w.node(json!({"name": "b", "mesh": cube_mesh, "translation": [0.0, 0.0, -10.0]}));
+    let child = w.node(json!({"name": "child", "mesh": cube_mesh, "translation": [1.0, 0.0, 0.0]}));
+    let parent = w.node(json!({"name": "parent", "children": [child], "scale": [2.0, 2.0, 2.0]}));
+    let t = w.node(json!({"name": "t", "mesh": two}));
+    (w, vec![a, b, parent, t])
 }
 
 /// A unit cube at the origin: 8 vertices, 12 triangles.

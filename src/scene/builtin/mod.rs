@@ -3,7 +3,7 @@
 //! and deterministic, so every run of a spec gives the same scene.
 
 mod city;
-mod shapes;
+pub(crate) mod shapes;
 
 use super::{LoadOptions, Scene, SceneBuilder, SceneError};
 
@@ -80,7 +80,7 @@ fn read_params(params: &Params, keys: &mut [(&str, &mut u64, std::ops::RangeIncl
 
 /// A small seeded generator (SplitMix64): scenes must be reproducible from
 /// their spec alone, on every platform.
-pub(crate) struct Rng(u64);
+pub struct Rng(u64);
 
 impl Rng {
     pub fn new(seed: u64) -> Self {

@@ -1,0 +1,346 @@
+//! Fuzz-style tests of everything that reads user files: seeded random
+//! mutations of valid OBJ, glTF, GLB and camera-path inputs, and inputs
+//! generated from each format's grammar with hostile numbers, go through the
+//! loaders. Every input must end in a model or a clear error, never a panic;
+//! what loads must be usable (finite bounds, a hierarchy, finite cameras).
+//!
+//! Bounded and reproducible: a fixed seed and a fixed number of inputs per
+//! corpus entry. A failing input is written to the temporary directory and
+//! named in the failure, so it can be replayed.
+
+mod common;
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::Path;
+
+use common::THREE_OBJECTS_OBJ;
+use common::gltf_writer::instanced_scene;
+use occlu::camera::path::CameraPath;
+use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::scene::builtin::Rng;
+use occlu::scene::{LoadOptions, load_bytes};
+
+/// Mutated inputs per corpus entry.
+const MUTANTS: u32 = 5000;
+/// Grammar-generated inputs per format.
+const GENERATED: u32 = 5000;
+
+/// Numbers that break parsers and arithmetic.
+const HOSTILE_NUMBERS: &[&str] = &[
+    "0",
+    "-0",
+    "-1",
+    "1e308",
+    "-1e308",
+    "1e-320",
+    "3.4e38",
+    "1e19",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "4294967295",
+    "4294967296",
+    "2147483648",
+    "18446744073709551615",
+    "99999999999999999999999",
+    "0.5",
+    "1e",
+    "-",
+    "",
+];
+
+/// Bytes and tokens that break structure.
+const HOSTILE_TOKENS: &[&str] = &[
+    "\0", "\n", "\r", "{", "}", "[", "]", ",", ":", "\"", "/", "\\", "null", "[]", "{}", "\"\"", "-1", "#", "f ", "v ",
+    "o ", "g ", "1//", "é", "\u{FEFF}",
+];
+
+fn pick<'a>(rng: &mut Rng, list: &[&'a str]) -> &'a str {
+    list[rng.int(0, list.len() as u32 - 1) as usize]
+}
+
+fn position(rng: &mut Rng, len: usize) -> usize {
+    if len == 0 { 0 } else { rng.int(0, len as u32) as usize }
+}
+
+/// One to four random edits: bit flips, deletions, duplications, hostile
+/// tokens, numbers replaced by hostile ones, splices from another input.
+fn mutate(rng: &mut Rng, input: &[u8], other: &[u8]) -> Vec<u8> {
+    let mut out = input.to_vec();
+    for _ in 0..rng.int(1, 4) {
+        let at = position(rng, out.len());
+        match rng.int(0, 6) {
+            0 if !out.is_empty() => {
+                let i = at.min(out.len() - 1);
+                out[i] ^= 1 << rng.int(0, 7);
+            }
+            1 => {
+                let end = (at + rng.int(1, 16) as usize).min(out.len());
+                out.drain(at..end);
+            }
+            2 => {
+                let end = (at + rng.int(1, 64) as usize).min(out.len());
+                let chunk = out[at..end].to_vec();
+                let to = position(rng, out.len());
+                out.splice(to..to, chunk);
+            }
+            3 => {
+                let token = pick(rng, HOSTILE_TOKENS).as_bytes().to_vec();
+                out.splice(at..at, token);
+            }
+            4 => replace_number(rng, &mut out, at),
+            5 => out.truncate(at),
+            _ => {
+                let from = position(rng, other.len());
+                let end = (from + rng.int(1, 64) as usize).min(other.len());
+                out.splice(at..at, other[from..end].iter().copied());
+            }
+        }
+    }
+    out
+}
+
+/// Replaces the first number at or after `from` with a hostile one.
+fn replace_number(rng: &mut Rng, text: &mut Vec<u8>, from: usize) {
+    let Some(start) = text[from..].iter().position(u8::is_ascii_digit).map(|i| i + from) else {
+        return;
+    };
+    let is_number = |b: &u8| b.is_ascii_digit() || matches!(b, b'.' | b'e' | b'E' | b'-' | b'+');
+    let end = text[start..]
+        .iter()
+        .position(|b| !is_number(b))
+        .map_or(text.len(), |i| i + start);
+    let number = pick(rng, HOSTILE_NUMBERS).as_bytes().to_vec();
+    text.splice(start..end, number);
+}
+
+/// Runs `load` on `input`; a panic fails the test, naming a file that holds
+/// the input.
+fn must_not_panic(kind: &str, case: u32, input: &[u8], load: impl FnOnce(&[u8])) {
+    if catch_unwind(AssertUnwindSafe(|| load(input))).is_err() {
+        let saved = std::env::temp_dir().join(format!("occlu-fuzz-{kind}-{case}.bin"));
+        std::fs::write(&saved, input).expect("the failing input is saved");
+        panic!("{kind} input {case} panicked; it is saved in {}", saved.display());
+    }
+}
+
+/// Loads a model from bytes; what loads must have finite bounds and a
+/// hierarchy that covers every object.
+fn load_model(dir: &Path, file_name: &str, bytes: &[u8]) -> Result<(), String> {
+    let scene = load_bytes(&dir.join(file_name), bytes, &LoadOptions::default()).map_err(|e| e.to_string())?;
+    assert!(scene.bounds.min.is_finite() && scene.bounds.max.is_finite());
+    assert!(scene.objects.iter().all(|o| o.triangles > 0));
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    assert_eq!(hierarchy.objects.len(), scene.objects.len());
+    Ok(())
+}
+
+/// Parses a path; what parses must give finite cameras for every frame
+/// sampled.
+fn load_path(bytes: &[u8]) -> Result<(), String> {
+    let text = String::from_utf8_lossy(bytes);
+    let path = CameraPath::parse(&text, "fuzz").map_err(|e| e.to_string())?;
+    for frame in [0, 1, path.frames / 2, path.frames.saturating_sub(1)] {
+        let camera = path.camera(frame, 4.0 / 3.0);
+        assert!(camera.eye.is_finite() && camera.rotation.is_finite() && camera.fov_y.is_finite());
+    }
+    Ok(())
+}
+
+/// Every error must be one line: it is what the CLI prints.
+fn check_error(result: Result<(), String>, errors: &mut u32) {
+    if let Err(message) = result {
+        assert!(
+            !message.is_empty() && !message.contains('\n'),
+            "multi-line error: {message}"
+        );
+        *errors += 1;
+    }
+}
+
+/// Mutants of every corpus entry, with the outcome counts for sanity.
+fn fuzz_corpus(kind: &str, corpus: &[Vec<u8>], seed: u64, load: &dyn Fn(&[u8]) -> Result<(), String>) -> (u32, u32) {
+    let mut rng = Rng::new(seed);
+    let (mut loaded, mut errors) = (0, 0);
+    for (k, input) in corpus.iter().enumerate() {
+        // The seed input itself must load.
+        load(input).unwrap_or_else(|e| panic!("{kind} corpus entry {k} does not load: {e}"));
+        let other = &corpus[(k + 1) % corpus.len()];
+        for i in 0..MUTANTS {
+            let case = k as u32 * MUTANTS + i;
+            let mutant = mutate(&mut rng, input, other);
+            must_not_panic(kind, case, &mutant, |m| {
+                let result = load(m);
+                loaded += u32::from(result.is_ok());
+                check_error(result, &mut errors);
+            });
+        }
+    }
+    (loaded, errors)
+}
+
+fn obj_corpus() -> Vec<Vec<u8>> {
+    let rich = "# normals, texture coordinates, negative indices, polygons, materials\n\
+        mtllib missing.mtl\no a\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0 1.0\nvt 0 0\nvn 0 0 1\n\
+        usemtl red\nf 1/1/1 2/1/1 3/1/1 4/1/1\ng b\nv 5 5 5\nv 6 5 5\nv 5 6 5\nf -3 -2 -1\n\
+        l 1 2\np 3\ns off\nf 1//1 2//1 5//1\n";
+    vec![THREE_OBJECTS_OBJ.as_bytes().to_vec(), rich.as_bytes().to_vec()]
+}
+
+#[test]
+fn mutated_obj_files_load_or_fail_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let (loaded, errors) = fuzz_corpus("obj", &obj_corpus(), 1, &|b| load_model(dir.path(), "fuzz.obj", b));
+    // Both outcomes occur: the mutations neither break everything nor nothing.
+    assert!(loaded > 100 && errors > 100, "loaded {loaded}, errors {errors}");
+}
+
+#[test]
+fn mutated_gltf_and_glb_files_load_or_fail_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, roots) = instanced_scene();
+    let gltf = [w.gltf_embedded(&roots).into_bytes()];
+    let (loaded, errors) = fuzz_corpus("gltf", &gltf, 2, &|b| load_model(dir.path(), "fuzz.gltf", b));
+    assert!(loaded > 20 && errors > 100, "gltf: loaded {loaded}, errors {errors}");
+    let glb = [w.glb(&roots)];
+    let (loaded, errors) = fuzz_corpus("glb", &glb, 3, &|b| load_model(dir.path(), "fuzz.glb", b));
+    assert!(loaded > 20 && errors > 100, "glb: loaded {loaded}, errors {errors}");
+}
+
+fn path_corpus() -> Vec<Vec<u8>> {
+    let sample = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/paths/city-corner.json")).unwrap();
+    let frames = br#"{"frames": 5, "near": 0.01, "up": [0, 0, 1], "interpolation": "linear", "keyframes": [
+        {"time": -1, "position": [1e6, 0, 0], "target": [0, 0, 0], "up": [0, 1, 0]},
+        {"time": 3, "position": [0, 1, 0], "direction": [0, -1, 0]}]}"#;
+    vec![sample, frames.to_vec()]
+}
+
+#[test]
+fn mutated_camera_paths_parse_or_fail_with_one_line() {
+    let (loaded, errors) = fuzz_corpus("path", &path_corpus(), 4, &load_path);
+    assert!(loaded > 20 && errors > 100, "loaded {loaded}, errors {errors}");
+}
+
+/// A number: usually plain, hostile in one of `odds` cases.
+fn number(rng: &mut Rng, odds: u32, lo: f64, hi: f64) -> String {
+    if rng.int(1, odds) == 1 {
+        pick(rng, HOSTILE_NUMBERS).to_string()
+    } else {
+        format!("{}", rng.range(lo, hi))
+    }
+}
+
+/// How often an element is hostile: half the inputs are clean apart from
+/// rare slips, so some load and the loaders' checks after parsing run too.
+fn odds(rng: &mut Rng) -> u32 {
+    if rng.int(0, 1) == 0 { 200 } else { 8 }
+}
+
+/// Random OBJ text from the format's grammar: vertices with hostile
+/// coordinates, faces with indices in and out of range (negative, zero,
+/// huge), objects and groups.
+fn generated_obj(rng: &mut Rng) -> String {
+    let odds = odds(rng);
+    let mut text = String::new();
+    let mut vertices = 0;
+    for _ in 0..rng.int(1, 30) {
+        let line = match rng.int(0, 9) {
+            0..=4 => {
+                vertices += 1;
+                let xyz: Vec<String> = (0..3).map(|_| number(rng, odds, -1e3, 1e3)).collect();
+                format!("v {}", xyz.join(" "))
+            }
+            5..=7 => {
+                let corners: Vec<String> = (0..rng.int(3, 5))
+                    .map(|_| match rng.int(1, odds) {
+                        1 => pick(rng, HOSTILE_NUMBERS).to_string(),
+                        2 => format!("-{}", rng.int(1, 12)),
+                        3 => format!("{}/{}/{}", rng.int(1, 12), rng.int(0, 3), rng.int(0, 3)),
+                        _ => format!("{}", rng.int(1, vertices.max(1))),
+                    })
+                    .collect();
+                format!("f {}", corners.join(" "))
+            }
+            8 => format!("o obj{}", rng.int(0, 3)),
+            _ if rng.int(1, odds) == 1 => format!("g {}", pick(rng, HOSTILE_TOKENS)),
+            _ => "g group".to_string(),
+        };
+        text += &line;
+        text.push('\n');
+    }
+    text
+}
+
+/// Random path JSON: keyframes whose fields may be missing, hostile or of
+/// the wrong shape.
+fn generated_path(rng: &mut Rng) -> String {
+    let odds = odds(rng);
+    let vector = |rng: &mut Rng| {
+        let n = if rng.int(1, odds) == 1 { rng.int(0, 4) } else { 3 };
+        let parts: Vec<String> = (0..n).map(|_| number(rng, odds, -100.0, 100.0)).collect();
+        format!("[{}]", parts.join(","))
+    };
+    let keys: Vec<String> = (0..rng.int(1, 5))
+        .map(|k| {
+            let time = if rng.int(1, odds) == 1 {
+                number(rng, 1, 0.0, 0.0)
+            } else {
+                k.to_string()
+            };
+            let mut fields = vec![format!("\"time\": {time}"), format!("\"position\": {}", vector(rng))];
+            let views = ["target", "direction", "orientation"];
+            let view = views[rng.int(0, 2) as usize];
+            let value = if view == "orientation" {
+                let parts: Vec<String> = (0..4).map(|_| number(rng, odds, -1.0, 1.0)).collect();
+                format!("[{}]", parts.join(","))
+            } else {
+                vector(rng)
+            };
+            fields.push(format!("\"{view}\": {value}"));
+            if rng.int(1, odds) == 1 {
+                fields.push(format!("\"up\": {}", vector(rng)));
+            }
+            if rng.int(0, 3) == 0 {
+                fields.push(format!("\"fov_y_deg\": {}", number(rng, odds, 1.0, 170.0)));
+            }
+            format!("{{{}}}", fields.join(", "))
+        })
+        .collect();
+    let count = if rng.int(1, odds) == 1 {
+        pick(rng, HOSTILE_NUMBERS).to_string()
+    } else {
+        rng.int(1, 50).to_string()
+    };
+    let mut top = vec![
+        format!("\"keyframes\": [{}]", keys.join(", ")),
+        format!("\"frames\": {count}"),
+    ];
+    if rng.int(0, 2) == 0 {
+        top.push(format!("\"near\": {}", number(rng, odds, 1e-3, 1.0)));
+    }
+    format!("{{{}}}", top.join(", "))
+}
+
+#[test]
+fn generated_obj_and_path_inputs_load_or_fail_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = Rng::new(5);
+    let (mut loaded, mut errors) = ([0; 2], [0; 2]);
+    for case in 0..GENERATED {
+        let obj = generated_obj(&mut rng);
+        must_not_panic("generated-obj", case, obj.as_bytes(), |b| {
+            let result = load_model(dir.path(), "generated.obj", b);
+            loaded[0] += u32::from(result.is_ok());
+            check_error(result, &mut errors[0]);
+        });
+        let path = generated_path(&mut rng);
+        must_not_panic("generated-path", case, path.as_bytes(), |b| {
+            let result = load_path(b);
+            loaded[1] += u32::from(result.is_ok());
+            check_error(result, &mut errors[1]);
+        });
+    }
+    assert!(loaded.iter().all(|&n| n > 50), "loaded {loaded:?}, errors {errors:?}");
+    assert!(errors.iter().all(|&n| n > 50), "loaded {loaded:?}, errors {errors:?}");
+}
