@@ -15,7 +15,7 @@ use crate::camera::Camera;
 use crate::camera::generate::default_path;
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
-use crate::cull::{Culler, FrameInput, Labeled, MODES, ModeError, PreviousFrame, create};
+use crate::cull::{Culler, FrameInput, Labeled, ModeError, ModeInfo, PreviousFrame, create};
 use crate::gpu::{
     AdapterReport, FrameCtx, FrameResources, GpuContext, GpuError, GpuScene, GpuTimer, QueryPool, RenderTargets,
     Resolution, SceneRenderer,
@@ -209,6 +209,7 @@ impl<'a> Session<'a> {
                 query_wait_ms: ms(outcome.counters.query_wait),
                 query_gpu_ms: outcome.counters.query_gpu.map(ms),
                 error_pixels: None,
+                max_depth_error: None,
                 missed_objects: None,
                 visible_objects: visible.as_ref().map(|v| v.len() as u64),
             });
@@ -233,7 +234,8 @@ impl<'a> Session<'a> {
                 let mut row = row.expect("every mode ran this frame");
                 row.gpu_ms = gpu_ms.as_ref().map(|t| t[k]);
                 if let (Some(wrong), Some(visible)) = (&wrong, &visible) {
-                    row.error_pixels = Some(wrong[k]);
+                    row.error_pixels = Some(wrong[k].wrong_pixels);
+                    row.max_depth_error = Some(f64::from(wrong[k].max_difference));
                     row.missed_objects = Some(visible.count_missing_from(&self.drawn[k]) as u64);
                 }
                 self.previous[k] = Some(PreviousFrame {
@@ -243,6 +245,15 @@ impl<'a> Session<'a> {
                 row
             })
             .collect()
+    }
+
+    /// The reference depth of the last frame, row-major from the top-left
+    /// pixel; `None` when the session renders no reference.
+    pub fn reference_depth(&mut self) -> Option<Vec<f32>> {
+        let meter = self.meter.as_mut()?;
+        let mut depth = Vec::new();
+        meter.read_reference_depth(self.gpu, &self.targets, &mut depth);
+        Some(depth)
     }
 }
 
@@ -336,21 +347,17 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
     let mut skipped = Vec::new();
     let mut runs = plan.runs();
     runs.retain(|run| {
-        let info = MODES
-            .iter()
-            .find(|m| m.name == run.mode)
-            .expect("plans hold known modes");
-        let unsupported = info.needs_pixel_counts && !gpu.pixel_counts;
-        if unsupported && !skipped.iter().any(|s: &SkippedMode| s.mode == run.mode) {
-            let reason =
-                "the adapter cannot count visible pixels (needs SHADER_EARLY_DEPTH_TEST and fragment storage writes)";
+        let Some(reason) = ModeInfo::named(run.mode).unsupported_on(&gpu) else {
+            return true;
+        };
+        if !skipped.iter().any(|s: &SkippedMode| s.mode == run.mode) {
             events(BenchEvent::Skipped { mode: run.mode, reason });
             skipped.push(SkippedMode {
                 mode: run.mode.to_string(),
                 reason: reason.to_string(),
             });
         }
-        !unsupported
+        false
     });
     let mut cullers = runs
         .iter()
@@ -380,7 +387,7 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
         .zip(&cullers)
         .map(|(run, culler)| ModeDescription {
             name: run.label.clone(),
-            conservative: MODES.iter().any(|m| m.name == run.mode && m.conservative),
+            conservative: ModeInfo::named(run.mode).conservative,
             parameters: culler.parameters(),
         })
         .collect();

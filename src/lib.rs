@@ -6,7 +6,8 @@
 //! the device, the scene's buffers and the per-frame operations, [`cull`]
 //! holds one file per culling mode, [`measure`] computes error and
 //! statistics, [`report`] writes the result files and charts, [`bench`]
-//! runs the whole flow, and [`picture`] renders one frame to look at.
+//! runs the whole flow, [`picture`] renders one frame to look at, and
+//! [`stress`] runs the numerically hard cases.
 
 pub mod bench;
 pub mod bounds;
@@ -20,4 +21,5 @@ pub mod object_set;
 pub mod picture;
 pub mod report;
 pub mod scene;
+pub mod stress;
 pub mod text;

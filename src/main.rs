@@ -20,6 +20,7 @@ use occlu::report::compare::{CompareError, Metric};
 use occlu::report::{ReportError, SceneFacts};
 use occlu::scene::builtin::SCENES;
 use occlu::scene::{LoadOptions, Scene, SceneError, SceneSpec, load};
+use occlu::stress::{StressError, StressEvent};
 
 #[derive(Parser)]
 #[command(
@@ -70,6 +71,12 @@ enum Command {
     /// depth complexity), optionally beside a bird's-eye view marking its
     /// frustum and the boxes it culled.
     Render(RenderArgs),
+    /// Run the built-in matrix of numerically hard cases (eye inside boxes,
+    /// near-plane crossings, 1e7 offsets, tiny and huge scales, flat boxes,
+    /// coplanar walls, 1° and 170° fields of view, vertical views,
+    /// teleports) through every mode against the DR reference; exit 1 when a
+    /// conservative mode shows any error or a moved case renders differently.
+    Stress(StressArgs),
     /// Draw a run's charts (and report.md) again from its frames.csv and summary.json.
     Plot {
         /// A bench output directory.
@@ -198,6 +205,28 @@ struct RenderArgs {
 }
 
 #[derive(Args)]
+struct StressArgs {
+    /// Modes to run, comma-separated, or "all" [default: all].
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    modes: Option<Vec<String>>,
+    /// Cases to run, comma-separated [default: all]; --list shows them.
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    cases: Vec<String>,
+    /// Print the cases and exit.
+    #[arg(long)]
+    list: bool,
+    /// Render size [default: 400x300].
+    #[arg(long, value_name = "WxH")]
+    resolution: Option<Resolution>,
+    /// Graphics API; auto honours WGPU_BACKEND [default: auto].
+    #[arg(long, value_enum)]
+    backend: Option<BackendChoice>,
+    /// Also write stress.md and stress.json here.
+    #[arg(long, short, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+#[derive(Args)]
 struct InfoArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -251,6 +280,7 @@ fn main() -> ExitCode {
                     output,
                 },
         } => path_gen(scene, kind, frames, output).map(|()| ExitCode::SUCCESS),
+        Command::Stress(args) => stress(args),
         Command::Plot { run_dir } => plot(&run_dir).map(|()| ExitCode::SUCCESS),
         Command::Render(args) => render(args).map(|()| ExitCode::SUCCESS),
         Command::Compare {
@@ -263,7 +293,7 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("occlu: error: {e:#}");
+            eprintln!("occlu: error: {}", occlu::text::one_line(&format!("{e:#}")));
             ExitCode::from(if is_input_error(&e) { 2 } else { 1 })
         }
     }
@@ -278,6 +308,7 @@ fn is_input_error(e: &anyhow::Error) -> bool {
             || c.is::<ReportError>()
             || c.is::<CompareError>()
             || c.is::<ModeError>()
+            || c.downcast_ref::<StressError>().is_some_and(StressError::is_input_error)
             || c.downcast_ref::<PictureError>()
                 .is_some_and(PictureError::is_input_error)
     })
@@ -351,6 +382,60 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
     );
     Ok(())
 }
+
+fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
+    let modes = parse_modes(args.modes.as_deref().unwrap_or(&["all".to_string()]))?;
+    let cases = occlu::stress::select(&args.cases)?;
+    if args.list {
+        for case in &cases {
+            println!("{:<15} {} frames: {}", case.name, case.cameras.len(), case.summary);
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    if let Some(out) = &args.out {
+        occlu::report::prepare_output(out)?;
+    }
+    let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
+    eprintln!("adapter: {}", gpu.adapter);
+    let bar = ProgressBar::new(0).with_style(
+        ProgressStyle::with_template("{prefix:<15} [{bar:32}] {pos}/{len} frames, {elapsed} elapsed")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    let resolution = args.resolution.unwrap_or(STRESS_RESOLUTION);
+    let report = occlu::stress::run(&gpu, &cases, &modes, resolution, &mut |event| match event {
+        StressEvent::Skipped { mode, reason } => eprintln!("skipped: {mode}: {reason}"),
+        StressEvent::Case { case } => bar.set_prefix(case.name.clone()),
+        StressEvent::Frame { done, total } => {
+            bar.set_length(u64::from(total));
+            bar.set_position(u64::from(done));
+        }
+    })?;
+    bar.finish_and_clear();
+    let markdown = occlu::stress::render_markdown(&report);
+    print!("{markdown}");
+    if let Some(out) = &args.out {
+        let write = |name: &str, text: String| {
+            let path = out.join(name);
+            std::fs::write(&path, text).map_err(|error| ReportError { path, error })
+        };
+        write("stress.md", markdown)?;
+        write("stress.json", serde_json::to_string_pretty(&report)? + "\n")?;
+        eprintln!("results: stress.md and stress.json in {}", out.display());
+    }
+    let (_, failed) = report.verdicts();
+    Ok(if failed == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+/// Small: the cases are about precision, not pixel throughput.
+const STRESS_RESOLUTION: Resolution = Resolution {
+    width: 400,
+    height: 300,
+};
 
 fn compare(base: &std::path::Path, new: &std::path::Path, pct: f64, metrics: &[Metric]) -> anyhow::Result<ExitCode> {
     let metrics = if metrics.is_empty() { &Metric::ALL[..] } else { metrics };

@@ -152,6 +152,35 @@ fn bad_input_gets_one_clear_line() {
     let started = std::time::Instant::now();
     fails_with(&["bench", "--out", &blocked], 2, &["blocker"]);
     assert!(started.elapsed().as_secs() < 5, "refused before loading the city");
+    fails_with(
+        &["stress", "--cases", "bogus"],
+        2,
+        &["unknown stress case 'bogus'", "teleport"],
+    );
+    fails_with(&["stress", "--modes", "dr,nope"], 2, &["unknown mode 'nope'"]);
+    fails_with(&["stress", "--resolution", "0x3"], 2, &["resolution"]);
+    fails_with(&["stress", "--out", &blocked], 2, &["blocker"]);
+    // A name with a newline in a file stays on the error's one line.
+    let newline_path = write(
+        dir.path(),
+        "nl.json",
+        "{\"frames\": 2, \"keyframes\": [], \"bad\\nfield\": 1}",
+    );
+    fails_with(
+        &["bench", "--path", &s(&newline_path), "--out", &out],
+        2,
+        &["bad\\nfield"],
+    );
+}
+
+#[test]
+fn stress_lists_its_cases() {
+    let out = occlu(&["stress", "--list"]);
+    assert!(out.status.success());
+    let text = stdout(&out);
+    for case in ["inside-leaf", "near-crossing", "offset-1e7", "fov-1 ", "teleport"] {
+        assert!(text.contains(case), "--list lacks {case}: {text}");
+    }
 }
 
 #[test]

@@ -5,7 +5,7 @@ mod common;
 
 use std::cell::RefCell;
 
-use common::{boxes, run_modes, still};
+use common::{DropOneVisible, boxes, run_modes, still};
 use glam::DVec3;
 use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create};
 use occlu::gpu::{BackendChoice, FrameCtx, GpuContext, GpuError, Resolution};
@@ -19,24 +19,6 @@ impl Culler for DrawNothing {
         "nothing"
     }
     fn frame(&mut self, _: &mut FrameCtx, _: &FrameInput) -> TraversalStats {
-        TraversalStats::default()
-    }
-}
-
-/// Draws the reference visible set minus its first object: a culler that
-/// wrongly culls one visible object per frame.
-struct DropOneVisible(Vec<u32>);
-impl Culler for DropOneVisible {
-    fn name(&self) -> &str {
-        "drop-one"
-    }
-    fn needs_reference(&self) -> bool {
-        true
-    }
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
-        self.0.clear();
-        self.0.extend(input.reference_visible.unwrap().iter().skip(1));
-        ctx.draw(&self.0);
         TraversalStats::default()
     }
 }

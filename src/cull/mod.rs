@@ -19,7 +19,7 @@ use std::fmt::Display;
 use std::str::FromStr;
 
 use crate::camera::Camera;
-use crate::gpu::{FrameCtx, Resolution};
+use crate::gpu::{FrameCtx, GpuContext, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
@@ -98,6 +98,24 @@ pub struct ModeInfo {
     /// Whether it counts visible pixels per box (`GpuContext::pixel_counts`);
     /// such a mode is skipped, with a message, on adapters without them.
     pub needs_pixel_counts: bool,
+}
+
+impl ModeInfo {
+    /// The mode named `name`, which must be one of [`MODES`] (mode names are
+    /// checked by [`parse_modes`] before anything runs).
+    pub fn named(name: &str) -> &'static ModeInfo {
+        MODES
+            .iter()
+            .find(|m| m.name == name)
+            .unwrap_or_else(|| panic!("'{name}' is not in MODES"))
+    }
+
+    /// Why the mode cannot run on `gpu`, or `None` when it can.
+    pub fn unsupported_on(&self, gpu: &GpuContext) -> Option<&'static str> {
+        (self.needs_pixel_counts && !gpu.pixel_counts).then_some(
+            "the adapter cannot count visible pixels (needs SHADER_EARLY_DEPTH_TEST and fragment storage writes)",
+        )
+    }
 }
 
 pub struct ParamInfo {

@@ -5,7 +5,7 @@ mod summary;
 
 use serde::{Deserialize, Serialize};
 
-pub use reference::ErrorMeter;
+pub use reference::{DepthError, ErrorMeter};
 pub use summary::{Distribution, ModeDescription, ModeSummary, summarize};
 
 /// One row of frames.csv: one mode, one frame. Columns are in field order.
@@ -44,6 +44,11 @@ pub struct FrameStats {
     pub query_gpu_ms: Option<f64>,
     /// Pixels whose depth differs from the reference; empty with --no-error.
     pub error_pixels: Option<u64>,
+    /// The largest |depth − reference depth| of the frame, in reverse-Z
+    /// depth (`near / distance`); 0 without wrong pixels, empty with
+    /// --no-error (and in files written before the column existed).
+    #[serde(default)]
+    pub max_depth_error: Option<f64>,
     /// Objects visible in the reference that the mode did not draw.
     pub missed_objects: Option<u64>,
     /// Objects visible in the reference frame (the oracle's draw count).

@@ -4,7 +4,7 @@
 //! targets, then a compute pass sets one bit per object id present (the
 //! reference visible set). After every mode has rendered, one compute pass
 //! per mode counts the pixels whose depth differs from the reference in any
-//! bit, and one read-back returns all counts.
+//! bit and finds the largest difference, and one read-back returns them all.
 
 use crate::gpu::{GpuContext, Readback, RenderTargets, SceneRenderer};
 use crate::object_set::ObjectSet;
@@ -25,7 +25,24 @@ pub struct ErrorMeter {
     /// Bytes between the counter slots of two modes.
     slot_stride: u64,
     words: Vec<u32>,
+    copy_depth: wgpu::ComputePipeline,
+    depth_group: wgpu::BindGroup,
+    depth_values: wgpu::Buffer,
+    depth_readback: Readback,
 }
+
+/// How one mode's depth differs from the reference in one frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DepthError {
+    /// Pixels whose depth differs in any bit.
+    pub wrong_pixels: u64,
+    /// The largest |depth − reference depth| over the frame (reverse-Z depth,
+    /// `near / distance`); 0 when no pixel differs.
+    pub max_difference: f32,
+}
+
+/// Bytes of one mode's [`DepthError`] on the GPU: two u32 atomics.
+const ERROR_SLOT_BYTES: u64 = 8;
 
 impl ErrorMeter {
     pub fn new(gpu: &GpuContext, targets: &RenderTargets, objects: usize) -> ErrorMeter {
@@ -75,7 +92,7 @@ impl ErrorMeter {
 
         let count_wrong = pipeline("count_depth_differences");
         let modes = targets.mode_depths.len();
-        let slot_stride = u64::from(device.limits().min_storage_buffer_offset_alignment).max(4);
+        let slot_stride = u64::from(device.limits().min_storage_buffer_offset_alignment).max(ERROR_SLOT_BYTES);
         let wrong_counts = storage("wrong pixel counts", slot_stride * modes.max(1) as u64);
         let wrong_groups = targets
             .mode_depths
@@ -93,13 +110,27 @@ impl ErrorMeter {
                             resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                                 buffer: &wrong_counts,
                                 offset: slot_stride * k as u64,
-                                size: wgpu::BufferSize::new(4),
+                                size: wgpu::BufferSize::new(ERROR_SLOT_BYTES),
                             }),
                         },
                     ],
                 })
             })
             .collect();
+        let copy_depth = pipeline("copy_depth");
+        let depth_bytes = targets.resolution.pixels() * 4;
+        let depth_values = storage("reference depth values", depth_bytes);
+        let depth_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("copy depth"),
+            layout: &copy_depth.get_bind_group_layout(0),
+            entries: &[
+                texture(0, &targets.reference_depth),
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: depth_values.as_entire_binding(),
+                },
+            ],
+        });
         ErrorMeter {
             all_objects: (0..objects as u32).collect(),
             mark_visible,
@@ -112,6 +143,10 @@ impl ErrorMeter {
             wrong_counts,
             slot_stride,
             words: Vec::new(),
+            copy_depth,
+            depth_group,
+            depth_readback: Readback::new(gpu, "reference depth readback", depth_bytes),
+            depth_values,
         }
     }
 
@@ -141,14 +176,14 @@ impl ErrorMeter {
         ObjectSet::from_words(words)
     }
 
-    /// Counts, for every mode, the pixels whose depth differs from the
-    /// reference (`encoder` may carry other end-of-frame work).
+    /// Measures, for every mode, how its depth differs from the reference
+    /// (`encoder` may carry other end-of-frame work).
     pub fn count_wrong_pixels(
         &mut self,
         gpu: &GpuContext,
         targets: &RenderTargets,
         mut encoder: wgpu::CommandEncoder,
-    ) -> Vec<u64> {
+    ) -> Vec<DepthError> {
         encoder.clear_buffer(&self.wrong_counts, 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -164,8 +199,26 @@ impl ErrorMeter {
         self.wrong_readback.read(gpu, bytes, &mut self.words);
         let stride = (self.slot_stride / 4) as usize;
         (0..self.wrong_groups.len())
-            .map(|k| u64::from(self.words[k * stride]))
+            .map(|k| DepthError {
+                wrong_pixels: u64::from(self.words[k * stride]),
+                max_difference: f32::from_bits(self.words[k * stride + 1]),
+            })
             .collect()
+    }
+
+    /// The current reference depth, row-major from the top-left pixel.
+    pub fn read_reference_depth(&mut self, gpu: &GpuContext, targets: &RenderTargets, out: &mut Vec<f32>) {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.copy_depth);
+            pass.set_bind_group(0, &self.depth_group, &[]);
+            dispatch_per_pixel(&mut pass, targets);
+        }
+        let bytes = self.depth_values.size();
+        self.depth_readback.copy(&mut encoder, &self.depth_values, 0, 0, bytes);
+        gpu.queue.submit([encoder.finish()]);
+        self.depth_readback.read(gpu, bytes, out);
     }
 }
 

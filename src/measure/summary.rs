@@ -81,6 +81,7 @@ const COLUMNS: &[(&str, Column)] = &[
     ("query_wait_ms", |r| Some(r.query_wait_ms)),
     ("query_gpu_ms", |r| r.query_gpu_ms),
     ("error_pixels", |r| r.error_pixels.map(|v| v as f64)),
+    ("max_depth_error", |r| r.max_depth_error),
     ("missed_objects", |r| r.missed_objects.map(|v| v as f64)),
 ];
 
@@ -195,6 +196,7 @@ mod tests {
             query_wait_ms: 0.0,
             query_gpu_ms: None,
             error_pixels: error,
+            max_depth_error: error.map(|_| 0.0),
             missed_objects: error.map(|_| 0),
             visible_objects: None,
         }

@@ -10,8 +10,8 @@ use glam::{DAffine3, DVec3};
 use occlu::bench::{RunOptions, RunOutput, run};
 use occlu::camera::generate::{PathKind, generate};
 use occlu::camera::path::{CameraPath, Interpolation, KeyframeFile, PathFile};
-use occlu::cull::Culler;
-use occlu::gpu::{BackendChoice, GpuContext, Resolution};
+use occlu::cull::{Culler, FrameInput, TraversalStats};
+use occlu::gpu::{BackendChoice, FrameCtx, GpuContext, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::scene::{LoadOptions, Scene, SceneBuilder, SceneSpec, load};
 
@@ -159,3 +159,21 @@ pub const SMALL: Resolution = Resolution {
     width: 160,
     height: 120,
 };
+
+/// Draws the reference visible set minus its first object: a culler that
+/// wrongly culls one visible object per frame.
+pub struct DropOneVisible(pub Vec<u32>);
+impl Culler for DropOneVisible {
+    fn name(&self) -> &str {
+        "drop-one"
+    }
+    fn needs_reference(&self) -> bool {
+        true
+    }
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        self.0.clear();
+        self.0.extend(input.reference_visible.unwrap().iter().skip(1));
+        ctx.draw(&self.0);
+        TraversalStats::default()
+    }
+}

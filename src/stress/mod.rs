@@ -1,0 +1,504 @@
+//! `occlu stress`: numerically hard cameras and scenes, run through every
+//! mode with each frame checked against the DR reference.
+//!
+//! A case passes for a conservative mode when no frame has a wrong pixel or
+//! a missed object; modes that may trade error for speed (ac) are reported
+//! but not judged. Cases with a `baseline` (the same shapes and cameras,
+//! translated or scaled) must also render the baseline's image: their
+//! reference depth is compared pixel by pixel, which shows that precision
+//! does not depend on where in the world a scene lies.
+
+pub mod cases;
+
+use serde::Serialize;
+
+use crate::bench::{RunOptions, Session};
+use crate::camera::Camera;
+use crate::cull::{Culler, ModeError, ModeInfo, ModeParams, create};
+use crate::gpu::{AdapterReport, GpuContext, GpuError, Resolution};
+use crate::hierarchy::{Hierarchy, HierarchyParams};
+use crate::measure::FrameStats;
+use crate::report::SkippedMode;
+use crate::scene::Scene;
+
+/// One hard case: a scene and the cameras of its frames.
+pub struct StressCase {
+    pub name: String,
+    /// What makes it hard, in a line.
+    pub summary: String,
+    pub scene: Scene,
+    /// One camera per frame; the aspect is set to the viewport's when run.
+    pub cameras: Vec<Camera>,
+    /// The untransformed case whose image this one must reproduce.
+    pub baseline: Option<Baseline>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Baseline {
+    pub case: String,
+    pub tolerance: DepthTolerance,
+}
+
+/// How far a pixel's depth may be from the baseline's: |a − b| ≤
+/// max(relative · max(a, b), absolute). Depth is reverse-Z, `near / distance`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct DepthTolerance {
+    pub relative: f64,
+    pub absolute: f64,
+}
+
+impl DepthTolerance {
+    /// Bit for bit: a translated scene. The eye is subtracted in f64 before
+    /// anything is rounded to f32 (and vertices are stored relative to their
+    /// cluster's centre), so the GPU sees the same numbers.
+    pub const EXACT: DepthTolerance = DepthTolerance {
+        relative: 0.0,
+        absolute: 0.0,
+    };
+
+    /// A scaled scene: every f32 vertex and matrix entry rounds differently,
+    /// by f32's last place (6e-8 relative), which a surface seen at a grazing
+    /// angle turns into up to ~1e-5 of depth at a pixel centre. The absolute
+    /// term is for wgpu's GL backend, which maps depth to GL's [−1, 1] clip
+    /// range as 2z − w (naga's `ADJUST_COORDINATE_SPACE`): there depth keeps
+    /// about 1e-7 of absolute precision rather than reverse-Z's relative one.
+    pub const SCALED: DepthTolerance = DepthTolerance {
+        relative: 1e-4,
+        absolute: 1e-6,
+    };
+
+    fn allows(&self, a: f64, b: f64) -> bool {
+        (a - b).abs() <= (self.relative * a.max(b)).max(self.absolute)
+    }
+}
+
+/// How one case's reference depth differs from its baseline's.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct DepthDifference {
+    /// Pixels beyond the tolerance, counting those covered on one side only.
+    pub pixels_beyond: u64,
+    /// Pixels covered on one side only (background on the other).
+    pub coverage_changes: u64,
+    /// Largest |a − b| and |a − b| / max(a, b) over pixels covered on both sides.
+    pub max_absolute: f64,
+    pub max_relative: f64,
+}
+
+impl DepthDifference {
+    /// Compares two depth images of the same size.
+    pub fn of(depth: &[f32], baseline: &[f32], tolerance: &DepthTolerance) -> DepthDifference {
+        let mut d = DepthDifference::default();
+        for (&a, &b) in depth.iter().zip(baseline) {
+            let (a, b) = (f64::from(a), f64::from(b));
+            if (a == 0.0) != (b == 0.0) {
+                d.coverage_changes += 1;
+                d.pixels_beyond += 1;
+            } else if a != 0.0 {
+                d.max_absolute = d.max_absolute.max((a - b).abs());
+                d.max_relative = d.max_relative.max((a - b).abs() / a.max(b));
+                d.pixels_beyond += u64::from(!tolerance.allows(a, b));
+            }
+        }
+        d
+    }
+
+    fn merge(self, other: DepthDifference) -> DepthDifference {
+        DepthDifference {
+            pixels_beyond: self.pixels_beyond + other.pixels_beyond,
+            coverage_changes: self.coverage_changes + other.coverage_changes,
+            max_absolute: self.max_absolute.max(other.max_absolute),
+            max_relative: self.max_relative.max(other.max_relative),
+        }
+    }
+}
+
+/// One mode over all frames of one case.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StressRow {
+    pub case: String,
+    pub mode: String,
+    pub conservative: bool,
+    pub frames: u32,
+    pub error_pixels: u64,
+    pub missed_objects: u64,
+    /// Largest |depth − reference depth| over the case's frames.
+    pub max_depth_error: f64,
+}
+
+impl StressRow {
+    /// Tallies a mode's frame rows.
+    pub fn tally(case: &str, mode: &str, conservative: bool, rows: &[FrameStats]) -> StressRow {
+        let mine = rows.iter().filter(|r| r.mode == mode);
+        StressRow {
+            case: case.to_string(),
+            mode: mode.to_string(),
+            conservative,
+            frames: mine.clone().count() as u32,
+            error_pixels: mine.clone().filter_map(|r| r.error_pixels).sum(),
+            missed_objects: mine.clone().filter_map(|r| r.missed_objects).sum(),
+            max_depth_error: mine.filter_map(|r| r.max_depth_error).fold(0.0, f64::max),
+        }
+    }
+
+    /// `None` for modes that make no zero-error promise.
+    pub fn passed(&self) -> Option<bool> {
+        self.conservative
+            .then_some(self.error_pixels == 0 && self.missed_objects == 0)
+    }
+}
+
+/// A transformed case's reference depth against its baseline's, over all
+/// frames.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct InvarianceCheck {
+    pub case: String,
+    pub baseline: String,
+    pub frames: u32,
+    pub tolerance: DepthTolerance,
+    pub difference: DepthDifference,
+}
+
+impl InvarianceCheck {
+    pub fn passed(&self) -> bool {
+        self.difference.pixels_beyond == 0
+    }
+}
+
+/// Everything `occlu stress` found.
+#[derive(Clone, Debug, Serialize)]
+pub struct StressReport {
+    pub adapter: AdapterReport,
+    pub resolution: Resolution,
+    pub rows: Vec<StressRow>,
+    pub invariance: Vec<InvarianceCheck>,
+    pub skipped: Vec<SkippedMode>,
+}
+
+impl StressReport {
+    /// (passed, failed) over conservative rows and invariance checks.
+    pub fn verdicts(&self) -> (usize, usize) {
+        let all: Vec<bool> = self
+            .rows
+            .iter()
+            .filter_map(StressRow::passed)
+            .chain(self.invariance.iter().map(InvarianceCheck::passed))
+            .collect();
+        let passed = all.iter().filter(|&&p| p).count();
+        (passed, all.len() - passed)
+    }
+}
+
+/// What a stress run reports as it goes.
+pub enum StressEvent<'a> {
+    Skipped { mode: &'a str, reason: &'a str },
+    Case { case: &'a StressCase },
+    Frame { done: u32, total: u32 },
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum StressError {
+    #[error(transparent)]
+    Mode(#[from] ModeError),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error("unknown stress case '{name}' (cases: {known})")]
+    UnknownCase { name: String, known: String },
+}
+
+impl StressError {
+    /// Whether the user's input was at fault (as opposed to the GPU).
+    pub fn is_input_error(&self) -> bool {
+        !matches!(self, StressError::Gpu(_))
+    }
+}
+
+/// The cases named in `names` (all of them when empty), in run order, with
+/// the baselines they need.
+pub fn select(names: &[String]) -> Result<Vec<StressCase>, StressError> {
+    let all = cases::all();
+    if names.is_empty() {
+        return Ok(all);
+    }
+    for name in names {
+        if !all.iter().any(|c| &c.name == name) {
+            let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
+            return Err(StressError::UnknownCase {
+                name: name.clone(),
+                known: known.join(", "),
+            });
+        }
+    }
+    let wanted = |c: &StressCase| names.contains(&c.name);
+    let needed: Vec<String> = all
+        .iter()
+        .filter(|c| wanted(c))
+        .filter_map(|c| c.baseline.as_ref().map(|b| b.case.clone()))
+        .collect();
+    Ok(all
+        .into_iter()
+        .filter(|c| wanted(c) || needed.contains(&c.name))
+        .collect())
+}
+
+/// Runs `modes` over `cases` (baselines before the cases that name them).
+pub fn run(
+    gpu: &GpuContext,
+    cases: &[StressCase],
+    modes: &[&'static str],
+    resolution: Resolution,
+    events: &mut dyn FnMut(StressEvent),
+) -> Result<StressReport, StressError> {
+    let mut skipped = Vec::new();
+    let modes: Vec<&'static ModeInfo> = modes
+        .iter()
+        .map(|&m| ModeInfo::named(m))
+        .filter(|m| match m.unsupported_on(gpu) {
+            Some(reason) => {
+                events(StressEvent::Skipped { mode: m.name, reason });
+                skipped.push(SkippedMode {
+                    mode: m.name.to_string(),
+                    reason: reason.to_string(),
+                });
+                false
+            }
+            None => true,
+        })
+        .collect();
+    let total: u32 = cases.iter().map(|c| c.cameras.len() as u32).sum();
+    let mut done = 0;
+    let mut rows = Vec::new();
+    let mut invariance = Vec::new();
+    let mut baseline_depths: Vec<(String, Vec<Vec<f32>>)> = Vec::new();
+    let is_baseline = |c: &StressCase| {
+        cases
+            .iter()
+            .any(|d| d.baseline.as_ref().is_some_and(|b| b.case == c.name))
+    };
+    for case in cases {
+        events(StressEvent::Case { case });
+        let hierarchy = Hierarchy::build(&case.scene.objects, &HierarchyParams::default());
+        let mut cullers = modes
+            .iter()
+            .map(|m| create(m.name, &case.scene, &hierarchy, &ModeParams::default()))
+            .collect::<Result<Vec<_>, _>>()?;
+        let keep_depth = case.baseline.is_some() || is_baseline(case);
+        let outcome = run_case(gpu, case, &mut cullers, resolution, keep_depth, &mut |_| {
+            done += 1;
+            events(StressEvent::Frame { done, total });
+        })?;
+        rows.extend(
+            modes
+                .iter()
+                .map(|m| StressRow::tally(&case.name, m.name, m.conservative, &outcome.rows)),
+        );
+        if let Some(baseline) = &case.baseline {
+            let (_, base) = baseline_depths
+                .iter()
+                .find(|(name, _)| name == &baseline.case)
+                .expect("select() runs every baseline before the cases naming it");
+            let difference = outcome
+                .depths
+                .iter()
+                .zip(base)
+                .map(|(depth, base)| DepthDifference::of(depth, base, &baseline.tolerance))
+                .fold(DepthDifference::default(), DepthDifference::merge);
+            invariance.push(InvarianceCheck {
+                case: case.name.clone(),
+                baseline: baseline.case.clone(),
+                frames: outcome.depths.len() as u32,
+                tolerance: baseline.tolerance,
+                difference,
+            });
+        }
+        if is_baseline(case) {
+            baseline_depths.push((case.name.clone(), outcome.depths));
+        }
+    }
+    Ok(StressReport {
+        adapter: gpu.adapter.clone(),
+        resolution,
+        rows,
+        invariance,
+        skipped,
+    })
+}
+
+/// What one case produced.
+pub struct CaseOutcome {
+    /// Frame-major, one row per culler.
+    pub rows: Vec<FrameStats>,
+    /// The reference depth of every frame, when asked for.
+    pub depths: Vec<Vec<f32>>,
+}
+
+/// Runs `cullers` over one case's frames with error measurement; `frame_done`
+/// is called after each frame.
+pub fn run_case(
+    gpu: &GpuContext,
+    case: &StressCase,
+    cullers: &mut [Box<dyn Culler + '_>],
+    resolution: Resolution,
+    keep_depth: bool,
+    frame_done: &mut dyn FnMut(u32),
+) -> Result<CaseOutcome, GpuError> {
+    let options = RunOptions {
+        warmup: 0,
+        resolution,
+        measure_error: true,
+    };
+    let mut session = Session::new(gpu, &case.scene, cullers.len(), true, &options)?;
+    let mut outcome = CaseOutcome {
+        rows: Vec::new(),
+        depths: Vec::new(),
+    };
+    for (frame, camera) in case.cameras.iter().enumerate() {
+        let camera = Camera {
+            aspect: resolution.aspect(),
+            ..*camera
+        };
+        outcome
+            .rows
+            .extend(session.frame(frame as u32, &camera, cullers, frame));
+        if keep_depth {
+            outcome
+                .depths
+                .push(session.reference_depth().expect("the session renders a reference"));
+        }
+        frame_done(frame as u32);
+    }
+    Ok(outcome)
+}
+
+/// The report as Markdown: the case × mode table, the invariance table and
+/// the verdict line.
+pub fn render_markdown(report: &StressReport) -> String {
+    let mut out = format!(
+        "# occlu stress\n\nadapter: {}, {}\n\n| case | mode | frames | error px | missed | max \\|Δdepth\\| | verdict |\n|---|---|---:|---:|---:|---:|---|\n",
+        report.adapter, report.resolution
+    );
+    for r in &report.rows {
+        let verdict = match r.passed() {
+            Some(true) => "pass",
+            Some(false) => "FAIL",
+            None => "not judged",
+        };
+        out += &format!(
+            "| {} | {} | {} | {} | {} | {:.3e} | {verdict} |\n",
+            r.case, r.mode, r.frames, r.error_pixels, r.missed_objects, r.max_depth_error
+        );
+    }
+    if !report.invariance.is_empty() {
+        out += "\nSame image as the baseline: reference depth of every frame, pixel by pixel (a pixel passes when |Δ| ≤ max(relative · depth, absolute)):\n\n| case | baseline | frames | tolerance rel / abs | pixels beyond | coverage changes | max \\|Δdepth\\| | max relative | verdict |\n|---|---|---:|---:|---:|---:|---:|---:|---|\n";
+        for c in &report.invariance {
+            let (t, d) = (&c.tolerance, &c.difference);
+            out += &format!(
+                "| {} | {} | {} | {:e} / {:e} | {} | {} | {:.3e} | {:.3e} | {} |\n",
+                c.case,
+                c.baseline,
+                c.frames,
+                t.relative,
+                t.absolute,
+                d.pixels_beyond,
+                d.coverage_changes,
+                d.max_absolute,
+                d.max_relative,
+                if c.passed() { "pass" } else { "FAIL" }
+            );
+        }
+    }
+    for s in &report.skipped {
+        out += &format!("\nskipped: {}: {}\n", s.mode, s.reason);
+    }
+    let (passed, failed) = report.verdicts();
+    out += &format!("\n{passed} passed, {failed} failed\n");
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(mode: &str, error: u64, missed: u64) -> FrameStats {
+        FrameStats {
+            mode: mode.into(),
+            frame: 0,
+            frame_ms: 1.0,
+            cpu_ms: 0.0,
+            gpu_ms: None,
+            objects_drawn: 1,
+            triangles_drawn: 1,
+            nodes_visited: 0,
+            nodes_culled_frustum: 0,
+            nodes_culled_occlusion: 0,
+            queries: 0,
+            query_batches: 0,
+            queries_skipped: 0,
+            nodes_culled_adaptive: 0,
+            nodes_past_budget: 0,
+            query_wait_ms: 0.0,
+            query_gpu_ms: None,
+            error_pixels: Some(error),
+            max_depth_error: Some(error as f64 * 1e-3),
+            missed_objects: Some(missed),
+            visible_objects: Some(1),
+        }
+    }
+
+    #[test]
+    fn any_error_fails_a_conservative_mode_and_only_it() {
+        let rows = [row("vfc", 0, 0), row("sq", 0, 1), row("vfc", 3, 0), row("ac", 7, 2)];
+        let vfc = StressRow::tally("c", "vfc", true, &rows);
+        assert_eq!((vfc.frames, vfc.error_pixels, vfc.missed_objects), (2, 3, 0));
+        assert_eq!(vfc.max_depth_error, 3e-3);
+        assert_eq!(vfc.passed(), Some(false));
+        assert_eq!(StressRow::tally("c", "sq", true, &rows).passed(), Some(false));
+        assert_eq!(StressRow::tally("c", "ac", false, &rows).passed(), None);
+        let clean = StressRow::tally("c", "vfc", true, &rows[..1]);
+        assert_eq!(clean.passed(), Some(true));
+    }
+
+    #[test]
+    fn depth_differences_are_judged_by_the_tolerance() {
+        let base = [0.0, 0.5, 0.25, 0.1, 0.0];
+        let same = DepthDifference::of(&base, &base, &DepthTolerance::EXACT);
+        assert_eq!(same, DepthDifference::default());
+        let nudged = [0.0, 0.5 * (1.0 + 4e-5), 0.25, 0.1 + 5e-7, 0.0];
+        let exact = DepthDifference::of(&nudged, &base, &DepthTolerance::EXACT);
+        assert_eq!((exact.pixels_beyond, exact.coverage_changes), (2, 0));
+        assert!((exact.max_relative - 4e-5).abs() < 1e-7, "{exact:?}");
+        assert!((exact.max_absolute - 2e-5).abs() < 1e-7, "{exact:?}");
+        // Within 1e-4 relative; 5e-7 at depth 0.1 is 5e-6 relative.
+        assert_eq!(
+            DepthDifference::of(&nudged, &base, &DepthTolerance::SCALED).pixels_beyond,
+            0
+        );
+        // Coverage lost and gained, and a surface moved by 1e-3.
+        let moved = [0.3, 0.5, 0.25 * (1.0 + 1e-3), 0.0, 0.0];
+        let d = DepthDifference::of(&moved, &base, &DepthTolerance::SCALED);
+        assert_eq!((d.pixels_beyond, d.coverage_changes), (3, 2));
+        let check = InvarianceCheck {
+            case: "c".into(),
+            baseline: "b".into(),
+            frames: 1,
+            tolerance: DepthTolerance::SCALED,
+            difference: d,
+        };
+        assert!(!check.passed());
+    }
+
+    #[test]
+    fn selecting_a_transformed_case_brings_its_baseline() {
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let picked: Vec<String> = select(&names(&["offset-1e7", "teleport"]))
+            .unwrap()
+            .into_iter()
+            .map(|c| c.name)
+            .collect();
+        assert_eq!(picked, names(&["inside-root", "offset-1e7", "teleport"]));
+        let err = select(&names(&["bogus"])).err().unwrap().to_string();
+        assert!(
+            err.contains("unknown stress case 'bogus'") && err.contains("near-far"),
+            "{err}"
+        );
+    }
+}
