@@ -65,3 +65,34 @@ impl FrameStats {
         }
     }
 }
+
+#[cfg(test)]
+impl FrameStats {
+    /// A row of `mode` with every counter zero and every optional column
+    /// empty, for tests of what reads rows.
+    pub(crate) fn blank(mode: &str) -> FrameStats {
+        FrameStats {
+            mode: mode.into(),
+            frame: 0,
+            frame_ms: 0.0,
+            cpu_ms: 0.0,
+            gpu_ms: None,
+            objects_drawn: 0,
+            triangles_drawn: 0,
+            nodes_visited: 0,
+            nodes_culled_frustum: 0,
+            nodes_culled_occlusion: 0,
+            queries: 0,
+            query_batches: 0,
+            queries_skipped: 0,
+            nodes_culled_adaptive: 0,
+            nodes_past_budget: 0,
+            query_wait_ms: 0.0,
+            query_gpu_ms: None,
+            error_pixels: None,
+            max_depth_error: None,
+            missed_objects: None,
+            visible_objects: None,
+        }
+    }
+}

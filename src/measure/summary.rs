@@ -178,27 +178,13 @@ mod tests {
 
     fn row(mode: &str, frame_ms: f64, error: Option<u64>) -> FrameStats {
         FrameStats {
-            mode: mode.into(),
-            frame: 0,
             frame_ms,
-            cpu_ms: 0.0,
-            gpu_ms: None,
             objects_drawn: 1,
             triangles_drawn: 10,
-            nodes_visited: 0,
-            nodes_culled_frustum: 0,
-            nodes_culled_occlusion: 0,
-            queries: 0,
-            query_batches: 0,
-            queries_skipped: 0,
-            nodes_culled_adaptive: 0,
-            nodes_past_budget: 0,
-            query_wait_ms: 0.0,
-            query_gpu_ms: None,
             error_pixels: error,
             max_depth_error: error.map(|_| 0.0),
             missed_objects: error.map(|_| 0),
-            visible_objects: None,
+            ..FrameStats::blank(mode)
         }
     }
 

@@ -84,7 +84,12 @@ impl Draft {
         }
     }
 
-    fn case(&self, name: &str, summary: &str, baseline: Option<Baseline>, placement: Placement) -> StressCase {
+    fn case(&self, name: &str, summary: &str) -> StressCase {
+        self.placed(name, summary, None, IN_PLACE)
+    }
+
+    /// The case with every shape and shot moved by `placement`.
+    fn placed(&self, name: &str, summary: &str, baseline: Option<Baseline>, placement: Placement) -> StressCase {
         let mut builder = SceneBuilder::new(format!("stress:{name}"), crate::scene::DEFAULT_CLUSTER_TRIANGLES);
         for shape in &self.shapes {
             let positions: Vec<DVec3> = shape
@@ -191,11 +196,9 @@ pub fn all() -> Vec<StressCase> {
     let mut cases = vec![walk.case(
         "inside-root",
         "street walk, the eye inside the root box (baseline of the offset and scale cases)",
-        None,
-        IN_PLACE,
     )];
     for (name, offset) in [("offset-1e3", 1e3), ("offset-1e5", 1e5), ("offset-1e7", 1e7)] {
-        cases.push(walk.case(
+        cases.push(walk.placed(
             name,
             "inside-root with every coordinate translated by this much",
             Some(Baseline {
@@ -209,7 +212,7 @@ pub fn all() -> Vec<StressCase> {
         ));
     }
     for (name, scale) in [("scale-1e-3", 1e-3), ("scale-1e4", 1e4)] {
-        cases.push(walk.case(
+        cases.push(walk.placed(
             name,
             "inside-root scaled by this factor (near plane too)",
             Some(Baseline {
@@ -227,7 +230,7 @@ pub fn all() -> Vec<StressCase> {
             fov_deg: fov,
             ..Draft::new(town(), street_walk())
         };
-        cases.push(draft.case(name, "the street walk with this vertical field of view", None, IN_PLACE));
+        cases.push(draft.case(name, "the street walk with this vertical field of view"));
     }
     cases.extend([
         inside_leaf(),
@@ -275,8 +278,6 @@ fn inside_leaf() -> StressCase {
     Draft::new(shapes, shots).case(
         "inside-leaf",
         "the eye inside a room object's box, looking out of its doorway and around",
-        None,
-        IN_PLACE,
     )
 }
 
@@ -319,8 +320,6 @@ fn near_crossing() -> StressCase {
     Draft::new(shapes, shots).case(
         "near-crossing",
         "boxes crossing the near plane (the eye 0.02 to 0.1 from faces, near 0.1)",
-        None,
-        IN_PLACE,
     )
 }
 
@@ -345,12 +344,7 @@ fn on_face() -> StressCase {
         looking(v(24.0, EYE, 0.0), DVec3::X),
         looking(v(24.0, EYE, 0.0), DVec3::Z),
     ];
-    Draft::new(shapes, shots).case(
-        "on-face",
-        "the eye exactly on box faces, edges and corners",
-        None,
-        IN_PLACE,
-    )
+    Draft::new(shapes, shots).case("on-face", "the eye exactly on box faces, edges and corners")
 }
 
 /// Near plane 1e-4 with millimetre crates centimetres away, and mountains
@@ -387,8 +381,6 @@ fn near_far() -> StressCase {
     .case(
         "near-far",
         "near plane 1e-4, millimetre objects at 1 cm, mountains at 1e5",
-        None,
-        IN_PLACE,
     )
 }
 
@@ -402,19 +394,31 @@ fn flat_boxes() -> StressCase {
         v(14.0, 0.0, 50.0),
         v(20.0, 6.0, 50.5),
     ));
-    let plane = |name: &str, min: DVec3, max: DVec3| {
-        let mut soup = TriangleSoup::default();
-        cuboid(&mut soup, min, max);
-        Shape {
-            name: name.into(),
-            soup,
-        }
-    };
-    shapes.push(plane("floating sheet", v(15.0, 3.0, 55.0), v(21.0, 3.0, 60.0)));
-    shapes.push(plane("ground sheet", v(13.0, 0.0, 44.0), v(16.0, 0.0, 47.0)));
-    shapes.push(plane("hidden panel", v(15.0, 1.0, 52.0), v(19.0, 4.0, 52.0)));
-    shapes.push(plane("edge panel", v(19.5, 1.0, 53.0), v(21.5, 4.0, 53.0)));
-    shapes.push(plane("side panel", v(22.0, 0.5, 51.0), v(22.0, 3.0, 56.0)));
+    shapes.push(cuboid_shape(
+        "floating sheet".into(),
+        v(15.0, 3.0, 55.0),
+        v(21.0, 3.0, 60.0),
+    ));
+    shapes.push(cuboid_shape(
+        "ground sheet".into(),
+        v(13.0, 0.0, 44.0),
+        v(16.0, 0.0, 47.0),
+    ));
+    shapes.push(cuboid_shape(
+        "hidden panel".into(),
+        v(15.0, 1.0, 52.0),
+        v(19.0, 4.0, 52.0),
+    ));
+    shapes.push(cuboid_shape(
+        "edge panel".into(),
+        v(19.5, 1.0, 53.0),
+        v(21.5, 4.0, 53.0),
+    ));
+    shapes.push(cuboid_shape(
+        "side panel".into(),
+        v(22.0, 0.5, 51.0),
+        v(22.0, 3.0, 56.0),
+    ));
     for k in 0..4 {
         let y = 1.0 + 1.8 * f64::from(k);
         let z = 51.0 + f64::from(k);
@@ -436,8 +440,6 @@ fn flat_boxes() -> StressCase {
     Draft::new(shapes, shots).case(
         "flat-boxes",
         "zero-thickness boxes (planes) and slivers 1 mm wide, hidden and half hidden",
-        None,
-        IN_PLACE,
     )
 }
 
@@ -484,8 +486,6 @@ fn coplanar() -> StressCase {
     Draft::new(shapes, shots).case(
         "coplanar",
         "coincident surfaces: a duplicated building, posters on a wall, stacked crates",
-        None,
-        IN_PLACE,
     )
 }
 
@@ -503,8 +503,6 @@ fn vertical() -> StressCase {
     Draft::new(town(), shots).case(
         "vertical",
         "straight down and straight up (up vector parallel to the view)",
-        None,
-        IN_PLACE,
     )
 }
 
@@ -530,8 +528,6 @@ fn occluder_crowd() -> StressCase {
     Draft::new(shapes, shots).case(
         "occluder-crowd",
         "400 small objects behind one large occluder, some peeking over it",
-        None,
-        IN_PLACE,
     )
 }
 
@@ -546,7 +542,7 @@ fn teleport() -> StressCase {
             looking(eye, if forward.length() > 1e-3 { forward } else { DVec3::Z })
         })
         .collect();
-    Draft::new(town(), shots).case("teleport", "a random place and direction every frame", None, IN_PLACE)
+    Draft::new(town(), shots).case("teleport", "a random place and direction every frame")
 }
 
 #[cfg(test)]

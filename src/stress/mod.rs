@@ -420,27 +420,14 @@ mod tests {
 
     fn row(mode: &str, error: u64, missed: u64) -> FrameStats {
         FrameStats {
-            mode: mode.into(),
-            frame: 0,
             frame_ms: 1.0,
-            cpu_ms: 0.0,
-            gpu_ms: None,
             objects_drawn: 1,
             triangles_drawn: 1,
-            nodes_visited: 0,
-            nodes_culled_frustum: 0,
-            nodes_culled_occlusion: 0,
-            queries: 0,
-            query_batches: 0,
-            queries_skipped: 0,
-            nodes_culled_adaptive: 0,
-            nodes_past_budget: 0,
-            query_wait_ms: 0.0,
-            query_gpu_ms: None,
             error_pixels: Some(error),
             max_depth_error: Some(error as f64 * 1e-3),
             missed_objects: Some(missed),
             visible_objects: Some(1),
+            ..FrameStats::blank(mode)
         }
     }
 
