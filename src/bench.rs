@@ -1,8 +1,9 @@
 //! `occlu bench`: the whole flow of DESIGN.md, load → hierarchy → GPU →
 //! cull → measure → report, and the interleaved frame loop at its heart.
 //!
-//! The frame loop: for each frame of the path, the camera's per-object
-//! matrices are uploaded and the reference is rendered (both untimed); then
+//! The frame loop: for each frame of the path, the scene's movers are put in
+//! place, the camera's per-object matrices are uploaded and the reference is
+//! rendered (all untimed); then
 //! every mode renders that frame (timed: from the start of its frame on the
 //! CPU until the GPU finished it); then one pass measures every mode's error
 //! (untimed). The order of the modes rotates from frame to frame, so no mode
@@ -28,6 +29,7 @@ use crate::report::{
     SweepSummary, ToolInfo, prepare_output, write_results,
 };
 use crate::scene::{LoadOptions, Scene, SceneError};
+use crate::world::World;
 
 #[derive(Clone, Copy, Debug)]
 pub struct RunOptions {
@@ -43,18 +45,19 @@ pub struct RunOutput {
     pub upload_ms: f64,
 }
 
-/// Runs `cullers` over every frame of `path`. `progress` is called with
-/// (frames done, frames in all) including warm-up frames.
+/// Runs `cullers` over every frame of `path`, moving `world`'s movers as
+/// the frames go. `progress` is called with (frames done, frames in all)
+/// including warm-up frames.
 pub fn run(
     gpu: &GpuContext,
-    scene: &Scene,
+    world: &mut World,
     path: &CameraPath,
     cullers: &mut [Box<dyn Culler + '_>],
     options: &RunOptions,
     progress: &mut dyn FnMut(u32, u32),
 ) -> Result<RunOutput, GpuError> {
     let needs_reference = options.measure_error || cullers.iter().any(|c| c.needs_reference());
-    let mut session = Session::new(gpu, scene, cullers.len(), needs_reference, options)?;
+    let mut session = Session::new(gpu, &world.scene, cullers.len(), needs_reference, options)?;
     let frames = path.frames;
     // Both are capped (MAX_FRAMES, MAX_WARMUP), so the sum cannot overflow.
     let total = options.warmup + frames;
@@ -67,9 +70,10 @@ pub fn run(
             step % frames
         };
         let camera = path.camera(frame, options.resolution.aspect());
+        world.advance(frame);
         // Rotating the order from frame to frame: no mode always runs right
         // after the reference.
-        let frame_rows = session.frame(frame, &camera, cullers, step as usize);
+        let frame_rows = session.frame(frame, &camera, world, cullers, step as usize);
         if recording {
             rows.extend(frame_rows);
         }
@@ -137,21 +141,24 @@ impl<'a> Session<'a> {
         })
     }
 
-    /// Renders one frame in every mode, starting with mode `first % n`, and
-    /// returns one row per mode in the order of `cullers`.
+    /// Renders one frame of `world` (its movers already placed) in every
+    /// mode, starting with mode `first % n`, and returns one row per mode in
+    /// the order of `cullers`.
     ///
     /// Untimed: the per-object matrix upload, the reference, GPU times and
     /// errors. Timed, per mode: from the start of its frame on the CPU until
-    /// the GPU finished it.
+    /// the GPU finished it, including the refit of the hierarchy around
+    /// moved objects for modes that traverse it.
     pub fn frame(
         &mut self,
         frame: u32,
         camera: &Camera,
+        world: &mut World,
         cullers: &mut [Box<dyn Culler + '_>],
         first: usize,
     ) -> Vec<FrameStats> {
         let gpu = self.gpu;
-        self.renderer.set_camera(gpu, camera);
+        self.renderer.set_camera(gpu, camera, &world.scene.objects);
         // Flush the upload now, so no mode's timed submit carries it.
         gpu.queue.submit([]);
         gpu.wait_idle();
@@ -164,10 +171,19 @@ impl<'a> Session<'a> {
         for turn in 0..cullers.len() {
             let k = (turn + first) % cullers.len();
             let culler = &mut cullers[k];
+            let frame_start = Instant::now();
+            let refit_time = if culler.traverses_hierarchy() {
+                world.refit()
+            } else {
+                Duration::ZERO
+            };
             let input = FrameInput {
                 frame,
                 camera,
                 resolution: self.options.resolution,
+                scene: &world.scene,
+                hierarchy: &world.hierarchy,
+                moved: world.moved(),
                 reference_visible: if culler.needs_reference() {
                     visible.as_ref()
                 } else {
@@ -175,7 +191,6 @@ impl<'a> Session<'a> {
                 },
                 previous: self.previous[k],
             };
-            let frame_start = Instant::now();
             let resources = FrameResources {
                 gpu,
                 renderer: &self.renderer,
@@ -194,7 +209,8 @@ impl<'a> Session<'a> {
                 mode: culler.name().to_string(),
                 frame,
                 frame_ms: ms(frame_time),
-                cpu_ms: ms(cull_time.saturating_sub(outcome.gpu_ops)),
+                cpu_ms: ms(refit_time + cull_time.saturating_sub(outcome.gpu_ops)),
+                maintenance_ms: ms(refit_time + traversal.maintenance),
                 gpu_ms: None,
                 objects_drawn: outcome.counters.objects_drawn,
                 triangles_drawn: outcome.counters.triangles_drawn,
@@ -327,16 +343,18 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
     let params = HierarchyParams::default();
     let hierarchy = Hierarchy::build(&scene.objects, &params);
     let build_ms = ms(start.elapsed());
+    let mut world = World::new(scene, hierarchy);
+    let (scene, hierarchy) = (&world.scene, &world.hierarchy);
     events(BenchEvent::Loaded {
-        scene: &scene,
-        hierarchy: &hierarchy,
+        scene,
+        hierarchy,
         load_ms,
         build_ms,
     });
 
     let path = match path_file {
         Some(path) => path,
-        None => default_path(&scene)?,
+        None => default_path(scene)?,
     };
     let path = match plan.frames {
         Some(n) => path.with_frames(n)?,
@@ -362,7 +380,7 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
     let mut cullers = runs
         .iter()
         .map(|run| {
-            let culler = create(run.mode, &scene, &hierarchy, &run.params)?;
+            let culler = create(run.mode, scene, &run.params)?;
             Ok(if run.label == run.mode {
                 culler
             } else {
@@ -378,7 +396,8 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
         resolution: plan.resolution,
         measure_error: plan.measure_error,
     };
-    let output = run(&gpu, &scene, &path, &mut cullers, &options, &mut |done, total| {
+    let facts = SceneFacts::of(scene, hierarchy, load_ms, build_ms);
+    let output = run(&gpu, &mut world, &path, &mut cullers, &options, &mut |done, total| {
         events(BenchEvent::Frame { done, total })
     })?;
 
@@ -396,7 +415,7 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
         tool: ToolInfo::current(),
         adapter: gpu.adapter.clone(),
         scene: SceneSummary {
-            facts: SceneFacts::of(&scene, &hierarchy, load_ms, build_ms),
+            facts,
             hierarchy_params: params,
             upload_ms: output.upload_ms,
         },

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::cull::{ModeError, ModeParams, parse_modes};
 use crate::gpu::{BackendChoice, Resolution};
+use crate::scene::builtin::with_movers;
 use crate::scene::{DEFAULT_CLUSTER_TRIANGLES, SceneSpec};
 
 /// Every field optional: a file or the flags may give any subset.
@@ -18,6 +19,8 @@ pub struct BenchConfig {
     pub model: Option<PathBuf>,
     /// A built-in scene, `NAME[:key=value,...]`.
     pub scene: Option<String>,
+    /// Moving objects added to a built-in scene (its `movers` parameter).
+    pub movers: Option<u32>,
     /// A camera path file; generated from the scene when absent.
     pub path: Option<PathBuf>,
     /// Mode names, or "all".
@@ -54,6 +57,8 @@ pub enum ConfigError {
     Json { path: String, message: String },
     #[error("give a model file or --scene, not both")]
     ModelAndScene,
+    #[error("--movers animates built-in scenes; a model file has no movers")]
+    MoversOnModel,
     #[error("--frames must be in 1..={}", crate::camera::path::MAX_FRAMES)]
     Frames,
     #[error("--warmup must be at most {MAX_WARMUP}")]
@@ -62,6 +67,27 @@ pub enum ConfigError {
     Mode(#[from] ModeError),
     #[error("--sweep '{0}' is not MODE.KEY=V1,V2,...")]
     Sweep(String),
+}
+
+/// The scene a model file, a built-in scene (the city when neither is
+/// given) and a mover count name together.
+pub fn scene_spec(
+    model: Option<PathBuf>,
+    scene: Option<String>,
+    movers: Option<u32>,
+) -> Result<SceneSpec, ConfigError> {
+    match (model, scene) {
+        (Some(_), Some(_)) => Err(ConfigError::ModelAndScene),
+        (Some(_), None) if movers.is_some() => Err(ConfigError::MoversOnModel),
+        (Some(model), None) => Ok(SceneSpec::File(model)),
+        (None, scene) => {
+            let spec = scene.unwrap_or_else(|| DEFAULT_SCENE.into());
+            Ok(SceneSpec::Builtin(match movers {
+                Some(n) => with_movers(&spec, n),
+                None => spec,
+            }))
+        }
+    }
 }
 
 /// A complete, validated plan for one bench run.
@@ -112,6 +138,7 @@ impl BenchConfig {
         BenchConfig {
             model: if source_given { self.model } else { fallback.model },
             scene: if source_given { self.scene } else { fallback.scene },
+            movers: self.movers.or(fallback.movers),
             path: self.path.or(fallback.path),
             modes: self.modes.or(fallback.modes),
             frames: self.frames.or(fallback.frames),
@@ -135,11 +162,7 @@ impl BenchConfig {
 
     /// Fills defaults and validates.
     pub fn plan(self) -> Result<BenchPlan, ConfigError> {
-        let scene = match (self.model, self.scene) {
-            (Some(_), Some(_)) => return Err(ConfigError::ModelAndScene),
-            (Some(model), None) => SceneSpec::File(model),
-            (None, scene) => SceneSpec::Builtin(scene.unwrap_or_else(|| DEFAULT_SCENE.into())),
-        };
+        let scene = scene_spec(self.model, self.scene, self.movers)?;
         if self
             .frames
             .is_some_and(|n| n == 0 || n > crate::camera::path::MAX_FRAMES)
@@ -334,6 +357,31 @@ mod tests {
             ..Default::default()
         };
         assert!(matches!(long.plan(), Err(ConfigError::Warmup)));
+        let moving_model = BenchConfig {
+            model: Some("m.obj".into()),
+            movers: Some(3),
+            ..Default::default()
+        };
+        assert!(matches!(moving_model.plan(), Err(ConfigError::MoversOnModel)));
+    }
+
+    #[test]
+    fn movers_join_the_built_in_scene_spec() {
+        let plan = |scene: Option<&str>| {
+            BenchConfig {
+                scene: scene.map(str::to_string),
+                movers: Some(30),
+                ..Default::default()
+            }
+            .plan()
+            .unwrap()
+            .scene
+        };
+        assert_eq!(plan(None), SceneSpec::Builtin("city:movers=30".into()));
+        assert_eq!(
+            plan(Some("city:blocks=2")),
+            SceneSpec::Builtin("city:blocks=2,movers=30".into())
+        );
     }
 
     #[test]

@@ -23,3 +23,4 @@ pub mod report;
 pub mod scene;
 pub mod stress;
 pub mod text;
+pub mod world;

@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use occlu::bench::{BenchError, BenchEvent, execute};
 use occlu::camera::generate::{DEFAULT_FRAMES, PathKind, default_kind, generate};
 use occlu::camera::path::{CameraPath, PathError};
-use occlu::config::{BenchConfig, ConfigError};
+use occlu::config::{BenchConfig, ConfigError, scene_spec};
 use occlu::cull::{MODES, ModeError, ModeParams, create, parse_modes};
 use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
@@ -21,6 +21,7 @@ use occlu::report::{ReportError, SceneFacts};
 use occlu::scene::builtin::SCENES;
 use occlu::scene::{LoadOptions, Scene, SceneError, SceneSpec, load};
 use occlu::stress::{StressError, StressEvent};
+use occlu::world::World;
 
 #[derive(Parser)]
 #[command(
@@ -108,17 +109,18 @@ struct SceneArgs {
     /// Built-in scene, NAME[:key=value,...], e.g. city:blocks=4,seed=7.
     #[arg(long, conflicts_with = "model")]
     scene: Option<String>,
+    /// Cars driving round the city's blocks, so culling meets moving
+    /// objects (the scene's movers=N parameter) [default: 0].
+    #[arg(long, value_name = "N", conflicts_with = "model")]
+    movers: Option<u32>,
     /// Meshes with more triangles than this are split into clusters [default: 4096].
     #[arg(long, value_name = "N")]
     cluster_triangles: Option<u32>,
 }
 
 impl SceneArgs {
-    fn spec(&self) -> SceneSpec {
-        match (&self.model, &self.scene) {
-            (Some(m), _) => SceneSpec::File(m.clone()),
-            (None, s) => SceneSpec::Builtin(s.clone().unwrap_or_else(|| "city".into())),
-        }
+    fn spec(&self) -> Result<SceneSpec, ConfigError> {
+        scene_spec(self.model.clone(), self.scene.clone(), self.movers)
     }
 
     fn options(&self) -> LoadOptions {
@@ -318,6 +320,7 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
     let flags = BenchConfig {
         model: args.scene.model,
         scene: args.scene.scene,
+        movers: args.scene.movers,
         path: args.path,
         modes: args.modes,
         frames: args.frames,
@@ -464,21 +467,22 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     };
     let params = ModeParams::parse(&args.params, &modes)?;
     let path_file = args.path.as_deref().map(CameraPath::load).transpose()?;
-    let scene = load(&args.scene.spec(), &args.scene.options())?;
+    let scene = load(&args.scene.spec()?, &args.scene.options())?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let path = match path_file {
         Some(p) => p,
         None => occlu::camera::generate::default_path(&scene)?,
     };
     let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
-    let culler = create(mode, &scene, &hierarchy, &params)?;
+    let culler = create(mode, &scene, &params)?;
+    let mut world = World::new(scene, hierarchy);
     let options = PictureOptions {
         frame: args.frame,
         resolution: args.resolution.unwrap_or(Resolution::DEFAULT),
         overview: args.overview,
         heat: args.heat,
     };
-    let picture = occlu::picture::render(&gpu, &scene, &path, culler, &options)?;
+    let picture = occlu::picture::render(&gpu, &mut world, &path, culler, &options)?;
     occlu::report::write_png(&args.output, picture.width, picture.height, &picture.rgb)?;
     eprintln!(
         "wrote {} ({}x{}): {mode} drew {} objects at frame {}, culled {} inside the frustum",
@@ -508,7 +512,7 @@ fn plot(run_dir: &std::path::Path) -> anyhow::Result<()> {
 
 fn info(args: InfoArgs) -> anyhow::Result<()> {
     let start = Instant::now();
-    let scene = load(&args.scene.spec(), &args.scene.options())?;
+    let scene = load(&args.scene.spec()?, &args.scene.options())?;
     let load_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = Instant::now();
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
@@ -521,6 +525,9 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
     let h = report.hierarchy;
     println!("source      {}", report.source);
     println!("objects     {} ({} meshes)", report.objects, report.meshes);
+    if report.movers > 0 {
+        println!("movers      {} objects move from frame to frame", report.movers);
+    }
     println!("triangles   {}", report.triangles);
     println!("vertices    {}", report.vertices);
     println!("bounds      {:?} to {:?}", report.bounds_min, report.bounds_max);
@@ -543,7 +550,7 @@ fn path_gen(scene_args: SceneArgs, kind: Option<PathKind>, frames: u32, output: 
     if frames == 0 || frames > occlu::camera::path::MAX_FRAMES {
         return Err(PathError::FrameCount.into());
     }
-    let scene: Scene = load(&scene_args.spec(), &scene_args.options())?;
+    let scene: Scene = load(&scene_args.spec()?, &scene_args.options())?;
     let kind = kind.unwrap_or_else(|| default_kind(&scene));
     let file = generate(kind, &scene, frames);
     // Validate what is written, so a generated file always loads.

@@ -19,6 +19,7 @@ use crate::camera::{Camera, Containment, look_rotation};
 use crate::cull::Culler;
 use crate::gpu::{GpuContext, GpuError, LinePainter, LineVertex, RenderTargets, Resolution, picture_target, read_rgb};
 use crate::scene::Scene;
+use crate::world::World;
 
 #[derive(Clone, Copy, Debug)]
 pub struct PictureOptions {
@@ -62,9 +63,9 @@ const RED: [f32; 3] = [0.9, 0.1, 0.1];
 
 pub fn render(
     gpu: &GpuContext,
-    scene: &Scene,
+    world: &mut World,
     path: &CameraPath,
-    culler: Box<dyn Culler + '_>,
+    culler: Box<dyn Culler>,
     options: &PictureOptions,
 ) -> Result<Picture, PictureError> {
     if options.frame >= path.frames {
@@ -80,11 +81,13 @@ pub fn render(
         measure_error: false,
     };
     let mut cullers = [culler];
-    let mut session = Session::new(gpu, scene, 1, cullers[0].needs_reference(), &run)?;
+    let mut session = Session::new(gpu, &world.scene, 1, cullers[0].needs_reference(), &run)?;
     let camera = path.camera(options.frame, resolution.aspect());
     for f in options.frame.saturating_sub(LEAD_IN)..=options.frame {
-        session.frame(f, &path.camera(f, resolution.aspect()), &mut cullers, 0);
+        world.advance(f);
+        session.frame(f, &path.camera(f, resolution.aspect()), world, &mut cullers, 0);
     }
+    let scene = &world.scene;
     let drawn: Vec<u32> = session.drawn[0].iter().collect();
     let frustum = camera.frustum();
     let culled: Vec<&Aabb> = scene
@@ -109,7 +112,7 @@ pub fn render(
 
     let (width, rgb) = if options.overview {
         let above = overview_camera(scene, resolution);
-        session.renderer.set_camera(gpu, &above);
+        session.renderer.set_camera(gpu, &above, &scene.objects);
         let targets = RenderTargets::new(gpu, resolution, 1);
         let all: Vec<u32> = (0..scene.objects.len() as u32).collect();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());

@@ -101,6 +101,17 @@ fn bad_input_gets_one_clear_line() {
         &["unknown scene 'moon'"],
     );
     fails_with(
+        &["bench", &s(&good_obj), "--movers", "3", "--out", &out],
+        2,
+        &["--movers", "MODEL"],
+    );
+    fails_with(
+        &["bench", "--scene", "city:movers=2", "--movers", "3", "--out", &out],
+        2,
+        &["'movers' is given twice"],
+    );
+    fails_with(&["bench", "--movers", "lots", "--out", &out], 2, &["'lots'"]);
+    fails_with(
         &bench_args(&["--param", "omq.bogus=1"], &out),
         2,
         &["unknown parameter 'omq.bogus'", "omq.factor"],

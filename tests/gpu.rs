@@ -64,9 +64,16 @@ fn missing_quad_costs_exactly_its_rasterised_pixels() {
     for gpu in common::gpus() {
         let mut cullers: Vec<Box<dyn Culler>> = vec![
             Box::new(DrawNothing),
-            create("dr", &scene, &hierarchy, &ModeParams::default()).unwrap(),
+            create("dr", &scene, &ModeParams::default()).unwrap(),
         ];
-        let out = run_modes(&gpu, &scene, &path, &mut cullers, Resolution { width: w, height: h });
+        let out = run_modes(
+            &gpu,
+            &scene,
+            &hierarchy,
+            &path,
+            &mut cullers,
+            Resolution { width: w, height: h },
+        );
         let (nothing, dr) = (&out.rows[0], &out.rows[1]);
         assert_eq!(nothing.error_pixels, Some(expected), "{}", gpu.adapter);
         assert_eq!(nothing.missed_objects, Some(1));
@@ -144,7 +151,14 @@ fn reference_visible_set_matches_cpu_ray_casting() {
     for gpu in common::gpus() {
         let seen = RefCell::new(Vec::new());
         let mut cullers: Vec<Box<dyn Culler>> = vec![Box::new(Recorder(&seen))];
-        let out = run_modes(&gpu, &scene, &path, &mut cullers, Resolution { width: w, height: h });
+        let out = run_modes(
+            &gpu,
+            &scene,
+            &common::hierarchy(&scene),
+            &path,
+            &mut cullers,
+            Resolution { width: w, height: h },
+        );
         assert_eq!(
             out.rows[0].error_pixels,
             Some(0),
@@ -173,12 +187,12 @@ fn reference_visible_set_matches_cpu_ray_casting() {
 fn exact_modes_show_no_error_and_a_wrong_culler_is_caught() {
     let (scene, hierarchy, path) = common::small_city(6);
     for gpu in common::gpus() {
-        let mut cullers: Vec<Box<dyn Culler + '_>> = ["dr", "vfc", "oracle"]
+        let mut cullers: Vec<Box<dyn Culler>> = ["dr", "vfc", "oracle"]
             .iter()
-            .map(|m| create(m, &scene, &hierarchy, &ModeParams::default()).unwrap())
+            .map(|m| create(m, &scene, &ModeParams::default()).unwrap())
             .collect();
         cullers.push(Box::new(DropOneVisible(Vec::new())));
-        let out = run_modes(&gpu, &scene, &path, &mut cullers, common::SMALL);
+        let out = run_modes(&gpu, &scene, &hierarchy, &path, &mut cullers, common::SMALL);
         assert_eq!(out.rows.len(), 6 * 4);
         let sum = |mode: &str, f: fn(&occlu::measure::FrameStats) -> u64| -> u64 {
             out.rows.iter().filter(|r| r.mode == mode).map(f).sum()
@@ -227,5 +241,74 @@ fn missing_backend_is_a_clear_error() {
         Err(e @ GpuError::NoAdapter(_)) => assert!(e.to_string().contains("no graphics adapter")),
         Err(e) => panic!("unexpected error {e}"),
         Ok(_) => panic!("{absent} should not exist here"),
+    }
+}
+
+/// Draws the reference visible set and notes, per frame, how many movers it
+/// holds and how many objects moved.
+struct MoverWatch<'a> {
+    movers: Vec<u32>,
+    seen: &'a RefCell<Vec<(usize, usize)>>,
+    visible: Vec<u32>,
+}
+impl Culler for MoverWatch<'_> {
+    fn name(&self) -> &str {
+        "mover-watch"
+    }
+    fn needs_reference(&self) -> bool {
+        true
+    }
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        let reference = input.reference_visible.unwrap();
+        let visible_movers = self.movers.iter().filter(|&&m| reference.contains(m)).count();
+        self.seen.borrow_mut().push((visible_movers, input.moved.len()));
+        self.visible.clear();
+        self.visible.extend(reference.iter());
+        ctx.draw(&self.visible);
+        TraversalStats::default()
+    }
+}
+
+#[test]
+fn conservative_modes_stay_exact_while_cars_drive_through_the_city() {
+    let frames = 24;
+    let (scene, hierarchy, path) = common::city("city:blocks=2,movers=40", frames);
+    let movers: Vec<u32> = scene.movers.iter().map(|m| m.object).collect();
+    let modes: Vec<&str> = occlu::cull::MODES
+        .iter()
+        .filter(|m| m.conservative)
+        .map(|m| m.name)
+        .collect();
+    for gpu in common::gpus() {
+        let seen = RefCell::new(Vec::new());
+        let mut cullers: Vec<Box<dyn Culler>> = modes
+            .iter()
+            .map(|m| create(m, &scene, &ModeParams::default()).unwrap())
+            .collect();
+        cullers.push(Box::new(MoverWatch {
+            movers: movers.clone(),
+            seen: &seen,
+            visible: Vec::new(),
+        }));
+        let out = run_modes(&gpu, &scene, &hierarchy, &path, &mut cullers, common::SMALL);
+        for row in &out.rows {
+            let at = format!("{} frame {} on {}", row.mode, row.frame, gpu.adapter);
+            assert_eq!(row.error_pixels, Some(0), "{at}");
+            assert_eq!(row.missed_objects, Some(0), "{at}");
+        }
+        let seen = seen.borrow();
+        assert_eq!(seen[0].1, 0, "frame 0 is where the scene was built");
+        assert!(seen[1..].iter().all(|&(_, moved)| moved == movers.len()), "{seen:?}");
+        let frames_with_movers = seen.iter().filter(|&&(visible, _)| visible > 0).count();
+        assert!(
+            frames_with_movers * 2 >= frames as usize,
+            "cars are in view in most frames: {seen:?}"
+        );
+        let refits = out.rows.iter().filter(|r| r.mode == "vfc" && r.maintenance_ms > 0.0);
+        assert_eq!(
+            refits.count(),
+            frames as usize - 1,
+            "vfc refits the hierarchy after every move"
+        );
     }
 }

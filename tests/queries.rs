@@ -78,7 +78,7 @@ fn queries_see_what_is_drawn() {
             tests: vec![(singles.clone(), BoxTest::Occlusion), (big.clone(), BoxTest::Occlusion)],
             results: &results,
         })];
-        let out = run_modes(&gpu, &scene, &path, &mut cullers, RES);
+        let out = run_modes(&gpu, &scene, &common::hierarchy(&scene), &path, &mut cullers, RES);
         let r = results.borrow();
         let seen: Vec<bool> = r[0].iter().map(|v| v.is_visible()).collect();
         assert_eq!(
@@ -128,9 +128,9 @@ fn run(scene: &Scene, path: &CameraPath, modes: &[&str], res: Resolution) -> Vec
         .map(|gpu| {
             let mut cullers: Vec<Box<dyn Culler>> = modes
                 .iter()
-                .map(|m| create(m, scene, &hierarchy, &ModeParams::default()).unwrap())
+                .map(|m| create(m, scene, &ModeParams::default()).unwrap())
                 .collect();
-            run_modes(gpu, scene, path, &mut cullers, res).rows
+            run_modes(gpu, scene, &hierarchy, path, &mut cullers, res).rows
         })
         .collect()
 }
@@ -193,9 +193,9 @@ fn query_modes_are_exact_on_the_city_and_omq_saves_round_trips() {
     for gpu in common::gpus() {
         let mut cullers: Vec<Box<dyn Culler>> = modes
             .iter()
-            .map(|m| create(m, &scene, &hierarchy, &ModeParams::default()).unwrap())
+            .map(|m| create(m, &scene, &ModeParams::default()).unwrap())
             .collect();
-        let rows = run_modes(&gpu, &scene, &path, &mut cullers, common::SMALL).rows;
+        let rows = run_modes(&gpu, &scene, &hierarchy, &path, &mut cullers, common::SMALL).rows;
         let sum =
             |mode: &str, f: fn(&FrameStats) -> u64| -> u64 { rows.iter().filter(|r| r.mode == mode).map(f).sum() };
         for r in &rows {
@@ -287,7 +287,7 @@ fn pixel_counts_match_the_ray_cast_footprint_and_query_counts() {
             tests: kinds.iter().map(|&k| (batch.clone(), k)).collect(),
             results: &results,
         })];
-        run_modes(&gpu, &scene, &path, &mut cullers, res);
+        run_modes(&gpu, &scene, &common::hierarchy(&scene), &path, &mut cullers, res);
         let r = results.borrow();
         let samples = |v: &BoxVisibility| match v {
             BoxVisibility::Samples(n) => *n,
@@ -333,11 +333,11 @@ fn city_runs(runs: &[(&str, &[&str])], frames: u32) -> Vec<Vec<FrameStats>> {
                     let params = ModeParams::parse(&items, &[mode]).unwrap();
                     Box::new(occlu::cull::Labeled {
                         label: label.to_string(),
-                        inner: create(mode, &scene, &hierarchy, &params).unwrap(),
+                        inner: create(mode, &scene, &params).unwrap(),
                     }) as Box<dyn Culler>
                 })
                 .collect();
-            run_modes(gpu, &scene, &path, &mut cullers, common::SMALL).rows
+            run_modes(gpu, &scene, &hierarchy, &path, &mut cullers, common::SMALL).rows
         })
         .collect()
 }

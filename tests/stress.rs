@@ -10,7 +10,7 @@ use glam::DVec3;
 use occlu::camera::{Camera, look_rotation};
 use occlu::cull::{Culler, MODES, ModeParams, create};
 use occlu::gpu::Resolution;
-use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::hierarchy::HierarchyParams;
 use occlu::scene::builtin::Rng;
 use occlu::stress::{DepthTolerance, StressCase, StressRow, run_case, select};
 use serde_json::Value;
@@ -68,9 +68,11 @@ fn the_scene_at_1e7_renders_the_image_at_the_origin_bit_for_bit() {
     );
     for gpu in gpus() {
         let depth = |case: &StressCase| {
-            let hierarchy = Hierarchy::build(&case.scene.objects, &HierarchyParams::default());
-            let mut dr = [create("dr", &case.scene, &hierarchy, &ModeParams::default()).unwrap()];
-            run_case(&gpu, case, &mut dr, SIZE, true, &mut |_| {}).unwrap().depths
+            let mut dr = [create("dr", &case.scene, &ModeParams::default()).unwrap()];
+            let hierarchy = HierarchyParams::default();
+            run_case(&gpu, case, &hierarchy, &mut dr, SIZE, true, &mut |_| {})
+                .unwrap()
+                .depths
         };
         let (a, b) = (depth(origin), depth(far));
         assert_eq!(a.len(), 10);
@@ -88,7 +90,16 @@ fn a_culler_that_drops_a_visible_object_fails_the_stress_verdict() {
     let case = select(&["on-face".to_string()]).unwrap().remove(0);
     for gpu in gpus() {
         let mut cullers: Vec<Box<dyn Culler>> = vec![Box::new(DropOneVisible(Vec::new()))];
-        let outcome = run_case(&gpu, &case, &mut cullers, SIZE, false, &mut |_| {}).unwrap();
+        let outcome = run_case(
+            &gpu,
+            &case,
+            &HierarchyParams::default(),
+            &mut cullers,
+            SIZE,
+            false,
+            &mut |_| {},
+        )
+        .unwrap();
         let row = StressRow::tally(&case.name, "drop-one", true, &outcome.rows);
         assert_eq!(row.missed_objects, case.cameras.len() as u64, "{row:?}");
         assert!(row.error_pixels > 0 && row.max_depth_error > 0.0, "{row:?}");
@@ -181,12 +192,11 @@ fn conservative_modes_draw_every_visible_object_of_random_scenes() {
                     ..HierarchyParams::default()
                 }
             };
-            let hierarchy = Hierarchy::build(&case.scene.objects, &params);
             let mut cullers = modes
                 .iter()
-                .map(|m| create(m, &case.scene, &hierarchy, &ModeParams::default()).unwrap())
+                .map(|m| create(m, &case.scene, &ModeParams::default()).unwrap())
                 .collect::<Vec<_>>();
-            let outcome = run_case(&gpu, case, &mut cullers, SIZE, false, &mut |_| {}).unwrap();
+            let outcome = run_case(&gpu, case, &params, &mut cullers, SIZE, false, &mut |_| {}).unwrap();
             for row in &outcome.rows {
                 let at = format!(
                     "{}: {} frame {} ({})",

@@ -56,8 +56,6 @@ use serde::Serialize;
 use super::traversal::{DepthQueue, children, draw_leaf, frustum_cull_subtree, in_frustum, view_depth};
 use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
 use crate::gpu::{BoxTest, BoxVisibility, FrameCtx};
-use crate::hierarchy::Hierarchy;
-use crate::scene::Scene;
 
 /// The threshold of Eq. 1, in pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -180,9 +178,7 @@ impl Serialize for EyeDistance {
     }
 }
 
-pub struct AdaptiveCulling<'a> {
-    scene: &'a Scene,
-    hierarchy: &'a Hierarchy,
+pub struct AdaptiveCulling {
     params: AcParams,
     depth_list: DepthQueue,
     result: Vec<BoxVisibility>,
@@ -190,11 +186,9 @@ pub struct AdaptiveCulling<'a> {
     stack: Vec<u32>,
 }
 
-impl<'a> AdaptiveCulling<'a> {
-    pub fn new(scene: &'a Scene, hierarchy: &'a Hierarchy, params: AcParams) -> Self {
+impl AdaptiveCulling {
+    pub fn new(params: AcParams) -> Self {
         AdaptiveCulling {
-            scene,
-            hierarchy,
             params,
             depth_list: DepthQueue::default(),
             result: Vec::with_capacity(1),
@@ -204,9 +198,13 @@ impl<'a> AdaptiveCulling<'a> {
     }
 }
 
-impl Culler for AdaptiveCulling<'_> {
+impl Culler for AdaptiveCulling {
     fn name(&self) -> &str {
         "ac"
+    }
+
+    fn traverses_hierarchy(&self) -> bool {
+        true
     }
 
     fn parameters(&self) -> serde_json::Value {
@@ -217,7 +215,8 @@ impl Culler for AdaptiveCulling<'_> {
         let start = Instant::now();
         let camera = input.camera;
         let frustum = camera.frustum();
-        let nodes = &self.hierarchy.nodes;
+        let (scene, hierarchy) = (input.scene, input.hierarchy);
+        let nodes = &hierarchy.nodes;
         let threshold = self.params.threshold.pixels(input.resolution.pixels());
         let eye_distance = match self.params.eye_distance {
             EyeDistance::Near => camera.near,
@@ -236,7 +235,7 @@ impl Culler for AdaptiveCulling<'_> {
         let root = &nodes[0];
         // The root itself only when it is a leaf (then it has no children).
         let uppermost = std::iter::once(0).filter(|_| root.is_leaf()).chain(children(root));
-        for node in in_frustum(self.hierarchy, uppermost, &frustum, &mut stats) {
+        for node in in_frustum(hierarchy, uppermost, &frustum, &mut stats) {
             self.depth_list
                 .push(node, view_depth(&nodes[node as usize].bounds, camera));
         }
@@ -249,8 +248,8 @@ impl Culler for AdaptiveCulling<'_> {
                 while let Some(node) = rest {
                     stats.nodes_past_budget += 1;
                     frustum_cull_subtree(
-                        self.scene,
-                        self.hierarchy,
+                        scene,
+                        hierarchy,
                         node,
                         &frustum,
                         &mut self.stack,
@@ -284,9 +283,9 @@ impl Culler for AdaptiveCulling<'_> {
                 }
             }
             if node.is_leaf() {
-                draw_leaf(ctx, self.scene, self.hierarchy, node, &frustum, &mut self.objects);
+                draw_leaf(ctx, scene, hierarchy, node, &frustum, &mut self.objects);
             } else {
-                for child in in_frustum(self.hierarchy, children(node), &frustum, &mut stats) {
+                for child in in_frustum(hierarchy, children(node), &frustum, &mut stats) {
                     self.depth_list
                         .push(child, view_depth(&nodes[child as usize].bounds, camera));
                 }

@@ -17,6 +17,7 @@ mod vfc;
 use std::collections::BTreeMap;
 use std::fmt::Display;
 use std::str::FromStr;
+use std::time::Duration;
 
 use crate::camera::Camera;
 use crate::gpu::{FrameCtx, GpuContext, Resolution};
@@ -36,6 +37,13 @@ pub struct FrameInput<'a> {
     pub frame: u32,
     pub camera: &'a Camera,
     pub resolution: Resolution,
+    /// The scene at this frame: movers placed, object bounds current.
+    pub scene: &'a Scene,
+    /// The shared hierarchy, refit around moved objects for modes whose
+    /// [`Culler::traverses_hierarchy`] is true.
+    pub hierarchy: &'a Hierarchy,
+    /// Objects whose pose changed since the previous frame.
+    pub moved: &'a [u32],
     /// The objects that own at least one pixel of the reference frame; given
     /// only to modes whose [`Culler::needs_reference`] is true (the oracle).
     pub reference_visible: Option<&'a ObjectSet>,
@@ -67,6 +75,9 @@ pub struct TraversalStats {
     /// Nodes left when the culling budget ran out, only frustum-culled and
     /// drawn (cost-adaptive culling, 002 Eq. 2).
     pub nodes_past_budget: u64,
+    /// Time spent keeping the mode's own spatial structure current with
+    /// moved objects (part of its CPU time).
+    pub maintenance: Duration,
 }
 
 pub trait Culler {
@@ -80,6 +91,12 @@ pub trait Culler {
 
     /// Whether the mode needs the reference visible set (only the oracle).
     fn needs_reference(&self) -> bool {
+        false
+    }
+
+    /// Whether the mode traverses the shared hierarchy, which is then refit
+    /// around moved objects at the start of its timed frame.
+    fn traverses_hierarchy(&self) -> bool {
         false
     }
 
@@ -327,12 +344,12 @@ pub fn parse_modes(list: &[String]) -> Result<Vec<&'static str>, ModeError> {
 
 /// A culler run under another name: one value of a parameter sweep, e.g.
 /// `ac[threshold=50]`.
-pub struct Labeled<'a> {
+pub struct Labeled {
     pub label: String,
-    pub inner: Box<dyn Culler + 'a>,
+    pub inner: Box<dyn Culler>,
 }
 
-impl Culler for Labeled<'_> {
+impl Culler for Labeled {
     fn name(&self) -> &str {
         &self.label
     }
@@ -342,28 +359,23 @@ impl Culler for Labeled<'_> {
     fn needs_reference(&self) -> bool {
         self.inner.needs_reference()
     }
+    fn traverses_hierarchy(&self) -> bool {
+        self.inner.traverses_hierarchy()
+    }
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
         self.inner.frame(ctx, input)
     }
 }
 
-/// Creates the culler of a mode named by [`parse_modes`].
-pub fn create<'a>(
-    name: &str,
-    scene: &'a Scene,
-    hierarchy: &'a Hierarchy,
-    params: &ModeParams,
-) -> Result<Box<dyn Culler + 'a>, ModeError> {
+/// Creates the culler of a mode named by [`parse_modes`]; scratch space is
+/// sized for `scene`, which each frame then brings in [`FrameInput`].
+pub fn create(name: &str, scene: &Scene, params: &ModeParams) -> Result<Box<dyn Culler>, ModeError> {
     Ok(match name {
         "dr" => Box::new(DirectRendering::new(scene)),
-        "vfc" => Box::new(FrustumCulling::new(scene, hierarchy)),
-        "sq" => Box::new(SingleQueries::new(scene, hierarchy)),
-        "omq" => Box::new(OccupancyMapQueries::new(
-            scene,
-            hierarchy,
-            OmqParams::from_params(params)?,
-        )),
-        "ac" => Box::new(AdaptiveCulling::new(scene, hierarchy, AcParams::from_params(params)?)),
+        "vfc" => Box::new(FrustumCulling::new(scene)),
+        "sq" => Box::new(SingleQueries::new()),
+        "omq" => Box::new(OccupancyMapQueries::new(OmqParams::from_params(params)?)),
+        "ac" => Box::new(AdaptiveCulling::new(AcParams::from_params(params)?)),
         "oracle" => Box::new(Oracle::new()),
         other => return Err(ModeError::Unknown(other.to_string())),
     })

@@ -40,6 +40,15 @@ use crate::gpu::{BoxTest, BoxVisibility, FrameCtx, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::scene::Scene;
 
+/// What one frame's traversal looks at.
+struct View<'a> {
+    scene: &'a Scene,
+    hierarchy: &'a Hierarchy,
+    camera: &'a Camera,
+    frustum: Frustum,
+    eye: DVec3,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct OmqParams {
     /// Occupancy Map cells across and down the screen.
@@ -75,9 +84,7 @@ enum Destination {
     Pending,
 }
 
-pub struct OccupancyMapQueries<'a> {
-    scene: &'a Scene,
-    hierarchy: &'a Hierarchy,
+pub struct OccupancyMapQueries {
     params: OmqParams,
     /// Carried from frame to frame.
     max_tests: u32,
@@ -90,11 +97,9 @@ pub struct OccupancyMapQueries<'a> {
     objects: Vec<u32>,
 }
 
-impl<'a> OccupancyMapQueries<'a> {
-    pub fn new(scene: &'a Scene, hierarchy: &'a Hierarchy, params: OmqParams) -> Self {
+impl OccupancyMapQueries {
+    pub fn new(params: OmqParams) -> Self {
         OccupancyMapQueries {
-            scene,
-            hierarchy,
             params,
             max_tests: params.initial_max_tests.max(1),
             om: OccupancyMap::new(params.om.width, params.om.height),
@@ -107,34 +112,39 @@ impl<'a> OccupancyMapQueries<'a> {
         }
     }
 
-    fn rect(&self, node: u32, camera: &Camera) -> ScreenRect {
-        let bounds = &self.hierarchy.nodes[node as usize].bounds;
-        ScreenRect::of_box(bounds, camera, self.om.cols(), self.om.rows())
+    fn rect(&self, view: &View, node: u32) -> ScreenRect {
+        let bounds = &view.hierarchy.nodes[node as usize].bounds;
+        ScreenRect::of_box(bounds, view.camera, self.om.cols(), self.om.rows())
     }
 
     /// Frustum-tests the children of `node`; those inside go to `into`.
-    fn open(&mut self, node: u32, frustum: &Frustum, eye: DVec3, into: Destination, stats: &mut TraversalStats) {
-        let hierarchy = self.hierarchy;
-        for child in in_frustum(hierarchy, children(&hierarchy.nodes[node as usize]), frustum, stats) {
+    fn open(&mut self, view: &View, node: u32, into: Destination, stats: &mut TraversalStats) {
+        let hierarchy = view.hierarchy;
+        for child in in_frustum(
+            hierarchy,
+            children(&hierarchy.nodes[node as usize]),
+            &view.frustum,
+            stats,
+        ) {
             match into {
                 Destination::Queue => self
                     .queue
-                    .push(child, nearest_corner(&hierarchy.nodes[child as usize].bounds, eye)),
+                    .push(child, nearest_corner(&hierarchy.nodes[child as usize].bounds, view.eye)),
                 Destination::Pending => self.pending.push(child),
             }
         }
     }
 
-    fn draw_leaf(&mut self, ctx: &mut FrameCtx, node: u32, frustum: &Frustum) {
-        let n = &self.hierarchy.nodes[node as usize];
-        draw_leaf(ctx, self.scene, self.hierarchy, n, frustum, &mut self.objects);
+    fn draw_leaf(&mut self, ctx: &mut FrameCtx, view: &View, node: u32) {
+        let n = &view.hierarchy.nodes[node as usize];
+        draw_leaf(ctx, view.scene, view.hierarchy, n, &view.frustum, &mut self.objects);
     }
 
     /// One multiple occlusion query over the test list: visible leaves are
     /// drawn, visible inner nodes' children become pending.
-    fn query_test_list(&mut self, ctx: &mut FrameCtx, frustum: &Frustum, eye: DVec3, stats: &mut TraversalStats) {
+    fn query_test_list(&mut self, ctx: &mut FrameCtx, view: &View, stats: &mut TraversalStats) {
         self.boxes.clear();
-        let nodes = &self.hierarchy.nodes;
+        let nodes = &view.hierarchy.nodes;
         self.boxes
             .extend(self.test_list.iter().map(|&n| nodes[n as usize].bounds));
         ctx.test_boxes(&self.boxes, BoxTest::Occlusion, &mut self.results);
@@ -144,18 +154,22 @@ impl<'a> OccupancyMapQueries<'a> {
             if !self.results[k].is_visible() {
                 stats.nodes_culled_occlusion += 1;
             } else if nodes[node as usize].is_leaf() {
-                self.draw_leaf(ctx, node, frustum);
+                self.draw_leaf(ctx, view, node);
             } else {
-                self.open(node, frustum, eye, Destination::Pending, stats);
+                self.open(view, node, Destination::Pending, stats);
             }
         }
         self.test_list.clear();
     }
 }
 
-impl Culler for OccupancyMapQueries<'_> {
+impl Culler for OccupancyMapQueries {
     fn name(&self) -> &str {
         "omq"
+    }
+
+    fn traverses_hierarchy(&self) -> bool {
+        true
     }
 
     fn parameters(&self) -> serde_json::Value {
@@ -164,7 +178,14 @@ impl Culler for OccupancyMapQueries<'_> {
 
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
         let camera = input.camera;
-        let (frustum, eye) = (camera.frustum(), camera.eye);
+        let view = View {
+            scene: input.scene,
+            hierarchy: input.hierarchy,
+            camera,
+            frustum: camera.frustum(),
+            eye: camera.eye,
+        };
+        let (frustum, eye) = (&view.frustum, view.eye);
         let mut stats = TraversalStats {
             nodes_visited: 1,
             ..Default::default()
@@ -172,7 +193,7 @@ impl Culler for OccupancyMapQueries<'_> {
         self.om.clear();
         self.queue.clear();
         self.pending.clear();
-        let root = &self.hierarchy.nodes[0];
+        let root = &view.hierarchy.nodes[0];
         if frustum.classify(&root.bounds) == Containment::Outside {
             stats.nodes_culled_frustum += 1;
             return stats;
@@ -181,14 +202,14 @@ impl Culler for OccupancyMapQueries<'_> {
 
         // Stage 1: visible nodes in front, found by the Occupancy Map.
         while let Some(node) = self.queue.pop() {
-            let rect = self.rect(node, camera);
+            let rect = self.rect(&view, node);
             if self.om.any_empty(&rect) {
                 stats.queries_skipped += 1;
-                if self.hierarchy.nodes[node as usize].is_leaf() {
-                    self.draw_leaf(ctx, node, &frustum);
+                if view.hierarchy.nodes[node as usize].is_leaf() {
+                    self.draw_leaf(ctx, &view, node);
                     self.om.mark(&rect);
                 } else {
-                    self.open(node, &frustum, eye, Destination::Queue, &mut stats);
+                    self.open(&view, node, Destination::Queue, &mut stats);
                 }
             } else {
                 self.pending.push(node);
@@ -200,11 +221,11 @@ impl Culler for OccupancyMapQueries<'_> {
         while !self.pending.is_empty() && batches < self.max_tests {
             for node in std::mem::take(&mut self.pending) {
                 self.queue
-                    .push(node, nearest_corner(&self.hierarchy.nodes[node as usize].bounds, eye));
+                    .push(node, nearest_corner(&view.hierarchy.nodes[node as usize].bounds, eye));
             }
             self.om.clear();
             while let Some(node) = self.queue.pop() {
-                let rect = self.rect(node, camera);
+                let rect = self.rect(&view, node);
                 if self.om.any_empty(&rect) {
                     self.test_list.push(node);
                     self.om.mark(&rect);
@@ -212,14 +233,14 @@ impl Culler for OccupancyMapQueries<'_> {
                     self.pending.push(node);
                 }
             }
-            self.query_test_list(ctx, &frustum, eye, &mut stats);
+            self.query_test_list(ctx, &view, &mut stats);
             batches += 1;
         }
 
         // Stage 3: brute-force batches of everything still pending.
         while !self.pending.is_empty() {
             std::mem::swap(&mut self.test_list, &mut self.pending);
-            self.query_test_list(ctx, &frustum, eye, &mut stats);
+            self.query_test_list(ctx, &view, &mut stats);
             batches += 1;
         }
 

@@ -14,37 +14,32 @@ use super::traversal::{DepthQueue, draw_leaf, nearest_corner};
 use super::{Culler, FrameInput, TraversalStats};
 use crate::camera::Containment;
 use crate::gpu::{BoxTest, BoxVisibility, FrameCtx};
-use crate::hierarchy::Hierarchy;
-use crate::scene::Scene;
 
-pub struct SingleQueries<'a> {
-    scene: &'a Scene,
-    hierarchy: &'a Hierarchy,
+#[derive(Default)]
+pub struct SingleQueries {
     queue: DepthQueue,
     objects: Vec<u32>,
     result: Vec<BoxVisibility>,
 }
 
-impl<'a> SingleQueries<'a> {
-    pub fn new(scene: &'a Scene, hierarchy: &'a Hierarchy) -> Self {
-        SingleQueries {
-            scene,
-            hierarchy,
-            queue: DepthQueue::default(),
-            objects: Vec::new(),
-            result: Vec::with_capacity(1),
-        }
+impl SingleQueries {
+    pub fn new() -> Self {
+        SingleQueries::default()
     }
 }
 
-impl Culler for SingleQueries<'_> {
+impl Culler for SingleQueries {
     fn name(&self) -> &str {
         "sq"
     }
 
+    fn traverses_hierarchy(&self) -> bool {
+        true
+    }
+
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
         let (frustum, eye) = (input.camera.frustum(), input.camera.eye);
-        let nodes = &self.hierarchy.nodes;
+        let nodes = &input.hierarchy.nodes;
         let mut stats = TraversalStats::default();
         self.queue.clear();
         self.queue.push(0, nearest_corner(&nodes[0].bounds, eye));
@@ -61,7 +56,7 @@ impl Culler for SingleQueries<'_> {
                 continue;
             }
             if node.is_leaf() {
-                draw_leaf(ctx, self.scene, self.hierarchy, node, &frustum, &mut self.objects);
+                draw_leaf(ctx, input.scene, input.hierarchy, node, &frustum, &mut self.objects);
             } else {
                 for child in node.children() {
                     self.queue.push(child as u32, nearest_corner(&nodes[child].bounds, eye));

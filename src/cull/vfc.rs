@@ -15,31 +15,30 @@
 use super::traversal::frustum_cull_subtree;
 use super::{Culler, FrameInput, TraversalStats};
 use crate::gpu::FrameCtx;
-use crate::hierarchy::Hierarchy;
 use crate::scene::Scene;
 
-pub struct FrustumCulling<'a> {
-    scene: &'a Scene,
-    hierarchy: &'a Hierarchy,
+pub struct FrustumCulling {
     /// Reused between frames: the traversal allocates nothing.
     visible: Vec<u32>,
     stack: Vec<u32>,
 }
 
-impl<'a> FrustumCulling<'a> {
-    pub fn new(scene: &'a Scene, hierarchy: &'a Hierarchy) -> Self {
+impl FrustumCulling {
+    pub fn new(scene: &Scene) -> Self {
         FrustumCulling {
-            scene,
-            hierarchy,
             visible: Vec::with_capacity(scene.objects.len()),
             stack: Vec::new(),
         }
     }
 }
 
-impl Culler for FrustumCulling<'_> {
+impl Culler for FrustumCulling {
     fn name(&self) -> &str {
         "vfc"
+    }
+
+    fn traverses_hierarchy(&self) -> bool {
+        true
     }
 
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
@@ -47,8 +46,8 @@ impl Culler for FrustumCulling<'_> {
         let mut stats = TraversalStats::default();
         self.visible.clear();
         frustum_cull_subtree(
-            self.scene,
-            self.hierarchy,
+            input.scene,
+            input.hierarchy,
             0,
             &frustum,
             &mut self.stack,

@@ -2,13 +2,13 @@
 //! every mode renders, timed) and `reference` (depth and object ids for the
 //! error measure, untimed). Both share one vertex stage.
 
-use glam::{DAffine3, Mat4};
+use glam::Mat4;
 use wgpu::util::DeviceExt;
 
 use super::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, RenderTargets};
 use super::{GpuContext, GpuError};
 use crate::camera::Camera;
-use crate::scene::Scene;
+use crate::scene::{Object, Scene};
 
 /// The index range an object draws.
 #[derive(Clone, Copy, Debug)]
@@ -24,7 +24,6 @@ pub struct GpuScene {
     /// One camera-relative model-view matrix per object, rewritten per frame.
     object_data: wgpu::Buffer,
     pub draws: Vec<DrawRange>,
-    transforms: Vec<DAffine3>,
     /// Reused every frame, so the upload allocates nothing.
     staging: Vec<Mat4>,
 }
@@ -84,7 +83,6 @@ impl GpuScene {
                     }
                 })
                 .collect(),
-            transforms: scene.objects.iter().map(|o| o.transform).collect(),
             staging: Vec::with_capacity(scene.objects.len()),
         })
     }
@@ -219,12 +217,13 @@ impl SceneRenderer {
     }
 
     /// Uploads the camera uniform and every object's camera-relative
-    /// model-view matrix (computed in f64, rounded to f32 last).
-    pub fn set_camera(&mut self, gpu: &GpuContext, camera: &Camera) {
+    /// model-view matrix (computed in f64 from the objects' current
+    /// transforms, rounded to f32 last).
+    pub fn set_camera(&mut self, gpu: &GpuContext, camera: &Camera, objects: &[Object]) {
         let scene = &mut self.scene;
         scene.staging.clear();
-        scene.staging.extend(scene.transforms.iter().map(|t| {
-            let mv = camera.model_view(t);
+        scene.staging.extend(objects.iter().map(|o| {
+            let mv = camera.model_view(&o.transform);
             glam::DMat4::from(mv).as_mat4()
         }));
         gpu.queue

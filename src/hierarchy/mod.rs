@@ -95,6 +95,25 @@ impl Hierarchy {
         }
     }
 
+    /// Recomputes every box bottom-up from the objects' current bounds,
+    /// keeping the topology: what moving objects cost a bounding-volume
+    /// hierarchy each frame (children come after their parents, so one
+    /// backward sweep suffices).
+    pub fn refit(&mut self, objects: &[Object]) {
+        for i in (0..self.nodes.len()).rev() {
+            let node = self.nodes[i];
+            self.nodes[i].bounds = if node.is_leaf() {
+                self.subtree_objects(&node)
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, &o| b.union(objects[o as usize].bounds))
+            } else {
+                self.nodes[node.children()]
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, child| b.union(child.bounds))
+            };
+        }
+    }
+
     pub fn root(&self) -> &Node {
         &self.nodes[0]
     }
@@ -328,6 +347,24 @@ mod tests {
         let s = h.stats();
         assert_eq!(s.nodes, h.nodes.len());
         assert!(s.depth >= 6 && s.depth <= 20, "depth {}", s.depth);
+    }
+
+    #[test]
+    fn refit_follows_moved_objects_and_keeps_the_topology() {
+        let mut objects = grid_objects(40);
+        let mut h = Hierarchy::build(&objects, &HierarchyParams::default());
+        let before = h.clone();
+        for (i, o) in objects.iter_mut().enumerate().filter(|(i, _)| i % 3 == 0) {
+            let shift = DVec3::new(i as f64 * 7.0, -50.0, 3.0);
+            o.bounds = Aabb::new(o.bounds.min + shift, o.bounds.max + shift * 2.0);
+        }
+        h.refit(&objects);
+        check_invariants(&h, &objects);
+        assert_eq!(h.objects, before.objects);
+        for (a, b) in h.nodes.iter().zip(&before.nodes) {
+            assert_eq!((a.first_child, a.child_count), (b.first_child, b.child_count));
+        }
+        assert_ne!(h.root().bounds, before.root().bounds);
     }
 
     #[test]

@@ -19,6 +19,12 @@ pub struct FrameStats {
     /// Time the mode spent deciding what to draw: its frame minus the time
     /// inside GPU operations.
     pub cpu_ms: f64,
+    /// Part of cpu_ms spent keeping a spatial structure current with moved
+    /// objects: the refit of the shared hierarchy, or a mode's own tree
+    /// updates (chc). 0 in static scenes and in files written before the
+    /// column existed.
+    #[serde(default)]
+    pub maintenance_ms: f64,
     /// GPU time between the frame's first and last command (timestamp
     /// queries); empty where the adapter has none.
     pub gpu_ms: Option<f64>,
@@ -76,6 +82,7 @@ impl FrameStats {
             frame: 0,
             frame_ms: 0.0,
             cpu_ms: 0.0,
+            maintenance_ms: 0.0,
             gpu_ms: None,
             objects_drawn: 0,
             triangles_drawn: 0,

@@ -67,6 +67,7 @@ type Column = fn(&FrameStats) -> Option<f64>;
 const COLUMNS: &[(&str, Column)] = &[
     ("frame_ms", |r| Some(r.frame_ms)),
     ("cpu_ms", |r| Some(r.cpu_ms)),
+    ("maintenance_ms", |r| Some(r.maintenance_ms)),
     ("gpu_ms", |r| r.gpu_ms),
     ("objects_drawn", |r| Some(r.objects_drawn as f64)),
     ("triangles_drawn", |r| Some(r.triangles_drawn as f64)),

@@ -92,6 +92,9 @@ pub struct SceneFacts {
     pub bounds_min: [f64; 3],
     pub bounds_max: [f64; 3],
     pub hierarchy: HierarchyStats,
+    /// Objects that move from frame to frame.
+    #[serde(default)]
+    pub movers: usize,
     pub warnings: Vec<String>,
     pub load_ms: f64,
     pub build_ms: f64,
@@ -108,6 +111,7 @@ impl SceneFacts {
             bounds_min: scene.bounds.min.to_array(),
             bounds_max: scene.bounds.max.to_array(),
             hierarchy: hierarchy.stats(),
+            movers: scene.movers.len(),
             warnings: scene.warnings.clone(),
             load_ms,
             build_ms,

@@ -9,6 +9,7 @@
 pub mod builtin;
 mod cluster;
 mod gltf;
+pub mod motion;
 mod obj;
 mod validate;
 
@@ -18,6 +19,7 @@ use glam::{DAffine3, DVec3};
 
 use crate::bounds::Aabb;
 use crate::text::one_line;
+use motion::{Mover, Route};
 pub use validate::{GeometryError, MAX_COORDINATE, within_range};
 
 /// Default triangle budget of one cluster: meshes above it are split.
@@ -67,11 +69,28 @@ pub struct Scene {
     /// A street-level polyline a procedural scene suggests for walks; `None`
     /// for loaded models, which get a generic walk.
     pub walk_hint: Option<Vec<DVec3>>,
+    /// Objects that move from frame to frame (built-in scenes only); the
+    /// objects above stand where frame 0 puts them.
+    pub movers: Vec<Mover>,
 }
 
 impl Scene {
     pub fn triangles(&self) -> u64 {
         self.objects.iter().map(|o| u64::from(o.triangles)).sum()
+    }
+
+    /// Puts every mover where `frame` has it (transform and world bounds)
+    /// and appends the ids of the objects that changed to `moved`.
+    pub fn pose(&mut self, frame: u32, moved: &mut Vec<u32>) {
+        for mover in &self.movers {
+            let transform = mover.transform(frame);
+            let object = &mut self.objects[mover.object as usize];
+            if object.transform != transform {
+                object.transform = transform;
+                object.bounds = self.meshes[object.mesh as usize].bounds.transformed(&transform);
+                moved.push(mover.object);
+            }
+        }
     }
 }
 
@@ -180,6 +199,7 @@ pub struct SceneBuilder {
     degenerate: Vec<(String, usize)>,
     warnings: Vec<String>,
     walk_hint: Option<Vec<DVec3>>,
+    movers: Vec<Mover>,
 }
 
 impl SceneBuilder {
@@ -194,6 +214,7 @@ impl SceneBuilder {
             degenerate: Vec::new(),
             warnings: Vec::new(),
             walk_hint: None,
+            movers: Vec::new(),
         }
     }
 
@@ -236,6 +257,37 @@ impl SceneBuilder {
     /// transform that is not finite or puts geometry beyond
     /// [`MAX_COORDINATE`] is an error naming the object.
     pub fn add_object(&mut self, name: &str, group: &MeshGroup, transform: DAffine3) -> Result<(), GeometryError> {
+        self.place(name, group, transform).map(drop)
+    }
+
+    /// Places `group` on `route`, driven at `speed` units per frame from
+    /// `start` units along it; it stands where frame 0 puts it.
+    pub fn add_mover(
+        &mut self,
+        name: &str,
+        group: &MeshGroup,
+        route: &Route,
+        speed: f64,
+        start: f64,
+    ) -> Result<(), GeometryError> {
+        let at_rest = Mover::new(0, route.clone(), speed, start, DAffine3::IDENTITY);
+        let first = self.place(name, group, at_rest.transform(0))?.start;
+        for (k, &(_, origin)) in group.clusters.iter().enumerate() {
+            let local = DAffine3::from_translation(origin);
+            let object = (first + k) as u32;
+            self.movers.push(Mover::new(object, route.clone(), speed, start, local));
+        }
+        Ok(())
+    }
+
+    /// Adds one object per cluster of `group`; returns their ids.
+    fn place(
+        &mut self,
+        name: &str,
+        group: &MeshGroup,
+        transform: DAffine3,
+    ) -> Result<std::ops::Range<usize>, GeometryError> {
+        let first = self.objects.len();
         let name = &one_line(name);
         let split = group.clusters.len() > 1;
         for (i, &(mesh, origin)) in group.clusters.iter().enumerate() {
@@ -255,7 +307,7 @@ impl SceneBuilder {
                 triangles: m.triangles(),
             });
         }
-        Ok(())
+        Ok(first..self.objects.len())
     }
 
     /// Records a problem that does not stop the load; it is reported by
@@ -302,6 +354,7 @@ impl SceneBuilder {
             bounds,
             warnings,
             walk_hint: self.walk_hint,
+            movers: self.movers,
         })
     }
 }

@@ -20,6 +20,7 @@ use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::FrameStats;
 use crate::report::SkippedMode;
 use crate::scene::Scene;
+use crate::world::World;
 
 /// One hard case: a scene and the cameras of its frames.
 pub struct StressCase {
@@ -276,13 +277,13 @@ pub fn run(
     };
     for case in cases {
         events(StressEvent::Case { case });
-        let hierarchy = Hierarchy::build(&case.scene.objects, &HierarchyParams::default());
         let mut cullers = modes
             .iter()
-            .map(|m| create(m.name, &case.scene, &hierarchy, &ModeParams::default()))
+            .map(|m| create(m.name, &case.scene, &ModeParams::default()))
             .collect::<Result<Vec<_>, _>>()?;
         let keep_depth = case.baseline.is_some() || is_baseline(case);
-        let outcome = run_case(gpu, case, &mut cullers, resolution, keep_depth, &mut |_| {
+        let hierarchy = HierarchyParams::default();
+        let outcome = run_case(gpu, case, &hierarchy, &mut cullers, resolution, keep_depth, &mut |_| {
             done += 1;
             events(StressEvent::Frame { done, total });
         })?;
@@ -331,11 +332,13 @@ pub struct CaseOutcome {
     pub depths: Vec<Vec<f32>>,
 }
 
-/// Runs `cullers` over one case's frames with error measurement; `frame_done`
-/// is called after each frame.
+/// Runs `cullers` over one case's frames, on a hierarchy built with
+/// `hierarchy`, with error measurement; `frame_done` is called after each
+/// frame.
 pub fn run_case(
     gpu: &GpuContext,
     case: &StressCase,
+    hierarchy: &HierarchyParams,
     cullers: &mut [Box<dyn Culler + '_>],
     resolution: Resolution,
     keep_depth: bool,
@@ -346,7 +349,9 @@ pub fn run_case(
         resolution,
         measure_error: true,
     };
-    let mut session = Session::new(gpu, &case.scene, cullers.len(), true, &options)?;
+    let hierarchy = Hierarchy::build(&case.scene.objects, hierarchy);
+    let mut world = World::new(case.scene.clone(), hierarchy);
+    let mut session = Session::new(gpu, &world.scene, cullers.len(), true, &options)?;
     let mut outcome = CaseOutcome {
         rows: Vec::new(),
         depths: Vec::new(),
@@ -358,7 +363,7 @@ pub fn run_case(
         };
         outcome
             .rows
-            .extend(session.frame(frame as u32, &camera, cullers, frame));
+            .extend(session.frame(frame as u32, &camera, &mut world, cullers, frame));
         if keep_depth {
             outcome
                 .depths

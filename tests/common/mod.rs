@@ -14,6 +14,7 @@ use occlu::cull::{Culler, FrameInput, TraversalStats};
 use occlu::gpu::{BackendChoice, FrameCtx, GpuContext, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::scene::{LoadOptions, Scene, SceneBuilder, SceneSpec, load};
+use occlu::world::World;
 
 /// Runs the `occlu` binary built for these tests.
 pub fn occlu(args: &[&str]) -> Output {
@@ -129,10 +130,17 @@ pub fn boxes(list: &[(DVec3, DVec3)]) -> Scene {
     b.finish().unwrap()
 }
 
-/// Runs `cullers` over `path` with error measurement and no warm-up.
+/// The hierarchy `occlu bench` builds over `scene`.
+pub fn hierarchy(scene: &Scene) -> Hierarchy {
+    Hierarchy::build(&scene.objects, &HierarchyParams::default())
+}
+
+/// Runs `cullers` over `path` in `scene` (its movers moving) with
+/// error measurement and no warm-up.
 pub fn run_modes(
     gpu: &GpuContext,
     scene: &Scene,
+    hierarchy: &Hierarchy,
     path: &CameraPath,
     cullers: &mut [Box<dyn Culler + '_>],
     resolution: Resolution,
@@ -142,14 +150,20 @@ pub fn run_modes(
         resolution,
         measure_error: true,
     };
-    run(gpu, scene, path, cullers, &options, &mut |_, _| {}).unwrap()
+    let mut world = World::new(scene.clone(), hierarchy.clone());
+    run(gpu, &mut world, path, cullers, &options, &mut |_, _| {}).unwrap()
 }
 
 /// The small built-in city (`city:blocks=2`), its hierarchy, and its street
 /// walk sampled at `frames` frames: the shared workload of the GPU tests.
 pub fn small_city(frames: u32) -> (Scene, Hierarchy, CameraPath) {
-    let scene = load(&SceneSpec::Builtin("city:blocks=2".into()), &LoadOptions::default()).unwrap();
-    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    city("city:blocks=2", frames)
+}
+
+/// The built-in city `spec`, its hierarchy and its street walk.
+pub fn city(spec: &str, frames: u32) -> (Scene, Hierarchy, CameraPath) {
+    let scene = load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).unwrap();
+    let hierarchy = hierarchy(&scene);
     let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, frames), "walk").unwrap();
     (scene, hierarchy, path)
 }

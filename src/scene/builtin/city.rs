@@ -5,7 +5,8 @@
 //! A grid of `blocks`×`blocks` blocks, each holding 2×2 buildings of 2–14
 //! floors. Every building is a closed shell (walls, floor bands, pilasters,
 //! roof units) around one furniture object per floor, which the street can
-//! never see; cars stand in the lanes. Most triangles are furniture, so
+//! never see; cars stand in the lanes, and `movers` more drive round the
+//! blocks. Most triangles are furniture, so
 //! depth complexity is high: direct rendering pays for all of it, view-frustum
 //! culling for what lies in the frustum, and an exact occlusion culler for
 //! little more than the street walls.
@@ -17,8 +18,11 @@ use glam::{DAffine3, DQuat, DVec3};
 
 use super::shapes::{cuboid, cylinder};
 use super::{Params, Rng, read_params};
+use crate::scene::motion::Route;
 use crate::scene::{MeshGroup, SceneBuilder, TriangleSoup};
 
+/// Movers beyond this are surely a mistake.
+const MAX_MOVERS: u64 = 100_000;
 /// Side of a lot; a block holds 2×2 lots.
 const LOT: f64 = 32.0;
 const BLOCK: f64 = 2.0 * LOT;
@@ -28,39 +32,59 @@ const PITCH: f64 = BLOCK + STREET;
 const FLOOR_HEIGHT: f64 = 3.5;
 /// Camera height of the street walk.
 pub const EYE_HEIGHT: f64 = 1.7;
+/// Moving cars keep this far from the centre line of a street: clear of the
+/// walk's camera on the centre line and of the cars parked at ±4 m.
+const DRIVING_LANE: f64 = 1.5;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CityParams {
     /// Blocks per side.
     pub blocks: u32,
     pub seed: u64,
+    /// Cars driving round the blocks (001 §4's moving objects).
+    pub movers: u32,
 }
 
 impl Default for CityParams {
     /// 8×8 blocks: about 1.5 M triangles, a few hundred milliseconds of
     /// direct rendering per frame on llvmpipe.
     fn default() -> Self {
-        CityParams { blocks: 8, seed: 1 }
+        CityParams {
+            blocks: 8,
+            seed: 1,
+            movers: 0,
+        }
     }
 }
 
 impl CityParams {
     pub(super) fn from_params(params: &Params) -> Result<Self, String> {
         let d = CityParams::default();
-        let (mut blocks, mut seed) = (u64::from(d.blocks), d.seed);
+        let (mut blocks, mut seed, mut movers) = (u64::from(d.blocks), d.seed, u64::from(d.movers));
         read_params(
             params,
-            &mut [("blocks", &mut blocks, 1..=64), ("seed", &mut seed, 0..=u64::MAX)],
+            &mut [
+                ("blocks", &mut blocks, 1..=64),
+                ("seed", &mut seed, 0..=u64::MAX),
+                ("movers", &mut movers, 0..=MAX_MOVERS),
+            ],
         )?;
         Ok(CityParams {
             blocks: blocks as u32,
             seed,
+            movers: movers as u32,
         })
     }
 
-    /// The canonical spec, with every parameter spelled out.
+    /// The canonical spec, with every parameter spelled out (movers only
+    /// when there are some, so static specs read as before).
     pub fn spec(&self) -> String {
-        format!("city:blocks={},seed={}", self.blocks, self.seed)
+        let movers = if self.movers > 0 {
+            format!(",movers={}", self.movers)
+        } else {
+            String::new()
+        };
+        format!("city:blocks={},seed={}{movers}", self.blocks, self.seed)
     }
 }
 
@@ -85,7 +109,10 @@ pub fn generate(p: &CityParams, builder: &mut SceneBuilder) {
             }
         }
     }
-    cars(n, &mut rng, builder);
+    let models = car_models(builder);
+    parked_cars(n, &models, &mut rng, builder);
+    // Their own generator: adding movers leaves the static city as it was.
+    moving_cars(n, p.movers, &models, &mut Rng::new(p.seed ^ 0x6d6f_7665), builder);
     let (m, mx) = (n / 2, (n / 2).max(1));
     let at = |x: f64, z: f64| DVec3::new(x, EYE_HEIGHT, z);
     builder.set_walk_hint(vec![
@@ -236,13 +263,17 @@ fn table(room: &mut TriangleSoup, at: DVec3, w: f64, d: f64, h: f64) {
     }
 }
 
-/// Three car models, instanced along every street segment.
-fn cars(n: u32, rng: &mut Rng, builder: &mut SceneBuilder) {
-    let models: Vec<MeshGroup> = [(4.4, 1.8, 1.5), (3.6, 1.6, 1.45), (5.2, 2.0, 2.2)]
+/// Three car models.
+fn car_models(builder: &mut SceneBuilder) -> Vec<MeshGroup> {
+    [(4.4, 1.8, 1.5), (3.6, 1.6, 1.45), (5.2, 2.0, 2.2)]
         .iter()
         .enumerate()
         .map(|(k, &(length, width, height))| mesh(builder, &format!("car{k}"), &car(length, width, height)))
-        .collect();
+        .collect()
+}
+
+/// Cars of the given models parked along every street segment.
+fn parked_cars(n: u32, models: &[MeshGroup], rng: &mut Rng, builder: &mut SceneBuilder) {
     let slot = 8.0;
     for along_x in [true, false] {
         for line in 0..=n {
@@ -275,6 +306,33 @@ fn cars(n: u32, rng: &mut Rng, builder: &mut SceneBuilder) {
                 }
             }
         }
+    }
+}
+
+/// `count` cars driving round blocks at 0.3–0.6 m a frame (9–18 m/s at 30
+/// frames a second), each on a loop just inside the centre lines of the
+/// streets round its block, half of them clockwise.
+fn moving_cars(n: u32, count: u32, models: &[MeshGroup], rng: &mut Rng, builder: &mut SceneBuilder) {
+    for k in 0..count {
+        let (bi, bj) = (rng.int(0, n - 1), rng.int(0, n - 1));
+        let (x0, z0) = (f64::from(bi) * PITCH, f64::from(bj) * PITCH);
+        let edge = STREET / 2.0 - DRIVING_LANE;
+        let (lo, hi) = (-edge, BLOCK + edge);
+        let mut corners = vec![
+            DVec3::new(x0 + lo, 0.0, z0 + lo),
+            DVec3::new(x0 + hi, 0.0, z0 + lo),
+            DVec3::new(x0 + hi, 0.0, z0 + hi),
+            DVec3::new(x0 + lo, 0.0, z0 + hi),
+        ];
+        if rng.next_u64() & 1 == 0 {
+            corners.reverse();
+        }
+        let route = Route::closed(corners).expect("a block's loop has length");
+        let (speed, start) = (rng.range(0.3, 0.6), rng.range(0.0, route.length()));
+        let model = &models[rng.int(0, models.len() as u32 - 1) as usize];
+        builder
+            .add_mover(&format!("mover{k}"), model, &route, speed, start)
+            .expect("the streets lie well within the renderable range");
     }
 }
 
@@ -342,5 +400,41 @@ mod tests {
         }
         assert!(s.objects.iter().any(|o| o.name.starts_with("carx")));
         assert!(s.walk_hint.as_ref().is_some_and(|w| w.len() == 3));
+    }
+
+    #[test]
+    fn movers_drive_round_their_blocks_and_leave_the_static_city_alone() {
+        let load_spec = |spec: &str| load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).unwrap();
+        let still = load_spec("city:blocks=2");
+        let mut moving = load_spec("city:blocks=2,movers=12");
+        assert_eq!(moving.source, "builtin:city:blocks=2,seed=1,movers=12");
+        assert!(still.movers.is_empty());
+        assert_eq!(moving.movers.len(), 12, "one object per car model");
+        let fixed = still.objects.len();
+        assert_eq!(moving.objects.len(), fixed + 12);
+        for (a, b) in still.objects.iter().zip(&moving.objects) {
+            assert_eq!((&a.name, a.bounds), (&b.name, b.bounds), "the static city is unchanged");
+        }
+        let streets = moving.bounds;
+        let mut moved = Vec::new();
+        for frame in [0, 1, 57, 400] {
+            moved.clear();
+            moving.pose(frame, &mut moved);
+            for m in &moving.movers {
+                let o = &moving.objects[m.object as usize];
+                assert!(streets.contains(&o.bounds), "{} left the city at frame {frame}", o.name);
+                assert!(
+                    o.bounds.min.y >= 0.0 && o.bounds.max.y < 3.0,
+                    "{} is on the road",
+                    o.name
+                );
+            }
+            if frame > 0 {
+                assert_eq!(moved.len(), 12, "every car moves every frame");
+            }
+        }
+        let mut again = Vec::new();
+        moving.pose(400, &mut again);
+        assert!(again.is_empty(), "posing the same frame twice moves nothing");
     }
 }

@@ -12,7 +12,7 @@ pub use city::{CityParams, EYE_HEIGHT};
 /// The scenes `--scene` accepts, with a one-line description each.
 pub const SCENES: &[(&str, &str)] = &[(
     "city",
-    "grid of closed buildings with furniture inside and cars in the streets (params: blocks, seed)",
+    "grid of closed buildings with furniture inside and cars in the streets (params: blocks, seed, movers)",
 )];
 
 /// Builds the scene a spec names.
@@ -34,6 +34,12 @@ pub fn build(spec: &str, options: &LoadOptions) -> Result<Scene, SceneError> {
             SCENES.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
         ))),
     }
+}
+
+/// `spec` with `movers=N` added to its parameters (`--movers`).
+pub fn with_movers(spec: &str, movers: u32) -> String {
+    let separator = if spec.contains(':') { ',' } else { ':' };
+    format!("{spec}{separator}movers={movers}")
 }
 
 type Params<'a> = Vec<(&'a str, &'a str)>;
@@ -120,6 +126,8 @@ mod tests {
         assert!(msg("city:blocks=0").contains("must be in"));
         assert!(msg("city:blocks").contains("not key=value"));
         assert!(msg("city:blocks=1,blocks=2").contains("'blocks' is given twice"));
+        assert!(msg(&with_movers("city:movers=2", 3)).contains("'movers' is given twice"));
+        assert!(msg("city:movers=100001").contains("must be in"));
     }
 
     #[test]
