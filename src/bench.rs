@@ -220,6 +220,7 @@ impl<'a> Session<'a> {
                 queries: outcome.counters.queries,
                 query_batches: outcome.counters.query_batches,
                 queries_skipped: traversal.queries_skipped,
+                queries_delayed: traversal.queries_delayed,
                 nodes_culled_adaptive: traversal.nodes_culled_adaptive,
                 nodes_past_budget: traversal.nodes_past_budget,
                 query_wait_ms: ms(outcome.counters.query_wait),

@@ -82,7 +82,7 @@ fn bad_input_gets_one_clear_line() {
     fails_with(
         &bench_args(&["--modes", "dr,warp"], &out),
         2,
-        &["unknown mode 'warp'", "dr, vfc, sq, omq, ac, oracle"],
+        &["unknown mode 'warp'", "dr, vfc, sq, omq, ac, chc, oracle"],
     );
     fails_with(
         &["bench", &s(&good_obj), "--frames", "0", "--out", &out],
@@ -214,7 +214,7 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
         .iter()
         .map(|m| m["name"].as_str().unwrap())
         .collect();
-    assert_eq!(modes, ["dr", "vfc", "sq", "omq", "ac", "oracle"]);
+    assert_eq!(modes, ["dr", "vfc", "sq", "omq", "ac", "chc", "oracle"]);
     for m in summary["modes"].as_array().unwrap() {
         assert_eq!(m["frames"], 2);
         if m["conservative"] == true {
@@ -240,12 +240,14 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
         "queries",
         "query_batches",
         "queries_skipped",
+        "queries_delayed",
+        "maintenance_ms",
         "error_pixels",
         "missed_objects",
     ] {
         assert!(header.split(',').any(|c| c == column), "frames.csv lacks {column}");
     }
-    assert_eq!(lines.count(), 12, "2 frames × 6 modes");
+    assert_eq!(lines.count(), 14, "2 frames × 7 modes");
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| oracle |") && report.contains("Adapter:"));
     for chart in occlu::report::charts::CHARTS {

@@ -380,3 +380,67 @@ fn adaptive_culling_is_exact_at_threshold_zero_and_trades_error_above_it() {
         assert!(of("ac[default]").iter().all(|r| r.error_pixels.is_some()));
     }
 }
+
+/// chc with `items` as its parameters.
+fn chc(scene: &Scene, items: &[&str]) -> Box<dyn Culler> {
+    let items: Vec<String> = items.iter().map(|s| s.to_string()).collect();
+    create("chc", scene, &ModeParams::parse(&items, &["chc"]).unwrap()).unwrap()
+}
+
+#[test]
+fn a_query_behind_a_pending_nearer_one_waits_for_it() {
+    // A wall, a box hidden right behind it, and a box off to the side. In
+    // the first frame nothing is known visible, so all are queried; the
+    // hidden box's rectangle overlaps the wall's, so its query must wait
+    // until the wall is drawn (001 §3.5). Sent together, it would be found
+    // visible (the wall not drawn yet) and drawn.
+    let scene = boxes(&[
+        (DVec3::new(-3.0, -3.0, -10.1), DVec3::new(3.0, 3.0, -9.9)),
+        (DVec3::new(-0.5, -0.5, -20.5), DVec3::new(0.5, 0.5, -19.5)),
+        (DVec3::new(10.0, -0.5, -20.5), DVec3::new(11.0, 0.5, -19.5)),
+    ]);
+    let path = still(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0), 90.0);
+    for gpu in common::gpus() {
+        // One object per leaf, boxes tight from the first frame.
+        let mut cullers = vec![chc(&scene, &["chc.o_merge=0", "chc.tight_after=0"])];
+        let out = run_modes(&gpu, &scene, &common::hierarchy(&scene), &path, &mut cullers, RES);
+        let row = &out.rows[0];
+        assert_eq!(
+            (row.error_pixels, row.missed_objects),
+            (Some(0), Some(0)),
+            "{}",
+            gpu.adapter
+        );
+        assert_eq!(row.objects_drawn, 2, "the wall and the side box: {row:?}");
+        assert!(row.queries_delayed >= 1, "{row:?}");
+        assert!(row.nodes_culled_occlusion >= 1, "{row:?}");
+    }
+}
+
+#[test]
+fn chc_is_exact_with_fewer_round_trips_than_sq_on_the_moving_city() {
+    let (scene, hierarchy, path) = common::city("city:blocks=2,movers=40", 12);
+    for gpu in common::gpus() {
+        let mut cullers: Vec<Box<dyn Culler>> =
+            vec![create("sq", &scene, &ModeParams::default()).unwrap(), chc(&scene, &[])];
+        let rows = run_modes(&gpu, &scene, &hierarchy, &path, &mut cullers, common::SMALL).rows;
+        let sum =
+            |mode: &str, f: fn(&FrameStats) -> u64| -> u64 { rows.iter().filter(|r| r.mode == mode).map(f).sum() };
+        assert_eq!(sum("chc", |r| r.error_pixels.unwrap()), 0, "{}", gpu.adapter);
+        assert_eq!(sum("chc", |r| r.missed_objects.unwrap()), 0, "{}", gpu.adapter);
+        let (sq, chc) = (sum("sq", |r| r.query_batches), sum("chc", |r| r.query_batches));
+        assert!(chc * 4 < sq, "chc {chc} vs sq {sq} round trips");
+        assert!(
+            sum("chc", |r| r.queries_skipped) > 0,
+            "visible nodes are opened unqueried"
+        );
+        let moving = rows.iter().filter(|r| r.mode == "chc" && r.frame > 0);
+        assert!(
+            moving.clone().all(|r| r.maintenance_ms > 0.0),
+            "the tree follows the cars"
+        );
+        let drawn = sum("chc", |r| r.triangles_drawn);
+        let all = scene.triangles() * 12;
+        assert!(drawn * 2 < all, "chc culls: {drawn} of {all} triangles");
+    }
+}

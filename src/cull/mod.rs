@@ -6,6 +6,7 @@
 //! [`Culler`], add it to [`MODES`] and to [`create`].
 
 mod ac;
+mod chc;
 mod dr;
 pub mod occupancy;
 mod omq;
@@ -26,6 +27,7 @@ use crate::object_set::ObjectSet;
 use crate::scene::Scene;
 
 pub use ac::{AcParams, AdaptiveCulling, EyeDistance, Threshold};
+pub use chc::{ChcParams, CoherentCulling};
 pub use dr::DirectRendering;
 pub use omq::{OccupancyMapQueries, OmqParams};
 pub use oracle::Oracle;
@@ -67,8 +69,12 @@ pub struct TraversalStats {
     pub nodes_visited: u64,
     pub nodes_culled_frustum: u64,
     pub nodes_culled_occlusion: u64,
-    /// Queries made unnecessary (the Occupancy Map's empty-area rule).
+    /// Queries made unnecessary (the Occupancy Map's empty-area rule, or
+    /// chc's nodes visible in the last frame).
     pub queries_skipped: u64,
+    /// Queries held back because a nearer query in flight covered part of
+    /// their screen rectangle (chc, 001 §3.5).
+    pub queries_delayed: u64,
     /// Nodes visible but treated as occluded for their small contribution
     /// (adaptive culling, 002 Eq. 1).
     pub nodes_culled_adaptive: u64,
@@ -215,6 +221,39 @@ pub const MODES: &[ModeInfo] = &[
         needs_pixel_counts: true,
     },
     ModeInfo {
+        name: "chc",
+        summary: "coherent culling on a ternary tree: last frame's visible nodes unwaited, TightBoxes, split/merge, colliding queries wait (001)",
+        conservative: true,
+        params: &[
+            ParamInfo {
+                key: "r_split",
+                default: "0.25",
+                summary: "split a leaf whose visible/total pixels reach this …",
+            },
+            ParamInfo {
+                key: "o_split",
+                default: "12",
+                summary: "… and which holds at least this many objects",
+            },
+            ParamInfo {
+                key: "r_merge",
+                default: "0.75",
+                summary: "merge sibling leaves whose visible/total pixels are at most this …",
+            },
+            ParamInfo {
+                key: "o_merge",
+                default: "5",
+                summary: "… and which hold at most this many objects each",
+            },
+            ParamInfo {
+                key: "tight_after",
+                default: "3",
+                summary: "frames without change before a node's TightBox replaces its cell",
+            },
+        ],
+        needs_pixel_counts: true,
+    },
+    ModeInfo {
         name: "oracle",
         summary: "draws exactly the objects visible in the reference frame: the floor for object-level culling",
         conservative: true,
@@ -277,6 +316,7 @@ impl ModeParams {
             match *mode {
                 "omq" => drop(OmqParams::from_params(&params)?),
                 "ac" => drop(AcParams::from_params(&params)?),
+                "chc" => drop(ChcParams::from_params(&params)?),
                 _ => {}
             }
         }
@@ -376,6 +416,7 @@ pub fn create(name: &str, scene: &Scene, params: &ModeParams) -> Result<Box<dyn 
         "sq" => Box::new(SingleQueries::new()),
         "omq" => Box::new(OccupancyMapQueries::new(OmqParams::from_params(params)?)),
         "ac" => Box::new(AdaptiveCulling::new(AcParams::from_params(params)?)),
+        "chc" => Box::new(CoherentCulling::new(scene, ChcParams::from_params(params)?)),
         "oracle" => Box::new(Oracle::new()),
         other => return Err(ModeError::Unknown(other.to_string())),
     })
@@ -395,7 +436,7 @@ mod tests {
         assert!(
             ModeError::Unknown("x".into())
                 .to_string()
-                .contains("dr, vfc, sq, omq, ac, oracle")
+                .contains("dr, vfc, sq, omq, ac, chc, oracle")
         );
     }
 

@@ -25,6 +25,11 @@ impl ScreenRect {
         self.x0 >= self.x1 || self.y0 >= self.y1
     }
 
+    /// Whether the two rectangles share a cell.
+    pub fn overlaps(&self, other: &ScreenRect) -> bool {
+        self.x0 < other.x1 && other.x0 < self.x1 && self.y0 < other.y1 && other.y0 < self.y1
+    }
+
     /// The cells the projection of `bounds` may touch on a `cols`×`rows`
     /// grid over the viewport, rounded outward. A box with a corner on or
     /// behind the near plane covers the whole screen: its projection is

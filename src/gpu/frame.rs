@@ -6,7 +6,7 @@
 
 use std::time::{Duration, Instant};
 
-use super::queries::{BoxTest, BoxVisibility, QueryPool, TestTarget};
+use super::queries::{BatchAnswers, BoxTest, BoxVisibility, QueryPool, TestTarget};
 use super::{GpuContext, GpuTimer, RenderTargets, SceneRenderer};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
@@ -122,6 +122,24 @@ impl<'a> FrameCtx<'a> {
     /// queries or pixel counts), one round trip. Writes one result per box
     /// to `out`; a box that reaches the near plane is visible untested.
     pub fn test_boxes(&mut self, boxes: &[Aabb], kind: BoxTest, out: &mut Vec<BoxVisibility>) {
+        self.test(boxes, kind, out, None);
+    }
+
+    /// [`FrameCtx::test_boxes`] by pixel counts that also counts the pixels
+    /// each box covers in all (001 §3.3's additional query), in the same
+    /// round trip; `totals` gets 0 for a box not tested. Needs
+    /// [`GpuContext::pixel_counts`].
+    pub fn test_boxes_with_totals(
+        &mut self,
+        boxes: &[Aabb],
+        sampling: u32,
+        out: &mut Vec<BoxVisibility>,
+        totals: &mut Vec<u64>,
+    ) {
+        self.test(boxes, BoxTest::PixelCount { sampling }, out, Some(totals));
+    }
+
+    fn test(&mut self, boxes: &[Aabb], kind: BoxTest, out: &mut Vec<BoxVisibility>, totals: Option<&mut Vec<u64>>) {
         let start = Instant::now();
         self.encode_queued_draws();
         let encoder = std::mem::replace(
@@ -132,7 +150,11 @@ impl<'a> FrameCtx<'a> {
             depth: self.depth,
             camera: self.camera,
         };
-        let cost = self.queries.test(self.gpu, encoder, target, boxes, kind, out);
+        let answers = BatchAnswers {
+            visibility: out,
+            totals,
+        };
+        let cost = self.queries.test(self.gpu, encoder, target, boxes, kind, answers);
         if cost.queries > 0 {
             self.counters.queries += cost.queries;
             self.counters.query_batches += 1;

@@ -7,7 +7,9 @@
 //!   0/1 per query, Vulkan a sample count.
 //! - **Pixel counts**: all boxes in one instanced draw whose fragment stage
 //!   (forced early depth test) adds one per visible pixel to the box's
-//!   counter: counts on every backend, optionally sampled (002 §4.2).
+//!   counter: counts on every backend, optionally sampled (002 §4.2). On
+//!   request a second draw without the depth test counts each box's total
+//!   pixels, visible or not (001 §3.3's additional query).
 //!
 //! Either way a batch costs one GPU→CPU round trip: results (and two
 //! timestamps around the test passes) are resolved into one buffer and read
@@ -68,6 +70,13 @@ pub struct TestTarget<'a> {
     pub camera: &'a Camera,
 }
 
+/// Where a batch's answers go: one visibility per box, and with `totals`
+/// (pixel counts only) the pixels each box covers, visible or not.
+pub struct BatchAnswers<'a> {
+    pub visibility: &'a mut Vec<BoxVisibility>,
+    pub totals: Option<&'a mut Vec<u64>>,
+}
+
 /// What one batch cost.
 pub struct BatchCost {
     /// Boxes actually tested (unqueried ones excluded).
@@ -102,6 +111,10 @@ struct Sampling {
 /// The pixel-count pipeline and its per-box counters.
 struct Counting {
     pipeline: wgpu::RenderPipeline,
+    /// Counts every covered pixel into `totals`.
+    totals_pipeline: wgpu::RenderPipeline,
+    totals: wgpu::Buffer,
+    totals_group: wgpu::BindGroup,
     layout: wgpu::BindGroupLayout,
     sampling: wgpu::Buffer,
     counts: wgpu::Buffer,
@@ -158,7 +171,9 @@ impl QueryPool {
             compilation_options: Default::default(),
             buffers: &[],
         };
-        let pipeline = |label, layouts: &[Option<&wgpu::BindGroupLayout>], fragment| {
+        // `compare` is the depth test: the real one, or `Always` to count
+        // every pixel a box covers.
+        let pipeline = |label, layouts: &[Option<&wgpu::BindGroupLayout>], fragment, compare| {
             let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(label),
                 bind_group_layouts: layouts,
@@ -175,9 +190,7 @@ impl QueryPool {
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
                     depth_write_enabled: Some(false),
-                    // Reverse-Z: nearer is greater. Equal passes, so a box
-                    // face on a surface is not judged hidden by it.
-                    depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
+                    depth_compare: Some(compare),
                     stencil: Default::default(),
                     bias: Default::default(),
                 }),
@@ -187,7 +200,10 @@ impl QueryPool {
                 cache: None,
             })
         };
-        let occlusion = pipeline("occlusion queries", &[Some(&box_layout)], None);
+        // Reverse-Z: nearer is greater. Equal passes, so a box face on a
+        // surface is not judged hidden by it.
+        let test = wgpu::CompareFunction::GreaterEqual;
+        let occlusion = pipeline("occlusion queries", &[Some(&box_layout)], None, test);
         let counting = count_module.as_ref().map(|count_module| {
             let layout = bind_group_layout(
                 gpu,
@@ -211,8 +227,13 @@ impl QueryPool {
                 mapped_at_creation: false,
             });
             let (counts, bind_group) = count_buffer(gpu, &layout, &sampling, QUERIES_PER_SET);
+            let (totals, totals_group) = count_buffer(gpu, &layout, &sampling, QUERIES_PER_SET);
+            let layouts = [Some(&box_layout), Some(&layout)];
             Counting {
-                pipeline: pipeline("pixel counts", &[Some(&box_layout), Some(&layout)], Some(fragment)),
+                pipeline: pipeline("pixel counts", &layouts, Some(fragment.clone()), test),
+                totals_pipeline: pipeline("total pixels", &layouts, Some(fragment), wgpu::CompareFunction::Always),
+                totals,
+                totals_group,
                 layout,
                 sampling,
                 counts,
@@ -247,11 +268,14 @@ impl QueryPool {
 
     /// Tests `boxes` against `depth` after the work already in `encoder`:
     /// submits it with the batch, waits for the results, and writes one
-    /// [`BoxVisibility`] per box to `out`.
+    /// [`BoxVisibility`] per box to `answers`. With totals, pixel counts
+    /// also count every pixel each box covers, visible or not (0 for a box
+    /// that was not tested), in the same round trip.
     ///
     /// # Panics
-    /// On [`BoxTest::PixelCount`] when the adapter lacks pixel counts; modes
-    /// that count pixels declare it and are not run on such adapters.
+    /// On [`BoxTest::PixelCount`] when the adapter lacks pixel counts (modes
+    /// that count pixels declare it and are not run on such adapters), and
+    /// on `totals` with [`BoxTest::Occlusion`].
     pub fn test(
         &mut self,
         gpu: &GpuContext,
@@ -259,10 +283,22 @@ impl QueryPool {
         target: TestTarget,
         boxes: &[Aabb],
         kind: BoxTest,
-        out: &mut Vec<BoxVisibility>,
+        answers: BatchAnswers,
     ) -> BatchCost {
+        let BatchAnswers {
+            visibility: out,
+            mut totals,
+        } = answers;
+        assert!(
+            totals.is_none() || kind != BoxTest::Occlusion,
+            "total pixels are counted by pixel counts only"
+        );
         let depth = target.depth;
         self.prepare(target.camera, boxes, out);
+        if let Some(t) = totals.as_deref_mut() {
+            t.clear();
+            t.resize(boxes.len(), 0);
+        }
         let count = self.staging.len() as u32;
         if count == 0 {
             gpu.queue.submit([encoder.finish()]);
@@ -284,10 +320,11 @@ impl QueryPool {
                 u64::from(count) * 8
             }
             BoxTest::PixelCount { sampling } => {
-                self.encode_pixel_counts(gpu, &mut encoder, depth, count, sampling);
+                self.encode_pixel_counts(gpu, &mut encoder, depth, count, sampling, totals.is_some());
                 u64::from(count) * 4
             }
         };
+        let total_bytes = if totals.is_some() { u64::from(count) * 4 } else { 0 };
         if let Some((set, _)) = &self.timestamps {
             encoder.write_timestamp(set, 1);
             encoder.resolve_query_set(set, 0..2, &self.resolved, 0);
@@ -300,9 +337,14 @@ impl QueryPool {
         self.readback.copy(&mut encoder, &self.resolved, 0, 0, 16);
         self.readback
             .copy(&mut encoder, source, source_offset, RESULTS_OFFSET, result_bytes);
+        if let (Some(c), true) = (&self.counting, total_bytes > 0) {
+            self.readback
+                .copy(&mut encoder, &c.totals, 0, RESULTS_OFFSET + result_bytes, total_bytes);
+        }
         let submitted = Instant::now();
         gpu.queue.submit([encoder.finish()]);
-        self.readback.read(gpu, RESULTS_OFFSET + result_bytes, &mut self.words);
+        self.readback
+            .read(gpu, RESULTS_OFFSET + result_bytes + total_bytes, &mut self.words);
         let wait = submitted.elapsed();
 
         let results = &self.words[(RESULTS_OFFSET / 4) as usize..];
@@ -311,6 +353,12 @@ impl QueryPool {
                 BoxTest::Occlusion => u64::from(results[2 * k]) | (u64::from(results[2 * k + 1]) << 32),
                 BoxTest::PixelCount { .. } => u64::from(results[k]),
             });
+        }
+        if let Some(t) = totals {
+            let covered = &results[self.tested.len()..];
+            for (k, &i) in self.tested.iter().enumerate() {
+                t[i] = u64::from(covered[k]);
+            }
         }
         let gpu_time = self.timestamps.as_ref().map(|&(_, period_ns)| {
             let tick = |i: usize| u64::from(self.words[2 * i]) | (u64::from(self.words[2 * i + 1]) << 32);
@@ -380,6 +428,7 @@ impl QueryPool {
         depth: &wgpu::TextureView,
         count: u32,
         sampling: u32,
+        totals: bool,
     ) {
         let counting = self
             .counting
@@ -393,11 +442,19 @@ impl QueryPool {
         gpu.queue
             .write_buffer(&counting.sampling, 0, bytemuck::bytes_of(&uniform));
         encoder.clear_buffer(&counting.counts, 0, Some(u64::from(count) * 4));
+        if totals {
+            encoder.clear_buffer(&counting.totals, 0, Some(u64::from(count) * 4));
+        }
         let mut pass = depth_only_pass(encoder, "pixel counts", depth, None);
         pass.set_pipeline(&counting.pipeline);
         pass.set_bind_group(0, &self.box_group, &[]);
         pass.set_bind_group(1, &counting.bind_group, &[]);
         pass.draw(0..36, 0..count);
+        if totals {
+            pass.set_pipeline(&counting.totals_pipeline);
+            pass.set_bind_group(1, &counting.totals_group, &[]);
+            pass.draw(0..36, 0..count);
+        }
     }
 
     /// Grows the buffers and query sets to hold `count` boxes.
@@ -407,6 +464,7 @@ impl QueryPool {
             (self.boxes, self.box_group) = box_buffer(gpu, &self.box_layout, &self.camera, capacity);
             if let Some(c) = &mut self.counting {
                 (c.counts, c.bind_group) = count_buffer(gpu, &c.layout, &c.sampling, capacity);
+                (c.totals, c.totals_group) = count_buffer(gpu, &c.layout, &c.sampling, capacity);
             }
             self.resolved = result_buffer(gpu, capacity);
             self.readback = Readback::new(gpu, "box test readback", result_bytes(capacity));

@@ -13,6 +13,8 @@
 //! permutation of object ids), so a culler that accepts a whole subtree draws
 //! one slice.
 
+pub mod ternary;
+
 use serde::{Deserialize, Serialize};
 
 use crate::bounds::Aabb;

@@ -37,8 +37,13 @@ pub struct FrameStats {
     pub queries: u64,
     /// GPU→CPU round trips for query results.
     pub query_batches: u64,
-    /// Queries the Occupancy Map made unnecessary.
+    /// Queries made unnecessary: by the Occupancy Map (omq), by last
+    /// frame's visibility (chc).
     pub queries_skipped: u64,
+    /// Queries held back until a nearer overlapping query was answered
+    /// (chc); 0 in files written before the column existed.
+    #[serde(default)]
+    pub queries_delayed: u64,
     /// Visible nodes treated as occluded for their small contribution (ac).
     pub nodes_culled_adaptive: u64,
     /// Nodes only frustum-culled because the culling budget ran out (ac).
@@ -92,6 +97,7 @@ impl FrameStats {
             queries: 0,
             query_batches: 0,
             queries_skipped: 0,
+            queries_delayed: 0,
             nodes_culled_adaptive: 0,
             nodes_past_budget: 0,
             query_wait_ms: 0.0,

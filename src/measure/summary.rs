@@ -77,6 +77,7 @@ const COLUMNS: &[(&str, Column)] = &[
     ("queries", |r| Some(r.queries as f64)),
     ("query_batches", |r| Some(r.query_batches as f64)),
     ("queries_skipped", |r| Some(r.queries_skipped as f64)),
+    ("queries_delayed", |r| Some(r.queries_delayed as f64)),
     ("nodes_culled_adaptive", |r| Some(r.nodes_culled_adaptive as f64)),
     ("nodes_past_budget", |r| Some(r.nodes_past_budget as f64)),
     ("query_wait_ms", |r| Some(r.query_wait_ms)),

@@ -1,0 +1,314 @@
+//! `chc`: coherent hierarchical culling over a ternary tree, paper 001 on
+//! the algorithm it builds on (001 §3: [KS05], "also similar to [BWPP04]",
+//! coherent hierarchical culling).
+//!
+//! One frame:
+//!
+//! 1. **Maintenance** (001 §3.1): every moved object is moved in the tree
+//!    ([`TernaryTree::update`]); its time, with TightBox computation and
+//!    split/merge, is reported as the frame's maintenance.
+//! 2. **Traversal**, front to back by nearest box corner (as 003 §4.2). A
+//!    node outside the frustum is culled. A node found visible in the
+//!    previous frame is not waited for (001 §3: "a node visible in a few
+//!    recent frames will probably be visible again in this frame. Hence we
+//!    can skip the occlusion query and render it immediately"): an inner one
+//!    is opened, a leaf drawn at once and queried after the frame for the
+//!    next one. Every other node needs a query, and its query joins the
+//!    batch in flight (001 §3, Figure 1: several queries at once).
+//! 3. **Colliding queries** (001 §3.5): a query whose screen rectangle
+//!    overlaps one already in the batch, which is nearer, waits: the batch is
+//!    sent first and its visible nodes drawn, so the nearer objects can hide
+//!    the farther node. The batch is also sent when the queue runs dry. A
+//!    visible node marks its ancestors visible (CHC's pull-up); a visible
+//!    leaf is drawn, a visible inner node opened.
+//! 4. **End of frame**: the leaves drawn without waiting are queried in one
+//!    batch for the next frame. Every query also counts the box's total
+//!    pixels (001 §3.3), and leaves are split or merged by their ratios
+//!    (001 §3.4), split across the axis that faces the camera.
+//!
+//! Conservative: a node is culled only by a query that found its box hidden
+//! behind depth really drawn this frame, and every box a query tests holds
+//! the objects below it (cells, TightBoxes and straddle boxes alike).
+//!
+//! Departures: queries count pixels in one instanced draw per batch (the
+//! portable path of `gpu::queries`), so a batch is one round trip rather
+//! than asynchronous per-query results; the paper's "few recent frames" of
+//! visibility is one frame, as in CHC.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::occupancy::ScreenRect;
+use super::traversal::{DepthQueue, nearest_corner};
+use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
+use crate::bounds::Aabb;
+use crate::camera::{Camera, Containment, Frustum};
+use crate::gpu::{BoxVisibility, FrameCtx, Resolution};
+use crate::hierarchy::ternary::{Pixels, TernaryTree, TreeParams, facing_axis};
+use crate::scene::Scene;
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ChcParams {
+    #[serde(flatten)]
+    pub tree: TreeParams,
+}
+
+impl ChcParams {
+    pub fn from_params(params: &ModeParams) -> Result<ChcParams, ModeError> {
+        let ratio = |key: &str| -> Result<f64, ModeError> {
+            let r: f64 = params.get("chc", key)?;
+            if (0.0..=1.0).contains(&r) {
+                Ok(r)
+            } else {
+                Err(ModeError::BadParam {
+                    key: format!("chc.{key}"),
+                    reason: format!("a pixel ratio must be in 0..=1, got {r}"),
+                })
+            }
+        };
+        Ok(ChcParams {
+            tree: TreeParams {
+                r_split: ratio("r_split")?,
+                o_split: params.get("chc", "o_split")?,
+                r_merge: ratio("r_merge")?,
+                o_merge: params.get("chc", "o_merge")?,
+                tight_after: params.get("chc", "tight_after")?,
+            },
+        })
+    }
+}
+
+/// Nodes and the boxes their queries test.
+#[derive(Default)]
+struct QueryList {
+    nodes: Vec<u32>,
+    boxes: Vec<Aabb>,
+}
+
+impl QueryList {
+    fn clear(&mut self) {
+        self.nodes.clear();
+        self.boxes.clear();
+    }
+}
+
+/// Queries sent together: no two of their screen rectangles overlap.
+#[derive(Default)]
+struct QueryBatch {
+    queries: QueryList,
+    rects: Vec<ScreenRect>,
+}
+
+impl QueryBatch {
+    fn clear(&mut self) {
+        self.queries.clear();
+        self.rects.clear();
+    }
+
+    /// Whether `rect` overlaps a query already in the batch (001 §3.5).
+    fn collides(&self, rect: &ScreenRect) -> bool {
+        self.rects.iter().any(|r| r.overlaps(rect))
+    }
+}
+
+/// Query answers, reused from batch to batch.
+#[derive(Default)]
+struct Answers {
+    visibility: Vec<BoxVisibility>,
+    totals: Vec<u64>,
+}
+
+impl Answers {
+    /// Tests `list` in one round trip, counting visible and total pixels,
+    /// and records them on its nodes (001 §3.3).
+    fn query(&mut self, ctx: &mut FrameCtx, tree: &mut TernaryTree, list: &QueryList, frame: u32) {
+        ctx.test_boxes_with_totals(&list.boxes, 1, &mut self.visibility, &mut self.totals);
+        for (k, &node) in list.nodes.iter().enumerate() {
+            if let BoxVisibility::Samples(visible) = self.visibility[k] {
+                tree.node_mut(node).pixels = Some(Pixels {
+                    frame,
+                    visible,
+                    total: self.totals[k],
+                });
+            }
+        }
+    }
+}
+
+/// What one frame's traversal looks at.
+struct View<'a> {
+    scene: &'a Scene,
+    camera: &'a Camera,
+    frustum: Frustum,
+    resolution: Resolution,
+    frame: u32,
+}
+
+pub struct CoherentCulling {
+    params: ChcParams,
+    tree: TernaryTree,
+    queue: DepthQueue,
+    batch: QueryBatch,
+    /// Leaves drawn without waiting, queried after the frame.
+    drawn_unqueried: QueryList,
+    answers: Answers,
+    objects: Vec<u32>,
+}
+
+impl CoherentCulling {
+    /// Builds the ternary tree over `scene`'s objects as they stand.
+    pub fn new(scene: &Scene, params: ChcParams) -> Self {
+        let bounds: Vec<Aabb> = scene.objects.iter().map(|o| o.bounds).collect();
+        CoherentCulling {
+            params,
+            tree: TernaryTree::build(&bounds, params.tree),
+            queue: DepthQueue::default(),
+            batch: QueryBatch::default(),
+            drawn_unqueried: QueryList::default(),
+            answers: Answers::default(),
+            objects: Vec::new(),
+        }
+    }
+
+    /// Queues `node` by its box's nearest corner, unless nothing lies below.
+    fn push(&mut self, node: u32, view: &View) {
+        if self.tree.node(node).count > 0 {
+            let b = self.tree.query_box(node, view.frame);
+            self.queue.push(node, nearest_corner(&b, view.camera.eye));
+        }
+    }
+
+    fn open(&mut self, node: u32, view: &View) {
+        for child in self.tree.children(node) {
+            self.push(child, view);
+        }
+    }
+
+    /// Draws the objects of leaf `node` the frustum does not exclude.
+    fn draw(&mut self, ctx: &mut FrameCtx, node: u32, view: &View) {
+        self.objects.clear();
+        let scene = view.scene;
+        self.objects.extend(
+            self.tree
+                .node(node)
+                .objects
+                .iter()
+                .filter(|&&o| view.frustum.classify(&scene.objects[o as usize].bounds) != Containment::Outside),
+        );
+        ctx.draw(&self.objects);
+    }
+
+    /// Sends the batch and acts on its answers.
+    fn flush(&mut self, ctx: &mut FrameCtx, view: &View, stats: &mut TraversalStats) {
+        self.answers.query(ctx, &mut self.tree, &self.batch.queries, view.frame);
+        for k in 0..self.batch.queries.nodes.len() {
+            let node = self.batch.queries.nodes[k];
+            if !self.answers.visibility[k].is_visible() {
+                stats.nodes_culled_occlusion += 1;
+                continue;
+            }
+            self.tree.pull_up_visibility(node);
+            if self.tree.node(node).split.is_some() {
+                self.open(node, view);
+            } else {
+                self.draw(ctx, node, view);
+            }
+        }
+        self.batch.clear();
+    }
+}
+
+impl Culler for CoherentCulling {
+    fn name(&self) -> &str {
+        "chc"
+    }
+
+    fn parameters(&self) -> serde_json::Value {
+        serde_json::to_value(self.params).expect("plain struct serialises")
+    }
+
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        let mut stats = TraversalStats::default();
+        let view = View {
+            scene: input.scene,
+            camera: input.camera,
+            frustum: input.camera.frustum(),
+            resolution: input.resolution,
+            frame: input.frame,
+        };
+        let frame = view.frame;
+
+        // 1. Maintenance: moved objects find their nodes.
+        let start = Instant::now();
+        for &o in input.moved {
+            self.tree.update(o, input.scene.objects[o as usize].bounds, frame);
+        }
+        stats.maintenance += start.elapsed();
+
+        // 2-3. Front to back; queries in batches of non-overlapping rectangles.
+        self.queue.clear();
+        self.batch.clear();
+        self.drawn_unqueried.clear();
+        self.push(0, &view);
+        loop {
+            while let Some(node) = self.queue.pop() {
+                let bounds = self.tree.query_box(node, frame);
+                if view.frustum.classify(&bounds) == Containment::Outside {
+                    stats.nodes_visited += 1;
+                    stats.nodes_culled_frustum += 1;
+                    continue;
+                }
+                let n = self.tree.node(node);
+                let leaf = n.split.is_none();
+                let was_visible = n.visible && n.last_visited.is_some_and(|f| f + 1 == frame);
+                if !was_visible {
+                    let (cols, rows) = (view.resolution.width, view.resolution.height);
+                    let rect = ScreenRect::of_box(&bounds, view.camera, cols, rows);
+                    if self.batch.collides(&rect) {
+                        // The nearer query goes first; this node comes out
+                        // of the queue again once its answers are drawn.
+                        stats.queries_delayed += 1;
+                        self.queue.push(node, nearest_corner(&bounds, view.camera.eye));
+                        self.flush(ctx, &view, &mut stats);
+                        continue;
+                    }
+                    self.batch.queries.nodes.push(node);
+                    self.batch.queries.boxes.push(bounds);
+                    self.batch.rects.push(rect);
+                }
+                stats.nodes_visited += 1;
+                let n = self.tree.node_mut(node);
+                n.visible = false;
+                n.last_visited = Some(frame);
+                if was_visible && leaf {
+                    self.draw(ctx, node, &view);
+                    self.drawn_unqueried.nodes.push(node);
+                    self.drawn_unqueried.boxes.push(bounds);
+                } else if was_visible {
+                    stats.queries_skipped += 1;
+                    self.open(node, &view);
+                }
+            }
+            if self.batch.queries.nodes.is_empty() {
+                break;
+            }
+            self.flush(ctx, &view, &mut stats);
+        }
+
+        // 4. The leaves drawn without waiting are checked for the next frame.
+        if !self.drawn_unqueried.nodes.is_empty() {
+            self.answers.query(ctx, &mut self.tree, &self.drawn_unqueried, frame);
+            for (k, &node) in self.drawn_unqueried.nodes.iter().enumerate() {
+                if self.answers.visibility[k].is_visible() {
+                    self.tree.pull_up_visibility(node);
+                }
+            }
+        }
+        let start = Instant::now();
+        let axis = facing_axis(view.camera.forward());
+        self.tree.split_and_merge(frame, axis);
+        stats.maintenance += start.elapsed() + self.tree.take_tight_time();
+        stats
+    }
+}
