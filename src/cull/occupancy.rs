@@ -27,7 +27,12 @@ impl ScreenRect {
 
     /// Whether the two rectangles share a cell.
     pub fn overlaps(&self, other: &ScreenRect) -> bool {
-        self.x0 < other.x1 && other.x0 < self.x1 && self.y0 < other.y1 && other.y0 < self.y1
+        !self.is_empty()
+            && !other.is_empty()
+            && self.x0 < other.x1
+            && other.x0 < self.x1
+            && self.y0 < other.y1
+            && other.y0 < self.y1
     }
 
     /// The cells the projection of `bounds` may touch on a `cols`×`rows`
@@ -198,6 +203,17 @@ mod tests {
                 reference.cells.fill(false);
             }
         }
+    }
+
+    #[test]
+    fn rectangles_overlap_only_when_they_share_a_cell() {
+        let r = |x0, y0, x1, y1| ScreenRect { x0, y0, x1, y1 };
+        let a = r(2, 2, 5, 5);
+        assert!(a.overlaps(&r(4, 4, 8, 8)) && r(4, 4, 8, 8).overlaps(&a));
+        assert!(a.overlaps(&r(3, 0, 4, 9)), "a bar across it");
+        assert!(!a.overlaps(&r(5, 2, 7, 5)), "edge to edge: half-open cells");
+        assert!(!a.overlaps(&r(2, 5, 5, 6)));
+        assert!(!a.overlaps(&r(3, 3, 3, 4)), "an empty rectangle covers nothing");
     }
 
     #[test]

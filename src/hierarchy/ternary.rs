@@ -199,9 +199,10 @@ impl TernaryTree {
         &mut self.nodes[id as usize]
     }
 
-    /// The children of an inner node, or none for a leaf.
-    pub fn children(&self, id: u32) -> Vec<u32> {
-        self.node(id).split.map_or_else(Vec::new, |s| s.children.to_vec())
+    /// The children of an inner node, or none for a leaf (by value, so the
+    /// tree can be changed while they are visited).
+    pub fn children(&self, id: u32) -> impl Iterator<Item = u32> + use<> {
+        self.node(id).split.map(|s| s.children).into_iter().flatten()
     }
 
     /// The node `object` lives in.
@@ -209,10 +210,10 @@ impl TernaryTree {
         self.home[object as usize]
     }
 
-    /// Ids of the nodes in use (the root first); a discarded node has no
+    /// Whether node `id` is in use: a node discarded by a merge has no
     /// parent.
-    pub fn live_nodes(&self) -> impl Iterator<Item = u32> + '_ {
-        (0..self.nodes.len() as u32).filter(|&n| n == 0 || self.nodes[n as usize].parent != NO_NODE)
+    fn is_live(&self, id: u32) -> bool {
+        id == 0 || self.nodes[id as usize].parent != NO_NODE
     }
 
     /// Marks `node` and its ancestors visible (CHC's pull-up).
@@ -278,6 +279,7 @@ impl TernaryTree {
     pub fn update(&mut self, object: u32, bounds: Aabb, frame: u32) -> bool {
         let home = self.home[object as usize];
         self.bounds[object as usize] = bounds;
+        self.grow_root(&bounds);
         self.touch(home, frame);
         if self.fits(home, &bounds) {
             return false;
@@ -287,14 +289,11 @@ impl TernaryTree {
         true
     }
 
-    /// Whether insertion would put an object with `bounds` in `id`: every
-    /// step from the root down to it takes the object.
+    /// Whether insertion would put an object with `bounds` (inside the
+    /// root's cell) in `id`: every step from the root down to it takes it.
     fn fits(&self, id: u32, bounds: &Aabb) -> bool {
         let mut child = id;
         let mut parent = self.nodes[id as usize].parent;
-        if parent == NO_NODE {
-            return self.nodes[0].cell.contains(bounds) || self.nodes[0].split.is_none();
-        }
         while parent != NO_NODE {
             if self.place(parent, bounds) != child {
                 return false;
@@ -302,7 +301,16 @@ impl TernaryTree {
             child = parent;
             parent = self.nodes[parent as usize].parent;
         }
-        self.nodes[0].cell.contains(bounds)
+        true
+    }
+
+    /// Grows the root's cell to hold `bounds`. Its children keep their
+    /// cells: an object beyond them goes to the straddle child.
+    fn grow_root(&mut self, bounds: &Aabb) {
+        let root = &mut self.nodes[0];
+        if !root.cell.contains(bounds) {
+            root.cell = root.cell.union(*bounds);
+        }
     }
 
     /// The child of inner node `id` an object with `bounds` goes to.
@@ -317,11 +325,7 @@ impl TernaryTree {
 
     fn insert(&mut self, object: u32, frame: u32) {
         let bounds = self.bounds[object as usize];
-        if !self.nodes[0].cell.contains(&bounds) {
-            // The root grows; its children keep their cells, and an object
-            // beyond them goes to the straddle child.
-            self.nodes[0].cell = self.nodes[0].cell.union(bounds);
-        }
+        self.grow_root(&bounds);
         let mut n = 0;
         while self.nodes[n as usize].split.is_some() {
             n = self.place(n, &bounds);
@@ -461,12 +465,13 @@ impl TernaryTree {
         let mut out = Reshaped::default();
         let params = self.params;
         let measured = |n: &TernaryNode| n.pixels.filter(|p| p.frame == frame);
-        let candidates: Vec<u32> = self.live_nodes().collect();
-        for id in candidates {
-            let n = &self.nodes[id as usize];
-            if id != 0 && n.parent == NO_NODE {
-                continue; // discarded by a merge earlier in this pass
+        // Nodes a split adds in this pass have no pixels yet: the ids
+        // standing at its start are all there is to look at.
+        for id in 0..self.nodes.len() as u32 {
+            if !self.is_live(id) {
+                continue;
             }
+            let n = &self.nodes[id as usize];
             match n.split {
                 None => {
                     if measured(n).is_some_and(|p| split_wanted(&params, p, n.objects.len()))
@@ -520,7 +525,7 @@ mod tests {
     /// Every promise of the module comment, checked from scratch.
     fn check(tree: &TernaryTree, bounds: &[Aabb]) {
         let mut seen = vec![0; bounds.len()];
-        for id in tree.live_nodes() {
+        for id in (0..tree.nodes.len() as u32).filter(|&n| tree.is_live(n)) {
             let n = tree.node(id);
             for &o in &n.objects {
                 seen[o as usize] += 1;
@@ -656,6 +661,17 @@ mod tests {
         let straddle = tree.node(0).split.unwrap().children[2];
         assert_eq!(tree.home(0), straddle, "outside both halves");
         assert!(tree.query_box(straddle, 1).contains(&bounds[0]));
+        // A root that is a leaf keeps the object, and its cell grows too.
+        let mut few = vec![cube(0.0, 0.0, 1.0), cube(3.0, 0.0, 1.0)];
+        let mut leaf_root = TernaryTree::build(&few, TreeParams::default());
+        assert!(leaf_root.node(0).split.is_none());
+        few[1] = cube(90.0, 0.0, 1.0);
+        assert!(!leaf_root.update(1, few[1], 1));
+        check(&leaf_root, &few);
+        assert!(
+            leaf_root.query_box(0, 1).contains(&few[1]),
+            "the cell a query tests holds it"
+        );
     }
 
     #[test]

@@ -270,8 +270,7 @@ impl SceneBuilder {
         speed: f64,
         start: f64,
     ) -> Result<(), GeometryError> {
-        let at_rest = Mover::new(0, route.clone(), speed, start, DAffine3::IDENTITY);
-        let first = self.place(name, group, at_rest.transform(0))?.start;
+        let first = self.place(name, group, route.placement(start))?.start;
         for (k, &(_, origin)) in group.clusters.iter().enumerate() {
             let local = DAffine3::from_translation(origin);
             let object = (first + k) as u32;

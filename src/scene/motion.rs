@@ -31,6 +31,14 @@ impl Route {
         self.length
     }
 
+    /// Where a model facing +X stands at `distance` along the loop: turned
+    /// about +Y to face the direction of travel and set on the route.
+    pub fn placement(&self, distance: f64) -> DAffine3 {
+        let (position, heading) = self.at(distance);
+        let yaw = (-heading.z).atan2(heading.x);
+        DAffine3::from_rotation_translation(DQuat::from_rotation_y(yaw), position)
+    }
+
     /// The point at `distance` along the loop (wrapping), and the unit
     /// direction of travel there.
     pub fn at(&self, distance: f64) -> (DVec3, DVec3) {
@@ -70,12 +78,9 @@ impl Mover {
         }
     }
 
-    /// The object's transform at `frame`: the model, which faces +X, turned
-    /// about +Y to face the direction of travel and set on the route.
+    /// The object's transform at `frame`.
     pub fn transform(&self, frame: u32) -> DAffine3 {
-        let (position, heading) = self.route.at(self.start + self.speed * f64::from(frame));
-        let yaw = (-heading.z).atan2(heading.x);
-        DAffine3::from_rotation_translation(DQuat::from_rotation_y(yaw), position) * self.local
+        self.route.placement(self.start + self.speed * f64::from(frame)) * self.local
     }
 }
 
