@@ -3,7 +3,8 @@
 // triangles, wound counter-clockwise seen from outside so back faces can be
 // culled (the eye is never inside a tested box: such boxes are visible
 // without a test). pixel_count.wgsl holds the fragment stage that counts
-// visible pixels per box.
+// visible pixels per box; raster_mark.wgsl, appended to this file, draws
+// boxes named by a GPU-built queue.
 
 struct Camera {
     projection: mat4x4<f32>,
@@ -37,14 +38,18 @@ struct BoxVertex {
     @location(0) @interpolate(flat) index: u32,
 }
 
-@vertex
-fn vs_box(@builtin(vertex_index) vertex: u32, @builtin(instance_index) index: u32) -> BoxVertex {
+// Clip position of `vertex` (0..36) of box `b`.
+fn box_clip(b: QueryBox, vertex: u32) -> vec4<f32> {
     let corner = CORNERS[vertex];
-    let b = boxes[index];
     let p = vec3<f32>(
         select(b.min.x, b.max.x, (corner & 1u) != 0u),
         select(b.min.y, b.max.y, (corner & 2u) != 0u),
         select(b.min.z, b.max.z, (corner & 4u) != 0u),
     );
-    return BoxVertex(camera.view_projection * vec4<f32>(p, 1.0), index);
+    return camera.view_projection * vec4<f32>(p, 1.0);
+}
+
+@vertex
+fn vs_box(@builtin(vertex_index) vertex: u32, @builtin(instance_index) index: u32) -> BoxVertex {
+    return BoxVertex(box_clip(boxes[index], vertex), index);
 }

@@ -18,8 +18,8 @@ use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
 use crate::cull::{Culler, FrameInput, Labeled, ModeError, ModeInfo, PreviousFrame, create};
 use crate::gpu::{
-    AdapterReport, FrameCtx, FrameResources, GpuContext, GpuError, GpuScene, GpuTimer, QueryPool, RenderTargets,
-    Resolution, SceneRenderer,
+    AdapterReport, FrameCtx, FrameResources, GpuContext, GpuError, GpuScene, GpuTimer, QueryPool, RasterPool,
+    RenderTargets, Resolution, SceneRenderer,
 };
 use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{ErrorMeter, FrameStats, ModeDescription, summarize};
@@ -94,6 +94,8 @@ pub struct Session<'a> {
     meter: Option<ErrorMeter>,
     timer: Option<GpuTimer>,
     queries: QueryPool,
+    /// Created when a mode that culls on the GPU first runs.
+    raster: Option<RasterPool>,
     draw_queue: Vec<u32>,
     /// What each mode drew in the last frame.
     pub(crate) drawn: Vec<ObjectSet>,
@@ -131,6 +133,7 @@ impl<'a> Session<'a> {
             meter: needs_reference.then(|| ErrorMeter::new(gpu, &targets, scene.objects.len())),
             timer: GpuTimer::new(gpu, modes),
             queries: QueryPool::new(gpu, renderer.camera_uniform()),
+            raster: None,
             draw_queue: Vec::new(),
             drawn: (0..modes).map(|_| ObjectSet::new(scene.objects.len())).collect(),
             previous: vec![None; modes],
@@ -167,6 +170,13 @@ impl<'a> Session<'a> {
             .as_mut()
             .map(|m| m.render_reference(gpu, &self.renderer, &self.targets));
 
+        if self.raster.is_none() && gpu.gpu_driven && cullers.iter().any(|c| c.culls_on_gpu()) {
+            self.raster = Some(RasterPool::new(
+                gpu,
+                self.renderer.camera_uniform(),
+                &self.renderer.scene.draws,
+            ));
+        }
         let mut rows: Vec<Option<FrameStats>> = vec![None; cullers.len()];
         for turn in 0..cullers.len() {
             let k = (turn + first) % cullers.len();
@@ -196,15 +206,22 @@ impl<'a> Session<'a> {
                 renderer: &self.renderer,
                 targets: &self.targets,
                 queries: &mut self.queries,
+                raster: self.raster.as_mut(),
                 timer: self.timer.as_ref(),
                 draw_queue: &mut self.draw_queue,
             };
             let mut ctx = FrameCtx::begin(resources, k, camera, &mut self.drawn[k]);
             let cull_start = Instant::now();
-            let traversal = culler.frame(&mut ctx, &input);
+            let mut traversal = culler.frame(&mut ctx, &input);
             let cull_time = cull_start.elapsed();
-            let outcome = ctx.finish();
+            let mut outcome = ctx.finish();
             let frame_time = frame_start.elapsed();
+            // Untimed: what a GPU-driven mode drew and tested, from the GPU.
+            if let Some(audit) = self.raster.as_mut().and_then(|r| r.audit(gpu, &mut self.drawn[k])) {
+                outcome.add_gpu_audit(&audit);
+                traversal.nodes_visited += audit.nodes_tested;
+                traversal.nodes_culled_occlusion += audit.nodes_hidden;
+            }
             rows[k] = Some(FrameStats {
                 mode: culler.name().to_string(),
                 frame,

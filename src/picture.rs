@@ -17,7 +17,9 @@ use crate::bounds::Aabb;
 use crate::camera::path::CameraPath;
 use crate::camera::{Camera, Containment, look_rotation};
 use crate::cull::Culler;
-use crate::gpu::{GpuContext, GpuError, LinePainter, LineVertex, RenderTargets, Resolution, picture_target, read_rgb};
+use crate::gpu::{
+    Draws, GpuContext, GpuError, LinePainter, LineVertex, RenderTargets, Resolution, picture_target, read_rgb,
+};
 use crate::scene::Scene;
 use crate::world::World;
 
@@ -116,9 +118,13 @@ pub fn render(
         let targets = RenderTargets::new(gpu, resolution, 1);
         let all: Vec<u32> = (0..scene.objects.len() as u32).collect();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        session
-            .renderer
-            .encode_shaded(&mut encoder, &targets, &targets.mode_depths[0], true, &all);
+        session.renderer.encode_shaded(
+            &mut encoder,
+            &targets,
+            &targets.mode_depths[0],
+            true,
+            Draws::Objects(&all),
+        );
         gpu.queue.submit([encoder.finish()]);
         let mut lines = Vec::new();
         for b in &culled {

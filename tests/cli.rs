@@ -82,7 +82,7 @@ fn bad_input_gets_one_clear_line() {
     fails_with(
         &bench_args(&["--modes", "dr,warp"], &out),
         2,
-        &["unknown mode 'warp'", "dr, vfc, sq, omq, ac, chc, oracle"],
+        &["unknown mode 'warp'", "dr, vfc, sq, omq, ac, chc, roc, ioc, oracle"],
     );
     fails_with(
         &["bench", &s(&good_obj), "--frames", "0", "--out", &out],
@@ -120,6 +120,19 @@ fn bad_input_gets_one_clear_line() {
         &bench_args(&["--param", "omq.om=wide"], &out),
         2,
         &["parameter 'omq.om'", "'wide'"],
+    );
+    fails_with(
+        &bench_args(
+            &["--modes", "ioc", "--param", "ioc.start=5", "--param", "ioc.bottom=2"],
+            &out,
+        ),
+        2,
+        &["parameter 'ioc.start'", "below the bottom depth 2"],
+    );
+    fails_with(
+        &bench_args(&["--modes", "ioc", "--param", "ioc.bottom=-1"], &out),
+        2,
+        &["parameter 'ioc.bottom'", "'auto' or a depth"],
     );
     fails_with(&["bench", "--backend", "glide"], 2, &["invalid value 'glide'"]);
     fails_with(&["bench", "--bogus-flag"], 2, &["--bogus-flag"]);
@@ -214,7 +227,7 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
         .iter()
         .map(|m| m["name"].as_str().unwrap())
         .collect();
-    assert_eq!(modes, ["dr", "vfc", "sq", "omq", "ac", "chc", "oracle"]);
+    assert_eq!(modes, ["dr", "vfc", "sq", "omq", "ac", "chc", "roc", "ioc", "oracle"]);
     for m in summary["modes"].as_array().unwrap() {
         assert_eq!(m["frames"], 2);
         if m["conservative"] == true {
@@ -247,7 +260,7 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
     ] {
         assert!(header.split(',').any(|c| c == column), "frames.csv lacks {column}");
     }
-    assert_eq!(lines.count(), 14, "2 frames × 7 modes");
+    assert_eq!(lines.count(), 18, "2 frames × 9 modes");
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| oracle |") && report.contains("Adapter:"));
     for chart in occlu::report::charts::CHARTS {

@@ -8,9 +8,11 @@
 mod ac;
 mod chc;
 mod dr;
+mod ioc;
 pub mod occupancy;
 mod omq;
 mod oracle;
+mod roc;
 mod sq;
 mod traversal;
 mod vfc;
@@ -29,8 +31,10 @@ use crate::scene::Scene;
 pub use ac::{AcParams, AdaptiveCulling, EyeDistance, Threshold};
 pub use chc::{ChcParams, CoherentCulling};
 pub use dr::DirectRendering;
+pub use ioc::{Depth, IocParams, IterativeOcclusionCulling, auto_depths};
 pub use omq::{OccupancyMapQueries, OmqParams};
 pub use oracle::Oracle;
+pub use roc::RasterOcclusionCulling;
 pub use sq::SingleQueries;
 pub use vfc::FrustumCulling;
 
@@ -106,6 +110,12 @@ pub trait Culler {
         false
     }
 
+    /// Whether the mode walks a tree on the GPU (`FrameCtx::begin_gpu_walk`
+    /// and the operations after it).
+    fn culls_on_gpu(&self) -> bool {
+        false
+    }
+
     /// Renders one frame: decides what to draw and draws it through `ctx`.
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats;
 }
@@ -118,9 +128,20 @@ pub struct ModeInfo {
     pub conservative: bool,
     /// Parameters it takes as `--param NAME.KEY=VALUE`.
     pub params: &'static [ParamInfo],
-    /// Whether it counts visible pixels per box (`GpuContext::pixel_counts`);
-    /// such a mode is skipped, with a message, on adapters without them.
-    pub needs_pixel_counts: bool,
+    /// What it needs from the adapter beyond drawing and occlusion queries;
+    /// a mode whose needs are not met is skipped, with a message.
+    pub needs: Needs,
+}
+
+/// Adapter capabilities a mode may need.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Needs {
+    /// Drawing and occlusion queries: every adapter.
+    Nothing,
+    /// Visible pixels counted per box (`GpuContext::pixel_counts`).
+    PixelCounts,
+    /// Culling on the GPU alone (`GpuContext::gpu_driven`).
+    GpuCulling,
 }
 
 impl ModeInfo {
@@ -135,9 +156,15 @@ impl ModeInfo {
 
     /// Why the mode cannot run on `gpu`, or `None` when it can.
     pub fn unsupported_on(&self, gpu: &GpuContext) -> Option<&'static str> {
-        (self.needs_pixel_counts && !gpu.pixel_counts).then_some(
-            "the adapter cannot count visible pixels (needs SHADER_EARLY_DEPTH_TEST and fragment storage writes)",
-        )
+        match self.needs {
+            Needs::PixelCounts if !gpu.pixel_counts => Some(
+                "the adapter cannot count visible pixels (needs SHADER_EARLY_DEPTH_TEST and fragment storage writes)",
+            ),
+            Needs::GpuCulling if !gpu.gpu_driven => Some(
+                "the adapter cannot cull on the GPU (needs SHADER_EARLY_DEPTH_TEST, fragment storage writes, compute shaders, indirect draws and INDIRECT_FIRST_INSTANCE)",
+            ),
+            _ => None,
+        }
     }
 }
 
@@ -153,21 +180,21 @@ pub const MODES: &[ModeInfo] = &[
         summary: "direct rendering: every object, no culling (002 §5)",
         conservative: true,
         params: &[],
-        needs_pixel_counts: false,
+        needs: Needs::Nothing,
     },
     ModeInfo {
         name: "vfc",
         summary: "hierarchical view-frustum culling with the fully-inside shortcut (002 §4.1)",
         conservative: true,
         params: &[],
-        needs_pixel_counts: false,
+        needs: Needs::Nothing,
     },
     ModeInfo {
         name: "sq",
         summary: "front-to-back traversal, one occlusion query per node, each awaited (003 §5 b)",
         conservative: true,
         params: &[],
-        needs_pixel_counts: false,
+        needs: Needs::Nothing,
     },
     ModeInfo {
         name: "omq",
@@ -190,7 +217,7 @@ pub const MODES: &[ModeInfo] = &[
                 summary: "next frame's max_tests = factor x this frame's batches",
             },
         ],
-        needs_pixel_counts: false,
+        needs: Needs::Nothing,
     },
     ModeInfo {
         name: "ac",
@@ -218,7 +245,7 @@ pub const MODES: &[ModeInfo] = &[
                 summary: "Dist(Eye) of Eq. 1: the near plane, or a distance",
             },
         ],
-        needs_pixel_counts: true,
+        needs: Needs::PixelCounts,
     },
     ModeInfo {
         name: "chc",
@@ -251,14 +278,39 @@ pub const MODES: &[ModeInfo] = &[
                 summary: "frames without change before a node's TightBox replaces its cell",
             },
         ],
-        needs_pixel_counts: true,
+        needs: Needs::PixelCounts,
+    },
+    ModeInfo {
+        name: "roc",
+        summary: "raster occlusion culling on the GPU: every object's box marks a visibility buffer, indirect multi-draw (004's ROC)",
+        conservative: true,
+        params: &[],
+        needs: Needs::GpuCulling,
+    },
+    ModeInfo {
+        name: "ioc",
+        summary: "iterative hierarchical raster occlusion culling: roc over the hierarchy, level by level from a start to a bottom depth (004 §2)",
+        conservative: true,
+        params: &[
+            ParamInfo {
+                key: "start",
+                default: "auto",
+                summary: "depth whose nodes are tested first (root 0); auto: from the hierarchy",
+            },
+            ParamInfo {
+                key: "bottom",
+                default: "auto",
+                summary: "depth below which nodes are not tested: a visible node there draws its subtree; auto: from the hierarchy",
+            },
+        ],
+        needs: Needs::GpuCulling,
     },
     ModeInfo {
         name: "oracle",
         summary: "draws exactly the objects visible in the reference frame: the floor for object-level culling",
         conservative: true,
         params: &[],
-        needs_pixel_counts: false,
+        needs: Needs::Nothing,
     },
 ];
 
@@ -317,6 +369,7 @@ impl ModeParams {
                 "omq" => drop(OmqParams::from_params(&params)?),
                 "ac" => drop(AcParams::from_params(&params)?),
                 "chc" => drop(ChcParams::from_params(&params)?),
+                "ioc" => drop(IocParams::from_params(&params)?),
                 _ => {}
             }
         }
@@ -402,6 +455,9 @@ impl Culler for Labeled {
     fn traverses_hierarchy(&self) -> bool {
         self.inner.traverses_hierarchy()
     }
+    fn culls_on_gpu(&self) -> bool {
+        self.inner.culls_on_gpu()
+    }
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
         self.inner.frame(ctx, input)
     }
@@ -417,6 +473,8 @@ pub fn create(name: &str, scene: &Scene, params: &ModeParams) -> Result<Box<dyn 
         "omq" => Box::new(OccupancyMapQueries::new(OmqParams::from_params(params)?)),
         "ac" => Box::new(AdaptiveCulling::new(AcParams::from_params(params)?)),
         "chc" => Box::new(CoherentCulling::new(scene, ChcParams::from_params(params)?)),
+        "roc" => Box::new(RasterOcclusionCulling::new()),
+        "ioc" => Box::new(IterativeOcclusionCulling::new(IocParams::from_params(params)?)),
         "oracle" => Box::new(Oracle::new()),
         other => return Err(ModeError::Unknown(other.to_string())),
     })
@@ -436,7 +494,7 @@ mod tests {
         assert!(
             ModeError::Unknown("x".into())
                 .to_string()
-                .contains("dr, vfc, sq, omq, ac, chc, oracle")
+                .contains("dr, vfc, sq, omq, ac, chc, roc, ioc, oracle")
         );
     }
 

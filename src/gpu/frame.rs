@@ -7,10 +7,19 @@
 use std::time::{Duration, Instant};
 
 use super::queries::{BatchAnswers, BoxTest, BoxVisibility, QueryPool, TestTarget};
-use super::{GpuContext, GpuTimer, RenderTargets, SceneRenderer};
+use super::raster::{CullTree, DrawList, GpuAudit, GpuCullTree, RasterPool};
+use super::{Draws, GpuContext, GpuTimer, RenderTargets, SceneRenderer};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
 use crate::object_set::ObjectSet;
+
+/// The pool of GPU-driven culling, which the session provides to modes that
+/// declare `Culler::culls_on_gpu` (run only where `GpuContext::gpu_driven`).
+fn pool<'p>(raster: &'p mut Option<&mut RasterPool>) -> &'p mut RasterPool {
+    raster
+        .as_deref_mut()
+        .expect("GPU-driven modes declare Culler::culls_on_gpu and run only where GpuContext::gpu_driven")
+}
 
 /// What a mode did on the GPU in one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -36,11 +45,26 @@ pub struct FrameOutcome {
     pub gpu_ops: Duration,
 }
 
+impl FrameOutcome {
+    /// Adds what a GPU-driven walk drew and tested (each node box drawn
+    /// into the visibility buffer counts as a query).
+    pub fn add_gpu_audit(&mut self, audit: &GpuAudit) {
+        let c = &mut self.counters;
+        c.objects_drawn += audit.objects_drawn;
+        c.triangles_drawn += audit.triangles_drawn;
+        c.queries += audit.nodes_tested;
+        if let Some(t) = audit.cull_gpu {
+            *c.query_gpu.get_or_insert(Duration::ZERO) += t;
+        }
+    }
+}
+
 pub struct FrameCtx<'a> {
     gpu: &'a GpuContext,
     renderer: &'a SceneRenderer,
     targets: &'a RenderTargets,
     queries: &'a mut QueryPool,
+    raster: Option<&'a mut RasterPool>,
     camera: &'a Camera,
     depth: &'a wgpu::TextureView,
     timer: Option<(&'a GpuTimer, usize)>,
@@ -59,6 +83,8 @@ pub struct FrameResources<'a> {
     pub renderer: &'a SceneRenderer,
     pub targets: &'a RenderTargets,
     pub queries: &'a mut QueryPool,
+    /// For modes that cull on the GPU; `None` when none runs.
+    pub raster: Option<&'a mut RasterPool>,
     pub timer: Option<&'a GpuTimer>,
     /// Scratch for queued draws, reused from frame to frame.
     pub draw_queue: &'a mut Vec<u32>,
@@ -78,6 +104,7 @@ impl<'a> FrameCtx<'a> {
             renderer,
             targets,
             queries,
+            raster,
             timer,
             draw_queue: queued,
         } = resources;
@@ -88,12 +115,13 @@ impl<'a> FrameCtx<'a> {
         if let Some(t) = timer {
             t.begin(&mut encoder, slot);
         }
-        renderer.encode_shaded(&mut encoder, targets, depth, true, &[]);
+        renderer.encode_shaded(&mut encoder, targets, depth, true, Draws::Objects(&[]));
         FrameCtx {
             gpu,
             renderer,
             targets,
             queries,
+            raster,
             camera,
             depth,
             timer: timer.map(|t| (t, slot)),
@@ -168,10 +196,72 @@ impl<'a> FrameCtx<'a> {
 
     fn encode_queued_draws(&mut self) {
         if !self.queued.is_empty() {
-            self.renderer
-                .encode_shaded(&mut self.encoder, self.targets, self.depth, false, self.queued);
+            self.renderer.encode_shaded(
+                &mut self.encoder,
+                self.targets,
+                self.depth,
+                false,
+                Draws::Objects(self.queued),
+            );
             self.queued.clear();
         }
+    }
+
+    /// GPU-driven culling (004): puts `tree` on the GPU for this mode, with
+    /// an empty visible list. Done once; the mode keeps the result.
+    pub fn upload_cull_tree(&mut self, tree: &CullTree) -> GpuCullTree {
+        let start = Instant::now();
+        let uploaded = pool(&mut self.raster).upload(self.gpu, tree);
+        self.gpu_ops += start.elapsed();
+        uploaded
+    }
+
+    /// Draws one of `tree`'s GPU-built lists, shaded. Objects drawn are
+    /// counted after the frame ([`RasterPool::audit`]). Where draws cannot
+    /// take their count from a GPU buffer, the newly visible list's length
+    /// is read back first: one round trip.
+    pub fn draw_gpu_list(&mut self, tree: &mut GpuCullTree, list: DrawList) {
+        let start = Instant::now();
+        self.encode_queued_draws();
+        let indirect_count = self.gpu.indirect_count;
+        if list == DrawList::NewlyVisible && !indirect_count {
+            let encoder = std::mem::replace(
+                &mut self.encoder,
+                self.gpu.device.create_command_encoder(&Default::default()),
+            );
+            let submitted = Instant::now();
+            pool(&mut self.raster).read_counts(self.gpu, encoder, tree);
+            self.counters.query_batches += 1;
+            self.counters.query_wait += submitted.elapsed();
+        }
+        let draws = Draws::Indirect(RasterPool::list(tree, list, indirect_count));
+        self.renderer
+            .encode_shaded(&mut self.encoder, self.targets, self.depth, false, draws);
+        self.gpu_ops += start.elapsed();
+    }
+
+    /// Starts a walk of `tree` (boxes from `bounds`, one per node) with its
+    /// seed queued, after everything drawn so far.
+    pub fn begin_gpu_walk(&mut self, tree: &GpuCullTree, bounds: impl ExactSizeIterator<Item = Aabb>) {
+        let start = Instant::now();
+        self.encode_queued_draws();
+        pool(&mut self.raster).begin_walk(self.gpu, &mut self.encoder, self.camera, tree, bounds);
+        self.gpu_ops += start.elapsed();
+    }
+
+    /// Tests the queued nodes of `tree` as one batch on the GPU and queues
+    /// the children of the visible ones.
+    pub fn walk_gpu_level(&mut self, tree: &GpuCullTree) {
+        let start = Instant::now();
+        pool(&mut self.raster).walk_level(&mut self.encoder, self.depth, tree);
+        self.gpu_ops += start.elapsed();
+    }
+
+    /// Ends the walk: builds `tree`'s visible and newly visible lists.
+    pub fn compact_gpu_lists(&mut self, tree: &GpuCullTree) {
+        let start = Instant::now();
+        pool(&mut self.raster).compact(&mut self.encoder, tree);
+        self.gpu_ops += start.elapsed();
     }
 
     /// Submits the rest of the frame and waits until the GPU has finished it.

@@ -5,6 +5,7 @@
 mod frame;
 mod picture;
 mod queries;
+mod raster;
 mod readback;
 mod renderer;
 mod targets;
@@ -17,8 +18,9 @@ use serde::Serialize;
 pub use frame::{FrameCounters, FrameCtx, FrameOutcome, FrameResources};
 pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};
 pub use queries::{BoxTest, BoxVisibility, QUERIES_PER_SET, QueryPool};
+pub use raster::{CullTree, DrawList, GpuAudit, GpuCullTree, MAX_LEVELS, RasterPool, TreeNode};
 pub use readback::Readback;
-pub use renderer::{GpuScene, SceneRenderer};
+pub use renderer::{Draws, GpuScene, SceneRenderer};
 pub use targets::{RenderTargets, Resolution};
 pub use timing::GpuTimer;
 
@@ -67,6 +69,14 @@ pub struct AdapterReport {
     /// Whether visible pixels can be counted per box (forced early depth
     /// test and storage writes in fragment shaders).
     pub pixel_counts: bool,
+    /// Whether culling can run on the GPU alone: pixel counts, compute
+    /// shaders, and indirect draws that name their first instance.
+    #[serde(default)]
+    pub gpu_driven: bool,
+    /// Whether an indirect multi-draw can take its count from a GPU buffer
+    /// (no read-back before drawing a list the GPU built).
+    #[serde(default)]
+    pub indirect_count: bool,
 }
 
 impl fmt::Display for AdapterReport {
@@ -100,6 +110,10 @@ pub struct GpuContext {
     pub timestamps: bool,
     /// See [`AdapterReport::pixel_counts`].
     pub pixel_counts: bool,
+    /// See [`AdapterReport::gpu_driven`].
+    pub gpu_driven: bool,
+    /// See [`AdapterReport::indirect_count`].
+    pub indirect_count: bool,
 }
 
 impl GpuContext {
@@ -124,13 +138,19 @@ impl GpuContext {
             .ok_or(GpuError::NoAdapter(choice))?;
         let info = adapter.get_info();
         let timing = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
-        let features = adapter.features() & (timing | wgpu::Features::SHADER_EARLY_DEPTH_TEST);
+        let wanted = timing
+            | wgpu::Features::SHADER_EARLY_DEPTH_TEST
+            | wgpu::Features::INDIRECT_FIRST_INSTANCE
+            | wgpu::Features::MULTI_DRAW_INDIRECT_COUNT;
+        let features = adapter.features() & wanted;
+        let downlevel = adapter.get_downlevel_capabilities().flags;
         let timestamps = features.contains(timing);
         let pixel_counts = features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST)
-            && adapter
-                .get_downlevel_capabilities()
-                .flags
-                .contains(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE);
+            && downlevel.contains(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE);
+        let gpu_driven = pixel_counts
+            && features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE)
+            && downlevel.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS | wgpu::DownlevelFlags::INDIRECT_EXECUTION);
+        let indirect_count = features.contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("occlu"),
             required_features: features,
@@ -153,9 +173,13 @@ impl GpuContext {
                 driver_info: info.driver_info,
                 timestamps,
                 pixel_counts,
+                gpu_driven,
+                indirect_count,
             },
             timestamps,
             pixel_counts,
+            gpu_driven,
+            indirect_count,
         })
     }
 

@@ -94,9 +94,43 @@ const RESULTS_OFFSET: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
 /// Eye-relative corners, as the shader reads them.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct QueryBox {
+pub(super) struct QueryBox {
     min: Vec4,
     max: Vec4,
+}
+
+/// A box made ready for a depth test.
+pub(super) enum EyeBox {
+    /// It reaches the near plane or holds the eye: visible, untestable (its
+    /// projection is unbounded).
+    ReachesNear,
+    /// Grown against f32 rounding, eye-relative.
+    Testable(QueryBox),
+}
+
+/// Prepares `b`, which must not lie outside `camera`'s frustum, for a depth
+/// test by `camera`, whose `view_rotation()` is `view` (computed once per
+/// batch by the caller).
+pub(super) fn eye_relative_box(camera: &Camera, view: &glam::DMat3, b: &Aabb) -> EyeBox {
+    let (min, max) = (b.min - camera.eye, b.max - camera.eye);
+    let reach = min.abs().max(max.abs()).max_element();
+    let grow = glam::DVec3::splat(EXPANSION * reach + f64::MIN_POSITIVE);
+    let (min, max) = (min - grow, max + grow);
+    // The box reaches the near plane when a corner is nearer than it along
+    // the view direction (this also covers holding the eye).
+    let nearest = Aabb::new(min, max)
+        .corners()
+        .iter()
+        .map(|&c| -(*view * c).z)
+        .fold(f64::INFINITY, f64::min);
+    if nearest <= camera.near {
+        EyeBox::ReachesNear
+    } else {
+        EyeBox::Testable(QueryBox {
+            min: min.as_vec3().extend(0.0),
+            max: max.as_vec3().extend(0.0),
+        })
+    }
 }
 
 /// The uniform of pixel_count.wgsl.
@@ -149,15 +183,7 @@ impl QueryPool {
             label: Some("boxes.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/boxes.wgsl").into()),
         });
-        let box_layout = bind_group_layout(
-            gpu,
-            "boxes",
-            wgpu::ShaderStages::VERTEX,
-            &[
-                wgpu::BufferBindingType::Uniform,
-                wgpu::BufferBindingType::Storage { read_only: true },
-            ],
-        );
+        let box_layout = box_bind_group_layout(gpu);
         // Only on adapters that have the feature: the module is invalid elsewhere.
         let count_module = gpu.pixel_counts.then(|| {
             device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -205,13 +231,13 @@ impl QueryPool {
         let test = wgpu::CompareFunction::GreaterEqual;
         let occlusion = pipeline("occlusion queries", &[Some(&box_layout)], None, test);
         let counting = count_module.as_ref().map(|count_module| {
+            let fragment = wgpu::ShaderStages::FRAGMENT;
             let layout = bind_group_layout(
                 gpu,
                 "pixel counts",
-                wgpu::ShaderStages::FRAGMENT,
                 &[
-                    wgpu::BufferBindingType::Storage { read_only: false },
-                    wgpu::BufferBindingType::Uniform,
+                    (fragment, wgpu::BufferBindingType::Storage { read_only: false }),
+                    (fragment, wgpu::BufferBindingType::Uniform),
                 ],
             );
             let fragment = wgpu::FragmentState {
@@ -379,26 +405,13 @@ impl QueryPool {
         self.tested.clear();
         let view = camera.view_rotation();
         for (i, b) in boxes.iter().enumerate() {
-            let (min, max) = (b.min - camera.eye, b.max - camera.eye);
-            let reach = min.abs().max(max.abs()).max_element();
-            let grow = glam::DVec3::splat(EXPANSION * reach + f64::MIN_POSITIVE);
-            let (min, max) = (min - grow, max + grow);
-            // The box reaches the near plane when a corner is nearer than it
-            // along the view direction (this also covers holding the eye).
-            let nearest = Aabb::new(min, max)
-                .corners()
-                .iter()
-                .map(|&c| -(view * c).z)
-                .fold(f64::INFINITY, f64::min);
-            if nearest <= camera.near {
-                out.push(BoxVisibility::Unqueried);
-            } else {
-                out.push(BoxVisibility::Samples(0));
-                self.tested.push(i);
-                self.staging.push(QueryBox {
-                    min: min.as_vec3().extend(0.0),
-                    max: max.as_vec3().extend(0.0),
-                });
+            match eye_relative_box(camera, &view, b) {
+                EyeBox::ReachesNear => out.push(BoxVisibility::Unqueried),
+                EyeBox::Testable(q) => {
+                    out.push(BoxVisibility::Samples(0));
+                    self.tested.push(i);
+                    self.staging.push(q);
+                }
             }
         }
     }
@@ -476,7 +489,7 @@ impl QueryPool {
     }
 }
 
-fn depth_only_pass<'e>(
+pub(super) fn depth_only_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     label: &str,
     depth: &wgpu::TextureView,
@@ -499,16 +512,16 @@ fn depth_only_pass<'e>(
     })
 }
 
-fn bind_group_layout(
+/// A layout of buffer bindings 0, 1, …, each seen by its stages.
+pub(super) fn bind_group_layout(
     gpu: &GpuContext,
     label: &str,
-    visibility: wgpu::ShaderStages,
-    buffers: &[wgpu::BufferBindingType],
+    buffers: &[(wgpu::ShaderStages, wgpu::BufferBindingType)],
 ) -> wgpu::BindGroupLayout {
     let entries: Vec<wgpu::BindGroupLayoutEntry> = buffers
         .iter()
         .enumerate()
-        .map(|(binding, &ty)| wgpu::BindGroupLayoutEntry {
+        .map(|(binding, &(visibility, ty))| wgpu::BindGroupLayoutEntry {
             binding: binding as u32,
             visibility,
             ty: wgpu::BindingType::Buffer {
@@ -525,7 +538,24 @@ fn bind_group_layout(
     })
 }
 
-fn bind_buffers(gpu: &GpuContext, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+/// Group 0 of boxes.wgsl: the camera uniform and the boxes.
+pub(super) fn box_bind_group_layout(gpu: &GpuContext) -> wgpu::BindGroupLayout {
+    let vertex = wgpu::ShaderStages::VERTEX;
+    bind_group_layout(
+        gpu,
+        "boxes",
+        &[
+            (vertex, wgpu::BufferBindingType::Uniform),
+            (vertex, wgpu::BufferBindingType::Storage { read_only: true }),
+        ],
+    )
+}
+
+pub(super) fn bind_buffers(
+    gpu: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
     let entries: Vec<wgpu::BindGroupEntry> = buffers
         .iter()
         .enumerate()
@@ -541,7 +571,7 @@ fn bind_buffers(gpu: &GpuContext, layout: &wgpu::BindGroupLayout, buffers: &[&wg
     })
 }
 
-fn storage_buffer(gpu: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+pub(super) fn storage_buffer(gpu: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size,
@@ -550,7 +580,7 @@ fn storage_buffer(gpu: &GpuContext, label: &str, size: u64, usage: wgpu::BufferU
     })
 }
 
-fn box_buffer(
+pub(super) fn box_buffer(
     gpu: &GpuContext,
     layout: &wgpu::BindGroupLayout,
     camera: &wgpu::Buffer,

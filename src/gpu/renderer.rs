@@ -5,6 +5,7 @@
 use glam::Mat4;
 use wgpu::util::DeviceExt;
 
+use super::raster::{IndirectCount, IndirectDraws};
 use super::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, RenderTargets};
 use super::{GpuContext, GpuError};
 use crate::camera::Camera;
@@ -234,7 +235,7 @@ impl SceneRenderer {
         gpu.queue.write_buffer(&self.camera, 0, bytemuck::cast_slice(&uniform));
     }
 
-    /// Records a shaded pass into `depth` drawing `objects`, clearing first
+    /// Records a shaded pass into `depth` drawing `draws`, clearing first
     /// when `clear` is set.
     pub fn encode_shaded(
         &self,
@@ -242,7 +243,7 @@ impl SceneRenderer {
         targets: &RenderTargets,
         depth: &wgpu::TextureView,
         clear: bool,
-        objects: &[u32],
+        draws: Draws,
     ) {
         let color_load = if clear {
             wgpu::LoadOp::Clear(wgpu::Color {
@@ -255,7 +256,7 @@ impl SceneRenderer {
             wgpu::LoadOp::Load
         };
         let mut pass = begin_pass(encoder, "shaded", &targets.color, color_load, depth, clear);
-        self.draw(&mut pass, &self.shaded, objects);
+        self.draw(&mut pass, &self.shaded, draws);
     }
 
     /// Records the reference pass: every object into the reference depth and
@@ -269,7 +270,7 @@ impl SceneRenderer {
             &targets.reference_depth,
             true,
         );
-        self.draw(&mut pass, &self.reference, all);
+        self.draw(&mut pass, &self.reference, Draws::Objects(all));
     }
 
     /// Records a pass counting, per pixel of `target`, the surfaces of
@@ -296,22 +297,49 @@ impl SceneRenderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        self.draw(&mut pass, &self.heat, objects);
+        self.draw(&mut pass, &self.heat, Draws::Objects(objects));
     }
 
-    fn draw(&self, pass: &mut wgpu::RenderPass, pipeline: &wgpu::RenderPipeline, objects: &[u32]) {
-        if objects.is_empty() {
+    fn draw(&self, pass: &mut wgpu::RenderPass, pipeline: &wgpu::RenderPipeline, draws: Draws) {
+        if let Draws::Objects([])
+        | Draws::Indirect(IndirectDraws {
+            count: IndirectCount::Known(0),
+            ..
+        }) = draws
+        {
             return;
         }
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
         pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-        for &o in objects {
-            let d = self.scene.draws[o as usize];
-            pass.draw_indexed(d.first_index..d.first_index + d.index_count, 0, o..o + 1);
+        match draws {
+            Draws::Objects(objects) => {
+                for &o in objects {
+                    let d = self.scene.draws[o as usize];
+                    pass.draw_indexed(d.first_index..d.first_index + d.index_count, 0, o..o + 1);
+                }
+            }
+            Draws::Indirect(IndirectDraws {
+                commands,
+                offset,
+                count,
+            }) => match count {
+                IndirectCount::Known(n) => pass.multi_draw_indexed_indirect(commands, offset, n),
+                IndirectCount::InBuffer {
+                    buffer,
+                    offset: count_offset,
+                    max,
+                } => pass.multi_draw_indexed_indirect_count(commands, offset, buffer, count_offset, max),
+            },
         }
     }
+}
+
+/// What a pass draws: objects named on the CPU, or commands the GPU built.
+pub enum Draws<'b> {
+    Objects(&'b [u32]),
+    Indirect(IndirectDraws<'b>),
 }
 
 fn begin_pass<'e>(

@@ -288,12 +288,15 @@ fn merge(a: Bin, b: Bin) -> Bin {
     }
 }
 
+/// Objects for unit tests of the structures built over them.
 #[cfg(test)]
-mod tests {
-    use super::*;
+pub(crate) mod fixtures {
     use glam::{DAffine3, DVec3};
 
-    fn object(min: DVec3, size: f64, triangles: u32) -> Object {
+    use crate::bounds::Aabb;
+    use crate::scene::Object;
+
+    pub fn object(min: DVec3, size: f64, triangles: u32) -> Object {
         Object {
             name: String::new(),
             mesh: 0,
@@ -303,7 +306,8 @@ mod tests {
         }
     }
 
-    fn grid_objects(n: usize) -> Vec<Object> {
+    /// `n` unit cubes on a grid ten wide, 3 units apart.
+    pub fn grid_objects(n: usize) -> Vec<Object> {
         (0..n)
             .map(|i| {
                 object(
@@ -314,6 +318,13 @@ mod tests {
             })
             .collect()
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fixtures::{grid_objects, object};
+    use super::*;
+    use glam::DVec3;
 
     /// Every structural promise of the layout, checked from scratch.
     fn check_invariants(h: &Hierarchy, objects: &[Object]) {

@@ -90,8 +90,13 @@ pub fn gpus() -> Vec<GpuContext> {
 
 /// A one-frame path: the camera at `eye` looking at `target`.
 pub fn still(eye: DVec3, target: DVec3, fov_y_deg: f64) -> CameraPath {
+    held(eye, target, fov_y_deg, 1)
+}
+
+/// The camera held at `eye`, looking at `target`, for `frames` frames.
+pub fn held(eye: DVec3, target: DVec3, fov_y_deg: f64, frames: u32) -> CameraPath {
     let file = PathFile {
-        frames: Some(1),
+        frames: Some(frames),
         fps: None,
         near: Some(0.1),
         fov_y_deg: Some(fov_y_deg),

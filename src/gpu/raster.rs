@@ -1,0 +1,828 @@
+//! GPU-driven culling (paper 004): the visibility of tree nodes is decided
+//! on the GPU, level by level, and the GPU builds the draw lists itself, so
+//! no per-node result ever travels back to the CPU.
+//!
+//! A [`CullTree`] is what the GPU walks: nodes whose children are contiguous,
+//! the objects of each subtree contiguous in `order`, and the nodes tested
+//! first (`seed`). `roc` walks a flat tree (every object a leaf); `ioc` the
+//! bounding-volume hierarchy cut at a bottom depth.
+//!
+//! One frame, as the modes drive it through `FrameCtx`:
+//! 1. draw the visible list (last frame's visible objects, the occluders);
+//! 2. per level: draw the boxes of the queued nodes with `fs_mark`, which
+//!    marks a node visible when one of its fragments passes the early depth
+//!    test (raster_mark.wgsl); then `cs_expand` enqueues the children of
+//!    visible inner nodes and marks the objects of visible leaves
+//!    (raster_cull.wgsl). The queue's length stays on the GPU: it is the
+//!    instance count of the next level's indirect draw and dispatch;
+//! 3. `cs_compact` turns the marks into the next visible list and the list of
+//!    objects visible now but not drawn in step 1;
+//! 4. draw that list by indirect multi-draw. Where the adapter cannot take
+//!    the count from a GPU buffer (GL), the two list lengths are read back
+//!    first: the frame's only round trip.
+//!
+//! After the frame, untimed, [`RasterPool::audit`] reads back which objects
+//! were drawn, how many nodes each level tested and hid, and the GPU time of
+//! steps 2-3, for the statistics.
+
+use std::time::Duration;
+
+use wgpu::util::DeviceExt;
+
+use super::queries::{
+    EyeBox, QueryBox, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer, depth_only_pass,
+    eye_relative_box, storage_buffer,
+};
+use super::renderer::DrawRange;
+use super::targets::DEPTH_FORMAT;
+use super::{GpuContext, Readback};
+use crate::bounds::Aabb;
+use crate::camera::{Camera, Containment};
+use crate::hierarchy::Hierarchy;
+use crate::object_set::ObjectSet;
+
+/// The most levels one walk may take (the size of the per-level statistics).
+pub const MAX_LEVELS: u32 = 64;
+
+/// Threads per workgroup of raster_cull.wgsl, and its grid limit.
+const GROUP_SIZE: u32 = 64;
+const MAX_GROUPS: u32 = 65_535;
+
+/// Bytes of one level's arguments (`Level` in raster_cull.wgsl): an indirect
+/// draw, an indirect dispatch, and a hidden-node count.
+const LEVEL_BYTES: u64 = 32;
+const DRAW_COMMAND_BYTES: u64 = 20;
+
+/// A node as raster_cull.wgsl reads it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct TreeNode {
+    pub first_child: u32,
+    /// 0 where the walk stops: a leaf, or a node at the bottom depth.
+    pub child_count: u32,
+    pub first_object: u32,
+    pub object_count: u32,
+}
+
+/// A tree for GPU-driven culling, built on the CPU.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CullTree {
+    pub nodes: Vec<TreeNode>,
+    /// Object ids; a node's objects are `order[first_object..][..object_count]`.
+    pub order: Vec<u32>,
+    /// The nodes tested in the first level.
+    pub seed: Vec<u32>,
+    /// Levels a walk takes: one more than the depth of the deepest node
+    /// below the seed.
+    pub levels: u32,
+}
+
+impl CullTree {
+    /// Every object a leaf of its own, all tested in one level (roc).
+    pub fn flat(objects: u32) -> CullTree {
+        CullTree {
+            nodes: (0..objects)
+                .map(|o| TreeNode {
+                    first_child: 0,
+                    child_count: 0,
+                    first_object: o,
+                    object_count: 1,
+                })
+                .collect(),
+            order: (0..objects).collect(),
+            seed: (0..objects).collect(),
+            levels: 1,
+        }
+    }
+
+    /// `hierarchy` cut at depth `bottom` (its nodes there become leaves) and
+    /// walked from its nodes at depth `start` (or leaves above it); the root
+    /// is at depth 0. Also returns, per tree node, the hierarchy node it
+    /// stands for. `start` is at most `bottom`, and `bottom - start` less
+    /// than [`MAX_LEVELS`].
+    pub fn cut(hierarchy: &Hierarchy, start: u32, bottom: u32) -> (CullTree, Vec<u32>) {
+        assert!(
+            start <= bottom && bottom - start < MAX_LEVELS,
+            "levels {start}..={bottom}"
+        );
+        // Breadth first, so every node's children get consecutive numbers.
+        let mut source = vec![0u32];
+        let mut depth = vec![0u32];
+        let mut nodes = Vec::new();
+        let mut next = 0;
+        while next < source.len() {
+            let h = &hierarchy.nodes[source[next] as usize];
+            let d = depth[next];
+            let expand = !h.is_leaf() && d < bottom;
+            nodes.push(TreeNode {
+                first_child: if expand { source.len() as u32 } else { 0 },
+                child_count: if expand { h.child_count } else { 0 },
+                first_object: h.first_object,
+                object_count: h.object_count,
+            });
+            if expand {
+                source.extend(h.children().map(|c| c as u32));
+                depth.extend(h.children().map(|_| d + 1));
+            }
+            next += 1;
+        }
+        let seed: Vec<u32> = (0..nodes.len() as u32)
+            .filter(|&i| {
+                let d = depth[i as usize];
+                d == start || (d < start && nodes[i as usize].child_count == 0)
+            })
+            .collect();
+        let deepest = depth.iter().copied().max().unwrap_or(0);
+        let tree = CullTree {
+            nodes,
+            order: hierarchy.objects.clone(),
+            seed,
+            levels: deepest.max(start) - start + 1,
+        };
+        (tree, source)
+    }
+}
+
+/// Which of a tree's two draw lists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DrawList {
+    /// The objects visible in the last walk: this frame's occluders.
+    Visible,
+    /// The objects visible in this walk and not in the last one.
+    NewlyVisible,
+}
+
+/// A [`CullTree`] on the GPU with the state one mode keeps between frames:
+/// which objects were visible, and the draw lists.
+pub struct GpuCullTree {
+    nodes: u32,
+    objects: u32,
+    seed_len: u32,
+    levels: u32,
+    seed: wgpu::Buffer,
+    seed_level: wgpu::Buffer,
+    tree_group: wgpu::BindGroup,
+    lists_group: wgpu::BindGroup,
+    /// The visible list at [0, n), the newly visible one at [n, 2n).
+    commands: wgpu::Buffer,
+    /// The two lists' lengths.
+    counts: wgpu::Buffer,
+    /// The lengths as last read back, where draws cannot take them from
+    /// `counts`.
+    known_counts: [u32; 2],
+}
+
+impl GpuCullTree {
+    pub fn levels(&self) -> u32 {
+        self.levels
+    }
+
+    pub fn nodes(&self) -> u32 {
+        self.nodes
+    }
+}
+
+/// How many commands an indirect multi-draw takes.
+pub enum IndirectCount<'b> {
+    /// Known on the CPU.
+    Known(u32),
+    /// A `u32` in a GPU buffer at an offset, at most `max`.
+    InBuffer {
+        buffer: &'b wgpu::Buffer,
+        offset: u64,
+        max: u32,
+    },
+}
+
+/// Draw commands built on the GPU.
+pub struct IndirectDraws<'b> {
+    pub commands: &'b wgpu::Buffer,
+    pub offset: u64,
+    pub count: IndirectCount<'b>,
+}
+
+/// What one walk's audit found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GpuAudit {
+    pub objects_drawn: u64,
+    pub triangles_drawn: u64,
+    /// Node boxes drawn into the visibility buffer.
+    pub nodes_tested: u64,
+    pub nodes_hidden: u64,
+    /// GPU time of the walk and the compaction, where timestamps exist.
+    pub cull_gpu: Option<Duration>,
+}
+
+/// The walk recorded for the audit.
+struct Walk {
+    seed_len: u32,
+    levels: u32,
+}
+
+/// Per-node scratch for trees of up to `capacity` nodes, replaced by a
+/// larger one when a larger tree arrives.
+struct NodeScratch {
+    capacity: u32,
+    boxes: wgpu::Buffer,
+    box_group: wgpu::BindGroup,
+    /// The visibility buffer: one word per node, set by `fs_mark` (and by
+    /// the CPU for boxes that reach the near plane).
+    node_visible: wgpu::Buffer,
+    /// Two queues with their levels' arguments, used in turn: a level reads
+    /// one and fills the other.
+    queues: [wgpu::Buffer; 2],
+    level_args: [wgpu::Buffer; 2],
+    mark_groups: [wgpu::BindGroup; 2],
+    /// `step_groups[i]` reads queue `i` and fills the other.
+    step_groups: [wgpu::BindGroup; 2],
+}
+
+/// Pipelines and scratch shared by every GPU-driven mode.
+pub struct RasterPool {
+    mark: wgpu::RenderPipeline,
+    expand: wgpu::ComputePipeline,
+    compact: wgpu::ComputePipeline,
+    box_layout: wgpu::BindGroupLayout,
+    mark_layout: wgpu::BindGroupLayout,
+    step_layout: wgpu::BindGroupLayout,
+    tree_layout: wgpu::BindGroupLayout,
+    lists_layout: wgpu::BindGroupLayout,
+    camera: wgpu::Buffer,
+    scratch: NodeScratch,
+    /// An empty level, copied over a level before its queue is filled.
+    empty_level: wgpu::Buffer,
+    /// Every object's draw command (first instance = object id).
+    draws: wgpu::Buffer,
+    objects: u32,
+    triangles: Vec<u64>,
+    /// One word per object: drawn this frame.
+    drawn: wgpu::Buffer,
+    /// Each level's arguments after it ran, for the audit.
+    level_stats: wgpu::Buffer,
+    timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, f64)>,
+    audit_readback: Readback,
+    counts_readback: Readback,
+    walk: Option<Walk>,
+    /// Scratch, reused so a frame allocates nothing once warm.
+    staging: Vec<QueryBox>,
+    node_flags: Vec<u32>,
+    words: Vec<u32>,
+}
+
+/// Where the audit's parts sit in its read-back buffer.
+const AUDIT_LEVELS_OFFSET: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
+const AUDIT_DRAWN_OFFSET: u64 = AUDIT_LEVELS_OFFSET + MAX_LEVELS as u64 * LEVEL_BYTES;
+
+impl RasterPool {
+    /// For a scene whose objects draw `draws`; `camera` is the uniform the
+    /// scene renderer fills per frame. Needs [`GpuContext::gpu_driven`].
+    pub fn new(gpu: &GpuContext, camera: &wgpu::Buffer, draws: &[DrawRange]) -> RasterPool {
+        let device = &gpu.device;
+        let mark_source = [
+            include_str!("../../shaders/boxes.wgsl"),
+            include_str!("../../shaders/raster_mark.wgsl"),
+        ]
+        .concat();
+        let mark_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("boxes.wgsl + raster_mark.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(mark_source.into()),
+        });
+        let cull_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("raster_cull.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/raster_cull.wgsl").into()),
+        });
+        use wgpu::BufferBindingType::Storage;
+        use wgpu::ShaderStages as S;
+        let read = Storage { read_only: true };
+        let write = Storage { read_only: false };
+        let box_layout = box_bind_group_layout(gpu);
+        let mark_layout = bind_group_layout(gpu, "mark", &[(S::VERTEX, read), (S::FRAGMENT, write)]);
+        let step_layout = bind_group_layout(
+            gpu,
+            "level step",
+            &[
+                (S::COMPUTE, read),
+                (S::COMPUTE, read),
+                (S::COMPUTE, read),
+                (S::COMPUTE, write),
+                (S::COMPUTE, write),
+            ],
+        );
+        let tree_layout = bind_group_layout(
+            gpu,
+            "tree",
+            &[(S::COMPUTE, read), (S::COMPUTE, read), (S::COMPUTE, write)],
+        );
+        let lists_layout = bind_group_layout(
+            gpu,
+            "lists",
+            &[
+                (S::COMPUTE, read),
+                (S::COMPUTE, write),
+                (S::COMPUTE, write),
+                (S::COMPUTE, write),
+            ],
+        );
+        let layout = |label, groups: &[Option<&wgpu::BindGroupLayout>]| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: groups,
+                immediate_size: 0,
+            })
+        };
+        let mark = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("mark visible nodes"),
+            layout: Some(&layout("mark", &[Some(&box_layout), Some(&mark_layout)])),
+            vertex: wgpu::VertexState {
+                module: &mark_module,
+                entry_point: Some("vs_queued"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                cull_mode: Some(wgpu::Face::Back),
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                // Reverse-Z, as the box tests of queries.rs.
+                depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &mark_module,
+                entry_point: Some("fs_mark"),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let compute = |label, entry, groups: &[Option<&wgpu::BindGroupLayout>]| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&layout(label, groups)),
+                module: &cull_module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let expand = compute("expand a level", "cs_expand", &[Some(&step_layout), Some(&tree_layout)]);
+        let compact = compute(
+            "compact draw lists",
+            "cs_compact",
+            &[Some(&step_layout), Some(&tree_layout), Some(&lists_layout)],
+        );
+        let commands: Vec<u8> = draws
+            .iter()
+            .enumerate()
+            .flat_map(|(o, d)| {
+                wgpu::util::DrawIndexedIndirectArgs {
+                    index_count: d.index_count,
+                    instance_count: 1,
+                    first_index: d.first_index,
+                    base_vertex: 0,
+                    first_instance: o as u32,
+                }
+                .as_bytes()
+                .to_vec()
+            })
+            .collect();
+        let init = |label, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let objects = draws.len() as u32;
+        let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let empty_level = [36u32, 0, 0, 0, 0, 1, 1, 0];
+        let scratch = NodeScratch::new(gpu, [&box_layout, &mark_layout, &step_layout], camera, objects);
+        RasterPool {
+            draws: init("all draw commands", &commands, wgpu::BufferUsages::STORAGE),
+            drawn: storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy),
+            level_stats: storage_buffer(gpu, "level statistics", u64::from(MAX_LEVELS) * LEVEL_BYTES, copy),
+            empty_level: init(
+                "empty level",
+                bytemuck::cast_slice(&empty_level),
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+            timestamps: gpu.timestamps.then(|| {
+                let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("gpu culling timestamps"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: 2,
+                });
+                let resolved = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("gpu culling timestamps"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                (set, resolved, f64::from(gpu.queue.get_timestamp_period()))
+            }),
+            audit_readback: Readback::new(gpu, "gpu culling audit", AUDIT_DRAWN_OFFSET + u64::from(objects) * 4),
+            counts_readback: Readback::new(gpu, "draw list lengths", 8),
+            objects,
+            triangles: draws.iter().map(|d| u64::from(d.index_count / 3)).collect(),
+            walk: None,
+            staging: Vec::new(),
+            node_flags: Vec::new(),
+            words: Vec::new(),
+            scratch,
+            mark,
+            expand,
+            compact,
+            box_layout,
+            mark_layout,
+            step_layout,
+            tree_layout,
+            lists_layout,
+            camera: camera.clone(),
+        }
+    }
+
+    /// Puts `tree` on the GPU with an empty visible list, for one mode.
+    pub fn upload(&mut self, gpu: &GpuContext, tree: &CullTree) -> GpuCullTree {
+        assert!(
+            tree.order.len() == self.objects as usize,
+            "a cull tree orders every object of the scene"
+        );
+        assert!((1..=MAX_LEVELS).contains(&tree.levels), "1..={MAX_LEVELS} levels");
+        let nodes = tree.nodes.len() as u32;
+        if nodes > self.scratch.capacity {
+            self.scratch = NodeScratch::new(
+                gpu,
+                [&self.box_layout, &self.mark_layout, &self.step_layout],
+                &self.camera,
+                nodes,
+            );
+        }
+        let device = &gpu.device;
+        let init = |label, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: if contents.is_empty() { &[0; 4] } else { contents },
+                usage,
+            })
+        };
+        let storage = wgpu::BufferUsages::STORAGE;
+        let seed_len = tree.seed.len() as u32;
+        let seed_level = [36, seed_len, 0, 0, groups_for(seed_len), 1, 1, 0];
+        let node_buffer = init("tree nodes", bytemuck::cast_slice(&tree.nodes), storage);
+        let order = init("tree order", bytemuck::cast_slice(&tree.order), storage);
+        let object_state = storage_buffer(
+            gpu,
+            "object state",
+            u64::from(self.objects.max(1)) * 4,
+            wgpu::BufferUsages::empty(),
+        );
+        let commands = storage_buffer(
+            gpu,
+            "draw lists",
+            2 * u64::from(self.objects.max(1)) * DRAW_COMMAND_BYTES,
+            wgpu::BufferUsages::INDIRECT,
+        );
+        let counts = storage_buffer(
+            gpu,
+            "draw list lengths",
+            8,
+            wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        );
+        GpuCullTree {
+            nodes,
+            objects: self.objects,
+            seed_len,
+            levels: tree.levels,
+            seed: init(
+                "seed queue",
+                bytemuck::cast_slice(&tree.seed),
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+            seed_level: init(
+                "seed level",
+                bytemuck::cast_slice(&seed_level),
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+            tree_group: bind_buffers(gpu, &self.tree_layout, &[&node_buffer, &order, &object_state]),
+            lists_group: bind_buffers(gpu, &self.lists_layout, &[&self.draws, &commands, &counts, &self.drawn]),
+            commands,
+            counts,
+            known_counts: [0; 2],
+        }
+    }
+
+    /// Starts a walk of `tree`: stages the boxes of its nodes (`bounds`,
+    /// one per node, in node order) for `camera`, marks those that reach
+    /// the near plane visible, and queues the seed.
+    pub fn begin_walk(
+        &mut self,
+        gpu: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
+        tree: &GpuCullTree,
+        bounds: impl ExactSizeIterator<Item = Aabb>,
+    ) {
+        assert_eq!(bounds.len(), tree.nodes as usize, "one box per tree node");
+        let view = camera.view_rotation();
+        let frustum = camera.frustum();
+        self.staging.clear();
+        self.node_flags.clear();
+        for b in bounds {
+            // A box outside the frustum is hidden, and one reaching the near
+            // plane visible, without a test: both are staged empty, which
+            // draws no fragment. The rasteriser would clip the first, but
+            // the near-plane rule must not see it.
+            let (q, visible) = if frustum.classify(&b) == Containment::Outside {
+                (bytemuck::Zeroable::zeroed(), 0)
+            } else {
+                match eye_relative_box(camera, &view, &b) {
+                    EyeBox::Testable(q) => (q, 0),
+                    EyeBox::ReachesNear => (bytemuck::Zeroable::zeroed(), 1),
+                }
+            };
+            self.staging.push(q);
+            self.node_flags.push(visible);
+        }
+        let s = &self.scratch;
+        if !self.staging.is_empty() {
+            gpu.queue.write_buffer(&s.boxes, 0, bytemuck::cast_slice(&self.staging));
+            gpu.queue
+                .write_buffer(&s.node_visible, 0, bytemuck::cast_slice(&self.node_flags));
+        }
+        if let Some((set, _, _)) = &self.timestamps {
+            encoder.write_timestamp(set, 0);
+        }
+        encoder.copy_buffer_to_buffer(&tree.seed, 0, &s.queues[0], 0, u64::from(tree.seed_len.max(1)) * 4);
+        encoder.copy_buffer_to_buffer(&tree.seed_level, 0, &s.level_args[0], 0, LEVEL_BYTES);
+        self.walk = Some(Walk {
+            seed_len: tree.seed_len,
+            levels: 0,
+        });
+    }
+
+    /// One level: draws the queued nodes' boxes against `depth`, marking
+    /// the visible ones, then expands them into the next queue.
+    ///
+    /// # Panics
+    /// Outside a walk, or past [`MAX_LEVELS`].
+    pub fn walk_level(&mut self, encoder: &mut wgpu::CommandEncoder, depth: &wgpu::TextureView, tree: &GpuCullTree) {
+        let walk = self.walk.as_mut().expect("walk_level follows begin_walk");
+        assert!(walk.levels < MAX_LEVELS, "at most {MAX_LEVELS} levels");
+        let (input, output) = ((walk.levels % 2) as usize, ((walk.levels + 1) % 2) as usize);
+        let s = &self.scratch;
+        encoder.copy_buffer_to_buffer(&self.empty_level, 0, &s.level_args[output], 0, LEVEL_BYTES);
+        {
+            let mut pass = depth_only_pass(encoder, "mark visible nodes", depth, None);
+            pass.set_pipeline(&self.mark);
+            pass.set_bind_group(0, &s.box_group, &[]);
+            pass.set_bind_group(1, &s.mark_groups[input], &[]);
+            pass.draw_indirect(&s.level_args[input], 0);
+        }
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("expand a level"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.expand);
+            pass.set_bind_group(0, &s.step_groups[input], &[]);
+            pass.set_bind_group(1, &tree.tree_group, &[]);
+            // The dispatch arguments follow the draw's four words.
+            pass.dispatch_workgroups_indirect(&s.level_args[input], 16);
+        }
+        encoder.copy_buffer_to_buffer(
+            &s.level_args[output],
+            0,
+            &self.level_stats,
+            u64::from(walk.levels) * LEVEL_BYTES,
+            LEVEL_BYTES,
+        );
+        walk.levels += 1;
+    }
+
+    /// Ends the walk: the marks become the tree's visible and newly visible
+    /// lists.
+    pub fn compact(&mut self, encoder: &mut wgpu::CommandEncoder, tree: &GpuCullTree) {
+        encoder.clear_buffer(&tree.counts, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("compact draw lists"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.compact);
+            pass.set_bind_group(0, &self.scratch.step_groups[0], &[]);
+            pass.set_bind_group(1, &tree.tree_group, &[]);
+            pass.set_bind_group(2, &tree.lists_group, &[]);
+            pass.dispatch_workgroups(groups_for(self.objects), 1, 1);
+        }
+        if let Some((set, _, _)) = &self.timestamps {
+            encoder.write_timestamp(set, 1);
+        }
+    }
+
+    /// Submits `encoder` and reads the lengths of `tree`'s lists back, for
+    /// adapters whose draws cannot take them from a buffer.
+    pub fn read_counts(&mut self, gpu: &GpuContext, mut encoder: wgpu::CommandEncoder, tree: &mut GpuCullTree) {
+        self.counts_readback.copy(&mut encoder, &tree.counts, 0, 0, 8);
+        gpu.queue.submit([encoder.finish()]);
+        self.counts_readback.read(gpu, 8, &mut self.words);
+        tree.known_counts = [self.words[0], self.words[1]];
+    }
+
+    /// The commands of one of `tree`'s lists; the count comes from the GPU
+    /// when `indirect_count`, else from the last [`RasterPool::read_counts`].
+    pub fn list<'t>(tree: &'t GpuCullTree, list: DrawList, indirect_count: bool) -> IndirectDraws<'t> {
+        let (index, offset) = match list {
+            DrawList::Visible => (0, 0),
+            DrawList::NewlyVisible => (1, u64::from(tree.objects) * DRAW_COMMAND_BYTES),
+        };
+        IndirectDraws {
+            commands: &tree.commands,
+            offset,
+            count: if indirect_count {
+                IndirectCount::InBuffer {
+                    buffer: &tree.counts,
+                    offset: 4 * index as u64,
+                    max: tree.objects,
+                }
+            } else {
+                IndirectCount::Known(tree.known_counts[index])
+            },
+        }
+    }
+
+    /// After a frame with a walk, untimed: fills `drawn` with the objects
+    /// drawn from the lists and returns the walk's figures; `None` when the
+    /// frame had no walk.
+    pub fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        let walk = self.walk.take()?;
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        if let Some((set, resolved, _)) = &self.timestamps {
+            encoder.resolve_query_set(set, 0..2, resolved, 0);
+            self.audit_readback.copy(&mut encoder, resolved, 0, 0, 16);
+        }
+        let level_bytes = u64::from(walk.levels) * LEVEL_BYTES;
+        if level_bytes > 0 {
+            self.audit_readback
+                .copy(&mut encoder, &self.level_stats, 0, AUDIT_LEVELS_OFFSET, level_bytes);
+        }
+        let drawn_bytes = u64::from(self.objects) * 4;
+        if drawn_bytes > 0 {
+            self.audit_readback
+                .copy(&mut encoder, &self.drawn, 0, AUDIT_DRAWN_OFFSET, drawn_bytes);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        self.audit_readback
+            .read(gpu, AUDIT_DRAWN_OFFSET + drawn_bytes, &mut self.words);
+
+        let word = |offset: u64| (offset / 4) as usize;
+        let levels = &self.words[word(AUDIT_LEVELS_OFFSET)..word(AUDIT_LEVELS_OFFSET + level_bytes)];
+        let mut audit = GpuAudit {
+            nodes_tested: u64::from(walk.seed_len),
+            ..GpuAudit::default()
+        };
+        for (k, level) in levels.chunks_exact(word(LEVEL_BYTES)).enumerate() {
+            // A level's arguments hold the next queue's length and the
+            // hidden count of the level that filled it.
+            if k + 1 < walk.levels as usize {
+                audit.nodes_tested += u64::from(level[1]);
+            }
+            audit.nodes_hidden += u64::from(level[7]);
+        }
+        drawn.clear();
+        for (object, &flag) in self.words[word(AUDIT_DRAWN_OFFSET)..].iter().enumerate() {
+            if flag != 0 {
+                drawn.insert(object as u32);
+                audit.objects_drawn += 1;
+                audit.triangles_drawn += self.triangles[object];
+            }
+        }
+        audit.cull_gpu = self.timestamps.as_ref().map(|&(_, _, period_ns)| {
+            let tick = |i: usize| u64::from(self.words[2 * i]) | (u64::from(self.words[2 * i + 1]) << 32);
+            Duration::from_nanos((tick(1).saturating_sub(tick(0)) as f64 * period_ns) as u64)
+        });
+        Some(audit)
+    }
+}
+
+impl NodeScratch {
+    fn new(
+        gpu: &GpuContext,
+        [box_layout, mark_layout, step_layout]: [&wgpu::BindGroupLayout; 3],
+        camera: &wgpu::Buffer,
+        capacity: u32,
+    ) -> NodeScratch {
+        let capacity = capacity.max(1);
+        let words = u64::from(capacity) * 4;
+        let copy_dst = wgpu::BufferUsages::COPY_DST;
+        let (boxes, box_group) = box_buffer(gpu, box_layout, camera, capacity);
+        let node_visible = storage_buffer(gpu, "visibility buffer", words, copy_dst);
+        let queues = [0, 1].map(|_| storage_buffer(gpu, "node queue", words, copy_dst));
+        let level_args = [0, 1].map(|_| {
+            storage_buffer(
+                gpu,
+                "level arguments",
+                LEVEL_BYTES,
+                wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC | copy_dst,
+            )
+        });
+        let mark_groups = [0, 1].map(|i| bind_buffers(gpu, mark_layout, &[&queues[i], &node_visible]));
+        let step_groups = [0, 1].map(|i| {
+            let o = 1 - i;
+            bind_buffers(
+                gpu,
+                step_layout,
+                &[&queues[i], &level_args[i], &node_visible, &queues[o], &level_args[o]],
+            )
+        });
+        NodeScratch {
+            capacity,
+            boxes,
+            box_group,
+            node_visible,
+            queues,
+            level_args,
+            mark_groups,
+            step_groups,
+        }
+    }
+}
+
+/// Workgroups that cover `n` items, within the grid limit (the shaders
+/// stride over the rest).
+fn groups_for(n: u32) -> u32 {
+    n.div_ceil(GROUP_SIZE).min(MAX_GROUPS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hierarchy::HierarchyParams;
+    use crate::hierarchy::fixtures::grid_objects;
+
+    /// Walks `tree` as the GPU does when every node is visible, returning
+    /// the objects marked and the number of levels taken.
+    fn walk_all_visible(tree: &CullTree) -> (Vec<u32>, u32) {
+        let (mut queue, mut marked, mut levels) = (tree.seed.clone(), Vec::new(), 0);
+        while !queue.is_empty() {
+            levels += 1;
+            let mut next = Vec::new();
+            for &i in &queue {
+                let n = tree.nodes[i as usize];
+                if n.child_count == 0 {
+                    marked.extend_from_slice(&tree.order[n.first_object as usize..][..n.object_count as usize]);
+                } else {
+                    next.extend(n.first_child..n.first_child + n.child_count);
+                }
+            }
+            queue = next;
+        }
+        marked.sort_unstable();
+        (marked, levels)
+    }
+
+    #[test]
+    fn every_cut_reaches_every_object_once_in_its_levels() {
+        let objects = grid_objects(100);
+        let h = Hierarchy::build(&objects, &HierarchyParams::default());
+        let deepest = h.stats().depth - 1;
+        let all: Vec<u32> = (0..100).collect();
+        for bottom in 0..=deepest + 1 {
+            for start in 0..=bottom {
+                let (tree, source) = CullTree::cut(&h, start, bottom);
+                let (marked, levels) = walk_all_visible(&tree);
+                assert_eq!(marked, all, "start {start}, bottom {bottom}");
+                assert_eq!(levels, tree.levels, "start {start}, bottom {bottom}");
+                assert_eq!(tree.levels, bottom.min(deepest).max(start) - start + 1);
+                // Tree nodes stand for hierarchy nodes with the same objects;
+                // every node below the bottom depth is left out.
+                assert_eq!(source.len(), tree.nodes.len());
+                for (node, &s) in tree.nodes.iter().zip(&source) {
+                    let hn = &h.nodes[s as usize];
+                    assert_eq!(
+                        (node.first_object, node.object_count),
+                        (hn.first_object, hn.object_count)
+                    );
+                    assert!(node.child_count == 0 || node.child_count == hn.child_count);
+                }
+            }
+        }
+        let (root_only, _) = CullTree::cut(&h, 0, 0);
+        assert_eq!(root_only.nodes.len(), 1, "a bottom of 0 keeps the root alone");
+        let (full, _) = CullTree::cut(&h, 0, deepest);
+        assert_eq!(full.nodes.len(), h.nodes.len(), "the deepest bottom keeps every node");
+    }
+
+    #[test]
+    fn a_flat_tree_tests_every_object_in_one_level() {
+        let tree = CullTree::flat(5);
+        assert_eq!(walk_all_visible(&tree), ((0..5).collect(), 1));
+        assert_eq!(tree.seed, (0..5).collect::<Vec<u32>>());
+        assert!(tree.nodes.iter().all(|n| n.child_count == 0 && n.object_count == 1));
+    }
+}
