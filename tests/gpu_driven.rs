@@ -6,7 +6,7 @@ mod common;
 
 use common::{boxes, held, run_modes};
 use glam::DVec3;
-use occlu::cull::{Culler, Labeled, ModeParams, create};
+use occlu::cull::{Culler, Labeled, ModeInfo, ModeParams, create};
 use occlu::gpu::{GpuContext, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::measure::FrameStats;
@@ -139,4 +139,21 @@ fn roc_and_ioc_are_exact_on_the_moving_city_within_their_round_trips() {
                 .all(|r| r.query_gpu_ms.is_some() == gpu.timestamps)
         );
     }
+}
+
+#[test]
+fn adapters_without_gpu_culling_skip_roc_and_ioc_with_a_reason() {
+    let mut gpu = common::gpus().remove(0);
+    assert!(gpu.gpu_driven, "Mesa's llvmpipe culls on the GPU: {}", gpu.adapter);
+    assert_eq!(ModeInfo::named("roc").unsupported_on(&gpu), None);
+    gpu.gpu_driven = false;
+    for m in ["roc", "ioc"] {
+        let reason = ModeInfo::named(m).unsupported_on(&gpu).unwrap_or_default();
+        assert!(reason.contains("cannot cull on the GPU"), "{m}: {reason:?}");
+    }
+    assert_eq!(
+        ModeInfo::named("omq").unsupported_on(&gpu),
+        None,
+        "other modes still run"
+    );
 }

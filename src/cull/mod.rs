@@ -31,7 +31,7 @@ use crate::scene::Scene;
 pub use ac::{AcParams, AdaptiveCulling, EyeDistance, Threshold};
 pub use chc::{ChcParams, CoherentCulling};
 pub use dr::DirectRendering;
-pub use ioc::{Depth, IocParams, IterativeOcclusionCulling, auto_depths};
+pub use ioc::{Depth, IocParams, IterativeOcclusionCulling};
 pub use omq::{OccupancyMapQueries, OmqParams};
 pub use oracle::Oracle;
 pub use roc::RasterOcclusionCulling;

@@ -41,7 +41,8 @@ pub struct FrameCounters {
 pub struct FrameOutcome {
     pub counters: FrameCounters,
     /// Time the mode spent inside `FrameCtx` operations (encoding, submitting,
-    /// waiting for results), excluded from its CPU culling time.
+    /// waiting for results), excluded from its CPU culling time. Preparing
+    /// boxes for a test is culling, and not part of it.
     pub gpu_ops: Duration,
 }
 
@@ -191,7 +192,7 @@ impl<'a> FrameCtx<'a> {
                 *self.counters.query_gpu.get_or_insert(Duration::ZERO) += gpu;
             }
         }
-        self.gpu_ops += start.elapsed();
+        self.gpu_ops += start.elapsed().saturating_sub(cost.prepare);
     }
 
     fn encode_queued_draws(&mut self) {
@@ -245,8 +246,8 @@ impl<'a> FrameCtx<'a> {
     pub fn begin_gpu_walk(&mut self, tree: &GpuCullTree, bounds: impl ExactSizeIterator<Item = Aabb>) {
         let start = Instant::now();
         self.encode_queued_draws();
-        pool(&mut self.raster).begin_walk(self.gpu, &mut self.encoder, self.camera, tree, bounds);
-        self.gpu_ops += start.elapsed();
+        let prepare = pool(&mut self.raster).begin_walk(self.gpu, &mut self.encoder, self.camera, tree, bounds);
+        self.gpu_ops += start.elapsed().saturating_sub(prepare);
     }
 
     /// Tests the queued nodes of `tree` as one batch on the GPU and queues

@@ -85,6 +85,9 @@ pub struct BatchCost {
     pub wait: Duration,
     /// GPU time of the test passes alone (timestamps), where available.
     pub gpu: Option<Duration>,
+    /// CPU time spent preparing the boxes (made eye-relative, grown, the
+    /// near-plane rule applied): culling work rather than GPU work.
+    pub prepare: Duration,
 }
 
 /// Where results start in the read-back buffer: after the two timestamps
@@ -320,7 +323,9 @@ impl QueryPool {
             "total pixels are counted by pixel counts only"
         );
         let depth = target.depth;
+        let started = Instant::now();
         self.prepare(target.camera, boxes, out);
+        let prepare = started.elapsed();
         if let Some(t) = totals.as_deref_mut() {
             t.clear();
             t.resize(boxes.len(), 0);
@@ -332,6 +337,7 @@ impl QueryPool {
                 queries: 0,
                 wait: Duration::ZERO,
                 gpu: None,
+                prepare,
             };
         }
         self.reserve(gpu, count);
@@ -394,6 +400,7 @@ impl QueryPool {
             queries: u64::from(count),
             wait,
             gpu: gpu_time,
+            prepare,
         }
     }
 

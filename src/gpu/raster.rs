@@ -25,7 +25,7 @@
 //! were drawn, how many nodes each level tested and hid, and the GPU time of
 //! steps 2-3, for the statistics.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
 
@@ -519,7 +519,8 @@ impl RasterPool {
 
     /// Starts a walk of `tree`: stages the boxes of its nodes (`bounds`,
     /// one per node, in node order) for `camera`, marks those that reach
-    /// the near plane visible, and queues the seed.
+    /// the near plane visible, and queues the seed. Returns the CPU time
+    /// spent preparing the boxes.
     pub fn begin_walk(
         &mut self,
         gpu: &GpuContext,
@@ -527,8 +528,9 @@ impl RasterPool {
         camera: &Camera,
         tree: &GpuCullTree,
         bounds: impl ExactSizeIterator<Item = Aabb>,
-    ) {
+    ) -> Duration {
         assert_eq!(bounds.len(), tree.nodes as usize, "one box per tree node");
+        let started = Instant::now();
         let view = camera.view_rotation();
         let frustum = camera.frustum();
         self.staging.clear();
@@ -549,6 +551,7 @@ impl RasterPool {
             self.staging.push(q);
             self.node_flags.push(visible);
         }
+        let prepare = started.elapsed();
         let s = &self.scratch;
         if !self.staging.is_empty() {
             gpu.queue.write_buffer(&s.boxes, 0, bytemuck::cast_slice(&self.staging));
@@ -564,6 +567,7 @@ impl RasterPool {
             seed_len: tree.seed_len,
             levels: 0,
         });
+        prepare
     }
 
     /// One level: draws the queued nodes' boxes against `depth`, marking
