@@ -12,7 +12,7 @@ use occlu::bench::{BenchError, BenchEvent, execute};
 use occlu::camera::generate::{DEFAULT_FRAMES, PathKind, default_kind, generate};
 use occlu::camera::path::{CameraPath, PathError};
 use occlu::config::{BenchConfig, ConfigError, scene_spec};
-use occlu::cull::{MODES, ModeError, ModeParams, create, parse_modes};
+use occlu::cull::{MODES, ModeError, ModeInfo, ModeParams, create, parse_modes};
 use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::picture::{PictureError, PictureOptions};
@@ -474,6 +474,9 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         None => occlu::camera::generate::default_path(&scene)?,
     };
     let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
+    if let Some(reason) = ModeInfo::named(mode).unsupported_on(&gpu) {
+        anyhow::bail!("mode '{mode}' cannot run on {}: {reason}", gpu.adapter);
+    }
     let culler = create(mode, &scene, &params)?;
     let mut world = World::new(scene, hierarchy);
     let options = PictureOptions {

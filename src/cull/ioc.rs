@@ -168,9 +168,10 @@ fn depths(params: IocParams, hierarchy: &Hierarchy, objects: &[Object]) -> (u32,
     (start, bottom.min(start + MAX_LEVELS - 1))
 }
 
-/// Nodes a level needs before the walk starts there: one workgroup of the
-/// expand pass.
-pub const START_NODES: usize = 64;
+/// Nodes a level needs before the walk starts there: about what one level's
+/// fixed cost (a box pass, an expand pass and their barriers) buys in box
+/// tests. Measured on llvmpipe: ~1.1 ms a level against 4-5 µs a box.
+pub const START_NODES: usize = 512;
 
 /// Start and bottom depths from the hierarchy's statistics (004 §4 leaves
 /// this choice open):
@@ -180,14 +181,14 @@ pub const START_NODES: usize = 64;
 ///   that the hierarchy's build weighs splits with. Below it a test costs
 ///   more than drawing what it could save.
 /// - **start**: the shallowest depth with at least [`START_NODES`] nodes
-///   (or the bottom, if no level has that many). The few large boxes above
-///   it are nearly always visible, so testing them costs a pass and a
-///   screenful of fragments each and culls almost nothing.
+///   (or the bottom, if no level has that many). A level of fewer nodes
+///   costs about as much as its passes alone, and its few large boxes are
+///   nearly always visible: it culls too little to pay for itself.
 ///
-/// On the default city (15 levels, ~560 triangles per object) this gives
-/// start 6 and bottom 14; a sweep of the 60-frame walk is in the issue 8
-/// note: the walk from depth 6 to the leaves was within noise of the best
-/// start and bottom, and every shallower bottom was slower.
+/// Measured by sweeps of the 60-frame walk (issue 8's note): on cities of
+/// 363, 2 625 and 10 521 objects this picks start 11, 10 and 9 and bottom
+/// 11, 14 and 16, at or next to the fastest start of each sweep; every
+/// shallower bottom was slower.
 pub fn auto_depths(hierarchy: &Hierarchy, objects: &[Object]) -> (u32, u32) {
     // (nodes, triangles) per depth.
     let mut levels: Vec<(usize, u64)> = Vec::new();
@@ -236,41 +237,54 @@ mod tests {
         (Hierarchy::build(&objects, &params), objects)
     }
 
+    /// The nodes at `depth` (root 0).
+    fn level(h: &Hierarchy, depth: u32) -> Vec<usize> {
+        let mut nodes = vec![0usize];
+        for _ in 0..depth {
+            nodes = nodes.iter().flat_map(|&i| h.nodes[i].children()).collect();
+        }
+        nodes
+    }
+
+    /// Mean triangles under the nodes at `depth`.
+    fn mean_triangles(h: &Hierarchy, objects: &[Object], depth: u32) -> f64 {
+        let nodes = level(h, depth);
+        let triangles: u32 = nodes
+            .iter()
+            .flat_map(|&i| h.subtree_objects(&h.nodes[i]))
+            .map(|&o| objects[o as usize].triangles)
+            .sum();
+        f64::from(triangles) / nodes.len() as f64
+    }
+
     #[test]
-    fn auto_depths_start_at_a_workgroup_of_nodes_and_stop_where_tests_cost_more_than_drawing() {
-        // 400 objects of 1000 triangles: every level is worth testing; the
-        // first with 64 nodes is depth 6 of a balanced binary tree.
-        let (h, objects) = grid(400, 1000);
-        let deepest = h.stats().depth - 1;
-        let nodes_at = |depth: u32| {
-            let mut level = vec![0usize];
-            for _ in 0..depth {
-                level = level.iter().flat_map(|&i| h.nodes[i].children()).collect();
-            }
-            level.len()
-        };
+    fn auto_depths_start_where_a_level_pays_for_its_passes_and_stop_where_tests_cost_more_than_drawing() {
+        // 2000 objects of 1000 triangles: every level is worth testing.
+        let (h, objects) = grid(2000, 1000);
         let (start, bottom) = auto_depths(&h, &objects);
-        assert_eq!(bottom, deepest);
+        assert_eq!(bottom, h.stats().depth - 1);
         assert!(
-            nodes_at(start) >= START_NODES && nodes_at(start - 1) < START_NODES,
+            level(&h, start).len() >= START_NODES && level(&h, start - 1).len() < START_NODES,
             "start {start}"
         );
         // 400 objects of 40 triangles: a node must hold two objects (80
         // triangles ≥ 64) to be worth a test, so the leaves are not.
         let (h, objects) = grid(400, 40);
         let (_, bottom) = auto_depths(&h, &objects);
-        let mean = |depth: u32| 40.0 * 400.0 / nodes_at(depth) as f64;
         assert!(bottom < h.stats().depth - 1);
-        assert!(mean(bottom) >= 64.0 && mean(bottom + 1) < 64.0, "bottom {bottom}");
-        // Too few nodes for a workgroup anywhere: one level, at the bottom.
-        let (h, objects) = grid(20, 1000);
+        assert!(
+            mean_triangles(&h, &objects, bottom) >= 64.0 && mean_triangles(&h, &objects, bottom + 1) < 64.0,
+            "bottom {bottom}"
+        );
+        // No level has enough nodes: one level, at the bottom.
+        let (h, objects) = grid(400, 1000);
         let (start, bottom) = auto_depths(&h, &objects);
         assert_eq!((start, bottom), (h.stats().depth - 1, h.stats().depth - 1));
     }
 
     #[test]
     fn given_depths_win_over_auto_and_stay_ordered() {
-        let (h, objects) = grid(400, 1000);
+        let (h, objects) = grid(2000, 1000);
         let (auto_start, auto_bottom) = auto_depths(&h, &objects);
         let with = |start, bottom| depths(IocParams { start, bottom }, &h, &objects);
         assert_eq!(with(Depth::Auto, Depth::Auto), (auto_start, auto_bottom));

@@ -1,5 +1,6 @@
 //! [`FrameCtx`]: the operations a culling mode may perform on the GPU during
-//! one timed frame: draw objects, and test boxes against what is drawn.
+//! one timed frame: draw objects, test boxes against what is drawn, and, for
+//! GPU-driven modes, walk a tree and draw the lists the GPU built.
 //! Every mode goes through these operations, which do the counting
 //! themselves, so no mode can draw or query without paying for it or report
 //! its own figures.
@@ -12,14 +13,6 @@ use super::{Draws, GpuContext, GpuTimer, RenderTargets, SceneRenderer};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
 use crate::object_set::ObjectSet;
-
-/// The pool of GPU-driven culling, which the session provides to modes that
-/// declare `Culler::culls_on_gpu` (run only where `GpuContext::gpu_driven`).
-fn pool<'p>(raster: &'p mut Option<&mut RasterPool>) -> &'p mut RasterPool {
-    raster
-        .as_deref_mut()
-        .expect("GPU-driven modes declare Culler::culls_on_gpu and run only where GpuContext::gpu_driven")
-}
 
 /// What a mode did on the GPU in one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -278,4 +271,12 @@ impl<'a> FrameCtx<'a> {
             gpu_ops: self.gpu_ops,
         }
     }
+}
+
+/// The pool of GPU-driven culling, which the session provides to modes that
+/// declare `Culler::culls_on_gpu` (run only where `GpuContext::gpu_driven`).
+fn pool<'p>(raster: &'p mut Option<&mut RasterPool>) -> &'p mut RasterPool {
+    raster
+        .as_deref_mut()
+        .expect("GPU-driven modes declare Culler::culls_on_gpu and run only where GpuContext::gpu_driven")
 }

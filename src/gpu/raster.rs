@@ -176,10 +176,6 @@ impl GpuCullTree {
     pub fn levels(&self) -> u32 {
         self.levels
     }
-
-    pub fn nodes(&self) -> u32 {
-        self.nodes
-    }
 }
 
 /// How many commands an indirect multi-draw takes.
