@@ -98,9 +98,10 @@ impl IocParams {
 
 pub struct IterativeOcclusionCulling {
     params: IocParams,
-    /// Chosen in the first frame: the depths, the tree on the GPU, and per
-    /// tree node the hierarchy node whose box it tests.
+    /// The start and bottom depths, chosen in the first frame.
     chosen: Option<(u32, u32)>,
+    /// The cut hierarchy on the GPU, and per tree node the hierarchy node
+    /// whose box it tests; uploaded in the first frame.
     tree: Option<(GpuCullTree, Vec<u32>)>,
 }
 

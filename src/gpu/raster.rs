@@ -388,24 +388,17 @@ impl RasterPool {
                 .to_vec()
             })
             .collect();
-        let init = |label, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
         let objects = draws.len() as u32;
         let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        let empty_level = [36u32, 0, 0, 0, 0, 1, 1, 0];
         let scratch = NodeScratch::new(gpu, [&box_layout, &mark_layout, &step_layout], camera, objects);
         RasterPool {
-            draws: init("all draw commands", &commands, wgpu::BufferUsages::STORAGE),
+            draws: init_buffer(gpu, "all draw commands", &commands, wgpu::BufferUsages::STORAGE),
             drawn: storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy),
             level_stats: storage_buffer(gpu, "level statistics", u64::from(MAX_LEVELS) * LEVEL_BYTES, copy),
-            empty_level: init(
+            empty_level: init_buffer(
+                gpu,
                 "empty level",
-                bytemuck::cast_slice(&empty_level),
+                bytemuck::cast_slice(&level_args(0)),
                 wgpu::BufferUsages::COPY_SRC,
             ),
             timestamps: gpu.timestamps.then(|| {
@@ -459,19 +452,10 @@ impl RasterPool {
                 nodes,
             );
         }
-        let device = &gpu.device;
-        let init = |label, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: if contents.is_empty() { &[0; 4] } else { contents },
-                usage,
-            })
-        };
         let storage = wgpu::BufferUsages::STORAGE;
         let seed_len = tree.seed.len() as u32;
-        let seed_level = [36, seed_len, 0, 0, groups_for(seed_len), 1, 1, 0];
-        let node_buffer = init("tree nodes", bytemuck::cast_slice(&tree.nodes), storage);
-        let order = init("tree order", bytemuck::cast_slice(&tree.order), storage);
+        let node_buffer = init_buffer(gpu, "tree nodes", bytemuck::cast_slice(&tree.nodes), storage);
+        let order = init_buffer(gpu, "tree order", bytemuck::cast_slice(&tree.order), storage);
         let object_state = storage_buffer(
             gpu,
             "object state",
@@ -495,14 +479,16 @@ impl RasterPool {
             objects: self.objects,
             seed_len,
             levels: tree.levels,
-            seed: init(
+            seed: init_buffer(
+                gpu,
                 "seed queue",
                 bytemuck::cast_slice(&tree.seed),
                 wgpu::BufferUsages::COPY_SRC,
             ),
-            seed_level: init(
+            seed_level: init_buffer(
+                gpu,
                 "seed level",
-                bytemuck::cast_slice(&seed_level),
+                bytemuck::cast_slice(&level_args(seed_len)),
                 wgpu::BufferUsages::COPY_SRC,
             ),
             tree_group: bind_buffers(gpu, &self.tree_layout, &[&node_buffer, &order, &object_state]),
@@ -751,6 +737,22 @@ impl NodeScratch {
             step_groups,
         }
     }
+}
+
+/// A level's arguments (`Level` in raster_cull.wgsl) for a queue of
+/// `entries` nodes: an indirect draw of one box (36 vertices) per entry, an
+/// indirect dispatch over the entries, and no hidden nodes counted yet.
+fn level_args(entries: u32) -> [u32; 8] {
+    [36, entries, 0, 0, groups_for(entries), 1, 1, 0]
+}
+
+/// A buffer holding `contents` (at least one word, as bindings need).
+fn init_buffer(gpu: &GpuContext, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: if contents.is_empty() { &[0; 4] } else { contents },
+        usage,
+    })
 }
 
 /// Workgroups that cover `n` items, within the grid limit (the shaders
