@@ -16,8 +16,8 @@ struct TreeNode {
 }
 
 // The arguments of one level: an indirect draw of 36 box vertices per queue
-// entry, an indirect dispatch over the queue, and the count of the previous
-// level's nodes found hidden.
+// entry, an indirect dispatch over the queue, and what became of the
+// previous level's nodes that were not found visible by a test.
 struct Level {
     vertex_count: u32,
     entries: atomic<u32>,
@@ -26,7 +26,12 @@ struct Level {
     groups_x: atomic<u32>,
     groups_y: u32,
     groups_z: u32,
+    // Tested, and no fragment passed.
     hidden: atomic<u32>,
+    // Outside the frustum: hidden untested.
+    outside: atomic<u32>,
+    // Reaching the near plane: visible untested.
+    near: atomic<u32>,
 }
 
 // wgpu's DrawIndexedIndirectArgs.
@@ -42,6 +47,13 @@ struct Counts {
     visible: atomic<u32>,
     newly_visible: atomic<u32>,
 }
+
+// node_visible words: set per frame by the CPU (0 for a box to test), and
+// to VISIBLE by fs_mark when a fragment of the box passes.
+const TESTED: u32 = 0u;
+const VISIBLE: u32 = 1u;
+const OUTSIDE_FRUSTUM: u32 = 2u;
+const REACHES_NEAR: u32 = 3u;
 
 // object_state bits. VISIBLE_LAST_FRAME persists from frame to frame;
 // MARKED lives from the level walk to compaction.
@@ -79,9 +91,19 @@ fn cs_expand(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     let entries = level_in[1];
     for (var i = id.x; i < entries; i += grid.x * GROUP_SIZE) {
         let index = queue_in[i];
-        if node_visible[index] == 0u {
-            atomicAdd(&level_out.hidden, 1u);
-            continue;
+        switch node_visible[index] {
+            case TESTED: {
+                atomicAdd(&level_out.hidden, 1u);
+                continue;
+            }
+            case OUTSIDE_FRUSTUM: {
+                atomicAdd(&level_out.outside, 1u);
+                continue;
+            }
+            case REACHES_NEAR: {
+                atomicAdd(&level_out.near, 1u);
+            }
+            default: {}
         }
         let node = nodes[index];
         if node.child_count == 0u {

@@ -4,7 +4,8 @@
 // never learns how long the queue is. Early depth testing is forced, so a
 // fragment reaches fs_mark only if it passes the depth test against the
 // occluders drawn so far, and then marks its node visible in the visibility
-// buffer. Every writer stores the same value, so plain stores suffice.
+// buffer (VISIBLE in raster_cull.wgsl). Every writer stores the same value,
+// so plain stores suffice.
 
 @group(1) @binding(0) var<storage, read> queue: array<u32>;
 @group(1) @binding(1) var<storage, read_write> node_visible: array<u32>;

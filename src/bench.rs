@@ -219,8 +219,7 @@ impl<'a> Session<'a> {
             // Untimed: what a GPU-driven mode drew and tested, from the GPU.
             if let Some(audit) = self.raster.as_mut().and_then(|r| r.audit(gpu, &mut self.drawn[k])) {
                 outcome.add_gpu_audit(&audit);
-                traversal.nodes_visited += audit.nodes_tested;
-                traversal.nodes_culled_occlusion += audit.nodes_hidden;
+                traversal.add_gpu_audit(&audit);
             }
             rows[k] = Some(FrameStats {
                 mode: culler.name().to_string(),

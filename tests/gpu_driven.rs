@@ -87,10 +87,21 @@ fn roc_and_ioc_draw_what_a_wall_leaves_visible() {
             assert_eq!(r.objects_drawn, expected, "{at}: {r:?}");
             assert_eq!(r.query_batches, round_trips(&gpu), "{at}");
         }
-        let tested = |m: &str| rows.iter().find(|r| r.mode == m).unwrap().queries;
-        assert_eq!(tested("roc"), 6, "roc tests every object's box");
-        assert_eq!(tested("ioc[root]"), 1, "a bottom of 0 tests the root alone");
-        assert!(tested("ioc") > 6, "the full walk tests inner nodes too");
+        let first = |m: &str| rows.iter().find(|r| r.mode == m).unwrap();
+        let roc = first("roc");
+        assert_eq!(roc.nodes_visited, 6, "roc visits every object's box");
+        assert_eq!(
+            roc.nodes_culled_frustum, 2,
+            "the boxes behind the eye and off to the side"
+        );
+        assert_eq!(roc.queries, 3, "the box through the near plane is visible untested");
+        let root = first("ioc[root]");
+        assert_eq!(
+            (root.nodes_visited, root.queries),
+            (1, 0),
+            "a bottom of 0 visits the root alone, which holds the eye"
+        );
+        assert!(first("ioc").nodes_visited > 6, "the full walk visits inner nodes too");
     }
 }
 
@@ -124,10 +135,12 @@ fn roc_and_ioc_are_exact_on_the_moving_city_within_their_round_trips() {
             assert!(drawn * 3 < vfc * 2, "{m} culls: {drawn} of vfc's {vfc} triangles");
             assert!(sum(m, |r| r.nodes_culled_occlusion) > 0, "{m} hides nodes");
         }
-        assert_eq!(
-            sum("roc", |r| r.queries),
-            12 * scene.objects.len() as u64,
-            "roc tests every box"
+        let boxes = 12 * scene.objects.len() as u64;
+        assert_eq!(sum("roc", |r| r.nodes_visited), boxes, "roc visits every object's box");
+        let (tested, outside) = (sum("roc", |r| r.queries), sum("roc", |r| r.nodes_culled_frustum));
+        assert!(
+            outside > 0 && tested + outside <= boxes,
+            "{tested} tested, {outside} outside"
         );
         assert!(
             sum("ioc", |r| r.queries) < sum("roc", |r| r.queries),

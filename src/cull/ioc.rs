@@ -146,9 +146,7 @@ impl Culler for IterativeOcclusionCulling {
             (ctx.upload_cull_tree(&tree), source)
         });
         let bounds = source.iter().map(|&n| hierarchy.nodes[n as usize].bounds);
-        cull_on_gpu(ctx, tree, bounds);
-        // Nodes tested and hidden are counted on the GPU, read after the frame.
-        TraversalStats::default()
+        cull_on_gpu(ctx, tree, bounds)
     }
 }
 
@@ -166,7 +164,7 @@ fn depths(params: IocParams, hierarchy: &Hierarchy, objects: &[Object]) -> (u32,
         Depth::Fixed(d) => d,
         Depth::Auto => auto_bottom.max(start),
     };
-    (start, bottom.min(start + MAX_LEVELS - 1))
+    (start, bottom.min(start.saturating_add(MAX_LEVELS - 1)))
 }
 
 /// Nodes a level needs before the walk starts there: about what one level's
@@ -299,5 +297,9 @@ mod tests {
             with(Depth::Fixed(auto_bottom + 2), Depth::Auto),
             (auto_bottom + 2, auto_bottom + 2)
         );
+        let deepest = Depth::Fixed(u32::MAX);
+        assert_eq!(with(deepest, deepest), (u32::MAX, u32::MAX), "no overflow");
+        let (tree, _) = CullTree::cut(&h, u32::MAX, u32::MAX);
+        assert_eq!(tree.levels, 1, "one level: every leaf, as the seed");
     }
 }

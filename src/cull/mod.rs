@@ -23,7 +23,7 @@ use std::str::FromStr;
 use std::time::Duration;
 
 use crate::camera::Camera;
-use crate::gpu::{FrameCtx, GpuContext, Resolution};
+use crate::gpu::{FrameCtx, GpuAudit, GpuContext, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
@@ -88,6 +88,16 @@ pub struct TraversalStats {
     /// Time spent keeping the mode's own spatial structure current with
     /// moved objects (part of its CPU time).
     pub maintenance: Duration,
+}
+
+impl TraversalStats {
+    /// Adds the nodes a GPU-driven walk visited, found outside the frustum
+    /// and found hidden.
+    pub fn add_gpu_audit(&mut self, audit: &GpuAudit) {
+        self.nodes_visited += audit.nodes_visited;
+        self.nodes_culled_frustum += audit.nodes_outside_frustum;
+        self.nodes_culled_occlusion += audit.nodes_hidden;
+    }
 }
 
 pub trait Culler {
@@ -161,7 +171,7 @@ impl ModeInfo {
                 "the adapter cannot count visible pixels (needs SHADER_EARLY_DEPTH_TEST and fragment storage writes)",
             ),
             Needs::GpuCulling if !gpu.gpu_driven => Some(
-                "the adapter cannot cull on the GPU (needs SHADER_EARLY_DEPTH_TEST, fragment storage writes, compute shaders, indirect draws and INDIRECT_FIRST_INSTANCE)",
+                "the adapter cannot cull on the GPU (needs SHADER_EARLY_DEPTH_TEST, fragment storage writes, compute shaders, indirect draws, INDIRECT_FIRST_INSTANCE and 8 storage buffers per stage)",
             ),
             _ => None,
         }

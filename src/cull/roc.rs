@@ -54,16 +54,20 @@ impl Culler for RasterOcclusionCulling {
         let tree = self
             .tree
             .get_or_insert_with(|| ctx.upload_cull_tree(&CullTree::flat(objects.len() as u32)));
-        cull_on_gpu(ctx, tree, objects.iter().map(|o| o.bounds));
-        // Nodes tested and hidden are counted on the GPU, read after the frame.
-        TraversalStats::default()
+        cull_on_gpu(ctx, tree, objects.iter().map(|o| o.bounds))
     }
 }
 
 /// One frame of GPU-driven culling over `tree`, whose nodes have the boxes
 /// `bounds` this frame: steps 1-4 above, step 2 taken level by level from
-/// the tree's seed (one level for roc's flat tree).
-pub(super) fn cull_on_gpu(ctx: &mut FrameCtx, tree: &mut GpuCullTree, bounds: impl ExactSizeIterator<Item = Aabb>) {
+/// the tree's seed (one level for roc's flat tree). The traversal figures
+/// are counted on the GPU and added after the frame: the ones returned are
+/// empty.
+pub(super) fn cull_on_gpu(
+    ctx: &mut FrameCtx,
+    tree: &mut GpuCullTree,
+    bounds: impl ExactSizeIterator<Item = Aabb>,
+) -> TraversalStats {
     ctx.draw_gpu_list(tree, DrawList::Visible);
     ctx.begin_gpu_walk(tree, bounds);
     for _ in 0..tree.levels() {
@@ -71,4 +75,5 @@ pub(super) fn cull_on_gpu(ctx: &mut FrameCtx, tree: &mut GpuCullTree, bounds: im
     }
     ctx.compact_gpu_lists(tree);
     ctx.draw_gpu_list(tree, DrawList::NewlyVisible);
+    TraversalStats::default()
 }

@@ -7,8 +7,9 @@
 
 use std::time::{Duration, Instant};
 
+use super::cull_tree::CullTree;
 use super::queries::{BatchAnswers, BoxTest, BoxVisibility, QueryPool, TestTarget};
-use super::raster::{CullTree, DrawList, GpuAudit, GpuCullTree, RasterPool};
+use super::raster::{DrawList, GpuAudit, GpuCullTree, RasterPool};
 use super::{Draws, GpuContext, GpuTimer, RenderTargets, SceneRenderer};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
@@ -41,7 +42,8 @@ pub struct FrameOutcome {
 
 impl FrameOutcome {
     /// Adds what a GPU-driven walk drew and tested (each node box drawn
-    /// into the visibility buffer counts as a query).
+    /// into the visibility buffer counts as a query); its node counts go to
+    /// the mode's traversal figures (`TraversalStats::add_gpu_audit`).
     pub fn add_gpu_audit(&mut self, audit: &GpuAudit) {
         let c = &mut self.counters;
         c.objects_drawn += audit.objects_drawn;

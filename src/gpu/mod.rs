@@ -2,6 +2,7 @@
 //! occlusion-query batches, and the per-frame operations every culling mode
 //! goes through ([`FrameCtx`]).
 
+mod cull_tree;
 mod frame;
 mod picture;
 mod queries;
@@ -15,10 +16,11 @@ use std::fmt;
 
 use serde::Serialize;
 
+pub use cull_tree::{CullTree, MAX_LEVELS, TreeNode};
 pub use frame::{FrameCounters, FrameCtx, FrameOutcome, FrameResources};
 pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};
 pub use queries::{BoxTest, BoxVisibility, QUERIES_PER_SET, QueryPool};
-pub use raster::{CullTree, DrawList, GpuAudit, GpuCullTree, MAX_LEVELS, RasterPool, TreeNode};
+pub use raster::{DrawList, GpuAudit, GpuCullTree, RasterPool};
 pub use readback::Readback;
 pub use renderer::{Draws, GpuScene, SceneRenderer};
 pub use targets::{RenderTargets, Resolution};
@@ -147,9 +149,11 @@ impl GpuContext {
         let timestamps = features.contains(timing);
         let pixel_counts = features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST)
             && downlevel.contains(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE);
+        // raster_cull.wgsl's expand pass binds 8 storage buffers.
         let gpu_driven = pixel_counts
             && features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE)
-            && downlevel.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS | wgpu::DownlevelFlags::INDIRECT_EXECUTION);
+            && downlevel.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS | wgpu::DownlevelFlags::INDIRECT_EXECUTION)
+            && adapter.limits().max_storage_buffers_per_shader_stage >= 8;
         let indirect_count = features.contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("occlu"),

@@ -2,10 +2,9 @@
 //! on the GPU, level by level, and the GPU builds the draw lists itself, so
 //! no per-node result ever travels back to the CPU.
 //!
-//! A [`CullTree`] is what the GPU walks: nodes whose children are contiguous,
-//! the objects of each subtree contiguous in `order`, and the nodes tested
-//! first (`seed`). `roc` walks a flat tree (every object a leaf); `ioc` the
-//! bounding-volume hierarchy cut at a bottom depth.
+//! What the GPU walks is a [`CullTree`] (cull_tree.rs): `roc` walks a flat
+//! tree (every object a leaf); `ioc` the bounding-volume hierarchy cut at a
+//! bottom depth.
 //!
 //! One frame, as the modes drive it through `FrameCtx`:
 //! 1. draw the visible list (last frame's visible objects, the occluders);
@@ -29,6 +28,7 @@ use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
 
+use super::cull_tree::{CullTree, MAX_LEVELS};
 use super::queries::{
     EyeBox, QueryBox, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer, depth_only_pass,
     eye_relative_box, storage_buffer,
@@ -38,110 +38,23 @@ use super::targets::DEPTH_FORMAT;
 use super::{GpuContext, Readback};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
-use crate::hierarchy::Hierarchy;
 use crate::object_set::ObjectSet;
-
-/// The most levels one walk may take (the size of the per-level statistics).
-pub const MAX_LEVELS: u32 = 64;
 
 /// Threads per workgroup of raster_cull.wgsl, and its grid limit.
 const GROUP_SIZE: u32 = 64;
 const MAX_GROUPS: u32 = 65_535;
 
 /// Bytes of one level's arguments (`Level` in raster_cull.wgsl): an indirect
-/// draw, an indirect dispatch, and a hidden-node count.
-const LEVEL_BYTES: u64 = 32;
+/// draw, an indirect dispatch, and counts of nodes hidden, outside the
+/// frustum and reaching the near plane.
+const LEVEL_BYTES: u64 = 40;
+
+/// What the CPU sets a node's word of the visibility buffer to before a walk
+/// (raster_cull.wgsl's constants); `fs_mark` sets a tested one to 1.
+const TO_TEST: u32 = 0;
+const OUTSIDE_FRUSTUM: u32 = 2;
+const REACHES_NEAR: u32 = 3;
 const DRAW_COMMAND_BYTES: u64 = 20;
-
-/// A node as raster_cull.wgsl reads it.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct TreeNode {
-    pub first_child: u32,
-    /// 0 where the walk stops: a leaf, or a node at the bottom depth.
-    pub child_count: u32,
-    pub first_object: u32,
-    pub object_count: u32,
-}
-
-/// A tree for GPU-driven culling, built on the CPU.
-#[derive(Clone, Debug, PartialEq)]
-pub struct CullTree {
-    pub nodes: Vec<TreeNode>,
-    /// Object ids; a node's objects are `order[first_object..][..object_count]`.
-    pub order: Vec<u32>,
-    /// The nodes tested in the first level.
-    pub seed: Vec<u32>,
-    /// Levels a walk takes: one more than the depth of the deepest node
-    /// below the seed.
-    pub levels: u32,
-}
-
-impl CullTree {
-    /// Every object a leaf of its own, all tested in one level (roc).
-    pub fn flat(objects: u32) -> CullTree {
-        CullTree {
-            nodes: (0..objects)
-                .map(|o| TreeNode {
-                    first_child: 0,
-                    child_count: 0,
-                    first_object: o,
-                    object_count: 1,
-                })
-                .collect(),
-            order: (0..objects).collect(),
-            seed: (0..objects).collect(),
-            levels: 1,
-        }
-    }
-
-    /// `hierarchy` cut at depth `bottom` (its nodes there become leaves) and
-    /// walked from its nodes at depth `start` (or leaves above it); the root
-    /// is at depth 0. Also returns, per tree node, the hierarchy node it
-    /// stands for. `start` is at most `bottom`, and `bottom - start` less
-    /// than [`MAX_LEVELS`].
-    pub fn cut(hierarchy: &Hierarchy, start: u32, bottom: u32) -> (CullTree, Vec<u32>) {
-        assert!(
-            start <= bottom && bottom - start < MAX_LEVELS,
-            "levels {start}..={bottom}"
-        );
-        // Breadth first, so every node's children get consecutive numbers.
-        let mut source = vec![0u32];
-        let mut depth = vec![0u32];
-        let mut nodes = Vec::new();
-        let mut next = 0;
-        while next < source.len() {
-            let h = &hierarchy.nodes[source[next] as usize];
-            let d = depth[next];
-            let expand = !h.is_leaf() && d < bottom;
-            nodes.push(TreeNode {
-                first_child: if expand { source.len() as u32 } else { 0 },
-                child_count: if expand { h.child_count } else { 0 },
-                first_object: h.first_object,
-                object_count: h.object_count,
-            });
-            if expand {
-                source.extend(h.children().map(|c| c as u32));
-                depth.extend(h.children().map(|_| d + 1));
-            }
-            next += 1;
-        }
-        let seed: Vec<u32> = (0..nodes.len() as u32)
-            .filter(|&i| {
-                let d = depth[i as usize];
-                d == start || (d < start && nodes[i as usize].child_count == 0)
-            })
-            .collect();
-        let deepest = depth.iter().copied().max().unwrap_or(0);
-        let tree = CullTree {
-            nodes,
-            order: hierarchy.objects.clone(),
-            seed,
-            levels: deepest.max(start) - start + 1,
-        };
-        (tree, source)
-    }
-}
 
 /// Which of a tree's two draw lists.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -202,9 +115,14 @@ pub struct IndirectDraws<'b> {
 pub struct GpuAudit {
     pub objects_drawn: u64,
     pub triangles_drawn: u64,
-    /// Node boxes drawn into the visibility buffer.
+    /// Nodes the walk reached.
+    pub nodes_visited: u64,
+    /// Of those, boxes drawn into the visibility buffer (the others were
+    /// outside the frustum or reached the near plane).
     pub nodes_tested: u64,
+    /// Tested and hidden.
     pub nodes_hidden: u64,
+    pub nodes_outside_frustum: u64,
     /// GPU time of the walk and the compaction, where timestamps exist.
     pub cull_gpu: Option<Duration>,
 }
@@ -238,6 +156,8 @@ pub struct RasterPool {
     mark: wgpu::RenderPipeline,
     expand: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
+    /// `compact`'s empty group 0.
+    no_bindings: wgpu::BindGroup,
     box_layout: wgpu::BindGroupLayout,
     mark_layout: wgpu::BindGroupLayout,
     step_layout: wgpu::BindGroupLayout,
@@ -368,11 +288,16 @@ impl RasterPool {
             })
         };
         let expand = compute("expand a level", "cs_expand", &[Some(&step_layout), Some(&tree_layout)]);
+        // cs_compact shares the module's groups 1 and 2 and binds nothing at
+        // 0: an empty group there keeps it within 8 storage buffers, the
+        // minimum an adapter guarantees.
+        let no_bindings = bind_group_layout(gpu, "no bindings", &[]);
         let compact = compute(
             "compact draw lists",
             "cs_compact",
-            &[Some(&step_layout), Some(&tree_layout), Some(&lists_layout)],
+            &[Some(&no_bindings), Some(&tree_layout), Some(&lists_layout)],
         );
+        let no_bindings = bind_buffers(gpu, &no_bindings, &[]);
         let commands: Vec<u8> = draws
             .iter()
             .enumerate()
@@ -427,6 +352,7 @@ impl RasterPool {
             mark,
             expand,
             compact,
+            no_bindings,
             box_layout,
             mark_layout,
             step_layout,
@@ -522,16 +448,16 @@ impl RasterPool {
             // plane visible, without a test: both are staged empty, which
             // draws no fragment. The rasteriser would clip the first, but
             // the near-plane rule must not see it.
-            let (q, visible) = if frustum.classify(&b) == Containment::Outside {
-                (bytemuck::Zeroable::zeroed(), 0)
+            let (q, state) = if frustum.classify(&b) == Containment::Outside {
+                (bytemuck::Zeroable::zeroed(), OUTSIDE_FRUSTUM)
             } else {
                 match eye_relative_box(camera, &view, &b) {
-                    EyeBox::Testable(q) => (q, 0),
-                    EyeBox::ReachesNear => (bytemuck::Zeroable::zeroed(), 1),
+                    EyeBox::Testable(q) => (q, TO_TEST),
+                    EyeBox::ReachesNear => (bytemuck::Zeroable::zeroed(), REACHES_NEAR),
                 }
             };
             self.staging.push(q);
-            self.node_flags.push(visible);
+            self.node_flags.push(state);
         }
         let prepare = started.elapsed();
         let s = &self.scratch;
@@ -601,7 +527,7 @@ impl RasterPool {
                 timestamp_writes: None,
             });
             pass.set_pipeline(&self.compact);
-            pass.set_bind_group(0, &self.scratch.step_groups[0], &[]);
+            pass.set_bind_group(0, &self.no_bindings, &[]);
             pass.set_bind_group(1, &tree.tree_group, &[]);
             pass.set_bind_group(2, &tree.lists_group, &[]);
             pass.dispatch_workgroups(groups_for(self.objects), 1, 1);
@@ -669,17 +595,21 @@ impl RasterPool {
         let word = |offset: u64| (offset / 4) as usize;
         let levels = &self.words[word(AUDIT_LEVELS_OFFSET)..word(AUDIT_LEVELS_OFFSET + level_bytes)];
         let mut audit = GpuAudit {
-            nodes_tested: u64::from(walk.seed_len),
+            nodes_visited: u64::from(walk.seed_len),
             ..GpuAudit::default()
         };
+        let mut untested = 0;
         for (k, level) in levels.chunks_exact(word(LEVEL_BYTES)).enumerate() {
             // A level's arguments hold the next queue's length and the
-            // hidden count of the level that filled it.
+            // counts of the level that filled it.
             if k + 1 < walk.levels as usize {
-                audit.nodes_tested += u64::from(level[1]);
+                audit.nodes_visited += u64::from(level[1]);
             }
             audit.nodes_hidden += u64::from(level[7]);
+            audit.nodes_outside_frustum += u64::from(level[8]);
+            untested += u64::from(level[8]) + u64::from(level[9]);
         }
+        audit.nodes_tested = audit.nodes_visited - untested;
         drawn.clear();
         for (object, &flag) in self.words[word(AUDIT_DRAWN_OFFSET)..].iter().enumerate() {
             if flag != 0 {
@@ -741,9 +671,9 @@ impl NodeScratch {
 
 /// A level's arguments (`Level` in raster_cull.wgsl) for a queue of
 /// `entries` nodes: an indirect draw of one box (36 vertices) per entry, an
-/// indirect dispatch over the entries, and no hidden nodes counted yet.
-fn level_args(entries: u32) -> [u32; 8] {
-    [36, entries, 0, 0, groups_for(entries), 1, 1, 0]
+/// indirect dispatch over the entries, and no nodes counted yet.
+fn level_args(entries: u32) -> [u32; 10] {
+    [36, entries, 0, 0, groups_for(entries), 1, 1, 0, 0, 0]
 }
 
 /// A buffer holding `contents` (at least one word, as bindings need).
@@ -759,72 +689,4 @@ fn init_buffer(gpu: &GpuContext, label: &str, contents: &[u8], usage: wgpu::Buff
 /// stride over the rest).
 fn groups_for(n: u32) -> u32 {
     n.div_ceil(GROUP_SIZE).min(MAX_GROUPS)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::hierarchy::HierarchyParams;
-    use crate::hierarchy::fixtures::grid_objects;
-
-    /// Walks `tree` as the GPU does when every node is visible, returning
-    /// the objects marked and the number of levels taken.
-    fn walk_all_visible(tree: &CullTree) -> (Vec<u32>, u32) {
-        let (mut queue, mut marked, mut levels) = (tree.seed.clone(), Vec::new(), 0);
-        while !queue.is_empty() {
-            levels += 1;
-            let mut next = Vec::new();
-            for &i in &queue {
-                let n = tree.nodes[i as usize];
-                if n.child_count == 0 {
-                    marked.extend_from_slice(&tree.order[n.first_object as usize..][..n.object_count as usize]);
-                } else {
-                    next.extend(n.first_child..n.first_child + n.child_count);
-                }
-            }
-            queue = next;
-        }
-        marked.sort_unstable();
-        (marked, levels)
-    }
-
-    #[test]
-    fn every_cut_reaches_every_object_once_in_its_levels() {
-        let objects = grid_objects(100);
-        let h = Hierarchy::build(&objects, &HierarchyParams::default());
-        let deepest = h.stats().depth - 1;
-        let all: Vec<u32> = (0..100).collect();
-        for bottom in 0..=deepest + 1 {
-            for start in 0..=bottom {
-                let (tree, source) = CullTree::cut(&h, start, bottom);
-                let (marked, levels) = walk_all_visible(&tree);
-                assert_eq!(marked, all, "start {start}, bottom {bottom}");
-                assert_eq!(levels, tree.levels, "start {start}, bottom {bottom}");
-                assert_eq!(tree.levels, bottom.min(deepest).max(start) - start + 1);
-                // Tree nodes stand for hierarchy nodes with the same objects;
-                // every node below the bottom depth is left out.
-                assert_eq!(source.len(), tree.nodes.len());
-                for (node, &s) in tree.nodes.iter().zip(&source) {
-                    let hn = &h.nodes[s as usize];
-                    assert_eq!(
-                        (node.first_object, node.object_count),
-                        (hn.first_object, hn.object_count)
-                    );
-                    assert!(node.child_count == 0 || node.child_count == hn.child_count);
-                }
-            }
-        }
-        let (root_only, _) = CullTree::cut(&h, 0, 0);
-        assert_eq!(root_only.nodes.len(), 1, "a bottom of 0 keeps the root alone");
-        let (full, _) = CullTree::cut(&h, 0, deepest);
-        assert_eq!(full.nodes.len(), h.nodes.len(), "the deepest bottom keeps every node");
-    }
-
-    #[test]
-    fn a_flat_tree_tests_every_object_in_one_level() {
-        let tree = CullTree::flat(5);
-        assert_eq!(walk_all_visible(&tree), ((0..5).collect(), 1));
-        assert_eq!(tree.seed, (0..5).collect::<Vec<u32>>());
-        assert!(tree.nodes.iter().all(|n| n.child_count == 0 && n.object_count == 1));
-    }
 }
