@@ -272,7 +272,7 @@ impl Culler for MoverWatch<'_> {
 #[test]
 fn conservative_modes_stay_exact_while_cars_drive_through_the_city() {
     let frames = 24;
-    let (scene, hierarchy, path) = common::city("city:blocks=2,movers=40", frames);
+    let (scene, hierarchy, path) = common::builtin("city:blocks=2,movers=40", frames);
     let movers: Vec<u32> = scene.movers.iter().map(|m| m.object).collect();
     let modes: Vec<&str> = occlu::cull::MODES
         .iter()
@@ -311,4 +311,41 @@ fn conservative_modes_stay_exact_while_cars_drive_through_the_city() {
             "vfc refits the hierarchy after every move"
         );
     }
+}
+
+#[test]
+fn the_forest_is_mostly_visible_where_the_city_is_mostly_hidden_and_every_mode_is_exact_in_it() {
+    let modes: Vec<&str> = occlu::cull::MODES
+        .iter()
+        .filter(|m| m.conservative)
+        .map(|m| m.name)
+        .collect();
+    // The share of the objects in the frustum (vfc draws them) that own a
+    // pixel: the occlusion a scene offers to cull.
+    let visible_share = |rows: &[occlu::measure::FrameStats]| {
+        let vfc = rows.iter().filter(|r| r.mode == "vfc");
+        let drawn: u64 = vfc.clone().map(|r| r.objects_drawn).sum();
+        let visible: u64 = vfc.map(|r| r.visible_objects.unwrap()).sum();
+        visible as f64 / drawn as f64
+    };
+    let gpu = common::gpus().remove(0);
+    let mut shares = Vec::new();
+    for spec in ["forest:trees=200", "city:blocks=2"] {
+        let (scene, hierarchy, path) = common::builtin(spec, 8);
+        let mut cullers: Vec<Box<dyn Culler>> = modes
+            .iter()
+            .map(|m| create(m, &scene, &ModeParams::default()).unwrap())
+            .collect();
+        let rows = run_modes(&gpu, &scene, &hierarchy, &path, &mut cullers, common::SMALL).rows;
+        for row in &rows {
+            let at = format!("{spec}: {} frame {} on {}", row.mode, row.frame, gpu.adapter);
+            assert_eq!((row.error_pixels, row.missed_objects), (Some(0), Some(0)), "{at}");
+        }
+        shares.push(visible_share(&rows));
+    }
+    assert!(
+        shares[0] > 0.6,
+        "the forest shows most of what is in the frustum: {shares:?}"
+    );
+    assert!(shares[1] < 0.3, "the city hides most of it: {shares:?}");
 }

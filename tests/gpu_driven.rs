@@ -107,7 +107,7 @@ fn roc_and_ioc_draw_what_a_wall_leaves_visible() {
 
 #[test]
 fn roc_and_ioc_are_exact_on_the_moving_city_within_their_round_trips() {
-    let (scene, hierarchy, path) = common::city("city:blocks=2,movers=40", 12);
+    let (scene, hierarchy, path) = common::builtin("city:blocks=2,movers=40", 12);
     for gpu in common::gpus() {
         let mut cullers = vec![
             mode(&scene, "vfc", "vfc", &[]),

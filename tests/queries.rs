@@ -419,7 +419,7 @@ fn a_query_behind_a_pending_nearer_one_waits_for_it() {
 
 #[test]
 fn chc_is_exact_with_fewer_round_trips_than_sq_on_the_moving_city() {
-    let (scene, hierarchy, path) = common::city("city:blocks=2,movers=40", 12);
+    let (scene, hierarchy, path) = common::builtin("city:blocks=2,movers=40", 12);
     for gpu in common::gpus() {
         let mut cullers: Vec<Box<dyn Culler>> =
             vec![create("sq", &scene, &ModeParams::default()).unwrap(), chc(&scene, &[])];

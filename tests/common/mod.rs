@@ -162,11 +162,11 @@ pub fn run_modes(
 /// The small built-in city (`city:blocks=2`), its hierarchy, and its street
 /// walk sampled at `frames` frames: the shared workload of the GPU tests.
 pub fn small_city(frames: u32) -> (Scene, Hierarchy, CameraPath) {
-    city("city:blocks=2", frames)
+    builtin("city:blocks=2", frames)
 }
 
-/// The built-in city `spec`, its hierarchy and its street walk.
-pub fn city(spec: &str, frames: u32) -> (Scene, Hierarchy, CameraPath) {
+/// The built-in scene `spec`, its hierarchy and its walk.
+pub fn builtin(spec: &str, frames: u32) -> (Scene, Hierarchy, CameraPath) {
     let scene = load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).unwrap();
     let hierarchy = hierarchy(&scene);
     let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, frames), "walk").unwrap();

@@ -17,7 +17,7 @@
 use glam::{DAffine3, DQuat, DVec3};
 
 use super::shapes::{cuboid, cylinder};
-use super::{Params, Rng, read_params};
+use super::{Params, Rng, add, mesh, place, read_params};
 use crate::scene::motion::Route;
 use crate::scene::{MeshGroup, SceneBuilder, TriangleSoup};
 
@@ -120,23 +120,6 @@ pub fn generate(p: &CityParams, builder: &mut SceneBuilder) {
         at(street(mx), street(m)),
         at(street(mx), street(n)),
     ]);
-}
-
-fn add(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) {
-    let group = mesh(builder, name, soup);
-    place(builder, name, &group, DAffine3::IDENTITY);
-}
-
-fn place(builder: &mut SceneBuilder, name: &str, group: &MeshGroup, transform: DAffine3) {
-    builder
-        .add_object(name, group, transform)
-        .expect("the city lies well within the renderable range");
-}
-
-fn mesh(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) -> MeshGroup {
-    builder
-        .add_mesh(name, &soup.positions, &soup.indices)
-        .expect("procedural geometry is finite and indexed in range")
 }
 
 /// Asphalt tiles (one per block and its streets) and raised sidewalks.

@@ -3,17 +3,27 @@
 //! and deterministic, so every run of a spec gives the same scene.
 
 mod city;
+mod forest;
 pub(crate) mod shapes;
 
-use super::{LoadOptions, Scene, SceneBuilder, SceneError};
+use glam::DAffine3;
+
+use super::{LoadOptions, MeshGroup, Scene, SceneBuilder, SceneError, TriangleSoup};
 
 pub use city::{CityParams, EYE_HEIGHT};
+pub use forest::ForestParams;
 
 /// The scenes `--scene` accepts, with a one-line description each.
-pub const SCENES: &[(&str, &str)] = &[(
-    "city",
-    "grid of closed buildings with furniture inside and cars in the streets (params: blocks, seed, movers)",
-)];
+pub const SCENES: &[(&str, &str)] = &[
+    (
+        "city",
+        "grid of closed buildings with furniture inside and cars in the streets: heavy occlusion (params: blocks, seed, movers)",
+    ),
+    (
+        "forest",
+        "scattered trees with see-through crowns: little occlusion, where culling must not cost more than it saves (params: trees, seed)",
+    ),
+];
 
 /// Builds the scene a spec names.
 pub fn build(spec: &str, options: &LoadOptions) -> Result<Scene, SceneError> {
@@ -29,11 +39,35 @@ pub fn build(spec: &str, options: &LoadOptions) -> Result<Scene, SceneError> {
             city::generate(&p, &mut builder);
             builder.finish().ok_or_else(|| error("generated no geometry".into()))
         }
+        "forest" => {
+            let p = ForestParams::from_params(&params).map_err(error)?;
+            let mut builder = SceneBuilder::new(format!("builtin:{}", p.spec()), options.cluster_triangles);
+            forest::generate(&p, &mut builder);
+            builder.finish().ok_or_else(|| error("generated no geometry".into()))
+        }
         other => Err(error(format!(
             "unknown scene '{other}' (built-in scenes: {})",
             SCENES.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
         ))),
     }
+}
+
+/// Adds `soup` as a mesh and one object of it, untransformed.
+fn add(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) {
+    let group = mesh(builder, name, soup);
+    place(builder, name, &group, DAffine3::IDENTITY);
+}
+
+fn place(builder: &mut SceneBuilder, name: &str, group: &MeshGroup, transform: DAffine3) {
+    builder
+        .add_object(name, group, transform)
+        .expect("built-in scenes lie well within the renderable range");
+}
+
+fn mesh(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) -> MeshGroup {
+    builder
+        .add_mesh(name, &soup.positions, &soup.indices)
+        .expect("procedural geometry is finite and indexed in range")
 }
 
 /// `spec` with `movers=N` added to its parameters (`--movers`).
@@ -120,7 +154,7 @@ mod tests {
     fn unknown_scene_and_bad_params_are_clear_errors() {
         let o = LoadOptions::default();
         let msg = |s: &str| build(s, &o).err().unwrap().to_string();
-        assert!(msg("forest").contains("unknown scene 'forest'"));
+        assert!(msg("desert").contains("unknown scene 'desert' (built-in scenes: city, forest)"));
         assert!(msg("city:size=3").contains("unknown parameter 'size'"));
         assert!(msg("city:blocks=x").contains("whole number"));
         assert!(msg("city:blocks=0").contains("must be in"));
