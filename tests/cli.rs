@@ -82,7 +82,10 @@ fn bad_input_gets_one_clear_line() {
     fails_with(
         &bench_args(&["--modes", "dr,warp"], &out),
         2,
-        &["unknown mode 'warp'", "dr, vfc, sq, omq, ac, chc, roc, ioc, oracle"],
+        &[
+            "unknown mode 'warp'",
+            "dr, vfc, sq, omq, ac, chc, roc, ioc, auto, oracle",
+        ],
     );
     fails_with(
         &["bench", &s(&good_obj), "--frames", "0", "--out", &out],
@@ -227,7 +230,10 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
         .iter()
         .map(|m| m["name"].as_str().unwrap())
         .collect();
-    assert_eq!(modes, ["dr", "vfc", "sq", "omq", "ac", "chc", "roc", "ioc", "oracle"]);
+    assert_eq!(
+        modes,
+        ["dr", "vfc", "sq", "omq", "ac", "chc", "roc", "ioc", "auto", "oracle"]
+    );
     for m in summary["modes"].as_array().unwrap() {
         assert_eq!(m["frames"], 2);
         if m["conservative"] == true {
@@ -260,7 +266,7 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
     ] {
         assert!(header.split(',').any(|c| c == column), "frames.csv lacks {column}");
     }
-    assert_eq!(lines.count(), 18, "2 frames × 9 modes");
+    assert_eq!(lines.count(), 20, "2 frames × 10 modes");
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| oracle |") && report.contains("Adapter:"));
     for chart in occlu::report::charts::CHARTS {

@@ -6,6 +6,7 @@
 //! [`Culler`], add it to [`MODES`] and to [`create`].
 
 mod ac;
+mod auto;
 mod chc;
 mod dr;
 mod ioc;
@@ -29,6 +30,7 @@ use crate::object_set::ObjectSet;
 use crate::scene::Scene;
 
 pub use ac::{AcParams, AdaptiveCulling, EyeDistance, Threshold};
+pub use auto::{AutoCulling, AutoParams};
 pub use chc::{ChcParams, CoherentCulling};
 pub use dr::DirectRendering;
 pub use ioc::{Depth, IocParams, IterativeOcclusionCulling};
@@ -316,6 +318,17 @@ pub const MODES: &[ModeInfo] = &[
         needs: Needs::GpuCulling,
     },
     ModeInfo {
+        name: "auto",
+        summary: "per frame, vfc or occlusion culling (ioc, or omq without GPU culling), whichever measured cheaper; the other re-measured now and then",
+        conservative: true,
+        params: &[ParamInfo {
+            key: "probe",
+            default: "32",
+            summary: "frames between re-measurements of the dearer strategy, times how much dearer it was",
+        }],
+        needs: Needs::Nothing,
+    },
+    ModeInfo {
         name: "oracle",
         summary: "draws exactly the objects visible in the reference frame: the floor for object-level culling",
         conservative: true,
@@ -380,6 +393,7 @@ impl ModeParams {
                 "ac" => drop(AcParams::from_params(&params)?),
                 "chc" => drop(ChcParams::from_params(&params)?),
                 "ioc" => drop(IocParams::from_params(&params)?),
+                "auto" => drop(AutoParams::from_params(&params)?),
                 _ => {}
             }
         }
@@ -485,6 +499,7 @@ pub fn create(name: &str, scene: &Scene, params: &ModeParams) -> Result<Box<dyn 
         "chc" => Box::new(CoherentCulling::new(scene, ChcParams::from_params(params)?)),
         "roc" => Box::new(RasterOcclusionCulling::new()),
         "ioc" => Box::new(IterativeOcclusionCulling::new(IocParams::from_params(params)?)),
+        "auto" => Box::new(AutoCulling::new(scene, AutoParams::from_params(params)?)),
         "oracle" => Box::new(Oracle::new()),
         other => return Err(ModeError::Unknown(other.to_string())),
     })
@@ -504,7 +519,7 @@ mod tests {
         assert!(
             ModeError::Unknown("x".into())
                 .to_string()
-                .contains("dr, vfc, sq, omq, ac, chc, roc, ioc, oracle")
+                .contains("dr, vfc, sq, omq, ac, chc, roc, ioc, auto, oracle")
         );
     }
 

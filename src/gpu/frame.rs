@@ -203,6 +203,11 @@ impl<'a> FrameCtx<'a> {
         }
     }
 
+    /// Whether GPU-driven culling can run here (the session made its pool).
+    pub fn can_cull_on_gpu(&self) -> bool {
+        self.raster.is_some()
+    }
+
     /// GPU-driven culling (004): puts `tree` on the GPU for this mode, with
     /// an empty visible list. Done once; the mode keeps the result.
     pub fn upload_cull_tree(&mut self, tree: &CullTree) -> GpuCullTree {

@@ -1,0 +1,293 @@
+//! `auto`: frustum culling where occlusion culling does not pay, occlusion
+//! culling where it does, decided frame by frame from measured costs.
+//!
+//! 002 §4.3 notes that culling "does not pay off" where little is hidden
+//! and bounds culling time by the render time it saves (Eq. 2); CHC++ and
+//! NOHC decide per node from query statistics. Here the decision is per
+//! frame and between whole strategies, from what each really cost:
+//!
+//! - the two strategies are `vfc` and an occlusion culler: `ioc` where the
+//!   adapter culls on the GPU (no round trips), `omq` elsewhere;
+//! - each keeps a moving average of its measured frame times (this mode's
+//!   previous frame, credited to the strategy that drew it);
+//! - every frame runs the strategy with the lower average, except that the
+//!   other one is measured again ("probed") when it has not run for
+//!   `probe` × (its average / the chosen one's) frames: the dearer a
+//!   strategy has been, the rarer its probes, so a probe costs at most
+//!   about 1/`probe` of a frame on average;
+//! - a probe of the occlusion culler runs three frames and keeps the last
+//!   (see [`OCCLUSION_PROBE`]); a strategy's first measured frame after it
+//!   did not run starts its average afresh.
+//!
+//! Both strategies are conservative, so `auto` is too.
+
+use serde::Serialize;
+
+use super::ioc::{IocParams, IterativeOcclusionCulling};
+use super::omq::{OccupancyMapQueries, OmqParams};
+use super::vfc::FrustumCulling;
+use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
+use crate::gpu::FrameCtx;
+use crate::scene::Scene;
+
+/// Weight of the newest frame in a strategy's average.
+const SMOOTHING: f64 = 0.3;
+
+/// Frames a probe of the occlusion culler runs; only the last is measured.
+/// After a stretch without it, its occluders (last visible set) are stale:
+/// its first frame tests against them and marks too much, its second draws
+/// that too-large set, and only the third costs what it costs in steady
+/// state.
+const OCCLUSION_PROBE: u32 = 3;
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct AutoParams {
+    /// Base period of probes, in frames.
+    pub probe: u32,
+}
+
+impl AutoParams {
+    pub fn from_params(params: &ModeParams) -> Result<AutoParams, ModeError> {
+        let probe: u32 = params.get("auto", "probe")?;
+        if probe == 0 {
+            return Err(ModeError::BadParam {
+                key: "auto.probe".into(),
+                reason: "must be at least 1 frame".into(),
+            });
+        }
+        Ok(AutoParams { probe })
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Strategy {
+    Frustum,
+    Occlusion,
+}
+
+/// What one strategy has cost.
+#[derive(Clone, Copy, Debug, Default)]
+struct Record {
+    /// Moving average of its measured frame times.
+    average_ms: Option<f64>,
+    /// The frame (this mode's count) it last ran.
+    last_run: u64,
+}
+
+/// The plan for one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Turn {
+    strategy: Strategy,
+    /// Whether its time is measured (not a probe's warm-up frame).
+    measured: bool,
+    /// Whether it starts a new average (the first measured frame after the
+    /// strategy did not run: the old average describes another view).
+    fresh: bool,
+}
+
+pub struct AutoCulling {
+    params: AutoParams,
+    frustum: FrustumCulling,
+    /// Created in the first frame, when the adapter is known.
+    occlusion: Option<Box<dyn Culler>>,
+    records: [Record; 2],
+    previous: Option<Turn>,
+    /// Frames run so far (the path's frame numbers repeat after warm-up).
+    frames_run: u64,
+    /// Frames left in a probe of the occlusion culler.
+    probing: u32,
+}
+
+impl AutoCulling {
+    pub fn new(scene: &Scene, params: AutoParams) -> Self {
+        AutoCulling {
+            params,
+            frustum: FrustumCulling::new(scene),
+            occlusion: None,
+            records: [Record::default(); 2],
+            previous: None,
+            frames_run: 0,
+            probing: 0,
+        }
+    }
+
+    fn record(&mut self, s: Strategy) -> &mut Record {
+        &mut self.records[s as usize]
+    }
+
+    /// Credits the previous frame's time to the strategy that drew it.
+    fn learn(&mut self, turn: Turn, frame_ms: f64) {
+        if !turn.measured {
+            return;
+        }
+        let r = self.record(turn.strategy);
+        r.average_ms = Some(match r.average_ms {
+            Some(a) if !turn.fresh => a + SMOOTHING * (frame_ms - a),
+            _ => frame_ms,
+        });
+    }
+
+    /// This frame's plan, from the records: measure both strategies first
+    /// (occlusion, then frustum), then run the cheaper one and probe the
+    /// other when it is due.
+    fn plan(&mut self) -> Turn {
+        use Strategy::{Frustum, Occlusion};
+        let turn = |strategy, measured, fresh| Turn {
+            strategy,
+            measured,
+            fresh,
+        };
+        if self.probing > 0 {
+            self.probing -= 1;
+            return turn(Occlusion, self.probing == 0, true);
+        }
+        let [f, o] = self.records.map(|r| r.average_ms);
+        let (chosen, other) = match (f, o) {
+            (_, None) => return self.start_probe(),
+            (None, _) => return turn(Frustum, true, true),
+            (Some(f), Some(o)) if f <= o => ((Frustum, f), (Occlusion, o)),
+            (Some(f), Some(o)) => ((Occlusion, o), (Frustum, f)),
+        };
+        let since = self.frames_run - self.record(other.0).last_run;
+        let period = f64::from(self.params.probe) * other.1 / chosen.1.max(f64::MIN_POSITIVE);
+        match other.0 {
+            Occlusion if since as f64 >= period => self.start_probe(),
+            Frustum if since as f64 >= period => turn(Frustum, true, true),
+            _ => {
+                let continuing = self.record(chosen.0).last_run + 1 == self.frames_run;
+                turn(chosen.0, true, !continuing)
+            }
+        }
+    }
+
+    /// Learns from the previous frame's time (`None` in the first frame)
+    /// and plans this one.
+    fn next_turn(&mut self, previous_ms: Option<f64>) -> Turn {
+        if let (Some(turn), Some(ms)) = (self.previous, previous_ms) {
+            self.learn(turn, ms);
+        }
+        self.frames_run += 1;
+        let turn = self.plan();
+        self.previous = Some(turn);
+        let frames_run = self.frames_run;
+        self.record(turn.strategy).last_run = frames_run;
+        turn
+    }
+
+    fn start_probe(&mut self) -> Turn {
+        self.probing = OCCLUSION_PROBE - 1;
+        Turn {
+            strategy: Strategy::Occlusion,
+            measured: false,
+            fresh: true,
+        }
+    }
+}
+
+impl Culler for AutoCulling {
+    fn name(&self) -> &str {
+        "auto"
+    }
+
+    fn parameters(&self) -> serde_json::Value {
+        serde_json::json!(self.params)
+    }
+
+    fn traverses_hierarchy(&self) -> bool {
+        true
+    }
+
+    fn culls_on_gpu(&self) -> bool {
+        true
+    }
+
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        let turn = self.next_turn(input.previous.map(|p| p.frame_ms));
+        match turn.strategy {
+            Strategy::Frustum => self.frustum.frame(ctx, input),
+            Strategy::Occlusion => {
+                let gpu_culling = ctx.can_cull_on_gpu();
+                self.occlusion
+                    .get_or_insert_with(|| occlusion_culler(gpu_culling))
+                    .frame(ctx, input)
+            }
+        }
+    }
+}
+
+/// `ioc` where the adapter culls on the GPU, `omq` elsewhere, each with
+/// its default parameters.
+fn occlusion_culler(gpu_culling: bool) -> Box<dyn Culler> {
+    let defaults = ModeParams::default();
+    if gpu_culling {
+        Box::new(IterativeOcclusionCulling::new(
+            IocParams::from_params(&defaults).expect("ioc's defaults parse"),
+        ))
+    } else {
+        Box::new(OccupancyMapQueries::new(
+            OmqParams::from_params(&defaults).expect("omq's defaults parse"),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{LoadOptions, SceneSpec, load};
+    use Strategy::{Frustum, Occlusion};
+
+    /// The strategies `auto` runs for `frames` frames when each costs what
+    /// `cost(frame, strategy)` says.
+    fn run(frames: u64, cost: impl Fn(u64, Strategy) -> f64) -> Vec<Strategy> {
+        let scene = load(&SceneSpec::Builtin("city:blocks=1".into()), &LoadOptions::default()).unwrap();
+        let mut auto = AutoCulling::new(&scene, AutoParams { probe: 8 });
+        let mut previous = None;
+        (0..frames)
+            .map(|k| {
+                let turn = auto.next_turn(previous);
+                previous = Some(cost(k, turn.strategy));
+                turn.strategy
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_cheaper_strategy_runs_and_the_dearer_is_probed_the_rarer_the_dearer() {
+        // Frustum culling at 10 ms, occlusion culling at 30: after measuring
+        // both (three occlusion frames, one frustum), frustum culling runs,
+        // and occlusion culling is probed 8 × 3 frames after it last ran,
+        // three frames at a time.
+        let s = run(100, |_, s| if s == Frustum { 10.0 } else { 30.0 });
+        assert_eq!(s[..4], [Occlusion, Occlusion, Occlusion, Frustum]);
+        let probes: Vec<usize> = (1..s.len())
+            .filter(|&k| s[k] == Occlusion && s[k - 1] == Frustum)
+            .collect();
+        assert_eq!(probes, [26, 52, 78], "{s:?}");
+        assert_eq!(s.iter().filter(|&&x| x == Occlusion).count(), 3 * 4);
+        // Occlusion culling 4× cheaper: frustum culling is re-measured one
+        // frame every 8 × 4 frames.
+        let s = run(100, |_, s| if s == Frustum { 40.0 } else { 10.0 });
+        let frustum: Vec<usize> = (4..s.len()).filter(|&k| s[k] == Frustum).collect();
+        assert_eq!(frustum, [35, 67, 99], "{s:?}");
+    }
+
+    #[test]
+    fn a_change_in_costs_is_followed_at_the_next_probe() {
+        // Occlusion culling pays until frame 40, then costs 5× more.
+        let s = run(120, |k, s| match (s, k < 40) {
+            (Frustum, _) => 20.0,
+            (Occlusion, true) => 10.0,
+            (Occlusion, false) => 100.0,
+        });
+        assert!(s[4..40].iter().filter(|&&x| x == Occlusion).count() > 30, "{s:?}");
+        assert!(
+            s[41..55].iter().all(|&x| x == Frustum),
+            "frustum culling from frame 41: {s:?}"
+        );
+        let probes = s[41..].iter().filter(|&&x| x == Occlusion).count();
+        assert!(
+            probes <= 6,
+            "then occlusion culling only in probes, every 8 × 5 frames: {s:?}"
+        );
+    }
+}
