@@ -8,7 +8,7 @@ use common::{boxes, held, run_modes};
 use glam::DVec3;
 use occlu::cull::{Culler, Labeled, ModeInfo, ModeParams, create};
 use occlu::gpu::{GpuContext, Resolution};
-use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::hierarchy::Hierarchy;
 use occlu::measure::FrameStats;
 use occlu::scene::Scene;
 
@@ -56,14 +56,7 @@ fn roc_and_ioc_draw_what_a_wall_leaves_visible() {
         (DVec3::new(40.0, -1.0, -2.0), DVec3::new(42.0, 1.0, 2.0)),
     ]);
     let path = held(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0), 90.0, 4);
-    let hierarchy = Hierarchy::build(
-        &scene.objects,
-        &HierarchyParams {
-            max_leaf_objects: 1,
-            traversal_cost: 0.0,
-            ..Default::default()
-        },
-    );
+    let hierarchy = Hierarchy::build(&scene.objects, &common::one_object_per_leaf());
     let deepest = hierarchy.stats().depth - 1;
     let full = format!("ioc.bottom={deepest}");
     for gpu in common::gpus() {

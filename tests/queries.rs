@@ -11,7 +11,7 @@ use glam::DVec3;
 use occlu::camera::path::CameraPath;
 use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create};
 use occlu::gpu::{BoxTest, BoxVisibility, FrameCtx, QUERIES_PER_SET, Resolution};
-use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::hierarchy::Hierarchy;
 use occlu::measure::FrameStats;
 use occlu::scene::Scene;
 
@@ -115,14 +115,7 @@ fn queries_see_what_is_drawn() {
 /// Runs `modes` on `scene` with one object per leaf, so culling decisions
 /// are visible per object.
 fn run(scene: &Scene, path: &CameraPath, modes: &[&str], res: Resolution) -> Vec<Vec<FrameStats>> {
-    let hierarchy = Hierarchy::build(
-        &scene.objects,
-        &HierarchyParams {
-            max_leaf_objects: 1,
-            traversal_cost: 0.0,
-            ..Default::default()
-        },
-    );
+    let hierarchy = Hierarchy::build(&scene.objects, &common::one_object_per_leaf());
     common::gpus()
         .iter()
         .map(|gpu| {

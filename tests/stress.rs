@@ -186,11 +186,7 @@ fn conservative_modes_draw_every_visible_object_of_random_scenes() {
             let params = if k % 2 == 0 {
                 HierarchyParams::default()
             } else {
-                HierarchyParams {
-                    max_leaf_objects: 1,
-                    traversal_cost: 0.0,
-                    ..HierarchyParams::default()
-                }
+                common::one_object_per_leaf()
             };
             let mut cullers = modes
                 .iter()

@@ -200,38 +200,10 @@ impl QueryPool {
             compilation_options: Default::default(),
             buffers: &[],
         };
-        // `compare` is the depth test: the real one, or `Always` to count
-        // every pixel a box covers.
         let pipeline = |label, layouts: &[Option<&wgpu::BindGroupLayout>], fragment, compare| {
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(label),
-                bind_group_layouts: layouts,
-                immediate_size: 0,
-            });
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&layout),
-                vertex: vertex.clone(),
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: Some(wgpu::Face::Back),
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(compare),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment,
-                multiview_mask: None,
-                cache: None,
-            })
+            box_test_pipeline(gpu, label, layouts, vertex.clone(), fragment, compare)
         };
-        // Reverse-Z: nearer is greater. Equal passes, so a box face on a
-        // surface is not judged hidden by it.
-        let test = wgpu::CompareFunction::GreaterEqual;
+        let test = BOX_TEST;
         let occlusion = pipeline("occlusion queries", &[Some(&box_layout)], None, test);
         let counting = count_module.as_ref().map(|count_module| {
             let fragment = wgpu::ShaderStages::FRAGMENT;
@@ -516,6 +488,49 @@ pub(super) fn depth_only_pass<'e>(
         timestamp_writes: None,
         occlusion_query_set: queries,
         multiview_mask: None,
+    })
+}
+
+/// The depth test of box tests. Reverse-Z: nearer is greater. Equal passes,
+/// so a box face on a surface is not judged hidden by it.
+pub(super) const BOX_TEST: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
+
+/// A pipeline that draws boxes against a depth target without changing it:
+/// back faces culled (the eye is never inside a tested box), depth compared
+/// by `compare` (`BOX_TEST`, or `Always` to reach every pixel a box covers),
+/// no depth or colour writes; `fragment`, if any, does the counting.
+pub(super) fn box_test_pipeline(
+    gpu: &GpuContext,
+    label: &str,
+    layouts: &[Option<&wgpu::BindGroupLayout>],
+    vertex: wgpu::VertexState,
+    fragment: Option<wgpu::FragmentState>,
+    compare: wgpu::CompareFunction,
+) -> wgpu::RenderPipeline {
+    let layout = gpu.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: layouts,
+        immediate_size: 0,
+    });
+    gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(&layout),
+        vertex,
+        primitive: wgpu::PrimitiveState {
+            cull_mode: Some(wgpu::Face::Back),
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(false),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment,
+        multiview_mask: None,
+        cache: None,
     })
 }
 

@@ -30,12 +30,11 @@ use wgpu::util::DeviceExt;
 
 use super::cull_tree::{CullTree, MAX_LEVELS};
 use super::queries::{
-    EyeBox, QueryBox, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer, depth_only_pass,
-    eye_relative_box, storage_buffer,
+    BOX_TEST, EyeBox, QueryBox, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer, box_test_pipeline,
+    depth_only_pass, eye_relative_box, storage_buffer,
 };
 use super::renderer::DrawRange;
-use super::targets::DEPTH_FORMAT;
-use super::{GpuContext, Readback};
+use super::{GpuContext, GpuTimer, Readback};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
 use crate::object_set::ObjectSet;
@@ -175,7 +174,8 @@ pub struct RasterPool {
     drawn: wgpu::Buffer,
     /// Each level's arguments after it ran, for the audit.
     level_stats: wgpu::Buffer,
-    timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, f64)>,
+    /// One span around a walk and its compaction, where timestamps exist.
+    timer: Option<GpuTimer>,
     audit_readback: Readback,
     counts_readback: Readback,
     walk: Option<Walk>,
@@ -186,8 +186,7 @@ pub struct RasterPool {
 }
 
 /// Where the audit's parts sit in its read-back buffer.
-const AUDIT_LEVELS_OFFSET: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
-const AUDIT_DRAWN_OFFSET: u64 = AUDIT_LEVELS_OFFSET + MAX_LEVELS as u64 * LEVEL_BYTES;
+const AUDIT_DRAWN_OFFSET: u64 = MAX_LEVELS as u64 * LEVEL_BYTES;
 
 impl RasterPool {
     /// For a scene whose objects draw `draws`; `camera` is the uniform the
@@ -246,37 +245,24 @@ impl RasterPool {
                 immediate_size: 0,
             })
         };
-        let mark = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("mark visible nodes"),
-            layout: Some(&layout("mark", &[Some(&box_layout), Some(&mark_layout)])),
-            vertex: wgpu::VertexState {
+        let mark = box_test_pipeline(
+            gpu,
+            "mark visible nodes",
+            &[Some(&box_layout), Some(&mark_layout)],
+            wgpu::VertexState {
                 module: &mark_module,
                 entry_point: Some("vs_queued"),
                 compilation_options: Default::default(),
                 buffers: &[],
             },
-            primitive: wgpu::PrimitiveState {
-                cull_mode: Some(wgpu::Face::Back),
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                // Reverse-Z, as the box tests of queries.rs.
-                depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
+            Some(wgpu::FragmentState {
                 module: &mark_module,
                 entry_point: Some("fs_mark"),
                 compilation_options: Default::default(),
                 targets: &[],
             }),
-            multiview_mask: None,
-            cache: None,
-        });
+            BOX_TEST,
+        );
         let compute = |label, entry, groups: &[Option<&wgpu::BindGroupLayout>]| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(label),
@@ -326,20 +312,7 @@ impl RasterPool {
                 bytemuck::cast_slice(&level_args(0)),
                 wgpu::BufferUsages::COPY_SRC,
             ),
-            timestamps: gpu.timestamps.then(|| {
-                let set = device.create_query_set(&wgpu::QuerySetDescriptor {
-                    label: Some("gpu culling timestamps"),
-                    ty: wgpu::QueryType::Timestamp,
-                    count: 2,
-                });
-                let resolved = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("gpu culling timestamps"),
-                    size: 16,
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                (set, resolved, f64::from(gpu.queue.get_timestamp_period()))
-            }),
+            timer: GpuTimer::new(gpu, 1),
             audit_readback: Readback::new(gpu, "gpu culling audit", AUDIT_DRAWN_OFFSET + u64::from(objects) * 4),
             counts_readback: Readback::new(gpu, "draw list lengths", 8),
             objects,
@@ -466,8 +439,8 @@ impl RasterPool {
             gpu.queue
                 .write_buffer(&s.node_visible, 0, bytemuck::cast_slice(&self.node_flags));
         }
-        if let Some((set, _, _)) = &self.timestamps {
-            encoder.write_timestamp(set, 0);
+        if let Some(t) = &self.timer {
+            t.begin(encoder, 0);
         }
         encoder.copy_buffer_to_buffer(&tree.seed, 0, &s.queues[0], 0, u64::from(tree.seed_len.max(1)) * 4);
         encoder.copy_buffer_to_buffer(&tree.seed_level, 0, &s.level_args[0], 0, LEVEL_BYTES);
@@ -532,8 +505,8 @@ impl RasterPool {
             pass.set_bind_group(2, &tree.lists_group, &[]);
             pass.dispatch_workgroups(groups_for(self.objects), 1, 1);
         }
-        if let Some((set, _, _)) = &self.timestamps {
-            encoder.write_timestamp(set, 1);
+        if let Some(t) = &self.timer {
+            t.end(encoder, 0);
         }
     }
 
@@ -568,20 +541,19 @@ impl RasterPool {
         }
     }
 
-    /// After a frame with a walk, untimed: fills `drawn` with the objects
-    /// drawn from the lists and returns the walk's figures; `None` when the
-    /// frame had no walk.
+    /// After a frame with a walk, untimed: adds the objects drawn from the
+    /// lists to `drawn` and returns the walk's figures; `None` when the frame
+    /// had no walk.
     pub fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
         let walk = self.walk.take()?;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        if let Some((set, resolved, _)) = &self.timestamps {
-            encoder.resolve_query_set(set, 0..2, resolved, 0);
-            self.audit_readback.copy(&mut encoder, resolved, 0, 0, 16);
+        if let Some(t) = &self.timer {
+            t.resolve(&mut encoder);
         }
         let level_bytes = u64::from(walk.levels) * LEVEL_BYTES;
         if level_bytes > 0 {
             self.audit_readback
-                .copy(&mut encoder, &self.level_stats, 0, AUDIT_LEVELS_OFFSET, level_bytes);
+                .copy(&mut encoder, &self.level_stats, 0, 0, level_bytes);
         }
         let drawn_bytes = u64::from(self.objects) * 4;
         if drawn_bytes > 0 {
@@ -593,7 +565,7 @@ impl RasterPool {
             .read(gpu, AUDIT_DRAWN_OFFSET + drawn_bytes, &mut self.words);
 
         let word = |offset: u64| (offset / 4) as usize;
-        let levels = &self.words[word(AUDIT_LEVELS_OFFSET)..word(AUDIT_LEVELS_OFFSET + level_bytes)];
+        let levels = &self.words[..word(level_bytes)];
         let mut audit = GpuAudit {
             nodes_visited: u64::from(walk.seed_len),
             ..GpuAudit::default()
@@ -610,7 +582,6 @@ impl RasterPool {
             untested += u64::from(level[8]) + u64::from(level[9]);
         }
         audit.nodes_tested = audit.nodes_visited - untested;
-        drawn.clear();
         for (object, &flag) in self.words[word(AUDIT_DRAWN_OFFSET)..].iter().enumerate() {
             if flag != 0 {
                 drawn.insert(object as u32);
@@ -618,10 +589,10 @@ impl RasterPool {
                 audit.triangles_drawn += self.triangles[object];
             }
         }
-        audit.cull_gpu = self.timestamps.as_ref().map(|&(_, _, period_ns)| {
-            let tick = |i: usize| u64::from(self.words[2 * i]) | (u64::from(self.words[2 * i + 1]) << 32);
-            Duration::from_nanos((tick(1).saturating_sub(tick(0)) as f64 * period_ns) as u64)
-        });
+        audit.cull_gpu = self
+            .timer
+            .as_mut()
+            .map(|t| Duration::from_secs_f64(t.read_ms(gpu)[0] / 1e3));
         Some(audit)
     }
 }

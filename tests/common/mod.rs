@@ -140,6 +140,16 @@ pub fn hierarchy(scene: &Scene) -> Hierarchy {
     Hierarchy::build(&scene.objects, &HierarchyParams::default())
 }
 
+/// Hierarchy parameters that put every object in a leaf of its own, so each
+/// box is tested alone, with no neighbour in its leaf to make it visible.
+pub fn one_object_per_leaf() -> HierarchyParams {
+    HierarchyParams {
+        max_leaf_objects: 1,
+        traversal_cost: 0.0,
+        ..HierarchyParams::default()
+    }
+}
+
 /// Runs `cullers` over `path` in `scene` (its movers moving) with
 /// error measurement and no warm-up.
 pub fn run_modes(

@@ -14,15 +14,13 @@
 use glam::DVec3;
 
 use super::shapes::{cuboid, cylinder};
-use super::{Params, Rng, add, read_params};
+use super::{EYE_HEIGHT, Params, Rng, add, read_params};
 use crate::scene::{SceneBuilder, TriangleSoup};
 
 /// Ground per tree: one tree per 8 m × 8 m on average.
 const AREA_PER_TREE: f64 = 64.0;
 /// Half-width of the clear lane the walk follows.
 const LANE: f64 = 2.5;
-/// Camera height of the walk.
-const EYE_HEIGHT: f64 = 1.7;
 /// Ground tiles per side.
 const TILES: u32 = 4;
 
