@@ -167,10 +167,12 @@ fn depths(params: IocParams, hierarchy: &Hierarchy, objects: &[Object]) -> (u32,
     (start, bottom.min(start.saturating_add(MAX_LEVELS - 1)))
 }
 
-/// Nodes a level needs before the walk starts there: about what one level's
-/// fixed cost (a box pass, an expand pass and their barriers) buys in box
-/// tests. Measured on llvmpipe: ~1.1 ms a level (start-depth sweeps) against
-/// 4.4-5.5 µs a box (roc: 14.4 ms for 2 625 boxes, 45.8 ms for 10 521).
+/// Nodes a level needs before the walk starts there: about twice what one
+/// level's fixed cost (a box pass, an expand pass and their barriers) buys
+/// in box tests, since a level hides only part of its boxes. Measured on
+/// llvmpipe: ~1.1 ms a level (start-depth sweeps) against 4.4-5.5 µs a box
+/// (roc: 14.4 ms for 2 625 boxes, 45.8 ms for 10 521); the sweeps in issue
+/// 8's note confirm 512.
 pub const START_NODES: usize = 512;
 
 /// Start and bottom depths from the hierarchy's statistics (004 §4 leaves
