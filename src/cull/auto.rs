@@ -17,7 +17,13 @@
 //!   about 1/`probe` of a frame on average;
 //! - a probe of the occlusion culler runs three frames and keeps the last
 //!   (see [`OCCLUSION_PROBE`]); a strategy's first measured frame after it
-//!   did not run starts its average afresh.
+//!   did not run starts its average afresh;
+//! - `ioc`'s very first frame has no occluders yet (no last visible set), so
+//!   every box in the frustum tests visible against the cleared depth and
+//!   it draws what frustum culling draws: its drawing time is frustum
+//!   culling's first measurement, which spares a frame of `vfc` on scenes
+//!   where it is dear. `omq` culls within its first frame, so beside it
+//!   `vfc` is measured by running it.
 //!
 //! Both strategies are conservative, so `auto` is too.
 
@@ -26,7 +32,7 @@ use serde::Serialize;
 use super::ioc::{IocParams, IterativeOcclusionCulling};
 use super::omq::{OccupancyMapQueries, OmqParams};
 use super::vfc::FrustumCulling;
-use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
+use super::{Culler, FrameInput, ModeError, ModeParams, PreviousFrame, TraversalStats};
 use crate::gpu::FrameCtx;
 use crate::scene::Scene;
 
@@ -83,6 +89,10 @@ struct Turn {
     /// Whether it starts a new average (the first measured frame after the
     /// strategy did not run: the old average describes another view).
     fresh: bool,
+    /// Whether its drawing time measures frustum culling: the GPU-driven
+    /// occlusion culler's first frame, which draws everything in the
+    /// frustum.
+    draws_frustum: bool,
 }
 
 pub struct AutoCulling {
@@ -96,6 +106,9 @@ pub struct AutoCulling {
     frames_run: u64,
     /// Frames left in a probe of the occlusion culler.
     probing: u32,
+    /// Whether the occlusion culler culls on the GPU (`ioc`); known from the
+    /// first frame, when the adapter is.
+    gpu_culling: bool,
 }
 
 impl AutoCulling {
@@ -108,6 +121,7 @@ impl AutoCulling {
             previous: None,
             frames_run: 0,
             probing: 0,
+            gpu_culling: false,
         }
     }
 
@@ -115,15 +129,22 @@ impl AutoCulling {
         &mut self.records[s as usize]
     }
 
-    /// Credits the previous frame's time to the strategy that drew it.
-    fn learn(&mut self, turn: Turn, frame_ms: f64) {
+    /// Credits the previous frame's time to the strategy that drew it, and
+    /// its drawing time to frustum culling when it drew what that draws.
+    fn learn(&mut self, turn: Turn, previous: PreviousFrame) {
+        if turn.draws_frustum {
+            let frame = self.frames_run;
+            let r = self.record(Strategy::Frustum);
+            r.average_ms = Some(previous.render_ms);
+            r.last_run = frame;
+        }
         if !turn.measured {
             return;
         }
         let r = self.record(turn.strategy);
         r.average_ms = Some(match r.average_ms {
-            Some(a) if !turn.fresh => a + SMOOTHING * (frame_ms - a),
-            _ => frame_ms,
+            Some(a) if !turn.fresh => a + SMOOTHING * (previous.frame_ms - a),
+            _ => previous.frame_ms,
         });
     }
 
@@ -136,6 +157,7 @@ impl AutoCulling {
             strategy,
             measured,
             fresh,
+            draws_frustum: false,
         };
         if self.probing > 0 {
             self.probing -= 1;
@@ -160,11 +182,11 @@ impl AutoCulling {
         }
     }
 
-    /// Learns from the previous frame's time (`None` in the first frame)
-    /// and plans this one.
-    fn next_turn(&mut self, previous_ms: Option<f64>) -> Turn {
-        if let (Some(turn), Some(ms)) = (self.previous, previous_ms) {
-            self.learn(turn, ms);
+    /// Learns from the previous frame (`None` in the first frame) and plans
+    /// this one.
+    fn next_turn(&mut self, previous: Option<PreviousFrame>) -> Turn {
+        if let (Some(turn), Some(frame)) = (self.previous, previous) {
+            self.learn(turn, frame);
         }
         self.frames_run += 1;
         let turn = self.plan();
@@ -180,6 +202,7 @@ impl AutoCulling {
             strategy: Strategy::Occlusion,
             measured: false,
             fresh: true,
+            draws_frustum: self.gpu_culling && self.frames_run == 1,
         }
     }
 }
@@ -202,11 +225,12 @@ impl Culler for AutoCulling {
     }
 
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
-        let turn = self.next_turn(input.previous.map(|p| p.frame_ms));
+        self.gpu_culling = ctx.can_cull_on_gpu();
+        let turn = self.next_turn(input.previous);
         match turn.strategy {
             Strategy::Frustum => self.frustum.frame(ctx, input),
             Strategy::Occlusion => {
-                let gpu_culling = ctx.can_cull_on_gpu();
+                let gpu_culling = self.gpu_culling;
                 self.occlusion
                     .get_or_insert_with(|| occlusion_culler(gpu_culling))
                     .frame(ctx, input)
@@ -236,16 +260,28 @@ mod tests {
     use crate::scene::{LoadOptions, SceneSpec, load};
     use Strategy::{Frustum, Occlusion};
 
-    /// The strategies `auto` runs for `frames` frames when each costs what
-    /// `cost(frame, strategy)` says.
+    /// The strategies `auto` runs for `frames` frames beside `omq` (no GPU
+    /// culling) when each costs what `cost(frame, strategy)` says.
     fn run(frames: u64, cost: impl Fn(u64, Strategy) -> f64) -> Vec<Strategy> {
+        run_with(frames, false, |k, s| {
+            let ms = cost(k, s);
+            PreviousFrame {
+                frame_ms: ms,
+                render_ms: ms,
+            }
+        })
+    }
+
+    /// The same with the occlusion culler's frames as `frame` measures them.
+    fn run_with(frames: u64, gpu_culling: bool, frame: impl Fn(u64, Strategy) -> PreviousFrame) -> Vec<Strategy> {
         let scene = load(&SceneSpec::Builtin("city:blocks=1".into()), &LoadOptions::default()).unwrap();
         let mut auto = AutoCulling::new(&scene, AutoParams { probe: 8 });
+        auto.gpu_culling = gpu_culling;
         let mut previous = None;
         (0..frames)
             .map(|k| {
                 let turn = auto.next_turn(previous);
-                previous = Some(cost(k, turn.strategy));
+                previous = Some(frame(k, turn.strategy));
                 turn.strategy
             })
             .collect()
@@ -269,6 +305,41 @@ mod tests {
         let s = run(100, |_, s| if s == Frustum { 40.0 } else { 10.0 });
         let frustum: Vec<usize> = (4..s.len()).filter(|&k| s[k] == Frustum).collect();
         assert_eq!(frustum, [35, 67, 99], "{s:?}");
+    }
+
+    #[test]
+    fn ioc_first_frame_measures_frustum_culling() {
+        // Frame 0 of ioc draws everything in the frustum (40 ms of drawing,
+        // 45 with its tests); its later frames cost 10 ms; frustum culling
+        // would cost 40.
+        let frame = |k, s| {
+            let ms = match (s, k) {
+                (Frustum, _) => 40.0,
+                (Occlusion, 0) => 45.0,
+                (Occlusion, _) => 10.0,
+            };
+            let render_ms = if k == 0 { 40.0 } else { ms };
+            PreviousFrame {
+                frame_ms: ms,
+                render_ms,
+            }
+        };
+        // No frame of frustum culling is spent measuring it: its first run
+        // is the probe 8 × 4 frames after frame 0.
+        let s = run_with(100, true, frame);
+        let frustum: Vec<usize> = (0..s.len()).filter(|&k| s[k] == Frustum).collect();
+        assert_eq!(frustum, [32, 64, 96], "{s:?}");
+        // Beside omq the first frame says nothing of frustum culling, which
+        // is run once to be measured.
+        let s = run_with(100, false, frame);
+        assert_eq!(s[..5], [Occlusion, Occlusion, Occlusion, Frustum, Occlusion]);
+        // A frustum estimate below the occlusion culler's cost is checked by
+        // running frustum culling at once.
+        let s = run_with(10, true, |k, s| PreviousFrame {
+            render_ms: 5.0,
+            ..frame(k, s)
+        });
+        assert_eq!(s[..4], [Occlusion, Occlusion, Occlusion, Frustum]);
     }
 
     #[test]

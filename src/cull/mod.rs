@@ -9,13 +9,13 @@ mod ac;
 mod auto;
 mod chc;
 mod dr;
-mod ioc;
+pub mod ioc;
 pub mod occupancy;
 mod omq;
 mod oracle;
 mod roc;
 mod sq;
-mod traversal;
+pub mod traversal;
 mod vfc;
 
 use std::collections::BTreeMap;

@@ -20,7 +20,7 @@ pub use cull_tree::{CullTree, MAX_LEVELS, TreeNode};
 pub use frame::{FrameCounters, FrameCtx, FrameOutcome, FrameResources};
 pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};
 pub use queries::{BoxTest, BoxVisibility, QUERIES_PER_SET, QueryPool};
-pub use raster::{DrawList, GpuAudit, GpuCullTree, RasterPool};
+pub use raster::{DrawList, GpuAudit, GpuCullTree, NodeBoxes, RasterPool};
 pub use readback::Readback;
 pub use renderer::{Draws, GpuScene, SceneRenderer};
 pub use targets::{RenderTargets, Resolution};

@@ -180,9 +180,52 @@ pub struct RasterPool {
     counts_readback: Readback,
     walk: Option<Walk>,
     /// Scratch, reused so a frame allocates nothing once warm.
-    staging: Vec<QueryBox>,
-    node_flags: Vec<u32>,
+    node_boxes: NodeBoxes,
     words: Vec<u32>,
+}
+
+/// A walk's node boxes for one camera, prepared on the CPU in f64 (the
+/// eye-relative rounding the 1e7-offset stress cases need) before they go
+/// to the GPU. Reused from frame to frame.
+#[derive(Default)]
+pub struct NodeBoxes {
+    /// One per node, eye-relative; empty (drawing no fragment) for a node
+    /// outside the frustum or reaching the near plane.
+    boxes: Vec<QueryBox>,
+    /// One per node, its state before the walk: [`TO_TEST`],
+    /// [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`].
+    states: Vec<u32>,
+}
+
+impl NodeBoxes {
+    /// Prepares `bounds`, one box per node, for `camera`.
+    pub fn prepare(&mut self, camera: &Camera, bounds: impl Iterator<Item = Aabb>) {
+        let view = camera.view_rotation();
+        let frustum = camera.frustum();
+        self.boxes.clear();
+        self.states.clear();
+        for b in bounds {
+            // A box outside the frustum is hidden, and one reaching the near
+            // plane visible, without a test: both are staged empty, which
+            // draws no fragment. The rasteriser would clip the first, but
+            // the near-plane rule must not see it.
+            let (q, state) = if frustum.classify(&b) == Containment::Outside {
+                (bytemuck::Zeroable::zeroed(), OUTSIDE_FRUSTUM)
+            } else {
+                match eye_relative_box(camera, &view, &b) {
+                    EyeBox::Testable(q) => (q, TO_TEST),
+                    EyeBox::ReachesNear => (bytemuck::Zeroable::zeroed(), REACHES_NEAR),
+                }
+            };
+            self.boxes.push(q);
+            self.states.push(state);
+        }
+    }
+
+    /// Nodes prepared, and of them those to test on the GPU.
+    pub fn counts(&self) -> (usize, usize) {
+        (self.states.len(), self.states.iter().filter(|&&s| s == TO_TEST).count())
+    }
 }
 
 /// Where the audit's parts sit in its read-back buffer.
@@ -318,8 +361,7 @@ impl RasterPool {
             objects,
             triangles: draws.iter().map(|d| u64::from(d.index_count / 3)).collect(),
             walk: None,
-            staging: Vec::new(),
-            node_flags: Vec::new(),
+            node_boxes: NodeBoxes::default(),
             words: Vec::new(),
             scratch,
             mark,
@@ -412,32 +454,13 @@ impl RasterPool {
     ) -> Duration {
         assert_eq!(bounds.len(), tree.nodes as usize, "one box per tree node");
         let started = Instant::now();
-        let view = camera.view_rotation();
-        let frustum = camera.frustum();
-        self.staging.clear();
-        self.node_flags.clear();
-        for b in bounds {
-            // A box outside the frustum is hidden, and one reaching the near
-            // plane visible, without a test: both are staged empty, which
-            // draws no fragment. The rasteriser would clip the first, but
-            // the near-plane rule must not see it.
-            let (q, state) = if frustum.classify(&b) == Containment::Outside {
-                (bytemuck::Zeroable::zeroed(), OUTSIDE_FRUSTUM)
-            } else {
-                match eye_relative_box(camera, &view, &b) {
-                    EyeBox::Testable(q) => (q, TO_TEST),
-                    EyeBox::ReachesNear => (bytemuck::Zeroable::zeroed(), REACHES_NEAR),
-                }
-            };
-            self.staging.push(q);
-            self.node_flags.push(state);
-        }
+        self.node_boxes.prepare(camera, bounds);
         let prepare = started.elapsed();
         let s = &self.scratch;
-        if !self.staging.is_empty() {
-            gpu.queue.write_buffer(&s.boxes, 0, bytemuck::cast_slice(&self.staging));
-            gpu.queue
-                .write_buffer(&s.node_visible, 0, bytemuck::cast_slice(&self.node_flags));
+        let NodeBoxes { boxes, states } = &self.node_boxes;
+        if !boxes.is_empty() {
+            gpu.queue.write_buffer(&s.boxes, 0, bytemuck::cast_slice(boxes));
+            gpu.queue.write_buffer(&s.node_visible, 0, bytemuck::cast_slice(states));
         }
         if let Some(t) = &self.timer {
             t.begin(encoder, 0);

@@ -1,0 +1,126 @@
+//! Per-frame CPU work of culling, along each built-in scene's default
+//! 120-frame walk: `cargo bench --bench traversal`.
+//!
+//! - **frustum traversal**: `vfc`'s whole frame (002 §4.1), and the first
+//!   step of every hierarchical mode;
+//! - **front-to-back order**: every node in the frustum through the
+//!   nearest-corner queue (003 §4.2), the order `sq`, `omq` and `chc` visit
+//!   nodes in; an upper bound, since those stop below hidden nodes;
+//! - **box preparation**: the eye-relative f64 boxes `ioc` (its cut tree
+//!   at the automatic depths) and `roc` (one per object) stage for the GPU
+//!   every frame.
+//!
+//! Means per frame over the walk, each the median of several passes.
+
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+use occlu::bounds::Aabb;
+use occlu::camera::generate::default_path;
+use occlu::camera::{Camera, Containment};
+use occlu::cull::TraversalStats;
+use occlu::cull::ioc::auto_depths;
+use occlu::cull::traversal::{DepthQueue, frustum_cull_subtree, nearest_corner};
+use occlu::gpu::{CullTree, NodeBoxes};
+use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::scene::{LoadOptions, SceneSpec, load};
+
+const FRAMES: u32 = 120;
+const PASSES: usize = 7;
+
+fn main() {
+    for spec in ["city:blocks=8", "city:blocks=16", "forest"] {
+        let scene = load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).expect("built-in scene");
+        let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+        let path = default_path(&scene)
+            .and_then(|p| p.with_frames(FRAMES))
+            .expect("built-in walk");
+        let cameras: Vec<Camera> = (0..FRAMES).map(|i| path.camera(i, 4.0 / 3.0)).collect();
+        println!(
+            "{spec}: {} objects, {} nodes, {FRAMES} frames",
+            scene.objects.len(),
+            hierarchy.nodes.len()
+        );
+
+        let (mut stack, mut visible) = (Vec::new(), Vec::new());
+        let mut drawn = 0;
+        let vfc = per_frame(&cameras, |camera| {
+            let mut stats = TraversalStats::default();
+            visible.clear();
+            let frustum = camera.frustum();
+            frustum_cull_subtree(&scene, &hierarchy, 0, &frustum, &mut stack, &mut visible, &mut stats);
+            drawn += visible.len();
+        });
+        report(
+            "frustum traversal (vfc)",
+            vfc,
+            drawn / (PASSES * cameras.len()),
+            "objects kept",
+        );
+
+        let mut queue = DepthQueue::default();
+        let mut popped = 0;
+        let order = per_frame(&cameras, |camera| {
+            popped += front_to_back(&hierarchy, camera, &mut queue)
+        });
+        report("front-to-back order", order, popped / (PASSES * cameras.len()), "nodes");
+
+        let (start, bottom) = auto_depths(&hierarchy, &scene.objects);
+        let (_, source) = CullTree::cut(&hierarchy, start, bottom);
+        let bounds: Vec<Aabb> = source.iter().map(|&n| hierarchy.nodes[n as usize].bounds).collect();
+        prepare_boxes(&format!("ioc boxes (depths {start}-{bottom})"), &cameras, &bounds);
+        let objects: Vec<Aabb> = scene.objects.iter().map(|o| o.bounds).collect();
+        prepare_boxes("roc boxes (every object)", &cameras, &objects);
+        println!();
+    }
+}
+
+/// Visits every node in the frustum nearest corner first; the count.
+fn front_to_back(hierarchy: &Hierarchy, camera: &Camera, queue: &mut DepthQueue) -> usize {
+    let frustum = camera.frustum();
+    queue.clear();
+    queue.push(0, 0.0);
+    let mut visited = 0;
+    while let Some(n) = queue.pop() {
+        visited += 1;
+        for c in hierarchy.nodes[n as usize].children() {
+            let b = &hierarchy.nodes[c].bounds;
+            if frustum.classify(b) != Containment::Outside {
+                queue.push(c as u32, nearest_corner(b, camera.eye));
+            }
+        }
+    }
+    visited
+}
+
+fn prepare_boxes(what: &str, cameras: &[Camera], bounds: &[Aabb]) {
+    let mut boxes = NodeBoxes::default();
+    let mut tested = 0;
+    let time = per_frame(cameras, |camera| {
+        boxes.prepare(camera, bounds.iter().copied());
+        tested += boxes.counts().1;
+    });
+    report(what, time, tested / (PASSES * cameras.len()), "to test");
+}
+
+/// Mean time per camera of `f`, the median over [`PASSES`] passes.
+fn per_frame(cameras: &[Camera], mut f: impl FnMut(&Camera)) -> Duration {
+    let mut passes: Vec<Duration> = (0..PASSES)
+        .map(|_| {
+            let start = Instant::now();
+            for camera in cameras {
+                f(black_box(camera));
+            }
+            start.elapsed() / cameras.len() as u32
+        })
+        .collect();
+    passes.sort();
+    passes[PASSES / 2]
+}
+
+fn report(what: &str, per_frame: Duration, count: usize, unit: &str) {
+    println!(
+        "  {what:<36} {:>8.1} µs/frame   {count:>6} {unit}",
+        per_frame.as_secs_f64() * 1e6
+    );
+}
