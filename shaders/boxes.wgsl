@@ -1,10 +1,12 @@
 // Bounding boxes for occlusion tests: depth test only, no colour, no depth
-// writes. One instance per box; the 36 vertices of a box are its 12
-// triangles, wound counter-clockwise seen from outside so back faces can be
-// culled (the eye is never inside a tested box: such boxes are visible
-// without a test). pixel_count.wgsl holds the fragment stage that counts
-// visible pixels per box; raster_mark.wgsl, appended to this file, draws
-// boxes named by a GPU-built queue.
+// writes. One instance per box, drawn indexed: the vertex index is one of
+// the box's 8 corners, and the 36 indices (BOX_INDICES in gpu/queries.rs)
+// are its 12 triangles, wound counter-clockwise seen from outside so back
+// faces can be culled (the eye is never inside a tested box: such boxes are
+// visible without a test). Indexing shades 8 vertices a box instead of 36.
+// pixel_count.wgsl holds the fragment stage that counts visible pixels per
+// box; raster_mark.wgsl, appended to this file, draws boxes named by a
+// GPU-built queue.
 
 struct Camera {
     projection: mat4x4<f32>,
@@ -22,25 +24,15 @@ struct QueryBox {
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<storage, read> boxes: array<QueryBox>;
 
-// Corner bit 0 picks max x, bit 1 max y, bit 2 max z.
-var<private> CORNERS: array<u32, 36> = array<u32, 36>(
-    0u, 6u, 2u, 0u, 4u, 6u, // -x
-    1u, 7u, 5u, 1u, 3u, 7u, // +x
-    0u, 5u, 4u, 0u, 1u, 5u, // -y
-    2u, 7u, 3u, 2u, 6u, 7u, // +y
-    0u, 3u, 1u, 0u, 2u, 3u, // -z
-    4u, 7u, 6u, 4u, 5u, 7u, // +z
-);
-
 struct BoxVertex {
     @builtin(position) clip: vec4<f32>,
     // Which box: the pixel counter to add to.
     @location(0) @interpolate(flat) index: u32,
 }
 
-// Clip position of `vertex` (0..36) of box `b`.
-fn box_clip(b: QueryBox, vertex: u32) -> vec4<f32> {
-    let corner = CORNERS[vertex];
+// Clip position of `corner` (0..8) of box `b`: bit 0 picks max x, bit 1
+// max y, bit 2 max z.
+fn box_clip(b: QueryBox, corner: u32) -> vec4<f32> {
     let p = vec3<f32>(
         select(b.min.x, b.max.x, (corner & 1u) != 0u),
         select(b.min.y, b.max.y, (corner & 2u) != 0u),
@@ -50,6 +42,6 @@ fn box_clip(b: QueryBox, vertex: u32) -> vec4<f32> {
 }
 
 @vertex
-fn vs_box(@builtin(vertex_index) vertex: u32, @builtin(instance_index) index: u32) -> BoxVertex {
-    return BoxVertex(box_clip(boxes[index], vertex), index);
+fn vs_box(@builtin(vertex_index) corner: u32, @builtin(instance_index) index: u32) -> BoxVertex {
+    return BoxVertex(box_clip(boxes[index], corner), index);
 }

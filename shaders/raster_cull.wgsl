@@ -15,13 +15,15 @@ struct TreeNode {
     object_count: u32,
 }
 
-// The arguments of one level: an indirect draw of 36 box vertices per queue
-// entry, an indirect dispatch over the queue, and what became of the
-// previous level's nodes that were not found visible by a test.
+// The arguments of one level: an indexed indirect draw of a box (36
+// indices) per queue entry, an indirect dispatch over the queue, and what
+// became of the previous level's nodes that were not found visible by a
+// test.
 struct Level {
-    vertex_count: u32,
+    index_count: u32,
     entries: atomic<u32>,
-    first_vertex: u32,
+    first_index: u32,
+    base_vertex: i32,
     first_instance: u32,
     groups_x: atomic<u32>,
     groups_y: u32,

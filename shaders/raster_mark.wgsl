@@ -11,9 +11,9 @@
 @group(1) @binding(1) var<storage, read_write> node_visible: array<u32>;
 
 @vertex
-fn vs_queued(@builtin(vertex_index) vertex: u32, @builtin(instance_index) entry: u32) -> BoxVertex {
+fn vs_queued(@builtin(vertex_index) corner: u32, @builtin(instance_index) entry: u32) -> BoxVertex {
     let node = queue[entry];
-    return BoxVertex(box_clip(boxes[node], vertex), node);
+    return BoxVertex(box_clip(boxes[node], corner), node);
 }
 
 @fragment

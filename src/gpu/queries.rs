@@ -18,6 +18,7 @@
 use std::time::{Duration, Instant};
 
 use glam::Vec4;
+use wgpu::util::DeviceExt;
 
 use super::targets::DEPTH_FORMAT;
 use super::{GpuContext, Readback};
@@ -167,6 +168,7 @@ pub struct QueryPool {
     capacity: u32,
     boxes: wgpu::Buffer,
     box_group: wgpu::BindGroup,
+    box_indices: wgpu::Buffer,
     sets: Vec<wgpu::QuerySet>,
     /// Two timestamps around a batch's test passes, where supported.
     timestamps: Option<(wgpu::QuerySet, f64)>,
@@ -250,6 +252,7 @@ impl QueryPool {
             capacity: QUERIES_PER_SET,
             boxes,
             box_group,
+            box_indices: box_index_buffer(gpu),
             sets: vec![query_set(gpu)],
             timestamps: gpu.timestamps.then(|| {
                 let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -403,9 +406,10 @@ impl QueryPool {
                 let mut pass = depth_only_pass(encoder, "occlusion queries", depth, Some(set));
                 pass.set_pipeline(&self.occlusion);
                 pass.set_bind_group(0, &self.box_group, &[]);
+                set_box_indices(&mut pass, &self.box_indices);
                 for q in 0..n {
                     pass.begin_occlusion_query(q);
-                    pass.draw(0..36, first + q..first + q + 1);
+                    pass.draw_indexed(0..BOX_INDEX_COUNT, 0, first + q..first + q + 1);
                     pass.end_occlusion_query();
                 }
             }
@@ -441,11 +445,12 @@ impl QueryPool {
         pass.set_pipeline(&counting.pipeline);
         pass.set_bind_group(0, &self.box_group, &[]);
         pass.set_bind_group(1, &counting.bind_group, &[]);
-        pass.draw(0..36, 0..count);
+        set_box_indices(&mut pass, &self.box_indices);
+        pass.draw_indexed(0..BOX_INDEX_COUNT, 0, 0..count);
         if totals {
             pass.set_pipeline(&counting.totals_pipeline);
             pass.set_bind_group(1, &counting.totals_group, &[]);
-            pass.draw(0..36, 0..count);
+            pass.draw_indexed(0..BOX_INDEX_COUNT, 0, 0..count);
         }
     }
 
@@ -489,6 +494,35 @@ pub(super) fn depth_only_pass<'e>(
         occlusion_query_set: queries,
         multiview_mask: None,
     })
+}
+
+/// The 12 triangles of a box over its 8 corners (bit 0 picks max x, bit 1
+/// max y, bit 2 max z), counter-clockwise seen from outside. Box tests draw
+/// indexed, so each corner is shaded once rather than once per triangle.
+const BOX_INDICES: [u16; 36] = [
+    0, 6, 2, 0, 4, 6, // -x
+    1, 7, 5, 1, 3, 7, // +x
+    0, 5, 4, 0, 1, 5, // -y
+    2, 7, 3, 2, 6, 7, // +y
+    0, 3, 1, 0, 2, 3, // -z
+    4, 7, 6, 4, 5, 7, // +z
+];
+
+/// Indices one box draws.
+pub(super) const BOX_INDEX_COUNT: u32 = BOX_INDICES.len() as u32;
+
+/// A buffer of [`BOX_INDICES`], for [`set_box_indices`].
+pub(super) fn box_index_buffer(gpu: &GpuContext) -> wgpu::Buffer {
+    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("box indices"),
+        contents: bytemuck::cast_slice(&BOX_INDICES),
+        usage: wgpu::BufferUsages::INDEX,
+    })
+}
+
+/// Binds `indices` (from [`box_index_buffer`]) for drawing boxes.
+pub(super) fn set_box_indices(pass: &mut wgpu::RenderPass, indices: &wgpu::Buffer) {
+    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint16);
 }
 
 /// The depth test of box tests. Reverse-Z: nearer is greater. Equal passes,

@@ -30,8 +30,8 @@ use wgpu::util::DeviceExt;
 
 use super::cull_tree::{CullTree, MAX_LEVELS};
 use super::queries::{
-    BOX_TEST, EyeBox, QueryBox, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer, box_test_pipeline,
-    depth_only_pass, eye_relative_box, storage_buffer,
+    BOX_INDEX_COUNT, BOX_TEST, EyeBox, QueryBox, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer,
+    box_index_buffer, box_test_pipeline, depth_only_pass, eye_relative_box, set_box_indices, storage_buffer,
 };
 use super::renderer::DrawRange;
 use super::{GpuContext, GpuTimer, Readback};
@@ -43,10 +43,14 @@ use crate::object_set::ObjectSet;
 const GROUP_SIZE: u32 = 64;
 const MAX_GROUPS: u32 = 65_535;
 
-/// Bytes of one level's arguments (`Level` in raster_cull.wgsl): an indirect
-/// draw, an indirect dispatch, and counts of nodes hidden, outside the
-/// frustum and reaching the near plane.
-const LEVEL_BYTES: u64 = 40;
+/// Words of one level's arguments (`Level` in raster_cull.wgsl): an indexed
+/// indirect draw (5), an indirect dispatch (3), and counts of nodes hidden,
+/// outside the frustum and reaching the near plane (3).
+const LEVEL_WORDS: usize = 11;
+const LEVEL_BYTES: u64 = LEVEL_WORDS as u64 * 4;
+/// Where the dispatch arguments and the hidden count start in a level.
+const DISPATCH_OFFSET: u64 = 5 * 4;
+const HIDDEN: usize = 8;
 
 /// What the CPU sets a node's word of the visibility buffer to before a walk
 /// (raster_cull.wgsl's constants); `fs_mark` sets a tested one to 1.
@@ -153,6 +157,7 @@ struct NodeScratch {
 /// Pipelines and scratch shared by every GPU-driven mode.
 pub struct RasterPool {
     mark: wgpu::RenderPipeline,
+    box_indices: wgpu::Buffer,
     expand: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
     /// `compact`'s empty group 0.
@@ -346,6 +351,7 @@ impl RasterPool {
         let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let scratch = NodeScratch::new(gpu, [&box_layout, &mark_layout, &step_layout], camera, objects);
         RasterPool {
+            box_indices: box_index_buffer(gpu),
             draws: init_buffer(gpu, "all draw commands", &commands, wgpu::BufferUsages::STORAGE),
             drawn: storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy),
             level_stats: storage_buffer(gpu, "level statistics", u64::from(MAX_LEVELS) * LEVEL_BYTES, copy),
@@ -490,7 +496,8 @@ impl RasterPool {
             pass.set_pipeline(&self.mark);
             pass.set_bind_group(0, &s.box_group, &[]);
             pass.set_bind_group(1, &s.mark_groups[input], &[]);
-            pass.draw_indirect(&s.level_args[input], 0);
+            set_box_indices(&mut pass, &self.box_indices);
+            pass.draw_indexed_indirect(&s.level_args[input], 0);
         }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -501,7 +508,7 @@ impl RasterPool {
             pass.set_bind_group(0, &s.step_groups[input], &[]);
             pass.set_bind_group(1, &tree.tree_group, &[]);
             // The dispatch arguments follow the draw's four words.
-            pass.dispatch_workgroups_indirect(&s.level_args[input], 16);
+            pass.dispatch_workgroups_indirect(&s.level_args[input], DISPATCH_OFFSET);
         }
         encoder.copy_buffer_to_buffer(
             &s.level_args[output],
@@ -600,9 +607,10 @@ impl RasterPool {
             if k + 1 < walk.levels as usize {
                 audit.nodes_visited += u64::from(level[1]);
             }
-            audit.nodes_hidden += u64::from(level[7]);
-            audit.nodes_outside_frustum += u64::from(level[8]);
-            untested += u64::from(level[8]) + u64::from(level[9]);
+            let [hidden, outside, near] = [level[HIDDEN], level[HIDDEN + 1], level[HIDDEN + 2]].map(u64::from);
+            audit.nodes_hidden += hidden;
+            audit.nodes_outside_frustum += outside;
+            untested += outside + near;
         }
         audit.nodes_tested = audit.nodes_visited - untested;
         for (object, &flag) in self.words[word(AUDIT_DRAWN_OFFSET)..].iter().enumerate() {
@@ -664,10 +672,10 @@ impl NodeScratch {
 }
 
 /// A level's arguments (`Level` in raster_cull.wgsl) for a queue of
-/// `entries` nodes: an indirect draw of one box (36 vertices) per entry, an
+/// `entries` nodes: an indexed indirect draw of one box per entry, an
 /// indirect dispatch over the entries, and no nodes counted yet.
-fn level_args(entries: u32) -> [u32; 10] {
-    [36, entries, 0, 0, groups_for(entries), 1, 1, 0, 0, 0]
+fn level_args(entries: u32) -> [u32; LEVEL_WORDS] {
+    [BOX_INDEX_COUNT, entries, 0, 0, 0, groups_for(entries), 1, 1, 0, 0, 0]
 }
 
 /// A buffer holding `contents` (at least one word, as bindings need).
