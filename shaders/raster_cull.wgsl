@@ -30,7 +30,7 @@ struct Level {
     groups_z: u32,
     // Tested, and no fragment passed.
     hidden: atomic<u32>,
-    // Outside the frustum: hidden untested.
+    // Children outside the frustum: hidden untested, and not queued.
     outside: atomic<u32>,
     // Reaching the near plane: visible untested.
     near: atomic<u32>,
@@ -98,10 +98,6 @@ fn cs_expand(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
                 atomicAdd(&level_out.hidden, 1u);
                 continue;
             }
-            case OUTSIDE_FRUSTUM: {
-                atomicAdd(&level_out.outside, 1u);
-                continue;
-            }
             case REACHES_NEAR: {
                 atomicAdd(&level_out.near, 1u);
             }
@@ -116,11 +112,23 @@ fn cs_expand(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
                 object_state[object] |= MARKED;
             }
         } else {
-            let slot = atomicAdd(&level_out.entries, node.child_count);
+            // A child outside the frustum would draw no fragment: it is
+            // counted and not queued, which spares its box's vertices.
+            var inside = 0u;
             for (var k = 0u; k < node.child_count; k++) {
-                queue_out[slot + k] = node.first_child + k;
+                inside += u32(node_visible[node.first_child + k] != OUTSIDE_FRUSTUM);
             }
-            let groups = (slot + node.child_count + GROUP_SIZE - 1u) / GROUP_SIZE;
+            atomicAdd(&level_out.outside, node.child_count - inside);
+            let slot = atomicAdd(&level_out.entries, inside);
+            var next = slot;
+            for (var k = 0u; k < node.child_count; k++) {
+                let child = node.first_child + k;
+                if node_visible[child] != OUTSIDE_FRUSTUM {
+                    queue_out[next] = child;
+                    next += 1u;
+                }
+            }
+            let groups = (slot + inside + GROUP_SIZE - 1u) / GROUP_SIZE;
             atomicMax(&level_out.groups_x, min(groups, MAX_GROUPS));
         }
     }

@@ -73,10 +73,9 @@ pub enum DrawList {
 pub struct GpuCullTree {
     nodes: u32,
     objects: u32,
-    seed_len: u32,
     levels: u32,
-    seed: wgpu::Buffer,
-    seed_level: wgpu::Buffer,
+    /// The nodes tested first (before the frustum is applied).
+    seed: Vec<u32>,
     tree_group: wgpu::BindGroup,
     lists_group: wgpu::BindGroup,
     /// The visible list at [0, n), the newly visible one at [n, 2n).
@@ -132,7 +131,9 @@ pub struct GpuAudit {
 
 /// The walk recorded for the audit.
 struct Walk {
+    /// Seed nodes, and of them those outside the frustum (never queued).
     seed_len: u32,
+    seed_outside: u32,
     levels: u32,
 }
 
@@ -186,6 +187,7 @@ pub struct RasterPool {
     walk: Option<Walk>,
     /// Scratch, reused so a frame allocates nothing once warm.
     node_boxes: NodeBoxes,
+    seed_queue: Vec<u32>,
     words: Vec<u32>,
 }
 
@@ -211,9 +213,10 @@ impl NodeBoxes {
         self.states.clear();
         for b in bounds {
             // A box outside the frustum is hidden, and one reaching the near
-            // plane visible, without a test: both are staged empty, which
-            // draws no fragment. The rasteriser would clip the first, but
-            // the near-plane rule must not see it.
+            // plane visible, without a test. The first is never queued; the
+            // second is staged empty, so drawing it marks nothing. The
+            // frustum test comes first: the near-plane rule must not take a
+            // box beside the camera for one that holds it.
             let (q, state) = if frustum.classify(&b) == Containment::Outside {
                 (bytemuck::Zeroable::zeroed(), OUTSIDE_FRUSTUM)
             } else {
@@ -368,6 +371,7 @@ impl RasterPool {
             triangles: draws.iter().map(|d| u64::from(d.index_count / 3)).collect(),
             walk: None,
             node_boxes: NodeBoxes::default(),
+            seed_queue: Vec::new(),
             words: Vec::new(),
             scratch,
             mark,
@@ -400,7 +404,6 @@ impl RasterPool {
             );
         }
         let storage = wgpu::BufferUsages::STORAGE;
-        let seed_len = tree.seed.len() as u32;
         let node_buffer = init_buffer(gpu, "tree nodes", bytemuck::cast_slice(&tree.nodes), storage);
         let order = init_buffer(gpu, "tree order", bytemuck::cast_slice(&tree.order), storage);
         let object_state = storage_buffer(
@@ -424,20 +427,8 @@ impl RasterPool {
         GpuCullTree {
             nodes,
             objects: self.objects,
-            seed_len,
             levels: tree.levels,
-            seed: init_buffer(
-                gpu,
-                "seed queue",
-                bytemuck::cast_slice(&tree.seed),
-                wgpu::BufferUsages::COPY_SRC,
-            ),
-            seed_level: init_buffer(
-                gpu,
-                "seed level",
-                bytemuck::cast_slice(&level_args(seed_len)),
-                wgpu::BufferUsages::COPY_SRC,
-            ),
+            seed: tree.seed.clone(),
             tree_group: bind_buffers(gpu, &self.tree_layout, &[&node_buffer, &order, &object_state]),
             lists_group: bind_buffers(gpu, &self.lists_layout, &[&self.draws, &commands, &counts, &self.drawn]),
             commands,
@@ -448,8 +439,8 @@ impl RasterPool {
 
     /// Starts a walk of `tree`: stages the boxes of its nodes (`bounds`,
     /// one per node, in node order) for `camera`, marks those that reach
-    /// the near plane visible, and queues the seed. Returns the CPU time
-    /// spent preparing the boxes.
+    /// the near plane visible, and queues the seed nodes not outside the
+    /// frustum. Returns the CPU time spent preparing the boxes.
     pub fn begin_walk(
         &mut self,
         gpu: &GpuContext,
@@ -468,13 +459,24 @@ impl RasterPool {
             gpu.queue.write_buffer(&s.boxes, 0, bytemuck::cast_slice(boxes));
             gpu.queue.write_buffer(&s.node_visible, 0, bytemuck::cast_slice(states));
         }
+        // A box outside the frustum would draw no fragment: not queueing it
+        // spares its vertices (cs_expand does the same for children).
+        self.seed_queue.clear();
+        let in_frustum = tree.seed.iter().filter(|&&n| states[n as usize] != OUTSIDE_FRUSTUM);
+        self.seed_queue.extend(in_frustum);
+        if !self.seed_queue.is_empty() {
+            gpu.queue
+                .write_buffer(&s.queues[0], 0, bytemuck::cast_slice(&self.seed_queue));
+        }
+        let seed_level = level_args(self.seed_queue.len() as u32);
+        gpu.queue
+            .write_buffer(&s.level_args[0], 0, bytemuck::cast_slice(&seed_level));
         if let Some(t) = &self.timer {
             t.begin(encoder, 0);
         }
-        encoder.copy_buffer_to_buffer(&tree.seed, 0, &s.queues[0], 0, u64::from(tree.seed_len.max(1)) * 4);
-        encoder.copy_buffer_to_buffer(&tree.seed_level, 0, &s.level_args[0], 0, LEVEL_BYTES);
         self.walk = Some(Walk {
-            seed_len: tree.seed_len,
+            seed_len: tree.seed.len() as u32,
+            seed_outside: (tree.seed.len() - self.seed_queue.len()) as u32,
             levels: 0,
         });
         prepare
@@ -507,7 +509,7 @@ impl RasterPool {
             pass.set_pipeline(&self.expand);
             pass.set_bind_group(0, &s.step_groups[input], &[]);
             pass.set_bind_group(1, &tree.tree_group, &[]);
-            // The dispatch arguments follow the draw's four words.
+            // The dispatch arguments follow the draw's five words.
             pass.dispatch_workgroups_indirect(&s.level_args[input], DISPATCH_OFFSET);
         }
         encoder.copy_buffer_to_buffer(
@@ -598,21 +600,25 @@ impl RasterPool {
         let levels = &self.words[..word(level_bytes)];
         let mut audit = GpuAudit {
             nodes_visited: u64::from(walk.seed_len),
+            nodes_outside_frustum: u64::from(walk.seed_outside),
             ..GpuAudit::default()
         };
-        let mut untested = 0;
+        let mut reaching_near = 0;
         for (k, level) in levels.chunks_exact(word(LEVEL_BYTES)).enumerate() {
             // A level's arguments hold the next queue's length and the
-            // counts of the level that filled it.
+            // counts of the level that filled it: its entries found hidden
+            // or reaching the near plane, and the children it found outside
+            // the frustum and did not queue (reached, so visited, too).
             if k + 1 < walk.levels as usize {
                 audit.nodes_visited += u64::from(level[1]);
             }
             let [hidden, outside, near] = [level[HIDDEN], level[HIDDEN + 1], level[HIDDEN + 2]].map(u64::from);
+            audit.nodes_visited += outside;
             audit.nodes_hidden += hidden;
             audit.nodes_outside_frustum += outside;
-            untested += outside + near;
+            reaching_near += near;
         }
-        audit.nodes_tested = audit.nodes_visited - untested;
+        audit.nodes_tested = audit.nodes_visited - audit.nodes_outside_frustum - reaching_near;
         for (object, &flag) in self.words[word(AUDIT_DRAWN_OFFSET)..].iter().enumerate() {
             if flag != 0 {
                 drawn.insert(object as u32);
