@@ -172,7 +172,8 @@ fn depths(params: IocParams, hierarchy: &Hierarchy, objects: &[Object]) -> (u32,
 /// in box tests, since a level hides only part of its boxes. Measured on
 /// llvmpipe: ~1.1 ms a level (start-depth sweeps) against 4.4-5.5 µs a box
 /// (roc: 14.4 ms for 2 625 boxes, 45.8 ms for 10 521); the sweeps in issue
-/// 8's note confirm 512.
+/// 8's note confirm 512. Both were measured before boxes were drawn indexed
+/// and outside-frustum nodes left unqueued, which made boxes cheaper.
 pub const START_NODES: usize = 512;
 
 /// Start and bottom depths from the hierarchy's statistics (004 §4 leaves
