@@ -8,15 +8,22 @@
 // box; raster_mark.wgsl, appended to this file, draws boxes named by a
 // GPU-built queue.
 
+// CameraUniform in gpu/renderer.rs.
 struct Camera {
     projection: mat4x4<f32>,
     // Projection times the world-to-camera rotation: for eye-relative
     // world positions.
     view_projection: mat4x4<f32>,
+    // The world direction of the ray through pixel (x, y), at view depth 1,
+    // is x * ray_x + y * ray_y + ray_c (gpu/conservative.rs).
+    ray_x: vec4<f32>,
+    ray_y: vec4<f32>,
+    ray_c: vec4<f32>,
 }
 
 struct QueryBox {
-    // Eye-relative world coordinates, already expanded outward.
+    // Eye-relative world coordinates, already grown (gpu/conservative.rs);
+    // min.w is how much the box is raised in depth.
     min: vec4<f32>,
     max: vec4<f32>,
 }
@@ -38,7 +45,10 @@ fn box_clip(b: QueryBox, corner: u32) -> vec4<f32> {
         select(b.min.y, b.max.y, (corner & 2u) != 0u),
         select(b.min.z, b.max.z, (corner & 4u) != 0u),
     );
-    return camera.view_projection * vec4<f32>(p, 1.0);
+    let clip = camera.view_projection * vec4<f32>(p, 1.0);
+    // Raised in depth by min.w (gpu/conservative.rs, rule 1): z / w grows by
+    // it, x and y stay.
+    return vec4<f32>(clip.xy, clip.z + b.min.w * clip.w, clip.w);
 }
 
 @vertex

@@ -161,7 +161,8 @@ impl<'a> Session<'a> {
         first: usize,
     ) -> Vec<FrameStats> {
         let gpu = self.gpu;
-        self.renderer.set_camera(gpu, camera, &world.scene.objects);
+        self.renderer
+            .set_camera(gpu, camera, self.options.resolution, &world.scene.objects);
         // Flush the upload now, so no mode's timed submit carries it.
         gpu.queue.submit([]);
         gpu.wait_idle();

@@ -114,7 +114,7 @@ pub fn render(
 
     let (width, rgb) = if options.overview {
         let above = overview_camera(scene, resolution);
-        session.renderer.set_camera(gpu, &above, &scene.objects);
+        session.renderer.set_camera(gpu, &above, resolution, &scene.objects);
         let targets = RenderTargets::new(gpu, resolution, 1);
         let all: Vec<u32> = (0..scene.objects.len() as u32).collect();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());

@@ -2,6 +2,7 @@
 //! occlusion-query batches, and the per-frame operations every culling mode
 //! goes through ([`FrameCtx`]).
 
+mod conservative;
 mod cull_tree;
 mod frame;
 mod picture;
@@ -16,6 +17,7 @@ use std::fmt;
 
 use serde::Serialize;
 
+pub use conservative::DepthMargins;
 pub use cull_tree::{CullTree, MAX_LEVELS, TreeNode};
 pub use frame::{FrameCounters, FrameCtx, FrameOutcome, FrameResources};
 pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};
@@ -116,6 +118,8 @@ pub struct GpuContext {
     pub gpu_driven: bool,
     /// See [`AdapterReport::indirect_count`].
     pub indirect_count: bool,
+    /// How far box tests stay clear of rounding on this backend.
+    pub depth_margins: DepthMargins,
 }
 
 impl GpuContext {
@@ -184,6 +188,7 @@ impl GpuContext {
             pixel_counts,
             gpu_driven,
             indirect_count,
+            depth_margins: DepthMargins::for_backend(info.backend),
         })
     }
 

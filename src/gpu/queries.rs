@@ -17,9 +17,9 @@
 
 use std::time::{Duration, Instant};
 
-use glam::Vec4;
 use wgpu::util::DeviceExt;
 
+use super::conservative::{DepthMargins, EyeBox, QueryBox, eye_relative_box};
 use super::targets::DEPTH_FORMAT;
 use super::{GpuContext, Readback};
 use crate::bounds::Aabb;
@@ -27,11 +27,6 @@ use crate::camera::Camera;
 
 /// wgpu's limit on queries per query set.
 pub const QUERIES_PER_SET: u32 = 4096;
-
-/// Boxes are grown by this fraction of their distance from the eye before
-/// they are drawn, so a box face that coincides with geometry (a building's
-/// box and its wall) stays in front of it despite f32 rounding (~1e-7).
-const EXPANSION: f64 = 1e-4;
 
 /// Pixels per span of the sampled pixel count (002 §4.2: "spans of ten
 /// pixels").
@@ -94,48 +89,6 @@ pub struct BatchCost {
 /// Where results start in the read-back buffer: after the two timestamps
 /// that bracket the test passes, at the 256-byte resolve alignment.
 const RESULTS_OFFSET: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
-
-/// Eye-relative corners, as the shader reads them.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub(super) struct QueryBox {
-    min: Vec4,
-    max: Vec4,
-}
-
-/// A box made ready for a depth test.
-pub(super) enum EyeBox {
-    /// It reaches the near plane or holds the eye: visible, untestable (its
-    /// projection is unbounded).
-    ReachesNear,
-    /// Grown against f32 rounding, eye-relative.
-    Testable(QueryBox),
-}
-
-/// Prepares `b`, which must not lie outside `camera`'s frustum, for a depth
-/// test by `camera`, whose `view_rotation()` is `view` (computed once per
-/// batch by the caller).
-pub(super) fn eye_relative_box(camera: &Camera, view: &glam::DMat3, b: &Aabb) -> EyeBox {
-    let (min, max) = (b.min - camera.eye, b.max - camera.eye);
-    let reach = min.abs().max(max.abs()).max_element();
-    let grow = glam::DVec3::splat(EXPANSION * reach + f64::MIN_POSITIVE);
-    let (min, max) = (min - grow, max + grow);
-    // The box reaches the near plane when a corner is nearer than it along
-    // the view direction (this also covers holding the eye).
-    let nearest = Aabb::new(min, max)
-        .corners()
-        .iter()
-        .map(|&c| -(*view * c).z)
-        .fold(f64::INFINITY, f64::min);
-    if nearest <= camera.near {
-        EyeBox::ReachesNear
-    } else {
-        EyeBox::Testable(QueryBox {
-            min: min.as_vec3().extend(0.0),
-            max: max.as_vec3().extend(0.0),
-        })
-    }
-}
 
 /// The uniform of pixel_count.wgsl.
 #[repr(C)]
@@ -299,7 +252,7 @@ impl QueryPool {
         );
         let depth = target.depth;
         let started = Instant::now();
-        self.prepare(target.camera, boxes, out);
+        self.prepare(target.camera, gpu.depth_margins, boxes, out);
         let prepare = started.elapsed();
         if let Some(t) = totals.as_deref_mut() {
             t.clear();
@@ -381,13 +334,13 @@ impl QueryPool {
 
     /// Grows every box, marks the ones reaching the near plane visible
     /// without a test, and stages the others eye-relative.
-    fn prepare(&mut self, camera: &Camera, boxes: &[Aabb], out: &mut Vec<BoxVisibility>) {
+    fn prepare(&mut self, camera: &Camera, margins: DepthMargins, boxes: &[Aabb], out: &mut Vec<BoxVisibility>) {
         out.clear();
         self.staging.clear();
         self.tested.clear();
         let view = camera.view_rotation();
         for (i, b) in boxes.iter().enumerate() {
-            match eye_relative_box(camera, &view, b) {
+            match eye_relative_box(camera, &view, margins, b) {
                 EyeBox::ReachesNear => out.push(BoxVisibility::Unqueried),
                 EyeBox::Testable(q) => {
                     out.push(BoxVisibility::Samples(0));

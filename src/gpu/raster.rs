@@ -28,10 +28,11 @@ use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
 
+use super::conservative::{DepthMargins, EyeBox, QueryBox, eye_relative_box};
 use super::cull_tree::{CullTree, MAX_LEVELS};
 use super::queries::{
-    BOX_INDEX_COUNT, BOX_TEST, EyeBox, QueryBox, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer,
-    box_index_buffer, box_test_pipeline, depth_only_pass, eye_relative_box, set_box_indices, storage_buffer,
+    BOX_INDEX_COUNT, BOX_TEST, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer, box_index_buffer,
+    box_test_pipeline, depth_only_pass, set_box_indices, storage_buffer,
 };
 use super::renderer::DrawRange;
 use super::{GpuContext, GpuTimer, Readback};
@@ -205,8 +206,9 @@ pub struct NodeBoxes {
 }
 
 impl NodeBoxes {
-    /// Prepares `bounds`, one box per node, for `camera`.
-    pub fn prepare(&mut self, camera: &Camera, bounds: impl Iterator<Item = Aabb>) {
+    /// Prepares `bounds`, one box per node, for `camera` on a backend with
+    /// `margins`.
+    pub fn prepare(&mut self, camera: &Camera, margins: DepthMargins, bounds: impl Iterator<Item = Aabb>) {
         let view = camera.view_rotation();
         let frustum = camera.frustum();
         self.boxes.clear();
@@ -220,7 +222,7 @@ impl NodeBoxes {
             let (q, state) = if frustum.classify(&b) == Containment::Outside {
                 (bytemuck::Zeroable::zeroed(), OUTSIDE_FRUSTUM)
             } else {
-                match eye_relative_box(camera, &view, &b) {
+                match eye_relative_box(camera, &view, margins, &b) {
                     EyeBox::Testable(q) => (q, TO_TEST),
                     EyeBox::ReachesNear => (bytemuck::Zeroable::zeroed(), REACHES_NEAR),
                 }
@@ -451,7 +453,7 @@ impl RasterPool {
     ) -> Duration {
         assert_eq!(bounds.len(), tree.nodes as usize, "one box per tree node");
         let started = Instant::now();
-        self.node_boxes.prepare(camera, bounds);
+        self.node_boxes.prepare(camera, gpu.depth_margins, bounds);
         let prepare = started.elapsed();
         let s = &self.scratch;
         let NodeBoxes { boxes, states } = &self.node_boxes;

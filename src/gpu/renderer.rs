@@ -5,9 +5,10 @@
 use glam::Mat4;
 use wgpu::util::DeviceExt;
 
+use super::conservative::{FragmentLimit, pixel_rays};
 use super::raster::{IndirectCount, IndirectDraws};
 use super::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, RenderTargets};
-use super::{GpuContext, GpuError};
+use super::{GpuContext, GpuError, Resolution};
 use crate::camera::Camera;
 use crate::scene::{Object, Scene};
 
@@ -18,15 +19,26 @@ pub struct DrawRange {
     pub index_count: u32,
 }
 
+/// What scene.wgsl knows of one object, rewritten every frame.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ObjectData {
+    /// Camera-relative model-view matrix.
+    model_view: Mat4,
+    /// No fragment of the object is nearer than this (see
+    /// `gpu/conservative.rs`, rule 2).
+    limit: FragmentLimit,
+}
+
 /// Geometry and per-object data in GPU buffers.
 pub struct GpuScene {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
-    /// One camera-relative model-view matrix per object, rewritten per frame.
+    /// One [`ObjectData`] per object.
     object_data: wgpu::Buffer,
     pub draws: Vec<DrawRange>,
     /// Reused every frame, so the upload allocates nothing.
-    staging: Vec<Mat4>,
+    staging: Vec<ObjectData>,
 }
 
 impl GpuScene {
@@ -41,7 +53,7 @@ impl GpuScene {
         };
         let vertex_bytes = std::mem::size_of_val(scene.vertices.as_slice()) as u64;
         let index_bytes = std::mem::size_of_val(scene.indices.as_slice()) as u64;
-        let object_bytes = (scene.objects.len() * std::mem::size_of::<Mat4>()) as u64;
+        let object_bytes = (scene.objects.len() * std::mem::size_of::<ObjectData>()) as u64;
         check("vertex buffer", vertex_bytes, limits.max_buffer_size)?;
         check("index buffer", index_bytes, limits.max_buffer_size)?;
         check(
@@ -89,6 +101,20 @@ impl GpuScene {
     }
 }
 
+/// The camera as every shader reads it (`struct Camera` in the WGSL files).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CameraUniform {
+    /// Camera space to clip space: scene geometry.
+    projection: Mat4,
+    /// Eye-relative world positions to clip space: test boxes, the
+    /// overview's lines.
+    view_projection: Mat4,
+    /// The world direction of the ray through pixel (x, y) is
+    /// `x · rays[0] + y · rays[1] + rays[2]`: for fragment limits.
+    rays: [glam::Vec4; 3],
+}
+
 pub struct SceneRenderer {
     pub scene: GpuScene,
     camera: wgpu::Buffer,
@@ -108,13 +134,14 @@ impl SceneRenderer {
         });
         let camera = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("camera"),
-            size: 2 * std::mem::size_of::<Mat4>() as u64,
+            size: std::mem::size_of::<CameraUniform>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        // The fragment stage reads the camera's pixel rays.
         let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
             binding,
-            visibility: wgpu::ShaderStages::VERTEX,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
             ty,
             count: None,
         };
@@ -211,28 +238,32 @@ impl SceneRenderer {
         }
     }
 
-    /// The uniform set by [`SceneRenderer::set_camera`]: the projection, and
-    /// projection × view rotation for eye-relative world positions.
+    /// The uniform set by [`SceneRenderer::set_camera`], a [`CameraUniform`].
     pub fn camera_uniform(&self) -> &wgpu::Buffer {
         &self.camera
     }
 
-    /// Uploads the camera uniform and every object's camera-relative
+    /// Uploads the camera uniform and, for every object, its camera-relative
     /// model-view matrix (computed in f64 from the objects' current
-    /// transforms, rounded to f32 last).
-    pub fn set_camera(&mut self, gpu: &GpuContext, camera: &Camera, objects: &[Object]) {
+    /// transforms, rounded to f32 last) and its fragment limit for a
+    /// picture of `resolution`.
+    pub fn set_camera(&mut self, gpu: &GpuContext, camera: &Camera, resolution: Resolution, objects: &[Object]) {
         let scene = &mut self.scene;
+        let view = camera.view_rotation();
         scene.staging.clear();
-        scene.staging.extend(objects.iter().map(|o| {
-            let mv = camera.model_view(&o.transform);
-            glam::DMat4::from(mv).as_mat4()
+        scene.staging.extend(objects.iter().map(|o| ObjectData {
+            model_view: glam::DMat4::from(camera.model_view(&o.transform)).as_mat4(),
+            limit: FragmentLimit::new(camera, &view, gpu.depth_margins, &o.bounds),
         }));
         gpu.queue
             .write_buffer(&scene.object_data, 0, bytemuck::cast_slice(&scene.staging));
         let projection = camera.projection();
-        let view_projection = projection * glam::DMat4::from_mat3(camera.view_rotation());
-        let uniform = [projection.as_mat4(), view_projection.as_mat4()];
-        gpu.queue.write_buffer(&self.camera, 0, bytemuck::cast_slice(&uniform));
+        let uniform = CameraUniform {
+            projection: projection.as_mat4(),
+            view_projection: (projection * glam::DMat4::from_mat3(view)).as_mat4(),
+            rays: pixel_rays(camera, resolution),
+        };
+        gpu.queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&uniform));
     }
 
     /// Records a shaded pass into `depth` drawing `draws`, clearing first

@@ -1,0 +1,350 @@
+//! The numerical rules that make box tests conservative: a box test never
+//! judges hidden an object that direct rendering shows in any pixel.
+//!
+//! A box test (an occlusion query, a pixel count, or 004's marking pass)
+//! draws an object's or node's bounding box against depth already drawn and
+//! calls the object hidden when no fragment of the box passes. That is safe
+//! only if, at every pixel, each fragment of the object lies no nearer than
+//! the box's front face at that pixel. In exact arithmetic every point of an
+//! object lies inside its box, so it does. A rasteriser working in f32 breaks
+//! it in two ways, and each has a rule here:
+//!
+//! 1. **Rounding of surfaces that coincide with a box face** (a building
+//!    part lying on its building's wall, a box face on its own wall). Both
+//!    are rounded, so the box face may land a hair behind the surface. The
+//!    error has three parts, and each has a margin ([`DepthMargins`]):
+//!    - *relative to the depth at the pixel*, about 2^-24: boxes are grown by
+//!      [`BOX_GROWTH`] = 1e-4 of their distance, hundreds of times that.
+//!    - *relative to the largest depth of the triangle*: a triangle's depth is
+//!      interpolated in f32 across the screen from its vertices, so at its
+//!      far end the error is a few 2^-24 of its near end's depth. An object's
+//!      triangles and the faces of any box holding it reach no nearer than
+//!      that box's nearest corner, so a box is raised in depth by 2^-22 (4
+//!      steps of 2^-24) of its nearest corner's depth.
+//!    - *absolute*, on GL without clip control (every GLES adapter): wgpu
+//!      rewrites `z` as `2z − w` for GL's [−1, 1] clip range, and
+//!      `(2z − w) / w`, close to −1 for all but the nearest surfaces, keeps
+//!      only the absolute precision of numbers near 1 whatever the depth.
+//!      At reverse-Z depth `near / distance` = 0.08 / 500 m = 1.6e-4 one step
+//!      of 2^-24 is 4e-4 of the depth, four times the relative growth:
+//!      distant coplanar parts were missed on GL and not on Vulkan. On GL
+//!      boxes are raised by a further 2^-20 (16 steps). In distance that is
+//!      `offset · distance² / near`: 0.1 m at 100 m with near 0.1, 3 m at
+//!      500 m with near 0.08 (where GL's depth resolves 0.2 m).
+//!
+//!    The raise is added to clip z in the box vertex stage (z += offset · w),
+//!    which moves no box edge on screen.
+//!
+//! 2. **Depth extrapolated on triangles seen edge-on.** A triangle whose
+//!    plane nearly holds the eye projects to a sliver far thinner than a
+//!    pixel. Snapped to the rasteriser's sub-pixel grid it may still cover
+//!    the odd pixel centre, and its depth plane, ill-conditioned across the
+//!    sliver, is evaluated there far outside the triangle's own depths, or
+//!    is not a number at all. Measured on llvmpipe (two-cylinder-engine.glb,
+//!    frame 23 of its orbit): a sliver of 5e-4 square pixels whose vertices
+//!    lie at depths 1.18e-4 to 1.25e-4 (560 m) wrote 7.4e-4 (115 m) into a
+//!    pixel, in front of a surface that hides its whole box; 2 000 triangles
+//!    seen exactly edge-on wrote about 290 such pixels, some at depth 1 (a
+//!    NaN clamped). No box test can see such a fragment: it lies outside the
+//!    box. So the scene's fragment stage discards every fragment nearer than
+//!    the point where its pixel's ray enters its object's box
+//!    ([`FragmentLimit`]). Direct rendering, the reference and every mode
+//!    draw through that one stage, so the rule changes no comparison: it
+//!    only removes fragments that lie off the geometry.
+//!
+//! Why the two rules together suffice: at a pixel p inside an object's
+//! footprint, a fragment that survives lies at most at [`FragmentLimit`]'s
+//! depth: the entry depth of the object's box grown by half of
+//! [`BOX_GROWTH`] and raised by half of its box test's raise. The front face
+//! at p of any box test holding the object is the entry depth of a box at
+//! least as large, grown by all of [`BOX_GROWTH`] and raised by all of a
+//! raise at least as large: nearer by half the growth (5e-5 of the depth)
+//! and half the raise, each more than the rounding of either computation.
+//! The box test's footprint reaches at least 1e-4 of the distance beyond the
+//! object's (0.05 pixel at 800×600 and a 60° field of view), far more than
+//! sub-pixel snapping moves a fragment (1/512 pixel). Nothing rounds a
+//! surviving fragment of an object past its box test.
+
+use glam::{DMat3, DVec3, Vec4};
+
+use super::Resolution;
+use crate::bounds::Aabb;
+use crate::camera::Camera;
+
+/// Boxes are grown by this fraction of their distance from the eye before
+/// they are tested (rule 1, relative to the depth at the pixel).
+pub(crate) const BOX_GROWTH: f64 = 1e-4;
+
+/// Growth of the box that bounds fragments (rule 2): half of the box
+/// tests', as its raise is half of theirs, so a box test always lies in
+/// front of the bound.
+const FRAGMENT_GROWTH: f64 = BOX_GROWTH / 2.0;
+
+/// Raise of a tested box per unit of its nearest corner's depth (rule 1,
+/// relative to the largest depth of a triangle): 4 steps of 2^-24.
+const RAISE_PER_DEPTH: f64 = 1.0 / (1u32 << 22) as f64;
+
+/// The raise GL adds to every tested box (rule 1, absolute): 16 steps of
+/// 2^-24.
+const GL_RAISE: f64 = 1.0 / (1u32 << 20) as f64;
+
+/// The largest raise a box reaching depth 1 can get on any backend.
+const MAX_RAISE: f64 = GL_RAISE + RAISE_PER_DEPTH;
+
+/// The depth margins of one backend (rule 1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DepthMargins {
+    /// Added to every raise: the backend's absolute depth error.
+    absolute: f64,
+}
+
+impl DepthMargins {
+    pub fn for_backend(backend: wgpu::Backend) -> DepthMargins {
+        DepthMargins {
+            absolute: if backend == wgpu::Backend::Gl { GL_RAISE } else { 0.0 },
+        }
+    }
+
+    /// How much a box whose nearest corner lies at `nearest_depth` is raised
+    /// when it is tested.
+    fn raise(self, nearest_depth: f64) -> f64 {
+        self.absolute + RAISE_PER_DEPTH * nearest_depth
+    }
+}
+
+/// Eye-relative corners of a box grown for testing, as boxes.wgsl reads
+/// them; `min.w` holds the box's raise in depth.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub(super) struct QueryBox {
+    pub(super) min: Vec4,
+    pub(super) max: Vec4,
+}
+
+/// A box made ready for a depth test.
+pub(super) enum EyeBox {
+    /// It reaches the near plane or holds the eye: visible, untestable (its
+    /// projection is unbounded).
+    ReachesNear,
+    /// Grown by [`BOX_GROWTH`], eye-relative, with its raise.
+    Testable(QueryBox),
+}
+
+/// `b` relative to the eye, grown by `fraction` of its reach from the eye.
+fn grown_eye_relative(camera: &Camera, b: &Aabb, fraction: f64) -> (DVec3, DVec3) {
+    let (min, max) = (b.min - camera.eye, b.max - camera.eye);
+    let reach = min.abs().max(max.abs()).max_element();
+    let grow = DVec3::splat(fraction * reach + f64::MIN_POSITIVE);
+    (min - grow, max + grow)
+}
+
+/// Distance along the view direction of the nearest corner of the
+/// eye-relative box `min`..`max`, for a camera whose `view_rotation()` is
+/// `view`.
+fn nearest_distance(view: &DMat3, min: DVec3, max: DVec3) -> f64 {
+    Aabb::new(min, max)
+        .corners()
+        .iter()
+        .map(|&c| -(*view * c).z)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Prepares `b`, which must not lie outside `camera`'s frustum, for a depth
+/// test by `camera`, whose `view_rotation()` is `view` (computed once per
+/// batch by the caller).
+pub(super) fn eye_relative_box(camera: &Camera, view: &DMat3, margins: DepthMargins, b: &Aabb) -> EyeBox {
+    let (min, max) = grown_eye_relative(camera, b, BOX_GROWTH);
+    // The box reaches the near plane when a corner is nearer than it along
+    // the view direction (this also covers holding the eye). The raise
+    // lifts a corner at distance t to near / t + raise, which must stay
+    // below 1 (the near plane) or the corner would be clipped away: checked
+    // for the largest raise, which costs a test of a box within a millionth
+    // of the near distance beyond it.
+    let nearest = nearest_distance(view, min, max);
+    if nearest <= camera.near / (1.0 - MAX_RAISE) {
+        EyeBox::ReachesNear
+    } else {
+        EyeBox::Testable(QueryBox {
+            min: min.as_vec3().extend(margins.raise(camera.near / nearest) as f32),
+            max: max.as_vec3().extend(0.0),
+        })
+    }
+}
+
+/// The world direction of the ray through pixel centre (x, y) (framebuffer
+/// coordinates, centres at .5), scaled to view depth 1, is
+/// `x · per_x + y · per_y + constant`: the camera's part of every
+/// [`FragmentLimit`], as three vectors for the camera uniform.
+pub(super) fn pixel_rays(camera: &Camera, resolution: Resolution) -> [Vec4; 3] {
+    let f = 1.0 / (camera.fov_y / 2.0).tan();
+    let (w, h) = (f64::from(resolution.width), f64::from(resolution.height));
+    let (sx, sy) = (camera.aspect / f, 1.0 / f);
+    // In camera space the ray is ((2x / w − 1) · sx, (1 − 2y / h) · sy, −1).
+    let to_world = DMat3::from_quat(camera.rotation);
+    let (right, up, back) = (to_world.x_axis, to_world.y_axis, to_world.z_axis);
+    [
+        right * (2.0 * sx / w),
+        up * (-2.0 * sy / h),
+        -right * sx + up * sy - back,
+    ]
+    .map(|v| v.as_vec3().extend(0.0))
+}
+
+/// Where an object's fragments may lie (rule 2). For each world axis along
+/// which the eye lies outside the object's box, the face across that axis
+/// that faces the eye: the pixel ray d meets its plane (eye-relative
+/// coordinate `face`) at view depth t = face / d_axis, so at depth
+/// `near / t = d_axis · near / face`. `scale` holds `near / face` per axis
+/// (0 where the eye lies within the box's extent along that axis, which
+/// sets no bound); the nearest of the three depths is where the ray enters
+/// the box. scene.wgsl discards fragments beyond it plus `raise`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FragmentLimit {
+    scale: [f32; 3],
+    raise: f32,
+}
+
+impl FragmentLimit {
+    /// The limit for an object with world bounds `bounds`, seen by `camera`
+    /// (whose `view_rotation()` is `view`) on a backend with `margins`.
+    pub fn new(camera: &Camera, view: &DMat3, margins: DepthMargins, bounds: &Aabb) -> FragmentLimit {
+        let (min, max) = grown_eye_relative(camera, bounds, FRAGMENT_GROWTH);
+        let scale = [0, 1, 2].map(|axis| {
+            if min[axis] > 0.0 {
+                camera.near / min[axis]
+            } else if max[axis] < 0.0 {
+                camera.near / max[axis]
+            } else {
+                0.0
+            }
+        });
+        // Half the raise the object's own box test gets (a box reaching the
+        // near plane is never tested: any finite raise will do).
+        let nearest = nearest_distance(view, min, max).max(camera.near);
+        FragmentLimit {
+            scale: scale.map(|s| s as f32),
+            raise: (margins.raise(camera.near / nearest) / 2.0) as f32,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::look_rotation;
+
+    /// scene.wgsl's depth for "no face across this axis": depth is at most 1.
+    const NO_LIMIT: f64 = 2.0;
+
+    fn camera() -> Camera {
+        Camera {
+            eye: DVec3::new(3.0, 2.0, 10.0),
+            rotation: look_rotation(DVec3::new(-0.3, -0.2, -1.0), DVec3::Y),
+            fov_y: 60f64.to_radians(),
+            near: 0.1,
+            aspect: 4.0 / 3.0,
+        }
+    }
+
+    impl FragmentLimit {
+        /// The depth limit for the pixel ray `ray` (world axes, view depth
+        /// 1), as scene.wgsl computes it.
+        fn at(&self, ray: glam::Vec3) -> f64 {
+            let depths = [0, 1, 2].map(|i| {
+                if self.scale[i] == 0.0 {
+                    NO_LIMIT
+                } else {
+                    f64::from(self.scale[i] * ray[i])
+                }
+            });
+            depths.into_iter().fold(NO_LIMIT, f64::min) + f64::from(self.raise)
+        }
+    }
+
+    /// The ray through pixel centre (x, y) in world axes, view depth 1, from
+    /// the camera's field of view alone.
+    fn ray(cam: &Camera, r: Resolution, x: f64, y: f64) -> DVec3 {
+        let t = (cam.fov_y / 2.0).tan();
+        let ndc = (2.0 * x / f64::from(r.width) - 1.0, 1.0 - 2.0 * y / f64::from(r.height));
+        cam.rotation * DVec3::new(ndc.0 * cam.aspect * t, ndc.1 * t, -1.0)
+    }
+
+    /// Depth (near / view distance) where `ray` enters `b`, by a slab test in
+    /// f64; `None` when it misses.
+    fn entry_depth(cam: &Camera, b: &Aabb, d: DVec3) -> Option<f64> {
+        let (lo, hi) = (b.min - cam.eye, b.max - cam.eye);
+        let (mut enter, mut exit) = (0.0f64, f64::INFINITY);
+        for i in 0..3 {
+            let (a, c) = (lo[i] / d[i], hi[i] / d[i]);
+            enter = enter.max(a.min(c));
+            exit = exit.min(a.max(c));
+        }
+        (enter <= exit).then(|| cam.near / enter)
+    }
+
+    #[test]
+    fn pixel_rays_match_the_projection() {
+        let cam = camera();
+        let r = Resolution::DEFAULT;
+        let [per_x, per_y, constant] = pixel_rays(&cam, r);
+        for (x, y) in [(0.5, 0.5), (400.5, 300.5), (799.5, 12.5)] {
+            let got = (per_x * x as f32 + per_y * y as f32 + constant).truncate().as_dvec3();
+            assert!((got - ray(&cam, r, x, y)).length() < 1e-6, "({x}, {y})");
+        }
+    }
+
+    #[test]
+    fn fragment_limit_is_the_depth_where_each_pixel_ray_enters_the_box() {
+        let cam = camera();
+        let r = Resolution::DEFAULT;
+        let view = cam.view_rotation();
+        let b = Aabb::new(DVec3::new(-2.0, -1.0, -6.0), DVec3::new(1.0, 3.0, -2.0));
+        let margins = DepthMargins::for_backend(wgpu::Backend::Gl);
+        let limit = FragmentLimit::new(&cam, &view, margins, &b);
+        let (min, max) = grown_eye_relative(&cam, &b, FRAGMENT_GROWTH);
+        let grown = Aabb::new(min + cam.eye, max + cam.eye);
+        let mut hits = 0;
+        for y in (0..r.height).step_by(7) {
+            for x in (0..r.width).step_by(7) {
+                let d = ray(&cam, r, f64::from(x) + 0.5, f64::from(y) + 0.5);
+                if let Some(depth) = entry_depth(&cam, &b, d) {
+                    hits += 1;
+                    let got = limit.at(d.as_vec3());
+                    let want =
+                        entry_depth(&cam, &grown, d).expect("the grown box holds the box") + f64::from(limit.raise);
+                    assert!(got > depth, "({x}, {y}): {got} ≤ {depth}");
+                    assert!((got - want).abs() <= 1e-6 * want, "({x}, {y}): {got} against {want}");
+                }
+            }
+        }
+        assert!(hits > 200, "the box must cover a good part of the view: {hits}");
+    }
+
+    #[test]
+    fn fragment_limit_is_open_when_the_eye_is_inside_the_box() {
+        let cam = camera();
+        let around = Aabb::new(cam.eye - DVec3::ONE, cam.eye + DVec3::ONE);
+        let margins = DepthMargins::for_backend(wgpu::Backend::Vulkan);
+        let limit = FragmentLimit::new(&cam, &cam.view_rotation(), margins, &around);
+        assert!(limit.at(ray(&cam, Resolution::DEFAULT, 400.5, 300.5).as_vec3()) >= NO_LIMIT);
+    }
+
+    #[test]
+    fn boxes_are_raised_by_the_backend_margins() {
+        let cam = camera();
+        let view = cam.view_rotation();
+        let b = Aabb::new(DVec3::new(-2.0, -1.0, -60.0), DVec3::new(1.0, 3.0, -20.0));
+        let raise = |backend| match eye_relative_box(&cam, &view, DepthMargins::for_backend(backend), &b) {
+            EyeBox::Testable(q) => f64::from(q.min.w),
+            EyeBox::ReachesNear => panic!("the box lies far beyond the near plane"),
+        };
+        let nearest_depth = cam.near / nearest_distance(&view, b.min - cam.eye, b.max - cam.eye);
+        let relative = raise(wgpu::Backend::Vulkan);
+        assert!(
+            (relative / (RAISE_PER_DEPTH * nearest_depth) - 1.0).abs() < 1e-3,
+            "{relative}"
+        );
+        assert!((raise(wgpu::Backend::Gl) - relative - GL_RAISE).abs() < 1e-12);
+    }
+}
