@@ -27,10 +27,14 @@
 //!      only the absolute precision of numbers near 1 whatever the depth.
 //!      At reverse-Z depth `near / distance` = 0.08 / 500 m = 1.6e-4 one step
 //!      of 2^-24 is 4e-4 of the depth, four times the relative growth:
-//!      distant coplanar parts were missed on GL and not on Vulkan. On GL
-//!      boxes are raised by a further 2^-20 (16 steps). In distance that is
-//!      `offset · distance² / near`: 0.1 m at 100 m with near 0.1, 3 m at
-//!      500 m with near 0.08 (where GL's depth resolves 0.2 m).
+//!      distant coplanar parts were missed on GL and not on Vulkan. A
+//!      fragment takes about two such roundings (the subtraction and the
+//!      division), so two coplanar surfaces differ by at most a few steps
+//!      (measured: at most 5e-8, under one step, on den-haag.obj). On GL
+//!      boxes are raised by a further 2^-22 (4 steps; half of it separates
+//!      the box test from the fragment bound of rule 2). In distance that is
+//!      `raise · distance² / near`: 2.4 cm at 100 m with near 0.1, 0.75 m
+//!      at 500 m with near 0.08 (where one step of GL's depth is 0.19 m).
 //!
 //!    The raise is added to clip z in the box vertex stage (z += offset · w),
 //!    which moves no box edge on screen.
@@ -84,9 +88,9 @@ const FRAGMENT_GROWTH: f64 = BOX_GROWTH / 2.0;
 /// relative to the largest depth of a triangle): 4 steps of 2^-24.
 const RAISE_PER_DEPTH: f64 = 1.0 / (1u32 << 22) as f64;
 
-/// The raise GL adds to every tested box (rule 1, absolute): 16 steps of
+/// The raise GL adds to every tested box (rule 1, absolute): 4 steps of
 /// 2^-24.
-const GL_RAISE: f64 = 1.0 / (1u32 << 20) as f64;
+const GL_RAISE: f64 = 1.0 / (1u32 << 22) as f64;
 
 /// The largest raise a box reaching depth 1 can get on any backend.
 const MAX_RAISE: f64 = GL_RAISE + RAISE_PER_DEPTH;

@@ -1,11 +1,12 @@
 //! The built-in matrix of hard cases: scenes and cameras where occlusion
 //! cullers are known to fail (the near plane, an eye inside a box, huge
 //! coordinates, degenerate boxes, extreme fields of view, vertical views,
-//! no temporal coherence).
+//! no temporal coherence, parts flush with distant walls, triangles seen
+//! edge-on).
 //!
-//! Every case is a small seeded town (a ground slab, a 5×5 grid of closed
-//! buildings, crates in the streets) plus the objects and cameras its
-//! difficulty needs. Units are metres, +Y up. Geometry is written in world
+//! Most cases are a small seeded town (a ground slab, a 5×5 grid of closed
+//! buildings, crates in the streets) plus the objects and cameras their
+//! difficulty needs; the last two, found on real models, build their own. Units are metres, +Y up. Geometry is written in world
 //! coordinates in f64 and goes through [`SceneBuilder`] like any loaded
 //! model, so the translated cases also exercise the loaders' re-centring.
 
@@ -242,6 +243,8 @@ pub fn all() -> Vec<StressCase> {
         vertical(),
         occluder_crowd(),
         teleport(),
+        distant_plaques(),
+        edge_on(),
     ]);
     cases
 }
@@ -543,6 +546,95 @@ fn teleport() -> StressCase {
         })
         .collect();
     Draft::new(town(), shots).case("teleport", "a random place and direction every frame")
+}
+
+/// Buildings with plaques set flush into their walls (parts sharing a face
+/// with their building, as CityJSON building parts do), seen from 1 km with
+/// near 0.08. Depth there is 8e-5, where GL keeps only absolute precision:
+/// a step of 2^-24 is 7e-4 of the depth, seven times the boxes' relative
+/// growth. A plaque covers a few pixels and owns those where its rounding
+/// beats the wall's; its box test must pass at one of them at least
+/// (found on den-haag.obj: 36 objects missed over 60 frames on GL).
+fn distant_plaques() -> StressCase {
+    let mut rng = Rng::new(SEED ^ 4);
+    let mut shapes = Vec::new();
+    let (side, pitch) = (20.0, 30.0);
+    for i in -4..4 {
+        for j in -4..4 {
+            let base = v(f64::from(i) * pitch, 0.0, f64::from(j) * pitch);
+            let height = rng.range(10.0, 30.0);
+            shapes.push(cuboid_shape(
+                format!("building {i},{j}"),
+                base,
+                base + v(side, height, side),
+            ));
+            for k in 0..12 {
+                let size = rng.range(1.0, 3.0);
+                let low = base + v(rng.range(0.0, side - size), rng.range(0.0, height - size), 0.0);
+                let low = v(low.x, low.y, base.z + rng.range(0.0, side - size));
+                // Inside the building, one face on one of its four walls.
+                let min = match rng.int(0, 3) {
+                    0 => v(base.x, low.y, low.z),
+                    1 => v(base.x + side - size, low.y, low.z),
+                    2 => v(low.x, low.y, base.z),
+                    _ => v(low.x, low.y, base.z + side - size),
+                };
+                shapes.push(cuboid_shape(
+                    format!("plaque {i},{j},{k}"),
+                    min,
+                    min + DVec3::splat(size),
+                ));
+            }
+        }
+    }
+    let shots = (0..8)
+        .map(|k| {
+            let angle = 0.4 * f64::from(k);
+            at(v(1000.0 * angle.cos(), 300.0, 1000.0 * angle.sin()), v(0.0, 10.0, 0.0))
+        })
+        .collect();
+    Draft {
+        near: 0.08,
+        ..Draft::new(shapes, shots)
+    }
+    .case(
+        "distant-plaques",
+        "parts flush with their buildings' walls, seen from 1 km with near 0.08",
+    )
+}
+
+/// 2 000 single triangles whose planes hold the eye, between 105 and 375 m
+/// away, behind a screen 95 m away that hides all of their boxes. Each
+/// projects to a line; rounded to f32 it becomes a sliver the rasteriser
+/// may still sample, with its depth extrapolated anywhere, even NaN (found
+/// on two-cylinder-engine.glb: a part in one pixel, 115 m in front of
+/// where its triangle lies). The cameras only turn, so the triangles stay
+/// edge-on.
+fn edge_on() -> StressCase {
+    let mut rng = Rng::new(SEED ^ 5);
+    let mut shapes = vec![cuboid_shape(
+        "screen".into(),
+        v(-80.0, -60.0, -96.0),
+        v(80.0, 60.0, -95.0),
+    )];
+    for k in 0..2000 {
+        let mut ray = || v(rng.range(-0.35, 0.35), rng.range(-0.25, 0.25), -1.0) * rng.range(150.0, 250.0);
+        let (a, b) = (ray(), ray());
+        let c = a * rng.range(0.35, 1.5) + b * rng.range(0.35, 1.5);
+        let mut soup = TriangleSoup::default();
+        soup.append(&[a, b, c], [0, 1, 2]);
+        shapes.push(Shape {
+            name: format!("edge-on {k}"),
+            soup,
+        });
+    }
+    let shots = [v(0.0, 0.0, -1.0), v(0.1, 0.05, -1.0), v(-0.12, -0.04, -1.0)]
+        .map(|forward| looking(DVec3::ZERO, forward))
+        .to_vec();
+    Draft::new(shapes, shots).case(
+        "edge-on",
+        "2000 triangles seen exactly edge-on behind a screen that hides their boxes",
+    )
 }
 
 #[cfg(test)]
