@@ -8,6 +8,10 @@
 //
 // mark_visible_objects: sets bit (id - 1) of a bitset for every object id in
 // the reference id target, i.e. the objects that own at least one pixel.
+//
+// attribute_wrong_pixels: for one mode, charges each wrong pixel to the
+// object that owns it in the reference, and keeps the first such pixel of
+// each object (row-major), so the results can name what a mode missed.
 
 @group(0) @binding(0) var reference_depth: texture_2d<f32>;
 @group(0) @binding(1) var mode_depth: texture_2d<f32>;
@@ -61,4 +65,28 @@ fn copy_depth(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     depth_out[id.y * size.x + id.x] = textureLoad(depth_in, vec2<i32>(id.xy), 0).r;
+}
+
+@group(0) @binding(2) var owners: texture_2d<u32>;
+// Two words per object: wrong pixels, and the complement of the row-major
+// index of its first wrong pixel (a buffer cleared to 0 then needs no fill:
+// the largest complement is the smallest index).
+@group(0) @binding(3) var<storage, read_write> per_object: array<atomic<u32>>;
+
+@compute @workgroup_size(8, 8)
+fn attribute_wrong_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(reference_depth);
+    if (id.x >= size.x || id.y >= size.y) {
+        return;
+    }
+    let p = vec2<i32>(id.xy);
+    let object = textureLoad(owners, p, 0).r;
+    let reference = textureLoad(reference_depth, p, 0).r;
+    let mode = textureLoad(mode_depth, p, 0).r;
+    if (object == 0u || bitcast<u32>(reference) == bitcast<u32>(mode)) {
+        return;
+    }
+    let slot = 2u * (object - 1u);
+    atomicAdd(&per_object[slot], 1u);
+    atomicMax(&per_object[slot + 1u], ~(id.y * size.x + id.x));
 }

@@ -10,6 +10,7 @@
 //! always runs right after the reference (whose work warms caches). Warm-up
 //! frames run the path's first frames and are not recorded.
 
+use std::collections::BTreeSet;
 use std::time::{Duration, Instant};
 
 use crate::camera::Camera;
@@ -22,11 +23,11 @@ use crate::gpu::{
     RenderTargets, Resolution, SceneRenderer,
 };
 use crate::hierarchy::{Hierarchy, HierarchyParams};
-use crate::measure::{ErrorMeter, FrameStats, ModeDescription, summarize};
+use crate::measure::{ErrorMeter, FrameStats, MissedObject, ModeDescription, ObjectError, summarize};
 use crate::object_set::ObjectSet;
 use crate::report::{
-    PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary, SkippedMode, Summary,
-    SweepSummary, ToolInfo, prepare_output, write_results,
+    MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary, SkippedMode,
+    Summary, SweepSummary, ToolInfo, prepare_output, write_results,
 };
 use crate::scene::{LoadOptions, Scene, SceneError};
 use crate::world::World;
@@ -42,6 +43,9 @@ pub struct RunOptions {
 pub struct RunOutput {
     /// Frame-major, modes in the order given.
     pub rows: Vec<FrameStats>,
+    /// What the modes got wrong, frame by frame (empty when every mode was
+    /// exact or error was not measured).
+    pub missed: Vec<MissedObject>,
     pub upload_ms: f64,
 }
 
@@ -76,11 +80,14 @@ pub fn run(
         let frame_rows = session.frame(frame, &camera, world, cullers, step as usize);
         if recording {
             rows.extend(frame_rows);
+        } else {
+            session.missed.clear();
         }
         progress(step + 1, total);
     }
     Ok(RunOutput {
         rows,
+        missed: std::mem::take(&mut session.missed),
         upload_ms: session.upload_ms,
     })
 }
@@ -102,6 +109,10 @@ pub struct Session<'a> {
     previous: Vec<Option<PreviousFrame>>,
     options: RunOptions,
     pub upload_ms: f64,
+    /// What the modes got wrong in the frames recorded so far.
+    pub missed: Vec<MissedObject>,
+    /// Scratch for [`ErrorMeter::attribute_wrong_pixels`].
+    object_errors: Vec<ObjectError>,
 }
 
 impl<'a> Session<'a> {
@@ -139,6 +150,8 @@ impl<'a> Session<'a> {
             previous: vec![None; modes],
             options: *options,
             upload_ms,
+            missed: Vec::new(),
+            object_errors: Vec::new(),
             renderer,
             targets,
         })
@@ -270,7 +283,11 @@ impl<'a> Session<'a> {
                 if let (Some(wrong), Some(visible)) = (&wrong, &visible) {
                     row.error_pixels = Some(wrong[k].wrong_pixels);
                     row.max_depth_error = Some(f64::from(wrong[k].max_difference));
-                    row.missed_objects = Some(visible.count_missing_from(&self.drawn[k]) as u64);
+                    let missed = visible.count_missing_from(&self.drawn[k]) as u64;
+                    row.missed_objects = Some(missed);
+                    if wrong[k].wrong_pixels > 0 || missed > 0 {
+                        self.name_what_was_missed(k, &row, visible, &world.scene);
+                    }
                 }
                 self.previous[k] = Some(PreviousFrame {
                     frame_ms: row.frame_ms,
@@ -281,12 +298,54 @@ impl<'a> Session<'a> {
             .collect()
     }
 
+    /// Appends to [`Session::missed`] what mode `k` got wrong in this frame
+    /// (`row`): the objects the reference shows (`visible`) that it did not
+    /// draw, and the objects owning pixels it got wrong.
+    fn name_what_was_missed(&mut self, k: usize, row: &FrameStats, visible: &ObjectSet, scene: &Scene) {
+        let meter = self.meter.as_mut().expect("errors were measured");
+        meter.attribute_wrong_pixels(self.gpu, &self.targets, k, &mut self.object_errors);
+        let drawn = &self.drawn[k];
+        let errors = &self.object_errors;
+        let objects: BTreeSet<u32> = visible
+            .iter()
+            .filter(|&o| !drawn.contains(o))
+            .chain(errors.iter().map(|e| e.object))
+            .collect();
+        for object in objects {
+            // `errors` ascends by object id.
+            let error = errors
+                .binary_search_by_key(&object, |e| e.object)
+                .ok()
+                .map(|i| errors[i]);
+            self.missed.push(MissedObject {
+                mode: row.mode.clone(),
+                frame: row.frame,
+                object,
+                name: scene.objects[object as usize].name.clone(),
+                drawn: drawn.contains(object),
+                wrong_pixels: error.map_or(0, |e| e.wrong_pixels),
+                first_x: error.map(|e| e.first_pixel.0),
+                first_y: error.map(|e| e.first_pixel.1),
+            });
+        }
+    }
+
     /// The reference depth of the last frame, row-major from the top-left
     /// pixel; `None` when the session renders no reference.
     pub fn reference_depth(&mut self) -> Option<Vec<f32>> {
+        self.depth(None)
+    }
+
+    /// The depth mode `k` drew in the last frame, as
+    /// [`Session::reference_depth`]; `None` without a reference.
+    pub fn mode_depth(&mut self, k: usize) -> Option<Vec<f32>> {
+        self.depth(Some(k))
+    }
+
+    fn depth(&mut self, mode: Option<usize>) -> Option<Vec<f32>> {
         let meter = self.meter.as_mut()?;
         let mut depth = Vec::new();
-        meter.read_reference_depth(self.gpu, &self.targets, &mut depth);
+        meter.read_depth(self.gpu, &self.targets, mode, &mut depth);
         Some(depth)
     }
 }
@@ -453,7 +512,8 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
             key: s.key.clone(),
             values: s.values.clone(),
         }),
+        missed: MissedSummary::of(&output.missed),
     };
-    let files = write_results(&plan.out, &summary, &output.rows)?;
+    let files = write_results(&plan.out, &summary, &output.rows, &output.missed)?;
     Ok(BenchOutcome { summary, files })
 }

@@ -198,6 +198,11 @@ struct RenderArgs {
     /// Colour pixels by depth complexity (surfaces drawn over them) instead of shading.
     #[arg(long)]
     heat: bool,
+    /// Compare the frame with direct rendering: paint the pixels whose depth
+    /// differs in magenta and outline the boxes of the objects the mode
+    /// missed, and list them.
+    #[arg(long)]
+    show_missed: bool,
     /// Render size [default: 800x600].
     #[arg(long, value_name = "WxH")]
     resolution: Option<Resolution>,
@@ -375,12 +380,18 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
     })?;
     bar.finish_and_clear();
     print!("{}", occlu::report::render_markdown(&outcome.summary));
+    let files = &outcome.files;
+    let missed = files
+        .missed_csv
+        .as_ref()
+        .map(|p| format!(", {}", p.display()))
+        .unwrap_or_default();
     eprintln!(
-        "results: {}, {}, {} and {} charts in {}",
-        outcome.files.report_md.display(),
-        outcome.files.summary_json.display(),
-        outcome.files.frames_csv.display(),
-        outcome.files.charts.len(),
+        "results: {}, {}, {}{missed} and {} charts in {}",
+        files.report_md.display(),
+        files.summary_json.display(),
+        files.frames_csv.display(),
+        files.charts.len(),
         plan.out.display()
     );
     Ok(())
@@ -484,6 +495,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         resolution: args.resolution.unwrap_or(Resolution::DEFAULT),
         overview: args.overview,
         heat: args.heat,
+        show_missed: args.show_missed,
     };
     let picture = occlu::picture::render(&gpu, &mut world, &path, culler, &options)?;
     occlu::report::write_png(&args.output, picture.width, picture.height, &picture.rgb)?;
@@ -496,6 +508,26 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         args.frame,
         picture.culled_in_frustum
     );
+    if let Some(wrong) = &picture.wrong {
+        eprintln!(
+            "{} pixels differ from direct rendering (magenta); {} objects got wrong (boxes outlined)",
+            wrong.pixels,
+            wrong.objects.len()
+        );
+        for m in &wrong.objects {
+            let first = match (m.first_x, m.first_y) {
+                (Some(x), Some(y)) => format!(", first at ({x}, {y})"),
+                _ => String::new(),
+            };
+            let drawn = if m.drawn { "drawn" } else { "not drawn" };
+            eprintln!(
+                "  object {} '{}': {drawn}, {} wrong pixels{first}",
+                m.object,
+                occlu::text::one_line(&m.name),
+                m.wrong_pixels
+            );
+        }
+    }
     Ok(())
 }
 

@@ -8,7 +8,10 @@
 //! (the IOC paper's Figure 1). With `overview`, a bird's-eye view of the
 //! whole scene is placed beside it, with the mode's frustum in red and the
 //! boxes of objects inside the frustum that the mode did not draw in yellow,
-//! as the papers' figures mark culled bounding volumes.
+//! as the papers' figures mark culled bounding volumes. With `show_missed`,
+//! the frame is compared with direct rendering: pixels whose depth differs
+//! turn magenta and the boxes of the objects the mode got wrong are
+//! outlined in magenta, so the picture shows a culling bug.
 
 use glam::DVec3;
 
@@ -20,6 +23,7 @@ use crate::cull::Culler;
 use crate::gpu::{
     Draws, GpuContext, GpuError, LinePainter, LineVertex, RenderTargets, Resolution, picture_target, read_rgb,
 };
+use crate::measure::MissedObject;
 use crate::scene::Scene;
 use crate::world::World;
 
@@ -29,6 +33,15 @@ pub struct PictureOptions {
     pub resolution: Resolution,
     pub overview: bool,
     pub heat: bool,
+    pub show_missed: bool,
+}
+
+/// What a mode got wrong in the pictured frame (with `show_missed`).
+pub struct WrongInFrame {
+    /// Pixels whose depth differs from direct rendering.
+    pub pixels: u64,
+    /// The objects missed or wrong there (missed.csv's rows for the frame).
+    pub objects: Vec<MissedObject>,
 }
 
 /// An RGB image and what it shows.
@@ -40,6 +53,8 @@ pub struct Picture {
     pub drawn: usize,
     /// Objects inside the frustum it did not draw (the yellow boxes).
     pub culled_in_frustum: usize,
+    /// With `show_missed`: what it got wrong.
+    pub wrong: Option<WrongInFrame>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -62,6 +77,7 @@ const LEAD_IN: u32 = 2;
 
 const YELLOW: [f32; 3] = [1.0, 0.85, 0.0];
 const RED: [f32; 3] = [0.9, 0.1, 0.1];
+const MAGENTA: [f32; 3] = [1.0, 0.0, 1.0];
 
 pub fn render(
     gpu: &GpuContext,
@@ -80,15 +96,24 @@ pub fn render(
     let run = RunOptions {
         warmup: 0,
         resolution,
-        measure_error: false,
+        measure_error: options.show_missed,
     };
     let mut cullers = [culler];
-    let mut session = Session::new(gpu, &world.scene, 1, cullers[0].needs_reference(), &run)?;
+    let needs_reference = options.show_missed || cullers[0].needs_reference();
+    let mut session = Session::new(gpu, &world.scene, 1, needs_reference, &run)?;
     let camera = path.camera(options.frame, resolution.aspect());
+    let mut wrong_pixels = 0;
     for f in options.frame.saturating_sub(LEAD_IN)..=options.frame {
         world.advance(f);
-        session.frame(f, &path.camera(f, resolution.aspect()), world, &mut cullers, 0);
+        let rows = session.frame(f, &path.camera(f, resolution.aspect()), world, &mut cullers, 0);
+        wrong_pixels = rows[0].error_pixels.unwrap_or(0);
     }
+    // Only the pictured frame's: the lead-in frames are not shown.
+    session.missed.retain(|m| m.frame == options.frame);
+    let wrong = options.show_missed.then(|| WrongInFrame {
+        pixels: wrong_pixels,
+        objects: std::mem::take(&mut session.missed),
+    });
     let scene = &world.scene;
     let drawn: Vec<u32> = session.drawn[0].iter().collect();
     let frustum = camera.frustum();
@@ -100,7 +125,7 @@ pub fn render(
         .map(|(_, o)| &o.bounds)
         .collect();
 
-    let main = if options.heat {
+    let mut main = if options.heat {
         let target = picture_target(gpu, resolution);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let view = target.create_view(&Default::default());
@@ -111,6 +136,28 @@ pub fn render(
     } else {
         read_rgb(gpu, &session.targets.color_texture, resolution)
     };
+    if let Some(wrong) = &wrong {
+        paint_wrong_pixels(&mut session, &mut main);
+        // The frame's camera is still in the uniform the lines are drawn with.
+        let mut lines = Vec::new();
+        for m in &wrong.objects {
+            box_lines(
+                &scene.objects[m.object as usize].bounds,
+                camera.eye,
+                MAGENTA,
+                &mut lines,
+            );
+        }
+        let target = picture_target(gpu, resolution);
+        let view = target.create_view(&Default::default());
+        LinePainter::new(gpu, session.renderer.camera_uniform()).draw(gpu, &view, &lines);
+        let outlines = read_rgb(gpu, &target, resolution);
+        for (pixel, line) in main.chunks_mut(3).zip(outlines.chunks(3)) {
+            if line != [0, 0, 0] {
+                pixel.copy_from_slice(line);
+            }
+        }
+    }
 
     let (width, rgb) = if options.overview {
         let above = overview_camera(scene, resolution);
@@ -151,7 +198,21 @@ pub fn render(
         rgb,
         drawn: drawn.len(),
         culled_in_frustum: culled.len(),
+        wrong,
     })
+}
+
+/// Paints magenta the pixels of `rgb` (the pictured frame) whose depth in
+/// the session's only mode differs from the reference's in any bit.
+fn paint_wrong_pixels(session: &mut Session, rgb: &mut [u8]) {
+    let (Some(reference), Some(mode)) = (session.reference_depth(), session.mode_depth(0)) else {
+        return;
+    };
+    for ((pixel, r), m) in rgb.chunks_mut(3).zip(&reference).zip(&mode) {
+        if r.to_bits() != m.to_bits() {
+            pixel.copy_from_slice(&[255, 0, 255]);
+        }
+    }
 }
 
 /// Straight down on the whole scene, north (−Z) up, far enough that its

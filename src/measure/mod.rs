@@ -5,7 +5,7 @@ mod summary;
 
 use serde::{Deserialize, Serialize};
 
-pub use reference::{DepthError, ErrorMeter};
+pub use reference::{DepthError, ErrorMeter, ObjectError};
 pub use summary::{Distribution, ModeDescription, ModeSummary, summarize};
 
 /// One row of frames.csv: one mode, one frame. Columns are in field order.
@@ -64,6 +64,27 @@ pub struct FrameStats {
     pub missed_objects: Option<u64>,
     /// Objects visible in the reference frame (the oracle's draw count).
     pub visible_objects: Option<u64>,
+}
+
+/// One row of missed.csv: an object a mode got wrong in one frame, so a
+/// user can find it. Written for every object the reference shows that the
+/// mode did not draw, and for every object that owns pixels whose depth the
+/// mode got wrong.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MissedObject {
+    pub mode: String,
+    pub frame: u32,
+    /// Index of the object in the scene (as `occlu info --json` lists them).
+    pub object: u32,
+    pub name: String,
+    /// Whether the mode drew it (its pixels are wrong all the same).
+    pub drawn: bool,
+    /// Pixels it owns in the reference whose depth the mode got wrong.
+    pub wrong_pixels: u64,
+    /// The first of them, row-major from the top left; empty when there is
+    /// none (a missed object hidden by a coplanar twin of equal depth).
+    pub first_x: Option<u32>,
+    pub first_y: Option<u32>,
 }
 
 impl FrameStats {

@@ -5,6 +5,8 @@
 //! reference visible set). After every mode has rendered, one compute pass
 //! per mode counts the pixels whose depth differs from the reference in any
 //! bit and finds the largest difference, and one read-back returns them all.
+//! Where a mode got pixels wrong, one more pass charges them to the objects
+//! that own them in the reference ([`ErrorMeter::attribute_wrong_pixels`]).
 
 use crate::gpu::{GpuContext, Readback, RenderTargets, SceneRenderer};
 use crate::object_set::ObjectSet;
@@ -26,9 +28,11 @@ pub struct ErrorMeter {
     slot_stride: u64,
     words: Vec<u32>,
     copy_depth: wgpu::ComputePipeline,
-    depth_group: wgpu::BindGroup,
+    /// The reference depth's, then each mode's.
+    depth_groups: Vec<wgpu::BindGroup>,
     depth_values: wgpu::Buffer,
     depth_readback: Readback,
+    attribute: Attribution,
 }
 
 /// How one mode's depth differs from the reference in one frame.
@@ -39,6 +43,24 @@ pub struct DepthError {
     /// The largest |depth − reference depth| over the frame (reverse-Z depth,
     /// `near / distance`); 0 when no pixel differs.
     pub max_difference: f32,
+}
+
+/// Wrong pixels of one mode charged to one object of the reference.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ObjectError {
+    pub object: u32,
+    pub wrong_pixels: u64,
+    /// The first wrong pixel of the object, row-major from the top left.
+    pub first_pixel: (u32, u32),
+}
+
+/// The pass behind [`ErrorMeter::attribute_wrong_pixels`]: two words per
+/// object (attribute_wrong_pixels in error.wgsl), one bind group per mode.
+struct Attribution {
+    pipeline: wgpu::ComputePipeline,
+    groups: Vec<wgpu::BindGroup>,
+    per_object: wgpu::Buffer,
+    readback: Readback,
 }
 
 /// Bytes of one mode's [`DepthError`] on the GPU: two u32 atomics.
@@ -120,18 +142,51 @@ impl ErrorMeter {
         let copy_depth = pipeline("copy_depth");
         let depth_bytes = targets.resolution.pixels() * 4;
         let depth_values = storage("reference depth values", depth_bytes);
-        let depth_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("copy depth"),
-            layout: &copy_depth.get_bind_group_layout(0),
-            entries: &[
-                texture(0, &targets.reference_depth),
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: depth_values.as_entire_binding(),
-                },
-            ],
-        });
+        let depth_groups = std::iter::once(&targets.reference_depth)
+            .chain(&targets.mode_depths)
+            .map(|depth| {
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("copy depth"),
+                    layout: &copy_depth.get_bind_group_layout(0),
+                    entries: &[
+                        texture(0, depth),
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: depth_values.as_entire_binding(),
+                        },
+                    ],
+                })
+            })
+            .collect();
+        let attribute = pipeline("attribute_wrong_pixels");
+        let per_object_bytes = objects as u64 * 8;
+        let per_object = storage("wrong pixels per object", per_object_bytes);
+        let attribution = Attribution {
+            groups: targets
+                .mode_depths
+                .iter()
+                .map(|depth| {
+                    device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("attribute wrong pixels"),
+                        layout: &attribute.get_bind_group_layout(0),
+                        entries: &[
+                            texture(0, &targets.reference_depth),
+                            texture(1, depth),
+                            texture(2, &targets.reference_ids),
+                            wgpu::BindGroupEntry {
+                                binding: 3,
+                                resource: per_object.as_entire_binding(),
+                            },
+                        ],
+                    })
+                })
+                .collect(),
+            pipeline: attribute,
+            readback: Readback::new(gpu, "wrong pixels per object readback", per_object_bytes),
+            per_object,
+        };
         ErrorMeter {
+            attribute: attribution,
             all_objects: (0..objects as u32).collect(),
             mark_visible,
             visible_group,
@@ -144,7 +199,7 @@ impl ErrorMeter {
             slot_stride,
             words: Vec::new(),
             copy_depth,
-            depth_group,
+            depth_groups,
             depth_readback: Readback::new(gpu, "reference depth readback", depth_bytes),
             depth_values,
         }
@@ -206,13 +261,57 @@ impl ErrorMeter {
             .collect()
     }
 
-    /// The current reference depth, row-major from the top-left pixel.
-    pub fn read_reference_depth(&mut self, gpu: &GpuContext, targets: &RenderTargets, out: &mut Vec<f32>) {
+    /// Charges mode `mode`'s wrong pixels of the last frame to the objects
+    /// that own them in the reference: one entry per such object, by
+    /// object id, into `out`. A pixel the reference leaves empty belongs to
+    /// no object and is not charged.
+    pub fn attribute_wrong_pixels(
+        &mut self,
+        gpu: &GpuContext,
+        targets: &RenderTargets,
+        mode: usize,
+        out: &mut Vec<ObjectError>,
+    ) {
+        let a = &mut self.attribute;
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&a.per_object, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&a.pipeline);
+            pass.set_bind_group(0, &a.groups[mode], &[]);
+            dispatch_per_pixel(&mut pass, targets);
+        }
+        let bytes = a.per_object.size();
+        a.readback.copy(&mut encoder, &a.per_object, 0, 0, bytes);
+        gpu.queue.submit([encoder.finish()]);
+        a.readback.read(gpu, bytes, &mut self.words);
+        let width = targets.resolution.width;
+        out.clear();
+        out.extend(
+            self.words
+                .chunks_exact(2)
+                .enumerate()
+                .filter(|(_, w)| w[0] > 0)
+                .map(|(object, w)| {
+                    let first = !w[1];
+                    ObjectError {
+                        object: object as u32,
+                        wrong_pixels: u64::from(w[0]),
+                        first_pixel: (first % width, first / width),
+                    }
+                }),
+        );
+    }
+
+    /// The current depth of the reference (`mode` `None`) or of mode
+    /// `mode`, row-major from the top-left pixel.
+    pub fn read_depth(&mut self, gpu: &GpuContext, targets: &RenderTargets, mode: Option<usize>, out: &mut Vec<f32>) {
+        let group = &self.depth_groups[mode.map_or(0, |k| k + 1)];
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.copy_depth);
-            pass.set_bind_group(0, &self.depth_group, &[]);
+            pass.set_bind_group(0, group, &[]);
             dispatch_per_pixel(&mut pass, targets);
         }
         let bytes = self.depth_values.size();

@@ -53,6 +53,7 @@ pub fn render(s: &Summary) -> String {
             flagged.join(", ")
         );
     }
+    missed_list(w, s);
     if let Some(sweep) = &s.sweep {
         sweep_table(w, s, sweep);
     }
@@ -139,6 +140,35 @@ fn group(v: f64) -> String {
         out.push(c);
     }
     out
+}
+
+/// The first objects the modes got wrong, and where the rest are.
+fn missed_list(w: &mut String, s: &Summary) {
+    let missed = &s.missed;
+    if missed.rows == 0 {
+        return;
+    }
+    let _ = writeln!(
+        w,
+        "\nWhat the modes got wrong (the first {} of {} rows of missed.csv; `occlu render --frame K --mode M --show-missed` paints them):\n",
+        missed.first.len(),
+        missed.rows
+    );
+    let _ = writeln!(w, "| mode | frame | object | name | drawn | wrong px | first pixel |");
+    let _ = writeln!(w, "|---|---:|---:|---|---|---:|---|");
+    for m in &missed.first {
+        let first = match (m.first_x, m.first_y) {
+            (Some(x), Some(y)) => format!("({x}, {y})"),
+            _ => "–".to_string(),
+        };
+        let drawn = if m.drawn { "yes" } else { "no" };
+        let name = m.name.replace('|', "\\|");
+        let _ = writeln!(
+            w,
+            "| {} | {} | {} | {name} | {drawn} | {} | {first} |",
+            m.mode, m.frame, m.object, m.wrong_pixels
+        );
+    }
 }
 
 #[cfg(test)]

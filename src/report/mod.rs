@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::gpu::{AdapterReport, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams, HierarchyStats};
-use crate::measure::{FrameStats, ModeSummary};
+use crate::measure::{FrameStats, MissedObject, ModeSummary};
 use crate::scene::Scene;
 
 pub use markdown::render as render_markdown;
@@ -37,6 +37,30 @@ pub struct Summary {
     /// The parameter sweep, if any: its mode summaries are labelled
     /// `MODE[KEY=VALUE]`, in the order of `values`.
     pub sweep: Option<SweepSummary>,
+    /// What the modes got wrong; every row is in missed.csv.
+    #[serde(default)]
+    pub missed: MissedSummary,
+}
+
+/// The head of missed.csv, for report.md and machines.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct MissedSummary {
+    /// Rows in missed.csv (0: no mode got anything wrong, and no file).
+    pub rows: usize,
+    /// The first [`MissedSummary::SHOWN`] of them.
+    pub first: Vec<MissedObject>,
+}
+
+impl MissedSummary {
+    /// Rows report.md lists.
+    pub const SHOWN: usize = 10;
+
+    pub fn of(missed: &[MissedObject]) -> MissedSummary {
+        MissedSummary {
+            rows: missed.len(),
+            first: missed.iter().take(Self::SHOWN).cloned().collect(),
+        }
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -138,7 +162,22 @@ pub struct ResultFiles {
     pub frames_csv: PathBuf,
     pub summary_json: PathBuf,
     pub report_md: PathBuf,
+    /// Written only when a mode got something wrong.
+    pub missed_csv: Option<PathBuf>,
     pub charts: Vec<PathBuf>,
+}
+
+/// Writes `rows` to `path` as CSV with a header of field names.
+fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<(), ReportError> {
+    let fail = |error| ReportError {
+        path: path.to_path_buf(),
+        error,
+    };
+    let mut csv = csv::Writer::from_path(path).map_err(|e| fail(std::io::Error::other(e)))?;
+    for row in rows {
+        csv.serialize(row).map_err(|e| fail(std::io::Error::other(e)))?;
+    }
+    csv.flush().map_err(fail)
 }
 
 /// Writes an 8-bit RGB image as PNG.
@@ -194,25 +233,35 @@ pub fn prepare_output(out: &Path) -> Result<(), ReportError> {
     std::fs::remove_file(&probe).map_err(io(&probe))
 }
 
-pub fn write_results(out: &Path, summary: &Summary, rows: &[FrameStats]) -> Result<ResultFiles, ReportError> {
+pub fn write_results(
+    out: &Path,
+    summary: &Summary,
+    rows: &[FrameStats],
+    missed: &[MissedObject],
+) -> Result<ResultFiles, ReportError> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |error| ReportError { path, error }
     };
     std::fs::create_dir_all(out).map_err(io(out))?;
+    let missed_csv = out.join("missed.csv");
     let files = ResultFiles {
         frames_csv: out.join("frames.csv"),
         summary_json: out.join("summary.json"),
         report_md: out.join("report.md"),
+        missed_csv: (!missed.is_empty()).then(|| missed_csv.clone()),
         charts: Vec::new(),
     };
-    let mut csv =
-        csv::Writer::from_path(&files.frames_csv).map_err(|e| io(&files.frames_csv)(std::io::Error::other(e)))?;
-    for row in rows {
-        csv.serialize(row)
-            .map_err(|e| io(&files.frames_csv)(std::io::Error::other(e)))?;
+    write_csv(&files.frames_csv, rows)?;
+    if missed.is_empty() {
+        // An earlier run's list must not pass for this run's.
+        match std::fs::remove_file(&missed_csv) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io(&missed_csv)(e)),
+            _ => {}
+        }
+    } else {
+        write_csv(&missed_csv, missed)?;
     }
-    csv.flush().map_err(io(&files.frames_csv))?;
     let json = serde_json::to_string_pretty(summary).expect("summary serialises: no maps with non-string keys");
     std::fs::write(&files.summary_json, json + "\n").map_err(io(&files.summary_json))?;
     std::fs::write(&files.report_md, render_markdown(summary)).map_err(io(&files.report_md))?;
