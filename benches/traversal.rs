@@ -21,7 +21,7 @@ use occlu::camera::{Camera, Containment};
 use occlu::cull::TraversalStats;
 use occlu::cull::ioc::auto_depths;
 use occlu::cull::traversal::{DepthQueue, frustum_cull_subtree, nearest_corner};
-use occlu::gpu::{CullTree, DepthMargins, NodeBoxes};
+use occlu::gpu::{BoxMargins, CullTree, DepthMargins, NodeBoxes, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::scene::{LoadOptions, SceneSpec, load};
 
@@ -95,9 +95,10 @@ fn front_to_back(hierarchy: &Hierarchy, camera: &Camera, queue: &mut DepthQueue)
 
 fn prepare_boxes(what: &str, cameras: &[Camera], bounds: &[Aabb]) {
     let mut boxes = NodeBoxes::default();
-    let margins = DepthMargins::for_backend(wgpu::Backend::Vulkan);
+    let depth = DepthMargins::for_backend(wgpu::Backend::Vulkan);
     let mut tested = 0;
     let time = per_frame(cameras, |camera| {
+        let margins = BoxMargins::new(depth, camera, Resolution::DEFAULT);
         boxes.prepare(camera, margins, bounds.iter().copied());
         tested += boxes.counts().1;
     });

@@ -56,8 +56,9 @@ fn mark_visible_objects(@builtin(global_invocation_id) id: vec3<u32>) {
 @group(0) @binding(0) var depth_in: texture_2d<f32>;
 @group(0) @binding(1) var<storage, read_write> depth_out: array<f32>;
 
-// copy_depth: the reference depth as a row-major array, read the same way
-// as the error count reads it (no depth-format texture copy is needed).
+// copy_depth: a depth target (the reference's or a mode's) as a row-major
+// array, read the same way as the error count reads it (no depth-format
+// texture copy is needed).
 @compute @workgroup_size(8, 8)
 fn copy_depth(@builtin(global_invocation_id) id: vec3<u32>) {
     let size = textureDimensions(depth_in);

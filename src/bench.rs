@@ -109,7 +109,8 @@ pub struct Session<'a> {
     previous: Vec<Option<PreviousFrame>>,
     options: RunOptions,
     pub upload_ms: f64,
-    /// What the modes got wrong in the frames recorded so far.
+    /// What the modes got wrong in the frames run so far (missed.csv's
+    /// rows); [`run`] drops the warm-up frames'.
     pub missed: Vec<MissedObject>,
     /// Scratch for [`ErrorMeter::attribute_wrong_pixels`].
     object_errors: Vec<ObjectError>,

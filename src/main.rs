@@ -180,6 +180,10 @@ struct RenderArgs {
     /// Camera path (JSON); generated from the scene when omitted.
     #[arg(long, value_name = "FILE")]
     path: Option<PathBuf>,
+    /// Resamples the path to this many frames, as bench's --frames does
+    /// [default: the path's].
+    #[arg(long, value_name = "N")]
+    frames: Option<u32>,
     /// Frame of the path to render (0-based).
     #[arg(long, value_name = "K")]
     frame: u32,
@@ -483,6 +487,10 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let path = match path_file {
         Some(p) => p,
         None => occlu::camera::generate::default_path(&scene)?,
+    };
+    let path = match args.frames {
+        Some(n) => path.with_frames(n)?,
+        None => path,
     };
     let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
     if let Some(reason) = ModeInfo::named(mode).unsupported_on(&gpu) {

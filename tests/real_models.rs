@@ -48,7 +48,10 @@ fn models(dir: &Path) -> Vec<(PathBuf, Option<PathBuf>)> {
             let path = files.iter().find(|p| {
                 extension(p).as_deref() == Some("json")
                     && p.parent() == model.parent()
-                    && p.file_name().unwrap().to_string_lossy().starts_with(&format!("{stem}."))
+                    && p.file_name()
+                        .unwrap()
+                        .to_string_lossy()
+                        .starts_with(&format!("{stem}."))
             });
             (model.clone(), path.cloned())
         })
@@ -105,5 +108,10 @@ fn every_conservative_mode_is_exact_on_every_shared_model() {
             );
         }
     }
-    assert!(failures.is_empty(), "{} frames not exact:\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} frames not exact:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
 }

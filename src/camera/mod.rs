@@ -64,6 +64,16 @@ impl Camera {
     }
 }
 
+/// Depth along the view direction of the nearest point of the eye-relative
+/// box `min`..`max`, for a camera whose `view_rotation()` is `view`: the
+/// nearest corner's, found axis by axis.
+pub fn nearest_view_depth(view: &DMat3, min: DVec3, max: DVec3) -> f64 {
+    // Depth is −(row z of view) · p; its least over the box takes, on each
+    // axis, whichever bound makes that axis's term larger.
+    let forward = -view.row(2);
+    (forward * min).min(forward * max).element_sum()
+}
+
 /// Rotation of a camera at the origin looking along `forward` with `up`
 /// as close to its +Y as possible. When `up` is (nearly) parallel to
 /// `forward` (looking straight up or down), the world axis least aligned with
@@ -184,6 +194,16 @@ mod tests {
     fn project(cam: &Camera, p: DVec3) -> DVec4 {
         let mv = cam.model_view(&DAffine3::IDENTITY);
         cam.projection() * mv.transform_point3(p).extend(1.0)
+    }
+
+    #[test]
+    fn nearest_view_depth_is_the_nearest_corner_along_the_view() {
+        let cam = camera(DVec3::new(1.0, 2.0, 3.0), DVec3::new(0.3, -0.4, -1.0));
+        let view = cam.view_rotation();
+        let (min, max) = (DVec3::new(-4.0, -1.0, -9.0), DVec3::new(2.0, 5.0, -6.0));
+        let corners = Aabb::new(min, max).corners();
+        let nearest = corners.iter().map(|&c| -(view * c).z).fold(f64::INFINITY, f64::min);
+        assert!((nearest_view_depth(&view, min, max) - nearest).abs() < 1e-12);
     }
 
     #[test]

@@ -8,7 +8,7 @@ use glam::DVec3;
 
 use super::TraversalStats;
 use crate::bounds::Aabb;
-use crate::camera::{Camera, Containment, Frustum};
+use crate::camera::{Camera, Containment, Frustum, nearest_view_depth};
 use crate::gpu::FrameCtx;
 use crate::hierarchy::{Hierarchy, Node};
 use crate::scene::Scene;
@@ -38,12 +38,11 @@ pub fn nearest_corner(bounds: &Aabb, eye: DVec3) -> f64 {
 /// 002 §4.4's order: z_min, the depth of the box's nearest corner along the
 /// view direction.
 pub fn view_depth(bounds: &Aabb, camera: &Camera) -> f64 {
-    let view = camera.view_rotation();
-    bounds
-        .corners()
-        .iter()
-        .map(|&c| -(view * (c - camera.eye)).z)
-        .fold(f64::INFINITY, f64::min)
+    nearest_view_depth(
+        &camera.view_rotation(),
+        bounds.min - camera.eye,
+        bounds.max - camera.eye,
+    )
 }
 
 // Reversed, so the max-heap yields the nearest node; ties by node id keep

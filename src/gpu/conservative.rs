@@ -12,9 +12,10 @@
 //! 1. **Rounding of surfaces that coincide with a box face** (a building
 //!    part lying on its building's wall, a box face on its own wall). Both
 //!    are rounded, so the box face may land a hair behind the surface. The
-//!    error has three parts, and each has a margin ([`DepthMargins`]):
+//!    error has three parts, and each has a margin ([`BoxMargins`]):
 //!    - *relative to the depth at the pixel*, about 2^-24: boxes are grown by
-//!      [`BOX_GROWTH`] = 1e-4 of their distance, hundreds of times that.
+//!      at least [`BOX_GROWTH`] = 1e-4 of their reach (largest eye-relative
+//!      coordinate), hundreds of times that.
 //!    - *relative to the largest depth of the triangle*: a triangle's depth is
 //!      interpolated in f32 across the screen from its vertices, so at its
 //!      far end the error is a few 2^-24 of its near end's depth. An object's
@@ -58,31 +59,34 @@
 //!
 //! Why the two rules together suffice: at a pixel p inside an object's
 //! footprint, a fragment that survives lies at most at [`FragmentLimit`]'s
-//! depth: the entry depth of the object's box grown by half of
-//! [`BOX_GROWTH`] and raised by half of its box test's raise. The front face
-//! at p of any box test holding the object is the entry depth of a box at
-//! least as large, grown by all of [`BOX_GROWTH`] and raised by all of a
-//! raise at least as large: nearer by half the growth (5e-5 of the depth)
-//! and half the raise, each more than the rounding of either computation.
-//! The box test's footprint reaches at least 1e-4 of the distance beyond the
-//! object's (0.05 pixel at 800×600 and a 60° field of view), far more than
-//! sub-pixel snapping moves a fragment (1/512 pixel). Nothing rounds a
-//! surviving fragment of an object past its box test.
+//! depth: the entry depth of the object's box grown by half of its box
+//! test's growth and raised by half of its raise. The front face at p of any
+//! box test holding the object is the entry depth of a box at least as
+//! large, grown and raised by all of margins at least as large: nearer by
+//! half the growth (at least 5e-5 of the depth) and half the raise, each
+//! more than the rounding of either computation. A fragment lies at most a
+//! sub-pixel snap from its triangle, and a box test's edges move by as much:
+//! at most 1/32 pixel each with the 4 sub-pixel bits Vulkan requires (most
+//! GPUs and llvmpipe snap to 1/256). So boxes are also grown by enough to
+//! move their outline [`SNAP_MARGIN`] = 1/16 pixel out at the frame's field
+//! of view and resolution ([`BoxMargins::new`]): about 2e-4 of their reach
+//! at 800×600 and 60°, 1e-3 at 160×120. The box test covers every pixel
+//! where a fragment of the object may land. Nothing rounds a surviving
+//! fragment of an object past its box test.
 
 use glam::{DMat3, DVec3, Vec4};
 
 use super::Resolution;
 use crate::bounds::Aabb;
-use crate::camera::Camera;
+use crate::camera::{Camera, nearest_view_depth};
 
-/// Boxes are grown by this fraction of their distance from the eye before
-/// they are tested (rule 1, relative to the depth at the pixel).
+/// Boxes are grown by at least this fraction of their reach from the eye
+/// before they are tested (rule 1, relative to the depth at the pixel).
 pub(crate) const BOX_GROWTH: f64 = 1e-4;
 
-/// Growth of the box that bounds fragments (rule 2): half of the box
-/// tests', as its raise is half of theirs, so a box test always lies in
-/// front of the bound.
-const FRAGMENT_GROWTH: f64 = BOX_GROWTH / 2.0;
+/// Pixels by which a tested box's outline must reach beyond the object's:
+/// twice the largest sub-pixel snap Vulkan allows (4 sub-pixel bits).
+const SNAP_MARGIN: f64 = 1.0 / 16.0;
 
 /// Raise of a tested box per unit of its nearest corner's depth (rule 1,
 /// relative to the largest depth of a triangle): 4 steps of 2^-24.
@@ -94,6 +98,30 @@ const GL_RAISE: f64 = 1.0 / (1u32 << 22) as f64;
 
 /// The largest raise a box reaching depth 1 can get on any backend.
 const MAX_RAISE: f64 = GL_RAISE + RAISE_PER_DEPTH;
+
+/// How far one frame's box tests stay clear of rounding: the backend's
+/// depth margins, and a growth that covers both the depth rounding and
+/// sub-pixel snapping at the frame's field of view and resolution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoxMargins {
+    /// Fraction of a box's reach (its largest eye-relative coordinate) that
+    /// it is grown by.
+    growth: f64,
+    depth: DepthMargins,
+}
+
+impl BoxMargins {
+    pub fn new(depth: DepthMargins, camera: &Camera, resolution: Resolution) -> BoxMargins {
+        // A box grown by g holds the ball of radius g round each of its
+        // points, whose outline is at least g · f / d pixels wide at
+        // distance d ≤ √3 · reach, with f = height / (2 tan(fov / 2)).
+        let pixel = 2.0 * (camera.fov_y / 2.0).tan() / f64::from(resolution.height);
+        BoxMargins {
+            growth: BOX_GROWTH.max(3f64.sqrt() * SNAP_MARGIN * pixel),
+            depth,
+        }
+    }
+}
 
 /// The depth margins of one backend (rule 1).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -130,7 +158,7 @@ pub(super) enum EyeBox {
     /// It reaches the near plane or holds the eye: visible, untestable (its
     /// projection is unbounded).
     ReachesNear,
-    /// Grown by [`BOX_GROWTH`], eye-relative, with its raise.
+    /// Grown by its [`BoxMargins`], eye-relative, with its raise.
     Testable(QueryBox),
 }
 
@@ -142,34 +170,23 @@ fn grown_eye_relative(camera: &Camera, b: &Aabb, fraction: f64) -> (DVec3, DVec3
     (min - grow, max + grow)
 }
 
-/// Distance along the view direction of the nearest corner of the
-/// eye-relative box `min`..`max`, for a camera whose `view_rotation()` is
-/// `view`.
-fn nearest_distance(view: &DMat3, min: DVec3, max: DVec3) -> f64 {
-    Aabb::new(min, max)
-        .corners()
-        .iter()
-        .map(|&c| -(*view * c).z)
-        .fold(f64::INFINITY, f64::min)
-}
-
 /// Prepares `b`, which must not lie outside `camera`'s frustum, for a depth
 /// test by `camera`, whose `view_rotation()` is `view` (computed once per
 /// batch by the caller).
-pub(super) fn eye_relative_box(camera: &Camera, view: &DMat3, margins: DepthMargins, b: &Aabb) -> EyeBox {
-    let (min, max) = grown_eye_relative(camera, b, BOX_GROWTH);
+pub(super) fn eye_relative_box(camera: &Camera, view: &DMat3, margins: BoxMargins, b: &Aabb) -> EyeBox {
+    let (min, max) = grown_eye_relative(camera, b, margins.growth);
     // The box reaches the near plane when a corner is nearer than it along
     // the view direction (this also covers holding the eye). The raise
     // lifts a corner at distance t to near / t + raise, which must stay
     // below 1 (the near plane) or the corner would be clipped away: checked
     // for the largest raise, which costs a test of a box within a millionth
     // of the near distance beyond it.
-    let nearest = nearest_distance(view, min, max);
+    let nearest = nearest_view_depth(view, min, max);
     if nearest <= camera.near / (1.0 - MAX_RAISE) {
         EyeBox::ReachesNear
     } else {
         EyeBox::Testable(QueryBox {
-            min: min.as_vec3().extend(margins.raise(camera.near / nearest) as f32),
+            min: min.as_vec3().extend(margins.depth.raise(camera.near / nearest) as f32),
             max: max.as_vec3().extend(0.0),
         })
     }
@@ -200,8 +217,10 @@ pub(super) fn pixel_rays(camera: &Camera, resolution: Resolution) -> [Vec4; 3] {
 /// coordinate `face`) at view depth t = face / d_axis, so at depth
 /// `near / t = d_axis · near / face`. `scale` holds `near / face` per axis
 /// (0 where the eye lies within the box's extent along that axis, which
-/// sets no bound); the nearest of the three depths is where the ray enters
-/// the box. scene.wgsl discards fragments beyond it plus `raise`.
+/// sets no bound). The least of the three depths is where the ray enters
+/// the box, the greatest depth (nearest the eye) it reaches inside it;
+/// scene.wgsl discards fragments of greater depth (reverse-Z: nearer) than
+/// that plus `raise`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct FragmentLimit {
@@ -211,9 +230,11 @@ pub struct FragmentLimit {
 
 impl FragmentLimit {
     /// The limit for an object with world bounds `bounds`, seen by `camera`
-    /// (whose `view_rotation()` is `view`) on a backend with `margins`.
-    pub fn new(camera: &Camera, view: &DMat3, margins: DepthMargins, bounds: &Aabb) -> FragmentLimit {
-        let (min, max) = grown_eye_relative(camera, bounds, FRAGMENT_GROWTH);
+    /// (whose `view_rotation()` is `view`), whose box tests keep `margins`:
+    /// the box is grown and raised by half of them, so a box test always
+    /// lies in front of the bound.
+    pub fn new(camera: &Camera, view: &DMat3, margins: BoxMargins, bounds: &Aabb) -> FragmentLimit {
+        let (min, max) = grown_eye_relative(camera, bounds, margins.growth / 2.0);
         let scale = [0, 1, 2].map(|axis| {
             if min[axis] > 0.0 {
                 camera.near / min[axis]
@@ -225,10 +246,10 @@ impl FragmentLimit {
         });
         // Half the raise the object's own box test gets (a box reaching the
         // near plane is never tested: any finite raise will do).
-        let nearest = nearest_distance(view, min, max).max(camera.near);
+        let nearest = nearest_view_depth(view, min, max).max(camera.near);
         FragmentLimit {
             scale: scale.map(|s| s as f32),
-            raise: (margins.raise(camera.near / nearest) / 2.0) as f32,
+            raise: (margins.depth.raise(camera.near / nearest) / 2.0) as f32,
         }
     }
 }
@@ -304,9 +325,9 @@ mod tests {
         let r = Resolution::DEFAULT;
         let view = cam.view_rotation();
         let b = Aabb::new(DVec3::new(-2.0, -1.0, -6.0), DVec3::new(1.0, 3.0, -2.0));
-        let margins = DepthMargins::for_backend(wgpu::Backend::Gl);
+        let margins = BoxMargins::new(DepthMargins::for_backend(wgpu::Backend::Gl), &cam, r);
         let limit = FragmentLimit::new(&cam, &view, margins, &b);
-        let (min, max) = grown_eye_relative(&cam, &b, FRAGMENT_GROWTH);
+        let (min, max) = grown_eye_relative(&cam, &b, margins.growth / 2.0);
         let grown = Aabb::new(min + cam.eye, max + cam.eye);
         let mut hits = 0;
         for y in (0..r.height).step_by(7) {
@@ -329,7 +350,8 @@ mod tests {
     fn fragment_limit_is_open_when_the_eye_is_inside_the_box() {
         let cam = camera();
         let around = Aabb::new(cam.eye - DVec3::ONE, cam.eye + DVec3::ONE);
-        let margins = DepthMargins::for_backend(wgpu::Backend::Vulkan);
+        let depth = DepthMargins::for_backend(wgpu::Backend::Vulkan);
+        let margins = BoxMargins::new(depth, &cam, Resolution::DEFAULT);
         let limit = FragmentLimit::new(&cam, &cam.view_rotation(), margins, &around);
         assert!(limit.at(ray(&cam, Resolution::DEFAULT, 400.5, 300.5).as_vec3()) >= NO_LIMIT);
     }
@@ -339,16 +361,39 @@ mod tests {
         let cam = camera();
         let view = cam.view_rotation();
         let b = Aabb::new(DVec3::new(-2.0, -1.0, -60.0), DVec3::new(1.0, 3.0, -20.0));
-        let raise = |backend| match eye_relative_box(&cam, &view, DepthMargins::for_backend(backend), &b) {
+        let margins = |backend| BoxMargins::new(DepthMargins::for_backend(backend), &cam, Resolution::DEFAULT);
+        let raise = |backend| match eye_relative_box(&cam, &view, margins(backend), &b) {
             EyeBox::Testable(q) => f64::from(q.min.w),
             EyeBox::ReachesNear => panic!("the box lies far beyond the near plane"),
         };
-        let nearest_depth = cam.near / nearest_distance(&view, b.min - cam.eye, b.max - cam.eye);
+        let nearest_depth = cam.near / nearest_view_depth(&view, b.min - cam.eye, b.max - cam.eye);
         let relative = raise(wgpu::Backend::Vulkan);
         assert!(
             (relative / (RAISE_PER_DEPTH * nearest_depth) - 1.0).abs() < 1e-3,
             "{relative}"
         );
         assert!((raise(wgpu::Backend::Gl) - relative - GL_RAISE).abs() < 1e-12);
+    }
+
+    #[test]
+    fn boxes_grow_by_a_sixteenth_of_a_pixel_at_least() {
+        let cam = camera();
+        let depth = DepthMargins::for_backend(wgpu::Backend::Vulkan);
+        let growth = |height| {
+            let r = Resolution {
+                width: height * 4 / 3,
+                height,
+            };
+            BoxMargins::new(depth, &cam, r).growth
+        };
+        assert_eq!(growth(8192), BOX_GROWTH, "fine pictures keep the relative growth");
+        // 160×120 at 60°: a pixel spans 2 tan 30° / 120 = 9.6e-3 at depth 1.
+        let pixel = 2.0 * 30f64.to_radians().tan() / 120.0;
+        let coarse = growth(120);
+        assert!((coarse / (3f64.sqrt() / 16.0 * pixel) - 1.0).abs() < 1e-12);
+        // Its outline moves out by a sixteenth of a pixel or more: a box
+        // corner at reach 10 grown by growth × 10, seen from 10 · √3 away.
+        let shift_px = coarse * 10.0 / (10.0 * 3f64.sqrt()) / pixel;
+        assert!(shift_px >= SNAP_MARGIN * (1.0 - 1e-12), "{shift_px}");
     }
 }

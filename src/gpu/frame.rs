@@ -7,6 +7,7 @@
 
 use std::time::{Duration, Instant};
 
+use super::conservative::BoxMargins;
 use super::cull_tree::CullTree;
 use super::queries::{BatchAnswers, BoxTest, BoxVisibility, QueryPool, TestTarget};
 use super::raster::{DrawList, GpuAudit, GpuCullTree, RasterPool};
@@ -62,6 +63,8 @@ pub struct FrameCtx<'a> {
     queries: &'a mut QueryPool,
     raster: Option<&'a mut RasterPool>,
     camera: &'a Camera,
+    /// What this frame's box tests stay clear of.
+    margins: BoxMargins,
     depth: &'a wgpu::TextureView,
     timer: Option<(&'a GpuTimer, usize)>,
     encoder: wgpu::CommandEncoder,
@@ -119,6 +122,7 @@ impl<'a> FrameCtx<'a> {
             queries,
             raster,
             camera,
+            margins: BoxMargins::new(gpu.depth_margins, camera, targets.resolution),
             depth,
             timer: timer.map(|t| (t, slot)),
             encoder,
@@ -173,6 +177,7 @@ impl<'a> FrameCtx<'a> {
         let target = TestTarget {
             depth: self.depth,
             camera: self.camera,
+            margins: self.margins,
         };
         let answers = BatchAnswers {
             visibility: out,
@@ -246,7 +251,8 @@ impl<'a> FrameCtx<'a> {
     pub fn begin_gpu_walk(&mut self, tree: &GpuCullTree, bounds: impl ExactSizeIterator<Item = Aabb>) {
         let start = Instant::now();
         self.encode_queued_draws();
-        let prepare = pool(&mut self.raster).begin_walk(self.gpu, &mut self.encoder, self.camera, tree, bounds);
+        let prepare =
+            pool(&mut self.raster).begin_walk(self.gpu, &mut self.encoder, self.camera, self.margins, tree, bounds);
         self.gpu_ops += start.elapsed().saturating_sub(prepare);
     }
 

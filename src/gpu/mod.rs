@@ -17,7 +17,7 @@ use std::fmt;
 
 use serde::Serialize;
 
-pub use conservative::DepthMargins;
+pub use conservative::{BoxMargins, DepthMargins};
 pub use cull_tree::{CullTree, MAX_LEVELS, TreeNode};
 pub use frame::{FrameCounters, FrameCtx, FrameOutcome, FrameResources};
 pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};

@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
 
-use super::conservative::{DepthMargins, EyeBox, QueryBox, eye_relative_box};
+use super::conservative::{BoxMargins, EyeBox, QueryBox, eye_relative_box};
 use super::targets::DEPTH_FORMAT;
 use super::{GpuContext, Readback};
 use crate::bounds::Aabb;
@@ -59,11 +59,13 @@ impl BoxVisibility {
     }
 }
 
-/// What a batch is tested against: a mode's depth target, seen by a camera.
+/// What a batch is tested against: a mode's depth target, seen by a
+/// camera, with the frame's margins.
 #[derive(Clone, Copy)]
 pub struct TestTarget<'a> {
     pub depth: &'a wgpu::TextureView,
     pub camera: &'a Camera,
+    pub margins: BoxMargins,
 }
 
 /// Where a batch's answers go: one visibility per box, and with `totals`
@@ -252,7 +254,7 @@ impl QueryPool {
         );
         let depth = target.depth;
         let started = Instant::now();
-        self.prepare(target.camera, gpu.depth_margins, boxes, out);
+        self.prepare(target.camera, target.margins, boxes, out);
         let prepare = started.elapsed();
         if let Some(t) = totals.as_deref_mut() {
             t.clear();
@@ -334,7 +336,7 @@ impl QueryPool {
 
     /// Grows every box, marks the ones reaching the near plane visible
     /// without a test, and stages the others eye-relative.
-    fn prepare(&mut self, camera: &Camera, margins: DepthMargins, boxes: &[Aabb], out: &mut Vec<BoxVisibility>) {
+    fn prepare(&mut self, camera: &Camera, margins: BoxMargins, boxes: &[Aabb], out: &mut Vec<BoxVisibility>) {
         out.clear();
         self.staging.clear();
         self.tested.clear();

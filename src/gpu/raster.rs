@@ -28,7 +28,7 @@ use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
 
-use super::conservative::{DepthMargins, EyeBox, QueryBox, eye_relative_box};
+use super::conservative::{BoxMargins, EyeBox, QueryBox, eye_relative_box};
 use super::cull_tree::{CullTree, MAX_LEVELS};
 use super::queries::{
     BOX_INDEX_COUNT, BOX_TEST, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer, box_index_buffer,
@@ -206,9 +206,9 @@ pub struct NodeBoxes {
 }
 
 impl NodeBoxes {
-    /// Prepares `bounds`, one box per node, for `camera` on a backend with
+    /// Prepares `bounds`, one box per node, for `camera` with the frame's
     /// `margins`.
-    pub fn prepare(&mut self, camera: &Camera, margins: DepthMargins, bounds: impl Iterator<Item = Aabb>) {
+    pub fn prepare(&mut self, camera: &Camera, margins: BoxMargins, bounds: impl Iterator<Item = Aabb>) {
         let view = camera.view_rotation();
         let frustum = camera.frustum();
         self.boxes.clear();
@@ -448,12 +448,13 @@ impl RasterPool {
         gpu: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         camera: &Camera,
+        margins: BoxMargins,
         tree: &GpuCullTree,
         bounds: impl ExactSizeIterator<Item = Aabb>,
     ) -> Duration {
         assert_eq!(bounds.len(), tree.nodes as usize, "one box per tree node");
         let started = Instant::now();
-        self.node_boxes.prepare(camera, gpu.depth_margins, bounds);
+        self.node_boxes.prepare(camera, margins, bounds);
         let prepare = started.elapsed();
         let s = &self.scratch;
         let NodeBoxes { boxes, states } = &self.node_boxes;

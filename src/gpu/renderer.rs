@@ -5,7 +5,7 @@
 use glam::Mat4;
 use wgpu::util::DeviceExt;
 
-use super::conservative::{FragmentLimit, pixel_rays};
+use super::conservative::{BoxMargins, FragmentLimit, pixel_rays};
 use super::raster::{IndirectCount, IndirectDraws};
 use super::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, RenderTargets};
 use super::{GpuContext, GpuError, Resolution};
@@ -19,7 +19,8 @@ pub struct DrawRange {
     pub index_count: u32,
 }
 
-/// What scene.wgsl knows of one object, rewritten every frame.
+/// What scene.wgsl knows of one object (`struct Object`), rewritten every
+/// frame.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct ObjectData {
@@ -29,6 +30,10 @@ struct ObjectData {
     /// `gpu/conservative.rs`, rule 2).
     limit: FragmentLimit,
 }
+
+// The WGSL structs' sizes: a mismatch would shift every field after it.
+const _: () = assert!(std::mem::size_of::<ObjectData>() == 80);
+const _: () = assert!(std::mem::size_of::<CameraUniform>() == 176);
 
 /// Geometry and per-object data in GPU buffers.
 pub struct GpuScene {
@@ -138,10 +143,9 @@ impl SceneRenderer {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        // The fragment stage reads the camera's pixel rays.
-        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+        let entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
             binding,
-            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            visibility,
             ty,
             count: None,
         };
@@ -153,8 +157,19 @@ impl SceneRenderer {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
             entries: &[
-                entry(0, buffer(wgpu::BufferBindingType::Uniform)),
-                entry(1, buffer(wgpu::BufferBindingType::Storage { read_only: true })),
+                // The fragment stage reads the camera's pixel rays; objects
+                // reach it as varyings (some GLES adapters have no storage
+                // buffers in fragment shaders).
+                entry(
+                    0,
+                    wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    buffer(wgpu::BufferBindingType::Uniform),
+                ),
+                entry(
+                    1,
+                    wgpu::ShaderStages::VERTEX,
+                    buffer(wgpu::BufferBindingType::Storage { read_only: true }),
+                ),
             ],
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -250,10 +265,11 @@ impl SceneRenderer {
     pub fn set_camera(&mut self, gpu: &GpuContext, camera: &Camera, resolution: Resolution, objects: &[Object]) {
         let scene = &mut self.scene;
         let view = camera.view_rotation();
+        let margins = BoxMargins::new(gpu.depth_margins, camera, resolution);
         scene.staging.clear();
         scene.staging.extend(objects.iter().map(|o| ObjectData {
             model_view: glam::DMat4::from(camera.model_view(&o.transform)).as_mat4(),
-            limit: FragmentLimit::new(camera, &view, gpu.depth_margins, &o.bounds),
+            limit: FragmentLimit::new(camera, &view, margins, &o.bounds),
         }));
         gpu.queue
             .write_buffer(&scene.object_data, 0, bytemuck::cast_slice(&scene.staging));

@@ -141,7 +141,7 @@ impl ErrorMeter {
             .collect();
         let copy_depth = pipeline("copy_depth");
         let depth_bytes = targets.resolution.pixels() * 4;
-        let depth_values = storage("reference depth values", depth_bytes);
+        let depth_values = storage("depth values", depth_bytes);
         let depth_groups = std::iter::once(&targets.reference_depth)
             .chain(&targets.mode_depths)
             .map(|depth| {
@@ -200,7 +200,7 @@ impl ErrorMeter {
             words: Vec::new(),
             copy_depth,
             depth_groups,
-            depth_readback: Readback::new(gpu, "reference depth readback", depth_bytes),
+            depth_readback: Readback::new(gpu, "depth readback", depth_bytes),
             depth_values,
         }
     }

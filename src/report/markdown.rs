@@ -150,7 +150,7 @@ fn missed_list(w: &mut String, s: &Summary) {
     }
     let _ = writeln!(
         w,
-        "\nWhat the modes got wrong (the first {} of {} rows of missed.csv; `occlu render --frame K --mode M --show-missed` paints them):\n",
+        "\nWhat the modes got wrong (the first {} of {} rows of missed.csv). `occlu render` with this run's model, `--path`, `--frames`, `--resolution` and `--param`, and `--frame K --mode M --show-missed`, paints them (it replays the two frames before K, so a mode carrying state over more frames may miss differently):\n",
         missed.first.len(),
         missed.rows
     );

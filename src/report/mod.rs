@@ -243,6 +243,7 @@ pub fn write_results(
         let path = path.to_path_buf();
         move |error| ReportError { path, error }
     };
+    debug_assert_eq!(summary.missed, MissedSummary::of(missed), "the summary heads this list");
     std::fs::create_dir_all(out).map_err(io(out))?;
     let missed_csv = out.join("missed.csv");
     let files = ResultFiles {

@@ -603,8 +603,9 @@ fn distant_plaques() -> StressCase {
     )
 }
 
-/// 2 000 single triangles whose planes hold the eye, between 105 and 375 m
-/// away, behind a screen 95 m away that hides all of their boxes. Each
+/// 2 000 single triangles whose planes hold the eye, between 105 and 750 m
+/// away, behind a screen 95 m away that hides all of their boxes (600 m
+/// wide and high: the boxes reach 2.5 times as far sideways as ahead). Each
 /// projects to a line; rounded to f32 it becomes a sliver the rasteriser
 /// may still sample, with its depth extrapolated anywhere, even NaN (found
 /// on two-cylinder-engine.glb: a part in one pixel, 115 m in front of
@@ -614,8 +615,8 @@ fn edge_on() -> StressCase {
     let mut rng = Rng::new(SEED ^ 5);
     let mut shapes = vec![cuboid_shape(
         "screen".into(),
-        v(-80.0, -60.0, -96.0),
-        v(80.0, 60.0, -95.0),
+        v(-300.0, -300.0, -96.0),
+        v(300.0, 300.0, -95.0),
     )];
     for k in 0..2000 {
         let mut ray = || v(rng.range(-0.35, 0.35), rng.range(-0.25, 0.25), -1.0) * rng.range(150.0, 250.0);

@@ -17,7 +17,7 @@ use crate::camera::Camera;
 use crate::cull::{Culler, ModeError, ModeInfo, ModeParams, create};
 use crate::gpu::{AdapterReport, GpuContext, GpuError, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams};
-use crate::measure::FrameStats;
+use crate::measure::{FrameStats, MissedObject};
 use crate::report::SkippedMode;
 use crate::scene::Scene;
 use crate::world::World;
@@ -328,6 +328,8 @@ pub fn run(
 pub struct CaseOutcome {
     /// Frame-major, one row per culler.
     pub rows: Vec<FrameStats>,
+    /// What the cullers got wrong (missed.csv's rows).
+    pub missed: Vec<MissedObject>,
     /// The reference depth of every frame, when asked for.
     pub depths: Vec<Vec<f32>>,
 }
@@ -354,6 +356,7 @@ pub fn run_case(
     let mut session = Session::new(gpu, &world.scene, cullers.len(), true, &options)?;
     let mut outcome = CaseOutcome {
         rows: Vec::new(),
+        missed: Vec::new(),
         depths: Vec::new(),
     };
     for (frame, camera) in case.cameras.iter().enumerate() {
@@ -371,6 +374,7 @@ pub fn run_case(
         }
         frame_done(frame as u32);
     }
+    outcome.missed = std::mem::take(&mut session.missed);
     Ok(outcome)
 }
 
