@@ -104,25 +104,37 @@ fn missed_csv_and_report_list_what_was_missed_and_an_exact_run_removes_the_list(
     assert!(!run.join("missed.csv").exists(), "an exact run names nothing");
     let (mut summary, rows) = read_results(&run).unwrap();
     assert_eq!(summary.missed, MissedSummary::default());
-    let missed: Vec<MissedObject> = (0..12)
-        .map(|k| MissedObject {
-            mode: "vfc".into(),
-            frame: 0,
-            object: k,
-            name: format!("part|{k}"),
-            drawn: k % 2 == 0,
-            wrong_pixels: u64::from(k),
-            first_x: (k > 0).then_some(3),
-            first_y: (k > 0).then_some(k),
-        })
-        .collect();
+    // What the culler that drops a visible object missed, twice over (as
+    // two frames would), then rows a table must cope with: names with '|',
+    // a drawn object, one with no wrong pixel.
+    let quads = two_quads();
+    let scene = boxes(&quads);
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    let path = common::held(DVec3::ZERO, DVec3::NEG_Z, 90.0, 2);
+    let gpu = common::gpus().remove(0);
+    let mut cullers: Vec<Box<dyn Culler>> = vec![Box::new(DropOneVisible(Vec::new()))];
+    let mut missed = run_modes(&gpu, &scene, &hierarchy, &path, &mut cullers, SIZE).missed;
+    assert_eq!(missed.len(), 2);
+    let (x, y) = footprint(quads[0].0, quads[0].1)[0];
+    missed.extend((2..12).map(|k| MissedObject {
+        mode: "vfc".into(),
+        frame: 0,
+        object: k,
+        name: format!("part|{k}"),
+        drawn: k % 2 == 0,
+        wrong_pixels: u64::from(k),
+        first_x: (k > 2).then_some(3),
+        first_y: (k > 2).then_some(k),
+    }));
     summary.missed = MissedSummary::of(&missed);
     let files = write_results(&run, &summary, &rows, &missed).unwrap();
     let csv_path = files.missed_csv.expect("written when something was missed");
     let csv = std::fs::read_to_string(&csv_path).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines[0], "mode,frame,object,name,drawn,wrong_pixels,first_x,first_y");
-    assert_eq!(lines[1], "vfc,0,0,part|0,true,0,,");
+    assert_eq!(lines[1], format!("drop-one,0,0,box0,false,80,{x},{y}"));
+    assert_eq!(lines[2], format!("drop-one,1,0,box0,false,80,{x},{y}"));
+    assert_eq!(lines[3], "vfc,0,2,part|2,true,2,,");
     assert_eq!(lines[12], "vfc,0,11,part|11,false,11,3,11");
     assert_eq!(lines.len(), 13);
     let report = std::fs::read_to_string(&files.report_md).unwrap();
