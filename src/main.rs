@@ -2,6 +2,8 @@
 //! and maps errors to one line and an exit code (2: bad input, 1: a failure
 //! while running).
 
+use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -50,7 +52,7 @@ fn after_help() -> String {
         .collect();
     let scenes: Vec<String> = SCENES.iter().map(|(n, s)| format!("  {n:<8} {s}")).collect();
     format!(
-        "Modes:\n{}\n\nBuilt-in scenes (--scene NAME[:key=value,...]):\n{}\n\nExit status: 0 success, 2 bad input, 1 failure while running.",
+        "Modes:\n{}\n\nBuilt-in scenes (--scene NAME[:key=value,...]):\n{}\n\nExit status: 0 success (a closed output pipe included), 2 bad input, 1 failure while running.",
         modes.join("\n"),
         scenes.join("\n")
     )
@@ -383,7 +385,7 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         }
     })?;
     bar.finish_and_clear();
-    print!("{}", occlu::report::render_markdown(&outcome.summary));
+    emit(&occlu::report::render_markdown(&outcome.summary))?;
     let files = &outcome.files;
     let missed = files
         .missed_csv
@@ -405,9 +407,11 @@ fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
     let modes = parse_modes(args.modes.as_deref().unwrap_or(&["all".to_string()]))?;
     let cases = occlu::stress::select(&args.cases)?;
     if args.list {
-        for case in &cases {
-            println!("{:<15} {} frames: {}", case.name, case.cameras.len(), case.summary);
-        }
+        let list: String = cases
+            .iter()
+            .map(|case| format!("{:<15} {} frames: {}\n", case.name, case.cameras.len(), case.summary))
+            .collect();
+        emit(&list)?;
         return Ok(ExitCode::SUCCESS);
     }
     if let Some(out) = &args.out {
@@ -431,7 +435,7 @@ fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
     })?;
     bar.finish_and_clear();
     let markdown = occlu::stress::render_markdown(&report);
-    print!("{markdown}");
+    emit(&markdown)?;
     if let Some(out) = &args.out {
         let write = |name: &str, text: String| {
             let path = out.join(name);
@@ -458,7 +462,7 @@ const STRESS_RESOLUTION: Resolution = Resolution {
 fn compare(base: &std::path::Path, new: &std::path::Path, pct: f64, metrics: &[Metric]) -> anyhow::Result<ExitCode> {
     let metrics = if metrics.is_empty() { &Metric::ALL[..] } else { metrics };
     let comparison = occlu::report::compare::compare(base, new, pct, metrics)?;
-    print!("{}", occlu::report::compare::render(&comparison));
+    emit(&occlu::report::compare::render(&comparison))?;
     let regressions: Vec<String> = comparison
         .regressions()
         .map(|c| match (c.base, c.new) {
@@ -478,7 +482,7 @@ fn compare(base: &std::path::Path, new: &std::path::Path, pct: f64, metrics: &[M
 fn render(args: RenderArgs) -> anyhow::Result<()> {
     let modes = parse_modes(std::slice::from_ref(&args.mode))?;
     let [mode] = modes[..] else {
-        anyhow::bail!(ModeError::Unknown(format!("{} (render takes one mode)", args.mode)));
+        anyhow::bail!(ModeError::NotOne(args.mode.clone()));
     };
     let params = ModeParams::parse(&args.params, &modes)?;
     let path_file = args.path.as_deref().map(CameraPath::load).transpose()?;
@@ -562,31 +566,50 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
     let build_ms = start.elapsed().as_secs_f64() * 1e3;
     let report = SceneFacts::of(&scene, &hierarchy, load_ms, build_ms);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-        return Ok(());
+        return emit(&(serde_json::to_string_pretty(&report)? + "\n"));
     }
     let h = report.hierarchy;
-    println!("source      {}", report.source);
-    println!("objects     {} ({} meshes)", report.objects, report.meshes);
+    let mut text = String::new();
+    let w = &mut text;
+    let _ = writeln!(w, "source      {}", report.source);
+    let _ = writeln!(w, "objects     {} ({} meshes)", report.objects, report.meshes);
     if report.movers > 0 {
-        println!("movers      {} objects move from frame to frame", report.movers);
+        let _ = writeln!(w, "movers      {} objects move from frame to frame", report.movers);
     }
-    println!("triangles   {}", report.triangles);
-    println!("vertices    {}", report.vertices);
-    println!("bounds      {:?} to {:?}", report.bounds_min, report.bounds_max);
-    println!(
+    let _ = writeln!(w, "triangles   {}", report.triangles);
+    let _ = writeln!(w, "vertices    {}", report.vertices);
+    let _ = writeln!(w, "bounds      {:?} to {:?}", report.bounds_min, report.bounds_max);
+    let _ = writeln!(
+        w,
         "hierarchy   {} nodes, {} leaves, depth {}, at most {} objects per leaf",
         h.nodes, h.leaves, h.depth, h.max_leaf_objects
     );
-    println!("load        {load_ms:.1} ms");
-    println!("build       {build_ms:.1} ms");
+    let _ = writeln!(w, "load        {load_ms:.1} ms");
+    let _ = writeln!(w, "build       {build_ms:.1} ms");
     if scene.warnings.is_empty() {
-        println!("warnings    none");
+        let _ = writeln!(w, "warnings    none");
     }
-    for w in &scene.warnings {
-        println!("warning     {w}");
+    for warning in &scene.warnings {
+        let _ = writeln!(w, "warning     {warning}");
     }
-    Ok(())
+    emit(&text)
+}
+
+/// Standard output could not take what a command printed (a full disk).
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write to standard output: {0}")]
+struct StdoutError(std::io::Error);
+
+/// Writes `text` to standard output. A reader that went away (a closed
+/// pipe, as in `occlu stress --list | head -1`) is not an error: the rest
+/// is not wanted, and the command succeeds as other Unix tools do. Any
+/// other failure is (exit 1).
+fn emit(text: &str) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(StdoutError(e).into()),
+        _ => Ok(()),
+    }
 }
 
 fn path_gen(scene_args: SceneArgs, kind: Option<PathKind>, frames: u32, output: PathBuf) -> anyhow::Result<()> {

@@ -536,5 +536,60 @@ fn render_draws_a_frame_its_overview_and_its_depth_complexity() {
     };
     bad(&["--frame", "500", "--mode", "vfc"], "beyond the path's 120 frames");
     bad(&["--frame", "0", "--mode", "warp"], "unknown mode 'warp'");
-    bad(&["--frame", "0", "--mode", "vfc,omq"], "render takes one mode");
+    bad(&["--frame", "0", "--mode", "vfc,omq"], "render draws one");
+    bad(
+        &["--frame", "0", "--mode", "all"],
+        "'all' names more than one mode, and render draws one",
+    );
+}
+
+#[test]
+fn a_reader_that_goes_away_ends_the_output_quietly() {
+    // The read end is closed before occlu starts, so its first write meets
+    // a broken pipe.
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .args(["stress", "--list"])
+        .stdout(writer)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{:?}", own_stderr(&out));
+    assert!(own_stderr(&out).is_empty(), "{:?}", own_stderr(&out));
+}
+
+#[test]
+fn a_full_stdout_is_one_line_and_exit_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = write(dir.path(), "m.obj", THREE_OBJECTS_OBJ);
+    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .args(["info", model.to_str().unwrap()])
+        .stdout(full)
+        .output()
+        .unwrap();
+    let lines = own_stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{lines:?}");
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(lines[0].contains("cannot write to standard output"), "{lines:?}");
+}
+
+#[test]
+fn messages_name_the_real_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(dir.path(), "not-a-folder", "x");
+    fails_with(
+        &["bench", "--out", file.to_str().unwrap()],
+        2,
+        &["not-a-folder", "is not a directory"],
+    );
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .args(["stress", "--cases", "edge-on"])
+        .env("WGPU_BACKEND", "bogus")
+        .output()
+        .unwrap();
+    let lines = own_stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{lines:?}");
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(lines[0].contains("WGPU_BACKEND=bogus"), "{lines:?}");
 }

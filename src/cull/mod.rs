@@ -343,6 +343,8 @@ pub enum ModeError {
     Unknown(String),
     #[error("no modes given")]
     Empty,
+    #[error("'{0}' names more than one mode, and render draws one (e.g. --mode roc)")]
+    NotOne(String),
     #[error("parameter '{0}' is not MODE.KEY=VALUE")]
     MalformedParam(String),
     #[error("unknown parameter '{key}' ({known})")]

@@ -96,13 +96,26 @@ impl fmt::Display for AdapterReport {
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
     #[error(
-        "no graphics adapter found for backend '{0}' (on Debian, Mesa's llvmpipe gives GL and mesa-vulkan-drivers gives Vulkan: scripts/install-deps)"
+        "no graphics adapter found for backend '{0}'{env} (on Debian, Mesa's llvmpipe gives GL and mesa-vulkan-drivers gives Vulkan: scripts/install-deps)",
+        env = narrowed_by_env(*.0)
     )]
     NoAdapter(BackendChoice),
     #[error("the adapter {adapter} refused a device: {message}")]
     Device { adapter: String, message: String },
     #[error("the run needs a {what} of {need}, but the adapter allows {limit}")]
     TooLarge { what: &'static str, need: u64, limit: u64 },
+}
+
+/// What `WGPU_BACKEND` did to an `auto` choice, for the no-adapter message
+/// (wgpu reads it and drops names it does not know).
+fn narrowed_by_env(choice: BackendChoice) -> String {
+    match std::env::var("WGPU_BACKEND") {
+        Ok(value) if choice == BackendChoice::Auto => format!(
+            " narrowed by WGPU_BACKEND={} (names wgpu knows: vulkan, gl, metal, dx12, comma-separated)",
+            crate::text::one_line(&value)
+        ),
+        _ => String::new(),
+    }
 }
 
 /// The device and queue of the chosen adapter.

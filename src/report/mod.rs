@@ -227,6 +227,10 @@ pub fn prepare_output(out: &Path) -> Result<(), ReportError> {
         let path = path.to_path_buf();
         move |error| ReportError { path, error }
     };
+    if out.exists() && !out.is_dir() {
+        let error = std::io::Error::other("exists and is not a directory: --out names the folder results go to");
+        return Err(io(out)(error));
+    }
     std::fs::create_dir_all(out).map_err(io(out))?;
     let probe = out.join(".occlu-write-test");
     std::fs::write(&probe, b"").map_err(io(&probe))?;
