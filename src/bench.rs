@@ -126,15 +126,7 @@ impl<'a> Session<'a> {
         needs_reference: bool,
         options: &RunOptions,
     ) -> Result<Session<'a>, GpuError> {
-        let side = gpu.device.limits().max_texture_dimension_2d;
-        let r = options.resolution;
-        if r.width > side || r.height > side {
-            return Err(GpuError::TooLarge {
-                what: "render target side",
-                need: u64::from(r.width.max(r.height)),
-                limit: u64::from(side),
-            });
-        }
+        RenderTargets::check(gpu, options.resolution)?;
         let start = Instant::now();
         let renderer = SceneRenderer::new(gpu, GpuScene::upload(gpu, scene)?);
         let targets = RenderTargets::new(gpu, options.resolution, modes);

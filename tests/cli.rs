@@ -593,3 +593,45 @@ fn messages_name_the_real_cause() {
     assert_eq!(lines.len(), 1, "{lines:?}");
     assert!(lines[0].contains("WGPU_BACKEND=bogus"), "{lines:?}");
 }
+
+#[test]
+fn a_resolution_beyond_the_adapters_buffers_is_refused_before_any_work() {
+    for gpu in common::gpus() {
+        let limit = gpu.device.limits().max_storage_buffer_binding_size;
+        // The smallest square picture whose depths (4 bytes a pixel) do not
+        // fit one storage binding; none where 8192 × 8192 fits.
+        let side = (((limit / 4) as f64).sqrt() as u64 + 1).max(1);
+        if side > 8192 {
+            continue;
+        }
+        let resolution = format!("{side}x{side}");
+        let backend = gpu.adapter.backend.clone();
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let started = std::time::Instant::now();
+        let run = occlu(&[
+            "bench",
+            "--scene",
+            "city:blocks=1",
+            "--frames",
+            "1",
+            "--backend",
+            &backend,
+            "--resolution",
+            &resolution,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        // The scene and adapter lines come first; then one error line.
+        let lines = own_stderr(&run);
+        assert_eq!(run.status.code(), Some(1), "{lines:?}");
+        let last = lines.last().unwrap();
+        assert!(
+            last.starts_with("occlu: error:") && last.contains("a smaller --resolution fits"),
+            "{lines:?}"
+        );
+        assert!(last.contains(&limit.to_string()) && !lines.iter().any(|l| l.contains("panicked")));
+        assert!(started.elapsed().as_secs() < 60, "refused before rendering");
+        assert!(!out.join("frames.csv").exists());
+    }
+}

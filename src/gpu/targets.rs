@@ -7,7 +7,7 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-use super::GpuContext;
+use super::{GpuContext, GpuError};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -107,6 +107,41 @@ pub fn texture_2d(
 }
 
 impl RenderTargets {
+    /// Whether the adapter can hold targets of `resolution` and what is read
+    /// from them: each side within its texture limit, and a depth per pixel
+    /// (the error measure's and the pictures' read-backs, 4 bytes a pixel)
+    /// within its buffer limits. Checked before anything is drawn, so a
+    /// resolution the flags accept cannot fail inside wgpu.
+    pub fn check(gpu: &GpuContext, resolution: Resolution) -> Result<(), GpuError> {
+        let limits = gpu.device.limits();
+        let fits = |what, need: u64, limit: u64| {
+            if need > limit {
+                Err(GpuError::TooLarge { what, need, limit })
+            } else {
+                Ok(())
+            }
+        };
+        let side = resolution.width.max(resolution.height);
+        fits(
+            "render target side",
+            u64::from(side),
+            u64::from(limits.max_texture_dimension_2d),
+        )?;
+        let depth_bytes = resolution.pixels() * 4;
+        fits(
+            "storage binding for a depth per pixel (bytes; a smaller --resolution fits)",
+            depth_bytes,
+            limits.max_storage_buffer_binding_size,
+        )?;
+        // Picture rows are padded to the copy alignment.
+        let row = u64::from(resolution.width * 4).next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
+        fits(
+            "buffer for a picture read-back (bytes; a smaller --resolution fits)",
+            depth_bytes.max(row * u64::from(resolution.height)),
+            limits.max_buffer_size,
+        )
+    }
+
     pub fn new(gpu: &GpuContext, resolution: Resolution, modes: usize) -> RenderTargets {
         let texture = |label: &str, format, usage| texture_2d(gpu, label, resolution, format, usage);
         let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
