@@ -77,7 +77,7 @@ pub fn run(
         world.advance(frame);
         // Rotating the order from frame to frame: no mode always runs right
         // after the reference.
-        let frame_rows = session.frame(frame, &camera, world, cullers, step as usize);
+        let frame_rows = session.frame(frame, &camera, world, cullers, step as usize)?;
         if recording {
             rows.extend(frame_rows);
         } else {
@@ -165,7 +165,7 @@ impl<'a> Session<'a> {
         world: &mut World,
         cullers: &mut [Box<dyn Culler + '_>],
         first: usize,
-    ) -> Vec<FrameStats> {
+    ) -> Result<Vec<FrameStats>, GpuError> {
         let gpu = self.gpu;
         self.renderer
             .set_camera(gpu, camera, self.options.resolution, &world.scene.objects);
@@ -268,7 +268,8 @@ impl<'a> Session<'a> {
             }
         };
         let gpu_ms = self.timer.as_mut().map(|t| t.read_ms(gpu));
-        rows.into_iter()
+        let rows = rows
+            .into_iter()
             .enumerate()
             .map(|(k, row)| {
                 let mut row = row.expect("every mode ran this frame");
@@ -288,7 +289,10 @@ impl<'a> Session<'a> {
                 });
                 row
             })
-            .collect()
+            .collect();
+        // A frame the GPU failed in measured nothing.
+        gpu.check()?;
+        Ok(rows)
     }
 
     /// Appends to [`Session::missed`] what mode `k` got wrong in this frame

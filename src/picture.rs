@@ -105,7 +105,7 @@ pub fn render(
     let mut wrong_pixels = 0;
     for f in options.frame.saturating_sub(LEAD_IN)..=options.frame {
         world.advance(f);
-        let rows = session.frame(f, &path.camera(f, resolution.aspect()), world, &mut cullers, 0);
+        let rows = session.frame(f, &path.camera(f, resolution.aspect()), world, &mut cullers, 0)?;
         wrong_pixels = rows[0].error_pixels.unwrap_or(0);
     }
     // Only the pictured frame's: the lead-in frames are not shown.

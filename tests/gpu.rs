@@ -349,3 +349,25 @@ fn the_forest_is_mostly_visible_where_the_city_is_mostly_hidden_and_every_mode_i
     );
     assert!(shares[1] < 0.3, "the city hides most of it: {shares:?}");
 }
+
+#[test]
+fn a_gpu_error_at_run_time_is_an_error_not_a_panic() {
+    for gpu in common::gpus() {
+        assert!(gpu.check().is_ok(), "a fresh device has failed nothing");
+        // Invalid on every backend: a mappable buffer may only be a copy
+        // target besides. wgpu's default handler would panic here.
+        let _ = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("invalid on purpose"),
+            size: 16,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        match gpu.check() {
+            Err(e @ GpuError::Failed(_)) => {
+                let line = e.to_string();
+                assert!(line.starts_with("the GPU failed: ") && !line.contains('\n'), "{line}");
+            }
+            other => panic!("{}: {other:?}", gpu.adapter),
+        }
+    }
+}

@@ -14,6 +14,7 @@ mod targets;
 mod timing;
 
 use std::fmt;
+use std::sync::{Arc, Mutex};
 
 use serde::Serialize;
 
@@ -104,6 +105,10 @@ pub enum GpuError {
     Device { adapter: String, message: String },
     #[error("the run needs a {what} of {need}, but the adapter allows {limit}")]
     TooLarge { what: &'static str, need: u64, limit: u64 },
+    /// An error the GPU reported while running (validation, out of memory,
+    /// device lost), caught instead of wgpu's default panic.
+    #[error("the GPU failed: {0}")]
+    Failed(String),
 }
 
 /// What `WGPU_BACKEND` did to an `auto` choice, for the no-adapter message
@@ -133,6 +138,9 @@ pub struct GpuContext {
     pub indirect_count: bool,
     /// How far box tests stay clear of rounding on this backend.
     pub depth_margins: DepthMargins,
+    /// The first error the device reported outside any error scope, or its
+    /// loss; [`GpuContext::check`] turns it into a [`GpuError`].
+    failure: Arc<Mutex<Option<String>>>,
 }
 
 impl GpuContext {
@@ -183,6 +191,19 @@ impl GpuContext {
             adapter: info.name.clone(),
             message: e.to_string(),
         })?;
+        // wgpu's default handler panics; keep the first error for check().
+        let failure = Arc::new(Mutex::new(None));
+        let record = |failure: &Arc<Mutex<Option<String>>>| {
+            let failure = Arc::clone(failure);
+            move |message: String| {
+                let mut first = failure.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+                first.get_or_insert(crate::text::one_line(&message));
+            }
+        };
+        let on_error = record(&failure);
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| on_error(e.to_string())));
+        let on_loss = record(&failure);
+        device.set_device_lost_callback(move |reason, message| on_loss(format!("device lost ({reason:?}): {message}")));
         Ok(GpuContext {
             device,
             queue,
@@ -202,13 +223,23 @@ impl GpuContext {
             gpu_driven,
             indirect_count,
             depth_margins: DepthMargins::for_backend(info.backend),
+            failure,
         })
+    }
+
+    /// The first error the GPU reported since the device was opened, if any.
+    pub fn check(&self) -> Result<(), GpuError> {
+        let failure = self.failure.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        match failure.as_ref() {
+            Some(message) => Err(GpuError::Failed(message.clone())),
+            None => Ok(()),
+        }
     }
 
     /// Blocks until the GPU has finished everything submitted so far.
     pub fn wait_idle(&self) {
-        // A lost device is reported by wgpu's own error handler; waiting on
-        // it cannot fail any other way here.
+        // A lost device is recorded by the device-lost callback and reported
+        // by check(); waiting on it cannot fail any other way here.
         let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
     }
 }

@@ -366,7 +366,7 @@ pub fn run_case(
         };
         outcome
             .rows
-            .extend(session.frame(frame as u32, &camera, &mut world, cullers, frame));
+            .extend(session.frame(frame as u32, &camera, &mut world, cullers, frame)?);
         if keep_depth {
             outcome
                 .depths
