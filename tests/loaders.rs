@@ -146,6 +146,39 @@ fn gltf_with_external_buffer_loads() {
     assert_eq!(load_file(&gltf).unwrap().triangles(), 12);
 }
 
+#[test]
+fn gltf_buffers_outside_the_models_folder_are_refused() {
+    // A valid buffer one folder up, one in a subfolder, and a link out.
+    let root = tempfile::tempdir().unwrap();
+    let model_dir = root.path().join("model");
+    std::fs::create_dir_all(model_dir.join("sub")).unwrap();
+    let mut w = GltfWriter::default();
+    let (p, i) = cube();
+    let m = w.mesh("cube", &[(&p, Some(&i), 4)]);
+    let n = w.node(json!({"mesh": m}));
+    write(root.path(), "outside.bin", w.bin());
+    write(&model_dir.join("sub"), "inside.bin", w.bin());
+    std::os::unix::fs::symlink(root.path().join("outside.bin"), model_dir.join("link.bin")).unwrap();
+    let load = |uri: &str| load_file(&write(&model_dir, "m.gltf", w.gltf_external(&[n], uri)));
+    assert_eq!(load("sub/inside.bin").unwrap().triangles(), 12);
+    assert_eq!(load("./sub/inside.bin").unwrap().triangles(), 12);
+    let outside = root.path().join("outside.bin");
+    for (uri, why) in [
+        ("../outside.bin", "leaves the model's folder"),
+        ("sub/../../outside.bin", "leaves the model's folder"),
+        ("%2E%2E/outside.bin", "leaves the model's folder"),
+        (outside.to_str().unwrap(), "leaves the model's folder"),
+        (&format!("file://{}", outside.display()), "is not a relative path"),
+        ("link.bin", "through a link"),
+    ] {
+        let e = load(uri).err().unwrap_or_else(|| panic!("{uri} was read")).to_string();
+        assert!(
+            e.contains(why) && e.contains("buffer 0") && !e.contains('\n'),
+            "{uri}: {e}"
+        );
+    }
+}
+
 /// Loads a GLB with one cube primitive after `edit` changes its JSON.
 fn edited_glb(edit: impl FnOnce(&mut GltfWriter)) -> Result<occlu::scene::Scene, occlu::scene::SceneError> {
     let mut w = GltfWriter::default();

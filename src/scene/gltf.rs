@@ -4,7 +4,7 @@
 //! triangle primitive. Images are never decoded: visibility needs positions.
 
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Component, Path};
 
 use base64::Engine as _;
 use glam::{DAffine3, DMat4, DVec3};
@@ -300,7 +300,7 @@ fn buffer_data(path: &Path, gltf: &gltf::Gltf, buffer: &gltf::Buffer) -> Result<
                 .map_err(|e| error(format!("data URI does not decode: {e}")))?
         }
         gltf::buffer::Source::Uri(uri) => {
-            let file = path.parent().unwrap_or(Path::new(".")).join(percent_decode(uri));
+            let file = beside_the_model(path, uri).map_err(error)?;
             std::fs::read(&file).map_err(|e| error(format!("{}: {e}", file.display())))?
         }
     };
@@ -313,6 +313,40 @@ fn buffer_data(path: &Path, gltf: &gltf::Gltf, buffer: &gltf::Buffer) -> Result<
     }
     data.truncate(buffer.length());
     Ok(data)
+}
+
+/// The file a buffer URI names, which must lie in the model's folder or
+/// below it. A model from elsewhere must not make occlu read any other file
+/// (`../../etc/passwd`, `/home/…`, `file:` URLs): the URI must be a relative
+/// path without `..`, and once links are resolved the file must still lie
+/// under the folder.
+fn beside_the_model(model: &Path, uri: &str) -> Result<std::path::PathBuf, String> {
+    let refuse = |why: &str| {
+        Err(format!(
+            "URI '{}' {why}: buffers must lie in the model's folder or below it",
+            one_line(uri)
+        ))
+    };
+    let relative = percent_decode(uri);
+    let relative = Path::new(&relative);
+    if uri.contains(':') {
+        return refuse("is not a relative path");
+    }
+    if relative
+        .components()
+        .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
+    {
+        return refuse("leaves the model's folder");
+    }
+    let folder = model.parent().unwrap_or(Path::new("."));
+    let file = folder.join(relative);
+    // Resolved, a link inside the folder may still point out of it.
+    if let (Ok(folder), Ok(real)) = (folder.canonicalize(), file.canonicalize())
+        && !real.starts_with(&folder)
+    {
+        return refuse("leads out of the model's folder through a link");
+    }
+    Ok(file)
 }
 
 /// URIs in glTF are percent-encoded (a space is `%20`).
