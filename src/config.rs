@@ -110,7 +110,7 @@ pub struct BenchPlan {
 impl BenchConfig {
     pub fn load(path: &Path) -> Result<BenchConfig, ConfigError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|error| ConfigError::Io {
+        let text = crate::input::read_text(path, crate::input::TEXT_LIMIT).map_err(|error| ConfigError::Io {
             path: name.clone(),
             error,
         })?;

@@ -16,6 +16,7 @@ pub mod config;
 pub mod cull;
 pub mod gpu;
 pub mod hierarchy;
+pub mod input;
 pub mod measure;
 pub mod object_set;
 pub mod picture;

@@ -635,3 +635,33 @@ fn a_resolution_beyond_the_adapters_buffers_is_refused_before_any_work() {
         assert!(!out.join("frames.csv").exists());
     }
 }
+
+#[test]
+fn input_that_never_ends_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let endless = dir.path().join("endless.obj");
+    std::os::unix::fs::symlink("/dev/zero", &endless).unwrap();
+    let started = std::time::Instant::now();
+    fails_with(
+        &["info", endless.to_str().unwrap()],
+        2,
+        &["endless.obj", "not a regular file"],
+    );
+    // A FIFO would block a reader until something writes to it.
+    let fifo = dir.path().join("path.json");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    let out = dir.path().join("out");
+    fails_with(
+        &[
+            "bench",
+            "--path",
+            fifo.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        2,
+        &["path.json", "not a regular file"],
+    );
+    assert!(started.elapsed().as_secs() < 20, "neither read to its end");
+}

@@ -114,7 +114,7 @@ pub struct CameraPath {
 impl CameraPath {
     pub fn load(path: &Path) -> Result<CameraPath, PathError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|error| PathError::Io {
+        let text = crate::input::read_text(path, crate::input::TEXT_LIMIT).map_err(|error| PathError::Io {
             path: name.clone(),
             error,
         })?;

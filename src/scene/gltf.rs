@@ -301,7 +301,8 @@ fn buffer_data(path: &Path, gltf: &gltf::Gltf, buffer: &gltf::Buffer) -> Result<
         }
         gltf::buffer::Source::Uri(uri) => {
             let file = beside_the_model(path, uri).map_err(error)?;
-            std::fs::read(&file).map_err(|e| error(format!("{}: {e}", file.display())))?
+            crate::input::read_file(&file, crate::input::MODEL_LIMIT)
+                .map_err(|e| error(format!("{}: {e}", file.display())))?
         }
     };
     if data.len() < buffer.length() {

@@ -151,7 +151,7 @@ pub fn load(spec: &SceneSpec, options: &LoadOptions) -> Result<Scene, SceneError
 fn load_file(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     // The format is checked before reading, so a wrong file is not read whole.
     loader_for(path)?;
-    let bytes = std::fs::read(path).map_err(|error| SceneError::Io {
+    let bytes = crate::input::read_file(path, crate::input::MODEL_LIMIT).map_err(|error| SceneError::Io {
         path: path.into(),
         error,
     })?;
