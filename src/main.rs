@@ -18,7 +18,7 @@ use occlu::cull::{MODES, ModeError, ModeInfo, ModeParams, create, parse_modes};
 use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::picture::{PictureError, PictureOptions};
-use occlu::report::compare::{CompareError, Metric};
+use occlu::report::compare::{CompareError, CompareOptions, Metric};
 use occlu::report::{ReportError, SceneFacts};
 use occlu::scene::builtin::SCENES;
 use occlu::scene::{LoadOptions, Scene, SceneError, SceneSpec, load};
@@ -100,6 +100,17 @@ enum Command {
         /// Metrics to gate on, comma-separated [default: all].
         #[arg(long, value_enum, value_delimiter = ',')]
         metric: Vec<Metric>,
+        /// Let the new run lack modes or metrics the base measured (e.g. run
+        /// with fewer --modes or with --no-error) without failing.
+        #[arg(long)]
+        allow_missing: bool,
+        /// Compare runs from different adapters or backends (counters only:
+        /// frame times are not comparable across them).
+        #[arg(long)]
+        cross_adapter: bool,
+        /// Print the verdicts as JSON (for machines) instead of the table.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -301,7 +312,22 @@ fn main() -> ExitCode {
             new,
             max_regression,
             metric,
-        } => compare(&base, &new, max_regression, &metric),
+            allow_missing,
+            cross_adapter,
+            json,
+        } => {
+            let options = CompareOptions {
+                max_regression_pct: max_regression,
+                metrics: if metric.is_empty() {
+                    Metric::ALL.to_vec()
+                } else {
+                    metric
+                },
+                allow_missing,
+                cross_adapter,
+            };
+            compare(&base, &new, &options, json)
+        }
     };
     match result {
         Ok(code) => code,
@@ -459,10 +485,18 @@ const STRESS_RESOLUTION: Resolution = Resolution {
     height: 300,
 };
 
-fn compare(base: &std::path::Path, new: &std::path::Path, pct: f64, metrics: &[Metric]) -> anyhow::Result<ExitCode> {
-    let metrics = if metrics.is_empty() { &Metric::ALL[..] } else { metrics };
-    let comparison = occlu::report::compare::compare(base, new, pct, metrics)?;
-    emit(&occlu::report::compare::render(&comparison))?;
+fn compare(
+    base: &std::path::Path,
+    new: &std::path::Path,
+    options: &CompareOptions,
+    json: bool,
+) -> anyhow::Result<ExitCode> {
+    let comparison = occlu::report::compare::compare(base, new, options)?;
+    if json {
+        emit(&(serde_json::to_string_pretty(&comparison)? + "\n"))?;
+    } else {
+        emit(&occlu::report::compare::render(&comparison))?;
+    }
     let regressions: Vec<String> = comparison
         .regressions()
         .map(|c| match (c.base, c.new) {

@@ -665,3 +665,84 @@ fn input_that_never_ends_is_refused_at_once() {
     );
     assert!(started.elapsed().as_secs() < 20, "neither read to its end");
 }
+
+#[test]
+fn compare_fails_on_what_the_new_run_leaves_out_and_refuses_other_adapters() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "bench",
+            "--scene",
+            "city:blocks=1",
+            "--frames",
+            "8",
+            "--warmup",
+            "0",
+            "--resolution",
+            "64x48",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let result = occlu(&args);
+        assert!(result.status.success(), "{:?}", own_stderr(&result));
+        out.to_str().unwrap().to_string()
+    };
+    let base = run("base", &["--modes", "vfc,omq"]);
+    let fewer = run("fewer", &["--modes", "vfc"]);
+    let blind = run("blind", &["--modes", "vfc,omq", "--no-error"]);
+
+    let missing_mode = occlu(&["compare", &base, &fewer]);
+    assert_eq!(missing_mode.status.code(), Some(1), "{:?}", own_stderr(&missing_mode));
+    assert!(stdout(&missing_mode).contains("MISSING") && own_stderr(&missing_mode).join(" ").contains("omq"));
+    let allowed = occlu(&[
+        "compare",
+        &base,
+        &fewer,
+        "--allow-missing",
+        "--metric",
+        "triangles_drawn",
+    ]);
+    assert_eq!(allowed.status.code(), Some(0), "{:?}", own_stderr(&allowed));
+    assert!(stdout(&allowed).contains("note: mode omq is in the base run only"));
+
+    let missing_error = occlu(&["compare", &base, &blind, "--metric", "error_pixels,missed_objects"]);
+    assert_eq!(missing_error.status.code(), Some(1), "{}", stdout(&missing_error));
+    assert!(own_stderr(&missing_error).join(" ").contains("vfc error_pixels"));
+
+    // Few frames: the table says what "within noise" rests on.
+    let same = occlu(&["compare", &base, &base]);
+    assert_eq!(same.status.code(), Some(0));
+    assert!(
+        stdout(&same).contains("8 frames: frame_ms is 'within noise' when"),
+        "{}",
+        stdout(&same)
+    );
+
+    // Another adapter: refused, unless asked.
+    let other = dir.path().join("other");
+    tampered_copy(std::path::Path::new(&base), &other, &|_| {});
+    let summary = std::fs::read_to_string(other.join("summary.json")).unwrap();
+    let mut summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    summary["adapter"]["name"] = "Another GPU".into();
+    std::fs::write(other.join("summary.json"), summary.to_string()).unwrap();
+    let other = other.to_str().unwrap();
+    fails_with(
+        &["compare", &base, other],
+        2,
+        &["different adapters", "--cross-adapter"],
+    );
+    let crossed = occlu(&["compare", &base, other, "--cross-adapter", "--json"]);
+    assert_eq!(crossed.status.code(), Some(0), "{:?}", own_stderr(&crossed));
+    let verdicts: serde_json::Value = serde_json::from_str(&stdout(&crossed)).unwrap();
+    assert_eq!(verdicts["changes"].as_array().unwrap().len(), 2 * 6);
+    assert!(
+        verdicts["changes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|c| c["verdict"] == "same")
+    );
+    assert!(verdicts["notes"][0].as_str().unwrap().contains("Another GPU"));
+}

@@ -7,6 +7,11 @@
 //! `--max-regression` percent *and* the new median minus its MAD lies above
 //! the base median plus its MAD, so noise within the measured spread passes.
 //! Statistics are recomputed from each run's frames.csv.
+//!
+//! A comparison cannot pass by leaving things out: a mode or a measured
+//! metric of the base missing from the new run fails it (unless
+//! `allow_missing`), and runs on different adapters are refused (unless
+//! `cross_adapter`: their counters compare, their times do not).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -73,8 +78,18 @@ pub enum Verdict {
     /// Worse, but within the threshold or the measured spread.
     Noise,
     Regression,
-    /// The metric was not measured in one of the runs.
+    /// The base measured it and the new run did not (a mode left out, or
+    /// `--no-error`): fails the comparison unless missing is allowed.
+    Missing,
+    /// The metric was not measured in one of the runs, and that is allowed.
     Unmeasured,
+}
+
+impl Verdict {
+    /// Whether it fails the comparison.
+    pub fn fails(&self) -> bool {
+        matches!(self, Verdict::Regression | Verdict::Missing)
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -86,17 +101,38 @@ pub struct Change {
     pub verdict: Verdict,
 }
 
+#[derive(Clone, Debug, Serialize)]
 pub struct Comparison {
     pub changes: Vec<Change>,
-    /// Modes in only one of the runs, and other differences worth a look.
+    /// Modes in only one of the runs, small samples, and other differences
+    /// worth a look.
     pub notes: Vec<String>,
 }
 
 impl Comparison {
+    /// The changes that fail the comparison.
     pub fn regressions(&self) -> impl Iterator<Item = &Change> {
-        self.changes.iter().filter(|c| c.verdict == Verdict::Regression)
+        self.changes.iter().filter(|c| c.verdict.fails())
     }
 }
+
+/// How strict a comparison is.
+#[derive(Clone, Debug)]
+pub struct CompareOptions {
+    /// Allowed growth of mean frame time, percent.
+    pub max_regression_pct: f64,
+    pub metrics: Vec<Metric>,
+    /// A mode or metric of the base missing from the new run is a note, not
+    /// a failure.
+    pub allow_missing: bool,
+    /// Runs on different adapters or backends are compared (counters only
+    /// mean something then).
+    pub cross_adapter: bool,
+}
+
+/// Frames below which the frame-time noise test (median ± MAD) says
+/// little; comparisons of fewer carry a note.
+pub const FEW_FRAMES: u32 = 30;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CompareError {
@@ -106,14 +142,14 @@ pub enum CompareError {
     Different(String),
     #[error("--max-regression must be a percentage of 0 or more, got {0}")]
     Threshold(f64),
+    #[error(
+        "the runs used different adapters ({base} vs {new}); --cross-adapter compares them anyway (counters compare, times do not)"
+    )]
+    Adapters { base: String, new: String },
 }
 
-pub fn compare(
-    base: &Path,
-    new: &Path,
-    max_regression_pct: f64,
-    metrics: &[Metric],
-) -> Result<Comparison, CompareError> {
+pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comparison, CompareError> {
+    let max_regression_pct = options.max_regression_pct;
     if !(max_regression_pct >= 0.0 && max_regression_pct.is_finite()) {
         return Err(CompareError::Threshold(max_regression_pct));
     }
@@ -135,24 +171,42 @@ pub fn compare(
         )));
     }
     let mut notes = Vec::new();
-    if base_summary.adapter != new_summary.adapter {
+    let (adapter_a, adapter_b) = (&base_summary.adapter, &new_summary.adapter);
+    if (&adapter_a.name, &adapter_a.backend) != (&adapter_b.name, &adapter_b.backend) {
+        if !options.cross_adapter {
+            return Err(CompareError::Adapters {
+                base: adapter_a.to_string(),
+                new: adapter_b.to_string(),
+            });
+        }
         notes.push(format!(
-            "different adapters ({} vs {}): frame times are not comparable; counters are",
-            base_summary.adapter, new_summary.adapter
+            "different adapters ({adapter_a} vs {adapter_b}): frame times are not comparable; counters are"
+        ));
+    }
+    let frames = base_summary.frames.min(new_summary.frames);
+    if frames < FEW_FRAMES {
+        notes.push(format!(
+            "{frames} frames: frame_ms is 'within noise' when the new mean is at most {max_regression_pct}% above the base's or the new median − MAD does not clear the base median + MAD; on fewer than {FEW_FRAMES} frames that spread says little"
         ));
     }
     let base_modes = recompute(&base_summary, &base_rows);
     let new_modes = recompute(&new_summary, &new_rows);
+    let missing = if options.allow_missing {
+        Verdict::Unmeasured
+    } else {
+        Verdict::Missing
+    };
     let mut changes = Vec::new();
     for b in &base_modes {
-        let Some(n) = new_modes.iter().find(|n| n.name == b.name) else {
+        let n = new_modes.iter().find(|n| n.name == b.name);
+        if n.is_none() {
             notes.push(format!("mode {} is in the base run only", b.name));
-            continue;
-        };
-        for &metric in metrics {
-            let (base_value, new_value) = (metric.value(b), metric.value(n));
-            let verdict = match (base_value, new_value) {
-                (Some(x), Some(y)) => verdict(metric, x, y, b, n, max_regression_pct),
+        }
+        for &metric in &options.metrics {
+            let (base_value, new_value) = (metric.value(b), n.and_then(|n| metric.value(n)));
+            let verdict = match (base_value, new_value, n) {
+                (Some(x), Some(y), Some(n)) => verdict(metric, x, y, b, n, max_regression_pct),
+                (Some(_), None, _) => missing.clone(),
                 _ => Verdict::Unmeasured,
             };
             changes.push(Change {
@@ -243,6 +297,7 @@ pub fn render(c: &Comparison) -> String {
             Verdict::Better => "better",
             Verdict::Noise => "within noise",
             Verdict::Regression => "REGRESSION",
+            Verdict::Missing => "MISSING",
             Verdict::Unmeasured => "not measured",
         };
         let _ = writeln!(
