@@ -746,3 +746,18 @@ fn compare_fails_on_what_the_new_run_leaves_out_and_refuses_other_adapters() {
     );
     assert!(verdicts["notes"][0].as_str().unwrap().contains("Another GPU"));
 }
+
+#[test]
+fn a_headless_run_prints_no_wayland_noise() {
+    // libwayland complains about a missing XDG_RUNTIME_DIR when the Vulkan
+    // loader probes for a display; occlu gives it a private folder.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .args(["stress", "--cases", "on-face", "--modes", "vfc"])
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let stderr = common::stderr(&out);
+    assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
+    assert!(stderr.lines().all(|l| l.starts_with("adapter: ")), "{stderr}");
+}
