@@ -67,6 +67,10 @@ pub enum ConfigError {
     Mode(#[from] ModeError),
     #[error("--sweep '{0}' is not MODE.KEY=V1,V2,...")]
     Sweep(String),
+    #[error("--sweep and --param both set {0}: the sweep sets it run by run, so give it in one of them")]
+    SweptAndSet(String),
+    #[error("--sweep names {key}={value} twice: each value runs once")]
+    SweptTwice { key: String, value: String },
 }
 
 /// The scene a model file, a built-in scene (the city when neither is
@@ -181,8 +185,18 @@ impl BenchConfig {
         }
         let params = ModeParams::parse(&self.params.unwrap_or_default(), &modes)?;
         if let Some(s) = &sweep {
-            for value in &s.values {
-                ModeParams::parse(&[format!("{}.{}={value}", s.mode, s.key)], &[s.mode])?;
+            let key = format!("{}.{}", s.mode, s.key);
+            if params.is_set(&key) {
+                return Err(ConfigError::SweptAndSet(key));
+            }
+            for (i, value) in s.values.iter().enumerate() {
+                ModeParams::parse(&[format!("{key}={value}")], &[s.mode])?;
+                if s.values[..i].contains(value) {
+                    return Err(ConfigError::SweptTwice {
+                        key,
+                        value: value.clone(),
+                    });
+                }
             }
         }
         Ok(BenchPlan {
@@ -306,6 +320,27 @@ mod tests {
             Ok("32x24".into()),
             "the file still counts"
         );
+    }
+
+    #[test]
+    fn a_sweep_refuses_a_param_of_its_key_and_a_value_twice() {
+        let plan = |sweep: &str, params: &[&str]| {
+            BenchConfig {
+                sweep: Some(sweep.into()),
+                params: Some(params.iter().map(|p| p.to_string()).collect()),
+                ..BenchConfig::default()
+            }
+            .plan()
+        };
+        assert!(matches!(
+            plan("omq.factor=0.5,0.7", &["omq.factor=0.1"]),
+            Err(ConfigError::SweptAndSet(k)) if k == "omq.factor"
+        ));
+        assert!(matches!(
+            plan("omq.factor=0.5,0.7,0.5", &[]),
+            Err(ConfigError::SweptTwice { value, .. }) if value == "0.5"
+        ));
+        assert!(plan("omq.factor=0.5,0.7", &["omq.om=32x24"]).is_ok());
     }
 
     #[test]

@@ -402,6 +402,11 @@ impl ModeParams {
         Ok(params)
     }
 
+    /// Whether `key` (`MODE.KEY`) was given a value.
+    pub fn is_set(&self, key: &str) -> bool {
+        self.values.contains_key(key)
+    }
+
     /// These parameters with `key` (`MODE.KEY`) set to `value`.
     pub fn with(&self, key: &str, value: &str) -> ModeParams {
         let mut values = self.values.clone();
