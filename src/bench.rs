@@ -369,7 +369,11 @@ pub enum BenchError {
 impl BenchError {
     /// Whether the user's input was at fault (as opposed to the GPU).
     pub fn is_input_error(&self) -> bool {
-        !matches!(self, BenchError::Gpu(_))
+        match self {
+            BenchError::Gpu(_) => false,
+            BenchError::Report(e) => e.is_input_error(),
+            _ => true,
+        }
     }
 }
 
@@ -404,7 +408,8 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
     // A bad path file or output directory is reported before a long scene
     // load, not after the run.
     let path_file = plan.path.as_deref().map(CameraPath::load).transpose()?;
-    prepare_output(&plan.out)?;
+    // Held until the results are written: no second run writes here.
+    let _claim = prepare_output(&plan.out)?;
     let start = Instant::now();
     let scene = crate::scene::load(
         &plan.scene,
@@ -484,7 +489,7 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
             parameters: culler.parameters(),
         })
         .collect();
-    let summary = Summary {
+    let mut summary = Summary {
         schema_version: SCHEMA_VERSION,
         tool: ToolInfo::current(),
         adapter: gpu.adapter.clone(),
@@ -510,7 +515,8 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
             values: s.values.clone(),
         }),
         missed: MissedSummary::of(&output.missed),
+        frames_csv: None,
     };
-    let files = write_results(&plan.out, &summary, &output.rows, &output.missed)?;
+    let files = write_results(&plan.out, &mut summary, &output.rows, &output.missed)?;
     Ok(BenchOutcome { summary, files })
 }

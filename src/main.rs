@@ -375,7 +375,7 @@ fn is_input_error(e: &anyhow::Error) -> bool {
             || c.is::<SceneError>()
             || c.is::<PathError>()
             || c.is::<ConfigError>()
-            || c.is::<ReportError>()
+            || c.downcast_ref::<ReportError>().is_some_and(ReportError::is_input_error)
             || c.is::<CompareError>()
             || c.is::<ModeError>()
             || c.downcast_ref::<StressError>().is_some_and(StressError::is_input_error)
@@ -471,9 +471,7 @@ fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
         emit(&list)?;
         return Ok(ExitCode::SUCCESS);
     }
-    if let Some(out) = &args.out {
-        occlu::report::prepare_output(out)?;
-    }
+    let _claim = args.out.as_deref().map(occlu::report::prepare_output).transpose()?;
     let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
     eprintln!("adapter: {}", gpu.adapter);
     let bar = ProgressBar::new(0).with_style(

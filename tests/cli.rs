@@ -385,7 +385,6 @@ fn png_colours(path: &std::path::Path) -> (u32, u32, std::collections::HashSet<[
 /// Copies a run and rewrites its frames.csv with `edit` applied to each row.
 fn tampered_copy(run: &std::path::Path, to: &std::path::Path, edit: &dyn Fn(&mut occlu::measure::FrameStats)) {
     std::fs::create_dir_all(to).unwrap();
-    std::fs::copy(run.join("summary.json"), to.join("summary.json")).unwrap();
     let mut reader = csv::Reader::from_path(run.join("frames.csv")).unwrap();
     let mut writer = csv::Writer::from_path(to.join("frames.csv")).unwrap();
     for row in reader.deserialize() {
@@ -394,6 +393,13 @@ fn tampered_copy(run: &std::path::Path, to: &std::path::Path, edit: &dyn Fn(&mut
         writer.serialize(row).unwrap();
     }
     writer.flush().unwrap();
+    // As a run that measured these rows would have: summary.json records
+    // frames.csv's fingerprint.
+    let mut summary: occlu::report::Summary =
+        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+    let frames = std::fs::read(to.join("frames.csv")).unwrap();
+    summary.frames_csv = Some(occlu::report::Fingerprint::of(&frames));
+    std::fs::write(to.join("summary.json"), serde_json::to_string_pretty(&summary).unwrap()).unwrap();
 }
 
 #[test]
@@ -760,4 +766,111 @@ fn a_headless_run_prints_no_wayland_noise() {
     let stderr = common::stderr(&out);
     assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
     assert!(stderr.lines().all(|l| l.starts_with("adapter: ")), "{stderr}");
+}
+
+/// A tiny bench run into `out`.
+fn tiny_run(out: &std::path::Path) -> std::process::Output {
+    occlu(&bench_args(&["--modes", "vfc"], out.to_str().unwrap()))
+}
+
+#[test]
+fn result_folders_are_claimed_whole_and_checked_when_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a");
+    let run = tiny_run(&a);
+    assert!(run.status.success(), "{:?}", own_stderr(&run));
+    let left: Vec<String> = std::fs::read_dir(&a)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(left.is_empty(), "no staging folder or lock left: {left:?}");
+
+    // A frames.csv cut short, or another run's, is refused.
+    let b = dir.path().join("b");
+    tampered_copy(&a, &b, &|_| {});
+    let frames = std::fs::read(a.join("frames.csv")).unwrap();
+    std::fs::write(b.join("frames.csv"), &frames[..frames.len() - 10]).unwrap();
+    let (a_str, b_str) = (a.to_str().unwrap(), b.to_str().unwrap());
+    fails_with(
+        &["compare", a_str, b_str],
+        2,
+        &["frames.csv", "does not match summary.json"],
+    );
+    let c = dir.path().join("c");
+    assert!(
+        occlu(&bench_args(&["--modes", "omq"], c.to_str().unwrap()))
+            .status
+            .success()
+    );
+    std::fs::copy(c.join("frames.csv"), b.join("frames.csv")).unwrap();
+    fails_with(&["plot", b_str], 2, &["does not match summary.json"]);
+
+    // A folder another run is writing into is refused; a lock whose
+    // process is gone is taken over.
+    std::fs::write(a.join(".occlu.lock"), std::process::id().to_string()).unwrap();
+    fails_with(
+        &bench_args(&["--modes", "vfc"], a_str),
+        2,
+        &[
+            ".occlu.lock",
+            &format!("occlu process {} is writing results", std::process::id()),
+        ],
+    );
+    let gone = std::process::Command::new("true").spawn().unwrap();
+    let pid = gone.id();
+    gone.wait_with_output().unwrap();
+    std::fs::write(a.join(".occlu.lock"), pid.to_string()).unwrap();
+    let run = tiny_run(&a);
+    assert!(run.status.success(), "{:?}", own_stderr(&run));
+    assert!(!a.join(".occlu.lock").exists());
+}
+
+#[test]
+fn a_full_disk_fails_with_exit_1_and_leaves_the_earlier_results() {
+    let dir = tempfile::tempdir().unwrap();
+    let mount = dir.path().join("small");
+    std::fs::create_dir(&mount).unwrap();
+    let mounted = std::process::Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=4m", "tmpfs", mount.to_str().unwrap()])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if !mounted {
+        eprintln!("skipped: mounting a small tmpfs needs root");
+        return;
+    }
+    let unmount = || {
+        let _ = std::process::Command::new("umount").arg(&mount).status();
+    };
+    let out = mount.join("run");
+    let first = tiny_run(&out);
+    let earlier = std::fs::read(out.join("summary.json"));
+    // Leave about 16 KiB free: too little for the charts.
+    let free = || {
+        let df = std::process::Command::new("df")
+            .args(["-B1", "--output=avail"])
+            .arg(&mount)
+            .output()
+            .unwrap();
+        String::from_utf8_lossy(&df.stdout)
+            .lines()
+            .nth(1)
+            .unwrap()
+            .trim()
+            .parse::<u64>()
+            .unwrap()
+    };
+    let filler = vec![0u8; free().saturating_sub(16 << 10) as usize];
+    let filled = std::fs::write(mount.join("filler"), filler);
+    let second = tiny_run(&out);
+    let after = std::fs::read(out.join("summary.json"));
+    let staging_left = out.join(".occlu-staging").exists();
+    unmount();
+    assert!(first.status.success() && filled.is_ok(), "{:?}", own_stderr(&first));
+    let lines = own_stderr(&second);
+    assert_eq!(second.status.code(), Some(1), "{lines:?}");
+    assert!(lines.last().unwrap().contains("No space left on device"), "{lines:?}");
+    assert_eq!(earlier.unwrap(), after.unwrap(), "the earlier results stand");
+    assert!(!staging_left, "no partial files");
 }

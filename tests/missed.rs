@@ -127,7 +127,7 @@ fn missed_csv_and_report_list_what_was_missed_and_an_exact_run_removes_the_list(
         first_y: (k > 2).then_some(k),
     }));
     summary.missed = MissedSummary::of(&missed);
-    let files = write_results(&run, &summary, &rows, &missed).unwrap();
+    let files = write_results(&run, &mut summary, &rows, &missed).unwrap();
     let csv_path = files.missed_csv.expect("written when something was missed");
     let csv = std::fs::read_to_string(&csv_path).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
@@ -146,7 +146,7 @@ fn missed_csv_and_report_list_what_was_missed_and_an_exact_run_removes_the_list(
     );
     assert!(!report.contains("part\\|10"), "only the first ten");
     summary.missed = MissedSummary::default();
-    let files = write_results(&run, &summary, &rows, &[]).unwrap();
+    let files = write_results(&run, &mut summary, &rows, &[]).unwrap();
     assert!(
         files.missed_csv.is_none() && !csv_path.exists(),
         "a stale list is removed"

@@ -40,6 +40,10 @@ pub struct Summary {
     /// What the modes got wrong; every row is in missed.csv.
     #[serde(default)]
     pub missed: MissedSummary,
+    /// frames.csv's fingerprint, set when the results are written (absent
+    /// in files from before it existed, which are read unchecked).
+    #[serde(default)]
+    pub frames_csv: Option<Fingerprint>,
 }
 
 /// The head of missed.csv, for report.md and machines.
@@ -157,6 +161,17 @@ pub struct ReportError {
     pub error: std::io::Error,
 }
 
+impl ReportError {
+    /// Whether the user's input was at fault (a missing run, a bad --out),
+    /// as opposed to the machine failing while running (a full disk).
+    pub fn is_input_error(&self) -> bool {
+        !matches!(
+            self.error.kind(),
+            std::io::ErrorKind::StorageFull | std::io::ErrorKind::QuotaExceeded | std::io::ErrorKind::WriteZero
+        )
+    }
+}
+
 /// The files a run wrote.
 pub struct ResultFiles {
     pub frames_csv: PathBuf,
@@ -173,9 +188,9 @@ fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<(), ReportError> {
         path: path.to_path_buf(),
         error,
     };
-    let mut csv = csv::Writer::from_path(path).map_err(|e| fail(std::io::Error::other(e)))?;
+    let mut csv = csv::Writer::from_path(path).map_err(|e| fail(e.into()))?;
     for row in rows {
-        csv.serialize(row).map_err(|e| fail(std::io::Error::other(e)))?;
+        csv.serialize(row).map_err(|e| fail(e.into()))?;
     }
     csv.flush().map_err(fail)
 }
@@ -190,11 +205,14 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(),
     let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().map_err(|e| fail(std::io::Error::other(e)))?;
-    writer
-        .write_image_data(rgb)
-        .map_err(|e| fail(std::io::Error::other(e)))?;
-    writer.finish().map_err(|e| fail(std::io::Error::other(e)))
+    // An I/O failure (a full disk) keeps its kind, so it exits as one.
+    let encoding = |e: png::EncodingError| match e {
+        png::EncodingError::IoError(io) => fail(io),
+        e => fail(std::io::Error::other(e)),
+    };
+    let mut writer = encoder.write_header().map_err(encoding)?;
+    writer.write_image_data(rgb).map_err(encoding)?;
+    writer.finish().map_err(encoding)
 }
 
 /// Reads a run directory's summary.json and frames.csv (for `occlu plot`
@@ -212,7 +230,15 @@ pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportErro
         ))));
     }
     let csv_path = dir.join("frames.csv");
-    let mut reader = csv::Reader::from_path(&csv_path).map_err(|e| io(csv_path.clone())(std::io::Error::other(e)))?;
+    let bytes = crate::input::read_file(&csv_path, crate::input::MODEL_LIMIT).map_err(io(csv_path.clone()))?;
+    if let Some(expected) = summary.frames_csv
+        && Fingerprint::of(&bytes) != expected
+    {
+        return Err(io(csv_path)(std::io::Error::other(
+            "does not match summary.json: written by another run, or changed or cut short since",
+        )));
+    }
+    let mut reader = csv::Reader::from_reader(bytes.as_slice());
     let rows = reader
         .deserialize()
         .collect::<Result<Vec<FrameStats>, _>>()
@@ -220,9 +246,24 @@ pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportErro
     Ok((summary, rows))
 }
 
-/// Creates `out` and checks that files can be written there, so a bad
-/// `--out` fails before a long run rather than after it.
-pub fn prepare_output(out: &Path) -> Result<(), ReportError> {
+/// A run's claim on its `--out` folder: `.occlu.lock`, holding the process
+/// id, removed when the claim is dropped (the run ended, well or not).
+#[must_use = "the folder is claimed only while the lock lives"]
+pub struct OutputLock {
+    path: PathBuf,
+}
+
+impl Drop for OutputLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// Creates `out`, checks that files can be written there (so a bad `--out`
+/// fails before a long run rather than after it) and claims it: a second
+/// run into the same folder is refused while the first runs. A lock left by
+/// a process that no longer runs (killed) is taken over.
+pub fn prepare_output(out: &Path) -> Result<OutputLock, ReportError> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |error| ReportError { path, error }
@@ -234,42 +275,158 @@ pub fn prepare_output(out: &Path) -> Result<(), ReportError> {
     std::fs::create_dir_all(out).map_err(io(out))?;
     let probe = out.join(".occlu-write-test");
     std::fs::write(&probe, b"").map_err(io(&probe))?;
-    std::fs::remove_file(&probe).map_err(io(&probe))
+    std::fs::remove_file(&probe).map_err(io(&probe))?;
+    let path = out.join(".occlu.lock");
+    for _ in 0..2 {
+        match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+            Ok(mut file) => {
+                use std::io::Write as _;
+                write!(file, "{}", std::process::id()).map_err(io(&path))?;
+                return Ok(OutputLock { path });
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                let holder = std::fs::read_to_string(&path)
+                    .ok()
+                    .and_then(|t| t.trim().parse::<u32>().ok());
+                // Where /proc tells, a holder that no longer runs left it.
+                let running = holder.is_some_and(|pid| Path::new(&format!("/proc/{pid}")).exists())
+                    || !Path::new("/proc/self").exists();
+                if running {
+                    let who = holder.map_or("another occlu run".to_string(), |pid| format!("occlu process {pid}"));
+                    return Err(io(&path)(std::io::Error::other(format!(
+                        "{who} is writing results into this folder; use another --out (or remove this file if no run is)"
+                    ))));
+                }
+                std::fs::remove_file(&path).map_err(io(&path))?;
+            }
+            Err(e) => return Err(io(&path)(e)),
+        }
+    }
+    Err(io(&path)(std::io::Error::other("could not claim the folder")))
 }
 
+/// Writes a run's result files into `out`, whole or not at all: every
+/// file is first written into a staging folder inside `out` and moved into
+/// place only once all of them are complete, so a failure (a full disk)
+/// leaves `out`'s earlier contents as they were. summary.json records
+/// frames.csv's fingerprint, which [`read_results`] checks.
 pub fn write_results(
     out: &Path,
-    summary: &Summary,
+    summary: &mut Summary,
     rows: &[FrameStats],
     missed: &[MissedObject],
 ) -> Result<ResultFiles, ReportError> {
+    debug_assert_eq!(summary.missed, MissedSummary::of(missed), "the summary heads this list");
+    let staging = out.join(STAGING);
+    let staged = write_staged(&staging, summary, rows, missed);
+    let moved = staged.and_then(|names| {
+        for name in &names {
+            std::fs::rename(staging.join(name), out.join(name)).map_err(|error| ReportError {
+                path: out.join(name),
+                error,
+            })?;
+        }
+        if missed.is_empty() {
+            // An earlier run's list must not pass for this run's.
+            let stale = out.join("missed.csv");
+            match std::fs::remove_file(&stale) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(ReportError { path: stale, error: e });
+                }
+                _ => {}
+            }
+        }
+        Ok(names)
+    });
+    let _ = std::fs::remove_dir_all(&staging);
+    let names = moved?;
+    let path = |name: &str| out.join(name);
+    Ok(ResultFiles {
+        frames_csv: path("frames.csv"),
+        summary_json: path("summary.json"),
+        report_md: path("report.md"),
+        missed_csv: (!missed.is_empty()).then(|| path("missed.csv")),
+        charts: names.iter().filter(|n| n.ends_with(".png")).map(|n| path(n)).collect(),
+    })
+}
+
+/// The folder inside `--out` that results are written into before they
+/// are moved into place.
+const STAGING: &str = ".occlu-staging";
+
+/// Writes every result file into `staging` (made afresh) and returns their
+/// names, frames.csv first.
+fn write_staged(
+    staging: &Path,
+    summary: &mut Summary,
+    rows: &[FrameStats],
+    missed: &[MissedObject],
+) -> Result<Vec<String>, ReportError> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |error| ReportError { path, error }
     };
-    debug_assert_eq!(summary.missed, MissedSummary::of(missed), "the summary heads this list");
-    std::fs::create_dir_all(out).map_err(io(out))?;
-    let missed_csv = out.join("missed.csv");
-    let files = ResultFiles {
-        frames_csv: out.join("frames.csv"),
-        summary_json: out.join("summary.json"),
-        report_md: out.join("report.md"),
-        missed_csv: (!missed.is_empty()).then(|| missed_csv.clone()),
-        charts: Vec::new(),
-    };
-    write_csv(&files.frames_csv, rows)?;
-    if missed.is_empty() {
-        // An earlier run's list must not pass for this run's.
-        match std::fs::remove_file(&missed_csv) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io(&missed_csv)(e)),
-            _ => {}
-        }
-    } else {
-        write_csv(&missed_csv, missed)?;
+    let _ = std::fs::remove_dir_all(staging);
+    std::fs::create_dir_all(staging).map_err(io(staging))?;
+    let mut names = vec!["frames.csv".to_string()];
+    let frames_csv = staging.join("frames.csv");
+    write_csv(&frames_csv, rows)?;
+    summary.frames_csv = Some(Fingerprint::of(&std::fs::read(&frames_csv).map_err(io(&frames_csv))?));
+    if !missed.is_empty() {
+        write_csv(&staging.join("missed.csv"), missed)?;
+        names.push("missed.csv".into());
     }
     let json = serde_json::to_string_pretty(summary).expect("summary serialises: no maps with non-string keys");
-    std::fs::write(&files.summary_json, json + "\n").map_err(io(&files.summary_json))?;
-    std::fs::write(&files.report_md, render_markdown(summary)).map_err(io(&files.report_md))?;
-    let charts = charts::write_charts(out, summary, rows)?;
-    Ok(ResultFiles { charts, ..files })
+    let summary_json = staging.join("summary.json");
+    std::fs::write(&summary_json, json + "\n").map_err(io(&summary_json))?;
+    let report_md = staging.join("report.md");
+    std::fs::write(&report_md, render_markdown(summary)).map_err(io(&report_md))?;
+    names.extend(["summary.json".to_string(), "report.md".to_string()]);
+    for chart in charts::write_charts(staging, summary, rows)? {
+        names.push(
+            chart
+                .file_name()
+                .expect("a chart is a file")
+                .to_string_lossy()
+                .into_owned(),
+        );
+    }
+    Ok(names)
+}
+
+/// What identifies a frames.csv: its length and FNV-1a hash. Not a defence
+/// against forgery, only against a file from another run or cut short.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct Fingerprint {
+    pub bytes: u64,
+    /// FNV-1a (64 bits) of the file, in hex.
+    #[serde(with = "hex64")]
+    pub fnv1a: u64,
+}
+
+impl Fingerprint {
+    pub fn of(bytes: &[u8]) -> Fingerprint {
+        let fnv1a = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+        });
+        Fingerprint {
+            bytes: bytes.len() as u64,
+            fnv1a,
+        }
+    }
+}
+
+/// A u64 as a hex string, which JSON readers that hold numbers in doubles
+/// keep whole.
+mod hex64 {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &u64, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&format!("{v:016x}"))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
+        let text = String::deserialize(d)?;
+        u64::from_str_radix(&text, 16).map_err(serde::de::Error::custom)
+    }
 }
