@@ -3,7 +3,7 @@
 //! while running).
 
 use std::fmt::Write as _;
-use std::io::Write as _;
+use std::io::{IsTerminal as _, Write as _};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -177,6 +177,17 @@ struct BenchArgs {
     /// Skip the reference render and error measure (faster; error columns stay empty).
     #[arg(long)]
     no_error: bool,
+    /// Print summary.json (every mode's statistics) to stdout instead of
+    /// report.md; report.md is still written.
+    #[arg(long)]
+    json: bool,
+    /// Also write FILE for github-action-benchmark (customSmallerIsBetter):
+    /// per mode frame ms mean and p95, triangles drawn, wrong pixels.
+    #[arg(long, value_name = "FILE")]
+    export_github_benchmark: Option<PathBuf>,
+    /// Print no progress and no notes on stderr, only errors.
+    #[arg(long, short)]
+    quiet: bool,
     /// A mode parameter, MODE.KEY=VALUE (repeatable), e.g. omq.om=80x60.
     #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
     params: Vec<String>,
@@ -406,7 +417,13 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         None => BenchConfig::default(),
     };
     let plan = flags.or(file).plan()?;
-    let bar = ProgressBar::hidden();
+    let quiet = args.quiet;
+    let note = |text: String| {
+        if !quiet {
+            eprintln!("{text}");
+        }
+    };
+    let mut progress = Progress::new(quiet, plan.warmup, format!("{} modes", plan.modes.len()));
     let outcome = execute(&plan, &mut |event| match event {
         BenchEvent::Loaded {
             scene,
@@ -414,50 +431,122 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
             load_ms,
             build_ms,
         } => {
-            eprintln!(
+            note(format!(
                 "scene: {}: {} objects, {} triangles (load {load_ms:.0} ms, hierarchy of {} nodes {build_ms:.0} ms)",
                 scene.source,
                 scene.objects.len(),
                 scene.triangles(),
                 hierarchy.nodes.len()
-            );
+            ));
             for w in &scene.warnings {
-                eprintln!("warning: {w}");
+                note(format!("warning: {w}"));
             }
         }
-        BenchEvent::Skipped { mode, reason } => eprintln!("skipped: {mode}: {reason}"),
-        BenchEvent::Adapter(adapter) => {
-            eprintln!("adapter: {adapter}");
-            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
-            bar.set_style(
-                ProgressStyle::with_template("{prefix} [{bar:32}] {pos}/{len} frames, {elapsed} elapsed, eta {eta}")
-                    .expect("static template")
-                    .progress_chars("=> "),
-            );
-            bar.set_prefix(format!("{} modes", plan.modes.len()));
-        }
-        BenchEvent::Frame { done, total } => {
-            bar.set_length(u64::from(total));
-            bar.set_position(u64::from(done));
-        }
+        BenchEvent::Skipped { mode, reason } => note(format!("skipped: {mode}: {reason}")),
+        BenchEvent::Adapter(adapter) => note(format!("adapter: {adapter}")),
+        BenchEvent::Frame { done, total } => progress.frame(done, total),
     })?;
-    bar.finish_and_clear();
-    emit(&occlu::report::render_markdown(&outcome.summary))?;
+    progress.finish();
+    if let Some(path) = &args.export_github_benchmark {
+        let entries = occlu::report::github::entries(&outcome.summary);
+        let json = serde_json::to_string_pretty(&entries)? + "\n";
+        occlu::report::write_whole(path, json.as_bytes())?;
+        note(format!("wrote {}", path.display()));
+    }
+    if args.json {
+        emit(&(serde_json::to_string_pretty(&outcome.summary)? + "\n"))?;
+    } else {
+        emit(&occlu::report::render_markdown(&outcome.summary))?;
+    }
     let files = &outcome.files;
     let missed = files
         .missed_csv
         .as_ref()
         .map(|p| format!(", {}", p.display()))
         .unwrap_or_default();
-    eprintln!(
+    note(format!(
         "results: {}, {}, {}{missed} and {} charts in {}",
         files.report_md.display(),
         files.summary_json.display(),
         files.frames_csv.display(),
         files.charts.len(),
         plan.out.display()
-    );
+    ));
     Ok(())
+}
+
+/// Progress of a bench run on stderr: a bar over the recorded frames in a
+/// terminal (warm-up frames first show as such), and outside one (a CI log)
+/// a line every few seconds; nothing when quiet.
+struct Progress {
+    bar: Option<ProgressBar>,
+    quiet: bool,
+    warmup: u32,
+    prefix: String,
+    started: Instant,
+    last_line: Option<Instant>,
+}
+
+/// Seconds between progress lines outside a terminal.
+const PROGRESS_EVERY: f64 = 5.0;
+
+impl Progress {
+    fn new(quiet: bool, warmup: u32, prefix: String) -> Progress {
+        Progress {
+            bar: None,
+            quiet,
+            warmup,
+            prefix,
+            started: Instant::now(),
+            last_line: None,
+        }
+    }
+
+    /// `done` of `total` frames, warm-up frames included, have run.
+    fn frame(&mut self, done: u32, total: u32) {
+        if self.quiet {
+            return;
+        }
+        let recorded = total.saturating_sub(self.warmup);
+        let (phase, at, of) = if done <= self.warmup {
+            ("warm-up frame", done, self.warmup)
+        } else {
+            ("frame", done - self.warmup, recorded)
+        };
+        if std::io::stderr().is_terminal() {
+            // Created with its length known, so it never shows 0/0.
+            let bar = self.bar.get_or_insert_with(|| {
+                ProgressBar::new(u64::from(recorded)).with_style(
+                    ProgressStyle::with_template("{prefix} [{bar:32}] {msg} {pos}/{len}, {elapsed} elapsed, eta {eta}")
+                        .expect("static template")
+                        .progress_chars("=> "),
+                )
+            });
+            bar.set_prefix(self.prefix.clone());
+            bar.set_message(if phase == "frame" { "frames" } else { "warming up" });
+            bar.set_position(u64::from(if phase == "frame" { at } else { 0 }));
+        } else {
+            let now = Instant::now();
+            let due = self
+                .last_line
+                .is_none_or(|t| now.duration_since(t).as_secs_f64() >= PROGRESS_EVERY);
+            if due || done == total {
+                self.last_line = Some(now);
+                let elapsed = now.duration_since(self.started).as_secs_f64();
+                let left = elapsed / f64::from(done.max(1)) * f64::from(total - done);
+                eprintln!(
+                    "{}: {phase} {at} of {of}, {elapsed:.0} s elapsed, about {left:.0} s left",
+                    self.prefix
+                );
+            }
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
 }
 
 fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {

@@ -874,3 +874,56 @@ fn a_full_disk_fails_with_exit_1_and_leaves_the_earlier_results() {
     assert_eq!(earlier.unwrap(), after.unwrap(), "the earlier results stand");
     assert!(!staging_left, "no partial files");
 }
+
+#[test]
+fn bench_speaks_to_machines_json_github_benchmark_quiet_and_log_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let export = dir.path().join("bench.json");
+    let out_str = out.to_str().unwrap();
+    let json = occlu(&bench_args(
+        &[
+            "--modes",
+            "vfc,omq",
+            "--json",
+            "--export-github-benchmark",
+            export.to_str().unwrap(),
+        ],
+        out_str,
+    ));
+    assert!(json.status.success(), "{:?}", own_stderr(&json));
+    // stdout is summary.json itself.
+    let printed: serde_json::Value = serde_json::from_str(&stdout(&json)).unwrap();
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(printed, written);
+    assert!(out.join("report.md").exists(), "report.md is still written");
+    // Outside a terminal, progress comes as log lines, the last at the end.
+    let log = own_stderr(&json);
+    assert!(
+        log.iter().any(|l| l.ends_with("s left") && l.contains("frame 2 of 2")),
+        "{log:?}"
+    );
+    // github-action-benchmark's customSmallerIsBetter: name, unit, value.
+    let entries: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&export).unwrap()).unwrap();
+    let entries = entries.as_array().unwrap();
+    assert_eq!(entries.len(), 2 * 4, "four metrics for each of two modes");
+    for e in entries {
+        assert!(
+            e["name"].is_string() && e["unit"].is_string() && e["value"].is_number(),
+            "{e}"
+        );
+    }
+    let omq_mean = entries.iter().find(|e| e["name"] == "omq frame_ms mean").unwrap();
+    let omq = written["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"] == "omq")
+        .unwrap();
+    assert_eq!(omq_mean["value"], omq["stats"]["frame_ms"]["mean"]);
+
+    let quiet = occlu(&bench_args(&["--modes", "vfc", "--quiet"], out_str));
+    assert!(quiet.status.success());
+    assert!(own_stderr(&quiet).is_empty(), "{:?}", own_stderr(&quiet));
+}

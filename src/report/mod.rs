@@ -3,6 +3,7 @@
 
 pub mod charts;
 pub mod compare;
+pub mod github;
 mod markdown;
 
 use std::path::{Path, PathBuf};
@@ -180,6 +181,23 @@ pub struct ResultFiles {
     /// Written only when a mode got something wrong.
     pub missed_csv: Option<PathBuf>,
     pub charts: Vec<PathBuf>,
+}
+
+/// Writes `bytes` to `path` whole or not at all: into a temporary file
+/// beside it, then renamed over it.
+pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
+    let fail = |error| ReportError {
+        path: path.to_path_buf(),
+        error,
+    };
+    let mut temporary = path.as_os_str().to_owned();
+    temporary.push(".occlu-partial");
+    let temporary = PathBuf::from(temporary);
+    let written = std::fs::write(&temporary, bytes).and_then(|()| std::fs::rename(&temporary, path));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&temporary);
+    }
+    written.map_err(fail)
 }
 
 /// Writes `rows` to `path` as CSV with a header of field names.
