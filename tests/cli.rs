@@ -927,3 +927,44 @@ fn bench_speaks_to_machines_json_github_benchmark_quiet_and_log_lines() {
     assert!(quiet.status.success());
     assert!(own_stderr(&quiet).is_empty(), "{:?}", own_stderr(&quiet));
 }
+
+#[test]
+fn an_interrupted_run_leaves_the_earlier_results_intact() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    assert!(tiny_run(&out).status.success());
+    let earlier = std::fs::read(out.join("summary.json")).unwrap();
+    // A long run into the same folder, interrupted as Ctrl-C would.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .args([
+            "bench",
+            "--scene",
+            "city:blocks=2",
+            "--frames",
+            "5000",
+            "--resolution",
+            "64x48",
+        ])
+        .args(["--out", out.to_str().unwrap()])
+        .stderr(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let killed = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let status = child.wait().unwrap();
+    assert!(!status.success(), "interrupted, not finished");
+    assert_eq!(
+        std::fs::read(out.join("summary.json")).unwrap(),
+        earlier,
+        "the earlier results stand"
+    );
+    assert!(!out.join(".occlu-staging").exists(), "no partial files");
+    // Its claim on the folder went with it: the next run takes it over.
+    let next = tiny_run(&out);
+    assert!(next.status.success(), "{:?}", own_stderr(&next));
+}
