@@ -126,6 +126,7 @@ impl<'a> Session<'a> {
         needs_reference: bool,
         options: &RunOptions,
     ) -> Result<Session<'a>, GpuError> {
+        gpu.check()?;
         RenderTargets::check(gpu, options.resolution)?;
         let start = Instant::now();
         let renderer = SceneRenderer::new(gpu, GpuScene::upload(gpu, scene)?);

@@ -371,3 +371,26 @@ fn a_gpu_error_at_run_time_is_an_error_not_a_panic() {
         }
     }
 }
+
+#[test]
+fn a_lost_device_ends_the_run_with_an_error_not_a_panic() {
+    let scene = boxes(&[(DVec3::new(-1.0, -1.0, -6.0), DVec3::new(1.0, 1.0, -5.0))]);
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    let path = common::held(DVec3::ZERO, DVec3::NEG_Z, 60.0, 3);
+    for gpu in common::gpus() {
+        // Destroying the device is what losing it looks like to wgpu.
+        gpu.device.destroy();
+        let mut cullers: Vec<Box<dyn Culler>> = vec![create("vfc", &scene, &ModeParams::default()).unwrap()];
+        let options = occlu::bench::RunOptions {
+            warmup: 0,
+            resolution: Resolution { width: 32, height: 24 },
+            measure_error: true,
+        };
+        let mut world = occlu::world::World::new(scene.clone(), hierarchy.clone());
+        match occlu::bench::run(&gpu, &mut world, &path, &mut cullers, &options, &mut |_, _| {}) {
+            Err(GpuError::Failed(message)) => assert!(!message.contains('\n'), "{message}"),
+            Err(other) => panic!("{}: {other}", gpu.adapter),
+            Ok(_) => panic!("{}: a run on a destroyed device succeeded", gpu.adapter),
+        }
+    }
+}

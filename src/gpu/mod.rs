@@ -195,10 +195,7 @@ impl GpuContext {
         let failure = Arc::new(Mutex::new(None));
         let record = |failure: &Arc<Mutex<Option<String>>>| {
             let failure = Arc::clone(failure);
-            move |message: String| {
-                let mut first = failure.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-                first.get_or_insert(crate::text::one_line(&message));
-            }
+            move |message: String| record_failure(&failure, &message)
         };
         let on_error = record(&failure);
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| on_error(e.to_string())));
@@ -227,8 +224,16 @@ impl GpuContext {
         })
     }
 
+    /// Records a failure found outside wgpu's callbacks (a read-back that
+    /// could not be mapped), for [`GpuContext::check`].
+    pub(crate) fn fail(&self, message: &str) {
+        record_failure(&self.failure, message);
+    }
+
     /// The first error the GPU reported since the device was opened, if any.
     pub fn check(&self) -> Result<(), GpuError> {
+        // Callbacks (a lost device's) are delivered while polling.
+        let _ = self.device.poll(wgpu::PollType::Poll);
         let failure = self.failure.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         match failure.as_ref() {
             Some(message) => Err(GpuError::Failed(message.clone())),
@@ -242,6 +247,12 @@ impl GpuContext {
         // by check(); waiting on it cannot fail any other way here.
         let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
     }
+}
+
+/// Keeps `message` as the device's failure unless one came first.
+fn record_failure(failure: &Mutex<Option<String>>, message: &str) {
+    let mut first = failure.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    first.get_or_insert_with(|| crate::text::one_line(message));
 }
 
 fn device_rank(t: wgpu::DeviceType) -> u8 {

@@ -48,15 +48,22 @@ impl Readback {
         );
     }
 
-    /// Waits for the GPU and returns the first `size` bytes as `T`s.
+    /// Waits for the GPU and returns the first `size` bytes as `T`s. Where
+    /// the GPU failed (a lost device) the buffer cannot be mapped: `out`
+    /// gets zeros instead, and the failure is recorded for
+    /// [`GpuContext::check`], which ends the run after the frame.
     pub fn read<T: bytemuck::Pod>(&self, gpu: &GpuContext, size: u64, out: &mut Vec<T>) {
         let slice = self.buffer.slice(..size);
         slice.map_async(wgpu::MapMode::Read, |_| {});
         gpu.wait_idle();
         out.clear();
-        {
-            let view = slice.get_mapped_range().expect("buffer was mapped by the wait above");
-            out.extend_from_slice(bytemuck::cast_slice(&view));
+        match slice.get_mapped_range() {
+            Ok(view) => out.extend_from_slice(bytemuck::cast_slice(&view)),
+            Err(e) => {
+                gpu.fail(&format!("reading results back: {e}"));
+                out.resize(size as usize / std::mem::size_of::<T>(), T::zeroed());
+                return;
+            }
         }
         self.buffer.unmap();
     }
