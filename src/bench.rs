@@ -11,6 +11,7 @@
 //! frames run the path's first frames and are not recorded.
 
 use std::collections::BTreeSet;
+use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
 use crate::camera::Camera;
@@ -29,7 +30,7 @@ use crate::report::{
     MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary, SkippedMode,
     Summary, SweepSummary, ToolInfo, prepare_output, write_results,
 };
-use crate::scene::{LoadOptions, Scene, SceneError};
+use crate::scene::{Scene, SceneError};
 use crate::world::World;
 
 #[derive(Clone, Copy, Debug)]
@@ -50,16 +51,17 @@ pub struct RunOutput {
 }
 
 /// Runs `cullers` over every frame of `path`, moving `world`'s movers as
-/// the frames go. `progress` is called with (frames done, frames in all)
-/// including warm-up frames.
+/// the frames go. `progress` is called after each frame with (frames done,
+/// frames in all) including warm-up frames; when it breaks, the run stops
+/// there with [`BenchError::Interrupted`].
 pub fn run(
     gpu: &GpuContext,
     world: &mut World,
     path: &CameraPath,
     cullers: &mut [Box<dyn Culler + '_>],
     options: &RunOptions,
-    progress: &mut dyn FnMut(u32, u32),
-) -> Result<RunOutput, GpuError> {
+    progress: &mut dyn FnMut(u32, u32) -> ControlFlow<()>,
+) -> Result<RunOutput, BenchError> {
     let needs_reference = options.measure_error || cullers.iter().any(|c| c.needs_reference());
     let mut session = Session::new(gpu, &world.scene, cullers.len(), needs_reference, options)?;
     let frames = path.frames;
@@ -83,7 +85,7 @@ pub fn run(
         } else {
             session.missed.clear();
         }
-        progress(step + 1, total);
+        go_on(progress(step + 1, total))?;
     }
     Ok(RunOutput {
         rows,
@@ -365,16 +367,29 @@ pub enum BenchError {
     Gpu(#[from] GpuError),
     #[error(transparent)]
     Report(#[from] ReportError),
+    /// The caller asked the run to stop (Ctrl-C); nothing was written.
+    #[error("interrupted: no results written, the folder's earlier contents stand")]
+    Interrupted,
 }
 
 impl BenchError {
     /// Whether the user's input was at fault (as opposed to the GPU).
     pub fn is_input_error(&self) -> bool {
         match self {
-            BenchError::Gpu(_) => false,
+            BenchError::Gpu(e) => e.is_input_error(),
+            BenchError::Interrupted => false,
             BenchError::Report(e) => e.is_input_error(),
             _ => true,
         }
+    }
+}
+
+/// Whether the caller let the run go on: [`BenchError::Interrupted`] when
+/// it asked to stop.
+fn go_on(flow: ControlFlow<()>) -> Result<(), BenchError> {
+    match flow {
+        ControlFlow::Continue(()) => Ok(()),
+        ControlFlow::Break(()) => Err(BenchError::Interrupted),
     }
 }
 
@@ -404,20 +419,19 @@ pub struct BenchOutcome {
 }
 
 /// Loads the scene, builds the hierarchy, runs every mode and writes the
-/// result files.
-pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<BenchOutcome, BenchError> {
+/// result files. `events` hears how it goes; when it breaks, the run stops
+/// there with [`BenchError::Interrupted`] and writes nothing.
+pub fn execute(
+    plan: &BenchPlan,
+    events: &mut dyn FnMut(BenchEvent) -> ControlFlow<()>,
+) -> Result<BenchOutcome, BenchError> {
     // A bad path file or output directory is reported before a long scene
     // load, not after the run.
     let path_file = plan.path.as_deref().map(CameraPath::load).transpose()?;
     // Held until the results are written: no second run writes here.
     let _claim = prepare_output(&plan.out)?;
     let start = Instant::now();
-    let scene = crate::scene::load(
-        &plan.scene,
-        &LoadOptions {
-            cluster_triangles: plan.cluster_triangles,
-        },
-    )?;
+    let scene = crate::scene::load(&plan.scene, &plan.load)?;
     let load_ms = ms(start.elapsed());
     let start = Instant::now();
     let params = HierarchyParams::default();
@@ -425,12 +439,12 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
     let build_ms = ms(start.elapsed());
     let mut world = World::new(scene, hierarchy);
     let (scene, hierarchy) = (&world.scene, &world.hierarchy);
-    events(BenchEvent::Loaded {
+    go_on(events(BenchEvent::Loaded {
         scene,
         hierarchy,
         load_ms,
         build_ms,
-    });
+    }))?;
 
     let path = match path_file {
         Some(path) => path,
@@ -441,15 +455,14 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
         None => path,
     };
     let gpu = GpuContext::new(plan.backend)?;
-    events(BenchEvent::Adapter(&gpu.adapter));
-    let mut skipped = Vec::new();
+    go_on(events(BenchEvent::Adapter(&gpu.adapter)))?;
+    let mut skipped: Vec<SkippedMode> = Vec::new();
     let mut runs = plan.runs();
     runs.retain(|run| {
         let Some(reason) = ModeInfo::named(run.mode).unsupported_on(&gpu) else {
             return true;
         };
-        if !skipped.iter().any(|s: &SkippedMode| s.mode == run.mode) {
-            events(BenchEvent::Skipped { mode: run.mode, reason });
+        if !skipped.iter().any(|s| s.mode == run.mode) {
             skipped.push(SkippedMode {
                 mode: run.mode.to_string(),
                 reason: reason.to_string(),
@@ -457,6 +470,12 @@ pub fn execute(plan: &BenchPlan, events: &mut dyn FnMut(BenchEvent)) -> Result<B
         }
         false
     });
+    for s in &skipped {
+        go_on(events(BenchEvent::Skipped {
+            mode: &s.mode,
+            reason: &s.reason,
+        }))?;
+    }
     let mut cullers = runs
         .iter()
         .map(|run| {

@@ -8,8 +8,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::cull::{ModeError, ModeParams, parse_modes};
 use crate::gpu::{BackendChoice, Resolution};
+use crate::input::ByteSize;
 use crate::scene::builtin::with_movers;
-use crate::scene::{DEFAULT_CLUSTER_TRIANGLES, SceneSpec};
+use crate::scene::{LoadOptions, SceneSpec};
 
 /// Every field optional: a file or the flags may give any subset.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -37,6 +38,10 @@ pub struct BenchConfig {
     pub error: Option<bool>,
     /// Meshes above this many triangles are split into clusters.
     pub cluster_triangles: Option<u32>,
+    /// Largest model or glTF buffer file read ("8G", "512M").
+    pub max_file_size: Option<ByteSize>,
+    /// glTF buffers may lie outside the model's folder.
+    pub external_buffers: Option<bool>,
     /// Mode parameters, `MODE.KEY=VALUE`.
     pub params: Option<Vec<String>>,
     /// One mode at several values of one parameter, `MODE.KEY=V1,V2,...`.
@@ -108,7 +113,7 @@ pub struct BenchPlan {
     pub backend: BackendChoice,
     pub out: PathBuf,
     pub measure_error: bool,
-    pub cluster_triangles: u32,
+    pub load: LoadOptions,
 }
 
 impl BenchConfig {
@@ -152,6 +157,8 @@ impl BenchConfig {
             out: self.out.or(fallback.out),
             error: self.error.or(fallback.error),
             cluster_triangles: self.cluster_triangles.or(fallback.cluster_triangles),
+            max_file_size: self.max_file_size.or(fallback.max_file_size),
+            external_buffers: self.external_buffers.or(fallback.external_buffers),
             // Per key, a flag wins over the file: later entries override.
             sweep: self.sweep.or(fallback.sweep),
             params: match (fallback.params, self.params) {
@@ -211,8 +218,23 @@ impl BenchConfig {
             backend: self.backend.unwrap_or_default(),
             out: self.out.unwrap_or_else(|| DEFAULT_OUT.into()),
             measure_error: self.error.unwrap_or(true),
-            cluster_triangles: self.cluster_triangles.unwrap_or(DEFAULT_CLUSTER_TRIANGLES),
+            load: load_options(self.cluster_triangles, self.max_file_size, self.external_buffers),
         })
+    }
+}
+
+/// How a scene is loaded, from what the command line or a config file set
+/// (the defaults for the rest).
+pub fn load_options(
+    cluster_triangles: Option<u32>,
+    max_file_size: Option<ByteSize>,
+    external_buffers: Option<bool>,
+) -> LoadOptions {
+    let defaults = LoadOptions::default();
+    LoadOptions {
+        cluster_triangles: cluster_triangles.unwrap_or(defaults.cluster_triangles),
+        max_file_size: max_file_size.map_or(defaults.max_file_size, |size| size.0),
+        external_buffers: external_buffers.unwrap_or(defaults.external_buffers),
     }
 }
 

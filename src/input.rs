@@ -13,15 +13,81 @@ pub const MODEL_LIMIT: u64 = 4 << 30;
 /// Largest camera path or configuration file read (JSON text).
 pub const TEXT_LIMIT: u64 = 64 << 20;
 
+/// A size in bytes as a person writes it: a whole number, optionally
+/// followed by K, M, G or T (powers of 1024), e.g. `512M` or `8G`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ByteSize(pub u64);
+
+impl std::str::FromStr for ByteSize {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<ByteSize, String> {
+        let malformed = || format!("'{text}' is not a size (a whole number of bytes, or with K, M, G or T: 512M, 8G)");
+        let trimmed = text.trim();
+        let (digits, shift) = match trimmed.char_indices().last() {
+            Some((i, unit)) if unit.is_ascii_alphabetic() => {
+                let shift = match unit.to_ascii_uppercase() {
+                    'K' => 10,
+                    'M' => 20,
+                    'G' => 30,
+                    'T' => 40,
+                    _ => return Err(malformed()),
+                };
+                (&trimmed[..i], shift)
+            }
+            _ => (trimmed, 0),
+        };
+        let number: u64 = digits.parse().map_err(|_| malformed())?;
+        number
+            .checked_mul(1 << shift)
+            .filter(|&bytes| bytes > 0)
+            .map(ByteSize)
+            .ok_or_else(malformed)
+    }
+}
+
+impl std::fmt::Display for ByteSize {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self.0.trailing_zeros() {
+            30.. => write!(f, "{} GiB", self.0 >> 30),
+            20.. => write!(f, "{} MiB", self.0 >> 20),
+            _ => write!(f, "{} bytes", self.0),
+        }
+    }
+}
+
+impl serde::Serialize for ByteSize {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.0.to_string())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for ByteSize {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<ByteSize, D::Error> {
+        String::deserialize(d)?.parse().map_err(serde::de::Error::custom)
+    }
+}
+
 /// Reads all of `path`, a regular file of at most `limit` bytes.
 pub fn read_file(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
-    // Checked before opening: opening a FIFO waits for a writer.
-    let metadata = std::fs::metadata(path)?;
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    // Opening a FIFO waits for a writer, unless non-blocking; the check
+    // is then made on what was opened, so the path cannot be swapped for
+    // a FIFO or a device between a check and the open.
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
+    let file = options.open(path)?;
+    let metadata = file.metadata()?;
     if !metadata.is_file() {
         return Err(std::io::Error::other("not a regular file"));
     }
-    let file = std::fs::File::open(path)?;
-    let too_large = || std::io::Error::other(format!("larger than the {} MiB occlu reads", limit >> 20));
+    let too_large = || {
+        std::io::Error::new(
+            std::io::ErrorKind::FileTooLarge,
+            format!("larger than the {} occlu reads", ByteSize(limit)),
+        )
+    };
     if metadata.len() > limit {
         return Err(too_large());
     }
@@ -57,5 +123,15 @@ mod tests {
             read_text(&file, 100).unwrap_err().kind(),
             std::io::ErrorKind::InvalidData
         );
+    }
+
+    #[test]
+    fn sizes_read_as_people_write_them() {
+        assert_eq!("512M".parse(), Ok(ByteSize(512 << 20)));
+        assert_eq!("8g".parse(), Ok(ByteSize(8 << 30)));
+        assert_eq!("1000".parse(), Ok(ByteSize(1000)));
+        for bad in ["", "0", "-1", "1.5G", "4X", "G", "99999999999T"] {
+            assert!(bad.parse::<ByteSize>().is_err(), "{bad}");
+        }
     }
 }

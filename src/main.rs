@@ -4,8 +4,10 @@
 
 use std::fmt::Write as _;
 use std::io::{IsTerminal as _, Write as _};
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use clap::{Args, Parser, Subcommand};
@@ -13,10 +15,11 @@ use indicatif::{ProgressBar, ProgressStyle};
 use occlu::bench::{BenchError, BenchEvent, execute};
 use occlu::camera::generate::{DEFAULT_FRAMES, PathKind, default_kind, generate};
 use occlu::camera::path::{CameraPath, PathError};
-use occlu::config::{BenchConfig, ConfigError, scene_spec};
+use occlu::config::{BenchConfig, ConfigError, load_options, scene_spec};
 use occlu::cull::{MODES, ModeError, ModeInfo, ModeParams, create, parse_modes};
 use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::input::ByteSize;
 use occlu::picture::{PictureError, PictureOptions};
 use occlu::report::compare::{CompareError, CompareOptions, Metric};
 use occlu::report::{ReportError, SceneFacts};
@@ -24,6 +27,15 @@ use occlu::scene::builtin::SCENES;
 use occlu::scene::{LoadOptions, Scene, SceneError, SceneSpec, load};
 use occlu::stress::{StressError, StressEvent};
 use occlu::world::World;
+
+/// Writes a line to standard error. A closed or full standard error is no
+/// reason to fail a run (and must not panic, as `eprintln!` does): the line
+/// is dropped.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
 
 #[derive(Parser)]
 #[command(
@@ -129,6 +141,15 @@ struct SceneArgs {
     /// Meshes with more triangles than this are split into clusters [default: 4096].
     #[arg(long, value_name = "N")]
     cluster_triangles: Option<u32>,
+    /// Largest model or glTF buffer file read, e.g. 512M or 16G; larger
+    /// files, and files that grow past it while read, are refused [default: 4G].
+    #[arg(long, value_name = "SIZE")]
+    max_file_size: Option<ByteSize>,
+    /// Let a glTF file's buffers lie outside its folder (absolute paths,
+    /// "..", file: URIs). Off by default, so a model from elsewhere cannot
+    /// make occlu read other files.
+    #[arg(long)]
+    external_buffers: bool,
 }
 
 impl SceneArgs {
@@ -137,11 +158,11 @@ impl SceneArgs {
     }
 
     fn options(&self) -> LoadOptions {
-        LoadOptions {
-            cluster_triangles: self
-                .cluster_triangles
-                .unwrap_or(LoadOptions::default().cluster_triangles),
-        }
+        load_options(
+            self.cluster_triangles,
+            self.max_file_size,
+            self.external_buffers.then_some(true),
+        )
     }
 }
 
@@ -290,6 +311,7 @@ enum PathCommand {
 
 fn main() -> ExitCode {
     give_wayland_a_runtime_folder();
+    listen_for_ctrl_c();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {
@@ -300,7 +322,7 @@ fn main() -> ExitCode {
         Err(e) => {
             let text = e.render().to_string();
             let line = text.lines().next().unwrap_or("invalid arguments");
-            eprintln!("occlu: {}", line.trim_start_matches("error: ").trim());
+            say!("occlu: {}", line.trim_start_matches("error: ").trim());
             return ExitCode::from(2);
         }
     };
@@ -343,11 +365,51 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(code) => code,
+        Err(e) if was_interrupted(&e) => {
+            say!("occlu: {}", occlu::text::one_line(&format!("{e:#}")));
+            ExitCode::from(INTERRUPTED_EXIT)
+        }
         Err(e) => {
-            eprintln!("occlu: error: {}", occlu::text::one_line(&format!("{e:#}")));
+            say!("occlu: error: {}", occlu::text::one_line(&format!("{e:#}")));
             ExitCode::from(if is_input_error(&e) { 2 } else { 1 })
         }
     }
+}
+
+/// Set by Ctrl-C (SIGINT); long work stops at its next frame or case.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// The shell's code for a process ended by SIGINT (128 + 2).
+const INTERRUPTED_EXIT: u8 = 130;
+
+/// Ctrl-C asks the running work to stop between frames, so it releases its
+/// claim on --out and leaves no partial file; a second Ctrl-C ends the
+/// process at once. Where no handler can be installed, Ctrl-C keeps its
+/// default (the process ends; the operating system still releases the
+/// claim, and no result file is half-written since they are renamed into
+/// place whole).
+fn listen_for_ctrl_c() {
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            std::process::exit(i32::from(INTERRUPTED_EXIT));
+        }
+    });
+}
+
+/// Whether the work should go on (no Ctrl-C yet).
+fn go_on() -> ControlFlow<()> {
+    if INTERRUPTED.load(Ordering::SeqCst) {
+        ControlFlow::Break(())
+    } else {
+        ControlFlow::Continue(())
+    }
+}
+
+fn was_interrupted(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        matches!(c.downcast_ref::<BenchError>(), Some(BenchError::Interrupted))
+            || matches!(c.downcast_ref::<StressError>(), Some(StressError::Interrupted))
+    })
 }
 
 /// On a headless Linux machine the Vulkan loader probes for a Wayland
@@ -409,6 +471,8 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         out: args.out,
         error: args.no_error.then_some(false),
         cluster_triangles: args.scene.cluster_triangles,
+        max_file_size: args.scene.max_file_size,
+        external_buffers: args.scene.external_buffers.then_some(true),
         params: (!args.params.is_empty()).then_some(args.params),
         sweep: args.sweep,
     };
@@ -420,31 +484,17 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
     let quiet = args.quiet;
     let note = |text: String| {
         if !quiet {
-            eprintln!("{text}");
+            say!("{text}");
         }
     };
+    // Refused now, not after a long run.
+    if let Some(path) = &args.export_github_benchmark {
+        occlu::report::check_writable(path)?;
+    }
     let mut progress = Progress::new(quiet, plan.warmup, format!("{} modes", plan.modes.len()));
-    let outcome = execute(&plan, &mut |event| match event {
-        BenchEvent::Loaded {
-            scene,
-            hierarchy,
-            load_ms,
-            build_ms,
-        } => {
-            note(format!(
-                "scene: {}: {} objects, {} triangles (load {load_ms:.0} ms, hierarchy of {} nodes {build_ms:.0} ms)",
-                scene.source,
-                scene.objects.len(),
-                scene.triangles(),
-                hierarchy.nodes.len()
-            ));
-            for w in &scene.warnings {
-                note(format!("warning: {w}"));
-            }
-        }
-        BenchEvent::Skipped { mode, reason } => note(format!("skipped: {mode}: {reason}")),
-        BenchEvent::Adapter(adapter) => note(format!("adapter: {adapter}")),
-        BenchEvent::Frame { done, total } => progress.frame(done, total),
+    let outcome = execute(&plan, &mut |event| {
+        heard(&mut progress, event, &note);
+        go_on()
     })?;
     progress.finish();
     if let Some(path) = &args.export_github_benchmark {
@@ -473,6 +523,32 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         plan.out.display()
     ));
     Ok(())
+}
+
+/// What bench says on stderr as its run goes.
+fn heard(progress: &mut Progress, event: BenchEvent, note: &dyn Fn(String)) {
+    match event {
+        BenchEvent::Loaded {
+            scene,
+            hierarchy,
+            load_ms,
+            build_ms,
+        } => {
+            note(format!(
+                "scene: {}: {} objects, {} triangles (load {load_ms:.0} ms, hierarchy of {} nodes {build_ms:.0} ms)",
+                scene.source,
+                scene.objects.len(),
+                scene.triangles(),
+                hierarchy.nodes.len()
+            ));
+            for w in &scene.warnings {
+                note(format!("warning: {w}"));
+            }
+        }
+        BenchEvent::Skipped { mode, reason } => note(format!("skipped: {mode}: {reason}")),
+        BenchEvent::Adapter(adapter) => note(format!("adapter: {adapter}")),
+        BenchEvent::Frame { done, total } => progress.frame(done, total),
+    }
 }
 
 /// Progress of a bench run on stderr: a bar over the recorded frames in a
@@ -534,7 +610,7 @@ impl Progress {
                 self.last_line = Some(now);
                 let elapsed = now.duration_since(self.started).as_secs_f64();
                 let left = elapsed / f64::from(done.max(1)) * f64::from(total - done);
-                eprintln!(
+                say!(
                     "{}: {phase} {at} of {of}, {elapsed:.0} s elapsed, about {left:.0} s left",
                     self.prefix
                 );
@@ -562,32 +638,32 @@ fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
     }
     let _claim = args.out.as_deref().map(occlu::report::prepare_output).transpose()?;
     let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
-    eprintln!("adapter: {}", gpu.adapter);
+    say!("adapter: {}", gpu.adapter);
     let bar = ProgressBar::new(0).with_style(
         ProgressStyle::with_template("{prefix:<15} [{bar:32}] {pos}/{len} frames, {elapsed} elapsed")
             .expect("static template")
             .progress_chars("=> "),
     );
     let resolution = args.resolution.unwrap_or(STRESS_RESOLUTION);
-    let report = occlu::stress::run(&gpu, &cases, &modes, resolution, &mut |event| match event {
-        StressEvent::Skipped { mode, reason } => eprintln!("skipped: {mode}: {reason}"),
-        StressEvent::Case { case } => bar.set_prefix(case.name.clone()),
-        StressEvent::Frame { done, total } => {
-            bar.set_length(u64::from(total));
-            bar.set_position(u64::from(done));
+    let report = occlu::stress::run(&gpu, &cases, &modes, resolution, &mut |event| {
+        match event {
+            StressEvent::Skipped { mode, reason } => say!("skipped: {mode}: {reason}"),
+            StressEvent::Case { case } => bar.set_prefix(case.name.clone()),
+            StressEvent::Frame { done, total } => {
+                bar.set_length(u64::from(total));
+                bar.set_position(u64::from(done));
+            }
         }
+        go_on()
     })?;
     bar.finish_and_clear();
     let markdown = occlu::stress::render_markdown(&report);
     emit(&markdown)?;
     if let Some(out) = &args.out {
-        let write = |name: &str, text: String| {
-            let path = out.join(name);
-            std::fs::write(&path, text).map_err(|error| ReportError { path, error })
-        };
+        let write = |name: &str, text: String| occlu::report::write_whole(&out.join(name), text.as_bytes());
         write("stress.md", markdown)?;
         write("stress.json", serde_json::to_string_pretty(&report)? + "\n")?;
-        eprintln!("results: stress.md and stress.json in {}", out.display());
+        say!("results: stress.md and stress.json in {}", out.display());
     }
     let (_, failed) = report.verdicts();
     Ok(if failed == 0 {
@@ -623,10 +699,10 @@ fn compare(
         })
         .collect();
     if regressions.is_empty() {
-        eprintln!("no regression");
+        say!("no regression");
         Ok(ExitCode::SUCCESS)
     } else {
-        eprintln!("occlu: {} regressions: {}", regressions.len(), regressions.join(", "));
+        say!("occlu: {} regressions: {}", regressions.len(), regressions.join(", "));
         Ok(ExitCode::from(1))
     }
 }
@@ -663,7 +739,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     };
     let picture = occlu::picture::render(&gpu, &mut world, &path, culler, &options)?;
     occlu::report::write_png(&args.output, picture.width, picture.height, &picture.rgb)?;
-    eprintln!(
+    say!(
         "wrote {} ({}x{}): {mode} drew {} objects at frame {}, culled {} inside the frustum",
         args.output.display(),
         picture.width,
@@ -673,7 +749,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         picture.culled_in_frustum
     );
     if let Some(wrong) = &picture.wrong {
-        eprintln!(
+        say!(
             "{} pixels differ from direct rendering (magenta); {} objects got wrong (boxes outlined)",
             wrong.pixels,
             wrong.objects.len()
@@ -684,7 +760,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
                 _ => String::new(),
             };
             let drawn = if m.drawn { "drawn" } else { "not drawn" };
-            eprintln!(
+            say!(
                 "  object {} '{}': {drawn}, {} wrong pixels{first}",
                 m.object,
                 occlu::text::one_line(&m.name),
@@ -696,15 +772,15 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
 }
 
 fn plot(run_dir: &std::path::Path) -> anyhow::Result<()> {
+    // A folder that holds no run is refused before it is claimed (claiming
+    // creates it); then it is read and rewritten under the claim, so no run
+    // writes into it meanwhile.
+    occlu::report::read_results(run_dir)?;
+    let _claim = occlu::report::prepare_output(run_dir)?;
     let (summary, rows) = occlu::report::read_results(run_dir)?;
-    let charts = occlu::report::charts::write_charts(run_dir, &summary, &rows)?;
-    let report = run_dir.join("report.md");
-    std::fs::write(&report, occlu::report::render_markdown(&summary)).map_err(|error| ReportError {
-        path: report.clone(),
-        error,
-    })?;
+    let charts = occlu::report::rewrite_report(run_dir, &summary, &rows)?;
     for chart in charts {
-        eprintln!("wrote {}", chart.display());
+        say!("wrote {}", chart.display());
     }
     Ok(())
 }
@@ -774,11 +850,8 @@ fn path_gen(scene_args: SceneArgs, kind: Option<PathKind>, frames: u32, output: 
     // Validate what is written, so a generated file always loads.
     CameraPath::from_file(&file, &output.display().to_string())?;
     let text = serde_json::to_string_pretty(&file)? + "\n";
-    std::fs::write(&output, text).map_err(|error| ReportError {
-        path: output.clone(),
-        error,
-    })?;
-    eprintln!(
+    occlu::report::write_whole(&output, text.as_bytes())?;
+    say!(
         "wrote {} ({kind}, {frames} frames, {} keyframes)",
         output.display(),
         file.keyframes.len()

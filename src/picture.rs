@@ -192,6 +192,8 @@ pub fn render(
     } else {
         (resolution.width, main)
     };
+    // A picture the GPU failed in shows nothing true.
+    gpu.check()?;
     Ok(Picture {
         width,
         height: resolution.height,

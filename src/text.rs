@@ -18,9 +18,52 @@ pub fn one_line(text: &str) -> String {
         .collect()
 }
 
+/// `text` as literal Markdown inline text: on one line, with every
+/// character that could start a construct (emphasis, code, links, HTML,
+/// table cells, entities, strikethrough) escaped by a backslash. A name
+/// from a model file then reads as itself in report.md, whatever it holds.
+pub fn markdown(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in one_line(text).chars() {
+        if matches!(
+            c,
+            '\\' | '`' | '*' | '_' | '[' | ']' | '<' | '>' | '|' | '&' | '~' | '!'
+        ) {
+            out.push('\\');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// `text` as a CSV cell a spreadsheet shows rather than runs: a cell that
+/// starts as a formula would (`=`, `+`, `-`, `@`, a tab or a carriage
+/// return, as OWASP lists them) gets a leading `'`, which spreadsheets read
+/// as "text follows".
+pub fn spreadsheet_safe(text: &str) -> String {
+    if text.starts_with(['=', '+', '-', '@', '\t', '\r']) {
+        format!("'{text}")
+    } else {
+        text.to_string()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn names_read_as_themselves_in_markdown_and_spreadsheets() {
+        assert_eq!(
+            markdown("wall_2 [a](b) <img> | x\ny"),
+            "wall\\_2 \\[a\\](b) \\<img\\> \\| x\\\\ny",
+            "a newline shows as \\n, its backslash escaped"
+        );
+        assert_eq!(markdown("plain name.obj"), "plain name.obj");
+        assert_eq!(spreadsheet_safe("=cmd|' /C calc'!A0"), "'=cmd|' /C calc'!A0");
+        assert_eq!(spreadsheet_safe("-2+3"), "'-2+3");
+        assert_eq!(spreadsheet_safe("door 2"), "door 2");
+    }
 
     #[test]
     fn control_characters_are_escaped_and_the_rest_kept() {

@@ -7,6 +7,7 @@ use std::cell::RefCell;
 
 use common::{DropOneVisible, boxes, run_modes, still};
 use glam::DVec3;
+use occlu::bench::BenchError;
 use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create};
 use occlu::gpu::{BackendChoice, FrameCtx, GpuContext, GpuError, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
@@ -374,23 +375,58 @@ fn a_gpu_error_at_run_time_is_an_error_not_a_panic() {
 
 #[test]
 fn a_lost_device_ends_the_run_with_an_error_not_a_panic() {
-    let scene = boxes(&[(DVec3::new(-1.0, -1.0, -6.0), DVec3::new(1.0, 1.0, -5.0))]);
+    let scene = boxes(&[
+        (DVec3::new(-1.0, -1.0, -6.0), DVec3::new(1.0, 1.0, -5.0)),
+        (DVec3::new(-3.0, -1.0, -9.0), DVec3::new(3.0, 1.0, -8.0)),
+    ]);
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let path = common::held(DVec3::ZERO, DVec3::NEG_Z, 60.0, 3);
-    for gpu in common::gpus() {
-        // Destroying the device is what losing it looks like to wgpu.
-        gpu.device.destroy();
-        let mut cullers: Vec<Box<dyn Culler>> = vec![create("vfc", &scene, &ModeParams::default()).unwrap()];
-        let options = occlu::bench::RunOptions {
-            warmup: 0,
-            resolution: Resolution { width: 32, height: 24 },
-            measure_error: true,
-        };
-        let mut world = occlu::world::World::new(scene.clone(), hierarchy.clone());
-        match occlu::bench::run(&gpu, &mut world, &path, &mut cullers, &options, &mut |_, _| {}) {
-            Err(GpuError::Failed(message)) => assert!(!message.contains('\n'), "{message}"),
-            Err(other) => panic!("{}: {other}", gpu.adapter),
-            Ok(_) => panic!("{}: a run on a destroyed device succeeded", gpu.adapter),
+    // Lost before the run starts, and in the middle of it: between frames,
+    // where every mode (the GPU-driven ones creating their buffers) runs on.
+    for lost_after_frames in [0, 1] {
+        for gpu in common::gpus() {
+            let modes: Vec<&str> = occlu::cull::MODES
+                .iter()
+                .filter(|m| m.unsupported_on(&gpu).is_none())
+                .map(|m| m.name)
+                .collect();
+            let mut cullers: Vec<Box<dyn Culler>> = modes
+                .iter()
+                .map(|m| create(m, &scene, &ModeParams::default()).unwrap())
+                .collect();
+            let options = occlu::bench::RunOptions {
+                warmup: 0,
+                resolution: Resolution { width: 32, height: 24 },
+                measure_error: true,
+            };
+            let mut world = occlu::world::World::new(scene.clone(), hierarchy.clone());
+            // Destroying the device is what losing it looks like to wgpu.
+            if lost_after_frames == 0 {
+                gpu.device.destroy();
+            }
+            let outcome = occlu::bench::run(&gpu, &mut world, &path, &mut cullers, &options, &mut |done, _| {
+                if done == lost_after_frames {
+                    gpu.device.destroy();
+                }
+                std::ops::ControlFlow::Continue(())
+            });
+            match outcome {
+                Err(BenchError::Gpu(GpuError::Failed(message))) => assert!(!message.contains('\n'), "{message}"),
+                Err(other) => panic!("{}: {other}", gpu.adapter),
+                Ok(_) => panic!("{}: a run on a destroyed device succeeded", gpu.adapter),
+            }
         }
+    }
+}
+
+/// wgpu's own `create_buffer_init` panics on a lost device; every buffer
+/// occlu fills (the scene, the GPU walk's trees, the overview's lines)
+/// goes through `buffer_with`, which must not.
+#[test]
+fn a_buffer_filled_on_a_lost_device_is_an_error_not_a_panic() {
+    for gpu in common::gpus() {
+        gpu.device.destroy();
+        let _ = gpu.buffer_with("probe", &[1, 2, 3], wgpu::BufferUsages::VERTEX);
+        assert!(matches!(gpu.check(), Err(GpuError::Failed(_))), "{}", gpu.adapter);
     }
 }

@@ -88,7 +88,14 @@ fn large_meshes_are_clustered_and_keep_every_triangle() {
     }
     let dir = tempfile::tempdir().unwrap();
     let obj = write(dir.path(), "grid.obj", text);
-    let s = load(&SceneSpec::File(obj), &LoadOptions { cluster_triangles: 100 }).unwrap();
+    let s = load(
+        &SceneSpec::File(obj),
+        &LoadOptions {
+            cluster_triangles: 100,
+            ..LoadOptions::default()
+        },
+    )
+    .unwrap();
     assert_eq!(s.triangles(), 800);
     assert!(s.objects.len() >= 8, "{} clusters", s.objects.len());
     assert!(
@@ -173,8 +180,53 @@ fn gltf_buffers_outside_the_models_folder_are_refused() {
     ] {
         let e = load(uri).err().unwrap_or_else(|| panic!("{uri} was read")).to_string();
         assert!(
-            e.contains(why) && e.contains("buffer 0") && !e.contains('\n'),
+            e.contains(why) && e.contains("buffer 0") && e.contains("--external-buffers") && !e.contains('\n'),
             "{uri}: {e}"
+        );
+    }
+    // Unless the user allows buffers elsewhere.
+    let external = LoadOptions {
+        external_buffers: true,
+        ..LoadOptions::default()
+    };
+    for uri in [
+        "../outside.bin",
+        outside.to_str().unwrap(),
+        &format!("file://{}", outside.display()),
+    ] {
+        let model = write(&model_dir, "m.gltf", w.gltf_external(&[n], uri));
+        let scene = occlu::scene::load(&SceneSpec::File(model), &external).unwrap_or_else(|e| panic!("{uri}: {e}"));
+        assert_eq!(scene.triangles(), 12);
+    }
+}
+
+#[test]
+fn files_past_max_file_size_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut w = GltfWriter::default();
+    let (p, i) = cube();
+    let m = w.mesh("cube", &[(&p, Some(&i), 4)]);
+    let n = w.node(json!({"mesh": m}));
+    // The buffer file is larger than the model file: bytes past the
+    // buffer's declared length are allowed, and count.
+    let mut bin = w.bin().to_vec();
+    bin.resize(bin.len() + 8192, 0);
+    let buffer = write(dir.path(), "cube.bin", &bin);
+    let model = write(dir.path(), "m.gltf", w.gltf_external(&[n], "cube.bin"));
+    let size = |path: &std::path::Path| std::fs::metadata(path).unwrap().len();
+    let load_with = |max_file_size| {
+        let options = LoadOptions {
+            max_file_size,
+            ..LoadOptions::default()
+        };
+        load(&SceneSpec::File(model.clone()), &options).map_err(|e| e.to_string())
+    };
+    assert!(load_with(size(&buffer)).is_ok());
+    for (max, refused) in [(size(&buffer) - 1, "cube.bin"), (size(&model) - 1, "m.gltf")] {
+        let e = load_with(max).unwrap_err();
+        assert!(
+            e.contains(refused) && e.contains("larger than") && e.contains("--max-file-size"),
+            "{max}: {e}"
         );
     }
 }

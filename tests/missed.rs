@@ -106,7 +106,8 @@ fn missed_csv_and_report_list_what_was_missed_and_an_exact_run_removes_the_list(
     assert_eq!(summary.missed, MissedSummary::default());
     // What the culler that drops a visible object missed, twice over (as
     // two frames would), then rows a table must cope with: names with '|',
-    // a drawn object, one with no wrong pixel.
+    // one a spreadsheet would run as a formula and Markdown would render, a
+    // drawn object, one with no wrong pixel.
     let quads = two_quads();
     let scene = boxes(&quads);
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
@@ -120,7 +121,7 @@ fn missed_csv_and_report_list_what_was_missed_and_an_exact_run_removes_the_list(
         mode: "vfc".into(),
         frame: 0,
         object: k,
-        name: format!("part|{k}"),
+        name: if k == 3 { "=cmd_<b>".into() } else { format!("part|{k}") },
         drawn: k % 2 == 0,
         wrong_pixels: u64::from(k),
         first_x: (k > 2).then_some(3),
@@ -135,6 +136,7 @@ fn missed_csv_and_report_list_what_was_missed_and_an_exact_run_removes_the_list(
     assert_eq!(lines[1], format!("drop-one,0,0,box0,false,80,{x},{y}"));
     assert_eq!(lines[2], format!("drop-one,1,0,box0,false,80,{x},{y}"));
     assert_eq!(lines[3], "vfc,0,2,part|2,true,2,,");
+    assert_eq!(lines[4], "vfc,0,3,'=cmd_<b>,false,3,3,3");
     assert_eq!(lines[12], "vfc,0,11,part|11,false,11,3,11");
     assert_eq!(lines.len(), 13);
     let report = std::fs::read_to_string(&files.report_md).unwrap();
@@ -142,6 +144,10 @@ fn missed_csv_and_report_list_what_was_missed_and_an_exact_run_removes_the_list(
     assert!(report.contains("the first 10 of 12 rows of missed.csv"), "{report}");
     assert!(
         report.contains("| vfc | 0 | 9 | part\\|9 | no | 9 | (3, 9) |"),
+        "{report}"
+    );
+    assert!(
+        report.contains("| vfc | 0 | 3 | =cmd\\_\\<b\\> | no | 3 | (3, 3) |"),
         "{report}"
     );
     assert!(!report.contains("part\\|10"), "only the first ten");

@@ -111,6 +111,15 @@ pub enum GpuError {
     Failed(String),
 }
 
+impl GpuError {
+    /// Whether the user's input was at fault: a size the adapter cannot
+    /// hold (a smaller --resolution or model fits), as opposed to the GPU
+    /// or its driver failing.
+    pub fn is_input_error(&self) -> bool {
+        matches!(self, GpuError::TooLarge { .. })
+    }
+}
+
 /// What `WGPU_BACKEND` did to an `auto` choice, for the no-adapter message
 /// (wgpu reads it and drops names it does not know).
 fn narrowed_by_env(choice: BackendChoice) -> String {
@@ -242,6 +251,29 @@ impl GpuContext {
     }
 
     /// Blocks until the GPU has finished everything submitted so far.
+    /// A buffer holding `contents` (padded to whole words, at least one, as
+    /// copies and bindings need), written through the queue. wgpu's
+    /// `create_buffer_init` maps the new buffer instead, and panics when the
+    /// device is lost; here a lost device only records the failure for
+    /// [`GpuContext::check`].
+    pub fn buffer_with(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        let words = contents.len().div_ceil(4).max(1);
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: (words * 4) as u64,
+            usage: usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        if contents.len() == words * 4 {
+            self.queue.write_buffer(&buffer, 0, contents);
+        } else {
+            let mut padded = contents.to_vec();
+            padded.resize(words * 4, 0);
+            self.queue.write_buffer(&buffer, 0, &padded);
+        }
+        buffer
+    }
+
     pub fn wait_idle(&self) {
         // A lost device is recorded by the device-lost callback and reported
         // by check(); waiting on it cannot fail any other way here.

@@ -1,8 +1,6 @@
 //! GPU pieces of `occlu render`: reading a colour target back, and drawing
 //! coloured lines (frustum edges, boxes) over a picture.
 
-use wgpu::util::DeviceExt;
-
 use super::targets::{COLOR_FORMAT, Resolution, texture_2d};
 use super::{GpuContext, Readback};
 
@@ -72,11 +70,7 @@ impl LinePainter {
         if lines.is_empty() {
             return;
         }
-        let vertices = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("lines"),
-            contents: bytemuck::cast_slice(lines),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
+        let vertices = gpu.buffer_with("lines", bytemuck::cast_slice(lines), wgpu::BufferUsages::VERTEX);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {

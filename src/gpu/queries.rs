@@ -17,8 +17,6 @@
 
 use std::time::{Duration, Instant};
 
-use wgpu::util::DeviceExt;
-
 use super::conservative::{BoxMargins, EyeBox, QueryBox, eye_relative_box};
 use super::targets::DEPTH_FORMAT;
 use super::{GpuContext, Readback};
@@ -468,11 +466,11 @@ pub(super) const BOX_INDEX_COUNT: u32 = BOX_INDICES.len() as u32;
 
 /// A buffer of [`BOX_INDICES`], for [`set_box_indices`].
 pub(super) fn box_index_buffer(gpu: &GpuContext) -> wgpu::Buffer {
-    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("box indices"),
-        contents: bytemuck::cast_slice(&BOX_INDICES),
-        usage: wgpu::BufferUsages::INDEX,
-    })
+    gpu.buffer_with(
+        "box indices",
+        bytemuck::cast_slice(&BOX_INDICES),
+        wgpu::BufferUsages::INDEX,
+    )
 }
 
 /// Binds `indices` (from [`box_index_buffer`]) for drawing boxes.

@@ -26,8 +26,6 @@
 
 use std::time::{Duration, Instant};
 
-use wgpu::util::DeviceExt;
-
 use super::conservative::{BoxMargins, EyeBox, QueryBox, eye_relative_box};
 use super::cull_tree::{CullTree, MAX_LEVELS};
 use super::queries::{
@@ -357,11 +355,10 @@ impl RasterPool {
         let scratch = NodeScratch::new(gpu, [&box_layout, &mark_layout, &step_layout], camera, objects);
         RasterPool {
             box_indices: box_index_buffer(gpu),
-            draws: init_buffer(gpu, "all draw commands", &commands, wgpu::BufferUsages::STORAGE),
+            draws: gpu.buffer_with("all draw commands", &commands, wgpu::BufferUsages::STORAGE),
             drawn: storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy),
             level_stats: storage_buffer(gpu, "level statistics", u64::from(MAX_LEVELS) * LEVEL_BYTES, copy),
-            empty_level: init_buffer(
-                gpu,
+            empty_level: gpu.buffer_with(
                 "empty level",
                 bytemuck::cast_slice(&level_args(0)),
                 wgpu::BufferUsages::COPY_SRC,
@@ -406,8 +403,8 @@ impl RasterPool {
             );
         }
         let storage = wgpu::BufferUsages::STORAGE;
-        let node_buffer = init_buffer(gpu, "tree nodes", bytemuck::cast_slice(&tree.nodes), storage);
-        let order = init_buffer(gpu, "tree order", bytemuck::cast_slice(&tree.order), storage);
+        let node_buffer = gpu.buffer_with("tree nodes", bytemuck::cast_slice(&tree.nodes), storage);
+        let order = gpu.buffer_with("tree order", bytemuck::cast_slice(&tree.order), storage);
         let object_state = storage_buffer(
             gpu,
             "object state",
@@ -685,15 +682,6 @@ impl NodeScratch {
 /// indirect dispatch over the entries, and no nodes counted yet.
 fn level_args(entries: u32) -> [u32; LEVEL_WORDS] {
     [BOX_INDEX_COUNT, entries, 0, 0, 0, groups_for(entries), 1, 1, 0, 0, 0]
-}
-
-/// A buffer holding `contents` (at least one word, as bindings need).
-fn init_buffer(gpu: &GpuContext, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
-    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: if contents.is_empty() { &[0; 4] } else { contents },
-        usage,
-    })
 }
 
 /// Workgroups that cover `n` items, within the grid limit (the shaders

@@ -3,7 +3,6 @@
 //! error measure, untimed). Both share one vertex stage.
 
 use glam::Mat4;
-use wgpu::util::DeviceExt;
 
 use super::conservative::{BoxMargins, FragmentLimit, pixel_rays};
 use super::raster::{IndirectCount, IndirectDraws};
@@ -66,13 +65,7 @@ impl GpuScene {
             object_bytes,
             limits.max_storage_buffer_binding_size,
         )?;
-        let init = |label, contents: &[u8], usage| {
-            gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
+        let init = |label, contents: &[u8], usage| gpu.buffer_with(label, contents, usage);
         Ok(GpuScene {
             vertices: init(
                 "vertices",

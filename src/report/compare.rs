@@ -172,7 +172,8 @@ pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comp
     }
     let mut notes = Vec::new();
     let (adapter_a, adapter_b) = (&base_summary.adapter, &new_summary.adapter);
-    if (&adapter_a.name, &adapter_a.backend) != (&adapter_b.name, &adapter_b.backend) {
+    let same_adapter = (&adapter_a.name, &adapter_a.backend) == (&adapter_b.name, &adapter_b.backend);
+    if !same_adapter {
         if !options.cross_adapter {
             return Err(CompareError::Adapters {
                 base: adapter_a.to_string(),
@@ -180,7 +181,7 @@ pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comp
             });
         }
         notes.push(format!(
-            "different adapters ({adapter_a} vs {adapter_b}): frame times are not comparable; counters are"
+            "different adapters ({adapter_a} vs {adapter_b}): frame times are shown but not judged; counters are"
         ));
     }
     let frames = base_summary.frames.min(new_summary.frames);
@@ -205,6 +206,8 @@ pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comp
         for &metric in &options.metrics {
             let (base_value, new_value) = (metric.value(b), n.and_then(|n| metric.value(n)));
             let verdict = match (base_value, new_value, n) {
+                // Times on two adapters measure the adapters, not a change.
+                (Some(_), Some(_), Some(_)) if metric == Metric::FrameMs && !same_adapter => Verdict::Unmeasured,
                 (Some(x), Some(y), Some(n)) => verdict(metric, x, y, b, n, max_regression_pct),
                 (Some(_), None, _) => missing.clone(),
                 _ => Verdict::Unmeasured,

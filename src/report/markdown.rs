@@ -4,11 +4,12 @@ use std::fmt::Write as _;
 
 use super::{Summary, SweepSummary};
 use crate::measure::ModeSummary;
+use crate::text::markdown;
 
 pub fn render(s: &Summary) -> String {
     let mut md = String::new();
     let w = &mut md;
-    let _ = writeln!(w, "# occlu bench: {}\n", s.scene.facts.source);
+    let _ = writeln!(w, "# occlu bench: {}\n", markdown(&s.scene.facts.source));
     let _ = writeln!(
         w,
         "{} objects, {} triangles, {} hierarchy nodes (depth {}); {} frames at {} after {} warm-up frames; path {}.\n",
@@ -19,7 +20,7 @@ pub fn render(s: &Summary) -> String {
         s.frames,
         s.resolution,
         s.warmup,
-        s.path.source
+        markdown(&s.path.source)
     );
     let _ = writeln!(w, "Adapter: {}.\n", s.adapter);
     let _ = writeln!(
@@ -162,7 +163,7 @@ fn missed_list(w: &mut String, s: &Summary) {
             _ => "–".to_string(),
         };
         let drawn = if m.drawn { "yes" } else { "no" };
-        let name = m.name.replace('|', "\\|");
+        let name = markdown(&m.name);
         let _ = writeln!(
             w,
             "| {} | {} | {} | {name} | {drawn} | {} | {first} |",

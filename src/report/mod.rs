@@ -186,51 +186,78 @@ pub struct ResultFiles {
 /// Writes `bytes` to `path` whole or not at all: into a temporary file
 /// beside it, then renamed over it.
 pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
-    let fail = |error| ReportError {
-        path: path.to_path_buf(),
-        error,
-    };
-    let mut temporary = path.as_os_str().to_owned();
-    temporary.push(".occlu-partial");
-    let temporary = PathBuf::from(temporary);
+    let temporary = partial(path);
     let written = std::fs::write(&temporary, bytes).and_then(|()| std::fs::rename(&temporary, path));
     if written.is_err() {
         let _ = std::fs::remove_file(&temporary);
     }
-    written.map_err(fail)
+    written.map_err(|error| ReportError {
+        path: path.to_path_buf(),
+        error,
+    })
 }
 
-/// Writes `rows` to `path` as CSV with a header of field names.
-fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<(), ReportError> {
+/// Checks that [`write_whole`] could write `path`, so that a bad output
+/// file is refused before a long run rather than after it.
+pub fn check_writable(path: &Path) -> Result<(), ReportError> {
     let fail = |error| ReportError {
         path: path.to_path_buf(),
         error,
     };
-    let mut csv = csv::Writer::from_path(path).map_err(|e| fail(e.into()))?;
-    for row in rows {
-        csv.serialize(row).map_err(|e| fail(e.into()))?;
+    if path.is_dir() {
+        return Err(fail(std::io::Error::other("is a directory: a file name is needed")));
     }
-    csv.flush().map_err(fail)
+    let temporary = partial(path);
+    std::fs::File::create(&temporary).map_err(fail)?;
+    std::fs::remove_file(&temporary).map_err(fail)
 }
 
-/// Writes an 8-bit RGB image as PNG.
-pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ReportError> {
-    let fail = |error: std::io::Error| ReportError {
+/// The temporary twin [`write_whole`] writes `path` into first.
+fn partial(path: &Path) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(".occlu-partial");
+    PathBuf::from(name)
+}
+
+/// `rows` as CSV with a header of field names. Made in memory, so writing
+/// the file keeps the I/O error's kind (a full disk stays one) and its
+/// fingerprint needs no second read.
+fn csv_bytes<T: Serialize>(path: &Path, rows: &[T]) -> Result<Vec<u8>, ReportError> {
+    let mut csv = csv::Writer::from_writer(Vec::new());
+    for row in rows {
+        csv.serialize(row).map_err(|e| ReportError {
+            path: path.to_path_buf(),
+            error: e.into(),
+        })?;
+    }
+    csv.into_inner().map_err(|e| ReportError {
+        path: path.to_path_buf(),
+        error: e.into_error(),
+    })
+}
+
+/// Writes `bytes` to `path` (a fresh file in a staging folder).
+fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
+    std::fs::write(path, bytes).map_err(|error| ReportError {
         path: path.to_path_buf(),
         error,
-    };
-    let file = std::fs::File::create(path).map_err(fail)?;
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    })
+}
+
+/// Writes an 8-bit RGB image as PNG, whole or not at all.
+pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ReportError> {
+    let mut png = Vec::new();
+    let mut encoder = png::Encoder::new(&mut png, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
-    // An I/O failure (a full disk) keeps its kind, so it exits as one.
-    let encoding = |e: png::EncodingError| match e {
-        png::EncodingError::IoError(io) => fail(io),
-        e => fail(std::io::Error::other(e)),
-    };
-    let mut writer = encoder.write_header().map_err(encoding)?;
-    writer.write_image_data(rgb).map_err(encoding)?;
-    writer.finish().map_err(encoding)
+    encoder
+        .write_header()
+        .and_then(|mut writer| writer.write_image_data(rgb).and_then(|()| writer.finish()))
+        .map_err(|e| ReportError {
+            path: path.to_path_buf(),
+            error: std::io::Error::other(format!("encoding the picture failed: {e}")),
+        })?;
+    write_whole(path, &png)
 }
 
 /// Reads a run directory's summary.json and frames.csv (for `occlu plot`
@@ -238,7 +265,7 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(),
 pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportError> {
     let io = |path: PathBuf| move |error| ReportError { path, error };
     let json_path = dir.join("summary.json");
-    let text = std::fs::read_to_string(&json_path).map_err(io(json_path.clone()))?;
+    let text = crate::input::read_text(&json_path, crate::input::TEXT_LIMIT).map_err(io(json_path.clone()))?;
     let summary: Summary = serde_json::from_str(&text)
         .map_err(|e| io(json_path.clone())(std::io::Error::other(format!("not an occlu summary: {e}"))))?;
     if summary.schema_version != SCHEMA_VERSION {
@@ -264,23 +291,20 @@ pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportErro
     Ok((summary, rows))
 }
 
-/// A run's claim on its `--out` folder: `.occlu.lock`, holding the process
-/// id, removed when the claim is dropped (the run ended, well or not).
+/// A run's claim on its `--out` folder: an exclusive lock on
+/// `.occlu.lock`, held by the operating system for as long as this value
+/// lives, and released by it when the process ends however it ends (a kill
+/// included), so no claim outlives its run and no run can take over a live
+/// one. The file itself stays; it holds the last claimant's process id, for
+/// the message a refused run prints.
 #[must_use = "the folder is claimed only while the lock lives"]
 pub struct OutputLock {
-    path: PathBuf,
-}
-
-impl Drop for OutputLock {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-    }
+    _file: Option<std::fs::File>,
 }
 
 /// Creates `out`, checks that files can be written there (so a bad `--out`
 /// fails before a long run rather than after it) and claims it: a second
-/// run into the same folder is refused while the first runs. A lock left by
-/// a process that no longer runs (killed) is taken over.
+/// run into the same folder is refused while the first holds it.
 pub fn prepare_output(out: &Path) -> Result<OutputLock, ReportError> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
@@ -291,43 +315,87 @@ pub fn prepare_output(out: &Path) -> Result<OutputLock, ReportError> {
         return Err(io(out)(error));
     }
     std::fs::create_dir_all(out).map_err(io(out))?;
-    let probe = out.join(".occlu-write-test");
-    std::fs::write(&probe, b"").map_err(io(&probe))?;
-    std::fs::remove_file(&probe).map_err(io(&probe))?;
     let path = out.join(".occlu.lock");
-    for _ in 0..2 {
-        match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
-            Ok(mut file) => {
-                use std::io::Write as _;
-                write!(file, "{}", std::process::id()).map_err(io(&path))?;
-                return Ok(OutputLock { path });
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                let holder = std::fs::read_to_string(&path)
-                    .ok()
-                    .and_then(|t| t.trim().parse::<u32>().ok());
-                // Where /proc tells, a holder that no longer runs left it.
-                let running = holder.is_some_and(|pid| Path::new(&format!("/proc/{pid}")).exists())
-                    || !Path::new("/proc/self").exists();
-                if running {
-                    let who = holder.map_or("another occlu run".to_string(), |pid| format!("occlu process {pid}"));
-                    return Err(io(&path)(std::io::Error::other(format!(
-                        "{who} is writing results into this folder; use another --out (or remove this file if no run is)"
-                    ))));
-                }
-                std::fs::remove_file(&path).map_err(io(&path))?;
-            }
-            Err(e) => return Err(io(&path)(e)),
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .map_err(io(&path))?;
+    match file.try_lock() {
+        Ok(()) => {
+            use std::io::{Seek as _, Write as _};
+            file.set_len(0)
+                .and_then(|()| file.rewind())
+                .and_then(|()| write!(file, "{}", std::process::id()))
+                .map_err(io(&path))?;
+            Ok(OutputLock { _file: Some(file) })
         }
+        Err(std::fs::TryLockError::WouldBlock) => {
+            use std::io::Read as _;
+            let mut holder = String::new();
+            let _ = (&file).take(32).read_to_string(&mut holder);
+            let who = holder
+                .trim()
+                .parse::<u32>()
+                .map_or("another occlu run".to_string(), |pid| format!("occlu process {pid}"));
+            Err(io(&path)(std::io::Error::other(format!(
+                "{who} is writing results into this folder; use another --out"
+            ))))
+        }
+        // A file system without locks (some network mounts) cannot hold a
+        // claim; the run goes on unclaimed rather than not at all.
+        Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
+            Ok(OutputLock { _file: None })
+        }
+        Err(std::fs::TryLockError::Error(e)) => Err(io(&path)(e)),
     }
-    Err(io(&path)(std::io::Error::other("could not claim the folder")))
 }
 
-/// Writes a run's result files into `out`, whole or not at all: every
-/// file is first written into a staging folder inside `out` and moved into
-/// place only once all of them are complete, so a failure (a full disk)
-/// leaves `out`'s earlier contents as they were. summary.json records
-/// frames.csv's fingerprint, which [`read_results`] checks.
+/// Writes a set of result files into `out` so that each is whole or absent:
+/// `write` puts them into a fresh staging folder inside `out` and returns
+/// their names in the order they are moved into place, and nothing is moved
+/// until all are complete, so a failure (a full disk) leaves `out`'s
+/// earlier contents as they were. `stale` names files an earlier run may
+/// have left that this one does not write; they go first, so a reader never
+/// takes an earlier run's file for this one's.
+fn publish(
+    out: &Path,
+    stale: &[&str],
+    write: impl FnOnce(&Path) -> Result<Vec<String>, ReportError>,
+) -> Result<Vec<String>, ReportError> {
+    let staging = out.join(STAGING);
+    let _ = std::fs::remove_dir_all(&staging);
+    let staged = std::fs::create_dir(&staging)
+        .map_err(|error| ReportError {
+            path: staging.clone(),
+            error,
+        })
+        .and_then(|()| write(&staging));
+    let moved = staged.and_then(|names| {
+        for name in stale {
+            let path = out.join(name);
+            match std::fs::remove_file(&path) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(ReportError { path, error: e }),
+                _ => {}
+            }
+        }
+        for name in &names {
+            std::fs::rename(staging.join(name), out.join(name)).map_err(|error| ReportError {
+                path: out.join(name),
+                error,
+            })?;
+        }
+        Ok(names)
+    });
+    let _ = std::fs::remove_dir_all(&staging);
+    moved
+}
+
+/// Writes a run's result files into `out` (see [`publish`]). summary.json
+/// records frames.csv's fingerprint and is moved into place last, so
+/// [`read_results`] refuses a folder caught between two runs' files.
 pub fn write_results(
     out: &Path,
     summary: &mut Summary,
@@ -335,29 +403,24 @@ pub fn write_results(
     missed: &[MissedObject],
 ) -> Result<ResultFiles, ReportError> {
     debug_assert_eq!(summary.missed, MissedSummary::of(missed), "the summary heads this list");
-    let staging = out.join(STAGING);
-    let staged = write_staged(&staging, summary, rows, missed);
-    let moved = staged.and_then(|names| {
-        for name in &names {
-            std::fs::rename(staging.join(name), out.join(name)).map_err(|error| ReportError {
-                path: out.join(name),
-                error,
-            })?;
+    // An earlier run's list must not pass for this run's.
+    let stale: &[&str] = if missed.is_empty() { &["missed.csv"] } else { &[] };
+    let names = publish(out, stale, |staging| {
+        let frames_csv = csv_bytes(&staging.join("frames.csv"), rows)?;
+        summary.frames_csv = Some(Fingerprint::of(&frames_csv));
+        write_file(&staging.join("frames.csv"), &frames_csv)?;
+        let mut names = vec!["frames.csv".to_string()];
+        if !missed.is_empty() {
+            let path = staging.join("missed.csv");
+            write_file(&path, &csv_bytes(&path, &escape_formulas(missed))?)?;
+            names.push("missed.csv".into());
         }
-        if missed.is_empty() {
-            // An earlier run's list must not pass for this run's.
-            let stale = out.join("missed.csv");
-            match std::fs::remove_file(&stale) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                    return Err(ReportError { path: stale, error: e });
-                }
-                _ => {}
-            }
-        }
+        names.extend(write_report_and_charts(staging, summary, rows)?);
+        let json = serde_json::to_string_pretty(summary).expect("summary serialises: no maps with non-string keys");
+        write_file(&staging.join("summary.json"), (json + "\n").as_bytes())?;
+        names.push("summary.json".into());
         Ok(names)
-    });
-    let _ = std::fs::remove_dir_all(&staging);
-    let names = moved?;
+    })?;
     let path = |name: &str| out.join(name);
     Ok(ResultFiles {
         frames_csv: path("frames.csv"),
@@ -368,39 +431,23 @@ pub fn write_results(
     })
 }
 
-/// The folder inside `--out` that results are written into before they
-/// are moved into place.
-const STAGING: &str = ".occlu-staging";
+/// Draws a run's report.md and charts again from its summary and rows
+/// (`occlu plot`), into `out` as [`write_results`] writes them; returns the
+/// charts' paths.
+pub fn rewrite_report(out: &Path, summary: &Summary, rows: &[FrameStats]) -> Result<Vec<PathBuf>, ReportError> {
+    let names = publish(out, &[], |staging| write_report_and_charts(staging, summary, rows))?;
+    Ok(names
+        .iter()
+        .filter(|n| n.ends_with(".png"))
+        .map(|n| out.join(n))
+        .collect())
+}
 
-/// Writes every result file into `staging` (made afresh) and returns their
-/// names, frames.csv first.
-fn write_staged(
-    staging: &Path,
-    summary: &mut Summary,
-    rows: &[FrameStats],
-    missed: &[MissedObject],
-) -> Result<Vec<String>, ReportError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |error| ReportError { path, error }
-    };
-    let _ = std::fs::remove_dir_all(staging);
-    std::fs::create_dir_all(staging).map_err(io(staging))?;
-    let mut names = vec!["frames.csv".to_string()];
-    let frames_csv = staging.join("frames.csv");
-    write_csv(&frames_csv, rows)?;
-    summary.frames_csv = Some(Fingerprint::of(&std::fs::read(&frames_csv).map_err(io(&frames_csv))?));
-    if !missed.is_empty() {
-        write_csv(&staging.join("missed.csv"), missed)?;
-        names.push("missed.csv".into());
-    }
-    let json = serde_json::to_string_pretty(summary).expect("summary serialises: no maps with non-string keys");
-    let summary_json = staging.join("summary.json");
-    std::fs::write(&summary_json, json + "\n").map_err(io(&summary_json))?;
-    let report_md = staging.join("report.md");
-    std::fs::write(&report_md, render_markdown(summary)).map_err(io(&report_md))?;
-    names.extend(["summary.json".to_string(), "report.md".to_string()]);
-    for chart in charts::write_charts(staging, summary, rows)? {
+/// Writes report.md and the charts into `dir`; returns their names.
+fn write_report_and_charts(dir: &Path, summary: &Summary, rows: &[FrameStats]) -> Result<Vec<String>, ReportError> {
+    write_file(&dir.join("report.md"), render_markdown(summary).as_bytes())?;
+    let mut names = vec!["report.md".to_string()];
+    for chart in charts::write_charts(dir, summary, rows)? {
         names.push(
             chart
                 .file_name()
@@ -410,6 +457,24 @@ fn write_staged(
         );
     }
     Ok(names)
+}
+
+/// The folder inside `--out` that results are written into before they
+/// are moved into place.
+const STAGING: &str = ".occlu-staging";
+
+/// `missed` with object names that a spreadsheet would run as a formula
+/// (starting with `=`, `+`, `-`, `@`, a tab or a carriage return, as OWASP
+/// lists them) prefixed by `'`, which spreadsheets read as "text follows".
+/// Names come from model files, which may come from anyone.
+fn escape_formulas(missed: &[MissedObject]) -> Vec<MissedObject> {
+    missed
+        .iter()
+        .map(|m| MissedObject {
+            name: crate::text::spreadsheet_safe(&m.name),
+            ..m.clone()
+        })
+        .collect()
 }
 
 /// What identifies a frames.csv: its length and FNV-1a hash. Not a defence

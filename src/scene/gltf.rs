@@ -10,10 +10,10 @@ use base64::Engine as _;
 use glam::{DAffine3, DMat4, DVec3};
 use gltf::mesh::Mode;
 
-use super::{MeshGroup, SceneBuilder, SceneError};
+use super::{LoadOptions, MeshGroup, SceneBuilder, SceneError};
 use crate::text::one_line;
 
-pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(), SceneError> {
+pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut SceneBuilder) -> Result<(), SceneError> {
     let parse_error = |message: String| SceneError::Parse {
         path: path.into(),
         message,
@@ -45,7 +45,7 @@ pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(),
     }
     let buffers = gltf
         .buffers()
-        .map(|b| buffer_data(path, &gltf, &b))
+        .map(|b| buffer_data(path, &gltf, &b, options))
         .collect::<Result<Vec<_>, _>>()?;
 
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
@@ -281,7 +281,12 @@ fn triangle_list(mode: Mode, stream: &[u32]) -> Vec<u32> {
     }
 }
 
-fn buffer_data(path: &Path, gltf: &gltf::Gltf, buffer: &gltf::Buffer) -> Result<Vec<u8>, SceneError> {
+fn buffer_data(
+    path: &Path,
+    gltf: &gltf::Gltf,
+    buffer: &gltf::Buffer,
+    options: &LoadOptions,
+) -> Result<Vec<u8>, SceneError> {
     let error = |what: String| SceneError::Parse {
         path: path.into(),
         message: format!("buffer {}: {what}", buffer.index()),
@@ -300,9 +305,12 @@ fn buffer_data(path: &Path, gltf: &gltf::Gltf, buffer: &gltf::Buffer) -> Result<
                 .map_err(|e| error(format!("data URI does not decode: {e}")))?
         }
         gltf::buffer::Source::Uri(uri) => {
-            let file = beside_the_model(path, uri).map_err(error)?;
-            crate::input::read_file(&file, crate::input::MODEL_LIMIT)
-                .map_err(|e| error(format!("{}: {e}", file.display())))?
+            let file = if options.external_buffers {
+                buffer_file(path, uri)
+            } else {
+                beside_the_model(path, uri).map_err(error)?
+            };
+            super::read_model_file(&file, options).map_err(|e| error(format!("{}: {e}", file.display())))?
         }
     };
     if data.len() < buffer.length() {
@@ -324,15 +332,15 @@ fn buffer_data(path: &Path, gltf: &gltf::Gltf, buffer: &gltf::Buffer) -> Result<
 fn beside_the_model(model: &Path, uri: &str) -> Result<std::path::PathBuf, String> {
     let refuse = |why: &str| {
         Err(format!(
-            "URI '{}' {why}: buffers must lie in the model's folder or below it",
+            "URI '{}' {why}: buffers must lie in the model's folder or below it (--external-buffers allows others)",
             one_line(uri)
         ))
     };
-    let relative = percent_decode(uri);
-    let relative = Path::new(&relative);
     if uri.contains(':') {
         return refuse("is not a relative path");
     }
+    let relative = percent_decode(uri);
+    let relative = Path::new(&relative);
     if relative
         .components()
         .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
@@ -340,7 +348,7 @@ fn beside_the_model(model: &Path, uri: &str) -> Result<std::path::PathBuf, Strin
         return refuse("leaves the model's folder");
     }
     let folder = model.parent().unwrap_or(Path::new("."));
-    let file = folder.join(relative);
+    let file = buffer_file(model, uri);
     // Resolved, a link inside the folder may still point out of it.
     if let (Ok(folder), Ok(real)) = (folder.canonicalize(), file.canonicalize())
         && !real.starts_with(&folder)
@@ -348,6 +356,13 @@ fn beside_the_model(model: &Path, uri: &str) -> Result<std::path::PathBuf, Strin
         return refuse("leads out of the model's folder through a link");
     }
     Ok(file)
+}
+
+/// The file a buffer URI names, relative to the model's folder (an
+/// absolute path stays absolute).
+fn buffer_file(model: &Path, uri: &str) -> std::path::PathBuf {
+    let relative = percent_decode(uri.strip_prefix("file://").unwrap_or(uri));
+    model.parent().unwrap_or(Path::new(".")).join(relative)
 }
 
 /// URIs in glTF are percent-encoded (a space is `%20`).

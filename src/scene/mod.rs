@@ -102,16 +102,23 @@ pub enum SceneSpec {
     Builtin(String),
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LoadOptions {
     /// Meshes with more triangles than this are split into clusters.
     pub cluster_triangles: u32,
+    /// Largest model or glTF buffer file read, in bytes.
+    pub max_file_size: u64,
+    /// glTF buffers may lie anywhere, not only in the model's folder. Off by
+    /// default: a model from elsewhere must not make occlu read other files.
+    pub external_buffers: bool,
 }
 
 impl Default for LoadOptions {
     fn default() -> Self {
         LoadOptions {
             cluster_triangles: DEFAULT_CLUSTER_TRIANGLES,
+            max_file_size: crate::input::MODEL_LIMIT,
+            external_buffers: false,
         }
     }
 }
@@ -151,11 +158,23 @@ pub fn load(spec: &SceneSpec, options: &LoadOptions) -> Result<Scene, SceneError
 fn load_file(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     // The format is checked before reading, so a wrong file is not read whole.
     loader_for(path)?;
-    let bytes = crate::input::read_file(path, crate::input::MODEL_LIMIT).map_err(|error| SceneError::Io {
+    let bytes = read_model_file(path, options).map_err(|error| SceneError::Io {
         path: path.into(),
         error,
     })?;
     load_bytes(path, &bytes, options)
+}
+
+/// Reads a model or glTF buffer file of at most `options.max_file_size`
+/// bytes; past it, the message names the flag that raises the limit.
+fn read_model_file(path: &Path, options: &LoadOptions) -> std::io::Result<Vec<u8>> {
+    crate::input::read_file(path, options.max_file_size).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::FileTooLarge {
+            std::io::Error::new(e.kind(), format!("{e} (--max-file-size raises it)"))
+        } else {
+            e
+        }
+    })
 }
 
 /// Parses a model already in memory; `path` names it in errors, chooses the
@@ -166,11 +185,11 @@ pub fn load_bytes(path: &Path, bytes: &[u8], options: &LoadOptions) -> Result<Sc
     }
     let loader = loader_for(path)?;
     let mut builder = SceneBuilder::new(path.display().to_string(), options.cluster_triangles);
-    loader(path, bytes, &mut builder)?;
+    loader(path, bytes, options, &mut builder)?;
     builder.finish().ok_or_else(|| SceneError::Empty { path: path.into() })
 }
 
-type Loader = fn(&Path, &[u8], &mut SceneBuilder) -> Result<(), SceneError>;
+type Loader = fn(&Path, &[u8], &LoadOptions, &mut SceneBuilder) -> Result<(), SceneError>;
 
 fn loader_for(path: &Path) -> Result<Loader, SceneError> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);

@@ -6,9 +6,11 @@ use std::path::Path;
 
 use glam::{DAffine3, DVec3};
 
-use super::{SceneBuilder, SceneError};
+use super::{LoadOptions, SceneBuilder, SceneError};
 
-pub fn load(path: &Path, bytes: &[u8], builder: &mut SceneBuilder) -> Result<(), SceneError> {
+/// Loads an OBJ model. The options on reading further files do not apply:
+/// an OBJ file's geometry is all in it, and its material files are not read.
+pub fn load(path: &Path, bytes: &[u8], _: &LoadOptions, builder: &mut SceneBuilder) -> Result<(), SceneError> {
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,

@@ -10,6 +10,9 @@
 
 pub mod cases;
 
+use std::cell::Cell;
+use std::ops::ControlFlow;
+
 use serde::Serialize;
 
 use crate::bench::{RunOptions, Session};
@@ -204,12 +207,19 @@ pub enum StressError {
     Gpu(#[from] GpuError),
     #[error("unknown stress case '{name}' (cases: {known})")]
     UnknownCase { name: String, known: String },
+    /// The caller asked the run to stop (Ctrl-C).
+    #[error("interrupted: no results written")]
+    Interrupted,
 }
 
 impl StressError {
     /// Whether the user's input was at fault (as opposed to the GPU).
     pub fn is_input_error(&self) -> bool {
-        !matches!(self, StressError::Gpu(_))
+        match self {
+            StressError::Gpu(e) => e.is_input_error(),
+            StressError::Interrupted => false,
+            StressError::Mode(_) | StressError::UnknownCase { .. } => true,
+        }
     }
 }
 
@@ -242,13 +252,21 @@ pub fn select(names: &[String]) -> Result<Vec<StressCase>, StressError> {
 }
 
 /// Runs `modes` over `cases` (baselines before the cases that name them).
+/// When `events` breaks, the run stops before the next case with
+/// [`StressError::Interrupted`].
 pub fn run(
     gpu: &GpuContext,
     cases: &[StressCase],
     modes: &[&'static str],
     resolution: Resolution,
-    events: &mut dyn FnMut(StressEvent),
+    events: &mut dyn FnMut(StressEvent) -> ControlFlow<()>,
 ) -> Result<StressReport, StressError> {
+    let stop = Cell::new(false);
+    let mut events = |event| {
+        if events(event).is_break() {
+            stop.set(true);
+        }
+    };
     let mut skipped = Vec::new();
     let modes: Vec<&'static ModeInfo> = modes
         .iter()
@@ -277,6 +295,9 @@ pub fn run(
     };
     for case in cases {
         events(StressEvent::Case { case });
+        if stop.get() {
+            return Err(StressError::Interrupted);
+        }
         let mut cullers = modes
             .iter()
             .map(|m| create(m.name, &case.scene, &ModeParams::default()))

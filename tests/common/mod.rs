@@ -166,7 +166,10 @@ pub fn run_modes(
         measure_error: true,
     };
     let mut world = World::new(scene.clone(), hierarchy.clone());
-    run(gpu, &mut world, path, cullers, &options, &mut |_, _| {}).unwrap()
+    run(gpu, &mut world, path, cullers, &options, &mut |_, _| {
+        std::ops::ControlFlow::Continue(())
+    })
+    .unwrap()
 }
 
 /// The small built-in city (`city:blocks=2`), its hierarchy, and its street
