@@ -28,7 +28,7 @@ use crate::measure::{ErrorMeter, FrameStats, MissedObject, ModeDescription, Obje
 use crate::object_set::ObjectSet;
 use crate::report::{
     MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary, SkippedMode,
-    Summary, SweepSummary, ToolInfo, prepare_output, write_results,
+    Summary, SweepSummary, ToolInfo, check_writable, prepare_output, write_results, write_whole,
 };
 use crate::scene::{Scene, SceneError};
 use crate::world::World;
@@ -430,6 +430,9 @@ pub fn execute(
     let path_file = plan.path.as_deref().map(CameraPath::load).transpose()?;
     // Held until the results are written: no second run writes here.
     let _claim = prepare_output(&plan.out)?;
+    if let Some(path) = &plan.export_github_benchmark {
+        check_writable(path)?;
+    }
     let start = Instant::now();
     let scene = crate::scene::load(&plan.scene, &plan.load)?;
     let load_ms = ms(start.elapsed());
@@ -538,5 +541,10 @@ pub fn execute(
         frames_csv: None,
     };
     let files = write_results(&plan.out, &mut summary, &output.rows, &output.missed)?;
+    if let Some(path) = &plan.export_github_benchmark {
+        let entries = crate::report::github::entries(&summary);
+        let json = serde_json::to_string_pretty(&entries).expect("entries serialise: strings and numbers") + "\n";
+        write_whole(path, json.as_bytes())?;
+    }
     Ok(BenchOutcome { summary, files })
 }

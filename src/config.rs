@@ -42,6 +42,8 @@ pub struct BenchConfig {
     pub max_file_size: Option<ByteSize>,
     /// glTF buffers may lie outside the model's folder.
     pub external_buffers: Option<bool>,
+    /// Also write the run for github-action-benchmark here.
+    pub export_github_benchmark: Option<PathBuf>,
     /// Mode parameters, `MODE.KEY=VALUE`.
     pub params: Option<Vec<String>>,
     /// One mode at several values of one parameter, `MODE.KEY=V1,V2,...`.
@@ -114,6 +116,8 @@ pub struct BenchPlan {
     pub out: PathBuf,
     pub measure_error: bool,
     pub load: LoadOptions,
+    /// Also write the run in github-action-benchmark's format here.
+    pub export_github_benchmark: Option<PathBuf>,
 }
 
 impl BenchConfig {
@@ -159,6 +163,7 @@ impl BenchConfig {
             cluster_triangles: self.cluster_triangles.or(fallback.cluster_triangles),
             max_file_size: self.max_file_size.or(fallback.max_file_size),
             external_buffers: self.external_buffers.or(fallback.external_buffers),
+            export_github_benchmark: self.export_github_benchmark.or(fallback.export_github_benchmark),
             // Per key, a flag wins over the file: later entries override.
             sweep: self.sweep.or(fallback.sweep),
             params: match (fallback.params, self.params) {
@@ -219,6 +224,7 @@ impl BenchConfig {
             out: self.out.unwrap_or_else(|| DEFAULT_OUT.into()),
             measure_error: self.error.unwrap_or(true),
             load: load_options(self.cluster_triangles, self.max_file_size, self.external_buffers),
+            export_github_benchmark: self.export_github_benchmark,
         })
     }
 }
@@ -342,6 +348,21 @@ mod tests {
             Ok("32x24".into()),
             "the file still counts"
         );
+    }
+
+    #[test]
+    fn file_size_limits_read_as_numbers_or_sizes_and_flags_win() {
+        let file: BenchConfig =
+            serde_json::from_str(r#"{"max_file_size": 1000000, "external_buffers": true}"#).unwrap();
+        assert_eq!(file.clone().plan().unwrap().load.max_file_size, 1_000_000);
+        let sized: BenchConfig = serde_json::from_str(r#"{"max_file_size": "8G"}"#).unwrap();
+        assert_eq!(sized.plan().unwrap().load.max_file_size, 8 << 30);
+        let flags = BenchConfig {
+            external_buffers: Some(false),
+            ..BenchConfig::default()
+        };
+        assert!(!flags.or(file).plan().unwrap().load.external_buffers);
+        assert!(serde_json::from_str::<BenchConfig>(r#"{"max_file_size": "lots"}"#).is_err());
     }
 
     #[test]

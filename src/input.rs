@@ -37,6 +37,9 @@ impl std::str::FromStr for ByteSize {
             }
             _ => (trimmed, 0),
         };
+        if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+            return Err(malformed());
+        }
         let number: u64 = digits.parse().map_err(|_| malformed())?;
         number
             .checked_mul(1 << shift)
@@ -62,19 +65,33 @@ impl serde::Serialize for ByteSize {
     }
 }
 
+/// In a config file: a number of bytes, or a string as on the command line.
 impl<'de> serde::Deserialize<'de> for ByteSize {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<ByteSize, D::Error> {
-        String::deserialize(d)?.parse().map_err(serde::de::Error::custom)
+        #[derive(serde::Deserialize)]
+        #[serde(untagged)]
+        enum Written {
+            Bytes(u64),
+            Text(String),
+        }
+        let text = match Written::deserialize(d)? {
+            Written::Bytes(bytes) => bytes.to_string(),
+            Written::Text(text) => text,
+        };
+        text.parse().map_err(serde::de::Error::custom)
     }
 }
 
 /// Reads all of `path`, a regular file of at most `limit` bytes.
 pub fn read_file(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    // Checked before opening, since opening some devices acts on them, and
+    // again on what was opened (non-blocking, since opening a FIFO waits for
+    // a writer), so the path cannot be swapped between check and open.
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(std::io::Error::other("not a regular file"));
+    }
     let mut options = std::fs::OpenOptions::new();
     options.read(true);
-    // Opening a FIFO waits for a writer, unless non-blocking; the check
-    // is then made on what was opened, so the path cannot be swapped for
-    // a FIFO or a device between a check and the open.
     #[cfg(unix)]
     std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
     let file = options.open(path)?;
@@ -93,7 +110,7 @@ pub fn read_file(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
     }
     let mut bytes = Vec::with_capacity(metadata.len() as usize);
     // One byte past the limit tells a file that grew while being read.
-    file.take(limit + 1).read_to_end(&mut bytes)?;
+    file.take(limit.saturating_add(1)).read_to_end(&mut bytes)?;
     if bytes.len() as u64 > limit {
         return Err(too_large());
     }
@@ -130,7 +147,17 @@ mod tests {
         assert_eq!("512M".parse(), Ok(ByteSize(512 << 20)));
         assert_eq!("8g".parse(), Ok(ByteSize(8 << 30)));
         assert_eq!("1000".parse(), Ok(ByteSize(1000)));
-        for bad in ["", "0", "-1", "1.5G", "4X", "G", "99999999999T"] {
+        let most: ByteSize = "18446744073709551615".parse().unwrap();
+        assert_eq!(most, ByteSize(u64::MAX));
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("f");
+        std::fs::write(&file, [7u8; 10]).unwrap();
+        assert_eq!(
+            read_file(&file, most.0).unwrap().len(),
+            10,
+            "no overflow past the largest limit"
+        );
+        for bad in ["", "0", "-1", "+5", "1.5G", "4X", "G", "99999999999T"] {
             assert!(bad.parse::<ByteSize>().is_err(), "{bad}");
         }
     }

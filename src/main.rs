@@ -147,9 +147,9 @@ struct SceneArgs {
     max_file_size: Option<ByteSize>,
     /// Let a glTF file's buffers lie outside its folder (absolute paths,
     /// "..", file: URIs). Off by default, so a model from elsewhere cannot
-    /// make occlu read other files.
-    #[arg(long)]
-    external_buffers: bool,
+    /// make occlu read other files (=false overrides a config file).
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
+    external_buffers: Option<bool>,
 }
 
 impl SceneArgs {
@@ -158,11 +158,7 @@ impl SceneArgs {
     }
 
     fn options(&self) -> LoadOptions {
-        load_options(
-            self.cluster_triangles,
-            self.max_file_size,
-            self.external_buffers.then_some(true),
-        )
+        load_options(self.cluster_triangles, self.max_file_size, self.external_buffers)
     }
 }
 
@@ -363,41 +359,64 @@ fn main() -> ExitCode {
             compare(&base, &new, &options, json)
         }
     };
-    match result {
-        Ok(code) => code,
+    let code = match result {
         Err(e) if was_interrupted(&e) => {
             say!("occlu: {}", occlu::text::one_line(&format!("{e:#}")));
-            ExitCode::from(INTERRUPTED_EXIT)
+            end_by_sigint()
         }
+        Ok(code) => code,
         Err(e) => {
             say!("occlu: error: {}", occlu::text::one_line(&format!("{e:#}")));
             ExitCode::from(if is_input_error(&e) { 2 } else { 1 })
         }
+    };
+    // Ctrl-C while the results were written: they are whole, and the
+    // interruption still reaches the caller.
+    if INTERRUPTED.load(Ordering::SeqCst) {
+        say!("occlu: interrupted");
+        end_by_sigint();
     }
+    code
 }
 
-/// Set by Ctrl-C (SIGINT); long work stops at its next frame or case.
+/// Whether a command that stops cleanly on Ctrl-C is running: until one
+/// says so through [`go_on`], Ctrl-C ends the process at once, as it would
+/// without a handler. Nothing is half-written then: the operating system
+/// drops the claim on --out, and result files are moved into place whole.
+static LISTENING: AtomicBool = AtomicBool::new(false);
+
+/// Set by Ctrl-C while listening: the work stops at its next frame (bench)
+/// or case (stress), writes nothing, and ends the process.
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
-/// The shell's code for a process ended by SIGINT (128 + 2).
-const INTERRUPTED_EXIT: u8 = 130;
-
-/// Ctrl-C asks the running work to stop between frames, so it releases its
-/// claim on --out and leaves no partial file; a second Ctrl-C ends the
-/// process at once. Where no handler can be installed, Ctrl-C keeps its
-/// default (the process ends; the operating system still releases the
-/// claim, and no result file is half-written since they are renamed into
-/// place whole).
+/// The first Ctrl-C asks listening work to stop (see [`LISTENING`]); a
+/// second one, or one while nothing listens, ends the process at once.
 fn listen_for_ctrl_c() {
     let _ = ctrlc::set_handler(|| {
-        if INTERRUPTED.swap(true, Ordering::SeqCst) {
-            std::process::exit(i32::from(INTERRUPTED_EXIT));
+        if !LISTENING.load(Ordering::SeqCst) || INTERRUPTED.swap(true, Ordering::SeqCst) {
+            end_by_sigint();
         }
     });
 }
 
-/// Whether the work should go on (no Ctrl-C yet).
+/// Ends the process as killed by SIGINT, so a calling shell or script sees
+/// the interruption (status 130) and stops as well, which an exit code
+/// alone would not make it do.
+fn end_by_sigint() -> ! {
+    #[cfg(unix)]
+    // SAFETY: restores SIGINT's default action and raises it; neither call
+    // touches memory, and the default action ends the process.
+    unsafe {
+        libc::signal(libc::SIGINT, libc::SIG_DFL);
+        libc::raise(libc::SIGINT);
+    }
+    std::process::exit(130)
+}
+
+/// Whether the work should go on (no Ctrl-C yet); from its first call on,
+/// Ctrl-C asks the work to stop instead of ending the process.
 fn go_on() -> ControlFlow<()> {
+    LISTENING.store(true, Ordering::SeqCst);
     if INTERRUPTED.load(Ordering::SeqCst) {
         ControlFlow::Break(())
     } else {
@@ -472,7 +491,8 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         error: args.no_error.then_some(false),
         cluster_triangles: args.scene.cluster_triangles,
         max_file_size: args.scene.max_file_size,
-        external_buffers: args.scene.external_buffers.then_some(true),
+        external_buffers: args.scene.external_buffers,
+        export_github_benchmark: args.export_github_benchmark,
         params: (!args.params.is_empty()).then_some(args.params),
         sweep: args.sweep,
     };
@@ -487,20 +507,13 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
             say!("{text}");
         }
     };
-    // Refused now, not after a long run.
-    if let Some(path) = &args.export_github_benchmark {
-        occlu::report::check_writable(path)?;
-    }
     let mut progress = Progress::new(quiet, plan.warmup, format!("{} modes", plan.modes.len()));
     let outcome = execute(&plan, &mut |event| {
         heard(&mut progress, event, &note);
         go_on()
     })?;
     progress.finish();
-    if let Some(path) = &args.export_github_benchmark {
-        let entries = occlu::report::github::entries(&outcome.summary);
-        let json = serde_json::to_string_pretty(&entries)? + "\n";
-        occlu::report::write_whole(path, json.as_bytes())?;
+    if let Some(path) = &plan.export_github_benchmark {
         note(format!("wrote {}", path.display()));
     }
     if args.json {

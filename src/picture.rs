@@ -68,7 +68,10 @@ pub enum PictureError {
 impl PictureError {
     /// Whether the user's input was at fault (as opposed to the GPU).
     pub fn is_input_error(&self) -> bool {
-        !matches!(self, PictureError::Gpu(_))
+        match self {
+            PictureError::Gpu(e) => e.is_input_error(),
+            PictureError::FrameOutOfRange { .. } => true,
+        }
     }
 }
 

@@ -587,21 +587,31 @@ fn a_closed_or_full_stderr_loses_its_lines_and_nothing_else() {
     let dir = tempfile::tempdir().unwrap();
     let model = write(dir.path(), "m.obj", THREE_OBJECTS_OBJ);
     let path = dir.path().join("p.json");
-    let (model, path) = (model.to_str().unwrap(), path.to_str().unwrap());
-    for redirect in ["2>&-", "2>/dev/full"] {
-        // Success (its "wrote" line lost) and bad input (its error lost)
-        // keep their exit status; neither panics (101).
-        for (command, code) in [
-            (format!("path gen {model} -o {path}"), 0),
-            ("info no-such-model.obj".to_string(), 2),
-        ] {
-            let status = std::process::Command::new("sh")
-                .arg("-c")
-                .arg(format!("{} {command} {redirect}", env!("CARGO_BIN_EXE_occlu")))
-                .status()
-                .unwrap();
-            assert_eq!(status.code(), Some(code), "{command} {redirect}");
-        }
+    // Success (its "wrote" line lost) and bad input (its error lost) keep
+    // their exit status; neither panics (101).
+    let commands: [(&[&str], i32); 2] = [
+        (
+            &["path", "gen", model.to_str().unwrap(), "-o", path.to_str().unwrap()],
+            0,
+        ),
+        (&["info", "no-such-model.obj"], 2),
+    ];
+    for (args, code) in commands {
+        let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+        let status = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+            .args(args)
+            .stderr(full)
+            .status()
+            .unwrap();
+        assert_eq!(status.code(), Some(code), "{args:?} 2>/dev/full");
+        // A pipe whose reader has gone.
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+            .args(args)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stderr.take());
+        assert_eq!(child.wait().unwrap().code(), Some(code), "{args:?} 2>closed pipe");
     }
 }
 
@@ -770,13 +780,19 @@ fn compare_fails_on_what_the_new_run_leaves_out_and_refuses_other_adapters() {
     assert_eq!(changes.len(), 2 * 6);
     for c in changes {
         let expected = if c["metric"] == "frame_ms" {
-            "unmeasured"
+            "not_judged"
         } else {
             "same"
         };
         assert_eq!(c["verdict"], expected, "{c}");
     }
     assert!(verdicts["notes"][0].as_str().unwrap().contains("Another GPU"));
+    // A gate on frame time alone would judge nothing there: refused.
+    fails_with(
+        &["compare", &base, other, "--cross-adapter", "--metric", "frame_ms"],
+        2,
+        &["nothing would be judged"],
+    );
 }
 
 #[test]
@@ -792,6 +808,13 @@ fn a_headless_run_prints_no_wayland_noise() {
     let stderr = common::stderr(&out);
     assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
     assert!(stderr.lines().all(|l| l.starts_with("adapter: ")), "{stderr}");
+}
+
+/// Whether a run left a staging folder in `out`.
+fn staged_files_left(out: &std::path::Path) -> bool {
+    std::fs::read_dir(out)
+        .unwrap()
+        .any(|e| e.unwrap().file_name().to_string_lossy().starts_with(".occlu-staging"))
 }
 
 /// A tiny bench run into `out`.
@@ -840,7 +863,7 @@ fn result_folders_are_claimed_whole_and_checked_when_read() {
         .unwrap();
     lock.try_lock().unwrap();
     std::fs::write(a.join(".occlu.lock"), std::process::id().to_string()).unwrap();
-    let refused = format!("occlu process {} is writing results", std::process::id());
+    let refused = format!("occlu process {} claimed it last", std::process::id());
     fails_with(&bench_args(&["--modes", "vfc"], a_str), 2, &[".occlu.lock", &refused]);
     fails_with(&["plot", a_str], 2, &[".occlu.lock", &refused]);
     drop(lock);
@@ -887,7 +910,7 @@ fn a_full_disk_fails_with_exit_1_and_leaves_the_earlier_results() {
     let filled = std::fs::write(mount.join("filler"), filler);
     let second = tiny_run(&out);
     let after = std::fs::read(out.join("summary.json"));
-    let staging_left = out.join(".occlu-staging").exists();
+    let staging_left = staged_files_left(&out);
     unmount();
     assert!(first.status.success() && filled.is_ok(), "{:?}", own_stderr(&first));
     let lines = own_stderr(&second);
@@ -901,7 +924,8 @@ fn a_full_disk_fails_with_exit_1_and_leaves_the_earlier_results() {
 fn bench_speaks_to_machines_json_github_benchmark_quiet_and_log_lines() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let export = dir.path().join("bench.json");
+    // Inside the --out folder, which the run creates.
+    let export = out.join("github.json");
     let out_str = out.to_str().unwrap();
     let json = occlu(&bench_args(
         &[
@@ -956,7 +980,7 @@ fn bench_speaks_to_machines_json_github_benchmark_quiet_and_log_lines() {
         2,
         &["no-such-folder/bench.json", "No such file"],
     );
-    assert!(!never.exists(), "refused before anything ran");
+    assert!(!never.join("frames.csv").exists(), "refused before anything ran");
 
     let quiet = occlu(&bench_args(&["--modes", "vfc", "--quiet"], out_str));
     assert!(quiet.status.success());
@@ -992,16 +1016,18 @@ fn an_interrupted_run_leaves_the_earlier_results_intact() {
         .unwrap();
     assert!(killed.success());
     let interrupted = child.wait_with_output().unwrap();
-    // It stops between frames and says so, with the shell's code for SIGINT.
+    // It stops between frames, says so, and ends as killed by SIGINT, so a
+    // calling script stops too.
     let last = own_stderr(&interrupted).pop().unwrap_or_default();
-    assert_eq!(interrupted.status.code(), Some(130), "{last}");
-    assert!(last.starts_with("occlu: interrupted"), "{last}");
+    use std::os::unix::process::ExitStatusExt as _;
+    assert_eq!(interrupted.status.signal(), Some(2), "{last}");
+    assert!(last.starts_with("occlu: interrupted: no results written"), "{last}");
     assert_eq!(
         std::fs::read(out.join("summary.json")).unwrap(),
         earlier,
         "the earlier results stand"
     );
-    assert!(!out.join(".occlu-staging").exists(), "no partial files");
+    assert!(!staged_files_left(&out), "no partial files");
     // Its claim on the folder went with it.
     let next = tiny_run(&out);
     assert!(next.status.success(), "{:?}", own_stderr(&next));

@@ -250,7 +250,6 @@ impl GpuContext {
         }
     }
 
-    /// Blocks until the GPU has finished everything submitted so far.
     /// A buffer holding `contents` (padded to whole words, at least one, as
     /// copies and bindings need), written through the queue. wgpu's
     /// `create_buffer_init` maps the new buffer instead, and panics when the
@@ -274,6 +273,7 @@ impl GpuContext {
         buffer
     }
 
+    /// Blocks until the GPU has finished everything submitted so far.
     pub fn wait_idle(&self) {
         // A lost device is recorded by the device-lost callback and reported
         // by check(); waiting on it cannot fail any other way here.

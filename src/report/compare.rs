@@ -83,6 +83,8 @@ pub enum Verdict {
     Missing,
     /// The metric was not measured in one of the runs, and that is allowed.
     Unmeasured,
+    /// Measured in both, but not comparable: frame times on two adapters.
+    NotJudged,
 }
 
 impl Verdict {
@@ -146,6 +148,10 @@ pub enum CompareError {
         "the runs used different adapters ({base} vs {new}); --cross-adapter compares them anyway (counters compare, times do not)"
     )]
     Adapters { base: String, new: String },
+    #[error(
+        "the runs used different adapters ({base} vs {new}), where only counters compare, and --metric names frame_ms alone: nothing would be judged"
+    )]
+    NothingToJudge { base: String, new: String },
 }
 
 pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comparison, CompareError> {
@@ -174,11 +180,12 @@ pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comp
     let (adapter_a, adapter_b) = (&base_summary.adapter, &new_summary.adapter);
     let same_adapter = (&adapter_a.name, &adapter_a.backend) == (&adapter_b.name, &adapter_b.backend);
     if !same_adapter {
+        let (base, new) = (adapter_a.to_string(), adapter_b.to_string());
         if !options.cross_adapter {
-            return Err(CompareError::Adapters {
-                base: adapter_a.to_string(),
-                new: adapter_b.to_string(),
-            });
+            return Err(CompareError::Adapters { base, new });
+        }
+        if options.metrics.iter().all(|&m| m == Metric::FrameMs) {
+            return Err(CompareError::NothingToJudge { base, new });
         }
         notes.push(format!(
             "different adapters ({adapter_a} vs {adapter_b}): frame times are shown but not judged; counters are"
@@ -207,7 +214,7 @@ pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comp
             let (base_value, new_value) = (metric.value(b), n.and_then(|n| metric.value(n)));
             let verdict = match (base_value, new_value, n) {
                 // Times on two adapters measure the adapters, not a change.
-                (Some(_), Some(_), Some(_)) if metric == Metric::FrameMs && !same_adapter => Verdict::Unmeasured,
+                (Some(_), Some(_), Some(_)) if metric == Metric::FrameMs && !same_adapter => Verdict::NotJudged,
                 (Some(x), Some(y), Some(n)) => verdict(metric, x, y, b, n, max_regression_pct),
                 (Some(_), None, _) => missing.clone(),
                 _ => Verdict::Unmeasured,
@@ -302,6 +309,7 @@ pub fn render(c: &Comparison) -> String {
             Verdict::Regression => "REGRESSION",
             Verdict::Missing => "MISSING",
             Verdict::Unmeasured => "not measured",
+            Verdict::NotJudged => "not judged",
         };
         let _ = writeln!(
             out,

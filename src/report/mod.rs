@@ -184,17 +184,30 @@ pub struct ResultFiles {
 }
 
 /// Writes `bytes` to `path` whole or not at all: into a temporary file
-/// beside it, then renamed over it.
+/// beside it, then renamed over it. A link is followed (the file it names
+/// is replaced, with its permissions; the link stays), and a path that is
+/// not a regular file (`/dev/stdout`, a pipe) is written in place.
 pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
-    let temporary = partial(path);
-    let written = std::fs::write(&temporary, bytes).and_then(|()| std::fs::rename(&temporary, path));
+    let fail = |error| ReportError {
+        path: path.to_path_buf(),
+        error,
+    };
+    let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    let existing = std::fs::metadata(&target).ok();
+    if existing.as_ref().is_some_and(|m| !m.is_file()) {
+        return std::fs::write(&target, bytes).map_err(fail);
+    }
+    let temporary = partial(&target);
+    let written = std::fs::write(&temporary, bytes)
+        .and_then(|()| match &existing {
+            Some(m) => std::fs::set_permissions(&temporary, m.permissions()),
+            None => Ok(()),
+        })
+        .and_then(|()| std::fs::rename(&temporary, &target));
     if written.is_err() {
         let _ = std::fs::remove_file(&temporary);
     }
-    written.map_err(|error| ReportError {
-        path: path.to_path_buf(),
-        error,
-    })
+    written.map_err(fail)
 }
 
 /// Checks that [`write_whole`] could write `path`, so that a bad output
@@ -204,12 +217,17 @@ pub fn check_writable(path: &Path) -> Result<(), ReportError> {
         path: path.to_path_buf(),
         error,
     };
-    if path.is_dir() {
-        return Err(fail(std::io::Error::other("is a directory: a file name is needed")));
+    let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    match std::fs::metadata(&target) {
+        Ok(m) if m.is_dir() => Err(fail(std::io::Error::other("is a directory: a file name is needed"))),
+        // Written in place later; opening it now could end a pipe's stream.
+        Ok(m) if !m.is_file() => Ok(()),
+        _ => {
+            let temporary = partial(&target);
+            std::fs::File::create(&temporary).map_err(fail)?;
+            std::fs::remove_file(&temporary).map_err(fail)
+        }
     }
-    let temporary = partial(path);
-    std::fs::File::create(&temporary).map_err(fail)?;
-    std::fs::remove_file(&temporary).map_err(fail)
 }
 
 /// The temporary twin [`write_whole`] writes `path` into first.
@@ -299,13 +317,39 @@ pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportErro
 /// the message a refused run prints.
 #[must_use = "the folder is claimed only while the lock lives"]
 pub struct OutputLock {
-    _file: Option<std::fs::File>,
+    file: Option<std::fs::File>,
 }
 
-/// Creates `out`, checks that files can be written there (so a bad `--out`
-/// fails before a long run rather than after it) and claims it: a second
-/// run into the same folder is refused while the first holds it.
+impl OutputLock {
+    /// Whether the lock is held (false on a file system without locks).
+    fn held(&self) -> bool {
+        self.file.is_some()
+    }
+}
+
+/// Creates `out`, claims it (a second run into the same folder is refused
+/// while the first holds it) and checks that files can be written there, so
+/// a bad `--out` fails before a long run rather than after it.
 pub fn prepare_output(out: &Path) -> Result<OutputLock, ReportError> {
+    let claim = claim(out)?;
+    let io = |path: PathBuf| move |error| ReportError { path, error };
+    let probe = staging(out);
+    std::fs::create_dir_all(&probe).map_err(io(probe.clone()))?;
+    std::fs::remove_dir(&probe).map_err(io(probe))?;
+    if claim.held() {
+        // Folders of runs that were killed while staging: no live run can
+        // own one while this one holds the claim.
+        for entry in std::fs::read_dir(out).into_iter().flatten().flatten() {
+            if entry.file_name().to_string_lossy().starts_with(STAGING) {
+                let _ = std::fs::remove_dir_all(entry.path());
+            }
+        }
+    }
+    Ok(claim)
+}
+
+/// Creates `out` and takes the lock on it.
+fn claim(out: &Path) -> Result<OutputLock, ReportError> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |error| ReportError { path, error }
@@ -330,24 +374,24 @@ pub fn prepare_output(out: &Path) -> Result<OutputLock, ReportError> {
                 .and_then(|()| file.rewind())
                 .and_then(|()| write!(file, "{}", std::process::id()))
                 .map_err(io(&path))?;
-            Ok(OutputLock { _file: Some(file) })
+            Ok(OutputLock { file: Some(file) })
         }
         Err(std::fs::TryLockError::WouldBlock) => {
             use std::io::Read as _;
             let mut holder = String::new();
             let _ = (&file).take(32).read_to_string(&mut holder);
-            let who = holder
+            let last = holder
                 .trim()
                 .parse::<u32>()
-                .map_or("another occlu run".to_string(), |pid| format!("occlu process {pid}"));
+                .map_or(String::new(), |pid| format!(" (occlu process {pid} claimed it last)"));
             Err(io(&path)(std::io::Error::other(format!(
-                "{who} is writing results into this folder; use another --out"
+                "another occlu run{last} is writing results into this folder; wait for it, or write elsewhere"
             ))))
         }
         // A file system without locks (some network mounts) cannot hold a
         // claim; the run goes on unclaimed rather than not at all.
         Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
-            Ok(OutputLock { _file: None })
+            Ok(OutputLock { file: None })
         }
         Err(std::fs::TryLockError::Error(e)) => Err(io(&path)(e)),
     }
@@ -365,7 +409,7 @@ fn publish(
     stale: &[&str],
     write: impl FnOnce(&Path) -> Result<Vec<String>, ReportError>,
 ) -> Result<Vec<String>, ReportError> {
-    let staging = out.join(STAGING);
+    let staging = staging(out);
     let _ = std::fs::remove_dir_all(&staging);
     let staged = std::fs::create_dir(&staging)
         .map_err(|error| ReportError {
@@ -459,9 +503,15 @@ fn write_report_and_charts(dir: &Path, summary: &Summary, rows: &[FrameStats]) -
     Ok(names)
 }
 
-/// The folder inside `--out` that results are written into before they
-/// are moved into place.
+/// The start of the name of the folder inside `--out` that a run writes its
+/// results into before they are moved into place.
 const STAGING: &str = ".occlu-staging";
+
+/// This process's staging folder in `out`: one per process, so that runs
+/// on a file system without locks do not write into each other's.
+fn staging(out: &Path) -> PathBuf {
+    out.join(format!("{STAGING}-{}", std::process::id()))
+}
 
 /// `missed` with object names that a spreadsheet would run as a formula
 /// (starting with `=`, `+`, `-`, `@`, a tab or a carriage return, as OWASP
@@ -511,5 +561,47 @@ mod hex64 {
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
         let text = String::deserialize(d)?;
         u64::from_str_radix(&text, 16).map_err(serde::de::Error::custom)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn whole_files_follow_links_and_write_devices_in_place() {
+        use std::os::unix::fs::PermissionsExt as _;
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("target.json");
+        std::fs::write(&target, "old").unwrap();
+        std::fs::set_permissions(&target, std::fs::Permissions::from_mode(0o640)).unwrap();
+        let link = dir.path().join("link.json");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        write_whole(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().is_symlink(), "the link stays");
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "new");
+        let mode = std::fs::metadata(&target).unwrap().permissions().mode();
+        assert_eq!(mode & 0o777, 0o640, "the file keeps its permissions");
+        // A pipe (as /dev/stdout may be) is written, not replaced.
+        use std::os::unix::fs::FileTypeExt as _;
+        let pipe = dir.path().join("pipe");
+        assert!(
+            std::process::Command::new("mkfifo")
+                .arg(&pipe)
+                .status()
+                .unwrap()
+                .success()
+        );
+        let reader = {
+            let pipe = pipe.clone();
+            std::thread::spawn(move || std::fs::read(pipe).unwrap())
+        };
+        check_writable(&pipe).unwrap();
+        write_whole(&pipe, b"through").unwrap();
+        assert!(std::fs::metadata(&pipe).unwrap().file_type().is_fifo(), "still a pipe");
+        assert_eq!(reader.join().unwrap(), b"through");
+        assert!(check_writable(dir.path()).is_err(), "a folder is no file");
+        let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(left.len(), 3, "no temporary file left");
     }
 }

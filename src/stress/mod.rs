@@ -252,7 +252,7 @@ pub fn select(names: &[String]) -> Result<Vec<StressCase>, StressError> {
 }
 
 /// Runs `modes` over `cases` (baselines before the cases that name them).
-/// When `events` breaks, the run stops before the next case with
+/// When `events` breaks, the run stops at the end of the case it is in with
 /// [`StressError::Interrupted`].
 pub fn run(
     gpu: &GpuContext,
@@ -335,6 +335,9 @@ pub fn run(
         if is_baseline(case) {
             baseline_depths.push((case.name.clone(), outcome.depths));
         }
+    }
+    if stop.get() {
+        return Err(StressError::Interrupted);
     }
     Ok(StressReport {
         adapter: gpu.adapter.clone(),
