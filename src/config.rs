@@ -10,6 +10,7 @@ use crate::cull::{ModeError, ModeParams, parse_modes};
 use crate::gpu::{BackendChoice, Resolution};
 use crate::input::ByteSize;
 use crate::scene::builtin::with_movers;
+use crate::scene::up::UpChoice;
 use crate::scene::{LoadOptions, SceneSpec};
 
 /// Every field optional: a file or the flags may give any subset.
@@ -42,6 +43,8 @@ pub struct BenchConfig {
     pub max_file_size: Option<ByteSize>,
     /// glTF buffers may lie outside the model's folder.
     pub external_buffers: Option<bool>,
+    /// The scene's up axis ("z", "-y", "auto").
+    pub up: Option<UpChoice>,
     /// Also write the run for github-action-benchmark here.
     pub export_github_benchmark: Option<PathBuf>,
     /// Mode parameters, `MODE.KEY=VALUE`.
@@ -163,6 +166,7 @@ impl BenchConfig {
             cluster_triangles: self.cluster_triangles.or(fallback.cluster_triangles),
             max_file_size: self.max_file_size.or(fallback.max_file_size),
             external_buffers: self.external_buffers.or(fallback.external_buffers),
+            up: self.up.or(fallback.up),
             export_github_benchmark: self.export_github_benchmark.or(fallback.export_github_benchmark),
             // Per key, a flag wins over the file: later entries override.
             sweep: self.sweep.or(fallback.sweep),
@@ -223,7 +227,12 @@ impl BenchConfig {
             backend: self.backend.unwrap_or_default(),
             out: self.out.unwrap_or_else(|| DEFAULT_OUT.into()),
             measure_error: self.error.unwrap_or(true),
-            load: load_options(self.cluster_triangles, self.max_file_size, self.external_buffers),
+            load: load_options(
+                self.cluster_triangles,
+                self.max_file_size,
+                self.external_buffers,
+                self.up,
+            ),
             export_github_benchmark: self.export_github_benchmark,
         })
     }
@@ -235,12 +244,14 @@ pub fn load_options(
     cluster_triangles: Option<u32>,
     max_file_size: Option<ByteSize>,
     external_buffers: Option<bool>,
+    up: Option<UpChoice>,
 ) -> LoadOptions {
     let defaults = LoadOptions::default();
     LoadOptions {
         cluster_triangles: cluster_triangles.unwrap_or(defaults.cluster_triangles),
         max_file_size: max_file_size.map_or(defaults.max_file_size, |size| size.0),
         external_buffers: external_buffers.unwrap_or(defaults.external_buffers),
+        up: up.unwrap_or(defaults.up),
     }
 }
 

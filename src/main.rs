@@ -24,6 +24,7 @@ use occlu::picture::{PictureError, PictureOptions};
 use occlu::report::compare::{CompareError, CompareOptions, Metric};
 use occlu::report::{ReportError, SceneFacts};
 use occlu::scene::builtin::SCENES;
+use occlu::scene::up::UpChoice;
 use occlu::scene::{LoadOptions, Scene, SceneError, SceneSpec, load};
 use occlu::stress::{StressError, StressEvent};
 use occlu::world::World;
@@ -150,6 +151,12 @@ struct SceneArgs {
     /// make occlu read other files (=false overrides a config file).
     #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
     external_buffers: Option<bool>,
+    /// The scene's up axis, for generated paths and the overview: x, y, z,
+    /// -x, -y, -z, or auto (+Y for glTF and built-in scenes; for OBJ, +Z
+    /// when the model is at least twice as flat in Z as across and stands
+    /// on its Z minimum, else +Y) [default: auto].
+    #[arg(long, value_name = "AXIS", allow_hyphen_values = true)]
+    up: Option<UpChoice>,
 }
 
 impl SceneArgs {
@@ -158,7 +165,12 @@ impl SceneArgs {
     }
 
     fn options(&self) -> LoadOptions {
-        load_options(self.cluster_triangles, self.max_file_size, self.external_buffers)
+        load_options(
+            self.cluster_triangles,
+            self.max_file_size,
+            self.external_buffers,
+            self.up,
+        )
     }
 }
 
@@ -492,6 +504,7 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         cluster_triangles: args.scene.cluster_triangles,
         max_file_size: args.scene.max_file_size,
         external_buffers: args.scene.external_buffers,
+        up: args.scene.up,
         export_github_benchmark: args.export_github_benchmark,
         params: (!args.params.is_empty()).then_some(args.params),
         sweep: args.sweep,
@@ -820,6 +833,7 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
     let _ = writeln!(w, "triangles   {}", report.triangles);
     let _ = writeln!(w, "vertices    {}", report.vertices);
     let _ = writeln!(w, "bounds      {:?} to {:?}", report.bounds_min, report.bounds_max);
+    let _ = writeln!(w, "up          {} ({})", report.up.axis, report.up.why);
     let _ = writeln!(
         w,
         "hierarchy   {} nodes, {} leaves, depth {}, at most {} objects per leaf",

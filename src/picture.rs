@@ -220,17 +220,25 @@ fn paint_wrong_pixels(session: &mut Session, rgb: &mut [u8]) {
     }
 }
 
-/// Straight down on the whole scene, north (−Z) up, far enough that its
-/// bounds fit the view.
+/// Straight down the scene's up axis on the whole scene (for +Y up, −Z at
+/// the top of the picture), far enough that its bounds fit the view.
 fn overview_camera(scene: &Scene, resolution: Resolution) -> Camera {
     let b = scene.bounds;
     let (c, e) = (b.center(), b.extent());
+    let up = scene.up.axis.vector();
+    let (right, ahead) = scene.up.axis.ground_axes();
     let fov_y = 60f64.to_radians();
     let t = (fov_y / 2.0).tan();
-    let height = (e.z / (2.0 * t)).max(e.x / (2.0 * t * resolution.aspect())).max(1e-3) * 1.1;
+    let (wide, deep) = (e.dot(right.abs()), e.dot(ahead.abs()));
+    let height = (deep / (2.0 * t)).max(wide / (2.0 * t * resolution.aspect())).max(1e-3) * 1.1;
+    let top = b
+        .corners()
+        .map(|p| p.dot(up))
+        .into_iter()
+        .fold(f64::NEG_INFINITY, f64::max);
     Camera {
-        eye: DVec3::new(c.x, b.max.y + height, c.z),
-        rotation: look_rotation(DVec3::NEG_Y, DVec3::NEG_Z),
+        eye: c + up * (top - c.dot(up) + height),
+        rotation: look_rotation(-up, ahead),
         fov_y,
         near: height * 1e-3,
         aspect: resolution.aspect(),

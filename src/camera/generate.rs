@@ -57,31 +57,27 @@ pub fn default_path(scene: &Scene) -> Result<CameraPath, PathError> {
     CameraPath::from_file(&generate(kind, scene, DEFAULT_FRAMES), &format!("generated:{kind}"))
 }
 
+/// A path of `kind` over `scene`, around and above its up axis.
 pub fn generate(kind: PathKind, scene: &Scene, frames: u32) -> PathFile {
+    let ground = Ground::of(scene);
     let b = scene.bounds;
     let diagonal = b.extent().length().max(1e-6);
     let keyframes = match kind {
-        PathKind::Orbit => orbit(scene, diagonal),
+        PathKind::Orbit => orbit(&ground, b.center(), diagonal),
         PathKind::Walk => match &scene.walk_hint {
             Some(line) if line.len() >= 2 => walk_along(line, (diagonal * 0.02).max(1.0)),
             _ => {
-                let axis = horizontal_axis(scene);
-                let y = b.min.y + b.extent().y * 0.05;
-                let start = b.center() - axis * b.extent().dot(axis) * 0.45;
-                let end = b.center() + axis * b.extent().dot(axis) * 0.45;
-                walk_along(
-                    &[DVec3::new(start.x, y, start.z), DVec3::new(end.x, y, end.z)],
-                    diagonal * 0.05,
-                )
+                let (axis, length) = ground.longer_axis();
+                let height = ground.lowest + 0.05 * ground.height();
+                let at = |t: f64| ground.lift(b.center() + axis * length * t, height);
+                walk_along(&[at(-0.45), at(0.45)], diagonal * 0.05)
             }
         },
         PathKind::Flyover => {
-            let axis = horizontal_axis(scene);
-            let length = b.extent().dot(axis);
-            let y = b.max.y + 0.25 * length;
-            let c = DVec3::new(b.center().x, y, b.center().z);
+            let (axis, length) = ground.longer_axis();
+            let c = ground.lift(b.center(), ground.highest + 0.25 * length);
             let pitch = 35f64.to_radians();
-            let direction = axis * pitch.cos() - DVec3::Y * pitch.sin();
+            let direction = axis * pitch.cos() - ground.up * pitch.sin();
             [(0.0, c - axis * length * 0.6), (1.0, c + axis * length * 0.6)]
                 .map(|(time, position)| KeyframeFile {
                     time,
@@ -97,7 +93,7 @@ pub fn generate(kind: PathKind, scene: &Scene, frames: u32) -> PathFile {
         fps: None,
         near: Some(diagonal * 1e-4),
         fov_y_deg: Some(DEFAULT_FOV_Y_DEG),
-        up: None,
+        up: Some(ground.up.to_array()),
         interpolation: Interpolation::CatmullRom,
         keyframes,
     }
@@ -115,22 +111,63 @@ fn key(time: f64, position: DVec3) -> KeyframeFile {
     }
 }
 
-/// The longer horizontal axis of the scene bounds.
-fn horizontal_axis(scene: &Scene) -> DVec3 {
-    let e = scene.bounds.extent();
-    if e.x >= e.z { DVec3::X } else { DVec3::Z }
+/// The scene's ground plane, as its up axis defines it.
+struct Ground {
+    up: DVec3,
+    /// The two axes spanning the ground, and the scene's extent along each.
+    across: [(DVec3, f64); 2],
+    /// The scene's lowest and highest points along `up`.
+    lowest: f64,
+    highest: f64,
 }
 
-fn orbit(scene: &Scene, diagonal: f64) -> Vec<KeyframeFile> {
-    // Far enough that the bounding sphere fits the vertical field of view.
+impl Ground {
+    fn of(scene: &Scene) -> Ground {
+        let up = scene.up.axis.vector();
+        let (right, ahead) = scene.up.axis.ground_axes();
+        let (b, e) = (scene.bounds, scene.bounds.extent());
+        let along = |axis: DVec3| e.dot(axis.abs());
+        let heights = b.corners().map(|c| c.dot(up));
+        Ground {
+            up,
+            across: [(right, along(right)), (ahead, along(ahead))],
+            lowest: heights.into_iter().fold(f64::INFINITY, f64::min),
+            highest: heights.into_iter().fold(f64::NEG_INFINITY, f64::max),
+        }
+    }
+
+    fn height(&self) -> f64 {
+        self.highest - self.lowest
+    }
+
+    /// The longer ground axis (pointing to its positive side) and the
+    /// scene's extent along it.
+    fn longer_axis(&self) -> (DVec3, f64) {
+        let [a, b] = self.across;
+        let (axis, length) = if a.1 >= b.1 { a } else { b };
+        (axis.abs(), length)
+    }
+
+    /// `point` moved along `up` to `height`.
+    fn lift(&self, point: DVec3, height: f64) -> DVec3 {
+        point + self.up * (height - point.dot(self.up))
+    }
+}
+
+/// Circles the scene's centre `c` about its up axis at 25° elevation, far
+/// enough that the bounding sphere (of diameter `diagonal`) fits the
+/// vertical field of view.
+fn orbit(ground: &Ground, c: DVec3, diagonal: f64) -> Vec<KeyframeFile> {
     let radius = 0.5 * diagonal / (DEFAULT_FOV_Y_DEG.to_radians() / 2.0).sin();
     let elevation = 25f64.to_radians();
-    let c = scene.bounds.center();
+    let [(right, _), (ahead, _)] = ground.across;
     let steps = 24;
     (0..=steps)
         .map(|k| {
             let a = std::f64::consts::TAU * f64::from(k) / f64::from(steps);
-            let p = c + radius * DVec3::new(elevation.cos() * a.cos(), elevation.sin(), elevation.cos() * a.sin());
+            // For +Y up, (+X, −Z): anticlockwise seen from above.
+            let around = right * a.cos() - ahead * a.sin();
+            let p = c + radius * (around * elevation.cos() + ground.up * elevation.sin());
             KeyframeFile {
                 target: Some(c.to_array()),
                 ..key(f64::from(k), p)

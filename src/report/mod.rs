@@ -14,6 +14,7 @@ use crate::gpu::{AdapterReport, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams, HierarchyStats};
 use crate::measure::{FrameStats, MissedObject, ModeSummary};
 use crate::scene::Scene;
+use crate::scene::up::Up;
 
 pub use markdown::render as render_markdown;
 
@@ -124,6 +125,9 @@ pub struct SceneFacts {
     /// Objects that move from frame to frame.
     #[serde(default)]
     pub movers: usize,
+    /// The up axis generated paths and the overview use, and why.
+    #[serde(default)]
+    pub up: Up,
     pub warnings: Vec<String>,
     pub load_ms: f64,
     pub build_ms: f64,
@@ -141,6 +145,7 @@ impl SceneFacts {
             bounds_max: scene.bounds.max.to_array(),
             hierarchy: hierarchy.stats(),
             movers: scene.movers.len(),
+            up: scene.up.clone(),
             warnings: scene.warnings.clone(),
             load_ms,
             build_ms,

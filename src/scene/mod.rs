@@ -11,6 +11,7 @@ mod cluster;
 mod gltf;
 pub mod motion;
 mod obj;
+pub mod up;
 mod validate;
 
 use std::path::{Path, PathBuf};
@@ -20,6 +21,7 @@ use glam::{DAffine3, DVec3};
 use crate::bounds::Aabb;
 use crate::text::one_line;
 use motion::{Mover, Route};
+use up::{Up, UpChoice};
 pub use validate::{GeometryError, MAX_COORDINATE, within_range};
 
 /// Default triangle budget of one cluster: meshes above it are split.
@@ -72,6 +74,8 @@ pub struct Scene {
     /// Objects that move from frame to frame (built-in scenes only); the
     /// objects above stand where frame 0 puts them.
     pub movers: Vec<Mover>,
+    /// Which way is up, for generated paths and the overview picture.
+    pub up: Up,
 }
 
 impl Scene {
@@ -111,6 +115,8 @@ pub struct LoadOptions {
     /// glTF buffers may lie anywhere, not only in the model's folder. Off by
     /// default: a model from elsewhere must not make occlu read other files.
     pub external_buffers: bool,
+    /// The scene's up axis, or how to choose it.
+    pub up: UpChoice,
 }
 
 impl Default for LoadOptions {
@@ -119,6 +125,7 @@ impl Default for LoadOptions {
             cluster_triangles: DEFAULT_CLUSTER_TRIANGLES,
             max_file_size: crate::input::MODEL_LIMIT,
             external_buffers: false,
+            up: UpChoice::Auto,
         }
     }
 }
@@ -150,7 +157,11 @@ pub fn load(spec: &SceneSpec, options: &LoadOptions) -> Result<Scene, SceneError
         return Err(SceneError::ZeroClusterSize);
     }
     match spec {
-        SceneSpec::Builtin(name) => builtin::build(name, options),
+        SceneSpec::Builtin(name) => {
+            let mut scene = builtin::build(name, options)?;
+            scene.up = up::choose(options.up, up::Source::Builtin, &scene);
+            Ok(scene)
+        }
         SceneSpec::File(path) => load_file(path, options),
     }
 }
@@ -183,19 +194,23 @@ pub fn load_bytes(path: &Path, bytes: &[u8], options: &LoadOptions) -> Result<Sc
     if options.cluster_triangles == 0 {
         return Err(SceneError::ZeroClusterSize);
     }
-    let loader = loader_for(path)?;
+    let (loader, source) = loader_for(path)?;
     let mut builder = SceneBuilder::new(path.display().to_string(), options.cluster_triangles);
     loader(path, bytes, options, &mut builder)?;
-    builder.finish().ok_or_else(|| SceneError::Empty { path: path.into() })
+    let mut scene = builder
+        .finish()
+        .ok_or_else(|| SceneError::Empty { path: path.into() })?;
+    scene.up = up::choose(options.up, source, &scene);
+    Ok(scene)
 }
 
 type Loader = fn(&Path, &[u8], &LoadOptions, &mut SceneBuilder) -> Result<(), SceneError>;
 
-fn loader_for(path: &Path) -> Result<Loader, SceneError> {
+fn loader_for(path: &Path) -> Result<(Loader, up::Source), SceneError> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("obj") => Ok(obj::load),
-        Some("gltf") | Some("glb") => Ok(gltf::load),
+        Some("obj") => Ok((obj::load, up::Source::Obj)),
+        Some("gltf") | Some("glb") => Ok((gltf::load, up::Source::Gltf)),
         _ => Err(SceneError::UnsupportedFormat { path: path.into() }),
     }
 }
@@ -372,6 +387,7 @@ impl SceneBuilder {
             bounds,
             warnings,
             walk_hint: self.walk_hint,
+            up: Up::default(),
             movers: self.movers,
         })
     }
