@@ -251,13 +251,11 @@ fn bad_gltf_input_is_a_clear_error() {
         "{lines}"
     );
     let required = msg(edited_glb(|w| {
-        w.extra
-            .insert("extensionsUsed".into(), json!(["KHR_draco_mesh_compression"]));
-        w.extra
-            .insert("extensionsRequired".into(), json!(["KHR_draco_mesh_compression"]));
+        w.extra.insert("extensionsUsed".into(), json!(["EXT_unheard_of"]));
+        w.extra.insert("extensionsRequired".into(), json!(["EXT_unheard_of"]));
     }));
     assert!(
-        required.contains("KHR_draco_mesh_compression") && required.contains("Unsupported extension"),
+        required.contains("EXT_unheard_of") && required.contains("Unsupported extension"),
         "{required}"
     );
     // A required material extension does not affect visibility: it loads.

@@ -10,7 +10,7 @@ use base64::Engine as _;
 use glam::{DAffine3, DMat4, DVec3};
 use gltf::mesh::Mode;
 
-use super::{LoadOptions, MeshGroup, SceneBuilder, SceneError};
+use super::{LoadOptions, MeshGroup, SceneBuilder, SceneError, meshopt};
 use crate::text::one_line;
 
 pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut SceneBuilder) -> Result<(), SceneError> {
@@ -18,18 +18,21 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
         path: path.into(),
         message,
     };
-    let invalid = |e: gltf::Error| {
-        let text = e.to_string();
-        let detail = text.trim_start_matches("invalid glTF: ").trim_end_matches([';', ' ']);
-        parse_error(format!("invalid glTF: {}", one_line(detail)))
-    };
+    let invalid = |e: gltf::Error| parse_error(format!("invalid glTF: {}", summarise(&e)));
     // gltf-json's validator indexes primitive accessors without a bounds
     // check, so those are checked first; validation then also refuses files
-    // that require an extension not enabled in Cargo.toml (e.g. Draco).
+    // that require an extension occlu does not read.
     let unvalidated = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
     check_primitive_accessors(unvalidated.document.as_json()).map_err(parse_error)?;
+    let mut json = unvalidated.document.into_json();
+    if json.extensions_required.iter().any(|e| e == DRACO) {
+        return Err(parse_error(format!(
+            "requires {DRACO} (Draco geometry), which occlu does not decode; re-encode it with meshopt, which it does: gltf-transform meshopt IN OUT"
+        )));
+    }
+    json.extensions_required.retain(|e| !DECODED.contains(&e.as_str()));
     let gltf = gltf::Gltf {
-        document: gltf::Document::from_json(unvalidated.document.into_json()).map_err(invalid)?,
+        document: gltf::Document::from_json(json).map_err(invalid)?,
         blob: unvalidated.blob,
     };
     if gltf.extensions_used().any(|e| e == "EXT_mesh_gpu_instancing") {
@@ -43,10 +46,7 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
     {
         builder.warn("skins and morph targets are ignored: meshes are drawn in their rest pose".into());
     }
-    let buffers = gltf
-        .buffers()
-        .map(|b| buffer_data(path, &gltf, &b, options))
-        .collect::<Result<Vec<_>, _>>()?;
+    let buffers = load_buffers(path, bytes, &gltf, options)?;
 
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
     let roots: Vec<gltf::Node> = match &scene {
@@ -115,6 +115,120 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
         )));
     }
     Ok(())
+}
+
+/// Draco geometry compression, which no well-kept Rust crate decodes.
+const DRACO: &str = "KHR_draco_mesh_compression";
+
+/// Extensions the loader reads itself, which gltf-json does not know.
+const DECODED: [&str; 2] = ["KHR_mesh_quantization", "EXT_meshopt_compression"];
+
+/// A validation error in one line: each kind of problem once, with how often
+/// it occurs and where first ("195 × Missing data (first at
+/// accessors[0].bufferView)"), not one entry per element.
+fn summarise(e: &gltf::Error) -> String {
+    let gltf::Error::Validation(problems) = e else {
+        return one_line(&e.to_string());
+    };
+    let mut kinds: Vec<(String, usize, String)> = Vec::new();
+    for (path, problem) in problems {
+        let problem = problem.to_string();
+        match kinds.iter_mut().find(|(kind, _, _)| *kind == problem) {
+            Some((_, count, _)) => *count += 1,
+            None => kinds.push((problem, 1, path.to_string())),
+        }
+    }
+    let parts: Vec<String> = kinds
+        .iter()
+        .map(|(kind, count, first)| match count {
+            1 => format!("{first}: {kind}"),
+            n => format!("{n} × {kind} (first at {first})"),
+        })
+        .collect();
+    one_line(&parts.join("; "))
+}
+
+/// Every buffer's bytes, with `EXT_meshopt_compression` views decoded into
+/// their placeholder buffers.
+fn load_buffers(
+    path: &Path,
+    bytes: &[u8],
+    gltf: &gltf::Gltf,
+    options: &LoadOptions,
+) -> Result<Vec<Vec<u8>>, SceneError> {
+    let parse_error = |message: String| SceneError::Parse {
+        path: path.into(),
+        message,
+    };
+    let compressed = if gltf.extensions_used().any(|e| e == "EXT_meshopt_compression") {
+        let raw = raw_json(bytes).map_err(parse_error)?;
+        let views = meshopt::compressed_views(&raw).map_err(parse_error)?;
+        Some((raw, views))
+    } else {
+        None
+    };
+    // Decoded data may be several times the file's size; past a bound on
+    // that, the file is refused before anything is allocated for it.
+    let most = DECODED_PER_FILE_BYTE.saturating_mul(options.max_file_size);
+    let too_much = |what: String| {
+        parse_error(format!(
+            "{what} decompressed bytes, beyond the {most} that --max-file-size allows ({DECODED_PER_FILE_BYTE} per byte)"
+        ))
+    };
+    if let Some((_, views)) = &compressed {
+        let total = views
+            .iter()
+            .map(|v| v.decoded_length() as u64)
+            .fold(0u64, u64::saturating_add);
+        if total > most {
+            return Err(too_much(format!("its compressed buffer views declare {total}")));
+        }
+    }
+    let placeholder = |index| {
+        compressed
+            .as_ref()
+            .is_some_and(|(raw, _)| meshopt::is_placeholder(raw, index))
+    };
+    let mut buffers = Vec::new();
+    for buffer in gltf.buffers() {
+        if placeholder(buffer.index()) {
+            // Filled by decoding.
+            let length = buffer.length();
+            if length as u64 > most {
+                return Err(too_much(format!("buffer {} declares {length}", buffer.index())));
+            }
+            let mut zeros = Vec::new();
+            zeros
+                .try_reserve_exact(length)
+                .map_err(|e| parse_error(format!("buffer {}: {e}", buffer.index())))?;
+            zeros.resize(length, 0);
+            buffers.push(zeros);
+        } else {
+            buffers.push(buffer_data(path, gltf, &buffer, options)?);
+        }
+    }
+    if let Some((_, views)) = &compressed {
+        meshopt::decode(&mut buffers, views, options.max_file_size).map_err(parse_error)?;
+    }
+    Ok(buffers)
+}
+
+/// Decompressed bytes allowed per byte --max-file-size allows: meshopt
+/// rarely shrinks real geometry more than 4:1.
+const DECODED_PER_FILE_BYTE: u64 = 8;
+
+/// The document's JSON as it is written: the JSON chunk of a GLB, or the
+/// whole .gltf file.
+fn raw_json(bytes: &[u8]) -> Result<serde_json::Value, String> {
+    let text = if bytes.starts_with(b"glTF") {
+        gltf::Glb::from_slice(bytes)
+            .map_err(|e| format!("invalid GLB: {e}"))?
+            .json
+            .into_owned()
+    } else {
+        bytes.to_vec()
+    };
+    serde_json::from_slice(&text).map_err(|e| format!("invalid glTF JSON: {}", one_line(&e.to_string())))
 }
 
 /// Accessor indices of every primitive must exist.
@@ -220,17 +334,16 @@ fn load_mesh(
         let accessor = primitive
             .get(&gltf::Semantic::Positions)
             .ok_or_else(|| error("has no POSITION attribute".into()))?;
-        check_accessor(&accessor, "POSITION", &[DataType::F32], Dimensions::Vec3, buffer_bytes).map_err(error)?;
+        // Integer types: KHR_mesh_quantization.
+        let types = [DataType::F32, DataType::I8, DataType::U8, DataType::I16, DataType::U16];
+        check_accessor(&accessor, "POSITION", &types, Dimensions::Vec3, buffer_bytes).map_err(error)?;
         if let Some(indices) = primitive.indices() {
             let types = [DataType::U8, DataType::U16, DataType::U32];
             check_accessor(&indices, "indices", &types, Dimensions::Scalar, buffer_bytes).map_err(error)?;
         }
         let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-        let positions: Vec<DVec3> = reader
-            .read_positions()
-            .ok_or_else(|| error("POSITION data lies outside its buffer".into()))?
-            .map(|p| DVec3::from(p.map(f64::from)))
-            .collect();
+        let positions =
+            read_positions(&accessor, buffers).ok_or_else(|| error("POSITION data lies outside its buffer".into()))?;
         let stream: Vec<u32> = match reader.read_indices() {
             Some(indices) => indices.into_u32().collect(),
             None if primitive.indices().is_some() => {
@@ -257,6 +370,38 @@ fn load_mesh(
         groups.push(group);
     }
     Ok(groups)
+}
+
+/// The positions of a POSITION accessor: floats, or integers as
+/// KHR_mesh_quantization stores them, normalized or not. Normalized values
+/// map to [0, 1] (unsigned) or [−1, 1] (signed) as glTF 2.0 defines
+/// normalized integers: c / (2^b − 1) and max(c / (2^(b−1) − 1), −1). The
+/// node transforms, which quantizing exporters set to undo the scaling,
+/// apply afterwards as for any mesh.
+fn read_positions(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Option<Vec<DVec3>> {
+    use gltf::accessor::DataType;
+    let normalized = accessor.normalized();
+    let scaled = |c: f64, max: f64| if normalized { (c / max).max(-1.0) } else { c };
+    match accessor.data_type() {
+        DataType::F32 => read_vec3(accessor, buffers, |c: f32| f64::from(c)),
+        DataType::I8 => read_vec3(accessor, buffers, |c: i8| scaled(f64::from(c), 127.0)),
+        DataType::U8 => read_vec3(accessor, buffers, |c: u8| scaled(f64::from(c), 255.0)),
+        DataType::I16 => read_vec3(accessor, buffers, |c: i16| scaled(f64::from(c), 32767.0)),
+        DataType::U16 => read_vec3(accessor, buffers, |c: u16| scaled(f64::from(c), 65535.0)),
+        DataType::U32 => None,
+    }
+}
+
+/// The 3-vectors of components `T` of an accessor, each component mapped by
+/// `value`; `None` when its data lies outside its buffer.
+fn read_vec3<'a, T: gltf::accessor::Item + Copy>(
+    accessor: &gltf::Accessor<'a>,
+    buffers: &[Vec<u8>],
+    value: impl Fn(T) -> f64,
+) -> Option<Vec<DVec3>> {
+    let data = |b: gltf::Buffer<'a>| buffers.get(b.index()).map(Vec::as_slice);
+    let items = gltf::accessor::Iter::<[T; 3]>::new(accessor.clone(), data)?;
+    Some(items.map(|p| DVec3::from(p.map(&value))).collect())
 }
 
 /// Expands strips and fans into a triangle list (winding is irrelevant: the

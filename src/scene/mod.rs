@@ -9,6 +9,7 @@
 pub mod builtin;
 mod cluster;
 mod gltf;
+mod meshopt;
 pub mod motion;
 mod obj;
 pub mod up;

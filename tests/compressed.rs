@@ -1,0 +1,286 @@
+//! Compressed glTF, as gltfpack writes it: quantized positions
+//! (KHR_mesh_quantization) and meshopt-compressed buffers
+//! (EXT_meshopt_compression) load as the model they were made from; Draco
+//! is refused in one line.
+//!
+//! The files in `tests/fixtures/compressed/` were made from the model
+//! [`source`] builds, by `scripts/make-compressed-fixtures` (gltfpack and
+//! glTF-Transform). A test checks that `source.glb` there is still what
+//! [`source`] builds, so the fixtures cannot drift from the model.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::gltf_writer::{GltfWriter, cube_indices};
+use glam::DVec3;
+use occlu::bench::{RunOptions, Session};
+use occlu::camera::Camera;
+use occlu::camera::look_rotation;
+use occlu::cull::{ModeParams, create};
+use occlu::gpu::Resolution;
+use occlu::hierarchy::{Hierarchy, HierarchyParams};
+use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
+use occlu::world::World;
+use serde_json::json;
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/compressed")
+}
+
+/// Twelve boxes of assorted sizes at unround positions, three of them one
+/// mesh shared by three nodes (one scaled and rotated): 144 triangles.
+fn source() -> Vec<u8> {
+    let mut w = GltfWriter::default();
+    let box_mesh = |w: &mut GltfWriter, name: &str, min: [f32; 3], max: [f32; 3]| {
+        let p: Vec<[f32; 3]> = (0..8)
+            .map(|i| {
+                let pick = |bit: usize, k: usize| if i & bit == 0 { min[k] } else { max[k] };
+                [pick(1, 0), pick(2, 1), pick(4, 2)]
+            })
+            .collect();
+        w.mesh(name, &[(&p, Some(&cube_indices()), 4)])
+    };
+    let mut roots = Vec::new();
+    for k in 0..9 {
+        let x = -13.37 + 4.21 * k as f32;
+        let height = 1.3 + 0.77 * (k % 4) as f32;
+        let m = box_mesh(&mut w, &format!("block{k}"), [x, 0.0, -7.9], [x + 3.1, height, -4.45]);
+        roots.push(w.node(json!({"name": format!("block{k}"), "mesh": m})));
+    }
+    let shared = box_mesh(&mut w, "crate", [-0.5, 0.0, -0.5], [0.5, 0.83, 0.5]);
+    roots.push(w.node(json!({"name": "crate_a", "mesh": shared, "translation": [2.5, 0.0, -2.0]})));
+    roots.push(w.node(json!({"name": "crate_b", "mesh": shared, "translation": [-3.25, 0.0, -1.5]})));
+    roots.push(w.node(json!({
+        "name": "crate_c", "mesh": shared, "translation": [0.4, 0.0, -11.0],
+        "scale": [2.0, 2.0, 2.0], "rotation": [0.0, 0.3826834, 0.0, 0.9238795]
+    })));
+    w.glb(&roots)
+}
+
+fn load_fixture(name: &str) -> Result<Scene, String> {
+    load(&SceneSpec::File(fixtures().join(name)), &LoadOptions::default()).map_err(|e| e.to_string())
+}
+
+#[test]
+fn the_fixtures_were_made_from_the_model_the_tests_build() {
+    let path = fixtures().join("source.glb");
+    if std::env::var_os("OCCLU_WRITE_FIXTURES").is_some() {
+        std::fs::create_dir_all(fixtures()).unwrap();
+        std::fs::write(&path, source()).unwrap();
+    }
+    let committed = std::fs::read(&path).unwrap();
+    assert!(
+        committed == source(),
+        "{} is not what source() builds: run scripts/make-compressed-fixtures",
+        path.display()
+    );
+}
+
+/// The reference depth of `scene` seen from a fixed camera above and in
+/// front of the blocks, on the first adapter.
+fn depth(scene: &Scene) -> Vec<f32> {
+    let gpu = common::gpus().remove(0);
+    let resolution = Resolution {
+        width: 160,
+        height: 120,
+    };
+    let options = RunOptions {
+        warmup: 0,
+        resolution,
+        measure_error: true,
+    };
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    let mut world = World::new(scene.clone(), hierarchy);
+    let mut session = Session::new(&gpu, &world.scene, 1, true, &options).unwrap();
+    let eye = DVec3::new(1.0, 9.0, 12.0);
+    let camera = Camera {
+        eye,
+        rotation: look_rotation(DVec3::new(0.0, 0.0, -6.0) - eye, DVec3::Y),
+        fov_y: 60f64.to_radians(),
+        near: 0.1,
+        aspect: resolution.aspect(),
+    };
+    let mut dr = vec![create("dr", scene, &ModeParams::default()).unwrap()];
+    session.frame(0, &camera, &mut world, &mut dr, 0).unwrap();
+    session.reference_depth().unwrap()
+}
+
+#[test]
+fn quantized_and_meshopt_files_load_as_their_source() {
+    let source = load_fixture("source.glb").unwrap();
+    let source_depth = depth(&source);
+    let covered = source_depth.iter().filter(|&&d| d > 0.0).count();
+    assert!(covered > 1000, "the camera sees the model ({covered} pixels)");
+    let step = 37.0 / f64::from((1 << 14) - 1);
+    let mut depths = std::collections::HashMap::new();
+    for file in [
+        "float.glb",
+        "meshopt-float.glb",
+        "quantized.glb",
+        "meshopt-quantized.glb",
+    ] {
+        let scene = load_fixture(file).unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert_eq!(scene.triangles(), source.triangles(), "{file}");
+        for k in 0..3 {
+            let (a, b) = (
+                scene.bounds.min[k] - source.bounds.min[k],
+                scene.bounds.max[k] - source.bounds.max[k],
+            );
+            assert!(a.abs() <= step && b.abs() <= step, "{file}: bounds {a} {b}");
+        }
+        // gltfpack bakes node transforms into vertices and quantizes
+        // positions to 14 bits of the model's extent (37 units: 2.3e-3), so
+        // surfaces move by up to that: in depth well under 1e-5 here, with
+        // some edge pixels changing owner.
+        let d = depth(&scene);
+        let moved = d
+            .iter()
+            .zip(&source_depth)
+            .filter(|(a, b)| (*a - *b).abs() > 1e-5)
+            .count();
+        assert!(
+            moved * 50 < covered,
+            "{file}: {moved} of {covered} pixels moved by more than 1e-5"
+        );
+        depths.insert(file, d);
+    }
+    // Compression itself loses nothing: each meshopt file holds exactly the
+    // triangles gltfpack wrote without it (its index codec may rotate a
+    // triangle's corners, which can change a rasterised depth's last bit).
+    for (plain, compressed) in [
+        ("float.glb", "meshopt-float.glb"),
+        ("quantized.glb", "meshopt-quantized.glb"),
+    ] {
+        let (a, b) = (load_fixture(plain).unwrap(), load_fixture(compressed).unwrap());
+        assert!(
+            triangles(&a) == triangles(&b),
+            "{compressed} holds other triangles than {plain}"
+        );
+    }
+    let (float, quantized) = (
+        load_fixture("float.glb").unwrap(),
+        load_fixture("quantized.glb").unwrap(),
+    );
+    assert!(
+        triangles(&float) != triangles(&quantized),
+        "the comparison sees a 14-bit step"
+    );
+}
+
+/// Every triangle of `scene` in world space, each starting at its least
+/// corner (so a rotation of its corners is the same triangle), sorted.
+fn triangles(scene: &Scene) -> Vec<[[u64; 3]; 3]> {
+    let mut out = Vec::new();
+    for object in &scene.objects {
+        let mesh = &scene.meshes[object.mesh as usize];
+        let range = mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize;
+        for t in scene.indices[range].chunks(3) {
+            let corner = |i: u32| {
+                let v = DVec3::from(scene.vertices[i as usize].map(f64::from));
+                object.transform.transform_point3(v).to_array().map(f64::to_bits)
+            };
+            let c = [corner(t[0]), corner(t[1]), corner(t[2])];
+            let least = (0..3).min_by_key(|&k| c[k]).unwrap();
+            out.push([c[least], c[(least + 1) % 3], c[(least + 2) % 3]]);
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn draco_is_refused_in_one_line_that_names_it_and_a_way_out() {
+    let e = load_fixture("draco.glb").unwrap_err();
+    assert!(
+        e.contains("KHR_draco_mesh_compression") && e.contains("gltf-transform meshopt") && !e.contains('\n'),
+        "{e}"
+    );
+    assert!(e.len() < 300, "one short line: {e}");
+}
+
+#[test]
+fn repeated_validation_errors_are_summarised() {
+    // 40 accessors that all lack their data.
+    let mut w = GltfWriter::default();
+    let (p, i) = common::gltf_writer::cube();
+    let m = w.mesh("cube", &[(&p, Some(&i), 4)]);
+    let n = w.node(json!({"mesh": m}));
+    for k in 0..40 {
+        w.accessors
+            .push(json!({"bufferView": 99 + k, "componentType": 5126, "count": 1, "type": "VEC3"}));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let model = common::write(dir.path(), "m.glb", w.glb(&[n]));
+    let e = load(&SceneSpec::File(model), &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("40 × ") && e.contains("(first at accessors[2]"), "{e}");
+    assert!(e.len() < 300, "{e}");
+}
+
+/// A GLB's JSON and binary chunks.
+fn unpack(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
+    let word = |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
+    let json_length = word(12);
+    let json = serde_json::from_slice(&glb[20..20 + json_length]).unwrap();
+    let bin_at = 20 + json_length;
+    (json, glb[bin_at + 8..bin_at + 8 + word(bin_at)].to_vec())
+}
+
+/// A GLB of `json` and `bin`.
+fn pack(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut text = json.to_string().into_bytes();
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let total = 12 + 8 + text.len() + 8 + bin.len();
+    let mut out = Vec::new();
+    for word in [0x4654_6c67, 2, total as u32, text.len() as u32, 0x4e4f_534a] {
+        out.extend_from_slice(&u32::to_le_bytes(word));
+    }
+    out.extend_from_slice(&text);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(bin);
+    out
+}
+
+#[test]
+fn malformed_meshopt_data_is_an_error_not_a_crash() {
+    let (json, bin) = unpack(&std::fs::read(fixtures().join("meshopt-quantized.glb")).unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let try_load = |json: &serde_json::Value, bin: &[u8]| {
+        let model = common::write(dir.path(), "m.glb", pack(json, bin));
+        load(&SceneSpec::File(model), &LoadOptions::default()).map_err(|e| e.to_string())
+    };
+    assert!(try_load(&json, &bin).is_ok(), "the unchanged file loads");
+    // The file with its first compressed view's extension object edited.
+    let edited = |edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut json = json.clone();
+        edit(&mut json["bufferViews"][0]["extensions"]["EXT_meshopt_compression"]);
+        json
+    };
+    let refused = [
+        (edited(&|e| e["mode"] = "SHUFFLE".into()), "no known 'mode'"),
+        (
+            edited(&|e| e["count"] = (1u64 << 40).into()),
+            "decodes to a length other than",
+        ),
+        (
+            edited(&|e| e["byteLength"] = 1_000_000.into()),
+            "data lies outside its buffer",
+        ),
+        (edited(&|e| e["filter"] = "SPIRAL".into()), "unknown 'filter'"),
+    ];
+    for (json, why) in refused {
+        let e = try_load(&json, &bin).unwrap_err();
+        assert!(e.contains(why) && e.contains("EXT_meshopt_compression"), "{why}: {e}");
+    }
+    // Every byte of the compressed streams overwritten: refused or decoded
+    // into some geometry, never a panic.
+    for fill in [0x00, 0xff, 0xa0] {
+        let garbage = vec![fill; bin.len()];
+        let _ = try_load(&json, &garbage);
+    }
+}
