@@ -33,7 +33,7 @@ fn main() {
         let scene = load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).expect("built-in scene");
         let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
         let path = default_path(&scene)
-            .and_then(|p| p.with_frames(FRAMES))
+            .and_then(|(p, _)| p.with_frames(FRAMES))
             .expect("built-in walk");
         let cameras: Vec<Camera> = (0..FRAMES).map(|i| path.camera(i, 4.0 / 3.0)).collect();
         println!(

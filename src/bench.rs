@@ -26,6 +26,7 @@ use crate::gpu::{
 use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{ErrorMeter, FrameStats, MissedObject, ModeDescription, ObjectError, summarize};
 use crate::object_set::ObjectSet;
+use crate::raycast::RayCaster;
 use crate::report::{
     MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary, SkippedMode,
     Summary, SweepSummary, ToolInfo, check_writable, prepare_output, write_results, write_whole,
@@ -402,6 +403,8 @@ pub enum BenchEvent<'a> {
         build_ms: f64,
     },
     Adapter(&'a AdapterReport),
+    /// The camera path, and its frame count.
+    Path(&'a PathSummary, u32),
     /// A mode the adapter cannot run; the run goes on without it.
     Skipped {
         mode: &'a str,
@@ -449,14 +452,24 @@ pub fn execute(
         build_ms,
     }))?;
 
-    let path = match path_file {
-        Some(path) => path,
-        None => default_path(scene)?,
+    let (path, generated) = match path_file {
+        Some(path) => (path, None),
+        None => default_path(scene).map(|(path, why)| (path, Some(why)))?,
     };
     let path = match plan.frames {
         Some(n) => path.with_frames(n)?,
         None => path,
     };
+    let path_summary = PathSummary {
+        source: path.source.clone(),
+        keyframes: path.keyframes.len(),
+        near: path.near,
+        generated,
+        frames_with_geometry_within_near: Some(
+            path.frames_with_geometry_within_near(&RayCaster::new(scene), plan.resolution.aspect()),
+        ),
+    };
+    go_on(events(BenchEvent::Path(&path_summary, path.frames)))?;
     let gpu = GpuContext::new(plan.backend)?;
     go_on(events(BenchEvent::Adapter(&gpu.adapter)))?;
     let mut skipped: Vec<SkippedMode> = Vec::new();
@@ -521,11 +534,7 @@ pub fn execute(
             hierarchy_params: params,
             upload_ms: output.upload_ms,
         },
-        path: PathSummary {
-            source: path.source.clone(),
-            keyframes: path.keyframes.len(),
-            near: path.near,
-        },
+        path: path_summary,
         resolution: plan.resolution,
         frames: path.frames,
         warmup: plan.warmup,

@@ -20,6 +20,7 @@ pub mod input;
 pub mod measure;
 pub mod object_set;
 pub mod picture;
+pub mod raycast;
 pub mod report;
 pub mod scene;
 pub mod stress;

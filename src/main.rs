@@ -13,7 +13,7 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use occlu::bench::{BenchError, BenchEvent, execute};
-use occlu::camera::generate::{DEFAULT_FRAMES, PathKind, default_kind, generate};
+use occlu::camera::generate::{DEFAULT_FRAMES, PathKind, plan};
 use occlu::camera::path::{CameraPath, PathError};
 use occlu::config::{BenchConfig, ConfigError, load_options, scene_spec};
 use occlu::cull::{MODES, ModeError, ModeInfo, ModeParams, create, parse_modes};
@@ -21,6 +21,7 @@ use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::input::ByteSize;
 use occlu::picture::{PictureError, PictureOptions};
+use occlu::raycast::RayCaster;
 use occlu::report::compare::{CompareError, CompareOptions, Metric};
 use occlu::report::{ReportError, SceneFacts};
 use occlu::scene::builtin::SCENES;
@@ -573,6 +574,16 @@ fn heard(progress: &mut Progress, event: BenchEvent, note: &dyn Fn(String)) {
         }
         BenchEvent::Skipped { mode, reason } => note(format!("skipped: {mode}: {reason}")),
         BenchEvent::Adapter(adapter) => note(format!("adapter: {adapter}")),
+        BenchEvent::Path(path, frames) => {
+            let why = path.generated.as_ref().map(|w| format!(" ({w})")).unwrap_or_default();
+            note(format!("path: {}{why}", path.source));
+            if let Some(n) = path.frames_with_geometry_within_near.filter(|&n| n > 0) {
+                note(format!(
+                    "warning: {n} of {frames} frames have geometry nearer than the near plane's corners ({}): it may be clipped",
+                    path.near
+                ));
+            }
+        }
         BenchEvent::Frame { done, total } => progress.frame(done, total),
     }
 }
@@ -744,7 +755,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let path = match path_file {
         Some(p) => p,
-        None => occlu::camera::generate::default_path(&scene)?,
+        None => occlu::camera::generate::default_path(&scene)?.0,
     };
     let path = match args.frames {
         Some(n) => path.with_frames(n)?,
@@ -872,16 +883,21 @@ fn path_gen(scene_args: SceneArgs, kind: Option<PathKind>, frames: u32, output: 
         return Err(PathError::FrameCount.into());
     }
     let scene: Scene = load(&scene_args.spec()?, &scene_args.options())?;
-    let kind = kind.unwrap_or_else(|| default_kind(&scene));
-    let file = generate(kind, &scene, frames);
+    let generated = plan(kind, &scene, frames);
     // Validate what is written, so a generated file always loads.
-    CameraPath::from_file(&file, &output.display().to_string())?;
-    let text = serde_json::to_string_pretty(&file)? + "\n";
+    let path = CameraPath::from_file(&generated.file, &output.display().to_string())?;
+    let text = serde_json::to_string_pretty(&generated.file)? + "\n";
     occlu::report::write_whole(&output, text.as_bytes())?;
     say!(
-        "wrote {} ({kind}, {frames} frames, {} keyframes)",
+        "wrote {} ({}: {}; {frames} frames, {} keyframes)",
         output.display(),
-        file.keyframes.len()
+        generated.kind,
+        generated.why,
+        generated.file.keyframes.len()
     );
+    let near = path.frames_with_geometry_within_near(&RayCaster::new(&scene), Resolution::DEFAULT.aspect());
+    if near > 0 {
+        say!("warning: {near} of {frames} frames have geometry nearer than the near plane's corners (at 4:3)");
+    }
     Ok(())
 }

@@ -74,7 +74,7 @@ fn every_conservative_mode_is_exact_on_every_shared_model() {
         let hierarchy = hierarchy(&scene);
         let path = match path_file {
             Some(file) => CameraPath::load(file).unwrap(),
-            None => default_path(&scene).unwrap().with_frames(GENERATED_FRAMES).unwrap(),
+            None => default_path(&scene).unwrap().0.with_frames(GENERATED_FRAMES).unwrap(),
         };
         for gpu in &gpus {
             let started = Instant::now();

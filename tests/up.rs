@@ -3,61 +3,12 @@
 
 mod common;
 
-use common::{occlu, stdout, write};
+use common::{boxes_obj, occlu, stdout, town, write};
 use glam::DVec3;
 use occlu::camera::generate::{PathKind, generate};
 use occlu::camera::path::CameraPath;
 use occlu::scene::up::{UpAxis, UpChoice};
 use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
-
-/// An OBJ of axis-aligned boxes `(name, min, max)`, coordinates as given.
-fn boxes_obj(boxes: &[(String, DVec3, DVec3)]) -> String {
-    let mut obj = String::new();
-    for (k, (name, min, max)) in boxes.iter().enumerate() {
-        obj += &format!("o {name}\n");
-        for corner in 0..8 {
-            let pick = |bit: usize, lo: f64, hi: f64| if corner & bit == 0 { lo } else { hi };
-            let (x, y, z) = (pick(1, min.x, max.x), pick(2, min.y, max.y), pick(4, min.z, max.z));
-            obj += &format!("v {x} {y} {z}\n");
-        }
-        let base = 8 * k + 1;
-        for face in [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ] {
-            let [a, b, c, d] = face.map(|i| i + base);
-            obj += &format!("f {a} {b} {c} {d}\n");
-        }
-    }
-    obj
-}
-
-/// A town of 4×4 blocks on a ground slab, built +Z up: 120 units across,
-/// buildings 6 to 36 tall. `swap` turns it +Y up (y and z exchanged).
-fn town(swap: bool) -> Vec<(String, DVec3, DVec3)> {
-    let place = |v: DVec3| if swap { DVec3::new(v.x, v.z, v.y) } else { v };
-    let mut boxes = vec![(
-        "ground".to_string(),
-        DVec3::new(0.0, 0.0, -1.0),
-        DVec3::new(120.0, 120.0, 0.0),
-    )];
-    for i in 0..4 {
-        for j in 0..4 {
-            let (x, y) = (10.0 + 28.0 * f64::from(i), 10.0 + 28.0 * f64::from(j));
-            let height = 6.0 + f64::from((i * 7 + j * 3) % 11) * 3.0;
-            boxes.push((
-                format!("building_{i}_{j}"),
-                DVec3::new(x, y, 0.0),
-                DVec3::new(x + 18.0, y + 18.0, height),
-            ));
-        }
-    }
-    boxes.into_iter().map(|(n, a, b)| (n, place(a), place(b))).collect()
-}
 
 fn load_obj(dir: &std::path::Path, name: &str, boxes: &[(String, DVec3, DVec3)], up: UpChoice) -> Scene {
     let model = write(dir, name, boxes_obj(boxes));

@@ -8,6 +8,8 @@ use glam::DVec3;
 use serde::Serialize;
 
 use super::path::{CameraPath, DEFAULT_FOV_Y_DEG, Interpolation, KeyframeFile, PathError, PathFile};
+use super::walk::{self, Walk};
+use crate::raycast::RayCaster;
 use crate::scene::Scene;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -41,37 +43,185 @@ impl FromStr for PathKind {
 
 pub const DEFAULT_FRAMES: u32 = 120;
 
-/// The kind used when no path is given: a walk where the scene suggests one
-/// (the city's streets), an orbit otherwise.
-pub fn default_kind(scene: &Scene) -> PathKind {
-    if scene.walk_hint.is_some() {
-        PathKind::Walk
-    } else {
-        PathKind::Orbit
-    }
+/// A generated path and why it is what it is (which kind, and for a walk
+/// what it rests on), for the messages and summary.json.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Generated {
+    pub kind: PathKind,
+    pub file: PathFile,
+    pub why: String,
 }
 
-/// The path used when none is given: [`default_kind`], [`DEFAULT_FRAMES`].
-pub fn default_path(scene: &Scene) -> Result<CameraPath, PathError> {
-    let kind = default_kind(scene);
-    CameraPath::from_file(&generate(kind, scene, DEFAULT_FRAMES), &format!("generated:{kind}"))
+/// The path used when none is given ([`DEFAULT_FRAMES`] frames): a walk
+/// where the scene suggests one (the built-in scenes' streets), or where
+/// circling the model would show nothing but one object (a sky dome around
+/// it, or a closed shell hiding everything else); an orbit otherwise.
+pub fn default_path(scene: &Scene) -> Result<(CameraPath, String), PathError> {
+    let generated = plan(None, scene, DEFAULT_FRAMES);
+    let path = CameraPath::from_file(&generated.file, &format!("generated:{}", generated.kind))?;
+    Ok((path, generated.why))
+}
+
+/// A path of `kind` (the default of [`default_path`] when `None`) over
+/// `scene`, with why.
+pub fn plan(kind: Option<PathKind>, scene: &Scene, frames: u32) -> Generated {
+    let caster = RayCaster::new(scene);
+    let walk = || walk::plan(scene, &caster);
+    let (kind, why, planned) = match kind {
+        Some(kind) => (kind, "asked for".to_string(), None),
+        None => default_kind(scene, &caster, walk),
+    };
+    let (file, note) = generate_with(kind, scene, frames, || planned.or_else(walk));
+    let why = match note {
+        Some(note) => format!("{why}; {note}"),
+        None => why,
+    };
+    Generated { kind, file, why }
 }
 
 /// A path of `kind` over `scene`, around and above its up axis.
 pub fn generate(kind: PathKind, scene: &Scene, frames: u32) -> PathFile {
+    let caster = RayCaster::new(scene);
+    generate_with(kind, scene, frames, || walk::plan(scene, &caster)).0
+}
+
+/// The share of a walk's route that must be open to the sky for a model to
+/// be a place to walk through (streets, a site) rather than an object to
+/// circle (whose "ground" would be inside it).
+const OPEN_PLACE: f64 = 0.75;
+
+/// How long a walk must be, against the longer ground side, for a place to
+/// be walked rather than circled.
+const LONG_WALK: f64 = 0.25;
+
+/// The default kind for `scene`, why, and the walk planned to decide it.
+fn default_kind(
+    scene: &Scene,
+    caster: &RayCaster,
+    walk: impl Fn() -> Option<Walk>,
+) -> (PathKind, String, Option<Walk>) {
+    if scene.walk_hint.is_some() {
+        return (PathKind::Walk, "the scene's streets".into(), None);
+    }
+    let ground = Ground::of(scene);
+    let (_, width) = ground.longer_axis();
+    let circle = "circled from outside";
+    let enclosed = enclosing(scene, caster, &ground);
+    let Some(planned) = walk() else {
+        let why = enclosed.map_or("a model".to_string(), |e| format!("{e}, but"));
+        return (PathKind::Orbit, format!("{why} with no ground to walk: {circle}"), None);
+    };
+    let length: f64 = planned.line.windows(2).map(|p| p[0].distance(p[1])).sum();
+    let open = planned.open_sky;
+    match enclosed {
+        Some(why) => (PathKind::Walk, why, Some(planned)),
+        None if open >= OPEN_PLACE && length >= LONG_WALK * width => (
+            PathKind::Walk,
+            format!(
+                "a place with open ground ({:.0}% of the walk under the sky)",
+                100.0 * open
+            ),
+            Some(planned),
+        ),
+        None => (
+            PathKind::Orbit,
+            format!(
+                "an object (its longest walk, {length:.1} of its {width:.1} width, {:.0}% under the sky): {circle}",
+                100.0 * open
+            ),
+            None,
+        ),
+    }
+}
+
+/// Why circling `scene` would show one object only, if it would: the orbit
+/// circles inside one object's box (a sky dome), or from the orbit one
+/// object is the first thing met on the way to nearly every other (a closed
+/// shell).
+fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Option<String> {
+    let b = scene.bounds;
+    let eyes: Vec<DVec3> = orbit(ground, b.center(), b.extent().length().max(1e-6))
+        .iter()
+        .map(|k| DVec3::from(k.position))
+        .collect();
+    let name = |object: usize| crate::text::one_line(&scene.objects[object].name);
+    let mut inside = vec![0usize; scene.objects.len()];
+    for eye in &eyes {
+        for (k, o) in scene.objects.iter().enumerate() {
+            if o.bounds.contains_point(*eye) {
+                inside[k] += 1;
+            }
+        }
+    }
+    if let Some((k, &n)) = inside.iter().enumerate().max_by_key(|&(_, n)| *n)
+        && 2 * n > eyes.len()
+    {
+        return Some(format!(
+            "the orbit's eye would lie inside '{}' in {n} of {} keyframes",
+            name(k),
+            eyes.len()
+        ));
+    }
+    let targets: Vec<usize> = (0..scene.objects.len())
+        .step_by(scene.objects.len().div_ceil(64))
+        .collect();
+    let mut first = vec![0usize; scene.objects.len()];
+    let mut rays = 0;
+    for eye in eyes.iter().step_by(4) {
+        for &t in &targets {
+            let to = scene.objects[t].bounds.center() - *eye;
+            if let Some(hit) = caster.first_hit(*eye, to, 1.0)
+                && hit.object as usize != t
+            {
+                first[hit.object as usize] += 1;
+            }
+            rays += 1;
+        }
+    }
+    let (k, &n) = first.iter().enumerate().max_by_key(|&(_, n)| *n)?;
+    (targets.len() > 1 && 10 * n >= 9 * rays).then(|| {
+        format!(
+            "from the orbit, '{}' hides {n} of {rays} lines of sight to the other objects",
+            name(k)
+        )
+    })
+}
+
+/// [`generate`], with `walk` planning the walk a scene without streets
+/// gets; for such a walk also what it rests on.
+fn generate_with(
+    kind: PathKind,
+    scene: &Scene,
+    frames: u32,
+    walk: impl FnOnce() -> Option<Walk>,
+) -> (PathFile, Option<String>) {
     let ground = Ground::of(scene);
     let b = scene.bounds;
     let diagonal = b.extent().length().max(1e-6);
+    let mut note = None;
     let keyframes = match kind {
         PathKind::Orbit => orbit(&ground, b.center(), diagonal),
         PathKind::Walk => match &scene.walk_hint {
             Some(line) if line.len() >= 2 => walk_along(line, (diagonal * 0.02).max(1.0)),
-            _ => {
-                let (axis, length) = ground.longer_axis();
-                let height = ground.lowest + 0.05 * ground.height();
-                let at = |t: f64| ground.lift(b.center() + axis * length * t, height);
-                walk_along(&[at(-0.45), at(0.45)], diagonal * 0.05)
-            }
+            _ => match walk() {
+                Some(w) => {
+                    let length: f64 = w.line.windows(2).map(|p| p[0].distance(p[1])).sum();
+                    note = Some(format!(
+                        "a walk along the longest open route, {length:.1} units at eye height {} (cells of {:.2}, {:.0}% walkable)",
+                        w.eye_height,
+                        w.cell,
+                        100.0 * w.walkable
+                    ));
+                    walk_along(&w.line, w.cell)
+                }
+                None => {
+                    note = Some("no ground with room to walk was found: a straight line through the middle".into());
+                    let (axis, length) = ground.longer_axis();
+                    let height = ground.lowest + 0.05 * ground.height();
+                    let at = |t: f64| ground.lift(b.center() + axis * length * t, height);
+                    walk_along(&[at(-0.45), at(0.45)], diagonal * 0.05)
+                }
+            },
         },
         PathKind::Flyover => {
             let (axis, length) = ground.longer_axis();
@@ -88,7 +238,7 @@ pub fn generate(kind: PathKind, scene: &Scene, frames: u32) -> PathFile {
                 .to_vec()
         }
     };
-    PathFile {
+    let file = PathFile {
         frames: Some(frames),
         fps: None,
         near: Some(diagonal * 1e-4),
@@ -96,7 +246,8 @@ pub fn generate(kind: PathKind, scene: &Scene, frames: u32) -> PathFile {
         up: Some(ground.up.to_array()),
         interpolation: Interpolation::CatmullRom,
         keyframes,
-    }
+    };
+    (file, note)
 }
 
 fn key(time: f64, position: DVec3) -> KeyframeFile {

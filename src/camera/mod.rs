@@ -9,6 +9,7 @@
 
 pub mod generate;
 pub mod path;
+pub mod walk;
 
 use glam::{DAffine3, DMat3, DMat4, DQuat, DVec3, DVec4};
 

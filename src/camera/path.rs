@@ -321,6 +321,23 @@ fn nonzero(v: DVec3, what: &str) -> Result<DVec3, String> {
     }
 }
 
+impl CameraPath {
+    /// How many frames have a surface of `caster`'s scene closer to the eye
+    /// than the corners of the near plane (a sphere around the eye holding
+    /// the near plane): such a surface may be clipped away, showing what
+    /// lies behind it. Movers are counted where frame 0 puts them.
+    pub fn frames_with_geometry_within_near(&self, caster: &crate::raycast::RayCaster, aspect: f64) -> u32 {
+        (0..self.frames)
+            .filter(|&f| {
+                let camera = self.camera(f, aspect);
+                let t = (camera.fov_y / 2.0).tan();
+                let corner = camera.near * (1.0 + t * t * (1.0 + aspect * aspect)).sqrt();
+                caster.nearest_distance(camera.eye, corner).is_some()
+            })
+            .count() as u32
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -158,6 +158,15 @@ pub struct PathSummary {
     pub source: String,
     pub keyframes: usize,
     pub near: f64,
+    /// For a generated path: why it is the kind it is, and what a walk
+    /// rests on.
+    #[serde(default)]
+    pub generated: Option<String>,
+    /// Frames with a surface closer to the eye than the near plane's
+    /// corners (clipped geometry shows what lies behind it; the generated
+    /// paths aim for 0).
+    #[serde(default)]
+    pub frames_with_geometry_within_near: Option<u32>,
 }
 
 #[derive(Debug, thiserror::Error)]

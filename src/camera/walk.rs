@@ -1,0 +1,271 @@
+//! A walk through a model's free space, for models that suggest none (the
+//! built-in scenes do): at eye height above its ground, along its open
+//! corridors (streets, naves, rooms), never through geometry.
+//!
+//! The ground plane (the scene's up axis) is laid with a grid. Down each
+//! cell's vertical line a ray cast finds every surface; a surface with room
+//! for an eye above it (eye height and a margin up to the next surface) is
+//! a floor. The ground is the lowest level that holds a good share of the
+//! floors; cells with a floor there are walkable. Cells whose four
+//! neighbours are all walkable are kept (so the eye stays a cell from every
+//! wall), and two neighbours are joined when a ray at eye height passes
+//! between them. The walk is the longest of the shortest routes through the
+//! largest joined region (two breadth-first searches), in cell steps.
+
+use std::collections::VecDeque;
+
+use glam::DVec3;
+
+use crate::raycast::{Hit, RayCaster};
+use crate::scene::Scene;
+
+/// A planned walk: eye positions along the route, and what it rests on.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Walk {
+    /// Eye positions, one per cell of the route, turns kept.
+    pub line: Vec<DVec3>,
+    pub eye_height: f64,
+    /// The grid's cell size: the route keeps at least this much from walls.
+    pub cell: f64,
+    /// The share of the ground's cells with room to walk at its level.
+    pub walkable: f64,
+    /// The share of the route's cells open to the sky (nothing above the
+    /// eye): streets are, the inside of an object is not.
+    pub open_sky: f64,
+}
+
+/// Cells along the ground's longer side.
+const CELLS: usize = 160;
+
+/// Models at least this wide (in their units) are taken to be in metres,
+/// with an eye [`METRES_EYE_HEIGHT`] above the ground; smaller ones get an
+/// eye at [`EYE_FRACTION`] of their height.
+const METRE_SCALE_WIDTH: f64 = 30.0;
+const METRES_EYE_HEIGHT: f64 = 1.7;
+const EYE_FRACTION: f64 = 0.05;
+
+/// The eye height for `scene`, as the module says: metres assumed for
+/// city-sized models, a fraction of the height otherwise.
+pub fn eye_height(width: f64, height: f64) -> f64 {
+    if width >= METRE_SCALE_WIDTH && height > METRES_EYE_HEIGHT {
+        METRES_EYE_HEIGHT
+    } else {
+        (EYE_FRACTION * height).max(f64::MIN_POSITIVE)
+    }
+}
+
+/// Plans a walk through `scene`, or `None` when it has no ground with room
+/// to walk (fewer than [`MIN_CELLS`] joined cells).
+pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
+    let up = scene.up.axis.vector();
+    let (right, ahead) = scene.up.axis.ground_axes();
+    let b = scene.bounds;
+    let heights = b.corners().map(|c| c.dot(up));
+    let low = heights.iter().copied().fold(f64::INFINITY, f64::min);
+    let high = heights.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let span = |axis: DVec3| {
+        let values = b.corners().map(|c| c.dot(axis));
+        let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+        (lo, values.iter().copied().fold(f64::NEG_INFINITY, f64::max) - lo)
+    };
+    let ((x0, width), (y0, depth)) = (span(right), span(ahead));
+    let eye = eye_height(width.max(depth), high - low);
+    let cell = width.max(depth) / CELLS as f64;
+    if !(cell > 0.0 && cell.is_finite()) {
+        return None;
+    }
+    let (nx, ny) = (
+        ((width / cell).ceil() as usize).max(1),
+        ((depth / cell).ceil() as usize).max(1),
+    );
+    let at = |i: usize, j: usize, height: f64| {
+        right * (x0 + (i as f64 + 0.5) * cell) + ahead * (y0 + (j as f64 + 0.5) * cell) + up * height
+    };
+
+    // Floors: surfaces with room for the eye and a margin above them.
+    let room = eye * 1.5;
+    let mut floors: Vec<Vec<f64>> = vec![Vec::new(); nx * ny];
+    let mut hits: Vec<Hit> = Vec::new();
+    let top = high + cell;
+    for j in 0..ny {
+        for i in 0..nx {
+            caster.all_hits(at(i, j, top), -up, top - low + cell, &mut hits);
+            let mut above = f64::INFINITY;
+            for hit in &hits {
+                let h = top - hit.t;
+                if above - h >= room {
+                    floors[j * nx + i].push(h);
+                }
+                above = h;
+            }
+        }
+    }
+    let ground = ground_level(&floors, eye)?;
+    // Walkable: a floor near the ground level (steps of up to half the eye
+    // height), the eye above the highest such floor.
+    let eye_at: Vec<Option<f64>> = floors
+        .iter()
+        .map(|f| {
+            f.iter()
+                .copied()
+                .filter(|h| (h - ground).abs() <= 0.5 * eye)
+                .reduce(f64::max)
+                .map(|h| h + eye)
+        })
+        .collect();
+    let walkable = |i: usize, j: usize| eye_at[j * nx + i].is_some();
+    let clear = |i: usize, j: usize| {
+        i > 0
+            && j > 0
+            && i + 1 < nx
+            && j + 1 < ny
+            && walkable(i, j)
+            && walkable(i - 1, j)
+            && walkable(i + 1, j)
+            && walkable(i, j - 1)
+            && walkable(i, j + 1)
+    };
+    let open: Vec<bool> = (0..nx * ny).map(|k| clear(k % nx, k / nx)).collect();
+    let point = |k: usize| at(k % nx, k / nx, eye_at[k].expect("open cells are walkable"));
+    let joined = |a: usize, b: usize| {
+        let (p, q) = (point(a), point(b));
+        caster.first_hit(p, q - p, 1.0).is_none()
+    };
+    let neighbours = |k: usize| {
+        let (i, j) = (k % nx, k / nx);
+        [
+            (i > 0).then(|| k - 1),
+            (i + 1 < nx).then(|| k + 1),
+            (j > 0).then(|| k - nx),
+            (j + 1 < ny).then(|| k + nx),
+        ]
+        .into_iter()
+        .flatten()
+        .filter(|&n| open[n])
+    };
+    let edges: Vec<Vec<usize>> = (0..nx * ny)
+        .map(|k| {
+            if open[k] {
+                neighbours(k).filter(|&n| joined(k, n)).collect()
+            } else {
+                Vec::new()
+            }
+        })
+        .collect();
+    let start = largest_region(&edges, &open)?;
+    let (far, _) = farthest(&edges, start);
+    let (end, parents) = farthest(&edges, far);
+    let mut route = vec![end];
+    while let Some(previous) = parents[route[route.len() - 1]] {
+        route.push(previous);
+    }
+    if route.len() < MIN_CELLS {
+        return None;
+    }
+    let points: Vec<DVec3> = route.iter().map(|&k| point(k)).collect();
+    let sky = points
+        .iter()
+        .filter(|&&p| caster.first_hit(p, up, f64::INFINITY).is_none())
+        .count();
+    let walkable = eye_at.iter().filter(|e| e.is_some()).count() as f64 / eye_at.len() as f64;
+    Some(Walk {
+        line: turns(&points),
+        eye_height: eye,
+        cell,
+        walkable,
+        open_sky: sky as f64 / points.len() as f64,
+    })
+}
+
+/// Joined cells a walk needs at least.
+pub const MIN_CELLS: usize = 8;
+
+/// The ground: the lowest floor level (in bins of half the eye height)
+/// holding at least a fiftieth of all floors (so a few pits or basements do
+/// not count, while a town's streets under a sky dome, a few percent of the
+/// dome's roof, do), or failing that the most common one.
+fn ground_level(floors: &[Vec<f64>], eye: f64) -> Option<f64> {
+    let all: Vec<f64> = floors.iter().flatten().copied().collect();
+    let lowest = all.iter().copied().fold(f64::INFINITY, f64::min);
+    if !lowest.is_finite() {
+        return None;
+    }
+    let bin = 0.5 * eye;
+    let mut counts: std::collections::BTreeMap<i64, usize> = Default::default();
+    for h in &all {
+        *counts.entry(((h - lowest) / bin).floor() as i64).or_default() += 1;
+    }
+    let wanted = all.len().div_ceil(50).max(4 * MIN_CELLS);
+    let (&level, _) = counts
+        .iter()
+        .find(|&(_, &n)| n >= wanted)
+        .or_else(|| counts.iter().max_by_key(|&(_, &n)| n))?;
+    // The highest floor in that bin: the eye stands on it.
+    all.iter()
+        .copied()
+        .filter(|h| ((h - lowest) / bin).floor() as i64 == level)
+        .reduce(f64::max)
+}
+
+/// A cell of the largest connected region of open cells.
+fn largest_region(edges: &[Vec<usize>], open: &[bool]) -> Option<usize> {
+    let mut region = vec![usize::MAX; edges.len()];
+    let mut best: Option<(usize, usize)> = None;
+    for seed in (0..edges.len()).filter(|&k| open[k]) {
+        if region[seed] != usize::MAX {
+            continue;
+        }
+        let mut size = 0;
+        let mut queue = VecDeque::from([seed]);
+        region[seed] = seed;
+        while let Some(k) = queue.pop_front() {
+            size += 1;
+            for &n in &edges[k] {
+                if region[n] == usize::MAX {
+                    region[n] = seed;
+                    queue.push_back(n);
+                }
+            }
+        }
+        if best.is_none_or(|(_, s)| size > s) {
+            best = Some((seed, size));
+        }
+    }
+    best.map(|(seed, _)| seed)
+}
+
+/// The cell farthest from `start` in steps, and each reached cell's parent
+/// on a shortest route from `start`.
+fn farthest(edges: &[Vec<usize>], start: usize) -> (usize, Vec<Option<usize>>) {
+    let mut parent = vec![None; edges.len()];
+    let mut seen = vec![false; edges.len()];
+    seen[start] = true;
+    let mut last = start;
+    let mut queue = VecDeque::from([start]);
+    while let Some(k) = queue.pop_front() {
+        last = k;
+        for &n in &edges[k] {
+            if !seen[n] {
+                seen[n] = true;
+                parent[n] = Some(k);
+                queue.push_back(n);
+            }
+        }
+    }
+    (last, parent)
+}
+
+/// `points` without those in the middle of a straight run: the ends and the
+/// turns.
+fn turns(points: &[DVec3]) -> Vec<DVec3> {
+    let mut out: Vec<DVec3> = Vec::new();
+    for (k, &p) in points.iter().enumerate() {
+        let straight = k > 0
+            && k + 1 < points.len()
+            && (p - points[k - 1]).normalize().dot((points[k + 1] - p).normalize()) > 1.0 - 1e-9;
+        if !straight {
+            out.push(p);
+        }
+    }
+    out
+}

@@ -1,0 +1,225 @@
+//! The default path of a model: a walk through a flat place's free space at
+//! eye height, never nearer a surface than the near plane; inside a dome
+//! rather than around it; an orbit around an object. Distances are checked
+//! against a brute-force computation over every triangle, which shares no
+//! code with the ray caster the planner uses.
+
+mod common;
+
+use common::{boxes_obj, town, write};
+use glam::DVec3;
+use occlu::camera::generate::{PathKind, default_path, plan};
+use occlu::camera::path::CameraPath;
+use occlu::raycast::RayCaster;
+use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
+
+/// Every triangle of `scene` in world space.
+fn world_triangles(scene: &Scene) -> Vec<[DVec3; 3]> {
+    let mut out = Vec::new();
+    for o in &scene.objects {
+        let m = &scene.meshes[o.mesh as usize];
+        let indices = &scene.indices[m.first_index as usize..(m.first_index + m.index_count) as usize];
+        for t in indices.chunks(3) {
+            out.push([0, 1, 2].map(|k| {
+                let v = DVec3::from(scene.vertices[t[k] as usize].map(f64::from));
+                o.transform.transform_point3(v)
+            }));
+        }
+    }
+    out
+}
+
+/// The distance from `p` to triangle `t`: to its plane when the foot lies
+/// inside, else to the nearest of its edges.
+fn distance(p: DVec3, t: &[DVec3; 3]) -> f64 {
+    let [a, b, c] = *t;
+    let n = (b - a).cross(c - a);
+    if n.length_squared() > 0.0 {
+        let n = n.normalize();
+        let foot = p - n * n.dot(p - a);
+        let inside = [(a, b), (b, c), (c, a)]
+            .iter()
+            .all(|&(u, v)| (v - u).cross(foot - u).dot(n) >= 0.0);
+        if inside {
+            return (p - foot).length();
+        }
+    }
+    let segment = |u: DVec3, v: DVec3| {
+        let s = ((p - u).dot(v - u) / (v - u).length_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+        (p - (u + (v - u) * s)).length()
+    };
+    segment(a, b).min(segment(b, c)).min(segment(c, a))
+}
+
+/// Frames of `path` with a surface nearer the eye than the near plane's
+/// corners, by brute force.
+fn frames_too_near(path: &CameraPath, triangles: &[[DVec3; 3]]) -> Vec<u32> {
+    let aspect = 4.0 / 3.0;
+    (0..path.frames)
+        .filter(|&f| {
+            let camera = path.camera(f, aspect);
+            let t = (camera.fov_y / 2.0).tan();
+            let corner = camera.near * (1.0 + t * t * (1.0 + aspect * aspect)).sqrt();
+            triangles.iter().any(|tri| distance(camera.eye, tri) < corner)
+        })
+        .collect()
+}
+
+fn load_obj(dir: &std::path::Path, boxes: &[(String, DVec3, DVec3)]) -> Scene {
+    let model = write(dir, "model.obj", boxes_obj(boxes));
+    load(&SceneSpec::File(model), &LoadOptions::default()).unwrap()
+}
+
+/// The buildings of [`town`] (all but the ground).
+fn buildings(scene: &Scene) -> Vec<occlu::bounds::Aabb> {
+    scene
+        .objects
+        .iter()
+        .filter(|o| o.name.starts_with("building"))
+        .map(|o| o.bounds)
+        .collect()
+}
+
+#[test]
+fn a_flat_town_is_walked_through_its_streets_at_eye_height() {
+    let dir = tempfile::tempdir().unwrap();
+    for swap in [false, true] {
+        let scene = load_obj(dir.path(), &town(swap));
+        let up = scene.up.axis.vector();
+        let (path, why) = default_path(&scene).unwrap();
+        assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+        assert!(
+            why.contains("a place with open ground") && why.contains("eye height 1.7"),
+            "{why}"
+        );
+        let houses = buildings(&scene);
+        for f in 0..path.frames {
+            let camera = path.camera(f, 4.0 / 3.0);
+            // The town stands on its ground at height 0 (in +Z or +Y).
+            assert!((camera.eye.dot(up) - 1.7).abs() < 1e-6, "frame {f}: {}", camera.eye);
+            assert!(
+                houses.iter().all(|h| !h.contains_point(camera.eye)),
+                "frame {f}: inside a building at {}",
+                camera.eye
+            );
+        }
+        assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+        assert_eq!(
+            path.frames_with_geometry_within_near(&RayCaster::new(&scene), 4.0 / 3.0),
+            0
+        );
+    }
+}
+
+#[test]
+fn a_dome_around_the_town_makes_the_default_path_go_inside() {
+    let dir = tempfile::tempdir().unwrap();
+    let boxes = town(true);
+    // A dome: one object, four walls and a roof (no floor) from -200 to 320
+    // around the 120-unit town, 200 tall.
+    let (lo, hi, top) = (-200.0, 320.0, 200.0);
+    let mut obj = boxes_obj(&boxes);
+    obj += "o dome\n";
+    for (x, z) in [(lo, lo), (hi, lo), (hi, hi), (lo, hi)] {
+        obj += &format!("v {x} -1 {z}\nv {x} {top} {z}\n");
+    }
+    let base = 8 * boxes.len();
+    for k in 0..4 {
+        let (a, b) = (2 * k, 2 * ((k + 1) % 4));
+        let [a0, a1, b0, b1] = [a, a + 1, b, b + 1].map(|v| v + base + 1);
+        obj += &format!("f {a0} {b0} {b1} {a1}\n");
+    }
+    obj += &format!("f {} {} {} {}\n", base + 2, base + 4, base + 6, base + 8);
+    let model = write(dir.path(), "domed.obj", obj);
+    let scene = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();
+    let (path, why) = default_path(&scene).unwrap();
+    assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+    // The orbit circles outside the dome, which hides the town.
+    assert!(why.contains("'dome' hides"), "{why}");
+    let houses = buildings(&scene);
+    for f in 0..path.frames {
+        let eye = path.camera(f, 4.0 / 3.0).eye;
+        // On the town's ground, between its buildings.
+        assert!((eye.y - 1.7).abs() < 1e-6, "frame {f}: {eye}");
+        assert!(
+            (0.0..=120.0).contains(&eye.x) && (0.0..=120.0).contains(&eye.z),
+            "frame {f}: {eye}"
+        );
+        assert!(houses.iter().all(|h| !h.contains_point(eye)), "frame {f}: {eye}");
+    }
+    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+}
+
+#[test]
+fn objects_are_circled_and_built_in_streets_are_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    // A tower: taller than wide, an object.
+    let tower = vec![("tower".to_string(), DVec3::ZERO, DVec3::new(10.0, 40.0, 10.0))];
+    let scene = load_obj(dir.path(), &tower);
+    let generated = plan(None, &scene, 30);
+    assert_eq!(generated.kind, PathKind::Orbit, "{}", generated.why);
+    let city = load(&SceneSpec::Builtin("city:blocks=2".into()), &LoadOptions::default()).unwrap();
+    let (path, why) = default_path(&city).unwrap();
+    assert!(path.source.ends_with("walk") && why == "the scene's streets", "{why}");
+    let path = path.with_frames(40).unwrap();
+    assert_eq!(frames_too_near(&path, &world_triangles(&city)), Vec::<u32>::new());
+}
+
+#[test]
+fn the_ray_caster_agrees_with_every_triangle_tried_in_turn() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = load_obj(dir.path(), &town(false));
+    let caster = RayCaster::new(&scene);
+    let triangles = world_triangles(&scene);
+    let mut seed = 12345u64;
+    let mut random = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut hits = 0;
+    for _ in 0..400 {
+        let origin = DVec3::new(random() * 160.0 - 20.0, random() * 160.0 - 20.0, random() * 50.0);
+        let direction = DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5);
+        let expected = triangles
+            .iter()
+            .filter_map(|&[a, b, c]| {
+                // The ray meets the plane, and the point lies in the triangle.
+                let n = (b - a).cross(c - a);
+                let t = n.dot(a - origin) / n.dot(direction);
+                let p = origin + direction * t;
+                (t > 0.0 && t <= 400.0 && distance(p, &[a, b, c]) < 1e-9).then_some(t)
+            })
+            .fold(f64::INFINITY, f64::min);
+        match caster.first_hit(origin, direction, 400.0) {
+            Some(hit) => {
+                hits += 1;
+                assert!(
+                    (hit.t - expected).abs() < 1e-9,
+                    "{origin} {direction}: {} vs {expected}",
+                    hit.t
+                );
+            }
+            None => assert!(expected.is_infinite(), "{origin} {direction}: missed {expected}"),
+        }
+        let nearest = triangles
+            .iter()
+            .map(|t| distance(origin, t))
+            .fold(f64::INFINITY, f64::min);
+        let found = caster.nearest_distance(origin, 1e9).unwrap();
+        assert!((found - nearest).abs() < 1e-9, "{origin}: {found} vs {nearest}");
+    }
+    assert!(hits > 100, "the rays meet the town ({hits} of 400)");
+}
+
+#[test]
+fn den_haag_is_walked_without_clipping() {
+    let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/den-haag.obj");
+    if !model.exists() {
+        eprintln!("skipped: {} is absent", model.display());
+        return;
+    }
+    let scene = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();
+    let (path, why) = default_path(&scene).unwrap();
+    assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+}
