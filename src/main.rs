@@ -13,7 +13,7 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use occlu::bench::{BenchError, BenchEvent, execute};
-use occlu::camera::generate::{DEFAULT_FRAMES, PathKind, plan};
+use occlu::camera::generate::{PathRequest, plan};
 use occlu::camera::path::{CameraPath, PathError};
 use occlu::config::{BenchConfig, ConfigError, load_options, scene_spec};
 use occlu::cull::{MODES, ModeError, ModeInfo, ModeParams, create, parse_modes};
@@ -302,16 +302,21 @@ struct InfoArgs {
 
 #[derive(Subcommand)]
 enum PathCommand {
-    /// Write a camera path generated from a scene's bounds.
+    /// Write a camera path made from a scene: its shape, or a glTF file's
+    /// own cameras and camera animations.
     Gen {
         #[command(flatten)]
         scene: SceneArgs,
-        /// Path shape [default: walk for the built-in city, orbit otherwise].
-        #[arg(long, value_enum)]
-        kind: Option<PathKind>,
-        /// Frames of the path.
-        #[arg(long, default_value_t = DEFAULT_FRAMES, value_name = "N")]
-        frames: u32,
+        /// orbit, walk, flyover, cameras (the file's cameras in order) or
+        /// animation[=NAME] (an animation that moves a camera) [default: the
+        /// file's animated camera; a walk for streets, places and domes; an
+        /// orbit for objects].
+        #[arg(long, value_name = "KIND")]
+        kind: Option<PathRequest>,
+        /// Frames of the path [default: 120; one per camera for cameras; the
+        /// animation's own time at 30 per second for animation].
+        #[arg(long, value_name = "N")]
+        frames: Option<u32>,
         /// Output file.
         #[arg(long, short, value_name = "FILE")]
         output: PathBuf,
@@ -852,6 +857,26 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
     );
     let _ = writeln!(w, "load        {load_ms:.1} ms");
     let _ = writeln!(w, "build       {build_ms:.1} ms");
+    for c in &report.cameras {
+        let fov = c.fov_y_deg.map_or(String::new(), |f| format!(", fov {f:.1}°"));
+        let near = c.near.map_or(String::new(), |n| format!(", near {n}"));
+        let _ = writeln!(
+            w,
+            "camera      '{}' (node {}, {}{fov}{near})",
+            c.name, c.node, c.projection
+        );
+    }
+    for a in &report.animations {
+        let moves = a
+            .camera
+            .as_ref()
+            .map_or("moves no camera".to_string(), |c| format!("moves camera '{c}'"));
+        let _ = writeln!(
+            w,
+            "animation   '{}' ({} channels, {:.2} s, {moves})",
+            a.name, a.channels, a.duration
+        );
+    }
     if scene.warnings.is_empty() {
         let _ = writeln!(w, "warnings    none");
     }
@@ -878,26 +903,35 @@ fn emit(text: &str) -> anyhow::Result<()> {
     }
 }
 
-fn path_gen(scene_args: SceneArgs, kind: Option<PathKind>, frames: u32, output: PathBuf) -> anyhow::Result<()> {
-    if frames == 0 || frames > occlu::camera::path::MAX_FRAMES {
+fn path_gen(
+    scene_args: SceneArgs,
+    request: Option<PathRequest>,
+    frames: Option<u32>,
+    output: PathBuf,
+) -> anyhow::Result<()> {
+    if frames.is_some_and(|n| n == 0 || n > occlu::camera::path::MAX_FRAMES) {
         return Err(PathError::FrameCount.into());
     }
     let scene: Scene = load(&scene_args.spec()?, &scene_args.options())?;
-    let generated = plan(kind, &scene, frames);
+    let generated = plan(request.as_ref(), &scene, frames)?;
     // Validate what is written, so a generated file always loads.
     let path = CameraPath::from_file(&generated.file, &output.display().to_string())?;
     let text = serde_json::to_string_pretty(&generated.file)? + "\n";
     occlu::report::write_whole(&output, text.as_bytes())?;
     say!(
-        "wrote {} ({}: {}; {frames} frames, {} keyframes)",
+        "wrote {} ({}: {}; {} frames, {} keyframes)",
         output.display(),
         generated.kind,
         generated.why,
+        path.frames,
         generated.file.keyframes.len()
     );
     let near = path.frames_with_geometry_within_near(&RayCaster::new(&scene), Resolution::DEFAULT.aspect());
     if near > 0 {
-        say!("warning: {near} of {frames} frames have geometry nearer than the near plane's corners (at 4:3)");
+        say!(
+            "warning: {near} of {} frames have geometry nearer than the near plane's corners (at 4:3)",
+            path.frames
+        );
     }
     Ok(())
 }

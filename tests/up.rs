@@ -57,7 +57,7 @@ fn generated_paths_circle_and_walk_about_the_up_axis() {
         let scene = load_obj(dir.path(), "t.obj", &town(swap), UpChoice::Auto);
         let c = scene.bounds.center();
         // One frame per keyframe, so each lies on the circle exactly.
-        let orbit = CameraPath::from_file(&generate(PathKind::Orbit, &scene, 25), "orbit").unwrap();
+        let orbit = CameraPath::from_file(&generate(PathKind::Orbit, &scene, 25).unwrap(), "orbit").unwrap();
         assert_eq!(orbit.keyframes.len(), 25);
         let mut distances = Vec::new();
         for f in 0..25 {
@@ -80,7 +80,7 @@ fn generated_paths_circle_and_walk_about_the_up_axis() {
             distances.push(across);
         }
         assert!(distances.iter().all(|d| (d - distances[0]).abs() < 1e-9 * d));
-        let walk = CameraPath::from_file(&generate(PathKind::Walk, &scene, 20), "walk").unwrap();
+        let walk = CameraPath::from_file(&generate(PathKind::Walk, &scene, 20).unwrap(), "walk").unwrap();
         let ground = scene
             .bounds
             .corners()

@@ -156,7 +156,7 @@ fn objects_are_circled_and_built_in_streets_are_kept() {
     // A tower: taller than wide, an object.
     let tower = vec![("tower".to_string(), DVec3::ZERO, DVec3::new(10.0, 40.0, 10.0))];
     let scene = load_obj(dir.path(), &tower);
-    let generated = plan(None, &scene, 30);
+    let generated = plan(None, &scene, Some(30)).unwrap();
     assert_eq!(generated.kind, PathKind::Orbit, "{}", generated.why);
     let city = load(&SceneSpec::Builtin("city:blocks=2".into()), &LoadOptions::default()).unwrap();
     let (path, why) = default_path(&city).unwrap();

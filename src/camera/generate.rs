@@ -5,23 +5,26 @@ use std::fmt;
 use std::str::FromStr;
 
 use glam::DVec3;
-use serde::Serialize;
 
 use super::path::{CameraPath, DEFAULT_FOV_Y_DEG, Interpolation, KeyframeFile, PathError, PathFile};
 use super::walk::{self, Walk};
 use crate::raycast::RayCaster;
 use crate::scene::Scene;
+use crate::scene::cameras::{CameraPose, FileAnimation, SAMPLES_PER_SECOND};
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PathKind {
     /// Circle the scene at 25° elevation, looking at its centre.
     Orbit,
-    /// Eye height along the scene's streets (built-in scenes) or straight
-    /// through the middle of the model.
+    /// Eye height along the scene's streets (built-in scenes), or through a
+    /// model's free space ([`walk`]).
     Walk,
     /// Straight across above the scene, looking ahead and down.
     Flyover,
+    /// The file's own cameras in order, one keyframe each (glTF).
+    Cameras,
+    /// An animation of the file that moves a camera, sampled (glTF).
+    Animation,
 }
 
 impl fmt::Display for PathKind {
@@ -30,6 +33,8 @@ impl fmt::Display for PathKind {
             PathKind::Orbit => "orbit",
             PathKind::Walk => "walk",
             PathKind::Flyover => "flyover",
+            PathKind::Cameras => "cameras",
+            PathKind::Animation => "animation",
         })
     }
 }
@@ -37,7 +42,58 @@ impl fmt::Display for PathKind {
 impl FromStr for PathKind {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        <PathKind as clap::ValueEnum>::from_str(s, true)
+        Ok(match s.to_ascii_lowercase().as_str() {
+            "orbit" => PathKind::Orbit,
+            "walk" => PathKind::Walk,
+            "flyover" => PathKind::Flyover,
+            "cameras" => PathKind::Cameras,
+            "animation" => PathKind::Animation,
+            _ => {
+                return Err(format!(
+                    "unknown path kind '{s}' (orbit, walk, flyover, cameras, animation[=NAME])"
+                ));
+            }
+        })
+    }
+}
+
+/// The kinds made from the scene's shape.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Shape {
+    Orbit,
+    Walk,
+    Flyover,
+}
+
+impl PathKind {
+    fn shape(self) -> Option<Shape> {
+        match self {
+            PathKind::Orbit => Some(Shape::Orbit),
+            PathKind::Walk => Some(Shape::Walk),
+            PathKind::Flyover => Some(Shape::Flyover),
+            PathKind::Cameras | PathKind::Animation => None,
+        }
+    }
+}
+
+/// What `--kind` asks for: a kind, and for `animation=NAME` which one.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PathRequest {
+    pub kind: PathKind,
+    pub animation: Option<String>,
+}
+
+impl FromStr for PathRequest {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (kind, name) = match s.split_once('=') {
+            Some((kind, name)) => (kind.parse()?, Some(name.to_string())),
+            None => (s.parse()?, None),
+        };
+        if name.is_some() && kind != PathKind::Animation {
+            return Err(format!("only the animation kind takes a name ('{s}')"));
+        }
+        Ok(PathRequest { kind, animation: name })
     }
 }
 
@@ -57,32 +113,124 @@ pub struct Generated {
 /// circling the model would show nothing but one object (a sky dome around
 /// it, or a closed shell hiding everything else); an orbit otherwise.
 pub fn default_path(scene: &Scene) -> Result<(CameraPath, String), PathError> {
-    let generated = plan(None, scene, DEFAULT_FRAMES);
+    let generated = plan(None, scene, None)?;
     let path = CameraPath::from_file(&generated.file, &format!("generated:{}", generated.kind))?;
     Ok((path, generated.why))
 }
 
-/// A path of `kind` (the default of [`default_path`] when `None`) over
-/// `scene`, with why.
-pub fn plan(kind: Option<PathKind>, scene: &Scene, frames: u32) -> Generated {
+/// The path `request` asks for over `scene` (the default of
+/// [`default_path`] when `None`), with why, in `frames` frames (default: one
+/// per camera for `cameras`, the animation's own time at
+/// [`SAMPLES_PER_SECOND`] for `animation`, [`DEFAULT_FRAMES`] otherwise).
+pub fn plan(request: Option<&PathRequest>, scene: &Scene, frames: Option<u32>) -> Result<Generated, PathError> {
     let caster = RayCaster::new(scene);
     let walk = || walk::plan(scene, &caster);
-    let (kind, why, planned) = match kind {
-        Some(kind) => (kind, "asked for".to_string(), None),
+    let (kind, why, planned) = match request {
+        Some(r) => (r.kind, "asked for".to_string(), None),
         None => default_kind(scene, &caster, walk),
     };
-    let (file, note) = generate_with(kind, scene, frames, || planned.or_else(walk));
+    let shape_frames = frames.unwrap_or(DEFAULT_FRAMES);
+    let (file, note) = match (kind, kind.shape()) {
+        (_, Some(shape)) => generate_with(shape, scene, shape_frames, || planned.or_else(walk)),
+        (PathKind::Cameras, None) => (from_cameras(scene, frames)?, None),
+        (_, None) => {
+            let name = request.and_then(|r| r.animation.as_deref());
+            let (file, animation) = from_animation(scene, name, frames)?;
+            (file, Some(format!("animation '{animation}'")))
+        }
+    };
     let why = match note {
         Some(note) => format!("{why}; {note}"),
         None => why,
     };
-    Generated { kind, file, why }
+    Ok(Generated { kind, file, why })
 }
 
-/// A path of `kind` over `scene`, around and above its up axis.
-pub fn generate(kind: PathKind, scene: &Scene, frames: u32) -> PathFile {
-    let caster = RayCaster::new(scene);
-    generate_with(kind, scene, frames, || walk::plan(scene, &caster)).0
+/// A path of `kind` over `scene` in `frames` frames: [`plan`] without the
+/// why.
+pub fn generate(kind: PathKind, scene: &Scene, frames: u32) -> Result<PathFile, PathError> {
+    let request = PathRequest { kind, animation: None };
+    plan(Some(&request), scene, Some(frames)).map(|generated| generated.file)
+}
+
+/// The file's cameras in order, one keyframe each, with their fields of
+/// view; the path's near plane is the nearest of theirs.
+fn from_cameras(scene: &Scene, frames: Option<u32>) -> Result<PathFile, PathError> {
+    if scene.cameras.is_empty() {
+        return Err(PathError::NotInFile(
+            "the model has no cameras (glTF files may carry them)".into(),
+        ));
+    }
+    let keyframes = scene
+        .cameras
+        .iter()
+        .enumerate()
+        .map(|(k, c)| pose_key(k as f64, &c.pose))
+        .collect();
+    let near = scene.cameras.iter().filter_map(|c| c.pose.near).reduce(f64::min);
+    Ok(file_path(
+        keyframes,
+        near,
+        Some(frames.unwrap_or(scene.cameras.len() as u32)),
+        None,
+    ))
+}
+
+/// The poses of the camera an animation moves (the one named, or the first
+/// that moves a camera), at the animation's own times; and its name.
+fn from_animation(scene: &Scene, name: Option<&str>, frames: Option<u32>) -> Result<(PathFile, String), PathError> {
+    let moving: Vec<&FileAnimation> = scene.animations.iter().filter(|a| a.camera.is_some()).collect();
+    let names = || {
+        let list: Vec<&str> = moving.iter().map(|a| a.name.as_str()).collect();
+        if list.is_empty() {
+            "none".to_string()
+        } else {
+            list.join(", ")
+        }
+    };
+    let chosen = match name {
+        Some(name) => moving.iter().find(|a| a.name == name).ok_or_else(|| {
+            PathError::NotInFile(format!(
+                "no animation '{name}' moves a camera (those that do: {})",
+                names()
+            ))
+        })?,
+        None => moving
+            .first()
+            .ok_or_else(|| PathError::NotInFile("no animation of the model moves a camera".into()))?,
+    };
+    let camera = chosen.camera.as_ref().expect("filtered on a camera");
+    let start = camera.poses[0].0;
+    let keyframes = camera.poses.iter().map(|(t, pose)| pose_key(t - start, pose)).collect();
+    let near = camera.poses.iter().filter_map(|(_, p)| p.near).reduce(f64::min);
+    let file = match frames {
+        Some(n) => file_path(keyframes, near, Some(n), None),
+        None => file_path(keyframes, near, None, Some(SAMPLES_PER_SECOND)),
+    };
+    Ok((file, chosen.name.clone()))
+}
+
+/// A keyframe at `time` with a camera's pose.
+fn pose_key(time: f64, pose: &CameraPose) -> KeyframeFile {
+    KeyframeFile {
+        orientation: Some(pose.rotation.to_array()),
+        fov_y_deg: pose.fov_y_deg,
+        ..key(time, pose.eye)
+    }
+}
+
+/// A path through `keyframes` (linear between them: they are the file's
+/// poses), of `frames` frames or at `fps`.
+fn file_path(keyframes: Vec<KeyframeFile>, near: Option<f64>, frames: Option<u32>, fps: Option<f64>) -> PathFile {
+    PathFile {
+        frames,
+        fps,
+        near,
+        fov_y_deg: None,
+        up: None,
+        interpolation: Interpolation::Linear,
+        keyframes,
+    }
 }
 
 /// The share of a walk's route that must be open to the sky for a model to
@@ -102,6 +250,13 @@ fn default_kind(
 ) -> (PathKind, String, Option<Walk>) {
     if scene.walk_hint.is_some() {
         return (PathKind::Walk, "the scene's streets".into(), None);
+    }
+    if let Some(camera) = scene.animations.iter().find_map(|a| a.camera.as_ref()) {
+        return (
+            PathKind::Animation,
+            format!("the file's animated camera '{}'", camera.name),
+            None,
+        );
     }
     let ground = Ground::of(scene);
     let (_, width) = ground.longer_axis();
@@ -190,7 +345,7 @@ fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Option<Strin
 /// [`generate`], with `walk` planning the walk a scene without streets
 /// gets; for such a walk also what it rests on.
 fn generate_with(
-    kind: PathKind,
+    kind: Shape,
     scene: &Scene,
     frames: u32,
     walk: impl FnOnce() -> Option<Walk>,
@@ -200,8 +355,8 @@ fn generate_with(
     let diagonal = b.extent().length().max(1e-6);
     let mut note = None;
     let keyframes = match kind {
-        PathKind::Orbit => orbit(&ground, b.center(), diagonal),
-        PathKind::Walk => match &scene.walk_hint {
+        Shape::Orbit => orbit(&ground, b.center(), diagonal),
+        Shape::Walk => match &scene.walk_hint {
             Some(line) if line.len() >= 2 => walk_along(line, (diagonal * 0.02).max(1.0)),
             _ => match walk() {
                 Some(w) => {
@@ -223,7 +378,7 @@ fn generate_with(
                 }
             },
         },
-        PathKind::Flyover => {
+        Shape::Flyover => {
             let (axis, length) = ground.longer_axis();
             let c = ground.lift(b.center(), ground.highest + 0.25 * length);
             let pitch = 35f64.to_radians();
@@ -371,7 +526,7 @@ mod tests {
     fn every_kind_gives_a_valid_path_inside_sensible_bounds() {
         let scene = city();
         for kind in [PathKind::Orbit, PathKind::Walk, PathKind::Flyover] {
-            let file = generate(kind, &scene, 30);
+            let file = generate(kind, &scene, 30).unwrap();
             let path = CameraPath::from_file(&file, "gen").unwrap();
             assert_eq!(path.frames, 30);
             for f in 0..30 {
@@ -384,7 +539,7 @@ mod tests {
     #[test]
     fn city_walk_stays_at_eye_height_on_the_streets() {
         let scene = city();
-        let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, 50), "walk").unwrap();
+        let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, 50).unwrap(), "walk").unwrap();
         for f in 0..50 {
             let c = path.camera(f, 1.0);
             assert!((c.eye.y - crate::scene::builtin::EYE_HEIGHT).abs() < 1e-6);
@@ -403,7 +558,7 @@ mod tests {
     #[test]
     fn orbit_keeps_the_scene_centre_in_view() {
         let scene = city();
-        let path = CameraPath::from_file(&generate(PathKind::Orbit, &scene, 40), "orbit").unwrap();
+        let path = CameraPath::from_file(&generate(PathKind::Orbit, &scene, 40).unwrap(), "orbit").unwrap();
         let c = scene.bounds.center();
         for f in 0..40 {
             let cam = path.camera(f, 4.0 / 3.0);

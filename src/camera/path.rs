@@ -89,6 +89,9 @@ pub enum PathError {
     Invalid { path: String, message: String },
     #[error("the frame count must be in 1..={MAX_FRAMES}")]
     FrameCount,
+    /// A path from the model file that the file does not hold.
+    #[error("{0}")]
+    NotInFile(String),
 }
 
 /// A validated keyframe.

@@ -128,6 +128,12 @@ pub struct SceneFacts {
     /// The up axis generated paths and the overview use, and why.
     #[serde(default)]
     pub up: Up,
+    /// The file's own cameras (glTF).
+    #[serde(default)]
+    pub cameras: Vec<CameraFact>,
+    /// The file's animations (glTF).
+    #[serde(default)]
+    pub animations: Vec<AnimationFact>,
     pub warnings: Vec<String>,
     pub load_ms: f64,
     pub build_ms: f64,
@@ -146,11 +152,53 @@ impl SceneFacts {
             hierarchy: hierarchy.stats(),
             movers: scene.movers.len(),
             up: scene.up.clone(),
+            cameras: scene
+                .cameras
+                .iter()
+                .map(|c| CameraFact {
+                    name: c.name.clone(),
+                    node: c.node,
+                    projection: c.projection.to_string(),
+                    fov_y_deg: c.pose.fov_y_deg,
+                    near: c.pose.near,
+                })
+                .collect(),
+            animations: scene
+                .animations
+                .iter()
+                .map(|a| AnimationFact {
+                    name: a.name.clone(),
+                    channels: a.channels,
+                    duration: a.duration,
+                    camera: a.camera.as_ref().map(|c| c.name.clone()),
+                })
+                .collect(),
             warnings: scene.warnings.clone(),
             load_ms,
             build_ms,
         }
     }
+}
+
+/// A camera of the model file, as `info` lists it.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct CameraFact {
+    pub name: String,
+    pub node: usize,
+    pub projection: String,
+    pub fov_y_deg: Option<f64>,
+    pub near: Option<f64>,
+}
+
+/// An animation of the model file, as `info` lists it.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct AnimationFact {
+    pub name: String,
+    pub channels: usize,
+    /// Seconds.
+    pub duration: f64,
+    /// The camera it moves, if any.
+    pub camera: Option<String>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]

@@ -10,7 +10,7 @@ use base64::Engine as _;
 use glam::{DAffine3, DMat4, DVec3};
 use gltf::mesh::Mode;
 
-use super::{LoadOptions, MeshGroup, SceneBuilder, SceneError, meshopt};
+use super::{LoadOptions, MeshGroup, SceneBuilder, SceneError, cameras, meshopt};
 use crate::text::one_line;
 
 pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut SceneBuilder) -> Result<(), SceneError> {
@@ -114,6 +114,24 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
             lost.index()
         )));
     }
+    let buffer_bytes = buffers.iter().map(Vec::len).sum();
+    let check = |accessor: &gltf::Accessor, what: &str, types: &[gltf::accessor::DataType], dims| {
+        check_accessor(accessor, what, types, dims, buffer_bytes)
+    };
+    let (cameras, animations) = cameras::read(&gltf, &buffers, &reached, &check).map_err(parse_error)?;
+    let unused: Vec<&str> = animations
+        .iter()
+        .filter(|a| a.camera.is_none())
+        .map(|a| a.name.as_str())
+        .collect();
+    if !unused.is_empty() {
+        builder.warn(format!(
+            "{} animations move no camera and are not replayed (occlu animates no objects): {}",
+            unused.len(),
+            unused.join(", ")
+        ));
+    }
+    builder.set_cameras(cameras, animations);
     Ok(())
 }
 

@@ -7,6 +7,7 @@
 //! all sources obey the same rules.
 
 pub mod builtin;
+pub mod cameras;
 mod cluster;
 mod gltf;
 mod meshopt;
@@ -21,6 +22,7 @@ use glam::{DAffine3, DVec3};
 
 use crate::bounds::Aabb;
 use crate::text::one_line;
+use cameras::{FileAnimation, FileCamera};
 use motion::{Mover, Route};
 use up::{Up, UpChoice};
 pub use validate::{GeometryError, MAX_COORDINATE, within_range};
@@ -77,6 +79,10 @@ pub struct Scene {
     pub movers: Vec<Mover>,
     /// Which way is up, for generated paths and the overview picture.
     pub up: Up,
+    /// The file's own cameras (glTF), in node order.
+    pub cameras: Vec<FileCamera>,
+    /// The file's animations (glTF), with the poses of the cameras they move.
+    pub animations: Vec<FileAnimation>,
 }
 
 impl Scene {
@@ -234,6 +240,8 @@ pub struct SceneBuilder {
     degenerate: Vec<(String, usize)>,
     warnings: Vec<String>,
     walk_hint: Option<Vec<DVec3>>,
+    cameras: Vec<FileCamera>,
+    animations: Vec<FileAnimation>,
     movers: Vec<Mover>,
 }
 
@@ -249,6 +257,8 @@ impl SceneBuilder {
             degenerate: Vec::new(),
             warnings: Vec::new(),
             walk_hint: None,
+            cameras: Vec::new(),
+            animations: Vec::new(),
             movers: Vec::new(),
         }
     }
@@ -350,6 +360,12 @@ impl SceneBuilder {
         self.warnings.push(warning);
     }
 
+    /// Records the file's cameras and animations.
+    pub fn set_cameras(&mut self, cameras: Vec<FileCamera>, animations: Vec<FileAnimation>) {
+        self.cameras = cameras;
+        self.animations = animations;
+    }
+
     pub fn set_walk_hint(&mut self, walk: Vec<DVec3>) {
         self.walk_hint = Some(walk);
     }
@@ -389,6 +405,8 @@ impl SceneBuilder {
             warnings,
             walk_hint: self.walk_hint,
             up: Up::default(),
+            cameras: self.cameras,
+            animations: self.animations,
             movers: self.movers,
         })
     }

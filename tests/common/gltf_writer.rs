@@ -47,6 +47,31 @@ impl GltfWriter {
         self.accessors.len() - 1
     }
 
+    /// An accessor of `values`, `components` floats each ("SCALAR", "VEC3",
+    /// "VEC4"), with min and max as animation inputs need.
+    pub fn floats(&mut self, values: &[f32], kind: &str) -> usize {
+        let components = match kind {
+            "SCALAR" => 1,
+            "VEC3" => 3,
+            _ => 4,
+        };
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.view(&bytes, 0);
+        let (mut min, mut max) = (vec![f32::MAX; components], vec![f32::MIN; components]);
+        for chunk in values.chunks(components) {
+            for (k, &v) in chunk.iter().enumerate() {
+                min[k] = min[k].min(v);
+                max[k] = max[k].max(v);
+            }
+        }
+        self.buffer_views[view].as_object_mut().unwrap().remove("target");
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": 5126, "count": values.len() / components,
+            "type": kind, "min": min, "max": max
+        }));
+        self.accessors.len() - 1
+    }
+
     pub fn indices(&mut self, i: &[u32]) -> usize {
         let bytes: Vec<u8> = i.iter().flat_map(|v| v.to_le_bytes()).collect();
         let view = self.view(&bytes, 34963);

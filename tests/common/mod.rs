@@ -182,7 +182,7 @@ pub fn small_city(frames: u32) -> (Scene, Hierarchy, CameraPath) {
 pub fn builtin(spec: &str, frames: u32) -> (Scene, Hierarchy, CameraPath) {
     let scene = load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).unwrap();
     let hierarchy = hierarchy(&scene);
-    let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, frames), "walk").unwrap();
+    let path = CameraPath::from_file(&generate(PathKind::Walk, &scene, frames).unwrap(), "walk").unwrap();
     (scene, hierarchy, path)
 }
 
