@@ -4,6 +4,8 @@
 //! find the ground and free space, and a run uses them to count frames with
 //! geometry inside the near plane.
 
+use std::cell::Cell;
+
 use glam::{DAffine3, DVec3};
 
 use crate::bounds::Aabb;
@@ -59,48 +61,53 @@ impl<'a> RayCaster<'a> {
     /// Calls `found` with every surface along the ray up to `max_t`; `found`
     /// may shorten the reach (the second argument) to prune the search.
     fn cast(&self, origin: DVec3, direction: DVec3, max_t: f64, found: &mut dyn FnMut(Hit, &mut f64)) {
-        let mut reach = max_t;
+        let reach = Cell::new(max_t);
         let inverse = direction.recip();
-        let mut stack = vec![0usize];
-        while let Some(n) = stack.pop() {
-            let node = &self.hierarchy.nodes[n];
-            if !slab(&node.bounds, origin, inverse, reach) {
-                continue;
-            }
-            if !node.is_leaf() {
-                stack.extend(node.children());
-                continue;
-            }
-            for &object in self.hierarchy.subtree_objects(node) {
-                let o = &self.scene.objects[object as usize];
-                if !slab(&o.bounds, origin, inverse, reach) {
-                    continue;
-                }
-                // An affine map keeps a line's parameter: t is the same in
-                // the mesh's local frame.
-                let local = self.to_local[object as usize];
-                let (lo, ld) = (local.transform_point3(origin), local.transform_vector3(direction));
-                for [a, b, c] in self.triangles(o.mesh) {
-                    if let Some(t) = intersect(lo, ld, a, b, c)
-                        && t > 0.0
-                        && t <= reach
-                    {
-                        found(Hit { t, object }, &mut reach);
-                    }
+        self.visit_objects(&|bounds| slab(bounds, origin, inverse, reach.get()), &mut |object| {
+            // An affine map keeps a line's parameter: t is the same in the
+            // mesh's local frame.
+            let local = self.to_local[object as usize];
+            let (lo, ld) = (local.transform_point3(origin), local.transform_vector3(direction));
+            for [a, b, c] in self.triangles(self.scene.objects[object as usize].mesh) {
+                if let Some(t) = intersect(lo, ld, a, b, c)
+                    && t > 0.0
+                    && t <= reach.get()
+                {
+                    let mut shortened = reach.get();
+                    found(Hit { t, object }, &mut shortened);
+                    reach.set(shortened);
                 }
             }
-        }
+        });
     }
 
     /// The distance from `point` to the nearest surface, if one lies within
     /// `within`.
     pub fn nearest_distance(&self, point: DVec3, within: f64) -> Option<f64> {
-        let mut best = within;
+        let best = Cell::new(within);
         let mut found = false;
+        self.visit_objects(&|bounds| box_distance(bounds, point) <= best.get(), &mut |object| {
+            let world = self.scene.objects[object as usize].transform;
+            for [a, b, c] in self.triangles(self.scene.objects[object as usize].mesh) {
+                let [a, b, c] = [a, b, c].map(|v| world.transform_point3(v));
+                let d = closest_point(point, a, b, c).distance(point);
+                if d <= best.get() {
+                    best.set(d);
+                    found = true;
+                }
+            }
+        });
+        found.then(|| best.get())
+    }
+
+    /// Calls `visit` with every object whose box `wanted` accepts, and whose
+    /// hierarchy nodes' boxes it accepts too; `wanted` is asked as the search
+    /// goes, so a bound `visit` tightens prunes what is left.
+    fn visit_objects(&self, wanted: &dyn Fn(&Aabb) -> bool, visit: &mut dyn FnMut(u32)) {
         let mut stack = vec![0usize];
         while let Some(n) = stack.pop() {
             let node = &self.hierarchy.nodes[n];
-            if box_distance(&node.bounds, point) > best {
+            if !wanted(&node.bounds) {
                 continue;
             }
             if !node.is_leaf() {
@@ -108,22 +115,11 @@ impl<'a> RayCaster<'a> {
                 continue;
             }
             for &object in self.hierarchy.subtree_objects(node) {
-                let o = &self.scene.objects[object as usize];
-                if box_distance(&o.bounds, point) > best {
-                    continue;
-                }
-                let world = o.transform;
-                for [a, b, c] in self.triangles(o.mesh) {
-                    let [a, b, c] = [a, b, c].map(|v| world.transform_point3(v));
-                    let d = closest_point(point, a, b, c).distance(point);
-                    if d <= best {
-                        best = d;
-                        found = true;
-                    }
+                if wanted(&self.scene.objects[object as usize].bounds) {
+                    visit(object);
                 }
             }
         }
-        found.then_some(best)
     }
 
     /// The triangles of a mesh, in its local frame.

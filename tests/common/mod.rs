@@ -220,17 +220,9 @@ pub fn boxes_obj(boxes: &[(String, DVec3, DVec3)]) -> String {
             let (x, y, z) = (pick(1, min.x, max.x), pick(2, min.y, max.y), pick(4, min.z, max.z));
             obj += &format!("v {x} {y} {z}\n");
         }
-        let base = 8 * k + 1;
-        for face in [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ] {
-            let [a, b, c, d] = face.map(|i| i + base);
-            obj += &format!("f {a} {b} {c} {d}\n");
+        let base = 8 * k as u32 + 1;
+        for t in gltf_writer::cube_indices().chunks(3) {
+            obj += &format!("f {} {} {}\n", t[0] + base, t[1] + base, t[2] + base);
         }
     }
     obj
