@@ -14,6 +14,7 @@ pub mod bounds;
 pub mod camera;
 pub mod config;
 pub mod cull;
+pub mod export;
 pub mod gpu;
 pub mod hierarchy;
 pub mod input;

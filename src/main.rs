@@ -94,6 +94,21 @@ enum Command {
     /// teleports) through every mode against the DR reference; exit 1 when a
     /// conservative mode shows any error or a moved case renders differently.
     Stress(StressArgs),
+    /// Write a scene as occlu holds it (after clustering) and a camera path
+    /// (as a camera animation) to a GLB, to replay them in another engine.
+    Export {
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// Camera path (JSON) [default: the path bench would generate].
+        #[arg(long, value_name = "FILE")]
+        path: Option<PathBuf>,
+        /// Resamples the path to this many frames [default: the path's].
+        #[arg(long, value_name = "N")]
+        frames: Option<u32>,
+        /// Output .glb file.
+        #[arg(long, short, value_name = "FILE")]
+        output: PathBuf,
+    },
     /// Draw a run's charts (and report.md) again from its frames.csv and summary.json.
     Plot {
         /// A bench output directory.
@@ -353,6 +368,12 @@ fn main() -> ExitCode {
                 },
         } => path_gen(scene, kind, frames, output).map(|()| ExitCode::SUCCESS),
         Command::Stress(args) => stress(args),
+        Command::Export {
+            scene,
+            path,
+            frames,
+            output,
+        } => export(&scene, path.as_deref(), frames, &output).map(|()| ExitCode::SUCCESS),
         Command::Plot { run_dir } => plot(&run_dir).map(|()| ExitCode::SUCCESS),
         Command::Render(args) => render(args).map(|()| ExitCode::SUCCESS),
         Command::Compare {
@@ -488,6 +509,7 @@ fn is_input_error(e: &anyhow::Error) -> bool {
             || c.downcast_ref::<ReportError>().is_some_and(ReportError::is_input_error)
             || c.is::<CompareError>()
             || c.is::<ModeError>()
+            || c.is::<occlu::export::ExportError>()
             || c.downcast_ref::<StressError>().is_some_and(StressError::is_input_error)
             || c.downcast_ref::<PictureError>()
                 .is_some_and(PictureError::is_input_error)
@@ -901,6 +923,36 @@ fn emit(text: &str) -> anyhow::Result<()> {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(StdoutError(e).into()),
         _ => Ok(()),
     }
+}
+
+fn export(
+    scene_args: &SceneArgs,
+    path: Option<&std::path::Path>,
+    frames: Option<u32>,
+    output: &std::path::Path,
+) -> anyhow::Result<()> {
+    let path_file = path.map(CameraPath::load).transpose()?;
+    occlu::report::check_writable(output)?;
+    let scene = load(&scene_args.spec()?, &scene_args.options())?;
+    let path = match path_file {
+        Some(p) => p,
+        None => occlu::camera::generate::default_path(&scene)?.0,
+    };
+    let path = match frames {
+        Some(n) => path.with_frames(n)?,
+        None => path,
+    };
+    let bytes = occlu::export::glb(&scene, &path, Resolution::DEFAULT.aspect())?;
+    occlu::report::write_whole(output, &bytes)?;
+    say!(
+        "wrote {} ({} objects, {} triangles, {} and {} frames as the animation 'occlu path')",
+        output.display(),
+        scene.objects.len(),
+        scene.triangles(),
+        path.source,
+        path.frames
+    );
+    Ok(())
 }
 
 fn path_gen(

@@ -14,14 +14,10 @@ use std::path::{Path, PathBuf};
 
 use common::gltf_writer::{GltfWriter, cube_indices};
 use glam::DVec3;
-use occlu::bench::{RunOptions, Session};
 use occlu::camera::Camera;
 use occlu::camera::look_rotation;
-use occlu::cull::{ModeParams, create};
 use occlu::gpu::Resolution;
-use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
-use occlu::world::World;
 use serde_json::json;
 
 fn fixtures() -> PathBuf {
@@ -80,30 +76,22 @@ fn the_fixtures_were_made_from_the_model_the_tests_build() {
 /// The reference depth of `scene` seen from a fixed camera above and in
 /// front of the blocks, on the first adapter.
 fn depth(scene: &Scene) -> Vec<f32> {
-    let gpu = common::gpus().remove(0);
-    let resolution = Resolution {
-        width: 160,
-        height: 120,
-    };
-    let options = RunOptions {
-        warmup: 0,
-        resolution,
-        measure_error: true,
-    };
-    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-    let mut world = World::new(scene.clone(), hierarchy);
-    let mut session = Session::new(&gpu, &world.scene, 1, true, &options).unwrap();
     let eye = DVec3::new(1.0, 9.0, 12.0);
     let camera = Camera {
         eye,
         rotation: look_rotation(DVec3::new(0.0, 0.0, -6.0) - eye, DVec3::Y),
         fov_y: 60f64.to_radians(),
         near: 0.1,
-        aspect: resolution.aspect(),
+        aspect: 4.0 / 3.0,
     };
-    let mut dr = vec![create("dr", scene, &ModeParams::default()).unwrap()];
-    session.frame(0, &camera, &mut world, &mut dr, 0).unwrap();
-    session.reference_depth().unwrap()
+    common::reference_depth(
+        scene,
+        &camera,
+        Resolution {
+            width: 160,
+            height: 120,
+        },
+    )
 }
 
 #[test]

@@ -168,12 +168,8 @@ fn from_cameras(scene: &Scene, frames: Option<u32>) -> Result<PathFile, PathErro
         .map(|(k, c)| pose_key(k as f64, &c.pose))
         .collect();
     let near = scene.cameras.iter().filter_map(|c| c.pose.near).reduce(f64::min);
-    Ok(file_path(
-        keyframes,
-        near,
-        Some(frames.unwrap_or(scene.cameras.len() as u32)),
-        None,
-    ))
+    let frames = frames.unwrap_or(scene.cameras.len() as u32);
+    Ok(file_path(keyframes, near, Some(frames)))
 }
 
 /// The poses of the camera an animation moves (the one named, or the first
@@ -203,10 +199,12 @@ fn from_animation(scene: &Scene, name: Option<&str>, frames: Option<u32>) -> Res
     let start = camera.poses[0].0;
     let keyframes = camera.poses.iter().map(|(t, pose)| pose_key(t - start, pose)).collect();
     let near = camera.poses.iter().filter_map(|(_, p)| p.near).reduce(f64::min);
-    let file = match frames {
-        Some(n) => file_path(keyframes, near, Some(n), None),
-        None => file_path(keyframes, near, None, Some(SAMPLES_PER_SECOND)),
-    };
+    // The animation's own time at SAMPLES_PER_SECOND, both ends included
+    // (counted, not derived from an fps: key times stored in f32 fall a
+    // hair short of whole frames).
+    let duration = camera.poses[camera.poses.len() - 1].0 - start;
+    let own = (duration * SAMPLES_PER_SECOND).round().min(f64::from(u32::MAX - 1)) as u32 + 1;
+    let file = file_path(keyframes, near, Some(frames.unwrap_or(own)));
     Ok((file, chosen.name.clone()))
 }
 
@@ -220,11 +218,11 @@ fn pose_key(time: f64, pose: &CameraPose) -> KeyframeFile {
 }
 
 /// A path through `keyframes` (linear between them: they are the file's
-/// poses), of `frames` frames or at `fps`.
-fn file_path(keyframes: Vec<KeyframeFile>, near: Option<f64>, frames: Option<u32>, fps: Option<f64>) -> PathFile {
+/// poses), of `frames` frames.
+fn file_path(keyframes: Vec<KeyframeFile>, near: Option<f64>, frames: Option<u32>) -> PathFile {
     PathFile {
         frames,
-        fps,
+        fps: None,
         near,
         fov_y_deg: None,
         up: None,

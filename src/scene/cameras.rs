@@ -317,7 +317,8 @@ fn sample_times(channels: &[&Channel]) -> Result<Vec<f64>, String> {
     let keys: Vec<f64> = keys.into_iter().map(f64::from_bits).collect();
     let mut times = Vec::new();
     for pair in keys.windows(2) {
-        let steps = ((pair[1] - pair[0]) * SAMPLES_PER_SECOND).ceil().max(1.0);
+        // Keys already 1/30 s apart (stored in f32) get no sample between.
+        let steps = ((pair[1] - pair[0]) * SAMPLES_PER_SECOND - 1e-3).ceil().max(1.0);
         if times.len() as f64 + steps > MAX_SAMPLES as f64 {
             return Err(format!("animates a camera for more than {MAX_SAMPLES} samples"));
         }

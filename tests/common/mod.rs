@@ -186,6 +186,26 @@ pub fn builtin(spec: &str, frames: u32) -> (Scene, Hierarchy, CameraPath) {
     (scene, hierarchy, path)
 }
 
+/// The depth direct rendering draws of `scene` from `camera` at
+/// `resolution` (its aspect replaces the camera's), on the first adapter.
+pub fn reference_depth(scene: &Scene, camera: &occlu::camera::Camera, resolution: Resolution) -> Vec<f32> {
+    let gpu = gpus().remove(0);
+    let options = RunOptions {
+        warmup: 0,
+        resolution,
+        measure_error: true,
+    };
+    let mut world = World::new(scene.clone(), hierarchy(scene));
+    let mut session = occlu::bench::Session::new(&gpu, &world.scene, 1, true, &options).unwrap();
+    let camera = occlu::camera::Camera {
+        aspect: resolution.aspect(),
+        ..*camera
+    };
+    let mut dr = vec![occlu::cull::create("dr", scene, &occlu::cull::ModeParams::default()).unwrap()];
+    session.frame(0, &camera, &mut world, &mut dr, 0).unwrap();
+    session.reference_depth().unwrap()
+}
+
 /// The resolution the city tests render at.
 pub const SMALL: Resolution = Resolution {
     width: 160,

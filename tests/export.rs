@@ -1,0 +1,63 @@
+//! `occlu export`: the scene and path as a GLB load back as the same
+//! triangles, bounds and cameras, and render the same depth.
+
+mod common;
+
+use occlu::camera::generate::default_path;
+use occlu::gpu::Resolution;
+use occlu::scene::{LoadOptions, SceneSpec, load};
+
+#[test]
+fn an_exported_city_and_walk_load_back_and_render_the_same() {
+    let city = load(&SceneSpec::Builtin("city:blocks=1".into()), &LoadOptions::default()).unwrap();
+    let (walk, _) = default_path(&city).unwrap();
+    let walk = walk.with_frames(12).unwrap();
+    let aspect = 4.0 / 3.0;
+    let dir = tempfile::tempdir().unwrap();
+    let file = common::write(
+        dir.path(),
+        "city.glb",
+        occlu::export::glb(&city, &walk, aspect).unwrap(),
+    );
+    let back = load(&SceneSpec::File(file), &LoadOptions::default()).unwrap();
+    assert_eq!(back.objects.len(), city.objects.len());
+    assert_eq!(back.triangles(), city.triangles());
+    let reach = city.bounds.extent().length();
+    assert!(back.bounds.min.distance(city.bounds.min) < 1e-6 * reach);
+    assert!(back.bounds.max.distance(city.bounds.max) < 1e-6 * reach);
+    // Its default path is the exported walk, frame for frame.
+    let (replay, why) = default_path(&back).unwrap();
+    assert!(why.contains("'occlu path'"), "{why}");
+    assert_eq!(replay.frames, walk.frames);
+    let size = Resolution {
+        width: 160,
+        height: 120,
+    };
+    for f in 0..walk.frames {
+        let (a, b) = (walk.camera(f, aspect), replay.camera(f, aspect));
+        assert!(
+            a.eye.distance(b.eye) < 1e-5 * reach,
+            "frame {f}: {} vs {}",
+            a.eye,
+            b.eye
+        );
+        assert!(a.rotation.dot(b.rotation).abs() > 1.0 - 1e-9, "frame {f}");
+        assert!((a.fov_y - b.fov_y).abs() < 1e-6 && (a.near - b.near).abs() < 1e-6 * a.near);
+        if f % 6 == 0 {
+            let (da, db) = (
+                common::reference_depth(&city, &a, size),
+                common::reference_depth(&back, &b, size),
+            );
+            let covered = da.iter().filter(|&&d| d > 0.0).count();
+            let moved = da
+                .iter()
+                .zip(&db)
+                .filter(|(x, y)| (*x - *y).abs() > 1e-5 * x.abs().max(1e-3))
+                .count();
+            assert!(
+                covered > 1000 && moved * 100 <= covered,
+                "frame {f}: {moved} of {covered} pixels differ"
+            );
+        }
+    }
+}
