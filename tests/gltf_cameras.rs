@@ -22,7 +22,7 @@ const QUARTER_TURN: [f32; 4] = [
 
 /// A cube, two still cameras (one under a turned parent) and a camera on a
 /// rig that one animation moves (translation LINEAR, rotation STEP) and
-/// another dollies (CUBICSPLINE, zero tangents); a third animation spins the
+/// another dollies (CUBICSPLINE, over 2 s); a third animation spins the
 /// cube and moves no camera.
 fn model(dir: &std::path::Path) -> std::path::PathBuf {
     let mut w = GltfWriter::default();
@@ -51,10 +51,12 @@ fn model(dir: &std::path::Path) -> std::path::PathBuf {
         ],
         "VEC4",
     );
-    // In-tangent, value, out-tangent per key.
+    // In-tangent, value, out-tangent per key; keys 2 s apart, out-tangent
+    // 1 at the start, in-tangent -1 at the end.
+    let dolly_times = w.floats(&[0.0, 2.0], "SCALAR");
     let dolly = w.floats(
         &[
-            0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 8.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 8.0, 0.0, 0.0, 0.0, 0.0, 0.0,
         ],
         "VEC3",
     );
@@ -76,7 +78,7 @@ fn model(dir: &std::path::Path) -> std::path::PathBuf {
                 {"sampler": 0, "target": {"node": rig, "path": "translation"}},
                 {"sampler": 1, "target": {"node": rig, "path": "rotation"}}
              ]},
-            {"name": "dolly", "samplers": [{"input": turn_times, "output": dolly, "interpolation": "CUBICSPLINE"}],
+            {"name": "dolly", "samplers": [{"input": dolly_times, "output": dolly, "interpolation": "CUBICSPLINE"}],
              "channels": [{"sampler": 0, "target": {"node": rig, "path": "translation"}}]},
             {"name": "spin", "samplers": [{"input": turn_times, "output": spin, "interpolation": "LINEAR"}],
              "channels": [{"sampler": 0, "target": {"node": cube_node, "path": "rotation"}}]}
@@ -164,17 +166,23 @@ fn an_animated_camera_is_sampled_as_the_file_moves_it() {
     }
     assert!((path.keyframes.last().unwrap().time - 2.0).abs() < 1e-12);
     assert_eq!(path.frames, 61, "2 s at 30 frames a second, both ends");
-    // CUBICSPLINE with zero tangents: x(u) = 5 + 3·(3u² − 2u³) from 5 to 8.
+    // CUBICSPLINE over 2 s: the Hermite curve from 5 to 8 with tangents 1
+    // and -1 per second, scaled by the 2 s between the keys.
     let dolly = plan(Some(&request(PathKind::Animation, Some("dolly"))), &scene, None).unwrap();
     let dolly = CameraPath::from_file(&dolly.file, "dolly").unwrap();
-    let quarter_way = dolly.keyframes.iter().find(|k| (k.time - 0.25).abs() < 0.02).unwrap();
-    let u = quarter_way.time;
-    let x = 5.0 + 3.0 * (3.0 * u * u - 2.0 * u * u * u);
-    assert!(
-        (quarter_way.position.x - x).abs() < 1e-6,
-        "{} vs {x}",
-        quarter_way.position.x
-    );
+    for key in &dolly.keyframes {
+        let u = key.time / 2.0;
+        let (u2, u3) = (u * u, u * u * u);
+        let x = (2.0 * u3 - 3.0 * u2 + 1.0) * 5.0 + (u3 - 2.0 * u2 + u) * 2.0 + (-2.0 * u3 + 3.0 * u2) * 8.0
+            - (u3 - u2) * 2.0;
+        assert!(
+            (key.position.x - x).abs() < 1e-6,
+            "at {} s: {} vs {x}",
+            key.time,
+            key.position.x
+        );
+    }
+    assert_eq!(dolly.keyframes.len(), 61, "2 s at 30 samples a second");
 }
 
 #[test]
@@ -229,4 +237,50 @@ fn info_lists_cameras_and_animations_and_bad_requests_say_why() {
         out.to_str().unwrap(),
     ]);
     assert!(common::stderr(&bad).contains("only the animation kind takes a name"));
+}
+
+#[test]
+fn a_camera_or_animation_occlu_cannot_use_is_left_out_with_a_warning() {
+    let mut w = GltfWriter::default();
+    let (p, i) = cube();
+    let mesh = w.mesh("cube", &[(&p, Some(&i), 4)]);
+    let cube_node = w.node(json!({"name": "cube", "mesh": mesh}));
+    let lost = w.node(json!({"name": "lost", "camera": 0}));
+    let flat = w.node(json!({"name": "flat", "children": [lost], "scale": [0.0, 0.0, 0.0]}));
+    let kept = w.node(json!({"name": "kept", "camera": 0, "translation": [0.0, 0.0, 5.0]}));
+    // Keys out of order, and keys at -0 and +0 in two channels.
+    let backwards = w.floats(&[0.0, 2.0, 1.0], "SCALAR");
+    let moves = w.floats(&[0.0; 9], "VEC3");
+    let signed_zero = w.floats(&[-0.0, 1.0], "SCALAR");
+    let zero = w.floats(&[0.0, 1.0], "SCALAR");
+    let two = w.floats(&[0.0, 0.0, 5.0, 1.0, 0.0, 5.0], "VEC3");
+    let scales = w.floats(&[1.0, 1.0, 1.0, 1.0, 1.0, 1.0], "VEC3");
+    w.extra.insert(
+        "cameras".into(),
+        json!([{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.05}}]),
+    );
+    w.extra.insert(
+        "animations".into(),
+        json!([
+            {"name": "backwards", "samplers": [{"input": backwards, "output": moves}],
+             "channels": [{"sampler": 0, "target": {"node": kept, "path": "translation"}}]},
+            {"name": "zeros", "samplers": [{"input": signed_zero, "output": two}, {"input": zero, "output": scales}],
+             "channels": [{"sampler": 0, "target": {"node": kept, "path": "translation"}},
+                          {"sampler": 1, "target": {"node": kept, "path": "scale"}}]}
+        ]),
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let model = write(dir.path(), "odd.glb", w.glb(&[cube_node, flat, kept]));
+    let scene = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();
+    let names: Vec<&str> = scene.cameras.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["kept"]);
+    let said = scene.warnings.join(" | ");
+    assert!(said.contains("camera 'lost' is left out"), "{said}");
+    assert!(
+        said.contains("animation 'backwards' is not replayed") && said.contains("increasing"),
+        "{said}"
+    );
+    // -0 and +0 are one time: the second animation replays.
+    let zeros = plan(Some(&request(PathKind::Animation, Some("zeros"))), &scene, None).unwrap();
+    assert!(CameraPath::from_file(&zeros.file, "zeros").is_ok());
 }

@@ -287,10 +287,10 @@ fn default_kind(
     }
 }
 
-/// Why circling `scene` would show one object only, if it would: the orbit
-/// circles inside one object's box (a sky dome), or from the orbit one
-/// object is the first thing met on the way to nearly every other (a closed
-/// shell).
+/// Why circling `scene` would show one object only, if it would: from the
+/// orbit (which circles outside the scene's bounds) one object is the first
+/// thing met on the way to nearly every other (a sky dome or a closed
+/// shell around the rest).
 fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Option<String> {
     let b = scene.bounds;
     let eyes: Vec<DVec3> = orbit(ground, b.center(), b.extent().length().max(1e-6))
@@ -298,23 +298,6 @@ fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Option<Strin
         .map(|k| DVec3::from(k.position))
         .collect();
     let name = |object: usize| crate::text::one_line(&scene.objects[object].name);
-    let mut inside = vec![0usize; scene.objects.len()];
-    for eye in &eyes {
-        for (k, o) in scene.objects.iter().enumerate() {
-            if o.bounds.contains_point(*eye) {
-                inside[k] += 1;
-            }
-        }
-    }
-    if let Some((k, &n)) = inside.iter().enumerate().max_by_key(|&(_, n)| *n)
-        && 2 * n > eyes.len()
-    {
-        return Some(format!(
-            "the orbit's eye would lie inside '{}' in {n} of {} keyframes",
-            name(k),
-            eyes.len()
-        ));
-    }
     let targets: Vec<usize> = (0..scene.objects.len())
         .step_by(scene.objects.len().div_ceil(64))
         .collect();
@@ -360,7 +343,7 @@ fn generate_with(
                 Some(w) => {
                     let length: f64 = w.line.windows(2).map(|p| p[0].distance(p[1])).sum();
                     note = Some(format!(
-                        "a walk along the longest open route, {length:.1} units at eye height {} (cells of {:.2}, {:.0}% walkable)",
+                        "a walk along the longest open route, {length:.1} units at eye height {:.3} (cells of {:.3}, {:.0}% walkable)",
                         w.eye_height,
                         w.cell,
                         100.0 * w.walkable

@@ -44,15 +44,19 @@ const METRE_SCALE_WIDTH: f64 = 30.0;
 const METRES_EYE_HEIGHT: f64 = 1.7;
 const EYE_FRACTION: f64 = 0.05;
 
-/// The eye height for `scene`, as the module says: metres assumed for
-/// city-sized models, a fraction of the height otherwise.
+/// The eye height for a model `width` wide and `height` tall, as the
+/// module says: metres assumed for city-sized models, a fraction of the
+/// height otherwise (of the width for a model with no height).
 pub fn eye_height(width: f64, height: f64) -> f64 {
     if width >= METRE_SCALE_WIDTH && height > METRES_EYE_HEIGHT {
         METRES_EYE_HEIGHT
     } else {
-        (EYE_FRACTION * height).max(f64::MIN_POSITIVE)
+        (EYE_FRACTION * height).max(FLAT_EYE_FRACTION * width)
     }
 }
+
+/// The eye height over a flat model's width.
+const FLAT_EYE_FRACTION: f64 = 0.01;
 
 /// Plans a walk through `scene`, or `None` when it has no ground with room
 /// to walk (fewer than [`MIN_CELLS`] joined cells).

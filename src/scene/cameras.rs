@@ -13,8 +13,6 @@
 //! move the camera or its ancestors, and at [`SAMPLES_PER_SECOND`] between
 //! them.
 
-use std::collections::BTreeSet;
-
 use glam::{DMat4, DQuat, DVec3};
 use gltf::animation::util::ReadOutputs;
 use gltf::animation::{Interpolation, Property};
@@ -71,16 +69,18 @@ pub const SAMPLES_PER_SECOND: f64 = 30.0;
 /// Samples an animation may give a path at most.
 const MAX_SAMPLES: usize = 100_000;
 
-/// The node tree: each node's parent and rest transform.
+/// The default scene's node tree: each node's parent and rest transform.
 struct Nodes {
     parent: Vec<Option<usize>>,
     rest: Vec<([f64; 3], DQuat, [f64; 3])>,
 }
 
 impl Nodes {
-    fn of(gltf: &gltf::Gltf) -> Nodes {
+    /// The tree of the nodes in the default scene (`reached`), which the
+    /// mesh loader has checked to be trees: a node outside it is no parent.
+    fn of(gltf: &gltf::Gltf, reached: &[bool]) -> Nodes {
         let mut parent = vec![None; gltf.nodes().len()];
-        for node in gltf.nodes() {
+        for node in gltf.nodes().filter(|n| reached[n.index()]) {
             for child in node.children() {
                 parent[child.index()] = Some(node.index());
             }
@@ -99,36 +99,31 @@ impl Nodes {
         Nodes { parent, rest }
     }
 
-    /// Whether `node` is `ancestor` or lies below it.
-    fn under(&self, mut node: usize, ancestor: usize) -> bool {
-        for _ in 0..=self.parent.len() {
-            if node == ancestor {
-                return true;
+    /// `node` and its ancestors, from `node` up to its root.
+    fn chain(&self, node: usize) -> Vec<usize> {
+        let mut chain = vec![node];
+        while let Some(p) = self.parent[chain[chain.len() - 1]] {
+            if chain.len() > self.parent.len() {
+                break;
             }
-            match self.parent[node] {
-                Some(p) => node = p,
-                None => return false,
-            }
+            chain.push(p);
         }
-        false
+        chain
     }
 
-    /// `node`'s world transform with `local` giving each node's transform.
-    fn world(&self, node: usize, local: &dyn Fn(usize) -> DMat4) -> DMat4 {
-        let mut m = local(node);
-        let mut at = node;
-        for _ in 0..self.parent.len() {
-            match self.parent[at] {
-                Some(p) => {
-                    m = local(p) * m;
-                    at = p;
-                }
-                None => break,
-            }
-        }
-        m
+    /// The world transform at the end of `chain` (from [`Nodes::chain`]),
+    /// with `local` giving each node's transform.
+    fn world(chain: &[usize], local: &dyn Fn(usize) -> DMat4) -> DMat4 {
+        chain.iter().rev().fold(DMat4::IDENTITY, |m, &n| m * local(n))
     }
 }
+
+/// Node transforms evaluated, in all, per file: a camera sampled N times
+/// under a chain of L nodes costs N·L.
+const MAX_WORK: usize = 20_000_000;
+
+/// Animation keys read, in all, per file.
+const MAX_KEYS: usize = 10_000_000;
 
 /// One channel's keys, read and checked.
 struct Channel {
@@ -186,109 +181,190 @@ impl Channel {
     }
 }
 
+/// What [`read`] found: the cameras, the animations, and what it had to
+/// leave out (a camera it cannot place, an animation it cannot replay),
+/// which the model loads without.
+pub struct Found {
+    pub cameras: Vec<FileCamera>,
+    pub animations: Vec<FileAnimation>,
+    pub warnings: Vec<String>,
+}
+
 /// The cameras of the default scene's nodes (`reached[n]`: node `n` is in
 /// it) and every animation, with the poses of the cameras they move.
 /// `check` vets an accessor before it is read, as the mesh loader does.
-pub fn read(
-    gltf: &gltf::Gltf,
-    buffers: &[Vec<u8>],
-    reached: &[bool],
-    check: &CheckAccessor,
-) -> Result<(Vec<FileCamera>, Vec<FileAnimation>), String> {
-    let nodes = Nodes::of(gltf);
+/// Only channels that move a camera are read; keys and work are bounded.
+pub fn read(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], check: &CheckAccessor) -> Found {
+    let nodes = Nodes::of(gltf, reached);
     let rest = |n: usize| {
         let (t, r, s) = nodes.rest[n];
         DMat4::from_scale_rotation_translation(DVec3::from(s), r, DVec3::from(t))
     };
-    let pose_of = |camera: &gltf::Camera, world: DMat4| -> Result<CameraPose, String> {
-        let (_, rotation, eye) = world.to_scale_rotation_translation();
-        if !(eye.is_finite() && rotation.is_finite()) {
-            return Err(format!(
-                "camera '{}': its node's transform is not finite",
-                name_of_camera(camera)
-            ));
-        }
-        let (fov_y_deg, near) = match camera.projection() {
-            gltf::camera::Projection::Perspective(p) => {
-                (Some(decimal(p.yfov()).to_degrees()), Some(decimal(p.znear())))
-            }
-            gltf::camera::Projection::Orthographic(o) => (None, Some(decimal(o.znear()))),
-        };
-        Ok(CameraPose {
-            eye,
-            rotation: rotation.normalize(),
-            fov_y_deg,
-            near,
-        })
-    };
+    let mut warnings = Vec::new();
     let mut cameras = Vec::new();
+    // The nodes whose motion moves a camera: cameras and their ancestors.
+    let mut moves_a_camera = vec![false; nodes.parent.len()];
+    let mut chains = Vec::new();
     for node in gltf.nodes().filter(|n| reached[n.index()]) {
-        if let Some(camera) = node.camera() {
-            cameras.push(FileCamera {
-                name: node
-                    .name()
-                    .or(camera.name())
-                    .map_or_else(|| format!("camera{}", camera.index()), one_line),
-                node: node.index(),
-                projection: match camera.projection() {
-                    gltf::camera::Projection::Perspective(_) => "perspective",
-                    gltf::camera::Projection::Orthographic(_) => "orthographic",
-                },
-                pose: pose_of(&camera, nodes.world(node.index(), &rest))?,
-            });
+        let Some(camera) = node.camera() else { continue };
+        let name = node.name().map_or_else(|| name_of_camera(&camera), one_line);
+        let chain = nodes.chain(node.index());
+        match pose_of(&camera, Nodes::world(&chain, &rest)) {
+            Some(pose) => {
+                for &n in &chain {
+                    moves_a_camera[n] = true;
+                }
+                cameras.push(FileCamera {
+                    name,
+                    node: node.index(),
+                    projection: match camera.projection() {
+                        gltf::camera::Projection::Perspective(_) => "perspective",
+                        gltf::camera::Projection::Orthographic(_) => "orthographic",
+                    },
+                    pose,
+                });
+                chains.push((chain, camera));
+            }
+            None => warnings.push(format!(
+                "camera '{name}' is left out: its node's transform cannot place it (not finite, or scaled to nothing)"
+            )),
         }
     }
     let mut animations = Vec::new();
+    let mut budget = Budget::default();
     for animation in gltf.animations() {
         let name = animation
             .name()
             .map_or_else(|| format!("animation{}", animation.index()), one_line);
-        let mut channels = Vec::new();
-        for channel in animation.channels() {
-            let what = format!("animation '{name}' channel {}", channel.index());
-            if let Some(c) = read_channel(&channel, buffers, check).map_err(|e| format!("{what}: {e}"))? {
-                channels.push(c);
+        let moved = Moved {
+            cameras: &cameras,
+            chains: &chains,
+            nodes: &moves_a_camera,
+        };
+        let camera = match replay(&animation, &moved, &nodes, buffers, check, &mut budget) {
+            Ok(camera) => camera,
+            Err(e) => {
+                warnings.push(format!("animation '{name}' is not replayed: {e}"));
+                None
             }
-        }
-        let first = channels.iter().map(|c| c.times[0]).fold(f64::INFINITY, f64::min);
-        let last = channels
-            .iter()
-            .map(|c| c.times[c.times.len() - 1])
-            .fold(f64::NEG_INFINITY, f64::max);
-        let duration = if channels.is_empty() { 0.0 } else { last - first };
-        let moved = cameras
-            .iter()
-            .find(|cam| channels.iter().any(|c| nodes.under(cam.node, c.node)));
-        let camera = match moved {
-            Some(cam) => {
-                let camera = gltf
-                    .nodes()
-                    .nth(cam.node)
-                    .and_then(|n| n.camera())
-                    .ok_or("a camera node lost its camera")?;
-                let relevant: Vec<&Channel> = channels.iter().filter(|c| nodes.under(cam.node, c.node)).collect();
-                let poses = sample_times(&relevant)?
-                    .into_iter()
-                    .map(|t| {
-                        let world = nodes.world(cam.node, &|n| animated(&nodes, &relevant, t, n));
-                        Ok((t, pose_of(&camera, world)?))
-                    })
-                    .collect::<Result<Vec<_>, String>>()?;
-                Some(AnimatedCamera {
-                    name: cam.name.clone(),
-                    poses,
-                })
-            }
-            None => None,
         };
         animations.push(FileAnimation {
             name,
-            channels: channels.len(),
-            duration,
+            channels: animation.channels().count(),
+            duration: duration(&animation),
             camera,
         });
     }
-    Ok((cameras, animations))
+    Found {
+        cameras,
+        animations,
+        warnings,
+    }
+}
+
+/// The cameras an animation may move: their entries, their node chains (in
+/// the same order), and which nodes lie on a chain.
+struct Moved<'c, 'g> {
+    cameras: &'c [FileCamera],
+    chains: &'c [(Vec<usize>, gltf::Camera<'g>)],
+    nodes: &'c [bool],
+}
+
+/// Keys read and node transforms evaluated so far in the file.
+#[derive(Default)]
+struct Budget {
+    keys: usize,
+    work: usize,
+}
+
+/// An animation's length in seconds, from its inputs' `min` and `max` (which
+/// glTF requires of animation inputs; 0 where they are missing).
+fn duration(animation: &gltf::Animation) -> f64 {
+    let bound = |value: Option<serde_json::Value>| value.and_then(|v| v.get(0).and_then(serde_json::Value::as_f64));
+    let (mut first, mut last) = (f64::INFINITY, f64::NEG_INFINITY);
+    for channel in animation.channels() {
+        let input = channel.sampler().input();
+        if let (Some(a), Some(b)) = (bound(input.min()), bound(input.max())) {
+            first = first.min(a);
+            last = last.max(b);
+        }
+    }
+    if last >= first { last - first } else { 0.0 }
+}
+
+/// The poses of the first camera `animation` moves, if it moves one.
+fn replay(
+    animation: &gltf::Animation,
+    moved: &Moved,
+    nodes: &Nodes,
+    buffers: &[Vec<u8>],
+    check: &CheckAccessor,
+    budget: &mut Budget,
+) -> Result<Option<AnimatedCamera>, String> {
+    let mut channels = Vec::new();
+    for channel in animation.channels() {
+        if !moved.nodes[channel.target().node().index()] {
+            continue;
+        }
+        let what = format!("channel {}", channel.index());
+        if let Some(c) = read_channel(&channel, buffers, check).map_err(|e| format!("{what}: {e}"))? {
+            budget.keys += c.times.len();
+            if budget.keys > MAX_KEYS {
+                return Err(format!("the file's camera animations hold more than {MAX_KEYS} keys"));
+            }
+            channels.push(c);
+        }
+    }
+    let Some(((chain, camera), file_camera)) = moved
+        .chains
+        .iter()
+        .zip(moved.cameras)
+        .find(|((chain, _), _)| channels.iter().any(|c| chain.contains(&c.node)))
+    else {
+        return Ok(None);
+    };
+    let relevant: Vec<&Channel> = channels.iter().filter(|c| chain.contains(&c.node)).collect();
+    let times = sample_times(&relevant)?;
+    budget.work += times.len() * chain.len();
+    if budget.work > MAX_WORK {
+        return Err(format!(
+            "sampling it ({} poses through {} nodes) passes the {MAX_WORK} node transforms occlu evaluates per file",
+            times.len(),
+            chain.len()
+        ));
+    }
+    let poses = times
+        .into_iter()
+        .map(|t| {
+            let world = Nodes::world(chain, &|n| animated(nodes, &relevant, t, n));
+            pose_of(camera, world)
+                .map(|pose| (t, pose))
+                .ok_or_else(|| format!("at {t} s the camera's transform cannot place it"))
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    Ok(Some(AnimatedCamera {
+        name: file_camera.name.clone(),
+        poses,
+    }))
+}
+
+/// A camera's pose under `world`, or `None` when the transform cannot place
+/// it (not finite, or scaled to nothing, which leaves no rotation).
+fn pose_of(camera: &gltf::Camera, world: DMat4) -> Option<CameraPose> {
+    let (scale, rotation, eye) = world.to_scale_rotation_translation();
+    if !(eye.is_finite() && rotation.is_finite() && scale.is_finite() && scale.cmpne(DVec3::ZERO).all()) {
+        return None;
+    }
+    let (fov_y_deg, near) = match camera.projection() {
+        gltf::camera::Projection::Perspective(p) => (Some(decimal(p.yfov()).to_degrees()), Some(decimal(p.znear()))),
+        gltf::camera::Projection::Orthographic(o) => (None, Some(decimal(o.znear()))),
+    };
+    Some(CameraPose {
+        eye,
+        rotation: rotation.normalize(),
+        fov_y_deg,
+        near,
+    })
 }
 
 /// Node `n`'s transform at time `t`: its rest transform with what
@@ -310,11 +386,10 @@ fn animated(nodes: &Nodes, channels: &[&Channel], t: f64, n: usize) -> DMat4 {
 /// The times a camera moved by `channels` is sampled at: every key time,
 /// and [`SAMPLES_PER_SECOND`] between them.
 fn sample_times(channels: &[&Channel]) -> Result<Vec<f64>, String> {
-    let keys: BTreeSet<u64> = channels
-        .iter()
-        .flat_map(|c| c.times.iter().map(|t| t.to_bits()))
-        .collect();
-    let keys: Vec<f64> = keys.into_iter().map(f64::from_bits).collect();
+    let mut keys: Vec<f64> = channels.iter().flat_map(|c| c.times.iter().copied()).collect();
+    keys.sort_by(f64::total_cmp);
+    // == also merges -0 and +0.
+    keys.dedup_by(|a, b| a == b);
     let mut times = Vec::new();
     for pair in keys.windows(2) {
         // Keys already 1/30 s apart (stored in f32) get no sample between.

@@ -25,14 +25,21 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
     let unvalidated = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
     check_primitive_accessors(unvalidated.document.as_json()).map_err(parse_error)?;
     let mut json = unvalidated.document.into_json();
-    if json.extensions_required.iter().any(|e| e == DRACO) {
-        return Err(parse_error(format!(
+    let draco = || {
+        parse_error(format!(
             "requires {DRACO} (Draco geometry), which occlu does not decode; re-encode it with meshopt, which it does: gltf-transform meshopt IN OUT"
-        )));
+        ))
+    };
+    if json.extensions_required.iter().any(|e| e == DRACO) {
+        return Err(draco());
     }
+    // Draco named as used only: the file may carry plain data as well, and
+    // loads if it does; if it does not, Draco is the reason.
+    let draco_used = json.extensions_used.iter().any(|e| e == DRACO);
     json.extensions_required.retain(|e| !DECODED.contains(&e.as_str()));
+    let document = gltf::Document::from_json(json).map_err(|e| if draco_used { draco() } else { invalid(e) })?;
     let gltf = gltf::Gltf {
-        document: gltf::Document::from_json(json).map_err(invalid)?,
+        document,
         blob: unvalidated.blob,
     };
     if gltf.extensions_used().any(|e| e == "EXT_mesh_gpu_instancing") {
@@ -118,7 +125,14 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
     let check = |accessor: &gltf::Accessor, what: &str, types: &[gltf::accessor::DataType], dims| {
         check_accessor(accessor, what, types, dims, buffer_bytes)
     };
-    let (cameras, animations) = cameras::read(&gltf, &buffers, &reached, &check).map_err(parse_error)?;
+    let cameras::Found {
+        cameras,
+        animations,
+        warnings,
+    } = cameras::read(&gltf, &buffers, &reached, &check);
+    for warning in warnings {
+        builder.warn(warning);
+    }
     let unused: Vec<&str> = animations
         .iter()
         .filter(|a| a.camera.is_none())
@@ -210,10 +224,25 @@ fn load_buffers(
     let mut buffers = Vec::new();
     for buffer in gltf.buffers() {
         if placeholder(buffer.index()) {
-            // Filled by decoding.
-            let length = buffer.length();
+            // Filled by decoding, and only as far as the views decoded into
+            // it reach (their sum is bounded above), whatever it declares.
+            let reach = compressed
+                .iter()
+                .flat_map(|(_, views)| views)
+                .filter(|v| v.target == buffer.index());
+            let length = reach
+                .map(|v| v.target_offset.saturating_add(v.decoded_length()))
+                .max()
+                .unwrap_or(0);
+            if length > buffer.length() {
+                return Err(parse_error(format!(
+                    "buffer {}: its compressed views decode to {length} bytes, more than the {} it declares",
+                    buffer.index(),
+                    buffer.length()
+                )));
+            }
             if length as u64 > most {
-                return Err(too_much(format!("buffer {} declares {length}", buffer.index())));
+                return Err(too_much(format!("buffer {} needs {length}", buffer.index())));
             }
             let mut zeros = Vec::new();
             zeros
