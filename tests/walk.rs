@@ -131,23 +131,30 @@ fn a_dome_around_the_town_makes_the_default_path_go_inside() {
     }
     obj += &format!("f {} {} {} {}\n", base + 2, base + 4, base + 6, base + 8);
     let model = write(dir.path(), "domed.obj", obj);
-    let scene = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();
-    let (path, why) = default_path(&scene).unwrap();
-    assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
-    // The orbit circles outside the dome, which hides the town.
-    assert!(why.contains("'dome' hides"), "{why}");
-    let houses = buildings(&scene);
-    for f in 0..path.frames {
-        let eye = path.camera(f, 4.0 / 3.0).eye;
-        // On the town's ground, between its buildings.
-        assert!((eye.y - 1.7).abs() < 1e-6, "frame {f}: {eye}");
-        assert!(
-            (0.0..=120.0).contains(&eye.x) && (0.0..=120.0).contains(&eye.z),
-            "frame {f}: {eye}"
-        );
-        assert!(houses.iter().all(|h| !h.contains_point(eye)), "frame {f}: {eye}");
+    // Whole, and split into clusters of 4 triangles (the dome in three).
+    for cluster_triangles in [4096, 4] {
+        let options = LoadOptions {
+            cluster_triangles,
+            ..LoadOptions::default()
+        };
+        let scene = load(&SceneSpec::File(model.clone()), &options).unwrap();
+        let (path, why) = default_path(&scene).unwrap();
+        assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+        // The orbit circles outside the dome, which hides the town.
+        assert!(why.contains("'dome' hides"), "{why}");
+        let houses = buildings(&scene);
+        for f in 0..path.frames {
+            let eye = path.camera(f, 4.0 / 3.0).eye;
+            // On the town's ground, between its buildings.
+            assert!((eye.y - 1.7).abs() < 1e-6, "frame {f}: {eye}");
+            assert!(
+                (0.0..=120.0).contains(&eye.x) && (0.0..=120.0).contains(&eye.z),
+                "frame {f}: {eye}"
+            );
+            assert!(houses.iter().all(|h| !h.contains_point(eye)), "frame {f}: {eye}");
+        }
+        assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
     }
-    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
 }
 
 #[test]

@@ -297,28 +297,35 @@ fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Option<Strin
         .iter()
         .map(|k| DVec3::from(k.position))
         .collect();
-    let name = |object: usize| crate::text::one_line(&scene.objects[object].name);
+    // Clusters of one split mesh ("dome#0", "dome#1") are one part.
+    let part = |object: usize| {
+        let name = &scene.objects[object].name;
+        match name.rsplit_once('#') {
+            Some((part, k)) if k.bytes().all(|b| b.is_ascii_digit()) => part,
+            _ => name.as_str(),
+        }
+    };
     let targets: Vec<usize> = (0..scene.objects.len())
         .step_by(scene.objects.len().div_ceil(64))
         .collect();
-    let mut first = vec![0usize; scene.objects.len()];
+    let mut first: std::collections::HashMap<&str, usize> = Default::default();
     let mut rays = 0;
     for eye in eyes.iter().step_by(4) {
         for &t in &targets {
             let to = scene.objects[t].bounds.center() - *eye;
             if let Some(hit) = caster.first_hit(*eye, to, 1.0)
-                && hit.object as usize != t
+                && part(hit.object as usize) != part(t)
             {
-                first[hit.object as usize] += 1;
+                *first.entry(part(hit.object as usize)).or_default() += 1;
             }
             rays += 1;
         }
     }
-    let (k, &n) = first.iter().enumerate().max_by_key(|&(_, n)| *n)?;
+    let (name, &n) = first.iter().max_by_key(|&(name, n)| (*n, std::cmp::Reverse(*name)))?;
     (targets.len() > 1 && 10 * n >= 9 * rays).then(|| {
         format!(
             "from the orbit, '{}' hides {n} of {rays} lines of sight to the other objects",
-            name(k)
+            crate::text::one_line(name)
         )
     })
 }
