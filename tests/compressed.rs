@@ -1,7 +1,8 @@
 //! Compressed glTF, as gltfpack writes it: quantized positions
 //! (KHR_mesh_quantization) and meshopt-compressed buffers
-//! (EXT_meshopt_compression) load as the model they were made from; Draco
-//! is refused in one line.
+//! (EXT_meshopt_compression, its octahedral filter on normals and its
+//! exponential filter on positions) load as the model they were made from;
+//! Draco is refused in one line.
 //!
 //! The files in `tests/fixtures/compressed/` were made from the model
 //! [`source`] builds, by `scripts/make-compressed-fixtures` (gltfpack and
@@ -35,7 +36,20 @@ fn source() -> Vec<u8> {
                 [pick(1, 0), pick(2, 1), pick(4, 2)]
             })
             .collect();
-        w.mesh(name, &[(&p, Some(&cube_indices()), 4)])
+        let mesh = w.mesh(name, &[(&p, Some(&cube_indices()), 4)]);
+        // Normals (occlu reads none), so compressors use their filters on
+        // them (meshopt's octahedral), which decoding must get through.
+        let normals: Vec<f32> = p
+            .iter()
+            .flat_map(|v| {
+                let c = [0, 1, 2].map(|k| v[k] - 0.5 * (min[k] + max[k]));
+                let length = c.iter().map(|x| x * x).sum::<f32>().sqrt();
+                c.map(|x| x / length)
+            })
+            .collect();
+        let normal = w.floats(&normals, "VEC3");
+        w.meshes[mesh]["primitives"][0]["attributes"]["NORMAL"] = json!(normal);
+        mesh
     };
     let mut roots = Vec::new();
     for k in 0..9 {
@@ -107,6 +121,7 @@ fn quantized_and_meshopt_files_load_as_their_source() {
         "meshopt-float.glb",
         "quantized.glb",
         "meshopt-quantized.glb",
+        "meshopt-exponential.glb",
     ] {
         let scene = load_fixture(file).unwrap_or_else(|e| panic!("{file}: {e}"));
         assert_eq!(scene.triangles(), source.triangles(), "{file}");
@@ -270,5 +285,70 @@ fn malformed_meshopt_data_is_an_error_not_a_crash() {
     for fill in [0x00, 0xff, 0xa0] {
         let garbage = vec![fill; bin.len()];
         let _ = try_load(&json, &garbage);
+    }
+}
+
+#[test]
+fn quantized_positions_dequantize_as_gltf_defines_them() {
+    // A cube's corners as integers: (component type, normalized, low, high
+    // as little-endian bytes, the value each means).
+    type Encoding = (u32, bool, Vec<u8>, Vec<u8>, f64, f64);
+    let encodings: [Encoding; 4] = [
+        // -32768 is clamped to -1 (it would be -1.00003).
+        (
+            5122,
+            true,
+            (-32768i16).to_le_bytes().to_vec(),
+            32767i16.to_le_bytes().to_vec(),
+            -1.0,
+            1.0,
+        ),
+        (5121, true, vec![0], vec![255], 0.0, 1.0),
+        (5120, false, vec![(-5i8) as u8], vec![5], -5.0, 5.0),
+        (
+            5123,
+            true,
+            0u16.to_le_bytes().to_vec(),
+            65535u16.to_le_bytes().to_vec(),
+            0.0,
+            1.0,
+        ),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (component, normalized, low, high, lo, hi) in encodings {
+        let mut w = GltfWriter::default();
+        let mut bytes = Vec::new();
+        for corner in 0..8 {
+            for axis in 0..3 {
+                bytes.extend(if corner & (1 << axis) == 0 { &low } else { &high });
+            }
+            // Each element padded to 4 bytes, as glTF asks of vertex data.
+            bytes.resize(bytes.len().next_multiple_of(4), 0);
+        }
+        let stride = bytes.len() / 8;
+        let position = w.raw(
+            &bytes,
+            json!({"componentType": component, "normalized": normalized, "count": 8, "type": "VEC3",
+                   "min": [0, 0, 0], "max": [0, 0, 0]}),
+        );
+        w.buffer_views[position]["byteStride"] = json!(stride.max(4));
+        let indices = w.indices(&cube_indices());
+        w.meshes
+            .push(json!({"name": "q", "primitives": [{"attributes": {"POSITION": position}, "indices": indices}]}));
+        let node = w.node(json!({"mesh": 0, "scale": [3.0, 3.0, 3.0], "translation": [10.0, 0.0, 0.0]}));
+        w.extra
+            .insert("extensionsUsed".into(), json!(["KHR_mesh_quantization"]));
+        w.extra
+            .insert("extensionsRequired".into(), json!(["KHR_mesh_quantization"]));
+        let model = common::write(dir.path(), "q.glb", w.glb(&[node]));
+        let scene =
+            load(&SceneSpec::File(model), &LoadOptions::default()).unwrap_or_else(|e| panic!("{component}: {e}"));
+        let expected_min = DVec3::new(10.0 + 3.0 * lo, 3.0 * lo, 3.0 * lo);
+        let expected_max = DVec3::new(10.0 + 3.0 * hi, 3.0 * hi, 3.0 * hi);
+        assert!(
+            scene.bounds.min.distance(expected_min) < 1e-9 && scene.bounds.max.distance(expected_max) < 1e-9,
+            "{component} normalized {normalized}: {:?}",
+            scene.bounds
+        );
     }
 }

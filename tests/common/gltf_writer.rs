@@ -72,6 +72,14 @@ impl GltfWriter {
         self.accessors.len() - 1
     }
 
+    /// An accessor over `bytes` as `accessor` describes them (its
+    /// `bufferView` is filled in).
+    pub fn raw(&mut self, bytes: &[u8], mut accessor: Value) -> usize {
+        accessor["bufferView"] = json!(self.view(bytes, 34962));
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+
     pub fn indices(&mut self, i: &[u32]) -> usize {
         let bytes: Vec<u8> = i.iter().flat_map(|v| v.to_le_bytes()).collect();
         let view = self.view(&bytes, 34963);
