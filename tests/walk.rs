@@ -112,6 +112,23 @@ fn a_flat_town_is_walked_through_its_streets_at_eye_height() {
 }
 
 #[test]
+fn a_thick_ground_slab_is_walked_on_not_in() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = town(true);
+    // The ground 5 thick: its inside must not count as room to walk.
+    boxes[0].1.y = -5.0;
+    let scene = load_obj(dir.path(), &boxes);
+    let (path, why) = default_path(&scene).unwrap();
+    assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+    let houses = buildings(&scene);
+    for f in 0..path.frames {
+        let eye = path.camera(f, 4.0 / 3.0).eye;
+        assert!((eye.y - 1.7).abs() < 1e-6, "frame {f}: {eye}");
+        assert!(houses.iter().all(|h| !h.contains_point(eye)), "frame {f}: {eye}");
+    }
+}
+
+#[test]
 fn a_dome_around_the_town_makes_the_default_path_go_inside() {
     let dir = tempfile::tempdir().unwrap();
     let boxes = town(true);

@@ -5,14 +5,17 @@
 //! The ground plane (the scene's up axis) is laid with a grid. Down each
 //! cell's vertical line a ray cast finds every surface; a surface with room
 //! for an eye above it (eye height and a margin up to the next surface) is
-//! a floor. The ground is the lowest level that holds a good share of the
-//! floors; cells with a floor there are walkable. Cells whose four
+//! a floor, unless that room lies inside a closed mesh (the ray has crossed
+//! its surface an odd number of times: inside a thick ground slab, a closed
+//! building). The ground is the lowest level that holds a good share of the
+//! floors, in the lowest quarter of the model's height; cells with a floor
+//! there are walkable. Cells whose four
 //! neighbours are all walkable are kept (so the eye stays a cell from every
 //! wall), and two neighbours are joined when a ray at eye height passes
 //! between them. The walk is the longest of the shortest routes through the
 //! largest joined region (two breadth-first searches), in cell steps.
 
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 
 use glam::DVec3;
 
@@ -88,23 +91,37 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
 
     // Floors: surfaces with room for the eye and a margin above them.
     let room = eye * 1.5;
+    let closed: Vec<bool> = (0..scene.meshes.len()).map(|m| is_closed(scene, m)).collect();
     let mut floors: Vec<Vec<f64>> = vec![Vec::new(); nx * ny];
     let mut hits: Vec<Hit> = Vec::new();
+    let mut inside: Vec<u32> = Vec::new();
     let top = high + cell;
     for j in 0..ny {
         for i in 0..nx {
             caster.all_hits(at(i, j, top), -up, top - low + cell, &mut hits);
+            // A ray through an edge meets both triangles at one point: one
+            // crossing.
+            hits.dedup_by(|b, a| a.object == b.object && (b.t - a.t).abs() <= 1e-9 * a.t.abs().max(1.0));
+            inside.clear();
             let mut above = f64::INFINITY;
             for hit in &hits {
                 let h = top - hit.t;
-                if above - h >= room {
+                if above - h >= room && inside.is_empty() {
                     floors[j * nx + i].push(h);
+                }
+                if closed[scene.objects[hit.object as usize].mesh as usize] {
+                    match inside.iter().position(|&o| o == hit.object) {
+                        Some(k) => {
+                            inside.swap_remove(k);
+                        }
+                        None => inside.push(hit.object),
+                    }
                 }
                 above = h;
             }
         }
     }
-    let ground = ground_level(&floors, eye)?;
+    let ground = ground_level(&floors, eye, low, high)?;
     // Walkable: a floor near the ground level (steps of up to half the eye
     // height), the eye above the highest such floor.
     let eye_at: Vec<Option<f64>> = floors
@@ -181,14 +198,39 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
     })
 }
 
+/// Whether mesh `m` is closed (watertight): welded by position, every edge
+/// is shared by an even number of its triangles, so a line crosses its
+/// surface an even number of times and an odd count means "inside".
+fn is_closed(scene: &Scene, m: usize) -> bool {
+    let mesh = &scene.meshes[m];
+    let indices = &scene.indices[mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize];
+    let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut id = |v: u32| {
+        let key = scene.vertices[v as usize].map(f32::to_bits);
+        let next = welded.len() as u32;
+        *welded.entry(key).or_insert(next)
+    };
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in indices.chunks_exact(3) {
+        let [a, b, c] = [id(t[0]), id(t[1]), id(t[2])];
+        for (u, v) in [(a, b), (b, c), (c, a)] {
+            *edges.entry((u.min(v), u.max(v))).or_default() += 1;
+        }
+    }
+    !edges.is_empty() && edges.values().all(|n| n % 2 == 0)
+}
+
 /// Joined cells a walk needs at least.
 pub const MIN_CELLS: usize = 8;
 
 /// The ground: the lowest floor level (in bins of half the eye height)
 /// holding at least a fiftieth of all floors (so a few pits or basements do
 /// not count, while a town's streets under a sky dome, a few percent of the
-/// dome's roof, do), or failing that the most common one.
-fn ground_level(floors: &[Vec<f64>], eye: f64) -> Option<f64> {
+/// dome's roof, do), or failing that the most common one. A ground lies in
+/// the lowest [`GROUND_SHARE`] of the model's height (`low` to `high`):
+/// floors only higher up are the top of an object (a tower's roof), and
+/// there is no ground.
+fn ground_level(floors: &[Vec<f64>], eye: f64, low: f64, high: f64) -> Option<f64> {
     let all: Vec<f64> = floors.iter().flatten().copied().collect();
     let lowest = all.iter().copied().fold(f64::INFINITY, f64::min);
     if !lowest.is_finite() {
@@ -205,11 +247,16 @@ fn ground_level(floors: &[Vec<f64>], eye: f64) -> Option<f64> {
         .find(|&(_, &n)| n >= wanted)
         .or_else(|| counts.iter().max_by_key(|&(_, &n)| n))?;
     // The highest floor in that bin: the eye stands on it.
-    all.iter()
+    let ground = all
+        .iter()
         .copied()
         .filter(|h| ((h - lowest) / bin).floor() as i64 == level)
-        .reduce(f64::max)
+        .reduce(f64::max)?;
+    (ground <= low + GROUND_SHARE * (high - low)).then_some(ground)
 }
+
+/// How high in a model its ground may lie, as a share of its height.
+const GROUND_SHARE: f64 = 0.25;
 
 /// A cell of the largest connected region of open cells.
 fn largest_region(edges: &[Vec<usize>], open: &[bool]) -> Option<usize> {
