@@ -236,9 +236,9 @@ fn file_path(keyframes: Vec<KeyframeFile>, near: Option<f64>, frames: Option<u32
 /// circle (whose "ground" would be inside it).
 const OPEN_PLACE: f64 = 0.75;
 
-/// How long a walk must be, against the longer ground side, for a place to
-/// be walked rather than circled.
-const LONG_WALK: f64 = 0.25;
+/// How long a walk must be, in its grid's cells, for a place to be walked
+/// rather than circled.
+const LONG_WALK: f64 = walk::LONG_ROUTE as f64;
 
 /// The default kind for `scene`, why, and the walk planned to decide it.
 fn default_kind(
@@ -268,7 +268,7 @@ fn default_kind(
     let open = planned.open_sky;
     match enclosed {
         Some(why) => (PathKind::Walk, why, Some(planned)),
-        None if open >= OPEN_PLACE && length >= LONG_WALK * width => (
+        None if open >= OPEN_PLACE && length >= LONG_WALK * planned.cell => (
             PathKind::Walk,
             format!(
                 "a place with open ground ({:.0}% of the walk under the sky)",

@@ -13,7 +13,9 @@
 //! neighbours are all walkable are kept (so the eye stays a cell from every
 //! wall), and two neighbours are joined when a ray at eye height passes
 //! between them. The walk is the longest of the shortest routes through the
-//! largest joined region (two breadth-first searches), in cell steps.
+//! largest joined region (two breadth-first searches), in cell steps, of
+//! the streets (open cells with walls near in most directions) when they
+//! hold a long enough one, else of all open cells.
 
 use std::collections::{HashMap, VecDeque};
 
@@ -152,34 +154,55 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
         let (p, q) = (point(a), point(b));
         caster.first_hit(p, q - p, 1.0).is_none()
     };
-    let neighbours = |k: usize| {
-        let (i, j) = (k % nx, k / nx);
-        [
-            (i > 0).then(|| k - 1),
-            (i + 1 < nx).then(|| k + 1),
-            (j > 0).then(|| k - nx),
-            (j + 1 < ny).then(|| k + nx),
-        ]
-        .into_iter()
-        .flatten()
-        .filter(|&n| open[n])
+    // The longest shortest route through the largest joined region of
+    // `cells`.
+    let longest_route = |cells: &[bool]| -> Option<Vec<usize>> {
+        let edges: Vec<Vec<usize>> = (0..nx * ny)
+            .map(|k| {
+                if !cells[k] {
+                    return Vec::new();
+                }
+                let (i, j) = (k % nx, k / nx);
+                [
+                    (i > 0).then(|| k - 1),
+                    (i + 1 < nx).then(|| k + 1),
+                    (j > 0).then(|| k - nx),
+                    (j + 1 < ny).then(|| k + nx),
+                ]
+                .into_iter()
+                .flatten()
+                .filter(|&n| cells[n] && joined(k, n))
+                .collect()
+            })
+            .collect();
+        let start = largest_region(&edges, cells)?;
+        let (far, _) = farthest(&edges, start);
+        let (end, parents) = farthest(&edges, far);
+        let mut route = vec![end];
+        while let Some(previous) = parents[route[route.len() - 1]] {
+            route.push(previous);
+        }
+        Some(route)
     };
-    let edges: Vec<Vec<usize>> = (0..nx * ny)
-        .map(|k| {
-            if open[k] {
-                neighbours(k).filter(|&n| joined(k, n)).collect()
-            } else {
-                Vec::new()
-            }
-        })
-        .collect();
-    let start = largest_region(&edges, &open)?;
-    let (far, _) = farthest(&edges, start);
-    let (end, parents) = farthest(&edges, far);
-    let mut route = vec![end];
-    while let Some(previous) = parents[route[route.len() - 1]] {
-        route.push(previous);
-    }
+    // Streets: open cells with walls around, where most of eight level
+    // rays meet something within [`STREET_REACH`] cells; a walk along them
+    // sees occlusion, one round the open outskirts does not.
+    let walled = |k: usize| {
+        let p = point(k);
+        let reach = STREET_REACH * cell;
+        let walls = (0..8)
+            .filter(|&a| {
+                let angle = std::f64::consts::TAU * f64::from(a) / 8.0;
+                let direction = right * angle.cos() + ahead * angle.sin();
+                caster.first_hit(p, direction, reach).is_some()
+            })
+            .count();
+        walls >= 5
+    };
+    let streets: Vec<bool> = (0..nx * ny).map(|k| open[k] && walled(k)).collect();
+    let route = longest_route(&streets)
+        .filter(|r| r.len() >= LONG_ROUTE)
+        .or_else(|| longest_route(&open))?;
     if route.len() < MIN_CELLS {
         return None;
     }
@@ -219,6 +242,13 @@ fn is_closed(scene: &Scene, m: usize) -> bool {
     }
     !edges.is_empty() && edges.values().all(|n| n % 2 == 0)
 }
+
+/// How far (in cells) a street's walls may lie.
+const STREET_REACH: f64 = 16.0;
+
+/// Cells a route through the streets needs, or the walk takes the open
+/// ground as a whole; and a place's walk, to be its default path.
+pub const LONG_ROUTE: usize = 4 * MIN_CELLS;
 
 /// Joined cells a walk needs at least.
 pub const MIN_CELLS: usize = 8;
