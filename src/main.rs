@@ -98,13 +98,7 @@ enum Command {
     /// (as a camera animation) to a GLB, to replay them in another engine.
     Export {
         #[command(flatten)]
-        scene: SceneArgs,
-        /// Camera path (JSON) [default: the path bench would generate].
-        #[arg(long, value_name = "FILE")]
-        path: Option<PathBuf>,
-        /// Resamples the path to this many frames [default: the path's].
-        #[arg(long, value_name = "N")]
-        frames: Option<u32>,
+        scene: SceneAndPath,
         /// Output .glb file.
         #[arg(long, short, value_name = "FILE")]
         output: PathBuf,
@@ -190,6 +184,37 @@ impl SceneArgs {
     }
 }
 
+/// A scene and a camera path over it, as `render` and `export` take them.
+#[derive(Args)]
+struct SceneAndPath {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Camera path (JSON) [default: the path bench would generate].
+    #[arg(long, value_name = "FILE")]
+    path: Option<PathBuf>,
+    /// Resamples the path to this many frames, as bench's --frames does
+    /// [default: the path's].
+    #[arg(long, value_name = "N")]
+    frames: Option<u32>,
+}
+
+impl SceneAndPath {
+    fn load(&self) -> anyhow::Result<(Scene, CameraPath)> {
+        // Read first: a bad path file fails before a long scene load.
+        let path_file = self.path.as_deref().map(CameraPath::load).transpose()?;
+        let scene = load(&self.scene.spec()?, &self.scene.options())?;
+        let path = match path_file {
+            Some(p) => p,
+            None => occlu::camera::generate::default_path(&scene)?.0,
+        };
+        let path = match self.frames {
+            Some(n) => path.with_frames(n)?,
+            None => path,
+        };
+        Ok((scene, path))
+    }
+}
+
 #[derive(Args)]
 struct BenchArgs {
     #[command(flatten)]
@@ -245,14 +270,7 @@ struct BenchArgs {
 #[derive(Args)]
 struct RenderArgs {
     #[command(flatten)]
-    scene: SceneArgs,
-    /// Camera path (JSON); generated from the scene when omitted.
-    #[arg(long, value_name = "FILE")]
-    path: Option<PathBuf>,
-    /// Resamples the path to this many frames, as bench's --frames does
-    /// [default: the path's].
-    #[arg(long, value_name = "N")]
-    frames: Option<u32>,
+    scene: SceneAndPath,
     /// Frame of the path to render (0-based).
     #[arg(long, value_name = "K")]
     frame: u32,
@@ -368,12 +386,7 @@ fn main() -> ExitCode {
                 },
         } => path_gen(scene, kind, frames, output).map(|()| ExitCode::SUCCESS),
         Command::Stress(args) => stress(args),
-        Command::Export {
-            scene,
-            path,
-            frames,
-            output,
-        } => export(&scene, path.as_deref(), frames, &output).map(|()| ExitCode::SUCCESS),
+        Command::Export { scene, output } => export(&scene, &output).map(|()| ExitCode::SUCCESS),
         Command::Plot { run_dir } => plot(&run_dir).map(|()| ExitCode::SUCCESS),
         Command::Render(args) => render(args).map(|()| ExitCode::SUCCESS),
         Command::Compare {
@@ -777,17 +790,8 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         anyhow::bail!(ModeError::NotOne(args.mode.clone()));
     };
     let params = ModeParams::parse(&args.params, &modes)?;
-    let path_file = args.path.as_deref().map(CameraPath::load).transpose()?;
-    let scene = load(&args.scene.spec()?, &args.scene.options())?;
+    let (scene, path) = args.scene.load()?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-    let path = match path_file {
-        Some(p) => p,
-        None => occlu::camera::generate::default_path(&scene)?.0,
-    };
-    let path = match args.frames {
-        Some(n) => path.with_frames(n)?,
-        None => path,
-    };
     let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
     if let Some(reason) = ModeInfo::named(mode).unsupported_on(&gpu) {
         anyhow::bail!("mode '{mode}' cannot run on {}: {reason}", gpu.adapter);
@@ -925,23 +929,9 @@ fn emit(text: &str) -> anyhow::Result<()> {
     }
 }
 
-fn export(
-    scene_args: &SceneArgs,
-    path: Option<&std::path::Path>,
-    frames: Option<u32>,
-    output: &std::path::Path,
-) -> anyhow::Result<()> {
-    let path_file = path.map(CameraPath::load).transpose()?;
+fn export(input: &SceneAndPath, output: &std::path::Path) -> anyhow::Result<()> {
     occlu::report::check_writable(output)?;
-    let scene = load(&scene_args.spec()?, &scene_args.options())?;
-    let path = match path_file {
-        Some(p) => p,
-        None => occlu::camera::generate::default_path(&scene)?.0,
-    };
-    let path = match frames {
-        Some(n) => path.with_frames(n)?,
-        None => path,
-    };
+    let (scene, path) = input.load()?;
     let bytes = occlu::export::glb(&scene, &path, Resolution::DEFAULT.aspect())?;
     occlu::report::write_whole(output, &bytes)?;
     say!(
