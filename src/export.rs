@@ -6,10 +6,14 @@
 //! Loaded back by occlu, the file gives the same triangles and, as its
 //! default path, the same cameras.
 //!
+//! A scene whose up axis is not +Y hangs under a root node that turns it
+//! +Y up, as glTF expects.
+//!
 //! Departures: glTF animates no field of view without an extension, so the
-//! camera keeps the first frame's; node transforms are written in f32, as
-//! glTF stores them, so a scene far from the origin loses the precision
-//! occlu keeps in f64.
+//! camera keeps the first frame's; moving objects (the city's cars) stand
+//! where frame 0 puts them; node transforms are written in f32, as glTF
+//! stores them, so a scene far from the origin loses the precision occlu
+//! keeps in f64.
 
 use serde_json::{Value, json};
 
@@ -65,9 +69,16 @@ pub fn glb(scene: &Scene, path: &CameraPath, aspect: f64) -> Result<Vec<u8>, Exp
         .flat_map(|c| c.eye.to_array())
         .map(|v| v as f32)
         .collect();
+    // Each rotation on the same side as the one before (q and -q are one
+    // turn), so loaders that interpolate components do not spin.
+    let mut previous = glam::DQuat::IDENTITY;
     let turns: Vec<f32> = cameras
         .iter()
-        .flat_map(|c| c.rotation.normalize().to_array())
+        .flat_map(|c| {
+            let q = c.rotation.normalize();
+            previous = if q.dot(previous) < 0.0 { -q } else { q };
+            previous.to_array()
+        })
         .map(|v| v as f32)
         .collect();
     let input = bin.accessor(&mut accessors, &times, "SCALAR", 0);
@@ -78,11 +89,16 @@ pub fn glb(scene: &Scene, path: &CameraPath, aspect: f64) -> Result<Vec<u8>, Exp
         "name": "occlu camera", "camera": 0,
         "translation": &eyes[..3], "rotation": &turns[..4]
     }));
+    // glTF is +Y up: a scene with another up axis hangs under a root that
+    // turns its up to +Y, the camera with it.
+    let turn = glam::DQuat::from_rotation_arc(scene.up.axis.vector(), glam::DVec3::Y);
+    let children: Vec<usize> = (0..nodes.len()).collect();
+    nodes.push(json!({"name": "occlu up", "children": children, "rotation": turn.to_array()}));
     let first = &cameras[0];
     let document = json!({
         "asset": {"version": "2.0", "generator": concat!("occlu ", env!("CARGO_PKG_VERSION"))},
         "scene": 0,
-        "scenes": [{"nodes": (0..nodes.len()).collect::<Vec<_>>()}],
+        "scenes": [{"nodes": [nodes.len() - 1]}],
         "nodes": nodes,
         "meshes": meshes,
         "cameras": [{"type": "perspective", "name": path.source,

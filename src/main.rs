@@ -932,6 +932,12 @@ fn emit(text: &str) -> anyhow::Result<()> {
 fn export(input: &SceneAndPath, output: &std::path::Path) -> anyhow::Result<()> {
     occlu::report::check_writable(output)?;
     let (scene, path) = input.load()?;
+    if !scene.movers.is_empty() {
+        say!(
+            "warning: {} moving objects are written where frame 0 puts them (glTF animation of objects is not exported)",
+            scene.movers.len()
+        );
+    }
     let bytes = occlu::export::glb(&scene, &path, Resolution::DEFAULT.aspect())?;
     occlu::report::write_whole(output, &bytes)?;
     say!(

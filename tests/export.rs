@@ -61,3 +61,39 @@ fn an_exported_city_and_walk_load_back_and_render_the_same() {
         }
     }
 }
+
+#[test]
+fn a_z_up_model_is_exported_y_up_as_gltf_expects() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = common::write(dir.path(), "town.obj", common::boxes_obj(&common::town(false)));
+    let town = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();
+    assert_eq!(town.up.axis, occlu::scene::up::UpAxis::Z);
+    let (path, _) = default_path(&town).unwrap();
+    let path = path.with_frames(4).unwrap();
+    let file = common::write(
+        dir.path(),
+        "town.glb",
+        occlu::export::glb(&town, &path, 4.0 / 3.0).unwrap(),
+    );
+    let back = load(&SceneSpec::File(file), &LoadOptions::default()).unwrap();
+    // +Z turned to +Y: (x, y, z) becomes (x, z, -y).
+    let turn = |v: glam::DVec3| glam::DVec3::new(v.x, v.z, -v.y);
+    let (a, b) = (turn(town.bounds.min), turn(town.bounds.max));
+    let expected = occlu::bounds::Aabb::new(a.min(b), a.max(b));
+    assert!(
+        back.bounds.min.distance(expected.min) < 1e-4 && back.bounds.max.distance(expected.max) < 1e-4,
+        "{:?} vs {expected:?}",
+        back.bounds
+    );
+    assert_eq!(back.up.axis, occlu::scene::up::UpAxis::Y);
+    let (replay, _) = default_path(&back).unwrap();
+    for f in 0..path.frames {
+        let (p, q) = (path.camera(f, 4.0 / 3.0), replay.camera(f, 4.0 / 3.0));
+        assert!(
+            turn(p.eye).distance(q.eye) < 1e-4,
+            "frame {f}: {} vs {}",
+            turn(p.eye),
+            q.eye
+        );
+    }
+}

@@ -108,6 +108,43 @@ fn a_flat_town_is_walked_through_its_streets_at_eye_height() {
             path.frames_with_geometry_within_near(&RayCaster::new(&scene), 4.0 / 3.0),
             0
         );
+        // Down the streets between the blocks, not round the open edge.
+        let (right, ahead) = scene.up.axis.ground_axes();
+        let between = (0..path.frames)
+            .filter(|&f| {
+                let eye = path.camera(f, 4.0 / 3.0).eye;
+                let (x, y) = (eye.dot(right).abs(), eye.dot(ahead).abs());
+                (10.0..=110.0).contains(&x) && (10.0..=110.0).contains(&y)
+            })
+            .count();
+        assert!(
+            2 * between >= path.frames as usize,
+            "{between} of {} frames between the blocks",
+            path.frames
+        );
+    }
+}
+
+#[test]
+fn a_closed_hall_around_the_town_is_space_to_walk_in() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = town(true);
+    // A closed box around the town, its floor level with the ground.
+    boxes.push((
+        "hall".into(),
+        DVec3::new(-20.0, 0.0, -20.0),
+        DVec3::new(140.0, 60.0, 140.0),
+    ));
+    let scene = load_obj(dir.path(), &boxes);
+    let (path, why) = default_path(&scene).unwrap();
+    assert!(
+        path.source.ends_with("walk") && why.contains("'hall' hides"),
+        "{}: {why}",
+        path.source
+    );
+    for f in 0..path.frames {
+        let eye = path.camera(f, 4.0 / 3.0).eye;
+        assert!((eye.y - 1.7).abs() < 1e-6, "frame {f}: {eye} ({why})");
     }
 }
 

@@ -257,7 +257,6 @@ fn default_kind(
         );
     }
     let ground = Ground::of(scene);
-    let (_, width) = ground.longer_axis();
     let circle = "circled from outside";
     let enclosed = enclosing(scene, caster, &ground);
     let Some(planned) = walk() else {
@@ -279,7 +278,8 @@ fn default_kind(
         None => (
             PathKind::Orbit,
             format!(
-                "an object (its longest walk, {length:.1} of its {width:.1} width, {:.0}% under the sky): {circle}",
+                "an object (its longest walk {length:.1} units over {:.0} cells, {:.0}% under the sky): {circle}",
+                length / planned.cell,
                 100.0 * open
             ),
             None,

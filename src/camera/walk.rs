@@ -7,14 +7,15 @@
 //! for an eye above it (eye height and a margin up to the next surface) is
 //! a floor, unless that room lies inside a closed mesh (the ray has crossed
 //! its surface an odd number of times: inside a thick ground slab, a closed
-//! building). The ground is the lowest level that holds a good share of the
-//! floors, in the lowest quarter of the model's height; cells with a floor
-//! there are walkable. Cells whose four
+//! building; a closed hall or sky box around everything is space, not a
+//! solid). The ground is the lowest level that holds a good share of the
+//! floors, with something rising above it; cells with a floor there are
+//! walkable. Cells whose four
 //! neighbours are all walkable are kept (so the eye stays a cell from every
 //! wall), and two neighbours are joined when a ray at eye height passes
 //! between them. The walk is the longest of the shortest routes through the
 //! largest joined region (two breadth-first searches), in cell steps, of
-//! the streets (open cells with walls near in most directions) when they
+//! the streets (open cells with walls near in half the directions) when they
 //! hold a long enough one, else of all open cells.
 
 use std::collections::{HashMap, VecDeque};
@@ -93,7 +94,24 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
 
     // Floors: surfaces with room for the eye and a margin above them.
     let room = eye * 1.5;
+    // Closed solids, not shells: a closed mesh as tall as half the model
+    // that covers most of its ground (a hall, a sky box) is space to walk
+    // in, not a solid.
+    let footprint = |b: &crate::bounds::Aabb| {
+        let e = b.extent();
+        (e.dot(right.abs()), e.dot(ahead.abs()), e.dot(up.abs()))
+    };
+    let (model_w, model_d, model_h) = footprint(&scene.bounds);
     let closed: Vec<bool> = (0..scene.meshes.len()).map(|m| is_closed(scene, m)).collect();
+    let solid: Vec<bool> = scene
+        .objects
+        .iter()
+        .map(|o| {
+            let (w, d, h) = footprint(&o.bounds);
+            let shell = h >= 0.5 * model_h && w * d >= 0.5 * model_w * model_d;
+            closed[o.mesh as usize] && !shell
+        })
+        .collect();
     let mut floors: Vec<Vec<f64>> = vec![Vec::new(); nx * ny];
     let mut hits: Vec<Hit> = Vec::new();
     let mut inside: Vec<u32> = Vec::new();
@@ -111,7 +129,7 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
                 if above - h >= room && inside.is_empty() {
                     floors[j * nx + i].push(h);
                 }
-                if closed[scene.objects[hit.object as usize].mesh as usize] {
+                if solid[hit.object as usize] {
                     match inside.iter().position(|&o| o == hit.object) {
                         Some(k) => {
                             inside.swap_remove(k);
@@ -123,7 +141,7 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
             }
         }
     }
-    let ground = ground_level(&floors, eye, low, high)?;
+    let ground = ground_level(&floors, eye, high)?;
     // Walkable: a floor near the ground level (steps of up to half the eye
     // height), the eye above the highest such floor.
     let eye_at: Vec<Option<f64>> = floors
@@ -184,8 +202,8 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
         }
         Some(route)
     };
-    // Streets: open cells with walls around, where most of eight level
-    // rays meet something within [`STREET_REACH`] cells; a walk along them
+    // Streets: open cells with walls around, where at least half of eight
+    // level rays meet something within [`STREET_REACH`] cells; a walk along them
     // sees occlusion, one round the open outskirts does not.
     let walled = |k: usize| {
         let p = point(k);
@@ -197,7 +215,8 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
                 caster.first_hit(p, direction, reach).is_some()
             })
             .count();
-        walls >= 5
+        // At a crossing only the four diagonals meet walls.
+        walls >= 4
     };
     let streets: Vec<bool> = (0..nx * ny).map(|k| open[k] && walled(k)).collect();
     let route = longest_route(&streets)
@@ -221,9 +240,11 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
     })
 }
 
-/// Whether mesh `m` is closed (watertight): welded by position, every edge
-/// is shared by an even number of its triangles, so a line crosses its
-/// surface an even number of times and an odd count means "inside".
+/// Whether mesh `m` is a closed solid: welded by position, every edge is
+/// walked once in each direction (watertight and consistently wound), and
+/// it encloses a volume (a surface stored twice, once per side, encloses
+/// none). A line then crosses its surface an even number of times, and an
+/// odd count means "inside".
 fn is_closed(scene: &Scene, m: usize) -> bool {
     let mesh = &scene.meshes[m];
     let indices = &scene.indices[mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize];
@@ -233,14 +254,20 @@ fn is_closed(scene: &Scene, m: usize) -> bool {
         let next = welded.len() as u32;
         *welded.entry(key).or_insert(next)
     };
-    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut edges: HashMap<(u32, u32), i64> = HashMap::new();
+    let mut volume = 0.0;
     for t in indices.chunks_exact(3) {
         let [a, b, c] = [id(t[0]), id(t[1]), id(t[2])];
         for (u, v) in [(a, b), (b, c), (c, a)] {
-            *edges.entry((u.min(v), u.max(v))).or_default() += 1;
+            // +1 one way, -1 the other: a closed, consistently wound
+            // surface sums to 0 on every edge.
+            *edges.entry((u.min(v), u.max(v))).or_default() += if u < v { 1 } else { -1 };
         }
+        let [p, q, r] = [t[0], t[1], t[2]].map(|i| DVec3::from(scene.vertices[i as usize].map(f64::from)));
+        volume += p.dot(q.cross(r)) / 6.0;
     }
-    !edges.is_empty() && edges.values().all(|n| n % 2 == 0)
+    let e = mesh.bounds.extent();
+    !edges.is_empty() && edges.values().all(|&n| n == 0) && volume.abs() >= 0.01 * e.x * e.y * e.z
 }
 
 /// How far (in cells) a street's walls may lie.
@@ -256,11 +283,10 @@ pub const MIN_CELLS: usize = 8;
 /// The ground: the lowest floor level (in bins of half the eye height)
 /// holding at least a fiftieth of all floors (so a few pits or basements do
 /// not count, while a town's streets under a sky dome, a few percent of the
-/// dome's roof, do), or failing that the most common one. A ground lies in
-/// the lowest [`GROUND_SHARE`] of the model's height (`low` to `high`):
-/// floors only higher up are the top of an object (a tower's roof), and
-/// there is no ground.
-fn ground_level(floors: &[Vec<f64>], eye: f64, low: f64, high: f64) -> Option<f64> {
+/// dome's roof, do), or failing that the most common one. Something must
+/// rise at least two eye heights above it (the model's top is `high`): a
+/// tower's roof is no ground.
+fn ground_level(floors: &[Vec<f64>], eye: f64, high: f64) -> Option<f64> {
     let all: Vec<f64> = floors.iter().flatten().copied().collect();
     let lowest = all.iter().copied().fold(f64::INFINITY, f64::min);
     if !lowest.is_finite() {
@@ -282,11 +308,9 @@ fn ground_level(floors: &[Vec<f64>], eye: f64, low: f64, high: f64) -> Option<f6
         .copied()
         .filter(|h| ((h - lowest) / bin).floor() as i64 == level)
         .reduce(f64::max)?;
-    (ground <= low + GROUND_SHARE * (high - low)).then_some(ground)
+    // Something must rise above the eye: the top of a model is no ground.
+    (ground + 2.0 * eye <= high).then_some(ground)
 }
-
-/// How high in a model its ground may lie, as a share of its height.
-const GROUND_SHARE: f64 = 0.25;
 
 /// A cell of the largest connected region of open cells.
 fn largest_region(edges: &[Vec<usize>], open: &[bool]) -> Option<usize> {

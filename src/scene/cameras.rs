@@ -392,8 +392,10 @@ fn sample_times(channels: &[&Channel]) -> Result<Vec<f64>, String> {
     keys.dedup_by(|a, b| a == b);
     let mut times = Vec::new();
     for pair in keys.windows(2) {
-        // Keys already 1/30 s apart (stored in f32) get no sample between.
-        let steps = ((pair[1] - pair[0]) * SAMPLES_PER_SECOND - 1e-3).ceil().max(1.0);
+        // Keys already 1/30 s apart get no sample between, though stored in
+        // f32, whose rounding grows with the time (about 1e-4 s at 1000 s).
+        let slack = 1e-3 + 8.0 * f64::from(f32::EPSILON) * pair[1].abs() * SAMPLES_PER_SECOND;
+        let steps = ((pair[1] - pair[0]) * SAMPLES_PER_SECOND - slack).ceil().max(1.0);
         if times.len() as f64 + steps > MAX_SAMPLES as f64 {
             return Err(format!("animates a camera for more than {MAX_SAMPLES} samples"));
         }
