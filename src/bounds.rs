@@ -69,6 +69,14 @@ impl Aabb {
         other.is_empty() || (self.contains_point(other.min) && self.contains_point(other.max))
     }
 
+    /// The least and greatest of `p · direction` over the box: its extent
+    /// along a direction (an up axis, a ground axis).
+    pub fn span_along(&self, direction: DVec3) -> (f64, f64) {
+        let values = self.corners().map(|c| c.dot(direction));
+        let least = values.iter().copied().fold(f64::INFINITY, f64::min);
+        (least, values.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+    }
+
     /// The eight corners, bit i of the index choosing max over min on axis i.
     pub fn corners(&self) -> [DVec3; 8] {
         std::array::from_fn(|i| {

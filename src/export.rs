@@ -171,8 +171,8 @@ impl Binary {
     }
 }
 
-/// A GLB container of `document` and `bin`.
-fn pack(document: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, ExportError> {
+/// A GLB container of `document` and `bin` (each padded to 4 bytes).
+pub fn pack(document: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, ExportError> {
     let mut json = document.to_string().into_bytes();
     json.resize(json.len().next_multiple_of(4), b' ');
     bin.resize(bin.len().next_multiple_of(4), 0);

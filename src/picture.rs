@@ -231,11 +231,7 @@ fn overview_camera(scene: &Scene, resolution: Resolution) -> Camera {
     let t = (fov_y / 2.0).tan();
     let (wide, deep) = (e.dot(right.abs()), e.dot(ahead.abs()));
     let height = (deep / (2.0 * t)).max(wide / (2.0 * t * resolution.aspect())).max(1e-3) * 1.1;
-    let top = b
-        .corners()
-        .map(|p| p.dot(up))
-        .into_iter()
-        .fold(f64::NEG_INFINITY, f64::max);
+    let (_, top) = b.span_along(up);
     Camera {
         eye: c + up * (top - c.dot(up) + height),
         rotation: look_rotation(-up, ahead),

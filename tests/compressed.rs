@@ -231,30 +231,12 @@ fn unpack(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
     (json, glb[bin_at + 8..bin_at + 8 + word(bin_at)].to_vec())
 }
 
-/// A GLB of `json` and `bin`.
-fn pack(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    let mut text = json.to_string().into_bytes();
-    while !text.len().is_multiple_of(4) {
-        text.push(b' ');
-    }
-    let total = 12 + 8 + text.len() + 8 + bin.len();
-    let mut out = Vec::new();
-    for word in [0x4654_6c67, 2, total as u32, text.len() as u32, 0x4e4f_534a] {
-        out.extend_from_slice(&u32::to_le_bytes(word));
-    }
-    out.extend_from_slice(&text);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(bin);
-    out
-}
-
 #[test]
 fn malformed_meshopt_data_is_an_error_not_a_crash() {
     let (json, bin) = unpack(&std::fs::read(fixtures().join("meshopt-quantized.glb")).unwrap());
     let dir = tempfile::tempdir().unwrap();
     let try_load = |json: &serde_json::Value, bin: &[u8]| {
-        let model = common::write(dir.path(), "m.glb", pack(json, bin));
+        let model = common::write(dir.path(), "m.glb", occlu::export::pack(json, bin.to_vec()).unwrap());
         load(&SceneSpec::File(model), &LoadOptions::default()).map_err(|e| e.to_string())
     };
     assert!(try_load(&json, &bin).is_ok(), "the unchanged file loads");

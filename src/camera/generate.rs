@@ -263,7 +263,7 @@ fn default_kind(
         let why = enclosed.map_or("a model".to_string(), |e| format!("{e}, but"));
         return (PathKind::Orbit, format!("{why} with no ground to walk: {circle}"), None);
     };
-    let length: f64 = planned.line.windows(2).map(|p| p[0].distance(p[1])).sum();
+    let length = planned.length();
     let open = planned.open_sky;
     match enclosed {
         Some(why) => (PathKind::Walk, why, Some(planned)),
@@ -348,7 +348,7 @@ fn generate_with(
             Some(line) if line.len() >= 2 => walk_along(line, (diagonal * 0.02).max(1.0)),
             _ => match walk() {
                 Some(w) => {
-                    let length: f64 = w.line.windows(2).map(|p| p[0].distance(p[1])).sum();
+                    let length = w.length();
                     note = Some(format!(
                         "a walk along the longest open route, {length:.1} units at eye height {:.3} (cells of {:.3}, {:.0}% walkable)",
                         w.eye_height,
@@ -419,14 +419,17 @@ impl Ground {
     fn of(scene: &Scene) -> Ground {
         let up = scene.up.axis.vector();
         let (right, ahead) = scene.up.axis.ground_axes();
-        let (b, e) = (scene.bounds, scene.bounds.extent());
-        let along = |axis: DVec3| e.dot(axis.abs());
-        let heights = b.corners().map(|c| c.dot(up));
+        let b = scene.bounds;
+        let along = |axis: DVec3| {
+            let (least, greatest) = b.span_along(axis);
+            greatest - least
+        };
+        let (lowest, highest) = b.span_along(up);
         Ground {
             up,
             across: [(right, along(right)), (ahead, along(ahead))],
-            lowest: heights.into_iter().fold(f64::INFINITY, f64::min),
-            highest: heights.into_iter().fold(f64::NEG_INFINITY, f64::max),
+            lowest,
+            highest,
         }
     }
 

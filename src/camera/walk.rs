@@ -40,6 +40,13 @@ pub struct Walk {
     pub open_sky: f64,
 }
 
+impl Walk {
+    /// The route's length, in the model's units.
+    pub fn length(&self) -> f64 {
+        self.line.windows(2).map(|p| p[0].distance(p[1])).sum()
+    }
+}
+
 /// Cells along the ground's longer side.
 const CELLS: usize = 160;
 
@@ -53,7 +60,7 @@ const EYE_FRACTION: f64 = 0.05;
 /// The eye height for a model `width` wide and `height` tall, as the
 /// module says: metres assumed for city-sized models, a fraction of the
 /// height otherwise (of the width for a model with no height).
-pub fn eye_height(width: f64, height: f64) -> f64 {
+fn eye_height(width: f64, height: f64) -> f64 {
     if width >= METRE_SCALE_WIDTH && height > METRES_EYE_HEIGHT {
         METRES_EYE_HEIGHT
     } else {
@@ -70,15 +77,9 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
     let up = scene.up.axis.vector();
     let (right, ahead) = scene.up.axis.ground_axes();
     let b = scene.bounds;
-    let heights = b.corners().map(|c| c.dot(up));
-    let low = heights.iter().copied().fold(f64::INFINITY, f64::min);
-    let high = heights.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let span = |axis: DVec3| {
-        let values = b.corners().map(|c| c.dot(axis));
-        let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
-        (lo, values.iter().copied().fold(f64::NEG_INFINITY, f64::max) - lo)
-    };
-    let ((x0, width), (y0, depth)) = (span(right), span(ahead));
+    let (low, high) = b.span_along(up);
+    let ((x0, x1), (y0, y1)) = (b.span_along(right), b.span_along(ahead));
+    let (width, depth) = (x1 - x0, y1 - y0);
     let eye = eye_height(width.max(depth), high - low);
     let cell = width.max(depth) / CELLS as f64;
     if !(cell > 0.0 && cell.is_finite()) {

@@ -225,6 +225,15 @@ pub struct ReportError {
 }
 
 impl ReportError {
+    /// A maker of errors about `path`, for `map_err`.
+    pub fn at(path: &Path) -> impl Fn(std::io::Error) -> ReportError + use<> {
+        let path = path.to_path_buf();
+        move |error| ReportError {
+            path: path.clone(),
+            error,
+        }
+    }
+
     /// Whether the user's input was at fault (a missing run, a bad --out),
     /// as opposed to the machine failing while running (a full disk).
     pub fn is_input_error(&self) -> bool {
@@ -250,10 +259,7 @@ pub struct ResultFiles {
 /// is replaced, with its permissions; the link stays), and a path that is
 /// not a regular file (`/dev/stdout`, a pipe) is written in place.
 pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
-    let fail = |error| ReportError {
-        path: path.to_path_buf(),
-        error,
-    };
+    let fail = ReportError::at(path);
     let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     let existing = std::fs::metadata(&target).ok();
     if existing.as_ref().is_some_and(|m| !m.is_file()) {
@@ -275,10 +281,7 @@ pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
 /// Checks that [`write_whole`] could write `path`, so that a bad output
 /// file is refused before a long run rather than after it.
 pub fn check_writable(path: &Path) -> Result<(), ReportError> {
-    let fail = |error| ReportError {
-        path: path.to_path_buf(),
-        error,
-    };
+    let fail = ReportError::at(path);
     let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     match std::fs::metadata(&target) {
         Ok(m) if m.is_dir() => Err(fail(std::io::Error::other("is a directory: a file name is needed"))),
@@ -286,7 +289,7 @@ pub fn check_writable(path: &Path) -> Result<(), ReportError> {
         Ok(m) if !m.is_file() => Ok(()),
         _ => {
             let temporary = partial(&target);
-            std::fs::File::create(&temporary).map_err(fail)?;
+            std::fs::File::create(&temporary).map_err(&fail)?;
             std::fs::remove_file(&temporary).map_err(fail)
         }
     }
@@ -305,23 +308,14 @@ fn partial(path: &Path) -> PathBuf {
 fn csv_bytes<T: Serialize>(path: &Path, rows: &[T]) -> Result<Vec<u8>, ReportError> {
     let mut csv = csv::Writer::from_writer(Vec::new());
     for row in rows {
-        csv.serialize(row).map_err(|e| ReportError {
-            path: path.to_path_buf(),
-            error: e.into(),
-        })?;
+        csv.serialize(row).map_err(|e| ReportError::at(path)(e.into()))?;
     }
-    csv.into_inner().map_err(|e| ReportError {
-        path: path.to_path_buf(),
-        error: e.into_error(),
-    })
+    csv.into_inner().map_err(|e| ReportError::at(path)(e.into_error()))
 }
 
 /// Writes `bytes` to `path` (a fresh file in a staging folder).
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
-    std::fs::write(path, bytes).map_err(|error| ReportError {
-        path: path.to_path_buf(),
-        error,
-    })
+    std::fs::write(path, bytes).map_err(ReportError::at(path))
 }
 
 /// Writes an 8-bit RGB image as PNG, whole or not at all.
@@ -333,33 +327,30 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(),
     encoder
         .write_header()
         .and_then(|mut writer| writer.write_image_data(rgb).and_then(|()| writer.finish()))
-        .map_err(|e| ReportError {
-            path: path.to_path_buf(),
-            error: std::io::Error::other(format!("encoding the picture failed: {e}")),
-        })?;
+        .map_err(|e| ReportError::at(path)(std::io::Error::other(format!("encoding the picture failed: {e}"))))?;
     write_whole(path, &png)
 }
 
 /// Reads a run directory's summary.json and frames.csv (for `occlu plot`
 /// and `occlu compare`).
 pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportError> {
-    let io = |path: PathBuf| move |error| ReportError { path, error };
+    let io = ReportError::at;
     let json_path = dir.join("summary.json");
-    let text = crate::input::read_text(&json_path, crate::input::TEXT_LIMIT).map_err(io(json_path.clone()))?;
+    let text = crate::input::read_text(&json_path, crate::input::TEXT_LIMIT).map_err(io(&json_path))?;
     let summary: Summary = serde_json::from_str(&text)
-        .map_err(|e| io(json_path.clone())(std::io::Error::other(format!("not an occlu summary: {e}"))))?;
+        .map_err(|e| io(&json_path)(std::io::Error::other(format!("not an occlu summary: {e}"))))?;
     if summary.schema_version != SCHEMA_VERSION {
-        return Err(io(json_path)(std::io::Error::other(format!(
+        return Err(io(&json_path)(std::io::Error::other(format!(
             "schema_version {} is not the {SCHEMA_VERSION} this occlu reads",
             summary.schema_version
         ))));
     }
     let csv_path = dir.join("frames.csv");
-    let bytes = crate::input::read_file(&csv_path, crate::input::MODEL_LIMIT).map_err(io(csv_path.clone()))?;
+    let bytes = crate::input::read_file(&csv_path, crate::input::MODEL_LIMIT).map_err(io(&csv_path))?;
     if let Some(expected) = summary.frames_csv
         && Fingerprint::of(&bytes) != expected
     {
-        return Err(io(csv_path)(std::io::Error::other(
+        return Err(io(&csv_path)(std::io::Error::other(
             "does not match summary.json: written by another run, or changed or cut short since",
         )));
     }
@@ -367,7 +358,7 @@ pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportErro
     let rows = reader
         .deserialize()
         .collect::<Result<Vec<FrameStats>, _>>()
-        .map_err(|e| io(csv_path)(std::io::Error::other(format!("not an occlu frames.csv: {e}"))))?;
+        .map_err(|e| io(&csv_path)(std::io::Error::other(format!("not an occlu frames.csv: {e}"))))?;
     Ok((summary, rows))
 }
 
@@ -394,10 +385,10 @@ impl OutputLock {
 /// a bad `--out` fails before a long run rather than after it.
 pub fn prepare_output(out: &Path) -> Result<OutputLock, ReportError> {
     let claim = claim(out)?;
-    let io = |path: PathBuf| move |error| ReportError { path, error };
+    let io = ReportError::at;
     let probe = staging(out);
-    std::fs::create_dir_all(&probe).map_err(io(probe.clone()))?;
-    std::fs::remove_dir(&probe).map_err(io(probe))?;
+    std::fs::create_dir_all(&probe).map_err(io(&probe))?;
+    std::fs::remove_dir(&probe).map_err(io(&probe))?;
     if claim.held() {
         // Folders of runs that were killed while staging: no live run can
         // own one while this one holds the claim.
@@ -412,10 +403,7 @@ pub fn prepare_output(out: &Path) -> Result<OutputLock, ReportError> {
 
 /// Creates `out` and takes the lock on it.
 fn claim(out: &Path) -> Result<OutputLock, ReportError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |error| ReportError { path, error }
-    };
+    let io = ReportError::at;
     if out.exists() && !out.is_dir() {
         let error = std::io::Error::other("exists and is not a directory: --out names the folder results go to");
         return Err(io(out)(error));
@@ -474,24 +462,18 @@ fn publish(
     let staging = staging(out);
     let _ = std::fs::remove_dir_all(&staging);
     let staged = std::fs::create_dir(&staging)
-        .map_err(|error| ReportError {
-            path: staging.clone(),
-            error,
-        })
+        .map_err(ReportError::at(&staging))
         .and_then(|()| write(&staging));
     let moved = staged.and_then(|names| {
         for name in stale {
             let path = out.join(name);
             match std::fs::remove_file(&path) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(ReportError { path, error: e }),
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(ReportError::at(&path)(e)),
                 _ => {}
             }
         }
         for name in &names {
-            std::fs::rename(staging.join(name), out.join(name)).map_err(|error| ReportError {
-                path: out.join(name),
-                error,
-            })?;
+            std::fs::rename(staging.join(name), out.join(name)).map_err(ReportError::at(&out.join(name)))?;
         }
         Ok(names)
     });

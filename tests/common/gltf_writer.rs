@@ -130,29 +130,8 @@ impl GltfWriter {
 
     /// A binary .glb with `roots` as the scene's root nodes.
     pub fn glb(&self, roots: &[usize]) -> Vec<u8> {
-        let mut json = self
-            .document(json!({"byteLength": self.bin.len()}), roots)
-            .to_string()
-            .into_bytes();
-        while !json.len().is_multiple_of(4) {
-            json.push(b' ');
-        }
-        let mut bin = self.bin.clone();
-        while !bin.len().is_multiple_of(4) {
-            bin.push(0);
-        }
-        let total = 12 + 8 + json.len() + 8 + bin.len();
-        let mut out = Vec::with_capacity(total);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&(total as u32).to_le_bytes());
-        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&json);
-        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&bin);
-        out
+        let document = self.document(json!({"byteLength": self.bin.len()}), roots);
+        occlu::export::pack(&document, self.bin.clone()).expect("test models are small")
     }
 
     /// A .gltf whose buffer is the external file `bin_name` (written by the
