@@ -3,13 +3,19 @@
 //! distance from a point to the nearest surface. Generated walks use them to
 //! find the ground and free space, and a run uses them to count frames with
 //! geometry inside the near plane.
+//!
+//! Two levels of trees: the scene's hierarchy over objects, then one tree
+//! per mesh over its triangles in the mesh's own frame, built the first time
+//! a search reaches the mesh (a planned walk casts tens of thousands of
+//! rays; a mesh is thousands of triangles).
 
 use std::cell::Cell;
+use std::sync::OnceLock;
 
 use glam::{DAffine3, DVec3};
 
 use crate::bounds::Aabb;
-use crate::hierarchy::{Hierarchy, HierarchyParams};
+use crate::hierarchy::{Hierarchy, HierarchyParams, Item};
 use crate::scene::Scene;
 
 /// A scene and a hierarchy over its objects, ready for ray casts.
@@ -18,6 +24,9 @@ pub struct RayCaster<'a> {
     hierarchy: Hierarchy,
     /// Each object's world-to-local transform.
     to_local: Vec<DAffine3>,
+    /// Each mesh's tree over its triangles (indices into the mesh's
+    /// triangle list), built on first use.
+    mesh_trees: Vec<OnceLock<Hierarchy>>,
 }
 
 /// A surface a ray met: its distance along the ray (in units of the ray's
@@ -28,11 +37,34 @@ pub struct Hit {
     pub object: u32,
 }
 
+/// A triangle's box, for building a mesh's tree: every triangle costs one
+/// intersection test.
+struct TriangleBox(Aabb);
+
+impl Item for TriangleBox {
+    fn bounds(&self) -> Aabb {
+        self.0
+    }
+
+    fn cost(&self) -> f64 {
+        1.0
+    }
+}
+
+/// A mesh tree's leaves hold a few triangles, and a node test costs about
+/// one triangle test.
+const MESH_TREE: HierarchyParams = HierarchyParams {
+    max_leaf_objects: 4,
+    traversal_cost: 1.0,
+    bins: 16,
+};
+
 impl<'a> RayCaster<'a> {
     pub fn new(scene: &'a Scene) -> RayCaster<'a> {
         RayCaster {
             hierarchy: Hierarchy::build(&scene.objects, &HierarchyParams::default()),
             to_local: scene.objects.iter().map(|o| o.transform.inverse()).collect(),
+            mesh_trees: scene.meshes.iter().map(|_| OnceLock::new()).collect(),
             scene,
         }
     }
@@ -68,16 +100,22 @@ impl<'a> RayCaster<'a> {
             // mesh's local frame.
             let local = self.to_local[object as usize];
             let (lo, ld) = (local.transform_point3(origin), local.transform_vector3(direction));
-            for [a, b, c] in self.triangles(self.scene.objects[object as usize].mesh) {
-                if let Some(t) = intersect(lo, ld, a, b, c)
-                    && t > 0.0
-                    && t <= reach.get()
-                {
-                    let mut shortened = reach.get();
-                    found(Hit { t, object }, &mut shortened);
-                    reach.set(shortened);
-                }
-            }
+            let local_inverse = ld.recip();
+            let mesh = self.scene.objects[object as usize].mesh;
+            self.visit_triangles(
+                mesh,
+                &|bounds| slab(bounds, lo, local_inverse, reach.get()),
+                &mut |[a, b, c]| {
+                    if let Some(t) = intersect(lo, ld, a, b, c)
+                        && t > 0.0
+                        && t <= reach.get()
+                    {
+                        let mut shortened = reach.get();
+                        found(Hit { t, object }, &mut shortened);
+                        reach.set(shortened);
+                    }
+                },
+            );
         });
     }
 
@@ -87,15 +125,19 @@ impl<'a> RayCaster<'a> {
         let best = Cell::new(within);
         let mut found = false;
         self.visit_objects(&|bounds| box_distance(bounds, point) <= best.get(), &mut |object| {
-            let world = self.scene.objects[object as usize].transform;
-            for [a, b, c] in self.triangles(self.scene.objects[object as usize].mesh) {
-                let [a, b, c] = [a, b, c].map(|v| world.transform_point3(v));
+            let object = &self.scene.objects[object as usize];
+            let world = object.transform;
+            // The world box of a local box holds its triangles: its distance
+            // bounds theirs from below, whatever the transform's scale.
+            let near_enough = |bounds: &Aabb| box_distance(&bounds.transformed(&world), point) <= best.get();
+            self.visit_triangles(object.mesh, &near_enough, &mut |corners| {
+                let [a, b, c] = corners.map(|v| world.transform_point3(v));
                 let d = closest_point(point, a, b, c).distance(point);
                 if d <= best.get() {
                     best.set(d);
                     found = true;
                 }
-            }
+            });
         });
         found.then(|| best.get())
     }
@@ -104,31 +146,52 @@ impl<'a> RayCaster<'a> {
     /// hierarchy nodes' boxes it accepts too; `wanted` is asked as the search
     /// goes, so a bound `visit` tightens prunes what is left.
     fn visit_objects(&self, wanted: &dyn Fn(&Aabb) -> bool, visit: &mut dyn FnMut(u32)) {
-        let mut stack = vec![0usize];
-        while let Some(n) = stack.pop() {
-            let node = &self.hierarchy.nodes[n];
-            if !wanted(&node.bounds) {
-                continue;
+        descend(&self.hierarchy, wanted, &mut |object| {
+            if wanted(&self.scene.objects[object as usize].bounds) {
+                visit(object);
             }
-            if !node.is_leaf() {
-                stack.extend(node.children());
-                continue;
-            }
-            for &object in self.hierarchy.subtree_objects(node) {
-                if wanted(&self.scene.objects[object as usize].bounds) {
-                    visit(object);
-                }
-            }
-        }
+        });
+    }
+
+    /// Calls `visit` with the local corners of every triangle of `mesh` in a
+    /// leaf whose boxes (local) `wanted` accepts.
+    fn visit_triangles(&self, mesh: u32, wanted: &dyn Fn(&Aabb) -> bool, visit: &mut dyn FnMut([DVec3; 3])) {
+        let tree = self.mesh_trees[mesh as usize].get_or_init(|| {
+            let boxes: Vec<TriangleBox> = self
+                .triangles(mesh)
+                .map(|corners| TriangleBox(corners.iter().fold(Aabb::EMPTY, |b, &v| b.grown(v))))
+                .collect();
+            Hierarchy::build(&boxes, &MESH_TREE)
+        });
+        descend(tree, wanted, &mut |triangle| visit(self.triangle(mesh, triangle)));
     }
 
     /// The triangles of a mesh, in its local frame.
     fn triangles(&self, mesh: u32) -> impl Iterator<Item = [DVec3; 3]> + '_ {
-        let mesh = &self.scene.meshes[mesh as usize];
-        let range = mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize;
-        self.scene.indices[range]
-            .chunks_exact(3)
-            .map(|t| [0, 1, 2].map(|k| DVec3::from(self.scene.vertices[t[k] as usize].map(f64::from))))
+        (0..self.scene.meshes[mesh as usize].triangles()).map(move |t| self.triangle(mesh, t))
+    }
+
+    /// Triangle `triangle` of `mesh`, in its local frame.
+    fn triangle(&self, mesh: u32, triangle: u32) -> [DVec3; 3] {
+        let first = (self.scene.meshes[mesh as usize].first_index + 3 * triangle) as usize;
+        [0, 1, 2].map(|k| DVec3::from(self.scene.vertices[self.scene.indices[first + k] as usize].map(f64::from)))
+    }
+}
+
+/// Calls `visit` with the items of every leaf of `tree` reached through
+/// boxes `wanted` accepts (asked as the search goes).
+fn descend(tree: &Hierarchy, wanted: &dyn Fn(&Aabb) -> bool, visit: &mut dyn FnMut(u32)) {
+    let mut stack = vec![0usize];
+    while let Some(n) = stack.pop() {
+        let node = &tree.nodes[n];
+        if !wanted(&node.bounds) {
+            continue;
+        }
+        if node.is_leaf() {
+            tree.subtree_objects(node).iter().for_each(|&item| visit(item));
+        } else {
+            stack.extend(node.children());
+        }
     }
 }
 
@@ -226,5 +289,87 @@ mod tests {
         assert!(!slab(&unit, DVec3::new(0.5, 0.5, 5.0), DVec3::NEG_Z.recip(), 3.0));
         assert!(!slab(&unit, DVec3::new(1.5, 0.5, 5.0), DVec3::NEG_Z.recip(), 10.0));
         assert_eq!(box_distance(&unit, DVec3::new(0.5, 3.0, 0.5)), 2.0);
+    }
+
+    /// A bumpy sheet of 2·n² triangles, folded into a tube so rays meet it
+    /// several times.
+    fn tube(n: u32) -> (Vec<DVec3>, Vec<u32>) {
+        let positions = (0..=n)
+            .flat_map(|j| {
+                (0..=n).map(move |i| {
+                    let angle = std::f64::consts::TAU * f64::from(i) / f64::from(n);
+                    let radius = 1.0 + 0.1 * (7.0 * angle).sin() * (f64::from(j) * 0.9).cos();
+                    DVec3::new(
+                        radius * angle.cos(),
+                        radius * angle.sin(),
+                        4.0 * f64::from(j) / f64::from(n),
+                    )
+                })
+            })
+            .collect();
+        let indices = (0..n)
+            .flat_map(|j| {
+                (0..n).flat_map(move |i| {
+                    let k = j * (n + 1) + i;
+                    [k, k + 1, k + n + 2, k, k + n + 2, k + n + 1]
+                })
+            })
+            .collect();
+        (positions, indices)
+    }
+
+    #[test]
+    fn mesh_trees_find_what_every_triangle_tried_in_turn_finds_under_any_transform() {
+        let (positions, indices) = tube(48);
+        let mut builder = crate::scene::SceneBuilder::new("test".into(), 1 << 20);
+        let group = builder.add_mesh("tube", &positions, &indices).unwrap();
+        // Scaled unevenly and turned, so local and world distances differ.
+        let transform = DAffine3::from_scale_rotation_translation(
+            DVec3::new(3.0, 0.5, 1.5),
+            glam::DQuat::from_rotation_y(0.7) * glam::DQuat::from_rotation_x(-0.3),
+            DVec3::new(10.0, -5.0, 3.0),
+        );
+        builder.add_object("tube", &group, transform).unwrap();
+        let scene = builder.finish().unwrap();
+        assert_eq!(scene.objects.len(), 1, "one mesh, so its tree does the work");
+        let object = &scene.objects[0];
+        let caster = RayCaster::new(&scene);
+        let world: Vec<[DVec3; 3]> = caster
+            .triangles(object.mesh)
+            .map(|corners| corners.map(|v| object.transform.transform_point3(v)))
+            .collect();
+        assert_eq!(world.len(), 2 * 48 * 48);
+        let mut seed = 99u64;
+        let mut random = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut hits, mut all) = (0, Vec::new());
+        for _ in 0..300 {
+            let origin = object.bounds.center() + DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5) * 12.0;
+            let target = object.bounds.center() + DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5) * 4.0;
+            let direction = target - origin;
+            let mut expected: Vec<f64> = world
+                .iter()
+                .filter_map(|&[a, b, c]| intersect(origin, direction, a, b, c).filter(|&t| t > 0.0 && t <= 2.0))
+                .collect();
+            expected.sort_by(f64::total_cmp);
+            caster.all_hits(origin, direction, 2.0, &mut all);
+            let found: Vec<f64> = all.iter().map(|h| h.t).collect();
+            assert_eq!(found.len(), expected.len(), "{origin} {direction}");
+            for (f, e) in found.iter().zip(&expected) {
+                assert!((f - e).abs() < 1e-9, "{origin} {direction}: {f} vs {e}");
+            }
+            let first = caster.first_hit(origin, direction, 2.0).map(|h| h.t);
+            assert_eq!(first.is_some(), !expected.is_empty());
+            hits += usize::from(first.is_some());
+            let nearest = world
+                .iter()
+                .map(|&[a, b, c]| closest_point(origin, a, b, c).distance(origin))
+                .fold(f64::INFINITY, f64::min);
+            let found = caster.nearest_distance(origin, f64::INFINITY).unwrap();
+            assert!((found - nearest).abs() < 1e-9, "{origin}: {found} vs {nearest}");
+        }
+        assert!(hits > 100, "the rays meet the tube ({hits} of 300)");
     }
 }

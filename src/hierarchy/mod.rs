@@ -12,6 +12,9 @@
 //! contiguous, and so are the objects of every subtree (`objects` is a
 //! permutation of object ids), so a culler that accepts a whole subtree draws
 //! one slice.
+//!
+//! The builder takes any [`Item`]: the cullers build over objects weighted
+//! by triangles, the ray caster over a mesh's triangles weighted alike.
 
 pub mod ternary;
 
@@ -19,6 +22,23 @@ use serde::{Deserialize, Serialize};
 
 use crate::bounds::Aabb;
 use crate::scene::Object;
+
+/// What a tree is built over: a box, and the cost of what it holds (the
+/// work a test of the box can save).
+pub trait Item {
+    fn bounds(&self) -> Aabb;
+    fn cost(&self) -> f64;
+}
+
+impl Item for Object {
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    fn cost(&self) -> f64 {
+        f64::from(self.triangles)
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct HierarchyParams {
@@ -82,7 +102,7 @@ pub struct HierarchyStats {
 
 impl Hierarchy {
     /// Builds the tree over `objects` (at least one).
-    pub fn build(objects: &[Object], params: &HierarchyParams) -> Hierarchy {
+    pub fn build<T: Item>(objects: &[T], params: &HierarchyParams) -> Hierarchy {
         let mut b = Builder {
             objects,
             params,
@@ -152,8 +172,8 @@ fn placeholder() -> Node {
     }
 }
 
-struct Builder<'a> {
-    objects: &'a [Object],
+struct Builder<'a, T> {
+    objects: &'a [T],
     params: &'a HierarchyParams,
     order: Vec<u32>,
     nodes: Vec<Node>,
@@ -162,29 +182,29 @@ struct Builder<'a> {
 #[derive(Clone, Copy)]
 struct Bin {
     bounds: Aabb,
-    triangles: f64,
+    cost: f64,
     count: usize,
 }
 
 const EMPTY_BIN: Bin = Bin {
     bounds: Aabb::EMPTY,
-    triangles: 0.0,
+    cost: 0.0,
     count: 0,
 };
 
-impl Builder<'_> {
-    fn object(&self, i: usize) -> &Object {
+impl<T: Item> Builder<'_, T> {
+    fn object(&self, i: usize) -> &T {
         &self.objects[self.order[i] as usize]
     }
 
     /// Fills node `index` with the objects `order[start..end]`.
     fn build(&mut self, index: usize, start: usize, end: usize) {
-        let (mut bounds, mut centroids, mut triangles) = (Aabb::EMPTY, Aabb::EMPTY, 0u64);
+        let (mut bounds, mut centroids, mut cost) = (Aabb::EMPTY, Aabb::EMPTY, 0.0);
         for i in start..end {
             let o = self.object(i);
-            bounds = bounds.union(o.bounds);
-            centroids = centroids.grown(o.bounds.center());
-            triangles += u64::from(o.triangles);
+            bounds = bounds.union(o.bounds());
+            centroids = centroids.grown(o.bounds().center());
+            cost += o.cost();
         }
         self.nodes[index] = Node {
             bounds,
@@ -199,7 +219,7 @@ impl Builder<'_> {
         let split = self.best_split(start, end, &bounds, &centroids);
         let must_split = count > self.params.max_leaf_objects as usize;
         let mid = match split {
-            Some((cost, axis, plane)) if must_split || cost < triangles as f64 => {
+            Some((split_cost, axis, plane)) if must_split || split_cost < cost => {
                 self.partition(start, end, axis, plane)
             }
             None if must_split => start + count / 2, // identical centroids: any halving will do
@@ -228,9 +248,9 @@ impl Builder<'_> {
             let mut binned = vec![EMPTY_BIN; bins];
             for i in start..end {
                 let o = self.object(i);
-                let b = &mut binned[bin_of(o.bounds.center()[axis])];
-                b.bounds = b.bounds.union(o.bounds);
-                b.triangles += f64::from(o.triangles);
+                let b = &mut binned[bin_of(o.bounds().center()[axis])];
+                b.bounds = b.bounds.union(o.bounds());
+                b.cost += o.cost();
                 b.count += 1;
             }
             // Sweep from the right, then evaluate each plane from the left.
@@ -248,8 +268,7 @@ impl Builder<'_> {
                     continue;
                 }
                 let cost = self.params.traversal_cost
-                    + (left.bounds.surface_area() * left.triangles + r.bounds.surface_area() * r.triangles)
-                        / parent_area;
+                    + (left.bounds.surface_area() * left.cost + r.bounds.surface_area() * r.cost) / parent_area;
                 if best.is_none_or(|(c, _, _)| cost < c) {
                     best = Some((cost, axis, lo + (hi - lo) * k as f64 / bins as f64));
                 }
@@ -265,7 +284,7 @@ impl Builder<'_> {
         let part = &mut self.order[start..end];
         let mut mid = 0;
         for i in 0..part.len() {
-            if objects[part[i] as usize].bounds.center()[axis] < plane {
+            if objects[part[i] as usize].bounds().center()[axis] < plane {
                 part.swap(i, mid);
                 mid += 1;
             }
@@ -283,7 +302,7 @@ impl Builder<'_> {
 fn merge(a: Bin, b: Bin) -> Bin {
     Bin {
         bounds: a.bounds.union(b.bounds),
-        triangles: a.triangles + b.triangles,
+        cost: a.cost + b.cost,
         count: a.count + b.count,
     }
 }
