@@ -149,11 +149,74 @@ fn a_closed_hall_around_the_town_is_space_to_walk_in() {
 }
 
 #[test]
-fn a_thick_ground_slab_is_walked_on_not_in() {
+fn a_thick_ground_slab_is_walked_on_not_in_even_when_split_into_clusters() {
     let dir = tempfile::tempdir().unwrap();
     let mut boxes = town(true);
     // The ground 5 thick: its inside must not count as room to walk.
     boxes[0].1.y = -5.0;
+    let model = write(dir.path(), "model.obj", boxes_obj(&boxes));
+    // Whole, and every box cut into three clusters (none closed alone).
+    for cluster_triangles in [4096, 4] {
+        let options = LoadOptions {
+            cluster_triangles,
+            ..LoadOptions::default()
+        };
+        let scene = load(&SceneSpec::File(model.clone()), &options).unwrap();
+        let (path, why) = default_path(&scene).unwrap();
+        assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+        let houses = buildings(&scene);
+        for f in 0..path.frames {
+            let eye = path.camera(f, 4.0 / 3.0).eye;
+            assert!(
+                (eye.y - 1.7).abs() < 1e-6,
+                "clusters of {cluster_triangles}, frame {f}: {eye}"
+            );
+            assert!(houses.iter().all(|h| !h.contains_point(eye)), "frame {f}: {eye}");
+        }
+    }
+}
+
+/// A town of `n`×`n` blocks `block` wide with streets `street` wide, on a
+/// ground slab reaching `margin` beyond them, +Y up.
+fn town_grid(n: u32, block: f64, street: f64, margin: f64) -> Vec<(String, DVec3, DVec3)> {
+    let size = f64::from(n) * (block + street) - street;
+    let mut boxes = vec![(
+        "ground".to_string(),
+        DVec3::new(-margin, -1.0, -margin),
+        DVec3::new(size + margin, 0.0, size + margin),
+    )];
+    for i in 0..n {
+        for j in 0..n {
+            let (x, z) = (f64::from(i) * (block + street), f64::from(j) * (block + street));
+            let height = 8.0 + f64::from((i * 7 + j * 3) % 5) * 4.0;
+            boxes.push((
+                format!("building_{i}_{j}"),
+                DVec3::new(x, 0.0, z),
+                DVec3::new(x + block, height, z + block),
+            ));
+        }
+    }
+    boxes
+}
+
+/// How many of `path`'s frames have the eye inside the square `[lo, hi]²`
+/// of the ground (x and z).
+fn frames_within(path: &CameraPath, lo: f64, hi: f64) -> usize {
+    (0..path.frames)
+        .filter(|&f| {
+            let eye = path.camera(f, 4.0 / 3.0).eye;
+            (lo..=hi).contains(&eye.x) && (lo..=hi).contains(&eye.z)
+        })
+        .count()
+}
+
+#[test]
+fn streets_a_few_metres_wide_in_a_large_town_are_walked() {
+    let dir = tempfile::tempdir().unwrap();
+    // 12×12 blocks 28 wide with streets of 5.2: 393 across, with 20 of
+    // open ground around. (160 cells across, as before, were 2.7 wide: no
+    // street held the three cell centres an open cell needs.)
+    let boxes = town_grid(12, 28.0, 5.2, 20.0);
     let scene = load_obj(dir.path(), &boxes);
     let (path, why) = default_path(&scene).unwrap();
     assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
@@ -163,6 +226,76 @@ fn a_thick_ground_slab_is_walked_on_not_in() {
         assert!((eye.y - 1.7).abs() < 1e-6, "frame {f}: {eye}");
         assert!(houses.iter().all(|h| !h.contains_point(eye)), "frame {f}: {eye}");
     }
+    // Down the narrow streets, not round the open margin.
+    let between = frames_within(&path, 28.0, 365.0);
+    assert!(
+        2 * between >= path.frames as usize,
+        "{between} of {} frames ({why})",
+        path.frames
+    );
+    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+}
+
+#[test]
+fn a_town_on_a_slope_is_walked_across_the_slope_at_eye_height() {
+    let dir = tempfile::tempdir().unwrap();
+    // The town rising one unit in ten along x (every vertex lifted: walls
+    // stay upright, ground and roofs tilt).
+    let obj: String = boxes_obj(&town(true))
+        .lines()
+        .map(|line| match line.strip_prefix("v ") {
+            Some(v) => {
+                let [x, y, z] = [0, 1, 2].map(|k| v.split(' ').nth(k).unwrap().parse::<f64>().unwrap());
+                format!("v {x} {} {z}\n", y + 0.1 * x)
+            }
+            None => format!("{line}\n"),
+        })
+        .collect();
+    let model = write(dir.path(), "slope.obj", obj);
+    let scene = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();
+    let (path, why) = default_path(&scene).unwrap();
+    assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+    let (mut least, mut most) = (f64::INFINITY, f64::NEG_INFINITY);
+    for f in 0..path.frames {
+        let eye = path.camera(f, 4.0 / 3.0).eye;
+        // The ground is the plane y = x / 10.
+        assert!((eye.y - 0.1 * eye.x - 1.7).abs() < 1e-6, "frame {f}: {eye}");
+        (least, most) = (least.min(eye.x), most.max(eye.x));
+    }
+    // Up and down the slope, not along one contour.
+    assert!(most - least >= 60.0, "x from {least} to {most} ({why})");
+    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+}
+
+#[test]
+fn an_island_town_is_walked_in_its_streets_not_on_the_sea_around_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = town_grid(4, 18.0, 10.0, 10.0);
+    // The town on an island 3 above the sea, which reaches 300 beyond it.
+    boxes[0].1.y = 0.0;
+    boxes[0].2.y = 3.0;
+    for building in &mut boxes[1..] {
+        building.1.y += 3.0;
+        building.2.y += 3.0;
+    }
+    boxes.push((
+        "sea".into(),
+        DVec3::new(-300.0, -1.0, -300.0),
+        DVec3::new(402.0, 0.0, 402.0),
+    ));
+    let scene = load_obj(dir.path(), &boxes);
+    let (path, why) = default_path(&scene).unwrap();
+    assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+    for f in 0..path.frames {
+        let eye = path.camera(f, 4.0 / 3.0).eye;
+        assert!((eye.y - 4.7).abs() < 1e-6, "frame {f}: {eye} ({why})");
+    }
+    let between = frames_within(&path, 0.0, 102.0);
+    assert!(
+        2 * between >= path.frames as usize,
+        "{between} of {} frames ({why})",
+        path.frames
+    );
 }
 
 #[test]

@@ -298,17 +298,11 @@ fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Option<Strin
         .map(|k| DVec3::from(k.position))
         .collect();
     // Clusters of one split mesh ("dome#0", "dome#1") are one part.
-    let part = |object: usize| {
-        let name = &scene.objects[object].name;
-        match name.rsplit_once('#') {
-            Some((part, k)) if k.bytes().all(|b| b.is_ascii_digit()) => part,
-            _ => name.as_str(),
-        }
-    };
+    let part = |object: usize| scene.objects[object].part;
     let targets: Vec<usize> = (0..scene.objects.len())
         .step_by(scene.objects.len().div_ceil(64))
         .collect();
-    let mut first: std::collections::HashMap<&str, usize> = Default::default();
+    let mut first: std::collections::HashMap<u32, usize> = Default::default();
     let mut rays = 0;
     for eye in eyes.iter().step_by(4) {
         for &t in &targets {
@@ -321,7 +315,8 @@ fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Option<Strin
             rays += 1;
         }
     }
-    let (name, &n) = first.iter().max_by_key(|&(name, n)| (*n, std::cmp::Reverse(*name)))?;
+    let (&hider, &n) = first.iter().max_by_key(|&(p, n)| (*n, std::cmp::Reverse(*p)))?;
+    let name = &scene.parts[hider as usize].name;
     (targets.len() > 1 && 10 * n >= 9 * rays).then(|| {
         format!(
             "from the orbit, '{}' hides {n} of {rays} lines of sight to the other objects",
@@ -350,10 +345,10 @@ fn generate_with(
                 Some(w) => {
                     let length = w.length();
                     note = Some(format!(
-                        "a walk along the longest open route, {length:.1} units at eye height {:.3} (cells of {:.3}, {:.0}% walkable)",
+                        "a walk along the longest open route, {length:.1} units at eye height {:.3} (cells of {:.3}, {:.0}% of them joined to it)",
                         w.eye_height,
                         w.cell,
-                        100.0 * w.walkable
+                        100.0 * w.region
                     ));
                     walk_along(&w.line, w.cell)
                 }

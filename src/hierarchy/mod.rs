@@ -322,6 +322,7 @@ pub(crate) mod fixtures {
             transform: DAffine3::IDENTITY,
             bounds: Aabb::new(min, min + DVec3::splat(size)),
             triangles,
+            part: 0,
         }
     }
 

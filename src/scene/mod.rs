@@ -8,6 +8,7 @@
 
 pub mod builtin;
 pub mod cameras;
+mod closed;
 mod cluster;
 mod gltf;
 mod meshopt;
@@ -57,6 +58,18 @@ pub struct Object {
     /// World-space bounds.
     pub bounds: Aabb,
     pub triangles: u32,
+    /// The [`Part`] it belongs to.
+    pub part: u32,
+}
+
+/// A mesh as the loader placed it, before clustering: its objects are its
+/// clusters (a glTF primitive, an OBJ object or group, a built-in piece).
+#[derive(Clone, Debug)]
+pub struct Part {
+    pub name: String,
+    /// The mesh is a closed solid ([`closed::is_closed`]): a line through
+    /// it crosses its clusters' surfaces an even number of times.
+    pub closed: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -68,6 +81,8 @@ pub struct Scene {
     pub indices: Vec<u32>,
     pub meshes: Vec<Mesh>,
     pub objects: Vec<Object>,
+    /// What each object was cut from.
+    pub parts: Vec<Part>,
     pub bounds: Aabb,
     /// Problems that did not stop the load (degenerate triangles dropped, …).
     pub warnings: Vec<String>,
@@ -227,6 +242,8 @@ fn loader_for(path: &Path) -> Result<(Loader, up::Source), SceneError> {
 pub struct MeshGroup {
     /// (mesh id, origin of the cluster's local frame in source-mesh space).
     clusters: Vec<(u32, DVec3)>,
+    /// The source mesh is a closed solid.
+    closed: bool,
 }
 
 /// Accumulates validated, clustered meshes and their instances.
@@ -237,6 +254,7 @@ pub struct SceneBuilder {
     indices: Vec<u32>,
     meshes: Vec<Mesh>,
     objects: Vec<Object>,
+    parts: Vec<Part>,
     degenerate: Vec<(String, usize)>,
     warnings: Vec<String>,
     walk_hint: Option<Vec<DVec3>>,
@@ -254,6 +272,7 @@ impl SceneBuilder {
             indices: Vec::new(),
             meshes: Vec::new(),
             objects: Vec::new(),
+            parts: Vec::new(),
             degenerate: Vec::new(),
             warnings: Vec::new(),
             walk_hint: None,
@@ -295,7 +314,10 @@ impl SceneBuilder {
                 (self.meshes.len() as u32 - 1, origin)
             })
             .collect();
-        Ok(MeshGroup { clusters: group })
+        Ok(MeshGroup {
+            clusters: group,
+            closed: closed::is_closed(positions, &triangles.indices),
+        })
     }
 
     /// Places every cluster of `group` in the world under `transform`. A
@@ -334,6 +356,7 @@ impl SceneBuilder {
         let first = self.objects.len();
         let name = &one_line(name);
         let split = group.clusters.len() > 1;
+        let part = self.parts.len() as u32;
         for (i, &(mesh, origin)) in group.clusters.iter().enumerate() {
             let m = &self.meshes[mesh as usize];
             let transform = transform * DAffine3::from_translation(origin);
@@ -349,8 +372,13 @@ impl SceneBuilder {
                 bounds,
                 transform,
                 triangles: m.triangles(),
+                part,
             });
         }
+        self.parts.push(Part {
+            name: name.to_string(),
+            closed: group.closed,
+        });
         Ok(first..self.objects.len())
     }
 
@@ -401,6 +429,7 @@ impl SceneBuilder {
             indices: self.indices,
             meshes: self.meshes,
             objects: self.objects,
+            parts: self.parts,
             bounds,
             warnings,
             walk_hint: self.walk_hint,
