@@ -268,6 +268,51 @@ fn a_town_on_a_slope_is_walked_across_the_slope_at_eye_height() {
 }
 
 #[test]
+fn a_short_lane_in_open_ground_does_not_hold_the_walk() {
+    let dir = tempfile::tempdir().unwrap();
+    // A park 200 across with thin posts every 25 (too sparse to wall it),
+    // and in one corner a lane 60 long between two walls: a street, but
+    // short against the park.
+    let mut boxes = vec![(
+        "ground".to_string(),
+        DVec3::new(0.0, -1.0, 0.0),
+        DVec3::new(200.0, 0.0, 200.0),
+    )];
+    for i in 0..8 {
+        for j in 0..8 {
+            let (x, z) = (12.5 + 25.0 * f64::from(i), 12.5 + 25.0 * f64::from(j));
+            boxes.push((
+                format!("post_{i}_{j}"),
+                DVec3::new(x, 0.0, z),
+                DVec3::new(x + 1.0, 10.0, z + 1.0),
+            ));
+        }
+    }
+    boxes.push((
+        "wall_a".into(),
+        DVec3::new(130.0, 0.0, 170.0),
+        DVec3::new(190.0, 12.0, 175.0),
+    ));
+    boxes.push((
+        "wall_b".into(),
+        DVec3::new(130.0, 0.0, 185.0),
+        DVec3::new(190.0, 12.0, 190.0),
+    ));
+    let scene = load_obj(dir.path(), &boxes);
+    let (path, why) = default_path(&scene).unwrap();
+    assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+    let walk: f64 = (1..path.frames)
+        .map(|f| {
+            path.camera(f, 4.0 / 3.0)
+                .eye
+                .distance(path.camera(f - 1, 4.0 / 3.0).eye)
+        })
+        .sum();
+    assert!(walk >= 150.0, "a walk of {walk:.1} ({why})");
+    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+}
+
+#[test]
 fn an_island_town_is_walked_in_its_streets_not_on_the_sea_around_it() {
     let dir = tempfile::tempdir().unwrap();
     let mut boxes = town_grid(4, 18.0, 10.0, 10.0);

@@ -18,7 +18,8 @@
 //! passes between them. The walk is the longest of the shortest routes
 //! through the largest joined region (two breadth-first searches), in cell
 //! steps, of the streets (open floors with walls near in half the
-//! directions) when they hold a long enough one, else of all open floors.
+//! directions) when they hold a long enough one and a quarter of the open
+//! ground joined to them, else of all open floors.
 
 use std::collections::VecDeque;
 
@@ -172,20 +173,25 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
         let (p, q) = (point(a), point(b));
         caster.first_hit(p, q - p, 1.0).is_none()
     };
+    // The joined links between open floors: every route takes them.
+    let open_edges: Vec<Vec<usize>> = (0..floors.len())
+        .map(|f| {
+            if !open[f] {
+                return Vec::new();
+            }
+            let linked = links[f].iter().flatten().copied();
+            linked.filter(|&g| open[g] && joined(f, g)).collect()
+        })
+        .collect();
     // The longest shortest route through the largest joined region of
-    // `chosen` floors, and the region's size.
+    // `chosen` open floors, and the region's size.
     let longest_route = |chosen: &[bool]| -> Option<(Vec<usize>, usize)> {
-        let edges: Vec<Vec<usize>> = (0..floors.len())
-            .map(|f| {
-                if !chosen[f] {
-                    return Vec::new();
-                }
-                links[f]
-                    .iter()
-                    .flatten()
-                    .copied()
-                    .filter(|&g| chosen[g] && joined(f, g))
-                    .collect()
+        let edges: Vec<Vec<usize>> = open_edges
+            .iter()
+            .enumerate()
+            .map(|(f, e)| match chosen[f] {
+                true => e.iter().copied().filter(|&g| chosen[g]).collect(),
+                false => Vec::new(),
             })
             .collect();
         let start = largest_region(&edges, chosen)?;
@@ -217,9 +223,14 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
     // streets take in the open floors that near.
     let walled: Vec<bool> = (0..floors.len()).map(|f| open[f] && walled(f)).collect();
     let streets = widen(&walled, &links, &open, STREET_GAP);
-    let (route, region) = longest_route(&streets)
-        .filter(|(r, _)| r.len() >= LONG_ROUTE)
-        .or_else(|| longest_route(&open))?;
+    // The streets' route when it is long, and its streets are a good part
+    // of the open ground around them, not a lane between a few walls in a
+    // park or a forest.
+    let street_route = longest_route(&streets).filter(|(route, size)| {
+        let (_, _, around) = farthest(&open_edges, route[0]);
+        route.len() >= LONG_ROUTE && *size as f64 >= STREET_SHARE * around as f64
+    });
+    let (route, region) = street_route.or_else(|| longest_route(&open))?;
     if route.len() < MIN_CELLS {
         return None;
     }
@@ -264,6 +275,10 @@ fn solid_parts(scene: &Scene, right: DVec3, ahead: DVec3, up: DVec3) -> Vec<bool
 
 /// How far (in cells) a street's walls may lie.
 const STREET_REACH: f64 = 16.0;
+
+/// The streets must hold at least this share of the open ground joined to
+/// them.
+const STREET_SHARE: f64 = 0.25;
 
 /// Open cells this close (in steps) to a walled one are street too.
 const STREET_GAP: usize = 2;
