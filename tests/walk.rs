@@ -70,6 +70,19 @@ fn load_obj(dir: &std::path::Path, boxes: &[(String, DVec3, DVec3)]) -> Scene {
     load(&SceneSpec::File(model), &LoadOptions::default()).unwrap()
 }
 
+/// `model` loaded with meshes cut into clusters of `cluster_triangles`,
+/// and its default path, which must be a walk (with why).
+fn walked(model: &std::path::Path, cluster_triangles: u32) -> (Scene, CameraPath, String) {
+    let options = LoadOptions {
+        cluster_triangles,
+        ..LoadOptions::default()
+    };
+    let scene = load(&SceneSpec::File(model.to_path_buf()), &options).unwrap();
+    let (path, why) = default_path(&scene).unwrap();
+    assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+    (scene, path, why)
+}
+
 /// The buildings of [`town`] (all but the ground).
 fn buildings(scene: &Scene) -> Vec<occlu::bounds::Aabb> {
     scene
@@ -157,13 +170,7 @@ fn a_thick_ground_slab_is_walked_on_not_in_even_when_split_into_clusters() {
     let model = write(dir.path(), "model.obj", boxes_obj(&boxes));
     // Whole, and every box cut into three clusters (none closed alone).
     for cluster_triangles in [4096, 4] {
-        let options = LoadOptions {
-            cluster_triangles,
-            ..LoadOptions::default()
-        };
-        let scene = load(&SceneSpec::File(model.clone()), &options).unwrap();
-        let (path, why) = default_path(&scene).unwrap();
-        assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+        let (scene, path, why) = walked(&model, cluster_triangles);
         let houses = buildings(&scene);
         for f in 0..path.frames {
             let eye = path.camera(f, 4.0 / 3.0).eye;
@@ -365,13 +372,7 @@ fn a_dome_around_the_town_makes_the_default_path_go_inside() {
     let model = write(dir.path(), "domed.obj", obj);
     // Whole, and split into clusters of 4 triangles (the dome in three).
     for cluster_triangles in [4096, 4] {
-        let options = LoadOptions {
-            cluster_triangles,
-            ..LoadOptions::default()
-        };
-        let scene = load(&SceneSpec::File(model.clone()), &options).unwrap();
-        let (path, why) = default_path(&scene).unwrap();
-        assert!(path.source.ends_with("walk"), "{}: {why}", path.source);
+        let (scene, path, why) = walked(&model, cluster_triangles);
         // The orbit circles outside the dome, which hides the town.
         assert!(why.contains("'dome' hides"), "{why}");
         let houses = buildings(&scene);
