@@ -170,7 +170,7 @@ fn a_thick_ground_slab_is_walked_on_not_in_even_when_split_into_clusters() {
     let model = write(dir.path(), "model.obj", boxes_obj(&boxes));
     // Whole, and every box cut into three clusters (none closed alone).
     for cluster_triangles in [4096, 4] {
-        let (scene, path, why) = walked(&model, cluster_triangles);
+        let (scene, path, _) = walked(&model, cluster_triangles);
         let houses = buildings(&scene);
         for f in 0..path.frames {
             let eye = path.camera(f, 4.0 / 3.0).eye;
