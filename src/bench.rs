@@ -18,7 +18,7 @@ use crate::camera::Camera;
 use crate::camera::generate::default_path;
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
-use crate::cull::{Culler, FrameInput, Labeled, ModeError, ModeInfo, PreviousFrame, create};
+use crate::cull::{Culler, FrameInput, Labeled, ModeError, PreviousFrame};
 use crate::gpu::{
     AdapterReport, FrameCtx, FrameResources, GpuContext, GpuError, GpuScene, GpuTimer, QueryPool, RasterPool,
     RenderTargets, Resolution, SceneRenderer,
@@ -475,10 +475,10 @@ pub fn execute(
     let mut skipped: Vec<SkippedMode> = Vec::new();
     let mut runs = plan.runs();
     runs.retain(|run| {
-        let Some(reason) = ModeInfo::named(run.mode).unsupported_on(&gpu) else {
+        let Some(reason) = run.mode.info().unsupported_on(&gpu) else {
             return true;
         };
-        if !skipped.iter().any(|s| s.mode == run.mode) {
+        if !skipped.iter().any(|s| s.mode == run.mode.name()) {
             skipped.push(SkippedMode {
                 mode: run.mode.to_string(),
                 reason: reason.to_string(),
@@ -495,8 +495,8 @@ pub fn execute(
     let mut cullers = runs
         .iter()
         .map(|run| {
-            let culler = create(run.mode, scene, &run.params)?;
-            Ok(if run.label == run.mode {
+            let culler = run.mode.create(scene, &run.params)?;
+            Ok(if run.label == run.mode.name() {
                 culler
             } else {
                 Box::new(Labeled {
@@ -521,7 +521,7 @@ pub fn execute(
         .zip(&cullers)
         .map(|(run, culler)| ModeDescription {
             name: run.label.clone(),
-            conservative: ModeInfo::named(run.mode).conservative,
+            conservative: run.mode.info().conservative,
             parameters: culler.parameters(),
         })
         .collect();

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::cull::{ModeError, ModeParams, parse_modes};
+use crate::cull::{ModeError, ModeId, ModeParams, parse_modes};
 use crate::gpu::{BackendChoice, Resolution};
 use crate::input::ByteSize;
 use crate::scene::builtin::with_movers;
@@ -109,7 +109,7 @@ pub fn scene_spec(
 pub struct BenchPlan {
     pub scene: SceneSpec,
     pub path: Option<PathBuf>,
-    pub modes: Vec<&'static str>,
+    pub modes: Vec<ModeId>,
     pub params: ModeParams,
     pub sweep: Option<Sweep>,
     pub frames: Option<u32>,
@@ -259,7 +259,7 @@ pub fn load_options(
 /// interleaved run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sweep {
-    pub mode: &'static str,
+    pub mode: ModeId,
     pub key: String,
     pub values: Vec<String>,
 }
@@ -289,7 +289,7 @@ impl Sweep {
 /// One culler of a plan: a mode, its label in the results, its parameters.
 pub struct ModeRun {
     pub label: String,
-    pub mode: &'static str,
+    pub mode: ModeId,
     pub params: ModeParams,
 }
 
@@ -327,7 +327,7 @@ mod tests {
     fn defaults_give_the_built_in_city_with_every_mode() {
         let p = BenchConfig::default().plan().unwrap();
         assert_eq!(p.scene, SceneSpec::Builtin("city".into()));
-        assert_eq!(p.modes, crate::cull::mode_names());
+        assert_eq!(p.modes, ModeId::ALL.to_vec());
         assert_eq!(p.resolution, Resolution::DEFAULT);
         assert!(p.measure_error);
     }
@@ -353,9 +353,15 @@ mod tests {
         let p = flags.or(file).plan().unwrap();
         assert_eq!(p.scene, SceneSpec::File("m.obj".into()));
         assert_eq!((p.frames, p.warmup), (Some(20), 1));
-        assert_eq!(p.params.get::<f64>("omq", "factor"), Ok(0.5), "the flag wins");
         assert_eq!(
-            p.params.get::<String>("omq", "om"),
+            p.params
+                .get::<f64>(ModeId::Omq, ModeId::Omq.info().param("factor").unwrap()),
+            Ok(0.5),
+            "the flag wins"
+        );
+        assert_eq!(
+            p.params
+                .get::<String>(ModeId::Omq, ModeId::Omq.info().param("om").unwrap()),
             Ok("32x24".into()),
             "the file still counts"
         );
@@ -411,7 +417,12 @@ mod tests {
             labels,
             ["vfc", "ac[threshold=0]", "ac[threshold=50]", "ac[threshold=auto]"]
         );
-        assert_eq!(plan.runs()[2].params.get::<String>("ac", "threshold"), Ok("50".into()));
+        assert_eq!(
+            plan.runs()[2]
+                .params
+                .get::<String>(ModeId::Ac, ModeId::Ac.info().param("threshold").unwrap()),
+            Ok("50".into())
+        );
         let bad = |s: &str| {
             BenchConfig {
                 sweep: Some(s.into()),

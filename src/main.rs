@@ -16,7 +16,7 @@ use occlu::bench::{BenchError, BenchEvent, execute};
 use occlu::camera::generate::{PathRequest, plan};
 use occlu::camera::path::{CameraPath, PathError};
 use occlu::config::{BenchConfig, ConfigError, load_options, scene_spec};
-use occlu::cull::{MODES, ModeError, ModeInfo, ModeParams, create, parse_modes};
+use occlu::cull::{ModeError, ModeParams, parse_modes};
 use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::input::ByteSize;
@@ -52,8 +52,7 @@ struct Cli {
 }
 
 fn after_help() -> String {
-    let modes: Vec<String> = MODES
-        .iter()
+    let modes: Vec<String> = occlu::cull::modes()
         .map(|m| {
             let params = m.params.iter().map(|p| {
                 format!(
@@ -793,10 +792,10 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let (scene, path) = args.scene.load()?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
-    if let Some(reason) = ModeInfo::named(mode).unsupported_on(&gpu) {
+    if let Some(reason) = mode.info().unsupported_on(&gpu) {
         anyhow::bail!("mode '{mode}' cannot run on {}: {reason}", gpu.adapter);
     }
-    let culler = create(mode, &scene, &params)?;
+    let culler = mode.create(&scene, &params)?;
     let mut world = World::new(scene, hierarchy);
     let options = PictureOptions {
         frame: args.frame,

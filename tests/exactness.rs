@@ -18,7 +18,7 @@ use std::cell::Cell;
 
 use common::gpus;
 use occlu::camera::{Camera, look_rotation};
-use occlu::cull::{Culler, FrameInput, MODES, ModeParams, TraversalStats, create};
+use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create, modes};
 use occlu::gpu::{FrameCtx, GpuContext, Resolution};
 use occlu::hierarchy::HierarchyParams;
 use occlu::measure::FrameStats;
@@ -55,10 +55,7 @@ fn run_conservative_modes<'a>(
     extra: Vec<Box<dyn Culler + 'a>>,
 ) -> Vec<FrameStats> {
     let mut cullers = extra;
-    for mode in MODES
-        .iter()
-        .filter(|m| m.conservative && m.unsupported_on(gpu).is_none())
-    {
+    for mode in modes().filter(|m| m.conservative && m.unsupported_on(gpu).is_none()) {
         cullers.push(create(mode.name, &case.scene, &ModeParams::default()).unwrap());
     }
     let hierarchy = HierarchyParams::default();
@@ -170,8 +167,7 @@ fn parts_flush_with_distant_walls_are_drawn_on_every_backend() {
 }
 
 fn conservative_modes_on(gpu: &GpuContext) -> usize {
-    MODES
-        .iter()
+    modes()
         .filter(|m| m.conservative && m.unsupported_on(gpu).is_none())
         .count()
 }

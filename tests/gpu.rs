@@ -275,8 +275,7 @@ fn conservative_modes_stay_exact_while_cars_drive_through_the_city() {
     let frames = 24;
     let (scene, hierarchy, path) = common::builtin("city:blocks=2,movers=40", frames);
     let movers: Vec<u32> = scene.movers.iter().map(|m| m.object).collect();
-    let modes: Vec<&str> = occlu::cull::MODES
-        .iter()
+    let modes: Vec<&str> = occlu::cull::modes()
         .filter(|m| m.conservative)
         .map(|m| m.name)
         .collect();
@@ -316,8 +315,7 @@ fn conservative_modes_stay_exact_while_cars_drive_through_the_city() {
 
 #[test]
 fn the_forest_is_mostly_visible_where_the_city_is_mostly_hidden_and_every_mode_is_exact_in_it() {
-    let modes: Vec<&str> = occlu::cull::MODES
-        .iter()
+    let modes: Vec<&str> = occlu::cull::modes()
         .filter(|m| m.conservative)
         .map(|m| m.name)
         .collect();
@@ -385,8 +383,7 @@ fn a_lost_device_ends_the_run_with_an_error_not_a_panic() {
     // where every mode (the GPU-driven ones creating their buffers) runs on.
     for lost_after_frames in [0, 1] {
         for gpu in common::gpus() {
-            let modes: Vec<&str> = occlu::cull::MODES
-                .iter()
+            let modes: Vec<&str> = occlu::cull::modes()
                 .filter(|m| m.unsupported_on(&gpu).is_none())
                 .map(|m| m.name)
                 .collect();

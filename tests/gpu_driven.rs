@@ -6,7 +6,7 @@ mod common;
 
 use common::{boxes, held, run_modes};
 use glam::DVec3;
-use occlu::cull::{Culler, Labeled, ModeInfo, ModeParams, create};
+use occlu::cull::{Culler, Labeled, ModeId, ModeParams, create};
 use occlu::gpu::{GpuContext, Resolution};
 use occlu::hierarchy::Hierarchy;
 use occlu::measure::FrameStats;
@@ -19,7 +19,12 @@ fn mode(scene: &Scene, label: &str, mode: &str, items: &[&str]) -> Box<dyn Culle
     let items: Vec<String> = items.iter().map(|s| s.to_string()).collect();
     Box::new(Labeled {
         label: label.into(),
-        inner: create(mode, scene, &ModeParams::parse(&items, &[mode]).unwrap()).unwrap(),
+        inner: create(
+            mode,
+            scene,
+            &ModeParams::parse(&items, &[mode.parse().unwrap()]).unwrap(),
+        )
+        .unwrap(),
     })
 }
 
@@ -151,15 +156,11 @@ fn roc_and_ioc_are_exact_on_the_moving_city_within_their_round_trips() {
 fn adapters_without_gpu_culling_skip_roc_and_ioc_with_a_reason() {
     let mut gpu = common::gpus().remove(0);
     assert!(gpu.gpu_driven, "Mesa's llvmpipe culls on the GPU: {}", gpu.adapter);
-    assert_eq!(ModeInfo::named("roc").unsupported_on(&gpu), None);
+    assert_eq!(ModeId::Roc.info().unsupported_on(&gpu), None);
     gpu.gpu_driven = false;
-    for m in ["roc", "ioc"] {
-        let reason = ModeInfo::named(m).unsupported_on(&gpu).unwrap_or_default();
+    for m in [ModeId::Roc, ModeId::Ioc] {
+        let reason = m.info().unsupported_on(&gpu).unwrap_or_default();
         assert!(reason.contains("cannot cull on the GPU"), "{m}: {reason:?}");
     }
-    assert_eq!(
-        ModeInfo::named("omq").unsupported_on(&gpu),
-        None,
-        "other modes still run"
-    );
+    assert_eq!(ModeId::Omq.info().unsupported_on(&gpu), None, "other modes still run");
 }

@@ -323,7 +323,7 @@ fn city_runs(runs: &[(&str, &[&str])], frames: u32) -> Vec<Vec<FrameStats>> {
                 .map(|&(label, params)| {
                     let mode = label.split('[').next().unwrap();
                     let items: Vec<String> = params.iter().map(|p| p.to_string()).collect();
-                    let params = ModeParams::parse(&items, &[mode]).unwrap();
+                    let params = ModeParams::parse(&items, &[mode.parse().unwrap()]).unwrap();
                     Box::new(occlu::cull::Labeled {
                         label: label.to_string(),
                         inner: create(mode, &scene, &params).unwrap(),
@@ -377,7 +377,12 @@ fn adaptive_culling_is_exact_at_threshold_zero_and_trades_error_above_it() {
 /// chc with `items` as its parameters.
 fn chc(scene: &Scene, items: &[&str]) -> Box<dyn Culler> {
     let items: Vec<String> = items.iter().map(|s| s.to_string()).collect();
-    create("chc", scene, &ModeParams::parse(&items, &["chc"]).unwrap()).unwrap()
+    create(
+        "chc",
+        scene,
+        &ModeParams::parse(&items, &[occlu::cull::ModeId::Chc]).unwrap(),
+    )
+    .unwrap()
 }
 
 #[test]

@@ -12,7 +12,7 @@ use std::time::Instant;
 use common::{gpus, hierarchy, run_modes};
 use occlu::camera::generate::default_path;
 use occlu::camera::path::CameraPath;
-use occlu::cull::{Culler, MODES, ModeParams, create};
+use occlu::cull::{Culler, ModeParams, create, modes};
 use occlu::gpu::Resolution;
 use occlu::scene::{LoadOptions, SceneSpec, load};
 
@@ -78,8 +78,7 @@ fn every_conservative_mode_is_exact_on_every_shared_model() {
         };
         for gpu in &gpus {
             let started = Instant::now();
-            let mut cullers: Vec<Box<dyn Culler>> = MODES
-                .iter()
+            let mut cullers: Vec<Box<dyn Culler>> = modes()
                 .filter(|m| m.conservative && m.unsupported_on(gpu).is_none())
                 .map(|m| create(m.name, &scene, &ModeParams::default()).unwrap())
                 .collect();

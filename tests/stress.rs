@@ -8,7 +8,7 @@ mod common;
 use common::{DropOneVisible, boxes, gpus, occlu, own_stderr, stdout};
 use glam::DVec3;
 use occlu::camera::{Camera, look_rotation};
-use occlu::cull::{Culler, MODES, ModeParams, create};
+use occlu::cull::{Culler, ModeParams, create, modes};
 use occlu::gpu::Resolution;
 use occlu::hierarchy::HierarchyParams;
 use occlu::scene::builtin::Rng;
@@ -32,7 +32,7 @@ fn occlu_stress_passes_on_every_backend() {
             serde_json::from_str(&std::fs::read_to_string(dir.path().join("stress.json")).unwrap()).unwrap();
         let rows = report["rows"].as_array().unwrap();
         let cases = select(&[]).unwrap();
-        let conservative = MODES.iter().filter(|m| m.conservative).count();
+        let conservative = modes().filter(|m| m.conservative).count();
         assert!(
             rows.len() >= cases.len() * conservative,
             "{backend}: every case ran every mode"
@@ -177,7 +177,7 @@ fn conservative_modes_draw_every_visible_object_of_random_scenes() {
             }
         })
         .collect();
-    let modes: Vec<&str> = MODES.iter().filter(|m| m.conservative).map(|m| m.name).collect();
+    let modes: Vec<&str> = modes().filter(|m| m.conservative).map(|m| m.name).collect();
     for gpu in gpus() {
         let mut visible = 0;
         for (k, case) in scenes.iter().enumerate() {

@@ -54,8 +54,44 @@ use std::time::{Duration, Instant};
 use serde::Serialize;
 
 use super::traversal::{DepthQueue, children, draw_leaf, frustum_cull_subtree, in_frustum, view_depth};
-use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
+use super::{Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, TraversalStats};
 use crate::gpu::{BoxTest, BoxVisibility, FrameCtx};
+
+/// This mode's entry in the registry.
+pub(super) const MODE: ModeInfo = ModeInfo {
+    id: ModeId::Ac,
+    name: "ac",
+    summary: "V+O with adaptive culling (Eq. 1) and a cost-adaptive budget (Eq. 2) by visible-pixel counts (002 §4.2-4.4)",
+    conservative: false,
+    params: &[THRESHOLD, SAMPLING, F_GRAPHICS, EYE_DISTANCE],
+    needs: Needs::PixelCounts,
+    check: |params| AcParams::from_params(params).map(drop),
+    build: |_, params| Ok(Box::new(AdaptiveCulling::new(AcParams::from_params(params)?))),
+};
+
+const THRESHOLD: ParamInfo = ParamInfo {
+    key: "threshold",
+    default: "auto",
+    summary: "Eq. 1 threshold in pixels; auto = 100 px on 650x650 scaled to the viewport",
+};
+
+const SAMPLING: ParamInfo = ParamInfo {
+    key: "sampling",
+    default: "1",
+    summary: "count every k-th row of spans (1: every pixel)",
+};
+
+const F_GRAPHICS: ParamInfo = ParamInfo {
+    key: "f_graphics",
+    default: "0.3333333333333333",
+    summary: "Eq. 2 culling budget = previous render time x this (inf: no budget)",
+};
+
+const EYE_DISTANCE: ParamInfo = ParamInfo {
+    key: "eye_distance",
+    default: "near",
+    summary: "Dist(Eye) of Eq. 1: the near plane, or a distance",
+};
 
 /// The threshold of Eq. 1, in pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -88,11 +124,11 @@ impl AcParams {
             key: format!("ac.{key}"),
             reason,
         };
-        let sampling: u32 = params.get("ac", "sampling")?;
+        let sampling: u32 = params.get(ModeId::Ac, &SAMPLING)?;
         if sampling == 0 {
             return Err(bad("sampling", "must be at least 1".into()));
         }
-        let f_graphics: f64 = params.get("ac", "f_graphics")?;
+        let f_graphics: f64 = params.get(ModeId::Ac, &F_GRAPHICS)?;
         if f_graphics.is_nan() || f_graphics < 0.0 {
             return Err(bad(
                 "f_graphics",
@@ -100,10 +136,10 @@ impl AcParams {
             ));
         }
         Ok(AcParams {
-            threshold: params.get("ac", "threshold")?,
+            threshold: params.get(ModeId::Ac, &THRESHOLD)?,
             sampling,
             f_graphics,
-            eye_distance: params.get("ac", "eye_distance")?,
+            eye_distance: params.get(ModeId::Ac, &EYE_DISTANCE)?,
         })
     }
 }
@@ -315,7 +351,7 @@ mod tests {
         assert!("0".parse::<EyeDistance>().is_err());
         let p = |items: &[&str]| {
             let items: Vec<String> = items.iter().map(|s| s.to_string()).collect();
-            ModeParams::parse(&items, &["ac"]).and_then(|m| AcParams::from_params(&m))
+            ModeParams::parse(&items, &[ModeId::Ac]).and_then(|m| AcParams::from_params(&m))
         };
         let defaults = p(&[]).unwrap();
         assert_eq!(defaults.threshold, Threshold::Auto);

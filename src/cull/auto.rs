@@ -32,9 +32,29 @@ use serde::Serialize;
 use super::ioc::{IocParams, IterativeOcclusionCulling};
 use super::omq::{OccupancyMapQueries, OmqParams};
 use super::vfc::FrustumCulling;
-use super::{Culler, FrameInput, ModeError, ModeParams, PreviousFrame, TraversalStats};
+use super::{
+    Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, PreviousFrame, TraversalStats,
+};
 use crate::gpu::FrameCtx;
 use crate::scene::Scene;
+
+/// This mode's entry in the registry.
+pub(super) const MODE: ModeInfo = ModeInfo {
+    id: ModeId::Auto,
+    name: "auto",
+    summary: "per frame, vfc or occlusion culling (ioc, or omq without GPU culling), whichever measured cheaper; the other re-measured now and then",
+    conservative: true,
+    params: &[PROBE],
+    needs: Needs::Nothing,
+    check: |params| AutoParams::from_params(params).map(drop),
+    build: |scene, params| Ok(Box::new(AutoCulling::new(scene, AutoParams::from_params(params)?))),
+};
+
+const PROBE: ParamInfo = ParamInfo {
+    key: "probe",
+    default: "32",
+    summary: "frames between re-measurements of the dearer strategy, times how much dearer it was",
+};
 
 /// Weight of the newest frame in a strategy's average.
 const SMOOTHING: f64 = 0.3;
@@ -54,7 +74,7 @@ pub struct AutoParams {
 
 impl AutoParams {
     pub fn from_params(params: &ModeParams) -> Result<AutoParams, ModeError> {
-        let probe: u32 = params.get("auto", "probe")?;
+        let probe: u32 = params.get(ModeId::Auto, &PROBE)?;
         if probe == 0 {
             return Err(ModeError::BadParam {
                 key: "auto.probe".into(),

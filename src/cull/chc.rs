@@ -41,12 +41,54 @@ use serde::Serialize;
 
 use super::occupancy::ScreenRect;
 use super::traversal::{DepthQueue, nearest_corner};
-use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
+use super::{Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, TraversalStats};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
 use crate::gpu::{BoxVisibility, FrameCtx, Resolution};
 use crate::hierarchy::ternary::{Pixels, TernaryTree, TreeParams, facing_axis};
 use crate::scene::Scene;
+
+/// This mode's entry in the registry.
+pub(super) const MODE: ModeInfo = ModeInfo {
+    id: ModeId::Chc,
+    name: "chc",
+    summary: "coherent culling on a ternary tree: last frame's visible nodes unwaited, TightBoxes, split/merge, colliding queries wait (001)",
+    conservative: true,
+    params: &[R_SPLIT, O_SPLIT, R_MERGE, O_MERGE, TIGHT_AFTER],
+    needs: Needs::PixelCounts,
+    check: |params| ChcParams::from_params(params).map(drop),
+    build: |scene, params| Ok(Box::new(CoherentCulling::new(scene, ChcParams::from_params(params)?))),
+};
+
+const R_SPLIT: ParamInfo = ParamInfo {
+    key: "r_split",
+    default: "0.25",
+    summary: "split a leaf whose visible/total pixels reach this …",
+};
+
+const O_SPLIT: ParamInfo = ParamInfo {
+    key: "o_split",
+    default: "12",
+    summary: "… and which holds at least this many objects",
+};
+
+const R_MERGE: ParamInfo = ParamInfo {
+    key: "r_merge",
+    default: "0.75",
+    summary: "merge sibling leaves whose visible/total pixels are at most this …",
+};
+
+const O_MERGE: ParamInfo = ParamInfo {
+    key: "o_merge",
+    default: "5",
+    summary: "… and which hold at most this many objects each",
+};
+
+const TIGHT_AFTER: ParamInfo = ParamInfo {
+    key: "tight_after",
+    default: "3",
+    summary: "frames without change before a node's TightBox replaces its cell",
+};
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ChcParams {
@@ -56,24 +98,24 @@ pub struct ChcParams {
 
 impl ChcParams {
     pub fn from_params(params: &ModeParams) -> Result<ChcParams, ModeError> {
-        let ratio = |key: &str| -> Result<f64, ModeError> {
-            let r: f64 = params.get("chc", key)?;
+        let ratio = |param: &ParamInfo| -> Result<f64, ModeError> {
+            let r: f64 = params.get(ModeId::Chc, param)?;
             if (0.0..=1.0).contains(&r) {
                 Ok(r)
             } else {
                 Err(ModeError::BadParam {
-                    key: format!("chc.{key}"),
+                    key: format!("chc.{}", param.key),
                     reason: format!("a pixel ratio must be in 0..=1, got {r}"),
                 })
             }
         };
         Ok(ChcParams {
             tree: TreeParams {
-                r_split: ratio("r_split")?,
-                o_split: params.get("chc", "o_split")?,
-                r_merge: ratio("r_merge")?,
-                o_merge: params.get("chc", "o_merge")?,
-                tight_after: params.get("chc", "tight_after")?,
+                r_split: ratio(&R_SPLIT)?,
+                o_split: params.get(ModeId::Chc, &O_SPLIT)?,
+                r_merge: ratio(&R_MERGE)?,
+                o_merge: params.get(ModeId::Chc, &O_MERGE)?,
+                tight_after: params.get(ModeId::Chc, &TIGHT_AFTER)?,
             },
         })
     }

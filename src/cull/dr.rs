@@ -1,9 +1,21 @@
 //! `dr`: direct rendering (paper 002 §5, "DR – without any culling"). The
 //! baseline every culler must beat, and the image every culler must match.
 
-use super::{Culler, FrameInput, TraversalStats};
+use super::{Culler, FrameInput, ModeId, ModeInfo, Needs, TraversalStats};
 use crate::gpu::FrameCtx;
 use crate::scene::Scene;
+
+/// This mode's entry in the registry.
+pub(super) const MODE: ModeInfo = ModeInfo {
+    id: ModeId::Dr,
+    name: "dr",
+    summary: "direct rendering: every object, no culling (002 §5)",
+    conservative: true,
+    params: &[],
+    needs: Needs::Nothing,
+    check: |_| Ok(()),
+    build: |scene, _| Ok(Box::new(DirectRendering::new(scene))),
+};
 
 pub struct DirectRendering {
     all: Vec<u32>,

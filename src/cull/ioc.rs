@@ -27,10 +27,38 @@ use std::str::FromStr;
 use serde::Serialize;
 
 use super::roc::cull_on_gpu;
-use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
+use super::{Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, TraversalStats};
 use crate::gpu::{CullTree, FrameCtx, GpuCullTree, MAX_LEVELS};
 use crate::hierarchy::Hierarchy;
 use crate::scene::Object;
+
+/// This mode's entry in the registry.
+pub(super) const MODE: ModeInfo = ModeInfo {
+    id: ModeId::Ioc,
+    name: "ioc",
+    summary: "iterative hierarchical raster occlusion culling: roc over the hierarchy, level by level from a start to a bottom depth (004 §2)",
+    conservative: true,
+    params: &[START, BOTTOM],
+    needs: Needs::GpuCulling,
+    check: |params| IocParams::from_params(params).map(drop),
+    build: |_, params| {
+        Ok(Box::new(IterativeOcclusionCulling::new(IocParams::from_params(
+            params,
+        )?)))
+    },
+};
+
+const START: ParamInfo = ParamInfo {
+    key: "start",
+    default: "auto",
+    summary: "depth whose nodes are tested first (root 0); auto: from the hierarchy",
+};
+
+const BOTTOM: ParamInfo = ParamInfo {
+    key: "bottom",
+    default: "auto",
+    summary: "depth below which nodes are not tested: a visible node there draws its subtree; auto: from the hierarchy",
+};
 
 /// A depth of the hierarchy (root 0), given or chosen from the hierarchy.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -75,8 +103,8 @@ pub struct IocParams {
 impl IocParams {
     pub fn from_params(params: &ModeParams) -> Result<IocParams, ModeError> {
         let p = IocParams {
-            start: params.get("ioc", "start")?,
-            bottom: params.get("ioc", "bottom")?,
+            start: params.get(ModeId::Ioc, &START)?,
+            bottom: params.get(ModeId::Ioc, &BOTTOM)?,
         };
         if let (Depth::Fixed(start), Depth::Fixed(bottom)) = (p.start, p.bottom) {
             if start > bottom {

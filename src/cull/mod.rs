@@ -3,7 +3,8 @@
 //! A mode owns its state between frames (temporal coherence lives inside the
 //! mode) and touches the GPU only through [`FrameCtx`], which counts what it
 //! draws and queries. To add a mode: write `cull/NAME.rs` implementing
-//! [`Culler`], add it to [`MODES`] and to [`create`].
+//! [`Culler`] and declaring its registry entry (`MODE`: name, summary,
+//! parameters, needs, constructor), and name it in [`ModeId`].
 
 mod ac;
 mod auto;
@@ -132,8 +133,83 @@ pub trait Culler {
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats;
 }
 
-/// A mode on the command line.
+/// Every mode, in the order `all` runs them and `--help` lists them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ModeId {
+    Dr,
+    Vfc,
+    Sq,
+    Omq,
+    Ac,
+    Chc,
+    Roc,
+    Ioc,
+    Auto,
+    Oracle,
+}
+
+impl ModeId {
+    pub const ALL: [ModeId; 10] = [
+        ModeId::Dr,
+        ModeId::Vfc,
+        ModeId::Sq,
+        ModeId::Omq,
+        ModeId::Ac,
+        ModeId::Chc,
+        ModeId::Roc,
+        ModeId::Ioc,
+        ModeId::Auto,
+        ModeId::Oracle,
+    ];
+
+    /// The mode's registry entry, declared in its own file.
+    pub fn info(self) -> &'static ModeInfo {
+        match self {
+            ModeId::Dr => &dr::MODE,
+            ModeId::Vfc => &vfc::MODE,
+            ModeId::Sq => &sq::MODE,
+            ModeId::Omq => &omq::MODE,
+            ModeId::Ac => &ac::MODE,
+            ModeId::Chc => &chc::MODE,
+            ModeId::Roc => &roc::MODE,
+            ModeId::Ioc => &ioc::MODE,
+            ModeId::Auto => &auto::MODE,
+            ModeId::Oracle => &oracle::MODE,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        self.info().name
+    }
+
+    /// The mode's culler; scratch space is sized for `scene`, which each
+    /// frame then brings in [`FrameInput`].
+    pub fn create(self, scene: &Scene, params: &ModeParams) -> Result<Box<dyn Culler>, ModeError> {
+        (self.info().build)(scene, params)
+    }
+}
+
+impl Display for ModeId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for ModeId {
+    type Err = ModeError;
+
+    fn from_str(name: &str) -> Result<ModeId, ModeError> {
+        ModeId::ALL
+            .into_iter()
+            .find(|m| m.name() == name)
+            .ok_or_else(|| ModeError::Unknown(name.to_string()))
+    }
+}
+
+/// A mode's registry entry: all the rest of the program knows of it.
 pub struct ModeInfo {
+    pub id: ModeId,
+    /// The mode's name on the command line and in result files.
     pub name: &'static str,
     pub summary: &'static str,
     /// Whether the mode may never change a pixel (0 error required).
@@ -143,7 +219,15 @@ pub struct ModeInfo {
     /// What it needs from the adapter beyond drawing and occlusion queries;
     /// a mode whose needs are not met is skipped, with a message.
     pub needs: Needs,
+    /// Parses the mode's parameters, so a bad value is reported before any
+    /// work.
+    pub check: fn(&ModeParams) -> Result<(), ModeError>,
+    /// Creates the mode's culler (see [`ModeId::create`]).
+    pub build: BuildCuller,
 }
+
+/// A mode's constructor: its culler for a scene, with its parameters.
+pub type BuildCuller = fn(&Scene, &ModeParams) -> Result<Box<dyn Culler>, ModeError>;
 
 /// Adapter capabilities a mode may need.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -157,13 +241,9 @@ pub enum Needs {
 }
 
 impl ModeInfo {
-    /// The mode named `name`, which must be one of [`MODES`] (mode names are
-    /// checked by [`parse_modes`] before anything runs).
-    pub fn named(name: &str) -> &'static ModeInfo {
-        MODES
-            .iter()
-            .find(|m| m.name == name)
-            .unwrap_or_else(|| panic!("'{name}' is not in MODES"))
+    /// The parameter called `key`, if the mode declares one.
+    pub fn param(&self, key: &str) -> Option<&'static ParamInfo> {
+        self.params.iter().find(|p| p.key == key)
     }
 
     /// Why the mode cannot run on `gpu`, or `None` when it can.
@@ -186,160 +266,9 @@ pub struct ParamInfo {
     pub summary: &'static str,
 }
 
-pub const MODES: &[ModeInfo] = &[
-    ModeInfo {
-        name: "dr",
-        summary: "direct rendering: every object, no culling (002 §5)",
-        conservative: true,
-        params: &[],
-        needs: Needs::Nothing,
-    },
-    ModeInfo {
-        name: "vfc",
-        summary: "hierarchical view-frustum culling with the fully-inside shortcut (002 §4.1)",
-        conservative: true,
-        params: &[],
-        needs: Needs::Nothing,
-    },
-    ModeInfo {
-        name: "sq",
-        summary: "front-to-back traversal, one occlusion query per node, each awaited (003 §5 b)",
-        conservative: true,
-        params: &[],
-        needs: Needs::Nothing,
-    },
-    ModeInfo {
-        name: "omq",
-        summary: "Occupancy Map + multiple occlusion queries in three stages (003 §3-4)",
-        conservative: true,
-        params: &[
-            ParamInfo {
-                key: "om",
-                default: "64x48",
-                summary: "Occupancy Map cells across x down",
-            },
-            ParamInfo {
-                key: "initial_max_tests",
-                default: "4",
-                summary: "stage-2 batches in the first frame",
-            },
-            ParamInfo {
-                key: "factor",
-                default: "0.7",
-                summary: "next frame's max_tests = factor x this frame's batches",
-            },
-        ],
-        needs: Needs::Nothing,
-    },
-    ModeInfo {
-        name: "ac",
-        summary: "V+O with adaptive culling (Eq. 1) and a cost-adaptive budget (Eq. 2) by visible-pixel counts (002 §4.2-4.4)",
-        conservative: false,
-        params: &[
-            ParamInfo {
-                key: "threshold",
-                default: "auto",
-                summary: "Eq. 1 threshold in pixels; auto = 100 px on 650x650 scaled to the viewport",
-            },
-            ParamInfo {
-                key: "sampling",
-                default: "1",
-                summary: "count every k-th row of spans (1: every pixel)",
-            },
-            ParamInfo {
-                key: "f_graphics",
-                default: "0.3333333333333333",
-                summary: "Eq. 2 culling budget = previous render time x this (inf: no budget)",
-            },
-            ParamInfo {
-                key: "eye_distance",
-                default: "near",
-                summary: "Dist(Eye) of Eq. 1: the near plane, or a distance",
-            },
-        ],
-        needs: Needs::PixelCounts,
-    },
-    ModeInfo {
-        name: "chc",
-        summary: "coherent culling on a ternary tree: last frame's visible nodes unwaited, TightBoxes, split/merge, colliding queries wait (001)",
-        conservative: true,
-        params: &[
-            ParamInfo {
-                key: "r_split",
-                default: "0.25",
-                summary: "split a leaf whose visible/total pixels reach this …",
-            },
-            ParamInfo {
-                key: "o_split",
-                default: "12",
-                summary: "… and which holds at least this many objects",
-            },
-            ParamInfo {
-                key: "r_merge",
-                default: "0.75",
-                summary: "merge sibling leaves whose visible/total pixels are at most this …",
-            },
-            ParamInfo {
-                key: "o_merge",
-                default: "5",
-                summary: "… and which hold at most this many objects each",
-            },
-            ParamInfo {
-                key: "tight_after",
-                default: "3",
-                summary: "frames without change before a node's TightBox replaces its cell",
-            },
-        ],
-        needs: Needs::PixelCounts,
-    },
-    ModeInfo {
-        name: "roc",
-        summary: "raster occlusion culling on the GPU: every object's box marks a visibility buffer, indirect multi-draw (004's ROC)",
-        conservative: true,
-        params: &[],
-        needs: Needs::GpuCulling,
-    },
-    ModeInfo {
-        name: "ioc",
-        summary: "iterative hierarchical raster occlusion culling: roc over the hierarchy, level by level from a start to a bottom depth (004 §2)",
-        conservative: true,
-        params: &[
-            ParamInfo {
-                key: "start",
-                default: "auto",
-                summary: "depth whose nodes are tested first (root 0); auto: from the hierarchy",
-            },
-            ParamInfo {
-                key: "bottom",
-                default: "auto",
-                summary: "depth below which nodes are not tested: a visible node there draws its subtree; auto: from the hierarchy",
-            },
-        ],
-        needs: Needs::GpuCulling,
-    },
-    ModeInfo {
-        name: "auto",
-        summary: "per frame, vfc or occlusion culling (ioc, or omq without GPU culling), whichever measured cheaper; the other re-measured now and then",
-        conservative: true,
-        params: &[ParamInfo {
-            key: "probe",
-            default: "32",
-            summary: "frames between re-measurements of the dearer strategy, times how much dearer it was",
-        }],
-        needs: Needs::Nothing,
-    },
-    ModeInfo {
-        name: "oracle",
-        summary: "draws exactly the objects visible in the reference frame: the floor for object-level culling",
-        conservative: true,
-        params: &[],
-        needs: Needs::Nothing,
-    },
-];
-
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum ModeError {
-    #[error("unknown mode '{0}' (modes: {list}, or all)", list = mode_names().join(", "))]
+    #[error("unknown mode '{0}' (modes: {list}, or all)", list = ModeId::ALL.map(ModeId::name).join(", "))]
     Unknown(String),
     #[error("no modes given")]
     Empty,
@@ -361,15 +290,19 @@ pub struct ModeParams {
 }
 
 impl ModeParams {
-    pub fn parse(items: &[String], modes: &[&str]) -> Result<ModeParams, ModeError> {
+    pub fn parse(items: &[String], modes: &[ModeId]) -> Result<ModeParams, ModeError> {
         let mut values = BTreeMap::new();
         for item in items {
             let (key, value) = item
                 .split_once('=')
                 .filter(|(k, _)| k.contains('.'))
                 .ok_or_else(|| ModeError::MalformedParam(item.clone()))?;
-            let (mode, name) = key.split_once('.').expect("checked above");
-            let info = MODES.iter().find(|m| m.name == mode && modes.contains(&m.name));
+            let (mode, name) = key.split_once('.').unwrap_or((key, ""));
+            let info = mode
+                .parse::<ModeId>()
+                .ok()
+                .filter(|m| modes.contains(m))
+                .map(ModeId::info);
             if !info.is_some_and(|m| m.params.iter().any(|p| p.key == name)) {
                 let known = match info {
                     Some(m) if m.params.is_empty() => format!("{mode} takes no parameters"),
@@ -390,14 +323,7 @@ impl ModeParams {
         // Parse every typed value now, so a bad one is reported before a
         // long scene load rather than after it.
         for mode in modes {
-            match *mode {
-                "omq" => drop(OmqParams::from_params(&params)?),
-                "ac" => drop(AcParams::from_params(&params)?),
-                "chc" => drop(ChcParams::from_params(&params)?),
-                "ioc" => drop(IocParams::from_params(&params)?),
-                "auto" => drop(AutoParams::from_params(&params)?),
-                _ => {}
-            }
+            (mode.info().check)(&params)?;
         }
         Ok(params)
     }
@@ -414,19 +340,14 @@ impl ModeParams {
         ModeParams { values }
     }
 
-    /// The value of `mode.key`: the one given, or the default `MODES`
-    /// declares (the only place defaults are written).
-    pub fn get<T: FromStr>(&self, mode: &str, key: &str) -> Result<T, ModeError>
+    /// The value of `param` of `mode`: the one given, or the default its
+    /// declaration holds (the only place defaults are written).
+    pub fn get<T: FromStr>(&self, mode: ModeId, param: &ParamInfo) -> Result<T, ModeError>
     where
         T::Err: Display,
     {
-        let full = format!("{mode}.{key}");
-        let declared = MODES
-            .iter()
-            .find(|m| m.name == mode)
-            .and_then(|m| m.params.iter().find(|p| p.key == key))
-            .unwrap_or_else(|| panic!("{full} is not declared in MODES"));
-        let value = self.values.get(&full).map_or(declared.default, String::as_str);
+        let full = format!("{mode}.{}", param.key);
+        let value = self.values.get(&full).map_or(param.default, String::as_str);
         value.parse().map_err(|e| ModeError::BadParam {
             key: full,
             reason: format!("'{value}': {e}"),
@@ -434,25 +355,25 @@ impl ModeParams {
     }
 }
 
-pub fn mode_names() -> Vec<&'static str> {
-    MODES.iter().map(|m| m.name).collect()
+/// Every mode's registry entry, in [`ModeId::ALL`]'s order.
+pub fn modes() -> impl Iterator<Item = &'static ModeInfo> {
+    ModeId::ALL.into_iter().map(ModeId::info)
+}
+
+/// The culler of the mode called `name` (see [`ModeId::create`]).
+pub fn create(name: &str, scene: &Scene, params: &ModeParams) -> Result<Box<dyn Culler>, ModeError> {
+    name.parse::<ModeId>()?.create(scene, params)
 }
 
 /// Parses a comma-separated mode list (`all` for every mode); duplicates are
 /// dropped, the order kept.
-pub fn parse_modes(list: &[String]) -> Result<Vec<&'static str>, ModeError> {
-    let mut modes: Vec<&'static str> = Vec::new();
+pub fn parse_modes(list: &[String]) -> Result<Vec<ModeId>, ModeError> {
+    let mut modes: Vec<ModeId> = Vec::new();
     for name in list.iter().flat_map(|s| s.split(',')).map(str::trim) {
-        let found: Vec<&'static str> = if name == "all" {
-            mode_names()
+        let found = if name == "all" {
+            ModeId::ALL.to_vec()
         } else {
-            vec![
-                MODES
-                    .iter()
-                    .find(|m| m.name == name)
-                    .ok_or_else(|| ModeError::Unknown(name.to_string()))?
-                    .name,
-            ]
+            vec![name.parse()?]
         };
         for m in found {
             if !modes.contains(&m) {
@@ -494,33 +415,31 @@ impl Culler for Labeled {
     }
 }
 
-/// Creates the culler of a mode named by [`parse_modes`]; scratch space is
-/// sized for `scene`, which each frame then brings in [`FrameInput`].
-pub fn create(name: &str, scene: &Scene, params: &ModeParams) -> Result<Box<dyn Culler>, ModeError> {
-    Ok(match name {
-        "dr" => Box::new(DirectRendering::new(scene)),
-        "vfc" => Box::new(FrustumCulling::new(scene)),
-        "sq" => Box::new(SingleQueries::new()),
-        "omq" => Box::new(OccupancyMapQueries::new(OmqParams::from_params(params)?)),
-        "ac" => Box::new(AdaptiveCulling::new(AcParams::from_params(params)?)),
-        "chc" => Box::new(CoherentCulling::new(scene, ChcParams::from_params(params)?)),
-        "roc" => Box::new(RasterOcclusionCulling::new()),
-        "ioc" => Box::new(IterativeOcclusionCulling::new(IocParams::from_params(params)?)),
-        "auto" => Box::new(AutoCulling::new(scene, AutoParams::from_params(params)?)),
-        "oracle" => Box::new(Oracle::new()),
-        other => return Err(ModeError::Unknown(other.to_string())),
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
+    fn every_entry_is_its_own_and_its_defaults_parse() {
+        for id in ModeId::ALL {
+            assert_eq!(id.info().id, id, "{id}'s entry names another mode");
+            assert_eq!(id.name().parse::<ModeId>(), Ok(id));
+            assert_eq!((id.info().check)(&ModeParams::default()), Ok(()), "{id}'s defaults");
+            for p in id.info().params {
+                assert_eq!(id.info().param(p.key).map(|q| q.default), Some(p.default));
+            }
+        }
+        let mut names: Vec<&str> = ModeId::ALL.map(ModeId::name).to_vec();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), ModeId::ALL.len(), "names are unique");
+    }
+
+    #[test]
     fn mode_lists_parse_in_order_without_duplicates() {
         let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
-        assert_eq!(parse_modes(&s(&["vfc,dr", "vfc"])), Ok(vec!["vfc", "dr"]));
-        assert_eq!(parse_modes(&s(&["all"])), Ok(mode_names()));
+        assert_eq!(parse_modes(&s(&["vfc,dr", "vfc"])), Ok(vec![ModeId::Vfc, ModeId::Dr]));
+        assert_eq!(parse_modes(&s(&["all"])), Ok(ModeId::ALL.to_vec()));
         assert_eq!(parse_modes(&s(&["dr,bogus"])), Err(ModeError::Unknown("bogus".into())));
         assert_eq!(parse_modes(&s(&[])), Err(ModeError::Empty));
         assert!(
@@ -533,18 +452,21 @@ mod tests {
     #[test]
     fn parameters_are_checked_against_the_running_modes() {
         let items = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
-        let p = ModeParams::parse(&items(&["omq.om=80x60", "omq.factor=0.5"]), &["omq"]).unwrap();
-        assert_eq!(p.get("omq", "factor"), Ok(0.5));
-        assert_eq!(p.get("omq", "initial_max_tests"), Ok(4u32));
-        let err = |v: &[&str], modes: &[&str]| ModeParams::parse(&items(v), modes).unwrap_err().to_string();
-        assert!(err(&["omq.bogus=1"], &["omq"]).contains("omq takes omq.om, omq.initial_max_tests, omq.factor"));
-        assert!(err(&["omq.om=1x1"], &["vfc"]).contains("'omq' is not being run"));
-        assert!(err(&["vfc.x=1"], &["vfc"]).contains("vfc takes no parameters"));
-        assert!(err(&["omq"], &["omq"]).contains("not MODE.KEY=VALUE"));
+        let p = ModeParams::parse(&items(&["omq.om=80x60", "omq.factor=0.5"]), &[ModeId::Omq]).unwrap();
+        assert_eq!(p.get(ModeId::Omq, ModeId::Omq.info().param("factor").unwrap()), Ok(0.5));
+        assert_eq!(
+            p.get(ModeId::Omq, ModeId::Omq.info().param("initial_max_tests").unwrap()),
+            Ok(4u32)
+        );
+        let err = |v: &[&str], modes: &[ModeId]| ModeParams::parse(&items(v), modes).unwrap_err().to_string();
+        assert!(err(&["omq.bogus=1"], &[ModeId::Omq]).contains("omq takes omq.om, omq.initial_max_tests, omq.factor"));
+        assert!(err(&["omq.om=1x1"], &[ModeId::Vfc]).contains("'omq' is not being run"));
+        assert!(err(&["vfc.x=1"], &[ModeId::Vfc]).contains("vfc takes no parameters"));
+        assert!(err(&["omq"], &[ModeId::Omq]).contains("not MODE.KEY=VALUE"));
         assert!(
-            err(&["omq.factor=fast"], &["omq"]).contains("'fast'"),
+            err(&["omq.factor=fast"], &[ModeId::Omq]).contains("'fast'"),
             "values are parsed up front"
         );
-        assert!(err(&["omq.factor=-1"], &["omq"]).contains("positive"));
+        assert!(err(&["omq.factor=-1"], &[ModeId::Omq]).contains("positive"));
     }
 }

@@ -33,12 +33,42 @@ use serde::Serialize;
 
 use super::occupancy::{OccupancyMap, ScreenRect};
 use super::traversal::{DepthQueue, children, draw_leaf, in_frustum, nearest_corner};
-use super::{Culler, FrameInput, ModeError, ModeParams, TraversalStats};
+use super::{Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, TraversalStats};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
 use crate::gpu::{BoxTest, BoxVisibility, FrameCtx, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::scene::Scene;
+
+/// This mode's entry in the registry.
+pub(super) const MODE: ModeInfo = ModeInfo {
+    id: ModeId::Omq,
+    name: "omq",
+    summary: "Occupancy Map + multiple occlusion queries in three stages (003 §3-4)",
+    conservative: true,
+    params: &[OM, INITIAL_MAX_TESTS, FACTOR],
+    needs: Needs::Nothing,
+    check: |params| OmqParams::from_params(params).map(drop),
+    build: |_, params| Ok(Box::new(OccupancyMapQueries::new(OmqParams::from_params(params)?))),
+};
+
+const OM: ParamInfo = ParamInfo {
+    key: "om",
+    default: "64x48",
+    summary: "Occupancy Map cells across x down",
+};
+
+const INITIAL_MAX_TESTS: ParamInfo = ParamInfo {
+    key: "initial_max_tests",
+    default: "4",
+    summary: "stage-2 batches in the first frame",
+};
+
+const FACTOR: ParamInfo = ParamInfo {
+    key: "factor",
+    default: "0.7",
+    summary: "next frame's max_tests = factor x this frame's batches",
+};
 
 /// What one frame's traversal looks at.
 struct View<'a> {
@@ -61,7 +91,7 @@ pub struct OmqParams {
 
 impl OmqParams {
     pub fn from_params(params: &ModeParams) -> Result<OmqParams, ModeError> {
-        let factor: f64 = params.get("omq", "factor")?;
+        let factor: f64 = params.get(ModeId::Omq, &FACTOR)?;
         if !(factor > 0.0 && factor.is_finite()) {
             return Err(ModeError::BadParam {
                 key: "omq.factor".into(),
@@ -69,8 +99,8 @@ impl OmqParams {
             });
         }
         Ok(OmqParams {
-            om: params.get("omq", "om")?,
-            initial_max_tests: params.get("omq", "initial_max_tests")?,
+            om: params.get(ModeId::Omq, &OM)?,
+            initial_max_tests: params.get(ModeId::Omq, &INITIAL_MAX_TESTS)?,
             factor,
         })
     }

@@ -3,8 +3,20 @@
 //! REF, "ideal precomputed culling"). Its time is the cost of drawing the
 //! visible set alone; no real mode can draw less and still be exact.
 
-use super::{Culler, FrameInput, TraversalStats};
+use super::{Culler, FrameInput, ModeId, ModeInfo, Needs, TraversalStats};
 use crate::gpu::FrameCtx;
+
+/// This mode's entry in the registry.
+pub(super) const MODE: ModeInfo = ModeInfo {
+    id: ModeId::Oracle,
+    name: "oracle",
+    summary: "draws exactly the objects visible in the reference frame: the floor for object-level culling",
+    conservative: true,
+    params: &[],
+    needs: Needs::Nothing,
+    check: |_| Ok(()),
+    build: |_, _| Ok(Box::new(Oracle::new())),
+};
 
 #[derive(Default)]
 pub struct Oracle {

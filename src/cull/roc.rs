@@ -24,9 +24,21 @@
 //! (as for every box test here) and uploaded each frame, rather than
 //! transformed on the GPU from world coordinates in f32.
 
-use super::{Culler, FrameInput, TraversalStats};
+use super::{Culler, FrameInput, ModeId, ModeInfo, Needs, TraversalStats};
 use crate::bounds::Aabb;
 use crate::gpu::{CullTree, DrawList, FrameCtx, GpuCullTree};
+
+/// This mode's entry in the registry.
+pub(super) const MODE: ModeInfo = ModeInfo {
+    id: ModeId::Roc,
+    name: "roc",
+    summary: "raster occlusion culling on the GPU: every object's box marks a visibility buffer, indirect multi-draw (004's ROC)",
+    conservative: true,
+    params: &[],
+    needs: Needs::GpuCulling,
+    check: |_| Ok(()),
+    build: |_, _| Ok(Box::new(RasterOcclusionCulling::new())),
+};
 
 #[derive(Default)]
 pub struct RasterOcclusionCulling {

@@ -13,9 +13,21 @@
 //! objects here where the paper's leaves held one geometry node.
 
 use super::traversal::frustum_cull_subtree;
-use super::{Culler, FrameInput, TraversalStats};
+use super::{Culler, FrameInput, ModeId, ModeInfo, Needs, TraversalStats};
 use crate::gpu::FrameCtx;
 use crate::scene::Scene;
+
+/// This mode's entry in the registry.
+pub(super) const MODE: ModeInfo = ModeInfo {
+    id: ModeId::Vfc,
+    name: "vfc",
+    summary: "hierarchical view-frustum culling with the fully-inside shortcut (002 §4.1)",
+    conservative: true,
+    params: &[],
+    needs: Needs::Nothing,
+    check: |_| Ok(()),
+    build: |scene, _| Ok(Box::new(FrustumCulling::new(scene))),
+};
 
 pub struct FrustumCulling {
     /// Reused between frames: the traversal allocates nothing.

@@ -17,7 +17,7 @@ use serde::Serialize;
 
 use crate::bench::{RunOptions, Session};
 use crate::camera::Camera;
-use crate::cull::{Culler, ModeError, ModeInfo, ModeParams, create};
+use crate::cull::{Culler, ModeError, ModeId, ModeInfo, ModeParams};
 use crate::gpu::{AdapterReport, GpuContext, GpuError, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{FrameStats, MissedObject};
@@ -257,7 +257,7 @@ pub fn select(names: &[String]) -> Result<Vec<StressCase>, StressError> {
 pub fn run(
     gpu: &GpuContext,
     cases: &[StressCase],
-    modes: &[&'static str],
+    modes: &[ModeId],
     resolution: Resolution,
     events: &mut dyn FnMut(StressEvent) -> ControlFlow<()>,
 ) -> Result<StressReport, StressError> {
@@ -270,7 +270,7 @@ pub fn run(
     let mut skipped = Vec::new();
     let modes: Vec<&'static ModeInfo> = modes
         .iter()
-        .map(|&m| ModeInfo::named(m))
+        .map(|&m| m.info())
         .filter(|m| match m.unsupported_on(gpu) {
             Some(reason) => {
                 events(StressEvent::Skipped { mode: m.name, reason });
@@ -300,7 +300,7 @@ pub fn run(
         }
         let mut cullers = modes
             .iter()
-            .map(|m| create(m.name, &case.scene, &ModeParams::default()))
+            .map(|m| m.id.create(&case.scene, &ModeParams::default()))
             .collect::<Result<Vec<_>, _>>()?;
         let keep_depth = case.baseline.is_some() || is_baseline(case);
         let hierarchy = HierarchyParams::default();
