@@ -20,7 +20,7 @@ use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
 use crate::cull::{Culler, FrameInput, Labeled, ModeError, PreviousFrame};
 use crate::gpu::{
-    AdapterReport, FrameCtx, FrameResources, GpuContext, GpuError, GpuScene, GpuTimer, QueryPool, RasterPool,
+    AdapterReport, FrameCtx, FrameResources, GpuContext, GpuError, GpuScene, GpuSetup, GpuTimer, QueryPool,
     RenderTargets, Resolution, SceneRenderer,
 };
 use crate::hierarchy::{Hierarchy, HierarchyParams};
@@ -63,8 +63,7 @@ pub fn run(
     options: &RunOptions,
     progress: &mut dyn FnMut(u32, u32) -> ControlFlow<()>,
 ) -> Result<RunOutput, BenchError> {
-    let needs_reference = options.measure_error || cullers.iter().any(|c| c.needs_reference());
-    let mut session = Session::new(gpu, &world.scene, cullers.len(), needs_reference, options)?;
+    let mut session = Session::new(gpu, world, cullers, options.measure_error, options)?;
     let frames = path.frames;
     // Both are capped (MAX_FRAMES, MAX_WARMUP), so the sum cannot overflow.
     let total = options.warmup + frames;
@@ -104,8 +103,6 @@ pub struct Session<'a> {
     meter: Option<ErrorMeter>,
     timer: Option<GpuTimer>,
     queries: QueryPool,
-    /// Created when a mode that culls on the GPU first runs.
-    raster: Option<RasterPool>,
     draw_queue: Vec<u32>,
     /// What each mode drew in the last frame.
     pub(crate) drawn: Vec<ObjectSet>,
@@ -120,20 +117,33 @@ pub struct Session<'a> {
 }
 
 impl<'a> Session<'a> {
-    /// Uploads `scene` and creates targets for `modes` modes; the reference
-    /// is rendered each frame when `needs_reference`.
+    /// Uploads `world`'s scene, creates targets for every one of `cullers`
+    /// and lets each prepare its own GPU resources. The reference is
+    /// rendered each frame when `reference` or a culler needs it.
     pub fn new(
         gpu: &'a GpuContext,
-        scene: &Scene,
-        modes: usize,
-        needs_reference: bool,
+        world: &World,
+        cullers: &mut [Box<dyn Culler + '_>],
+        reference: bool,
         options: &RunOptions,
     ) -> Result<Session<'a>, GpuError> {
+        let (scene, modes) = (&world.scene, cullers.len());
+        let needs_reference = reference || cullers.iter().any(|c| c.needs_reference());
         gpu.check()?;
         RenderTargets::check(gpu, options.resolution)?;
         let start = Instant::now();
         let renderer = SceneRenderer::new(gpu, GpuScene::upload(gpu, scene)?);
         let targets = RenderTargets::new(gpu, options.resolution, modes);
+        let setup = GpuSetup {
+            gpu,
+            camera: renderer.camera_uniform(),
+            draws: &renderer.scene.draws,
+            scene,
+            hierarchy: &world.hierarchy,
+        };
+        for culler in cullers.iter_mut() {
+            culler.prepare(&setup);
+        }
         gpu.wait_idle();
         let upload_ms = ms(start.elapsed());
         Ok(Session {
@@ -141,7 +151,6 @@ impl<'a> Session<'a> {
             meter: needs_reference.then(|| ErrorMeter::new(gpu, &targets, scene.objects.len())),
             timer: GpuTimer::new(gpu, modes),
             queries: QueryPool::new(gpu, renderer.camera_uniform()),
-            raster: None,
             draw_queue: Vec::new(),
             drawn: (0..modes).map(|_| ObjectSet::new(scene.objects.len())).collect(),
             previous: vec![None; modes],
@@ -181,13 +190,6 @@ impl<'a> Session<'a> {
             .as_mut()
             .map(|m| m.render_reference(gpu, &self.renderer, &self.targets));
 
-        if self.raster.is_none() && gpu.gpu_driven && cullers.iter().any(|c| c.culls_on_gpu()) {
-            self.raster = Some(RasterPool::new(
-                gpu,
-                self.renderer.camera_uniform(),
-                &self.renderer.scene.draws,
-            ));
-        }
         let mut rows: Vec<Option<FrameStats>> = vec![None; cullers.len()];
         for turn in 0..cullers.len() {
             let k = (turn + first) % cullers.len();
@@ -217,7 +219,6 @@ impl<'a> Session<'a> {
                 renderer: &self.renderer,
                 targets: &self.targets,
                 queries: &mut self.queries,
-                raster: self.raster.as_mut(),
                 timer: self.timer.as_ref(),
                 draw_queue: &mut self.draw_queue,
             };
@@ -227,8 +228,8 @@ impl<'a> Session<'a> {
             let cull_time = cull_start.elapsed();
             let mut outcome = ctx.finish();
             let frame_time = frame_start.elapsed();
-            // Untimed: what a GPU-driven mode drew and tested, from the GPU.
-            if let Some(audit) = self.raster.as_mut().and_then(|r| r.audit(gpu, &mut self.drawn[k])) {
+            // Untimed: what the mode's own GPU work drew and tested.
+            if let Some(audit) = culler.audit(gpu, &mut self.drawn[k]) {
                 outcome.add_gpu_audit(&audit);
                 traversal.add_gpu_audit(&audit);
             }

@@ -102,8 +102,7 @@ pub fn render(
         measure_error: options.show_missed,
     };
     let mut cullers = [culler];
-    let needs_reference = options.show_missed || cullers[0].needs_reference();
-    let mut session = Session::new(gpu, &world.scene, 1, needs_reference, &run)?;
+    let mut session = Session::new(gpu, world, &mut cullers, options.show_missed, &run)?;
     let camera = path.camera(options.frame, resolution.aspect());
     let mut wrong_pixels = 0;
     for f in options.frame.saturating_sub(LEAD_IN)..=options.frame {

@@ -29,13 +29,14 @@
 
 use serde::Serialize;
 
-use super::ioc::{IocParams, IterativeOcclusionCulling};
+use super::gpu_walk::ioc::{IocParams, IterativeOcclusionCulling};
 use super::omq::{OccupancyMapQueries, OmqParams};
 use super::vfc::FrustumCulling;
 use super::{
     Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, PreviousFrame, TraversalStats,
 };
-use crate::gpu::FrameCtx;
+use crate::gpu::{FrameCtx, GpuAudit, GpuContext, GpuSetup};
+use crate::object_set::ObjectSet;
 use crate::scene::Scene;
 
 /// This mode's entry in the registry.
@@ -118,16 +119,17 @@ struct Turn {
 pub struct AutoCulling {
     params: AutoParams,
     frustum: FrustumCulling,
-    /// Created in the first frame, when the adapter is known.
-    occlusion: Option<Box<dyn Culler>>,
+    /// `omq` until `prepare` finds an adapter that culls on the GPU, then
+    /// `ioc`.
+    occlusion: Box<dyn Culler>,
     records: [Record; 2],
     previous: Option<Turn>,
     /// Frames run so far (the path's frame numbers repeat after warm-up).
     frames_run: u64,
     /// Frames left in a probe of the occlusion culler.
     probing: u32,
-    /// Whether the occlusion culler culls on the GPU (`ioc`); known from the
-    /// first frame, when the adapter is.
+    /// Whether the occlusion culler culls on the GPU (`ioc`); set by
+    /// `prepare`, when the adapter is known.
     gpu_culling: bool,
 }
 
@@ -136,7 +138,7 @@ impl AutoCulling {
         AutoCulling {
             params,
             frustum: FrustumCulling::new(scene),
-            occlusion: None,
+            occlusion: occlusion_culler(false),
             records: [Record::default(); 2],
             previous: None,
             frames_run: 0,
@@ -240,22 +242,22 @@ impl Culler for AutoCulling {
         true
     }
 
-    fn culls_on_gpu(&self) -> bool {
-        true
+    fn prepare(&mut self, setup: &GpuSetup) {
+        self.gpu_culling = setup.gpu.gpu_driven;
+        self.occlusion = occlusion_culler(self.gpu_culling);
+        self.occlusion.prepare(setup);
     }
 
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
-        self.gpu_culling = ctx.can_cull_on_gpu();
         let turn = self.next_turn(input.previous);
         match turn.strategy {
             Strategy::Frustum => self.frustum.frame(ctx, input),
-            Strategy::Occlusion => {
-                let gpu_culling = self.gpu_culling;
-                self.occlusion
-                    .get_or_insert_with(|| occlusion_culler(gpu_culling))
-                    .frame(ctx, input)
-            }
+            Strategy::Occlusion => self.occlusion.frame(ctx, input),
         }
+    }
+
+    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        self.occlusion.audit(gpu, drawn)
     }
 }
 

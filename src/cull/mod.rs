@@ -10,11 +10,10 @@ mod ac;
 mod auto;
 mod chc;
 mod dr;
-pub mod ioc;
+pub mod gpu_walk;
 pub mod occupancy;
 mod omq;
 mod oracle;
-mod roc;
 mod sq;
 pub mod traversal;
 mod vfc;
@@ -25,7 +24,7 @@ use std::str::FromStr;
 use std::time::Duration;
 
 use crate::camera::Camera;
-use crate::gpu::{FrameCtx, GpuAudit, GpuContext, Resolution};
+use crate::gpu::{FrameCtx, GpuAudit, GpuContext, GpuSetup, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
@@ -34,10 +33,10 @@ pub use ac::{AcParams, AdaptiveCulling, EyeDistance, Threshold};
 pub use auto::{AutoCulling, AutoParams};
 pub use chc::{ChcParams, CoherentCulling};
 pub use dr::DirectRendering;
-pub use ioc::{Depth, IocParams, IterativeOcclusionCulling};
+pub use gpu_walk::ioc::{Depth, IocParams, IterativeOcclusionCulling};
+pub use gpu_walk::roc::RasterOcclusionCulling;
 pub use omq::{OccupancyMapQueries, OmqParams};
 pub use oracle::Oracle;
-pub use roc::RasterOcclusionCulling;
 pub use sq::SingleQueries;
 pub use vfc::FrustumCulling;
 
@@ -123,10 +122,16 @@ pub trait Culler {
         false
     }
 
-    /// Whether the mode walks a tree on the GPU (`FrameCtx::begin_gpu_walk`
-    /// and the operations after it).
-    fn culls_on_gpu(&self) -> bool {
-        false
+    /// Creates the mode's own GPU resources (pipelines, buffers), once,
+    /// untimed, before its first frame. Modes that only draw and test boxes
+    /// through [`FrameCtx`] have none.
+    fn prepare(&mut self, _setup: &GpuSetup) {}
+
+    /// After each frame, untimed: what the mode's own GPU work drew and
+    /// tested, read back from the GPU, with what it drew added to `drawn`
+    /// (`None` when it did none this frame).
+    fn audit(&mut self, _gpu: &GpuContext, _drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        None
     }
 
     /// Renders one frame: decides what to draw and draws it through `ctx`.
@@ -171,8 +176,8 @@ impl ModeId {
             ModeId::Omq => &omq::MODE,
             ModeId::Ac => &ac::MODE,
             ModeId::Chc => &chc::MODE,
-            ModeId::Roc => &roc::MODE,
-            ModeId::Ioc => &ioc::MODE,
+            ModeId::Roc => &gpu_walk::roc::MODE,
+            ModeId::Ioc => &gpu_walk::ioc::MODE,
             ModeId::Auto => &auto::MODE,
             ModeId::Oracle => &oracle::MODE,
         }
@@ -407,8 +412,11 @@ impl Culler for Labeled {
     fn traverses_hierarchy(&self) -> bool {
         self.inner.traverses_hierarchy()
     }
-    fn culls_on_gpu(&self) -> bool {
-        self.inner.culls_on_gpu()
+    fn prepare(&mut self, setup: &GpuSetup) {
+        self.inner.prepare(setup)
+    }
+    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        self.inner.audit(gpu, drawn)
     }
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
         self.inner.frame(ctx, input)

@@ -148,13 +148,13 @@ impl DepthMargins {
 /// them; `min.w` holds the box's raise in depth.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub(super) struct QueryBox {
+pub(crate) struct QueryBox {
     pub(super) min: Vec4,
     pub(super) max: Vec4,
 }
 
 /// A box made ready for a depth test.
-pub(super) enum EyeBox {
+pub(crate) enum EyeBox {
     /// It reaches the near plane or holds the eye: visible, untestable (its
     /// projection is unbounded).
     ReachesNear,
@@ -173,7 +173,7 @@ fn grown_eye_relative(camera: &Camera, b: &Aabb, fraction: f64) -> (DVec3, DVec3
 /// Prepares `b`, which must not lie outside `camera`'s frustum, for a depth
 /// test by `camera`, whose `view_rotation()` is `view` (computed once per
 /// batch by the caller).
-pub(super) fn eye_relative_box(camera: &Camera, view: &DMat3, margins: BoxMargins, b: &Aabb) -> EyeBox {
+pub(crate) fn eye_relative_box(camera: &Camera, view: &DMat3, margins: BoxMargins, b: &Aabb) -> EyeBox {
     let (min, max) = grown_eye_relative(camera, b, margins.growth);
     // The box reaches the near plane when a corner is nearer than it along
     // the view direction (this also covers holding the eye). The raise

@@ -1,6 +1,7 @@
 //! [`FrameCtx`]: the operations a culling mode may perform on the GPU during
 //! one timed frame: draw objects, test boxes against what is drawn, and, for
-//! GPU-driven modes, walk a tree and draw the lists the GPU built.
+//! modes with GPU work of their own (the GPU walk), record it into the
+//! frame, read results back, and draw commands the GPU built.
 //! Every mode goes through these operations, which do the counting
 //! themselves, so no mode can draw or query without paying for it or report
 //! its own figures.
@@ -8,13 +9,14 @@
 use std::time::{Duration, Instant};
 
 use super::conservative::BoxMargins;
-use super::cull_tree::CullTree;
 use super::queries::{BatchAnswers, BoxTest, BoxVisibility, QueryPool, TestTarget};
-use super::raster::{DrawList, GpuAudit, GpuCullTree, RasterPool};
-use super::{Draws, GpuContext, GpuTimer, RenderTargets, SceneRenderer};
+use super::renderer::DrawRange;
+use super::{Draws, GpuContext, GpuTimer, IndirectDraws, RenderTargets, SceneRenderer};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
+use crate::hierarchy::Hierarchy;
 use crate::object_set::ObjectSet;
+use crate::scene::Scene;
 
 /// What a mode did on the GPU in one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -41,8 +43,26 @@ pub struct FrameOutcome {
     pub gpu_ops: Duration,
 }
 
+/// What a mode's own GPU work drew and tested in a frame, read back after
+/// it, untimed ([`crate::cull::Culler::audit`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GpuAudit {
+    pub objects_drawn: u64,
+    pub triangles_drawn: u64,
+    /// Nodes the walk reached.
+    pub nodes_visited: u64,
+    /// Of those, boxes drawn into the visibility buffer (the others were
+    /// outside the frustum or reached the near plane).
+    pub nodes_tested: u64,
+    /// Tested and hidden.
+    pub nodes_hidden: u64,
+    pub nodes_outside_frustum: u64,
+    /// GPU time of the walk and the compaction, where timestamps exist.
+    pub cull_gpu: Option<Duration>,
+}
+
 impl FrameOutcome {
-    /// Adds what a GPU-driven walk drew and tested (each node box drawn
+    /// Adds what a mode's own GPU work drew and tested (each node box drawn
     /// into the visibility buffer counts as a query); its node counts go to
     /// the mode's traversal figures (`TraversalStats::add_gpu_audit`).
     pub fn add_gpu_audit(&mut self, audit: &GpuAudit) {
@@ -56,12 +76,33 @@ impl FrameOutcome {
     }
 }
 
+/// What a mode creates its own GPU resources from, once, before its first
+/// frame ([`crate::cull::Culler::prepare`]).
+pub struct GpuSetup<'a> {
+    pub gpu: &'a GpuContext,
+    /// The camera uniform the scene renderer fills every frame.
+    pub camera: &'a wgpu::Buffer,
+    /// Every object's index range, in object order.
+    pub draws: &'a [DrawRange],
+    /// The scene and hierarchy as the first frame finds them.
+    pub scene: &'a Scene,
+    pub hierarchy: &'a Hierarchy,
+}
+
+/// A mode's own GPU work, recorded into its frame by [`FrameCtx::record`].
+pub struct GpuWork<'e> {
+    pub gpu: &'e GpuContext,
+    /// The frame's encoder, after every draw so far.
+    pub encoder: &'e mut wgpu::CommandEncoder,
+    /// This mode's depth target.
+    pub depth: &'e wgpu::TextureView,
+}
+
 pub struct FrameCtx<'a> {
     gpu: &'a GpuContext,
     renderer: &'a SceneRenderer,
     targets: &'a RenderTargets,
     queries: &'a mut QueryPool,
-    raster: Option<&'a mut RasterPool>,
     camera: &'a Camera,
     /// What this frame's box tests stay clear of.
     margins: BoxMargins,
@@ -82,8 +123,6 @@ pub struct FrameResources<'a> {
     pub renderer: &'a SceneRenderer,
     pub targets: &'a RenderTargets,
     pub queries: &'a mut QueryPool,
-    /// For modes that cull on the GPU; `None` when none runs.
-    pub raster: Option<&'a mut RasterPool>,
     pub timer: Option<&'a GpuTimer>,
     /// Scratch for queued draws, reused from frame to frame.
     pub draw_queue: &'a mut Vec<u32>,
@@ -103,7 +142,6 @@ impl<'a> FrameCtx<'a> {
             renderer,
             targets,
             queries,
-            raster,
             timer,
             draw_queue: queued,
         } = resources;
@@ -120,7 +158,6 @@ impl<'a> FrameCtx<'a> {
             renderer,
             targets,
             queries,
-            raster,
             camera,
             margins: BoxMargins::new(gpu.depth_margins, camera, targets.resolution),
             depth,
@@ -208,66 +245,61 @@ impl<'a> FrameCtx<'a> {
         }
     }
 
-    /// Whether GPU-driven culling can run here (the session made its pool).
-    pub fn can_cull_on_gpu(&self) -> bool {
-        self.raster.is_some()
+    /// The adapter, for what it can do.
+    pub fn gpu(&self) -> &'a GpuContext {
+        self.gpu
     }
 
-    /// GPU-driven culling (004): puts `tree` on the GPU for this mode, with
-    /// an empty visible list. Done once; the mode keeps the result.
-    pub fn upload_cull_tree(&mut self, tree: &CullTree) -> GpuCullTree {
-        let start = Instant::now();
-        let uploaded = pool(&mut self.raster).upload(self.gpu, tree);
-        self.gpu_ops += start.elapsed();
-        uploaded
+    /// The margins this frame's box tests keep (for boxes a mode prepares
+    /// itself).
+    pub fn margins(&self) -> BoxMargins {
+        self.margins
     }
 
-    /// Draws one of `tree`'s GPU-built lists, shaded. Objects drawn are
-    /// counted after the frame ([`RasterPool::audit`]). Where draws cannot
-    /// take their count from a GPU buffer, the newly visible list's length
-    /// is read back first: one round trip.
-    pub fn draw_gpu_list(&mut self, tree: &mut GpuCullTree, list: DrawList) {
+    /// Records a mode's own GPU work into this frame, after everything
+    /// drawn so far. Its time is GPU operations, not culling.
+    pub fn record<R>(&mut self, work: impl FnOnce(GpuWork) -> R) -> R {
         let start = Instant::now();
         self.encode_queued_draws();
-        let indirect_count = self.gpu.indirect_count;
-        if list == DrawList::NewlyVisible && !indirect_count {
-            let encoder = std::mem::replace(
-                &mut self.encoder,
-                self.gpu.device.create_command_encoder(&Default::default()),
-            );
-            let submitted = Instant::now();
-            pool(&mut self.raster).read_counts(self.gpu, encoder, tree);
-            self.counters.query_batches += 1;
-            self.counters.query_wait += submitted.elapsed();
-        }
-        let draws = Draws::Indirect(RasterPool::list(tree, list, indirect_count));
-        self.renderer
-            .encode_shaded(&mut self.encoder, self.targets, self.depth, false, draws);
+        let result = work(GpuWork {
+            gpu: self.gpu,
+            encoder: &mut self.encoder,
+            depth: self.depth,
+        });
         self.gpu_ops += start.elapsed();
+        result
     }
 
-    /// Starts a walk of `tree` (boxes from `bounds`, one per node) with its
-    /// seed queued, after everything drawn so far.
-    pub fn begin_gpu_walk(&mut self, tree: &GpuCullTree, bounds: impl ExactSizeIterator<Item = Aabb>) {
+    /// Submits everything recorded so far and hands `read` a fresh encoder
+    /// to copy results from and submit, then wait for: one round trip, its
+    /// time counted as waiting for results.
+    pub fn round_trip<R>(&mut self, read: impl FnOnce(&GpuContext, wgpu::CommandEncoder) -> R) -> R {
         let start = Instant::now();
         self.encode_queued_draws();
-        let prepare =
-            pool(&mut self.raster).begin_walk(self.gpu, &mut self.encoder, self.camera, self.margins, tree, bounds);
-        self.gpu_ops += start.elapsed().saturating_sub(prepare);
-    }
-
-    /// Tests the queued nodes of `tree` as one batch on the GPU and queues
-    /// the children of the visible ones.
-    pub fn walk_gpu_level(&mut self, tree: &GpuCullTree) {
-        let start = Instant::now();
-        pool(&mut self.raster).walk_level(&mut self.encoder, self.depth, tree);
+        let encoder = std::mem::replace(
+            &mut self.encoder,
+            self.gpu.device.create_command_encoder(&Default::default()),
+        );
+        let submitted = Instant::now();
+        let result = read(self.gpu, encoder);
+        self.counters.query_batches += 1;
+        self.counters.query_wait += submitted.elapsed();
         self.gpu_ops += start.elapsed();
+        result
     }
 
-    /// Ends the walk: builds `tree`'s visible and newly visible lists.
-    pub fn compact_gpu_lists(&mut self, tree: &GpuCullTree) {
+    /// Draws, shaded, the commands the GPU built. What they drew is counted
+    /// after the frame, from the mode's audit.
+    pub fn draw_indirect(&mut self, draws: IndirectDraws) {
         let start = Instant::now();
-        pool(&mut self.raster).compact(&mut self.encoder, tree);
+        self.encode_queued_draws();
+        self.renderer.encode_shaded(
+            &mut self.encoder,
+            self.targets,
+            self.depth,
+            false,
+            Draws::Indirect(draws),
+        );
         self.gpu_ops += start.elapsed();
     }
 
@@ -284,12 +316,4 @@ impl<'a> FrameCtx<'a> {
             gpu_ops: self.gpu_ops,
         }
     }
-}
-
-/// The pool of GPU-driven culling, which the session provides to modes that
-/// declare `Culler::culls_on_gpu` (run only where `GpuContext::gpu_driven`).
-fn pool<'p>(raster: &'p mut Option<&mut RasterPool>) -> &'p mut RasterPool {
-    raster
-        .as_deref_mut()
-        .expect("GPU-driven modes declare Culler::culls_on_gpu and run only where GpuContext::gpu_driven")
 }

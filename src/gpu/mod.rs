@@ -3,11 +3,9 @@
 //! goes through ([`FrameCtx`]).
 
 mod conservative;
-mod cull_tree;
 mod frame;
 mod picture;
 mod queries;
-mod raster;
 mod readback;
 mod renderer;
 mod targets;
@@ -19,13 +17,18 @@ use std::sync::{Arc, Mutex};
 use serde::Serialize;
 
 pub use conservative::{BoxMargins, DepthMargins};
-pub use cull_tree::{CullTree, MAX_LEVELS, TreeNode};
-pub use frame::{FrameCounters, FrameCtx, FrameOutcome, FrameResources};
+pub(crate) use conservative::{EyeBox, QueryBox, eye_relative_box};
+pub use frame::{FrameCounters, FrameCtx, FrameOutcome, FrameResources, GpuAudit, GpuSetup, GpuWork};
 pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};
+/// The building blocks of box tests, for modes that test boxes their own
+/// way (the GPU walk).
+pub(crate) use queries::{
+    BOX_INDEX_COUNT, BOX_TEST, BOXES_WGSL, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer,
+    box_index_buffer, box_test_pipeline, depth_only_pass, set_box_indices, storage_buffer,
+};
 pub use queries::{BoxTest, BoxVisibility, QUERIES_PER_SET, QueryPool};
-pub use raster::{DrawList, GpuAudit, GpuCullTree, NodeBoxes, RasterPool};
 pub use readback::Readback;
-pub use renderer::{Draws, GpuScene, SceneRenderer};
+pub use renderer::{DrawRange, Draws, GpuScene, IndirectCount, IndirectDraws, SceneRenderer};
 pub use targets::{RenderTargets, Resolution};
 pub use timing::GpuTimer;
 

@@ -133,13 +133,17 @@ pub struct QueryPool {
     words: Vec<u32>,
 }
 
+/// The box vertex stage every box test draws with (a box per instance,
+/// eye-relative, raised in depth: see conservative.rs).
+pub(crate) const BOXES_WGSL: &str = include_str!("../../shaders/boxes.wgsl");
+
 impl QueryPool {
     /// `camera` is the uniform buffer the scene renderer fills per frame.
     pub fn new(gpu: &GpuContext, camera: &wgpu::Buffer) -> QueryPool {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("boxes.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/boxes.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(BOXES_WGSL.into()),
         });
         let box_layout = box_bind_group_layout(gpu);
         // Only on adapters that have the feature: the module is invalid elsewhere.
@@ -426,7 +430,7 @@ impl QueryPool {
     }
 }
 
-pub(super) fn depth_only_pass<'e>(
+pub(crate) fn depth_only_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     label: &str,
     depth: &wgpu::TextureView,
@@ -462,10 +466,10 @@ const BOX_INDICES: [u16; 36] = [
 ];
 
 /// Indices one box draws.
-pub(super) const BOX_INDEX_COUNT: u32 = BOX_INDICES.len() as u32;
+pub(crate) const BOX_INDEX_COUNT: u32 = BOX_INDICES.len() as u32;
 
 /// A buffer of [`BOX_INDICES`], for [`set_box_indices`].
-pub(super) fn box_index_buffer(gpu: &GpuContext) -> wgpu::Buffer {
+pub(crate) fn box_index_buffer(gpu: &GpuContext) -> wgpu::Buffer {
     gpu.buffer_with(
         "box indices",
         bytemuck::cast_slice(&BOX_INDICES),
@@ -474,19 +478,19 @@ pub(super) fn box_index_buffer(gpu: &GpuContext) -> wgpu::Buffer {
 }
 
 /// Binds `indices` (from [`box_index_buffer`]) for drawing boxes.
-pub(super) fn set_box_indices(pass: &mut wgpu::RenderPass, indices: &wgpu::Buffer) {
+pub(crate) fn set_box_indices(pass: &mut wgpu::RenderPass, indices: &wgpu::Buffer) {
     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint16);
 }
 
 /// The depth test of box tests. Reverse-Z: nearer is greater. Equal passes,
 /// so a box face on a surface is not judged hidden by it.
-pub(super) const BOX_TEST: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
+pub(crate) const BOX_TEST: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
 
 /// A pipeline that draws boxes against a depth target without changing it:
 /// back faces culled (the eye is never inside a tested box), depth compared
 /// by `compare` (`BOX_TEST`, or `Always` to reach every pixel a box covers),
 /// no depth or colour writes; `fragment`, if any, does the counting.
-pub(super) fn box_test_pipeline(
+pub(crate) fn box_test_pipeline(
     gpu: &GpuContext,
     label: &str,
     layouts: &[Option<&wgpu::BindGroupLayout>],
@@ -522,7 +526,7 @@ pub(super) fn box_test_pipeline(
 }
 
 /// A layout of buffer bindings 0, 1, …, each seen by its stages.
-pub(super) fn bind_group_layout(
+pub(crate) fn bind_group_layout(
     gpu: &GpuContext,
     label: &str,
     buffers: &[(wgpu::ShaderStages, wgpu::BufferBindingType)],
@@ -548,7 +552,7 @@ pub(super) fn bind_group_layout(
 }
 
 /// Group 0 of boxes.wgsl: the camera uniform and the boxes.
-pub(super) fn box_bind_group_layout(gpu: &GpuContext) -> wgpu::BindGroupLayout {
+pub(crate) fn box_bind_group_layout(gpu: &GpuContext) -> wgpu::BindGroupLayout {
     let vertex = wgpu::ShaderStages::VERTEX;
     bind_group_layout(
         gpu,
@@ -560,7 +564,7 @@ pub(super) fn box_bind_group_layout(gpu: &GpuContext) -> wgpu::BindGroupLayout {
     )
 }
 
-pub(super) fn bind_buffers(
+pub(crate) fn bind_buffers(
     gpu: &GpuContext,
     layout: &wgpu::BindGroupLayout,
     buffers: &[&wgpu::Buffer],
@@ -580,7 +584,7 @@ pub(super) fn bind_buffers(
     })
 }
 
-pub(super) fn storage_buffer(gpu: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+pub(crate) fn storage_buffer(gpu: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size,
@@ -589,7 +593,7 @@ pub(super) fn storage_buffer(gpu: &GpuContext, label: &str, size: u64, usage: wg
     })
 }
 
-pub(super) fn box_buffer(
+pub(crate) fn box_buffer(
     gpu: &GpuContext,
     layout: &wgpu::BindGroupLayout,
     camera: &wgpu::Buffer,

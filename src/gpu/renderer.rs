@@ -5,7 +5,6 @@
 use glam::Mat4;
 
 use super::conservative::{BoxMargins, FragmentLimit, pixel_rays};
-use super::raster::{IndirectCount, IndirectDraws};
 use super::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, RenderTargets};
 use super::{GpuContext, GpuError, Resolution};
 use crate::camera::Camera;
@@ -374,6 +373,25 @@ impl SceneRenderer {
             },
         }
     }
+}
+
+/// How many commands an indirect multi-draw takes.
+pub enum IndirectCount<'b> {
+    /// Known on the CPU.
+    Known(u32),
+    /// A `u32` in a GPU buffer at an offset, at most `max`.
+    InBuffer {
+        buffer: &'b wgpu::Buffer,
+        offset: u64,
+        max: u32,
+    },
+}
+
+/// Draw commands built on the GPU.
+pub struct IndirectDraws<'b> {
+    pub commands: &'b wgpu::Buffer,
+    pub offset: u64,
+    pub count: IndirectCount<'b>,
 }
 
 /// What a pass draws: objects named on the CPU, or commands the GPU built.

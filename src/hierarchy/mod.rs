@@ -16,8 +16,6 @@
 //! The builder takes any [`Item`]: the cullers build over objects weighted
 //! by triangles, the ray caster over a mesh's triangles weighted alike.
 
-pub mod ternary;
-
 use serde::{Deserialize, Serialize};
 
 use crate::bounds::Aabb;

@@ -377,7 +377,7 @@ pub fn run_case(
     };
     let hierarchy = Hierarchy::build(&case.scene.objects, hierarchy);
     let mut world = World::new(case.scene.clone(), hierarchy);
-    let mut session = Session::new(gpu, &world.scene, cullers.len(), true, &options)?;
+    let mut session = Session::new(gpu, &world, cullers, true, &options)?;
     let mut outcome = CaseOutcome {
         rows: Vec::new(),
         missed: Vec::new(),

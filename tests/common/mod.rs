@@ -196,12 +196,12 @@ pub fn reference_depth(scene: &Scene, camera: &occlu::camera::Camera, resolution
         measure_error: true,
     };
     let mut world = World::new(scene.clone(), hierarchy(scene));
-    let mut session = occlu::bench::Session::new(&gpu, &world.scene, 1, true, &options).unwrap();
+    let mut dr = vec![occlu::cull::create("dr", scene, &occlu::cull::ModeParams::default()).unwrap()];
+    let mut session = occlu::bench::Session::new(&gpu, &world, &mut dr, true, &options).unwrap();
     let camera = occlu::camera::Camera {
         aspect: resolution.aspect(),
         ..*camera
     };
-    let mut dr = vec![occlu::cull::create("dr", scene, &occlu::cull::ModeParams::default()).unwrap()];
     session.frame(0, &camera, &mut world, &mut dr, 0).unwrap();
     session.reference_depth().unwrap()
 }

@@ -205,8 +205,9 @@ impl TernaryTree {
         self.node(id).split.map(|s| s.children).into_iter().flatten()
     }
 
-    /// The node `object` lives in.
-    pub fn home(&self, object: u32) -> u32 {
+    /// The node `object` lives in (for tests of moves, splits and merges).
+    #[cfg(test)]
+    fn home(&self, object: u32) -> u32 {
         self.home[object as usize]
     }
 

@@ -26,14 +26,15 @@ use std::str::FromStr;
 
 use serde::Serialize;
 
-use super::roc::cull_on_gpu;
-use super::{Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, TraversalStats};
-use crate::gpu::{CullTree, FrameCtx, GpuCullTree, MAX_LEVELS};
+use super::{CullTree, GpuWalk, MAX_LEVELS, cull_on_gpu};
+use crate::cull::{Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, TraversalStats};
+use crate::gpu::{FrameCtx, GpuAudit, GpuContext, GpuSetup};
 use crate::hierarchy::Hierarchy;
+use crate::object_set::ObjectSet;
 use crate::scene::Object;
 
 /// This mode's entry in the registry.
-pub(super) const MODE: ModeInfo = ModeInfo {
+pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Ioc,
     name: "ioc",
     summary: "iterative hierarchical raster occlusion culling: roc over the hierarchy, level by level from a start to a bottom depth (004 §2)",
@@ -126,11 +127,12 @@ impl IocParams {
 
 pub struct IterativeOcclusionCulling {
     params: IocParams,
-    /// The start and bottom depths, chosen in the first frame.
+    /// The start and bottom depths, chosen in `prepare`.
     chosen: Option<(u32, u32)>,
-    /// The cut hierarchy on the GPU, and per tree node the hierarchy node
-    /// whose box it tests; uploaded in the first frame.
-    tree: Option<(GpuCullTree, Vec<u32>)>,
+    /// Made in `prepare`, over the hierarchy cut at the chosen depths.
+    walk: Option<GpuWalk>,
+    /// Per tree node, the hierarchy node whose box it tests.
+    source: Vec<u32>,
 }
 
 impl IterativeOcclusionCulling {
@@ -138,7 +140,8 @@ impl IterativeOcclusionCulling {
         IterativeOcclusionCulling {
             params,
             chosen: None,
-            tree: None,
+            walk: None,
+            source: Vec::new(),
         }
     }
 }
@@ -161,20 +164,23 @@ impl Culler for IterativeOcclusionCulling {
         true
     }
 
-    fn culls_on_gpu(&self) -> bool {
-        true
+    fn prepare(&mut self, setup: &GpuSetup) {
+        let (start, bottom) = depths(self.params, setup.hierarchy, &setup.scene.objects);
+        self.chosen = Some((start, bottom));
+        let (tree, source) = CullTree::cut(setup.hierarchy, start, bottom);
+        self.source = source;
+        self.walk = Some(GpuWalk::new(setup, &tree));
     }
 
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        let walk = self.walk.as_mut().expect("ioc runs where the session prepared it");
         let hierarchy = input.hierarchy;
-        let (tree, source) = self.tree.get_or_insert_with(|| {
-            let (start, bottom) = depths(self.params, hierarchy, &input.scene.objects);
-            self.chosen = Some((start, bottom));
-            let (tree, source) = CullTree::cut(hierarchy, start, bottom);
-            (ctx.upload_cull_tree(&tree), source)
-        });
-        let bounds = source.iter().map(|&n| hierarchy.nodes[n as usize].bounds);
-        cull_on_gpu(ctx, tree, bounds)
+        let bounds = self.source.iter().map(|&n| hierarchy.nodes[n as usize].bounds);
+        cull_on_gpu(ctx, input.camera, walk, bounds)
+    }
+
+    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        self.walk.as_mut()?.audit(gpu, drawn)
     }
 }
 

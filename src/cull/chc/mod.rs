@@ -45,8 +45,10 @@ use super::{Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, 
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
 use crate::gpu::{BoxVisibility, FrameCtx, Resolution};
-use crate::hierarchy::ternary::{Pixels, TernaryTree, TreeParams, facing_axis};
+mod ternary;
+
 use crate::scene::Scene;
+use ternary::{Pixels, TernaryTree, TreeParams, facing_axis};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {

@@ -1,41 +1,18 @@
-//! GPU-driven culling (paper 004): the visibility of tree nodes is decided
-//! on the GPU, level by level, and the GPU builds the draw lists itself, so
-//! no per-node result ever travels back to the CPU.
-//!
-//! What the GPU walks is a [`CullTree`] (cull_tree.rs): `roc` walks a flat
-//! tree (every object a leaf); `ioc` the bounding-volume hierarchy cut at a
-//! bottom depth.
-//!
-//! One frame, as the modes drive it through `FrameCtx`:
-//! 1. draw the visible list (last frame's visible objects, the occluders);
-//! 2. per level: draw the boxes of the queued nodes with `fs_mark`, which
-//!    marks a node visible when one of its fragments passes the early depth
-//!    test (raster_mark.wgsl); then `cs_expand` enqueues the children of
-//!    visible inner nodes and marks the objects of visible leaves
-//!    (raster_cull.wgsl). The queue's length stays on the GPU: it is the
-//!    instance count of the next level's indirect draw and dispatch;
-//! 3. `cs_compact` turns the marks into the next visible list and the list of
-//!    objects visible now but not drawn in step 1;
-//! 4. draw that list by indirect multi-draw. Where the adapter cannot take
-//!    the count from a GPU buffer (GL), the two list lengths are read back
-//!    first: the frame's only round trip.
-//!
-//! After the frame, untimed, [`RasterPool::audit`] reads back which objects
-//! were drawn, how many nodes each level tested and hid, and the GPU time of
-//! steps 2-3, for the statistics.
+//! The GPU half of the walk: one mode's pipelines, per-node scratch and
+//! tree on the GPU, the passes of one walk, and the audit after it (see the
+//! module above for the frame they make).
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use super::conservative::{BoxMargins, EyeBox, QueryBox, eye_relative_box};
-use super::cull_tree::{CullTree, MAX_LEVELS};
-use super::queries::{
-    BOX_INDEX_COUNT, BOX_TEST, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer, box_index_buffer,
-    box_test_pipeline, depth_only_pass, set_box_indices, storage_buffer,
-};
-use super::renderer::DrawRange;
-use super::{GpuContext, GpuTimer, Readback};
+use super::tree::{CullTree, MAX_LEVELS};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
+use crate::gpu::{
+    BOX_INDEX_COUNT, BOX_TEST, BOXES_WGSL, BoxMargins, EyeBox, GpuAudit, GpuContext, GpuSetup, GpuTimer, GpuWork,
+    IndirectCount, IndirectDraws, QueryBox, Readback, bind_buffers, bind_group_layout, box_bind_group_layout,
+    box_buffer, box_index_buffer, box_test_pipeline, depth_only_pass, eye_relative_box, set_box_indices,
+    storage_buffer,
+};
 use crate::object_set::ObjectSet;
 
 /// Threads per workgroup of raster_cull.wgsl, and its grid limit.
@@ -51,12 +28,37 @@ const LEVEL_BYTES: u64 = LEVEL_WORDS as u64 * 4;
 const DISPATCH_OFFSET: u64 = 5 * 4;
 const HIDDEN: usize = 8;
 
-/// What the CPU sets a node's word of the visibility buffer to before a walk
-/// (raster_cull.wgsl's constants); `fs_mark` sets a tested one to 1.
+/// What a node's word of the visibility buffer says: set by the CPU before
+/// a walk, and to [`VISIBLE`] by `fs_mark` for a tested node a fragment of
+/// whose box passed.
 const TO_TEST: u32 = 0;
+const VISIBLE: u32 = 1;
 const OUTSIDE_FRUSTUM: u32 = 2;
 const REACHES_NEAR: u32 = 3;
+/// What an object's word of the state buffer says (`cs_expand` and
+/// `cs_compact`): drawn as visible in the last frame, and marked visible in
+/// this walk.
+const VISIBLE_LAST_FRAME: u32 = 1;
+const MARKED: u32 = 2;
 const DRAW_COMMAND_BYTES: u64 = 20;
+
+/// The constants the shaders share with this file, written as WGSL and put
+/// before their text, so the two cannot drift apart.
+fn shader_constants() -> String {
+    [
+        ("TO_TEST", TO_TEST),
+        ("VISIBLE", VISIBLE),
+        ("OUTSIDE_FRUSTUM", OUTSIDE_FRUSTUM),
+        ("REACHES_NEAR", REACHES_NEAR),
+        ("VISIBLE_LAST_FRAME", VISIBLE_LAST_FRAME),
+        ("MARKED", MARKED),
+        ("GROUP_SIZE", GROUP_SIZE),
+        ("MAX_GROUPS", MAX_GROUPS),
+    ]
+    .iter()
+    .map(|(name, value)| format!("const {name}: u32 = {value}u;\n"))
+    .collect()
+}
 
 /// Which of a tree's two draw lists.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,9 +69,9 @@ pub enum DrawList {
     NewlyVisible,
 }
 
-/// A [`CullTree`] on the GPU with the state one mode keeps between frames:
+/// A [`CullTree`] on the GPU with the state a mode keeps between frames:
 /// which objects were visible, and the draw lists.
-pub struct GpuCullTree {
+struct TreeOnGpu {
     nodes: u32,
     objects: u32,
     levels: u32,
@@ -86,48 +88,6 @@ pub struct GpuCullTree {
     known_counts: [u32; 2],
 }
 
-impl GpuCullTree {
-    pub fn levels(&self) -> u32 {
-        self.levels
-    }
-}
-
-/// How many commands an indirect multi-draw takes.
-pub enum IndirectCount<'b> {
-    /// Known on the CPU.
-    Known(u32),
-    /// A `u32` in a GPU buffer at an offset, at most `max`.
-    InBuffer {
-        buffer: &'b wgpu::Buffer,
-        offset: u64,
-        max: u32,
-    },
-}
-
-/// Draw commands built on the GPU.
-pub struct IndirectDraws<'b> {
-    pub commands: &'b wgpu::Buffer,
-    pub offset: u64,
-    pub count: IndirectCount<'b>,
-}
-
-/// What one walk's audit found.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct GpuAudit {
-    pub objects_drawn: u64,
-    pub triangles_drawn: u64,
-    /// Nodes the walk reached.
-    pub nodes_visited: u64,
-    /// Of those, boxes drawn into the visibility buffer (the others were
-    /// outside the frustum or reached the near plane).
-    pub nodes_tested: u64,
-    /// Tested and hidden.
-    pub nodes_hidden: u64,
-    pub nodes_outside_frustum: u64,
-    /// GPU time of the walk and the compaction, where timestamps exist.
-    pub cull_gpu: Option<Duration>,
-}
-
 /// The walk recorded for the audit.
 struct Walk {
     /// Seed nodes, and of them those outside the frustum (never queued).
@@ -136,10 +96,8 @@ struct Walk {
     levels: u32,
 }
 
-/// Per-node scratch for trees of up to `capacity` nodes, replaced by a
-/// larger one when a larger tree arrives.
+/// Per-node scratch for a tree of `capacity` nodes.
 struct NodeScratch {
-    capacity: u32,
     boxes: wgpu::Buffer,
     box_group: wgpu::BindGroup,
     /// The visibility buffer: one word per node, set by `fs_mark` (and by
@@ -154,25 +112,18 @@ struct NodeScratch {
     step_groups: [wgpu::BindGroup; 2],
 }
 
-/// Pipelines and scratch shared by every GPU-driven mode.
-pub struct RasterPool {
+/// One GPU-driven mode's walk: its pipelines, per-node scratch, tree on
+/// the GPU, and the record of its last walk for the audit.
+pub struct GpuWalk {
     mark: wgpu::RenderPipeline,
     box_indices: wgpu::Buffer,
     expand: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
     /// `compact`'s empty group 0.
     no_bindings: wgpu::BindGroup,
-    box_layout: wgpu::BindGroupLayout,
-    mark_layout: wgpu::BindGroupLayout,
-    step_layout: wgpu::BindGroupLayout,
-    tree_layout: wgpu::BindGroupLayout,
-    lists_layout: wgpu::BindGroupLayout,
-    camera: wgpu::Buffer,
     scratch: NodeScratch,
     /// An empty level, copied over a level before its queue is filled.
     empty_level: wgpu::Buffer,
-    /// Every object's draw command (first instance = object id).
-    draws: wgpu::Buffer,
     objects: u32,
     triangles: Vec<u64>,
     /// One word per object: drawn this frame.
@@ -184,6 +135,7 @@ pub struct RasterPool {
     audit_readback: Readback,
     counts_readback: Readback,
     walk: Option<Walk>,
+    tree: TreeOnGpu,
     /// Scratch, reused so a frame allocates nothing once warm.
     node_boxes: NodeBoxes,
     seed_queue: Vec<u32>,
@@ -239,23 +191,20 @@ impl NodeBoxes {
 /// Where the audit's parts sit in its read-back buffer.
 const AUDIT_DRAWN_OFFSET: u64 = MAX_LEVELS as u64 * LEVEL_BYTES;
 
-impl RasterPool {
-    /// For a scene whose objects draw `draws`; `camera` is the uniform the
-    /// scene renderer fills per frame. Needs [`GpuContext::gpu_driven`].
-    pub fn new(gpu: &GpuContext, camera: &wgpu::Buffer, draws: &[DrawRange]) -> RasterPool {
+impl GpuWalk {
+    /// Puts `tree` on the GPU, with an empty visible list, and makes what
+    /// walking it takes. Needs [`GpuContext::gpu_driven`].
+    pub fn new(setup: &GpuSetup, tree: &CullTree) -> GpuWalk {
+        let GpuSetup { gpu, camera, draws, .. } = *setup;
         let device = &gpu.device;
-        let mark_source = [
-            include_str!("../../shaders/boxes.wgsl"),
-            include_str!("../../shaders/raster_mark.wgsl"),
-        ]
-        .concat();
+        let mark_source = [BOXES_WGSL, &shader_constants(), include_str!("raster_mark.wgsl")].concat();
         let mark_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("boxes.wgsl + raster_mark.wgsl"),
             source: wgpu::ShaderSource::Wgsl(mark_source.into()),
         });
         let cull_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raster_cull.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/raster_cull.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl([&shader_constants(), include_str!("raster_cull.wgsl")].concat().into()),
         });
         use wgpu::BufferBindingType::Storage;
         use wgpu::ShaderStages as S;
@@ -352,11 +301,19 @@ impl RasterPool {
             .collect();
         let objects = draws.len() as u32;
         let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        let scratch = NodeScratch::new(gpu, [&box_layout, &mark_layout, &step_layout], camera, objects);
-        RasterPool {
+        assert!(
+            tree.order.len() == objects as usize,
+            "a cull tree orders every object of the scene"
+        );
+        assert!((1..=MAX_LEVELS).contains(&tree.levels), "1..={MAX_LEVELS} levels");
+        let nodes = tree.nodes.len() as u32;
+        let scratch = NodeScratch::new(gpu, [&box_layout, &mark_layout, &step_layout], camera, nodes);
+        let all_commands = gpu.buffer_with("all draw commands", &commands, wgpu::BufferUsages::STORAGE);
+        let drawn = storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy);
+        let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, &all_commands, &drawn);
+        GpuWalk {
             box_indices: box_index_buffer(gpu),
-            draws: gpu.buffer_with("all draw commands", &commands, wgpu::BufferUsages::STORAGE),
-            drawn: storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy),
+            drawn,
             level_stats: storage_buffer(gpu, "level statistics", u64::from(MAX_LEVELS) * LEVEL_BYTES, copy),
             empty_level: gpu.buffer_with(
                 "empty level",
@@ -369,6 +326,7 @@ impl RasterPool {
             objects,
             triangles: draws.iter().map(|d| u64::from(d.index_count / 3)).collect(),
             walk: None,
+            tree,
             node_boxes: NodeBoxes::default(),
             seed_queue: Vec::new(),
             words: Vec::new(),
@@ -377,82 +335,27 @@ impl RasterPool {
             expand,
             compact,
             no_bindings,
-            box_layout,
-            mark_layout,
-            step_layout,
-            tree_layout,
-            lists_layout,
-            camera: camera.clone(),
         }
     }
 
-    /// Puts `tree` on the GPU with an empty visible list, for one mode.
-    pub fn upload(&mut self, gpu: &GpuContext, tree: &CullTree) -> GpuCullTree {
-        assert!(
-            tree.order.len() == self.objects as usize,
-            "a cull tree orders every object of the scene"
-        );
-        assert!((1..=MAX_LEVELS).contains(&tree.levels), "1..={MAX_LEVELS} levels");
-        let nodes = tree.nodes.len() as u32;
-        if nodes > self.scratch.capacity {
-            self.scratch = NodeScratch::new(
-                gpu,
-                [&self.box_layout, &self.mark_layout, &self.step_layout],
-                &self.camera,
-                nodes,
-            );
-        }
-        let storage = wgpu::BufferUsages::STORAGE;
-        let node_buffer = gpu.buffer_with("tree nodes", bytemuck::cast_slice(&tree.nodes), storage);
-        let order = gpu.buffer_with("tree order", bytemuck::cast_slice(&tree.order), storage);
-        let object_state = storage_buffer(
-            gpu,
-            "object state",
-            u64::from(self.objects.max(1)) * 4,
-            wgpu::BufferUsages::empty(),
-        );
-        let commands = storage_buffer(
-            gpu,
-            "draw lists",
-            2 * u64::from(self.objects.max(1)) * DRAW_COMMAND_BYTES,
-            wgpu::BufferUsages::INDIRECT,
-        );
-        let counts = storage_buffer(
-            gpu,
-            "draw list lengths",
-            8,
-            wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        );
-        GpuCullTree {
-            nodes,
-            objects: self.objects,
-            levels: tree.levels,
-            seed: tree.seed.clone(),
-            tree_group: bind_buffers(gpu, &self.tree_layout, &[&node_buffer, &order, &object_state]),
-            lists_group: bind_buffers(gpu, &self.lists_layout, &[&self.draws, &commands, &counts, &self.drawn]),
-            commands,
-            counts,
-            known_counts: [0; 2],
-        }
+    /// Levels a walk of the tree takes.
+    pub fn levels(&self) -> u32 {
+        self.tree.levels
     }
 
-    /// Starts a walk of `tree`: stages the boxes of its nodes (`bounds`,
-    /// one per node, in node order) for `camera`, marks those that reach
-    /// the near plane visible, and queues the seed nodes not outside the
-    /// frustum. Returns the CPU time spent preparing the boxes.
-    pub fn begin_walk(
-        &mut self,
-        gpu: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        camera: &Camera,
-        margins: BoxMargins,
-        tree: &GpuCullTree,
-        bounds: impl ExactSizeIterator<Item = Aabb>,
-    ) -> Duration {
-        assert_eq!(bounds.len(), tree.nodes as usize, "one box per tree node");
-        let started = Instant::now();
+    /// Prepares the tree's node boxes (`bounds`, one per node, in node
+    /// order) for `camera` with the frame's `margins`, on the CPU.
+    pub fn prepare_boxes(&mut self, camera: &Camera, margins: BoxMargins, bounds: impl ExactSizeIterator<Item = Aabb>) {
+        assert_eq!(bounds.len(), self.tree.nodes as usize, "one box per tree node");
         self.node_boxes.prepare(camera, margins, bounds);
-        let prepare = started.elapsed();
+    }
+
+    /// Starts a walk with the prepared boxes: stages them, marks those that
+    /// reach the near plane visible, and queues the seed nodes not outside
+    /// the frustum.
+    pub fn begin(&mut self, work: GpuWork) {
+        let GpuWork { gpu, encoder, .. } = work;
+        let tree = &self.tree;
         let s = &self.scratch;
         let NodeBoxes { boxes, states } = &self.node_boxes;
         if !boxes.is_empty() {
@@ -479,7 +382,6 @@ impl RasterPool {
             seed_outside: (tree.seed.len() - self.seed_queue.len()) as u32,
             levels: 0,
         });
-        prepare
     }
 
     /// One level: draws the queued nodes' boxes against `depth`, marking
@@ -487,8 +389,10 @@ impl RasterPool {
     ///
     /// # Panics
     /// Outside a walk, or past [`MAX_LEVELS`].
-    pub fn walk_level(&mut self, encoder: &mut wgpu::CommandEncoder, depth: &wgpu::TextureView, tree: &GpuCullTree) {
-        let walk = self.walk.as_mut().expect("walk_level follows begin_walk");
+    pub fn walk_level(&mut self, work: GpuWork) {
+        let GpuWork { encoder, depth, .. } = work;
+        let walk = self.walk.as_mut().expect("walk_level follows begin");
+        let tree = &self.tree;
         assert!(walk.levels < MAX_LEVELS, "at most {MAX_LEVELS} levels");
         let (input, output) = ((walk.levels % 2) as usize, ((walk.levels + 1) % 2) as usize);
         let s = &self.scratch;
@@ -524,7 +428,9 @@ impl RasterPool {
 
     /// Ends the walk: the marks become the tree's visible and newly visible
     /// lists.
-    pub fn compact(&mut self, encoder: &mut wgpu::CommandEncoder, tree: &GpuCullTree) {
+    pub fn compact(&mut self, work: GpuWork) {
+        let encoder = work.encoder;
+        let tree = &self.tree;
         encoder.clear_buffer(&tree.counts, 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -542,18 +448,21 @@ impl RasterPool {
         }
     }
 
-    /// Submits `encoder` and reads the lengths of `tree`'s lists back, for
-    /// adapters whose draws cannot take them from a buffer.
-    pub fn read_counts(&mut self, gpu: &GpuContext, mut encoder: wgpu::CommandEncoder, tree: &mut GpuCullTree) {
+    /// Submits `encoder` and reads the lengths of the tree's lists back,
+    /// for adapters whose draws cannot take them from a buffer.
+    pub fn read_counts(&mut self, gpu: &GpuContext, mut encoder: wgpu::CommandEncoder) {
+        let tree = &mut self.tree;
         self.counts_readback.copy(&mut encoder, &tree.counts, 0, 0, 8);
         gpu.queue.submit([encoder.finish()]);
         self.counts_readback.read(gpu, 8, &mut self.words);
         tree.known_counts = [self.words[0], self.words[1]];
     }
 
-    /// The commands of one of `tree`'s lists; the count comes from the GPU
-    /// when `indirect_count`, else from the last [`RasterPool::read_counts`].
-    pub fn list<'t>(tree: &'t GpuCullTree, list: DrawList, indirect_count: bool) -> IndirectDraws<'t> {
+    /// The commands of one of the tree's lists; the count comes from the
+    /// GPU when `indirect_count`, else from the last
+    /// [`GpuWalk::read_counts`].
+    pub fn list(&self, list: DrawList, indirect_count: bool) -> IndirectDraws<'_> {
+        let tree = &self.tree;
         let (index, offset) = match list {
             DrawList::Visible => (0, 0),
             DrawList::NewlyVisible => (1, u64::from(tree.objects) * DRAW_COMMAND_BYTES),
@@ -634,6 +543,53 @@ impl RasterPool {
     }
 }
 
+impl TreeOnGpu {
+    /// `tree` on the GPU, bound with the walk's lists (`draws`: every
+    /// object's draw command; `drawn`: a word per object drawn).
+    fn new(
+        gpu: &GpuContext,
+        tree: &CullTree,
+        tree_layout: &wgpu::BindGroupLayout,
+        lists_layout: &wgpu::BindGroupLayout,
+        draws: &wgpu::Buffer,
+        drawn: &wgpu::Buffer,
+    ) -> TreeOnGpu {
+        let objects = tree.order.len() as u32;
+        let storage = wgpu::BufferUsages::STORAGE;
+        let node_buffer = gpu.buffer_with("tree nodes", bytemuck::cast_slice(&tree.nodes), storage);
+        let order = gpu.buffer_with("tree order", bytemuck::cast_slice(&tree.order), storage);
+        let object_state = storage_buffer(
+            gpu,
+            "object state",
+            u64::from(objects.max(1)) * 4,
+            wgpu::BufferUsages::empty(),
+        );
+        let commands = storage_buffer(
+            gpu,
+            "draw lists",
+            2 * u64::from(objects.max(1)) * DRAW_COMMAND_BYTES,
+            wgpu::BufferUsages::INDIRECT,
+        );
+        let counts = storage_buffer(
+            gpu,
+            "draw list lengths",
+            8,
+            wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        );
+        TreeOnGpu {
+            nodes: tree.nodes.len() as u32,
+            objects,
+            levels: tree.levels,
+            seed: tree.seed.clone(),
+            tree_group: bind_buffers(gpu, tree_layout, &[&node_buffer, &order, &object_state]),
+            lists_group: bind_buffers(gpu, lists_layout, &[draws, &commands, &counts, drawn]),
+            commands,
+            counts,
+            known_counts: [0; 2],
+        }
+    }
+}
+
 impl NodeScratch {
     fn new(
         gpu: &GpuContext,
@@ -665,7 +621,6 @@ impl NodeScratch {
             )
         });
         NodeScratch {
-            capacity,
             boxes,
             box_group,
             node_visible,
@@ -688,4 +643,55 @@ fn level_args(entries: u32) -> [u32; LEVEL_WORDS] {
 /// stride over the rest).
 fn groups_for(n: u32) -> u32 {
     n.div_ceil(GROUP_SIZE).min(MAX_GROUPS)
+}
+
+#[cfg(test)]
+mod tests {
+    use wgpu::naga;
+
+    use super::*;
+    use crate::cull::gpu_walk::TreeNode;
+
+    /// The members (name, byte offset) and size of struct `name` in `module`.
+    fn layout(module: &naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
+        let (_, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("no struct {name}"));
+        match &ty.inner {
+            naga::TypeInner::Struct { members, span } => (
+                members
+                    .iter()
+                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                    .collect(),
+                *span,
+            ),
+            other => panic!("{name} is {other:?}"),
+        }
+    }
+
+    #[test]
+    fn the_shaders_lay_out_what_this_file_writes_and_reads() {
+        let cull = [&shader_constants(), include_str!("raster_cull.wgsl")].concat();
+        let module = naga::front::wgsl::parse_str(&cull).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&cull)));
+        let (members, size) = layout(&module, "Level");
+        assert_eq!(u64::from(size), LEVEL_BYTES, "level_args writes LEVEL_WORDS words");
+        let offset = |name: &str| members.iter().find(|(n, _)| n == name).map(|&(_, o)| u64::from(o));
+        assert_eq!(offset("groups_x"), Some(DISPATCH_OFFSET));
+        assert_eq!(
+            offset("hidden"),
+            Some(HIDDEN as u64 * 4),
+            "the audit reads hidden, outside, near"
+        );
+        assert_eq!(offset("outside"), Some(HIDDEN as u64 * 4 + 4));
+        assert_eq!(offset("near"), Some(HIDDEN as u64 * 4 + 8));
+        let (members, size) = layout(&module, "TreeNode");
+        assert_eq!(size as usize, std::mem::size_of::<TreeNode>());
+        let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["first_child", "child_count", "first_object", "object_count"]);
+        assert_eq!(u64::from(layout(&module, "DrawCommand").1), DRAW_COMMAND_BYTES);
+        let mark = [BOXES_WGSL, &shader_constants(), include_str!("raster_mark.wgsl")].concat();
+        naga::front::wgsl::parse_str(&mark).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&mark)));
+    }
 }

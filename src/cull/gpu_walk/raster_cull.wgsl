@@ -50,19 +50,10 @@ struct Counts {
     newly_visible: atomic<u32>,
 }
 
-// node_visible words: set per frame by the CPU (0 for a box to test), and
-// to VISIBLE by fs_mark when a fragment of the box passes.
-const TESTED: u32 = 0u;
-const VISIBLE: u32 = 1u;
-const OUTSIDE_FRUSTUM: u32 = 2u;
-const REACHES_NEAR: u32 = 3u;
-
-// object_state bits. VISIBLE_LAST_FRAME persists from frame to frame;
-// MARKED lives from the level walk to compaction.
-const VISIBLE_LAST_FRAME: u32 = 1u;
-const MARKED: u32 = 2u;
-const GROUP_SIZE: u32 = 64u;
-const MAX_GROUPS: u32 = 65535u;
+// node_visible words (TO_TEST, VISIBLE, OUTSIDE_FRUSTUM, REACHES_NEAR) and
+// object_state bits (VISIBLE_LAST_FRAME persists from frame to frame;
+// MARKED lives from the level walk to compaction), GROUP_SIZE and
+// MAX_GROUPS are written before this text from pool.rs's constants.
 
 @group(0) @binding(0) var<storage, read> queue_in: array<u32>;
 // Level as plain words: [1] is the number of entries in queue_in.
@@ -94,7 +85,7 @@ fn cs_expand(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     for (var i = id.x; i < entries; i += grid.x * GROUP_SIZE) {
         let index = queue_in[i];
         switch node_visible[index] {
-            case TESTED: {
+            case TO_TEST: {
                 atomicAdd(&level_out.hidden, 1u);
                 continue;
             }

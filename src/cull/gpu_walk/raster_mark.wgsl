@@ -4,8 +4,8 @@
 // never learns how long the queue is. Early depth testing is forced, so a
 // fragment reaches fs_mark only if it passes the depth test against the
 // occluders drawn so far, and then marks its node visible in the visibility
-// buffer (VISIBLE in raster_cull.wgsl). Every writer stores the same value,
-// so plain stores suffice.
+// buffer. Every writer stores the same value, so plain stores suffice.
+// VISIBLE is written before this text from pool.rs's constants.
 
 @group(1) @binding(0) var<storage, read> queue: array<u32>;
 @group(1) @binding(1) var<storage, read_write> node_visible: array<u32>;
@@ -19,5 +19,5 @@ fn vs_queued(@builtin(vertex_index) corner: u32, @builtin(instance_index) entry:
 @fragment
 @early_depth_test(force)
 fn fs_mark(@location(0) @interpolate(flat) node: u32) {
-    node_visible[node] = 1u;
+    node_visible[node] = VISIBLE;
 }
