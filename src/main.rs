@@ -54,13 +54,11 @@ struct Cli {
 fn after_help() -> String {
     let modes: Vec<String> = occlu::cull::modes()
         .map(|m| {
-            let params = m.params.iter().map(|p| {
-                format!(
-                    "\n             --param {}.{}={}  {}",
-                    m.name, p.key, p.default, p.summary
-                )
-            });
-            format!("  {:<8} {}{}", m.name, m.summary, params.collect::<String>())
+            let params = m
+                .params
+                .iter()
+                .map(|p| format!("\n             --param {}.{}={}  {}", m.id, p.key, p.default, p.summary));
+            format!("  {:<8} {}{}", m.id.name(), m.summary, params.collect::<String>())
         })
         .collect();
     let scenes: Vec<String> = SCENES.iter().map(|(n, s)| format!("  {n:<8} {s}")).collect();

@@ -277,7 +277,7 @@ fn conservative_modes_stay_exact_while_cars_drive_through_the_city() {
     let movers: Vec<u32> = scene.movers.iter().map(|m| m.object).collect();
     let modes: Vec<&str> = occlu::cull::modes()
         .filter(|m| m.conservative)
-        .map(|m| m.name)
+        .map(|m| m.id.name())
         .collect();
     for gpu in common::gpus() {
         let seen = RefCell::new(Vec::new());
@@ -317,7 +317,7 @@ fn conservative_modes_stay_exact_while_cars_drive_through_the_city() {
 fn the_forest_is_mostly_visible_where_the_city_is_mostly_hidden_and_every_mode_is_exact_in_it() {
     let modes: Vec<&str> = occlu::cull::modes()
         .filter(|m| m.conservative)
-        .map(|m| m.name)
+        .map(|m| m.id.name())
         .collect();
     // The share of the objects in the frustum (vfc draws them) that own a
     // pixel: the occlusion a scene offers to cull.
@@ -385,7 +385,7 @@ fn a_lost_device_ends_the_run_with_an_error_not_a_panic() {
         for gpu in common::gpus() {
             let modes: Vec<&str> = occlu::cull::modes()
                 .filter(|m| m.unsupported_on(&gpu).is_none())
-                .map(|m| m.name)
+                .map(|m| m.id.name())
                 .collect();
             let mut cullers: Vec<Box<dyn Culler>> = modes
                 .iter()

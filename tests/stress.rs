@@ -177,7 +177,7 @@ fn conservative_modes_draw_every_visible_object_of_random_scenes() {
             }
         })
         .collect();
-    let modes: Vec<&str> = modes().filter(|m| m.conservative).map(|m| m.name).collect();
+    let modes: Vec<&str> = modes().filter(|m| m.conservative).map(|m| m.id.name()).collect();
     for gpu in gpus() {
         let mut visible = 0;
         for (k, case) in scenes.iter().enumerate() {

@@ -54,13 +54,13 @@ use std::time::{Duration, Instant};
 use serde::Serialize;
 
 use super::traversal::{DepthQueue, children, draw_leaf, frustum_cull_subtree, in_frustum, view_depth};
-use super::{Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, TraversalStats};
+use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{BoxTest, BoxVisibility, FrameCtx};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Ac,
-    name: "ac",
     summary: "V+O with adaptive culling (Eq. 1) and a cost-adaptive budget (Eq. 2) by visible-pixel counts (002 §4.2-4.4)",
     conservative: false,
     params: &[THRESHOLD, SAMPLING, F_GRAPHICS, EYE_DISTANCE],

@@ -32,9 +32,8 @@ use serde::Serialize;
 use super::gpu_walk::ioc::{IocParams, IterativeOcclusionCulling};
 use super::omq::{OccupancyMapQueries, OmqParams};
 use super::vfc::FrustumCulling;
-use super::{
-    Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, PreviousFrame, TraversalStats,
-};
+use crate::cull::culler::{Culler, FrameInput, PreviousFrame, TraversalStats};
+use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{FrameCtx, GpuAudit, GpuContext, GpuSetup};
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
@@ -42,7 +41,6 @@ use crate::scene::Scene;
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Auto,
-    name: "auto",
     summary: "per frame, vfc or occlusion culling (ioc, or omq without GPU culling), whichever measured cheaper; the other re-measured now and then",
     conservative: true,
     params: &[PROBE],

@@ -1,14 +1,14 @@
 //! `dr`: direct rendering (paper 002 §5, "DR – without any culling"). The
 //! baseline every culler must beat, and the image every culler must match.
 
-use super::{Culler, FrameInput, ModeId, ModeInfo, Needs, TraversalStats};
+use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::mode::{ModeId, ModeInfo, Needs};
 use crate::gpu::FrameCtx;
 use crate::scene::Scene;
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Dr,
-    name: "dr",
     summary: "direct rendering: every object, no culling (002 §5)",
     conservative: true,
     params: &[],

@@ -33,9 +33,10 @@ use serde::Serialize;
 
 use super::occupancy::{OccupancyMap, ScreenRect};
 use super::traversal::{DepthQueue, children, draw_leaf, in_frustum, nearest_corner};
-use super::{Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, TraversalStats};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
+use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{BoxTest, BoxVisibility, FrameCtx, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::scene::Scene;
@@ -43,7 +44,6 @@ use crate::scene::Scene;
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Omq,
-    name: "omq",
     summary: "Occupancy Map + multiple occlusion queries in three stages (003 §3-4)",
     conservative: true,
     params: &[OM, INITIAL_MAX_TESTS, FACTOR],

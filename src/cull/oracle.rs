@@ -3,13 +3,13 @@
 //! REF, "ideal precomputed culling"). Its time is the cost of drawing the
 //! visible set alone; no real mode can draw less and still be exact.
 
-use super::{Culler, FrameInput, ModeId, ModeInfo, Needs, TraversalStats};
+use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::mode::{ModeId, ModeInfo, Needs};
 use crate::gpu::FrameCtx;
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Oracle,
-    name: "oracle",
     summary: "draws exactly the objects visible in the reference frame: the floor for object-level culling",
     conservative: true,
     params: &[],

@@ -11,14 +11,14 @@
 //! the queue.
 
 use super::traversal::{DepthQueue, draw_leaf, nearest_corner};
-use super::{Culler, FrameInput, ModeId, ModeInfo, Needs, TraversalStats};
 use crate::camera::Containment;
+use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::mode::{ModeId, ModeInfo, Needs};
 use crate::gpu::{BoxTest, BoxVisibility, FrameCtx};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Sq,
-    name: "sq",
     summary: "front-to-back traversal, one occlusion query per node, each awaited (003 §5 b)",
     conservative: true,
     params: &[],

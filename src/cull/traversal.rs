@@ -6,9 +6,9 @@ use std::collections::BinaryHeap;
 
 use glam::DVec3;
 
-use super::TraversalStats;
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum, nearest_view_depth};
+use crate::cull::culler::TraversalStats;
 use crate::gpu::FrameCtx;
 use crate::hierarchy::{Hierarchy, Node};
 use crate::scene::Scene;

@@ -13,14 +13,14 @@
 //! objects here where the paper's leaves held one geometry node.
 
 use super::traversal::frustum_cull_subtree;
-use super::{Culler, FrameInput, ModeId, ModeInfo, Needs, TraversalStats};
+use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::mode::{ModeId, ModeInfo, Needs};
 use crate::gpu::FrameCtx;
 use crate::scene::Scene;
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Vfc,
-    name: "vfc",
     summary: "hierarchical view-frustum culling with the fully-inside shortcut (002 §4.1)",
     conservative: true,
     params: &[],

@@ -9,9 +9,12 @@
 use std::time::{Duration, Instant};
 
 use super::conservative::BoxMargins;
+use super::context::GpuContext;
 use super::queries::{BatchAnswers, BoxTest, BoxVisibility, QueryPool, TestTarget};
 use super::renderer::DrawRange;
-use super::{Draws, GpuContext, GpuTimer, IndirectDraws, RenderTargets, SceneRenderer};
+use super::renderer::{Draws, IndirectDraws, SceneRenderer};
+use super::targets::RenderTargets;
+use super::timing::GpuTimer;
 use crate::bounds::Aabb;
 use crate::camera::Camera;
 use crate::hierarchy::Hierarchy;

@@ -1,8 +1,9 @@
 //! GPU pieces of `occlu render`: reading a colour target back, and drawing
 //! coloured lines (frustum edges, boxes) over a picture.
 
+use super::context::GpuContext;
+use super::readback::Readback;
 use super::targets::{COLOR_FORMAT, Resolution, texture_2d};
-use super::{GpuContext, Readback};
 
 /// One end of a line: eye-relative world position and colour (0..1).
 #[repr(C)]

@@ -18,8 +18,9 @@
 use std::time::{Duration, Instant};
 
 use super::conservative::{BoxMargins, EyeBox, QueryBox, eye_relative_box};
+use super::context::GpuContext;
+use super::readback::Readback;
 use super::targets::DEPTH_FORMAT;
-use super::{GpuContext, Readback};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
 

@@ -1,6 +1,6 @@
 //! GPU→CPU copies: one mappable buffer reused frame after frame.
 
-use super::GpuContext;
+use super::context::GpuContext;
 
 pub struct Readback {
     buffer: wgpu::Buffer,

@@ -5,8 +5,9 @@
 use glam::Mat4;
 
 use super::conservative::{BoxMargins, FragmentLimit, pixel_rays};
+use super::context::{GpuContext, GpuError};
+use super::targets::Resolution;
 use super::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, RenderTargets};
-use super::{GpuContext, GpuError, Resolution};
 use crate::camera::Camera;
 use crate::scene::{Object, Scene};
 

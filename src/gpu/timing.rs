@@ -1,6 +1,7 @@
 //! GPU time per span (one span per mode and frame) from timestamp queries.
 
-use super::{GpuContext, Readback};
+use super::context::GpuContext;
+use super::readback::Readback;
 
 pub struct GpuTimer {
     queries: wgpu::QuerySet,

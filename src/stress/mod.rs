@@ -273,9 +273,12 @@ pub fn run(
         .map(|&m| m.info())
         .filter(|m| match m.unsupported_on(gpu) {
             Some(reason) => {
-                events(StressEvent::Skipped { mode: m.name, reason });
+                events(StressEvent::Skipped {
+                    mode: m.id.name(),
+                    reason,
+                });
                 skipped.push(SkippedMode {
-                    mode: m.name.to_string(),
+                    mode: m.id.name().to_string(),
                     reason: reason.to_string(),
                 });
                 false
@@ -311,7 +314,7 @@ pub fn run(
         rows.extend(
             modes
                 .iter()
-                .map(|m| StressRow::tally(&case.name, m.name, m.conservative, &outcome.rows)),
+                .map(|m| StressRow::tally(&case.name, m.id.name(), m.conservative, &outcome.rows)),
         );
         if let Some(baseline) = &case.baseline {
             let (_, base) = baseline_depths

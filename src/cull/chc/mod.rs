@@ -41,9 +41,10 @@ use serde::Serialize;
 
 use super::occupancy::ScreenRect;
 use super::traversal::{DepthQueue, nearest_corner};
-use super::{Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, TraversalStats};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
+use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{BoxVisibility, FrameCtx, Resolution};
 mod ternary;
 
@@ -53,7 +54,6 @@ use ternary::{Pixels, TernaryTree, TreeParams, facing_axis};
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Chc,
-    name: "chc",
     summary: "coherent culling on a ternary tree: last frame's visible nodes unwaited, TightBoxes, split/merge, colliding queries wait (001)",
     conservative: true,
     params: &[R_SPLIT, O_SPLIT, R_MERGE, O_MERGE, TIGHT_AFTER],

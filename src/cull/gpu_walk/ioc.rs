@@ -27,7 +27,8 @@ use std::str::FromStr;
 use serde::Serialize;
 
 use super::{CullTree, GpuWalk, MAX_LEVELS, cull_on_gpu};
-use crate::cull::{Culler, FrameInput, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo, TraversalStats};
+use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{FrameCtx, GpuAudit, GpuContext, GpuSetup};
 use crate::hierarchy::Hierarchy;
 use crate::object_set::ObjectSet;
@@ -36,7 +37,6 @@ use crate::scene::Object;
 /// This mode's entry in the registry.
 pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Ioc,
-    name: "ioc",
     summary: "iterative hierarchical raster occlusion culling: roc over the hierarchy, level by level from a start to a bottom depth (004 §2)",
     conservative: true,
     params: &[START, BOTTOM],

@@ -7,7 +7,7 @@
 //! its [`GpuWalk`] (pool.rs: pipelines, scratch, the tree on the GPU), made
 //! in [`Culler::prepare`](super::Culler::prepare).
 //!
-//! One frame ([`cull_on_gpu`]), every step through `FrameCtx`:
+//! One frame (`cull_on_gpu`), every step through `FrameCtx`:
 //!
 //! 1. Last frame's visible objects are drawn first: they are this frame's
 //!    occluders, and part of its image.
@@ -43,9 +43,9 @@ mod tree;
 pub use pool::{DrawList, GpuWalk, NodeBoxes};
 pub use tree::{CullTree, MAX_LEVELS, TreeNode};
 
-use super::TraversalStats;
 use crate::bounds::Aabb;
 use crate::camera::Camera;
+use crate::cull::culler::TraversalStats;
 use crate::gpu::FrameCtx;
 
 /// One frame of GPU-driven culling over `walk`'s tree, whose nodes have the

@@ -5,14 +5,14 @@
 //! tested in one level; the frame is the module above's.
 
 use super::{CullTree, GpuWalk, cull_on_gpu};
-use crate::cull::{Culler, FrameInput, ModeId, ModeInfo, Needs, TraversalStats};
+use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::mode::{ModeId, ModeInfo, Needs};
 use crate::gpu::{FrameCtx, GpuAudit, GpuContext, GpuSetup};
 use crate::object_set::ObjectSet;
 
 /// This mode's entry in the registry.
 pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Roc,
-    name: "roc",
     summary: "raster occlusion culling on the GPU: every object's box marks a visibility buffer, indirect multi-draw (004's ROC)",
     conservative: true,
     params: &[],

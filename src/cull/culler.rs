@@ -1,0 +1,139 @@
+//! The [`Culler`] trait every mode implements, what it is told each frame
+//! ([`FrameInput`]) and what it reports ([`TraversalStats`]).
+
+use std::time::Duration;
+
+use crate::camera::Camera;
+use crate::gpu::{FrameCtx, GpuAudit, GpuContext, GpuSetup, Resolution};
+use crate::hierarchy::Hierarchy;
+use crate::object_set::ObjectSet;
+use crate::scene::Scene;
+
+/// What a mode is told about the frame it renders.
+pub struct FrameInput<'a> {
+    pub frame: u32,
+    pub camera: &'a Camera,
+    pub resolution: Resolution,
+    /// The scene at this frame: movers placed, object bounds current.
+    pub scene: &'a Scene,
+    /// The shared hierarchy, refit around moved objects for modes whose
+    /// [`Culler::traverses_hierarchy`] is true.
+    pub hierarchy: &'a Hierarchy,
+    /// Objects whose pose changed since the previous frame.
+    pub moved: &'a [u32],
+    /// The objects that own at least one pixel of the reference frame; given
+    /// only to modes whose [`Culler::needs_reference`] is true (the oracle).
+    pub reference_visible: Option<&'a ObjectSet>,
+    /// What this mode's previous frame cost; `None` in its first frame.
+    pub previous: Option<PreviousFrame>,
+}
+
+/// A mode's own previous frame, as measured (cost-adaptive culling budgets
+/// from it, 002 Eq. 2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PreviousFrame {
+    pub frame_ms: f64,
+    /// Time spent drawing: GPU time outside box tests where timestamps
+    /// exist, else the frame minus culling CPU time and waits for results.
+    pub render_ms: f64,
+}
+
+/// Hierarchy traversal counts of one frame (drawing is counted by `FrameCtx`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalStats {
+    pub nodes_visited: u64,
+    pub nodes_culled_frustum: u64,
+    pub nodes_culled_occlusion: u64,
+    /// Queries made unnecessary (the Occupancy Map's empty-area rule, or
+    /// chc's nodes visible in the last frame).
+    pub queries_skipped: u64,
+    /// Queries held back because a nearer query in flight covered part of
+    /// their screen rectangle (chc, 001 §3.5).
+    pub queries_delayed: u64,
+    /// Nodes visible but treated as occluded for their small contribution
+    /// (adaptive culling, 002 Eq. 1).
+    pub nodes_culled_adaptive: u64,
+    /// Nodes left when the culling budget ran out, only frustum-culled and
+    /// drawn (cost-adaptive culling, 002 Eq. 2).
+    pub nodes_past_budget: u64,
+    /// Time spent keeping the mode's own spatial structure current with
+    /// moved objects (part of its CPU time).
+    pub maintenance: Duration,
+}
+
+impl TraversalStats {
+    /// Adds the nodes a GPU-driven walk visited, found outside the frustum
+    /// and found hidden.
+    pub fn add_gpu_audit(&mut self, audit: &GpuAudit) {
+        self.nodes_visited += audit.nodes_visited;
+        self.nodes_culled_frustum += audit.nodes_outside_frustum;
+        self.nodes_culled_occlusion += audit.nodes_hidden;
+    }
+}
+
+pub trait Culler {
+    /// The mode's name on the command line and in result files.
+    fn name(&self) -> &str;
+
+    /// The mode's parameters, recorded in summary.json.
+    fn parameters(&self) -> serde_json::Value {
+        serde_json::json!({})
+    }
+
+    /// Whether the mode needs the reference visible set (only the oracle).
+    fn needs_reference(&self) -> bool {
+        false
+    }
+
+    /// Whether the mode traverses the shared hierarchy, which is then refit
+    /// around moved objects at the start of its timed frame.
+    fn traverses_hierarchy(&self) -> bool {
+        false
+    }
+
+    /// Creates the mode's own GPU resources (pipelines, buffers), once,
+    /// untimed, before its first frame. Modes that only draw and test boxes
+    /// through [`FrameCtx`] have none.
+    fn prepare(&mut self, _setup: &GpuSetup) {}
+
+    /// After each frame, untimed: what the mode's own GPU work drew and
+    /// tested, read back from the GPU, with what it drew added to `drawn`
+    /// (`None` when it did none this frame).
+    fn audit(&mut self, _gpu: &GpuContext, _drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        None
+    }
+
+    /// Renders one frame: decides what to draw and draws it through `ctx`.
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats;
+}
+
+/// A culler run under another name: one value of a parameter sweep, e.g.
+/// `ac[threshold=50]`.
+pub struct Labeled {
+    pub label: String,
+    pub inner: Box<dyn Culler>,
+}
+
+impl Culler for Labeled {
+    fn name(&self) -> &str {
+        &self.label
+    }
+    fn parameters(&self) -> serde_json::Value {
+        self.inner.parameters()
+    }
+    fn needs_reference(&self) -> bool {
+        self.inner.needs_reference()
+    }
+    fn traverses_hierarchy(&self) -> bool {
+        self.inner.traverses_hierarchy()
+    }
+    fn prepare(&mut self, setup: &GpuSetup) {
+        self.inner.prepare(setup)
+    }
+    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        self.inner.audit(gpu, drawn)
+    }
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        self.inner.frame(ctx, input)
+    }
+}

@@ -1,0 +1,185 @@
+//! What the program knows of a mode without running it: its [`ModeId`]
+//! and name, its entry ([`ModeInfo`]: summary, parameters, needs,
+//! constructor), and the parameters a run gives it ([`ModeParams`]).
+
+use std::collections::BTreeMap;
+use std::fmt::Display;
+use std::str::FromStr;
+
+use super::culler::Culler;
+use crate::gpu::GpuContext;
+use crate::scene::Scene;
+
+/// Every mode, in the order `all` runs them and `--help` lists them; each
+/// one's entry (what it does, needs and takes) is declared in its own file,
+/// and found by [`ModeId::info`] (registry.rs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ModeId {
+    Dr,
+    Vfc,
+    Sq,
+    Omq,
+    Ac,
+    Chc,
+    Roc,
+    Ioc,
+    Auto,
+    Oracle,
+}
+
+impl ModeId {
+    pub const ALL: [ModeId; 10] = [
+        ModeId::Dr,
+        ModeId::Vfc,
+        ModeId::Sq,
+        ModeId::Omq,
+        ModeId::Ac,
+        ModeId::Chc,
+        ModeId::Roc,
+        ModeId::Ioc,
+        ModeId::Auto,
+        ModeId::Oracle,
+    ];
+
+    /// The mode's name on the command line and in result files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModeId::Dr => "dr",
+            ModeId::Vfc => "vfc",
+            ModeId::Sq => "sq",
+            ModeId::Omq => "omq",
+            ModeId::Ac => "ac",
+            ModeId::Chc => "chc",
+            ModeId::Roc => "roc",
+            ModeId::Ioc => "ioc",
+            ModeId::Auto => "auto",
+            ModeId::Oracle => "oracle",
+        }
+    }
+}
+
+impl Display for ModeId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for ModeId {
+    type Err = ModeError;
+
+    fn from_str(name: &str) -> Result<ModeId, ModeError> {
+        ModeId::ALL
+            .into_iter()
+            .find(|m| m.name() == name)
+            .ok_or_else(|| ModeError::Unknown(name.to_string()))
+    }
+}
+
+/// A mode's registry entry: all the rest of the program knows of it.
+pub struct ModeInfo {
+    pub id: ModeId,
+    pub summary: &'static str,
+    /// Whether the mode may never change a pixel (0 error required).
+    pub conservative: bool,
+    /// Parameters it takes as `--param NAME.KEY=VALUE`.
+    pub params: &'static [ParamInfo],
+    /// What it needs from the adapter beyond drawing and occlusion queries;
+    /// a mode whose needs are not met is skipped, with a message.
+    pub needs: Needs,
+    /// Parses the mode's parameters, so a bad value is reported before any
+    /// work.
+    pub check: fn(&ModeParams) -> Result<(), ModeError>,
+    /// Creates the mode's culler (see [`ModeId::create`]).
+    pub build: BuildCuller,
+}
+
+/// A mode's constructor: its culler for a scene, with its parameters.
+pub type BuildCuller = fn(&Scene, &ModeParams) -> Result<Box<dyn Culler>, ModeError>;
+
+/// Adapter capabilities a mode may need.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Needs {
+    /// Drawing and occlusion queries: every adapter.
+    Nothing,
+    /// Visible pixels counted per box (`GpuContext::pixel_counts`).
+    PixelCounts,
+    /// Culling on the GPU alone (`GpuContext::gpu_driven`).
+    GpuCulling,
+}
+
+impl ModeInfo {
+    /// The parameter called `key`, if the mode declares one.
+    pub fn param(&self, key: &str) -> Option<&'static ParamInfo> {
+        self.params.iter().find(|p| p.key == key)
+    }
+
+    /// Why the mode cannot run on `gpu`, or `None` when it can.
+    pub fn unsupported_on(&self, gpu: &GpuContext) -> Option<&'static str> {
+        match self.needs {
+            Needs::PixelCounts if !gpu.pixel_counts => Some(
+                "the adapter cannot count visible pixels (needs SHADER_EARLY_DEPTH_TEST and fragment storage writes)",
+            ),
+            Needs::GpuCulling if !gpu.gpu_driven => Some(
+                "the adapter cannot cull on the GPU (needs SHADER_EARLY_DEPTH_TEST, fragment storage writes, compute shaders, indirect draws, INDIRECT_FIRST_INSTANCE and 8 storage buffers per stage)",
+            ),
+            _ => None,
+        }
+    }
+}
+
+pub struct ParamInfo {
+    pub key: &'static str,
+    pub default: &'static str,
+    pub summary: &'static str,
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ModeError {
+    #[error("unknown mode '{0}' (modes: {list}, or all)", list = ModeId::ALL.map(ModeId::name).join(", "))]
+    Unknown(String),
+    #[error("no modes given")]
+    Empty,
+    #[error("'{0}' names more than one mode, and render draws one (e.g. --mode roc)")]
+    NotOne(String),
+    #[error("parameter '{0}' is not MODE.KEY=VALUE")]
+    MalformedParam(String),
+    #[error("unknown parameter '{key}' ({known})")]
+    UnknownParam { key: String, known: String },
+    #[error("parameter '{key}': {reason}")]
+    BadParam { key: String, reason: String },
+}
+
+/// Mode parameters given as `MODE.KEY=VALUE` (`--param`, a config's
+/// `params`), checked against the parameters the running modes declare.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ModeParams {
+    pub(super) values: BTreeMap<String, String>,
+}
+
+impl ModeParams {
+    /// Whether `key` (`MODE.KEY`) was given a value.
+    pub fn is_set(&self, key: &str) -> bool {
+        self.values.contains_key(key)
+    }
+
+    /// These parameters with `key` (`MODE.KEY`) set to `value`.
+    pub fn with(&self, key: &str, value: &str) -> ModeParams {
+        let mut values = self.values.clone();
+        values.insert(key.to_string(), value.to_string());
+        ModeParams { values }
+    }
+
+    /// The value of `param` of `mode`: the one given, or the default its
+    /// declaration holds (the only place defaults are written).
+    pub fn get<T: FromStr>(&self, mode: ModeId, param: &ParamInfo) -> Result<T, ModeError>
+    where
+        T::Err: Display,
+    {
+        let full = format!("{mode}.{}", param.key);
+        let value = self.values.get(&full).map_or(param.default, String::as_str);
+        value.parse().map_err(|e| ModeError::BadParam {
+            key: full,
+            reason: format!("'{value}': {e}"),
+        })
+    }
+}

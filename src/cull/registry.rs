@@ -1,0 +1,161 @@
+//! The registry: each [`ModeId`]'s entry, declared in the mode's own file,
+//! and what is built on it (parameter checks, mode lists, constructors).
+
+use std::collections::BTreeMap;
+
+use super::culler::Culler;
+use super::mode::{ModeError, ModeId, ModeInfo, ModeParams};
+use super::{ac, auto, chc, dr, gpu_walk, omq, oracle, sq, vfc};
+use crate::scene::Scene;
+
+impl ModeId {
+    /// The mode's entry, declared in its own file.
+    pub fn info(self) -> &'static ModeInfo {
+        match self {
+            ModeId::Dr => &dr::MODE,
+            ModeId::Vfc => &vfc::MODE,
+            ModeId::Sq => &sq::MODE,
+            ModeId::Omq => &omq::MODE,
+            ModeId::Ac => &ac::MODE,
+            ModeId::Chc => &chc::MODE,
+            ModeId::Roc => &gpu_walk::roc::MODE,
+            ModeId::Ioc => &gpu_walk::ioc::MODE,
+            ModeId::Auto => &auto::MODE,
+            ModeId::Oracle => &oracle::MODE,
+        }
+    }
+
+    /// The mode's culler; scratch space is sized for `scene`, which each
+    /// frame then brings in [`super::FrameInput`].
+    pub fn create(self, scene: &Scene, params: &ModeParams) -> Result<Box<dyn Culler>, ModeError> {
+        (self.info().build)(scene, params)
+    }
+}
+
+impl ModeParams {
+    pub fn parse(items: &[String], modes: &[ModeId]) -> Result<ModeParams, ModeError> {
+        let mut values = BTreeMap::new();
+        for item in items {
+            let (key, value) = item
+                .split_once('=')
+                .filter(|(k, _)| k.contains('.'))
+                .ok_or_else(|| ModeError::MalformedParam(item.clone()))?;
+            let (mode, name) = key.split_once('.').unwrap_or((key, ""));
+            let info = mode
+                .parse::<ModeId>()
+                .ok()
+                .filter(|m| modes.contains(m))
+                .map(ModeId::info);
+            if !info.is_some_and(|m| m.params.iter().any(|p| p.key == name)) {
+                let known = match info {
+                    Some(m) if m.params.is_empty() => format!("{mode} takes no parameters"),
+                    Some(m) => {
+                        let keys: Vec<String> = m.params.iter().map(|p| format!("{mode}.{}", p.key)).collect();
+                        format!("{mode} takes {}", keys.join(", "))
+                    }
+                    None => format!("mode '{mode}' is not being run"),
+                };
+                return Err(ModeError::UnknownParam {
+                    key: key.to_string(),
+                    known,
+                });
+            }
+            values.insert(key.to_string(), value.trim().to_string());
+        }
+        let params = ModeParams { values };
+        // Parse every typed value now, so a bad one is reported before a
+        // long scene load rather than after it.
+        for mode in modes {
+            (mode.info().check)(&params)?;
+        }
+        Ok(params)
+    }
+}
+
+/// Every mode's registry entry, in [`ModeId::ALL`]'s order.
+pub fn modes() -> impl Iterator<Item = &'static ModeInfo> {
+    ModeId::ALL.into_iter().map(ModeId::info)
+}
+
+/// The culler of the mode called `name` (see [`ModeId::create`]).
+pub fn create(name: &str, scene: &Scene, params: &ModeParams) -> Result<Box<dyn Culler>, ModeError> {
+    name.parse::<ModeId>()?.create(scene, params)
+}
+
+/// Parses a comma-separated mode list (`all` for every mode); duplicates are
+/// dropped, the order kept.
+pub fn parse_modes(list: &[String]) -> Result<Vec<ModeId>, ModeError> {
+    let mut modes: Vec<ModeId> = Vec::new();
+    for name in list.iter().flat_map(|s| s.split(',')).map(str::trim) {
+        let found = if name == "all" {
+            ModeId::ALL.to_vec()
+        } else {
+            vec![name.parse()?]
+        };
+        for m in found {
+            if !modes.contains(&m) {
+                modes.push(m);
+            }
+        }
+    }
+    if modes.is_empty() {
+        return Err(ModeError::Empty);
+    }
+    Ok(modes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_entry_is_its_own_and_its_defaults_parse() {
+        for id in ModeId::ALL {
+            assert_eq!(id.info().id, id, "{id}'s entry names another mode");
+            assert_eq!(id.name().parse::<ModeId>(), Ok(id));
+            assert_eq!((id.info().check)(&ModeParams::default()), Ok(()), "{id}'s defaults");
+            for p in id.info().params {
+                assert_eq!(id.info().param(p.key).map(|q| q.default), Some(p.default));
+            }
+        }
+        let mut names: Vec<&str> = ModeId::ALL.map(ModeId::name).to_vec();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), ModeId::ALL.len(), "names are unique");
+    }
+
+    #[test]
+    fn mode_lists_parse_in_order_without_duplicates() {
+        let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+        assert_eq!(parse_modes(&s(&["vfc,dr", "vfc"])), Ok(vec![ModeId::Vfc, ModeId::Dr]));
+        assert_eq!(parse_modes(&s(&["all"])), Ok(ModeId::ALL.to_vec()));
+        assert_eq!(parse_modes(&s(&["dr,bogus"])), Err(ModeError::Unknown("bogus".into())));
+        assert_eq!(parse_modes(&s(&[])), Err(ModeError::Empty));
+        assert!(
+            ModeError::Unknown("x".into())
+                .to_string()
+                .contains("dr, vfc, sq, omq, ac, chc, roc, ioc, auto, oracle")
+        );
+    }
+
+    #[test]
+    fn parameters_are_checked_against_the_running_modes() {
+        let items = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+        let p = ModeParams::parse(&items(&["omq.om=80x60", "omq.factor=0.5"]), &[ModeId::Omq]).unwrap();
+        assert_eq!(p.get(ModeId::Omq, ModeId::Omq.info().param("factor").unwrap()), Ok(0.5));
+        assert_eq!(
+            p.get(ModeId::Omq, ModeId::Omq.info().param("initial_max_tests").unwrap()),
+            Ok(4u32)
+        );
+        let err = |v: &[&str], modes: &[ModeId]| ModeParams::parse(&items(v), modes).unwrap_err().to_string();
+        assert!(err(&["omq.bogus=1"], &[ModeId::Omq]).contains("omq takes omq.om, omq.initial_max_tests, omq.factor"));
+        assert!(err(&["omq.om=1x1"], &[ModeId::Vfc]).contains("'omq' is not being run"));
+        assert!(err(&["vfc.x=1"], &[ModeId::Vfc]).contains("vfc takes no parameters"));
+        assert!(err(&["omq"], &[ModeId::Omq]).contains("not MODE.KEY=VALUE"));
+        assert!(
+            err(&["omq.factor=fast"], &[ModeId::Omq]).contains("'fast'"),
+            "values are parsed up front"
+        );
+        assert!(err(&["omq.factor=-1"], &[ModeId::Omq]).contains("positive"));
+    }
+}

@@ -1,0 +1,278 @@
+//! The adapter and device: which API and adapter a run uses
+//! ([`BackendChoice`], [`AdapterReport`]), what the adapter can do, and the
+//! errors the GPU can raise ([`GpuContext`], [`GpuError`]).
+
+use std::fmt;
+use std::sync::{Arc, Mutex};
+
+use serde::Serialize;
+
+use super::conservative::DepthMargins;
+
+/// Which graphics API to use.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum BackendChoice {
+    /// The best adapter of any API; `WGPU_BACKEND` (e.g. `gl`) narrows it.
+    #[default]
+    Auto,
+    Vulkan,
+    Gl,
+    Metal,
+    Dx12,
+}
+
+impl BackendChoice {
+    fn backends(self) -> wgpu::Backends {
+        match self {
+            BackendChoice::Auto => wgpu::Backends::all().with_env(),
+            BackendChoice::Vulkan => wgpu::Backends::VULKAN,
+            BackendChoice::Gl => wgpu::Backends::GL,
+            BackendChoice::Metal => wgpu::Backends::METAL,
+            BackendChoice::Dx12 => wgpu::Backends::DX12,
+        }
+    }
+}
+
+impl fmt::Display for BackendChoice {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        let v = clap::ValueEnum::to_possible_value(self).expect("no skipped variants");
+        f.write_str(v.get_name())
+    }
+}
+
+/// What every result file records about the adapter that produced it.
+#[derive(Clone, Debug, Serialize, serde::Deserialize, PartialEq)]
+pub struct AdapterReport {
+    pub name: String,
+    pub backend: String,
+    pub device_type: String,
+    pub driver: String,
+    pub driver_info: String,
+    /// Whether per-frame GPU time comes from timestamp queries.
+    pub timestamps: bool,
+    /// Whether visible pixels can be counted per box (forced early depth
+    /// test and storage writes in fragment shaders).
+    pub pixel_counts: bool,
+    /// Whether culling can run on the GPU alone: pixel counts, compute
+    /// shaders, and indirect draws that name their first instance.
+    #[serde(default)]
+    pub gpu_driven: bool,
+    /// Whether an indirect multi-draw can take its count from a GPU buffer
+    /// (no read-back before drawing a list the GPU built).
+    #[serde(default)]
+    pub indirect_count: bool,
+}
+
+impl fmt::Display for AdapterReport {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(f, "{} ({}, {}", self.name, self.backend, self.device_type)?;
+        if !self.driver_info.is_empty() {
+            write!(f, ", {}", self.driver_info)?;
+        }
+        f.write_str(")")
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error(
+        "no graphics adapter found for backend '{0}'{env} (on Debian, Mesa's llvmpipe gives GL and mesa-vulkan-drivers gives Vulkan: scripts/install-deps)",
+        env = narrowed_by_env(*.0)
+    )]
+    NoAdapter(BackendChoice),
+    #[error("the adapter {adapter} refused a device: {message}")]
+    Device { adapter: String, message: String },
+    #[error("the run needs a {what} of {need}, but the adapter allows {limit}")]
+    TooLarge { what: &'static str, need: u64, limit: u64 },
+    /// An error the GPU reported while running (validation, out of memory,
+    /// device lost), caught instead of wgpu's default panic.
+    #[error("the GPU failed: {0}")]
+    Failed(String),
+}
+
+impl GpuError {
+    /// Whether the user's input was at fault: a size the adapter cannot
+    /// hold (a smaller --resolution or model fits), as opposed to the GPU
+    /// or its driver failing.
+    pub fn is_input_error(&self) -> bool {
+        matches!(self, GpuError::TooLarge { .. })
+    }
+}
+
+/// What `WGPU_BACKEND` did to an `auto` choice, for the no-adapter message
+/// (wgpu reads it and drops names it does not know).
+fn narrowed_by_env(choice: BackendChoice) -> String {
+    match std::env::var("WGPU_BACKEND") {
+        Ok(value) if choice == BackendChoice::Auto => format!(
+            " narrowed by WGPU_BACKEND={} (names wgpu knows: vulkan, gl, metal, dx12, comma-separated)",
+            crate::text::one_line(&value)
+        ),
+        _ => String::new(),
+    }
+}
+
+/// The device and queue of the chosen adapter.
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter: AdapterReport,
+    /// Timestamp writes inside command encoders are available.
+    pub timestamps: bool,
+    /// See [`AdapterReport::pixel_counts`].
+    pub pixel_counts: bool,
+    /// See [`AdapterReport::gpu_driven`].
+    pub gpu_driven: bool,
+    /// See [`AdapterReport::indirect_count`].
+    pub indirect_count: bool,
+    /// How far box tests stay clear of rounding on this backend.
+    pub depth_margins: DepthMargins,
+    /// The first error the device reported outside any error scope, or its
+    /// loss; [`GpuContext::check`] turns it into a [`GpuError`].
+    failure: Arc<Mutex<Option<String>>>,
+}
+
+impl GpuContext {
+    /// Opens the best adapter the choice allows: real GPUs before software
+    /// ones, and a native API before GL on the same device.
+    pub fn new(choice: BackendChoice) -> Result<GpuContext, GpuError> {
+        let backends = choice.backends();
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends,
+            flags: wgpu::InstanceFlags::default().with_env(),
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        let adapter = pollster::block_on(instance.enumerate_adapters(backends))
+            .into_iter()
+            .min_by_key(|a| {
+                let info = a.get_info();
+                (
+                    device_rank(info.device_type),
+                    u8::from(info.backend == wgpu::Backend::Gl),
+                )
+            })
+            .ok_or(GpuError::NoAdapter(choice))?;
+        let info = adapter.get_info();
+        let timing = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let wanted = timing
+            | wgpu::Features::SHADER_EARLY_DEPTH_TEST
+            | wgpu::Features::INDIRECT_FIRST_INSTANCE
+            | wgpu::Features::MULTI_DRAW_INDIRECT_COUNT;
+        let features = adapter.features() & wanted;
+        let downlevel = adapter.get_downlevel_capabilities().flags;
+        let timestamps = features.contains(timing);
+        let pixel_counts = features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST)
+            && downlevel.contains(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE);
+        // raster_cull.wgsl's expand pass binds 8 storage buffers.
+        let gpu_driven = pixel_counts
+            && features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE)
+            && downlevel.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS | wgpu::DownlevelFlags::INDIRECT_EXECUTION)
+            && adapter.limits().max_storage_buffers_per_shader_stage >= 8;
+        let indirect_count = features.contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT);
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("occlu"),
+            required_features: features,
+            // Large models need the adapter's full buffer sizes.
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: info.name.clone(),
+            message: e.to_string(),
+        })?;
+        // wgpu's default handler panics; keep the first error for check().
+        let failure = Arc::new(Mutex::new(None));
+        let record = |failure: &Arc<Mutex<Option<String>>>| {
+            let failure = Arc::clone(failure);
+            move |message: String| record_failure(&failure, &message)
+        };
+        let on_error = record(&failure);
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| on_error(e.to_string())));
+        let on_loss = record(&failure);
+        device.set_device_lost_callback(move |reason, message| on_loss(format!("device lost ({reason:?}): {message}")));
+        Ok(GpuContext {
+            device,
+            queue,
+            adapter: AdapterReport {
+                name: info.name,
+                backend: info.backend.to_string(),
+                device_type: format!("{:?}", info.device_type),
+                driver: info.driver,
+                driver_info: info.driver_info,
+                timestamps,
+                pixel_counts,
+                gpu_driven,
+                indirect_count,
+            },
+            timestamps,
+            pixel_counts,
+            gpu_driven,
+            indirect_count,
+            depth_margins: DepthMargins::for_backend(info.backend),
+            failure,
+        })
+    }
+
+    /// Records a failure found outside wgpu's callbacks (a read-back that
+    /// could not be mapped), for [`GpuContext::check`].
+    pub(crate) fn fail(&self, message: &str) {
+        record_failure(&self.failure, message);
+    }
+
+    /// The first error the GPU reported since the device was opened, if any.
+    pub fn check(&self) -> Result<(), GpuError> {
+        // Callbacks (a lost device's) are delivered while polling.
+        let _ = self.device.poll(wgpu::PollType::Poll);
+        let failure = self.failure.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        match failure.as_ref() {
+            Some(message) => Err(GpuError::Failed(message.clone())),
+            None => Ok(()),
+        }
+    }
+
+    /// A buffer holding `contents` (padded to whole words, at least one, as
+    /// copies and bindings need), written through the queue. wgpu's
+    /// `create_buffer_init` maps the new buffer instead, and panics when the
+    /// device is lost; here a lost device only records the failure for
+    /// [`GpuContext::check`].
+    pub fn buffer_with(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        let words = contents.len().div_ceil(4).max(1);
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: (words * 4) as u64,
+            usage: usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        if contents.len() == words * 4 {
+            self.queue.write_buffer(&buffer, 0, contents);
+        } else {
+            let mut padded = contents.to_vec();
+            padded.resize(words * 4, 0);
+            self.queue.write_buffer(&buffer, 0, &padded);
+        }
+        buffer
+    }
+
+    /// Blocks until the GPU has finished everything submitted so far.
+    pub fn wait_idle(&self) {
+        // A lost device is recorded by the device-lost callback and reported
+        // by check(); waiting on it cannot fail any other way here.
+        let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
+    }
+}
+
+/// Keeps `message` as the device's failure unless one came first.
+fn record_failure(failure: &Mutex<Option<String>>, message: &str) {
+    let mut first = failure.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    first.get_or_insert_with(|| crate::text::one_line(message));
+}
+
+fn device_rank(t: wgpu::DeviceType) -> u8 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    }
+}
