@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use super::FrameStats;
+use super::rows::FrameStats;
 
 /// The distribution of one column over the recorded frames.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

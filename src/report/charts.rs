@@ -18,7 +18,8 @@ use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::types::RangedCoordu32;
 use plotters::prelude::*;
 
-use super::{ReportError, Summary};
+use super::files::{ReportError, write_png};
+use super::summary::Summary;
 use crate::measure::{FrameStats, ModeSummary};
 
 pub const WIDTH: u32 = 1200;
@@ -55,7 +56,7 @@ pub fn write_charts(dir: &Path, summary: &Summary, rows: &[FrameStats]) -> Resul
                     error: std::io::Error::other(format!("drawing the chart failed: {e}")),
                 })?;
             }
-            super::write_png(&path, WIDTH, HEIGHT, &rgb)?;
+            write_png(&path, WIDTH, HEIGHT, &rgb)?;
             Ok(path)
         })
         .collect()

@@ -5,7 +5,7 @@
 
 use serde::Serialize;
 
-use super::Summary;
+use super::summary::Summary;
 
 /// One point of the chart github-action-benchmark draws.
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -2,7 +2,7 @@
 
 use std::fmt::Write as _;
 
-use super::{Summary, SweepSummary};
+use super::summary::{Summary, SweepSummary};
 use crate::measure::ModeSummary;
 use crate::text::markdown;
 

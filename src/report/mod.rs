@@ -3,246 +3,23 @@
 
 pub mod charts;
 pub mod compare;
+mod files;
 pub mod github;
 mod markdown;
+mod summary;
 
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-use crate::gpu::{AdapterReport, Resolution};
-use crate::hierarchy::{Hierarchy, HierarchyParams, HierarchyStats};
-use crate::measure::{FrameStats, MissedObject, ModeSummary};
-use crate::scene::Scene;
-use crate::scene::up::Up;
+use crate::measure::{FrameStats, MissedObject};
 
+pub use files::{ReportError, check_writable, write_png, write_whole};
 pub use markdown::render as render_markdown;
-
-/// Bumped whenever a field of summary.json changes meaning or disappears
-/// (adding fields does not bump it).
-pub const SCHEMA_VERSION: u32 = 1;
-
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct Summary {
-    pub schema_version: u32,
-    pub tool: ToolInfo,
-    pub adapter: AdapterReport,
-    pub scene: SceneSummary,
-    pub path: PathSummary,
-    pub resolution: Resolution,
-    pub frames: u32,
-    pub warmup: u32,
-    pub error_measured: bool,
-    pub modes: Vec<ModeSummary>,
-    /// Modes the adapter could not run, with why.
-    pub skipped: Vec<SkippedMode>,
-    /// The parameter sweep, if any: its mode summaries are labelled
-    /// `MODE[KEY=VALUE]`, in the order of `values`.
-    pub sweep: Option<SweepSummary>,
-    /// What the modes got wrong; every row is in missed.csv.
-    #[serde(default)]
-    pub missed: MissedSummary,
-    /// frames.csv's fingerprint, set when the results are written (absent
-    /// in files from before it existed, which are read unchecked).
-    #[serde(default)]
-    pub frames_csv: Option<Fingerprint>,
-}
-
-/// The head of missed.csv, for report.md and machines.
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
-pub struct MissedSummary {
-    /// Rows in missed.csv (0: no mode got anything wrong, and no file).
-    pub rows: usize,
-    /// The first [`MissedSummary::SHOWN`] of them.
-    pub first: Vec<MissedObject>,
-}
-
-impl MissedSummary {
-    /// Rows report.md lists.
-    pub const SHOWN: usize = 10;
-
-    pub fn of(missed: &[MissedObject]) -> MissedSummary {
-        MissedSummary {
-            rows: missed.len(),
-            first: missed.iter().take(Self::SHOWN).cloned().collect(),
-        }
-    }
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct SkippedMode {
-    pub mode: String,
-    pub reason: String,
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct SweepSummary {
-    pub mode: String,
-    pub key: String,
-    pub values: Vec<String>,
-}
-
-impl SweepSummary {
-    pub fn label(&self, value: &str) -> String {
-        format!("{}[{}={value}]", self.mode, self.key)
-    }
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct ToolInfo {
-    pub name: String,
-    pub version: String,
-}
-
-impl ToolInfo {
-    pub fn current() -> ToolInfo {
-        ToolInfo {
-            name: env!("CARGO_PKG_NAME").into(),
-            version: env!("CARGO_PKG_VERSION").into(),
-        }
-    }
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct SceneSummary {
-    #[serde(flatten)]
-    pub facts: SceneFacts,
-    pub hierarchy_params: HierarchyParams,
-    pub upload_ms: f64,
-}
-
-/// What `occlu info` says of a scene, and summary.json records.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct SceneFacts {
-    pub source: String,
-    pub objects: usize,
-    pub meshes: usize,
-    pub triangles: u64,
-    pub vertices: usize,
-    pub bounds_min: [f64; 3],
-    pub bounds_max: [f64; 3],
-    pub hierarchy: HierarchyStats,
-    /// Objects that move from frame to frame.
-    #[serde(default)]
-    pub movers: usize,
-    /// The up axis generated paths and the overview use, and why.
-    #[serde(default)]
-    pub up: Up,
-    /// The file's own cameras (glTF).
-    #[serde(default)]
-    pub cameras: Vec<CameraFact>,
-    /// The file's animations (glTF).
-    #[serde(default)]
-    pub animations: Vec<AnimationFact>,
-    pub warnings: Vec<String>,
-    pub load_ms: f64,
-    pub build_ms: f64,
-}
-
-impl SceneFacts {
-    pub fn of(scene: &Scene, hierarchy: &Hierarchy, load_ms: f64, build_ms: f64) -> SceneFacts {
-        SceneFacts {
-            source: scene.source.clone(),
-            objects: scene.objects.len(),
-            meshes: scene.meshes.len(),
-            triangles: scene.triangles(),
-            vertices: scene.vertices.len(),
-            bounds_min: scene.bounds.min.to_array(),
-            bounds_max: scene.bounds.max.to_array(),
-            hierarchy: hierarchy.stats(),
-            movers: scene.movers.len(),
-            up: scene.up.clone(),
-            cameras: scene
-                .cameras
-                .iter()
-                .map(|c| CameraFact {
-                    name: c.name.clone(),
-                    node: c.node,
-                    projection: c.projection.to_string(),
-                    fov_y_deg: c.pose.fov_y_deg,
-                    near: c.pose.near,
-                })
-                .collect(),
-            animations: scene
-                .animations
-                .iter()
-                .map(|a| AnimationFact {
-                    name: a.name.clone(),
-                    channels: a.channels,
-                    duration: a.duration,
-                    camera: a.camera.as_ref().map(|c| c.name.clone()),
-                })
-                .collect(),
-            warnings: scene.warnings.clone(),
-            load_ms,
-            build_ms,
-        }
-    }
-}
-
-/// A camera of the model file, as `info` lists it.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct CameraFact {
-    pub name: String,
-    pub node: usize,
-    pub projection: String,
-    pub fov_y_deg: Option<f64>,
-    pub near: Option<f64>,
-}
-
-/// An animation of the model file, as `info` lists it.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct AnimationFact {
-    pub name: String,
-    pub channels: usize,
-    /// Seconds.
-    pub duration: f64,
-    /// The camera it moves, if any.
-    pub camera: Option<String>,
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct PathSummary {
-    pub source: String,
-    pub keyframes: usize,
-    pub near: f64,
-    /// For a generated path: why it is the kind it is, and what a walk
-    /// rests on.
-    #[serde(default)]
-    pub generated: Option<String>,
-    /// Frames with a surface closer to the eye than the near plane's
-    /// corners (clipped geometry shows what lies behind it; the generated
-    /// paths aim for 0).
-    #[serde(default)]
-    pub frames_with_geometry_within_near: Option<u32>,
-}
-
-#[derive(Debug, thiserror::Error)]
-#[error("{}: {error}", path.display())]
-pub struct ReportError {
-    pub path: PathBuf,
-    pub error: std::io::Error,
-}
-
-impl ReportError {
-    /// A maker of errors about `path`, for `map_err`.
-    pub fn at(path: &Path) -> impl Fn(std::io::Error) -> ReportError + use<> {
-        let path = path.to_path_buf();
-        move |error| ReportError {
-            path: path.clone(),
-            error,
-        }
-    }
-
-    /// Whether the user's input was at fault (a missing run, a bad --out),
-    /// as opposed to the machine failing while running (a full disk).
-    pub fn is_input_error(&self) -> bool {
-        !matches!(
-            self.error.kind(),
-            std::io::ErrorKind::StorageFull | std::io::ErrorKind::QuotaExceeded | std::io::ErrorKind::WriteZero
-        )
-    }
-}
+pub use summary::{
+    AnimationFact, CameraFact, Fingerprint, MissedSummary, PathSummary, SCHEMA_VERSION, SceneFacts, SceneSummary,
+    SkippedMode, Summary, SweepSummary, ToolInfo,
+};
 
 /// The files a run wrote.
 pub struct ResultFiles {
@@ -252,54 +29,6 @@ pub struct ResultFiles {
     /// Written only when a mode got something wrong.
     pub missed_csv: Option<PathBuf>,
     pub charts: Vec<PathBuf>,
-}
-
-/// Writes `bytes` to `path` whole or not at all: into a temporary file
-/// beside it, then renamed over it. A link is followed (the file it names
-/// is replaced, with its permissions; the link stays), and a path that is
-/// not a regular file (`/dev/stdout`, a pipe) is written in place.
-pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
-    let fail = ReportError::at(path);
-    let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
-    let existing = std::fs::metadata(&target).ok();
-    if existing.as_ref().is_some_and(|m| !m.is_file()) {
-        return std::fs::write(&target, bytes).map_err(fail);
-    }
-    let temporary = partial(&target);
-    let written = std::fs::write(&temporary, bytes)
-        .and_then(|()| match &existing {
-            Some(m) => std::fs::set_permissions(&temporary, m.permissions()),
-            None => Ok(()),
-        })
-        .and_then(|()| std::fs::rename(&temporary, &target));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&temporary);
-    }
-    written.map_err(fail)
-}
-
-/// Checks that [`write_whole`] could write `path`, so that a bad output
-/// file is refused before a long run rather than after it.
-pub fn check_writable(path: &Path) -> Result<(), ReportError> {
-    let fail = ReportError::at(path);
-    let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
-    match std::fs::metadata(&target) {
-        Ok(m) if m.is_dir() => Err(fail(std::io::Error::other("is a directory: a file name is needed"))),
-        // Written in place later; opening it now could end a pipe's stream.
-        Ok(m) if !m.is_file() => Ok(()),
-        _ => {
-            let temporary = partial(&target);
-            std::fs::File::create(&temporary).map_err(&fail)?;
-            std::fs::remove_file(&temporary).map_err(fail)
-        }
-    }
-}
-
-/// The temporary twin [`write_whole`] writes `path` into first.
-fn partial(path: &Path) -> PathBuf {
-    let mut name = path.as_os_str().to_owned();
-    name.push(".occlu-partial");
-    PathBuf::from(name)
 }
 
 /// `rows` as CSV with a header of field names. Made in memory, so writing
@@ -316,19 +45,6 @@ fn csv_bytes<T: Serialize>(path: &Path, rows: &[T]) -> Result<Vec<u8>, ReportErr
 /// Writes `bytes` to `path` (a fresh file in a staging folder).
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     std::fs::write(path, bytes).map_err(ReportError::at(path))
-}
-
-/// Writes an 8-bit RGB image as PNG, whole or not at all.
-pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ReportError> {
-    let mut png = Vec::new();
-    let mut encoder = png::Encoder::new(&mut png, width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder
-        .write_header()
-        .and_then(|mut writer| writer.write_image_data(rgb).and_then(|()| writer.finish()))
-        .map_err(|e| ReportError::at(path)(std::io::Error::other(format!("encoding the picture failed: {e}"))))?;
-    write_whole(path, &png)
 }
 
 /// Reads a run directory's summary.json and frames.csv (for `occlu plot`
@@ -569,43 +285,6 @@ fn escape_formulas(missed: &[MissedObject]) -> Vec<MissedObject> {
             ..m.clone()
         })
         .collect()
-}
-
-/// What identifies a frames.csv: its length and FNV-1a hash. Not a defence
-/// against forgery, only against a file from another run or cut short.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
-pub struct Fingerprint {
-    pub bytes: u64,
-    /// FNV-1a (64 bits) of the file, in hex.
-    #[serde(with = "hex64")]
-    pub fnv1a: u64,
-}
-
-impl Fingerprint {
-    pub fn of(bytes: &[u8]) -> Fingerprint {
-        let fnv1a = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
-            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-        });
-        Fingerprint {
-            bytes: bytes.len() as u64,
-            fnv1a,
-        }
-    }
-}
-
-/// A u64 as a hex string, which JSON readers that hold numbers in doubles
-/// keep whole.
-mod hex64 {
-    use serde::{Deserialize, Deserializer, Serializer};
-
-    pub fn serialize<S: Serializer>(v: &u64, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(&format!("{v:016x}"))
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
-        let text = String::deserialize(d)?;
-        u64::from_str_radix(&text, 16).map_err(serde::de::Error::custom)
-    }
 }
 
 #[cfg(test)]

@@ -10,7 +10,9 @@ use base64::Engine as _;
 use glam::{DAffine3, DMat4, DVec3};
 use gltf::mesh::Mode;
 
-use super::{LoadOptions, MeshGroup, SceneBuilder, SceneError, cameras, meshopt};
+use super::model::{MeshGroup, SceneBuilder};
+use super::source::{LoadOptions, SceneError, read_model_file};
+use super::{cameras, meshopt};
 use crate::text::one_line;
 
 pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut SceneBuilder) -> Result<(), SceneError> {
@@ -502,7 +504,7 @@ fn buffer_data(
             } else {
                 beside_the_model(path, uri).map_err(error)?
             };
-            super::read_model_file(&file, options).map_err(|e| error(format!("{}: {e}", file.display())))?
+            read_model_file(&file, options).map_err(|e| error(format!("{}: {e}", file.display())))?
         }
     };
     if data.len() < buffer.length() {

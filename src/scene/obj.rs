@@ -6,7 +6,8 @@ use std::path::Path;
 
 use glam::{DAffine3, DVec3};
 
-use super::{LoadOptions, SceneBuilder, SceneError};
+use super::model::SceneBuilder;
+use super::source::{LoadOptions, SceneError};
 
 /// Loads an OBJ model. The options on reading further files do not apply:
 /// an OBJ file's geometry is all in it, and its material files are not read.

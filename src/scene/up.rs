@@ -13,8 +13,6 @@ use std::str::FromStr;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::Scene;
-
 /// One of the six axis directions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum UpAxis {
@@ -136,74 +134,6 @@ impl Default for Up {
         }
     }
 }
-
-/// Where a scene came from, for the automatic choice.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Source {
-    Obj,
-    Gltf,
-    Builtin,
-}
-
-/// The up axis of `scene`, loaded from `source`, as `choice` asks.
-pub fn choose(choice: UpChoice, source: Source, scene: &Scene) -> Up {
-    match (choice, source) {
-        (UpChoice::Axis(axis), _) => Up {
-            axis,
-            why: "given by --up".into(),
-        },
-        (UpChoice::Auto, Source::Gltf) => Up {
-            axis: UpAxis::Y,
-            why: "auto: glTF is +Y up".into(),
-        },
-        (UpChoice::Auto, Source::Builtin) => Up {
-            axis: UpAxis::Y,
-            why: "auto: built-in scenes are +Y up".into(),
-        },
-        (UpChoice::Auto, Source::Obj) => match looks_z_up(scene) {
-            Some(evidence) => Up {
-                axis: UpAxis::Z,
-                why: format!("auto: OBJ {evidence}"),
-            },
-            None => Up {
-                axis: UpAxis::Y,
-                why: "auto: OBJ, +Y as most OBJ exporters write (it does not look +Z up)".into(),
-            },
-        },
-    }
-}
-
-/// Why a model looks +Z up, if it does: it is at least twice as flat in Z as
-/// across both X and Y (a city, a site, a floor plan), and it stands on its
-/// Z minimum. Standing is told by its objects: many start at the lowest Z
-/// and end below the highest (buildings of different heights on a ground),
-/// at least twice as many as the other way round. A Y-up model that is
-/// merely thin in Z (a facade, a sign) has parts spanning its whole depth,
-/// or as many at the back as at the front, and keeps +Y.
-pub fn looks_z_up(scene: &Scene) -> Option<String> {
-    let (b, e) = (scene.bounds, scene.bounds.extent());
-    let across = e.x.min(e.y);
-    if !(e.z > 0.0 && e.z * FLATNESS <= across) {
-        return None;
-    }
-    let near = 0.1 * e.z;
-    let at_bottom = |o: &super::Object| o.bounds.min.z - b.min.z <= near;
-    let at_top = |o: &super::Object| b.max.z - o.bounds.max.z <= near;
-    let standing = scene.objects.iter().filter(|o| at_bottom(o) && !at_top(o)).count();
-    let hanging = scene.objects.iter().filter(|o| at_top(o) && !at_bottom(o)).count();
-    (standing >= MIN_STANDING && standing >= 2 * hanging).then(|| {
-        format!(
-            "looks +Z up: {:.1}× flatter in Z than across, {standing} objects standing on its Z minimum ({hanging} hanging from its maximum)",
-            across / e.z
-        )
-    })
-}
-
-/// How much flatter in the up axis than across a +Z-up model must be.
-const FLATNESS: f64 = 2.0;
-
-/// Objects standing on the ground that a +Z-up model needs at least.
-const MIN_STANDING: usize = 3;
 
 /// An axis in JSON as `info` prints it ("+Z").
 mod axis_text {

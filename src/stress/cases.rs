@@ -12,7 +12,7 @@
 
 use glam::DVec3;
 
-use super::{Baseline, DepthTolerance, StressCase};
+use super::case::{Baseline, DepthTolerance, StressCase};
 use crate::camera::{Camera, look_rotation};
 use crate::scene::builtin::Rng;
 use crate::scene::builtin::shapes::cuboid;

@@ -16,8 +16,8 @@
 
 use glam::{DAffine3, DQuat, DVec3};
 
+use super::build::{Params, Rng, add, mesh, place, read_params};
 use super::shapes::{cuboid, cylinder};
-use super::{Params, Rng, add, mesh, place, read_params};
 use crate::scene::motion::Route;
 use crate::scene::{MeshGroup, SceneBuilder, TriangleSoup};
 

@@ -1,0 +1,92 @@
+//! Writing a file whole or not at all, and the one error of the result
+//! files ([`ReportError`]: the path and what went wrong).
+
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {error}", path.display())]
+pub struct ReportError {
+    pub path: PathBuf,
+    pub error: std::io::Error,
+}
+
+impl ReportError {
+    /// A maker of errors about `path`, for `map_err`.
+    pub fn at(path: &Path) -> impl Fn(std::io::Error) -> ReportError + use<> {
+        let path = path.to_path_buf();
+        move |error| ReportError {
+            path: path.clone(),
+            error,
+        }
+    }
+
+    /// Whether the user's input was at fault (a missing run, a bad --out),
+    /// as opposed to the machine failing while running (a full disk).
+    pub fn is_input_error(&self) -> bool {
+        !matches!(
+            self.error.kind(),
+            std::io::ErrorKind::StorageFull | std::io::ErrorKind::QuotaExceeded | std::io::ErrorKind::WriteZero
+        )
+    }
+}
+
+/// Writes `bytes` to `path` whole or not at all: into a temporary file
+/// beside it, then renamed over it. A link is followed (the file it names
+/// is replaced, with its permissions; the link stays), and a path that is
+/// not a regular file (`/dev/stdout`, a pipe) is written in place.
+pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
+    let fail = ReportError::at(path);
+    let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    let existing = std::fs::metadata(&target).ok();
+    if existing.as_ref().is_some_and(|m| !m.is_file()) {
+        return std::fs::write(&target, bytes).map_err(fail);
+    }
+    let temporary = partial(&target);
+    let written = std::fs::write(&temporary, bytes)
+        .and_then(|()| match &existing {
+            Some(m) => std::fs::set_permissions(&temporary, m.permissions()),
+            None => Ok(()),
+        })
+        .and_then(|()| std::fs::rename(&temporary, &target));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&temporary);
+    }
+    written.map_err(fail)
+}
+
+/// Checks that [`write_whole`] could write `path`, so that a bad output
+/// file is refused before a long run rather than after it.
+pub fn check_writable(path: &Path) -> Result<(), ReportError> {
+    let fail = ReportError::at(path);
+    let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    match std::fs::metadata(&target) {
+        Ok(m) if m.is_dir() => Err(fail(std::io::Error::other("is a directory: a file name is needed"))),
+        // Written in place later; opening it now could end a pipe's stream.
+        Ok(m) if !m.is_file() => Ok(()),
+        _ => {
+            let temporary = partial(&target);
+            std::fs::File::create(&temporary).map_err(&fail)?;
+            std::fs::remove_file(&temporary).map_err(fail)
+        }
+    }
+}
+
+/// The temporary twin [`write_whole`] writes `path` into first.
+fn partial(path: &Path) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(".occlu-partial");
+    PathBuf::from(name)
+}
+
+/// Writes an 8-bit RGB image as PNG, whole or not at all.
+pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ReportError> {
+    let mut png = Vec::new();
+    let mut encoder = png::Encoder::new(&mut png, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder
+        .write_header()
+        .and_then(|mut writer| writer.write_image_data(rgb).and_then(|()| writer.finish()))
+        .map_err(|e| ReportError::at(path)(std::io::Error::other(format!("encoding the picture failed: {e}"))))?;
+    write_whole(path, &png)
+}

@@ -1,0 +1,246 @@
+//! What summary.json holds ([`Summary`]): the run's adapter, scene, path and
+//! every mode's statistics, versioned by [`SCHEMA_VERSION`].
+
+use serde::{Deserialize, Serialize};
+
+use crate::gpu::{AdapterReport, Resolution};
+use crate::hierarchy::{Hierarchy, HierarchyParams, HierarchyStats};
+use crate::measure::{MissedObject, ModeSummary};
+use crate::scene::Scene;
+use crate::scene::up::Up;
+
+/// Bumped whenever a field of summary.json changes meaning or disappears
+/// (adding fields does not bump it).
+pub const SCHEMA_VERSION: u32 = 1;
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Summary {
+    pub schema_version: u32,
+    pub tool: ToolInfo,
+    pub adapter: AdapterReport,
+    pub scene: SceneSummary,
+    pub path: PathSummary,
+    pub resolution: Resolution,
+    pub frames: u32,
+    pub warmup: u32,
+    pub error_measured: bool,
+    pub modes: Vec<ModeSummary>,
+    /// Modes the adapter could not run, with why.
+    pub skipped: Vec<SkippedMode>,
+    /// The parameter sweep, if any: its mode summaries are labelled
+    /// `MODE[KEY=VALUE]`, in the order of `values`.
+    pub sweep: Option<SweepSummary>,
+    /// What the modes got wrong; every row is in missed.csv.
+    #[serde(default)]
+    pub missed: MissedSummary,
+    /// frames.csv's fingerprint, set when the results are written (absent
+    /// in files from before it existed, which are read unchecked).
+    #[serde(default)]
+    pub frames_csv: Option<Fingerprint>,
+}
+
+/// The head of missed.csv, for report.md and machines.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct MissedSummary {
+    /// Rows in missed.csv (0: no mode got anything wrong, and no file).
+    pub rows: usize,
+    /// The first [`MissedSummary::SHOWN`] of them.
+    pub first: Vec<MissedObject>,
+}
+
+impl MissedSummary {
+    /// Rows report.md lists.
+    pub const SHOWN: usize = 10;
+
+    pub fn of(missed: &[MissedObject]) -> MissedSummary {
+        MissedSummary {
+            rows: missed.len(),
+            first: missed.iter().take(Self::SHOWN).cloned().collect(),
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct SkippedMode {
+    pub mode: String,
+    pub reason: String,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct SweepSummary {
+    pub mode: String,
+    pub key: String,
+    pub values: Vec<String>,
+}
+
+impl SweepSummary {
+    pub fn label(&self, value: &str) -> String {
+        format!("{}[{}={value}]", self.mode, self.key)
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ToolInfo {
+    pub name: String,
+    pub version: String,
+}
+
+impl ToolInfo {
+    pub fn current() -> ToolInfo {
+        ToolInfo {
+            name: env!("CARGO_PKG_NAME").into(),
+            version: env!("CARGO_PKG_VERSION").into(),
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct SceneSummary {
+    #[serde(flatten)]
+    pub facts: SceneFacts,
+    pub hierarchy_params: HierarchyParams,
+    pub upload_ms: f64,
+}
+
+/// What `occlu info` says of a scene, and summary.json records.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct SceneFacts {
+    pub source: String,
+    pub objects: usize,
+    pub meshes: usize,
+    pub triangles: u64,
+    pub vertices: usize,
+    pub bounds_min: [f64; 3],
+    pub bounds_max: [f64; 3],
+    pub hierarchy: HierarchyStats,
+    /// Objects that move from frame to frame.
+    #[serde(default)]
+    pub movers: usize,
+    /// The up axis generated paths and the overview use, and why.
+    #[serde(default)]
+    pub up: Up,
+    /// The file's own cameras (glTF).
+    #[serde(default)]
+    pub cameras: Vec<CameraFact>,
+    /// The file's animations (glTF).
+    #[serde(default)]
+    pub animations: Vec<AnimationFact>,
+    pub warnings: Vec<String>,
+    pub load_ms: f64,
+    pub build_ms: f64,
+}
+
+impl SceneFacts {
+    pub fn of(scene: &Scene, hierarchy: &Hierarchy, load_ms: f64, build_ms: f64) -> SceneFacts {
+        SceneFacts {
+            source: scene.source.clone(),
+            objects: scene.objects.len(),
+            meshes: scene.meshes.len(),
+            triangles: scene.triangles(),
+            vertices: scene.vertices.len(),
+            bounds_min: scene.bounds.min.to_array(),
+            bounds_max: scene.bounds.max.to_array(),
+            hierarchy: hierarchy.stats(),
+            movers: scene.movers.len(),
+            up: scene.up.clone(),
+            cameras: scene
+                .cameras
+                .iter()
+                .map(|c| CameraFact {
+                    name: c.name.clone(),
+                    node: c.node,
+                    projection: c.projection.to_string(),
+                    fov_y_deg: c.pose.fov_y_deg,
+                    near: c.pose.near,
+                })
+                .collect(),
+            animations: scene
+                .animations
+                .iter()
+                .map(|a| AnimationFact {
+                    name: a.name.clone(),
+                    channels: a.channels,
+                    duration: a.duration,
+                    camera: a.camera.as_ref().map(|c| c.name.clone()),
+                })
+                .collect(),
+            warnings: scene.warnings.clone(),
+            load_ms,
+            build_ms,
+        }
+    }
+}
+
+/// A camera of the model file, as `info` lists it.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct CameraFact {
+    pub name: String,
+    pub node: usize,
+    pub projection: String,
+    pub fov_y_deg: Option<f64>,
+    pub near: Option<f64>,
+}
+
+/// An animation of the model file, as `info` lists it.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct AnimationFact {
+    pub name: String,
+    pub channels: usize,
+    /// Seconds.
+    pub duration: f64,
+    /// The camera it moves, if any.
+    pub camera: Option<String>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct PathSummary {
+    pub source: String,
+    pub keyframes: usize,
+    pub near: f64,
+    /// For a generated path: why it is the kind it is, and what a walk
+    /// rests on.
+    #[serde(default)]
+    pub generated: Option<String>,
+    /// Frames with a surface closer to the eye than the near plane's
+    /// corners (clipped geometry shows what lies behind it; the generated
+    /// paths aim for 0).
+    #[serde(default)]
+    pub frames_with_geometry_within_near: Option<u32>,
+}
+
+/// What identifies a frames.csv: its length and FNV-1a hash. Not a defence
+/// against forgery, only against a file from another run or cut short.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct Fingerprint {
+    pub bytes: u64,
+    /// FNV-1a (64 bits) of the file, in hex.
+    #[serde(with = "hex64")]
+    pub fnv1a: u64,
+}
+
+impl Fingerprint {
+    pub fn of(bytes: &[u8]) -> Fingerprint {
+        let fnv1a = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+        });
+        Fingerprint {
+            bytes: bytes.len() as u64,
+            fnv1a,
+        }
+    }
+}
+
+/// A u64 as a hex string, which JSON readers that hold numbers in doubles
+/// keep whole.
+mod hex64 {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &u64, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&format!("{v:016x}"))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
+        let text = String::deserialize(d)?;
+        u64::from_str_radix(&text, 16).map_err(serde::de::Error::custom)
+    }
+}

@@ -1,0 +1,82 @@
+//! What every built-in scene is built with: named integer parameters, a
+//! seeded random source, and adding generated meshes to the builder.
+
+use glam::DAffine3;
+
+use crate::scene::{MeshGroup, SceneBuilder, TriangleSoup};
+
+/// Adds `soup` as a mesh and one object of it, untransformed.
+pub(super) fn add(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) {
+    let group = mesh(builder, name, soup);
+    place(builder, name, &group, DAffine3::IDENTITY);
+}
+
+pub(super) fn place(builder: &mut SceneBuilder, name: &str, group: &MeshGroup, transform: DAffine3) {
+    builder
+        .add_object(name, group, transform)
+        .expect("built-in scenes lie well within the renderable range");
+}
+
+pub(super) fn mesh(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) -> MeshGroup {
+    builder
+        .add_mesh(name, &soup.positions, &soup.indices)
+        .expect("procedural geometry is finite and indexed in range")
+}
+
+pub(super) type Params<'a> = Vec<(&'a str, &'a str)>;
+
+/// Reads integer parameters by name, rejecting unknown keys and bad values.
+pub(super) fn read_params(
+    params: &Params,
+    keys: &mut [(&str, &mut u64, std::ops::RangeInclusive<u64>)],
+) -> Result<(), String> {
+    for (i, &(key, value)) in params.iter().enumerate() {
+        if params[..i].iter().any(|&(k, _)| k == key) {
+            return Err(format!("parameter '{key}' is given twice"));
+        }
+        let Some((_, slot, range)) = keys.iter_mut().find(|(k, _, _)| *k == key) else {
+            let known: Vec<&str> = keys.iter().map(|(k, _, _)| *k).collect();
+            return Err(format!("unknown parameter '{key}' (known: {})", known.join(", ")));
+        };
+        let v: u64 = value
+            .parse()
+            .map_err(|_| format!("parameter '{key}' must be a whole number, got '{value}'"))?;
+        if !range.contains(&v) {
+            return Err(format!(
+                "parameter '{key}' must be in {}..={}, got {v}",
+                range.start(),
+                range.end()
+            ));
+        }
+        **slot = v;
+    }
+    Ok(())
+}
+
+/// A small seeded generator (SplitMix64): scenes must be reproducible from
+/// their spec alone, on every platform.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed ^ 0x9E37_79B9_7F4A_7C15)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Uniform integer in lo..=hi.
+    pub fn int(&mut self, lo: u32, hi: u32) -> u32 {
+        lo + (self.next_u64() % u64::from(hi - lo + 1)) as u32
+    }
+}
