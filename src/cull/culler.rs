@@ -105,6 +105,42 @@ pub trait Culler {
 
     /// Renders one frame: decides what to draw and draws it through `ctx`.
     fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats;
+
+    /// The mode's GPU walk, for the tests that hold it against its CPU twin.
+    #[cfg(test)]
+    fn gpu_walk(&self) -> Option<&crate::cull::gpu_walk::GpuWalk> {
+        None
+    }
+}
+
+/// A borrowed culler runs as the culler it borrows (so a test can keep the
+/// mode it hands to a session).
+impl<C: Culler + ?Sized> Culler for &mut C {
+    fn name(&self) -> &str {
+        (**self).name()
+    }
+    fn parameters(&self) -> serde_json::Value {
+        (**self).parameters()
+    }
+    fn needs_reference(&self) -> bool {
+        (**self).needs_reference()
+    }
+    fn traverses_hierarchy(&self) -> bool {
+        (**self).traverses_hierarchy()
+    }
+    fn prepare(&mut self, setup: &GpuSetup) {
+        (**self).prepare(setup)
+    }
+    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        (**self).audit(gpu, drawn)
+    }
+    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+        (**self).frame(ctx, input)
+    }
+    #[cfg(test)]
+    fn gpu_walk(&self) -> Option<&crate::cull::gpu_walk::GpuWalk> {
+        (**self).gpu_walk()
+    }
 }
 
 /// A culler run under another name: one value of a parameter sweep, e.g.

@@ -182,6 +182,11 @@ impl Culler for IterativeOcclusionCulling {
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
         self.walk.as_mut()?.audit(gpu, drawn)
     }
+
+    #[cfg(test)]
+    fn gpu_walk(&self) -> Option<&GpuWalk> {
+        self.walk.as_ref()
+    }
 }
 
 /// The start and bottom depths for `hierarchy` over `objects`: the given

@@ -39,6 +39,8 @@ pub mod ioc;
 mod pool;
 pub mod roc;
 mod tree;
+#[cfg(test)]
+mod twin;
 
 pub use pool::{DrawList, GpuWalk, NodeBoxes};
 pub use tree::{CullTree, MAX_LEVELS, TreeNode};

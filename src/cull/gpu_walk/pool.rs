@@ -31,10 +31,10 @@ const HIDDEN: usize = 8;
 /// What a node's word of the visibility buffer says: set by the CPU before
 /// a walk, and to [`VISIBLE`] by `fs_mark` for a tested node a fragment of
 /// whose box passed.
-const TO_TEST: u32 = 0;
+pub(super) const TO_TEST: u32 = 0;
 const VISIBLE: u32 = 1;
-const OUTSIDE_FRUSTUM: u32 = 2;
-const REACHES_NEAR: u32 = 3;
+pub(super) const OUTSIDE_FRUSTUM: u32 = 2;
+pub(super) const REACHES_NEAR: u32 = 3;
 /// What an object's word of the state buffer says (`cs_expand` and
 /// `cs_compact`): drawn as visible in the last frame, and marked visible in
 /// this walk.
@@ -543,6 +543,24 @@ impl GpuWalk {
     }
 }
 
+#[cfg(test)]
+impl GpuWalk {
+    /// Every node's word of the visibility buffer as the last walk left it
+    /// (before it: [`TO_TEST`], [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`];
+    /// `fs_mark` turned the tested boxes a fragment of which passed into
+    /// [`VISIBLE`]), for the CPU twin of the walk.
+    pub(super) fn node_states(&self, gpu: &GpuContext) -> Vec<u32> {
+        let bytes = u64::from(self.tree.nodes) * 4;
+        let readback = Readback::new(gpu, "node states", bytes);
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        readback.copy(&mut encoder, &self.scratch.node_visible, 0, 0, bytes);
+        gpu.queue.submit([encoder.finish()]);
+        let mut words = Vec::new();
+        readback.read(gpu, bytes, &mut words);
+        words
+    }
+}
+
 impl TreeOnGpu {
     /// `tree` on the GPU, bound with the walk's lists (`draws`: every
     /// object's draw command; `drawn`: a word per object drawn).
@@ -601,7 +619,7 @@ impl NodeScratch {
         let words = u64::from(capacity) * 4;
         let copy_dst = wgpu::BufferUsages::COPY_DST;
         let (boxes, box_group) = box_buffer(gpu, box_layout, camera, capacity);
-        let node_visible = storage_buffer(gpu, "visibility buffer", words, copy_dst);
+        let node_visible = storage_buffer(gpu, "visibility buffer", words, copy_dst | wgpu::BufferUsages::COPY_SRC);
         let queues = [0, 1].map(|_| storage_buffer(gpu, "node queue", words, copy_dst));
         let level_args = [0, 1].map(|_| {
             storage_buffer(

@@ -52,4 +52,9 @@ impl Culler for RasterOcclusionCulling {
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
         self.walk.as_mut()?.audit(gpu, drawn)
     }
+
+    #[cfg(test)]
+    fn gpu_walk(&self) -> Option<&GpuWalk> {
+        self.walk.as_ref()
+    }
 }
