@@ -19,7 +19,7 @@ use std::cell::Cell;
 use common::gpus;
 use occlu::camera::{Camera, look_rotation};
 use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create, modes};
-use occlu::gpu::{FrameCtx, GpuContext, Resolution};
+use occlu::gpu::{Frame, GpuContext, Resolution};
 use occlu::hierarchy::HierarchyParams;
 use occlu::measure::FrameStats;
 use occlu::stress::{StressCase, run_case, select};
@@ -37,7 +37,7 @@ impl Culler for DrawOnly {
     fn name(&self) -> &str {
         "known visible set"
     }
-    fn frame(&mut self, ctx: &mut FrameCtx, _: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, _: &FrameInput) -> TraversalStats {
         ctx.draw(&self.0);
         TraversalStats::default()
     }
@@ -132,7 +132,7 @@ impl Culler for CountVisible<'_> {
     fn needs_reference(&self) -> bool {
         true
     }
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         self.visible.clear();
         self.visible.extend(input.reference_visible.unwrap().iter());
         let named = self

@@ -9,7 +9,7 @@ use common::{DropOneVisible, boxes, run_modes, still};
 use glam::DVec3;
 use occlu::bench::BenchError;
 use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create};
-use occlu::gpu::{BackendChoice, FrameCtx, GpuContext, GpuError, Resolution};
+use occlu::gpu::{BackendChoice, Frame, GpuContext, GpuError, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::object_set::ObjectSet;
 
@@ -19,7 +19,7 @@ impl Culler for DrawNothing {
     fn name(&self) -> &str {
         "nothing"
     }
-    fn frame(&mut self, _: &mut FrameCtx, _: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, _: &mut dyn Frame, _: &FrameInput) -> TraversalStats {
         TraversalStats::default()
     }
 }
@@ -33,7 +33,7 @@ impl Culler for Recorder<'_> {
     fn needs_reference(&self) -> bool {
         true
     }
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let visible = input.reference_visible.unwrap().clone();
         ctx.draw(&visible.iter().collect::<Vec<_>>());
         self.0.borrow_mut().push(visible);
@@ -259,7 +259,7 @@ impl Culler for MoverWatch<'_> {
     fn needs_reference(&self) -> bool {
         true
     }
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let reference = input.reference_visible.unwrap();
         let visible_movers = self.movers.iter().filter(|&&m| reference.contains(m)).count();
         self.seen.borrow_mut().push((visible_movers, input.moved.len()));

@@ -10,7 +10,7 @@ use common::{boxes, run_modes, still};
 use glam::DVec3;
 use occlu::camera::path::CameraPath;
 use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create};
-use occlu::gpu::{BoxTest, BoxVisibility, FrameCtx, QUERIES_PER_SET, Resolution};
+use occlu::gpu::{BoxTest, BoxVisibility, Frame, QUERIES_PER_SET, Resolution};
 use occlu::hierarchy::Hierarchy;
 use occlu::measure::FrameStats;
 use occlu::scene::Scene;
@@ -37,7 +37,7 @@ impl Culler for WallThenTests<'_> {
     fn name(&self) -> &str {
         "wall-then-tests"
     }
-    fn frame(&mut self, ctx: &mut FrameCtx, _: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, _: &FrameInput) -> TraversalStats {
         ctx.draw(&[0]);
         for (batch, kind) in &self.tests {
             let mut out = Vec::new();

@@ -56,7 +56,7 @@ use serde::Serialize;
 use super::traversal::{DepthQueue, children, draw_leaf, frustum_cull_subtree, in_frustum, view_depth};
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
-use crate::gpu::{BoxTest, BoxVisibility, FrameCtx};
+use crate::gpu::{BoxTest, BoxVisibility, Frame};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
@@ -247,7 +247,7 @@ impl Culler for AdaptiveCulling {
         serde_json::to_value(self.params).expect("plain struct serialises")
     }
 
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let start = Instant::now();
         let camera = input.camera;
         let frustum = camera.frustum();

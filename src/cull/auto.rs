@@ -34,7 +34,7 @@ use super::omq::{OccupancyMapQueries, OmqParams};
 use super::vfc::FrustumCulling;
 use crate::cull::culler::{Culler, FrameInput, PreviousFrame, TraversalStats};
 use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
-use crate::gpu::{FrameCtx, GpuAudit, GpuContext, GpuSetup};
+use crate::gpu::{Frame, GpuAudit, GpuContext, GpuSetup};
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
 
@@ -246,7 +246,7 @@ impl Culler for AutoCulling {
         self.occlusion.prepare(setup);
     }
 
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let turn = self.next_turn(input.previous);
         match turn.strategy {
             Strategy::Frustum => self.frustum.frame(ctx, input),

@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use crate::camera::Camera;
-use crate::gpu::{FrameCtx, GpuAudit, GpuContext, GpuSetup, Resolution};
+use crate::gpu::{Frame, GpuAudit, GpuContext, GpuSetup, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
@@ -104,13 +104,7 @@ pub trait Culler {
     }
 
     /// Renders one frame: decides what to draw and draws it through `ctx`.
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats;
-
-    /// The mode's GPU walk, for the tests that hold it against its CPU twin.
-    #[cfg(test)]
-    fn gpu_walk(&self) -> Option<&crate::cull::gpu_walk::GpuWalk> {
-        None
-    }
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats;
 }
 
 /// A borrowed culler runs as the culler it borrows (so a test can keep the
@@ -134,12 +128,8 @@ impl<C: Culler + ?Sized> Culler for &mut C {
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
         (**self).audit(gpu, drawn)
     }
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         (**self).frame(ctx, input)
-    }
-    #[cfg(test)]
-    fn gpu_walk(&self) -> Option<&crate::cull::gpu_walk::GpuWalk> {
-        (**self).gpu_walk()
     }
 }
 
@@ -169,7 +159,7 @@ impl Culler for Labeled {
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
         self.inner.audit(gpu, drawn)
     }
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         self.inner.frame(ctx, input)
     }
 }

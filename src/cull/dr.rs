@@ -3,7 +3,7 @@
 
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{ModeId, ModeInfo, Needs};
-use crate::gpu::FrameCtx;
+use crate::gpu::Frame;
 use crate::scene::Scene;
 
 /// This mode's entry in the registry.
@@ -34,7 +34,7 @@ impl Culler for DirectRendering {
         "dr"
     }
 
-    fn frame(&mut self, ctx: &mut FrameCtx, _input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, _input: &FrameInput) -> TraversalStats {
         ctx.draw(&self.all);
         TraversalStats::default()
     }

@@ -22,6 +22,8 @@ mod mode;
 pub mod occupancy;
 mod omq;
 mod oracle;
+#[cfg(test)]
+mod recording;
 mod registry;
 mod sq;
 pub mod traversal;

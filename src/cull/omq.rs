@@ -37,7 +37,7 @@ use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
-use crate::gpu::{BoxTest, BoxVisibility, FrameCtx, Resolution};
+use crate::gpu::{BoxTest, BoxVisibility, Frame, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::scene::Scene;
 
@@ -165,14 +165,14 @@ impl OccupancyMapQueries {
         }
     }
 
-    fn draw_leaf(&mut self, ctx: &mut FrameCtx, view: &View, node: u32) {
+    fn draw_leaf(&mut self, ctx: &mut dyn Frame, view: &View, node: u32) {
         let n = &view.hierarchy.nodes[node as usize];
         draw_leaf(ctx, view.scene, view.hierarchy, n, &view.frustum, &mut self.objects);
     }
 
     /// One multiple occlusion query over the test list: visible leaves are
     /// drawn, visible inner nodes' children become pending.
-    fn query_test_list(&mut self, ctx: &mut FrameCtx, view: &View, stats: &mut TraversalStats) {
+    fn query_test_list(&mut self, ctx: &mut dyn Frame, view: &View, stats: &mut TraversalStats) {
         self.boxes.clear();
         let nodes = &view.hierarchy.nodes;
         self.boxes
@@ -206,7 +206,7 @@ impl Culler for OccupancyMapQueries {
         serde_json::to_value(self.params).expect("plain struct serialises")
     }
 
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let camera = input.camera;
         let view = View {
             scene: input.scene,
@@ -276,5 +276,51 @@ impl Culler for OccupancyMapQueries {
 
         self.max_tests = ((self.params.factor * f64::from(batches)) as u32).max(1);
         stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::cull::recording::{Recording, camera_down_z, cubes, input};
+
+    #[test]
+    fn stage_two_takes_the_batches_of_7_10_of_the_last_frames_and_stage_three_the_rest() {
+        // A row of cubes down the view axis: the first hides the rest, and
+        // each lies on screen inside the one before.
+        let corners: Vec<DVec3> = (0..32)
+            .map(|k| DVec3::new(-0.5, -0.5, -4.0 - 2.0 * f64::from(k)))
+            .collect();
+        let (scene, hierarchy) = cubes(&corners);
+        let camera = camera_down_z();
+        let mut omq = OccupancyMapQueries::new(OmqParams::from_params(&ModeParams::default()).unwrap());
+        // 003: "n_frame+1 = 7/10 · m_frame", m being the frame's batches;
+        // the first frame takes initial_max_tests (4).
+        let mut max_tests = 4usize;
+        let mut pending = None;
+        for frame in 0..6 {
+            let mut double = Recording::new(|_: &Aabb| false);
+            omq.frame(&mut double, &input(frame, &camera, &scene, &hierarchy));
+            assert_eq!(
+                double.drawn(),
+                [0],
+                "frame {frame}: only the front cube, found by the Occupancy Map"
+            );
+            let sizes: Vec<usize> = double.batches().iter().map(|b| b.len()).collect();
+            // The nodes behind the front cube, each tested once.
+            let p = *pending.get_or_insert(sizes.iter().sum::<usize>());
+            assert!(p > 4, "more pending nodes than stage 2 takes in the first frame ({p})");
+            // Stage 2: one node a batch (each hides the rest of the list
+            // on the Occupancy Map), up to max_tests; stage 3: the rest in
+            // one batch.
+            let mut expected = vec![1; p.min(max_tests)];
+            if p > max_tests {
+                expected.push(p - max_tests);
+            }
+            assert_eq!(sizes, expected, "frame {frame} with max_tests {max_tests}");
+            max_tests = ((0.7 * expected.len() as f64) as usize).max(1);
+        }
     }
 }

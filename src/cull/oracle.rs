@@ -5,7 +5,7 @@
 
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{ModeId, ModeInfo, Needs};
-use crate::gpu::FrameCtx;
+use crate::gpu::Frame;
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
@@ -38,7 +38,7 @@ impl Culler for Oracle {
         true
     }
 
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         self.visible.clear();
         if let Some(reference) = input.reference_visible {
             self.visible.extend(reference.iter());

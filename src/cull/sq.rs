@@ -14,7 +14,7 @@ use super::traversal::{DepthQueue, draw_leaf, nearest_corner};
 use crate::camera::Containment;
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{ModeId, ModeInfo, Needs};
-use crate::gpu::{BoxTest, BoxVisibility, FrameCtx};
+use crate::gpu::{BoxTest, BoxVisibility, Frame};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
@@ -49,7 +49,7 @@ impl Culler for SingleQueries {
         true
     }
 
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let (frustum, eye) = (input.camera.frustum(), input.camera.eye);
         let nodes = &input.hierarchy.nodes;
         let mut stats = TraversalStats::default();

@@ -9,7 +9,7 @@ use glam::DVec3;
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum, nearest_view_depth};
 use crate::cull::culler::TraversalStats;
-use crate::gpu::FrameCtx;
+use crate::gpu::Frame;
 use crate::hierarchy::{Hierarchy, Node};
 use crate::scene::Scene;
 
@@ -133,7 +133,7 @@ pub fn children(node: &Node) -> impl Iterator<Item = u32> + use<> {
 /// Draws the objects of leaf `node` that the frustum does not exclude;
 /// `scratch` is reused between calls.
 pub fn draw_leaf(
-    ctx: &mut FrameCtx,
+    ctx: &mut dyn Frame,
     scene: &Scene,
     hierarchy: &Hierarchy,
     node: &Node,

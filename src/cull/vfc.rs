@@ -15,7 +15,7 @@
 use super::traversal::frustum_cull_subtree;
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{ModeId, ModeInfo, Needs};
-use crate::gpu::FrameCtx;
+use crate::gpu::Frame;
 use crate::scene::Scene;
 
 /// This mode's entry in the registry.
@@ -53,7 +53,7 @@ impl Culler for FrustumCulling {
         true
     }
 
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let frustum = input.camera.frustum();
         let mut stats = TraversalStats::default();
         self.visible.clear();

@@ -101,6 +101,61 @@ pub struct GpuWork<'e> {
     pub depth: &'e wgpu::TextureView,
 }
 
+/// What a mode does in a frame: draw objects and test boxes against what
+/// is drawn. [`FrameCtx`] does it on the GPU and counts it; unit tests of a
+/// mode's logic give it a double that records the calls and answers the
+/// tests from a rule.
+pub trait Frame {
+    /// Draws `objects`, shaded. Every draw is on the depth buffer before
+    /// any later test.
+    fn draw(&mut self, objects: &[u32]);
+
+    /// Tests `boxes` as one batch against the depth drawn so far, one round
+    /// trip: one result per box in `out`; a box that reaches the near plane
+    /// is visible untested.
+    fn test_boxes(&mut self, boxes: &[Aabb], kind: BoxTest, out: &mut Vec<BoxVisibility>);
+
+    /// [`Frame::test_boxes`] by pixel counts that also counts the pixels
+    /// each box covers in all (001 §3.3's additional query), in the same
+    /// round trip; `totals` gets 0 for a box not tested. Needs
+    /// [`GpuContext::pixel_counts`].
+    fn test_boxes_with_totals(
+        &mut self,
+        boxes: &[Aabb],
+        sampling: u32,
+        out: &mut Vec<BoxVisibility>,
+        totals: &mut Vec<u64>,
+    );
+
+    /// The frame on the GPU, for a mode with GPU work of its own; `None`
+    /// where there is no GPU (a test double).
+    fn on_gpu(&mut self) -> Option<&mut dyn GpuFrame>;
+}
+
+/// The GPU operations of a frame, for modes with GPU work of their own;
+/// each is counted like the rest.
+pub trait GpuFrame {
+    /// The adapter, for what it can do.
+    fn gpu(&self) -> &GpuContext;
+
+    /// The margins this frame's box tests keep (for boxes a mode prepares
+    /// itself).
+    fn margins(&self) -> BoxMargins;
+
+    /// Records a mode's own GPU work into the frame, after everything drawn
+    /// so far. Its time is GPU operations, not culling.
+    fn record(&mut self, work: &mut dyn FnMut(GpuWork));
+
+    /// Submits everything recorded so far and hands `read` a fresh encoder
+    /// to copy results from and submit, then wait for: one round trip, its
+    /// time counted as waiting for results.
+    fn round_trip(&mut self, read: &mut dyn FnMut(&GpuContext, wgpu::CommandEncoder));
+
+    /// Draws, shaded, the commands the GPU built. What they drew is counted
+    /// after the frame, from the mode's audit.
+    fn draw_indirect(&mut self, draws: IndirectDraws);
+}
+
 pub struct FrameCtx<'a> {
     gpu: &'a GpuContext,
     renderer: &'a SceneRenderer,
@@ -173,40 +228,6 @@ impl<'a> FrameCtx<'a> {
         }
     }
 
-    /// Draws `objects`, shaded, into this mode's frame. Every draw is on the
-    /// depth buffer before any later [`FrameCtx::test_boxes`].
-    pub fn draw(&mut self, objects: &[u32]) {
-        let start = Instant::now();
-        for &o in objects {
-            self.counters.objects_drawn += 1;
-            self.counters.triangles_drawn += u64::from(self.renderer.scene.draws[o as usize].index_count / 3);
-            self.drawn.insert(o);
-        }
-        self.queued.extend_from_slice(objects);
-        self.gpu_ops += start.elapsed();
-    }
-
-    /// Tests `boxes` as one batch against the depth drawn so far (occlusion
-    /// queries or pixel counts), one round trip. Writes one result per box
-    /// to `out`; a box that reaches the near plane is visible untested.
-    pub fn test_boxes(&mut self, boxes: &[Aabb], kind: BoxTest, out: &mut Vec<BoxVisibility>) {
-        self.test(boxes, kind, out, None);
-    }
-
-    /// [`FrameCtx::test_boxes`] by pixel counts that also counts the pixels
-    /// each box covers in all (001 §3.3's additional query), in the same
-    /// round trip; `totals` gets 0 for a box not tested. Needs
-    /// [`GpuContext::pixel_counts`].
-    pub fn test_boxes_with_totals(
-        &mut self,
-        boxes: &[Aabb],
-        sampling: u32,
-        out: &mut Vec<BoxVisibility>,
-        totals: &mut Vec<u64>,
-    ) {
-        self.test(boxes, BoxTest::PixelCount { sampling }, out, Some(totals));
-    }
-
     fn test(&mut self, boxes: &[Aabb], kind: BoxTest, out: &mut Vec<BoxVisibility>, totals: Option<&mut Vec<u64>>) {
         let start = Instant::now();
         self.encode_queued_draws();
@@ -248,64 +269,6 @@ impl<'a> FrameCtx<'a> {
         }
     }
 
-    /// The adapter, for what it can do.
-    pub fn gpu(&self) -> &'a GpuContext {
-        self.gpu
-    }
-
-    /// The margins this frame's box tests keep (for boxes a mode prepares
-    /// itself).
-    pub fn margins(&self) -> BoxMargins {
-        self.margins
-    }
-
-    /// Records a mode's own GPU work into this frame, after everything
-    /// drawn so far. Its time is GPU operations, not culling.
-    pub fn record<R>(&mut self, work: impl FnOnce(GpuWork) -> R) -> R {
-        let start = Instant::now();
-        self.encode_queued_draws();
-        let result = work(GpuWork {
-            gpu: self.gpu,
-            encoder: &mut self.encoder,
-            depth: self.depth,
-        });
-        self.gpu_ops += start.elapsed();
-        result
-    }
-
-    /// Submits everything recorded so far and hands `read` a fresh encoder
-    /// to copy results from and submit, then wait for: one round trip, its
-    /// time counted as waiting for results.
-    pub fn round_trip<R>(&mut self, read: impl FnOnce(&GpuContext, wgpu::CommandEncoder) -> R) -> R {
-        let start = Instant::now();
-        self.encode_queued_draws();
-        let encoder = std::mem::replace(
-            &mut self.encoder,
-            self.gpu.device.create_command_encoder(&Default::default()),
-        );
-        let submitted = Instant::now();
-        let result = read(self.gpu, encoder);
-        self.counters.query_batches += 1;
-        self.counters.query_wait += submitted.elapsed();
-        self.gpu_ops += start.elapsed();
-        result
-    }
-
-    /// Draws, shaded, the commands the GPU built. What they drew is counted
-    /// after the frame, from the mode's audit.
-    pub fn draw_indirect(&mut self, draws: IndirectDraws) {
-        let start = Instant::now();
-        self.encode_queued_draws();
-        self.renderer.encode_shaded(
-            &mut self.encoder,
-            self.targets,
-            self.depth,
-            false,
-            Draws::Indirect(draws),
-        );
-        self.gpu_ops += start.elapsed();
-    }
-
     /// Submits the rest of the frame and waits until the GPU has finished it.
     pub(crate) fn finish(mut self) -> FrameOutcome {
         self.encode_queued_draws();
@@ -318,5 +281,84 @@ impl<'a> FrameCtx<'a> {
             counters: self.counters,
             gpu_ops: self.gpu_ops,
         }
+    }
+}
+
+impl Frame for FrameCtx<'_> {
+    fn draw(&mut self, objects: &[u32]) {
+        let start = Instant::now();
+        for &o in objects {
+            self.counters.objects_drawn += 1;
+            self.counters.triangles_drawn += u64::from(self.renderer.scene.draws[o as usize].index_count / 3);
+            self.drawn.insert(o);
+        }
+        self.queued.extend_from_slice(objects);
+        self.gpu_ops += start.elapsed();
+    }
+
+    fn test_boxes(&mut self, boxes: &[Aabb], kind: BoxTest, out: &mut Vec<BoxVisibility>) {
+        self.test(boxes, kind, out, None);
+    }
+
+    fn test_boxes_with_totals(
+        &mut self,
+        boxes: &[Aabb],
+        sampling: u32,
+        out: &mut Vec<BoxVisibility>,
+        totals: &mut Vec<u64>,
+    ) {
+        self.test(boxes, BoxTest::PixelCount { sampling }, out, Some(totals));
+    }
+
+    fn on_gpu(&mut self) -> Option<&mut dyn GpuFrame> {
+        Some(self)
+    }
+}
+
+impl GpuFrame for FrameCtx<'_> {
+    fn gpu(&self) -> &GpuContext {
+        self.gpu
+    }
+
+    fn margins(&self) -> BoxMargins {
+        self.margins
+    }
+
+    fn record(&mut self, work: &mut dyn FnMut(GpuWork)) {
+        let start = Instant::now();
+        self.encode_queued_draws();
+        work(GpuWork {
+            gpu: self.gpu,
+            encoder: &mut self.encoder,
+            depth: self.depth,
+        });
+        self.gpu_ops += start.elapsed();
+    }
+
+    fn round_trip(&mut self, read: &mut dyn FnMut(&GpuContext, wgpu::CommandEncoder)) {
+        let start = Instant::now();
+        self.encode_queued_draws();
+        let encoder = std::mem::replace(
+            &mut self.encoder,
+            self.gpu.device.create_command_encoder(&Default::default()),
+        );
+        let submitted = Instant::now();
+        read(self.gpu, encoder);
+        self.counters.query_batches += 1;
+        self.counters.query_wait += submitted.elapsed();
+        self.gpu_ops += start.elapsed();
+    }
+
+    fn draw_indirect(&mut self, draws: IndirectDraws) {
+        let start = Instant::now();
+        self.encode_queued_draws();
+        self.renderer.encode_shaded(
+            &mut self.encoder,
+            self.targets,
+            self.depth,
+            false,
+            Draws::Indirect(draws),
+        );
+        self.gpu_ops += start.elapsed();
     }
 }

@@ -15,7 +15,7 @@ mod timing;
 pub use conservative::{BoxMargins, DepthMargins};
 pub(crate) use conservative::{EyeBox, QueryBox, eye_relative_box};
 pub use context::{AdapterReport, BackendChoice, GpuContext, GpuError};
-pub use frame::{FrameCounters, FrameCtx, FrameOutcome, FrameResources, GpuAudit, GpuSetup, GpuWork};
+pub use frame::{Frame, FrameCounters, FrameCtx, FrameOutcome, FrameResources, GpuAudit, GpuFrame, GpuSetup, GpuWork};
 pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};
 /// The building blocks of box tests, for modes that test boxes their own
 /// way (the GPU walk).

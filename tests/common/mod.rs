@@ -11,7 +11,7 @@ use occlu::bench::{RunOptions, RunOutput, run};
 use occlu::camera::generate::{PathKind, generate};
 use occlu::camera::path::{CameraPath, Interpolation, KeyframeFile, PathFile};
 use occlu::cull::{Culler, FrameInput, TraversalStats};
-use occlu::gpu::{BackendChoice, FrameCtx, GpuContext, Resolution};
+use occlu::gpu::{BackendChoice, Frame, GpuContext, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::scene::{LoadOptions, Scene, SceneBuilder, SceneSpec, load};
 use occlu::world::World;
@@ -222,7 +222,7 @@ impl Culler for DropOneVisible {
     fn needs_reference(&self) -> bool {
         true
     }
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         self.0.clear();
         self.0.extend(input.reference_visible.unwrap().iter().skip(1));
         ctx.draw(&self.0);

@@ -45,7 +45,7 @@ use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
-use crate::gpu::{BoxVisibility, FrameCtx, Resolution};
+use crate::gpu::{BoxVisibility, Frame, Resolution};
 mod ternary;
 
 use crate::scene::Scene;
@@ -166,7 +166,7 @@ struct Answers {
 impl Answers {
     /// Tests `list` in one round trip, counting visible and total pixels,
     /// and records them on its nodes (001 §3.3).
-    fn query(&mut self, ctx: &mut FrameCtx, tree: &mut TernaryTree, list: &QueryList, frame: u32) {
+    fn query(&mut self, ctx: &mut dyn Frame, tree: &mut TernaryTree, list: &QueryList, frame: u32) {
         ctx.test_boxes_with_totals(&list.boxes, 1, &mut self.visibility, &mut self.totals);
         for (k, &node) in list.nodes.iter().enumerate() {
             if let BoxVisibility::Samples(visible) = self.visibility[k] {
@@ -230,7 +230,7 @@ impl CoherentCulling {
     }
 
     /// Draws the objects of leaf `node` the frustum does not exclude.
-    fn draw(&mut self, ctx: &mut FrameCtx, node: u32, view: &View) {
+    fn draw(&mut self, ctx: &mut dyn Frame, node: u32, view: &View) {
         self.objects.clear();
         let scene = view.scene;
         self.objects.extend(
@@ -244,7 +244,7 @@ impl CoherentCulling {
     }
 
     /// Sends the batch and acts on its answers.
-    fn flush(&mut self, ctx: &mut FrameCtx, view: &View, stats: &mut TraversalStats) {
+    fn flush(&mut self, ctx: &mut dyn Frame, view: &View, stats: &mut TraversalStats) {
         self.answers.query(ctx, &mut self.tree, &self.batch.queries, view.frame);
         for k in 0..self.batch.queries.nodes.len() {
             let node = self.batch.queries.nodes[k];
@@ -272,7 +272,7 @@ impl Culler for CoherentCulling {
         serde_json::to_value(self.params).expect("plain struct serialises")
     }
 
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let mut stats = TraversalStats::default();
         let view = View {
             scene: input.scene,
@@ -354,5 +354,63 @@ impl Culler for CoherentCulling {
         self.tree.split_and_merge(frame, axis);
         stats.maintenance += start.elapsed() + self.tree.take_tight_time();
         stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::cull::recording::{Call, Recording, camera_down_z, cubes, input};
+
+    #[test]
+    fn a_query_overlapping_a_nearer_one_in_flight_waits_until_the_nearer_is_drawn() {
+        // Down −Z: a near cube on the axis, one far behind it, one off to
+        // the side whose rectangle overlaps neither.
+        let corners = [
+            DVec3::new(-0.5, -0.5, -4.0),
+            DVec3::new(-0.5, -0.5, -12.0),
+            DVec3::new(3.0, -0.5, -8.0),
+        ];
+        let (scene, hierarchy) = cubes(&corners);
+        let camera = camera_down_z();
+        // Leaves of one object each, and no split or merge in the way.
+        let params = ChcParams {
+            tree: TreeParams {
+                o_merge: 0,
+                o_split: u32::MAX,
+                ..TreeParams::default()
+            },
+        };
+        let mut chc = CoherentCulling::new(&scene, params);
+        // A box shows when it holds part of the near or the side cube: the
+        // far one lies in the near one's shadow.
+        let seen = [scene.objects[0].bounds, scene.objects[2].bounds];
+        let overlaps = |a: &Aabb, b: &Aabb| a.min.cmple(b.max).all() && b.min.cmple(a.max).all();
+        let mut double = Recording::new(|b: &Aabb| seen.iter().any(|s| overlaps(b, s)));
+        let stats = chc.frame(&mut double, &input(0, &camera, &scene, &hierarchy));
+        let (near, far) = (scene.objects[0].bounds.center(), scene.objects[1].bounds.center());
+        let near_drawn = double.calls.iter().position(|c| *c == Call::Draw(vec![0]));
+        // The first box tested that holds the far cube and not the near one.
+        let far_alone = |b: &Aabb| b.contains_point(far) && !b.contains_point(near);
+        let far_tested = double
+            .calls
+            .iter()
+            .position(|c| matches!(c, Call::Test(boxes) if boxes.iter().any(far_alone)));
+        assert!(stats.queries_delayed >= 1, "{stats:?}");
+        let (Some(near_drawn), Some(far_tested)) = (near_drawn, far_tested) else {
+            panic!(
+                "the near cube drawn and a box around the far one tested: {:?}",
+                double.calls
+            );
+        };
+        assert!(near_drawn < far_tested, "{:?}", double.calls);
+        let drawn = double.drawn();
+        assert!(
+            drawn.contains(&0) && drawn.contains(&2) && !drawn.contains(&1),
+            "{drawn:?}"
+        );
+        assert!(stats.nodes_culled_occlusion >= 1, "{stats:?}");
     }
 }

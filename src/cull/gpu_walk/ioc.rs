@@ -29,7 +29,7 @@ use serde::Serialize;
 use super::{CullTree, GpuWalk, MAX_LEVELS, cull_on_gpu};
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
-use crate::gpu::{FrameCtx, GpuAudit, GpuContext, GpuSetup};
+use crate::gpu::{Frame, GpuAudit, GpuContext, GpuSetup};
 use crate::hierarchy::Hierarchy;
 use crate::object_set::ObjectSet;
 use crate::scene::Object;
@@ -146,6 +146,14 @@ impl IterativeOcclusionCulling {
     }
 }
 
+#[cfg(test)]
+impl IterativeOcclusionCulling {
+    /// The walk, for the test that holds it against its CPU twin.
+    pub(super) fn gpu_walk(&self) -> Option<&GpuWalk> {
+        self.walk.as_ref()
+    }
+}
+
 impl Culler for IterativeOcclusionCulling {
     fn name(&self) -> &str {
         "ioc"
@@ -172,20 +180,16 @@ impl Culler for IterativeOcclusionCulling {
         self.walk = Some(GpuWalk::new(setup, &tree));
     }
 
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let walk = self.walk.as_mut().expect("ioc runs where the session prepared it");
         let hierarchy = input.hierarchy;
         let bounds = self.source.iter().map(|&n| hierarchy.nodes[n as usize].bounds);
-        cull_on_gpu(ctx, input.camera, walk, bounds)
+        let on_gpu = ctx.on_gpu().expect("the session runs GPU walks on the GPU");
+        cull_on_gpu(on_gpu, input.camera, walk, bounds)
     }
 
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
         self.walk.as_mut()?.audit(gpu, drawn)
-    }
-
-    #[cfg(test)]
-    fn gpu_walk(&self) -> Option<&GpuWalk> {
-        self.walk.as_ref()
     }
 }
 

@@ -48,14 +48,14 @@ pub use tree::{CullTree, MAX_LEVELS, TreeNode};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
 use crate::cull::culler::TraversalStats;
-use crate::gpu::FrameCtx;
+use crate::gpu::GpuFrame;
 
 /// One frame of GPU-driven culling over `walk`'s tree, whose nodes have the
 /// boxes `bounds` this frame: steps 1-4 above. The traversal figures are
 /// counted on the GPU and added after the frame (the mode's audit): the
 /// ones returned are empty.
 pub(super) fn cull_on_gpu(
-    ctx: &mut FrameCtx,
+    ctx: &mut dyn GpuFrame,
     camera: &Camera,
     walk: &mut GpuWalk,
     bounds: impl ExactSizeIterator<Item = Aabb>,
@@ -64,13 +64,13 @@ pub(super) fn cull_on_gpu(
     ctx.draw_indirect(walk.list(DrawList::Visible, indirect_count));
     // Preparing the boxes is culling work on the CPU, outside `record`.
     walk.prepare_boxes(camera, ctx.margins(), bounds);
-    ctx.record(|work| walk.begin(work));
+    ctx.record(&mut |work| walk.begin(work));
     for _ in 0..walk.levels() {
-        ctx.record(|work| walk.walk_level(work));
+        ctx.record(&mut |work| walk.walk_level(work));
     }
-    ctx.record(|work| walk.compact(work));
+    ctx.record(&mut |work| walk.compact(work));
     if !indirect_count {
-        ctx.round_trip(|gpu, encoder| walk.read_counts(gpu, encoder));
+        ctx.round_trip(&mut |gpu, encoder| walk.read_counts(gpu, encoder));
     }
     ctx.draw_indirect(walk.list(DrawList::NewlyVisible, indirect_count));
     TraversalStats::default()

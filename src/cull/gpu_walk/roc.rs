@@ -7,7 +7,7 @@
 use super::{CullTree, GpuWalk, cull_on_gpu};
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{ModeId, ModeInfo, Needs};
-use crate::gpu::{FrameCtx, GpuAudit, GpuContext, GpuSetup};
+use crate::gpu::{Frame, GpuAudit, GpuContext, GpuSetup};
 use crate::object_set::ObjectSet;
 
 /// This mode's entry in the registry.
@@ -33,6 +33,14 @@ impl RasterOcclusionCulling {
     }
 }
 
+#[cfg(test)]
+impl RasterOcclusionCulling {
+    /// The walk, for the test that holds it against its CPU twin.
+    pub(super) fn gpu_walk(&self) -> Option<&GpuWalk> {
+        self.walk.as_ref()
+    }
+}
+
 impl Culler for RasterOcclusionCulling {
     fn name(&self) -> &str {
         "roc"
@@ -43,18 +51,14 @@ impl Culler for RasterOcclusionCulling {
         self.walk = Some(GpuWalk::new(setup, &tree));
     }
 
-    fn frame(&mut self, ctx: &mut FrameCtx, input: &FrameInput) -> TraversalStats {
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let walk = self.walk.as_mut().expect("roc runs where the session prepared it");
         let bounds = input.scene.objects.iter().map(|o| o.bounds);
-        cull_on_gpu(ctx, input.camera, walk, bounds)
+        let on_gpu = ctx.on_gpu().expect("the session runs GPU walks on the GPU");
+        cull_on_gpu(on_gpu, input.camera, walk, bounds)
     }
 
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
         self.walk.as_mut()?.audit(gpu, drawn)
-    }
-
-    #[cfg(test)]
-    fn gpu_walk(&self) -> Option<&GpuWalk> {
-        self.walk.as_ref()
     }
 }

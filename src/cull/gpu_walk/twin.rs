@@ -82,13 +82,61 @@ mod tests {
     use super::*;
     use crate::bench::{RunOptions, Session};
     use crate::camera::generate::default_path;
+    use crate::camera::path::CameraPath;
     use crate::cull::culler::Culler;
+    use crate::cull::gpu_walk::GpuWalk;
     use crate::cull::gpu_walk::ioc::{Depth, IocParams, IterativeOcclusionCulling};
     use crate::cull::gpu_walk::roc::RasterOcclusionCulling;
     use crate::gpu::{BackendChoice, GpuContext, Resolution};
     use crate::hierarchy::{Hierarchy, HierarchyParams};
     use crate::scene::{LoadOptions, SceneSpec, load};
     use crate::world::World;
+
+    const RESOLUTION: Resolution = Resolution {
+        width: 160,
+        height: 120,
+    };
+
+    /// Runs `mode` (its walk shown by `walk_of`) through `world` along
+    /// `path` on `gpu`, holding every frame against the twin's walk of
+    /// `tree`; returns the nodes the walks hid.
+    fn compare<C: Culler>(
+        gpu: &GpuContext,
+        mut world: World,
+        path: &CameraPath,
+        mode: &mut C,
+        walk_of: fn(&C) -> Option<&GpuWalk>,
+        tree: &CullTree,
+    ) -> u64 {
+        let options = RunOptions {
+            warmup: 0,
+            resolution: RESOLUTION,
+            measure_error: false,
+        };
+        let mut session = Session::new(gpu, &world, &mut [Box::new(&mut *mode)], false, &options).unwrap();
+        let objects = world.scene.objects.len();
+        let (mut visible_last, mut hidden) = (vec![false; objects], 0);
+        for frame in 0..path.frames {
+            world.advance(frame);
+            let camera = path.camera(frame, RESOLUTION.aspect());
+            let row = session
+                .frame(frame, &camera, &mut world, &mut [Box::new(&mut *mode)], 0)
+                .unwrap()
+                .remove(0);
+            let on_gpu = walk_of(mode).expect("roc and ioc walk on the GPU");
+            let twin = walk(tree, &on_gpu.node_states(gpu), &visible_last);
+            let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
+            assert_eq!(row.nodes_visited, twin.visited, "{at}");
+            assert_eq!(row.nodes_culled_frustum, twin.outside, "{at}");
+            assert_eq!(row.nodes_culled_occlusion, twin.hidden, "{at}");
+            assert_eq!(row.queries, twin.tested, "{at}");
+            let drawn: Vec<bool> = (0..objects as u32).map(|o| session.drawn[0].contains(o)).collect();
+            assert_eq!(drawn, twin.drawn, "{at}");
+            hidden += twin.hidden;
+            visible_last = twin.marked;
+        }
+        hidden
+    }
 
     #[test]
     fn the_gpu_walk_counts_marks_and_draws_what_its_cpu_twin_does() {
@@ -108,59 +156,23 @@ mod tests {
             !gpus.is_empty(),
             "no Vulkan or GL adapter: install Mesa (scripts/install-deps)"
         );
-        let resolution = Resolution {
-            width: 160,
-            height: 120,
-        };
-        let options = RunOptions {
-            warmup: 0,
-            resolution,
-            measure_error: false,
-        };
-        let (mut walked, mut hidden) = (0, 0);
+        // roc's flat tree, and ioc's hierarchy cut from depth 2 to 6.
+        let flat = CullTree::flat(scene.objects.len() as u32);
+        let (cut, _) = CullTree::cut(&hierarchy, 2, 6);
         for gpu in &gpus {
-            // roc's flat tree, and ioc's hierarchy cut from depth 2 to 6.
+            let world = || World::new(scene.clone(), hierarchy.clone());
             let mut roc = RasterOcclusionCulling::new();
+            let hidden = compare(gpu, world(), &path, &mut roc, RasterOcclusionCulling::gpu_walk, &flat);
+            assert!(
+                hidden > 50,
+                "roc's walks hide nodes, so the comparison means something ({hidden})"
+            );
             let mut ioc = IterativeOcclusionCulling::new(IocParams {
                 start: Depth::Fixed(2),
                 bottom: Depth::Fixed(6),
             });
-            let flat = CullTree::flat(scene.objects.len() as u32);
-            let (cut, _) = CullTree::cut(&hierarchy, 2, 6);
-            for (mode, tree) in [(0, &flat), (1, &cut)] {
-                let mut world = World::new(scene.clone(), hierarchy.clone());
-                let culler: &mut dyn Culler = if mode == 0 { &mut roc } else { &mut ioc };
-                let mut cullers: [Box<dyn Culler + '_>; 1] = [Box::new(culler)];
-                let mut session = Session::new(gpu, &world, &mut cullers, false, &options).unwrap();
-                let mut visible_last = vec![false; scene.objects.len()];
-                for frame in 0..path.frames {
-                    world.advance(frame);
-                    let camera = path.camera(frame, resolution.aspect());
-                    let row = session
-                        .frame(frame, &camera, &mut world, &mut cullers, 0)
-                        .unwrap()
-                        .remove(0);
-                    let walk = cullers[0].gpu_walk().expect("roc and ioc walk on the GPU");
-                    let twin = super::walk(tree, &walk.node_states(gpu), &visible_last);
-                    let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
-                    assert_eq!(row.nodes_visited, twin.visited, "{at}");
-                    assert_eq!(row.nodes_culled_frustum, twin.outside, "{at}");
-                    assert_eq!(row.nodes_culled_occlusion, twin.hidden, "{at}");
-                    assert_eq!(row.queries, twin.tested, "{at}");
-                    let drawn: Vec<bool> = (0..scene.objects.len() as u32)
-                        .map(|o| session.drawn[0].contains(o))
-                        .collect();
-                    assert_eq!(drawn, twin.drawn, "{at}");
-                    hidden += twin.hidden;
-                    visible_last = twin.marked;
-                    walked += 1;
-                }
-            }
+            let hidden = compare(gpu, world(), &path, &mut ioc, IterativeOcclusionCulling::gpu_walk, &cut);
+            assert!(hidden > 50, "ioc's walks hide nodes ({hidden})");
         }
-        assert_eq!(walked, 2 * 12 * gpus.len());
-        assert!(
-            hidden > 100,
-            "the walks hide nodes, so the comparison means something ({hidden})"
-        );
     }
 }

@@ -1,0 +1,142 @@
+//! A recording double of [`Frame`] for unit tests of a mode's logic, with
+//! no GPU: it records what the mode drew and each batch of boxes it
+//! tested, and answers every test by a rule the test gives. Also the
+//! scenes and inputs such tests run on.
+
+use glam::{DQuat, DVec3};
+
+use crate::bounds::Aabb;
+use crate::camera::Camera;
+use crate::cull::culler::FrameInput;
+use crate::gpu::{BoxTest, BoxVisibility, Frame, GpuFrame, Resolution};
+use crate::hierarchy::{Hierarchy, HierarchyParams};
+use crate::scene::builtin::shapes::cuboid;
+use crate::scene::{Scene, SceneBuilder, TriangleSoup};
+
+/// Pixels a visible box reports, visible and in all (so its ratio is 1).
+pub const PIXELS: u64 = 100;
+
+/// One call a mode made, in order.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Call {
+    Draw(Vec<u32>),
+    /// A batch of boxes tested: one round trip.
+    Test(Vec<Aabb>),
+}
+
+/// The double: `visible` answers whether a tested box shows.
+pub struct Recording<F: FnMut(&Aabb) -> bool> {
+    /// Every call, in order.
+    pub calls: Vec<Call>,
+    visible: F,
+}
+
+impl<F: FnMut(&Aabb) -> bool> Recording<F> {
+    pub fn new(visible: F) -> Self {
+        Recording {
+            calls: Vec::new(),
+            visible,
+        }
+    }
+
+    /// Every object drawn, in order.
+    pub fn drawn(&self) -> Vec<u32> {
+        let draws = self.calls.iter().filter_map(|c| match c {
+            Call::Draw(objects) => Some(objects),
+            Call::Test(_) => None,
+        });
+        draws.flatten().copied().collect()
+    }
+
+    /// Every batch of boxes tested, in order.
+    pub fn batches(&self) -> Vec<&[Aabb]> {
+        let tests = self.calls.iter().filter_map(|c| match c {
+            Call::Test(boxes) => Some(boxes.as_slice()),
+            Call::Draw(_) => None,
+        });
+        tests.collect()
+    }
+
+    fn answer(&mut self, boxes: &[Aabb], out: &mut Vec<BoxVisibility>) {
+        self.calls.push(Call::Test(boxes.to_vec()));
+        out.clear();
+        for b in boxes {
+            out.push(BoxVisibility::Samples(if (self.visible)(b) { PIXELS } else { 0 }));
+        }
+    }
+}
+
+impl<F: FnMut(&Aabb) -> bool> Frame for Recording<F> {
+    fn draw(&mut self, objects: &[u32]) {
+        self.calls.push(Call::Draw(objects.to_vec()));
+    }
+
+    fn test_boxes(&mut self, boxes: &[Aabb], _kind: BoxTest, out: &mut Vec<BoxVisibility>) {
+        self.answer(boxes, out);
+    }
+
+    fn test_boxes_with_totals(
+        &mut self,
+        boxes: &[Aabb],
+        _sampling: u32,
+        out: &mut Vec<BoxVisibility>,
+        totals: &mut Vec<u64>,
+    ) {
+        self.answer(boxes, out);
+        totals.clear();
+        totals.resize(boxes.len(), PIXELS);
+    }
+
+    fn on_gpu(&mut self) -> Option<&mut dyn GpuFrame> {
+        None
+    }
+}
+
+/// A scene of unit cubes whose lowest corners are `corners`, one object
+/// each, and a hierarchy over it with one object per leaf.
+pub fn cubes(corners: &[DVec3]) -> (Scene, Hierarchy) {
+    let mut builder = SceneBuilder::new("test cubes".into(), 4096);
+    for (k, &corner) in corners.iter().enumerate() {
+        let mut soup = TriangleSoup::default();
+        cuboid(&mut soup, corner, corner + DVec3::ONE);
+        let group = builder
+            .add_mesh(&format!("cube{k}"), &soup.positions, &soup.indices)
+            .unwrap();
+        builder
+            .add_object(&format!("cube{k}"), &group, glam::DAffine3::IDENTITY)
+            .unwrap();
+    }
+    let scene = builder.finish().unwrap();
+    let params = HierarchyParams {
+        max_leaf_objects: 1,
+        ..HierarchyParams::default()
+    };
+    let hierarchy = Hierarchy::build(&scene.objects, &params);
+    (scene, hierarchy)
+}
+
+/// A camera at the origin looking down −Z, 60° high, 4:3.
+pub fn camera_down_z() -> Camera {
+    Camera {
+        eye: DVec3::ZERO,
+        rotation: DQuat::IDENTITY,
+        fov_y: 60f64.to_radians(),
+        near: 0.1,
+        aspect: 4.0 / 3.0,
+    }
+}
+
+/// Frame `frame`'s input: `scene` and `hierarchy` seen by `camera` at
+/// 800×600, nothing moved.
+pub fn input<'a>(frame: u32, camera: &'a Camera, scene: &'a Scene, hierarchy: &'a Hierarchy) -> FrameInput<'a> {
+    FrameInput {
+        frame,
+        camera,
+        resolution: Resolution::DEFAULT,
+        scene,
+        hierarchy,
+        moved: &[],
+        reference_visible: None,
+        previous: None,
+    }
+}
