@@ -134,6 +134,10 @@ impl<'a> Session<'a> {
         let start = Instant::now();
         let renderer = SceneRenderer::new(gpu, GpuScene::upload(gpu, scene)?);
         let targets = RenderTargets::new(gpu, options.resolution, modes);
+        gpu.wait_idle();
+        let upload_ms = ms(start.elapsed());
+        // The modes' own resources (pipelines, trees) are not the scene's
+        // upload.
         let setup = GpuSetup {
             gpu,
             camera: renderer.camera_uniform(),
@@ -145,7 +149,6 @@ impl<'a> Session<'a> {
             culler.prepare(&setup);
         }
         gpu.wait_idle();
-        let upload_ms = ms(start.elapsed());
         Ok(Session {
             gpu,
             meter: needs_reference.then(|| ErrorMeter::new(gpu, &targets, scene.objects.len())),
@@ -171,6 +174,9 @@ impl<'a> Session<'a> {
     /// errors. Timed, per mode: from the start of its frame on the CPU until
     /// the GPU finished it, including the refit of the hierarchy around
     /// moved objects for modes that traverse it.
+    ///
+    /// `cullers` are the ones this session was made with (and prepared), in
+    /// the same order.
     pub fn frame(
         &mut self,
         frame: u32,

@@ -120,18 +120,15 @@ pub struct AcParams {
 
 impl AcParams {
     pub fn from_params(params: &ModeParams) -> Result<AcParams, ModeError> {
-        let bad = |key: &str, reason: String| ModeError::BadParam {
-            key: format!("ac.{key}"),
-            reason,
-        };
+        let bad = |param, reason| ModeError::bad(ModeId::Ac, param, reason);
         let sampling: u32 = params.get(ModeId::Ac, &SAMPLING)?;
         if sampling == 0 {
-            return Err(bad("sampling", "must be at least 1".into()));
+            return Err(bad(&SAMPLING, "must be at least 1".into()));
         }
         let f_graphics: f64 = params.get(ModeId::Ac, &F_GRAPHICS)?;
         if f_graphics.is_nan() || f_graphics < 0.0 {
             return Err(bad(
-                "f_graphics",
+                &F_GRAPHICS,
                 format!("must be 0 or more (inf: no budget), got {f_graphics}"),
             ));
         }

@@ -75,10 +75,7 @@ impl AutoParams {
     pub fn from_params(params: &ModeParams) -> Result<AutoParams, ModeError> {
         let probe: u32 = params.get(ModeId::Auto, &PROBE)?;
         if probe == 0 {
-            return Err(ModeError::BadParam {
-                key: "auto.probe".into(),
-                reason: "must be at least 1 frame".into(),
-            });
+            return Err(ModeError::bad(ModeId::Auto, &PROBE, "must be at least 1 frame".into()));
         }
         Ok(AutoParams { probe })
     }

@@ -38,7 +38,8 @@ pub struct PreviousFrame {
     pub render_ms: f64,
 }
 
-/// Hierarchy traversal counts of one frame (drawing is counted by `FrameCtx`).
+/// Hierarchy traversal counts of one frame (drawing is counted by the
+/// [`crate::gpu::Frame`] the mode draws through).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TraversalStats {
     pub nodes_visited: u64,
@@ -93,7 +94,7 @@ pub trait Culler {
 
     /// Creates the mode's own GPU resources (pipelines, buffers), once,
     /// untimed, before its first frame. Modes that only draw and test boxes
-    /// through [`FrameCtx`] have none.
+    /// through [`crate::gpu::Frame`] have none.
     fn prepare(&mut self, _setup: &GpuSetup) {}
 
     /// After each frame, untimed: what the mode's own GPU work drew and

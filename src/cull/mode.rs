@@ -149,6 +149,16 @@ pub enum ModeError {
     BadParam { key: String, reason: String },
 }
 
+impl ModeError {
+    /// `param` of `mode` has a value the mode cannot take, for `reason`.
+    pub fn bad(mode: ModeId, param: &ParamInfo, reason: String) -> ModeError {
+        ModeError::BadParam {
+            key: format!("{mode}.{}", param.key),
+            reason,
+        }
+    }
+}
+
 /// Mode parameters given as `MODE.KEY=VALUE` (`--param`, a config's
 /// `params`), checked against the parameters the running modes declare.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -175,11 +185,37 @@ impl ModeParams {
     where
         T::Err: Display,
     {
-        let full = format!("{mode}.{}", param.key);
-        let value = self.values.get(&full).map_or(param.default, String::as_str);
-        value.parse().map_err(|e| ModeError::BadParam {
-            key: full,
-            reason: format!("'{value}': {e}"),
-        })
+        let given = self.values.get(&format!("{mode}.{}", param.key));
+        let value = given.map_or(param.default, String::as_str);
+        value
+            .parse()
+            .map_err(|e| ModeError::bad(mode, param, format!("'{value}': {e}")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn all_holds_every_mode_once() {
+        for id in ModeId::ALL {
+            // Exhaustive: a new mode does not compile here until listed,
+            // and the count below then asks for it in ALL.
+            match id {
+                ModeId::Dr
+                | ModeId::Vfc
+                | ModeId::Sq
+                | ModeId::Omq
+                | ModeId::Ac
+                | ModeId::Chc
+                | ModeId::Roc
+                | ModeId::Ioc
+                | ModeId::Auto
+                | ModeId::Oracle => {}
+            }
+            assert_eq!(ModeId::ALL.iter().filter(|&&m| m == id).count(), 1, "{id}");
+        }
+        assert_eq!(ModeId::ALL.len(), 10, "every variant of the match above is in ALL");
     }
 }

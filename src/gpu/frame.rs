@@ -87,7 +87,8 @@ pub struct GpuSetup<'a> {
     pub camera: &'a wgpu::Buffer,
     /// Every object's index range, in object order.
     pub draws: &'a [DrawRange],
-    /// The scene and hierarchy as the first frame finds them.
+    /// The scene and hierarchy as the session starts (movers where the
+    /// scene put them, before any frame poses them).
     pub scene: &'a Scene,
     pub hierarchy: &'a Hierarchy,
 }
@@ -143,7 +144,8 @@ pub trait GpuFrame {
     fn margins(&self) -> BoxMargins;
 
     /// Records a mode's own GPU work into the frame, after everything drawn
-    /// so far. Its time is GPU operations, not culling.
+    /// so far. Its time is GPU operations, not culling. `work` only records:
+    /// reading results back is [`GpuFrame::round_trip`], which counts it.
     fn record(&mut self, work: &mut dyn FnMut(GpuWork));
 
     /// Submits everything recorded so far and hands `read` a fresh encoder

@@ -5,7 +5,7 @@
 //! glTF says +Y (its specification, "Coordinate System and Units"), and the
 //! built-in scenes are built +Y up. OBJ says nothing, and much of what is
 //! exported as OBJ (CityJSON and GIS exports, CAD, 3ds Max, scans) is +Z up,
-//! so `--up auto` on an OBJ picks +Z by [`looks_z_up`], and +Y otherwise.
+//! so `--up auto` on an OBJ picks +Z by [`looks_z_up`](crate::scene::looks_z_up), and +Y otherwise.
 
 use std::fmt;
 use std::str::FromStr;
@@ -78,7 +78,7 @@ impl FromStr for UpAxis {
 /// What `--up` asks for.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum UpChoice {
-    /// The format's convention, or for OBJ the rule of [`looks_z_up`].
+    /// The format's convention, or for OBJ the rule of [`looks_z_up`](crate::scene::looks_z_up).
     #[default]
     Auto,
     Axis(UpAxis),

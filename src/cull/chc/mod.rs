@@ -35,6 +35,8 @@
 //! than asynchronous per-query results; the paper's "few recent frames" of
 //! visibility is one frame, as in CHC.
 
+mod ternary;
+
 use std::time::Instant;
 
 use serde::Serialize;
@@ -46,8 +48,6 @@ use crate::camera::{Camera, Containment, Frustum};
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{BoxVisibility, Frame, Resolution};
-mod ternary;
-
 use crate::scene::Scene;
 use ternary::{Pixels, TernaryTree, TreeParams, facing_axis};
 
@@ -105,10 +105,8 @@ impl ChcParams {
             if (0.0..=1.0).contains(&r) {
                 Ok(r)
             } else {
-                Err(ModeError::BadParam {
-                    key: format!("chc.{}", param.key),
-                    reason: format!("a pixel ratio must be in 0..=1, got {r}"),
-                })
+                let reason = format!("a pixel ratio must be in 0..=1, got {r}");
+                Err(ModeError::bad(ModeId::Chc, param, reason))
             }
         };
         Ok(ChcParams {

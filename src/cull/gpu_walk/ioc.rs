@@ -109,16 +109,12 @@ impl IocParams {
         };
         if let (Depth::Fixed(start), Depth::Fixed(bottom)) = (p.start, p.bottom) {
             if start > bottom {
-                return Err(ModeError::BadParam {
-                    key: "ioc.start".into(),
-                    reason: format!("start depth {start} is below the bottom depth {bottom}"),
-                });
+                let reason = format!("start depth {start} is below the bottom depth {bottom}");
+                return Err(ModeError::bad(ModeId::Ioc, &START, reason));
             }
             if bottom - start >= MAX_LEVELS {
-                return Err(ModeError::BadParam {
-                    key: "ioc.bottom".into(),
-                    reason: format!("at most {MAX_LEVELS} levels from start to bottom"),
-                });
+                let reason = format!("at most {MAX_LEVELS} levels from start to bottom");
+                return Err(ModeError::bad(ModeId::Ioc, &BOTTOM, reason));
             }
         }
         Ok(p)
@@ -181,11 +177,9 @@ impl Culler for IterativeOcclusionCulling {
     }
 
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
-        let walk = self.walk.as_mut().expect("ioc runs where the session prepared it");
         let hierarchy = input.hierarchy;
         let bounds = self.source.iter().map(|&n| hierarchy.nodes[n as usize].bounds);
-        let on_gpu = ctx.on_gpu().expect("the session runs GPU walks on the GPU");
-        cull_on_gpu(on_gpu, input.camera, walk, bounds)
+        cull_on_gpu(ctx, input.camera, self.walk.as_mut(), bounds)
     }
 
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {

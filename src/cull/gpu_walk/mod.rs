@@ -7,7 +7,7 @@
 //! its [`GpuWalk`] (pool.rs: pipelines, scratch, the tree on the GPU), made
 //! in [`Culler::prepare`](super::Culler::prepare).
 //!
-//! One frame (`cull_on_gpu`), every step through `FrameCtx`:
+//! One frame (`cull_on_gpu`), every step through `GpuFrame`:
 //!
 //! 1. Last frame's visible objects are drawn first: they are this frame's
 //!    occluders, and part of its image.
@@ -48,18 +48,24 @@ pub use tree::{CullTree, MAX_LEVELS, TreeNode};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
 use crate::cull::culler::TraversalStats;
-use crate::gpu::GpuFrame;
+use crate::gpu::Frame;
 
 /// One frame of GPU-driven culling over `walk`'s tree, whose nodes have the
 /// boxes `bounds` this frame: steps 1-4 above. The traversal figures are
 /// counted on the GPU and added after the frame (the mode's audit): the
 /// ones returned are empty.
+///
+/// # Panics
+/// Without a walk or a GPU frame: a session prepares every mode (which
+/// makes its walk) and runs it on the GPU.
 pub(super) fn cull_on_gpu(
-    ctx: &mut dyn GpuFrame,
+    frame: &mut dyn Frame,
     camera: &Camera,
-    walk: &mut GpuWalk,
+    walk: Option<&mut GpuWalk>,
     bounds: impl ExactSizeIterator<Item = Aabb>,
 ) -> TraversalStats {
+    let walk = walk.expect("the session prepared the mode, which made its walk");
+    let ctx = frame.on_gpu().expect("the session runs GPU walks on the GPU");
     let indirect_count = ctx.gpu().indirect_count;
     ctx.draw_indirect(walk.list(DrawList::Visible, indirect_count));
     // Preparing the boxes is culling work on the CPU, outside `record`.

@@ -79,7 +79,7 @@ struct Counts {
 // next occlusion test." Bottom-depth nodes arrive here as leaves, so marking
 // a leaf's objects also marks "all the children in the subtrees of the
 // visible nodes" at the bottom level.
-@compute @workgroup_size(64)
+@compute @workgroup_size(GROUP_SIZE)
 fn cs_expand(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) grid: vec3<u32>) {
     let entries = level_in[1];
     for (var i = id.x; i < entries; i += grid.x * GROUP_SIZE) {
@@ -128,7 +128,7 @@ fn cs_expand(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
 // The objects marked this frame become the visible list (next frame's
 // occluders); those not drawn as occluders this frame also go to the newly
 // visible list, drawn now.
-@compute @workgroup_size(64)
+@compute @workgroup_size(GROUP_SIZE)
 fn cs_compact(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) grid: vec3<u32>) {
     let n = arrayLength(&draws);
     for (var object = id.x; object < n; object += grid.x * GROUP_SIZE) {

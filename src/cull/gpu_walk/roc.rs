@@ -52,10 +52,8 @@ impl Culler for RasterOcclusionCulling {
     }
 
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
-        let walk = self.walk.as_mut().expect("roc runs where the session prepared it");
         let bounds = input.scene.objects.iter().map(|o| o.bounds);
-        let on_gpu = ctx.on_gpu().expect("the session runs GPU walks on the GPU");
-        cull_on_gpu(on_gpu, input.camera, walk, bounds)
+        cull_on_gpu(ctx, input.camera, self.walk.as_mut(), bounds)
     }
 
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {

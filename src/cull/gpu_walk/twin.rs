@@ -151,7 +151,14 @@ mod tests {
         let gpus: Vec<GpuContext> = [BackendChoice::Vulkan, BackendChoice::Gl]
             .into_iter()
             .filter_map(|b| GpuContext::new(b).ok())
+            .filter(|g| g.gpu_driven)
             .collect();
+        // Needs a GPU: scripts/test installs Mesa's software ones, which
+        // cull on the GPU.
+        assert!(
+            !gpus.is_empty(),
+            "no adapter culls on the GPU: install Mesa (scripts/install-deps)"
+        );
         assert!(
             !gpus.is_empty(),
             "no Vulkan or GL adapter: install Mesa (scripts/install-deps)"
