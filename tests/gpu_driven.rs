@@ -87,19 +87,22 @@ fn roc_and_ioc_draw_what_a_wall_leaves_visible() {
         }
         let first = |m: &str| rows.iter().find(|r| r.mode == m).unwrap();
         let roc = first("roc");
-        assert_eq!(roc.nodes_visited, 6, "roc visits every object's box");
+        assert_eq!(roc.traversal.nodes_visited, 6, "roc visits every object's box");
         assert_eq!(
-            roc.nodes_culled_frustum, 2,
+            roc.traversal.nodes_culled_frustum, 2,
             "the boxes behind the eye and off to the side"
         );
         assert_eq!(roc.queries, 3, "the box through the near plane is visible untested");
         let root = first("ioc[root]");
         assert_eq!(
-            (root.nodes_visited, root.queries),
+            (root.traversal.nodes_visited, root.queries),
             (1, 0),
             "a bottom of 0 visits the root alone, which holds the eye"
         );
-        assert!(first("ioc").nodes_visited > 6, "the full walk visits inner nodes too");
+        assert!(
+            first("ioc").traversal.nodes_visited > 6,
+            "the full walk visits inner nodes too"
+        );
     }
 }
 
@@ -131,11 +134,18 @@ fn roc_and_ioc_are_exact_on_the_moving_city_within_their_round_trips() {
             );
             let (drawn, vfc) = (later(m), later("vfc"));
             assert!(drawn * 3 < vfc * 2, "{m} culls: {drawn} of vfc's {vfc} triangles");
-            assert!(sum(m, |r| r.nodes_culled_occlusion) > 0, "{m} hides nodes");
+            assert!(sum(m, |r| r.traversal.nodes_culled_occlusion) > 0, "{m} hides nodes");
         }
         let boxes = 12 * scene.objects.len() as u64;
-        assert_eq!(sum("roc", |r| r.nodes_visited), boxes, "roc visits every object's box");
-        let (tested, outside) = (sum("roc", |r| r.queries), sum("roc", |r| r.nodes_culled_frustum));
+        assert_eq!(
+            sum("roc", |r| r.traversal.nodes_visited),
+            boxes,
+            "roc visits every object's box"
+        );
+        let (tested, outside) = (
+            sum("roc", |r| r.queries),
+            sum("roc", |r| r.traversal.nodes_culled_frustum),
+        );
         assert!(
             outside > 0 && tested + outside <= boxes,
             "{tested} tested, {outside} outside"

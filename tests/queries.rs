@@ -148,8 +148,8 @@ fn query_modes_cull_what_a_wall_hides_and_draw_what_it_does_not() {
             sq.queries > 0 && sq.query_batches == sq.queries,
             "stop-and-wait: one round trip per query"
         );
-        assert!(omq.nodes_culled_occlusion >= 1 && sq.nodes_culled_occlusion >= 1);
-        assert!(omq.queries_skipped > 0, "the nearest boxes need no query");
+        assert!(omq.traversal.nodes_culled_occlusion >= 1 && sq.traversal.nodes_culled_occlusion >= 1);
+        assert!(omq.traversal.queries_skipped > 0, "the nearest boxes need no query");
     }
 }
 
@@ -360,13 +360,13 @@ fn adaptive_culling_is_exact_at_threshold_zero_and_trades_error_above_it() {
         assert_eq!(sum("ac[exact]", |r| r.queries), sum("ac[exact]", |r| r.query_batches));
         // A threshold no footprint reaches: error, and less drawn than omq.
         assert!(sum("ac[high]", |r| r.error_pixels.unwrap()) > 0);
-        assert!(sum("ac[high]", |r| r.nodes_culled_adaptive) > 0);
+        assert!(sum("ac[high]", |r| r.traversal.nodes_culled_adaptive) > 0);
         assert!(sum("ac[high]", |r| r.triangles_drawn) < sum("omq", |r| r.triangles_drawn));
         // No budget at all: after the first frame (which has no previous
         // render time), everything is only frustum-culled, as vfc.
         for (a, v) in of("ac[no budget left]").into_iter().zip(of("vfc")).skip(1) {
             assert_eq!(a.triangles_drawn, v.triangles_drawn, "frame {}", a.frame);
-            assert!(a.nodes_past_budget > 0 && a.queries == 0);
+            assert!(a.traversal.nodes_past_budget > 0 && a.queries == 0);
         }
         // Sampled counts: not conservative, measured (finite, recorded).
         assert!(of("ac[sampled]").iter().all(|r| r.error_pixels.is_some()));
@@ -410,8 +410,8 @@ fn a_query_behind_a_pending_nearer_one_waits_for_it() {
             gpu.adapter
         );
         assert_eq!(row.objects_drawn, 2, "the wall and the side box: {row:?}");
-        assert!(row.queries_delayed >= 1, "{row:?}");
-        assert!(row.nodes_culled_occlusion >= 1, "{row:?}");
+        assert!(row.traversal.queries_delayed >= 1, "{row:?}");
+        assert!(row.traversal.nodes_culled_occlusion >= 1, "{row:?}");
     }
 }
 
@@ -429,7 +429,7 @@ fn chc_is_exact_with_fewer_round_trips_than_sq_on_the_moving_city() {
         let (sq, chc) = (sum("sq", |r| r.query_batches), sum("chc", |r| r.query_batches));
         assert!(chc * 4 < sq, "chc {chc} vs sq {sq} round trips");
         assert!(
-            sum("chc", |r| r.queries_skipped) > 0,
+            sum("chc", |r| r.traversal.queries_skipped) > 0,
             "visible nodes are opened unqueried"
         );
         let moving = rows.iter().filter(|r| r.mode == "chc" && r.frame > 0);

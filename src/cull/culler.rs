@@ -3,6 +3,8 @@
 
 use std::time::Duration;
 
+use serde::{Deserialize, Serialize};
+
 use crate::camera::Camera;
 use crate::gpu::{Frame, GpuAudit, GpuContext, GpuSetup, Resolution};
 use crate::hierarchy::Hierarchy;
@@ -38,28 +40,55 @@ pub struct PreviousFrame {
     pub render_ms: f64,
 }
 
-/// Hierarchy traversal counts of one frame (drawing is counted by the
-/// [`crate::gpu::Frame`] the mode draws through).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TraversalStats {
-    pub nodes_visited: u64,
-    pub nodes_culled_frustum: u64,
-    pub nodes_culled_occlusion: u64,
+/// Declares [`TraversalStats`] from its counters, once: the struct, and
+/// each counter's name (its frames.csv column and summary.json key) and
+/// value in order. Adding a counter is a line here and the mode that counts
+/// it; `FrameStats`, the result files and `compare` pick it up by name.
+macro_rules! traversal_stats {
+    ($($(#[$doc:meta])* $counter:ident,)*) => {
+        /// What a mode counted in one frame besides drawing (which the
+        /// [`crate::gpu::Frame`] it draws through counts).
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+        pub struct TraversalStats {
+            $($(#[$doc])* #[serde(default)] pub $counter: u64,)*
+            /// Time spent keeping the mode's own spatial structure current
+            /// with moved objects (part of its CPU time; frames.csv's
+            /// `maintenance_ms` with the shared hierarchy's refit).
+            #[serde(skip)]
+            pub maintenance: Duration,
+        }
+
+        impl TraversalStats {
+            /// Every counter's name, in order.
+            pub const COUNTERS: &[&str] = &[$(stringify!($counter)),*];
+
+            /// Every counter's value, in [`TraversalStats::COUNTERS`]' order.
+            pub fn counts(&self) -> impl Iterator<Item = u64> {
+                [$(self.$counter),*].into_iter()
+            }
+        }
+    };
+}
+
+traversal_stats! {
+    /// Nodes reached.
+    nodes_visited,
+    /// Nodes outside the frustum.
+    nodes_culled_frustum,
+    /// Nodes found hidden by a test.
+    nodes_culled_occlusion,
     /// Queries made unnecessary (the Occupancy Map's empty-area rule, or
     /// chc's nodes visible in the last frame).
-    pub queries_skipped: u64,
+    queries_skipped,
     /// Queries held back because a nearer query in flight covered part of
     /// their screen rectangle (chc, 001 §3.5).
-    pub queries_delayed: u64,
+    queries_delayed,
     /// Nodes visible but treated as occluded for their small contribution
     /// (adaptive culling, 002 Eq. 1).
-    pub nodes_culled_adaptive: u64,
+    nodes_culled_adaptive,
     /// Nodes left when the culling budget ran out, only frustum-culled and
     /// drawn (cost-adaptive culling, 002 Eq. 2).
-    pub nodes_past_budget: u64,
-    /// Time spent keeping the mode's own spatial structure current with
-    /// moved objects (part of its CPU time).
-    pub maintenance: Duration,
+    nodes_past_budget,
 }
 
 impl TraversalStats {

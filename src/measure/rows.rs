@@ -1,10 +1,15 @@
 //! The rows the result files hold: one per mode and frame (frames.csv),
 //! one per object a mode got wrong in a frame (missed.csv).
 
-use serde::{Deserialize, Serialize};
+use serde::ser::SerializeStruct;
+use serde::{Deserialize, Serialize, Serializer};
 
-/// One row of frames.csv: one mode, one frame. Columns are in field order.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+use crate::cull::TraversalStats;
+
+/// One row of frames.csv: one mode, one frame. Columns are in field order,
+/// with the mode's counters ([`TraversalStats::COUNTERS`]) after the drawing
+/// counters. Read by name, so files with fewer counters still read.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
 pub struct FrameStats {
     pub mode: String,
     pub frame: u32,
@@ -25,24 +30,14 @@ pub struct FrameStats {
     pub gpu_ms: Option<f64>,
     pub objects_drawn: u64,
     pub triangles_drawn: u64,
-    pub nodes_visited: u64,
-    pub nodes_culled_frustum: u64,
-    pub nodes_culled_occlusion: u64,
     /// Occlusion queries issued.
     pub queries: u64,
     /// GPU→CPU round trips for query results.
     pub query_batches: u64,
-    /// Queries made unnecessary: by the Occupancy Map (omq), by last
-    /// frame's visibility (chc).
-    pub queries_skipped: u64,
-    /// Queries held back until a nearer overlapping query was answered
-    /// (chc); 0 in files written before the column existed.
-    #[serde(default)]
-    pub queries_delayed: u64,
-    /// Visible nodes treated as occluded for their small contribution (ac).
-    pub nodes_culled_adaptive: u64,
-    /// Nodes only frustum-culled because the culling budget ran out (ac).
-    pub nodes_past_budget: u64,
+    /// What the mode counted: nodes visited and culled, queries skipped and
+    /// delayed, ... (a column each).
+    #[serde(flatten)]
+    pub traversal: TraversalStats,
     /// Time spent waiting for query results (within frame_ms).
     pub query_wait_ms: f64,
     /// GPU time spent rasterising query boxes (within gpu_ms); empty without
@@ -59,6 +54,34 @@ pub struct FrameStats {
     pub missed_objects: Option<u64>,
     /// Objects visible in the reference frame (the oracle's draw count).
     pub visible_objects: Option<u64>,
+}
+
+/// Flat, a column per field and per counter: CSV has no nesting (and the
+/// csv crate cannot write serde's `flatten`).
+impl Serialize for FrameStats {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut row = serializer.serialize_struct("FrameStats", 16 + TraversalStats::COUNTERS.len())?;
+        row.serialize_field("mode", &self.mode)?;
+        row.serialize_field("frame", &self.frame)?;
+        row.serialize_field("frame_ms", &self.frame_ms)?;
+        row.serialize_field("cpu_ms", &self.cpu_ms)?;
+        row.serialize_field("maintenance_ms", &self.maintenance_ms)?;
+        row.serialize_field("gpu_ms", &self.gpu_ms)?;
+        row.serialize_field("objects_drawn", &self.objects_drawn)?;
+        row.serialize_field("triangles_drawn", &self.triangles_drawn)?;
+        row.serialize_field("queries", &self.queries)?;
+        row.serialize_field("query_batches", &self.query_batches)?;
+        for (name, count) in TraversalStats::COUNTERS.iter().zip(self.traversal.counts()) {
+            row.serialize_field(name, &count)?;
+        }
+        row.serialize_field("query_wait_ms", &self.query_wait_ms)?;
+        row.serialize_field("query_gpu_ms", &self.query_gpu_ms)?;
+        row.serialize_field("error_pixels", &self.error_pixels)?;
+        row.serialize_field("max_depth_error", &self.max_depth_error)?;
+        row.serialize_field("missed_objects", &self.missed_objects)?;
+        row.serialize_field("visible_objects", &self.visible_objects)?;
+        row.end()
+    }
 }
 
 /// One row of missed.csv: an object a mode got wrong in one frame, so a
@@ -107,15 +130,9 @@ impl FrameStats {
             gpu_ms: None,
             objects_drawn: 0,
             triangles_drawn: 0,
-            nodes_visited: 0,
-            nodes_culled_frustum: 0,
-            nodes_culled_occlusion: 0,
             queries: 0,
             query_batches: 0,
-            queries_skipped: 0,
-            queries_delayed: 0,
-            nodes_culled_adaptive: 0,
-            nodes_past_budget: 0,
+            traversal: TraversalStats::default(),
             query_wait_ms: 0.0,
             query_gpu_ms: None,
             error_pixels: None,
@@ -123,5 +140,60 @@ impl FrameStats {
             missed_objects: None,
             visible_objects: None,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_counter_is_a_column_written_and_read_back_by_name() {
+        let names = TraversalStats::COUNTERS;
+        let values: Vec<u64> = (100..).take(names.len()).collect();
+        let line = |cells: &[String]| cells.join(",");
+        // The counters read by name from a file of their columns alone.
+        let numbers: Vec<String> = values.iter().map(u64::to_string).collect();
+        let file = format!("{}\n{}\n", names.join(","), line(&numbers));
+        let traversal: TraversalStats = csv::Reader::from_reader(file.as_bytes())
+            .deserialize()
+            .next()
+            .unwrap()
+            .unwrap();
+        assert_eq!(traversal.counts().collect::<Vec<_>>(), values);
+        let row = FrameStats {
+            traversal,
+            gpu_ms: Some(1.5),
+            objects_drawn: 3,
+            ..FrameStats::blank("vfc")
+        };
+        let mut writer = csv::Writer::from_writer(Vec::new());
+        writer.serialize(&row).unwrap();
+        let written = String::from_utf8(writer.into_inner().unwrap()).unwrap();
+        let (head, body) = written.split_once('\n').unwrap();
+        let columns: Vec<String> = head.split(',').map(String::from).collect();
+        let cells: Vec<String> = body.trim_end().split(',').map(String::from).collect();
+        for (name, value) in names.iter().zip(&values) {
+            let at = columns.iter().position(|c| c == name);
+            assert_eq!(
+                at.map(|k| cells[k].as_str()),
+                Some(value.to_string().as_str()),
+                "{name}: {head}"
+            );
+        }
+        let read = |text: &str| -> FrameStats {
+            csv::Reader::from_reader(text.as_bytes())
+                .deserialize()
+                .next()
+                .unwrap()
+                .unwrap()
+        };
+        assert_eq!(read(&written), row);
+        // A file written before a counter existed still reads, as 0.
+        let last = columns.iter().position(|c| c == names[names.len() - 1]).unwrap();
+        let without = |v: &[String]| line(&[&v[..last], &v[last + 1..]].concat());
+        let older = read(&format!("{}\n{}\n", without(&columns), without(&cells)));
+        assert_eq!(older.traversal.counts().last(), Some(0));
+        assert_eq!(older.traversal.counts().next(), Some(values[0]));
     }
 }

@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::rows::FrameStats;
+use crate::cull::TraversalStats;
 
 /// The distribution of one column over the recorded frames.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -71,15 +72,8 @@ const COLUMNS: &[(&str, Column)] = &[
     ("gpu_ms", |r| r.gpu_ms),
     ("objects_drawn", |r| Some(r.objects_drawn as f64)),
     ("triangles_drawn", |r| Some(r.triangles_drawn as f64)),
-    ("nodes_visited", |r| Some(r.nodes_visited as f64)),
-    ("nodes_culled_frustum", |r| Some(r.nodes_culled_frustum as f64)),
-    ("nodes_culled_occlusion", |r| Some(r.nodes_culled_occlusion as f64)),
     ("queries", |r| Some(r.queries as f64)),
     ("query_batches", |r| Some(r.query_batches as f64)),
-    ("queries_skipped", |r| Some(r.queries_skipped as f64)),
-    ("queries_delayed", |r| Some(r.queries_delayed as f64)),
-    ("nodes_culled_adaptive", |r| Some(r.nodes_culled_adaptive as f64)),
-    ("nodes_past_budget", |r| Some(r.nodes_past_budget as f64)),
     ("query_wait_ms", |r| Some(r.query_wait_ms)),
     ("query_gpu_ms", |r| r.query_gpu_ms),
     ("error_pixels", |r| r.error_pixels.map(|v| v as f64)),
@@ -125,12 +119,22 @@ pub fn summarize(rows: &[FrameStats], modes: &[ModeDescription], pixels: u64) ->
         .iter()
         .map(|m| {
             let mine: Vec<&FrameStats> = rows.iter().filter(|r| r.mode == m.name).collect();
-            let stats = COLUMNS
-                .iter()
-                .filter_map(|&(name, get)| {
-                    let v: Vec<f64> = mine.iter().filter_map(|r| get(r)).collect();
-                    Distribution::of(&v).map(|d| (name.to_string(), d))
-                })
+            let columns = COLUMNS.iter().map(|&(name, get)| {
+                let v: Vec<f64> = mine.iter().filter_map(|r| get(r)).collect();
+                (name, v)
+            });
+            // The mode's counters, by name, whatever they are.
+            let counters = TraversalStats::COUNTERS.iter().enumerate().map(|(k, &name)| {
+                let v: Vec<f64> = mine
+                    .iter()
+                    .filter_map(|r| r.traversal.counts().nth(k))
+                    .map(|c| c as f64)
+                    .collect();
+                (name, v)
+            });
+            let stats = columns
+                .chain(counters)
+                .filter_map(|(name, v)| Distribution::of(&v).map(|d| (name.to_string(), d)))
                 .collect::<BTreeMap<_, _>>();
             let mean = stats.get("frame_ms").map(|d| d.mean);
             let errors: Option<Vec<u64>> = mine.iter().map(|r| r.error_pixels).collect();
@@ -212,5 +216,21 @@ mod tests {
         assert_eq!(s[0].error_fraction, Some(5.0 / 200.0));
         assert_eq!(s[1].speedup_vs_vfc, Some(1.0));
         assert!(!s[0].stats.contains_key("gpu_ms"), "absent columns are left out");
+    }
+
+    #[test]
+    fn every_counter_is_summarised_by_name() {
+        let mut row = FrameStats::blank("vfc");
+        row.traversal.queries_delayed = 7;
+        let vfc = ModeDescription {
+            name: "vfc".into(),
+            conservative: true,
+            parameters: serde_json::json!({}),
+        };
+        let summary = summarize(&[row], &[vfc], 100);
+        for name in TraversalStats::COUNTERS {
+            assert!(summary[0].stats.contains_key(*name), "{name}");
+        }
+        assert_eq!(summary[0].stats["queries_delayed"].mean, 7.0);
     }
 }

@@ -126,9 +126,9 @@ mod tests {
             let on_gpu = walk_of(mode).expect("roc and ioc walk on the GPU");
             let twin = walk(tree, &on_gpu.node_states(gpu), &visible_last);
             let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
-            assert_eq!(row.nodes_visited, twin.visited, "{at}");
-            assert_eq!(row.nodes_culled_frustum, twin.outside, "{at}");
-            assert_eq!(row.nodes_culled_occlusion, twin.hidden, "{at}");
+            assert_eq!(row.traversal.nodes_visited, twin.visited, "{at}");
+            assert_eq!(row.traversal.nodes_culled_frustum, twin.outside, "{at}");
+            assert_eq!(row.traversal.nodes_culled_occlusion, twin.hidden, "{at}");
             assert_eq!(row.queries, twin.tested, "{at}");
             let drawn: Vec<bool> = (0..objects as u32).map(|o| session.drawn[0].contains(o)).collect();
             assert_eq!(drawn, twin.drawn, "{at}");
