@@ -5,9 +5,9 @@
 //! mode) and touches the GPU only through [`crate::gpu::FrameCtx`], which
 //! counts what it draws and queries. To add a mode: write `cull/NAME.rs`
 //! implementing [`Culler`] and declaring its entry (`MODE`: summary,
-//! parameters, needs, constructor), add it to [`ModeId`] with its name and
-//! its place in [`ModeId::ALL`] (mode.rs), and point [`ModeId::info`] at its
-//! entry (registry.rs).
+//! parameters, needs, constructor), add a line to `modes!` (mode.rs: its
+//! [`ModeId`] and name), and point [`ModeId::info`] at its entry
+//! (registry.rs).
 //!
 //! This file only declares and re-exports: the modes import what they use
 //! from the files that define it, so no file imports one that imports it

@@ -74,7 +74,7 @@ impl ModeParams {
 
 /// Every mode's registry entry, in [`ModeId::ALL`]'s order.
 pub fn modes() -> impl Iterator<Item = &'static ModeInfo> {
-    ModeId::ALL.into_iter().map(ModeId::info)
+    ModeId::ALL.iter().map(|m| m.info())
 }
 
 /// The culler of the mode called `name` (see [`ModeId::create`]).
@@ -110,7 +110,7 @@ mod tests {
 
     #[test]
     fn every_entry_is_its_own_and_its_defaults_parse() {
-        for id in ModeId::ALL {
+        for &id in ModeId::ALL {
             assert_eq!(id.info().id, id, "{id}'s entry names another mode");
             assert_eq!(id.name().parse::<ModeId>(), Ok(id));
             assert_eq!((id.info().check)(&ModeParams::default()), Ok(()), "{id}'s defaults");
@@ -119,7 +119,7 @@ mod tests {
             keys.dedup();
             assert_eq!(keys.len(), id.info().params.len(), "{id}'s parameter keys are unique");
         }
-        let mut names: Vec<&str> = ModeId::ALL.map(ModeId::name).to_vec();
+        let mut names: Vec<&str> = ModeId::ALL.iter().map(|m| m.name()).collect();
         names.sort_unstable();
         names.dedup();
         assert_eq!(names.len(), ModeId::ALL.len(), "names are unique");
