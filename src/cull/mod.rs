@@ -19,6 +19,7 @@ mod chc;
 mod culler;
 mod dr;
 pub mod gpu_walk;
+pub mod hiz;
 mod mode;
 pub mod occupancy;
 mod omq;

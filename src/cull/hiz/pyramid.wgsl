@@ -1,0 +1,62 @@
+// The depth pyramid of two-phase hierarchical-depth culling (see
+// pyramid.rs). Reverse-Z: a smaller depth is farther, so every texel keeps
+// the smallest depth below it: the farthest surface over its footprint. A
+// box whose nearest depth is smaller than that is hidden.
+//
+// Every level lives in one f32 array; a dispatch fills one level.
+
+struct Level {
+    // The level read (the depth target itself for the base).
+    source_offset: u32,
+    source_width: u32,
+    source_height: u32,
+    // The level written.
+    offset: u32,
+    width: u32,
+    height: u32,
+}
+
+@group(0) @binding(0) var<uniform> level: Level;
+@group(0) @binding(1) var<storage, read_write> pyramid: array<f32>;
+@group(0) @binding(2) var depth: texture_2d<f32>;
+
+// The base: a power-of-two size at most the target's, so each base texel
+// covers source_width / width ∈ [1, 2) target texels across. Its texel
+// takes the least depth over every target texel its footprint touches, in
+// part or whole (two or three across): rounding the footprint outward is
+// what keeps the base conservative at any target size.
+@compute @workgroup_size(8, 8)
+fn cs_base(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= level.width || id.y >= level.height {
+        return;
+    }
+    let x0 = id.x * level.source_width / level.width;
+    let x1 = min((id.x + 1u) * level.source_width + level.width - 1u, level.source_width * level.width) / level.width;
+    let y0 = id.y * level.source_height / level.height;
+    let y1 = min((id.y + 1u) * level.source_height + level.height - 1u, level.source_height * level.height) / level.height;
+    var farthest = 1.0;
+    for (var y = y0; y < y1; y++) {
+        for (var x = x0; x < x1; x++) {
+            farthest = min(farthest, textureLoad(depth, vec2<u32>(x, y), 0).r);
+        }
+    }
+    pyramid[level.offset + id.y * level.width + id.x] = farthest;
+}
+
+// Every further level halves a power-of-two size (a side already 1 stays
+// 1): its texel takes the least of the 2×2 (or 2×1) texels below it.
+@compute @workgroup_size(8, 8)
+fn cs_reduce(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= level.width || id.y >= level.height {
+        return;
+    }
+    let x1 = min(2u * id.x + 1u, level.source_width - 1u);
+    let y1 = min(2u * id.y + 1u, level.source_height - 1u);
+    var farthest = 1.0;
+    for (var y = 2u * id.y; y <= y1; y++) {
+        for (var x = 2u * id.x; x <= x1; x++) {
+            farthest = min(farthest, pyramid[level.source_offset + y * level.source_width + x]);
+        }
+    }
+    pyramid[level.offset + id.y * level.width + id.x] = farthest;
+}
