@@ -230,6 +230,19 @@ impl GpuContext {
         }
     }
 
+    /// The compute pipeline of `entry` in `module`, its bind group layouts
+    /// taken from the shader.
+    pub fn compute_pipeline(&self, module: &wgpu::ShaderModule, entry: &str) -> wgpu::ComputePipeline {
+        self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: None,
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    }
+
     /// A buffer holding `contents` (padded to whole words, at least one, as
     /// copies and bindings need), written through the queue. wgpu's
     /// `create_buffer_init` maps the new buffer instead, and panics when the

@@ -73,16 +73,7 @@ impl ErrorMeter {
             label: Some("error.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/error.wgsl").into()),
         });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let pipeline = |entry: &str| gpu.compute_pipeline(&module, entry);
         let storage = |label: &str, size: u64| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),

@@ -78,17 +78,10 @@ impl DepthPyramid {
             label: Some("pyramid.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("pyramid.wgsl").into()),
         });
-        let pipeline = |entry| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let (base, reduce) = (pipeline("cs_base"), pipeline("cs_reduce"));
+        let (base, reduce) = (
+            gpu.compute_pipeline(&module, "cs_base"),
+            gpu.compute_pipeline(&module, "cs_reduce"),
+        );
         let levels = levels(resolution);
         let last = levels[levels.len() - 1];
         let texels = storage_buffer(
