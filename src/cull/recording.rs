@@ -99,14 +99,15 @@ pub fn cubes(corners: &[DVec3]) -> (Scene, Hierarchy) {
     for (k, &corner) in corners.iter().enumerate() {
         let mut soup = TriangleSoup::default();
         cuboid(&mut soup, corner, corner + DVec3::ONE);
+        let name = format!("cube{k}");
         let group = builder
-            .add_mesh(&format!("cube{k}"), &soup.positions, &soup.indices)
-            .unwrap();
+            .add_mesh(&name, &soup.positions, &soup.indices)
+            .expect("a unit cube is valid geometry");
         builder
-            .add_object(&format!("cube{k}"), &group, glam::DAffine3::IDENTITY)
-            .unwrap();
+            .add_object(&name, &group, glam::DAffine3::IDENTITY)
+            .expect("test cubes lie within range");
     }
-    let scene = builder.finish().unwrap();
+    let scene = builder.finish().expect("at least one cube");
     let params = HierarchyParams {
         max_leaf_objects: 1,
         ..HierarchyParams::default()

@@ -41,21 +41,12 @@ pub fn is_closed(positions: &[DVec3], indices: &[u32]) -> bool {
 mod tests {
     use super::*;
 
-    /// A unit cube's corners and its 12 triangles, wound outward.
+    /// A unit cube's corners and its 12 triangles, wound outward (the
+    /// built-in scenes' box).
     fn cube() -> (Vec<DVec3>, Vec<u32>) {
-        let corners = (0..8)
-            .map(|k| DVec3::new(f64::from(k & 1), f64::from((k >> 1) & 1), f64::from((k >> 2) & 1)))
-            .collect();
-        let faces = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let indices = faces.iter().flat_map(|&[a, b, c, d]| [a, b, c, a, c, d]).collect();
-        (corners, indices)
+        let mut soup = crate::scene::TriangleSoup::default();
+        crate::scene::builtin::shapes::cuboid(&mut soup, DVec3::ZERO, DVec3::ONE);
+        (soup.positions, soup.indices)
     }
 
     #[test]

@@ -217,6 +217,37 @@ mod tests {
     }
 
     #[test]
+    fn the_level_uniform_is_laid_out_as_the_shader_reads_it() {
+        let module = wgpu::naga::front::wgsl::parse_str(include_str!("pyramid.wgsl")).unwrap();
+        let (_, level) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("Level"))
+            .unwrap();
+        let wgpu::naga::TypeInner::Struct { members, span } = &level.inner else {
+            panic!("Level is a struct");
+        };
+        let names: Vec<&str> = members.iter().filter_map(|m| m.name.as_deref()).collect();
+        assert_eq!(
+            names,
+            [
+                "source_offset",
+                "source_width",
+                "source_height",
+                "offset",
+                "width",
+                "height"
+            ]
+        );
+        assert!(members.iter().enumerate().all(|(k, m)| m.offset == 4 * k as u32));
+        // The Rust side pads to a uniform's 16-byte multiple.
+        assert_eq!(
+            std::mem::size_of::<LevelUniform>(),
+            (*span as usize).next_multiple_of(16)
+        );
+    }
+
+    #[test]
     fn every_texel_is_the_farthest_depth_its_footprint_touches_at_any_size() {
         let gpus: Vec<GpuContext> = [BackendChoice::Vulkan, BackendChoice::Gl]
             .into_iter()
