@@ -138,15 +138,16 @@ impl<'a> Session<'a> {
         let upload_ms = ms(start.elapsed());
         // The modes' own resources (pipelines, trees) are not the scene's
         // upload.
-        let setup = GpuSetup {
-            gpu,
-            camera: renderer.camera_uniform(),
-            draws: &renderer.scene.draws,
-            scene,
-            hierarchy: &world.hierarchy,
-        };
-        for culler in cullers.iter_mut() {
-            culler.prepare(&setup);
+        for (culler, depth) in cullers.iter_mut().zip(&targets.mode_depths) {
+            culler.prepare(&GpuSetup {
+                gpu,
+                camera: renderer.camera_uniform(),
+                draws: &renderer.scene.draws,
+                scene,
+                hierarchy: &world.hierarchy,
+                depth,
+                resolution: options.resolution,
+            });
         }
         gpu.wait_idle();
         Ok(Session {
@@ -253,6 +254,7 @@ impl<'a> Session<'a> {
                 traversal,
                 query_wait_ms: ms(outcome.counters.query_wait),
                 query_gpu_ms: outcome.counters.query_gpu.map(ms),
+                pyramid_gpu_ms: outcome.counters.pyramid_gpu.map(ms),
                 error_pixels: None,
                 max_depth_error: None,
                 missed_objects: None,

@@ -89,7 +89,7 @@ fn bad_input_gets_one_clear_line() {
         2,
         &[
             "unknown mode 'warp'",
-            "dr, vfc, sq, omq, ac, chc, roc, ioc, auto, oracle",
+            "dr, vfc, sq, omq, ac, chc, roc, ioc, hiz, auto, oracle",
         ],
     );
     fails_with(
@@ -237,7 +237,9 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
         .collect();
     assert_eq!(
         modes,
-        ["dr", "vfc", "sq", "omq", "ac", "chc", "roc", "ioc", "auto", "oracle"]
+        [
+            "dr", "vfc", "sq", "omq", "ac", "chc", "roc", "ioc", "hiz", "auto", "oracle"
+        ]
     );
     for m in summary["modes"].as_array().unwrap() {
         assert_eq!(m["frames"], 2);
@@ -271,9 +273,22 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
     ] {
         assert!(header.split(',').any(|c| c == column), "frames.csv lacks {column}");
     }
-    assert_eq!(lines.count(), 20, "2 frames × 10 modes");
+    assert_eq!(lines.count(), 22, "2 frames × 11 modes");
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| oracle |") && report.contains("Adapter:"));
+    // The cost split, where the adapter has timestamps: hiz's pyramid is
+    // part of its box tests, and drawing is the rest of its GPU time.
+    let hiz = &summary["modes"][8];
+    let mean = |col: &str| hiz["stats"][col]["mean"].as_f64();
+    assert_eq!(report.contains("## Cost split"), mean("gpu_ms").is_some());
+    if let (Some(gpu), Some(tests), Some(pyramid)) = (mean("gpu_ms"), mean("query_gpu_ms"), mean("pyramid_gpu_ms")) {
+        let row = report.lines().filter(|l| l.starts_with("| hiz |")).nth(1).unwrap();
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        assert_eq!(cells[4], format!("{tests:.2}"), "{row}");
+        assert_eq!(cells[5], format!("{pyramid:.2}"), "{row}");
+        assert_eq!(cells[6], format!("{:.2}", gpu - tests), "{row}");
+        assert!(pyramid <= tests, "{row}");
+    }
     for chart in occlu::report::charts::CHARTS {
         assert!(report.contains(&format!("]({chart})")), "report.md links {chart}");
         let (width, height, colours) = png_colours(&out.join(chart));

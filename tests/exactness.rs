@@ -208,6 +208,7 @@ fn the_fragment_bound_leaves_every_surface_whole() {
         scene: scene.clone(),
         cameras: vec![camera],
         baseline: None,
+        resolution: None,
     };
     // The depth where the ray through (x, y) enters the nearest box, 0 where
     // it misses both, or None within a hundredth of a box's edge

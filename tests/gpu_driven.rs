@@ -1,4 +1,4 @@
-//! GPU-driven culling (`roc`, `ioc`, paper 004): exact images, the objects
+//! GPU-driven culling (`roc`, `ioc`, paper 004; `hiz`): exact images, the objects
 //! a hand-made scene leaves visible, and round trips per frame, on every
 //! backend.
 
@@ -48,7 +48,7 @@ fn assert_exact(rows: &[FrameStats], gpu: &GpuContext) {
 }
 
 #[test]
-fn roc_and_ioc_draw_what_a_wall_leaves_visible() {
+fn gpu_walks_draw_what_a_wall_leaves_visible() {
     // The camera at the origin looks down -z (90° field of view).
     let scene = boxes(&[
         (DVec3::new(-3.0, -3.0, -10.1), DVec3::new(3.0, 3.0, -9.9)), // 0 wall
@@ -69,6 +69,8 @@ fn roc_and_ioc_draw_what_a_wall_leaves_visible() {
             mode(&scene, "roc", "roc", &[]),
             mode(&scene, "ioc", "ioc", &["ioc.start=0", &full]),
             mode(&scene, "ioc[root]", "ioc", &["ioc.start=0", "ioc.bottom=0"]),
+            mode(&scene, "hiz", "hiz", &[]),
+            mode(&scene, "hiz[engines]", "hiz", &["hiz.texels=2"]),
         ];
         let rows = run_modes(&gpu, &scene, &hierarchy, &path, &mut cullers, RES).rows;
         assert_exact(&rows, &gpu);
@@ -93,6 +95,27 @@ fn roc_and_ioc_draw_what_a_wall_leaves_visible() {
             "the boxes behind the eye and off to the side"
         );
         assert_eq!(roc.queries, 3, "the box through the near plane is visible untested");
+        for m in ["hiz", "hiz[engines]"] {
+            let hiz = first(m);
+            let at = format!("{m} on {}", gpu.adapter);
+            assert_eq!(
+                (
+                    hiz.traversal.nodes_visited,
+                    hiz.traversal.nodes_culled_frustum,
+                    hiz.queries
+                ),
+                (6, 2, 3),
+                "{at}: as roc"
+            );
+            let frame = |k: u32| rows.iter().find(|r| r.mode == m && r.frame == k).unwrap();
+            let (second, third) = (frame(1).traversal, frame(2).traversal);
+            assert_eq!(
+                (second.drawn_early, second.drawn_late, second.nodes_culled_occlusion),
+                (4, 0, 1),
+                "{at}: frame 1 draws what frame 0 found and hides the box behind the wall"
+            );
+            assert_eq!((third.drawn_early, third.drawn_late), (3, 0), "{at}");
+        }
         let root = first("ioc[root]");
         assert_eq!(
             (root.traversal.nodes_visited, root.queries),
@@ -107,13 +130,15 @@ fn roc_and_ioc_draw_what_a_wall_leaves_visible() {
 }
 
 #[test]
-fn roc_and_ioc_are_exact_on_the_moving_city_within_their_round_trips() {
+fn gpu_walks_are_exact_on_the_moving_city_within_their_round_trips() {
     let (scene, hierarchy, path) = common::builtin("city:blocks=2,movers=40", 12);
     for gpu in common::gpus() {
         let mut cullers = vec![
             mode(&scene, "vfc", "vfc", &[]),
             mode(&scene, "roc", "roc", &[]),
             mode(&scene, "ioc", "ioc", &[]),
+            mode(&scene, "hiz", "hiz", &[]),
+            mode(&scene, "hiz[nodes]", "hiz", &["hiz.boxes=nodes"]),
         ];
         let rows = run_modes(&gpu, &scene, &hierarchy, &path, &mut cullers, common::SMALL).rows;
         assert_exact(&rows, &gpu);
@@ -124,7 +149,7 @@ fn roc_and_ioc_are_exact_on_the_moving_city_within_their_round_trips() {
             let rows = rows.iter().filter(|r| r.mode == mode && r.frame >= 2);
             rows.map(|r| r.triangles_drawn).sum()
         };
-        for m in ["roc", "ioc"] {
+        for m in ["roc", "ioc", "hiz", "hiz[nodes]"] {
             assert!(
                 rows.iter()
                     .filter(|r| r.mode == m)
@@ -133,7 +158,14 @@ fn roc_and_ioc_are_exact_on_the_moving_city_within_their_round_trips() {
                 gpu.adapter
             );
             let (drawn, vfc) = (later(m), later("vfc"));
-            assert!(drawn * 3 < vfc * 2, "{m} culls: {drawn} of vfc's {vfc} triangles");
+            // hiz tests a box's screen rectangle against the farthest depth
+            // of a few pyramid texels, far coarser than drawing the box at
+            // this small size: it only has to cull.
+            let share = if m.starts_with("hiz") { 1.0 } else { 2.0 / 3.0 };
+            assert!(
+                (drawn as f64) < vfc as f64 * share,
+                "{m} culls: {drawn} of vfc's {vfc} triangles"
+            );
             assert!(sum(m, |r| r.traversal.nodes_culled_occlusion) > 0, "{m} hides nodes");
         }
         let boxes = 12 * scene.objects.len() as u64;
@@ -159,6 +191,18 @@ fn roc_and_ioc_are_exact_on_the_moving_city_within_their_round_trips() {
                 .filter(|r| r.mode != "vfc")
                 .all(|r| r.query_gpu_ms.is_some() == gpu.timestamps)
         );
+        // Only hiz builds a pyramid, and its time is part of the test's.
+        assert!(rows.iter().all(|r| {
+            let timed = gpu.timestamps && r.mode.starts_with("hiz");
+            r.pyramid_gpu_ms.is_some() == timed && r.pyramid_gpu_ms <= r.query_gpu_ms
+        }));
+        // Every object a walk drew was drawn early (visible last frame) or
+        // late (newly visible), and the first frame has no early list.
+        for r in rows.iter().filter(|r| r.mode != "vfc") {
+            let t = r.traversal;
+            assert_eq!(t.drawn_early + t.drawn_late, r.objects_drawn, "{}", r.mode);
+            assert!(r.frame > 0 || t.drawn_early == 0, "{}", r.mode);
+        }
     }
 }
 

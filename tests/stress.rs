@@ -174,6 +174,7 @@ fn conservative_modes_draw_every_visible_object_of_random_scenes() {
                 cameras: random_cameras(&mut rng, &list),
                 scene: boxes(&list),
                 baseline: None,
+                resolution: None,
             }
         })
         .collect();

@@ -29,7 +29,7 @@
 
 use serde::Serialize;
 
-use super::gpu_walk::ioc::{IocParams, IterativeOcclusionCulling};
+use super::gpu_walk::ioc::{DepthRange, iterative_occlusion_culling};
 use super::omq::{OccupancyMapQueries, OmqParams};
 use super::vfc::FrustumCulling;
 use crate::cull::culler::{Culler, FrameInput, PreviousFrame, TraversalStats};
@@ -261,8 +261,8 @@ impl Culler for AutoCulling {
 fn occlusion_culler(gpu_culling: bool) -> Box<dyn Culler> {
     let defaults = ModeParams::default();
     if gpu_culling {
-        Box::new(IterativeOcclusionCulling::new(
-            IocParams::from_params(&defaults).expect("ioc's defaults parse"),
+        Box::new(iterative_occlusion_culling(
+            DepthRange::from_params(ModeId::Ioc, &defaults).expect("ioc's defaults parse"),
         ))
     } else {
         Box::new(OccupancyMapQueries::new(

@@ -89,15 +89,23 @@ traversal_stats! {
     /// Nodes left when the culling budget ran out, only frustum-culled and
     /// drawn (cost-adaptive culling, 002 Eq. 2).
     nodes_past_budget,
+    /// Objects a GPU walk drew first, as last frame's visible list (the
+    /// early pass of two-phase culling).
+    drawn_early,
+    /// Objects a GPU walk drew after its test, newly visible (the late
+    /// pass).
+    drawn_late,
 }
 
 impl TraversalStats {
     /// Adds the nodes a GPU-driven walk visited, found outside the frustum
-    /// and found hidden.
+    /// and found hidden, and the objects it drew before and after its test.
     pub fn add_gpu_audit(&mut self, audit: &GpuAudit) {
         self.nodes_visited += audit.nodes_visited;
         self.nodes_culled_frustum += audit.nodes_outside_frustum;
         self.nodes_culled_occlusion += audit.nodes_hidden;
+        self.drawn_early += audit.drawn_early;
+        self.drawn_late += audit.drawn_late;
     }
 }
 

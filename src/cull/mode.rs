@@ -44,6 +44,7 @@ modes! {
     Chc => "chc",
     Roc => "roc",
     Ioc => "ioc",
+    Hiz => "hiz",
     Auto => "auto",
     Oracle => "oracle",
 }

@@ -20,6 +20,7 @@ impl ModeId {
             ModeId::Chc => &chc::MODE,
             ModeId::Roc => &gpu_walk::roc::MODE,
             ModeId::Ioc => &gpu_walk::ioc::MODE,
+            ModeId::Hiz => &gpu_walk::hiz::MODE,
             ModeId::Auto => &auto::MODE,
             ModeId::Oracle => &oracle::MODE,
         }
@@ -135,7 +136,7 @@ mod tests {
         assert!(
             ModeError::Unknown("x".into())
                 .to_string()
-                .contains("dr, vfc, sq, omq, ac, chc, roc, ioc, auto, oracle")
+                .contains("dr, vfc, sq, omq, ac, chc, roc, ioc, hiz, auto, oracle")
         );
     }
 

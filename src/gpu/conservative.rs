@@ -149,8 +149,8 @@ impl DepthMargins {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct QueryBox {
-    pub(super) min: Vec4,
-    pub(super) max: Vec4,
+    pub(crate) min: Vec4,
+    pub(crate) max: Vec4,
 }
 
 /// A box made ready for a depth test.

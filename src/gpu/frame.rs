@@ -13,7 +13,7 @@ use super::context::GpuContext;
 use super::queries::{BatchAnswers, BoxTest, BoxVisibility, QueryPool, TestTarget};
 use super::renderer::DrawRange;
 use super::renderer::{Draws, IndirectDraws, SceneRenderer};
-use super::targets::RenderTargets;
+use super::targets::{RenderTargets, Resolution};
 use super::timing::GpuTimer;
 use crate::bounds::Aabb;
 use crate::camera::Camera;
@@ -35,6 +35,8 @@ pub struct FrameCounters {
     pub query_wait: Duration,
     /// GPU time of the query passes (timestamps), where the adapter has them.
     pub query_gpu: Option<Duration>,
+    /// Of that, building a depth pyramid to test against.
+    pub pyramid_gpu: Option<Duration>,
 }
 
 /// Result of a finished frame.
@@ -60,8 +62,14 @@ pub struct GpuAudit {
     /// Tested and hidden.
     pub nodes_hidden: u64,
     pub nodes_outside_frustum: u64,
+    /// Objects drawn first, as last frame's visible list, and after the
+    /// walk, newly visible.
+    pub drawn_early: u64,
+    pub drawn_late: u64,
     /// GPU time of the walk and the compaction, where timestamps exist.
     pub cull_gpu: Option<Duration>,
+    /// Of that, the depth pyramid's build (hiz).
+    pub pyramid_gpu: Option<Duration>,
 }
 
 impl FrameOutcome {
@@ -75,6 +83,9 @@ impl FrameOutcome {
         c.queries += audit.nodes_tested;
         if let Some(t) = audit.cull_gpu {
             *c.query_gpu.get_or_insert(Duration::ZERO) += t;
+        }
+        if let Some(t) = audit.pyramid_gpu {
+            *c.pyramid_gpu.get_or_insert(Duration::ZERO) += t;
         }
     }
 }
@@ -91,6 +102,10 @@ pub struct GpuSetup<'a> {
     /// scene put them, before any frame poses them).
     pub scene: &'a Scene,
     pub hierarchy: &'a Hierarchy,
+    /// The mode's own depth target, which its frames draw into, and its
+    /// size.
+    pub depth: &'a wgpu::TextureView,
+    pub resolution: Resolution,
 }
 
 /// A mode's own GPU work, recorded into its frame by [`FrameCtx::record`].

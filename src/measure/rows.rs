@@ -43,6 +43,11 @@ pub struct FrameStats {
     /// GPU time spent rasterising query boxes (within gpu_ms); empty without
     /// timestamp queries or without queries.
     pub query_gpu_ms: Option<f64>,
+    /// Part of query_gpu_ms spent building a depth pyramid to test boxes
+    /// against (hiz); empty for other modes, without timestamp queries, and
+    /// in files written before the column existed.
+    #[serde(default)]
+    pub pyramid_gpu_ms: Option<f64>,
     /// Pixels whose depth differs from the reference; empty with --no-error.
     pub error_pixels: Option<u64>,
     /// The largest |depth − reference depth| of the frame, in reverse-Z
@@ -60,7 +65,7 @@ pub struct FrameStats {
 /// csv crate cannot write serde's `flatten`).
 impl Serialize for FrameStats {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        let mut row = serializer.serialize_struct("FrameStats", 16 + TraversalStats::COUNTERS.len())?;
+        let mut row = serializer.serialize_struct("FrameStats", 17 + TraversalStats::COUNTERS.len())?;
         row.serialize_field("mode", &self.mode)?;
         row.serialize_field("frame", &self.frame)?;
         row.serialize_field("frame_ms", &self.frame_ms)?;
@@ -76,6 +81,7 @@ impl Serialize for FrameStats {
         }
         row.serialize_field("query_wait_ms", &self.query_wait_ms)?;
         row.serialize_field("query_gpu_ms", &self.query_gpu_ms)?;
+        row.serialize_field("pyramid_gpu_ms", &self.pyramid_gpu_ms)?;
         row.serialize_field("error_pixels", &self.error_pixels)?;
         row.serialize_field("max_depth_error", &self.max_depth_error)?;
         row.serialize_field("missed_objects", &self.missed_objects)?;
@@ -135,6 +141,7 @@ impl FrameStats {
             traversal: TraversalStats::default(),
             query_wait_ms: 0.0,
             query_gpu_ms: None,
+            pyramid_gpu_ms: None,
             error_pixels: None,
             max_depth_error: None,
             missed_objects: None,

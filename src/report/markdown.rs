@@ -54,6 +54,7 @@ pub fn render(s: &Summary) -> String {
             flagged.join(", ")
         );
     }
+    cost_split(w, s);
     missed_list(w, s);
     if let Some(sweep) = &s.sweep {
         sweep_table(w, s, sweep);
@@ -82,6 +83,47 @@ pub fn render(s: &Summary) -> String {
         s.schema_version
     );
     md
+}
+
+/// Where each mode's frame went (004's Table 1 splits it the same way):
+/// deciding on the CPU, testing boxes on the GPU (hiz: of which building
+/// its pyramid), drawing, waiting for results; and for GPU walks the
+/// objects drawn before and after the test. Only with GPU timestamps.
+fn cost_split(w: &mut String, s: &Summary) {
+    if !s.modes.iter().any(|m| m.stats.contains_key("gpu_ms")) {
+        return;
+    }
+    let _ = writeln!(
+        w,
+        "\n## Cost split (means per frame)\n\n| mode | frame ms | culling CPU ms | box tests GPU ms | of which pyramid | drawing GPU ms | waits ms | drawn early | drawn late |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    for m in &s.modes {
+        let mean = |col: &str| m.stats.get(col).map(|d| d.mean);
+        let ms = |v: Option<f64>| v.map_or_else(|| "–".into(), |v| format!("{v:.2}"));
+        let count = |col: &str| match mean(col) {
+            Some(v) if v > 0.0 => format!("{v:.1}"),
+            _ => "–".into(),
+        };
+        let drawing = mean("gpu_ms").map(|gpu| gpu - mean("query_gpu_ms").unwrap_or(0.0));
+        let _ = writeln!(
+            w,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            m.name,
+            ms(mean("frame_ms")),
+            ms(mean("cpu_ms")),
+            ms(mean("query_gpu_ms")),
+            ms(mean("pyramid_gpu_ms")),
+            ms(drawing),
+            ms(mean("query_wait_ms")),
+            count("drawn_early"),
+            count("drawn_late"),
+        );
+    }
+    let _ = writeln!(
+        w,
+        "\nbox tests: GPU time of occlusion queries, pixel counts or a GPU walk's passes; drawing: the rest of the frame's GPU time. \
+         On a software rasteriser (llvmpipe) the pyramid's time also holds finishing the draws before it."
+    );
 }
 
 /// Run time against error, one row per swept value.

@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use crate::camera::Camera;
+use crate::gpu::Resolution;
 use crate::scene::Scene;
 
 /// One hard case: a scene and the cameras of its frames.
@@ -16,6 +17,10 @@ pub struct StressCase {
     pub cameras: Vec<Camera>,
     /// The untransformed case whose image this one must reproduce.
     pub baseline: Option<Baseline>,
+    /// The target size this case runs at, where the size is its difficulty
+    /// (a depth pyramid over a size that is not a power of two); `None`:
+    /// the run's.
+    pub resolution: Option<Resolution>,
 }
 
 #[derive(Clone, Debug, PartialEq)]

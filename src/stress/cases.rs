@@ -2,7 +2,7 @@
 //! cullers are known to fail (the near plane, an eye inside a box, huge
 //! coordinates, degenerate boxes, extreme fields of view, vertical views,
 //! no temporal coherence, parts flush with distant walls, triangles seen
-//! edge-on).
+//! edge-on, target sizes that are not powers of two).
 //!
 //! Most cases are a small seeded town (a ground slab, a 5×5 grid of closed
 //! buildings, crates in the streets) plus the objects and cameras their
@@ -14,6 +14,7 @@ use glam::DVec3;
 
 use super::case::{Baseline, DepthTolerance, StressCase};
 use crate::camera::{Camera, look_rotation};
+use crate::gpu::Resolution;
 use crate::scene::builtin::Rng;
 use crate::scene::builtin::shapes::cuboid;
 use crate::scene::{SceneBuilder, TriangleSoup};
@@ -73,6 +74,8 @@ struct Draft {
     shots: Vec<Shot>,
     near: f64,
     fov_deg: f64,
+    /// The target size it must run at, if any.
+    resolution: Option<Resolution>,
 }
 
 impl Draft {
@@ -82,6 +85,7 @@ impl Draft {
             shots,
             near: NEAR,
             fov_deg: FOV,
+            resolution: None,
         }
     }
 
@@ -125,6 +129,7 @@ impl Draft {
             scene,
             cameras,
             baseline,
+            resolution: self.resolution,
         }
     }
 }
@@ -245,8 +250,69 @@ pub fn all() -> Vec<StressCase> {
         teleport(),
         distant_plaques(),
         edge_on(),
+        slits(),
     ]);
+    // A depth pyramid's base is a power of two at most the target's size:
+    // at other sizes a base texel covers one to two target texels, and one
+    // that samples some of them culls what the others show (bevy#14062).
+    for (width, height) in [(801, 599), (1, 1), (1023, 1), (8191, 3)] {
+        let draft = Draft {
+            resolution: Some(Resolution { width, height }),
+            ..Draft::new(town(), street_walk())
+        };
+        let name = format!("size-{width}x{height}");
+        cases.push(draft.case(&name, "the street walk at a target size that is not a power of two"));
+    }
     cases
+}
+
+/// A wall with vertical slits 1.2 pixels wide at 801×599 and a small cube
+/// behind each: a cube shows in the one or two pixel columns its slit
+/// leaves, at every offset against the texels of a depth pyramid (whose
+/// base texels there are 1.56 pixels wide), so a pyramid that skips a
+/// column culls it. Slits are 50 pixels apart, so the few texels a cube is
+/// tested against see no other slit.
+fn slits() -> StressCase {
+    let size = Resolution {
+        width: 801,
+        height: 599,
+    };
+    // The eye 10 m before the wall: a pixel there is this wide.
+    let (distance, fov) = (10.0, FOV.to_radians());
+    let pixel = 2.0 * distance * (fov / 2.0).tan() / f64::from(size.height);
+    let slit = 1.2 * pixel;
+    let (half, depth) = (7.0, 0.1);
+    let mut shapes = Vec::new();
+    let mut left = -half;
+    // 12 slits, each 1/8 pixel further off the pixel grid than the last.
+    for k in 0..12 {
+        let at = -5.5 + f64::from(k) + f64::from(k % 8) * pixel / 8.0;
+        shapes.push(cuboid_shape(format!("wall {k}"), v(left, 0.0, 0.0), v(at, 6.0, depth)));
+        // On the line of sight through the slit's middle, 3 m behind it.
+        let x = (at + slit / 2.0) * (distance + 3.0) / distance;
+        shapes.push(cuboid_shape(
+            format!("cube {k}"),
+            v(x - 0.15, 2.85, -3.0),
+            v(x + 0.15, 3.15, -2.7),
+        ));
+        left = at + slit;
+    }
+    shapes.push(cuboid_shape("wall end".into(), v(left, 0.0, 0.0), v(half, 6.0, depth)));
+    let eye = v(0.0, 3.0, depth + distance);
+    // Frames 0 and 1 draw every cube (nothing was drawn before frame 0 to
+    // hide them, and what frame 0 saw is drawn first in frame 1): the cubes
+    // are tested against the wall alone from frame 2 on.
+    let shots = (0..6)
+        .map(|k| looking(eye + v(0.3 * pixel * f64::from(k), 0.0, 0.0), DVec3::NEG_Z))
+        .collect();
+    Draft {
+        resolution: Some(size),
+        ..Draft::new(shapes, shots)
+    }
+    .case(
+        "slits",
+        "cubes seen only through slits a pixel wide, at every offset against a pyramid's texels",
+    )
 }
 
 /// A closed room with a doorway, one object whose box holds the eye; a

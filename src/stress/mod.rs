@@ -258,7 +258,8 @@ pub fn run(
             .collect::<Result<Vec<_>, _>>()?;
         let keep_depth = case.baseline.is_some() || is_baseline(case);
         let hierarchy = HierarchyParams::default();
-        let outcome = run_case(gpu, case, &hierarchy, &mut cullers, resolution, keep_depth, &mut |_| {
+        let size = case.resolution.unwrap_or(resolution);
+        let outcome = run_case(gpu, case, &hierarchy, &mut cullers, size, keep_depth, &mut |_| {
             done += 1;
             events(StressEvent::Frame { done, total });
         })?;

@@ -26,12 +26,9 @@ use std::str::FromStr;
 
 use serde::Serialize;
 
-use super::{CullTree, GpuWalk, MAX_LEVELS, cull_on_gpu};
-use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use super::{GpuCulling, MAX_LEVELS, NodeTest, Walked};
 use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
-use crate::gpu::{Frame, GpuAudit, GpuContext, GpuSetup};
 use crate::hierarchy::Hierarchy;
-use crate::object_set::ObjectSet;
 use crate::scene::Object;
 
 /// This mode's entry in the registry.
@@ -41,21 +38,28 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     conservative: true,
     params: &[START, BOTTOM],
     needs: Needs::GpuCulling,
-    check: |params| IocParams::from_params(params).map(drop),
+    check: |params| DepthRange::from_params(ModeId::Ioc, params).map(drop),
     build: |_, params| {
-        Ok(Box::new(IterativeOcclusionCulling::new(IocParams::from_params(
+        Ok(Box::new(iterative_occlusion_culling(DepthRange::from_params(
+            ModeId::Ioc,
             params,
         )?)))
     },
 };
 
-const START: ParamInfo = ParamInfo {
+/// ioc: the hierarchy's nodes over `range`, their boxes drawn against the
+/// depth.
+pub fn iterative_occlusion_culling(range: DepthRange) -> GpuCulling {
+    GpuCulling::new("ioc", Walked::Nodes(range), NodeTest::Raster, serde_json::json!(range))
+}
+
+pub(super) const START: ParamInfo = ParamInfo {
     key: "start",
     default: "auto",
     summary: "depth whose nodes are tested first (root 0); auto: from the hierarchy",
 };
 
-const BOTTOM: ParamInfo = ParamInfo {
+pub(super) const BOTTOM: ParamInfo = ParamInfo {
     key: "bottom",
     default: "auto",
     summary: "depth below which nodes are not tested: a visible node there draws its subtree; auto: from the hierarchy",
@@ -95,113 +99,50 @@ impl Serialize for Depth {
     }
 }
 
+/// The depths of the hierarchy a walk tests, from `start` down to
+/// `bottom` (ioc's parameters, and hiz's over nodes).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct IocParams {
+pub struct DepthRange {
     pub start: Depth,
     pub bottom: Depth,
 }
 
-impl IocParams {
-    pub fn from_params(params: &ModeParams) -> Result<IocParams, ModeError> {
-        let p = IocParams {
-            start: params.get(ModeId::Ioc, &START)?,
-            bottom: params.get(ModeId::Ioc, &BOTTOM)?,
+impl DepthRange {
+    /// `mode`'s [`START`] and [`BOTTOM`] parameters.
+    pub fn from_params(mode: ModeId, params: &ModeParams) -> Result<DepthRange, ModeError> {
+        let p = DepthRange {
+            start: params.get(mode, &START)?,
+            bottom: params.get(mode, &BOTTOM)?,
         };
         if let (Depth::Fixed(start), Depth::Fixed(bottom)) = (p.start, p.bottom) {
             if start > bottom {
                 let reason = format!("start depth {start} is below the bottom depth {bottom}");
-                return Err(ModeError::bad(ModeId::Ioc, &START, reason));
+                return Err(ModeError::bad(mode, &START, reason));
             }
             if bottom - start >= MAX_LEVELS {
                 let reason = format!("at most {MAX_LEVELS} levels from start to bottom");
-                return Err(ModeError::bad(ModeId::Ioc, &BOTTOM, reason));
+                return Err(ModeError::bad(mode, &BOTTOM, reason));
             }
         }
         Ok(p)
     }
-}
 
-pub struct IterativeOcclusionCulling {
-    params: IocParams,
-    /// The start and bottom depths, chosen in `prepare`.
-    chosen: Option<(u32, u32)>,
-    /// Made in `prepare`, over the hierarchy cut at the chosen depths.
-    walk: Option<GpuWalk>,
-    /// Per tree node, the hierarchy node whose box it tests.
-    source: Vec<u32>,
-}
-
-impl IterativeOcclusionCulling {
-    pub fn new(params: IocParams) -> Self {
-        IterativeOcclusionCulling {
-            params,
-            chosen: None,
-            walk: None,
-            source: Vec::new(),
-        }
+    /// The start and bottom depths for `hierarchy` over `objects`: the
+    /// given ones, with `auto` replaced by [`auto_depths`], and the bottom
+    /// kept within [`MAX_LEVELS`] of the start.
+    pub fn choose(self, hierarchy: &Hierarchy, objects: &[Object]) -> (u32, u32) {
+        let (auto_start, auto_bottom) = auto_depths(hierarchy, objects);
+        let start = match (self.start, self.bottom) {
+            (Depth::Fixed(d), _) => d,
+            (Depth::Auto, Depth::Fixed(bottom)) => auto_start.min(bottom),
+            (Depth::Auto, Depth::Auto) => auto_start,
+        };
+        let bottom = match self.bottom {
+            Depth::Fixed(d) => d,
+            Depth::Auto => auto_bottom.max(start),
+        };
+        (start, bottom.min(start.saturating_add(MAX_LEVELS - 1)))
     }
-}
-
-#[cfg(test)]
-impl IterativeOcclusionCulling {
-    /// The walk, for the test that holds it against its CPU twin.
-    pub(super) fn gpu_walk(&self) -> Option<&GpuWalk> {
-        self.walk.as_ref()
-    }
-}
-
-impl Culler for IterativeOcclusionCulling {
-    fn name(&self) -> &str {
-        "ioc"
-    }
-
-    fn parameters(&self) -> serde_json::Value {
-        let mut p = serde_json::json!(self.params);
-        if let Some((start, bottom)) = self.chosen {
-            p["start_depth"] = start.into();
-            p["bottom_depth"] = bottom.into();
-        }
-        p
-    }
-
-    fn traverses_hierarchy(&self) -> bool {
-        true
-    }
-
-    fn prepare(&mut self, setup: &GpuSetup) {
-        let (start, bottom) = depths(self.params, setup.hierarchy, &setup.scene.objects);
-        self.chosen = Some((start, bottom));
-        let (tree, source) = CullTree::cut(setup.hierarchy, start, bottom);
-        self.source = source;
-        self.walk = Some(GpuWalk::new(setup, &tree));
-    }
-
-    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
-        let hierarchy = input.hierarchy;
-        let bounds = self.source.iter().map(|&n| hierarchy.nodes[n as usize].bounds);
-        cull_on_gpu(ctx, input.camera, self.walk.as_mut(), bounds)
-    }
-
-    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
-        self.walk.as_mut()?.audit(gpu, drawn)
-    }
-}
-
-/// The start and bottom depths for `hierarchy` over `objects`: the given
-/// ones, with `auto` replaced by [`auto_depths`], and the bottom kept within
-/// [`MAX_LEVELS`] of the start.
-fn depths(params: IocParams, hierarchy: &Hierarchy, objects: &[Object]) -> (u32, u32) {
-    let (auto_start, auto_bottom) = auto_depths(hierarchy, objects);
-    let start = match (params.start, params.bottom) {
-        (Depth::Fixed(d), _) => d,
-        (Depth::Auto, Depth::Fixed(bottom)) => auto_start.min(bottom),
-        (Depth::Auto, Depth::Auto) => auto_start,
-    };
-    let bottom = match params.bottom {
-        Depth::Fixed(d) => d,
-        Depth::Auto => auto_bottom.max(start),
-    };
-    (start, bottom.min(start.saturating_add(MAX_LEVELS - 1)))
 }
 
 /// Nodes a level needs before the walk starts there: about twice what one
@@ -261,6 +202,7 @@ pub fn auto_depths(hierarchy: &Hierarchy, objects: &[Object]) -> (u32, u32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cull::gpu_walk::CullTree;
     use crate::hierarchy::HierarchyParams;
     use crate::hierarchy::fixtures::grid_objects;
 
@@ -326,7 +268,7 @@ mod tests {
     fn given_depths_win_over_auto_and_stay_ordered() {
         let (h, objects) = grid(2000, 1000);
         let (auto_start, auto_bottom) = auto_depths(&h, &objects);
-        let with = |start, bottom| depths(IocParams { start, bottom }, &h, &objects);
+        let with = |start, bottom| DepthRange { start, bottom }.choose(&h, &objects);
         assert_eq!(with(Depth::Auto, Depth::Auto), (auto_start, auto_bottom));
         assert_eq!(with(Depth::Fixed(2), Depth::Fixed(3)), (2, 3));
         assert_eq!(

@@ -4,6 +4,9 @@
 
 use std::time::Duration;
 
+use super::pyramid::DepthPyramid;
+#[cfg(test)]
+use super::pyramid::PyramidLevel;
 use super::tree::{CullTree, MAX_LEVELS};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
@@ -40,6 +43,10 @@ pub(super) const REACHES_NEAR: u32 = 3;
 /// this walk.
 const VISIBLE_LAST_FRAME: u32 = 1;
 const MARKED: u32 = 2;
+/// What an object's word of the drawn buffer says after `cs_compact`: drawn
+/// first, as last frame's visible list, or after the test, newly visible.
+const DRAWN_EARLY: u32 = 1;
+const DRAWN_LATE: u32 = 2;
 const DRAW_COMMAND_BYTES: u64 = 20;
 
 /// The constants the shaders share with this file, written as WGSL and put
@@ -52,12 +59,42 @@ fn shader_constants() -> String {
         ("REACHES_NEAR", REACHES_NEAR),
         ("VISIBLE_LAST_FRAME", VISIBLE_LAST_FRAME),
         ("MARKED", MARKED),
+        ("DRAWN_EARLY", DRAWN_EARLY),
+        ("DRAWN_LATE", DRAWN_LATE),
         ("GROUP_SIZE", GROUP_SIZE),
         ("MAX_GROUPS", MAX_GROUPS),
     ]
     .iter()
     .map(|(name, value)| format!("const {name}: u32 = {value}u;\n"))
     .collect()
+}
+
+/// How a level finds which of its queued nodes are visible.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NodeTest {
+    /// Each box is drawn against the depth drawn so far, and a fragment
+    /// that passes marks its node (004: roc, ioc).
+    Raster,
+    /// Each box's nearest depth is compared, in a compute pass, with the
+    /// farthest depth of a pyramid built from the depth drawn so far over
+    /// the box's screen rectangle, read at the finest level where the
+    /// rectangle spans at most `texels` texels across (hiz).
+    Pyramid { texels: u32 },
+}
+
+/// A level's test, with what it binds per queue.
+enum LevelTest {
+    Raster {
+        mark: wgpu::RenderPipeline,
+        box_indices: wgpu::Buffer,
+        /// `groups[i]` reads queue `i`.
+        groups: [wgpu::BindGroup; 2],
+    },
+    Pyramid {
+        pyramid: DepthPyramid,
+        test: wgpu::ComputePipeline,
+        groups: [wgpu::BindGroup; 2],
+    },
 }
 
 /// Which of a tree's two draw lists.
@@ -100,14 +137,13 @@ struct Walk {
 struct NodeScratch {
     boxes: wgpu::Buffer,
     box_group: wgpu::BindGroup,
-    /// The visibility buffer: one word per node, set by `fs_mark` (and by
-    /// the CPU for boxes that reach the near plane).
+    /// The visibility buffer: one word per node, set by the level's test
+    /// (and by the CPU for boxes that reach the near plane).
     node_visible: wgpu::Buffer,
     /// Two queues with their levels' arguments, used in turn: a level reads
     /// one and fills the other.
     queues: [wgpu::Buffer; 2],
     level_args: [wgpu::Buffer; 2],
-    mark_groups: [wgpu::BindGroup; 2],
     /// `step_groups[i]` reads queue `i` and fills the other.
     step_groups: [wgpu::BindGroup; 2],
 }
@@ -115,8 +151,7 @@ struct NodeScratch {
 /// One GPU-driven mode's walk: its pipelines, per-node scratch, tree on
 /// the GPU, and the record of its last walk for the audit.
 pub struct GpuWalk {
-    mark: wgpu::RenderPipeline,
-    box_indices: wgpu::Buffer,
+    test: LevelTest,
     expand: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
     /// `compact`'s empty group 0.
@@ -130,7 +165,9 @@ pub struct GpuWalk {
     drawn: wgpu::Buffer,
     /// Each level's arguments after it ran, for the audit.
     level_stats: wgpu::Buffer,
-    /// One span around a walk and its compaction, where timestamps exist.
+    /// Span [`WALK_SPAN`] around a walk and its compaction, and for a
+    /// pyramid test [`PYRAMID_SPAN`] around the pyramid's build, where
+    /// timestamps exist.
     timer: Option<GpuTimer>,
     audit_readback: Readback,
     counts_readback: Readback,
@@ -149,10 +186,10 @@ pub struct GpuWalk {
 pub struct NodeBoxes {
     /// One per node, eye-relative; empty (drawing no fragment) for a node
     /// outside the frustum or reaching the near plane.
-    boxes: Vec<QueryBox>,
+    pub(super) boxes: Vec<QueryBox>,
     /// One per node, its state before the walk: [`TO_TEST`],
     /// [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`].
-    states: Vec<u32>,
+    pub(super) states: Vec<u32>,
 }
 
 impl NodeBoxes {
@@ -188,20 +225,19 @@ impl NodeBoxes {
     }
 }
 
+/// The timer's spans.
+const WALK_SPAN: usize = 0;
+const PYRAMID_SPAN: usize = 1;
+
 /// Where the audit's parts sit in its read-back buffer.
 const AUDIT_DRAWN_OFFSET: u64 = MAX_LEVELS as u64 * LEVEL_BYTES;
 
 impl GpuWalk {
     /// Puts `tree` on the GPU, with an empty visible list, and makes what
-    /// walking it takes. Needs [`GpuContext::gpu_driven`].
-    pub fn new(setup: &GpuSetup, tree: &CullTree) -> GpuWalk {
+    /// walking it with `node_test` takes. Needs [`GpuContext::gpu_driven`].
+    pub fn new(setup: &GpuSetup, tree: &CullTree, node_test: NodeTest) -> GpuWalk {
         let GpuSetup { gpu, camera, draws, .. } = *setup;
         let device = &gpu.device;
-        let mark_source = [BOXES_WGSL, &shader_constants(), include_str!("raster_mark.wgsl")].concat();
-        let mark_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("boxes.wgsl + raster_mark.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(mark_source.into()),
-        });
         let cull_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raster_cull.wgsl"),
             source: wgpu::ShaderSource::Wgsl([&shader_constants(), include_str!("raster_cull.wgsl")].concat().into()),
@@ -211,7 +247,6 @@ impl GpuWalk {
         let read = Storage { read_only: true };
         let write = Storage { read_only: false };
         let box_layout = box_bind_group_layout(gpu);
-        let mark_layout = bind_group_layout(gpu, "mark", &[(S::VERTEX, read), (S::FRAGMENT, write)]);
         let step_layout = bind_group_layout(
             gpu,
             "level step",
@@ -238,48 +273,92 @@ impl GpuWalk {
                 (S::COMPUTE, write),
             ],
         );
-        let layout = |label, groups: &[Option<&wgpu::BindGroupLayout>]| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(label),
-                bind_group_layouts: groups,
-                immediate_size: 0,
-            })
+        let nodes = tree.nodes.len() as u32;
+        let scratch = NodeScratch::new(gpu, [&box_layout, &step_layout], camera, nodes);
+        let test = match node_test {
+            NodeTest::Raster => {
+                let module = boxes_module(gpu, "boxes.wgsl + raster_mark.wgsl", include_str!("raster_mark.wgsl"));
+                let mark_layout = bind_group_layout(gpu, "mark", &[(S::VERTEX, read), (S::FRAGMENT, write)]);
+                let mark = box_test_pipeline(
+                    gpu,
+                    "mark visible nodes",
+                    &[Some(&box_layout), Some(&mark_layout)],
+                    wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_queued"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fs_mark"),
+                        compilation_options: Default::default(),
+                        targets: &[],
+                    }),
+                    BOX_TEST,
+                );
+                LevelTest::Raster {
+                    mark,
+                    box_indices: box_index_buffer(gpu),
+                    groups: [0, 1]
+                        .map(|i| bind_buffers(gpu, &mark_layout, &[&scratch.queues[i], &scratch.node_visible])),
+                }
+            }
+            NodeTest::Pyramid { texels } => {
+                let source = format!(
+                    "const MAX_TEXELS: u32 = {texels}u;\n{}",
+                    include_str!("pyramid_test.wgsl")
+                );
+                let module = boxes_module(gpu, "boxes.wgsl + pyramid_test.wgsl", &source);
+                let test_layout = bind_group_layout(
+                    gpu,
+                    "pyramid test",
+                    &[
+                        (S::COMPUTE, read),
+                        (S::COMPUTE, read),
+                        (S::COMPUTE, write),
+                        (S::COMPUTE, read),
+                        (S::COMPUTE, wgpu::BufferBindingType::Uniform),
+                    ],
+                );
+                let pyramid = DepthPyramid::new(gpu, setup.resolution, setup.depth);
+                let [pyramid_texels, shape] = pyramid.bindings();
+                let groups = [0, 1].map(|i| {
+                    let s = &scratch;
+                    bind_buffers(
+                        gpu,
+                        &test_layout,
+                        &[&s.queues[i], &s.level_args[i], &s.node_visible, pyramid_texels, shape],
+                    )
+                });
+                LevelTest::Pyramid {
+                    test: compute_pipeline(
+                        gpu,
+                        "test boxes against the pyramid",
+                        &module,
+                        "cs_test",
+                        &[Some(&box_layout), Some(&test_layout)],
+                    ),
+                    pyramid,
+                    groups,
+                }
+            }
         };
-        let mark = box_test_pipeline(
+        let expand = compute_pipeline(
             gpu,
-            "mark visible nodes",
-            &[Some(&box_layout), Some(&mark_layout)],
-            wgpu::VertexState {
-                module: &mark_module,
-                entry_point: Some("vs_queued"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            Some(wgpu::FragmentState {
-                module: &mark_module,
-                entry_point: Some("fs_mark"),
-                compilation_options: Default::default(),
-                targets: &[],
-            }),
-            BOX_TEST,
+            "expand a level",
+            &cull_module,
+            "cs_expand",
+            &[Some(&step_layout), Some(&tree_layout)],
         );
-        let compute = |label, entry, groups: &[Option<&wgpu::BindGroupLayout>]| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(label),
-                layout: Some(&layout(label, groups)),
-                module: &cull_module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let expand = compute("expand a level", "cs_expand", &[Some(&step_layout), Some(&tree_layout)]);
         // cs_compact shares the module's groups 1 and 2 and binds nothing at
         // 0: an empty group there keeps it within 8 storage buffers, the
         // minimum an adapter guarantees.
         let no_bindings = bind_group_layout(gpu, "no bindings", &[]);
-        let compact = compute(
+        let compact = compute_pipeline(
+            gpu,
             "compact draw lists",
+            &cull_module,
             "cs_compact",
             &[Some(&no_bindings), Some(&tree_layout), Some(&lists_layout)],
         );
@@ -306,13 +385,14 @@ impl GpuWalk {
             "a cull tree orders every object of the scene"
         );
         assert!((1..=MAX_LEVELS).contains(&tree.levels), "1..={MAX_LEVELS} levels");
-        let nodes = tree.nodes.len() as u32;
-        let scratch = NodeScratch::new(gpu, [&box_layout, &mark_layout, &step_layout], camera, nodes);
         let all_commands = gpu.buffer_with("all draw commands", &commands, wgpu::BufferUsages::STORAGE);
         let drawn = storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy);
         let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, &all_commands, &drawn);
+        let spans = match node_test {
+            NodeTest::Raster => 1,
+            NodeTest::Pyramid { .. } => 2,
+        };
         GpuWalk {
-            box_indices: box_index_buffer(gpu),
             drawn,
             level_stats: storage_buffer(gpu, "level statistics", u64::from(MAX_LEVELS) * LEVEL_BYTES, copy),
             empty_level: gpu.buffer_with(
@@ -320,7 +400,7 @@ impl GpuWalk {
                 bytemuck::cast_slice(&level_args(0)),
                 wgpu::BufferUsages::COPY_SRC,
             ),
-            timer: GpuTimer::new(gpu, 1),
+            timer: GpuTimer::new(gpu, spans),
             audit_readback: Readback::new(gpu, "gpu culling audit", AUDIT_DRAWN_OFFSET + u64::from(objects) * 4),
             counts_readback: Readback::new(gpu, "draw list lengths", 8),
             objects,
@@ -331,7 +411,7 @@ impl GpuWalk {
             seed_queue: Vec::new(),
             words: Vec::new(),
             scratch,
-            mark,
+            test,
             expand,
             compact,
             no_bindings,
@@ -375,7 +455,17 @@ impl GpuWalk {
         gpu.queue
             .write_buffer(&s.level_args[0], 0, bytemuck::cast_slice(&seed_level));
         if let Some(t) = &self.timer {
-            t.begin(encoder, 0);
+            t.begin(encoder, WALK_SPAN);
+        }
+        if let LevelTest::Pyramid { pyramid, .. } = &self.test {
+            // From the depth drawn so far: last frame's visible list.
+            if let Some(t) = &self.timer {
+                t.begin(encoder, PYRAMID_SPAN);
+            }
+            pyramid.encode(encoder);
+            if let Some(t) = &self.timer {
+                t.end(encoder, PYRAMID_SPAN);
+            }
         }
         self.walk = Some(Walk {
             seed_len: tree.seed.len() as u32,
@@ -384,8 +474,9 @@ impl GpuWalk {
         });
     }
 
-    /// One level: draws the queued nodes' boxes against `depth`, marking
-    /// the visible ones, then expands them into the next queue.
+    /// One level: tests the queued nodes' boxes against `depth` (drawn, or
+    /// through its pyramid), marking the visible ones, then expands them
+    /// into the next queue.
     ///
     /// # Panics
     /// Outside a walk, or past [`MAX_LEVELS`].
@@ -397,13 +488,29 @@ impl GpuWalk {
         let (input, output) = ((walk.levels % 2) as usize, ((walk.levels + 1) % 2) as usize);
         let s = &self.scratch;
         encoder.copy_buffer_to_buffer(&self.empty_level, 0, &s.level_args[output], 0, LEVEL_BYTES);
-        {
-            let mut pass = depth_only_pass(encoder, "mark visible nodes", depth, None);
-            pass.set_pipeline(&self.mark);
-            pass.set_bind_group(0, &s.box_group, &[]);
-            pass.set_bind_group(1, &s.mark_groups[input], &[]);
-            set_box_indices(&mut pass, &self.box_indices);
-            pass.draw_indexed_indirect(&s.level_args[input], 0);
+        match &self.test {
+            LevelTest::Raster {
+                mark,
+                box_indices,
+                groups,
+            } => {
+                let mut pass = depth_only_pass(encoder, "mark visible nodes", depth, None);
+                pass.set_pipeline(mark);
+                pass.set_bind_group(0, &s.box_group, &[]);
+                pass.set_bind_group(1, &groups[input], &[]);
+                set_box_indices(&mut pass, box_indices);
+                pass.draw_indexed_indirect(&s.level_args[input], 0);
+            }
+            LevelTest::Pyramid { test, groups, .. } => {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("test boxes against the pyramid"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(test);
+                pass.set_bind_group(0, &s.box_group, &[]);
+                pass.set_bind_group(1, &groups[input], &[]);
+                pass.dispatch_workgroups_indirect(&s.level_args[input], DISPATCH_OFFSET);
+            }
         }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -444,7 +551,7 @@ impl GpuWalk {
             pass.dispatch_workgroups(groups_for(self.objects), 1, 1);
         }
         if let Some(t) = &self.timer {
-            t.end(encoder, 0);
+            t.end(encoder, WALK_SPAN);
         }
     }
 
@@ -529,22 +636,41 @@ impl GpuWalk {
         }
         audit.nodes_tested = audit.nodes_visited - audit.nodes_outside_frustum - reaching_near;
         for (object, &flag) in self.words[word(AUDIT_DRAWN_OFFSET)..].iter().enumerate() {
-            if flag != 0 {
-                drawn.insert(object as u32);
-                audit.objects_drawn += 1;
-                audit.triangles_drawn += self.triangles[object];
+            match flag {
+                DRAWN_EARLY => audit.drawn_early += 1,
+                DRAWN_LATE => audit.drawn_late += 1,
+                _ => continue,
             }
+            drawn.insert(object as u32);
+            audit.objects_drawn += 1;
+            audit.triangles_drawn += self.triangles[object];
         }
-        audit.cull_gpu = self
-            .timer
-            .as_mut()
-            .map(|t| Duration::from_secs_f64(t.read_ms(gpu)[0] / 1e3));
+        if let Some(t) = &mut self.timer {
+            let spans = t.read_ms(gpu);
+            let time = |span: usize| spans.get(span).map(|&ms| Duration::from_secs_f64(ms / 1e3));
+            audit.cull_gpu = time(WALK_SPAN);
+            audit.pyramid_gpu = time(PYRAMID_SPAN);
+        }
         Some(audit)
     }
 }
 
 #[cfg(test)]
 impl GpuWalk {
+    /// The boxes the last walk tested, as prepared.
+    pub(super) fn node_boxes(&self) -> &NodeBoxes {
+        &self.node_boxes
+    }
+
+    /// The pyramid the last walk tested against, for a walk with a
+    /// pyramid test: its levels, and their texels read back.
+    pub(super) fn pyramid(&self, gpu: &GpuContext) -> Option<(Vec<PyramidLevel>, Vec<Vec<f32>>)> {
+        match &self.test {
+            LevelTest::Pyramid { pyramid, .. } => Some((pyramid.levels().to_vec(), pyramid.read(gpu))),
+            LevelTest::Raster { .. } => None,
+        }
+    }
+
     /// Every node's word of the visibility buffer as the last walk left it
     /// (before it: [`TO_TEST`], [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`];
     /// `fs_mark` turned the tested boxes a fragment of which passed into
@@ -611,7 +737,7 @@ impl TreeOnGpu {
 impl NodeScratch {
     fn new(
         gpu: &GpuContext,
-        [box_layout, mark_layout, step_layout]: [&wgpu::BindGroupLayout; 3],
+        [box_layout, step_layout]: [&wgpu::BindGroupLayout; 2],
         camera: &wgpu::Buffer,
         capacity: u32,
     ) -> NodeScratch {
@@ -629,7 +755,6 @@ impl NodeScratch {
                 wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC | copy_dst,
             )
         });
-        let mark_groups = [0, 1].map(|i| bind_buffers(gpu, mark_layout, &[&queues[i], &node_visible]));
         let step_groups = [0, 1].map(|i| {
             let o = 1 - i;
             bind_buffers(
@@ -644,10 +769,42 @@ impl NodeScratch {
             node_visible,
             queues,
             level_args,
-            mark_groups,
             step_groups,
         }
     }
+}
+
+/// The compute pipeline of `entry` in `module`, with bind groups of
+/// `layouts`.
+fn compute_pipeline(
+    gpu: &GpuContext,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    layouts: &[Option<&wgpu::BindGroupLayout>],
+) -> wgpu::ComputePipeline {
+    let layout = gpu.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: layouts,
+        immediate_size: 0,
+    });
+    gpu.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: Some(&layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+/// A shader module of boxes.wgsl (the camera, the boxes, `box_clip`), the
+/// shared constants and `source`.
+fn boxes_module(gpu: &GpuContext, label: &str, source: &str) -> wgpu::ShaderModule {
+    gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl([BOXES_WGSL, &shader_constants(), source].concat().into()),
+    })
 }
 
 /// A level's arguments (`Level` in raster_cull.wgsl) for a queue of

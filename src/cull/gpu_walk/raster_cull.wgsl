@@ -50,10 +50,11 @@ struct Counts {
     newly_visible: atomic<u32>,
 }
 
-// node_visible words (TO_TEST, VISIBLE, OUTSIDE_FRUSTUM, REACHES_NEAR) and
+// node_visible words (TO_TEST, VISIBLE, OUTSIDE_FRUSTUM, REACHES_NEAR),
 // object_state bits (VISIBLE_LAST_FRAME persists from frame to frame;
-// MARKED lives from the level walk to compaction), GROUP_SIZE and
-// MAX_GROUPS are written before this text from pool.rs's constants.
+// MARKED lives from the level walk to compaction), drawn words
+// (DRAWN_EARLY, DRAWN_LATE), GROUP_SIZE and MAX_GROUPS are written before
+// this text from pool.rs's constants.
 
 @group(0) @binding(0) var<storage, read> queue_in: array<u32>;
 // Level as plain words: [1] is the number of entries in queue_in.
@@ -70,7 +71,9 @@ struct Counts {
 // The visible list at [0, n), the newly visible list at [n, 2n), n objects.
 @group(2) @binding(1) var<storage, read_write> commands: array<DrawCommand>;
 @group(2) @binding(2) var<storage, read_write> counts: Counts;
-// 1 for every object drawn this frame (read back for the statistics).
+// DRAWN_EARLY for every object drawn first this frame (last frame's
+// visible list), DRAWN_LATE for every one drawn after the walk (read back
+// for the statistics).
 @group(2) @binding(3) var<storage, read_write> drawn: array<u32>;
 
 // 004 §2: "If the node is culled, we stop the traversal for the node [...].
@@ -136,7 +139,7 @@ fn cs_compact(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
         let was_visible = (state & VISIBLE_LAST_FRAME) != 0u;
         let marked = (state & MARKED) != 0u;
         object_state[object] = select(0u, VISIBLE_LAST_FRAME, marked);
-        drawn[object] = u32(was_visible || marked);
+        drawn[object] = select(select(0u, DRAWN_LATE, marked), DRAWN_EARLY, was_visible);
         if marked {
             commands[atomicAdd(&counts.visible, 1u)] = draws[object];
             if !was_visible {

@@ -1,12 +1,24 @@
-//! A CPU twin of the walk's compute stages, `cs_expand` and `cs_compact`,
-//! written from 004 §2 and the stages' contract (module above), not from
-//! the shader: given the tree, the node states the walk left (the CPU's
-//! frustum and near-plane rules and `fs_mark`'s marks) and the objects
-//! visible in the last frame, what the walk must have counted, marked and
-//! drawn. The test below holds the GPU's audit against it, frame by frame.
+//! CPU twins of the walk's compute stages, written from their contracts,
+//! not from the shaders:
+//!
+//! - [`walk`], of `cs_expand` and `cs_compact` (004 §2 and the module
+//!   above): given the tree, the node states the walk left (the CPU's
+//!   frustum and near-plane rules and the level tests' marks) and the
+//!   objects visible in the last frame, what the walk must have counted,
+//!   marked and drawn;
+//! - [`pyramid_verdict`], of hiz's box test (pyramid_test.wgsl's header):
+//!   in f64, whether a box lies behind the pyramid.
+//!
+//! The test below holds the GPU's audit and marks against them, frame by
+//! frame.
+
+use glam::{DMat4, DVec2, DVec3, Vec4Swizzles};
 
 use super::CullTree;
 use super::pool::{OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST};
+use super::pyramid::PyramidLevel;
+use crate::camera::Camera;
+use crate::gpu::{QueryBox, Resolution};
 
 /// What one walk did, by the CPU's reckoning.
 #[derive(Debug, Default, PartialEq)]
@@ -77,16 +89,86 @@ pub(super) fn walk(tree: &CullTree, states: &[u32], visible_last: &[bool]) -> Cp
     w
 }
 
+/// What hiz's test must find for one box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Verdict {
+    Visible,
+    Hidden,
+    /// An edge of the box's rectangle within 1e-3 pixel of a pixel's edge,
+    /// or its nearest depth within 1e-5 of the pyramid's: f32 may decide
+    /// either way.
+    TooClose,
+}
+
+/// hiz's test of `query` (prepared for `camera` at `size`) against a
+/// pyramid of `levels` holding `texels`, reading the finest level where the
+/// rectangle spans fewer than `span` + 1 texels across, computed in f64.
+pub(super) fn pyramid_verdict(
+    query: &QueryBox,
+    camera: &Camera,
+    size: Resolution,
+    levels: &[PyramidLevel],
+    texels: &[Vec<f32>],
+    span: u32,
+) -> Verdict {
+    let view_projection = camera.projection() * DMat4::from_mat3(camera.view_rotation());
+    let (min, max) = (query.min.xyz().as_dvec3(), query.max.xyz().as_dvec3());
+    let (mut low, mut high, mut nearest) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
+    for corner in 0..8 {
+        let pick = |bit: u32, axis: usize| if corner & bit != 0 { max[axis] } else { min[axis] };
+        let clip = view_projection * DVec3::new(pick(1, 0), pick(2, 1), pick(4, 2)).extend(1.0);
+        let ndc = clip.truncate() / clip.w;
+        low = low.min(ndc.truncate());
+        high = high.max(ndc.truncate());
+        // The raise lifts depth, not the outline (gpu/conservative.rs).
+        nearest = nearest.max(ndc.z + f64::from(query.min.w));
+    }
+    let (width, height) = (f64::from(size.width), f64::from(size.height));
+    // Pixel edges, rows from the top.
+    let edges = [
+        (low.x * 0.5 + 0.5) * width,
+        (high.x * 0.5 + 0.5) * width,
+        (0.5 - high.y * 0.5) * height,
+        (0.5 - low.y * 0.5) * height,
+    ];
+    let pixel = |edge: f64, side: f64| edge.floor().clamp(0.0, side - 1.0) as u32;
+    let (x0, x1) = (pixel(edges[0], width), pixel(edges[1], width));
+    let (y0, y1) = (pixel(edges[2], height), pixel(edges[3], height));
+    // The base texels whose footprints hold those pixels.
+    let base = levels[0];
+    let texel = |p: u32, base_side: u32, side: u32| (u64::from(p) * u64::from(base_side) / u64::from(side)) as u32;
+    let (bx0, bx1) = (texel(x0, base.width, size.width), texel(x1, base.width, size.width));
+    let (by0, by1) = (texel(y0, base.height, size.height), texel(y1, base.height, size.height));
+    let k = (0..levels.len())
+        .find(|&k| (bx1 >> k) - (bx0 >> k) < span && (by1 >> k) - (by0 >> k) < span)
+        .unwrap_or(levels.len() - 1);
+    let level = levels[k];
+    let mut farthest = 1.0f64;
+    for y in by0 >> k..=by1 >> k {
+        for x in bx0 >> k..=bx1 >> k {
+            farthest = farthest.min(f64::from(texels[k][(y * level.width + x) as usize]));
+        }
+    }
+    let on_pixel_edge = edges.iter().any(|e| (e - e.round()).abs() < 1e-3);
+    if on_pixel_edge || (nearest - farthest).abs() <= 1e-5 * farthest {
+        Verdict::TooClose
+    } else if nearest < farthest {
+        Verdict::Hidden
+    } else {
+        Verdict::Visible
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::bench::{RunOptions, Session};
     use crate::camera::generate::default_path;
     use crate::camera::path::CameraPath;
-    use crate::cull::culler::Culler;
-    use crate::cull::gpu_walk::GpuWalk;
-    use crate::cull::gpu_walk::ioc::{Depth, IocParams, IterativeOcclusionCulling};
-    use crate::cull::gpu_walk::roc::RasterOcclusionCulling;
+    use crate::cull::gpu_walk::GpuCulling;
+    use crate::cull::gpu_walk::hiz::{BoxesTested, HizParams, hierarchical_depth_culling};
+    use crate::cull::gpu_walk::ioc::{Depth, DepthRange, iterative_occlusion_culling};
+    use crate::cull::gpu_walk::roc::raster_occlusion_culling;
     use crate::gpu::{BackendChoice, GpuContext, Resolution};
     use crate::hierarchy::{Hierarchy, HierarchyParams};
     use crate::scene::{LoadOptions, SceneSpec, load};
@@ -97,44 +179,71 @@ mod tests {
         height: 120,
     };
 
-    /// Runs `mode` (its walk shown by `walk_of`) through `world` along
-    /// `path` on `gpu`, holding every frame against the twin's walk of
-    /// `tree`; returns the nodes the walks hid.
-    fn compare<C: Culler>(
+    /// Runs `mode` through `world` along `path` on `gpu`, holding every
+    /// frame against the twin's walk of `tree` and, for a pyramid test over
+    /// objects reading rectangles of at most `span` texels across, every
+    /// box's mark against [`pyramid_verdict`]; returns the nodes the walks
+    /// hid.
+    fn compare(
         gpu: &GpuContext,
         mut world: World,
         path: &CameraPath,
-        mode: &mut C,
-        walk_of: fn(&C) -> Option<&GpuWalk>,
+        mut mode: GpuCulling,
         tree: &CullTree,
+        span: Option<u32>,
     ) -> u64 {
         let options = RunOptions {
             warmup: 0,
             resolution: RESOLUTION,
             measure_error: false,
         };
-        let mut session = Session::new(gpu, &world, &mut [Box::new(&mut *mode)], false, &options).unwrap();
+        let mut session = Session::new(gpu, &world, &mut [Box::new(&mut mode)], false, &options).unwrap();
         let objects = world.scene.objects.len();
         let (mut visible_last, mut hidden) = (vec![false; objects], 0);
+        let (mut tested, mut too_close) = (0, 0);
         for frame in 0..path.frames {
             world.advance(frame);
             let camera = path.camera(frame, RESOLUTION.aspect());
             let row = session
-                .frame(frame, &camera, &mut world, &mut [Box::new(&mut *mode)], 0)
+                .frame(frame, &camera, &mut world, &mut [Box::new(&mut mode)], 0)
                 .unwrap()
                 .remove(0);
-            let on_gpu = walk_of(mode).expect("roc and ioc walk on the GPU");
-            let twin = walk(tree, &on_gpu.node_states(gpu), &visible_last);
+            let on_gpu = mode.gpu_walk().expect("the session prepared the walk");
+            let states = on_gpu.node_states(gpu);
+            let twin = walk(tree, &states, &visible_last);
             let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
+            if let Some(span) = span {
+                let (levels, texels) = on_gpu.pyramid(gpu).expect("a pyramid test");
+                let prepared = on_gpu.node_boxes();
+                for (node, query) in prepared.boxes.iter().enumerate() {
+                    if prepared.states[node] != TO_TEST {
+                        continue;
+                    }
+                    let marked = states[node] != TO_TEST;
+                    match pyramid_verdict(query, &camera, RESOLUTION, &levels, &texels, span) {
+                        Verdict::Visible => assert!(marked, "{at}: box {node} is visible"),
+                        Verdict::Hidden => assert!(!marked, "{at}: box {node} is hidden"),
+                        Verdict::TooClose => too_close += 1,
+                    }
+                }
+            }
             assert_eq!(row.traversal.nodes_visited, twin.visited, "{at}");
             assert_eq!(row.traversal.nodes_culled_frustum, twin.outside, "{at}");
             assert_eq!(row.traversal.nodes_culled_occlusion, twin.hidden, "{at}");
             assert_eq!(row.queries, twin.tested, "{at}");
             let drawn: Vec<bool> = (0..objects as u32).map(|o| session.drawn[0].contains(o)).collect();
             assert_eq!(drawn, twin.drawn, "{at}");
+            let early = visible_last.iter().filter(|&&v| v).count() as u64;
+            assert_eq!(row.traversal.drawn_early, early, "{at}");
+            assert_eq!(row.traversal.drawn_late, row.objects_drawn - early, "{at}");
             hidden += twin.hidden;
+            tested += row.queries;
             visible_last = twin.marked;
         }
+        assert!(
+            too_close * 50 <= tested,
+            "{too_close} of {tested} boxes too close to call"
+        );
         hidden
     }
 
@@ -159,27 +268,40 @@ mod tests {
             !gpus.is_empty(),
             "no adapter culls on the GPU: install Mesa (scripts/install-deps)"
         );
-        assert!(
-            !gpus.is_empty(),
-            "no Vulkan or GL adapter: install Mesa (scripts/install-deps)"
-        );
-        // roc's flat tree, and ioc's hierarchy cut from depth 2 to 6.
+        // roc's and hiz's flat tree, and ioc's and hiz's hierarchy cut from
+        // depth 2 to 6.
         let flat = CullTree::flat(scene.objects.len() as u32);
         let (cut, _) = CullTree::cut(&hierarchy, 2, 6);
+        let nodes = DepthRange {
+            start: Depth::Fixed(2),
+            bottom: Depth::Fixed(6),
+        };
         for gpu in &gpus {
             let world = || World::new(scene.clone(), hierarchy.clone());
-            let mut roc = RasterOcclusionCulling::new();
-            let hidden = compare(gpu, world(), &path, &mut roc, RasterOcclusionCulling::gpu_walk, &flat);
+            let hidden = compare(gpu, world(), &path, raster_occlusion_culling(), &flat, None);
             assert!(
                 hidden > 50,
                 "roc's walks hide nodes, so the comparison means something ({hidden})"
             );
-            let mut ioc = IterativeOcclusionCulling::new(IocParams {
-                start: Depth::Fixed(2),
-                bottom: Depth::Fixed(6),
-            });
-            let hidden = compare(gpu, world(), &path, &mut ioc, IterativeOcclusionCulling::gpu_walk, &cut);
+            let hidden = compare(gpu, world(), &path, iterative_occlusion_culling(nodes), &cut, None);
             assert!(hidden > 50, "ioc's walks hide nodes ({hidden})");
+            let objects = HizParams {
+                texels: 2,
+                boxes: BoxesTested::Objects,
+                range: DepthRange {
+                    start: Depth::Auto,
+                    bottom: Depth::Auto,
+                },
+            };
+            let hidden = compare(gpu, world(), &path, hierarchical_depth_culling(objects), &flat, Some(2));
+            assert!(hidden > 50, "hiz's walks over objects hide them ({hidden})");
+            let over_nodes = HizParams {
+                texels: 4,
+                boxes: BoxesTested::Nodes,
+                range: nodes,
+            };
+            let hidden = compare(gpu, world(), &path, hierarchical_depth_culling(over_nodes), &cut, None);
+            assert!(hidden > 20, "hiz's walks over nodes hide them ({hidden})");
         }
     }
 }

@@ -13,7 +13,7 @@
 //! target texel its footprint touches (the test below checks it against
 //! that definition, computed from the depth target alone).
 
-use crate::gpu::{GpuContext, Readback, Resolution, storage_buffer};
+use crate::gpu::{GpuContext, Resolution, storage_buffer};
 
 /// One level of the pyramid: its size and where it starts in the buffer
 /// (in texels).
@@ -37,10 +37,29 @@ struct LevelUniform {
     _pad: [u32; 2],
 }
 
+/// Most levels a pyramid can have (a base 2^31 texels wide): the length
+/// of `Pyramid.levels` in pyramid_test.wgsl.
+const MAX_PYRAMID_LEVELS: usize = 32;
+
+/// The pyramid's shape as the box test reads it (`Pyramid` in
+/// pyramid_test.wgsl): the target's size, the base's, and per level its
+/// width, height and offset (the fourth word pads).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ShapeUniform {
+    target: [u32; 2],
+    base: [u32; 2],
+    level_count: u32,
+    _pad: [u32; 3],
+    levels: [[u32; 4]; MAX_PYRAMID_LEVELS],
+}
+
 /// The pyramid over one depth target, and what builds it.
 pub struct DepthPyramid {
     levels: Vec<PyramidLevel>,
     texels: wgpu::Buffer,
+    /// Its [`ShapeUniform`], for the box test.
+    shape: wgpu::Buffer,
     base: wgpu::ComputePipeline,
     reduce: wgpu::ComputePipeline,
     /// One per level: its uniform, the pyramid and (for the base) the depth.
@@ -84,6 +103,21 @@ impl DepthPyramid {
         );
         let levels = levels(resolution);
         let last = levels[levels.len() - 1];
+        let mut shape = ShapeUniform {
+            target: [resolution.width, resolution.height],
+            base: [levels[0].width, levels[0].height],
+            level_count: levels.len() as u32,
+            _pad: [0; 3],
+            levels: [[0; 4]; MAX_PYRAMID_LEVELS],
+        };
+        for (slot, level) in shape.levels.iter_mut().zip(&levels) {
+            *slot = [level.width, level.height, level.offset, 0];
+        }
+        let shape = gpu.buffer_with(
+            "depth pyramid shape",
+            bytemuck::bytes_of(&shape),
+            wgpu::BufferUsages::UNIFORM,
+        );
         let texels = storage_buffer(
             gpu,
             "depth pyramid",
@@ -143,14 +177,17 @@ impl DepthPyramid {
         DepthPyramid {
             levels,
             texels,
+            shape,
             base,
             reduce,
             groups,
         }
     }
 
-    pub fn levels(&self) -> &[PyramidLevel] {
-        &self.levels
+    /// What the box test binds: every level's texels, and the shape that
+    /// says where each level lies.
+    pub fn bindings(&self) -> [&wgpu::Buffer; 2] {
+        [&self.texels, &self.shape]
     }
 
     /// Builds the pyramid from the depth drawn so far: one dispatch a level.
@@ -165,11 +202,18 @@ impl DepthPyramid {
             pass.dispatch_workgroups(level.width.div_ceil(8), level.height.div_ceil(8), 1);
         }
     }
+}
 
-    /// Every level's texels, row by row (for tests).
+#[cfg(test)]
+impl DepthPyramid {
+    pub fn levels(&self) -> &[PyramidLevel] {
+        &self.levels
+    }
+
+    /// Every level's texels, row by row.
     pub fn read(&self, gpu: &GpuContext) -> Vec<Vec<f32>> {
         let bytes = self.texels.size();
-        let readback = Readback::new(gpu, "depth pyramid", bytes);
+        let readback = crate::gpu::Readback::new(gpu, "depth pyramid", bytes);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         readback.copy(&mut encoder, &self.texels, 0, 0, bytes);
         gpu.queue.submit([encoder.finish()]);

@@ -1,0 +1,143 @@
+//! The culler every GPU-walk mode is: what it walks ([`Walked`]: every
+//! object, or the hierarchy cut at two depths), how a level tests boxes
+//! ([`NodeTest`]), and the frame of the module above ([`cull_on_gpu`]).
+//! roc, ioc and hiz differ only in those two choices and their parameters.
+
+use super::ioc::DepthRange;
+use super::pool::NodeTest;
+use super::{CullTree, DrawList, GpuWalk};
+use crate::bounds::Aabb;
+use crate::camera::Camera;
+use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::gpu::{Frame, GpuAudit, GpuContext, GpuSetup};
+use crate::object_set::ObjectSet;
+
+/// What a GPU walk tests.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Walked {
+    /// Every object's box, in one level (a flat tree).
+    Objects,
+    /// The hierarchy's node boxes, level by level over the given depths.
+    Nodes(DepthRange),
+}
+
+/// A mode that culls on the GPU by a [`GpuWalk`].
+pub struct GpuCulling {
+    name: &'static str,
+    walked: Walked,
+    node_test: NodeTest,
+    /// What summary.json records, before `prepare` adds the depths chosen.
+    parameters: serde_json::Value,
+    /// Over nodes: the start and bottom depths, chosen in `prepare`.
+    chosen: Option<(u32, u32)>,
+    /// Made in `prepare`.
+    walk: Option<GpuWalk>,
+    /// Over nodes: per tree node, the hierarchy node whose box it tests.
+    source: Vec<u32>,
+}
+
+impl GpuCulling {
+    pub fn new(name: &'static str, walked: Walked, node_test: NodeTest, parameters: serde_json::Value) -> GpuCulling {
+        GpuCulling {
+            name,
+            walked,
+            node_test,
+            parameters,
+            chosen: None,
+            walk: None,
+            source: Vec::new(),
+        }
+    }
+}
+
+#[cfg(test)]
+impl GpuCulling {
+    /// The walk, for the test that holds it against its CPU twin.
+    pub(super) fn gpu_walk(&self) -> Option<&GpuWalk> {
+        self.walk.as_ref()
+    }
+}
+
+impl Culler for GpuCulling {
+    fn name(&self) -> &str {
+        self.name
+    }
+
+    fn parameters(&self) -> serde_json::Value {
+        let mut p = self.parameters.clone();
+        if let Some((start, bottom)) = self.chosen {
+            p["start_depth"] = start.into();
+            p["bottom_depth"] = bottom.into();
+        }
+        p
+    }
+
+    fn traverses_hierarchy(&self) -> bool {
+        matches!(self.walked, Walked::Nodes(_))
+    }
+
+    fn prepare(&mut self, setup: &GpuSetup) {
+        let tree = match self.walked {
+            Walked::Objects => CullTree::flat(setup.scene.objects.len() as u32),
+            Walked::Nodes(range) => {
+                let (start, bottom) = range.choose(setup.hierarchy, &setup.scene.objects);
+                self.chosen = Some((start, bottom));
+                let (tree, source) = CullTree::cut(setup.hierarchy, start, bottom);
+                self.source = source;
+                tree
+            }
+        };
+        self.walk = Some(GpuWalk::new(setup, &tree, self.node_test));
+    }
+
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
+        let walk = self.walk.as_mut();
+        match self.walked {
+            Walked::Objects => {
+                let bounds = input.scene.objects.iter().map(|o| o.bounds);
+                cull_on_gpu(ctx, input.camera, walk, bounds)
+            }
+            Walked::Nodes(_) => {
+                let nodes = &input.hierarchy.nodes;
+                let bounds = self.source.iter().map(|&n| nodes[n as usize].bounds);
+                cull_on_gpu(ctx, input.camera, walk, bounds)
+            }
+        }
+    }
+
+    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        self.walk.as_mut()?.audit(gpu, drawn)
+    }
+}
+
+/// One frame of GPU-driven culling over `walk`'s tree, whose nodes have the
+/// boxes `bounds` this frame: steps 1-4 of the module above. The traversal
+/// figures are counted on the GPU and added after the frame (the mode's
+/// audit): the ones returned are empty.
+///
+/// # Panics
+/// Without a walk or a GPU frame: a session prepares every mode (which
+/// makes its walk) and runs it on the GPU.
+fn cull_on_gpu(
+    frame: &mut dyn Frame,
+    camera: &Camera,
+    walk: Option<&mut GpuWalk>,
+    bounds: impl ExactSizeIterator<Item = Aabb>,
+) -> TraversalStats {
+    let walk = walk.expect("the session prepared the mode, which made its walk");
+    let ctx = frame.on_gpu().expect("the session runs GPU walks on the GPU");
+    let indirect_count = ctx.gpu().indirect_count;
+    ctx.draw_indirect(walk.list(DrawList::Visible, indirect_count));
+    // Preparing the boxes is culling work on the CPU, outside `record`.
+    walk.prepare_boxes(camera, ctx.margins(), bounds);
+    ctx.record(&mut |work| walk.begin(work));
+    for _ in 0..walk.levels() {
+        ctx.record(&mut |work| walk.walk_level(work));
+    }
+    ctx.record(&mut |work| walk.compact(work));
+    if !indirect_count {
+        ctx.round_trip(&mut |gpu, encoder| walk.read_counts(gpu, encoder));
+    }
+    ctx.draw_indirect(walk.list(DrawList::NewlyVisible, indirect_count));
+    TraversalStats::default()
+}
