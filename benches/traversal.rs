@@ -19,7 +19,7 @@ use occlu::bounds::Aabb;
 use occlu::camera::generate::default_path;
 use occlu::camera::{Camera, Containment};
 use occlu::cull::TraversalStats;
-use occlu::cull::gpu_walk::ioc::auto_depths;
+use occlu::cull::gpu_walk::depths::auto_depths;
 use occlu::cull::gpu_walk::{CullTree, NodeBoxes};
 use occlu::cull::traversal::{DepthQueue, frustum_cull_subtree, nearest_corner};
 use occlu::gpu::{BoxMargins, DepthMargins, Resolution};

@@ -147,7 +147,7 @@ impl<'a> Session<'a> {
                 hierarchy: &world.hierarchy,
                 depth,
                 resolution: options.resolution,
-            });
+            })?;
         }
         gpu.wait_idle();
         Ok(Session {

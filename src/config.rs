@@ -199,14 +199,19 @@ impl BenchConfig {
         {
             modes.push(s.mode);
         }
-        let params = ModeParams::parse(&self.params.unwrap_or_default(), &modes)?;
+        let items = self.params.unwrap_or_default();
+        let params = ModeParams::parse(&items, &modes)?;
         if let Some(s) = &sweep {
             let key = format!("{}.{}", s.mode, s.key);
             if params.is_set(&key) {
                 return Err(ConfigError::SweptAndSet(key));
             }
             for (i, value) in s.values.iter().enumerate() {
-                ModeParams::parse(&[format!("{key}={value}")], &[s.mode])?;
+                // Each value with the other parameters, as it will run: a
+                // mode's check may weigh one parameter against another
+                // (hiz's depths need hiz.boxes=nodes).
+                let with: Vec<String> = items.iter().cloned().chain([format!("{key}={value}")]).collect();
+                ModeParams::parse(&with, &modes)?;
                 if s.values[..i].contains(value) {
                     return Err(ConfigError::SweptTwice {
                         key,
@@ -401,6 +406,13 @@ mod tests {
             Err(ConfigError::SweptTwice { value, .. }) if value == "0.5"
         ));
         assert!(plan("omq.factor=0.5,0.7", &["omq.om=32x24"]).is_ok());
+        // Each value is checked with the other parameters.
+        assert!(plan("hiz.start=0,2", &["hiz.boxes=nodes"]).is_ok());
+        assert!(plan("hiz.start=0,2", &[]).is_err(), "depths need hiz.boxes=nodes");
+        assert!(matches!(
+            plan("ioc.start=0,5", &["ioc.bottom=2"]),
+            Err(ConfigError::Mode(e)) if e.to_string().contains("below the bottom depth")
+        ));
     }
 
     #[test]

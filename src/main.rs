@@ -722,6 +722,7 @@ fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
     let report = occlu::stress::run(&gpu, &cases, &modes, resolution, &mut |event| {
         match event {
             StressEvent::Skipped { mode, reason } => say!("skipped: {mode}: {reason}"),
+            StressEvent::CaseSkipped { case, reason } => say!("skipped case: {case}: {reason}"),
             StressEvent::Case { case } => bar.set_prefix(case.name.clone()),
             StressEvent::Frame { done, total } => {
                 bar.set_length(u64::from(total));

@@ -5,10 +5,12 @@
 
 mod common;
 
+use std::ops::ControlFlow;
+
 use common::{DropOneVisible, boxes, gpus, occlu, own_stderr, stdout};
 use glam::DVec3;
 use occlu::camera::{Camera, look_rotation};
-use occlu::cull::{Culler, ModeParams, create, modes};
+use occlu::cull::{Culler, ModeId, ModeParams, create, modes};
 use occlu::gpu::Resolution;
 use occlu::hierarchy::HierarchyParams;
 use occlu::scene::builtin::Rng;
@@ -82,6 +84,30 @@ fn the_scene_at_1e7_renders_the_image_at_the_origin_bit_for_bit() {
             let differing = a.iter().zip(b).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
             assert_eq!(differing, 0, "{}: frame {frame}", gpu.adapter.backend);
         }
+    }
+}
+
+#[test]
+fn a_case_at_a_size_the_adapter_cannot_hold_is_skipped_and_the_run_goes_on() {
+    let mut too_wide = select(&["slits".to_string()]).unwrap().remove(0);
+    too_wide.name = "too wide".into();
+    too_wide.resolution = Some(Resolution {
+        width: 1 << 20,
+        height: 1,
+    });
+    let cases = [too_wide, select(&["vertical".to_string()]).unwrap().remove(0)];
+    for gpu in gpus() {
+        let report =
+            occlu::stress::run(&gpu, &cases, &[ModeId::Vfc], SIZE, &mut |_| ControlFlow::Continue(())).unwrap();
+        assert_eq!(report.skipped_cases.len(), 1, "{}", gpu.adapter.backend);
+        assert_eq!(report.skipped_cases[0].case, "too wide");
+        assert!(
+            report.skipped_cases[0].reason.contains("render target side"),
+            "{:?}",
+            report.skipped_cases
+        );
+        assert_eq!(report.rows.len(), 1, "the other case ran");
+        assert!(occlu::stress::render_markdown(&report).contains("skipped case: too wide: 1048576x1"));
     }
 }
 

@@ -6,42 +6,46 @@
 //! NOHC decide per node from query statistics. Here the decision is per
 //! frame and between whole strategies, from what each really cost:
 //!
-//! - the two strategies are `vfc` and an occlusion culler: `ioc` where the
-//!   adapter culls on the GPU (no round trips), `omq` elsewhere;
+//! - the strategies are `vfc` and the occlusion cullers: `ioc` and `hiz`
+//!   where the adapter culls on the GPU (no round trips; which is cheaper
+//!   depends on the GPU: a software rasteriser draws boxes cheaply and
+//!   builds a depth pyramid slowly), `omq` elsewhere;
 //! - each keeps a moving average of its measured frame times (this mode's
 //!   previous frame, credited to the strategy that drew it);
-//! - every frame runs the strategy with the lower average, except that the
-//!   other one is measured again ("probed") when it has not run for
+//! - every frame runs the strategy with the lowest average, except that
+//!   another one is measured again ("probed") when it has not run for
 //!   `probe` × (its average / the chosen one's) frames: the dearer a
 //!   strategy has been, the rarer its probes, so a probe costs at most
-//!   about 1/`probe` of a frame on average;
-//! - a probe of the occlusion culler runs three frames and keeps the last
+//!   about 1/`probe` of a frame on average per strategy;
+//! - a probe of an occlusion culler runs three frames and keeps the last
 //!   (see [`OCCLUSION_PROBE`]); a strategy's first measured frame after it
 //!   did not run starts its average afresh;
-//! - `ioc`'s very first frame has no occluders yet (no last visible set), so
-//!   every box in the frustum tests visible against the cleared depth and
-//!   it draws what frustum culling draws: its drawing time is frustum
-//!   culling's first measurement, which spares a frame of `vfc` on scenes
-//!   where it is dear. `omq` culls within its first frame, so beside it
-//!   `vfc` is measured by running it.
+//! - a GPU walk's very first frame has no occluders yet (no last visible
+//!   set), so every box in the frustum tests visible against the cleared
+//!   depth and it draws what frustum culling draws: its drawing time is
+//!   frustum culling's first measurement, which spares a frame of `vfc` on
+//!   scenes where it is dear. `omq` culls within its first frame, so beside
+//!   it `vfc` is measured by running it.
 //!
-//! Both strategies are conservative, so `auto` is too.
+//! Every strategy is conservative, so `auto` is too.
 
 use serde::Serialize;
 
-use super::gpu_walk::ioc::{DepthRange, iterative_occlusion_culling};
+use super::gpu_walk::depths::DepthRange;
+use super::gpu_walk::hiz::{HizParams, hierarchical_depth_culling};
+use super::gpu_walk::ioc::iterative_occlusion_culling;
 use super::omq::{OccupancyMapQueries, OmqParams};
 use super::vfc::FrustumCulling;
 use crate::cull::culler::{Culler, FrameInput, PreviousFrame, TraversalStats};
 use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
-use crate::gpu::{Frame, GpuAudit, GpuContext, GpuSetup};
+use crate::gpu::{Frame, GpuAudit, GpuContext, GpuError, GpuSetup};
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Auto,
-    summary: "per frame, vfc or occlusion culling (ioc, or omq without GPU culling), whichever measured cheaper; the other re-measured now and then",
+    summary: "per frame, vfc or occlusion culling (ioc or hiz, or omq without GPU culling), whichever measured cheapest; the others re-measured now and then",
     conservative: true,
     params: &[PROBE],
     needs: Needs::Nothing,
@@ -52,13 +56,13 @@ pub(super) const MODE: ModeInfo = ModeInfo {
 const PROBE: ParamInfo = ParamInfo {
     key: "probe",
     default: "32",
-    summary: "frames between re-measurements of the dearer strategy, times how much dearer it was",
+    summary: "frames between re-measurements of a dearer strategy, times how much dearer it was",
 };
 
 /// Weight of the newest frame in a strategy's average.
 const SMOOTHING: f64 = 0.3;
 
-/// Frames a probe of the occlusion culler runs; only the last is measured.
+/// Frames a probe of an occlusion culler runs; only the last is measured.
 /// After a stretch without it, its occluders (last visible set) are stale:
 /// its first frame tests against them and marks too much, its second draws
 /// that too-large set, and only the third costs what it costs in steady
@@ -81,10 +85,21 @@ impl AutoParams {
     }
 }
 
+/// What a frame runs: frustum culling, or one of the occlusion cullers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Strategy {
     Frustum,
-    Occlusion,
+    Occlusion(usize),
+}
+
+impl Strategy {
+    /// Where its [`Record`] is.
+    fn index(self) -> usize {
+        match self {
+            Strategy::Frustum => 0,
+            Strategy::Occlusion(k) => k + 1,
+        }
+    }
 }
 
 /// What one strategy has cost.
@@ -105,9 +120,8 @@ struct Turn {
     /// Whether it starts a new average (the first measured frame after the
     /// strategy did not run: the old average describes another view).
     fresh: bool,
-    /// Whether its drawing time measures frustum culling: the GPU-driven
-    /// occlusion culler's first frame, which draws everything in the
-    /// frustum.
+    /// Whether its drawing time measures frustum culling: a GPU walk's
+    /// first frame, which draws everything in the frustum.
     draws_frustum: bool,
 }
 
@@ -115,16 +129,17 @@ pub struct AutoCulling {
     params: AutoParams,
     frustum: FrustumCulling,
     /// `omq` until `prepare` finds an adapter that culls on the GPU, then
-    /// `ioc`.
-    occlusion: Box<dyn Culler>,
-    records: [Record; 2],
+    /// `ioc` and `hiz`.
+    occlusion: Vec<Box<dyn Culler>>,
+    /// One per strategy, in [`Strategy::index`] order.
+    records: Vec<Record>,
     previous: Option<Turn>,
     /// Frames run so far (the path's frame numbers repeat after warm-up).
     frames_run: u64,
-    /// Frames left in a probe of the occlusion culler.
-    probing: u32,
-    /// Whether the occlusion culler culls on the GPU (`ioc`); set by
-    /// `prepare`, when the adapter is known.
+    /// The occlusion culler being probed, and the frames left in its probe.
+    probing: Option<(usize, u32)>,
+    /// Whether the occlusion cullers cull on the GPU; set by `prepare`,
+    /// when the adapter is known.
     gpu_culling: bool,
 }
 
@@ -133,17 +148,23 @@ impl AutoCulling {
         AutoCulling {
             params,
             frustum: FrustumCulling::new(scene),
-            occlusion: occlusion_culler(false),
-            records: [Record::default(); 2],
+            occlusion: occlusion_cullers(false),
+            records: vec![Record::default(); 2],
             previous: None,
             frames_run: 0,
-            probing: 0,
+            probing: None,
             gpu_culling: false,
         }
     }
 
     fn record(&mut self, s: Strategy) -> &mut Record {
-        &mut self.records[s as usize]
+        &mut self.records[s.index()]
+    }
+
+    /// Every strategy, in [`Strategy::index`] order.
+    fn strategies(&self) -> Vec<Strategy> {
+        let occlusion = (0..self.records.len() - 1).map(Strategy::Occlusion);
+        std::iter::once(Strategy::Frustum).chain(occlusion).collect()
     }
 
     /// Credits the previous frame's time to the strategy that drew it, and
@@ -165,36 +186,61 @@ impl AutoCulling {
         });
     }
 
-    /// This frame's plan, from the records: measure both strategies first
-    /// (occlusion, then frustum), then run the cheaper one and probe the
-    /// other when it is due.
+    /// This frame's plan, from the records: measure every strategy first
+    /// (the occlusion cullers in turn, then frustum culling), then run the
+    /// cheapest and probe another when it is due (the most overdue).
     fn plan(&mut self) -> Turn {
-        use Strategy::{Frustum, Occlusion};
         let turn = |strategy, measured, fresh| Turn {
             strategy,
             measured,
             fresh,
             draws_frustum: false,
         };
-        if self.probing > 0 {
-            self.probing -= 1;
-            return turn(Occlusion, self.probing == 0, true);
+        if let Some((k, left)) = self.probing {
+            self.probing = (left > 1).then_some((k, left - 1));
+            return turn(Strategy::Occlusion(k), left == 1, true);
         }
-        let [f, o] = self.records.map(|r| r.average_ms);
-        let (chosen, other) = match (f, o) {
-            (_, None) => return self.start_probe(),
-            (None, _) => return turn(Frustum, true, true),
-            (Some(f), Some(o)) if f <= o => ((Frustum, f), (Occlusion, o)),
-            (Some(f), Some(o)) => ((Occlusion, o), (Frustum, f)),
+        let strategies = self.strategies();
+        let unmeasured: Vec<Strategy> = strategies
+            .iter()
+            .copied()
+            .filter(|s| self.records[s.index()].average_ms.is_none())
+            .collect();
+        // The occlusion cullers first, in order: a GPU walk's first frame
+        // measures frustum culling too.
+        let first_occlusion = unmeasured.iter().find_map(|&s| match s {
+            Strategy::Occlusion(k) => Some(k),
+            Strategy::Frustum => None,
+        });
+        if let Some(k) = first_occlusion {
+            return self.start_probe(k);
+        }
+        if unmeasured.contains(&Strategy::Frustum) {
+            return turn(Strategy::Frustum, true, true);
+        }
+        let average = |s: Strategy| self.records[s.index()].average_ms.unwrap_or(f64::INFINITY);
+        let chosen = strategies
+            .iter()
+            .copied()
+            .min_by(|&a, &b| average(a).total_cmp(&average(b)))
+            .expect("frustum culling is always a strategy");
+        // How far past its probe each other strategy is.
+        let overdue = |s: Strategy| {
+            let since = (self.frames_run - self.records[s.index()].last_run) as f64;
+            let period = f64::from(self.params.probe) * average(s) / average(chosen).max(f64::MIN_POSITIVE);
+            since / period
         };
-        let since = self.frames_run - self.record(other.0).last_run;
-        let period = f64::from(self.params.probe) * other.1 / chosen.1.max(f64::MIN_POSITIVE);
-        match other.0 {
-            Occlusion if since as f64 >= period => self.start_probe(),
-            Frustum if since as f64 >= period => turn(Frustum, true, true),
-            _ => {
-                let continuing = self.record(chosen.0).last_run + 1 == self.frames_run;
-                turn(chosen.0, true, !continuing)
+        let due = strategies
+            .iter()
+            .copied()
+            .filter(|&s| s != chosen && overdue(s) >= 1.0)
+            .max_by(|&a, &b| overdue(a).total_cmp(&overdue(b)));
+        match due {
+            Some(Strategy::Occlusion(k)) => self.start_probe(k),
+            Some(Strategy::Frustum) => turn(Strategy::Frustum, true, true),
+            None => {
+                let continuing = self.record(chosen).last_run + 1 == self.frames_run;
+                turn(chosen, true, !continuing)
             }
         }
     }
@@ -213,10 +259,11 @@ impl AutoCulling {
         turn
     }
 
-    fn start_probe(&mut self) -> Turn {
-        self.probing = OCCLUSION_PROBE - 1;
+    /// The first frame of a probe of occlusion culler `k`.
+    fn start_probe(&mut self, k: usize) -> Turn {
+        self.probing = Some((k, OCCLUSION_PROBE - 1));
         Turn {
-            strategy: Strategy::Occlusion,
+            strategy: Strategy::Occlusion(k),
             measured: false,
             fresh: true,
             draws_frustum: self.gpu_culling && self.frames_run == 1,
@@ -237,37 +284,44 @@ impl Culler for AutoCulling {
         true
     }
 
-    fn prepare(&mut self, setup: &GpuSetup) {
+    fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
         self.gpu_culling = setup.gpu.gpu_driven;
-        self.occlusion = occlusion_culler(self.gpu_culling);
-        self.occlusion.prepare(setup);
+        self.occlusion = occlusion_cullers(self.gpu_culling);
+        self.records = vec![Record::default(); self.occlusion.len() + 1];
+        self.occlusion.iter_mut().try_for_each(|c| c.prepare(setup))
     }
 
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let turn = self.next_turn(input.previous);
         match turn.strategy {
             Strategy::Frustum => self.frustum.frame(ctx, input),
-            Strategy::Occlusion => self.occlusion.frame(ctx, input),
+            Strategy::Occlusion(k) => self.occlusion[k].frame(ctx, input),
         }
     }
 
+    /// Only the culler that ran this frame has a walk to audit.
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
-        self.occlusion.audit(gpu, drawn)
+        self.occlusion.iter_mut().find_map(|c| c.audit(gpu, drawn))
     }
 }
 
-/// `ioc` where the adapter culls on the GPU, `omq` elsewhere, each with
-/// its default parameters.
-fn occlusion_culler(gpu_culling: bool) -> Box<dyn Culler> {
+/// `ioc` and `hiz` where the adapter culls on the GPU, `omq` elsewhere,
+/// each with its default parameters.
+fn occlusion_cullers(gpu_culling: bool) -> Vec<Box<dyn Culler>> {
     let defaults = ModeParams::default();
     if gpu_culling {
-        Box::new(iterative_occlusion_culling(
-            DepthRange::from_params(ModeId::Ioc, &defaults).expect("ioc's defaults parse"),
-        ))
+        vec![
+            Box::new(iterative_occlusion_culling(
+                DepthRange::from_params(ModeId::Ioc, &defaults).expect("ioc's defaults parse"),
+            )),
+            Box::new(hierarchical_depth_culling(
+                HizParams::from_params(&defaults).expect("hiz's defaults parse"),
+            )),
+        ]
     } else {
-        Box::new(OccupancyMapQueries::new(
+        vec![Box::new(OccupancyMapQueries::new(
             OmqParams::from_params(&defaults).expect("omq's defaults parse"),
-        ))
+        ))]
     }
 }
 
@@ -275,7 +329,10 @@ fn occlusion_culler(gpu_culling: bool) -> Box<dyn Culler> {
 mod tests {
     use super::*;
     use crate::scene::{LoadOptions, SceneSpec, load};
-    use Strategy::{Frustum, Occlusion};
+    use Strategy::Frustum;
+
+    /// The occlusion culler without GPU culling, omq: the only one.
+    const OMQ: Strategy = Strategy::Occlusion(0);
 
     /// The strategies `auto` runs for `frames` frames beside `omq` (no GPU
     /// culling) when each costs what `cost(frame, strategy)` says.
@@ -291,9 +348,20 @@ mod tests {
 
     /// The same with the occlusion culler's frames as `frame` measures them.
     fn run_with(frames: u64, gpu_culling: bool, frame: impl Fn(u64, Strategy) -> PreviousFrame) -> Vec<Strategy> {
+        run_cullers(1, frames, gpu_culling, frame)
+    }
+
+    /// The same beside `cullers` occlusion cullers.
+    fn run_cullers(
+        cullers: usize,
+        frames: u64,
+        gpu_culling: bool,
+        frame: impl Fn(u64, Strategy) -> PreviousFrame,
+    ) -> Vec<Strategy> {
         let scene = load(&SceneSpec::Builtin("city:blocks=1".into()), &LoadOptions::default()).unwrap();
         let mut auto = AutoCulling::new(&scene, AutoParams { probe: 8 });
         auto.gpu_culling = gpu_culling;
+        auto.records = vec![Record::default(); cullers + 1];
         let mut previous = None;
         (0..frames)
             .map(|k| {
@@ -311,12 +379,10 @@ mod tests {
         // and occlusion culling is probed 8 × 3 frames after it last ran,
         // three frames at a time.
         let s = run(100, |_, s| if s == Frustum { 10.0 } else { 30.0 });
-        assert_eq!(s[..4], [Occlusion, Occlusion, Occlusion, Frustum]);
-        let probes: Vec<usize> = (1..s.len())
-            .filter(|&k| s[k] == Occlusion && s[k - 1] == Frustum)
-            .collect();
+        assert_eq!(s[..4], [OMQ, OMQ, OMQ, Frustum]);
+        let probes: Vec<usize> = (1..s.len()).filter(|&k| s[k] == OMQ && s[k - 1] == Frustum).collect();
         assert_eq!(probes, [26, 52, 78], "{s:?}");
-        assert_eq!(s.iter().filter(|&&x| x == Occlusion).count(), 3 * 4);
+        assert_eq!(s.iter().filter(|&&x| x == OMQ).count(), 3 * 4);
         // Occlusion culling 4× cheaper: frustum culling is re-measured one
         // frame every 8 × 4 frames.
         let s = run(100, |_, s| if s == Frustum { 40.0 } else { 10.0 });
@@ -332,8 +398,8 @@ mod tests {
         let frame = |k, s| {
             let ms = match (s, k) {
                 (Frustum, _) => 40.0,
-                (Occlusion, 0) => 45.0,
-                (Occlusion, _) => 10.0,
+                (Strategy::Occlusion(_), 0) => 45.0,
+                (Strategy::Occlusion(_), _) => 10.0,
             };
             let render_ms = if k == 0 { 40.0 } else { ms };
             PreviousFrame {
@@ -349,14 +415,45 @@ mod tests {
         // Beside omq the first frame says nothing of frustum culling, which
         // is run once to be measured.
         let s = run_with(100, false, frame);
-        assert_eq!(s[..5], [Occlusion, Occlusion, Occlusion, Frustum, Occlusion]);
+        assert_eq!(s[..5], [OMQ, OMQ, OMQ, Frustum, OMQ]);
         // A frustum estimate below the occlusion culler's cost is checked by
         // running frustum culling at once.
         let s = run_with(10, true, |k, s| PreviousFrame {
             render_ms: 5.0,
             ..frame(k, s)
         });
-        assert_eq!(s[..4], [Occlusion, Occlusion, Occlusion, Frustum]);
+        assert_eq!(s[..4], [OMQ, OMQ, OMQ, Frustum]);
+    }
+
+    #[test]
+    fn the_cheapest_of_several_occlusion_cullers_runs_and_the_others_are_probed() {
+        const IOC: Strategy = Strategy::Occlusion(0);
+        const HIZ: Strategy = Strategy::Occlusion(1);
+        // Frustum culling costs 40 ms, ioc 10 and hiz 20 until frame 60,
+        // then 5; ioc's first frame draws what frustum culling draws.
+        let s = run_cullers(2, 160, true, |k, s| {
+            let ms = match s {
+                Frustum => 40.0,
+                IOC => 10.0,
+                _ if k < 60 => 20.0,
+                _ => 5.0,
+            };
+            PreviousFrame {
+                frame_ms: ms,
+                render_ms: if k == 0 { 40.0 } else { ms },
+            }
+        });
+        assert_eq!(s[..6], [IOC, IOC, IOC, HIZ, HIZ, HIZ], "each measured first: {s:?}");
+        let runs = |range: std::ops::Range<usize>, x: Strategy| s[range].iter().filter(|&&y| y == x).count();
+        // Until frame 60 ioc runs, hiz is probed (three frames) about every
+        // 8 × 2 frames and frustum culling about every 8 × 4.
+        assert!(runs(6..60, IOC) > 40, "{s:?}");
+        assert!((2..=3).contains(&(runs(6..60, HIZ) / 3)), "{s:?}");
+        assert!((1..=2).contains(&runs(6..60, Frustum)), "{s:?}");
+        // hiz's next probe finds it cheaper, and it runs from then on, ioc
+        // being probed about every 8 × 2 frames.
+        assert!(runs(100..160, HIZ) > 40, "{s:?}");
+        assert!(runs(100..160, IOC) <= 4 * 3, "{s:?}");
     }
 
     #[test]
@@ -364,15 +461,15 @@ mod tests {
         // Occlusion culling pays until frame 40, then costs 5× more.
         let s = run(120, |k, s| match (s, k < 40) {
             (Frustum, _) => 20.0,
-            (Occlusion, true) => 10.0,
-            (Occlusion, false) => 100.0,
+            (Strategy::Occlusion(_), true) => 10.0,
+            (Strategy::Occlusion(_), false) => 100.0,
         });
-        assert!(s[4..40].iter().filter(|&&x| x == Occlusion).count() > 30, "{s:?}");
+        assert!(s[4..40].iter().filter(|&&x| x == OMQ).count() > 30, "{s:?}");
         assert!(
             s[41..55].iter().all(|&x| x == Frustum),
             "frustum culling from frame 41: {s:?}"
         );
-        let probes = s[41..].iter().filter(|&&x| x == Occlusion).count();
+        let probes = s[41..].iter().filter(|&&x| x == OMQ).count();
         assert!(
             probes <= 6,
             "then occlusion culling only in probes, every 8 × 5 frames: {s:?}"

@@ -6,7 +6,7 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 
 use crate::camera::Camera;
-use crate::gpu::{Frame, GpuAudit, GpuContext, GpuSetup, Resolution};
+use crate::gpu::{Frame, GpuAudit, GpuContext, GpuError, GpuSetup, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
@@ -130,9 +130,12 @@ pub trait Culler {
     }
 
     /// Creates the mode's own GPU resources (pipelines, buffers), once,
-    /// untimed, before its first frame. Modes that only draw and test boxes
-    /// through [`crate::gpu::Frame`] have none.
-    fn prepare(&mut self, _setup: &GpuSetup) {}
+    /// untimed, before its first frame; fails when the adapter cannot hold
+    /// them at this size. Modes that only draw and test boxes through
+    /// [`crate::gpu::Frame`] have none.
+    fn prepare(&mut self, _setup: &GpuSetup) -> Result<(), GpuError> {
+        Ok(())
+    }
 
     /// After each frame, untimed: what the mode's own GPU work drew and
     /// tested, read back from the GPU, with what it drew added to `drawn`
@@ -160,7 +163,7 @@ impl<C: Culler + ?Sized> Culler for &mut C {
     fn traverses_hierarchy(&self) -> bool {
         (**self).traverses_hierarchy()
     }
-    fn prepare(&mut self, setup: &GpuSetup) {
+    fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
         (**self).prepare(setup)
     }
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
@@ -191,7 +194,7 @@ impl Culler for Labeled {
     fn traverses_hierarchy(&self) -> bool {
         self.inner.traverses_hierarchy()
     }
-    fn prepare(&mut self, setup: &GpuSetup) {
+    fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
         self.inner.prepare(setup)
     }
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {

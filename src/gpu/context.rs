@@ -163,7 +163,7 @@ impl GpuContext {
         let timestamps = features.contains(timing);
         let pixel_counts = features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST)
             && downlevel.contains(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE);
-        // raster_cull.wgsl's expand pass binds 8 storage buffers.
+        // walk.wgsl's expand pass binds 8 storage buffers.
         let gpu_driven = pixel_counts
             && features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE)
             && downlevel.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS | wgpu::DownlevelFlags::INDIRECT_EXECUTION)
@@ -230,12 +230,25 @@ impl GpuContext {
         }
     }
 
-    /// The compute pipeline of `entry` in `module`, its bind group layouts
-    /// taken from the shader.
-    pub fn compute_pipeline(&self, module: &wgpu::ShaderModule, entry: &str) -> wgpu::ComputePipeline {
+    /// The compute pipeline of `entry` in `module`, with bind groups of
+    /// `layouts`, or of layouts taken from the shader (`None`: each then
+    /// binds only groups made from the pipeline's own layouts).
+    pub fn compute_pipeline(
+        &self,
+        module: &wgpu::ShaderModule,
+        entry: &str,
+        layouts: Option<&[Option<&wgpu::BindGroupLayout>]>,
+    ) -> wgpu::ComputePipeline {
+        let layout = layouts.map(|layouts| {
+            self.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(entry),
+                bind_group_layouts: layouts,
+                immediate_size: 0,
+            })
+        });
         self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry),
-            layout: None,
+            layout: layout.as_ref(),
             module,
             entry_point: Some(entry),
             compilation_options: Default::default(),

@@ -52,7 +52,6 @@ pub struct FrameOutcome {
 /// it, untimed ([`crate::cull::Culler::audit`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct GpuAudit {
-    pub objects_drawn: u64,
     pub triangles_drawn: u64,
     /// Nodes the walk reached.
     pub nodes_visited: u64,
@@ -63,7 +62,7 @@ pub struct GpuAudit {
     pub nodes_hidden: u64,
     pub nodes_outside_frustum: u64,
     /// Objects drawn first, as last frame's visible list, and after the
-    /// walk, newly visible.
+    /// walk, newly visible: every object the walk drew.
     pub drawn_early: u64,
     pub drawn_late: u64,
     /// GPU time of the walk and the compaction, where timestamps exist.
@@ -78,7 +77,7 @@ impl FrameOutcome {
     /// the mode's traversal figures (`TraversalStats::add_gpu_audit`).
     pub fn add_gpu_audit(&mut self, audit: &GpuAudit) {
         let c = &mut self.counters;
-        c.objects_drawn += audit.objects_drawn;
+        c.objects_drawn += audit.drawn_early + audit.drawn_late;
         c.triangles_drawn += audit.triangles_drawn;
         c.queries += audit.nodes_tested;
         if let Some(t) = audit.cull_gpu {

@@ -73,7 +73,7 @@ impl ErrorMeter {
             label: Some("error.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/error.wgsl").into()),
         });
-        let pipeline = |entry: &str| gpu.compute_pipeline(&module, entry);
+        let pipeline = |entry: &str| gpu.compute_pipeline(&module, entry, None);
         let storage = |label: &str, size: u64| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),

@@ -77,6 +77,7 @@ const COLUMNS: &[(&str, Column)] = &[
     ("query_wait_ms", |r| Some(r.query_wait_ms)),
     ("query_gpu_ms", |r| r.query_gpu_ms),
     ("pyramid_gpu_ms", |r| r.pyramid_gpu_ms),
+    ("render_ms", |r| Some(r.render_ms())),
     ("error_pixels", |r| r.error_pixels.map(|v| v as f64)),
     ("max_depth_error", |r| r.max_depth_error),
     ("missed_objects", |r| r.missed_objects.map(|v| v as f64)),

@@ -100,11 +100,12 @@ fn cost_split(w: &mut String, s: &Summary) {
     for m in &s.modes {
         let mean = |col: &str| m.stats.get(col).map(|d| d.mean);
         let ms = |v: Option<f64>| v.map_or_else(|| "–".into(), |v| format!("{v:.2}"));
+        // Only GPU walks draw early or late; every other mode shows "–".
+        let walks = mean("drawn_early").unwrap_or(0.0) + mean("drawn_late").unwrap_or(0.0) > 0.0;
         let count = |col: &str| match mean(col) {
-            Some(v) if v > 0.0 => format!("{v:.1}"),
+            Some(v) if walks => format!("{v:.1}"),
             _ => "–".into(),
         };
-        let drawing = mean("gpu_ms").map(|gpu| gpu - mean("query_gpu_ms").unwrap_or(0.0));
         let _ = writeln!(
             w,
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
@@ -113,7 +114,7 @@ fn cost_split(w: &mut String, s: &Summary) {
             ms(mean("cpu_ms")),
             ms(mean("query_gpu_ms")),
             ms(mean("pyramid_gpu_ms")),
-            ms(drawing),
+            ms(mean("render_ms")),
             ms(mean("query_wait_ms")),
             count("drawn_early"),
             count("drawn_late"),

@@ -261,7 +261,10 @@ pub fn all() -> Vec<StressCase> {
             ..Draft::new(town(), street_walk())
         };
         let name = format!("size-{width}x{height}");
-        cases.push(draft.case(&name, "the street walk at a target size that is not a power of two"));
+        cases.push(draft.case(
+            &name,
+            "the street walk at this target size (odd, flat or one pixel: a depth pyramid's base rounds down to a power of two)",
+        ));
     }
     cases
 }

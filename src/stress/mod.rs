@@ -19,7 +19,7 @@ use serde::Serialize;
 use crate::bench::{RunOptions, Session};
 use crate::camera::Camera;
 use crate::cull::{Culler, ModeError, ModeId, ModeInfo, ModeParams};
-use crate::gpu::{AdapterReport, GpuContext, GpuError, Resolution};
+use crate::gpu::{AdapterReport, GpuContext, GpuError, RenderTargets, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{FrameStats, MissedObject};
 use crate::report::SkippedMode;
@@ -78,6 +78,9 @@ pub struct StressRow {
     pub missed_objects: u64,
     /// Largest |depth − reference depth| over the case's frames.
     pub max_depth_error: f64,
+    /// The size the case ran at where it has its own
+    /// ([`StressCase::resolution`]); otherwise the report's.
+    pub resolution: Option<Resolution>,
 }
 
 impl StressRow {
@@ -92,6 +95,7 @@ impl StressRow {
             error_pixels: mine.clone().filter_map(|r| r.error_pixels).sum(),
             missed_objects: mine.clone().filter_map(|r| r.missed_objects).sum(),
             max_depth_error: mine.filter_map(|r| r.max_depth_error).fold(0.0, f64::max),
+            resolution: None,
         }
     }
 
@@ -127,6 +131,15 @@ pub struct StressReport {
     pub rows: Vec<StressRow>,
     pub invariance: Vec<InvarianceCheck>,
     pub skipped: Vec<SkippedMode>,
+    /// Cases whose own target size the adapter cannot hold.
+    pub skipped_cases: Vec<SkippedCase>,
+}
+
+/// A case not run, and why.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SkippedCase {
+    pub case: String,
+    pub reason: String,
 }
 
 impl StressReport {
@@ -146,6 +159,7 @@ impl StressReport {
 /// What a stress run reports as it goes.
 pub enum StressEvent<'a> {
     Skipped { mode: &'a str, reason: &'a str },
+    CaseSkipped { case: &'a str, reason: &'a str },
     Case { case: &'a StressCase },
     Frame { done: u32, total: u32 },
 }
@@ -213,7 +227,7 @@ pub fn run(
     events: &mut dyn FnMut(StressEvent) -> ControlFlow<()>,
 ) -> Result<StressReport, StressError> {
     let stop = Cell::new(false);
-    let mut events = |event| {
+    let mut events = |event: StressEvent<'_>| {
         if events(event).is_break() {
             stop.set(true);
         }
@@ -247,10 +261,29 @@ pub fn run(
             .iter()
             .any(|d| d.baseline.as_ref().is_some_and(|b| b.case == c.name))
     };
+    let mut skipped_cases = Vec::new();
     for case in cases {
         events(StressEvent::Case { case });
         if stop.get() {
             return Err(StressError::Interrupted);
+        }
+        let size = case.resolution.unwrap_or(resolution);
+        // A case at a size of its own (8191×3) may exceed a small adapter:
+        // that case is skipped, the run goes on.
+        if let Err(e) = RenderTargets::check(gpu, size) {
+            if e.is_input_error() {
+                let reason = format!("{size}: {e}");
+                events(StressEvent::CaseSkipped {
+                    case: &case.name,
+                    reason: &reason,
+                });
+                skipped_cases.push(SkippedCase {
+                    case: case.name.clone(),
+                    reason,
+                });
+                continue;
+            }
+            return Err(e.into());
         }
         let mut cullers = modes
             .iter()
@@ -258,16 +291,14 @@ pub fn run(
             .collect::<Result<Vec<_>, _>>()?;
         let keep_depth = case.baseline.is_some() || is_baseline(case);
         let hierarchy = HierarchyParams::default();
-        let size = case.resolution.unwrap_or(resolution);
         let outcome = run_case(gpu, case, &hierarchy, &mut cullers, size, keep_depth, &mut |_| {
             done += 1;
             events(StressEvent::Frame { done, total });
         })?;
-        rows.extend(
-            modes
-                .iter()
-                .map(|m| StressRow::tally(&case.name, m.id.name(), m.conservative, &outcome.rows)),
-        );
+        rows.extend(modes.iter().map(|m| StressRow {
+            resolution: case.resolution,
+            ..StressRow::tally(&case.name, m.id.name(), m.conservative, &outcome.rows)
+        }));
         if let Some(baseline) = &case.baseline {
             let (_, base) = baseline_depths
                 .iter()
@@ -300,6 +331,7 @@ pub fn run(
         rows,
         invariance,
         skipped,
+        skipped_cases,
     })
 }
 
@@ -361,7 +393,7 @@ pub fn run_case(
 /// the verdict line.
 pub fn render_markdown(report: &StressReport) -> String {
     let mut out = format!(
-        "# occlu stress\n\nadapter: {}, {}\n\n| case | mode | frames | error px | missed | max \\|Δdepth\\| | verdict |\n|---|---|---:|---:|---:|---:|---|\n",
+        "# occlu stress\n\nadapter: {}, {} (a case at a size of its own names it)\n\n| case | mode | frames | error px | missed | max \\|Δdepth\\| | verdict |\n|---|---|---:|---:|---:|---:|---|\n",
         report.adapter, report.resolution
     );
     for r in &report.rows {
@@ -370,9 +402,13 @@ pub fn render_markdown(report: &StressReport) -> String {
             Some(false) => "FAIL",
             None => "not judged",
         };
+        let case = match r.resolution {
+            Some(size) => format!("{} ({size})", r.case),
+            None => r.case.clone(),
+        };
         out += &format!(
-            "| {} | {} | {} | {} | {} | {:.3e} | {verdict} |\n",
-            r.case, r.mode, r.frames, r.error_pixels, r.missed_objects, r.max_depth_error
+            "| {case} | {} | {} | {} | {} | {:.3e} | {verdict} |\n",
+            r.mode, r.frames, r.error_pixels, r.missed_objects, r.max_depth_error
         );
     }
     if !report.invariance.is_empty() {
@@ -396,6 +432,9 @@ pub fn render_markdown(report: &StressReport) -> String {
     }
     for s in &report.skipped {
         out += &format!("\nskipped: {}: {}\n", s.mode, s.reason);
+    }
+    for s in &report.skipped_cases {
+        out += &format!("\nskipped case: {}: {}\n", s.case, s.reason);
     }
     let (passed, failed) = report.verdicts();
     out += &format!("\n{passed} passed, {failed} failed\n");

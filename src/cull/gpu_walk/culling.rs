@@ -3,13 +3,13 @@
 //! ([`NodeTest`]), and the frame of the module above ([`cull_on_gpu`]).
 //! roc, ioc and hiz differ only in those two choices and their parameters.
 
-use super::ioc::DepthRange;
-use super::pool::NodeTest;
+use super::depths::DepthRange;
+use super::level_test::NodeTest;
 use super::{CullTree, DrawList, GpuWalk};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
-use crate::gpu::{Frame, GpuAudit, GpuContext, GpuSetup};
+use crate::gpu::{Frame, GpuAudit, GpuContext, GpuError, GpuSetup};
 use crate::object_set::ObjectSet;
 
 /// What a GPU walk tests.
@@ -76,7 +76,7 @@ impl Culler for GpuCulling {
         matches!(self.walked, Walked::Nodes(_))
     }
 
-    fn prepare(&mut self, setup: &GpuSetup) {
+    fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
         let tree = match self.walked {
             Walked::Objects => CullTree::flat(setup.scene.objects.len() as u32),
             Walked::Nodes(range) => {
@@ -87,11 +87,17 @@ impl Culler for GpuCulling {
                 tree
             }
         };
-        self.walk = Some(GpuWalk::new(setup, &tree, self.node_test));
+        self.walk = Some(GpuWalk::new(setup, &tree, self.node_test)?);
+        Ok(())
     }
 
+    /// # Panics
+    /// Before `prepare`: a session prepares every mode first.
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
-        let walk = self.walk.as_mut();
+        let walk = self
+            .walk
+            .as_mut()
+            .expect("the session prepared the mode, which made its walk");
         match self.walked {
             Walked::Objects => {
                 let bounds = input.scene.objects.iter().map(|o| o.bounds);
@@ -116,15 +122,13 @@ impl Culler for GpuCulling {
 /// audit): the ones returned are empty.
 ///
 /// # Panics
-/// Without a walk or a GPU frame: a session prepares every mode (which
-/// makes its walk) and runs it on the GPU.
+/// Without a GPU frame: a session runs GPU walks on the GPU.
 fn cull_on_gpu(
     frame: &mut dyn Frame,
     camera: &Camera,
-    walk: Option<&mut GpuWalk>,
+    walk: &mut GpuWalk,
     bounds: impl ExactSizeIterator<Item = Aabb>,
 ) -> TraversalStats {
-    let walk = walk.expect("the session prepared the mode, which made its walk");
     let ctx = frame.on_gpu().expect("the session runs GPU walks on the GPU");
     let indirect_count = ctx.gpu().indirect_count;
     ctx.draw_indirect(walk.list(DrawList::Visible, indirect_count));

@@ -16,7 +16,9 @@
 //!    against the farthest of those texels (pyramid_test.wgsl). Boxes
 //!    reaching the near plane are visible untested, as in niagara.
 //! 4. **Late**: the newly visible objects are drawn (indirect, the count
-//!    from the GPU); they and the early ones are next frame's visible list.
+//!    from the GPU). Every object found visible in step 3, drawn early or
+//!    late, is next frame's visible list; one drawn early and now hidden
+//!    drops out of it.
 //!
 //! No per-object result reaches the CPU; on GL, which has no indirect
 //! count, the two list lengths are read back before step 4, as roc does.
@@ -45,7 +47,7 @@ use std::str::FromStr;
 
 use serde::Serialize;
 
-use super::ioc::{BOTTOM, Depth, DepthRange, START};
+use super::depths::{BOTTOM, Depth, DepthRange, START};
 use super::{GpuCulling, NodeTest, Walked};
 use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 
@@ -63,7 +65,7 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
 const TEXELS: ParamInfo = ParamInfo {
     key: "texels",
     default: "4",
-    summary: "texels a box's rectangle may span across at the pyramid level it is read at (2 to 16): 2 reads at most 2×2 texels as the engines do; 4 reads a level finer, which on the city walk drew 27% fewer triangles for the same test time",
+    summary: "texels a box's rectangle may span across at the pyramid level it is read at (2 to 16): 2 reads at most 2×2 texels as the engines do; 4 reads a level finer, which on the default city walk drew 27% fewer triangles for the same test time",
 };
 
 /// The range of [`TEXELS`].
@@ -145,7 +147,12 @@ pub fn hierarchical_depth_culling(params: HizParams) -> GpuCulling {
         BoxesTested::Nodes => Walked::Nodes(params.range),
     };
     let test = NodeTest::Pyramid { texels: params.texels };
-    GpuCulling::new("hiz", walked, test, serde_json::json!(params))
+    // Depths are recorded only where they are used.
+    let recorded = match params.boxes {
+        BoxesTested::Objects => serde_json::json!({ "texels": params.texels, "boxes": params.boxes }),
+        BoxesTested::Nodes => serde_json::json!(params),
+    };
+    GpuCulling::new("hiz", walked, test, recorded)
 }
 
 #[cfg(test)]

@@ -27,7 +27,7 @@
 //!    every queued box not behind the pyramid (pyramid_test.wgsl). Then
 //!    `cs_expand` queues
 //!    the children of visible inner nodes and marks the objects of visible
-//!    leaves (raster_cull.wgsl). The queue's length stays on the GPU: it is
+//!    leaves (walk.wgsl). The queue's length stays on the GPU: it is
 //!    the instance count of the next level's indirect draw and dispatch.
 //!    Boxes that reach the near plane are marked by the CPU, which cannot
 //!    rasterise them, and boxes outside the frustum are never queued.
@@ -51,15 +51,19 @@
 //! transformed on the GPU from world coordinates in f32.
 
 mod culling;
+pub mod depths;
 pub mod hiz;
 pub mod ioc;
+mod level_test;
 mod pool;
 mod pyramid;
 pub mod roc;
 mod tree;
 #[cfg(test)]
 mod twin;
+mod words;
 
 pub use culling::{GpuCulling, Walked};
-pub use pool::{DrawList, GpuWalk, NodeBoxes, NodeTest};
+pub use level_test::NodeTest;
+pub use pool::{DrawList, GpuWalk, NodeBoxes};
 pub use tree::{CullTree, MAX_LEVELS, TreeNode};

@@ -4,98 +4,22 @@
 
 use std::time::Duration;
 
-use super::pyramid::DepthPyramid;
+use super::level_test::{LevelTest, NodeTest};
 #[cfg(test)]
 use super::pyramid::PyramidLevel;
 use super::tree::{CullTree, MAX_LEVELS};
+use super::words::{
+    DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_WORDS,
+    MAX_GROUPS, OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST, shader_constants,
+};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
 use crate::gpu::{
-    BOX_INDEX_COUNT, BOX_TEST, BOXES_WGSL, BoxMargins, EyeBox, GpuAudit, GpuContext, GpuSetup, GpuTimer, GpuWork,
-    IndirectCount, IndirectDraws, QueryBox, Readback, bind_buffers, bind_group_layout, box_bind_group_layout,
-    box_buffer, box_index_buffer, box_test_pipeline, depth_only_pass, eye_relative_box, set_box_indices,
-    storage_buffer,
+    BOX_INDEX_COUNT, BoxMargins, EyeBox, GpuAudit, GpuContext, GpuError, GpuSetup, GpuTimer, GpuWork, IndirectCount,
+    IndirectDraws, QueryBox, Readback, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer,
+    eye_relative_box, storage_buffer,
 };
 use crate::object_set::ObjectSet;
-
-/// Threads per workgroup of raster_cull.wgsl, and its grid limit.
-const GROUP_SIZE: u32 = 64;
-const MAX_GROUPS: u32 = 65_535;
-
-/// Words of one level's arguments (`Level` in raster_cull.wgsl): an indexed
-/// indirect draw (5), an indirect dispatch (3), and counts of nodes hidden,
-/// outside the frustum and reaching the near plane (3).
-const LEVEL_WORDS: usize = 11;
-const LEVEL_BYTES: u64 = LEVEL_WORDS as u64 * 4;
-/// Where the dispatch arguments and the hidden count start in a level.
-const DISPATCH_OFFSET: u64 = 5 * 4;
-const HIDDEN: usize = 8;
-
-/// What a node's word of the visibility buffer says: set by the CPU before
-/// a walk, and to [`VISIBLE`] by `fs_mark` for a tested node a fragment of
-/// whose box passed.
-pub(super) const TO_TEST: u32 = 0;
-const VISIBLE: u32 = 1;
-pub(super) const OUTSIDE_FRUSTUM: u32 = 2;
-pub(super) const REACHES_NEAR: u32 = 3;
-/// What an object's word of the state buffer says (`cs_expand` and
-/// `cs_compact`): drawn as visible in the last frame, and marked visible in
-/// this walk.
-const VISIBLE_LAST_FRAME: u32 = 1;
-const MARKED: u32 = 2;
-/// What an object's word of the drawn buffer says after `cs_compact`: drawn
-/// first, as last frame's visible list, or after the test, newly visible.
-const DRAWN_EARLY: u32 = 1;
-const DRAWN_LATE: u32 = 2;
-const DRAW_COMMAND_BYTES: u64 = 20;
-
-/// The constants the shaders share with this file, written as WGSL and put
-/// before their text, so the two cannot drift apart.
-fn shader_constants() -> String {
-    [
-        ("TO_TEST", TO_TEST),
-        ("VISIBLE", VISIBLE),
-        ("OUTSIDE_FRUSTUM", OUTSIDE_FRUSTUM),
-        ("REACHES_NEAR", REACHES_NEAR),
-        ("VISIBLE_LAST_FRAME", VISIBLE_LAST_FRAME),
-        ("MARKED", MARKED),
-        ("DRAWN_EARLY", DRAWN_EARLY),
-        ("DRAWN_LATE", DRAWN_LATE),
-        ("GROUP_SIZE", GROUP_SIZE),
-        ("MAX_GROUPS", MAX_GROUPS),
-    ]
-    .iter()
-    .map(|(name, value)| format!("const {name}: u32 = {value}u;\n"))
-    .collect()
-}
-
-/// How a level finds which of its queued nodes are visible.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum NodeTest {
-    /// Each box is drawn against the depth drawn so far, and a fragment
-    /// that passes marks its node (004: roc, ioc).
-    Raster,
-    /// Each box's nearest depth is compared, in a compute pass, with the
-    /// farthest depth of a pyramid built from the depth drawn so far over
-    /// the box's screen rectangle, read at the finest level where the
-    /// rectangle spans at most `texels` texels across (hiz).
-    Pyramid { texels: u32 },
-}
-
-/// A level's test, with what it binds per queue.
-enum LevelTest {
-    Raster {
-        mark: wgpu::RenderPipeline,
-        box_indices: wgpu::Buffer,
-        /// `groups[i]` reads queue `i`.
-        groups: [wgpu::BindGroup; 2],
-    },
-    Pyramid {
-        pyramid: DepthPyramid,
-        test: wgpu::ComputePipeline,
-        groups: [wgpu::BindGroup; 2],
-    },
-}
 
 /// Which of a tree's two draw lists.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -184,8 +108,8 @@ pub struct GpuWalk {
 /// to the GPU. Reused from frame to frame.
 #[derive(Default)]
 pub struct NodeBoxes {
-    /// One per node, eye-relative; empty (drawing no fragment) for a node
-    /// outside the frustum or reaching the near plane.
+    /// One per node, eye-relative; empty (drawing no fragment, never
+    /// tested) for a node outside the frustum or reaching the near plane.
     pub(super) boxes: Vec<QueryBox>,
     /// One per node, its state before the walk: [`TO_TEST`],
     /// [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`].
@@ -235,12 +159,12 @@ const AUDIT_DRAWN_OFFSET: u64 = MAX_LEVELS as u64 * LEVEL_BYTES;
 impl GpuWalk {
     /// Puts `tree` on the GPU, with an empty visible list, and makes what
     /// walking it with `node_test` takes. Needs [`GpuContext::gpu_driven`].
-    pub fn new(setup: &GpuSetup, tree: &CullTree, node_test: NodeTest) -> GpuWalk {
+    pub fn new(setup: &GpuSetup, tree: &CullTree, node_test: NodeTest) -> Result<GpuWalk, GpuError> {
         let GpuSetup { gpu, camera, draws, .. } = *setup;
         let device = &gpu.device;
         let cull_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("raster_cull.wgsl"),
-            source: wgpu::ShaderSource::Wgsl([&shader_constants(), include_str!("raster_cull.wgsl")].concat().into()),
+            label: Some("walk.wgsl"),
+            source: wgpu::ShaderSource::Wgsl([&shader_constants(), include_str!("walk.wgsl")].concat().into()),
         });
         use wgpu::BufferBindingType::Storage;
         use wgpu::ShaderStages as S;
@@ -275,75 +199,8 @@ impl GpuWalk {
         );
         let nodes = tree.nodes.len() as u32;
         let scratch = NodeScratch::new(gpu, [&box_layout, &step_layout], camera, nodes);
-        let test = match node_test {
-            NodeTest::Raster => {
-                let module = boxes_module(gpu, "boxes.wgsl + raster_mark.wgsl", include_str!("raster_mark.wgsl"));
-                let mark_layout = bind_group_layout(gpu, "mark", &[(S::VERTEX, read), (S::FRAGMENT, write)]);
-                let mark = box_test_pipeline(
-                    gpu,
-                    "mark visible nodes",
-                    &[Some(&box_layout), Some(&mark_layout)],
-                    wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vs_queued"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some("fs_mark"),
-                        compilation_options: Default::default(),
-                        targets: &[],
-                    }),
-                    BOX_TEST,
-                );
-                LevelTest::Raster {
-                    mark,
-                    box_indices: box_index_buffer(gpu),
-                    groups: [0, 1]
-                        .map(|i| bind_buffers(gpu, &mark_layout, &[&scratch.queues[i], &scratch.node_visible])),
-                }
-            }
-            NodeTest::Pyramid { texels } => {
-                let source = format!(
-                    "const MAX_TEXELS: u32 = {texels}u;\n{}",
-                    include_str!("pyramid_test.wgsl")
-                );
-                let module = boxes_module(gpu, "boxes.wgsl + pyramid_test.wgsl", &source);
-                let test_layout = bind_group_layout(
-                    gpu,
-                    "pyramid test",
-                    &[
-                        (S::COMPUTE, read),
-                        (S::COMPUTE, read),
-                        (S::COMPUTE, write),
-                        (S::COMPUTE, read),
-                        (S::COMPUTE, wgpu::BufferBindingType::Uniform),
-                    ],
-                );
-                let pyramid = DepthPyramid::new(gpu, setup.resolution, setup.depth);
-                let [pyramid_texels, shape] = pyramid.bindings();
-                let groups = [0, 1].map(|i| {
-                    let s = &scratch;
-                    bind_buffers(
-                        gpu,
-                        &test_layout,
-                        &[&s.queues[i], &s.level_args[i], &s.node_visible, pyramid_texels, shape],
-                    )
-                });
-                LevelTest::Pyramid {
-                    test: compute_pipeline(
-                        gpu,
-                        "test boxes against the pyramid",
-                        &module,
-                        "cs_test",
-                        &[Some(&box_layout), Some(&test_layout)],
-                    ),
-                    pyramid,
-                    groups,
-                }
-            }
-        };
+        let s = &scratch;
+        let test = LevelTest::new(setup, node_test, &box_layout, &s.queues, &s.level_args, &s.node_visible)?;
         let expand = compute_pipeline(
             gpu,
             "expand a level",
@@ -392,7 +249,7 @@ impl GpuWalk {
             NodeTest::Raster => 1,
             NodeTest::Pyramid { .. } => 2,
         };
-        GpuWalk {
+        Ok(GpuWalk {
             drawn,
             level_stats: storage_buffer(gpu, "level statistics", u64::from(MAX_LEVELS) * LEVEL_BYTES, copy),
             empty_level: gpu.buffer_with(
@@ -415,7 +272,7 @@ impl GpuWalk {
             expand,
             compact,
             no_bindings,
-        }
+        })
     }
 
     /// Levels a walk of the tree takes.
@@ -442,8 +299,8 @@ impl GpuWalk {
             gpu.queue.write_buffer(&s.boxes, 0, bytemuck::cast_slice(boxes));
             gpu.queue.write_buffer(&s.node_visible, 0, bytemuck::cast_slice(states));
         }
-        // A box outside the frustum would draw no fragment: not queueing it
-        // spares its vertices (cs_expand does the same for children).
+        // A box outside the frustum cannot be visible: not queueing it
+        // spares its test (cs_expand does the same for children).
         self.seed_queue.clear();
         let in_frustum = tree.seed.iter().filter(|&&n| states[n as usize] != OUTSIDE_FRUSTUM);
         self.seed_queue.extend(in_frustum);
@@ -457,16 +314,7 @@ impl GpuWalk {
         if let Some(t) = &self.timer {
             t.begin(encoder, WALK_SPAN);
         }
-        if let LevelTest::Pyramid { pyramid, .. } = &self.test {
-            // From the depth drawn so far: last frame's visible list.
-            if let Some(t) = &self.timer {
-                t.begin(encoder, PYRAMID_SPAN);
-            }
-            pyramid.encode(encoder);
-            if let Some(t) = &self.timer {
-                t.end(encoder, PYRAMID_SPAN);
-            }
-        }
+        self.test.begin(encoder, self.timer.as_ref().map(|t| (t, PYRAMID_SPAN)));
         self.walk = Some(Walk {
             seed_len: tree.seed.len() as u32,
             seed_outside: (tree.seed.len() - self.seed_queue.len()) as u32,
@@ -488,30 +336,8 @@ impl GpuWalk {
         let (input, output) = ((walk.levels % 2) as usize, ((walk.levels + 1) % 2) as usize);
         let s = &self.scratch;
         encoder.copy_buffer_to_buffer(&self.empty_level, 0, &s.level_args[output], 0, LEVEL_BYTES);
-        match &self.test {
-            LevelTest::Raster {
-                mark,
-                box_indices,
-                groups,
-            } => {
-                let mut pass = depth_only_pass(encoder, "mark visible nodes", depth, None);
-                pass.set_pipeline(mark);
-                pass.set_bind_group(0, &s.box_group, &[]);
-                pass.set_bind_group(1, &groups[input], &[]);
-                set_box_indices(&mut pass, box_indices);
-                pass.draw_indexed_indirect(&s.level_args[input], 0);
-            }
-            LevelTest::Pyramid { test, groups, .. } => {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("test boxes against the pyramid"),
-                    timestamp_writes: None,
-                });
-                pass.set_pipeline(test);
-                pass.set_bind_group(0, &s.box_group, &[]);
-                pass.set_bind_group(1, &groups[input], &[]);
-                pass.dispatch_workgroups_indirect(&s.level_args[input], DISPATCH_OFFSET);
-            }
-        }
+        self.test
+            .encode(encoder, depth, &s.box_group, input, &s.level_args[input]);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("expand a level"),
@@ -642,7 +468,6 @@ impl GpuWalk {
                 _ => continue,
             }
             drawn.insert(object as u32);
-            audit.objects_drawn += 1;
             audit.triangles_drawn += self.triangles[object];
         }
         if let Some(t) = &mut self.timer {
@@ -665,16 +490,15 @@ impl GpuWalk {
     /// The pyramid the last walk tested against, for a walk with a
     /// pyramid test: its levels, and their texels read back.
     pub(super) fn pyramid(&self, gpu: &GpuContext) -> Option<(Vec<PyramidLevel>, Vec<Vec<f32>>)> {
-        match &self.test {
-            LevelTest::Pyramid { pyramid, .. } => Some((pyramid.levels().to_vec(), pyramid.read(gpu))),
-            LevelTest::Raster { .. } => None,
-        }
+        let pyramid = self.test.pyramid()?;
+        Some((pyramid.levels().to_vec(), pyramid.read(gpu)))
     }
 
     /// Every node's word of the visibility buffer as the last walk left it
     /// (before it: [`TO_TEST`], [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`];
-    /// `fs_mark` turned the tested boxes a fragment of which passed into
-    /// [`VISIBLE`]), for the CPU twin of the walk.
+    /// the level test turned the boxes it found visible into
+    /// [`VISIBLE`](super::words::VISIBLE)),
+    /// for the CPU twin of the walk.
     pub(super) fn node_states(&self, gpu: &GpuContext) -> Vec<u32> {
         let bytes = u64::from(self.tree.nodes) * 4;
         let readback = Readback::new(gpu, "node states", bytes);
@@ -798,16 +622,7 @@ fn compute_pipeline(
     })
 }
 
-/// A shader module of boxes.wgsl (the camera, the boxes, `box_clip`), the
-/// shared constants and `source`.
-fn boxes_module(gpu: &GpuContext, label: &str, source: &str) -> wgpu::ShaderModule {
-    gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl([BOXES_WGSL, &shader_constants(), source].concat().into()),
-    })
-}
-
-/// A level's arguments (`Level` in raster_cull.wgsl) for a queue of
+/// A level's arguments (`Level` in walk.wgsl) for a queue of
 /// `entries` nodes: an indexed indirect draw of one box per entry, an
 /// indirect dispatch over the entries, and no nodes counted yet.
 fn level_args(entries: u32) -> [u32; LEVEL_WORDS] {
@@ -822,34 +637,14 @@ fn groups_for(n: u32) -> u32 {
 
 #[cfg(test)]
 mod tests {
-    use wgpu::naga;
-
     use super::*;
     use crate::cull::gpu_walk::TreeNode;
-
-    /// The members (name, byte offset) and size of struct `name` in `module`.
-    fn layout(module: &naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
-        let (_, ty) = module
-            .types
-            .iter()
-            .find(|(_, t)| t.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("no struct {name}"));
-        match &ty.inner {
-            naga::TypeInner::Struct { members, span } => (
-                members
-                    .iter()
-                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
-                    .collect(),
-                *span,
-            ),
-            other => panic!("{name} is {other:?}"),
-        }
-    }
+    use crate::cull::gpu_walk::words::{parse, struct_layout as layout};
+    use crate::gpu::BOXES_WGSL;
 
     #[test]
     fn the_shaders_lay_out_what_this_file_writes_and_reads() {
-        let cull = [&shader_constants(), include_str!("raster_cull.wgsl")].concat();
-        let module = naga::front::wgsl::parse_str(&cull).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&cull)));
+        let module = parse(&[&shader_constants(), include_str!("walk.wgsl")].concat());
         let (members, size) = layout(&module, "Level");
         assert_eq!(u64::from(size), LEVEL_BYTES, "level_args writes LEVEL_WORDS words");
         let offset = |name: &str| members.iter().find(|(n, _)| n == name).map(|&(_, o)| u64::from(o));
@@ -866,7 +661,6 @@ mod tests {
         let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(names, ["first_child", "child_count", "first_object", "object_count"]);
         assert_eq!(u64::from(layout(&module, "DrawCommand").1), DRAW_COMMAND_BYTES);
-        let mark = [BOXES_WGSL, &shader_constants(), include_str!("raster_mark.wgsl")].concat();
-        naga::front::wgsl::parse_str(&mark).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&mark)));
+        parse(&[BOXES_WGSL, &shader_constants(), include_str!("raster_mark.wgsl")].concat());
     }
 }

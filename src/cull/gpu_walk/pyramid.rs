@@ -13,7 +13,7 @@
 //! target texel its footprint touches (the test below checks it against
 //! that definition, computed from the depth target alone).
 
-use crate::gpu::{GpuContext, Resolution, storage_buffer};
+use crate::gpu::{GpuContext, GpuError, Resolution, storage_buffer};
 
 /// One level of the pyramid: its size and where it starts in the buffer
 /// (in texels).
@@ -90,19 +90,30 @@ pub fn levels(resolution: Resolution) -> Vec<PyramidLevel> {
 }
 
 impl DepthPyramid {
-    /// The pyramid over `depth`, a depth target of `resolution`.
-    pub fn new(gpu: &GpuContext, resolution: Resolution, depth: &wgpu::TextureView) -> DepthPyramid {
+    /// The pyramid over `depth`, a depth target of `resolution`; an error
+    /// when its texels exceed what the adapter binds as one buffer (about
+    /// 4/3 of the base, which is up to the target's size).
+    pub fn new(gpu: &GpuContext, resolution: Resolution, depth: &wgpu::TextureView) -> Result<DepthPyramid, GpuError> {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("pyramid.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("pyramid.wgsl").into()),
         });
         let (base, reduce) = (
-            gpu.compute_pipeline(&module, "cs_base"),
-            gpu.compute_pipeline(&module, "cs_reduce"),
+            gpu.compute_pipeline(&module, "cs_base", None),
+            gpu.compute_pipeline(&module, "cs_reduce", None),
         );
         let levels = levels(resolution);
         let last = levels[levels.len() - 1];
+        let bytes = u64::from(last.offset + 1) * 4;
+        let limit = gpu.device.limits().max_storage_buffer_binding_size;
+        if bytes > limit {
+            return Err(GpuError::TooLarge {
+                what: "storage binding for hiz's depth pyramid (bytes; a smaller --resolution fits)",
+                need: bytes,
+                limit,
+            });
+        }
         let mut shape = ShapeUniform {
             target: [resolution.width, resolution.height],
             base: [levels[0].width, levels[0].height],
@@ -118,12 +129,7 @@ impl DepthPyramid {
             bytemuck::bytes_of(&shape),
             wgpu::BufferUsages::UNIFORM,
         );
-        let texels = storage_buffer(
-            gpu,
-            "depth pyramid",
-            u64::from(last.offset + 1) * 4,
-            wgpu::BufferUsages::COPY_SRC,
-        );
+        let texels = storage_buffer(gpu, "depth pyramid", bytes, wgpu::BufferUsages::COPY_SRC);
         let groups = levels
             .iter()
             .enumerate()
@@ -174,14 +180,14 @@ impl DepthPyramid {
                 })
             })
             .collect();
-        DepthPyramid {
+        Ok(DepthPyramid {
             levels,
             texels,
             shape,
             base,
             reduce,
             groups,
-        }
+        })
     }
 
     /// What the box test binds: every level's texels, and the shape that
@@ -233,6 +239,8 @@ mod tests {
     use crate::camera::generate::default_path;
     use crate::cull::create;
     use crate::cull::culler::Culler;
+    use crate::cull::gpu_walk::words::{parse, shader_constants, struct_layout};
+    use crate::gpu::BOXES_WGSL;
     use crate::gpu::BackendChoice;
     use crate::hierarchy::{Hierarchy, HierarchyParams};
     use crate::scene::{LoadOptions, SceneSpec, load};
@@ -261,17 +269,10 @@ mod tests {
     }
 
     #[test]
-    fn the_level_uniform_is_laid_out_as_the_shader_reads_it() {
-        let module = wgpu::naga::front::wgsl::parse_str(include_str!("pyramid.wgsl")).unwrap();
-        let (_, level) = module
-            .types
-            .iter()
-            .find(|(_, t)| t.name.as_deref() == Some("Level"))
-            .unwrap();
-        let wgpu::naga::TypeInner::Struct { members, span } = &level.inner else {
-            panic!("Level is a struct");
-        };
-        let names: Vec<&str> = members.iter().filter_map(|m| m.name.as_deref()).collect();
+    fn the_uniforms_are_laid_out_as_the_shaders_read_them() {
+        let module = parse(include_str!("pyramid.wgsl"));
+        let (members, size) = struct_layout(&module, "Level");
+        let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(
             names,
             [
@@ -283,12 +284,40 @@ mod tests {
                 "height"
             ]
         );
-        assert!(members.iter().enumerate().all(|(k, m)| m.offset == 4 * k as u32));
+        assert!(
+            members
+                .iter()
+                .enumerate()
+                .all(|(k, (_, offset))| *offset == 4 * k as u32)
+        );
         // The Rust side pads to a uniform's 16-byte multiple.
         assert_eq!(
             std::mem::size_of::<LevelUniform>(),
-            (*span as usize).next_multiple_of(16)
+            (size as usize).next_multiple_of(16)
         );
+        // The box test's view of the pyramid (pyramid_test.wgsl, after what
+        // it is appended to and the constants it takes).
+        let test = [
+            BOXES_WGSL,
+            &shader_constants(),
+            "const MAX_TEXELS: u32 = 4u;\n",
+            include_str!("pyramid_test.wgsl"),
+        ]
+        .concat();
+        let (members, size) = struct_layout(&parse(&test), "Pyramid");
+        assert_eq!(
+            members,
+            [
+                ("target_size", 0),
+                ("base_size", 8),
+                ("level_count", 16),
+                ("levels", 32)
+            ]
+            .map(|(n, o)| (n.to_string(), o))
+        );
+        assert_eq!(std::mem::size_of::<ShapeUniform>(), size as usize);
+        assert_eq!(std::mem::offset_of!(ShapeUniform, levels), 32);
+        assert_eq!(std::mem::offset_of!(ShapeUniform, level_count), 16);
     }
 
     #[test]
@@ -321,7 +350,7 @@ mod tests {
                 let camera = path.camera(3, resolution.aspect());
                 session.frame(3, &camera, &mut world, &mut dr, 0).unwrap();
                 let depth = session.mode_depth(0).unwrap();
-                let pyramid = DepthPyramid::new(gpu, resolution, &session.targets.mode_depths[0]);
+                let pyramid = DepthPyramid::new(gpu, resolution, &session.targets.mode_depths[0]).unwrap();
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 pyramid.encode(&mut encoder);
                 gpu.queue.submit([encoder.finish()]);

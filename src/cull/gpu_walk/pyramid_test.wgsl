@@ -25,7 +25,7 @@ struct Pyramid {
 }
 
 @group(1) @binding(0) var<storage, read> queue: array<u32>;
-// Level as plain words (raster_cull.wgsl): [1] is the number of entries.
+// Level as plain words (walk.wgsl): [1] is the number of entries.
 @group(1) @binding(1) var<storage, read> level_in: array<u32>;
 @group(1) @binding(2) var<storage, read_write> node_visible: array<u32>;
 @group(1) @binding(3) var<storage, read> pyramid: array<f32>;

@@ -7,7 +7,7 @@ use crate::hierarchy::Hierarchy;
 /// The most levels one walk may take (the size of the per-level statistics).
 pub const MAX_LEVELS: u32 = 64;
 
-/// A node as raster_cull.wgsl reads it.
+/// A node as walk.wgsl reads it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct TreeNode {

@@ -12,11 +12,13 @@
 //! The test below holds the GPU's audit and marks against them, frame by
 //! frame.
 
+use std::ops::RangeInclusive;
+
 use glam::{DMat4, DVec2, DVec3, Vec4Swizzles};
 
 use super::CullTree;
-use super::pool::{OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST};
 use super::pyramid::PyramidLevel;
+use super::words::{OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST};
 use crate::camera::Camera;
 use crate::gpu::{QueryBox, Resolution};
 
@@ -25,12 +27,16 @@ use crate::gpu::{QueryBox, Resolution};
 pub(super) struct CpuWalk {
     /// Nodes reached: the seed, and every child of a visible inner node.
     pub visited: u64,
-    /// Reached nodes whose box was drawn into the visibility buffer.
+    /// Reached nodes whose box was tested (drawn into the visibility
+    /// buffer, or compared with the pyramid).
     pub tested: u64,
-    /// Tested, and no fragment passed: the subtree is culled.
+    /// Tested, and not found visible: the subtree is culled.
     pub hidden: u64,
     /// Reached, and outside the frustum: culled untested.
     pub outside: u64,
+    /// Every node reached and not outside the frustum: queued for a test
+    /// (those reaching the near plane pass it untested).
+    pub queued: Vec<u32>,
     /// Objects of visible leaves: this frame's visible list.
     pub marked: Vec<bool>,
     /// Objects drawn: visible in the last frame (drawn first, as
@@ -62,6 +68,7 @@ pub(super) fn walk(tree: &CullTree, states: &[u32], visible_last: &[bool]) -> Cp
     while !queue.is_empty() {
         let mut next = Vec::new();
         for node in std::mem::take(&mut queue) {
+            w.queued.push(node);
             match states[node as usize] {
                 TO_TEST => {
                     w.hidden += 1;
@@ -87,6 +94,33 @@ pub(super) fn walk(tree: &CullTree, states: &[u32], visible_last: &[bool]) -> Cp
     w.tested = w.visited - w.outside - near;
     w.drawn = w.marked.iter().zip(visible_last).map(|(&m, &v)| m || v).collect();
     w
+}
+
+/// The level and the texels (columns, rows) hiz's test reads for the
+/// pixels `first` to `last` (x, y, inclusive) of a target of `size`: the
+/// base texels whose footprints hold those pixels, at the finest level
+/// where they span fewer than `span` + 1 texels across.
+fn texels_read(
+    first: [u32; 2],
+    last: [u32; 2],
+    size: Resolution,
+    levels: &[PyramidLevel],
+    span: u32,
+) -> (usize, [RangeInclusive<u32>; 2]) {
+    let base = levels[0];
+    let texel = |p: u32, base_side: u32, side: u32| (u64::from(p) * u64::from(base_side) / u64::from(side)) as u32;
+    let (bx0, bx1) = (
+        texel(first[0], base.width, size.width),
+        texel(last[0], base.width, size.width),
+    );
+    let (by0, by1) = (
+        texel(first[1], base.height, size.height),
+        texel(last[1], base.height, size.height),
+    );
+    let k = (0..levels.len())
+        .find(|&k| (bx1 >> k) - (bx0 >> k) < span && (by1 >> k) - (by0 >> k) < span)
+        .unwrap_or(levels.len() - 1);
+    (k, [bx0 >> k..=bx1 >> k, by0 >> k..=by1 >> k])
 }
 
 /// What hiz's test must find for one box.
@@ -132,21 +166,13 @@ pub(super) fn pyramid_verdict(
         (0.5 - low.y * 0.5) * height,
     ];
     let pixel = |edge: f64, side: f64| edge.floor().clamp(0.0, side - 1.0) as u32;
-    let (x0, x1) = (pixel(edges[0], width), pixel(edges[1], width));
-    let (y0, y1) = (pixel(edges[2], height), pixel(edges[3], height));
-    // The base texels whose footprints hold those pixels.
-    let base = levels[0];
-    let texel = |p: u32, base_side: u32, side: u32| (u64::from(p) * u64::from(base_side) / u64::from(side)) as u32;
-    let (bx0, bx1) = (texel(x0, base.width, size.width), texel(x1, base.width, size.width));
-    let (by0, by1) = (texel(y0, base.height, size.height), texel(y1, base.height, size.height));
-    let k = (0..levels.len())
-        .find(|&k| (bx1 >> k) - (bx0 >> k) < span && (by1 >> k) - (by0 >> k) < span)
-        .unwrap_or(levels.len() - 1);
-    let level = levels[k];
+    let first = [pixel(edges[0], width), pixel(edges[2], height)];
+    let last = [pixel(edges[1], width), pixel(edges[3], height)];
+    let (k, [xs, ys]) = texels_read(first, last, size, levels, span);
     let mut farthest = 1.0f64;
-    for y in by0 >> k..=by1 >> k {
-        for x in bx0 >> k..=bx1 >> k {
-            farthest = farthest.min(f64::from(texels[k][(y * level.width + x) as usize]));
+    for y in ys {
+        for x in xs.clone() {
+            farthest = farthest.min(f64::from(texels[k][(y * levels[k].width + x) as usize]));
         }
     }
     let on_pixel_edge = edges.iter().any(|e| (e - e.round()).abs() < 1e-3);
@@ -165,9 +191,11 @@ mod tests {
     use crate::bench::{RunOptions, Session};
     use crate::camera::generate::default_path;
     use crate::camera::path::CameraPath;
+    use crate::cull::ModeParams;
     use crate::cull::gpu_walk::GpuCulling;
+    use crate::cull::gpu_walk::depths::{Depth, DepthRange};
     use crate::cull::gpu_walk::hiz::{BoxesTested, HizParams, hierarchical_depth_culling};
-    use crate::cull::gpu_walk::ioc::{Depth, DepthRange, iterative_occlusion_culling};
+    use crate::cull::gpu_walk::ioc::iterative_occlusion_culling;
     use crate::cull::gpu_walk::roc::raster_occlusion_culling;
     use crate::gpu::{BackendChoice, GpuContext, Resolution};
     use crate::hierarchy::{Hierarchy, HierarchyParams};
@@ -180,10 +208,10 @@ mod tests {
     };
 
     /// Runs `mode` through `world` along `path` on `gpu`, holding every
-    /// frame against the twin's walk of `tree` and, for a pyramid test over
-    /// objects reading rectangles of at most `span` texels across, every
-    /// box's mark against [`pyramid_verdict`]; returns the nodes the walks
-    /// hid.
+    /// frame against the twin's walk of `tree` and, for a pyramid test
+    /// reading rectangles of at most `span` texels across, the mark of every
+    /// box it tested against [`pyramid_verdict`]; returns the nodes the
+    /// walks hid.
     fn compare(
         gpu: &GpuContext,
         mut world: World,
@@ -215,12 +243,13 @@ mod tests {
             if let Some(span) = span {
                 let (levels, texels) = on_gpu.pyramid(gpu).expect("a pyramid test");
                 let prepared = on_gpu.node_boxes();
-                for (node, query) in prepared.boxes.iter().enumerate() {
+                for &node in &twin.queued {
+                    let node = node as usize;
                     if prepared.states[node] != TO_TEST {
                         continue;
                     }
                     let marked = states[node] != TO_TEST;
-                    match pyramid_verdict(query, &camera, RESOLUTION, &levels, &texels, span) {
+                    match pyramid_verdict(&prepared.boxes[node], &camera, RESOLUTION, &levels, &texels, span) {
                         Verdict::Visible => assert!(marked, "{at}: box {node} is visible"),
                         Verdict::Hidden => assert!(!marked, "{at}: box {node} is hidden"),
                         Verdict::TooClose => too_close += 1,
@@ -233,9 +262,16 @@ mod tests {
             assert_eq!(row.queries, twin.tested, "{at}");
             let drawn: Vec<bool> = (0..objects as u32).map(|o| session.drawn[0].contains(o)).collect();
             assert_eq!(drawn, twin.drawn, "{at}");
+            // Early: last frame's visible list; late: marked now, not in it.
             let early = visible_last.iter().filter(|&&v| v).count() as u64;
+            let late = twin
+                .marked
+                .iter()
+                .zip(&visible_last)
+                .filter(|&(&m, &v)| m && !v)
+                .count() as u64;
             assert_eq!(row.traversal.drawn_early, early, "{at}");
-            assert_eq!(row.traversal.drawn_late, row.objects_drawn - early, "{at}");
+            assert_eq!(row.traversal.drawn_late, late, "{at}");
             hidden += twin.hidden;
             tested += row.queries;
             visible_last = twin.marked;
@@ -245,6 +281,69 @@ mod tests {
             "{too_close} of {tested} boxes too close to call"
         );
         hidden
+    }
+
+    /// The target pixels a level-`k` texel's footprint touches along one
+    /// side: its base texels [t · 2^k, (t + 1) · 2^k) span target pixels
+    /// [first · side / base, end · side / base), rounded outward
+    /// (pyramid.rs's definition).
+    fn footprint(t: u32, k: usize, base_side: u32, side: u32) -> std::ops::Range<u64> {
+        let (first, end) = (
+            u64::from(t << k).min(u64::from(base_side)),
+            u64::from((t + 1) << k).min(u64::from(base_side)),
+        );
+        let (side, base_side) = (u64::from(side), u64::from(base_side));
+        first * side / base_side..(end * side).div_ceil(base_side)
+    }
+
+    #[test]
+    fn the_texels_read_hold_every_pixel_of_the_rectangle_and_span_at_most_the_limit() {
+        let mut rng = crate::scene::builtin::Rng::new(20);
+        let sizes = [
+            (801, 599),
+            (1, 1),
+            (1023, 1),
+            (8191, 3),
+            (37, 5),
+            (2, 3),
+            (640, 480),
+            (1920, 1080),
+        ];
+        for (width, height) in sizes {
+            let size = Resolution { width, height };
+            let levels = super::super::pyramid::levels(size);
+            let base = levels[0];
+            for span in [2, 3, 4, 16] {
+                for _ in 0..400 {
+                    let pick = |side: u32, rng: &mut crate::scene::builtin::Rng| {
+                        let a = rng.range(0.0, f64::from(side)) as u32;
+                        let b = rng.range(0.0, f64::from(side)) as u32;
+                        (a.min(b), a.max(b))
+                    };
+                    let ((x0, x1), (y0, y1)) = (pick(width, &mut rng), pick(height, &mut rng));
+                    let (k, [xs, ys]) = texels_read([x0, y0], [x1, y1], size, &levels, span);
+                    let at = format!(
+                        "{width}x{height} span {span}: pixels {x0}..={x1} × {y0}..={y1} read level {k} {xs:?} × {ys:?}"
+                    );
+                    assert!(xs.end() < &levels[k].width && ys.end() < &levels[k].height, "{at}");
+                    if k + 1 < levels.len() {
+                        assert!(xs.end() - xs.start() < span && ys.end() - ys.start() < span, "{at}");
+                    }
+                    for x in x0..=x1 {
+                        let held = xs
+                            .clone()
+                            .any(|t| footprint(t, k, base.width, width).contains(&u64::from(x)));
+                        assert!(held, "{at}: column {x}");
+                    }
+                    for y in y0..=y1 {
+                        let held = ys
+                            .clone()
+                            .any(|t| footprint(t, k, base.height, height).contains(&u64::from(y)));
+                        assert!(held, "{at}: row {y}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]
@@ -285,23 +384,20 @@ mod tests {
             );
             let hidden = compare(gpu, world(), &path, iterative_occlusion_culling(nodes), &cut, None);
             assert!(hidden > 50, "ioc's walks hide nodes ({hidden})");
-            let objects = HizParams {
-                texels: 2,
-                boxes: BoxesTested::Objects,
-                range: DepthRange {
-                    start: Depth::Auto,
-                    bottom: Depth::Auto,
-                },
-            };
-            let hidden = compare(gpu, world(), &path, hierarchical_depth_culling(objects), &flat, Some(2));
-            assert!(hidden > 50, "hiz's walks over objects hide them ({hidden})");
+            // hiz as it runs by default (objects, 4 texels), as the engines
+            // read (2), and over nodes.
+            let default = HizParams::from_params(&ModeParams::default()).unwrap();
+            let engines = HizParams { texels: 2, ..default };
             let over_nodes = HizParams {
-                texels: 4,
                 boxes: BoxesTested::Nodes,
                 range: nodes,
+                ..default
             };
-            let hidden = compare(gpu, world(), &path, hierarchical_depth_culling(over_nodes), &cut, None);
-            assert!(hidden > 20, "hiz's walks over nodes hide them ({hidden})");
+            for (params, tree, least) in [(default, &flat, 50), (engines, &flat, 50), (over_nodes, &cut, 20)] {
+                let mode = hierarchical_depth_culling(params);
+                let hidden = compare(gpu, world(), &path, mode, tree, Some(params.texels));
+                assert!(hidden > least, "hiz's walks hide boxes ({params:?}: {hidden})");
+            }
         }
     }
 }

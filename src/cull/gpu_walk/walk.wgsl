@@ -1,6 +1,7 @@
-// The compute half of GPU-driven culling (paper 004 §2): walking the tree one
-// level at a time, and building the draw lists. The render half, which marks
-// visible nodes, is raster_mark.wgsl.
+// The compute stages of a GPU walk (paper 004 §2) that every level test
+// shares: walking the tree one level at a time, and building the draw lists.
+// The test that marks a level's visible nodes comes before each expansion:
+// raster_mark.wgsl (roc, ioc) or pyramid_test.wgsl (hiz).
 //
 // Every pass strides over its work by the size of its grid, so a queue or an
 // object count beyond what one dispatch can launch is still covered.
@@ -28,7 +29,7 @@ struct Level {
     groups_x: atomic<u32>,
     groups_y: u32,
     groups_z: u32,
-    // Tested, and no fragment passed.
+    // Tested, and not found visible.
     hidden: atomic<u32>,
     // Children outside the frustum: hidden untested, and not queued.
     outside: atomic<u32>,
@@ -106,8 +107,8 @@ fn cs_expand(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
                 object_state[object] |= MARKED;
             }
         } else {
-            // A child outside the frustum would draw no fragment: it is
-            // counted and not queued, which spares its box's vertices.
+            // A child outside the frustum cannot be visible: it is counted
+            // and not queued, which spares its test.
             var inside = 0u;
             for (var k = 0u; k < node.child_count; k++) {
                 inside += u32(node_visible[node.first_child + k] != OUTSIDE_FRUSTUM);

@@ -1,0 +1,92 @@
+//! What the walk's buffers hold, word by word, and the constants its
+//! shaders share with the Rust side: written as WGSL before each shader's
+//! text ([`shader_constants`]), so the two cannot drift apart.
+
+use crate::gpu::{BOXES_WGSL, GpuContext};
+
+/// Threads per workgroup of walk.wgsl, and its grid limit.
+pub(super) const GROUP_SIZE: u32 = 64;
+pub(super) const MAX_GROUPS: u32 = 65_535;
+
+/// Words of one level's arguments (`Level` in walk.wgsl): an indexed
+/// indirect draw (5), an indirect dispatch (3), and counts of nodes hidden,
+/// outside the frustum and reaching the near plane (3).
+pub(super) const LEVEL_WORDS: usize = 11;
+pub(super) const LEVEL_BYTES: u64 = LEVEL_WORDS as u64 * 4;
+/// Where the dispatch arguments and the hidden count start in a level.
+pub(super) const DISPATCH_OFFSET: u64 = 5 * 4;
+pub(super) const HIDDEN: usize = 8;
+
+/// What a node's word of the visibility buffer says: set by the CPU before
+/// a walk, and to [`VISIBLE`] by the level's test (raster_mark.wgsl's
+/// `fs_mark` for a box a fragment of which passed, pyramid_test.wgsl's
+/// `cs_test` for a box not behind the pyramid).
+pub(super) const TO_TEST: u32 = 0;
+pub(super) const VISIBLE: u32 = 1;
+pub(super) const OUTSIDE_FRUSTUM: u32 = 2;
+pub(super) const REACHES_NEAR: u32 = 3;
+/// What an object's word of the state buffer says (`cs_expand` and
+/// `cs_compact`): drawn as visible in the last frame, and marked visible in
+/// this walk.
+pub(super) const VISIBLE_LAST_FRAME: u32 = 1;
+pub(super) const MARKED: u32 = 2;
+/// What an object's word of the drawn buffer says after `cs_compact`: drawn
+/// first, as last frame's visible list, or after the test, newly visible.
+pub(super) const DRAWN_EARLY: u32 = 1;
+pub(super) const DRAWN_LATE: u32 = 2;
+pub(super) const DRAW_COMMAND_BYTES: u64 = 20;
+
+/// The constants above that the shaders read, as WGSL.
+pub(super) fn shader_constants() -> String {
+    [
+        ("TO_TEST", TO_TEST),
+        ("VISIBLE", VISIBLE),
+        ("OUTSIDE_FRUSTUM", OUTSIDE_FRUSTUM),
+        ("REACHES_NEAR", REACHES_NEAR),
+        ("VISIBLE_LAST_FRAME", VISIBLE_LAST_FRAME),
+        ("MARKED", MARKED),
+        ("DRAWN_EARLY", DRAWN_EARLY),
+        ("DRAWN_LATE", DRAWN_LATE),
+        ("GROUP_SIZE", GROUP_SIZE),
+        ("MAX_GROUPS", MAX_GROUPS),
+    ]
+    .iter()
+    .map(|(name, value)| format!("const {name}: u32 = {value}u;\n"))
+    .collect()
+}
+
+/// A shader module of boxes.wgsl (the camera, the boxes, `box_clip`), the
+/// shared constants and `source`.
+pub(super) fn boxes_module(gpu: &GpuContext, label: &str, source: &str) -> wgpu::ShaderModule {
+    gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl([BOXES_WGSL, &shader_constants(), source].concat().into()),
+    })
+}
+
+/// WGSL `source` parsed, or the test fails with the parser's message.
+#[cfg(test)]
+pub(super) fn parse(source: &str) -> wgpu::naga::Module {
+    wgpu::naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)))
+}
+
+/// The members (name, byte offset) and size of struct `name` in `module`,
+/// for tests that hold a shader's structs against what Rust writes.
+#[cfg(test)]
+pub(super) fn struct_layout(module: &wgpu::naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
+    let (_, ty) = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no struct {name}"));
+    match &ty.inner {
+        wgpu::naga::TypeInner::Struct { members, span } => (
+            members
+                .iter()
+                .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                .collect(),
+            *span,
+        ),
+        other => panic!("{name} is {other:?}"),
+    }
+}
