@@ -21,6 +21,10 @@ pub struct Distribution {
     pub max: f64,
     /// Median absolute deviation from the median (unscaled).
     pub mad: f64,
+    /// Values summarised: the frames that have the column (0 in files
+    /// written before it was recorded).
+    #[serde(default)]
+    pub count: usize,
 }
 
 impl Distribution {
@@ -51,6 +55,7 @@ impl Distribution {
             min: sorted[0],
             max: sorted[sorted.len() - 1],
             mad: percentile(&deviations, 0.5),
+            count: values.len(),
         })
     }
 }

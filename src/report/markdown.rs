@@ -54,7 +54,7 @@ pub fn render(s: &Summary) -> String {
             flagged.join(", ")
         );
     }
-    cost_split(w, s);
+    cost_split(w, &s.modes);
     missed_list(w, s);
     if let Some(sweep) = &s.sweep {
         sweep_table(w, s, sweep);
@@ -89,16 +89,22 @@ pub fn render(s: &Summary) -> String {
 /// deciding on the CPU, testing boxes on the GPU (hiz: of which building
 /// its pyramid), drawing, waiting for results; and for GPU walks the
 /// objects drawn before and after the test. Only with GPU timestamps.
-fn cost_split(w: &mut String, s: &Summary) {
-    if !s.modes.iter().any(|m| m.stats.contains_key("gpu_ms")) {
+fn cost_split(w: &mut String, modes: &[ModeSummary]) {
+    if !modes.iter().any(|m| m.stats.contains_key("gpu_ms")) {
         return;
     }
     let _ = writeln!(
         w,
         "\n## Cost split (means per frame)\n\n| mode | frame ms | culling CPU ms | box tests GPU ms | of which pyramid | drawing GPU ms | waits ms | drawn early | drawn late |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
-    for m in &s.modes {
+    for m in modes {
         let mean = |col: &str| m.stats.get(col).map(|d| d.mean);
+        // Per frame of the run: a frame without box tests (auto running
+        // vfc) spent none on them.
+        let per_frame = |col: &str| {
+            let d = m.stats.get(col)?;
+            Some(d.mean * d.count as f64 / m.frames.max(1) as f64)
+        };
         let ms = |v: Option<f64>| v.map_or_else(|| "–".into(), |v| format!("{v:.2}"));
         // Only GPU walks draw early or late; every other mode shows "–".
         let walks = mean("drawn_early").unwrap_or(0.0) + mean("drawn_late").unwrap_or(0.0) > 0.0;
@@ -112,8 +118,8 @@ fn cost_split(w: &mut String, s: &Summary) {
             m.name,
             ms(mean("frame_ms")),
             ms(mean("cpu_ms")),
-            ms(mean("query_gpu_ms")),
-            ms(mean("pyramid_gpu_ms")),
+            ms(per_frame("query_gpu_ms")),
+            ms(per_frame("pyramid_gpu_ms")),
             ms(mean("render_ms")),
             ms(mean("query_wait_ms")),
             count("drawn_early"),
@@ -218,6 +224,36 @@ fn missed_list(w: &mut String, s: &Summary) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_cost_split_spreads_box_tests_over_every_frame() {
+        use crate::measure::{FrameStats, ModeDescription, summarize};
+        // auto: two frames of hiz (10 ms of GPU, 4 of box tests, 3 of them
+        // the pyramid) and two of vfc (10 ms of drawing, no tests).
+        let rows: Vec<FrameStats> = (0..4)
+            .map(|frame| {
+                let hiz = frame < 2;
+                FrameStats {
+                    frame,
+                    gpu_ms: Some(10.0),
+                    query_gpu_ms: hiz.then_some(4.0),
+                    pyramid_gpu_ms: hiz.then_some(3.0),
+                    ..FrameStats::blank("auto")
+                }
+            })
+            .collect();
+        let mode = ModeDescription {
+            name: "auto".into(),
+            conservative: true,
+            parameters: serde_json::json!({}),
+        };
+        let mut w = String::new();
+        cost_split(&mut w, &summarize(&rows, &[mode], 100));
+        let row = w.lines().find(|l| l.starts_with("| auto |")).unwrap();
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        // Box tests 2 and pyramid 1.5 a frame; drawing (6 + 6 + 10 + 10) / 4.
+        assert_eq!(cells[4..7], ["2.00", "1.50", "8.00"], "{row}");
+    }
 
     #[test]
     fn numbers_are_grouped_by_thousands() {
