@@ -89,7 +89,7 @@ fn bad_input_gets_one_clear_line() {
         2,
         &[
             "unknown mode 'warp'",
-            "dr, vfc, sq, omq, ac, chc, roc, ioc, hiz, auto, oracle",
+            "dr, vfc, sq, omq, ac, chc, roc, ioc, hiz, swr, auto, oracle",
         ],
     );
     fails_with(
@@ -277,7 +277,7 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
     assert_eq!(
         modes,
         [
-            "dr", "vfc", "sq", "omq", "ac", "chc", "roc", "ioc", "hiz", "auto", "oracle"
+            "dr", "vfc", "sq", "omq", "ac", "chc", "roc", "ioc", "hiz", "swr", "auto", "oracle"
         ]
     );
     for m in summary["modes"].as_array().unwrap() {
@@ -312,7 +312,7 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
     ] {
         assert!(header.split(',').any(|c| c == column), "frames.csv lacks {column}");
     }
-    assert_eq!(lines.count(), 22, "2 frames × 11 modes");
+    assert_eq!(lines.count(), 24, "2 frames × 12 modes");
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| oracle |") && report.contains("Adapter:"));
     // The cost split, where the adapter has timestamps: hiz's pyramid is

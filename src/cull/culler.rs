@@ -95,6 +95,8 @@ traversal_stats! {
     /// Objects a GPU walk drew after its test, newly visible (the late
     /// pass).
     drawn_late,
+    /// Occluder triangles a CPU occlusion buffer rasterised (swr).
+    occluder_triangles,
 }
 
 impl TraversalStats {

@@ -27,6 +27,7 @@ mod oracle;
 mod recording;
 mod registry;
 mod sq;
+pub mod swr;
 pub mod traversal;
 mod vfc;
 
@@ -45,4 +46,5 @@ pub use omq::{OccupancyMapQueries, OmqParams};
 pub use oracle::Oracle;
 pub use registry::{create, modes, parse_modes};
 pub use sq::SingleQueries;
+pub use swr::{SoftwareOcclusionCulling, SwrParams};
 pub use vfc::FrustumCulling;

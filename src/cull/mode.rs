@@ -45,6 +45,7 @@ modes! {
     Roc => "roc",
     Ioc => "ioc",
     Hiz => "hiz",
+    Swr => "swr",
     Auto => "auto",
     Oracle => "oracle",
 }

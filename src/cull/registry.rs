@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use super::culler::Culler;
 use super::mode::{ModeError, ModeId, ModeInfo, ModeParams};
-use super::{ac, auto, chc, dr, gpu_walk, omq, oracle, sq, vfc};
+use super::{ac, auto, chc, dr, gpu_walk, omq, oracle, sq, swr, vfc};
 use crate::scene::Scene;
 
 impl ModeId {
@@ -21,6 +21,7 @@ impl ModeId {
             ModeId::Roc => &gpu_walk::roc::MODE,
             ModeId::Ioc => &gpu_walk::ioc::MODE,
             ModeId::Hiz => &gpu_walk::hiz::MODE,
+            ModeId::Swr => &swr::MODE,
             ModeId::Auto => &auto::MODE,
             ModeId::Oracle => &oracle::MODE,
         }
@@ -136,7 +137,7 @@ mod tests {
         assert!(
             ModeError::Unknown("x".into())
                 .to_string()
-                .contains("dr, vfc, sq, omq, ac, chc, roc, ioc, hiz, auto, oracle")
+                .contains("dr, vfc, sq, omq, ac, chc, roc, ioc, hiz, swr, auto, oracle")
         );
     }
 
