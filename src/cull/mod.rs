@@ -27,7 +27,7 @@ mod oracle;
 mod recording;
 mod registry;
 mod sq;
-pub mod swr;
+mod swr;
 pub mod traversal;
 mod vfc;
 

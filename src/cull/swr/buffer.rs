@@ -7,29 +7,38 @@
 //! Why it is conservative. A box is hidden when its nearest depth lies
 //! behind the farthest depth the buffer holds over the cells its pixels
 //! fall in. That is safe if, at every pixel centre a cell holds, the
-//! occluders drawn this frame are no farther than the cell's depth. So a
-//! triangle writes a cell only where it covers every pixel centre the cell
-//! holds (not merely the cell's middle), by a margin that outlasts the GPU
-//! rasteriser's snapping and f32 rounding ([`COVER_MARGIN`]); and it
-//! writes the farthest depth it reaches over those centres (depth is affine
-//! across a triangle on screen, so the least of the four corners of the
-//! centres' rectangle), moved farther by the GPU's depth rounding
+//! occluders drawn this frame are no farther than the cell's depth. The
+//! GPU draws a triangle whose corners it placed within some error of ours
+//! (sub-pixel snapping, [`VERTEX_ERROR`]; f32 vertices,
+//! [`ScreenTriangle::error`]), so at a centre it covers it may draw the
+//! depth of any point that near the centre. So a triangle writes a cell
+//! only where it covers every pixel centre the cell holds (not merely the
+//! cell's middle) by twice that error, and it writes the farthest depth it
+//! reaches over the centres' rectangle widened by that error (depth is
+//! affine across a triangle on screen, so the least over the widened
+//! rectangle's corners), moved farther by the GPU's depth rounding
 //! ([`DEPTH_MARGIN`]). A cell keeps the nearest such depth of the triangles
 //! covering it. A pyramid level keeps the least of the 2×2 texels below it.
+//!
+//! The GPU must also draw every fragment of an occluder the buffer counts:
+//! the scene's fragment stage discards only fragments nearer than the
+//! object's box (`FragmentLimit`, gpu/conservative.rs), and an occluder's
+//! triangles lie within its box (the box is its mesh's bounds, placed).
 
 use glam::DVec3;
 
 use crate::gpu::Resolution;
 
-/// Pixels by which a triangle must reach beyond every pixel centre of a
-/// cell to claim it: twice the largest sub-pixel snap Vulkan allows (1/32)
-/// plus f32 rounding of the GPU's vertex transform, with room to spare.
-const COVER_MARGIN: f64 = 1.0 / 8.0;
+/// Pixels the GPU may place a triangle's corner from where the CPU
+/// projects it, on each axis, besides a triangle's own
+/// [`ScreenTriangle::error`]: twice the largest sub-pixel snap Vulkan
+/// allows (1/32).
+const VERTEX_ERROR: f64 = 1.0 / 16.0;
 
 /// A cell's depth is moved farther by this fraction, and by
-/// [`DEPTH_ABSOLUTE`], than the triangle's exact depth: the GPU draws the
-/// occluder from f32 vertices, and GL keeps only absolute precision of its
-/// depth (gpu/conservative.rs, rule 1).
+/// [`DEPTH_ABSOLUTE`], than the triangle's exact depth: the GPU
+/// interpolates depth in f32, and GL keeps only absolute precision of it
+/// (gpu/conservative.rs, rule 1); both apply on every backend.
 const DEPTH_MARGIN: f64 = 1.0 / (1u32 << 18) as f64;
 const DEPTH_ABSOLUTE: f64 = 1.0 / (1u32 << 21) as f64;
 
@@ -38,9 +47,22 @@ const DEPTH_ABSOLUTE: f64 = 1.0 / (1u32 << 21) as f64;
 const TEST_SPAN: u32 = 8;
 
 /// An occluder triangle on screen: per corner its pixel position (x, y)
-/// and depth (z).
+/// and depth (z), and how far beyond [`VERTEX_ERROR`] the GPU's f32 vertex
+/// transform may place its corners.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ScreenTriangle(pub [DVec3; 3]);
+pub struct ScreenTriangle {
+    pub corners: [DVec3; 3],
+    pub error: VertexError,
+}
+
+/// How far the GPU may place a triangle's corners from the CPU's
+/// projection: `pixels` on each axis, and `depth` as a fraction of their
+/// depth.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VertexError {
+    pub pixels: f64,
+    pub depth: f64,
+}
 
 /// One level of the buffer's pyramid.
 struct Level {
@@ -132,21 +154,25 @@ impl OcclusionBuffer {
     /// Writes `triangle` into the cells it covers (see the module above);
     /// returns how many it wrote.
     pub fn rasterise(&mut self, triangle: &ScreenTriangle) -> u32 {
-        let [a, b, c] = triangle.0;
+        let [a, b, c] = triangle.corners;
+        let slack = VERTEX_ERROR + triangle.error.pixels;
+        let cover = 2.0 * slack;
+        // Twice the triangle's area. A triangle too small to hold a disc of
+        // radius `cover` (3√3 · cover² for the equilateral, the roomiest)
+        // covers no centre by that much.
         let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-        if area.abs() < 1e-12 || !area.is_finite() {
+        if !area.is_finite() || area.abs() / 2.0 < 3.0 * 3f64.sqrt() * cover * cover {
             return 0;
         }
         // Inward edge functions, scaled to distances in pixels: a point is
-        // inside by `margin` when every one is at least that.
+        // inside by `cover` when every one is at least that.
         let edges = [(a, b), (b, c), (c, a)].map(|(p, q)| {
             let (dx, dy) = (q.x - p.x, q.y - p.y);
-            let length = dx.hypot(dy);
-            let s = area.signum() / length;
+            let s = area.signum() / dx.hypot(dy);
             // inside(x, y) = s · ((q − p) × ((x, y) − p))
             [-dy * s, dx * s, (dy * p.x - dx * p.y) * s]
         });
-        let inside = |x: f64, y: f64| edges.iter().all(|e| e[0] * x + e[1] * y + e[2] >= COVER_MARGIN);
+        let inside = |x: f64, y: f64| edges.iter().all(|e| e[0] * x + e[1] * y + e[2] >= cover);
         // The depth plane z = α x + β y + γ through the three corners.
         let alpha = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / area;
         let beta = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
@@ -161,15 +187,18 @@ impl OcclusionBuffer {
             let [y0, y1] = self.rows[row as usize];
             for column in column_range.clone() {
                 let [x0, x1] = self.columns[column as usize];
-                let corners = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)];
-                if !corners.iter().all(|&(x, y)| inside(x, y)) {
+                let centres = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)];
+                if !centres.iter().all(|&(x, y)| inside(x, y)) {
                     continue;
                 }
-                let farthest = corners
+                // The GPU may draw the depth of any point within `slack` of
+                // a centre: the least over the widened rectangle.
+                let (x0, x1, y0, y1) = (x0 - slack, x1 + slack, y0 - slack, y1 + slack);
+                let farthest = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)]
                     .iter()
                     .map(|&(x, y)| depth_at(x, y))
                     .fold(f64::INFINITY, f64::min);
-                let depth = farthest * (1.0 - DEPTH_MARGIN) - DEPTH_ABSOLUTE;
+                let depth = farthest * (1.0 - DEPTH_MARGIN - triangle.error.depth) - DEPTH_ABSOLUTE;
                 if depth <= 0.0 {
                     continue;
                 }
@@ -205,6 +234,7 @@ impl OcclusionBuffer {
     /// hold them, read at the finest pyramid level where they span at most
     /// [`TEST_SPAN`] texels across.
     pub fn farthest_over(&self, first: [u32; 2], last: [u32; 2]) -> f32 {
+        debug_assert!(first[0] <= last[0] && first[1] <= last[1], "{first:?} to {last:?}");
         let cells = self.cells();
         let (x0, x1) = (
             cell_of(first[0], cells.width, self.target.width),
@@ -250,7 +280,7 @@ mod tests {
     /// barycentric coordinates; 0 where none covers it.
     fn nearest_at(triangles: &[ScreenTriangle], x: f64, y: f64) -> f64 {
         let mut nearest = 0.0f64;
-        for ScreenTriangle([a, b, c]) in triangles {
+        for &ScreenTriangle { corners: [a, b, c], .. } in triangles {
             let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
             let wa = ((b.x - x) * (c.y - y) - (b.y - y) * (c.x - x)) / area;
             let wb = ((c.x - x) * (a.y - y) - (c.y - y) * (a.x - x)) / area;
@@ -269,16 +299,19 @@ mod tests {
                 // Sizes from a fraction of a pixel to beyond the screen.
                 let centre = DVec3::new(rng.range(-0.2 * w, 1.2 * w), rng.range(-0.2 * h, 1.2 * h), 0.0);
                 let reach = rng.range(0.5, 0.8 * w.max(h));
-                ScreenTriangle([0, 1, 2].map(|_| {
-                    let offset = DVec3::new(rng.range(-reach, reach), rng.range(-reach, reach), 0.0);
-                    (centre + offset).with_z(rng.range(1e-4, 0.9))
-                }))
+                ScreenTriangle {
+                    corners: [0, 1, 2].map(|_| {
+                        let offset = DVec3::new(rng.range(-reach, reach), rng.range(-reach, reach), 0.0);
+                        (centre + offset).with_z(rng.range(1e-4, 0.9))
+                    }),
+                    error: VertexError::default(),
+                }
             })
             .collect()
     }
 
     #[test]
-    fn a_cell_holds_no_depth_nearer_than_the_triangles_at_any_pixel_centre_it_holds() {
+    fn a_cell_holds_no_depth_nearer_than_the_triangles_as_the_gpu_may_draw_them_at_any_pixel_centre_it_holds() {
         let mut rng = Rng::new(21);
         let cases = [
             ((801, 599), (256, 192)),
@@ -295,6 +328,24 @@ mod tests {
             for t in &triangles {
                 written += buffer.rasterise(t);
             }
+            // The triangles as the GPU may place them: every corner moved
+            // by up to the snap bound on each axis, at the extremes.
+            let triangles: Vec<ScreenTriangle> = triangles
+                .iter()
+                .map(|t| ScreenTriangle {
+                    corners: t.corners.map(|c| {
+                        let mut shift = || {
+                            if rng.range(0.0, 1.0) < 0.5 {
+                                -VERTEX_ERROR
+                            } else {
+                                VERTEX_ERROR
+                            }
+                        };
+                        c + DVec3::new(shift(), shift(), 0.0)
+                    }),
+                    ..*t
+                })
+                .collect();
             // Every pixel, with the cell a box test reads for it (written
             // out here, not taken from the code under test).
             let cells = buffer.cells();
@@ -355,16 +406,15 @@ mod tests {
         let mut buffer = OcclusionBuffer::new(target, Resolution { width: 16, height: 12 });
         // A plane leaning in x: depth 0.5 at x = 0, 0.3 at x = 64.
         let at = |x: f64, y: f64| DVec3::new(x, y, 0.5 - 0.2 * x / 64.0);
-        assert_eq!(
-            buffer.rasterise(&ScreenTriangle([
-                at(-100.0, -100.0),
-                at(300.0, -100.0),
-                at(-100.0, 300.0)
-            ])),
-            192
-        );
-        // Column 0 holds pixels 0..=3, centres 0.5 to 3.5: its farthest is at 3.5.
-        let expected = (0.5 - 0.2 * 3.5 / 64.0) * (1.0 - DEPTH_MARGIN) - DEPTH_ABSOLUTE;
+        let whole = ScreenTriangle {
+            corners: [at(-100.0, -100.0), at(300.0, -100.0), at(-100.0, 300.0)],
+            error: VertexError::default(),
+        };
+        assert_eq!(buffer.rasterise(&whole), 192);
+        // Column 0 holds pixels 0..=3, centres 0.5 to 3.5: its farthest is
+        // where the GPU may sample beside 3.5.
+        let x = 3.5 + VERTEX_ERROR;
+        let expected = (0.5 - 0.2 * x / 64.0) * (1.0 - DEPTH_MARGIN) - DEPTH_ABSOLUTE;
         assert_eq!(buffer.depths()[0], f32_at_most(expected));
         assert!(f64::from(buffer.depths()[0]) <= expected);
     }

@@ -11,8 +11,11 @@
 //! 2. **Rasterise** their triangles, projected in f64, into a buffer of
 //!    `swr.resolution` cells, conservatively (buffer.rs: a cell takes a
 //!    triangle's farthest depth over the pixels it holds, and only where the
-//!    triangle covers all of them); triangles reaching the near plane are
-//!    left out (fewer occluders is always safe).
+//!    triangle covers all of them, with the GPU's snapping and f32 error as
+//!    margins); triangles reaching the near plane are left out (fewer
+//!    occluders is always safe). A cell is written only by a triangle that
+//!    covers it whole, so meshes of triangles about a cell's size occlude
+//!    little (MOC's coverage masks merge such triangles).
 //! 3. **Pyramid** of the buffer's farthest depths.
 //! 4. **Test**: the hierarchy is walked as `vfc` walks it; a node in the
 //!    frustum is also tested by its box (grown and raised as every box test
@@ -31,15 +34,16 @@
 
 mod buffer;
 
-use glam::{DMat4, DVec2, DVec3, Vec4Swizzles};
+use glam::{DMat3, DMat4, DVec2, DVec3, Vec4Swizzles};
 use serde::Serialize;
 
+use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{BoxMargins, DepthMargins, EyeBox, Frame, GpuError, GpuSetup, QueryBox, Resolution, eye_relative_box};
 use crate::scene::Scene;
-pub use buffer::{OcclusionBuffer, ScreenTriangle};
+use buffer::{OcclusionBuffer, ScreenTriangle, VertexError};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
@@ -71,13 +75,8 @@ const TRIANGLES: ParamInfo = ParamInfo {
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SwrParams {
-    #[serde(serialize_with = "as_text")]
     pub resolution: Resolution,
     pub triangles: u64,
-}
-
-fn as_text<S: serde::Serializer>(r: &Resolution, s: S) -> Result<S::Ok, S::Error> {
-    s.collect_str(r)
 }
 
 impl SwrParams {
@@ -138,41 +137,61 @@ impl Projector {
         }
     }
 
-    /// The eye-relative point `p` on screen: (x, y) in pixels, z its depth;
-    /// `None` nearer than `near` along the view (or behind the eye).
-    fn project(&self, p: DVec3, near: f64) -> Option<DVec3> {
+    /// The eye-relative point `p` on screen: (x, y) in pixels, z its depth,
+    /// and its view depth; `None` nearer than `near` along the view (or
+    /// behind the eye).
+    fn project(&self, p: DVec3, near: f64) -> Option<(DVec3, f64)> {
         let clip = self.view_projection * p.extend(1.0);
         if clip.w.is_nan() || clip.w < near {
             return None;
         }
         let ndc = clip.xyz() / clip.w;
-        Some(DVec3::new(
+        let on_screen = DVec3::new(
             (ndc.x * 0.5 + 0.5) * self.size.x,
             (0.5 - ndc.y * 0.5) * self.size.y,
             ndc.z,
-        ))
+        );
+        Some((on_screen, clip.w))
     }
 
-    /// A tested box's pixels (first and last, x and y, clamped to the
-    /// target), its screen area in pixels and its nearest depth, raised.
-    fn box_on_screen(&self, q: &QueryBox) -> ([u32; 2], [u32; 2], f64, f64) {
+    /// A tested box on screen; `None` where a corner does not project to
+    /// a finite point (then nothing can be said of it: it is visible).
+    fn box_on_screen(&self, q: &QueryBox) -> Option<BoxOnScreen> {
         let (min, max) = (q.min.xyz().as_dvec3(), q.max.xyz().as_dvec3());
         let (mut low, mut high, mut nearest) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
         for corner in 0..8 {
             let pick = |bit: u32, axis: usize| if corner & bit != 0 { max[axis] } else { min[axis] };
             let clip = self.view_projection * DVec3::new(pick(1, 0), pick(2, 1), pick(4, 2)).extend(1.0);
             let ndc = clip.xyz() / clip.w;
+            if !ndc.is_finite() {
+                return None;
+            }
             let pixel = DVec2::new((ndc.x * 0.5 + 0.5) * self.size.x, (0.5 - ndc.y * 0.5) * self.size.y);
             low = low.min(pixel);
             high = high.max(pixel);
             nearest = nearest.max(ndc.z + f64::from(q.min.w));
         }
         let clamp = |v: f64, side: f64| v.floor().clamp(0.0, side - 1.0) as u32;
-        let first = [clamp(low.x, self.size.x), clamp(low.y, self.size.y)];
-        let last = [clamp(high.x, self.size.x), clamp(high.y, self.size.y)];
         let seen = (high.min(self.size) - low.max(DVec2::ZERO)).max(DVec2::ZERO);
-        (first, last, seen.x * seen.y, nearest)
+        Some(BoxOnScreen {
+            first: [clamp(low.x, self.size.x), clamp(low.y, self.size.y)],
+            last: [clamp(high.x, self.size.x), clamp(high.y, self.size.y)],
+            area: seen.x * seen.y,
+            nearest,
+        })
     }
+}
+
+/// A tested box on screen.
+struct BoxOnScreen {
+    /// The first and last pixels (x, y) its rectangle touches, clamped to
+    /// the target.
+    first: [u32; 2],
+    last: [u32; 2],
+    /// Pixels of the target it covers.
+    area: f64,
+    /// Its nearest depth, raised.
+    nearest: f64,
 }
 
 /// How a box stands against the buffer.
@@ -182,24 +201,26 @@ enum Verdict {
     Visible,
 }
 
-/// `bounds` (in the frustum) tested against `buffer` for `camera`.
-fn test_box(
-    buffer: &OcclusionBuffer,
-    projector: &Projector,
-    camera: &Camera,
+/// What one frame tests boxes with.
+struct Tester<'a> {
+    buffer: &'a OcclusionBuffer,
+    projector: &'a Projector,
+    camera: &'a Camera,
+    view: &'a DMat3,
     margins: BoxMargins,
-    bounds: &crate::bounds::Aabb,
-) -> Verdict {
-    match eye_relative_box(camera, &camera.view_rotation(), margins, bounds) {
-        EyeBox::ReachesNear => Verdict::Visible,
-        EyeBox::Testable(q) => {
-            let (first, last, _, nearest) = projector.box_on_screen(&q);
-            // Hidden only when strictly behind; a NaN is visible.
-            if nearest < f64::from(buffer.farthest_over(first, last)) {
-                Verdict::Hidden
-            } else {
-                Verdict::Visible
-            }
+}
+
+impl Tester<'_> {
+    /// `bounds` (in the frustum) against the buffer.
+    fn test(&self, bounds: &Aabb) -> Verdict {
+        let on_screen = match eye_relative_box(self.camera, self.view, self.margins, bounds) {
+            EyeBox::ReachesNear => None,
+            EyeBox::Testable(q) => self.projector.box_on_screen(&q),
+        };
+        match on_screen {
+            // Hidden only when strictly behind.
+            Some(b) if b.nearest < f64::from(self.buffer.farthest_over(b.first, b.last)) => Verdict::Hidden,
+            _ => Verdict::Visible,
         }
     }
 }
@@ -233,16 +254,26 @@ impl Culler for SoftwareOcclusionCulling {
         let margins = BoxMargins::new(self.depth_margins, camera, size);
         let view = camera.view_rotation();
 
-        // 1. Occluders: last frame's visible objects, largest first.
+        let frustum = camera.frustum();
+
+        // 1. Occluders: last frame's visible objects still on screen,
+        // largest first.
         self.candidates.clear();
         for &o in &self.visible {
-            let area = match eye_relative_box(camera, &view, margins, &scene.objects[o as usize].bounds) {
+            let bounds = &scene.objects[o as usize].bounds;
+            if frustum.classify(bounds) == Containment::Outside {
+                continue;
+            }
+            let area = match eye_relative_box(camera, &view, margins, bounds) {
                 EyeBox::ReachesNear => f64::INFINITY,
-                EyeBox::Testable(q) => projector.box_on_screen(&q).2,
+                EyeBox::Testable(q) => projector.box_on_screen(&q).map_or(0.0, |b| b.area),
             };
-            self.candidates.push((area, o));
+            if area > 0.0 {
+                self.candidates.push((area, o));
+            }
         }
-        self.candidates.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        self.candidates
+            .sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         self.occluders.clear();
         let mut budget = self.params.triangles;
         for &(_, o) in &self.candidates {
@@ -263,7 +294,13 @@ impl Culler for SoftwareOcclusionCulling {
         buffer.build_pyramid();
 
         // 4. The hierarchy, in the frustum and not hidden.
-        let frustum = camera.frustum();
+        let tester = Tester {
+            buffer,
+            projector: &projector,
+            camera,
+            view: &view,
+            margins,
+        };
         let hierarchy = input.hierarchy;
         self.found.clear();
         self.stack.clear();
@@ -275,7 +312,7 @@ impl Culler for SoftwareOcclusionCulling {
                 stats.nodes_culled_frustum += 1;
                 continue;
             }
-            if test_box(buffer, &projector, camera, margins, &node.bounds) == Verdict::Hidden {
+            if tester.test(&node.bounds) == Verdict::Hidden {
                 stats.nodes_culled_occlusion += 1;
                 continue;
             }
@@ -285,9 +322,7 @@ impl Culler for SoftwareOcclusionCulling {
             }
             for &o in hierarchy.subtree_objects(node) {
                 let bounds = &scene.objects[o as usize].bounds;
-                if frustum.classify(bounds) != Containment::Outside
-                    && test_box(buffer, &projector, camera, margins, bounds) == Verdict::Visible
-                {
+                if frustum.classify(bounds) != Containment::Outside && tester.test(bounds) == Verdict::Visible {
                     self.found.push(o);
                 }
             }
@@ -307,9 +342,20 @@ impl Culler for SoftwareOcclusionCulling {
     }
 }
 
+/// The GPU's error in an f32 vertex position, as a fraction of the
+/// object's reach from the eye: 4 steps of 2^-24.
+const F32_POSITION_ERROR: f64 = 4.0 / (1u32 << 24) as f64;
+
 /// Rasterises object `o`'s triangles (placed where the scene has it this
-/// frame) into `buffer`; returns how many it rasterised (those reaching the
-/// near plane are left out).
+/// frame) into `buffer`; returns how many it rasterised.
+///
+/// The GPU transforms the object's f32 vertices by an f32 model-view whose
+/// translation is about as long as the object's reach from the eye, so its
+/// corners may land a few steps of 2^-24 of that reach from ours: that
+/// error, over the corner's view depth, in pixels and in relative depth, is
+/// the triangle's [`VertexError`]. Triangles with a corner within that
+/// error (and 2^-10 of the near distance) of the near plane are left out:
+/// the GPU may clip them.
 fn rasterise_object(
     buffer: &mut OcclusionBuffer,
     projector: &Projector,
@@ -318,6 +364,10 @@ fn rasterise_object(
     o: u32,
 ) -> u64 {
     let object = &scene.objects[o as usize];
+    let (min, max) = (object.bounds.min - camera.eye, object.bounds.max - camera.eye);
+    let position_error = F32_POSITION_ERROR * min.abs().max(max.abs()).max_element();
+    let near = camera.near * (1.0 + 1.0 / 1024.0) + position_error;
+    let pixels_at_unit_depth = projector.size.y / (2.0 * (camera.fov_y / 2.0).tan());
     let mesh = &scene.meshes[object.mesh as usize];
     let indices = &scene.indices[mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize];
     let to_eye = |v: u32| {
@@ -329,11 +379,55 @@ fn rasterise_object(
     };
     let mut rasterised = 0;
     for corners in indices.chunks_exact(3) {
-        let on_screen = [0, 1, 2].map(|k| projector.project(to_eye(corners[k]), camera.near));
-        if let [Some(a), Some(b), Some(c)] = on_screen {
-            buffer.rasterise(&ScreenTriangle([a, b, c]));
+        let on_screen = [0, 1, 2].map(|k| projector.project(to_eye(corners[k]), near));
+        if let [Some((a, wa)), Some((b, wb)), Some((c, wc))] = on_screen {
+            let nearest = wa.min(wb).min(wc);
+            let error = VertexError {
+                pixels: position_error * pixels_at_unit_depth / nearest,
+                depth: position_error / nearest,
+            };
+            buffer.rasterise(&ScreenTriangle {
+                corners: [a, b, c],
+                error,
+            });
             rasterised += 1;
         }
     }
     rasterised
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cull::recording::{Recording, camera_down_z, cubes, input};
+
+    #[test]
+    fn an_object_behind_an_occluder_is_drawn_until_the_occluder_is_known_and_each_object_once() {
+        // A cube 2 m ahead hides one 17 m further on; a third stands aside.
+        // The far one shows within one triangle of the near one's face: a
+        // cell is written only by a triangle covering it whole, so cells on
+        // the face's diagonal stay empty (see the module's doc).
+        let (scene, hierarchy) = cubes(&[
+            DVec3::new(-0.5, -0.5, -3.0),
+            DVec3::new(-0.5, 2.6, -20.0),
+            DVec3::new(8.0, -0.5, -20.0),
+        ]);
+        let camera = camera_down_z();
+        let params = SwrParams::from_params(&ModeParams::default()).unwrap();
+        let mut swr = SoftwareOcclusionCulling::new(&scene, params);
+        let (mut drawn, mut stats) = (Vec::new(), Vec::new());
+        for frame in 0..3 {
+            let mut frame_calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
+            stats.push(swr.frame(&mut frame_calls, &input(frame, &camera, &scene, &hierarchy)));
+            let mut objects = frame_calls.drawn();
+            objects.sort_unstable();
+            drawn.push(objects);
+        }
+        // Frame 0 knows no occluder: everything in view. Frame 1 draws those
+        // as occluders and finds the far cube hidden; frame 2 leaves it out.
+        assert_eq!(drawn, [vec![0, 1, 2], vec![0, 1, 2], vec![0, 2]]);
+        assert_eq!(stats[0].occluder_triangles, 0);
+        assert_eq!(stats[2].occluder_triangles, 2 * 12, "the two visible cubes' triangles");
+        assert!(stats[1].nodes_culled_occlusion > 0 && stats[2].nodes_culled_occlusion > 0);
+    }
 }
