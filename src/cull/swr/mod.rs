@@ -99,6 +99,8 @@ pub struct SoftwareOcclusionCulling {
     visible: Vec<u32>,
     /// Scratch, reused so a frame allocates nothing once warm.
     candidates: Vec<(f64, u32)>,
+    /// An occluder's vertices on screen, each projected once.
+    projected: Vec<Option<(DVec3, f64)>>,
     occluders: Vec<u32>,
     is_occluder: Vec<bool>,
     found: Vec<u32>,
@@ -114,6 +116,7 @@ impl SoftwareOcclusionCulling {
             depth_margins: DepthMargins::for_backend(wgpu::Backend::Gl),
             visible: Vec::new(),
             candidates: Vec::new(),
+            projected: Vec::new(),
             occluders: Vec::new(),
             is_occluder: vec![false; scene.objects.len()],
             found: Vec::new(),
@@ -289,7 +292,7 @@ impl Culler for SoftwareOcclusionCulling {
         // 2-3. Their triangles into the buffer, then the pyramid.
         buffer.clear();
         for &o in &self.occluders {
-            stats.occluder_triangles += rasterise_object(buffer, &projector, camera, scene, o);
+            stats.occluder_triangles += rasterise_object(buffer, &projector, camera, scene, o, &mut self.projected);
         }
         buffer.build_pyramid();
 
@@ -356,12 +359,15 @@ const F32_POSITION_ERROR: f64 = 4.0 / (1u32 << 24) as f64;
 /// the triangle's [`VertexError`]. Triangles with a corner within that
 /// error (and 2^-10 of the near distance) of the near plane are left out:
 /// the GPU may clip them.
+///
+/// Each vertex is projected once, into `projected` (reused scratch).
 fn rasterise_object(
     buffer: &mut OcclusionBuffer,
     projector: &Projector,
     camera: &Camera,
     scene: &Scene,
     o: u32,
+    projected: &mut Vec<Option<(DVec3, f64)>>,
 ) -> u64 {
     let object = &scene.objects[o as usize];
     let (min, max) = (object.bounds.min - camera.eye, object.bounds.max - camera.eye);
@@ -370,16 +376,20 @@ fn rasterise_object(
     let pixels_at_unit_depth = projector.size.y / (2.0 * (camera.fov_y / 2.0).tan());
     let mesh = &scene.meshes[object.mesh as usize];
     let indices = &scene.indices[mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize];
-    let to_eye = |v: u32| {
-        let p = scene.vertices[v as usize];
-        object
-            .transform
-            .transform_point3(DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2])))
-            - camera.eye
-    };
+    // A mesh's indices reach a run of vertices; each is projected once.
+    let (first, last) = indices
+        .iter()
+        .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    projected.clear();
+    if first <= last {
+        projected.extend(scene.vertices[first as usize..=last as usize].iter().map(|p| {
+            let local = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+            projector.project(object.transform.transform_point3(local) - camera.eye, near)
+        }));
+    }
     let mut rasterised = 0;
     for corners in indices.chunks_exact(3) {
-        let on_screen = [0, 1, 2].map(|k| projector.project(to_eye(corners[k]), near));
+        let on_screen = [0, 1, 2].map(|k| projected[(corners[k] - first) as usize]);
         if let [Some((a, wa)), Some((b, wb)), Some((c, wc))] = on_screen {
             let nearest = wa.min(wb).min(wc);
             let error = VertexError {
