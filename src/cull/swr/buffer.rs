@@ -80,6 +80,11 @@ pub struct OcclusionBuffer {
     /// Level 0 holds the cells; each further level halves them (rounding
     /// up) down to one texel.
     levels: Vec<Level>,
+    /// Breaks the rule above on purpose, for the test that sees the error
+    /// meter catch it: a cell takes a triangle's depth at its middle
+    /// wherever the triangle covers the middle, as a plain rasteriser does.
+    #[cfg(test)]
+    pub(super) careless: bool,
 }
 
 /// The pixels cell `c` of `cells` along a side of `pixels` holds: those
@@ -124,6 +129,8 @@ impl OcclusionBuffer {
             columns: centres(width, target.width),
             rows: centres(height, target.height),
             levels,
+            #[cfg(test)]
+            careless: false,
         }
     }
 
@@ -188,6 +195,16 @@ impl OcclusionBuffer {
             for column in column_range.clone() {
                 let [x0, x1] = self.columns[column as usize];
                 let centres = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)];
+                #[cfg(test)]
+                if self.careless {
+                    let (x, y) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+                    let cell = &mut base.depth[(row * cells.width + column) as usize];
+                    if edges.iter().all(|e| e[0] * x + e[1] * y + e[2] >= 0.0) {
+                        *cell = cell.max(depth_at(x, y) as f32);
+                        written += 1;
+                    }
+                    continue;
+                }
                 if !centres.iter().all(|&(x, y)| inside(x, y)) {
                     continue;
                 }

@@ -95,6 +95,10 @@ pub struct SoftwareOcclusionCulling {
     /// The backend's depth margins, known once prepared (GL's, the larger,
     /// until then).
     depth_margins: DepthMargins,
+    /// Whether its buffers break the conservative rule on purpose
+    /// ([`OcclusionBuffer::careless`]).
+    #[cfg(test)]
+    careless: bool,
     /// The objects found visible last frame.
     visible: Vec<u32>,
     /// Scratch, reused so a frame allocates nothing once warm.
@@ -114,6 +118,8 @@ impl SoftwareOcclusionCulling {
             params,
             buffer: None,
             depth_margins: DepthMargins::for_backend(wgpu::Backend::Gl),
+            #[cfg(test)]
+            careless: false,
             visible: Vec::new(),
             candidates: Vec::new(),
             projected: Vec::new(),
@@ -253,6 +259,10 @@ impl Culler for SoftwareOcclusionCulling {
             Some(b) if b.target() == size => b,
             slot => slot.insert(OcclusionBuffer::new(size, self.params.resolution)),
         };
+        #[cfg(test)]
+        {
+            buffer.careless = self.careless;
+        }
         let projector = Projector::new(camera, size);
         let margins = BoxMargins::new(self.depth_margins, camera, size);
         let view = camera.view_rotation();
@@ -439,5 +449,59 @@ mod tests {
         assert_eq!(stats[0].occluder_triangles, 0);
         assert_eq!(stats[2].occluder_triangles, 2 * 12, "the two visible cubes' triangles");
         assert!(stats[1].nodes_culled_occlusion > 0 && stats[2].nodes_culled_occlusion > 0);
+    }
+
+    #[test]
+    fn the_error_meter_catches_a_buffer_that_breaks_the_conservative_rule() {
+        use crate::cull::culler::Labeled;
+        use crate::gpu::{BackendChoice, GpuContext};
+        use crate::hierarchy::HierarchyParams;
+        use crate::stress::{cases, run_case};
+        // Cubes seen only through slits 1.2 pixels wide (stress case
+        // `slits`): cells of 3 pixels that the wall covers in the middle
+        // but not at the slit.
+        let case = cases::all().into_iter().find(|c| c.name == "slits").unwrap();
+        let size = case.resolution.unwrap();
+        let gpus: Vec<GpuContext> = [BackendChoice::Vulkan, BackendChoice::Gl]
+            .into_iter()
+            .filter_map(|b| GpuContext::new(b).ok())
+            .collect();
+        assert!(!gpus.is_empty(), "no adapter: install Mesa (scripts/install-deps)");
+        for gpu in &gpus {
+            let params = SwrParams::from_params(&ModeParams::default()).unwrap();
+            let careful = SoftwareOcclusionCulling::new(&case.scene, params);
+            let careless = SoftwareOcclusionCulling {
+                careless: true,
+                ..SoftwareOcclusionCulling::new(&case.scene, params)
+            };
+            let mut cullers: Vec<Box<dyn Culler>> = vec![
+                Box::new(careful),
+                Box::new(Labeled {
+                    label: "careless".into(),
+                    inner: Box::new(careless),
+                }),
+            ];
+            let outcome = run_case(
+                gpu,
+                &case,
+                &HierarchyParams::default(),
+                &mut cullers,
+                size,
+                false,
+                &mut |_| {},
+            )
+            .unwrap();
+            let total = |mode: &str, f: fn(&crate::measure::FrameStats) -> Option<u64>| -> u64 {
+                outcome.rows.iter().filter(|r| r.mode == mode).filter_map(f).sum()
+            };
+            let at = &gpu.adapter;
+            assert_eq!(total("swr", |r| r.error_pixels), 0, "{at}");
+            assert_eq!(total("swr", |r| r.missed_objects), 0, "{at}");
+            assert!(
+                total("careless", |r| r.missed_objects) > 0,
+                "{at}: the careless buffer hides a cube"
+            );
+            assert!(total("careless", |r| r.error_pixels) > 0, "{at}");
+        }
     }
 }
