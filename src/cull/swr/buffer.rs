@@ -179,7 +179,6 @@ impl OcclusionBuffer {
             // inside(x, y) = s · ((q − p) × ((x, y) − p))
             [-dy * s, dx * s, (dy * p.x - dx * p.y) * s]
         });
-        let inside = |x: f64, y: f64| edges.iter().all(|e| e[0] * x + e[1] * y + e[2] >= cover);
         // The depth plane z = α x + β y + γ through the three corners.
         let alpha = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / area;
         let beta = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
@@ -192,34 +191,57 @@ impl OcclusionBuffer {
         let base = &mut self.levels[0];
         for row in row_range {
             let [y0, y1] = self.rows[row as usize];
-            for column in column_range.clone() {
-                let [x0, x1] = self.columns[column as usize];
-                let centres = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)];
-                #[cfg(test)]
-                if self.careless {
+            let index = |column: u32| (row * cells.width + column) as usize;
+            #[cfg(test)]
+            if self.careless {
+                for column in column_range.clone() {
+                    let [x0, x1] = self.columns[column as usize];
                     let (x, y) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-                    let cell = &mut base.depth[(row * cells.width + column) as usize];
                     if edges.iter().all(|e| e[0] * x + e[1] * y + e[2] >= 0.0) {
+                        let cell = &mut base.depth[index(column)];
                         *cell = cell.max(depth_at(x, y) as f32);
                         written += 1;
                     }
-                    continue;
                 }
-                if !centres.iter().all(|&(x, y)| inside(x, y)) {
-                    continue;
+                continue;
+            }
+            // The x every edge keeps inside by `cover` on both rows of
+            // centres (edges are linear, so both rows at both ends of an x
+            // range bound the whole rectangle).
+            let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
+            for [ex, ey, ec] in edges {
+                let needed = |y: f64| cover - ey * y - ec;
+                let (n0, n1) = (needed(y0), needed(y1));
+                if ex > 0.0 {
+                    from = from.max(n0.max(n1) / ex);
+                } else if ex < 0.0 {
+                    to = to.min(n0.max(n1) / ex);
+                } else if n0.max(n1) > 0.0 {
+                    to = f64::NEG_INFINITY;
                 }
+            }
+            // Nothing admitted (a NaN admits nothing either).
+            if from.is_nan() || to.is_nan() || from > to {
+                continue;
+            }
+            // The columns of the triangle's span whose centres all lie in
+            // [from, to].
+            let (start, stop) = (*column_range.start(), *column_range.end() + 1);
+            let span = &self.columns[start as usize..stop as usize];
+            let first = start + span.partition_point(|&[x0, _]| x0 < from) as u32;
+            let end = start + span.partition_point(|&[_, x1]| x1 <= to) as u32;
+            for column in first..end {
+                let [x0, x1] = self.columns[column as usize];
                 // The GPU may draw the depth of any point within `slack` of
-                // a centre: the least over the widened rectangle.
-                let (x0, x1, y0, y1) = (x0 - slack, x1 + slack, y0 - slack, y1 + slack);
-                let farthest = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)]
-                    .iter()
-                    .map(|&(x, y)| depth_at(x, y))
-                    .fold(f64::INFINITY, f64::min);
-                let depth = farthest * (1.0 - DEPTH_MARGIN - triangle.error.depth) - DEPTH_ABSOLUTE;
+                // a centre: the least over the widened rectangle, at the
+                // corner the plane falls towards.
+                let x = if alpha > 0.0 { x0 - slack } else { x1 + slack };
+                let y = if beta > 0.0 { y0 - slack } else { y1 + slack };
+                let depth = depth_at(x, y) * (1.0 - DEPTH_MARGIN - triangle.error.depth) - DEPTH_ABSOLUTE;
                 if depth <= 0.0 {
                     continue;
                 }
-                let cell = &mut base.depth[(row * cells.width + column) as usize];
+                let cell = &mut base.depth[index(column)];
                 *cell = cell.max(f32_at_most(depth));
                 written += 1;
             }
