@@ -10,18 +10,20 @@
 //! the whole frame; with `swr.triangles=0` (no occluders, nothing hidden)
 //! the frame is the box tests alone, and boxes a second.
 
+mod common;
+
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use occlu::bounds::Aabb;
 use occlu::camera::Camera;
-use occlu::camera::generate::default_path;
 use occlu::cull::{Culler, FrameInput, ModeId, ModeParams, SoftwareOcclusionCulling, SwrParams, TraversalStats};
 use occlu::gpu::{BoxTest, BoxVisibility, Frame, GpuFrame, Resolution};
-use occlu::hierarchy::{Hierarchy, HierarchyParams};
-use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
+use occlu::hierarchy::Hierarchy;
+use occlu::scene::Scene;
 
-const FRAMES: u32 = 120;
+use common::{FRAMES, SCENES};
+
 const PASSES: usize = 5;
 
 /// A frame that draws nothing: swr asks the GPU for nothing else.
@@ -86,15 +88,8 @@ fn walk(scene: &Scene, hierarchy: &Hierarchy, cameras: &[Camera], params: &[&str
 }
 
 fn main() {
-    for spec in ["city:blocks=8", "city:blocks=16", "forest"] {
-        let scene = load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).expect("built-in scene");
-        let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-        let path = default_path(&scene)
-            .and_then(|(p, _)| p.with_frames(FRAMES))
-            .expect("built-in walk");
-        let cameras: Vec<Camera> = (0..FRAMES)
-            .map(|i| path.camera(i, Resolution::DEFAULT.aspect()))
-            .collect();
+    for spec in SCENES {
+        let (scene, hierarchy, cameras) = common::walk(spec);
         println!("{spec}: {} objects, {FRAMES} frames at 800x600", scene.objects.len());
         let (whole, counts) = walk(&scene, &hierarchy, &cameras, &[]);
         let ms = whole.as_secs_f64() * 1e3;

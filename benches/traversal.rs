@@ -12,31 +12,27 @@
 //!
 //! Means per frame over the walk, each the median of several passes.
 
+mod common;
+
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use occlu::bounds::Aabb;
-use occlu::camera::generate::default_path;
 use occlu::camera::{Camera, Containment};
 use occlu::cull::TraversalStats;
 use occlu::cull::gpu_walk::depths::auto_depths;
 use occlu::cull::gpu_walk::{CullTree, NodeBoxes};
 use occlu::cull::traversal::{DepthQueue, frustum_cull_subtree, nearest_corner};
 use occlu::gpu::{BoxMargins, DepthMargins, Resolution};
-use occlu::hierarchy::{Hierarchy, HierarchyParams};
-use occlu::scene::{LoadOptions, SceneSpec, load};
+use occlu::hierarchy::Hierarchy;
 
-const FRAMES: u32 = 120;
+use common::{FRAMES, SCENES};
+
 const PASSES: usize = 7;
 
 fn main() {
-    for spec in ["city:blocks=8", "city:blocks=16", "forest"] {
-        let scene = load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).expect("built-in scene");
-        let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-        let path = default_path(&scene)
-            .and_then(|(p, _)| p.with_frames(FRAMES))
-            .expect("built-in walk");
-        let cameras: Vec<Camera> = (0..FRAMES).map(|i| path.camera(i, 4.0 / 3.0)).collect();
+    for spec in SCENES {
+        let (scene, hierarchy, cameras) = common::walk(spec);
         println!(
             "{spec}: {} objects, {} nodes, {FRAMES} frames",
             scene.objects.len(),
