@@ -291,6 +291,11 @@ struct RenderArgs {
     /// missed, and list them.
     #[arg(long)]
     show_missed: bool,
+    /// Lay the depth buffer a CPU culling mode (swr) culled the frame with
+    /// over the picture: cells holding an occluder's depth from white (near)
+    /// to deep blue (far), the rest of the frame dimmed.
+    #[arg(long)]
+    occluders: bool,
     /// Render size [default: 800x600].
     #[arg(long, value_name = "WxH")]
     resolution: Option<Resolution>,
@@ -802,6 +807,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         overview: args.overview,
         heat: args.heat,
         show_missed: args.show_missed,
+        occluders: args.occluders,
     };
     let picture = occlu::picture::render(&gpu, &mut world, &path, culler, &options)?;
     occlu::report::write_png(&args.output, picture.width, picture.height, &picture.rgb)?;

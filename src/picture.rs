@@ -11,7 +11,11 @@
 //! as the papers' figures mark culled bounding volumes. With `show_missed`,
 //! the frame is compared with direct rendering: pixels whose depth differs
 //! turn magenta and the boxes of the objects the mode got wrong are
-//! outlined in magenta, so the picture shows a culling bug.
+//! outlined in magenta, so the picture shows a culling bug. With
+//! `occluders`, the depth buffer a CPU culling mode (swr) culled the frame
+//! with is laid over it: each cell holding an occluder's depth in a colour
+//! from near (white) to far (deep blue), the frame dimmed where no cell
+//! holds one, so the picture shows what could hide what.
 
 use glam::DVec3;
 
@@ -19,7 +23,7 @@ use crate::bench::{RunOptions, Session};
 use crate::bounds::Aabb;
 use crate::camera::path::CameraPath;
 use crate::camera::{Camera, Containment, look_rotation};
-use crate::cull::Culler;
+use crate::cull::{CellDepths, Culler};
 use crate::gpu::{
     Draws, GpuContext, GpuError, LinePainter, LineVertex, RenderTargets, Resolution, picture_target, read_rgb,
 };
@@ -34,6 +38,7 @@ pub struct PictureOptions {
     pub overview: bool,
     pub heat: bool,
     pub show_missed: bool,
+    pub occluders: bool,
 }
 
 /// What a mode got wrong in the pictured frame (with `show_missed`).
@@ -61,6 +66,8 @@ pub struct Picture {
 pub enum PictureError {
     #[error("--frame {frame} is beyond the path's {frames} frames (0..={})", frames - 1)]
     FrameOutOfRange { frame: u32, frames: u32 },
+    #[error("--occluders: mode '{mode}' keeps no depth buffer on the CPU (swr does)")]
+    NoOccluderDepths { mode: String },
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }
@@ -70,7 +77,7 @@ impl PictureError {
     pub fn is_input_error(&self) -> bool {
         match self {
             PictureError::Gpu(e) => e.is_input_error(),
-            PictureError::FrameOutOfRange { .. } => true,
+            PictureError::FrameOutOfRange { .. } | PictureError::NoOccluderDepths { .. } => true,
         }
     }
 }
@@ -116,6 +123,15 @@ pub fn render(
         pixels: wrong_pixels,
         objects: std::mem::take(&mut session.missed),
     });
+    let occluders = match options.occluders.then(|| cullers[0].occluder_depths()) {
+        None => None,
+        Some(Some(depths)) => Some(depths),
+        Some(None) => {
+            return Err(PictureError::NoOccluderDepths {
+                mode: cullers[0].name().to_string(),
+            });
+        }
+    };
     let scene = &world.scene;
     let drawn: Vec<u32> = session.drawn[0].iter().collect();
     let frustum = camera.frustum();
@@ -138,6 +154,9 @@ pub fn render(
     } else {
         read_rgb(gpu, &session.targets.color_texture, resolution)
     };
+    if let Some(depths) = &occluders {
+        paint_occluder_depths(depths, resolution, &mut main);
+    }
     if let Some(wrong) = &wrong {
         paint_wrong_pixels(&mut session, &mut main);
         // The frame's camera is still in the uniform the lines are drawn with.
@@ -204,6 +223,30 @@ pub fn render(
         culled_in_frustum: culled.len(),
         wrong,
     })
+}
+
+/// Lays `depths` over `rgb` (the pictured frame, `resolution` pixels): a
+/// pixel whose cell holds a depth takes that depth's colour, on a ramp
+/// over the logarithm of the depths the buffer holds (reverse-Z depth is
+/// near / distance, so equal steps are equal ratios of distance); the
+/// others are dimmed to a third.
+fn paint_occluder_depths(depths: &CellDepths, resolution: Resolution, rgb: &mut [u8]) {
+    let written = || depths.depths.iter().filter(|&&d| d > 0.0).map(|&d| f64::from(d).log2());
+    let (farthest, nearest) = written().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+    let span = (nearest - farthest).max(1e-9);
+    let (w, h) = (u64::from(resolution.width), u64::from(resolution.height));
+    for (i, pixel) in rgb.chunks_mut(3).enumerate() {
+        let (x, y) = (i as u64 % w, i as u64 / w);
+        let cell = (y * u64::from(depths.height) / h) * u64::from(depths.width) + x * u64::from(depths.width) / w;
+        let depth = depths.depths[cell as usize];
+        if depth > 0.0 {
+            let t = (f64::from(depth).log2() - farthest) / span;
+            let ramp = [0.1 + 0.9 * t, 0.25 + 0.75 * t, 0.6 + 0.4 * t];
+            pixel.copy_from_slice(&ramp.map(|c| (c * 255.0).round() as u8));
+        } else {
+            pixel.iter_mut().for_each(|c| *c /= 3);
+        }
+    }
 }
 
 /// Paints magenta the pixels of `rgb` (the pictured frame) whose depth in

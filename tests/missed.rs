@@ -1,17 +1,18 @@
 //! Naming what a mode missed: missed.csv's rows, report.md's list and
 //! `occlu render --show-missed`, for a culler that is wrong on purpose
 //! (it drops the first visible object), checked against pixel footprints
-//! computed on the CPU.
+//! computed on the CPU; and what a mode culled with, `occlu render
+//! --occluders`.
 
 mod common;
 
-use common::{DropOneVisible, boxes, occlu, run_modes, still};
+use common::{DropOneVisible, boxes, held, occlu, run_modes, still};
 use glam::DVec3;
 use occlu::cull::{Culler, ModeParams, create};
 use occlu::gpu::Resolution;
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::measure::MissedObject;
-use occlu::picture::{PictureOptions, render};
+use occlu::picture::{PictureError, PictureOptions, render};
 use occlu::report::{MissedSummary, read_results, render_markdown, write_results};
 use occlu::world::World;
 
@@ -171,6 +172,7 @@ fn show_missed_paints_the_dropped_object_magenta_and_nothing_else() {
         overview: false,
         heat: false,
         show_missed: true,
+        occluders: false,
     };
     let magenta = [255u8, 0, 255];
     for gpu in common::gpus() {
@@ -203,5 +205,54 @@ fn show_missed_paints_the_dropped_object_magenta_and_nothing_else() {
         let picture = render(&gpu, &mut world, &path, Box::new(DropOneVisible(Vec::new())), &plain).unwrap();
         assert!(picture.wrong.is_none());
         assert!(picture.rgb.chunks(3).all(|p| p != magenta), "only when asked");
+    }
+}
+
+#[test]
+fn occluders_lays_swrs_buffer_over_the_quads_it_culled_with_and_dims_the_rest() {
+    let quads = two_quads();
+    let scene = boxes(&quads);
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    // Frame 2: the quads drawn in frame 1 are frame 2's occluders.
+    let path = held(DVec3::ZERO, DVec3::NEG_Z, 90.0, 3);
+    let options = PictureOptions {
+        frame: 2,
+        resolution: SIZE,
+        overview: false,
+        heat: false,
+        show_missed: false,
+        occluders: true,
+    };
+    let one_cell_per_pixel =
+        ModeParams::parse(&["swr.resolution=100x100".to_string()], &["swr".parse().unwrap()]).unwrap();
+    let inside: Vec<Vec<(u32, u32)>> = quads.iter().map(|&(min, max)| footprint(min, max)).collect();
+    for gpu in common::gpus() {
+        let mut world = World::new(scene.clone(), hierarchy.clone());
+        let swr = create("swr", &scene, &one_cell_per_pixel).unwrap();
+        let picture = render(&gpu, &mut world, &path, swr, &options).unwrap();
+        let at = |(x, y): (u32, u32)| {
+            let i = 3 * (y * SIZE.width + x) as usize;
+            [picture.rgb[i], picture.rgb[i + 1], picture.rgb[i + 2]]
+        };
+        // Both quads' front faces lie at one depth: one colour, the far
+        // end of the ramp, over every pixel of them, their diagonals too.
+        for pixel in inside.iter().flatten() {
+            assert_eq!(at(*pixel), [26, 64, 153], "{pixel:?} on {}", gpu.adapter);
+        }
+        // The rest is the frame dimmed to a third.
+        let covered: usize = inside.iter().map(Vec::len).sum();
+        let dimmed = picture
+            .rgb
+            .chunks(3)
+            .filter(|p| p.iter().all(|&c| c <= 255 / 3))
+            .count();
+        assert_eq!(dimmed, (SIZE.width * SIZE.height) as usize - covered, "{}", gpu.adapter);
+
+        let mut world = World::new(scene.clone(), hierarchy.clone());
+        let roc = create("roc", &scene, &ModeParams::default()).unwrap();
+        match render(&gpu, &mut world, &path, roc, &options) {
+            Err(e @ PictureError::NoOccluderDepths { .. }) => assert!(e.is_input_error()),
+            other => panic!("roc keeps no CPU buffer: {:?}", other.map(|p| p.drawn)),
+        }
     }
 }

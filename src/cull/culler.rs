@@ -111,6 +111,17 @@ impl TraversalStats {
     }
 }
 
+/// A depth buffer a mode keeps on the CPU (swr's occlusion buffer), as it
+/// stood when the mode last culled: cells row by row, each a reverse-Z
+/// depth, 0 where no occluder wrote one. Cell (x, y) holds the render
+/// target's pixels p whose `⌊p · cells / pixels⌋` is (x, y) on each side.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellDepths {
+    pub width: u32,
+    pub height: u32,
+    pub depths: Vec<f32>,
+}
+
 pub trait Culler {
     /// The mode's name on the command line and in result files.
     fn name(&self) -> &str;
@@ -148,6 +159,12 @@ pub trait Culler {
 
     /// Renders one frame: decides what to draw and draws it through `ctx`.
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats;
+
+    /// The depth buffer the mode culled its last frame with, for modes that
+    /// keep one on the CPU (`occlu render --occluders`).
+    fn occluder_depths(&self) -> Option<CellDepths> {
+        None
+    }
 }
 
 /// A borrowed culler runs as the culler it borrows (so a test can keep the
@@ -173,6 +190,9 @@ impl<C: Culler + ?Sized> Culler for &mut C {
     }
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         (**self).frame(ctx, input)
+    }
+    fn occluder_depths(&self) -> Option<CellDepths> {
+        (**self).occluder_depths()
     }
 }
 
@@ -204,5 +224,8 @@ impl Culler for Labeled {
     }
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         self.inner.frame(ctx, input)
+    }
+    fn occluder_depths(&self) -> Option<CellDepths> {
+        self.inner.occluder_depths()
     }
 }

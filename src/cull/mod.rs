@@ -34,7 +34,7 @@ mod vfc;
 pub use ac::{AcParams, AdaptiveCulling, EyeDistance, Threshold};
 pub use auto::{AutoCulling, AutoParams};
 pub use chc::{ChcParams, CoherentCulling};
-pub use culler::{Culler, FrameInput, Labeled, PreviousFrame, TraversalStats};
+pub use culler::{CellDepths, Culler, FrameInput, Labeled, PreviousFrame, TraversalStats};
 pub use dr::DirectRendering;
 pub use gpu_walk::depths::{Depth, DepthRange};
 pub use gpu_walk::hiz::{BoxesTested, HizParams, hierarchical_depth_culling};

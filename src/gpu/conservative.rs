@@ -195,20 +195,174 @@ pub(crate) fn eye_relative_box(camera: &Camera, view: &DMat3, margins: BoxMargin
 /// The world direction of the ray through pixel centre (x, y) (framebuffer
 /// coordinates, centres at .5), scaled to view depth 1, is
 /// `x · per_x + y · per_y + constant`: the camera's part of every
-/// [`FragmentLimit`], as three vectors for the camera uniform.
-pub(super) fn pixel_rays(camera: &Camera, resolution: Resolution) -> [Vec4; 3] {
-    let f = 1.0 / (camera.fov_y / 2.0).tan();
-    let (w, h) = (f64::from(resolution.width), f64::from(resolution.height));
-    let (sx, sy) = (camera.aspect / f, 1.0 / f);
-    // In camera space the ray is ((2x / w − 1) · sx, (1 − 2y / h) · sy, −1).
-    let to_world = DMat3::from_quat(camera.rotation);
-    let (right, up, back) = (to_world.x_axis, to_world.y_axis, to_world.z_axis);
-    [
-        right * (2.0 * sx / w),
-        up * (-2.0 * sy / h),
-        -right * sx + up * sy - back,
-    ]
-    .map(|v| v.as_vec3().extend(0.0))
+/// [`FragmentLimit`] and [`BoxPlanes`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PixelRays {
+    per_x: DVec3,
+    per_y: DVec3,
+    constant: DVec3,
+}
+
+impl PixelRays {
+    pub(crate) fn new(camera: &Camera, resolution: Resolution) -> PixelRays {
+        let f = 1.0 / (camera.fov_y / 2.0).tan();
+        let (w, h) = (f64::from(resolution.width), f64::from(resolution.height));
+        let (sx, sy) = (camera.aspect / f, 1.0 / f);
+        // In camera space the ray is ((2x / w − 1) · sx, (1 − 2y / h) · sy, −1).
+        let to_world = DMat3::from_quat(camera.rotation);
+        let (right, up, back) = (to_world.x_axis, to_world.y_axis, to_world.z_axis);
+        PixelRays {
+            per_x: right * (2.0 * sx / w),
+            per_y: up * (-2.0 * sy / h),
+            constant: -right * sx + up * sy - back,
+        }
+    }
+
+    /// The three vectors as the camera uniform holds them.
+    pub(super) fn uniform(&self) -> [Vec4; 3] {
+        [self.per_x, self.per_y, self.constant].map(|v| v.as_vec3().extend(0.0))
+    }
+}
+
+/// Per world axis, `near / face` for the face of the eye-relative box
+/// `min`..`max` across that axis that faces the eye, and 0 where the eye
+/// lies within the box's extent along the axis (no face there faces it).
+/// The pixel ray d meets that face's plane at view depth t = face / d_axis,
+/// so at depth `near / t = d_axis · near / face`.
+fn facing_scales(near: f64, min: DVec3, max: DVec3) -> [f64; 3] {
+    [0, 1, 2].map(|axis| {
+        if min[axis] > 0.0 {
+            near / min[axis]
+        } else if max[axis] < 0.0 {
+            near / max[axis]
+        } else {
+            0.0
+        }
+    })
+}
+
+/// A depth affine in the pixel position (x, y) (framebuffer coordinates):
+/// `per_x · x + per_y · y + constant`, as the depth over one plane is.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct ScreenPlane {
+    pub(crate) per_x: f64,
+    pub(crate) per_y: f64,
+    pub(crate) constant: f64,
+}
+
+impl ScreenPlane {
+    pub(crate) fn at(&self, x: f64, y: f64) -> f64 {
+        self.per_x * x + self.per_y * y + self.constant
+    }
+
+    /// Its greatest value over the rectangle `x` × `y` (each `[low,
+    /// high]`): at the corner it rises towards.
+    pub(crate) fn max_over(&self, x: [f64; 2], y: [f64; 2]) -> f64 {
+        self.at(
+            if self.per_x > 0.0 { x[1] } else { x[0] },
+            if self.per_y > 0.0 { y[1] } else { y[0] },
+        )
+    }
+
+    pub(crate) fn minus(&self, other: &ScreenPlane) -> ScreenPlane {
+        ScreenPlane {
+            per_x: self.per_x - other.per_x,
+            per_y: self.per_y - other.per_y,
+            constant: self.constant - other.constant,
+        }
+    }
+
+    /// Its least value over the rectangle `x` × `y`.
+    pub(crate) fn min_over(&self, x: [f64; 2], y: [f64; 2]) -> f64 {
+        -ScreenPlane {
+            per_x: -self.per_x,
+            per_y: -self.per_y,
+            constant: -self.constant,
+        }
+        .max_over(x, y)
+    }
+}
+
+/// Where pixel rays meet an eye-relative box, for tests finer than its
+/// nearest corner and its screen rectangle. A ray entering the box does so
+/// on a face that faces the eye, at the least of those faces' plane depths,
+/// and leaves it through a far face (the slab test); each plane's depth is
+/// affine in the pixel's position (d_axis · near / face). So the depth of
+/// any fragment inside the box is at most each entry plane, and a ray
+/// entering it is entered no farther than it is left: where an entry plane
+/// lies behind an exit plane, the ray misses the box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct BoxPlanes {
+    /// Per axis across which the eye lies outside the box: the plane of
+    /// the face facing it, raised by the box's raise and by its rounding
+    /// anywhere on the target (at most three)...
+    entries: [ScreenPlane; 3],
+    /// ...and the plane of the face opposite, lowered by its rounding.
+    exits: [ScreenPlane; 3],
+    count: usize,
+}
+
+impl BoxPlanes {
+    /// The planes of a box tested as `q` (eye-relative, grown, with its
+    /// raise) by `camera` on a target of `target` pixels.
+    pub(crate) fn new(camera: &Camera, q: &QueryBox, rays: &PixelRays, target: Resolution) -> BoxPlanes {
+        let (min, max) = (q.min.truncate().as_dvec3(), q.max.truncate().as_dvec3());
+        let (width, height) = (f64::from(target.width), f64::from(target.height));
+        let mut planes = BoxPlanes {
+            entries: [ScreenPlane::default(); 3],
+            exits: [ScreenPlane::default(); 3],
+            count: 0,
+        };
+        // The plane of the face at eye-relative coordinate `face` across
+        // `axis`, moved by `sign` times its rounding.
+        let plane = |axis: usize, face: f64, sign: f64| {
+            let scale = camera.near / face;
+            let (per_x, per_y, constant) = (
+                scale * rays.per_x[axis],
+                scale * rays.per_y[axis],
+                scale * rays.constant[axis],
+            );
+            // A few roundings of each term in f64.
+            let rounding = (constant.abs() + per_x.abs() * width + per_y.abs() * height) * f64::EPSILON * 8.0;
+            ScreenPlane {
+                per_x,
+                per_y,
+                constant: constant + sign * rounding,
+            }
+        };
+        for axis in 0..3 {
+            let (near_face, far_face) = if min[axis] > 0.0 {
+                (min[axis], max[axis])
+            } else if max[axis] < 0.0 {
+                (max[axis], min[axis])
+            } else {
+                continue;
+            };
+            let mut entry = plane(axis, near_face, 1.0);
+            entry.constant += f64::from(q.min.w);
+            planes.entries[planes.count] = entry;
+            planes.exits[planes.count] = plane(axis, far_face, -1.0);
+            planes.count += 1;
+        }
+        planes
+    }
+
+    /// Planes the depth of any fragment in the box lies at or below.
+    pub(crate) fn entries(&self) -> &[ScreenPlane] {
+        &self.entries[..self.count]
+    }
+
+    /// Whether every ray through a pixel centre in the rectangle `x` × `y`
+    /// misses the box: enters it (by one axis) beyond where it leaves it
+    /// (by another).
+    pub(crate) fn missed_over(&self, x: [f64; 2], y: [f64; 2]) -> bool {
+        self.entries().iter().enumerate().any(|(i, entry)| {
+            self.exits[..self.count]
+                .iter()
+                .enumerate()
+                .any(|(j, exit)| i != j && entry.minus(exit).max_over(x, y) < 0.0)
+        })
+    }
 }
 
 /// Where an object's fragments may lie (rule 2). For each world axis along
@@ -235,15 +389,7 @@ impl FragmentLimit {
     /// lies in front of the bound.
     pub fn new(camera: &Camera, view: &DMat3, margins: BoxMargins, bounds: &Aabb) -> FragmentLimit {
         let (min, max) = grown_eye_relative(camera, bounds, margins.growth / 2.0);
-        let scale = [0, 1, 2].map(|axis| {
-            if min[axis] > 0.0 {
-                camera.near / min[axis]
-            } else if max[axis] < 0.0 {
-                camera.near / max[axis]
-            } else {
-                0.0
-            }
-        });
+        let scale = facing_scales(camera.near, min, max);
         // Half the raise the object's own box test gets (a box reaching the
         // near plane is never tested: any finite raise will do).
         let nearest = nearest_view_depth(view, min, max).max(camera.near);
@@ -312,7 +458,7 @@ mod tests {
     fn pixel_rays_match_the_projection() {
         let cam = camera();
         let r = Resolution::DEFAULT;
-        let [per_x, per_y, constant] = pixel_rays(&cam, r);
+        let [per_x, per_y, constant] = PixelRays::new(&cam, r).uniform();
         for (x, y) in [(0.5, 0.5), (400.5, 300.5), (799.5, 12.5)] {
             let got = (per_x * x as f32 + per_y * y as f32 + constant).truncate().as_dvec3();
             assert!((got - ray(&cam, r, x, y)).length() < 1e-6, "({x}, {y})");

@@ -13,7 +13,7 @@ mod targets;
 mod timing;
 
 pub use conservative::{BoxMargins, DepthMargins};
-pub(crate) use conservative::{EyeBox, QueryBox, eye_relative_box};
+pub(crate) use conservative::{BoxPlanes, EyeBox, PixelRays, QueryBox, ScreenPlane, eye_relative_box};
 pub use context::{AdapterReport, BackendChoice, GpuContext, GpuError};
 pub use frame::{Frame, FrameCounters, FrameCtx, FrameOutcome, FrameResources, GpuAudit, GpuFrame, GpuSetup, GpuWork};
 pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};

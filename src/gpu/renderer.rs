@@ -4,7 +4,7 @@
 
 use glam::Mat4;
 
-use super::conservative::{BoxMargins, FragmentLimit, pixel_rays};
+use super::conservative::{BoxMargins, FragmentLimit, PixelRays};
 use super::context::{GpuContext, GpuError};
 use super::targets::Resolution;
 use super::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, RenderTargets};
@@ -270,7 +270,7 @@ impl SceneRenderer {
         let uniform = CameraUniform {
             projection: projection.as_mat4(),
             view_projection: (projection * glam::DMat4::from_mat3(view)).as_mat4(),
-            rays: pixel_rays(camera, resolution),
+            rays: PixelRays::new(camera, resolution).uniform(),
         };
         gpu.queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&uniform));
     }

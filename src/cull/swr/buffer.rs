@@ -10,15 +10,25 @@
 //! occluders drawn this frame are no farther than the cell's depth. The
 //! GPU draws a triangle whose corners it placed within some error of ours
 //! (sub-pixel snapping, [`VERTEX_ERROR`]; f32 vertices,
-//! [`ScreenTriangle::error`]), so at a centre it covers it may draw the
-//! depth of any point that near the centre. So a triangle writes a cell
-//! only where it covers every pixel centre the cell holds (not merely the
-//! cell's middle) by twice that error, and it writes the farthest depth it
-//! reaches over the centres' rectangle widened by that error (depth is
-//! affine across a triangle on screen, so the least over the widened
-//! rectangle's corners), moved farther by the GPU's depth rounding
-//! ([`DEPTH_MARGIN`]). A cell keeps the nearest such depth of the triangles
-//! covering it. A pyramid level keeps the least of the 2×2 texels below it.
+//! [`VertexError`]), so at a centre it covers it may draw the depth of any
+//! point that near the centre. An occluder is a triangle, or two triangles
+//! of one mesh sharing an edge taken as one quad ([`ScreenPolygon`]). It
+//! writes a cell only where every pixel centre the cell holds (not merely
+//! the cell's middle) lies inside its outline by twice that error, so the
+//! disc of that radius round the centre lies inside the shape (for a quad,
+//! inside every edge's line puts a point in the quad: that region is the
+//! quad's kernel). The GPU's placement moves every point of the shape by
+//! at most the error, continuously across a shared edge, and a map that
+//! moves each point of a disc by less than its radius still covers the
+//! disc's centre and the points round it; the GPU draws every pixel centre
+//! inside the triangles it placed, one of the two where a centre lies on
+//! their shared edge (the fill rule). So the centre is drawn. The cell
+//! takes the farthest depth either triangle reaches over the centres'
+//! rectangle widened by that error (depth is affine across a triangle on
+//! screen, so the least over the widened rectangle's corners), moved
+//! farther by the GPU's depth rounding ([`DEPTH_MARGIN`]). A cell keeps
+//! the nearest such depth of the occluders covering it. A pyramid level
+//! keeps the least of the 2×2 texels below it.
 //!
 //! The GPU must also draw every fragment of an occluder the buffer counts:
 //! the scene's fragment stage discards only fragments nearer than the
@@ -27,11 +37,11 @@
 
 use glam::DVec3;
 
-use crate::gpu::Resolution;
+use crate::gpu::{BoxPlanes, Resolution, ScreenPlane};
 
 /// Pixels the GPU may place a triangle's corner from where the CPU
 /// projects it, on each axis, besides a triangle's own
-/// [`ScreenTriangle::error`]: twice the largest sub-pixel snap Vulkan
+/// [`VertexError`]: twice the largest sub-pixel snap Vulkan
 /// allows (1/32).
 const VERTEX_ERROR: f64 = 1.0 / 16.0;
 
@@ -46,13 +56,38 @@ const DEPTH_ABSOLUTE: f64 = 1.0 / (1u32 << 21) as f64;
 /// read at.
 const TEST_SPAN: u32 = 8;
 
-/// An occluder triangle on screen: per corner its pixel position (x, y)
-/// and depth (z), and how far beyond [`VERTEX_ERROR`] the GPU's f32 vertex
-/// transform may place its corners.
+/// An occluder on screen: per corner its pixel position (x, y) and depth
+/// (z). Three corners are a triangle; four are two triangles abc and acd
+/// of one mesh that share the edge a–c, so the GPU draws them without a
+/// gap (the fill rule gives each pixel centre on a shared edge to one of
+/// them), and the buffer may take them as one quad: a triangle alone
+/// leaves empty every cell along its edges, and a mesh of quads would
+/// occlude nothing along their diagonals. With them, how far beyond
+/// [`VERTEX_ERROR`] the GPU's f32 vertex transform may place the corners.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ScreenTriangle {
-    pub corners: [DVec3; 3],
-    pub error: VertexError,
+pub struct ScreenPolygon {
+    corners: [DVec3; 4],
+    sides: usize,
+    error: VertexError,
+}
+
+impl ScreenPolygon {
+    pub fn triangle([a, b, c]: [DVec3; 3], error: VertexError) -> ScreenPolygon {
+        ScreenPolygon {
+            corners: [a, b, c, c],
+            sides: 3,
+            error,
+        }
+    }
+
+    /// Triangles abc and acd, which share the edge a–c.
+    pub fn quad(corners: [DVec3; 4], error: VertexError) -> ScreenPolygon {
+        ScreenPolygon {
+            corners,
+            sides: 4,
+            error,
+        }
+    }
 }
 
 /// How far the GPU may place a triangle's corners from the CPU's
@@ -71,15 +106,25 @@ struct Level {
     depth: Vec<f32>,
 }
 
+/// The depth a cell holds at each pixel centre: the plane of the occluder
+/// that wrote it, lowered by the GPU's placement and rounding (see
+/// [`OcclusionBuffer::rasterise`]). A box can be compared with it centre
+/// by centre: a box just behind a wall seen at a slant is hidden even
+/// where the wall's depth changes across the cell by more than the gap.
+type CellPlane = ScreenPlane;
+
 pub struct OcclusionBuffer {
     target: Resolution,
     /// Per column of cells, the first and last pixel centre it holds (x);
     /// per row likewise (y).
     columns: Vec<[f64; 2]>,
     rows: Vec<[f64; 2]>,
-    /// Level 0 holds the cells; each further level halves them (rounding
-    /// up) down to one texel.
+    /// Level 0 holds the cells (each the least of its plane over its pixel
+    /// centres); each further level halves them (rounding up) down to one
+    /// texel.
     levels: Vec<Level>,
+    /// Per cell, its plane; meaningless where the cell holds no depth.
+    planes: Vec<CellPlane>,
     /// Breaks the rule above on purpose, for the test that sees the error
     /// meter catch it: a cell takes a triangle's depth at its middle
     /// wherever the triangle covers the middle, as a plain rasteriser does.
@@ -129,6 +174,7 @@ impl OcclusionBuffer {
             columns: centres(width, target.width),
             rows: centres(height, target.height),
             levels,
+            planes: vec![CellPlane::default(); (width * height) as usize],
             #[cfg(test)]
             careless: false,
         }
@@ -148,9 +194,25 @@ impl OcclusionBuffer {
     }
 
     /// Every cell's depth, row by row.
-    #[cfg(test)]
     pub fn depths(&self) -> &[f32] {
         &self.levels[0].depth
+    }
+
+    /// The depth the buffer vouches for at the pixel centre `(x, y)` of
+    /// the target: its cell's depth, or its cell's plane there where that
+    /// is nearer; 0 where the cell is empty.
+    #[cfg(test)]
+    pub fn vouched_at(&self, x: f64, y: f64) -> f64 {
+        let cells = self.cells();
+        let cell = |v: f64, cells: u32, pixels: u32| cell_of(v as u32, cells, pixels);
+        let index = (cell(y, cells.height, self.target.height) * cells.width + cell(x, cells.width, self.target.width))
+            as usize;
+        let depth = f64::from(self.levels[0].depth[index]);
+        if depth == 0.0 {
+            0.0
+        } else {
+            depth.max(self.planes[index].at(x, y))
+        }
     }
 
     /// Forgets every occluder.
@@ -158,33 +220,99 @@ impl OcclusionBuffer {
         self.levels[0].depth.fill(0.0);
     }
 
-    /// Writes `triangle` into the cells it covers (see the module above);
+    /// Writes `occluder` into the cells it covers (see the module above);
     /// returns how many it wrote.
-    pub fn rasterise(&mut self, triangle: &ScreenTriangle) -> u32 {
-        let [a, b, c] = triangle.corners;
-        let slack = VERTEX_ERROR + triangle.error.pixels;
+    pub fn rasterise(&mut self, occluder: &ScreenPolygon) -> u32 {
+        let corners = &occluder.corners[..occluder.sides];
+        let [a, b, c] = [corners[0], corners[1], corners[2]];
+        let twice_area = |p: DVec3, q: DVec3, r: DVec3| (q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x);
+        let first_area = twice_area(a, b, c);
+        let area = match corners {
+            [.., d] if occluder.sides == 4 => {
+                let second_area = twice_area(a, c, *d);
+                // Folded on screen (both on one side of a–c): then they
+                // cover less than the quad; each alone is safe.
+                if first_area.signum() != second_area.signum() {
+                    let [first, second] = [[a, b, c], [a, c, *d]].map(|t| ScreenPolygon::triangle(t, occluder.error));
+                    return self.rasterise(&first) + self.rasterise(&second);
+                }
+                first_area + second_area
+            }
+            _ => first_area,
+        };
+        let slack = VERTEX_ERROR + occluder.error.pixels;
         let cover = 2.0 * slack;
-        // Twice the triangle's area. A triangle too small to hold a disc of
-        // radius `cover` (3√3 · cover² for the equilateral, the roomiest)
-        // covers no centre by that much.
-        let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-        if !area.is_finite() || area.abs() / 2.0 < 3.0 * 3f64.sqrt() * cover * cover {
+        // A shape too small to hold a disc of radius `cover` (a triangle
+        // needs 3√3 · cover² of area, any shape π · cover²) covers no centre
+        // by that much.
+        let least_area = if occluder.sides == 3 {
+            3.0 * 3f64.sqrt()
+        } else {
+            std::f64::consts::PI
+        };
+        if !area.is_finite() || area.abs() / 2.0 < least_area * cover * cover {
             return 0;
         }
-        // Inward edge functions, scaled to distances in pixels: a point is
-        // inside by `cover` when every one is at least that.
-        let edges = [(a, b), (b, c), (c, a)].map(|(p, q)| {
+        // Inward edge functions of the outline, scaled to distances in
+        // pixels: a point is inside by `cover` when every one is at least
+        // that.
+        let mut edges = [[0.0; 3]; 4];
+        for (k, edge) in edges.iter_mut().enumerate().take(occluder.sides) {
+            let (p, q) = (corners[k], corners[(k + 1) % occluder.sides]);
             let (dx, dy) = (q.x - p.x, q.y - p.y);
             let s = area.signum() / dx.hypot(dy);
             // inside(x, y) = s · ((q − p) × ((x, y) − p))
-            [-dy * s, dx * s, (dy * p.x - dx * p.y) * s]
-        });
-        // The depth plane z = α x + β y + γ through the three corners.
-        let alpha = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / area;
-        let beta = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
-        let depth_at = |x: f64, y: f64| a.z + alpha * (x - a.x) + beta * (y - a.y);
+            *edge = [-dy * s, dx * s, (dy * p.x - dx * p.y) * s];
+        }
+        let edges = &edges[..occluder.sides];
+        // The depth planes through each triangle's corners.
+        let plane_of = |[p, q, r]: [DVec3; 3]| {
+            let area = twice_area(p, q, r);
+            let per_x = ((q.z - p.z) * (r.y - p.y) - (r.z - p.z) * (q.y - p.y)) / area;
+            let per_y = ((r.z - p.z) * (q.x - p.x) - (q.z - p.z) * (r.x - p.x)) / area;
+            ScreenPlane {
+                per_x,
+                per_y,
+                constant: p.z - per_x * p.x - per_y * p.y,
+            }
+        };
+        let first_plane = plane_of([a, b, c]);
+        // A quad's cells take the first plane, lowered until it lies below
+        // the second wherever the GPU may draw either: within `slack` of
+        // the outline's corners' hull (the difference is affine, so at a
+        // corner). Nothing for a flat quad.
+        let below_second = if occluder.sides == 4 {
+            let second_plane = plane_of([a, c, corners[3]]);
+            let (dx, dy) = (
+                first_plane.per_x - second_plane.per_x,
+                first_plane.per_y - second_plane.per_y,
+            );
+            let widest = corners
+                .iter()
+                .map(|p| first_plane.at(p.x, p.y) - second_plane.at(p.x, p.y))
+                .fold(f64::NEG_INFINITY, f64::max);
+            (widest + slack * (dx.abs() + dy.abs())).max(0.0)
+        } else {
+            0.0
+        };
+        // What a cell holds at a centre: the least of that plane within
+        // `slack` of it, moved farther by the depth margins (all affine).
+        let keep = 1.0 - DEPTH_MARGIN - occluder.error.depth;
+        let plane = ScreenPlane {
+            per_x: first_plane.per_x * keep,
+            per_y: first_plane.per_y * keep,
+            constant: (first_plane.constant
+                - slack * (first_plane.per_x.abs() + first_plane.per_y.abs())
+                - below_second)
+                * keep
+                - DEPTH_ABSOLUTE,
+        };
         let cells = self.cells();
-        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+        let (lo, hi) = corners
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            });
         let column_range = cell_range(lo.x, hi.x, cells.width, self.target.width);
         let row_range = cell_range(lo.y, hi.y, cells.height, self.target.height);
         let mut written = 0;
@@ -198,8 +326,12 @@ impl OcclusionBuffer {
                     let [x0, x1] = self.columns[column as usize];
                     let (x, y) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
                     if edges.iter().all(|e| e[0] * x + e[1] * y + e[2] >= 0.0) {
+                        let depth = first_plane.at(x, y);
                         let cell = &mut base.depth[index(column)];
-                        *cell = cell.max(depth_at(x, y) as f32);
+                        if f64::from(*cell) < depth {
+                            *cell = depth as f32;
+                            self.planes[index(column)] = first_plane;
+                        }
                         written += 1;
                     }
                 }
@@ -209,7 +341,7 @@ impl OcclusionBuffer {
             // centres (edges are linear, so both rows at both ends of an x
             // range bound the whole rectangle).
             let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
-            for [ex, ey, ec] in edges {
+            for &[ex, ey, ec] in edges {
                 let needed = |y: f64| cover - ey * y - ec;
                 let (n0, n1) = (needed(y0), needed(y1));
                 if ex > 0.0 {
@@ -224,25 +356,20 @@ impl OcclusionBuffer {
             if from.is_nan() || to.is_nan() || from > to {
                 continue;
             }
-            // The columns of the triangle's span whose centres all lie in
-            // [from, to].
+            // The columns of the span whose centres all lie in [from, to].
             let (start, stop) = (*column_range.start(), *column_range.end() + 1);
             let span = &self.columns[start as usize..stop as usize];
             let first = start + span.partition_point(|&[x0, _]| x0 < from) as u32;
             let end = start + span.partition_point(|&[_, x1]| x1 <= to) as u32;
             for column in first..end {
-                let [x0, x1] = self.columns[column as usize];
-                // The GPU may draw the depth of any point within `slack` of
-                // a centre: the least over the widened rectangle, at the
-                // corner the plane falls towards.
-                let x = if alpha > 0.0 { x0 - slack } else { x1 + slack };
-                let y = if beta > 0.0 { y0 - slack } else { y1 + slack };
-                let depth = depth_at(x, y) * (1.0 - DEPTH_MARGIN - triangle.error.depth) - DEPTH_ABSOLUTE;
-                if depth <= 0.0 {
+                let farthest = plane.min_over(self.columns[column as usize], [y0, y1]);
+                let cell = &mut base.depth[index(column)];
+                // A NaN writes nothing.
+                if farthest.is_nan() || farthest <= f64::from(*cell).max(0.0) {
                     continue;
                 }
-                let cell = &mut base.depth[index(column)];
-                *cell = cell.max(f32_at_most(depth));
+                *cell = f32_at_most(farthest);
+                self.planes[index(column)] = plane;
                 written += 1;
             }
         }
@@ -268,32 +395,102 @@ impl OcclusionBuffer {
         }
     }
 
-    /// The farthest depth the occluders may have at any of the pixels
-    /// `first` to `last` (x, y, inclusive): the least over the cells that
-    /// hold them, read at the finest pyramid level where they span at most
-    /// [`TEST_SPAN`] texels across.
-    pub fn farthest_over(&self, first: [u32; 2], last: [u32; 2]) -> f32 {
+    /// Whether the occluders hide a box over the pixels `first` to `last`
+    /// (x, y, inclusive), whose depth is at most `nearest` anywhere and
+    /// whose `planes` bound its depth at every pixel centre and tell where
+    /// pixel rays miss it. The pixels' cells are read at the finest pyramid
+    /// level where they span at most [`TEST_SPAN`] texels across; the box
+    /// is hidden when, at each texel, it lies strictly behind the texel's
+    /// farthest depth (by `nearest`, or else by its planes over the pixel
+    /// centres the texel holds), or no ray through those centres meets it,
+    /// or else this holds at each of the texel's children; at a cell, also
+    /// when one of its planes lies behind the cell's plane at each centre.
+    pub fn hides(&self, first: [u32; 2], last: [u32; 2], nearest: f64, planes: &BoxPlanes) -> bool {
         debug_assert!(first[0] <= last[0] && first[1] <= last[1], "{first:?} to {last:?}");
         let cells = self.cells();
-        let (x0, x1) = (
-            cell_of(first[0], cells.width, self.target.width),
-            cell_of(last[0], cells.width, self.target.width),
-        );
-        let (y0, y1) = (
-            cell_of(first[1], cells.height, self.target.height),
-            cell_of(last[1], cells.height, self.target.height),
-        );
+        let query = BoxQuery {
+            buffer: self,
+            pixels: [first, last],
+            columns: [
+                cell_of(first[0], cells.width, self.target.width),
+                cell_of(last[0], cells.width, self.target.width),
+            ],
+            rows: [
+                cell_of(first[1], cells.height, self.target.height),
+                cell_of(last[1], cells.height, self.target.height),
+            ],
+            nearest,
+            planes,
+        };
+        let ([x0, x1], [y0, y1]) = (query.columns, query.rows);
         let k = (0..self.levels.len())
             .find(|&k| (x1 >> k) - (x0 >> k) < TEST_SPAN && (y1 >> k) - (y0 >> k) < TEST_SPAN)
             .unwrap_or(self.levels.len() - 1);
-        let level = &self.levels[k];
-        let mut farthest = f32::INFINITY;
-        for y in y0 >> k..=y1 >> k {
-            for x in x0 >> k..=x1 >> k {
-                farthest = farthest.min(level.depth[(y * level.width + x) as usize]);
-            }
+        query.texels_hide(k as u32, [x0 >> k, x1 >> k], [y0 >> k, y1 >> k])
+    }
+}
+
+/// A box's test against the buffer ([`OcclusionBuffer::hides`]).
+struct BoxQuery<'a> {
+    buffer: &'a OcclusionBuffer,
+    /// The first and last pixels (x, y) of the box's rectangle.
+    pixels: [[u32; 2]; 2],
+    /// The cells holding them: first and last column, first and last row.
+    columns: [u32; 2],
+    rows: [u32; 2],
+    nearest: f64,
+    planes: &'a BoxPlanes,
+}
+
+impl BoxQuery<'_> {
+    /// Whether the box lies behind the texels `xs` × `ys` (first and last,
+    /// inclusive) of level `k`, each in the box's cells.
+    fn texels_hide(&self, k: u32, xs: [u32; 2], ys: [u32; 2]) -> bool {
+        (ys[0]..=ys[1]).all(|y| (xs[0]..=xs[1]).all(|x| self.texel_hides(k, x, y)))
+    }
+
+    fn texel_hides(&self, k: u32, x: u32, y: u32) -> bool {
+        let level = &self.buffer.levels[k as usize];
+        let farthest = f64::from(level.depth[(y * level.width + x) as usize]);
+        if self.nearest < farthest {
+            return true;
         }
-        farthest
+        // The texel's cells within the box's, along a side.
+        let held = |t: u32, [first, last]: [u32; 2]| [(t << k).max(first), ((t + 1) << k).saturating_sub(1).min(last)];
+        let [columns, rows] = [held(x, self.columns), held(y, self.rows)];
+        // Their pixel centres within the box's pixels.
+        let centres = |along: &[[f64; 2]], [from, to]: [u32; 2], axis: usize| {
+            [
+                along[from as usize][0].max(f64::from(self.pixels[0][axis]) + 0.5),
+                along[to as usize][1].min(f64::from(self.pixels[1][axis]) + 0.5),
+            ]
+        };
+        let (xs, ys) = (
+            centres(&self.buffer.columns, columns, 0),
+            centres(&self.buffer.rows, rows, 1),
+        );
+        let over = self
+            .planes
+            .entries()
+            .iter()
+            .map(|p| p.max_over(xs, ys))
+            .fold(f64::INFINITY, f64::min);
+        // Not `>=`: a NaN hides nothing, here and below.
+        if over < farthest || self.planes.missed_over(xs, ys) {
+            return true;
+        }
+        if k > 0 {
+            return self.texels_hide(k - 1, columns.map(|c| c >> (k - 1)), rows.map(|r| r >> (k - 1)));
+        }
+        // A cell: behind its plane by one of the box's (the box's depth is
+        // at most the least of them), at every centre.
+        let cell = self.buffer.planes[(y * level.width + x) as usize];
+        farthest > 0.0
+            && self
+                .planes
+                .entries()
+                .iter()
+                .any(|p| p.minus(&cell).max_over(xs, ys) < 0.0)
     }
 }
 
@@ -311,15 +508,25 @@ fn f32_at_most(v: f64) -> f32 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::scene::builtin::Rng;
 
+    /// The triangles an occluder stands for.
+    fn triangles_of(occluder: &ScreenPolygon) -> Vec<[DVec3; 3]> {
+        let [a, b, c, d] = occluder.corners;
+        if occluder.sides == 3 {
+            vec![[a, b, c]]
+        } else {
+            vec![[a, b, c], [a, c, d]]
+        }
+    }
+
     /// The nearest depth (greatest) of `triangles` at point (x, y), by
     /// barycentric coordinates; 0 where none covers it.
-    fn nearest_at(triangles: &[ScreenTriangle], x: f64, y: f64) -> f64 {
+    fn nearest_at(triangles: &[[DVec3; 3]], x: f64, y: f64) -> f64 {
         let mut nearest = 0.0f64;
-        for &ScreenTriangle { corners: [a, b, c], .. } in triangles {
+        for &[a, b, c] in triangles {
             let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
             let wa = ((b.x - x) * (c.y - y) - (b.y - y) * (c.x - x)) / area;
             let wb = ((c.x - x) * (a.y - y) - (c.y - y) * (a.x - x)) / area;
@@ -331,26 +538,55 @@ mod tests {
         nearest
     }
 
-    fn random_triangles(rng: &mut Rng, size: Resolution, count: usize) -> Vec<ScreenTriangle> {
+    /// Triangles and quads from a fraction of a pixel to beyond the screen;
+    /// most quads are near parallelograms, some fold on screen (both
+    /// triangles on one side of their shared edge) or bend (a reflex
+    /// corner).
+    pub(in crate::cull::swr) fn random_occluders(rng: &mut Rng, size: Resolution, count: usize) -> Vec<ScreenPolygon> {
         let (w, h) = (f64::from(size.width), f64::from(size.height));
         (0..count)
             .map(|_| {
-                // Sizes from a fraction of a pixel to beyond the screen.
                 let centre = DVec3::new(rng.range(-0.2 * w, 1.2 * w), rng.range(-0.2 * h, 1.2 * h), 0.0);
                 let reach = rng.range(0.5, 0.8 * w.max(h));
-                ScreenTriangle {
-                    corners: [0, 1, 2].map(|_| {
-                        let offset = DVec3::new(rng.range(-reach, reach), rng.range(-reach, reach), 0.0);
-                        (centre + offset).with_z(rng.range(1e-4, 0.9))
-                    }),
-                    error: VertexError::default(),
+                let mut corner = || {
+                    let offset = DVec3::new(rng.range(-reach, reach), rng.range(-reach, reach), 0.0);
+                    (centre + offset).with_z(rng.range(1e-4, 0.9))
+                };
+                let [a, b, c] = [corner(), corner(), corner()];
+                let d = corner();
+                let error = VertexError::default();
+                match rng.range(0.0, 4.0) as u32 {
+                    0 | 1 => ScreenPolygon::triangle([a, b, c], error),
+                    2 => {
+                        let opposite = a + c - b;
+                        let d = opposite.lerp(d, 0.2).with_z(d.z);
+                        ScreenPolygon::quad([a, b, c, d], error)
+                    }
+                    _ => ScreenPolygon::quad([a, b, c, d], error),
                 }
             })
             .collect()
     }
 
+    /// `occluder` as the GPU may place it: every corner moved by up to the
+    /// snap bound on each axis, at the extremes (a shared corner moves
+    /// once, for both triangles).
+    fn as_the_gpu_may_place(occluder: &ScreenPolygon, rng: &mut Rng) -> ScreenPolygon {
+        let mut shift = || {
+            if rng.range(0.0, 1.0) < 0.5 {
+                -VERTEX_ERROR
+            } else {
+                VERTEX_ERROR
+            }
+        };
+        ScreenPolygon {
+            corners: occluder.corners.map(|c| c + DVec3::new(shift(), shift(), 0.0)),
+            ..*occluder
+        }
+    }
+
     #[test]
-    fn a_cell_holds_no_depth_nearer_than_the_triangles_as_the_gpu_may_draw_them_at_any_pixel_centre_it_holds() {
+    fn a_cell_holds_no_depth_nearer_than_the_occluders_as_the_gpu_may_draw_them_at_any_pixel_centre_it_holds() {
         let mut rng = Rng::new(21);
         let cases = [
             ((801, 599), (256, 192)),
@@ -359,31 +595,21 @@ mod tests {
             ((1, 1), (1, 1)),
             ((640, 480), (97, 61)),
         ];
-        let mut written = 0;
+        let (mut written_by_quads, mut written) = (0, 0);
         for ((tw, th), (cw, ch)) in cases {
             let target = Resolution { width: tw, height: th };
             let mut buffer = OcclusionBuffer::new(target, Resolution { width: cw, height: ch });
-            let triangles = random_triangles(&mut rng, target, 40);
-            for t in &triangles {
-                written += buffer.rasterise(t);
+            let occluders = random_occluders(&mut rng, target, 60);
+            for o in &occluders {
+                let cells = buffer.rasterise(o);
+                written += cells;
+                if o.sides == 4 {
+                    written_by_quads += cells;
+                }
             }
-            // The triangles as the GPU may place them: every corner moved
-            // by up to the snap bound on each axis, at the extremes.
-            let triangles: Vec<ScreenTriangle> = triangles
+            let triangles: Vec<[DVec3; 3]> = occluders
                 .iter()
-                .map(|t| ScreenTriangle {
-                    corners: t.corners.map(|c| {
-                        let mut shift = || {
-                            if rng.range(0.0, 1.0) < 0.5 {
-                                -VERTEX_ERROR
-                            } else {
-                                VERTEX_ERROR
-                            }
-                        };
-                        c + DVec3::new(shift(), shift(), 0.0)
-                    }),
-                    ..*t
-                })
+                .flat_map(|o| triangles_of(&as_the_gpu_may_place(o, &mut rng)))
                 .collect();
             // Every pixel, with the cell a box test reads for it (written
             // out here, not taken from the code under test).
@@ -392,51 +618,54 @@ mod tests {
                 for px in 0..tw {
                     let cx = u64::from(px) * u64::from(cells.width) / u64::from(tw);
                     let cy = u64::from(py) * u64::from(cells.height) / u64::from(th);
-                    let depth = f64::from(buffer.depths()[(cy * u64::from(cells.width) + cx) as usize]);
+                    let cell = (cy * u64::from(cells.width) + cx) as usize;
+                    let depth = f64::from(buffer.depths()[cell]);
                     if depth == 0.0 {
                         continue;
                     }
-                    let drawn = nearest_at(&triangles, f64::from(px) + 0.5, f64::from(py) + 0.5);
+                    let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
+                    let drawn = nearest_at(&triangles, x, y);
+                    let plane = buffer.planes[cell].at(x, y);
                     assert!(
-                        depth <= drawn,
-                        "{tw}x{th} in {cw}x{ch}: cell ({cx}, {cy}) holds {depth}, pixel ({px}, {py}) shows {drawn}"
+                        depth <= plane && plane <= drawn,
+                        "{tw}x{th} in {cw}x{ch}: cell ({cx}, {cy}) holds {depth}, its plane {plane} at pixel ({px}, {py}), which shows {drawn}"
                     );
                 }
             }
         }
-        assert!(written > 1000, "the triangles cover cells ({written})");
+        assert!(written > 1000, "the occluders cover cells ({written})");
+        assert!(written_by_quads > 500, "quads cover cells ({written_by_quads})");
     }
 
     #[test]
-    fn the_pyramid_never_reports_a_depth_nearer_than_a_cell_the_pixels_fall_in() {
-        let mut rng = Rng::new(22);
-        let target = Resolution {
-            width: 801,
-            height: 599,
-        };
-        let mut buffer = OcclusionBuffer::new(target, Resolution { width: 203, height: 97 });
-        for t in random_triangles(&mut rng, target, 60) {
-            buffer.rasterise(&t);
+    fn a_quad_fills_the_cells_along_its_shared_edge_that_its_triangles_alone_leave_empty() {
+        let target = Resolution { width: 64, height: 48 };
+        let cells = Resolution { width: 16, height: 12 };
+        let at = |x: f64, y: f64| DVec3::new(x, y, 0.5 - 0.2 * x / 64.0);
+        // A screen-filling quad whose shared edge runs corner to corner.
+        let [a, b, c, d] = [at(-8.0, -8.0), at(72.0, -8.0), at(72.0, 56.0), at(-8.0, 56.0)];
+        let error = VertexError::default();
+        let mut apart = OcclusionBuffer::new(target, cells);
+        let alone = apart.rasterise(&ScreenPolygon::triangle([a, b, c], error))
+            + apart.rasterise(&ScreenPolygon::triangle([a, c, d], error));
+        let mut together = OcclusionBuffer::new(target, cells);
+        assert_eq!(together.rasterise(&ScreenPolygon::quad([a, b, c, d], error)), 192);
+        assert!(
+            alone < 192 - 12,
+            "the diagonal's cells stay empty apart ({alone} written)"
+        );
+        // Where both write, they agree: the quad's depth is its triangles'.
+        for (apart, together) in apart.depths().iter().zip(together.depths()) {
+            assert!(*apart == 0.0 || apart == together, "{apart} against {together}");
         }
-        buffer.build_pyramid();
-        let cells = buffer.cells();
-        for _ in 0..2000 {
-            let (a, b) = (rng.range(0.0, 801.0) as u32, rng.range(0.0, 801.0) as u32);
-            let (c, d) = (rng.range(0.0, 599.0) as u32, rng.range(0.0, 599.0) as u32);
-            let (first, last) = ([a.min(b), c.min(d)], [a.max(b), c.max(d)]);
-            let farthest = buffer.farthest_over(first, last);
-            for py in first[1]..=last[1] {
-                let cy = cell_of(py, cells.height, target.height);
-                for px in first[0]..=last[0] {
-                    let cx = cell_of(px, cells.width, target.width);
-                    let cell = buffer.depths()[(cy * cells.width + cx) as usize];
-                    assert!(
-                        farthest <= cell,
-                        "{first:?}..{last:?}: {farthest} over cell ({cx}, {cy}) of {cell}"
-                    );
-                }
-            }
-        }
+        // Folded (d on b's side of a–c): each triangle is rasterised alone.
+        let folded = at(60.0, 4.0);
+        let mut buffer = OcclusionBuffer::new(target, cells);
+        let written = buffer.rasterise(&ScreenPolygon::quad([a, b, c, folded], error));
+        let mut first_alone = OcclusionBuffer::new(target, cells);
+        let expected = first_alone.rasterise(&ScreenPolygon::triangle([a, b, c], error))
+            + first_alone.rasterise(&ScreenPolygon::triangle([a, c, folded], error));
+        assert_eq!(written, expected);
     }
 
     #[test]
@@ -445,10 +674,10 @@ mod tests {
         let mut buffer = OcclusionBuffer::new(target, Resolution { width: 16, height: 12 });
         // A plane leaning in x: depth 0.5 at x = 0, 0.3 at x = 64.
         let at = |x: f64, y: f64| DVec3::new(x, y, 0.5 - 0.2 * x / 64.0);
-        let whole = ScreenTriangle {
-            corners: [at(-100.0, -100.0), at(300.0, -100.0), at(-100.0, 300.0)],
-            error: VertexError::default(),
-        };
+        let whole = ScreenPolygon::triangle(
+            [at(-100.0, -100.0), at(300.0, -100.0), at(-100.0, 300.0)],
+            VertexError::default(),
+        );
         assert_eq!(buffer.rasterise(&whole), 192);
         // Column 0 holds pixels 0..=3, centres 0.5 to 3.5: its farthest is
         // where the GPU may sample beside 3.5.
