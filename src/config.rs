@@ -121,6 +121,9 @@ pub struct BenchPlan {
     pub load: LoadOptions,
     /// Also write the run in github-action-benchmark's format here.
     pub export_github_benchmark: Option<PathBuf>,
+    /// The run's name in a matrix (summary.json's `run`); `None` for a
+    /// single run.
+    pub run: Option<String>,
 }
 
 impl BenchConfig {
@@ -239,6 +242,7 @@ impl BenchConfig {
                 self.up,
             ),
             export_github_benchmark: self.export_github_benchmark,
+            run: None,
         })
     }
 }
