@@ -25,6 +25,7 @@ use occlu::matrix::{Matrix, MatrixError, Shard};
 use occlu::picture::{PictureError, PictureOptions};
 use occlu::raycast::RayCaster;
 use occlu::report::compare::{CompareError, CompareOptions, Metric};
+use occlu::report::merge::MergeError;
 use occlu::report::{ReportError, SceneFacts};
 use occlu::scene::builtin::SCENES;
 use occlu::scene::up::UpChoice;
@@ -109,14 +110,32 @@ enum Command {
         /// A bench output directory.
         run_dir: PathBuf,
     },
+    /// Merge result folders from many machines and adapters (bench --out
+    /// folders, or matrix folders of run folders, e.g. one per CI shard)
+    /// into one report: per run, its modes on every adapter side by side
+    /// (never averaged), a chart of each mode's ratio to the oracle per
+    /// adapter, counters that differ between adapters of one backend
+    /// flagged; merged.json for machines, and a copy of every run folder
+    /// under runs/. Folders of one run that measured different scenes,
+    /// paths, resolutions or frame counts are refused.
+    Merge {
+        /// Result folders: a run's folder (holding summary.json) or a
+        /// folder of them (a matrix's --out).
+        #[arg(value_name = "DIR")]
+        dirs: Vec<PathBuf>,
+        /// Where merged.json, report.md, charts/ and runs/ go.
+        #[arg(long, short, value_name = "MERGED")]
+        out: PathBuf,
+    },
     /// Compare two bench runs for CI: exit 1 when a counter (triangles,
     /// queries, round trips, wrong pixels, missed objects) grows, or when the
     /// mean frame time grows beyond --max-regression and beyond the measured
-    /// spread (median ± MAD).
+    /// spread (median ± MAD). Two merged folders (occlu merge) compare run
+    /// by run and adapter by adapter.
     Compare {
-        /// The reference run's output directory.
+        /// The reference run's output directory (or merged folder).
         base: PathBuf,
-        /// The run to judge.
+        /// The run to judge (or merged folder).
         new: PathBuf,
         /// Allowed growth of mean frame time, percent.
         #[arg(long, default_value_t = 5.0, value_name = "PCT")]
@@ -398,6 +417,7 @@ fn main() -> ExitCode {
         Command::Export { scene, output } => export(&scene, &output).map(|()| ExitCode::SUCCESS),
         Command::Plot { run_dir } => plot(&run_dir).map(|()| ExitCode::SUCCESS),
         Command::Render(args) => render(args).map(|()| ExitCode::SUCCESS),
+        Command::Merge { dirs, out } => merge(&dirs, &out).map(|()| ExitCode::SUCCESS),
         Command::Compare {
             base,
             new,
@@ -529,6 +549,7 @@ fn is_input_error(e: &anyhow::Error) -> bool {
             || c.is::<PathError>()
             || c.is::<ConfigError>()
             || c.is::<MatrixError>()
+            || c.downcast_ref::<MergeError>().is_some_and(MergeError::is_input_error)
             || c.downcast_ref::<ReportError>().is_some_and(ReportError::is_input_error)
             || c.is::<CompareError>()
             || c.is::<ModeError>()
@@ -658,6 +679,36 @@ fn bench_one(
         plan.out.display()
     ));
     Ok(outcome)
+}
+
+fn merge(dirs: &[PathBuf], out: &std::path::Path) -> anyhow::Result<()> {
+    let merged = occlu::report::merge::merge(dirs, out)?;
+    emit(&occlu::report::merge::render(&merged))?;
+    let adapters: std::collections::BTreeSet<String> = merged
+        .runs
+        .iter()
+        .flat_map(|r| r.adapters.iter().map(|a| a.label()))
+        .collect();
+    say!(
+        "merged {} runs on {} adapters into {} (report.md, merged.json, charts/, runs/)",
+        merged.runs.len(),
+        adapters.len(),
+        out.display()
+    );
+    for run in &merged.runs {
+        for d in &run.disagreements {
+            let values: Vec<String> = d.values.iter().map(|(a, v)| format!("{a} {v}")).collect();
+            say!(
+                "warning: {}: {} {} differs between {} adapters ({}): a backend-specific bug?",
+                run.name,
+                d.mode,
+                d.counter,
+                d.backend,
+                values.join(", ")
+            );
+        }
+    }
+    Ok(())
 }
 
 /// What bench says on stderr as its run goes.
