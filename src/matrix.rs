@@ -398,6 +398,23 @@ mod tests {
     }
 
     #[test]
+    fn the_sample_matrix_plans_the_workflows_runs() {
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/matrix.json");
+        let runs = Matrix::load(&file).unwrap().plan(&BenchConfig::default()).unwrap();
+        let names: Vec<&str> = runs.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "01-forest-generated",
+                "02-city-city-corner",
+                "03-city-city-walk",
+                "04-city-movers-20-city-corner",
+                "05-city-movers-20-city-walk"
+            ]
+        );
+    }
+
+    #[test]
     fn files_are_strict_and_resolve_paths_relative_to_themselves() {
         let dir = tempfile::tempdir().unwrap();
         let m = matrix(
