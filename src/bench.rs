@@ -28,8 +28,8 @@ use crate::measure::{ErrorMeter, FrameStats, MissedObject, ModeDescription, Obje
 use crate::object_set::ObjectSet;
 use crate::raycast::RayCaster;
 use crate::report::{
-    MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary, SkippedMode,
-    Summary, SweepSummary, ToolInfo, check_writable, prepare_output, write_results, write_whole,
+    Fingerprint, MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary,
+    SkippedMode, Summary, SweepSummary, ToolInfo, check_writable, prepare_output, write_results, write_whole,
 };
 use crate::scene::{Scene, SceneError};
 use crate::world::World;
@@ -471,6 +471,7 @@ pub fn execute(
         frames_with_geometry_within_near: Some(
             path.frames_with_geometry_within_near(&RayCaster::new(scene), plan.resolution.aspect()),
         ),
+        cameras: Some(Fingerprint::of_path(&path)),
     };
     go_on(events(BenchEvent::Path(&path_summary, path.frames)))?;
     let gpu = GpuContext::new(plan.backend)?;
@@ -531,6 +532,7 @@ pub fn execute(
     let mut summary = Summary {
         schema_version: SCHEMA_VERSION,
         tool: ToolInfo::current(),
+        run: plan.run.clone(),
         adapter: gpu.adapter.clone(),
         scene: SceneSummary {
             facts,

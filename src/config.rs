@@ -1,5 +1,6 @@
 //! Run configuration: the options of `occlu bench`, from a JSON file
-//! (`--config`, samples in configs/) and from flags, which win. Relative
+//! (`--config`, samples in configs/; read by `matrix::Matrix`,
+//! since a file may list several runs) and from flags, which win. Relative
 //! paths in a file are relative to the file.
 
 use std::path::{Path, PathBuf};
@@ -83,6 +84,32 @@ pub enum ConfigError {
     SweptTwice { key: String, value: String },
 }
 
+/// A configuration file's JSON, read within [`crate::input::TEXT_LIMIT`].
+pub fn read_json(path: &Path) -> Result<serde_json::Value, ConfigError> {
+    let text = crate::input::read_text(path, crate::input::TEXT_LIMIT).map_err(|error| ConfigError::Io {
+        path: path.display().to_string(),
+        error,
+    })?;
+    serde_json::from_str(&text).map_err(|e| invalid(path, "", &e))
+}
+
+/// `json` (a whole file, or the part `at` names, such as `runs[2]: `) as
+/// the type it should be, or the one-line error that names where it fails.
+pub fn from_json<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    at: &str,
+    json: serde_json::Value,
+) -> Result<T, ConfigError> {
+    serde_json::from_value(json).map_err(|e| invalid(path, at, &e))
+}
+
+fn invalid(path: &Path, at: &str, e: &serde_json::Error) -> ConfigError {
+    ConfigError::Json {
+        path: path.display().to_string(),
+        message: crate::text::one_line(&format!("{at}{e}")),
+    }
+}
+
 /// The scene a model file, a built-in scene (the city when neither is
 /// given) and a mover count name together.
 pub fn scene_spec(
@@ -121,29 +148,22 @@ pub struct BenchPlan {
     pub load: LoadOptions,
     /// Also write the run in github-action-benchmark's format here.
     pub export_github_benchmark: Option<PathBuf>,
+    /// The run's name in a matrix (summary.json's `run`); `None` for a
+    /// single run.
+    pub run: Option<String>,
 }
 
 impl BenchConfig {
-    pub fn load(path: &Path) -> Result<BenchConfig, ConfigError> {
-        let name = path.display().to_string();
-        let text = crate::input::read_text(path, crate::input::TEXT_LIMIT).map_err(|error| ConfigError::Io {
-            path: name.clone(),
-            error,
-        })?;
-        let mut config: BenchConfig = serde_json::from_str(&text).map_err(|e| ConfigError::Json {
-            path: name,
-            message: crate::text::one_line(&e.to_string()),
-        })?;
-        let base = path.parent().unwrap_or(Path::new(""));
-        for p in [&mut config.model, &mut config.path, &mut config.out]
-            .into_iter()
-            .flatten()
-        {
+    /// `self` with its relative paths taken as relative to the folder of
+    /// the configuration file `file`.
+    pub fn relative_to(mut self, file: &Path) -> BenchConfig {
+        let base = file.parent().unwrap_or(Path::new(""));
+        for p in [&mut self.model, &mut self.path, &mut self.out].into_iter().flatten() {
             if p.is_relative() {
                 *p = base.join(&*p);
             }
         }
-        Ok(config)
+        self
     }
 
     /// `self` with every unset field taken from `fallback`. A model or scene
@@ -239,6 +259,7 @@ impl BenchConfig {
                 self.up,
             ),
             export_github_benchmark: self.export_github_benchmark,
+            run: None,
         })
     }
 }
@@ -494,28 +515,5 @@ mod tests {
             plan(Some("city:blocks=2")),
             SceneSpec::Builtin("city:blocks=2,movers=30".into())
         );
-    }
-
-    #[test]
-    fn files_are_strict_and_resolve_paths_relative_to_themselves() {
-        let dir = tempfile::tempdir().unwrap();
-        let f = dir.path().join("c.json");
-        std::fs::write(
-            &f,
-            r#"{"path": "walk.json", "resolution": "320x240", "modes": ["vfc"]}"#,
-        )
-        .unwrap();
-        let c = BenchConfig::load(&f).unwrap();
-        assert_eq!(c.path, Some(dir.path().join("walk.json")));
-        assert_eq!(c.resolution, Some("320x240".parse().unwrap()));
-        std::fs::write(&f, r#"{"resolutoin": "320x240"}"#).unwrap();
-        assert!(
-            BenchConfig::load(&f)
-                .unwrap_err()
-                .to_string()
-                .contains("unknown field `resolutoin`")
-        );
-        std::fs::write(&f, r#"{"resolution": "320"}"#).unwrap();
-        assert!(BenchConfig::load(&f).unwrap_err().to_string().contains("WIDTHxHEIGHT"));
     }
 }

@@ -5,9 +5,11 @@
 //! bounding-volume tree, [`camera`] turns a path into cameras, [`gpu`] holds
 //! the device, the scene's buffers and the per-frame operations, [`cull`]
 //! holds one file per culling mode, [`measure`] computes error and
-//! statistics, [`report`] writes the result files and charts, [`bench`]
-//! runs the whole flow, [`picture`] renders one frame to look at, and
-//! [`stress`] runs the numerically hard cases.
+//! statistics, [`report`] writes the result files and charts (and merges
+//! many runs' into one report), [`bench`] runs the whole flow, [`matrix`]
+//! lists the runs of a matrix configuration and shards them, [`picture`]
+//! renders one frame to look at, and [`stress`] runs the numerically hard
+//! cases.
 
 pub mod bench;
 pub mod bounds;
@@ -18,6 +20,7 @@ pub mod export;
 pub mod gpu;
 pub mod hierarchy;
 pub mod input;
+pub mod matrix;
 pub mod measure;
 pub mod object_set;
 pub mod picture;

@@ -10,19 +10,22 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+use anyhow::Context as _;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use occlu::bench::{BenchError, BenchEvent, execute};
 use occlu::camera::generate::{PathRequest, plan};
 use occlu::camera::path::{CameraPath, PathError};
-use occlu::config::{BenchConfig, ConfigError, load_options, scene_spec};
+use occlu::config::{BenchConfig, BenchPlan, ConfigError, load_options, scene_spec};
 use occlu::cull::{ModeError, ModeParams, parse_modes};
 use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::input::ByteSize;
+use occlu::matrix::{Matrix, MatrixError, Shard};
 use occlu::picture::{PictureError, PictureOptions};
 use occlu::raycast::RayCaster;
 use occlu::report::compare::{CompareError, CompareOptions, Metric};
+use occlu::report::merge::MergeError;
 use occlu::report::{ReportError, SceneFacts};
 use occlu::scene::builtin::SCENES;
 use occlu::scene::up::UpChoice;
@@ -72,7 +75,9 @@ fn after_help() -> String {
 #[derive(Subcommand)]
 enum Command {
     /// Replay a camera path in each culling mode; write frames.csv,
-    /// summary.json and report.md.
+    /// summary.json and report.md. With a matrix configuration (--config
+    /// listing runs), every run of it (or --shard's share) into a folder
+    /// of its own under --out.
     Bench(Box<BenchArgs>),
     /// Print a model's objects, triangles, hierarchy, load time and warnings.
     Info(InfoArgs),
@@ -105,14 +110,32 @@ enum Command {
         /// A bench output directory.
         run_dir: PathBuf,
     },
+    /// Merge result folders from many machines and adapters (bench --out
+    /// folders, or matrix folders of run folders, e.g. one per CI shard)
+    /// into one report: per run, its modes on every adapter side by side
+    /// (never averaged), a chart of each mode's ratio to the oracle per
+    /// adapter, counters that differ between adapters of one backend
+    /// flagged; merged.json for machines, and a copy of every run folder
+    /// under runs/. Folders of one run that measured different scenes,
+    /// paths, resolutions or frame counts are refused.
+    Merge {
+        /// Result folders: a run's folder (holding summary.json) or a
+        /// folder of them (a matrix's --out).
+        #[arg(value_name = "DIR")]
+        dirs: Vec<PathBuf>,
+        /// Where merged.json, report.md, charts/ and runs/ go.
+        #[arg(long, short, value_name = "MERGED")]
+        out: PathBuf,
+    },
     /// Compare two bench runs for CI: exit 1 when a counter (triangles,
     /// queries, round trips, wrong pixels, missed objects) grows, or when the
     /// mean frame time grows beyond --max-regression and beyond the measured
-    /// spread (median ± MAD).
+    /// spread (median ± MAD). Two merged folders (occlu merge) compare run
+    /// by run and adapter by adapter.
     Compare {
-        /// The reference run's output directory.
+        /// The reference run's output directory (or merged folder).
         base: PathBuf,
-        /// The run to judge.
+        /// The run to judge (or merged folder).
         new: PathBuf,
         /// Allowed growth of mean frame time, percent.
         #[arg(long, default_value_t = 5.0, value_name = "PCT")]
@@ -235,9 +258,17 @@ struct BenchArgs {
     /// Graphics API; auto honours WGPU_BACKEND [default: auto].
     #[arg(long, value_enum)]
     backend: Option<BackendChoice>,
-    /// Run configuration (JSON, see configs/); flags override it.
+    /// Run configuration (JSON, see configs/); flags override it. A file
+    /// listing "runs" (or "models"/"scenes" × "paths") is a matrix: every
+    /// run goes into a folder of its own under --out, its fields over the
+    /// file's, flags over both.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
+    /// Run only the K-th of N shares of the matrix (1 <= K <= N): its runs
+    /// K, K+N, K+2N, ..., so N CI jobs given 1/N ... N/N run every run once.
+    /// A configuration that lists no runs is a matrix of one.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<Shard>,
     /// Output directory [default: occlu-out].
     #[arg(long, short, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -391,6 +422,7 @@ fn main() -> ExitCode {
         Command::Export { scene, output } => export(&scene, &output).map(|()| ExitCode::SUCCESS),
         Command::Plot { run_dir } => plot(&run_dir).map(|()| ExitCode::SUCCESS),
         Command::Render(args) => render(args).map(|()| ExitCode::SUCCESS),
+        Command::Merge { dirs, out } => merge(&dirs, &out).map(|()| ExitCode::SUCCESS),
         Command::Compare {
             base,
             new,
@@ -521,6 +553,8 @@ fn is_input_error(e: &anyhow::Error) -> bool {
             || c.is::<SceneError>()
             || c.is::<PathError>()
             || c.is::<ConfigError>()
+            || c.is::<MatrixError>()
+            || c.downcast_ref::<MergeError>().is_some_and(MergeError::is_input_error)
             || c.downcast_ref::<ReportError>().is_some_and(ReportError::is_input_error)
             || c.is::<CompareError>()
             || c.is::<ModeError>()
@@ -552,30 +586,88 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         params: (!args.params.is_empty()).then_some(args.params),
         sweep: args.sweep,
     };
-    let file = match &args.config {
-        Some(path) => BenchConfig::load(path)?,
-        None => BenchConfig::default(),
+    let matrix = match &args.config {
+        Some(path) => Matrix::load(path)?,
+        None => Matrix::default(),
     };
-    let plan = flags.or(file).plan()?;
     let quiet = args.quiet;
     let note = |text: String| {
         if !quiet {
             say!("{text}");
         }
     };
-    let mut progress = Progress::new(quiet, plan.warmup, format!("{} modes", plan.modes.len()));
-    let outcome = execute(&plan, &mut |event| {
-        heard(&mut progress, event, &note);
+    if !matrix.lists_runs() && args.shard.is_none() {
+        let plan = matrix.single_run(&flags)?;
+        let outcome = bench_one(&plan, &note, quiet, format!("{} modes", plan.modes.len()))?;
+        return if args.json {
+            emit(&(serde_json::to_string_pretty(&outcome.summary)? + "\n"))
+        } else {
+            emit(&occlu::report::render_markdown(&outcome.summary))
+        };
+    }
+    // Every run is checked before any runs, on every shard alike.
+    let runs = matrix.plan(&flags)?;
+    let shard = args.shard.unwrap_or(Shard::WHOLE);
+    let mine: Vec<_> = runs
+        .iter()
+        .enumerate()
+        .filter(|&(place, _)| shard.takes(place))
+        .map(|(_, run)| run)
+        .collect();
+    if mine.is_empty() {
+        note(format!(
+            "shard {shard}: none of the matrix's {} runs falls to this shard; nothing run, nothing written",
+            runs.len()
+        ));
+        return Ok(());
+    }
+    let mut summaries = Vec::new();
+    let mut table = String::from("| run | scene | path | adapter | folder |\n|---|---|---|---|---|\n");
+    for (k, run) in mine.iter().enumerate() {
+        note(format!(
+            "run {} of {} (shard {shard} of a matrix of {}): {}",
+            k + 1,
+            mine.len(),
+            runs.len(),
+            run.name
+        ));
+        let outcome =
+            bench_one(&run.plan, &note, quiet, run.name.clone()).with_context(|| format!("run {}", run.name))?;
+        let s = &outcome.summary;
+        let _ = writeln!(
+            table,
+            "| {} | {} | {} | {} | {} |",
+            run.name,
+            occlu::text::markdown(&s.scene.facts.source),
+            occlu::text::markdown(&s.path.source),
+            occlu::text::markdown(&s.adapter.to_string()),
+            occlu::text::markdown(&run.plan.out.display().to_string())
+        );
+        summaries.push(outcome.summary);
+    }
+    if args.json {
+        emit(&(serde_json::to_string_pretty(&summaries)? + "\n"))
+    } else {
+        emit(&table)
+    }
+}
+
+/// Runs one plan with its progress on stderr (`prefix` names it there) and
+/// says where its results went.
+fn bench_one(
+    plan: &BenchPlan,
+    note: &dyn Fn(String),
+    quiet: bool,
+    prefix: String,
+) -> anyhow::Result<occlu::bench::BenchOutcome> {
+    let mut progress = Progress::new(quiet, plan.warmup, prefix);
+    let outcome = execute(plan, &mut |event| {
+        heard(&mut progress, event, note);
         go_on()
     })?;
     progress.finish();
     if let Some(path) = &plan.export_github_benchmark {
         note(format!("wrote {}", path.display()));
-    }
-    if args.json {
-        emit(&(serde_json::to_string_pretty(&outcome.summary)? + "\n"))?;
-    } else {
-        emit(&occlu::report::render_markdown(&outcome.summary))?;
     }
     let files = &outcome.files;
     let missed = files
@@ -591,6 +683,36 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         files.charts.len(),
         plan.out.display()
     ));
+    Ok(outcome)
+}
+
+fn merge(dirs: &[PathBuf], out: &std::path::Path) -> anyhow::Result<()> {
+    let merged = occlu::report::merge::merge(dirs, out)?;
+    emit(&occlu::report::merge::render(&merged))?;
+    let adapters: std::collections::BTreeSet<String> = merged
+        .runs
+        .iter()
+        .flat_map(|r| r.adapters.iter().map(|a| a.label()))
+        .collect();
+    say!(
+        "merged {} runs on {} adapters into {} (report.md, merged.json, charts/, runs/)",
+        merged.runs.len(),
+        adapters.len(),
+        out.display()
+    );
+    for run in &merged.runs {
+        for d in &run.disagreements {
+            let values: Vec<String> = d.values.iter().map(|(a, v)| format!("{a} {v}")).collect();
+            say!(
+                "warning: {}: {} {} differs between {} adapters ({}): a backend-specific bug?",
+                run.name,
+                d.mode,
+                d.counter,
+                d.backend,
+                values.join(", ")
+            );
+        }
+    }
     Ok(())
 }
 

@@ -18,6 +18,27 @@ pub fn one_line(text: &str) -> String {
         .collect()
 }
 
+/// `text` as part of a file name that means the same on every system: ASCII
+/// letters, digits, `.` and `_` kept, every other run of characters one
+/// `-`, no `-` at either end, at most [`SLUG_LENGTH`] characters, and
+/// never empty (`x`), so it cannot name a parent or hidden folder.
+pub fn slug(text: &str) -> String {
+    let mut out = String::new();
+    for c in text.chars() {
+        if c.is_ascii_alphanumeric() || c == '_' || (c == '.' && !out.is_empty()) {
+            out.push(c);
+        } else if !out.is_empty() && !out.ends_with('-') {
+            out.push('-');
+        }
+    }
+    out.truncate(SLUG_LENGTH);
+    let out = out.trim_end_matches(['-', '.']);
+    if out.is_empty() { "x".into() } else { out.into() }
+}
+
+/// The longest [`slug`].
+pub const SLUG_LENGTH: usize = 40;
+
 /// `text` as literal Markdown inline text: on one line, with every
 /// character that could start a construct (emphasis, code, links, HTML,
 /// table cells, entities, strikethrough) escaped by a backslash. A name
@@ -70,5 +91,18 @@ mod tests {
         assert_eq!(one_line("plain 'é' ü"), "plain 'é' ü");
         assert_eq!(one_line("a\nb\r\tc\u{1b}[2J\0"), "a\\nb\\r\\tc\\u{1b}[2J\\u{0}");
         assert!(!one_line("x\u{85}y\u{7f}").chars().any(char::is_control));
+    }
+
+    #[test]
+    fn slugs_are_safe_file_name_parts() {
+        assert_eq!(slug("city:blocks=1,seed=2"), "city-blocks-1-seed-2");
+        assert_eq!(slug("../walk.json"), "walk.json");
+        assert_eq!(
+            slug("NVIDIA GeForce RTX 4090 (Vulkan)"),
+            "NVIDIA-GeForce-RTX-4090-Vulkan"
+        );
+        assert_eq!(slug("..."), "x");
+        assert_eq!(slug("ünïcode"), "n-code");
+        assert_eq!(slug(&"a".repeat(100)).len(), SLUG_LENGTH);
     }
 }

@@ -9,6 +9,9 @@
 //!   pixels, one point per mode and swept value, the Pareto front marked;
 //! - `summary.png`: mean and p95 frame time per mode, with the speed-up over
 //!   vfc and the ratio to the oracle written on the bars.
+//!
+//! `occlu merge` draws one more per run, [`ratio_to_oracle_bars`]: each
+//! mode's ratio to the oracle on each adapter.
 
 use std::path::{Path, PathBuf};
 use std::sync::Once;
@@ -36,7 +39,6 @@ const FONT: &str = "sans-serif";
 
 /// Writes every chart into `dir`; returns their paths.
 pub fn write_charts(dir: &Path, summary: &Summary, rows: &[FrameStats]) -> Result<Vec<PathBuf>, ReportError> {
-    register_font();
     let series = Series::of(summary, rows);
     let draw: [(&str, ChartFn); 5] = [
         (CHARTS[0], frame_time),
@@ -48,18 +50,104 @@ pub fn write_charts(dir: &Path, summary: &Summary, rows: &[FrameStats]) -> Resul
     draw.iter()
         .map(|&(name, chart)| {
             let path = dir.join(name);
-            let mut rgb = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
-            {
-                let root = BitMapBackend::with_buffer(&mut rgb, (WIDTH, HEIGHT)).into_drawing_area();
-                chart(&root, summary, &series).map_err(|e| ReportError {
-                    path: path.clone(),
-                    error: std::io::Error::other(format!("drawing the chart failed: {e}")),
-                })?;
-            }
-            write_png(&path, WIDTH, HEIGHT, &rgb)?;
+            draw_png(&path, |root| chart(root, summary, &series))?;
             Ok(path)
         })
         .collect()
+}
+
+/// Draws one chart with `draw` and writes it to `path` as a PNG.
+fn draw_png(path: &Path, draw: impl FnOnce(&Area) -> DrawResult) -> Result<(), ReportError> {
+    register_font();
+    let mut rgb = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (WIDTH, HEIGHT)).into_drawing_area();
+        draw(&root).map_err(|e| ReportError {
+            path: path.to_path_buf(),
+            error: std::io::Error::other(format!("drawing the chart failed: {e}")),
+        })?;
+    }
+    write_png(path, WIDTH, HEIGHT, &rgb)
+}
+
+/// One bar group of [`ratio_to_oracle_bars`]: a mode, and its mean frame
+/// time over the oracle's on each adapter (`None` where it did not run or
+/// the adapter ran no oracle).
+pub struct RatioBars {
+    pub mode: String,
+    pub ratios: Vec<Option<f64>>,
+}
+
+/// `occlu merge`'s chart of one run: for each mode, a bar per adapter of
+/// its ratio to the oracle (1 is the oracle itself, the floor of any
+/// object-level culler), adapters side by side in the colours of
+/// [`OTHER_COLOURS`], never averaged.
+pub fn ratio_to_oracle_bars(
+    path: &Path,
+    caption: &str,
+    adapters: &[String],
+    modes: &[RatioBars],
+) -> Result<(), ReportError> {
+    draw_png(path, |area| {
+        area.fill(&WHITE)?;
+        let y_max = modes
+            .iter()
+            .flat_map(|m| m.ratios.iter().flatten())
+            .fold(1.0, |a: f64, &b| a.max(b))
+            * 1.2;
+        let n = modes.len().max(1) as f64;
+        let names: Vec<&str> = modes.iter().map(|m| m.mode.as_str()).collect();
+        let mut chart = ChartBuilder::on(area)
+            .caption(caption, (FONT, 26))
+            .margin(18)
+            .x_label_area_size(48)
+            .y_label_area_size(90)
+            .build_cartesian_2d(-0.5f64..n - 0.5, 0f64..y_max)?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(modes.len().max(1))
+            .x_label_formatter(&|x| {
+                let i = x.round();
+                if (x - i).abs() < 1e-6 && i >= 0.0 {
+                    names.get(i as usize).map_or(String::new(), |n| n.to_string())
+                } else {
+                    String::new()
+                }
+            })
+            .x_desc("mode")
+            .y_desc("mean frame time / oracle's")
+            .label_style((FONT, 16))
+            .axis_desc_style((FONT, 18))
+            .draw()?;
+        chart.draw_series(LineSeries::new([(-0.5, 1.0), (n - 0.5, 1.0)], BLACK.mix(0.5)))?;
+        let width = 0.8 / adapters.len().max(1) as f64;
+        for (a, adapter) in adapters.iter().enumerate() {
+            let c = OTHER_COLOURS[a % OTHER_COLOURS.len()];
+            let bars = modes.iter().enumerate().filter_map(|(i, m)| {
+                let ratio = m.ratios.get(a).copied().flatten()?;
+                let left = i as f64 - 0.4 + width * a as f64;
+                Some(Rectangle::new([(left, 0.0), (left + width * 0.9, ratio)], c.filled()))
+            });
+            chart
+                .draw_series(bars)?
+                .label(adapter.as_str())
+                .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], c.filled()));
+            let values = modes.iter().enumerate().filter_map(|(i, m)| {
+                let ratio = m.ratios.get(a).copied().flatten()?;
+                let left = i as f64 - 0.4 + width * a as f64;
+                Some(Text::new(
+                    format!("{ratio:.2}×"),
+                    (left, ratio + y_max * 0.03),
+                    (FONT, 14),
+                ))
+            });
+            chart.draw_series(values)?;
+        }
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        area.present()?;
+        Ok(())
+    })
 }
 
 type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;

@@ -1,5 +1,8 @@
 //! `occlu compare BASE NEW`: what changed between two runs, and whether it
-//! is a regression a CI job should fail on.
+//! is a regression a CI job should fail on. Two merged folders (`occlu
+//! merge`) compare run folder by run folder (each run on each adapter),
+//! every change named `RUN--ADAPTER/MODE`; a run folder of the base that
+//! the new merge lacks is missing.
 //!
 //! Deterministic counters (triangles drawn, box tests, round trips, wrong
 //! pixels, missed objects) do not depend on machine noise: any increase is a
@@ -14,10 +17,11 @@
 //! `cross_adapter`: their counters compare, their times do not).
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::merge::{Merged, read_merged};
 use super::{ReportError, Summary, read_results};
 use crate::measure::{Distribution, FrameStats, ModeDescription, ModeSummary, summarize};
 
@@ -152,12 +156,32 @@ pub enum CompareError {
         "the runs used different adapters ({base} vs {new}), where only counters compare, and --metric names frame_ms alone: nothing would be judged"
     )]
     NothingToJudge { base: String, new: String },
+    #[error("{} is a merged folder and {} is not: compare two runs, or two merged folders", merged.display(), single.display())]
+    MergedWithSingle { merged: PathBuf, single: PathBuf },
+    #[error("{}: {error}", run.display())]
+    InRun { run: PathBuf, error: Box<CompareError> },
 }
 
 pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comparison, CompareError> {
     let max_regression_pct = options.max_regression_pct;
     if !(max_regression_pct >= 0.0 && max_regression_pct.is_finite()) {
         return Err(CompareError::Threshold(max_regression_pct));
+    }
+    match (read_merged(base)?, read_merged(new)?) {
+        (Some(b), Some(n)) => return compare_merged((base, &b), (new, &n), options),
+        (Some(_), None) => {
+            return Err(CompareError::MergedWithSingle {
+                merged: base.into(),
+                single: new.into(),
+            });
+        }
+        (None, Some(_)) => {
+            return Err(CompareError::MergedWithSingle {
+                merged: new.into(),
+                single: base.into(),
+            });
+        }
+        (None, None) => {}
     }
     let (base_summary, base_rows) = read_results(base)?;
     let (new_summary, new_rows) = read_results(new)?;
@@ -233,6 +257,60 @@ pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comp
         .filter(|n| !base_modes.iter().any(|b| b.name == n.name))
     {
         notes.push(format!("mode {} is in the new run only", n.name));
+    }
+    Ok(Comparison { changes, notes })
+}
+
+/// Two merged folders, run folder by run folder: every change and note of
+/// each pair, named by its folder; a folder of the base that the new merge
+/// lacks is missing (a failure unless `allow_missing`).
+fn compare_merged(
+    (base_dir, base): (&Path, &Merged),
+    (new_dir, new): (&Path, &Merged),
+    options: &CompareOptions,
+) -> Result<Comparison, CompareError> {
+    let folders = |m: &Merged| -> Vec<String> {
+        m.runs
+            .iter()
+            .flat_map(|r| r.adapters.iter().map(|a| a.folder.clone()))
+            .collect()
+    };
+    let (base_folders, new_folders) = (folders(base), folders(new));
+    let mut changes = Vec::new();
+    let mut notes = Vec::new();
+    for folder in &base_folders {
+        let name = folder.trim_start_matches("runs/");
+        if !new_folders.contains(folder) {
+            notes.push(format!("run {name} is in the base only"));
+            changes.push(Change {
+                mode: name.to_string(),
+                metric: "run",
+                base: None,
+                new: None,
+                verdict: if options.allow_missing {
+                    Verdict::Unmeasured
+                } else {
+                    Verdict::Missing
+                },
+            });
+            continue;
+        }
+        let pair =
+            compare(&base_dir.join(folder), &new_dir.join(folder), options).map_err(|error| CompareError::InRun {
+                run: new_dir.join(folder),
+                error: Box::new(error),
+            })?;
+        changes.extend(pair.changes.into_iter().map(|c| Change {
+            mode: format!("{name}/{}", c.mode),
+            ..c
+        }));
+        notes.extend(pair.notes.into_iter().map(|n| format!("{name}: {n}")));
+    }
+    for folder in new_folders.iter().filter(|f| !base_folders.contains(f)) {
+        notes.push(format!(
+            "run {} is in the new merge only",
+            folder.trim_start_matches("runs/")
+        ));
     }
     Ok(Comparison { changes, notes })
 }

@@ -1,11 +1,13 @@
 //! Result files of a bench run: frames.csv (one row per mode and frame),
-//! summary.json (machine-readable, versioned) and report.md (for people).
+//! summary.json (machine-readable, versioned) and report.md (for people);
+//! `occlu compare` and `occlu merge` read them back.
 
 pub mod charts;
 pub mod compare;
 mod files;
 pub mod github;
 mod markdown;
+pub mod merge;
 mod summary;
 
 use std::path::{Path, PathBuf};
@@ -163,7 +165,7 @@ fn claim(out: &Path) -> Result<OutputLock, ReportError> {
     }
 }
 
-/// Writes a set of result files into `out` so that each is whole or absent:
+/// Writes a set of result files (or folders of them) into `out` so that each is whole or absent:
 /// `write` puts them into a fresh staging folder inside `out` and returns
 /// their names in the order they are moved into place, and nothing is moved
 /// until all are complete, so a failure (a full disk) leaves `out`'s
@@ -189,7 +191,13 @@ fn publish(
             }
         }
         for name in &names {
-            std::fs::rename(staging.join(name), out.join(name)).map_err(ReportError::at(&out.join(name)))?;
+            let (staged, target) = (staging.join(name), out.join(name));
+            // A folder replaces the earlier one whole (rename cannot
+            // replace a folder that holds files).
+            if staged.is_dir() && target.is_dir() {
+                std::fs::remove_dir_all(&target).map_err(ReportError::at(&target))?;
+            }
+            std::fs::rename(&staged, &target).map_err(ReportError::at(&target))?;
         }
         Ok(names)
     });

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::camera::path::CameraPath;
 use crate::gpu::{AdapterReport, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams, HierarchyStats};
 use crate::measure::{MissedObject, ModeSummary};
@@ -17,6 +18,12 @@ pub const SCHEMA_VERSION: u32 = 1;
 pub struct Summary {
     pub schema_version: u32,
     pub tool: ToolInfo,
+    /// The run's name in a matrix (`occlu bench --config` with `runs`, or
+    /// `--shard`): the same on every machine that ran it, so `occlu merge`
+    /// knows which folders are one run on several adapters. Absent for a
+    /// single run.
+    #[serde(default)]
+    pub run: Option<String>,
     pub adapter: AdapterReport,
     pub scene: SceneSummary,
     pub path: PathSummary,
@@ -116,6 +123,11 @@ pub struct SceneFacts {
     /// Objects that move from frame to frame.
     #[serde(default)]
     pub movers: usize,
+    /// The geometry as loaded ([`Fingerprint::of_scene`]): what makes two
+    /// runs' scenes the same wherever their files lay (absent in files from
+    /// before it was recorded).
+    #[serde(default)]
+    pub geometry: Option<Fingerprint>,
     /// The up axis generated paths and the overview use, and why.
     #[serde(default)]
     pub up: Up,
@@ -142,6 +154,7 @@ impl SceneFacts {
             bounds_max: scene.bounds.max.to_array(),
             hierarchy: hierarchy.stats(),
             movers: scene.movers.len(),
+            geometry: Some(Fingerprint::of_scene(scene)),
             up: scene.up.clone(),
             cameras: scene
                 .cameras
@@ -206,6 +219,10 @@ pub struct PathSummary {
     /// paths aim for 0).
     #[serde(default)]
     pub frames_with_geometry_within_near: Option<u32>,
+    /// The cameras the run replayed ([`Fingerprint::of_path`]), which the
+    /// source's name alone does not pin down (absent in older files).
+    #[serde(default)]
+    pub cameras: Option<Fingerprint>,
 }
 
 /// What identifies a frames.csv: its length and FNV-1a hash. Not a defence
@@ -220,12 +237,86 @@ pub struct Fingerprint {
 
 impl Fingerprint {
     pub fn of(bytes: &[u8]) -> Fingerprint {
-        let fnv1a = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
-            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-        });
+        let mut hasher = Fnv1a::new();
+        hasher.write(bytes);
+        hasher.finish()
+    }
+
+    /// A scene's geometry as loaded: vertices, indices, each mesh's range
+    /// and each object's mesh and transform, and how many objects move.
+    /// Names, warnings and where the file lay do not count: the same model
+    /// read on two machines gives the same fingerprint.
+    pub fn of_scene(scene: &Scene) -> Fingerprint {
+        let mut h = Fnv1a::new();
+        h.write(&(scene.vertices.len() as u64).to_le_bytes());
+        for v in &scene.vertices {
+            for c in v {
+                h.write(&c.to_le_bytes());
+            }
+        }
+        h.write(&(scene.indices.len() as u64).to_le_bytes());
+        for i in &scene.indices {
+            h.write(&i.to_le_bytes());
+        }
+        for m in &scene.meshes {
+            h.write(&m.first_index.to_le_bytes());
+            h.write(&m.index_count.to_le_bytes());
+        }
+        for o in &scene.objects {
+            h.write(&o.mesh.to_le_bytes());
+            for c in o.transform.to_cols_array() {
+                h.write(&c.to_le_bytes());
+            }
+        }
+        h.write(&(scene.movers.len() as u64).to_le_bytes());
+        h.finish()
+    }
+
+    /// A camera path as replayed: its keyframes, near plane, interpolation
+    /// and frame count (a resampled path is another path).
+    pub fn of_path(path: &CameraPath) -> Fingerprint {
+        let mut h = Fnv1a::new();
+        for k in &path.keyframes {
+            let numbers = [k.time, k.fov_y]
+                .into_iter()
+                .chain(k.position.to_array())
+                .chain(k.rotation.to_array());
+            for n in numbers {
+                h.write(&n.to_le_bytes());
+            }
+        }
+        h.write(&path.near.to_le_bytes());
+        h.write(format!("{:?}", path.interpolation).as_bytes());
+        h.write(&path.frames.to_le_bytes());
+        h.finish()
+    }
+}
+
+/// FNV-1a (64 bits), fed piece by piece, counting the bytes it was fed.
+struct Fnv1a {
+    hash: u64,
+    bytes: u64,
+}
+
+impl Fnv1a {
+    fn new() -> Fnv1a {
+        Fnv1a {
+            hash: 0xcbf2_9ce4_8422_2325,
+            bytes: 0,
+        }
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.hash = (self.hash ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+        self.bytes += bytes.len() as u64;
+    }
+
+    fn finish(&self) -> Fingerprint {
         Fingerprint {
-            bytes: bytes.len() as u64,
-            fnv1a,
+            bytes: self.bytes,
+            fnv1a: self.hash,
         }
     }
 }

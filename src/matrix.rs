@@ -1,0 +1,434 @@
+//! A benchmark matrix: one configuration file that lists several runs, and
+//! `--shard K/N`, which gives a CI job its share of them.
+//!
+//! A file lists runs with `runs` (a list of run configurations) and with
+//! `models` and `scenes` (scene sources) × `paths` (camera paths). Its other
+//! fields are every run's defaults; a run's own fields win over them, and
+//! flags win over both (`--out` names the folder the runs' folders go in).
+//! The runs are in a fixed order: `runs` as listed, then each model, then
+//! each built-in scene, each with every path in turn. Each run writes into
+//! a folder of its own named from its place and content
+//! (`03-town-street.json`: place, scene, path), so the same run has the
+//! same folder on every machine and shards never collide. `--shard K/N`
+//! runs the runs at places K, K + N, K + 2N, … (1-based): N jobs given
+//! 1/N … N/N run every run exactly once between them.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use crate::camera::path::{CameraPath, PathError};
+use crate::config::{BenchConfig, BenchPlan, ConfigError, DEFAULT_OUT, DEFAULT_SCENE, from_json, read_json};
+use crate::scene::SceneSpec;
+
+/// The runs of one configuration file, before flags and planning.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Matrix {
+    /// The file's own fields: every run's defaults.
+    defaults: BenchConfig,
+    /// Each run's own fields, in the matrix's order; empty for a file that
+    /// lists no runs (one run of its defaults).
+    entries: Vec<BenchConfig>,
+}
+
+/// A run of a matrix: its folder's name and its validated plan (which
+/// writes into that folder and records the name).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MatrixRun {
+    pub name: String,
+    pub plan: BenchPlan,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum MatrixError {
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    #[error("{path}: the matrix lists no runs (runs, models, scenes and paths are all empty)")]
+    NoRuns { path: String },
+    #[error("{path}: runs[{index}] sets out: each run of a matrix writes into its own folder under the matrix's --out")]
+    OutInRun { path: String, index: usize },
+    #[error(
+        "--export-github-benchmark writes one run's file and a matrix has many runs: export from one run's summary.json instead"
+    )]
+    GithubExport,
+    #[error("run {run}: {error}")]
+    Plan { run: String, error: ConfigError },
+    #[error("run {run}: {error}")]
+    Path { run: String, error: PathError },
+    #[error("run {run}: {}: {error}", model.display())]
+    Model {
+        run: String,
+        model: PathBuf,
+        error: std::io::Error,
+    },
+}
+
+/// The keys of a configuration file that list runs rather than set one.
+const LISTS: [&str; 4] = ["runs", "models", "scenes", "paths"];
+
+impl Matrix {
+    /// Reads a configuration file: a matrix when it has any of `runs`,
+    /// `models`, `scenes` or `paths`, else one run. Relative paths are
+    /// relative to the file.
+    pub fn load(file: &Path) -> Result<Matrix, MatrixError> {
+        let mut json = read_json(file)?;
+        let [runs, models, scenes, paths] = match json.as_object_mut() {
+            Some(fields) => LISTS.map(|key| fields.remove(key)),
+            None => [None, None, None, None],
+        };
+        let listed = [&runs, &models, &scenes, &paths].iter().any(|l| l.is_some());
+        let defaults = from_json::<BenchConfig>(file, "", json)?.relative_to(file);
+        let list = |key: &str, json: Option<serde_json::Value>| -> Result<Vec<serde_json::Value>, ConfigError> {
+            json.map_or(Ok(Vec::new()), |json| from_json(file, &format!("{key}: "), json))
+        };
+        let mut entries = Vec::new();
+        for (index, run) in list("runs", runs)?.into_iter().enumerate() {
+            let entry: BenchConfig = from_json(file, &format!("runs[{index}]: "), run)?;
+            if entry.out.is_some() {
+                return Err(MatrixError::OutInRun {
+                    path: file.display().to_string(),
+                    index,
+                });
+            }
+            entries.push(entry.relative_to(file));
+        }
+        let models: Vec<PathBuf> = list("models", models)?
+            .into_iter()
+            .map(|m| from_json(file, "models: ", m))
+            .collect::<Result<_, _>>()?;
+        let scenes: Vec<String> = list("scenes", scenes)?
+            .into_iter()
+            .map(|s| from_json(file, "scenes: ", s))
+            .collect::<Result<_, _>>()?;
+        let paths: Vec<PathBuf> = list("paths", paths)?
+            .into_iter()
+            .map(|p| from_json(file, "paths: ", p))
+            .collect::<Result<_, _>>()?;
+        let sources: Vec<BenchConfig> = models
+            .into_iter()
+            .map(|model| BenchConfig {
+                model: Some(model),
+                ..BenchConfig::default()
+            })
+            .chain(scenes.into_iter().map(|scene| BenchConfig {
+                scene: Some(scene),
+                ..BenchConfig::default()
+            }))
+            .collect();
+        if !sources.is_empty() || !paths.is_empty() {
+            // A list left out takes the defaults' scene or path.
+            let sources = if sources.is_empty() {
+                vec![BenchConfig::default()]
+            } else {
+                sources
+            };
+            let paths: Vec<Option<PathBuf>> = if paths.is_empty() {
+                vec![None]
+            } else {
+                paths.into_iter().map(Some).collect()
+            };
+            for source in &sources {
+                for path in &paths {
+                    let entry = BenchConfig {
+                        path: path.clone(),
+                        ..source.clone()
+                    };
+                    entries.push(entry.relative_to(file));
+                }
+            }
+        }
+        if listed && entries.is_empty() {
+            return Err(MatrixError::NoRuns {
+                path: file.display().to_string(),
+            });
+        }
+        Ok(Matrix { defaults, entries })
+    }
+
+    /// Whether the file lists runs (else it is one run, which writes into
+    /// `--out` itself unless sharded).
+    pub fn lists_runs(&self) -> bool {
+        !self.entries.is_empty()
+    }
+
+    /// The one run of a file that lists none: `flags` over the file.
+    pub fn single_run(&self, flags: &BenchConfig) -> Result<BenchPlan, ConfigError> {
+        flags.clone().or(self.defaults.clone()).plan()
+    }
+
+    /// Every run, `flags` over its own fields over the defaults, each
+    /// planned into its folder under `--out` and checked before any of
+    /// them runs (its plan, its path file, that its model file exists), so
+    /// a bad run fails the whole matrix on every shard. A file that lists
+    /// no runs is a matrix of one.
+    pub fn plan(&self, flags: &BenchConfig) -> Result<Vec<MatrixRun>, MatrixError> {
+        let entries = if self.entries.is_empty() {
+            vec![BenchConfig::default()]
+        } else {
+            self.entries.clone()
+        };
+        let configs: Vec<BenchConfig> = entries
+            .into_iter()
+            .map(|entry| flags.clone().or(entry.or(self.defaults.clone())))
+            .collect();
+        if configs.iter().any(|c| c.export_github_benchmark.is_some()) {
+            return Err(MatrixError::GithubExport);
+        }
+        let out = flags
+            .out
+            .clone()
+            .or(self.defaults.out.clone())
+            .unwrap_or_else(|| DEFAULT_OUT.into());
+        let width = configs.len().to_string().len().max(2);
+        configs
+            .into_iter()
+            .enumerate()
+            .map(|(place, config)| {
+                let name = run_name(place, width, &config);
+                let mut plan = config.plan().map_err(|error| MatrixError::Plan {
+                    run: name.clone(),
+                    error,
+                })?;
+                if let Some(path) = &plan.path {
+                    CameraPath::load(path).map_err(|error| MatrixError::Path {
+                        run: name.clone(),
+                        error,
+                    })?;
+                }
+                if let SceneSpec::File(model) = &plan.scene {
+                    std::fs::metadata(model).map_err(|error| MatrixError::Model {
+                        run: name.clone(),
+                        model: model.clone(),
+                        error,
+                    })?;
+                }
+                plan.out = out.join(&name);
+                plan.run = Some(name.clone());
+                Ok(MatrixRun { name, plan })
+            })
+            .collect()
+    }
+}
+
+/// A run's folder name: its place (1-based, zero-padded to `width` so
+/// folders sort in the matrix's order), its scene's and its path's names.
+/// The place alone makes it unique; the rest says what it holds.
+fn run_name(place: usize, width: usize, config: &BenchConfig) -> String {
+    let stem = |p: &Path| {
+        p.file_stem()
+            .map_or(String::new(), |s| s.to_string_lossy().into_owned())
+    };
+    let scene = match (&config.model, &config.scene) {
+        (Some(model), _) => stem(model),
+        (None, Some(scene)) => scene.clone(),
+        (None, None) => DEFAULT_SCENE.into(),
+    };
+    let path = config.path.as_deref().map_or("generated".into(), stem);
+    format!(
+        "{:0width$}-{}-{}",
+        place + 1,
+        crate::text::slug(&scene),
+        crate::text::slug(&path)
+    )
+}
+
+/// `--shard K/N`: the K-th of N jobs that split a matrix (1 ≤ K ≤ N).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    index: u32,
+    count: u32,
+}
+
+impl Shard {
+    /// The whole matrix: what a run without `--shard` runs.
+    pub const WHOLE: Shard = Shard { index: 1, count: 1 };
+
+    /// Whether the run at `place` (0-based, in the matrix's order) is this
+    /// shard's: places K−1, K−1+N, K−1+2N, …
+    pub fn takes(&self, place: usize) -> bool {
+        place % self.count as usize == (self.index - 1) as usize
+    }
+}
+
+impl FromStr for Shard {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Shard, String> {
+        let refuse = || format!("'{text}' is not K/N, shard K of N with 1 <= K <= N (e.g. 2/3)");
+        let (k, n) = text.split_once('/').ok_or_else(refuse)?;
+        let (index, count): (u32, u32) = (k.parse().map_err(|_| refuse())?, n.parse().map_err(|_| refuse())?);
+        if index == 0 || index > count {
+            return Err(refuse());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+impl fmt::Display for Shard {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn matrix(dir: &Path, json: &str) -> Result<Matrix, MatrixError> {
+        let file = dir.join("m.json");
+        std::fs::write(&file, json).unwrap();
+        Matrix::load(&file)
+    }
+
+    #[test]
+    fn shards_split_the_runs_once_each_and_refuse_what_is_not_k_of_n() {
+        let shards: Vec<Shard> = ["1/3", "2/3", "3/3"].iter().map(|s| s.parse().unwrap()).collect();
+        let taken: Vec<Vec<usize>> = shards
+            .iter()
+            .map(|s| (0..7).filter(|&p| s.takes(p)).collect())
+            .collect();
+        assert_eq!(taken, [vec![0, 3, 6], vec![1, 4], vec![2, 5]]);
+        assert!("1/1".parse::<Shard>().unwrap().takes(5));
+        for bad in ["0/3", "4/3", "a/b", "1/0", "3", "-1/3", "1/3/5", ""] {
+            let e = bad.parse::<Shard>().unwrap_err();
+            assert!(e.contains("not K/N"), "{bad}: {e}");
+        }
+        assert_eq!("2/3".parse::<Shard>().unwrap().to_string(), "2/3");
+    }
+
+    #[test]
+    fn runs_then_models_and_scenes_by_paths_in_order_with_names_and_defaults() {
+        let dir = tempfile::tempdir().unwrap();
+        for p in ["a.json", "b.json"] {
+            std::fs::write(
+                dir.path().join(p),
+                r#"{"frames": 2, "keyframes": [{"time": 0, "position": [0, 2, 0], "target": [1, 2, 0]}]}"#,
+            )
+            .unwrap();
+        }
+        std::fs::write(dir.path().join("town.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        let m = matrix(
+            dir.path(),
+            r#"{"frames": 4, "modes": ["vfc"], "out": "res",
+                "runs": [{"scene": "forest", "frames": 2}],
+                "models": ["town.obj"], "scenes": ["city:blocks=1"], "paths": ["a.json", "b.json"]}"#,
+        )
+        .unwrap();
+        assert!(m.lists_runs());
+        let flags = BenchConfig {
+            modes: Some(vec!["dr".into()]),
+            ..BenchConfig::default()
+        };
+        let runs = m.plan(&flags).unwrap();
+        let names: Vec<&str> = runs.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "01-forest-generated",
+                "02-town-a",
+                "03-town-b",
+                "04-city-blocks-1-a",
+                "05-city-blocks-1-b"
+            ]
+        );
+        let first = &runs[0].plan;
+        assert_eq!(first.frames, Some(2), "the run's own field wins");
+        assert_eq!(runs[1].plan.frames, Some(4), "the file's field is the default");
+        assert!(
+            runs.iter().all(|r| r.plan.modes == [crate::cull::ModeId::Dr]),
+            "flags win"
+        );
+        assert_eq!(first.out, dir.path().join("res").join("01-forest-generated"));
+        assert_eq!(first.run.as_deref(), Some("01-forest-generated"));
+        assert_eq!(runs[2].plan.scene, SceneSpec::File(dir.path().join("town.obj")));
+        assert_eq!(runs[2].plan.path, Some(dir.path().join("b.json")));
+        // --out names the matrix's folder.
+        let out = BenchConfig {
+            out: Some("elsewhere".into()),
+            ..BenchConfig::default()
+        };
+        assert_eq!(
+            m.plan(&out).unwrap()[4].plan.out,
+            Path::new("elsewhere/05-city-blocks-1-b")
+        );
+    }
+
+    #[test]
+    fn a_file_without_lists_is_one_run_and_a_matrix_of_one_when_sharded() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = matrix(dir.path(), r#"{"scene": "city:blocks=1", "frames": 3}"#).unwrap();
+        assert!(!m.lists_runs());
+        let flags = BenchConfig::default();
+        assert_eq!(m.single_run(&flags).unwrap().out, Path::new(DEFAULT_OUT));
+        let runs = m.plan(&flags).unwrap();
+        assert_eq!(runs.len(), 1);
+        assert_eq!(
+            runs[0].plan.out,
+            Path::new(DEFAULT_OUT).join("01-city-blocks-1-generated")
+        );
+        assert!(!Matrix::default().lists_runs());
+    }
+
+    #[test]
+    fn a_bad_run_fails_the_whole_matrix_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let plan = |json: &str| matrix(dir.path(), json).and_then(|m| m.plan(&BenchConfig::default()));
+        let e = plan(r#"{"scenes": ["city", "forest"], "runs": [{"frames": 0}]}"#).unwrap_err();
+        assert!(
+            matches!(&e, MatrixError::Plan { run, .. } if run == "01-city-generated"),
+            "{e}"
+        );
+        let e = plan(r#"{"scenes": ["city"], "paths": ["missing.json"]}"#).unwrap_err();
+        assert!(
+            matches!(&e, MatrixError::Path { run, .. } if run == "01-city-missing"),
+            "{e}"
+        );
+        let e = plan(r#"{"models": ["gone.obj"]}"#).unwrap_err();
+        assert!(e.to_string().contains("run 01-gone-generated") && e.to_string().contains("gone.obj"));
+        let e = plan(r#"{"runs": [{"modes": ["vfc"]}, {"runs": []}]}"#).unwrap_err();
+        assert!(e.to_string().contains("runs[1]: unknown field `runs`"), "{e}");
+        let e = plan(r#"{"runs": [{"out": "x"}]}"#).unwrap_err();
+        assert!(matches!(e, MatrixError::OutInRun { index: 0, .. }));
+        let e = plan(r#"{"runs": []}"#).unwrap_err();
+        assert!(matches!(e, MatrixError::NoRuns { .. }));
+        let e = plan(r#"{"scenes": "city"}"#).unwrap_err();
+        assert!(e.to_string().contains("scenes: invalid type"), "{e}");
+        let e = plan(r#"{"scenes": ["city"], "export_github_benchmark": "g.json"}"#).unwrap_err();
+        assert!(matches!(e, MatrixError::GithubExport));
+    }
+
+    #[test]
+    fn the_sample_matrix_plans_the_workflows_runs() {
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/matrix.json");
+        let runs = Matrix::load(&file).unwrap().plan(&BenchConfig::default()).unwrap();
+        let names: Vec<&str> = runs.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "01-forest-generated",
+                "02-city-city-corner",
+                "03-city-city-walk",
+                "04-city-movers-20-city-corner",
+                "05-city-movers-20-city-walk"
+            ]
+        );
+    }
+
+    #[test]
+    fn files_are_strict_and_resolve_paths_relative_to_themselves() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = matrix(
+            dir.path(),
+            r#"{"path": "walk.json", "resolution": "320x240", "modes": ["vfc"]}"#,
+        )
+        .unwrap();
+        let plan = m.single_run(&BenchConfig::default()).unwrap();
+        assert_eq!(plan.path, Some(dir.path().join("walk.json")));
+        assert_eq!(plan.resolution, "320x240".parse().unwrap());
+        let error = |json: &str| matrix(dir.path(), json).unwrap_err().to_string();
+        assert!(error(r#"{"resolutoin": "320x240"}"#).contains("unknown field `resolutoin`"));
+        assert!(error(r#"{"resolution": "320"}"#).contains("WIDTHxHEIGHT"));
+        assert!(error("[1, 2]").contains("invalid type"));
+        assert!(error("{ not json").contains("m.json"));
+    }
+}

@@ -1,0 +1,614 @@
+//! `occlu merge DIR... --out MERGED`: result folders from many machines in
+//! one report.
+//!
+//! A DIR is a run's folder (it holds summary.json) or a folder of them (a
+//! matrix's `--out`, one per shard or machine). Folders are one run when
+//! summary.json names the same matrix run, or, for runs outside a matrix,
+//! when they measured the same scene and path; one run's folders must agree
+//! on scene (the geometry's fingerprint), path (the cameras'), resolution
+//! and frames, or the merge is refused. Within a run each adapter (name and
+//! backend) is a column beside the others, never averaged; two folders of
+//! one run on one adapter are refused unless they are copies of one result.
+//!
+//! Counters that do not depend on the adapter (objects and triangles drawn,
+//! boxes tested, wrong pixels) are compared between adapters of the same
+//! backend: a difference is listed in the report and merged.json, as it
+//! points at a bug in one backend's path. It does not fail the merge;
+//! `occlu compare` of merged folders is the gate.
+//!
+//! MERGED gets merged.json (for machines), report.md, `charts/` (each
+//! run's ratio to the oracle per adapter) and `runs/` (a copy of every
+//! merged run folder, `RUN--ADAPTER`, which `occlu compare` of two merged
+//! folders compares pair by pair).
+
+use std::collections::BTreeSet;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::charts::{CHARTS, RatioBars, ratio_to_oracle_bars};
+use super::files::ReportError;
+use super::summary::{Fingerprint, SkippedMode, Summary, ToolInfo};
+use super::{prepare_output, publish, read_results};
+use crate::gpu::Resolution;
+use crate::measure::ModeSummary;
+use crate::text::{markdown, slug};
+
+/// merged.json's version, bumped as summary.json's is.
+pub const MERGED_SCHEMA_VERSION: u32 = 1;
+
+/// What merged.json holds.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Merged {
+    pub schema_version: u32,
+    pub tool: ToolInfo,
+    pub runs: Vec<MergedRun>,
+}
+
+/// One run (a matrix run, or a scene and path) on every adapter that ran it.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct MergedRun {
+    /// The matrix run's name, or the scene's and path's.
+    pub name: String,
+    pub scene: String,
+    pub path: String,
+    pub resolution: Resolution,
+    pub frames: u32,
+    /// The columns, sorted by name and backend.
+    pub adapters: Vec<AdapterColumn>,
+    /// Every mode any adapter ran, in the order the first that ran it gave.
+    pub modes: Vec<ModeRow>,
+    /// Counters that differ between adapters of one backend.
+    pub disagreements: Vec<Disagreement>,
+    /// The ratio-to-oracle chart, relative to the merged folder; `None`
+    /// when no adapter ran the oracle.
+    pub chart: Option<String>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct AdapterColumn {
+    pub name: String,
+    pub backend: String,
+    pub device_type: String,
+    /// The copy of its run folder, relative to the merged folder.
+    pub folder: String,
+    /// The folder it was merged from, as given.
+    pub merged_from: PathBuf,
+    /// Modes this adapter could not run, with why.
+    pub skipped: Vec<SkippedMode>,
+}
+
+impl AdapterColumn {
+    pub fn label(&self) -> String {
+        format!("{} ({})", self.name, self.backend)
+    }
+}
+
+/// A mode's results, one per adapter column (`None`: not run there).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ModeRow {
+    pub mode: String,
+    pub results: Vec<Option<ModeResult>>,
+}
+
+/// What the merged report shows of a mode on one adapter: means per frame,
+/// and the run's total of wrong pixels.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ModeResult {
+    pub frame_ms: Option<f64>,
+    pub ratio_to_oracle: Option<f64>,
+    pub error_pixels: Option<u64>,
+    pub objects_drawn: Option<f64>,
+    pub triangles_drawn: Option<f64>,
+    pub queries: Option<f64>,
+    pub round_trips: Option<f64>,
+}
+
+impl ModeResult {
+    fn of(m: &ModeSummary) -> ModeResult {
+        let mean = |column: &str| m.stats.get(column).map(|d| d.mean);
+        ModeResult {
+            frame_ms: mean("frame_ms"),
+            ratio_to_oracle: m.ratio_to_oracle,
+            error_pixels: m.error_pixels_total,
+            objects_drawn: mean("objects_drawn"),
+            triangles_drawn: mean("triangles_drawn"),
+            queries: mean("queries"),
+            round_trips: mean("query_batches"),
+        }
+    }
+}
+
+/// Reads a counter of a [`ModeResult`].
+type Counter = fn(&ModeResult) -> Option<f64>;
+
+/// The counters every adapter of one backend must agree on, by name.
+const SAME_ON_EVERY_ADAPTER: [(&str, Counter); 4] = [
+    ("objects_drawn", |r| r.objects_drawn),
+    ("triangles_drawn", |r| r.triangles_drawn),
+    ("queries", |r| r.queries),
+    ("error_pixels", |r| r.error_pixels.map(|v| v as f64)),
+];
+
+/// A counter that two adapters of one backend measured differently.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Disagreement {
+    pub mode: String,
+    pub counter: String,
+    pub backend: String,
+    /// Each adapter of the backend and its value.
+    pub values: Vec<(String, f64)>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum MergeError {
+    #[error(transparent)]
+    Read(#[from] ReportError),
+    #[error("no result folders to merge: give one or more DIRs")]
+    NoFolders,
+    #[error("{}: not a result folder (no summary.json) and holds none", .0.display())]
+    NoRuns(PathBuf),
+    #[error(
+        "{} and {} are both run {run} but measured different {what} ({} vs {}): not one run (from two matrices?), so not merged",
+        folders[0].display(), folders[1].display(), values[0], values[1]
+    )]
+    NotOneRun {
+        run: String,
+        folders: Box<[PathBuf; 2]>,
+        what: &'static str,
+        /// What each folder measured.
+        values: Box<[String; 2]>,
+    },
+    #[error(
+        "{} and {} both hold run {run} on {adapter} with different results: which one counts is ambiguous, so merge one of them",
+        first.display(), second.display()
+    )]
+    Ambiguous {
+        run: String,
+        adapter: String,
+        first: PathBuf,
+        second: PathBuf,
+    },
+}
+
+impl MergeError {
+    /// Whether the user's input was at fault (as opposed to a full disk).
+    pub fn is_input_error(&self) -> bool {
+        match self {
+            MergeError::Read(e) => e.is_input_error(),
+            _ => true,
+        }
+    }
+}
+
+/// One result folder read for the merge.
+struct RunFolder {
+    dir: PathBuf,
+    summary: Summary,
+}
+
+impl RunFolder {
+    /// Which run it is: its matrix run's name, or its scene's and path's.
+    fn run(&self) -> String {
+        let s = &self.summary;
+        s.run
+            .clone()
+            .unwrap_or_else(|| format!("{}, {}", s.scene.facts.source, s.path.source))
+    }
+
+    /// The first thing `other` measured differently, if any: what it is
+    /// and each folder's value. Scenes and paths are the same when their
+    /// geometry's and cameras' fingerprints are; a file from before those
+    /// were recorded is judged by the sources' names.
+    fn differs_from(&self, other: &RunFolder) -> Option<(&'static str, String, String)> {
+        let (a, b) = (&self.summary, &other.summary);
+        let identity =
+            |what, source_a: &String, source_b: &String, fa: Option<Fingerprint>, fb: Option<Fingerprint>| {
+                let same = match (fa, fb) {
+                    (Some(fa), Some(fb)) => fa == fb,
+                    _ => source_a == source_b,
+                };
+                let show = |source: &String, f: Option<Fingerprint>| match f {
+                    Some(f) if source_a == source_b => format!("{source} #{:016x}", f.fnv1a),
+                    _ => source.clone(),
+                };
+                (!same).then(|| (what, show(source_a, fa), show(source_b, fb)))
+            };
+        let plain = |what, x: String, y: String| (x != y).then_some((what, x, y));
+        identity(
+            "scenes",
+            &a.scene.facts.source,
+            &b.scene.facts.source,
+            a.scene.facts.geometry,
+            b.scene.facts.geometry,
+        )
+        .or_else(|| identity("paths", &a.path.source, &b.path.source, a.path.cameras, b.path.cameras))
+        .or_else(|| plain("resolutions", a.resolution.to_string(), b.resolution.to_string()))
+        .or_else(|| plain("frame counts", a.frames.to_string(), b.frames.to_string()))
+    }
+
+    fn adapter(&self) -> (String, String) {
+        (self.summary.adapter.name.clone(), self.summary.adapter.backend.clone())
+    }
+}
+
+/// Reads every run folder in `dirs` (each one, or the folders in it that
+/// hold a run), checks that the folders of each run agree, and writes the
+/// merged report into `out` (claimed while it is written, each file whole).
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged, MergeError> {
+    if dirs.is_empty() {
+        return Err(MergeError::NoFolders);
+    }
+    let mut folders = Vec::new();
+    for dir in dirs {
+        for run_dir in run_folders(dir)? {
+            let (summary, _) = read_results(&run_dir)?;
+            folders.push(RunFolder { dir: run_dir, summary });
+        }
+    }
+    let groups = group(folders)?;
+    let _claim = prepare_output(out)?;
+    let mut used = BTreeSet::new();
+    let mut merged = Merged {
+        schema_version: MERGED_SCHEMA_VERSION,
+        tool: ToolInfo::current(),
+        runs: groups.iter().map(|g| merged_run(g, &mut used)).collect(),
+    };
+    publish(out, &[], |staging| {
+        for dir in ["runs", "charts"] {
+            let path = staging.join(dir);
+            std::fs::create_dir(&path).map_err(ReportError::at(&path))?;
+        }
+        for (group, run) in groups.iter().zip(&mut merged.runs) {
+            for (folder, column) in group.iter().zip(&run.adapters) {
+                copy_run(&folder.dir, &staging.join(&column.folder))?;
+            }
+            draw_chart(staging, run, &mut used)?;
+        }
+        let write = |name: &str, text: String| {
+            let path = staging.join(name);
+            std::fs::write(&path, text).map_err(ReportError::at(&path))
+        };
+        write("report.md", render(&merged))?;
+        let json = serde_json::to_string_pretty(&merged).expect("merged.json serialises: no maps with non-string keys");
+        write("merged.json", json + "\n")?;
+        // merged.json last: a reader never finds it beside older files.
+        Ok(["runs", "charts", "report.md", "merged.json"]
+            .map(String::from)
+            .to_vec())
+    })?;
+    Ok(merged)
+}
+
+/// `dir` itself when it holds a run, else the folders in it that do (in
+/// name order); neither is an error.
+fn run_folders(dir: &Path) -> Result<Vec<PathBuf>, MergeError> {
+    if dir.join("summary.json").exists() {
+        return Ok(vec![dir.to_path_buf()]);
+    }
+    let entries = std::fs::read_dir(dir).map_err(ReportError::at(dir))?;
+    let mut runs: Vec<PathBuf> = entries
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.is_dir() && p.join("summary.json").exists())
+        .collect();
+    if runs.is_empty() {
+        return Err(MergeError::NoRuns(dir.to_path_buf()));
+    }
+    runs.sort();
+    Ok(runs)
+}
+
+/// The folders of each run, runs in name order (a matrix's order), each
+/// run's folders in adapter order; refuses folders of one run that differ
+/// in what they measured, and two different results of one run on one
+/// adapter (copies of one result count once).
+fn group(mut folders: Vec<RunFolder>) -> Result<Vec<Vec<RunFolder>>, MergeError> {
+    folders.sort_by_key(|f| (f.run(), f.adapter()));
+    let mut groups: Vec<Vec<RunFolder>> = Vec::new();
+    for folder in folders {
+        let Some(group) = groups.last_mut().filter(|g| g[0].run() == folder.run()) else {
+            groups.push(vec![folder]);
+            continue;
+        };
+        let first = &group[0];
+        if let Some((what, first_value, second_value)) = first.differs_from(&folder) {
+            return Err(MergeError::NotOneRun {
+                run: folder.run(),
+                folders: Box::new([first.dir.clone(), folder.dir]),
+                what,
+                values: Box::new([first_value, second_value]),
+            });
+        }
+        let last = group.last().expect("a group has a folder");
+        if last.adapter() == folder.adapter() {
+            let copies = last.summary.frames_csv.is_some() && last.summary.frames_csv == folder.summary.frames_csv;
+            if copies {
+                continue;
+            }
+            let adapter = format!("{} ({})", folder.summary.adapter.name, folder.summary.adapter.backend);
+            return Err(MergeError::Ambiguous {
+                run: folder.run(),
+                adapter,
+                first: last.dir.clone(),
+                second: folder.dir,
+            });
+        }
+        group.push(folder);
+    }
+    Ok(groups)
+}
+
+/// `name`, or `name-2`, `name-3`, … when `used` has it; marked used.
+fn unique(name: String, used: &mut BTreeSet<String>) -> String {
+    let mut candidate = name.clone();
+    let mut n = 1;
+    while !used.insert(candidate.clone()) {
+        n += 1;
+        candidate = format!("{name}-{n}");
+    }
+    candidate
+}
+
+/// One run's table, columns and cross-check (its chart comes later).
+fn merged_run(folders: &[RunFolder], used: &mut BTreeSet<String>) -> MergedRun {
+    let first = &folders[0].summary;
+    let name = folders[0].run();
+    let adapters: Vec<AdapterColumn> = folders
+        .iter()
+        .map(|f| {
+            let a = &f.summary.adapter;
+            let folder = unique(
+                format!("runs/{}--{}", slug(&name), slug(&format!("{} {}", a.name, a.backend))),
+                used,
+            );
+            AdapterColumn {
+                name: a.name.clone(),
+                backend: a.backend.clone(),
+                device_type: a.device_type.clone(),
+                folder,
+                merged_from: f.dir.clone(),
+                skipped: f.summary.skipped.clone(),
+            }
+        })
+        .collect();
+    let mut names: Vec<&str> = Vec::new();
+    for m in folders.iter().flat_map(|f| &f.summary.modes) {
+        if !names.contains(&m.name.as_str()) {
+            names.push(&m.name);
+        }
+    }
+    let modes: Vec<ModeRow> = names
+        .iter()
+        .map(|&mode| ModeRow {
+            mode: mode.to_string(),
+            results: folders
+                .iter()
+                .map(|f| f.summary.modes.iter().find(|m| m.name == mode).map(ModeResult::of))
+                .collect(),
+        })
+        .collect();
+    let disagreements = cross_check(&adapters, &modes);
+    MergedRun {
+        name,
+        scene: first.scene.facts.source.clone(),
+        path: first.path.source.clone(),
+        resolution: first.resolution,
+        frames: first.frames,
+        adapters,
+        modes,
+        disagreements,
+        chart: None,
+    }
+}
+
+/// Relative tolerance for "equal" means of deterministic counters (sums of
+/// integers over the same frame count).
+const SAME: f64 = 1e-9;
+
+/// The counters of [`SAME_ON_EVERY_ADAPTER`] that differ between adapters
+/// of one backend.
+fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreement> {
+    let backends: BTreeSet<&str> = adapters.iter().map(|a| a.backend.as_str()).collect();
+    let mut found = Vec::new();
+    for row in modes {
+        for &backend in &backends {
+            for (counter, value) in SAME_ON_EVERY_ADAPTER {
+                let values: Vec<(String, f64)> = adapters
+                    .iter()
+                    .zip(&row.results)
+                    .filter(|(a, _)| a.backend == backend)
+                    .filter_map(|(a, r)| Some((a.name.clone(), value(r.as_ref()?)?)))
+                    .collect();
+                let differ = values
+                    .iter()
+                    .any(|(_, v)| (v - values[0].1).abs() > SAME * values[0].1.abs().max(1.0));
+                if differ {
+                    found.push(Disagreement {
+                        mode: row.mode.clone(),
+                        counter: counter.into(),
+                        backend: backend.into(),
+                        values,
+                    });
+                }
+            }
+        }
+    }
+    found
+}
+
+/// Copies a run folder's result files (not its lock or anything else).
+fn copy_run(from: &Path, to: &Path) -> Result<(), ReportError> {
+    std::fs::create_dir_all(to).map_err(ReportError::at(to))?;
+    let files = ["summary.json", "frames.csv", "missed.csv", "report.md"]
+        .into_iter()
+        .chain(CHARTS);
+    for name in files {
+        let source = from.join(name);
+        if source.is_file() {
+            std::fs::copy(&source, to.join(name)).map_err(ReportError::at(&to.join(name)))?;
+        }
+    }
+    Ok(())
+}
+
+/// Draws `run`'s ratio-to-oracle chart into `staging`'s charts folder and
+/// records its name, when any adapter ran the oracle.
+fn draw_chart(staging: &Path, run: &mut MergedRun, used: &mut BTreeSet<String>) -> Result<(), ReportError> {
+    let bars: Vec<RatioBars> = run
+        .modes
+        .iter()
+        .filter(|row| row.mode != "oracle")
+        .map(|row| RatioBars {
+            mode: row.mode.clone(),
+            ratios: row
+                .results
+                .iter()
+                .map(|r| r.as_ref().and_then(|r| r.ratio_to_oracle))
+                .collect(),
+        })
+        .collect();
+    if !bars.iter().any(|b| b.ratios.iter().any(Option::is_some)) {
+        return Ok(());
+    }
+    let name = unique(format!("charts/{}.png", slug(&run.name)), used);
+    let labels: Vec<String> = run.adapters.iter().map(AdapterColumn::label).collect();
+    let caption = format!("Mean frame time over the oracle's — {} at {}", run.name, run.resolution);
+    ratio_to_oracle_bars(&staging.join(&name), &caption, &labels, &bars)?;
+    run.chart = Some(name);
+    Ok(())
+}
+
+/// Shows one metric of a [`ModeResult`] in a table cell.
+type Cell = fn(&ModeResult) -> String;
+
+/// The merged report.md.
+pub fn render(merged: &Merged) -> String {
+    let mut out = String::new();
+    let w = &mut out;
+    let adapters: BTreeSet<String> = merged
+        .runs
+        .iter()
+        .flat_map(|r| r.adapters.iter().map(AdapterColumn::label))
+        .collect();
+    let _ = writeln!(w, "# occlu: merged results\n");
+    let _ = writeln!(
+        w,
+        "{} runs on {} adapters. Adapters are side by side, never averaged; frame times compare only on one adapter, counters everywhere.\n",
+        merged.runs.len(),
+        adapters.len()
+    );
+    for run in &merged.runs {
+        let _ = writeln!(w, "## {}\n", markdown(&run.name));
+        let _ = writeln!(
+            w,
+            "Scene {}, path {}, {}, {} frames.\n",
+            markdown(&run.scene),
+            markdown(&run.path),
+            run.resolution,
+            run.frames
+        );
+        let _ = write!(w, "| mode | metric |");
+        for a in &run.adapters {
+            let _ = write!(w, " {} |", markdown(&a.label()));
+        }
+        let _ = write!(w, "\n|---|---|");
+        for _ in &run.adapters {
+            let _ = write!(w, "---:|");
+        }
+        let _ = writeln!(w);
+        let metrics: [(&str, Cell); 6] = [
+            ("frame ms (mean)", |r| number(r.frame_ms, 3)),
+            ("× oracle", |r| {
+                r.ratio_to_oracle.map_or("–".into(), |v| format!("{v:.2}×"))
+            }),
+            ("wrong pixels", |r| number(r.error_pixels.map(|v| v as f64), 0)),
+            ("triangles", |r| number(r.triangles_drawn, 1)),
+            ("queries", |r| number(r.queries, 1)),
+            ("round trips", |r| number(r.round_trips, 1)),
+        ];
+        for row in &run.modes {
+            for (k, (metric, show)) in metrics.iter().enumerate() {
+                let mode = if k == 0 { markdown(&row.mode) } else { String::new() };
+                let _ = write!(w, "| {mode} | {metric} |");
+                for (a, result) in run.adapters.iter().zip(&row.results) {
+                    let cell = match result {
+                        Some(r) => show(r),
+                        None if a.skipped.iter().any(|s| s.mode == row.mode) => "skipped".into(),
+                        None => "not run".into(),
+                    };
+                    let _ = write!(w, " {cell} |");
+                }
+                let _ = writeln!(w);
+            }
+        }
+        let _ = writeln!(w);
+        match &run.chart {
+            Some(chart) => {
+                let _ = writeln!(w, "![ratio to the oracle per adapter]({chart})\n");
+            }
+            None => {
+                let _ = writeln!(
+                    w,
+                    "No adapter ran the oracle, so there is no ratio to it (add `oracle` to the modes).\n"
+                );
+            }
+        }
+        for d in &run.disagreements {
+            let values: Vec<String> = d
+                .values
+                .iter()
+                .map(|(a, v)| format!("{} {}", markdown(a), number(Some(*v), 1)))
+                .collect();
+            let _ = writeln!(
+                w,
+                "- **{} {} differs between {} adapters** ({}): a counter that does not depend on the adapter, so one backend's path has a bug.",
+                markdown(&d.mode),
+                markdown(&d.counter),
+                markdown(&d.backend),
+                values.join(", ")
+            );
+        }
+        if !run.disagreements.is_empty() {
+            let _ = writeln!(w);
+        }
+        let sources: Vec<String> = run
+            .adapters
+            .iter()
+            .map(|a| format!("{} from {}", a.folder, markdown(&a.merged_from.display().to_string())))
+            .collect();
+        let _ = writeln!(w, "Run folders: {}.\n", sources.join("; "));
+    }
+    out
+}
+
+/// `v` with up to `decimals` decimals (none for whole numbers), `–` when
+/// not measured.
+fn number(v: Option<f64>, decimals: usize) -> String {
+    match v {
+        None => "–".into(),
+        Some(v) if v.fract() == 0.0 => format!("{v:.0}"),
+        Some(v) => format!("{v:.decimals$}"),
+    }
+}
+
+/// Reads a merged folder's merged.json (for `occlu compare`); `None` when
+/// `dir` holds none.
+pub fn read_merged(dir: &Path) -> Result<Option<Merged>, ReportError> {
+    let path = dir.join("merged.json");
+    if !path.exists() {
+        return Ok(None);
+    }
+    let io = ReportError::at(&path);
+    let text = crate::input::read_text(&path, crate::input::TEXT_LIMIT).map_err(&io)?;
+    let merged: Merged =
+        serde_json::from_str(&text).map_err(|e| io(std::io::Error::other(format!("not an occlu merged.json: {e}"))))?;
+    if merged.schema_version != MERGED_SCHEMA_VERSION {
+        return Err(io(std::io::Error::other(format!(
+            "schema_version {} is not the {MERGED_SCHEMA_VERSION} this occlu reads",
+            merged.schema_version
+        ))));
+    }
+    Ok(Some(merged))
+}

@@ -1,0 +1,458 @@
+//! Benchmark matrices as CI runs them: a matrix split by `--shard` runs
+//! exactly the runs of the whole, `occlu merge` puts shards and adapters
+//! side by side in one report (and refuses what is not one run), and
+//! `occlu compare` of merged folders gates as of single runs. The commands
+//! are docs/ci/occlu-matrix.yml's, on tiny scenes.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use common::{THREE_OBJECTS_OBJ, occlu, own_stderr, stdout, write};
+use occlu::report::Summary;
+use occlu::report::merge::Merged;
+
+/// A camera held at `eye` looking at the city's middle, as path JSON.
+fn held_path(eye: [f64; 3]) -> String {
+    format!(
+        r#"{{"frames": 2, "keyframes": [{{"time": 0, "position": [{}, {}, {}], "target": [0, 1, 0]}}]}}"#,
+        eye[0], eye[1], eye[2]
+    )
+}
+
+/// Two tiny cities × two paths, three modes: four runs.
+fn two_by_two(dir: &Path) -> PathBuf {
+    write(dir, "street.json", held_path([-30.0, 2.0, -30.0]));
+    write(dir, "above.json", held_path([30.0, 40.0, 30.0]));
+    write(
+        dir,
+        "matrix.json",
+        r#"{"scenes": ["city:blocks=1", "city:blocks=1,seed=2"], "paths": ["street.json", "above.json"],
+            "modes": ["dr", "vfc", "oracle"], "warmup": 0, "resolution": "64x48"}"#,
+    )
+}
+
+/// The backends present here, by the names `--backend` takes.
+fn backends() -> Vec<String> {
+    common::gpus()
+        .iter()
+        .map(|g| g.adapter.backend.to_lowercase())
+        .collect()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// `occlu bench --config MATRIX --backend B --out OUT EXTRA...`, which must succeed.
+fn bench_matrix(matrix: &Path, backend: &str, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["bench", "--config", s(matrix), "--backend", backend, "--out", s(out)];
+    args.extend_from_slice(extra);
+    let run = occlu(&args);
+    assert!(run.status.success(), "{args:?}: {:?}", own_stderr(&run));
+    run
+}
+
+/// The run folders in `dir`, by name.
+fn run_folders(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .map(|entries| {
+            entries
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .filter(|n| !n.starts_with('.'))
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    names
+}
+
+/// A row's mode, frame, objects and triangles drawn, boxes tested, round
+/// trips and wrong pixels.
+type Counters = (String, u32, u64, u64, u64, u64, Option<u64>);
+
+/// What a run measured that does not depend on timing, row by row.
+fn counters(run: &Path) -> Vec<Counters> {
+    csv::Reader::from_path(run.join("frames.csv"))
+        .unwrap()
+        .deserialize::<occlu::measure::FrameStats>()
+        .map(|r| {
+            let r = r.unwrap();
+            (
+                r.mode,
+                r.frame,
+                r.objects_drawn,
+                r.triangles_drawn,
+                r.queries,
+                r.query_batches,
+                r.error_pixels,
+            )
+        })
+        .collect()
+}
+
+fn summary(run: &Path) -> Summary {
+    serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap()
+}
+
+fn merged(dir: &Path) -> Merged {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("merged.json")).unwrap()).unwrap()
+}
+
+/// Fails with exit 2 and one line of stderr holding every one of `needles`.
+fn refused(args: &[&str], needles: &[&str]) {
+    let out = occlu(args);
+    let lines = own_stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {lines:?}");
+    assert_eq!(lines.len(), 1, "{args:?}: one line expected, got {lines:?}");
+    for n in needles {
+        assert!(lines[0].contains(n), "{args:?}: '{}' lacks '{n}'", lines[0]);
+    }
+}
+
+#[test]
+fn three_shards_run_exactly_the_runs_of_the_whole_matrix() {
+    let dir = tempfile::tempdir().unwrap();
+    let matrix = two_by_two(dir.path());
+    let backend = &backends()[0];
+    let whole = dir.path().join("whole");
+    bench_matrix(&matrix, backend, &whole, &["--quiet"]);
+    assert_eq!(
+        run_folders(&whole),
+        [
+            "01-city-blocks-1-street",
+            "02-city-blocks-1-above",
+            "03-city-blocks-1-seed-2-street",
+            "04-city-blocks-1-seed-2-above"
+        ]
+    );
+    let mut sharded: BTreeMap<String, PathBuf> = BTreeMap::new();
+    for k in 1..=3 {
+        let out = dir.path().join(format!("shard{k}"));
+        let run = bench_matrix(&matrix, backend, &out, &["--shard", &format!("{k}/3")]);
+        let progress: Vec<String> = own_stderr(&run).into_iter().filter(|l| l.starts_with("run ")).collect();
+        assert_eq!(progress.len(), run_folders(&out).len(), "a line per run: {progress:?}");
+        for name in run_folders(&out) {
+            let earlier = sharded.insert(name.clone(), out.join(&name));
+            assert!(earlier.is_none(), "{name} ran on two shards");
+        }
+    }
+    assert_eq!(sharded.keys().cloned().collect::<Vec<_>>(), run_folders(&whole));
+    for (name, run) in &sharded {
+        assert_eq!(counters(run), counters(&whole.join(name)), "{name}");
+        assert_eq!(summary(run).run.as_deref(), Some(name.as_str()));
+    }
+    assert_eq!(
+        run_folders(&dir.path().join("shard1")),
+        ["01-city-blocks-1-street", "04-city-blocks-1-seed-2-above"]
+    );
+
+    // A shard with no run says so and writes nothing.
+    let idle = dir.path().join("idle");
+    let run = bench_matrix(&matrix, backend, &idle, &["--shard", "5/5"]);
+    assert!(
+        own_stderr(&run)[0].contains("none of the matrix's 4 runs"),
+        "{:?}",
+        own_stderr(&run)
+    );
+    assert!(!idle.exists());
+    for bad in ["0/3", "4/3", "a/b", "1/0"] {
+        refused(
+            &["bench", "--config", s(&matrix), "--shard", bad, "--out", s(&idle)],
+            &[bad, "K/N"],
+        );
+    }
+    // One run sharded is a matrix of one.
+    let one = dir.path().join("one");
+    let quick = [
+        "bench",
+        "--scene",
+        "city:blocks=1",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--resolution",
+        "64x48",
+        "--modes",
+        "vfc",
+        "--backend",
+        backend,
+        "--quiet",
+        "--out",
+        s(&one),
+    ];
+    let first: Vec<&str> = quick.iter().copied().chain(["--shard", "1/2"]).collect();
+    assert!(occlu(&first).status.success());
+    assert_eq!(run_folders(&one), ["01-city-blocks-1-generated"]);
+    let second: Vec<&str> = quick.iter().copied().chain(["--shard", "2/2"]).collect();
+    assert!(occlu(&second).status.success());
+    assert_eq!(
+        run_folders(&one),
+        ["01-city-blocks-1-generated"],
+        "shard 2/2 of one run is empty"
+    );
+    // A bad run fails every shard before any work, naming it.
+    let bad = write(
+        dir.path(),
+        "bad.json",
+        r#"{"scenes": ["city:blocks=1"], "runs": [{"modes": ["vfc"]}, {"modes": ["warp"]}]}"#,
+    );
+    refused(
+        &["bench", "--config", s(&bad), "--shard", "1/2", "--out", s(&idle)],
+        &["run 02-city-generated", "unknown mode 'warp'"],
+    );
+    assert!(!idle.exists());
+}
+
+#[test]
+fn shards_and_a_gl_run_merge_into_one_report_that_compare_gates() {
+    let dir = tempfile::tempdir().unwrap();
+    let matrix = two_by_two(dir.path());
+    let backends = backends();
+    // As the workflow: three shards on one runner, the whole matrix on
+    // another adapter (GL here) when there is one.
+    let mut dirs = Vec::new();
+    for k in 1..=3 {
+        let out = dir.path().join(format!("shard{k}"));
+        bench_matrix(&matrix, &backends[0], &out, &["--shard", &format!("{k}/3"), "--quiet"]);
+        dirs.push(out);
+    }
+    for backend in &backends[1..] {
+        let out = dir.path().join(backend);
+        bench_matrix(&matrix, backend, &out, &["--quiet"]);
+        dirs.push(out);
+    }
+    let out = dir.path().join("merged");
+    let mut args = vec!["merge"];
+    args.extend(dirs.iter().map(|d| s(d)));
+    args.extend(["--out", s(&out)]);
+    let run = occlu(&args);
+    assert!(run.status.success(), "{:?}", own_stderr(&run));
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert_eq!(stdout(&run), report, "merge prints its report");
+    let m = merged(&out);
+    assert_eq!(m.runs.len(), 4);
+    for run in &m.runs {
+        let mut kinds: Vec<String> = run.adapters.iter().map(|a| a.backend.to_lowercase()).collect();
+        kinds.sort();
+        let mut expected = backends.clone();
+        expected.sort();
+        assert_eq!(kinds, expected, "{}: one column per adapter", run.name);
+        assert_eq!((run.resolution.to_string(), run.frames), ("64x48".into(), 2));
+        for row in &run.modes {
+            assert!(
+                row.results.iter().all(Option::is_some),
+                "{} ran on every adapter",
+                row.mode
+            );
+        }
+        let vfc = run.modes.iter().find(|r| r.mode == "vfc").unwrap();
+        assert!(
+            vfc.results
+                .iter()
+                .all(|r| r.as_ref().unwrap().ratio_to_oracle.is_some())
+        );
+        let chart = run.chart.as_deref().unwrap();
+        assert!(out.join(chart).is_file(), "{chart}");
+        assert!(report.contains(&format!("({chart})")));
+        assert!(run.disagreements.is_empty(), "{:?}", run.disagreements);
+        for a in &run.adapters {
+            assert!(report.contains(&occlu::text::markdown(&a.label())));
+            assert!(out.join(&a.folder).join("frames.csv").is_file());
+            assert!(out.join(&a.folder).join("summary.json").is_file());
+        }
+    }
+    assert!(report.contains("| vfc | frame ms (mean) |"));
+    assert!(report.contains("|  | × oracle |"));
+
+    // The base branch's merge against this one: the same results pass…
+    let same = occlu(&["compare", s(&out), s(&out)]);
+    assert!(same.status.success(), "{:?}", own_stderr(&same));
+    assert!(stdout(&same).contains("01-city-blocks-1-street--"));
+    // …and a merge that lacks runs the base had fails.
+    let partial = dir.path().join("partial");
+    assert!(occlu(&["merge", s(&dirs[0]), "--out", s(&partial)]).status.success());
+    let missing = occlu(&["compare", s(&out), s(&partial)]);
+    assert_eq!(missing.status.code(), Some(1), "{:?}", own_stderr(&missing));
+    assert!(stdout(&missing).contains("MISSING"));
+    let lenient = occlu(&["compare", s(&out), s(&partial), "--allow-missing"]);
+    assert_eq!(lenient.status.code(), Some(0), "{:?}", own_stderr(&lenient));
+    refused(
+        &["compare", s(&out), s(&dirs[0].join("01-city-blocks-1-street"))],
+        &["is a merged folder", "is not"],
+    );
+}
+
+/// Copies a run folder with its summary.json edited by `edit` (frames.csv
+/// as it was, so the folder still reads as a whole run).
+fn edited_copy(from: &Path, to: &Path, edit: impl Fn(&mut serde_json::Value)) {
+    std::fs::create_dir_all(to).unwrap();
+    std::fs::copy(from.join("frames.csv"), to.join("frames.csv")).unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(from.join("summary.json")).unwrap()).unwrap();
+    edit(&mut json);
+    std::fs::write(to.join("summary.json"), json.to_string()).unwrap();
+}
+
+#[test]
+fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let backend = &backends()[0];
+    // One matrix, run on two machines whose model files differ: the same
+    // path, other content.
+    let matrix = write(
+        dir.path(),
+        "m.json",
+        r#"{"models": ["model.obj"], "modes": ["dr", "vfc"], "frames": 2, "warmup": 0, "resolution": "64x48"}"#,
+    );
+    let mut outs = Vec::new();
+    for (machine, obj) in [
+        ("a", THREE_OBJECTS_OBJ.to_string()),
+        ("b", THREE_OBJECTS_OBJ.replace("v 0 0 0", "v 0 0 0.5")),
+    ] {
+        write(dir.path(), "model.obj", obj);
+        let out = dir.path().join(format!("out-{machine}"));
+        bench_matrix(&matrix, backend, &out, &["--quiet"]);
+        outs.push(out);
+    }
+    assert_ne!(
+        summary(&outs[0].join("01-model-generated")).scene.facts.geometry,
+        summary(&outs[1].join("01-model-generated")).scene.facts.geometry
+    );
+    let merged_out = dir.path().join("merged");
+    refused(
+        &["merge", s(&outs[0]), s(&outs[1]), "--out", s(&merged_out)],
+        &[
+            "run 01-model-generated",
+            "different scenes",
+            "out-a/01-model-generated",
+            "out-b/01-model-generated",
+        ],
+    );
+    assert!(!merged_out.exists(), "nothing written");
+
+    // Runs outside a matrix are one run by scene and path: a different
+    // resolution is refused; a different result on one adapter is
+    // ambiguous; the same folder twice counts once.
+    let quick = |out: &Path, resolution: &str| {
+        let args = [
+            "bench",
+            "--scene",
+            "city:blocks=1",
+            "--frames",
+            "2",
+            "--warmup",
+            "0",
+            "--modes",
+            "dr,vfc,oracle",
+            "--resolution",
+            resolution,
+            "--backend",
+            backend,
+            "--quiet",
+            "--out",
+            s(out),
+        ];
+        assert!(occlu(&args).status.success());
+    };
+    let (small, wide, again) = (
+        dir.path().join("small"),
+        dir.path().join("wide"),
+        dir.path().join("again"),
+    );
+    quick(&small, "64x48");
+    quick(&wide, "96x48");
+    quick(&again, "64x48");
+    refused(
+        &["merge", s(&small), s(&wide), "--out", s(&merged_out)],
+        &["different resolutions", "64x48 vs 96x48", "small", "wide"],
+    );
+    refused(
+        &["merge", s(&small), s(&again), "--out", s(&merged_out)],
+        &["ambiguous", "small", "again"],
+    );
+    let twice = occlu(&["merge", s(&small), s(&small), "--out", s(&merged_out)]);
+    assert!(twice.status.success(), "{:?}", own_stderr(&twice));
+    assert_eq!(merged(&merged_out).runs[0].adapters.len(), 1);
+
+    // Another adapter of the same backend that drew other triangles is
+    // flagged, in the report and merged.json, without failing the merge;
+    // one of another backend may differ. A summary.json from before the
+    // fingerprints (no run, geometry, cameras) still merges.
+    let same_backend = dir.path().join("other-gpu");
+    edited_copy(&small, &same_backend, |j| {
+        j["adapter"]["name"] = "Other GPU".into();
+        let vfc = j["modes"]
+            .as_array_mut()
+            .unwrap()
+            .iter_mut()
+            .find(|m| m["name"] == "vfc")
+            .unwrap();
+        let mean = vfc["stats"]["triangles_drawn"]["mean"].as_f64().unwrap();
+        vfc["stats"]["triangles_drawn"]["mean"] = (mean + 12.0).into();
+    });
+    let other_backend = dir.path().join("other-backend");
+    edited_copy(&same_backend, &other_backend, |j| {
+        j["adapter"]["backend"] = "Metal".into()
+    });
+    let old = dir.path().join("old");
+    edited_copy(&small, &old, |j| {
+        j["adapter"]["name"] = "Old GPU".into();
+        j["adapter"]["backend"] = "Dx12".into();
+        let summary = j.as_object_mut().unwrap();
+        summary.remove("run");
+        summary["scene"].as_object_mut().unwrap().remove("geometry");
+        summary["path"].as_object_mut().unwrap().remove("cameras");
+    });
+    let run = occlu(&[
+        "merge",
+        s(&small),
+        s(&same_backend),
+        s(&other_backend),
+        s(&old),
+        "--out",
+        s(&merged_out),
+    ]);
+    assert!(run.status.success(), "{:?}", own_stderr(&run));
+    let m = merged(&merged_out);
+    assert_eq!(m.runs.len(), 1);
+    assert_eq!(m.runs[0].adapters.len(), 4);
+    let flagged: Vec<(&str, &str, &str)> = m.runs[0]
+        .disagreements
+        .iter()
+        .map(|d| (d.mode.as_str(), d.counter.as_str(), d.backend.as_str()))
+        .collect();
+    assert_eq!(
+        flagged,
+        [("vfc", "triangles_drawn", summary(&small).adapter.backend.as_str())]
+    );
+    let warnings: Vec<String> = own_stderr(&run)
+        .into_iter()
+        .filter(|l| l.starts_with("warning:"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("vfc triangles_drawn differs"));
+    let report = std::fs::read_to_string(merged_out.join("report.md")).unwrap();
+    assert!(report.contains("vfc triangles\\_drawn differs between"), "{report}");
+
+    // Input that is no result: one line, exit 2.
+    let not_a_run = dir.path().join("empty");
+    std::fs::create_dir(&not_a_run).unwrap();
+    refused(
+        &["merge", s(&not_a_run), "--out", s(&merged_out)],
+        &["not a result folder"],
+    );
+    refused(
+        &["merge", s(&dir.path().join("absent")), "--out", s(&merged_out)],
+        &["absent"],
+    );
+    let broken = dir.path().join("broken");
+    edited_copy(&small, &broken, |j| *j = serde_json::json!({"schema_version": 1}));
+    refused(
+        &["merge", s(&broken), "--out", s(&merged_out)],
+        &["broken", "not an occlu summary"],
+    );
+    refused(&["merge", "--out", s(&merged_out)], &["no result folders"]);
+}
