@@ -220,6 +220,19 @@ impl OcclusionBuffer {
         self.levels[0].depth.fill(0.0);
     }
 
+    /// Takes each cell of `other` (a buffer of the same size) that is
+    /// nearer than this one's, with its plane: as if `other`'s occluders
+    /// had been rasterised here after this one's.
+    pub fn merge(&mut self, other: &OcclusionBuffer) {
+        let cells = self.levels[0].depth.iter_mut().zip(&mut self.planes);
+        for ((depth, plane), (&theirs, their_plane)) in cells.zip(other.levels[0].depth.iter().zip(&other.planes)) {
+            if theirs > *depth {
+                *depth = theirs;
+                *plane = *their_plane;
+            }
+        }
+    }
+
     /// Writes `occluder` into the cells it covers (see the module above);
     /// returns how many it wrote.
     pub fn rasterise(&mut self, occluder: &ScreenPolygon) -> u32 {
@@ -260,7 +273,7 @@ impl OcclusionBuffer {
         for (k, edge) in edges.iter_mut().enumerate().take(occluder.sides) {
             let (p, q) = (corners[k], corners[(k + 1) % occluder.sides]);
             let (dx, dy) = (q.x - p.x, q.y - p.y);
-            let s = area.signum() / dx.hypot(dy);
+            let s = area.signum() / (dx * dx + dy * dy).sqrt();
             // inside(x, y) = s · ((q − p) × ((x, y) − p))
             *edge = [-dy * s, dx * s, (dy * p.x - dx * p.y) * s];
         }

@@ -36,10 +36,12 @@
 //!
 //! Departures: MOC keeps coverage masks per tile with two depths (its
 //! "masked" buffer), which merge any triangles covering a tile together,
-//! and rasterises with SIMD over threads; this version merges only the two
-//! triangles of a quad, keeps one depth and one plane per cell, and runs
-//! scalar on one thread (issue 21 asks for the rest). Occluders are whole
-//! visible objects (MOC and Godot take authored occluder meshes). A cell
+//! and rasterises with SIMD; this version merges only the two triangles of
+//! a quad, keeps one depth and one plane per cell, and rasterises scalar in
+//! f64. Like MOC it shares the occluders among threads (`swr.threads`),
+//! each into a buffer of its own, merged after; the box tests run on one
+//! thread. Occluders are whole visible objects (MOC and Godot take
+//! authored occluder meshes). A cell
 //! holds depth only where an occluder covers all its pixels, so at the
 //! default 256×192 over 800×600 a box within about a cell of an occluder's
 //! outline is not hidden by it; `swr.resolution` trades that against time.
@@ -65,7 +67,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Swr,
     summary: "CPU software occlusion culling: last frame's visible objects rasterised conservatively into a small depth buffer on the CPU, the hierarchy's boxes tested against it (Intel's MOC, Godot, Umbra)",
     conservative: true,
-    params: &[RESOLUTION, TRIANGLES],
+    params: &[RESOLUTION, TRIANGLES, THREADS],
     needs: Needs::Nothing,
     check: |params| SwrParams::from_params(params).map(drop),
     build: |scene, params| {
@@ -88,10 +90,18 @@ const TRIANGLES: ParamInfo = ParamInfo {
     summary: "occluder triangles rasterised a frame at most: last frame's visible objects, largest on screen first",
 };
 
+const THREADS: ParamInfo = ParamInfo {
+    key: "threads",
+    default: "0",
+    summary: "threads rasterising occluders, each into a buffer of its own, merged after (0: one per core)",
+};
+
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SwrParams {
     pub resolution: Resolution,
     pub triangles: u64,
+    /// 0: one per core.
+    pub threads: usize,
 }
 
 impl SwrParams {
@@ -99,6 +109,7 @@ impl SwrParams {
         Ok(SwrParams {
             resolution: params.get(ModeId::Swr, &RESOLUTION)?,
             triangles: params.get(ModeId::Swr, &TRIANGLES)?,
+            threads: params.get(ModeId::Swr, &THREADS)?,
         })
     }
 }
@@ -107,6 +118,8 @@ pub struct SoftwareOcclusionCulling {
     params: SwrParams,
     /// Made for the frame's render size, and again when it changes.
     buffer: Option<OcclusionBuffer>,
+    /// The threads besides the frame's own that rasterise occluders.
+    helpers: Vec<Rasteriser>,
     /// The backend's depth margins, known once prepared (GL's, the larger,
     /// until then).
     depth_margins: DepthMargins,
@@ -119,8 +132,10 @@ pub struct SoftwareOcclusionCulling {
     /// Scratch, reused so a frame allocates nothing once warm.
     candidates: Vec<(f64, u32)>,
     /// An occluder's vertices on screen, each projected once.
-    projected: Vec<Option<(DVec3, f64)>>,
+    projected: Projected,
     occluders: Vec<u32>,
+    /// Where each thread's share of `occluders` ends.
+    shares: Vec<usize>,
     is_occluder: Vec<bool>,
     found: Vec<u32>,
     to_draw: Vec<u32>,
@@ -132,6 +147,7 @@ impl SoftwareOcclusionCulling {
         SoftwareOcclusionCulling {
             params,
             buffer: None,
+            helpers: Vec::new(),
             depth_margins: DepthMargins::for_backend(wgpu::Backend::Gl),
             #[cfg(test)]
             careless: false,
@@ -139,6 +155,7 @@ impl SoftwareOcclusionCulling {
             candidates: Vec::new(),
             projected: Vec::new(),
             occluders: Vec::new(),
+            shares: Vec::new(),
             is_occluder: vec![false; scene.objects.len()],
             found: Vec::new(),
             to_draw: Vec::new(),
@@ -279,11 +296,26 @@ impl Culler for SoftwareOcclusionCulling {
         let mut stats = TraversalStats::default();
         let buffer = match &mut self.buffer {
             Some(b) if b.target() == size => b,
-            slot => slot.insert(OcclusionBuffer::new(size, self.params.resolution)),
+            slot => {
+                let threads = match self.params.threads {
+                    0 => std::thread::available_parallelism().map_or(1, usize::from),
+                    n => n,
+                };
+                self.helpers = (1..threads)
+                    .map(|_| Rasteriser {
+                        buffer: OcclusionBuffer::new(size, self.params.resolution),
+                        projected: Vec::new(),
+                    })
+                    .collect();
+                slot.insert(OcclusionBuffer::new(size, self.params.resolution))
+            }
         };
         #[cfg(test)]
         {
             buffer.careless = self.careless;
+            for helper in &mut self.helpers {
+                helper.buffer.careless = self.careless;
+            }
         }
         let projector = Projector::new(camera, size);
         let margins = BoxMargins::new(self.depth_margins, camera, size);
@@ -322,10 +354,14 @@ impl Culler for SoftwareOcclusionCulling {
         ctx.draw(&self.occluders);
 
         // 2-3. Their triangles into the buffer, then the pyramid.
-        buffer.clear();
-        for &o in &self.occluders {
-            stats.occluder_triangles += rasterise_object(buffer, &projector, camera, scene, o, &mut self.projected);
-        }
+        let occluders = Occluders {
+            objects: &self.occluders,
+            projector: &projector,
+            camera,
+            scene,
+        };
+        stats.occluder_triangles =
+            occluders.rasterise(buffer, &mut self.projected, &mut self.helpers, &mut self.shares);
         buffer.build_pyramid();
 
         // 4. The hierarchy, in the frustum and not hidden.
@@ -386,6 +422,91 @@ impl Culler for SoftwareOcclusionCulling {
     }
 }
 
+/// Vertices on screen, each projected once: scratch for one object.
+type Projected = Vec<Option<(DVec3, f64)>>;
+
+/// The buffer and scratch of a thread that helps rasterise occluders.
+struct Rasteriser {
+    buffer: OcclusionBuffer,
+    projected: Projected,
+}
+
+/// Triangles a thread should have at least, beyond the first thread's, to
+/// be worth starting (a start costs tens of microseconds).
+const TRIANGLES_PER_THREAD: u64 = 4096;
+
+/// One frame's occluders, and what they are rasterised with.
+struct Occluders<'a> {
+    objects: &'a [u32],
+    projector: &'a Projector,
+    camera: &'a Camera,
+    scene: &'a Scene,
+}
+
+impl Occluders<'_> {
+    /// Rasterises every occluder into `buffer` (cleared first),
+    /// sharing them out by triangles with `helpers` when there are enough:
+    /// each helper rasterises its share into a buffer of its own on a
+    /// thread of its own, and the buffers are merged in the shares' order,
+    /// which leaves the same cells as one thread taking them in turn.
+    /// Returns how many triangles were rasterised; `shares` is scratch.
+    fn rasterise(
+        &self,
+        buffer: &mut OcclusionBuffer,
+        projected: &mut Projected,
+        helpers: &mut [Rasteriser],
+        shares: &mut Vec<usize>,
+    ) -> u64 {
+        let triangles = |o: u32| u64::from(self.scene.objects[o as usize].triangles);
+        let total: u64 = self.objects.iter().map(|&o| triangles(o)).sum();
+        let threads = (1 + total / TRIANGLES_PER_THREAD).min(1 + helpers.len() as u64);
+        // Share k < threads − 1 ends where the triangles so far first reach
+        // (k + 1) / threads of them; the last ends with the objects.
+        shares.clear();
+        let mut so_far = 0;
+        for (i, &o) in self.objects.iter().enumerate() {
+            if shares.len() as u64 + 1 >= threads {
+                break;
+            }
+            so_far += triangles(o);
+            if so_far * threads >= total * (shares.len() as u64 + 1) {
+                shares.push(i + 1);
+            }
+        }
+        shares.resize(threads as usize, self.objects.len());
+        let start = |k: usize| if k == 0 { 0 } else { shares[k - 1] };
+        let helpers = &mut helpers[..threads as usize - 1];
+        let share = |k: usize| &self.objects[start(k)..shares[k]];
+        let rasterised = std::thread::scope(|scope| {
+            let running: Vec<_> = helpers
+                .iter_mut()
+                .enumerate()
+                .map(|(k, helper)| {
+                    let objects = share(k + 1);
+                    scope.spawn(move || self.rasterise_share(objects, &mut helper.buffer, &mut helper.projected))
+                })
+                .collect();
+            let mut rasterised = self.rasterise_share(share(0), buffer, projected);
+            for thread in running {
+                rasterised += thread.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            }
+            rasterised
+        });
+        for helper in helpers.iter() {
+            buffer.merge(&helper.buffer);
+        }
+        rasterised
+    }
+
+    fn rasterise_share(&self, objects: &[u32], buffer: &mut OcclusionBuffer, projected: &mut Projected) -> u64 {
+        buffer.clear();
+        objects
+            .iter()
+            .map(|&o| rasterise_object(buffer, self.projector, self.camera, self.scene, o, projected))
+            .sum()
+    }
+}
+
 /// The GPU's error in an f32 vertex position, as a fraction of the
 /// object's reach from the eye: 4 steps of 2^-24.
 const F32_POSITION_ERROR: f64 = 4.0 / (1u32 << 24) as f64;
@@ -408,7 +529,7 @@ fn rasterise_object(
     camera: &Camera,
     scene: &Scene,
     o: u32,
-    projected: &mut Vec<Option<(DVec3, f64)>>,
+    projected: &mut Projected,
 ) -> u64 {
     let object = &scene.objects[o as usize];
     let (min, max) = (object.bounds.min - camera.eye, object.bounds.max - camera.eye);
@@ -631,6 +752,37 @@ mod tests {
             }
         }
         assert!(hidden > 300 && hidden < tested, "{hidden} of {tested} hidden");
+    }
+
+    #[test]
+    fn threads_leave_the_buffer_and_the_drawn_objects_exactly_as_one_thread_does() {
+        use crate::camera::generate::default_path;
+        use crate::hierarchy::{Hierarchy, HierarchyParams};
+        use crate::scene::{LoadOptions, SceneSpec, load};
+        let scene = load(&SceneSpec::Builtin("city:blocks=2".into()), &LoadOptions::default()).unwrap();
+        let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+        let path = default_path(&scene).and_then(|(p, _)| p.with_frames(24)).unwrap();
+        let mut runs = [1, 2, 5].map(|threads| {
+            let params = ModeParams::parse(&[format!("swr.threads={threads}")], &[ModeId::Swr]).unwrap();
+            SoftwareOcclusionCulling::new(&scene, SwrParams::from_params(&params).unwrap())
+        });
+        let mut shared_out = 0;
+        for frame in 0..24 {
+            let camera = path.camera(frame, Resolution::DEFAULT.aspect());
+            let seen: Vec<_> = runs
+                .iter_mut()
+                .map(|swr| {
+                    let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
+                    let stats = swr.frame(&mut calls, &input(frame, &camera, &scene, &hierarchy));
+                    (calls.drawn(), stats, swr.occluder_depths())
+                })
+                .collect();
+            assert!(seen.iter().all(|s| *s == seen[0]), "frame {frame}");
+            if seen[0].1.occluder_triangles > 2 * TRIANGLES_PER_THREAD {
+                shared_out += 1;
+            }
+        }
+        assert!(shared_out > 10, "{shared_out} frames had occluders enough to share out");
     }
 
     #[test]
