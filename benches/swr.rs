@@ -49,7 +49,7 @@ impl Frame for NoDrawing {
 fn walk(scene: &Scene, hierarchy: &Hierarchy, cameras: &[Camera], params: &[&str]) -> (Duration, TraversalStats) {
     let items: Vec<String> = params.iter().map(|p| p.to_string()).collect();
     let params = ModeParams::parse(&items, &[ModeId::Swr]).expect("bench parameters");
-    let mut swr = SoftwareOcclusionCulling::new(scene, SwrParams::from_params(&params).expect("bench parameters"));
+    let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&params).expect("bench parameters"));
     let mut totals = TraversalStats::default();
     let mut run = |count: bool, totals: &mut TraversalStats| {
         for (frame, camera) in cameras.iter().enumerate() {

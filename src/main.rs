@@ -324,7 +324,8 @@ struct RenderArgs {
     show_missed: bool,
     /// Lay the depth buffer a CPU culling mode (swr) culled the frame with
     /// over the picture: cells holding an occluder's depth from white (near)
-    /// to deep blue (far), the rest of the frame dimmed.
+    /// to deep blue (far; all of them when they share one depth), the rest
+    /// of the frame dimmed.
     #[arg(long)]
     occluders: bool,
     /// Render size [default: 800x600].
@@ -942,6 +943,9 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         args.frame,
         picture.culled_in_frustum
     );
+    if let Some([written, cells]) = picture.occluder_cells {
+        say!("{written} of its {cells} buffer cells hold an occluder's depth (coloured; the rest dimmed)");
+    }
     if let Some(wrong) = &picture.wrong {
         say!(
             "{} pixels differ from direct rendering (magenta); {} objects got wrong (boxes outlined)",

@@ -60,6 +60,9 @@ pub struct Picture {
     pub culled_in_frustum: usize,
     /// With `show_missed`: what it got wrong.
     pub wrong: Option<WrongInFrame>,
+    /// With `occluders`: the cells of the mode's buffer that hold an
+    /// occluder's depth, and all its cells.
+    pub occluder_cells: Option<[usize; 2]>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -110,6 +113,12 @@ pub fn render(
     };
     let mut cullers = [culler];
     let mut session = Session::new(gpu, world, &mut cullers, options.show_missed, &run)?;
+    // A mode keeps its buffer from `prepare` on, before any frame is spent.
+    if options.occluders && cullers[0].occluder_depths().is_none() {
+        return Err(PictureError::NoOccluderDepths {
+            mode: cullers[0].name().to_string(),
+        });
+    }
     let camera = path.camera(options.frame, resolution.aspect());
     let mut wrong_pixels = 0;
     for f in options.frame.saturating_sub(LEAD_IN)..=options.frame {
@@ -123,15 +132,7 @@ pub fn render(
         pixels: wrong_pixels,
         objects: std::mem::take(&mut session.missed),
     });
-    let occluders = match options.occluders.then(|| cullers[0].occluder_depths()) {
-        None => None,
-        Some(Some(depths)) => Some(depths),
-        Some(None) => {
-            return Err(PictureError::NoOccluderDepths {
-                mode: cullers[0].name().to_string(),
-            });
-        }
-    };
+    let occluders = options.occluders.then(|| cullers[0].occluder_depths()).flatten();
     let scene = &world.scene;
     let drawn: Vec<u32> = session.drawn[0].iter().collect();
     let frustum = camera.frustum();
@@ -222,6 +223,7 @@ pub fn render(
         drawn: drawn.len(),
         culled_in_frustum: culled.len(),
         wrong,
+        occluder_cells: occluders.map(|d| [d.depths.iter().filter(|&&c| c > 0.0).count(), d.depths.len()]),
     })
 }
 

@@ -9,7 +9,9 @@
 //! - the strategies are `vfc` and the occlusion cullers: `ioc` and `hiz`
 //!   where the adapter culls on the GPU (no round trips; which is cheaper
 //!   depends on the GPU: a software rasteriser draws boxes cheaply and
-//!   builds a depth pyramid slowly), `omq` elsewhere;
+//!   builds a depth pyramid slowly), `omq` elsewhere, and `swr` on every
+//!   adapter (it culls on the CPU: it pays where the CPU is fast beside the
+//!   GPU, or the GPU is busy);
 //! - each keeps a moving average of its measured frame times (this mode's
 //!   previous frame, credited to the strategy that drew it);
 //! - every frame runs the strategy with the lowest average, except that
@@ -19,7 +21,9 @@
 //!   about 1/`probe` of a frame on average per strategy;
 //! - a probe of an occlusion culler runs three frames and keeps the last
 //!   (see [`OCCLUSION_PROBE`]); a strategy's first measured frame after it
-//!   did not run starts its average afresh;
+//!   did not run starts its average afresh; a probed culler is first told
+//!   what the last frame drew ([`Culler::seed_visible`]), so `swr` starts
+//!   with today's occluders instead of those of its last run (or none);
 //! - a GPU walk's very first frame has no occluders yet (no last visible
 //!   set), so every box in the frustum tests visible against the cleared
 //!   depth and it draws what frustum culling draws: its drawing time is
@@ -35,6 +39,7 @@ use super::gpu_walk::depths::DepthRange;
 use super::gpu_walk::hiz::{HizParams, hierarchical_depth_culling};
 use super::gpu_walk::ioc::iterative_occlusion_culling;
 use super::omq::{OccupancyMapQueries, OmqParams};
+use super::swr::{SoftwareOcclusionCulling, SwrParams};
 use super::vfc::FrustumCulling;
 use crate::cull::culler::{Culler, FrameInput, PreviousFrame, TraversalStats};
 use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
@@ -45,7 +50,7 @@ use crate::scene::Scene;
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Auto,
-    summary: "per frame, vfc or occlusion culling (ioc or hiz, or omq without GPU culling), whichever measured cheapest; the others re-measured now and then",
+    summary: "per frame, vfc or occlusion culling (ioc or hiz, or omq without GPU culling; swr on every adapter), whichever measured cheapest; the others re-measured now and then",
     conservative: true,
     params: &[PROBE],
     needs: Needs::Nothing,
@@ -128,8 +133,8 @@ struct Turn {
 pub struct AutoCulling {
     params: AutoParams,
     frustum: FrustumCulling,
-    /// `omq` until `prepare` finds an adapter that culls on the GPU, then
-    /// `ioc` and `hiz`.
+    /// `omq` and `swr` until `prepare` finds an adapter that culls on the
+    /// GPU, then `ioc`, `hiz` and `swr`.
     occlusion: Vec<Box<dyn Culler>>,
     /// One per strategy, in [`Strategy::index`] order.
     records: Vec<Record>,
@@ -141,19 +146,23 @@ pub struct AutoCulling {
     /// Whether the occlusion cullers cull on the GPU; set by `prepare`,
     /// when the adapter is known.
     gpu_culling: bool,
+    /// The objects drawn in the last frame, whichever strategy drew them.
+    last_drawn: Vec<u32>,
 }
 
 impl AutoCulling {
     pub fn new(scene: &Scene, params: AutoParams) -> Self {
+        let occlusion = occlusion_cullers(false);
         AutoCulling {
             params,
             frustum: FrustumCulling::new(scene),
-            occlusion: occlusion_cullers(false),
-            records: vec![Record::default(); 2],
+            records: vec![Record::default(); occlusion.len() + 1],
+            occlusion,
             previous: None,
             frames_run: 0,
             probing: None,
             gpu_culling: false,
+            last_drawn: Vec::new(),
         }
     }
 
@@ -262,6 +271,7 @@ impl AutoCulling {
     /// The first frame of a probe of occlusion culler `k`.
     fn start_probe(&mut self, k: usize) -> Turn {
         self.probing = Some((k, OCCLUSION_PROBE - 1));
+        self.occlusion[k].seed_visible(&self.last_drawn);
         Turn {
             strategy: Strategy::Occlusion(k),
             measured: false,
@@ -299,17 +309,21 @@ impl Culler for AutoCulling {
         }
     }
 
-    /// Only the culler that ran this frame has a walk to audit.
+    /// Only the culler that ran this frame has a walk to audit; then
+    /// `drawn` holds all it drew, remembered for the next probe.
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
-        self.occlusion.iter_mut().find_map(|c| c.audit(gpu, drawn))
+        let audit = self.occlusion.iter_mut().find_map(|c| c.audit(gpu, drawn));
+        self.last_drawn.clear();
+        self.last_drawn.extend(drawn.iter());
+        audit
     }
 }
 
 /// `ioc` and `hiz` where the adapter culls on the GPU, `omq` elsewhere,
-/// each with its default parameters.
+/// then `swr`, each with its default parameters.
 fn occlusion_cullers(gpu_culling: bool) -> Vec<Box<dyn Culler>> {
     let defaults = ModeParams::default();
-    if gpu_culling {
+    let mut cullers: Vec<Box<dyn Culler>> = if gpu_culling {
         vec![
             Box::new(iterative_occlusion_culling(
                 DepthRange::from_params(ModeId::Ioc, &defaults).expect("ioc's defaults parse"),
@@ -322,7 +336,11 @@ fn occlusion_cullers(gpu_culling: bool) -> Vec<Box<dyn Culler>> {
         vec![Box::new(OccupancyMapQueries::new(
             OmqParams::from_params(&defaults).expect("omq's defaults parse"),
         ))]
-    }
+    };
+    cullers.push(Box::new(SoftwareOcclusionCulling::new(
+        SwrParams::from_params(&defaults).expect("swr's defaults parse"),
+    )));
+    cullers
 }
 
 #[cfg(test)]

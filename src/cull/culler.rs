@@ -165,6 +165,12 @@ pub trait Culler {
     fn occluder_depths(&self) -> Option<CellDepths> {
         None
     }
+
+    /// Before a frame: the objects another culler drew last frame, for a
+    /// mode that takes its occluders from last frame's visible objects and
+    /// did not run then (`auto` hands them to the culler it probes). Modes
+    /// that keep no such list ignore them.
+    fn seed_visible(&mut self, _visible: &[u32]) {}
 }
 
 /// A borrowed culler runs as the culler it borrows (so a test can keep the
@@ -193,6 +199,9 @@ impl<C: Culler + ?Sized> Culler for &mut C {
     }
     fn occluder_depths(&self) -> Option<CellDepths> {
         (**self).occluder_depths()
+    }
+    fn seed_visible(&mut self, visible: &[u32]) {
+        (**self).seed_visible(visible)
     }
 }
 
@@ -227,5 +236,8 @@ impl Culler for Labeled {
     }
     fn occluder_depths(&self) -> Option<CellDepths> {
         self.inner.occluder_depths()
+    }
+    fn seed_visible(&mut self, visible: &[u32]) {
+        self.inner.seed_visible(visible)
     }
 }

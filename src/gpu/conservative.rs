@@ -224,21 +224,28 @@ impl PixelRays {
     }
 }
 
+/// Per world axis along which the eye lies outside the eye-relative box
+/// `min`..`max`: the coordinate of the box's face that faces the eye, and
+/// of the face opposite; `None` where the eye lies within the box's extent
+/// along the axis (no face across it faces the eye).
+fn faces_across(min: DVec3, max: DVec3) -> [Option<(f64, f64)>; 3] {
+    [0, 1, 2].map(|axis| {
+        if min[axis] > 0.0 {
+            Some((min[axis], max[axis]))
+        } else if max[axis] < 0.0 {
+            Some((max[axis], min[axis]))
+        } else {
+            None
+        }
+    })
+}
+
 /// Per world axis, `near / face` for the face of the eye-relative box
-/// `min`..`max` across that axis that faces the eye, and 0 where the eye
-/// lies within the box's extent along the axis (no face there faces it).
+/// `min`..`max` across that axis that faces the eye, and 0 where none does.
 /// The pixel ray d meets that face's plane at view depth t = face / d_axis,
 /// so at depth `near / t = d_axis · near / face`.
 fn facing_scales(near: f64, min: DVec3, max: DVec3) -> [f64; 3] {
-    [0, 1, 2].map(|axis| {
-        if min[axis] > 0.0 {
-            near / min[axis]
-        } else if max[axis] < 0.0 {
-            near / max[axis]
-        } else {
-            0.0
-        }
-    })
+    faces_across(min, max).map(|faces| faces.map_or(0.0, |(facing, _)| near / facing))
 }
 
 /// A depth affine in the pixel position (x, y) (framebuffer coordinates):
@@ -287,11 +294,23 @@ impl ScreenPlane {
 /// nearest corner and its screen rectangle. A ray entering the box does so
 /// on a face that faces the eye, at the least of those faces' plane depths,
 /// and leaves it through a far face (the slab test); each plane's depth is
-/// affine in the pixel's position (d_axis · near / face). So the depth of
-/// any fragment inside the box is at most each entry plane, and a ray
-/// entering it is entered no farther than it is left: where an entry plane
-/// lies behind an exit plane, the ray misses the box.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// affine in the pixel's position (d_axis · near / face). So where a ray
+/// enters the box it does so at most at each entry plane, and it enters no
+/// farther than it leaves: where an entry plane lies behind an exit plane,
+/// the ray misses the box.
+///
+/// Why that bounds the GPU's fragments, which need not lie inside the box:
+/// for a box test of an object's box (or of a box holding it), grown and
+/// raised by its [`BoxMargins`], a fragment of the object survives only
+/// where its pixel's ray meets the object's box grown by half the growth,
+/// at most at that box's entry depth plus half the raise
+/// ([`FragmentLimit`]), and the ray meets it where it meets the tested box
+/// (whose outline reaches at least 1/16 pixel beyond the object's, more
+/// than a sub-pixel snap). The entry planes of the tested box, raised by
+/// its full raise and their rounding, lie above that limit; its exit
+/// planes, lowered by their rounding, below the half-grown box's.
+/// By default, none: nothing bounded, no miss.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct BoxPlanes {
     /// Per axis across which the eye lies outside the box: the plane of
     /// the face facing it, raised by the box's raise and by its rounding
@@ -330,12 +349,8 @@ impl BoxPlanes {
                 constant: constant + sign * rounding,
             }
         };
-        for axis in 0..3 {
-            let (near_face, far_face) = if min[axis] > 0.0 {
-                (min[axis], max[axis])
-            } else if max[axis] < 0.0 {
-                (max[axis], min[axis])
-            } else {
+        for (axis, faces) in faces_across(min, max).into_iter().enumerate() {
+            let Some((near_face, far_face)) = faces else {
                 continue;
             };
             let mut entry = plane(axis, near_face, 1.0);
@@ -347,7 +362,8 @@ impl BoxPlanes {
         planes
     }
 
-    /// Planes the depth of any fragment in the box lies at or below.
+    /// Planes the depth of any fragment of an object inside the box lies at
+    /// or below (see above).
     pub(crate) fn entries(&self) -> &[ScreenPlane] {
         &self.entries[..self.count]
     }
@@ -490,6 +506,56 @@ mod tests {
             }
         }
         assert!(hits > 200, "the box must cover a good part of the view: {hits}");
+    }
+
+    #[test]
+    fn box_planes_lie_above_every_surviving_fragment_and_claim_misses_only_where_rays_miss_the_object() {
+        use crate::scene::builtin::Rng;
+        let cam = camera();
+        let r = Resolution::DEFAULT;
+        let view = cam.view_rotation();
+        let margins = BoxMargins::new(DepthMargins::for_backend(wgpu::Backend::Gl), &cam, r);
+        let rays = PixelRays::new(&cam, r);
+        // The rays as the scene's fragment stage computes them, in f32.
+        let [per_x, per_y, constant] = rays.uniform();
+        let mut rng = Rng::new(31);
+        let (mut hits, mut misses_claimed) = (0, 0);
+        for _ in 0..200 {
+            let centre =
+                cam.eye + cam.rotation * DVec3::new(rng.range(-8.0, 8.0), rng.range(-6.0, 6.0), -rng.range(0.5, 30.0));
+            let half = DVec3::new(rng.range(0.01, 4.0), rng.range(0.01, 4.0), rng.range(0.01, 4.0));
+            let b = Aabb::new(centre - half, centre + half);
+            let EyeBox::Testable(q) = eye_relative_box(&cam, &view, margins, &b) else {
+                continue;
+            };
+            let planes = BoxPlanes::new(&cam, &q, &rays, r);
+            let limit = FragmentLimit::new(&cam, &view, margins, &b);
+            let (min, max) = grown_eye_relative(&cam, &b, margins.growth / 2.0);
+            let object = Aabb::new(min + cam.eye, max + cam.eye);
+            for y in (0..r.height).step_by(9) {
+                for x in (0..r.width).step_by(9) {
+                    let (x, y) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+                    let missed = planes.missed_over([x, x], [y, y]);
+                    misses_claimed += usize::from(missed);
+                    if entry_depth(&cam, &object, ray(&cam, r, x, y)).is_none() {
+                        continue;
+                    }
+                    hits += 1;
+                    assert!(!missed, "{b:?}: a miss claimed at ({x}, {y})");
+                    let fragment_ray = (per_x * x as f32 + per_y * y as f32 + constant).truncate();
+                    let bound = planes
+                        .entries()
+                        .iter()
+                        .map(|p| p.at(x, y))
+                        .fold(f64::INFINITY, f64::min);
+                    assert!(bound >= limit.at(fragment_ray), "{b:?} at ({x}, {y})");
+                }
+            }
+        }
+        assert!(
+            hits > 10_000 && misses_claimed > 10_000,
+            "{hits} hits, {misses_claimed} misses claimed"
+        );
     }
 
     #[test]

@@ -4,10 +4,11 @@
 //! Screen positions are framebuffer pixels (x right, y down); depth is
 //! reverse-Z (`near / distance`, 0 = nothing drawn).
 //!
-//! Why it is conservative. A box is hidden when its nearest depth lies
-//! behind the farthest depth the buffer holds over the cells its pixels
-//! fall in. That is safe if, at every pixel centre a cell holds, the
-//! occluders drawn this frame are no farther than the cell's depth. The
+//! Why it is conservative. A box is hidden when, at every pixel centre its
+//! rectangle covers, it lies behind what the buffer holds there (a cell's
+//! depth, or its plane; [`OcclusionBuffer::hides`]) or its pixel ray misses
+//! it. That is safe if, at every pixel centre a cell holds, the occluders
+//! drawn this frame are no farther than the cell's depth and its plane. The
 //! GPU draws a triangle whose corners it placed within some error of ours
 //! (sub-pixel snapping, [`VERTEX_ERROR`]; f32 vertices,
 //! [`VertexError`]), so at a centre it covers it may draw the depth of any
@@ -22,13 +23,20 @@
 //! moves each point of a disc by less than its radius still covers the
 //! disc's centre and the points round it; the GPU draws every pixel centre
 //! inside the triangles it placed, one of the two where a centre lies on
-//! their shared edge (the fill rule). So the centre is drawn. The cell
-//! takes the farthest depth either triangle reaches over the centres'
-//! rectangle widened by that error (depth is affine across a triangle on
-//! screen, so the least over the widened rectangle's corners), moved
-//! farther by the GPU's depth rounding ([`DEPTH_MARGIN`]). A cell keeps
-//! the nearest such depth of the occluders covering it. A pyramid level
-//! keeps the least of the 2×2 texels below it.
+//! their shared edge (the fill rule). So the centre is drawn. Its depth
+//! is that of a point of either triangle within that error of it, which
+//! the cell's plane lies below: the first triangle's plane, lowered by its
+//! greatest change within the error, and further by as much as it ever
+//! lies above the second's plane over the quad, then moved farther by the
+//! GPU's depth rounding ([`DEPTH_MARGIN`]). The cell's depth is that
+//! plane's least over its centres (depth is affine across a triangle on
+//! screen, so at a corner of their rectangle). A cell keeps the nearest
+//! such depth of the occluders covering it, with its plane. A pyramid level
+//! keeps the least of the 2×2 texels below it. Both halves of a quad must
+//! be at least [`QUAD_HALF_HEIGHT`] covers high over their shared edge: the
+//! depth margins bound f32 interpolation over triangles, not over slivers
+//! (gpu/conservative.rs, rule 2), and a centre inside a quad may lie in
+//! either half.
 //!
 //! The GPU must also draw every fragment of an occluder the buffer counts:
 //! the scene's fragment stage discards only fragments nearer than the
@@ -51,6 +59,10 @@ const VERTEX_ERROR: f64 = 1.0 / 16.0;
 /// (gpu/conservative.rs, rule 1); both apply on every backend.
 const DEPTH_MARGIN: f64 = 1.0 / (1u32 << 18) as f64;
 const DEPTH_ABSOLUTE: f64 = 1.0 / (1u32 << 21) as f64;
+
+/// How high each triangle of a quad must stand over their shared edge, in
+/// multiples of the cover, for the quad to be rasterised as one.
+const QUAD_HALF_HEIGHT: f64 = 3.0;
 
 /// Texels across a box's rectangle may span at the pyramid level it is
 /// read at.
@@ -106,13 +118,6 @@ struct Level {
     depth: Vec<f32>,
 }
 
-/// The depth a cell holds at each pixel centre: the plane of the occluder
-/// that wrote it, lowered by the GPU's placement and rounding (see
-/// [`OcclusionBuffer::rasterise`]). A box can be compared with it centre
-/// by centre: a box just behind a wall seen at a slant is hidden even
-/// where the wall's depth changes across the cell by more than the gap.
-type CellPlane = ScreenPlane;
-
 pub struct OcclusionBuffer {
     target: Resolution,
     /// Per column of cells, the first and last pixel centre it holds (x);
@@ -123,8 +128,13 @@ pub struct OcclusionBuffer {
     /// centres); each further level halves them (rounding up) down to one
     /// texel.
     levels: Vec<Level>,
-    /// Per cell, its plane; meaningless where the cell holds no depth.
-    planes: Vec<CellPlane>,
+    /// Per cell, the depth it holds at each pixel centre: the plane of the
+    /// occluder that wrote it, lowered by the GPU's placement and rounding
+    /// ([`OcclusionBuffer::rasterise`]), so a box just behind a wall seen at
+    /// a slant is hidden even where the wall's depth changes across the
+    /// cell by more than the gap; meaningless where the cell holds no
+    /// depth.
+    planes: Vec<ScreenPlane>,
     /// Breaks the rule above on purpose, for the test that sees the error
     /// meter catch it: a cell takes a triangle's depth at its middle
     /// wherever the triangle covers the middle, as a plain rasteriser does.
@@ -134,7 +144,7 @@ pub struct OcclusionBuffer {
 
 /// The pixels cell `c` of `cells` along a side of `pixels` holds: those
 /// whose index maps to it by `⌊p · cells / pixels⌋`, as
-/// [`OcclusionBuffer::farthest_over`] maps them.
+/// [`OcclusionBuffer::hides`] maps them.
 fn held_pixels(c: u32, cells: u32, pixels: u32) -> [u32; 2] {
     let first = (u64::from(c) * u64::from(pixels)).div_ceil(u64::from(cells));
     let end = (u64::from(c + 1) * u64::from(pixels)).div_ceil(u64::from(cells));
@@ -174,7 +184,7 @@ impl OcclusionBuffer {
             columns: centres(width, target.width),
             rows: centres(height, target.height),
             levels,
-            planes: vec![CellPlane::default(); (width * height) as usize],
+            planes: vec![ScreenPlane::default(); (width * height) as usize],
             #[cfg(test)]
             careless: false,
         }
@@ -243,9 +253,12 @@ impl OcclusionBuffer {
         let area = match corners {
             [.., d] if occluder.sides == 4 => {
                 let second_area = twice_area(a, c, *d);
-                // Folded on screen (both on one side of a–c): then they
-                // cover less than the quad; each alone is safe.
-                if first_area.signum() != second_area.signum() {
+                // Folded on screen (both on one side of a–c; they cover less
+                // than the quad) or a half too thin (see the module's doc):
+                // each alone is safe.
+                let least_area =
+                    QUAD_HALF_HEIGHT * 2.0 * (VERTEX_ERROR + occluder.error.pixels) * (c - a).truncate().length();
+                if !(first_area * second_area > 0.0 && first_area.abs().min(second_area.abs()) >= least_area) {
                     let [first, second] = [[a, b, c], [a, c, *d]].map(|t| ScreenPolygon::triangle(t, occluder.error));
                     return self.rasterise(&first) + self.rasterise(&second);
                 }
@@ -304,7 +317,9 @@ impl OcclusionBuffer {
                 .iter()
                 .map(|p| first_plane.at(p.x, p.y) - second_plane.at(p.x, p.y))
                 .fold(f64::NEG_INFINITY, f64::max);
-            (widest + slack * (dx.abs() + dy.abs())).max(0.0)
+            // A NaN stays one, and writes nothing below.
+            let below = widest + slack * (dx.abs() + dy.abs());
+            if below < 0.0 { 0.0 } else { below }
         } else {
             0.0
         };
@@ -439,7 +454,7 @@ impl OcclusionBuffer {
         let k = (0..self.levels.len())
             .find(|&k| (x1 >> k) - (x0 >> k) < TEST_SPAN && (y1 >> k) - (y0 >> k) < TEST_SPAN)
             .unwrap_or(self.levels.len() - 1);
-        query.texels_hide(k as u32, [x0 >> k, x1 >> k], [y0 >> k, y1 >> k])
+        query.hides_texels(k as u32, [x0 >> k, x1 >> k], [y0 >> k, y1 >> k])
     }
 }
 
@@ -451,6 +466,7 @@ struct BoxQuery<'a> {
     /// The cells holding them: first and last column, first and last row.
     columns: [u32; 2],
     rows: [u32; 2],
+    /// The box's nearest depth anywhere, raised.
     nearest: f64,
     planes: &'a BoxPlanes,
 }
@@ -458,11 +474,11 @@ struct BoxQuery<'a> {
 impl BoxQuery<'_> {
     /// Whether the box lies behind the texels `xs` × `ys` (first and last,
     /// inclusive) of level `k`, each in the box's cells.
-    fn texels_hide(&self, k: u32, xs: [u32; 2], ys: [u32; 2]) -> bool {
-        (ys[0]..=ys[1]).all(|y| (xs[0]..=xs[1]).all(|x| self.texel_hides(k, x, y)))
+    fn hides_texels(&self, k: u32, xs: [u32; 2], ys: [u32; 2]) -> bool {
+        (ys[0]..=ys[1]).all(|y| (xs[0]..=xs[1]).all(|x| self.hides_texel(k, x, y)))
     }
 
-    fn texel_hides(&self, k: u32, x: u32, y: u32) -> bool {
+    fn hides_texel(&self, k: u32, x: u32, y: u32) -> bool {
         let level = &self.buffer.levels[k as usize];
         let farthest = f64::from(level.depth[(y * level.width + x) as usize]);
         if self.nearest < farthest {
@@ -482,18 +498,20 @@ impl BoxQuery<'_> {
             centres(&self.buffer.columns, columns, 0),
             centres(&self.buffer.rows, rows, 1),
         );
+        // Each entry plane bounds the box's depth on its own, so the least
+        // of them does; a NaN among them is passed over by `min`, and a NaN
+        // result hides nothing (`<`, not `>=`), here and below.
         let over = self
             .planes
             .entries()
             .iter()
             .map(|p| p.max_over(xs, ys))
             .fold(f64::INFINITY, f64::min);
-        // Not `>=`: a NaN hides nothing, here and below.
         if over < farthest || self.planes.missed_over(xs, ys) {
             return true;
         }
         if k > 0 {
-            return self.texels_hide(k - 1, columns.map(|c| c >> (k - 1)), rows.map(|r| r >> (k - 1)));
+            return self.hides_texels(k - 1, columns.map(|c| c >> (k - 1)), rows.map(|r| r >> (k - 1)));
         }
         // A cell: behind its plane by one of the box's (the box's depth is
         // at most the least of them), at every centre.
@@ -521,7 +539,7 @@ fn f32_at_most(v: f64) -> f32 {
 }
 
 #[cfg(test)]
-pub(super) mod tests {
+mod tests {
     use super::*;
     use crate::scene::builtin::Rng;
 
@@ -555,7 +573,7 @@ pub(super) mod tests {
     /// most quads are near parallelograms, some fold on screen (both
     /// triangles on one side of their shared edge) or bend (a reflex
     /// corner).
-    pub(in crate::cull::swr) fn random_occluders(rng: &mut Rng, size: Resolution, count: usize) -> Vec<ScreenPolygon> {
+    fn random_occluders(rng: &mut Rng, size: Resolution, count: usize) -> Vec<ScreenPolygon> {
         let (w, h) = (f64::from(size.width), f64::from(size.height));
         (0..count)
             .map(|_| {

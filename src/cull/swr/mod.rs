@@ -70,12 +70,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     params: &[RESOLUTION, TRIANGLES, THREADS],
     needs: Needs::Nothing,
     check: |params| SwrParams::from_params(params).map(drop),
-    build: |scene, params| {
-        Ok(Box::new(SoftwareOcclusionCulling::new(
-            scene,
-            SwrParams::from_params(params)?,
-        )))
-    },
+    build: |_, params| Ok(Box::new(SoftwareOcclusionCulling::new(SwrParams::from_params(params)?))),
 };
 
 const RESOLUTION: ParamInfo = ParamInfo {
@@ -134,16 +129,17 @@ pub struct SoftwareOcclusionCulling {
     /// An occluder's vertices on screen, each projected once.
     projected: Projected,
     occluders: Vec<u32>,
+    /// Per object of the scene (sized in the first frame).
+    is_occluder: Vec<bool>,
     /// Where each thread's share of `occluders` ends.
     shares: Vec<usize>,
-    is_occluder: Vec<bool>,
     found: Vec<u32>,
     to_draw: Vec<u32>,
     stack: Vec<u32>,
 }
 
 impl SoftwareOcclusionCulling {
-    pub fn new(scene: &Scene, params: SwrParams) -> Self {
+    pub fn new(params: SwrParams) -> Self {
         SoftwareOcclusionCulling {
             params,
             buffer: None,
@@ -156,10 +152,37 @@ impl SoftwareOcclusionCulling {
             projected: Vec::new(),
             occluders: Vec::new(),
             shares: Vec::new(),
-            is_occluder: vec![false; scene.objects.len()],
+            is_occluder: Vec::new(),
             found: Vec::new(),
             to_draw: Vec::new(),
             stack: Vec::new(),
+        }
+    }
+}
+
+impl SoftwareOcclusionCulling {
+    /// Its buffer and its helper threads' for render size `size`.
+    fn make_buffers(&mut self, size: Resolution) {
+        let threads = match self.params.threads {
+            0 => std::thread::available_parallelism().map_or(1, usize::from),
+            n => n,
+        };
+        let buffer = || OcclusionBuffer::new(size, self.params.resolution);
+        self.helpers = (1..threads)
+            .map(|_| Rasteriser {
+                buffer: buffer(),
+                projected: Vec::new(),
+            })
+            .collect();
+        self.buffer = Some(buffer());
+        #[cfg(test)]
+        for buffer in self
+            .helpers
+            .iter_mut()
+            .map(|h| &mut h.buffer)
+            .chain(self.buffer.as_mut())
+        {
+            buffer.careless = self.careless;
         }
     }
 }
@@ -288,41 +311,26 @@ impl Culler for SoftwareOcclusionCulling {
 
     fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
         self.depth_margins = setup.gpu.depth_margins;
+        self.make_buffers(setup.resolution);
         Ok(())
     }
 
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let (camera, scene, size) = (input.camera, input.scene, input.resolution);
         let mut stats = TraversalStats::default();
-        let buffer = match &mut self.buffer {
-            Some(b) if b.target() == size => b,
-            slot => {
-                let threads = match self.params.threads {
-                    0 => std::thread::available_parallelism().map_or(1, usize::from),
-                    n => n,
-                };
-                self.helpers = (1..threads)
-                    .map(|_| Rasteriser {
-                        buffer: OcclusionBuffer::new(size, self.params.resolution),
-                        projected: Vec::new(),
-                    })
-                    .collect();
-                slot.insert(OcclusionBuffer::new(size, self.params.resolution))
-            }
-        };
-        #[cfg(test)]
-        {
-            buffer.careless = self.careless;
-            for helper in &mut self.helpers {
-                helper.buffer.careless = self.careless;
-            }
+        if self.buffer.as_ref().is_none_or(|b| b.target() != size) {
+            self.make_buffers(size);
         }
+        let Some(buffer) = &mut self.buffer else {
+            unreachable!("made above")
+        };
         let projector = Projector::new(camera, size);
         let margins = BoxMargins::new(self.depth_margins, camera, size);
         let view = camera.view_rotation();
 
         let frustum = camera.frustum();
 
+        self.is_occluder.resize(scene.objects.len(), false);
         // 1. Occluders: last frame's visible objects still on screen,
         // largest first.
         self.candidates.clear();
@@ -411,6 +419,11 @@ impl Culler for SoftwareOcclusionCulling {
         }
         std::mem::swap(&mut self.visible, &mut self.found);
         stats
+    }
+
+    fn seed_visible(&mut self, visible: &[u32]) {
+        self.visible.clear();
+        self.visible.extend_from_slice(visible);
     }
 
     fn occluder_depths(&self) -> Option<CellDepths> {
@@ -560,15 +573,11 @@ fn rasterise_object(
     while let Some(triangle) = triangles.next() {
         // Meshes list a quad's two triangles one after the other: taken
         // together they leave no empty cells along their shared edge.
-        let quad = triangles
-            .peek()
-            .and_then(|&next| quad_of(triangle, next, position))
-            .filter(|quad| quad.iter().all(|&v| vertex(v).is_some()));
-        if let Some(quad) = quad {
+        let quad = triangles.peek().and_then(|&next| quad_of(triangle, next, position));
+        if let Some([Some(a), Some(b), Some(c), Some(d)]) = quad.map(|corners| corners.map(vertex)) {
             triangles.next();
-            let on_screen = quad.map(|v| vertex(v).expect("checked above"));
-            let nearest = on_screen.iter().map(|&(_, w)| w).fold(f64::INFINITY, f64::min);
-            buffer.rasterise(&ScreenPolygon::quad(on_screen.map(|(p, _)| p), error_at(nearest)));
+            let nearest = [a, b, c, d].iter().map(|&(_, w)| w).fold(f64::INFINITY, f64::min);
+            buffer.rasterise(&ScreenPolygon::quad([a, b, c, d].map(|(p, _)| p), error_at(nearest)));
             rasterised += 2;
         } else if let [Some((a, wa)), Some((b, wb)), Some((c, wc))] = triangle.map(vertex) {
             buffer.rasterise(&ScreenPolygon::triangle([a, b, c], error_at(wa.min(wb).min(wc))));
@@ -617,7 +626,7 @@ mod tests {
         ]);
         let camera = camera_down_z();
         let params = SwrParams::from_params(&ModeParams::default()).unwrap();
-        let mut swr = SoftwareOcclusionCulling::new(&scene, params);
+        let mut swr = SoftwareOcclusionCulling::new(params);
         let (mut drawn, mut stats) = (Vec::new(), Vec::new());
         for frame in 0..3 {
             let mut frame_calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
@@ -632,6 +641,16 @@ mod tests {
         assert_eq!(stats[0].occluder_triangles, 0);
         assert_eq!(stats[2].occluder_triangles, 2 * 12, "the two visible cubes' triangles");
         assert!(stats[1].nodes_culled_occlusion > 0 && stats[2].nodes_culled_occlusion > 0);
+
+        // Told what another culler drew (as auto tells the culler it
+        // probes), its first frame has the near cube as occluder already.
+        let mut seeded = SoftwareOcclusionCulling::new(params);
+        seeded.seed_visible(&[0, 2]);
+        let mut frame_calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
+        seeded.frame(&mut frame_calls, &input(0, &camera, &scene, &hierarchy));
+        let mut objects = frame_calls.drawn();
+        objects.sort_unstable();
+        assert_eq!(objects, [0, 2]);
     }
 
     #[test]
@@ -691,7 +710,7 @@ mod tests {
                 ]
             })
             .collect();
-        let (mut tested, mut hidden) = (0, 0);
+        let (mut tested, mut hidden, mut by_planes) = (0, 0, 0);
         for cells in [Resolution { width: 97, height: 61 }, size] {
             let mut buffer = OcclusionBuffer::new(size, cells);
             for wall in &walls {
@@ -737,6 +756,18 @@ mod tests {
                     continue;
                 }
                 hidden += 1;
+                // Whether its nearest corner alone would have hidden it.
+                if let EyeBox::Testable(q) = eye_relative_box(&camera, &view, tester.margins, &b)
+                    && let Some(on_screen) = projector.box_on_screen(&q)
+                    && !buffer.hides(
+                        on_screen.first,
+                        on_screen.last,
+                        on_screen.nearest,
+                        &BoxPlanes::default(),
+                    )
+                {
+                    by_planes += 1;
+                }
                 for py in 0..size.height {
                     for px in 0..size.width {
                         let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
@@ -752,6 +783,7 @@ mod tests {
             }
         }
         assert!(hidden > 300 && hidden < tested, "{hidden} of {tested} hidden");
+        assert!(by_planes > 100, "{by_planes} of them hidden only by their planes");
     }
 
     #[test]
@@ -764,7 +796,7 @@ mod tests {
         let path = default_path(&scene).and_then(|(p, _)| p.with_frames(24)).unwrap();
         let mut runs = [1, 2, 5].map(|threads| {
             let params = ModeParams::parse(&[format!("swr.threads={threads}")], &[ModeId::Swr]).unwrap();
-            SoftwareOcclusionCulling::new(&scene, SwrParams::from_params(&params).unwrap())
+            SoftwareOcclusionCulling::new(SwrParams::from_params(&params).unwrap())
         });
         let mut shared_out = 0;
         for frame in 0..24 {
@@ -826,10 +858,10 @@ mod tests {
         assert!(!gpus.is_empty(), "no adapter: install Mesa (scripts/install-deps)");
         for gpu in &gpus {
             let params = SwrParams::from_params(&ModeParams::default()).unwrap();
-            let careful = SoftwareOcclusionCulling::new(&case.scene, params);
+            let careful = SoftwareOcclusionCulling::new(params);
             let careless = SoftwareOcclusionCulling {
                 careless: true,
-                ..SoftwareOcclusionCulling::new(&case.scene, params)
+                ..SoftwareOcclusionCulling::new(params)
             };
             let mut cullers: Vec<Box<dyn Culler>> = vec![
                 Box::new(careful),
