@@ -417,7 +417,7 @@ impl FragmentLimit {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::camera::look_rotation;
 
@@ -451,7 +451,7 @@ mod tests {
 
     /// The ray through pixel centre (x, y) in world axes, view depth 1, from
     /// the camera's field of view alone.
-    fn ray(cam: &Camera, r: Resolution, x: f64, y: f64) -> DVec3 {
+    pub(crate) fn pixel_ray(cam: &Camera, r: Resolution, x: f64, y: f64) -> DVec3 {
         let t = (cam.fov_y / 2.0).tan();
         let ndc = (2.0 * x / f64::from(r.width) - 1.0, 1.0 - 2.0 * y / f64::from(r.height));
         cam.rotation * DVec3::new(ndc.0 * cam.aspect * t, ndc.1 * t, -1.0)
@@ -459,7 +459,7 @@ mod tests {
 
     /// Depth (near / view distance) where `ray` enters `b`, by a slab test in
     /// f64; `None` when it misses.
-    fn entry_depth(cam: &Camera, b: &Aabb, d: DVec3) -> Option<f64> {
+    pub(crate) fn entry_depth(cam: &Camera, b: &Aabb, d: DVec3) -> Option<f64> {
         let (lo, hi) = (b.min - cam.eye, b.max - cam.eye);
         let (mut enter, mut exit) = (0.0f64, f64::INFINITY);
         for i in 0..3 {
@@ -477,7 +477,7 @@ mod tests {
         let [per_x, per_y, constant] = PixelRays::new(&cam, r).uniform();
         for (x, y) in [(0.5, 0.5), (400.5, 300.5), (799.5, 12.5)] {
             let got = (per_x * x as f32 + per_y * y as f32 + constant).truncate().as_dvec3();
-            assert!((got - ray(&cam, r, x, y)).length() < 1e-6, "({x}, {y})");
+            assert!((got - pixel_ray(&cam, r, x, y)).length() < 1e-6, "({x}, {y})");
         }
     }
 
@@ -494,7 +494,7 @@ mod tests {
         let mut hits = 0;
         for y in (0..r.height).step_by(7) {
             for x in (0..r.width).step_by(7) {
-                let d = ray(&cam, r, f64::from(x) + 0.5, f64::from(y) + 0.5);
+                let d = pixel_ray(&cam, r, f64::from(x) + 0.5, f64::from(y) + 0.5);
                 if let Some(depth) = entry_depth(&cam, &b, d) {
                     hits += 1;
                     let got = limit.at(d.as_vec3());
@@ -537,7 +537,7 @@ mod tests {
                     let (x, y) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
                     let missed = planes.missed_over([x, x], [y, y]);
                     misses_claimed += usize::from(missed);
-                    if entry_depth(&cam, &object, ray(&cam, r, x, y)).is_none() {
+                    if entry_depth(&cam, &object, pixel_ray(&cam, r, x, y)).is_none() {
                         continue;
                     }
                     hits += 1;
@@ -565,7 +565,7 @@ mod tests {
         let depth = DepthMargins::for_backend(wgpu::Backend::Vulkan);
         let margins = BoxMargins::new(depth, &cam, Resolution::DEFAULT);
         let limit = FragmentLimit::new(&cam, &cam.view_rotation(), margins, &around);
-        assert!(limit.at(ray(&cam, Resolution::DEFAULT, 400.5, 300.5).as_vec3()) >= NO_LIMIT);
+        assert!(limit.at(pixel_ray(&cam, Resolution::DEFAULT, 400.5, 300.5).as_vec3()) >= NO_LIMIT);
     }
 
     #[test]

@@ -12,6 +12,9 @@ mod renderer;
 mod targets;
 mod timing;
 
+/// A ray caster's view of pixels and boxes, for tests of box tests.
+#[cfg(test)]
+pub(crate) use conservative::tests::{entry_depth, pixel_ray};
 pub use conservative::{BoxMargins, DepthMargins};
 pub(crate) use conservative::{BoxPlanes, EyeBox, PixelRays, QueryBox, ScreenPlane, eye_relative_box};
 pub use context::{AdapterReport, BackendChoice, GpuContext, GpuError};

@@ -656,6 +656,9 @@ mod tests {
     #[test]
     fn a_box_found_hidden_lies_behind_what_the_buffer_vouches_for_wherever_a_pixel_ray_meets_it() {
         use crate::camera::look_rotation;
+        // The ray through a pixel centre and where it enters a box, from
+        // the field of view and a slab test alone.
+        use crate::gpu::{entry_depth, pixel_ray};
         use crate::scene::builtin::Rng;
         let mut rng = Rng::new(23);
         let size = Resolution {
@@ -671,28 +674,6 @@ mod tests {
         };
         let (view, frustum) = (camera.view_rotation(), camera.frustum());
         let projector = Projector::new(&camera, size);
-        // The ray through a pixel centre and where it enters a box, from
-        // the field of view and a slab test alone.
-        let tan = (camera.fov_y / 2.0).tan();
-        let ray = |x: f64, y: f64| {
-            let (w, h) = (f64::from(size.width), f64::from(size.height));
-            camera.rotation
-                * DVec3::new(
-                    (2.0 * x / w - 1.0) * camera.aspect * tan,
-                    (1.0 - 2.0 * y / h) * tan,
-                    -1.0,
-                )
-        };
-        let entry_depth = |b: &Aabb, d: DVec3| {
-            let (lo, hi) = (b.min - camera.eye, b.max - camera.eye);
-            let (mut enter, mut exit) = (0.0f64, f64::INFINITY);
-            for i in 0..3 {
-                let (a, c) = (lo[i] / d[i], hi[i] / d[i]);
-                enter = enter.max(a.min(c));
-                exit = exit.min(a.max(c));
-            }
-            (enter <= exit).then(|| camera.near / enter)
-        };
         // Walls: rectangles 20 to 200 m ahead, facing the eye at a slant.
         let walls: Vec<[DVec3; 4]> = (0..12)
             .map(|_| {
@@ -771,7 +752,7 @@ mod tests {
                 for py in 0..size.height {
                     for px in 0..size.width {
                         let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
-                        if let Some(depth) = entry_depth(&b, ray(x, y)) {
+                        if let Some(depth) = entry_depth(&camera, &b, pixel_ray(&camera, size, x, y)) {
                             let vouched = buffer.vouched_at(x, y);
                             assert!(
                                 depth < vouched,
