@@ -456,3 +456,84 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
     );
     refused(&["merge", "--out", s(&merged_out)], &["no result folders"]);
 }
+
+/// A matrix of `scenes` (JSON list) in `name`, 3 frames at 64x48, vfc and
+/// the oracle.
+fn tiny_matrix(dir: &Path, name: &str, scenes: &str) -> PathBuf {
+    write(
+        dir,
+        name,
+        format!(
+            r#"{{"scenes": {scenes}, "modes": ["vfc", "oracle"], "frames": 3, "warmup": 0, "resolution": "64x48"}}"#
+        ),
+    )
+}
+
+#[test]
+fn a_bad_run_fails_every_shard_up_front_and_a_failing_run_leaves_no_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let backend = &backends()[0];
+    std::fs::create_dir(dir.path().join("adir")).unwrap();
+    let out = dir.path().join("out");
+    // A built-in scene that does not parse, or a model that is a folder:
+    // every shard refuses before any run, so none writes anything.
+    let bad_scene = tiny_matrix(dir.path(), "scene.json", r#"["city:blocks=1", "nonesuch"]"#);
+    let bad_model = write(dir.path(), "model.json", r#"{"models": ["adir"], "modes": ["vfc"]}"#);
+    for shard in ["1/2", "2/2"] {
+        let args = [
+            "bench",
+            "--config",
+            s(&bad_scene),
+            "--backend",
+            backend,
+            "--out",
+            s(&out),
+        ];
+        let sharded: Vec<&str> = args.iter().copied().chain(["--shard", shard]).collect();
+        refused(&sharded, &["run 02-nonesuch-generated", "unknown scene 'nonesuch'"]);
+        assert!(!out.exists(), "shard {shard} wrote nothing");
+    }
+    refused(
+        &["bench", "--config", s(&bad_model), "--out", s(&out)],
+        &["run 01-adir-generated", "not a file"],
+    );
+    assert!(!out.exists());
+    // A model that only fails when loaded fails its run, which leaves no
+    // run folder (a folder with only a lock reads as a run still going).
+    write(dir.path(), "garbage.obj", "garbage\n");
+    let garbage = write(
+        dir.path(),
+        "garbage.json",
+        r#"{"models": ["garbage.obj"], "modes": ["vfc"], "frames": 3, "warmup": 0, "resolution": "64x48"}"#,
+    );
+    refused(
+        &[
+            "bench",
+            "--config",
+            s(&garbage),
+            "--backend",
+            backend,
+            "--out",
+            s(&out),
+            "--quiet",
+        ],
+        &["garbage.obj"],
+    );
+    assert!(!out.join("01-garbage-generated").exists());
+    // Nor is a matrix past MAX_RUNS planned.
+    let scenes: Vec<String> = (0..101).map(|k| format!("\"city:seed={k}\"")).collect();
+    let paths: Vec<String> = (0..100).map(|k| format!("\"p{k}.json\"")).collect();
+    let huge = write(
+        dir.path(),
+        "huge.json",
+        format!(
+            r#"{{"scenes": [{}], "paths": [{}]}}"#,
+            scenes.join(","),
+            paths.join(",")
+        ),
+    );
+    refused(
+        &["bench", "--config", s(&huge), "--out", s(&out)],
+        &["10100 runs", "more than the 10000"],
+    );
+}
