@@ -548,6 +548,7 @@ fn execute_claimed(
         schema_version: SCHEMA_VERSION,
         tool: ToolInfo::current(),
         run: plan.run.clone(),
+        matrix: plan.matrix,
         adapter: gpu.adapter.clone(),
         scene: SceneSummary {
             facts,

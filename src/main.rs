@@ -690,9 +690,9 @@ fn merge(dirs: &[PathBuf], out: &std::path::Path) -> anyhow::Result<()> {
         .flat_map(|r| r.adapters.iter().map(|a| a.label()))
         .collect();
     say!(
-        "merged {} runs on {} adapters into {} (report.md, merged.json, charts/, runs/)",
-        merged.runs.len(),
-        adapters.len(),
+        "merged {} on {} into {} (report.md, merged.json, charts/, runs/)",
+        occlu::text::count(merged.runs.len(), "run"),
+        occlu::text::count(adapters.len(), "adapter"),
         out.display()
     );
     for run in &merged.runs {

@@ -20,6 +20,7 @@ use std::str::FromStr;
 
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::{BenchConfig, BenchPlan, ConfigError, DEFAULT_OUT, DEFAULT_SCENE, from_json, read_json};
+use crate::report::MatrixIdentity;
 use crate::scene::{SceneError, SceneSpec};
 
 /// The runs of one configuration file, before flags and planning.
@@ -189,12 +190,17 @@ impl Matrix {
             .or(self.defaults.out.clone())
             .unwrap_or_else(|| DEFAULT_OUT.into());
         let width = configs.len().to_string().len().max(2);
+        let names: Vec<String> = configs
+            .iter()
+            .enumerate()
+            .map(|(place, config)| run_name(place, width, config))
+            .collect();
+        let matrix = MatrixIdentity::of(names.iter().map(String::as_str));
         let mut paths_read = BTreeSet::new();
         configs
             .into_iter()
-            .enumerate()
-            .map(|(place, config)| {
-                let name = run_name(place, width, &config);
+            .zip(names)
+            .map(|(config, name)| {
                 let mut plan = config.plan().map_err(|error| MatrixError::Plan {
                     run: name.clone(),
                     error,
@@ -232,6 +238,7 @@ impl Matrix {
                 }
                 plan.out = out.join(&name);
                 plan.run = Some(name.clone());
+                plan.matrix = Some(matrix);
                 Ok(MatrixRun { name, plan })
             })
             .collect()

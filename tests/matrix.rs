@@ -537,3 +537,108 @@ fn a_bad_run_fails_every_shard_up_front_and_a_failing_run_leaves_no_folder() {
         &["10100 runs", "more than the 10000"],
     );
 }
+
+#[test]
+fn merge_refuses_to_write_over_its_input_or_a_partial_matrix_and_takes_odd_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let backend = &backends()[0];
+    let matrix = tiny_matrix(dir.path(), "m.json", r#"["city:blocks=1"]"#);
+    let full = dir.path().join("full");
+    bench_matrix(&matrix, backend, &full, &["--quiet"]);
+    let run = full.join("01-city-blocks-1-generated");
+    let report = std::fs::read_to_string(run.join("report.md")).unwrap();
+    for out in [&run, &run.join("merged"), &full, &dir.path().to_path_buf()] {
+        refused(
+            &["merge", s(&run), "--out", s(out)],
+            &["write over what it reads", "choose another --out"],
+        );
+    }
+    refused(&["merge", s(&full), "--out", s(&run)], &["write over what it reads"]);
+    assert_eq!(std::fs::read_to_string(run.join("report.md")).unwrap(), report);
+    assert!(!run.join("merged").exists());
+
+    // A folder of the matrix without a run is a run that failed: refused,
+    // named; hidden folders (staging) are passed over.
+    let partial = dir.path().join("partial");
+    std::fs::create_dir_all(partial.join("02-forest-generated")).unwrap();
+    std::fs::create_dir_all(partial.join(".occlu-staging-1")).unwrap();
+    let out = dir.path().join("merged");
+    let copy = |to: &Path| {
+        std::fs::create_dir_all(to).unwrap();
+        for f in ["summary.json", "frames.csv"] {
+            std::fs::copy(run.join(f), to.join(f)).unwrap();
+        }
+    };
+    copy(&partial.join("01-city-blocks-1-generated"));
+    refused(
+        &["merge", s(&partial), "--out", s(&out)],
+        &["02-forest-generated", "without summary.json"],
+    );
+    std::fs::remove_dir(partial.join("02-forest-generated")).unwrap();
+    let merged_ok = occlu(&["merge", s(&partial), "--out", s(&out)]);
+    assert!(merged_ok.status.success(), "{:?}", own_stderr(&merged_ok));
+    assert!(stdout(&merged_ok).starts_with("# occlu: merged results\n\n1 run on 1 adapter."));
+    // A merged folder given to merge says what it is.
+    refused(
+        &["merge", s(&out), "--out", s(&dir.path().join("again"))],
+        &["a merged folder", "runs/"],
+    );
+
+    // A folder whose name is not UTF-8 merges; merged.json names it as
+    // best it can.
+    use std::os::unix::ffi::OsStrExt as _;
+    let odd = dir.path().join(std::ffi::OsStr::from_bytes(b"nu\xff"));
+    copy(&odd);
+    let odd_out = dir.path().join("odd-merged");
+    let merged_odd = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .arg("merge")
+        .arg(&odd)
+        .args(["--out", s(&odd_out)])
+        .output()
+        .unwrap();
+    assert!(merged_odd.status.success(), "{:?}", own_stderr(&merged_odd));
+    assert!(merged(&odd_out).runs[0].adapters[0].merged_from.ends_with("nu\u{fffd}"));
+
+    // The same folder twice, once inside its matrix folder, counts once,
+    // even from before summary.json fingerprinted frames.csv.
+    let old = dir.path().join("old");
+    edited_copy(&run, &old.join("01-city-blocks-1-generated"), |j| {
+        j.as_object_mut().unwrap().remove("frames_csv");
+    });
+    let twice = occlu(&[
+        "merge",
+        s(&old),
+        s(&old.join("01-city-blocks-1-generated")),
+        s(&old.join("01-city-blocks-1-generated/../01-city-blocks-1-generated")),
+        "--out",
+        s(&out),
+    ]);
+    assert!(twice.status.success(), "{:?}", own_stderr(&twice));
+    assert_eq!(merged(&out).runs[0].adapters.len(), 1);
+}
+
+#[test]
+fn merge_refuses_runs_of_two_matrices_and_names_a_frame_count_that_differs() {
+    let dir = tempfile::tempdir().unwrap();
+    let backend = &backends()[0];
+    // Run 01 of a matrix of one and of a matrix of two: the same name, not
+    // one run of one matrix.
+    let one = tiny_matrix(dir.path(), "one.json", r#"["city:blocks=1"]"#);
+    let two = tiny_matrix(dir.path(), "two.json", r#"["city:blocks=1", "city:blocks=1,seed=2"]"#);
+    let (a, b, c) = (dir.path().join("a"), dir.path().join("b"), dir.path().join("c"));
+    bench_matrix(&one, backend, &a, &["--quiet"]);
+    bench_matrix(&two, backend, &b, &["--quiet", "--shard", "1/2"]);
+    bench_matrix(&one, backend, &c, &["--quiet", "--frames", "2"]);
+    let first = |d: &Path| d.join("01-city-blocks-1-generated");
+    assert!(summary(&first(&a)).matrix.is_some());
+    let out = dir.path().join("merged");
+    refused(
+        &["merge", s(&first(&a)), s(&first(&b)), "--out", s(&out)],
+        &["different matrices", "a matrix of 1 run", "a matrix of 2 runs"],
+    );
+    refused(
+        &["merge", s(&a), s(&c), "--out", s(&out)],
+        &["different frame counts", "3 vs 2"],
+    );
+    assert!(!out.exists());
+}

@@ -19,8 +19,8 @@ use crate::measure::{FrameStats, MissedObject};
 pub use files::{ReportError, check_writable, write_png, write_whole};
 pub use markdown::render as render_markdown;
 pub use summary::{
-    AnimationFact, CameraFact, Fingerprint, MissedSummary, PathSummary, SCHEMA_VERSION, SceneFacts, SceneSummary,
-    SkippedMode, Summary, SweepSummary, ToolInfo,
+    AnimationFact, CameraFact, Fingerprint, MatrixIdentity, MissedSummary, PathSummary, SCHEMA_VERSION, SceneFacts,
+    SceneSummary, SkippedMode, Summary, SweepSummary, ToolInfo,
 };
 
 /// The files a run wrote.

@@ -24,6 +24,11 @@ pub struct Summary {
     /// single run.
     #[serde(default)]
     pub run: Option<String>,
+    /// Which matrix the run is of: folders of one run name from two
+    /// matrices (a run added in front renames every later one) are not
+    /// merged as one. Absent for a single run and in older files.
+    #[serde(default)]
+    pub matrix: Option<MatrixIdentity>,
     pub adapter: AdapterReport,
     pub scene: SceneSummary,
     pub path: PathSummary,
@@ -223,6 +228,43 @@ pub struct PathSummary {
     /// source's name alone does not pin down (absent in older files).
     #[serde(default)]
     pub cameras: Option<Fingerprint>,
+}
+
+/// A matrix: how many runs it has and the FNV-1a hash of their names in
+/// order, one a line. The names hold each run's place, scene and path, and
+/// are the same on every machine, so every shard records the same identity.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct MatrixIdentity {
+    pub runs: usize,
+    #[serde(with = "hex64")]
+    pub names: u64,
+}
+
+impl MatrixIdentity {
+    pub fn of<'a>(names: impl IntoIterator<Item = &'a str>) -> MatrixIdentity {
+        let mut h = Fnv1a::new();
+        let mut runs = 0;
+        for name in names {
+            h.write(name.as_bytes());
+            h.write(b"\n");
+            runs += 1;
+        }
+        MatrixIdentity {
+            runs,
+            names: h.finish().fnv1a,
+        }
+    }
+}
+
+impl std::fmt::Display for MatrixIdentity {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(
+            f,
+            "a matrix of {} #{:016x}",
+            crate::text::count(self.runs, "run"),
+            self.names
+        )
+    }
 }
 
 /// What identifies a frames.csv: its length and FNV-1a hash. Not a defence
