@@ -642,3 +642,55 @@ fn merge_refuses_runs_of_two_matrices_and_names_a_frame_count_that_differs() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn compare_of_merged_folders_pairs_runs_by_adapter_not_by_folder_name_and_trusts_no_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let backend = &backends()[0];
+    let matrix = tiny_matrix(dir.path(), "m.json", r#"["city:blocks=1"]"#);
+    let full = dir.path().join("full");
+    bench_matrix(&matrix, backend, &full, &["--quiet"]);
+    let run = full.join("01-city-blocks-1-generated");
+    // One adapter by two backends, with a name longer than a folder's slug:
+    // the base ran Vulkan only, the new merge GL and Vulkan.
+    let long = "NVIDIA GeForce RTX 4090 Laptop GPU/PCIe/SSE2 (rev a1)";
+    let on = |backend: &'static str| {
+        let to = dir.path().join(backend).join("01-city-blocks-1-generated");
+        edited_copy(&run, &to, |j| {
+            j["adapter"]["name"] = long.into();
+            j["adapter"]["backend"] = backend.into();
+        });
+        to
+    };
+    let (vulkan, gl) = (on("Vulkan"), on("Gl"));
+    let (base, new) = (dir.path().join("base"), dir.path().join("new"));
+    assert!(occlu(&["merge", s(&vulkan), "--out", s(&base)]).status.success());
+    assert!(occlu(&["merge", s(&gl), s(&vulkan), "--out", s(&new)]).status.success());
+    let folders: Vec<String> = merged(&new).runs[0].adapters.iter().map(|a| a.folder.clone()).collect();
+    assert_ne!(folders[0], folders[1]);
+    let compared = occlu(&["compare", s(&base), s(&new)]);
+    assert!(compared.status.success(), "{:?}", own_stderr(&compared));
+    assert!(stdout(&compared).contains("in the new merge only"));
+    // A folder in merged.json that is not one in its runs/ is refused.
+    for folder in [
+        ".",
+        "../full",
+        "runs/..",
+        "runs/../../full/01-city-blocks-1-generated",
+        "runs",
+    ] {
+        let edited = dir.path().join("edited");
+        let _ = std::fs::remove_dir_all(&edited);
+        std::fs::create_dir(&edited).unwrap();
+        let mut m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(new.join("merged.json")).unwrap()).unwrap();
+        for a in m["runs"][0]["adapters"].as_array_mut().unwrap() {
+            a["folder"] = folder.into();
+        }
+        std::fs::write(edited.join("merged.json"), m.to_string()).unwrap();
+        refused(
+            &["compare", s(&base), s(&edited)],
+            &["is not a folder in its runs/", folder],
+        );
+    }
+}

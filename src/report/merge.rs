@@ -18,8 +18,10 @@
 //!
 //! MERGED gets merged.json (for machines), report.md, `charts/` (each
 //! run's ratio to the oracle per adapter) and `runs/` (a copy of every
-//! merged run folder, `RUN--ADAPTER`, which `occlu compare` of two merged
-//! folders compares pair by pair).
+//! merged run folder, `RUN--ADAPTER-HASH`, the hash of the run's and the
+//! adapter's full names so that names cut short never collide; `occlu
+//! compare` of two merged folders pairs them by the run, adapter and
+//! backend merged.json records, not by folder name).
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
@@ -470,6 +472,20 @@ fn unique(name: String, used: &mut BTreeSet<String>) -> String {
     candidate
 }
 
+/// A run folder's copy under `runs/`: the run's and the adapter's names as
+/// slugs (cut short, so they only say what it holds) and a hash of the
+/// whole identity, so two runs or adapters whose names share their first
+/// characters never share a folder.
+fn column_folder(run: &str, adapter: &str, backend: &str) -> String {
+    let identity = Fingerprint::of(format!("{run}\n{adapter}\n{backend}").as_bytes());
+    format!(
+        "runs/{}--{}-{:08x}",
+        slug(run),
+        slug(&format!("{adapter} {backend}")),
+        identity.fnv1a >> 32
+    )
+}
+
 /// One run's table, columns and cross-check (its chart comes later).
 fn merged_run(folders: &[RunFolder], used: &mut BTreeSet<String>) -> MergedRun {
     let first = &folders[0].summary;
@@ -478,10 +494,9 @@ fn merged_run(folders: &[RunFolder], used: &mut BTreeSet<String>) -> MergedRun {
         .iter()
         .map(|f| {
             let a = &f.summary.adapter;
-            let folder = unique(
-                format!("runs/{}--{}", slug(&name), slug(&format!("{} {}", a.name, a.backend))),
-                used,
-            );
+            // Two runs outside a matrix may share a name (other frames);
+            // the suffix keeps their folders apart.
+            let folder = unique(column_folder(&name, &a.name, &a.backend), used);
             AdapterColumn {
                 name: a.name.clone(),
                 backend: a.backend.clone(),
