@@ -611,10 +611,11 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         .collect();
     if mine.is_empty() {
         note(format!(
-            "shard {shard}: none of the matrix's {} runs falls to this shard; nothing run, nothing written",
-            runs.len()
+            "shard {shard}: none of the matrix's {} falls to this shard; nothing run, nothing written",
+            occlu::text::count(runs.len(), "run")
         ));
-        return Ok(());
+        // --json still prints a list, of no summaries.
+        return if args.json { emit("[]\n") } else { Ok(()) };
     }
     let mut summaries = Vec::new();
     let mut table = String::from("| run | scene | path | adapter | folder |\n|---|---|---|---|---|\n");

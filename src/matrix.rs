@@ -305,7 +305,15 @@ impl FromStr for Shard {
     fn from_str(text: &str) -> Result<Shard, String> {
         let refuse = || format!("'{text}' is not K/N, shard K of N with 1 <= K <= N (e.g. 2/3)");
         let (k, n) = text.split_once('/').ok_or_else(refuse)?;
-        let (index, count): (u32, u32) = (k.parse().map_err(|_| refuse())?, n.parse().map_err(|_| refuse())?);
+        // Digits only: u32's parser would take "+1".
+        let number = |s: &str| {
+            s.bytes()
+                .all(|b| b.is_ascii_digit())
+                .then(|| s.parse::<u32>().ok())
+                .flatten()
+                .ok_or_else(refuse)
+        };
+        let (index, count) = (number(k)?, number(n)?);
         if index == 0 || index > count {
             return Err(refuse());
         }
@@ -338,7 +346,9 @@ mod tests {
             .collect();
         assert_eq!(taken, [vec![0, 3, 6], vec![1, 4], vec![2, 5]]);
         assert!("1/1".parse::<Shard>().unwrap().takes(5));
-        for bad in ["0/3", "4/3", "a/b", "1/0", "3", "-1/3", "1/3/5", ""] {
+        for bad in [
+            "0/3", "4/3", "a/b", "1/0", "3", "-1/3", "1/3/5", "", "+1/3", "1/+3", " 1/3",
+        ] {
             let e = bad.parse::<Shard>().unwrap_err();
             assert!(e.contains("not K/N"), "{bad}: {e}");
         }

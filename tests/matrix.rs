@@ -520,6 +520,10 @@ fn a_bad_run_fails_every_shard_up_front_and_a_failing_run_leaves_no_folder() {
         &["garbage.obj"],
     );
     assert!(!out.join("01-garbage-generated").exists());
+    // A shard with no run prints an empty list for --json.
+    let one = tiny_matrix(dir.path(), "one.json", r#"["city:blocks=1"]"#);
+    let idle = bench_matrix(&one, backend, &out, &["--shard", "2/2", "--json"]);
+    assert_eq!(stdout(&idle), "[]\n");
     // Nor is a matrix past MAX_RUNS planned.
     let scenes: Vec<String> = (0..101).map(|k| format!("\"city:seed={k}\"")).collect();
     let paths: Vec<String> = (0..100).map(|k| format!("\"p{k}.json\"")).collect();
