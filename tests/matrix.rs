@@ -266,6 +266,8 @@ fn shards_and_a_gl_run_merge_into_one_report_that_compare_gates() {
     }
     assert!(report.contains("| vfc | frame ms (mean) |"));
     assert!(report.contains("|  | × oracle |"));
+    // Every counter the cross-check compares is in the table.
+    assert!(report.contains("|  | objects |"));
 
     // The base branch's merge against this one: the same results pass…
     let same = occlu(&["compare", s(&out), s(&out)]);

@@ -654,12 +654,13 @@ pub fn render(merged: &Merged) -> String {
             let _ = write!(w, "---:|");
         }
         let _ = writeln!(w);
-        let metrics: [(&str, Cell); 6] = [
+        let metrics: [(&str, Cell); 7] = [
             ("frame ms (mean)", |r| number(r.frame_ms, 3)),
             ("× oracle", |r| {
                 r.ratio_to_oracle.map_or("–".into(), |v| format!("{v:.2}×"))
             }),
             ("wrong pixels", |r| number(r.error_pixels.map(|v| v as f64), 0)),
+            ("objects", |r| number(r.objects_drawn, 1)),
             ("triangles", |r| number(r.triangles_drawn, 1)),
             ("queries", |r| number(r.queries, 1)),
             ("round trips", |r| number(r.round_trips, 1)),
