@@ -698,15 +698,7 @@ fn merge(dirs: &[PathBuf], out: &std::path::Path) -> anyhow::Result<()> {
     );
     for run in &merged.runs {
         for d in &run.disagreements {
-            let values: Vec<String> = d.values.iter().map(|(a, v)| format!("{a} {v}")).collect();
-            say!(
-                "warning: {}: {} {} differs between {} adapters ({}): a backend-specific bug?",
-                run.name,
-                d.mode,
-                d.counter,
-                d.backend,
-                values.join(", ")
-            );
+            say!("warning: {}: {}: a backend-specific bug?", run.name, d.describe());
         }
     }
     Ok(())

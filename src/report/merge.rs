@@ -149,6 +149,25 @@ pub struct Disagreement {
     pub values: Vec<(String, f64)>,
 }
 
+impl Disagreement {
+    /// What differs, and each adapter's value, as plain text: the report
+    /// and the warning on stderr both say it.
+    pub fn describe(&self) -> String {
+        let values: Vec<String> = self
+            .values
+            .iter()
+            .map(|(a, v)| format!("{a} {}", number(Some(*v), 1)))
+            .collect();
+        format!(
+            "{} {} differs between {} adapters ({})",
+            self.mode,
+            self.counter,
+            self.backend,
+            values.join(", ")
+        )
+    }
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum MergeError {
     #[error(transparent)]
@@ -693,18 +712,10 @@ pub fn render(merged: &Merged) -> String {
             }
         }
         for d in &run.disagreements {
-            let values: Vec<String> = d
-                .values
-                .iter()
-                .map(|(a, v)| format!("{} {}", markdown(a), number(Some(*v), 1)))
-                .collect();
             let _ = writeln!(
                 w,
-                "- **{} {} differs between {} adapters** ({}): a counter that does not depend on the adapter, so one backend's path has a bug.",
-                markdown(&d.mode),
-                markdown(&d.counter),
-                markdown(&d.backend),
-                values.join(", ")
+                "- **{}**: a counter that does not depend on the adapter, so one backend's path has a bug.",
+                markdown(&d.describe())
             );
         }
         if !run.disagreements.is_empty() {
