@@ -407,6 +407,7 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
         summary.remove("run");
         summary["scene"].as_object_mut().unwrap().remove("geometry");
         summary["path"].as_object_mut().unwrap().remove("cameras");
+        summary["error_measured"] = false.into();
     });
     let run = occlu(&[
         "merge",
@@ -438,6 +439,10 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
     assert!(warnings[0].contains("vfc triangles_drawn differs"));
     let report = std::fs::read_to_string(merged_out.join("report.md")).unwrap();
     assert!(report.contains("vfc triangles\\_drawn differs between"), "{report}");
+    assert!(
+        report.contains("Wrong pixels not measured on Old GPU (Dx12) (run with --no-error)."),
+        "{report}"
+    );
 
     // Input that is no result: one line, exit 2.
     let not_a_run = dir.path().join("empty");

@@ -80,6 +80,8 @@ pub struct AdapterColumn {
     pub merged_from: String,
     /// Modes this adapter could not run, with why.
     pub skipped: Vec<SkippedMode>,
+    /// Whether wrong pixels were measured (false: run with --no-error).
+    pub error_measured: bool,
 }
 
 impl AdapterColumn {
@@ -523,6 +525,7 @@ fn merged_run(folders: &[RunFolder], used: &mut BTreeSet<String>) -> MergedRun {
                 folder,
                 merged_from: f.dir.to_string_lossy().into_owned(),
                 skipped: f.summary.skipped.clone(),
+                error_measured: f.summary.error_measured,
             }
         })
         .collect();
@@ -700,6 +703,19 @@ pub fn render(merged: &Merged) -> String {
             }
         }
         let _ = writeln!(w);
+        let unmeasured: Vec<String> = run
+            .adapters
+            .iter()
+            .filter(|a| !a.error_measured)
+            .map(|a| markdown(&a.label()))
+            .collect();
+        if !unmeasured.is_empty() {
+            let _ = writeln!(
+                w,
+                "Wrong pixels not measured on {} (run with --no-error).\n",
+                unmeasured.join(", ")
+            );
+        }
         match &run.chart {
             Some(chart) => {
                 let _ = writeln!(w, "![ratio to the oracle per adapter]({chart})\n");
