@@ -651,6 +651,13 @@ fn merge_refuses_runs_of_two_matrices_and_names_a_frame_count_that_differs() {
         &["merge", s(&a), s(&c), "--out", s(&out)],
         &["different frame counts", "3 vs 2"],
     );
+    // Nor do runs with other warmup merge into one table.
+    let d = dir.path().join("d");
+    bench_matrix(&one, backend, &d, &["--quiet", "--warmup", "1"]);
+    refused(
+        &["merge", s(&a), s(&d), "--out", s(&out)],
+        &["different warmup frames", "0 vs 1"],
+    );
     assert!(!out.exists());
 }
 
