@@ -426,8 +426,23 @@ pub struct BenchOutcome {
 
 /// Loads the scene, builds the hierarchy, runs every mode and writes the
 /// result files. `events` hears how it goes; when it breaks, the run stops
-/// there with [`BenchError::Interrupted`] and writes nothing.
+/// there with [`BenchError::Interrupted`] and writes nothing. A run that
+/// fails leaves no folder behind that it made (a matrix's run folder with
+/// only a lock in it would read as a run still going).
 pub fn execute(
+    plan: &BenchPlan,
+    events: &mut dyn FnMut(BenchEvent) -> ControlFlow<()>,
+) -> Result<BenchOutcome, BenchError> {
+    let made_here = !plan.out.exists();
+    let outcome = execute_claimed(plan, events);
+    if outcome.is_err() && made_here {
+        crate::report::remove_unused_output(&plan.out);
+    }
+    outcome
+}
+
+/// [`execute`] but for the cleaning up after a failure.
+fn execute_claimed(
     plan: &BenchPlan,
     events: &mut dyn FnMut(BenchEvent) -> ControlFlow<()>,
 ) -> Result<BenchOutcome, BenchError> {
@@ -533,6 +548,7 @@ pub fn execute(
         schema_version: SCHEMA_VERSION,
         tool: ToolInfo::current(),
         run: plan.run.clone(),
+        matrix: plan.matrix,
         adapter: gpu.adapter.clone(),
         scene: SceneSummary {
             facts,

@@ -151,6 +151,8 @@ pub struct BenchPlan {
     /// The run's name in a matrix (summary.json's `run`); `None` for a
     /// single run.
     pub run: Option<String>,
+    /// The matrix the run is of (summary.json's `matrix`).
+    pub matrix: Option<crate::report::MatrixIdentity>,
 }
 
 impl BenchConfig {
@@ -260,6 +262,7 @@ impl BenchConfig {
             ),
             export_github_benchmark: self.export_github_benchmark,
             run: None,
+            matrix: None,
         })
     }
 }

@@ -617,10 +617,11 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         .collect();
     if mine.is_empty() {
         note(format!(
-            "shard {shard}: none of the matrix's {} runs falls to this shard; nothing run, nothing written",
-            runs.len()
+            "shard {shard}: none of the matrix's {} falls to this shard; nothing run, nothing written",
+            occlu::text::count(runs.len(), "run")
         ));
-        return Ok(());
+        // --json still prints a list, of no summaries.
+        return if args.json { emit("[]\n") } else { Ok(()) };
     }
     let mut summaries = Vec::new();
     let mut table = String::from("| run | scene | path | adapter | folder |\n|---|---|---|---|---|\n");
@@ -696,22 +697,14 @@ fn merge(dirs: &[PathBuf], out: &std::path::Path) -> anyhow::Result<()> {
         .flat_map(|r| r.adapters.iter().map(|a| a.label()))
         .collect();
     say!(
-        "merged {} runs on {} adapters into {} (report.md, merged.json, charts/, runs/)",
-        merged.runs.len(),
-        adapters.len(),
+        "merged {} on {} into {} (report.md, merged.json, charts/, runs/)",
+        occlu::text::count(merged.runs.len(), "run"),
+        occlu::text::count(adapters.len(), "adapter"),
         out.display()
     );
     for run in &merged.runs {
         for d in &run.disagreements {
-            let values: Vec<String> = d.values.iter().map(|(a, v)| format!("{a} {v}")).collect();
-            say!(
-                "warning: {}: {} {} differs between {} adapters ({}): a backend-specific bug?",
-                run.name,
-                d.mode,
-                d.counter,
-                d.backend,
-                values.join(", ")
-            );
+            say!("warning: {}: {}: a backend-specific bug?", run.name, d.describe());
         }
     }
     Ok(())

@@ -8,18 +8,20 @@
 //! The runs are in a fixed order: `runs` as listed, then each model, then
 //! each built-in scene, each with every path in turn. Each run writes into
 //! a folder of its own named from its place and content
-//! (`03-town-street.json`: place, scene, path), so the same run has the
+//! (`03-town-street`: place, scene, path), so the same run has the
 //! same folder on every machine and shards never collide. `--shard K/N`
 //! runs the runs at places K, K + N, K + 2N, … (1-based): N jobs given
 //! 1/N … N/N run every run exactly once between them.
 
+use std::collections::BTreeSet;
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::{BenchConfig, BenchPlan, ConfigError, DEFAULT_OUT, DEFAULT_SCENE, from_json, read_json};
-use crate::scene::SceneSpec;
+use crate::report::MatrixIdentity;
+use crate::scene::{SceneError, SceneSpec};
 
 /// The runs of one configuration file, before flags and planning.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -55,6 +57,12 @@ pub enum MatrixError {
     Plan { run: String, error: ConfigError },
     #[error("run {run}: {error}")]
     Path { run: String, error: PathError },
+    #[error(
+        "{path}: the matrix lists {runs} runs, more than the {MAX_RUNS} one matrix may: split it into several files"
+    )]
+    TooManyRuns { path: String, runs: usize },
+    #[error("run {run}: {error}")]
+    Scene { run: String, error: SceneError },
     #[error("run {run}: {}: {error}", model.display())]
     Model {
         run: String,
@@ -62,6 +70,10 @@ pub enum MatrixError {
         error: std::io::Error,
     },
 }
+
+/// The most runs one matrix may list: past it, two long lists multiplied
+/// by mistake are likelier than a plan, and checking them would take long.
+pub const MAX_RUNS: usize = 10_000;
 
 /// The keys of a configuration file that list runs rather than set one.
 const LISTS: [&str; 4] = ["runs", "models", "scenes", "paths"];
@@ -78,11 +90,8 @@ impl Matrix {
         };
         let listed = [&runs, &models, &scenes, &paths].iter().any(|l| l.is_some());
         let defaults = from_json::<BenchConfig>(file, "", json)?.relative_to(file);
-        let list = |key: &str, json: Option<serde_json::Value>| -> Result<Vec<serde_json::Value>, ConfigError> {
-            json.map_or(Ok(Vec::new()), |json| from_json(file, &format!("{key}: "), json))
-        };
         let mut entries = Vec::new();
-        for (index, run) in list("runs", runs)?.into_iter().enumerate() {
+        for (index, run) in list::<serde_json::Value>(file, "runs", runs)?.into_iter().enumerate() {
             let entry: BenchConfig = from_json(file, &format!("runs[{index}]: "), run)?;
             if entry.out.is_some() {
                 return Err(MatrixError::OutInRun {
@@ -92,18 +101,18 @@ impl Matrix {
             }
             entries.push(entry.relative_to(file));
         }
-        let models: Vec<PathBuf> = list("models", models)?
-            .into_iter()
-            .map(|m| from_json(file, "models: ", m))
-            .collect::<Result<_, _>>()?;
-        let scenes: Vec<String> = list("scenes", scenes)?
-            .into_iter()
-            .map(|s| from_json(file, "scenes: ", s))
-            .collect::<Result<_, _>>()?;
-        let paths: Vec<PathBuf> = list("paths", paths)?
-            .into_iter()
-            .map(|p| from_json(file, "paths: ", p))
-            .collect::<Result<_, _>>()?;
+        let models: Vec<PathBuf> = list(file, "models", models)?;
+        let scenes: Vec<String> = list(file, "scenes", scenes)?;
+        let paths: Vec<PathBuf> = list(file, "paths", paths)?;
+        // Counted before the runs are made: a huge product is refused
+        // before it takes the memory.
+        let listed_runs = entries.len() + (models.len() + scenes.len()).max(1) * paths.len().max(1);
+        if listed_runs > MAX_RUNS {
+            return Err(MatrixError::TooManyRuns {
+                path: file.display().to_string(),
+                runs: listed_runs,
+            });
+        }
         let sources: Vec<BenchConfig> = models
             .into_iter()
             .map(|model| BenchConfig {
@@ -158,9 +167,10 @@ impl Matrix {
 
     /// Every run, `flags` over its own fields over the defaults, each
     /// planned into its folder under `--out` and checked before any of
-    /// them runs (its plan, its path file, that its model file exists), so
-    /// a bad run fails the whole matrix on every shard. A file that lists
-    /// no runs is a matrix of one.
+    /// them runs (its plan, its path file, its built-in scene's spec, that
+    /// its model is a file), so a bad run fails the whole matrix on every
+    /// shard. Each path file is read once, however many runs use it. A
+    /// file that lists no runs is a matrix of one.
     pub fn plan(&self, flags: &BenchConfig) -> Result<Vec<MatrixRun>, MatrixError> {
         let entries = if self.entries.is_empty() {
             vec![BenchConfig::default()]
@@ -180,34 +190,73 @@ impl Matrix {
             .or(self.defaults.out.clone())
             .unwrap_or_else(|| DEFAULT_OUT.into());
         let width = configs.len().to_string().len().max(2);
+        let names: Vec<String> = configs
+            .iter()
+            .enumerate()
+            .map(|(place, config)| run_name(place, width, config))
+            .collect();
+        let matrix = MatrixIdentity::of(names.iter().map(String::as_str));
+        let mut paths_read = BTreeSet::new();
         configs
             .into_iter()
-            .enumerate()
-            .map(|(place, config)| {
-                let name = run_name(place, width, &config);
+            .zip(names)
+            .map(|(config, name)| {
                 let mut plan = config.plan().map_err(|error| MatrixError::Plan {
                     run: name.clone(),
                     error,
                 })?;
-                if let Some(path) = &plan.path {
+                if let Some(path) = plan.path.as_ref().filter(|p| !paths_read.contains(*p)) {
                     CameraPath::load(path).map_err(|error| MatrixError::Path {
                         run: name.clone(),
                         error,
                     })?;
+                    paths_read.insert(path.clone());
                 }
-                if let SceneSpec::File(model) = &plan.scene {
-                    std::fs::metadata(model).map_err(|error| MatrixError::Model {
-                        run: name.clone(),
-                        model: model.clone(),
-                        error,
-                    })?;
+                match &plan.scene {
+                    SceneSpec::File(model) => {
+                        let fault = match std::fs::metadata(model) {
+                            Ok(m) if m.is_file() => None,
+                            Ok(_) => Some(std::io::Error::other(
+                                "not a file: a model is an .obj, .gltf or .glb file",
+                            )),
+                            Err(e) => Some(e),
+                        };
+                        if let Some(error) = fault {
+                            return Err(MatrixError::Model {
+                                run: name,
+                                model: model.clone(),
+                                error,
+                            });
+                        }
+                    }
+                    SceneSpec::Builtin(spec) => {
+                        crate::scene::builtin::check(spec).map_err(|error| MatrixError::Scene {
+                            run: name.clone(),
+                            error,
+                        })?
+                    }
                 }
                 plan.out = out.join(&name);
                 plan.run = Some(name.clone());
+                plan.matrix = Some(matrix);
                 Ok(MatrixRun { name, plan })
             })
             .collect()
     }
+}
+
+/// The items of a list field of the file (`key`), each deserialised.
+fn list<T: serde::de::DeserializeOwned>(
+    file: &Path,
+    key: &str,
+    json: Option<serde_json::Value>,
+) -> Result<Vec<T>, ConfigError> {
+    let items: Vec<serde_json::Value> =
+        json.map_or(Ok(Vec::new()), |json| from_json(file, &format!("{key}: "), json))?;
+    items
+        .into_iter()
+        .map(|item| from_json(file, &format!("{key}: "), item))
+        .collect()
 }
 
 /// A run's folder name: its place (1-based, zero-padded to `width` so
@@ -256,7 +305,15 @@ impl FromStr for Shard {
     fn from_str(text: &str) -> Result<Shard, String> {
         let refuse = || format!("'{text}' is not K/N, shard K of N with 1 <= K <= N (e.g. 2/3)");
         let (k, n) = text.split_once('/').ok_or_else(refuse)?;
-        let (index, count): (u32, u32) = (k.parse().map_err(|_| refuse())?, n.parse().map_err(|_| refuse())?);
+        // Digits only: u32's parser would take "+1".
+        let number = |s: &str| {
+            s.bytes()
+                .all(|b| b.is_ascii_digit())
+                .then(|| s.parse::<u32>().ok())
+                .flatten()
+                .ok_or_else(refuse)
+        };
+        let (index, count) = (number(k)?, number(n)?);
         if index == 0 || index > count {
             return Err(refuse());
         }
@@ -289,7 +346,9 @@ mod tests {
             .collect();
         assert_eq!(taken, [vec![0, 3, 6], vec![1, 4], vec![2, 5]]);
         assert!("1/1".parse::<Shard>().unwrap().takes(5));
-        for bad in ["0/3", "4/3", "a/b", "1/0", "3", "-1/3", "1/3/5", ""] {
+        for bad in [
+            "0/3", "4/3", "a/b", "1/0", "3", "-1/3", "1/3/5", "", "+1/3", "1/+3", " 1/3",
+        ] {
             let e = bad.parse::<Shard>().unwrap_err();
             assert!(e.contains("not K/N"), "{bad}: {e}");
         }
@@ -383,6 +442,14 @@ mod tests {
             matches!(&e, MatrixError::Path { run, .. } if run == "01-city-missing"),
             "{e}"
         );
+        let e = plan(r#"{"scenes": ["city", "city:blocks=x"]}"#).unwrap_err();
+        assert!(
+            matches!(&e, MatrixError::Scene { run, .. } if run == "02-city-blocks-x-generated"),
+            "{e}"
+        );
+        std::fs::create_dir(dir.path().join("adir")).unwrap();
+        let e = plan(r#"{"models": ["adir"]}"#).unwrap_err();
+        assert!(e.to_string().contains("adir: not a file"), "{e}");
         let e = plan(r#"{"models": ["gone.obj"]}"#).unwrap_err();
         assert!(e.to_string().contains("run 01-gone-generated") && e.to_string().contains("gone.obj"));
         let e = plan(r#"{"runs": [{"modes": ["vfc"]}, {"runs": []}]}"#).unwrap_err();

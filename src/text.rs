@@ -36,6 +36,15 @@ pub fn slug(text: &str) -> String {
     if out.is_empty() { "x".into() } else { out.into() }
 }
 
+/// `n` and `noun`, plural unless `n` is 1: "1 run", "2 runs".
+pub fn count(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
 /// The longest [`slug`].
 pub const SLUG_LENGTH: usize = 40;
 

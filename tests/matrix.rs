@@ -266,6 +266,8 @@ fn shards_and_a_gl_run_merge_into_one_report_that_compare_gates() {
     }
     assert!(report.contains("| vfc | frame ms (mean) |"));
     assert!(report.contains("|  | × oracle |"));
+    // Every counter the cross-check compares is in the table.
+    assert!(report.contains("|  | objects |"));
 
     // The base branch's merge against this one: the same results pass…
     let same = occlu(&["compare", s(&out), s(&out)]);
@@ -405,6 +407,7 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
         summary.remove("run");
         summary["scene"].as_object_mut().unwrap().remove("geometry");
         summary["path"].as_object_mut().unwrap().remove("cameras");
+        summary["error_measured"] = false.into();
     });
     let run = occlu(&[
         "merge",
@@ -436,6 +439,10 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
     assert!(warnings[0].contains("vfc triangles_drawn differs"));
     let report = std::fs::read_to_string(merged_out.join("report.md")).unwrap();
     assert!(report.contains("vfc triangles\\_drawn differs between"), "{report}");
+    assert!(
+        report.contains("Wrong pixels not measured on Old GPU (Dx12) (run with --no-error)."),
+        "{report}"
+    );
 
     // Input that is no result: one line, exit 2.
     let not_a_run = dir.path().join("empty");
@@ -455,4 +462,253 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
         &["broken", "not an occlu summary"],
     );
     refused(&["merge", "--out", s(&merged_out)], &["no result folders"]);
+}
+
+/// A matrix of `scenes` (JSON list) in `name`, 3 frames at 64x48, vfc and
+/// the oracle.
+fn tiny_matrix(dir: &Path, name: &str, scenes: &str) -> PathBuf {
+    write(
+        dir,
+        name,
+        format!(
+            r#"{{"scenes": {scenes}, "modes": ["vfc", "oracle"], "frames": 3, "warmup": 0, "resolution": "64x48"}}"#
+        ),
+    )
+}
+
+#[test]
+fn a_bad_run_fails_every_shard_up_front_and_a_failing_run_leaves_no_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let backend = &backends()[0];
+    std::fs::create_dir(dir.path().join("adir")).unwrap();
+    let out = dir.path().join("out");
+    // A built-in scene that does not parse, or a model that is a folder:
+    // every shard refuses before any run, so none writes anything.
+    let bad_scene = tiny_matrix(dir.path(), "scene.json", r#"["city:blocks=1", "nonesuch"]"#);
+    let bad_model = write(dir.path(), "model.json", r#"{"models": ["adir"], "modes": ["vfc"]}"#);
+    for shard in ["1/2", "2/2"] {
+        let args = [
+            "bench",
+            "--config",
+            s(&bad_scene),
+            "--backend",
+            backend,
+            "--out",
+            s(&out),
+        ];
+        let sharded: Vec<&str> = args.iter().copied().chain(["--shard", shard]).collect();
+        refused(&sharded, &["run 02-nonesuch-generated", "unknown scene 'nonesuch'"]);
+        assert!(!out.exists(), "shard {shard} wrote nothing");
+    }
+    refused(
+        &["bench", "--config", s(&bad_model), "--out", s(&out)],
+        &["run 01-adir-generated", "not a file"],
+    );
+    assert!(!out.exists());
+    // A model that only fails when loaded fails its run, which leaves no
+    // run folder (a folder with only a lock reads as a run still going).
+    write(dir.path(), "garbage.obj", "garbage\n");
+    let garbage = write(
+        dir.path(),
+        "garbage.json",
+        r#"{"models": ["garbage.obj"], "modes": ["vfc"], "frames": 3, "warmup": 0, "resolution": "64x48"}"#,
+    );
+    refused(
+        &[
+            "bench",
+            "--config",
+            s(&garbage),
+            "--backend",
+            backend,
+            "--out",
+            s(&out),
+            "--quiet",
+        ],
+        &["garbage.obj"],
+    );
+    assert!(!out.join("01-garbage-generated").exists());
+    // A shard with no run prints an empty list for --json.
+    let one = tiny_matrix(dir.path(), "one.json", r#"["city:blocks=1"]"#);
+    let idle = bench_matrix(&one, backend, &out, &["--shard", "2/2", "--json"]);
+    assert_eq!(stdout(&idle), "[]\n");
+    // Nor is a matrix past MAX_RUNS planned.
+    let scenes: Vec<String> = (0..101).map(|k| format!("\"city:seed={k}\"")).collect();
+    let paths: Vec<String> = (0..100).map(|k| format!("\"p{k}.json\"")).collect();
+    let huge = write(
+        dir.path(),
+        "huge.json",
+        format!(
+            r#"{{"scenes": [{}], "paths": [{}]}}"#,
+            scenes.join(","),
+            paths.join(",")
+        ),
+    );
+    refused(
+        &["bench", "--config", s(&huge), "--out", s(&out)],
+        &["10100 runs", "more than the 10000"],
+    );
+}
+
+#[test]
+fn merge_refuses_to_write_over_its_input_or_a_partial_matrix_and_takes_odd_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let backend = &backends()[0];
+    let matrix = tiny_matrix(dir.path(), "m.json", r#"["city:blocks=1"]"#);
+    let full = dir.path().join("full");
+    bench_matrix(&matrix, backend, &full, &["--quiet"]);
+    let run = full.join("01-city-blocks-1-generated");
+    let report = std::fs::read_to_string(run.join("report.md")).unwrap();
+    for out in [&run, &run.join("merged"), &full, &dir.path().to_path_buf()] {
+        refused(
+            &["merge", s(&run), "--out", s(out)],
+            &["write over what it reads", "choose another --out"],
+        );
+    }
+    refused(&["merge", s(&full), "--out", s(&run)], &["write over what it reads"]);
+    assert_eq!(std::fs::read_to_string(run.join("report.md")).unwrap(), report);
+    assert!(!run.join("merged").exists());
+
+    // A folder of the matrix without a run is a run that failed: refused,
+    // named; hidden folders (staging) are passed over.
+    let partial = dir.path().join("partial");
+    std::fs::create_dir_all(partial.join("02-forest-generated")).unwrap();
+    std::fs::create_dir_all(partial.join(".occlu-staging-1")).unwrap();
+    let out = dir.path().join("merged");
+    let copy = |to: &Path| {
+        std::fs::create_dir_all(to).unwrap();
+        for f in ["summary.json", "frames.csv"] {
+            std::fs::copy(run.join(f), to.join(f)).unwrap();
+        }
+    };
+    copy(&partial.join("01-city-blocks-1-generated"));
+    refused(
+        &["merge", s(&partial), "--out", s(&out)],
+        &["02-forest-generated", "without summary.json"],
+    );
+    std::fs::remove_dir(partial.join("02-forest-generated")).unwrap();
+    let merged_ok = occlu(&["merge", s(&partial), "--out", s(&out)]);
+    assert!(merged_ok.status.success(), "{:?}", own_stderr(&merged_ok));
+    assert!(stdout(&merged_ok).starts_with("# occlu: merged results\n\n1 run on 1 adapter."));
+    // A merged folder given to merge says what it is.
+    refused(
+        &["merge", s(&out), "--out", s(&dir.path().join("again"))],
+        &["a merged folder", "runs/"],
+    );
+
+    // A folder whose name is not UTF-8 merges; merged.json names it as
+    // best it can.
+    use std::os::unix::ffi::OsStrExt as _;
+    let odd = dir.path().join(std::ffi::OsStr::from_bytes(b"nu\xff"));
+    copy(&odd);
+    let odd_out = dir.path().join("odd-merged");
+    let merged_odd = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .arg("merge")
+        .arg(&odd)
+        .args(["--out", s(&odd_out)])
+        .output()
+        .unwrap();
+    assert!(merged_odd.status.success(), "{:?}", own_stderr(&merged_odd));
+    assert!(merged(&odd_out).runs[0].adapters[0].merged_from.ends_with("nu\u{fffd}"));
+
+    // The same folder twice, once inside its matrix folder, counts once,
+    // even from before summary.json fingerprinted frames.csv.
+    let old = dir.path().join("old");
+    edited_copy(&run, &old.join("01-city-blocks-1-generated"), |j| {
+        j.as_object_mut().unwrap().remove("frames_csv");
+    });
+    let twice = occlu(&[
+        "merge",
+        s(&old),
+        s(&old.join("01-city-blocks-1-generated")),
+        s(&old.join("01-city-blocks-1-generated/../01-city-blocks-1-generated")),
+        "--out",
+        s(&out),
+    ]);
+    assert!(twice.status.success(), "{:?}", own_stderr(&twice));
+    assert_eq!(merged(&out).runs[0].adapters.len(), 1);
+}
+
+#[test]
+fn merge_refuses_runs_of_two_matrices_and_names_a_frame_count_that_differs() {
+    let dir = tempfile::tempdir().unwrap();
+    let backend = &backends()[0];
+    // Run 01 of a matrix of one and of a matrix of two: the same name, not
+    // one run of one matrix.
+    let one = tiny_matrix(dir.path(), "one.json", r#"["city:blocks=1"]"#);
+    let two = tiny_matrix(dir.path(), "two.json", r#"["city:blocks=1", "city:blocks=1,seed=2"]"#);
+    let (a, b, c) = (dir.path().join("a"), dir.path().join("b"), dir.path().join("c"));
+    bench_matrix(&one, backend, &a, &["--quiet"]);
+    bench_matrix(&two, backend, &b, &["--quiet", "--shard", "1/2"]);
+    bench_matrix(&one, backend, &c, &["--quiet", "--frames", "2"]);
+    let first = |d: &Path| d.join("01-city-blocks-1-generated");
+    assert!(summary(&first(&a)).matrix.is_some());
+    let out = dir.path().join("merged");
+    refused(
+        &["merge", s(&first(&a)), s(&first(&b)), "--out", s(&out)],
+        &["different matrices", "a matrix of 1 run", "a matrix of 2 runs"],
+    );
+    refused(
+        &["merge", s(&a), s(&c), "--out", s(&out)],
+        &["different frame counts", "3 vs 2"],
+    );
+    // Nor do runs with other warmup merge into one table.
+    let d = dir.path().join("d");
+    bench_matrix(&one, backend, &d, &["--quiet", "--warmup", "1"]);
+    refused(
+        &["merge", s(&a), s(&d), "--out", s(&out)],
+        &["different warmup frames", "0 vs 1"],
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn compare_of_merged_folders_pairs_runs_by_adapter_not_by_folder_name_and_trusts_no_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let backend = &backends()[0];
+    let matrix = tiny_matrix(dir.path(), "m.json", r#"["city:blocks=1"]"#);
+    let full = dir.path().join("full");
+    bench_matrix(&matrix, backend, &full, &["--quiet"]);
+    let run = full.join("01-city-blocks-1-generated");
+    // One adapter by two backends, with a name longer than a folder's slug:
+    // the base ran Vulkan only, the new merge GL and Vulkan.
+    let long = "NVIDIA GeForce RTX 4090 Laptop GPU/PCIe/SSE2 (rev a1)";
+    let on = |backend: &'static str| {
+        let to = dir.path().join(backend).join("01-city-blocks-1-generated");
+        edited_copy(&run, &to, |j| {
+            j["adapter"]["name"] = long.into();
+            j["adapter"]["backend"] = backend.into();
+        });
+        to
+    };
+    let (vulkan, gl) = (on("Vulkan"), on("Gl"));
+    let (base, new) = (dir.path().join("base"), dir.path().join("new"));
+    assert!(occlu(&["merge", s(&vulkan), "--out", s(&base)]).status.success());
+    assert!(occlu(&["merge", s(&gl), s(&vulkan), "--out", s(&new)]).status.success());
+    let folders: Vec<String> = merged(&new).runs[0].adapters.iter().map(|a| a.folder.clone()).collect();
+    assert_ne!(folders[0], folders[1]);
+    let compared = occlu(&["compare", s(&base), s(&new)]);
+    assert!(compared.status.success(), "{:?}", own_stderr(&compared));
+    assert!(stdout(&compared).contains("in the new merge only"));
+    // A folder in merged.json that is not one in its runs/ is refused.
+    for folder in [
+        ".",
+        "../full",
+        "runs/..",
+        "runs/../../full/01-city-blocks-1-generated",
+        "runs",
+    ] {
+        let edited = dir.path().join("edited");
+        let _ = std::fs::remove_dir_all(&edited);
+        std::fs::create_dir(&edited).unwrap();
+        let mut m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(new.join("merged.json")).unwrap()).unwrap();
+        for a in m["runs"][0]["adapters"].as_array_mut().unwrap() {
+            a["folder"] = folder.into();
+        }
+        std::fs::write(edited.join("merged.json"), m.to_string()).unwrap();
+        refused(
+            &["compare", s(&base), s(&edited)],
+            &["is not a folder in its runs/", folder],
+        );
+    }
 }

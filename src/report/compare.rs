@@ -158,6 +158,11 @@ pub enum CompareError {
     NothingToJudge { base: String, new: String },
     #[error("{} is a merged folder and {} is not: compare two runs, or two merged folders", merged.display(), single.display())]
     MergedWithSingle { merged: PathBuf, single: PathBuf },
+    #[error(
+        "{}: run folder '{folder}' is not a folder in its runs/: not a merged.json occlu wrote, or edited since",
+        merged.display()
+    )]
+    NotARunFolder { merged: PathBuf, folder: String },
     #[error("{}: {error}", run.display())]
     InRun { run: PathBuf, error: Box<CompareError> },
 }
@@ -168,21 +173,21 @@ pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comp
         return Err(CompareError::Threshold(max_regression_pct));
     }
     match (read_merged(base)?, read_merged(new)?) {
-        (Some(b), Some(n)) => return compare_merged((base, &b), (new, &n), options),
-        (Some(_), None) => {
-            return Err(CompareError::MergedWithSingle {
-                merged: base.into(),
-                single: new.into(),
-            });
+        (Some(b), Some(n)) => compare_merged((base, &b), (new, &n), options),
+        (None, None) => compare_runs(base, new, options),
+        (b, _) => {
+            let (merged, single) = if b.is_some() { (base, new) } else { (new, base) };
+            Err(CompareError::MergedWithSingle {
+                merged: merged.into(),
+                single: single.into(),
+            })
         }
-        (None, Some(_)) => {
-            return Err(CompareError::MergedWithSingle {
-                merged: new.into(),
-                single: base.into(),
-            });
-        }
-        (None, None) => {}
     }
+}
+
+/// Two run folders (not merged ones).
+fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comparison, CompareError> {
+    let max_regression_pct = options.max_regression_pct;
     let (base_summary, base_rows) = read_results(base)?;
     let (new_summary, new_rows) = read_results(new)?;
     let workload = |s: &Summary| {
@@ -262,28 +267,24 @@ pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comp
 }
 
 /// Two merged folders, run folder by run folder: every change and note of
-/// each pair, named by its folder; a folder of the base that the new merge
-/// lacks is missing (a failure unless `allow_missing`).
+/// each pair, named by the base's folder. Folders pair by what they hold
+/// (run name, adapter and backend as merged.json records them), never by
+/// their folder names; a run of the base that the new merge lacks is
+/// missing (a failure unless `allow_missing`).
 fn compare_merged(
     (base_dir, base): (&Path, &Merged),
     (new_dir, new): (&Path, &Merged),
     options: &CompareOptions,
 ) -> Result<Comparison, CompareError> {
-    let folders = |m: &Merged| -> Vec<String> {
-        m.runs
-            .iter()
-            .flat_map(|r| r.adapters.iter().map(|a| a.folder.clone()))
-            .collect()
-    };
-    let (base_folders, new_folders) = (folders(base), folders(new));
+    let (base_columns, new_columns) = (columns(base_dir, base)?, columns(new_dir, new)?);
     let mut changes = Vec::new();
     let mut notes = Vec::new();
-    for folder in &base_folders {
-        let name = folder.trim_start_matches("runs/");
-        if !new_folders.contains(folder) {
+    for (identity, base_folder) in &base_columns {
+        let name = label(base_folder);
+        let Some((_, new_folder)) = new_columns.iter().find(|(i, _)| i == identity) else {
             notes.push(format!("run {name} is in the base only"));
             changes.push(Change {
-                mode: name.to_string(),
+                mode: name,
                 metric: "run",
                 base: None,
                 new: None,
@@ -294,25 +295,69 @@ fn compare_merged(
                 },
             });
             continue;
-        }
-        let pair =
-            compare(&base_dir.join(folder), &new_dir.join(folder), options).map_err(|error| CompareError::InRun {
-                run: new_dir.join(folder),
-                error: Box::new(error),
-            })?;
+        };
+        let pair = compare_runs(base_folder, new_folder, options).map_err(|error| CompareError::InRun {
+            run: new_folder.clone(),
+            error: Box::new(error),
+        })?;
         changes.extend(pair.changes.into_iter().map(|c| Change {
             mode: format!("{name}/{}", c.mode),
             ..c
         }));
         notes.extend(pair.notes.into_iter().map(|n| format!("{name}: {n}")));
     }
-    for folder in new_folders.iter().filter(|f| !base_folders.contains(f)) {
-        notes.push(format!(
-            "run {} is in the new merge only",
-            folder.trim_start_matches("runs/")
-        ));
+    for (_, folder) in new_columns
+        .iter()
+        .filter(|(i, _)| !base_columns.iter().any(|(b, _)| b == i))
+    {
+        notes.push(format!("run {} is in the new merge only", label(folder)));
     }
     Ok(Comparison { changes, notes })
+}
+
+/// What a merged folder's run folder holds: the run's name, the adapter's
+/// name and backend, and which of that name it is (runs outside a matrix
+/// may share a name).
+type Identity = (String, String, String, usize);
+
+/// Every run folder of a merged folder with what it holds; its folder must
+/// be a folder directly in `dir`'s runs/ (merged.json is read, not
+/// trusted).
+fn columns(dir: &Path, merged: &Merged) -> Result<Vec<(Identity, PathBuf)>, CompareError> {
+    let runs = dir.join("runs");
+    let mut found: Vec<(Identity, PathBuf)> = Vec::new();
+    for run in &merged.runs {
+        for a in &run.adapters {
+            let bad = || CompareError::NotARunFolder {
+                merged: dir.join("merged.json"),
+                folder: a.folder.clone(),
+            };
+            let name = a.folder.strip_prefix("runs/").ok_or_else(bad)?;
+            let mut parts = Path::new(name).components();
+            let plain = matches!(
+                (parts.next(), parts.next()),
+                (Some(std::path::Component::Normal(_)), None)
+            );
+            let folder = runs.join(name);
+            let is_folder = std::fs::symlink_metadata(&folder).is_ok_and(|m| m.is_dir());
+            if !plain || name.starts_with('.') || !is_folder {
+                return Err(bad());
+            }
+            let seen = found
+                .iter()
+                .filter(|((r, n, b, _), _)| (r, n, b) == (&run.name, &a.name, &a.backend))
+                .count();
+            found.push(((run.name.clone(), a.name.clone(), a.backend.clone(), seen), folder));
+        }
+    }
+    Ok(found)
+}
+
+/// A run folder's name as changes and notes show it.
+fn label(folder: &Path) -> String {
+    folder
+        .file_name()
+        .map_or(String::new(), |n| n.to_string_lossy().into_owned())
 }
 
 /// Statistics from frames.csv, with the conservative flags and parameters

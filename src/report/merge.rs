@@ -18,8 +18,10 @@
 //!
 //! MERGED gets merged.json (for machines), report.md, `charts/` (each
 //! run's ratio to the oracle per adapter) and `runs/` (a copy of every
-//! merged run folder, `RUN--ADAPTER`, which `occlu compare` of two merged
-//! folders compares pair by pair).
+//! merged run folder, `RUN--ADAPTER-HASH`, the hash of the run's and the
+//! adapter's full names so that names cut short never collide; `occlu
+//! compare` of two merged folders pairs them by the run, adapter and
+//! backend merged.json records, not by folder name).
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
@@ -73,16 +75,24 @@ pub struct AdapterColumn {
     pub device_type: String,
     /// The copy of its run folder, relative to the merged folder.
     pub folder: String,
-    /// The folder it was merged from, as given.
-    pub merged_from: PathBuf,
+    /// The folder it was merged from, as given (lossily as text: a folder
+    /// name need not be UTF-8, and JSON holds text).
+    pub merged_from: String,
     /// Modes this adapter could not run, with why.
     pub skipped: Vec<SkippedMode>,
+    /// Whether wrong pixels were measured (false: run with --no-error).
+    pub error_measured: bool,
 }
 
 impl AdapterColumn {
     pub fn label(&self) -> String {
-        format!("{} ({})", self.name, self.backend)
+        adapter_label(&self.name, &self.backend)
     }
+}
+
+/// An adapter as a column's heading: its name and backend.
+fn adapter_label(name: &str, backend: &str) -> String {
+    format!("{name} ({backend})")
 }
 
 /// A mode's results, one per adapter column (`None`: not run there).
@@ -141,6 +151,25 @@ pub struct Disagreement {
     pub values: Vec<(String, f64)>,
 }
 
+impl Disagreement {
+    /// What differs, and each adapter's value, as plain text: the report
+    /// and the warning on stderr both say it.
+    pub fn describe(&self) -> String {
+        let values: Vec<String> = self
+            .values
+            .iter()
+            .map(|(a, v)| format!("{a} {}", number(Some(*v), 1)))
+            .collect();
+        format!(
+            "{} {} differs between {} adapters ({})",
+            self.mode,
+            self.counter,
+            self.backend,
+            values.join(", ")
+        )
+    }
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum MergeError {
     #[error(transparent)]
@@ -149,6 +178,15 @@ pub enum MergeError {
     NoFolders,
     #[error("{}: not a result folder (no summary.json) and holds none", .0.display())]
     NoRuns(PathBuf),
+    #[error("{}: a merged folder (merged.json), not a result folder: merge the run folders in its runs/ instead", .0.display())]
+    MergedFolder(PathBuf),
+    #[error(
+        "{}: a folder of the matrix folder {} without summary.json (a run that failed or still runs?): a partial matrix is not merged; remove it or finish the run",
+        folder.display(), matrix.display()
+    )]
+    NotARun { matrix: PathBuf, folder: PathBuf },
+    #[error("--out {} is, holds or lies in the input {}: the merge would write over what it reads; choose another --out", out.display(), input.display())]
+    OutOverlapsInput { out: PathBuf, input: PathBuf },
     #[error(
         "{} and {} are both run {run} but measured different {what} ({} vs {}): not one run (from two matrices?), so not merged",
         folders[0].display(), folders[1].display(), values[0], values[1]
@@ -197,39 +235,84 @@ impl RunFolder {
             .unwrap_or_else(|| format!("{}, {}", s.scene.facts.source, s.path.source))
     }
 
-    /// The first thing `other` measured differently, if any: what it is
-    /// and each folder's value. Scenes and paths are the same when their
-    /// geometry's and cameras' fingerprints are; a file from before those
-    /// were recorded is judged by the sources' names.
+    /// Whether `other` is the same run: the same matrix run by name, or,
+    /// outside a matrix, the same scene and path by their fingerprints (by
+    /// their sources' names for files from before fingerprints, so that
+    /// `held.json` and `/abs/held.json` are one path when they can be told).
+    fn same_run(&self, other: &RunFolder) -> bool {
+        let (a, b) = (&self.summary, &other.summary);
+        match (&a.run, &b.run) {
+            (Some(x), Some(y)) => x == y,
+            (None, None) => {
+                same_thing(
+                    (&a.scene.facts.source, a.scene.facts.geometry),
+                    (&b.scene.facts.source, b.scene.facts.geometry),
+                ) && same_thing((&a.path.source, a.path.cameras), (&b.path.source, b.path.cameras))
+            }
+            _ => false,
+        }
+    }
+
+    /// The first thing `other`, the same run, measured differently, if
+    /// any: what it is and each folder's value. What a user sets (frames,
+    /// resolution, warmup, mode parameters) comes before the fingerprints,
+    /// which a different frame count changes too, so the message names the
+    /// real difference.
     fn differs_from(&self, other: &RunFolder) -> Option<(&'static str, String, String)> {
         let (a, b) = (&self.summary, &other.summary);
-        let identity =
-            |what, source_a: &String, source_b: &String, fa: Option<Fingerprint>, fb: Option<Fingerprint>| {
-                let same = match (fa, fb) {
-                    (Some(fa), Some(fb)) => fa == fb,
-                    _ => source_a == source_b,
-                };
-                let show = |source: &String, f: Option<Fingerprint>| match f {
-                    Some(f) if source_a == source_b => format!("{source} #{:016x}", f.fnv1a),
-                    _ => source.clone(),
-                };
-                (!same).then(|| (what, show(source_a, fa), show(source_b, fb)))
+        let identity = |what, (source_a, fa): (&String, Option<Fingerprint>), (source_b, fb)| {
+            let show = |source: &String, f: Option<Fingerprint>| match f {
+                Some(f) if source_a == source_b => format!("{source} #{:016x}", f.fnv1a),
+                _ => source.clone(),
             };
+            (!same_thing((source_a, fa), (source_b, fb))).then(|| (what, show(source_a, fa), show(source_b, fb)))
+        };
         let plain = |what, x: String, y: String| (x != y).then_some((what, x, y));
-        identity(
-            "scenes",
-            &a.scene.facts.source,
-            &b.scene.facts.source,
-            a.scene.facts.geometry,
-            b.scene.facts.geometry,
-        )
-        .or_else(|| identity("paths", &a.path.source, &b.path.source, a.path.cameras, b.path.cameras))
-        .or_else(|| plain("resolutions", a.resolution.to_string(), b.resolution.to_string()))
-        .or_else(|| plain("frame counts", a.frames.to_string(), b.frames.to_string()))
+        let params = |s: &Summary, other: &Summary| -> String {
+            s.modes
+                .iter()
+                .filter(|m| other.modes.iter().any(|o| o.name == m.name))
+                .map(|m| format!("{} {}", m.name, m.parameters))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let matrices = match (a.matrix, b.matrix) {
+            (Some(x), Some(y)) => plain("matrices", x.to_string(), y.to_string()),
+            // A file from before matrices were recorded is judged by the rest.
+            _ => None,
+        };
+        matrices
+            .or_else(|| plain("frame counts", a.frames.to_string(), b.frames.to_string()))
+            .or_else(|| plain("resolutions", a.resolution.to_string(), b.resolution.to_string()))
+            .or_else(|| plain("warmup frames", a.warmup.to_string(), b.warmup.to_string()))
+            .or_else(|| plain("mode parameters", params(a, b), params(b, a)))
+            .or_else(|| {
+                identity(
+                    "scenes",
+                    (&a.scene.facts.source, a.scene.facts.geometry),
+                    (&b.scene.facts.source, b.scene.facts.geometry),
+                )
+            })
+            .or_else(|| {
+                identity(
+                    "paths",
+                    (&a.path.source, a.path.cameras),
+                    (&b.path.source, b.path.cameras),
+                )
+            })
     }
 
     fn adapter(&self) -> (String, String) {
         (self.summary.adapter.name.clone(), self.summary.adapter.backend.clone())
+    }
+}
+
+/// Whether two scenes or paths (a source's name and its fingerprint) are
+/// one: by fingerprint when both have one, else by name.
+fn same_thing((source_a, fa): (&String, Option<Fingerprint>), (source_b, fb): (&String, Option<Fingerprint>)) -> bool {
+    match (fa, fb) {
+        (Some(fa), Some(fb)) => fa == fb,
+        _ => source_a == source_b,
     }
 }
 
@@ -240,9 +323,17 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged, MergeError> {
     if dirs.is_empty() {
         return Err(MergeError::NoFolders);
     }
+    // A folder given twice (or as itself and inside its matrix folder) is
+    // read once.
+    let mut seen = BTreeSet::new();
     let mut folders = Vec::new();
     for dir in dirs {
+        refuse_overlap(dir, out)?;
         for run_dir in run_folders(dir)? {
+            let canonical = std::fs::canonicalize(&run_dir).map_err(ReportError::at(&run_dir))?;
+            if !seen.insert(canonical) {
+                continue;
+            }
             let (summary, _) = read_results(&run_dir)?;
             folders.push(RunFolder { dir: run_dir, summary });
         }
@@ -271,7 +362,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged, MergeError> {
             std::fs::write(&path, text).map_err(ReportError::at(&path))
         };
         write("report.md", render(&merged))?;
-        let json = serde_json::to_string_pretty(&merged).expect("merged.json serialises: no maps with non-string keys");
+        let json = serde_json::to_string_pretty(&merged).map_err(|e| ReportError::at(staging)(e.into()))?;
         write("merged.json", json + "\n")?;
         // merged.json last: a reader never finds it beside older files.
         Ok(["runs", "charts", "report.md", "merged.json"]
@@ -281,18 +372,67 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged, MergeError> {
     Ok(merged)
 }
 
-/// `dir` itself when it holds a run, else the folders in it that do (in
-/// name order); neither is an error.
+/// Refuses an `out` that is `input`, lies inside it or holds it: the merge
+/// would write over (or into) what it reads. `out` need not exist yet, so
+/// its nearest existing ancestor is resolved and the rest appended.
+fn refuse_overlap(input: &Path, out: &Path) -> Result<(), MergeError> {
+    let input_path = std::fs::canonicalize(input).map_err(ReportError::at(input))?;
+    let mut existing = out;
+    let mut rest = Vec::new();
+    let out_path = loop {
+        match std::fs::canonicalize(if existing.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            existing
+        }) {
+            Ok(path) => break rest.iter().rev().fold(path, |path: PathBuf, part| path.join(part)),
+            Err(_) => match (existing.parent(), existing.file_name()) {
+                (Some(parent), Some(name)) => {
+                    rest.push(name.to_owned());
+                    existing = parent;
+                }
+                // Nothing of it exists (or `..` past the root): it cannot
+                // be an input.
+                _ => return Ok(()),
+            },
+        }
+    };
+    if out_path.starts_with(&input_path) || input_path.starts_with(&out_path) {
+        return Err(MergeError::OutOverlapsInput {
+            out: out.to_path_buf(),
+            input: input.to_path_buf(),
+        });
+    }
+    Ok(())
+}
+
+/// `dir` itself when it holds a run, else the folders in it (in name
+/// order), each of which must hold a run: a folder without one is a run
+/// that failed or is still running, and a matrix without it is not whole.
+/// Hidden folders (`.occlu-staging-…`) are not runs and are passed over.
 fn run_folders(dir: &Path) -> Result<Vec<PathBuf>, MergeError> {
     if dir.join("summary.json").exists() {
         return Ok(vec![dir.to_path_buf()]);
     }
+    if dir.join("merged.json").exists() {
+        return Err(MergeError::MergedFolder(dir.to_path_buf()));
+    }
     let entries = std::fs::read_dir(dir).map_err(ReportError::at(dir))?;
-    let mut runs: Vec<PathBuf> = entries
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| p.is_dir() && p.join("summary.json").exists())
-        .collect();
+    let mut runs = Vec::new();
+    for entry in entries {
+        let entry = entry.map_err(ReportError::at(dir))?;
+        let path = entry.path();
+        if entry.file_name().as_encoded_bytes().starts_with(b".") || !path.is_dir() {
+            continue;
+        }
+        if !path.join("summary.json").exists() {
+            return Err(MergeError::NotARun {
+                matrix: dir.to_path_buf(),
+                folder: path,
+            });
+        }
+        runs.push(path);
+    }
     if runs.is_empty() {
         return Err(MergeError::NoRuns(dir.to_path_buf()));
     }
@@ -308,7 +448,7 @@ fn group(mut folders: Vec<RunFolder>) -> Result<Vec<Vec<RunFolder>>, MergeError>
     folders.sort_by_key(|f| (f.run(), f.adapter()));
     let mut groups: Vec<Vec<RunFolder>> = Vec::new();
     for folder in folders {
-        let Some(group) = groups.last_mut().filter(|g| g[0].run() == folder.run()) else {
+        let Some(group) = groups.iter_mut().find(|g| g[0].same_run(&folder)) else {
             groups.push(vec![folder]);
             continue;
         };
@@ -321,21 +461,23 @@ fn group(mut folders: Vec<RunFolder>) -> Result<Vec<Vec<RunFolder>>, MergeError>
                 values: Box::new([first_value, second_value]),
             });
         }
-        let last = group.last().expect("a group has a folder");
-        if last.adapter() == folder.adapter() {
-            let copies = last.summary.frames_csv.is_some() && last.summary.frames_csv == folder.summary.frames_csv;
+        if let Some(same_adapter) = group.iter().find(|f| f.adapter() == folder.adapter()) {
+            let summary = &same_adapter.summary;
+            let copies = summary.frames_csv.is_some() && summary.frames_csv == folder.summary.frames_csv;
             if copies {
                 continue;
             }
-            let adapter = format!("{} ({})", folder.summary.adapter.name, folder.summary.adapter.backend);
             return Err(MergeError::Ambiguous {
                 run: folder.run(),
-                adapter,
-                first: last.dir.clone(),
+                adapter: adapter_label(&folder.summary.adapter.name, &folder.summary.adapter.backend),
+                first: same_adapter.dir.clone(),
                 second: folder.dir,
             });
         }
         group.push(folder);
+    }
+    for group in &mut groups {
+        group.sort_by_key(RunFolder::adapter);
     }
     Ok(groups)
 }
@@ -351,6 +493,20 @@ fn unique(name: String, used: &mut BTreeSet<String>) -> String {
     candidate
 }
 
+/// A run folder's copy under `runs/`: the run's and the adapter's names as
+/// slugs (cut short, so they only say what it holds) and a hash of the
+/// whole identity, so two runs or adapters whose names share their first
+/// characters never share a folder.
+fn column_folder(run: &str, adapter: &str, backend: &str) -> String {
+    let identity = Fingerprint::of(format!("{run}\n{adapter}\n{backend}").as_bytes());
+    format!(
+        "runs/{}--{}-{:08x}",
+        slug(run),
+        slug(&format!("{adapter} {backend}")),
+        identity.fnv1a >> 32
+    )
+}
+
 /// One run's table, columns and cross-check (its chart comes later).
 fn merged_run(folders: &[RunFolder], used: &mut BTreeSet<String>) -> MergedRun {
     let first = &folders[0].summary;
@@ -359,17 +515,17 @@ fn merged_run(folders: &[RunFolder], used: &mut BTreeSet<String>) -> MergedRun {
         .iter()
         .map(|f| {
             let a = &f.summary.adapter;
-            let folder = unique(
-                format!("runs/{}--{}", slug(&name), slug(&format!("{} {}", a.name, a.backend))),
-                used,
-            );
+            // Two runs outside a matrix may share a name (other frames);
+            // the suffix keeps their folders apart.
+            let folder = unique(column_folder(&name, &a.name, &a.backend), used);
             AdapterColumn {
                 name: a.name.clone(),
                 backend: a.backend.clone(),
                 device_type: a.device_type.clone(),
                 folder,
-                merged_from: f.dir.clone(),
+                merged_from: f.dir.to_string_lossy().into_owned(),
                 skipped: f.summary.skipped.clone(),
+                error_measured: f.summary.error_measured,
             }
         })
         .collect();
@@ -445,9 +601,11 @@ fn copy_run(from: &Path, to: &Path) -> Result<(), ReportError> {
         .into_iter()
         .chain(CHARTS);
     for name in files {
-        let source = from.join(name);
+        let (source, target) = (from.join(name), to.join(name));
         if source.is_file() {
-            std::fs::copy(&source, to.join(name)).map_err(ReportError::at(&to.join(name)))?;
+            // Read, then written: an error names the file at fault.
+            let bytes = std::fs::read(&source).map_err(ReportError::at(&source))?;
+            std::fs::write(&target, bytes).map_err(ReportError::at(&target))?;
         }
     }
     Ok(())
@@ -495,9 +653,9 @@ pub fn render(merged: &Merged) -> String {
     let _ = writeln!(w, "# occlu: merged results\n");
     let _ = writeln!(
         w,
-        "{} runs on {} adapters. Adapters are side by side, never averaged; frame times compare only on one adapter, counters everywhere.\n",
-        merged.runs.len(),
-        adapters.len()
+        "{} on {}. Adapters are side by side, never averaged; frame times compare only on one adapter, counters everywhere.\n",
+        crate::text::count(merged.runs.len(), "run"),
+        crate::text::count(adapters.len(), "adapter")
     );
     for run in &merged.runs {
         let _ = writeln!(w, "## {}\n", markdown(&run.name));
@@ -518,12 +676,13 @@ pub fn render(merged: &Merged) -> String {
             let _ = write!(w, "---:|");
         }
         let _ = writeln!(w);
-        let metrics: [(&str, Cell); 6] = [
+        let metrics: [(&str, Cell); 7] = [
             ("frame ms (mean)", |r| number(r.frame_ms, 3)),
             ("× oracle", |r| {
                 r.ratio_to_oracle.map_or("–".into(), |v| format!("{v:.2}×"))
             }),
             ("wrong pixels", |r| number(r.error_pixels.map(|v| v as f64), 0)),
+            ("objects", |r| number(r.objects_drawn, 1)),
             ("triangles", |r| number(r.triangles_drawn, 1)),
             ("queries", |r| number(r.queries, 1)),
             ("round trips", |r| number(r.round_trips, 1)),
@@ -544,6 +703,19 @@ pub fn render(merged: &Merged) -> String {
             }
         }
         let _ = writeln!(w);
+        let unmeasured: Vec<String> = run
+            .adapters
+            .iter()
+            .filter(|a| !a.error_measured)
+            .map(|a| markdown(&a.label()))
+            .collect();
+        if !unmeasured.is_empty() {
+            let _ = writeln!(
+                w,
+                "Wrong pixels not measured on {} (run with --no-error).\n",
+                unmeasured.join(", ")
+            );
+        }
         match &run.chart {
             Some(chart) => {
                 let _ = writeln!(w, "![ratio to the oracle per adapter]({chart})\n");
@@ -556,18 +728,10 @@ pub fn render(merged: &Merged) -> String {
             }
         }
         for d in &run.disagreements {
-            let values: Vec<String> = d
-                .values
-                .iter()
-                .map(|(a, v)| format!("{} {}", markdown(a), number(Some(*v), 1)))
-                .collect();
             let _ = writeln!(
                 w,
-                "- **{} {} differs between {} adapters** ({}): a counter that does not depend on the adapter, so one backend's path has a bug.",
-                markdown(&d.mode),
-                markdown(&d.counter),
-                markdown(&d.backend),
-                values.join(", ")
+                "- **{}**: a counter that does not depend on the adapter, so one backend's path has a bug.",
+                markdown(&d.describe())
             );
         }
         if !run.disagreements.is_empty() {
@@ -576,7 +740,7 @@ pub fn render(merged: &Merged) -> String {
         let sources: Vec<String> = run
             .adapters
             .iter()
-            .map(|a| format!("{} from {}", a.folder, markdown(&a.merged_from.display().to_string())))
+            .map(|a| format!("{} from {}", a.folder, markdown(&a.merged_from)))
             .collect();
         let _ = writeln!(w, "Run folders: {}.\n", sources.join("; "));
     }

@@ -19,8 +19,8 @@ use crate::measure::{FrameStats, MissedObject};
 pub use files::{ReportError, check_writable, write_png, write_whole};
 pub use markdown::render as render_markdown;
 pub use summary::{
-    AnimationFact, CameraFact, Fingerprint, MissedSummary, PathSummary, SCHEMA_VERSION, SceneFacts, SceneSummary,
-    SkippedMode, Summary, SweepSummary, ToolInfo,
+    AnimationFact, CameraFact, Fingerprint, MatrixIdentity, MissedSummary, PathSummary, SCHEMA_VERSION, SceneFacts,
+    SceneSummary, SkippedMode, Summary, SweepSummary, ToolInfo,
 };
 
 /// The files a run wrote.
@@ -98,6 +98,20 @@ impl OutputLock {
     }
 }
 
+/// The lock file a claimed results folder holds.
+const LOCK: &str = ".occlu.lock";
+
+/// Removes `out` when it holds nothing but its lock: what a run that made
+/// it and then failed leaves, which would read as a run that never
+/// finished. Called once the claim is released.
+pub fn remove_unused_output(out: &Path) {
+    let only_lock = std::fs::read_dir(out).is_ok_and(|entries| entries.flatten().all(|e| e.file_name() == LOCK));
+    if only_lock {
+        let _ = std::fs::remove_file(out.join(LOCK));
+        let _ = std::fs::remove_dir(out);
+    }
+}
+
 /// Creates `out`, claims it (a second run into the same folder is refused
 /// while the first holds it) and checks that files can be written there, so
 /// a bad `--out` fails before a long run rather than after it.
@@ -127,7 +141,7 @@ fn claim(out: &Path) -> Result<OutputLock, ReportError> {
         return Err(io(out)(error));
     }
     std::fs::create_dir_all(out).map_err(io(out))?;
-    let path = out.join(".occlu.lock");
+    let path = out.join(LOCK);
     let mut file = std::fs::OpenOptions::new()
         .read(true)
         .write(true)

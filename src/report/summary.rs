@@ -24,6 +24,11 @@ pub struct Summary {
     /// single run.
     #[serde(default)]
     pub run: Option<String>,
+    /// Which matrix the run is of: folders of one run name from two
+    /// matrices (a run added in front renames every later one) are not
+    /// merged as one. Absent for a single run and in older files.
+    #[serde(default)]
+    pub matrix: Option<MatrixIdentity>,
     pub adapter: AdapterReport,
     pub scene: SceneSummary,
     pub path: PathSummary,
@@ -225,6 +230,43 @@ pub struct PathSummary {
     pub cameras: Option<Fingerprint>,
 }
 
+/// A matrix: how many runs it has and the FNV-1a hash of their names in
+/// order, one a line. The names hold each run's place, scene and path, and
+/// are the same on every machine, so every shard records the same identity.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct MatrixIdentity {
+    pub runs: usize,
+    #[serde(with = "hex64")]
+    pub names: u64,
+}
+
+impl MatrixIdentity {
+    pub fn of<'a>(names: impl IntoIterator<Item = &'a str>) -> MatrixIdentity {
+        let mut h = Fnv1a::new();
+        let mut runs = 0;
+        for name in names {
+            h.write(name.as_bytes());
+            h.write(b"\n");
+            runs += 1;
+        }
+        MatrixIdentity {
+            runs,
+            names: h.finish().fnv1a,
+        }
+    }
+}
+
+impl std::fmt::Display for MatrixIdentity {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(
+            f,
+            "a matrix of {} #{:016x}",
+            crate::text::count(self.runs, "run"),
+            self.names
+        )
+    }
+}
+
 /// What identifies a frames.csv: its length and FNV-1a hash. Not a defence
 /// against forgery, only against a file from another run or cut short.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -246,6 +288,13 @@ impl Fingerprint {
     /// and each object's mesh and transform, and how many objects move.
     /// Names, warnings and where the file lay do not count: the same model
     /// read on two machines gives the same fingerprint.
+    ///
+    /// Known limit: built-in scenes and generated paths are made with
+    /// sin/cos, whose last bits the platform's maths library decides, so a
+    /// macOS or Windows run of a built-in scene may fingerprint differently
+    /// from a Linux one and be refused as another scene. Identifying those
+    /// by spec and parameters instead is left to do; runs on one OS (the
+    /// CI recipe's) agree.
     pub fn of_scene(scene: &Scene) -> Fingerprint {
         let mut h = Fnv1a::new();
         h.write(&(scene.vertices.len() as u64).to_le_bytes());

@@ -27,26 +27,45 @@ pub const SCENES: &[(&str, &str)] = &[
     ),
 ];
 
+/// A built-in scene with its parameters, parsed and checked.
+enum Builtin {
+    City(CityParams),
+    Forest(ForestParams),
+}
+
+/// Parses and checks a spec without building it: what a matrix checks of
+/// each run before any runs.
+pub fn check(spec: &str) -> Result<(), SceneError> {
+    parse(spec).map(|_| ())
+}
+
 /// Builds the scene a spec names.
 pub fn build(spec: &str, options: &LoadOptions) -> Result<Scene, SceneError> {
+    let builtin = parse(spec)?;
+    let name = match &builtin {
+        Builtin::City(p) => p.spec(),
+        Builtin::Forest(p) => p.spec(),
+    };
+    let mut builder = SceneBuilder::new(format!("builtin:{name}"), options.cluster_triangles);
+    match &builtin {
+        Builtin::City(p) => city::generate(p, &mut builder),
+        Builtin::Forest(p) => forest::generate(p, &mut builder),
+    }
+    builder.finish().ok_or_else(|| SceneError::Builtin {
+        spec: spec.to_string(),
+        message: "generated no geometry".into(),
+    })
+}
+
+fn parse(spec: &str) -> Result<Builtin, SceneError> {
     let (name, params) = parse_spec(spec)?;
     let error = |message: String| SceneError::Builtin {
         spec: spec.to_string(),
         message,
     };
     match name {
-        "city" => {
-            let p = CityParams::from_params(&params).map_err(error)?;
-            let mut builder = SceneBuilder::new(format!("builtin:{}", p.spec()), options.cluster_triangles);
-            city::generate(&p, &mut builder);
-            builder.finish().ok_or_else(|| error("generated no geometry".into()))
-        }
-        "forest" => {
-            let p = ForestParams::from_params(&params).map_err(error)?;
-            let mut builder = SceneBuilder::new(format!("builtin:{}", p.spec()), options.cluster_triangles);
-            forest::generate(&p, &mut builder);
-            builder.finish().ok_or_else(|| error("generated no geometry".into()))
-        }
+        "city" => CityParams::from_params(&params).map(Builtin::City).map_err(error),
+        "forest" => ForestParams::from_params(&params).map(Builtin::Forest).map_err(error),
         other => Err(error(format!(
             "unknown scene '{other}' (built-in scenes: {})",
             SCENES.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
