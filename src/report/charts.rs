@@ -124,24 +124,22 @@ pub fn ratio_to_oracle_bars(
         let width = 0.8 / adapters.len().max(1) as f64;
         for (a, adapter) in adapters.iter().enumerate() {
             let c = OTHER_COLOURS[a % OTHER_COLOURS.len()];
-            let bars = modes.iter().enumerate().filter_map(|(i, m)| {
-                let ratio = m.ratios.get(a).copied().flatten()?;
-                let left = i as f64 - 0.4 + width * a as f64;
-                Some(Rectangle::new([(left, 0.0), (left + width * 0.9, ratio)], c.filled()))
-            });
+            // Each mode's bar for this adapter: its left edge and its ratio.
+            let placed: Vec<(f64, f64)> = modes
+                .iter()
+                .enumerate()
+                .filter_map(|(i, m)| Some((i as f64 - 0.4 + width * a as f64, m.ratios.get(a).copied().flatten()?)))
+                .collect();
+            let bars = placed
+                .iter()
+                .map(|&(left, ratio)| Rectangle::new([(left, 0.0), (left + width * 0.9, ratio)], c.filled()));
             chart
                 .draw_series(bars)?
                 .label(adapter.as_str())
                 .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], c.filled()));
-            let values = modes.iter().enumerate().filter_map(|(i, m)| {
-                let ratio = m.ratios.get(a).copied().flatten()?;
-                let left = i as f64 - 0.4 + width * a as f64;
-                Some(Text::new(
-                    format!("{ratio:.2}×"),
-                    (left, ratio + y_max * 0.03),
-                    (FONT, 14),
-                ))
-            });
+            let values = placed
+                .iter()
+                .map(|&(left, ratio)| Text::new(format!("{ratio:.2}×"), (left, ratio + y_max * 0.03), (FONT, 14)));
             chart.draw_series(values)?;
         }
         legend(&mut chart, SeriesLabelPosition::UpperRight)?;
