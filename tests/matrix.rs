@@ -9,7 +9,8 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use common::{THREE_OBJECTS_OBJ, occlu, own_stderr, stdout, write};
+use common::{THREE_OBJECTS_OBJ, boxes_obj, occlu, own_stderr, stdout, write};
+use glam::DVec3;
 use occlu::report::Summary;
 use occlu::report::merge::Merged;
 
@@ -21,14 +22,26 @@ fn held_path(eye: [f64; 3]) -> String {
     )
 }
 
-/// Two tiny cities × two paths, three modes: four runs.
+/// Two model files × two paths, three modes: four runs.
 fn two_by_two(dir: &Path) -> PathBuf {
+    let block = |name: &str, min: [f64; 3], max: [f64; 3]| (name.to_string(), DVec3::from(min), DVec3::from(max));
+    let town = [
+        block("hall", [-5.0, 0.0, -5.0], [5.0, 8.0, 5.0]),
+        block("shed", [8.0, 0.0, -3.0], [12.0, 4.0, 3.0]),
+        block("tower", [-12.0, 0.0, 6.0], [-8.0, 20.0, 10.0]),
+    ];
+    let village = [
+        block("barn", [-6.0, 0.0, -2.0], [2.0, 5.0, 4.0]),
+        block("well", [4.0, 0.0, 4.0], [5.0, 1.0, 5.0]),
+    ];
+    write(dir, "town.obj", boxes_obj(&town));
+    write(dir, "village.obj", boxes_obj(&village));
     write(dir, "street.json", held_path([-30.0, 2.0, -30.0]));
     write(dir, "above.json", held_path([30.0, 40.0, 30.0]));
     write(
         dir,
         "matrix.json",
-        r#"{"scenes": ["city:blocks=1", "city:blocks=1,seed=2"], "paths": ["street.json", "above.json"],
+        r#"{"models": ["town.obj", "village.obj"], "paths": ["street.json", "above.json"],
             "modes": ["dr", "vfc", "oracle"], "warmup": 0, "resolution": "64x48"}"#,
     )
 }
@@ -121,10 +134,10 @@ fn three_shards_run_exactly_the_runs_of_the_whole_matrix() {
     assert_eq!(
         run_folders(&whole),
         [
-            "01-city-blocks-1-street",
-            "02-city-blocks-1-above",
-            "03-city-blocks-1-seed-2-street",
-            "04-city-blocks-1-seed-2-above"
+            "01-town-street",
+            "02-town-above",
+            "03-village-street",
+            "04-village-above"
         ]
     );
     let mut sharded: BTreeMap<String, PathBuf> = BTreeMap::new();
@@ -145,7 +158,7 @@ fn three_shards_run_exactly_the_runs_of_the_whole_matrix() {
     }
     assert_eq!(
         run_folders(&dir.path().join("shard1")),
-        ["01-city-blocks-1-street", "04-city-blocks-1-seed-2-above"]
+        ["01-town-street", "04-village-above"]
     );
 
     // A shard with no run says so and writes nothing.
@@ -272,7 +285,7 @@ fn shards_and_a_gl_run_merge_into_one_report_that_compare_gates() {
     // The base branch's merge against this one: the same results pass…
     let same = occlu(&["compare", s(&out), s(&out)]);
     assert!(same.status.success(), "{:?}", own_stderr(&same));
-    assert!(stdout(&same).contains("01-city-blocks-1-street--"));
+    assert!(stdout(&same).contains("01-town-street--"));
     // …and a merge that lacks runs the base had fails.
     let partial = dir.path().join("partial");
     assert!(occlu(&["merge", s(&dirs[0]), "--out", s(&partial)]).status.success());
@@ -282,7 +295,7 @@ fn shards_and_a_gl_run_merge_into_one_report_that_compare_gates() {
     let lenient = occlu(&["compare", s(&out), s(&partial), "--allow-missing"]);
     assert_eq!(lenient.status.code(), Some(0), "{:?}", own_stderr(&lenient));
     refused(
-        &["compare", s(&out), s(&dirs[0].join("01-city-blocks-1-street"))],
+        &["compare", s(&out), s(&dirs[0].join("01-town-street"))],
         &["is a merged folder", "is not"],
     );
 }
