@@ -22,7 +22,9 @@
 //! - a probe of an occlusion culler runs three frames and keeps the last
 //!   (see [`OCCLUSION_PROBE`]); a strategy's first measured frame after it
 //!   did not run starts its average afresh; a probed culler is first told
-//!   what the last frame drew ([`Culler::seed_visible`]), so `swr` starts
+//!   what the last frame drew ([`Culler::seed_visible`]) where the CPU knew
+//!   it (`vfc`, `omq`, `swr`; a GPU walk's drawn set is read back only by
+//!   the untimed audit, which an engine would pay for), so `swr` starts
 //!   with today's occluders instead of those of its last run (or none);
 //! - a GPU walk's very first frame has no occluders yet (no last visible
 //!   set), so every box in the frustum tests visible against the cleared
@@ -146,8 +148,9 @@ pub struct AutoCulling {
     /// Whether the occlusion cullers cull on the GPU; set by `prepare`,
     /// when the adapter is known.
     gpu_culling: bool,
-    /// The objects drawn in the last frame, whichever strategy drew them.
-    last_drawn: Vec<u32>,
+    /// The objects drawn in the last frame, when the CPU decided them (not
+    /// a GPU walk); `None` also where frames run without their audit.
+    last_drawn: Option<Vec<u32>>,
 }
 
 impl AutoCulling {
@@ -162,7 +165,7 @@ impl AutoCulling {
             frames_run: 0,
             probing: None,
             gpu_culling: false,
-            last_drawn: Vec::new(),
+            last_drawn: None,
         }
     }
 
@@ -172,7 +175,7 @@ impl AutoCulling {
 
     /// Every strategy, in [`Strategy::index`] order.
     fn strategies(&self) -> Vec<Strategy> {
-        let occlusion = (0..self.records.len() - 1).map(Strategy::Occlusion);
+        let occlusion = (0..self.occlusion.len()).map(Strategy::Occlusion);
         std::iter::once(Strategy::Frustum).chain(occlusion).collect()
     }
 
@@ -268,10 +271,24 @@ impl AutoCulling {
         turn
     }
 
+    /// Remembers the objects the last frame drew, or that they are unknown.
+    fn remember_drawn(&mut self, drawn: Option<&ObjectSet>) {
+        match (drawn, &mut self.last_drawn) {
+            (None, last) => *last = None,
+            (Some(drawn), Some(last)) => {
+                last.clear();
+                last.extend(drawn.iter());
+            }
+            (Some(drawn), last) => *last = Some(drawn.iter().collect()),
+        }
+    }
+
     /// The first frame of a probe of occlusion culler `k`.
     fn start_probe(&mut self, k: usize) -> Turn {
         self.probing = Some((k, OCCLUSION_PROBE - 1));
-        self.occlusion[k].seed_visible(&self.last_drawn);
+        if let Some(drawn) = &self.last_drawn {
+            self.occlusion[k].seed_visible(drawn);
+        }
         Turn {
             strategy: Strategy::Occlusion(k),
             measured: false,
@@ -309,12 +326,12 @@ impl Culler for AutoCulling {
         }
     }
 
-    /// Only the culler that ran this frame has a walk to audit; then
-    /// `drawn` holds all it drew, remembered for the next probe.
+    /// Only the culler that ran this frame has a walk to audit. Where none
+    /// had (the CPU decided the frame), `drawn` is what it drew, remembered
+    /// for the next probe.
     fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
         let audit = self.occlusion.iter_mut().find_map(|c| c.audit(gpu, drawn));
-        self.last_drawn.clear();
-        self.last_drawn.extend(drawn.iter());
+        self.remember_drawn(audit.is_none().then_some(drawn));
         audit
     }
 }
@@ -349,8 +366,26 @@ mod tests {
     use crate::scene::{LoadOptions, SceneSpec, load};
     use Strategy::Frustum;
 
-    /// The occlusion culler without GPU culling, omq: the only one.
+    /// The first occlusion culler without GPU culling, omq; the tests that
+    /// use it run one occlusion culler.
     const OMQ: Strategy = Strategy::Occlusion(0);
+
+    /// An occlusion culler that draws nothing and keeps what it is told to
+    /// start from.
+    #[derive(Default)]
+    struct Stand(std::rc::Rc<std::cell::RefCell<Vec<Vec<u32>>>>);
+
+    impl Culler for Stand {
+        fn name(&self) -> &str {
+            "stand-in"
+        }
+        fn frame(&mut self, _: &mut dyn Frame, _: &FrameInput) -> TraversalStats {
+            TraversalStats::default()
+        }
+        fn seed_visible(&mut self, visible: &[u32]) {
+            self.0.borrow_mut().push(visible.to_vec());
+        }
+    }
 
     /// The strategies `auto` runs for `frames` frames beside `omq` (no GPU
     /// culling) when each costs what `cost(frame, strategy)` says.
@@ -379,6 +414,9 @@ mod tests {
         let scene = load(&SceneSpec::Builtin("city:blocks=1".into()), &LoadOptions::default()).unwrap();
         let mut auto = AutoCulling::new(&scene, AutoParams { probe: 8 });
         auto.gpu_culling = gpu_culling;
+        auto.occlusion = (0..cullers)
+            .map(|_| Box::new(Stand::default()) as Box<dyn Culler>)
+            .collect();
         auto.records = vec![Record::default(); cullers + 1];
         let mut previous = None;
         (0..frames)
@@ -492,5 +530,24 @@ mod tests {
             probes <= 6,
             "then occlusion culling only in probes, every 8 × 5 frames: {s:?}"
         );
+    }
+
+    #[test]
+    fn a_probed_culler_starts_from_what_the_cpu_last_drew_and_never_from_a_gpu_walks_read_back() {
+        let scene = load(&SceneSpec::Builtin("city:blocks=1".into()), &LoadOptions::default()).unwrap();
+        let mut auto = AutoCulling::new(&scene, AutoParams { probe: 8 });
+        let told = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+        auto.occlusion = vec![Box::new(Stand(told.clone()))];
+        auto.records = vec![Record::default(); 2];
+        let mut drawn = ObjectSet::new(8);
+        drawn.insert(3);
+        drawn.insert(5);
+        // Known to the CPU: handed over at the probe's start.
+        auto.remember_drawn(Some(&drawn));
+        auto.start_probe(0);
+        // A GPU walk's read-back: not handed over; the culler keeps its own.
+        auto.remember_drawn(None);
+        auto.start_probe(0);
+        assert_eq!(*told.borrow(), [vec![3, 5]]);
     }
 }

@@ -166,10 +166,10 @@ pub trait Culler {
         None
     }
 
-    /// Before a frame: the objects another culler drew last frame, for a
-    /// mode that takes its occluders from last frame's visible objects and
-    /// did not run then (`auto` hands them to the culler it probes). Modes
-    /// that keep no such list ignore them.
+    /// Before a frame: the objects (ids of the frame's scene) another culler
+    /// drew last frame, for a mode that takes its occluders from last
+    /// frame's visible objects and did not run then (`auto` hands them to
+    /// the culler it probes). Modes that keep no such list ignore them.
     fn seed_visible(&mut self, _visible: &[u32]) {}
 }
 

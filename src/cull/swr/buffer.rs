@@ -61,7 +61,10 @@ const DEPTH_MARGIN: f64 = 1.0 / (1u32 << 18) as f64;
 const DEPTH_ABSOLUTE: f64 = 1.0 / (1u32 << 21) as f64;
 
 /// How high each triangle of a quad must stand over their shared edge, in
-/// multiples of the cover, for the quad to be rasterised as one.
+/// multiples of the cover, for the quad to be rasterised as one: at least
+/// 0.375 pixel, so a corner's sub-pixel snap tilts the triangle's depth
+/// plane by at most a twelfth of its rise across it, as for a triangle that
+/// covers a centre by the cover on its own.
 const QUAD_HALF_HEIGHT: f64 = 3.0;
 
 /// Texels across a box's rectangle may span at the pyramid level it is
@@ -203,6 +206,12 @@ impl OcclusionBuffer {
         }
     }
 
+    /// Every cell's plane, row by row.
+    #[cfg(test)]
+    pub fn planes(&self) -> &[ScreenPlane] {
+        &self.planes
+    }
+
     /// Every cell's depth, row by row.
     pub fn depths(&self) -> &[f32] {
         &self.levels[0].depth
@@ -234,6 +243,7 @@ impl OcclusionBuffer {
     /// nearer than this one's, with its plane: as if `other`'s occluders
     /// had been rasterised here after this one's.
     pub fn merge(&mut self, other: &OcclusionBuffer) {
+        debug_assert_eq!(self.cells(), other.cells());
         let cells = self.levels[0].depth.iter_mut().zip(&mut self.planes);
         for ((depth, plane), (&theirs, their_plane)) in cells.zip(other.levels[0].depth.iter().zip(&other.planes)) {
             if theirs > *depth {
@@ -256,9 +266,9 @@ impl OcclusionBuffer {
                 // Folded on screen (both on one side of a–c; they cover less
                 // than the quad) or a half too thin (see the module's doc):
                 // each alone is safe.
-                let least_area =
+                let least_twice_area =
                     QUAD_HALF_HEIGHT * 2.0 * (VERTEX_ERROR + occluder.error.pixels) * (c - a).truncate().length();
-                if !(first_area * second_area > 0.0 && first_area.abs().min(second_area.abs()) >= least_area) {
+                if !(first_area * second_area > 0.0 && first_area.abs().min(second_area.abs()) >= least_twice_area) {
                     let [first, second] = [[a, b, c], [a, c, *d]].map(|t| ScreenPolygon::triangle(t, occluder.error));
                     return self.rasterise(&first) + self.rasterise(&second);
                 }
@@ -271,12 +281,12 @@ impl OcclusionBuffer {
         // A shape too small to hold a disc of radius `cover` (a triangle
         // needs 3√3 · cover² of area, any shape π · cover²) covers no centre
         // by that much.
-        let least_area = if occluder.sides == 3 {
+        let disc_factor = if occluder.sides == 3 {
             3.0 * 3f64.sqrt()
         } else {
             std::f64::consts::PI
         };
-        if !area.is_finite() || area.abs() / 2.0 < least_area * cover * cover {
+        if !area.is_finite() || area.abs() / 2.0 < disc_factor * cover * cover {
             return 0;
         }
         // Inward edge functions of the outline, scaled to distances in
@@ -392,11 +402,14 @@ impl OcclusionBuffer {
             for column in first..end {
                 let farthest = plane.min_over(self.columns[column as usize], [y0, y1]);
                 let cell = &mut base.depth[index(column)];
+                // Compared as stored, so a cell keeps the first of occluders
+                // that round alike (as `merge` keeps the earlier buffer's).
                 // A NaN writes nothing.
-                if farthest.is_nan() || farthest <= f64::from(*cell).max(0.0) {
+                let depth = f32_at_most(farthest);
+                if farthest.is_nan() || depth <= cell.max(0.0) {
                     continue;
                 }
-                *cell = f32_at_most(farthest);
+                *cell = depth;
                 self.planes[index(column)] = plane;
                 written += 1;
             }

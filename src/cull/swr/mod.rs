@@ -88,8 +88,11 @@ const TRIANGLES: ParamInfo = ParamInfo {
 const THREADS: ParamInfo = ParamInfo {
     key: "threads",
     default: "0",
-    summary: "threads rasterising occluders, each into a buffer of its own, merged after (0: one per core)",
+    summary: "threads rasterising occluders, each into a buffer of its own, merged after (0: one per core; at most 64)",
 };
+
+/// The most threads `swr.threads` may ask for: each holds a buffer.
+const MAX_THREADS: usize = 64;
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SwrParams {
@@ -101,11 +104,30 @@ pub struct SwrParams {
 
 impl SwrParams {
     pub fn from_params(params: &ModeParams) -> Result<SwrParams, ModeError> {
+        let threads = params.get(ModeId::Swr, &THREADS)?;
+        if threads > MAX_THREADS {
+            return Err(ModeError::bad(
+                ModeId::Swr,
+                &THREADS,
+                format!("{threads}: at most {MAX_THREADS} (0: one per core)"),
+            ));
+        }
         Ok(SwrParams {
             resolution: params.get(ModeId::Swr, &RESOLUTION)?,
             triangles: params.get(ModeId::Swr, &TRIANGLES)?,
-            threads: params.get(ModeId::Swr, &THREADS)?,
+            threads,
         })
+    }
+
+    /// The threads a frame may use: `threads`, or one per core for 0, and
+    /// no more than the triangle budget gives work to.
+    fn threads_used(&self) -> usize {
+        let asked = match self.threads {
+            0 => std::thread::available_parallelism().map_or(1, usize::from),
+            n => n,
+        };
+        let worth = 1 + self.triangles / TRIANGLES_PER_THREAD;
+        asked.min(usize::try_from(worth).unwrap_or(usize::MAX))
     }
 }
 
@@ -163,10 +185,7 @@ impl SoftwareOcclusionCulling {
 impl SoftwareOcclusionCulling {
     /// Its buffer and its helper threads' for render size `size`.
     fn make_buffers(&mut self, size: Resolution) {
-        let threads = match self.params.threads {
-            0 => std::thread::available_parallelism().map_or(1, usize::from),
-            n => n,
-        };
+        let threads = self.params.threads_used();
         let buffer = || OcclusionBuffer::new(size, self.params.resolution);
         self.helpers = (1..threads)
             .map(|_| Rasteriser {
@@ -301,8 +320,11 @@ impl Culler for SoftwareOcclusionCulling {
         "swr"
     }
 
+    /// Its parameters, and the threads they come to on this machine.
     fn parameters(&self) -> serde_json::Value {
-        serde_json::json!(self.params)
+        let mut parameters = serde_json::json!(self.params);
+        parameters["threads_used"] = serde_json::json!(self.params.threads_used());
+        parameters
     }
 
     fn traverses_hierarchy(&self) -> bool {
@@ -444,8 +466,8 @@ struct Rasteriser {
     projected: Projected,
 }
 
-/// Triangles a thread should have at least, beyond the first thread's, to
-/// be worth starting (a start costs tens of microseconds).
+/// A frame uses one thread more for each this many occluder triangles (a
+/// thread's start costs tens of microseconds).
 const TRIANGLES_PER_THREAD: u64 = 4096;
 
 /// One frame's occluders, and what they are rasterised with.
@@ -494,6 +516,7 @@ impl Occluders<'_> {
             let running: Vec<_> = helpers
                 .iter_mut()
                 .enumerate()
+                .filter(|&(k, _)| !share(k + 1).is_empty())
                 .map(|(k, helper)| {
                     let objects = share(k + 1);
                     scope.spawn(move || self.rasterise_share(objects, &mut helper.buffer, &mut helper.projected))
@@ -505,8 +528,10 @@ impl Occluders<'_> {
             }
             rasterised
         });
-        for helper in helpers.iter() {
-            buffer.merge(&helper.buffer);
+        for (k, helper) in helpers.iter().enumerate() {
+            if !share(k + 1).is_empty() {
+                buffer.merge(&helper.buffer);
+            }
         }
         rasterised
     }
@@ -787,7 +812,8 @@ mod tests {
                 .map(|swr| {
                     let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
                     let stats = swr.frame(&mut calls, &input(frame, &camera, &scene, &hierarchy));
-                    (calls.drawn(), stats, swr.occluder_depths())
+                    let planes = swr.buffer.as_ref().map(|b| b.planes().to_vec());
+                    (calls.drawn(), stats, swr.occluder_depths(), planes)
                 })
                 .collect();
             assert!(seen.iter().all(|s| *s == seen[0]), "frame {frame}");
@@ -796,6 +822,27 @@ mod tests {
             }
         }
         assert!(shared_out > 10, "{shared_out} frames had occluders enough to share out");
+    }
+
+    #[test]
+    fn threads_are_refused_beyond_the_cap_and_used_only_where_the_budget_gives_them_work() {
+        let params = |items: &[&str]| {
+            let items: Vec<String> = items.iter().map(|s| s.to_string()).collect();
+            let parsed = ModeParams::parse(&items, &[ModeId::Swr]).map_err(|e| e.to_string())?;
+            SwrParams::from_params(&parsed).map_err(|e| e.to_string())
+        };
+        let error = params(&["swr.threads=65"]).unwrap_err();
+        assert!(error.contains("at most 64"), "{error}");
+        assert_eq!(
+            params(&["swr.threads=64"]).unwrap().threads_used(),
+            9,
+            "32768 triangles: 9 threads' work"
+        );
+        assert_eq!(
+            params(&["swr.threads=64", "swr.triangles=100"]).unwrap().threads_used(),
+            1
+        );
+        assert_eq!(params(&["swr.threads=3"]).unwrap().threads_used(), 3);
     }
 
     #[test]
