@@ -287,20 +287,26 @@ impl Fingerprint {
     /// A scene's geometry as loaded: vertices, indices, each mesh's range
     /// and each object's mesh and transform, and how many objects move.
     /// Names, warnings and where the file lay do not count: the same model
-    /// read on two machines gives the same fingerprint.
+    /// read on two machines gives the same fingerprint (parsing and placing
+    /// a file's geometry is exact arithmetic, the same on every platform).
     ///
-    /// Known limit: built-in scenes and generated paths are made with
-    /// sin/cos, whose last bits the platform's maths library decides, so a
-    /// macOS or Windows run of a built-in scene may fingerprint differently
-    /// from a Linux one and be refused as another scene. Identifying those
-    /// by spec and parameters instead is left to do; runs on one OS (the
-    /// CI recipe's) agree.
+    /// A built-in scene is made with sin/cos, whose last bits the
+    /// platform's maths library decides, so its floats would tell a macOS
+    /// or Windows run from a Linux one: for it, its canonical spec (its
+    /// `source`) and occlu's version stand in for the floats; its integers
+    /// (indices, ranges, meshes) still count.
     pub fn of_scene(scene: &Scene) -> Fingerprint {
         let mut h = Fnv1a::new();
+        let made_with_trigonometry = scene.source.starts_with("builtin:");
         h.write(&(scene.vertices.len() as u64).to_le_bytes());
-        for v in &scene.vertices {
-            for c in v {
-                h.write(&c.to_le_bytes());
+        if made_with_trigonometry {
+            h.write(scene.source.as_bytes());
+            h.write(env!("CARGO_PKG_VERSION").as_bytes());
+        } else {
+            for v in &scene.vertices {
+                for c in v {
+                    h.write(&c.to_le_bytes());
+                }
             }
         }
         h.write(&(scene.indices.len() as u64).to_le_bytes());
@@ -313,8 +319,10 @@ impl Fingerprint {
         }
         for o in &scene.objects {
             h.write(&o.mesh.to_le_bytes());
-            for c in o.transform.to_cols_array() {
-                h.write(&c.to_le_bytes());
+            if !made_with_trigonometry {
+                for c in o.transform.to_cols_array() {
+                    h.write(&c.to_le_bytes());
+                }
             }
         }
         h.write(&(scene.movers.len() as u64).to_le_bytes());
@@ -322,19 +330,29 @@ impl Fingerprint {
     }
 
     /// A camera path as replayed: its keyframes, near plane, interpolation
-    /// and frame count (a resampled path is another path).
+    /// and frame count (a resampled path is another path). A generated path
+    /// (`generated:KIND`) is made with sin/cos from its scene: for it, its
+    /// kind, its keyframe count and occlu's version stand in for the
+    /// keyframes' and near plane's floats (its scene is compared on its
+    /// own, and generation is the same arithmetic everywhere).
     pub fn of_path(path: &CameraPath) -> Fingerprint {
         let mut h = Fnv1a::new();
-        for k in &path.keyframes {
-            let numbers = [k.time, k.fov_y]
-                .into_iter()
-                .chain(k.position.to_array())
-                .chain(k.rotation.to_array());
-            for n in numbers {
-                h.write(&n.to_le_bytes());
+        if path.source.starts_with("generated:") {
+            h.write(path.source.as_bytes());
+            h.write(env!("CARGO_PKG_VERSION").as_bytes());
+            h.write(&(path.keyframes.len() as u64).to_le_bytes());
+        } else {
+            for k in &path.keyframes {
+                let numbers = [k.time, k.fov_y]
+                    .into_iter()
+                    .chain(k.position.to_array())
+                    .chain(k.rotation.to_array());
+                for n in numbers {
+                    h.write(&n.to_le_bytes());
+                }
             }
+            h.write(&path.near.to_le_bytes());
         }
-        h.write(&path.near.to_le_bytes());
         h.write(format!("{:?}", path.interpolation).as_bytes());
         h.write(&path.frames.to_le_bytes());
         h.finish()
@@ -382,5 +400,54 @@ mod hex64 {
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
         let text = String::deserialize(d)?;
         u64::from_str_radix(&text, 16).map_err(serde::de::Error::custom)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::generate::default_path;
+    use crate::scene::{LoadOptions, SceneSpec, load, load_bytes};
+
+    /// Moves the last bit of the first vertex and of the first object's
+    /// transform, as another platform's sin/cos may.
+    fn nudged(scene: &Scene) -> Scene {
+        let mut other = scene.clone();
+        other.vertices[0][0] = other.vertices[0][0].next_up();
+        other.objects[0].transform.translation.x = other.objects[0].transform.translation.x.next_up();
+        other
+    }
+
+    #[test]
+    fn built_in_scenes_and_generated_paths_fingerprint_by_what_made_them_files_by_their_numbers() {
+        let city = load(&SceneSpec::Builtin("city:blocks=1".into()), &LoadOptions::default()).unwrap();
+        assert_eq!(Fingerprint::of_scene(&nudged(&city)), Fingerprint::of_scene(&city));
+        let other_city = load(
+            &SceneSpec::Builtin("city:blocks=1,seed=2".into()),
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        assert_ne!(Fingerprint::of_scene(&other_city), Fingerprint::of_scene(&city));
+
+        let obj = "o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+        let model = load_bytes(std::path::Path::new("tri.obj"), obj.as_bytes(), &LoadOptions::default()).unwrap();
+        assert_ne!(Fingerprint::of_scene(&nudged(&model)), Fingerprint::of_scene(&model));
+
+        let (generated, _) = default_path(&city).unwrap();
+        let mut moved = generated.clone();
+        moved.keyframes[0].position.x = moved.keyframes[0].position.x.next_up();
+        moved.near = moved.near.next_up();
+        assert_eq!(Fingerprint::of_path(&moved), Fingerprint::of_path(&generated));
+        assert_ne!(
+            Fingerprint::of_path(&generated.clone().with_frames(7).unwrap()),
+            Fingerprint::of_path(&generated)
+        );
+        let file = CameraPath {
+            source: "fly.json".into(),
+            ..generated.clone()
+        };
+        let mut moved_file = file.clone();
+        moved_file.keyframes[0].position.x = moved_file.keyframes[0].position.x.next_up();
+        assert_ne!(Fingerprint::of_path(&moved_file), Fingerprint::of_path(&file));
     }
 }
