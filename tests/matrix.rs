@@ -267,6 +267,17 @@ fn shards_and_a_gl_run_merge_into_one_report_that_compare_gates() {
                 .iter()
                 .all(|r| r.as_ref().unwrap().ratio_to_oracle.is_some())
         );
+        // Each number as its run's summary.json holds it, to the last bit.
+        for (k, adapter) in run.adapters.iter().enumerate() {
+            let own = summary(&out.join(&adapter.folder));
+            let mean = own.modes.iter().find(|m| m.name == "vfc").unwrap().stats["frame_ms"].mean;
+            assert_eq!(
+                vfc.results[k].as_ref().unwrap().frame_ms,
+                Some(mean),
+                "{}",
+                adapter.label()
+            );
+        }
         let chart = run.chart.as_deref().unwrap();
         assert!(out.join(chart).is_file(), "{chart}");
         assert!(report.contains(&format!("({chart})")));

@@ -450,4 +450,15 @@ mod tests {
         moved_file.keyframes[0].position.x = moved_file.keyframes[0].position.x.next_up();
         assert_ne!(Fingerprint::of_path(&moved_file), Fingerprint::of_path(&file));
     }
+
+    /// summary.json's numbers read back as written: merge and compare
+    /// recompute from files read back (serde_json's float_roundtrip).
+    #[test]
+    fn numbers_written_to_json_read_back_to_the_last_bit() {
+        let drifted = (1..20_000u32)
+            .map(|k| f64::from(k) / 3.0e4 + 2.0)
+            .filter(|&x| serde_json::from_str::<f64>(&serde_json::to_string(&x).unwrap()).unwrap() != x)
+            .count();
+        assert_eq!(drifted, 0);
+    }
 }
