@@ -103,6 +103,106 @@ impl ScreenPolygon {
             error,
         }
     }
+
+    /// How far the GPU may place a corner from ours, in pixels on each axis.
+    fn slack(&self) -> f64 {
+        VERTEX_ERROR + self.error.pixels
+    }
+
+    /// A quad's two triangles, when it must be rasterised as them: folded
+    /// on screen (both on one side of a–c; they cover less than the quad)
+    /// or a half too thin (see the module's doc). Each alone is safe.
+    fn halves_apart(&self) -> Option<[ScreenPolygon; 2]> {
+        let [a, b, c, d] = self.corners;
+        let (first, second) = (twice_area(a, b, c), twice_area(a, c, d));
+        let least = QUAD_HALF_HEIGHT * 2.0 * self.slack() * (c - a).truncate().length();
+        let whole = first * second > 0.0 && first.abs().min(second.abs()) >= least;
+        (self.sides == 4 && !whole).then(|| [[a, b, c], [a, c, d]].map(|t| ScreenPolygon::triangle(t, self.error)))
+    }
+
+    /// Its outline's inward edge functions, scaled to distances in pixels
+    /// (a point is inside by `cover` when every one is at least that); `None`
+    /// when it is too small to hold a disc of radius `cover` (a triangle
+    /// needs 3√3 · cover² of area, any shape π · cover²), so covers no centre
+    /// by that much. Not for a quad to be rasterised as its halves.
+    fn inward_edges(&self) -> Option<[[f64; 3]; 4]> {
+        let [a, b, c, d] = self.corners;
+        let area = twice_area(a, b, c) + if self.sides == 4 { twice_area(a, c, d) } else { 0.0 };
+        let cover = 2.0 * self.slack();
+        let disc_factor = if self.sides == 3 {
+            3.0 * 3f64.sqrt()
+        } else {
+            std::f64::consts::PI
+        };
+        if !area.is_finite() || area.abs() / 2.0 < disc_factor * cover * cover {
+            return None;
+        }
+        let mut edges = [[0.0; 3]; 4];
+        for (k, edge) in edges.iter_mut().enumerate().take(self.sides) {
+            let (p, q) = (self.corners[k], self.corners[(k + 1) % self.sides]);
+            let (dx, dy) = (q.x - p.x, q.y - p.y);
+            let s = area.signum() / (dx * dx + dy * dy).sqrt();
+            // inside(x, y) = s · ((q − p) × ((x, y) − p))
+            *edge = [-dy * s, dx * s, (dy * p.x - dx * p.y) * s];
+        }
+        Some(edges)
+    }
+
+    /// The depth plane through the first triangle's corners.
+    fn first_plane(&self) -> ScreenPlane {
+        let [a, b, c, _] = self.corners;
+        plane_through([a, b, c])
+    }
+
+    /// What a cell it covers holds at each centre: the first triangle's
+    /// plane lowered by its change within the slack, and for a quad until
+    /// it lies below the second's wherever the GPU may draw either (within
+    /// the slack of the corners' hull: the difference is affine, so at a
+    /// corner; nothing for a flat quad), then moved farther by the depth
+    /// margins (all affine).
+    fn cell_plane(&self) -> ScreenPlane {
+        let [a, _, c, d] = self.corners;
+        let (first, slack) = (self.first_plane(), self.slack());
+        let below_second = if self.sides == 4 {
+            let second = plane_through([a, c, d]);
+            let (dx, dy) = (first.per_x - second.per_x, first.per_y - second.per_y);
+            let widest = self
+                .corners
+                .iter()
+                .map(|p| first.at(p.x, p.y) - second.at(p.x, p.y))
+                .fold(f64::NEG_INFINITY, f64::max);
+            // A NaN stays one, and writes nothing.
+            let below = widest + slack * (dx.abs() + dy.abs());
+            if below < 0.0 { 0.0 } else { below }
+        } else {
+            0.0
+        };
+        let keep = 1.0 - DEPTH_MARGIN - self.error.depth;
+        ScreenPlane {
+            per_x: first.per_x * keep,
+            per_y: first.per_y * keep,
+            constant: (first.constant - slack * (first.per_x.abs() + first.per_y.abs()) - below_second) * keep
+                - DEPTH_ABSOLUTE,
+        }
+    }
+}
+
+/// Twice the signed area of the screen triangle pqr: its sign is its
+/// winding.
+fn twice_area(p: DVec3, q: DVec3, r: DVec3) -> f64 {
+    (q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x)
+}
+
+/// The depth plane through the corners of screen triangle pqr.
+fn plane_through([p, q, r]: [DVec3; 3]) -> ScreenPlane {
+    let area = twice_area(p, q, r);
+    let per_x = ((q.z - p.z) * (r.y - p.y) - (r.z - p.z) * (q.y - p.y)) / area;
+    let per_y = ((r.z - p.z) * (q.x - p.x) - (q.z - p.z) * (r.x - p.x)) / area;
+    ScreenPlane {
+        per_x,
+        per_y,
+        constant: p.z - per_x * p.x - per_y * p.y,
+    }
 }
 
 /// How far the GPU may place a triangle's corners from the CPU's
@@ -256,95 +356,15 @@ impl OcclusionBuffer {
     /// Writes `occluder` into the cells it covers (see the module above);
     /// returns how many it wrote.
     pub fn rasterise(&mut self, occluder: &ScreenPolygon) -> u32 {
-        let corners = &occluder.corners[..occluder.sides];
-        let [a, b, c] = [corners[0], corners[1], corners[2]];
-        let twice_area = |p: DVec3, q: DVec3, r: DVec3| (q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x);
-        let first_area = twice_area(a, b, c);
-        let area = match corners {
-            [.., d] if occluder.sides == 4 => {
-                let second_area = twice_area(a, c, *d);
-                // Folded on screen (both on one side of a–c; they cover less
-                // than the quad) or a half too thin (see the module's doc):
-                // each alone is safe.
-                let least_twice_area =
-                    QUAD_HALF_HEIGHT * 2.0 * (VERTEX_ERROR + occluder.error.pixels) * (c - a).truncate().length();
-                if !(first_area * second_area > 0.0 && first_area.abs().min(second_area.abs()) >= least_twice_area) {
-                    let [first, second] = [[a, b, c], [a, c, *d]].map(|t| ScreenPolygon::triangle(t, occluder.error));
-                    return self.rasterise(&first) + self.rasterise(&second);
-                }
-                first_area + second_area
-            }
-            _ => first_area,
-        };
-        let slack = VERTEX_ERROR + occluder.error.pixels;
-        let cover = 2.0 * slack;
-        // A shape too small to hold a disc of radius `cover` (a triangle
-        // needs 3√3 · cover² of area, any shape π · cover²) covers no centre
-        // by that much.
-        let disc_factor = if occluder.sides == 3 {
-            3.0 * 3f64.sqrt()
-        } else {
-            std::f64::consts::PI
-        };
-        if !area.is_finite() || area.abs() / 2.0 < disc_factor * cover * cover {
+        if let Some(halves) = occluder.halves_apart() {
+            return halves.iter().map(|half| self.rasterise(half)).sum();
+        }
+        let Some(edges) = occluder.inward_edges() else {
             return 0;
-        }
-        // Inward edge functions of the outline, scaled to distances in
-        // pixels: a point is inside by `cover` when every one is at least
-        // that.
-        let mut edges = [[0.0; 3]; 4];
-        for (k, edge) in edges.iter_mut().enumerate().take(occluder.sides) {
-            let (p, q) = (corners[k], corners[(k + 1) % occluder.sides]);
-            let (dx, dy) = (q.x - p.x, q.y - p.y);
-            let s = area.signum() / (dx * dx + dy * dy).sqrt();
-            // inside(x, y) = s · ((q − p) × ((x, y) − p))
-            *edge = [-dy * s, dx * s, (dy * p.x - dx * p.y) * s];
-        }
+        };
         let edges = &edges[..occluder.sides];
-        // The depth planes through each triangle's corners.
-        let plane_of = |[p, q, r]: [DVec3; 3]| {
-            let area = twice_area(p, q, r);
-            let per_x = ((q.z - p.z) * (r.y - p.y) - (r.z - p.z) * (q.y - p.y)) / area;
-            let per_y = ((r.z - p.z) * (q.x - p.x) - (q.z - p.z) * (r.x - p.x)) / area;
-            ScreenPlane {
-                per_x,
-                per_y,
-                constant: p.z - per_x * p.x - per_y * p.y,
-            }
-        };
-        let first_plane = plane_of([a, b, c]);
-        // A quad's cells take the first plane, lowered until it lies below
-        // the second wherever the GPU may draw either: within `slack` of
-        // the outline's corners' hull (the difference is affine, so at a
-        // corner). Nothing for a flat quad.
-        let below_second = if occluder.sides == 4 {
-            let second_plane = plane_of([a, c, corners[3]]);
-            let (dx, dy) = (
-                first_plane.per_x - second_plane.per_x,
-                first_plane.per_y - second_plane.per_y,
-            );
-            let widest = corners
-                .iter()
-                .map(|p| first_plane.at(p.x, p.y) - second_plane.at(p.x, p.y))
-                .fold(f64::NEG_INFINITY, f64::max);
-            // A NaN stays one, and writes nothing below.
-            let below = widest + slack * (dx.abs() + dy.abs());
-            if below < 0.0 { 0.0 } else { below }
-        } else {
-            0.0
-        };
-        // What a cell holds at a centre: the least of that plane within
-        // `slack` of it, moved farther by the depth margins (all affine).
-        let keep = 1.0 - DEPTH_MARGIN - occluder.error.depth;
-        let plane = ScreenPlane {
-            per_x: first_plane.per_x * keep,
-            per_y: first_plane.per_y * keep,
-            constant: (first_plane.constant
-                - slack * (first_plane.per_x.abs() + first_plane.per_y.abs())
-                - below_second)
-                * keep
-                - DEPTH_ABSOLUTE,
-        };
+        let (cover, plane) = (2.0 * occluder.slack(), occluder.cell_plane());
+        let corners = &occluder.corners[..occluder.sides];
         let cells = self.cells();
         let (lo, hi) = corners
             .iter()
@@ -364,6 +384,7 @@ impl OcclusionBuffer {
                     let [x0, x1] = self.columns[column as usize];
                     let (x, y) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
                     if edges.iter().all(|e| e[0] * x + e[1] * y + e[2] >= 0.0) {
+                        let first_plane = occluder.first_plane();
                         let depth = first_plane.at(x, y);
                         let cell = &mut base.depth[index(column)];
                         if f64::from(*cell) < depth {
