@@ -490,6 +490,16 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
 
 /// A matrix of `scenes` (JSON list) in `name`, 3 frames at 64x48, vfc and
 /// the oracle.
+/// A tiny matrix of one run benched in `dir/full` on the first backend:
+/// that folder and the run's.
+fn matrix_of_one(dir: &Path) -> (PathBuf, PathBuf) {
+    let matrix = tiny_matrix(dir, "m.json", r#"["city:blocks=1"]"#);
+    let full = dir.join("full");
+    bench_matrix(&matrix, &backends()[0], &full, &["--quiet"]);
+    let run = full.join("01-city-blocks-1-generated");
+    (full, run)
+}
+
 fn tiny_matrix(dir: &Path, name: &str, scenes: &str) -> PathBuf {
     write(
         dir,
@@ -576,11 +586,7 @@ fn a_bad_run_fails_every_shard_up_front_and_a_failing_run_leaves_no_folder() {
 #[test]
 fn merge_refuses_to_write_over_its_input_or_a_partial_matrix_and_takes_odd_names() {
     let dir = tempfile::tempdir().unwrap();
-    let backend = &backends()[0];
-    let matrix = tiny_matrix(dir.path(), "m.json", r#"["city:blocks=1"]"#);
-    let full = dir.path().join("full");
-    bench_matrix(&matrix, backend, &full, &["--quiet"]);
-    let run = full.join("01-city-blocks-1-generated");
+    let (full, run) = matrix_of_one(dir.path());
     let report = std::fs::read_to_string(run.join("report.md")).unwrap();
     for out in [&run, &run.join("merged"), &full, &dir.path().to_path_buf()] {
         refused(
@@ -688,11 +694,7 @@ fn merge_refuses_runs_of_two_matrices_and_names_a_frame_count_that_differs() {
 #[test]
 fn compare_of_merged_folders_pairs_runs_by_adapter_not_by_folder_name_and_trusts_no_folder() {
     let dir = tempfile::tempdir().unwrap();
-    let backend = &backends()[0];
-    let matrix = tiny_matrix(dir.path(), "m.json", r#"["city:blocks=1"]"#);
-    let full = dir.path().join("full");
-    bench_matrix(&matrix, backend, &full, &["--quiet"]);
-    let run = full.join("01-city-blocks-1-generated");
+    let (_, run) = matrix_of_one(dir.path());
     // One adapter by two backends, with a name longer than a folder's slug:
     // the base ran Vulkan only, the new merge GL and Vulkan.
     let long = "NVIDIA GeForce RTX 4090 Laptop GPU/PCIe/SSE2 (rev a1)";

@@ -18,7 +18,7 @@ use std::sync::Once;
 
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::ValueFormatter;
-use plotters::coord::types::RangedCoordu32;
+use plotters::coord::types::{RangedCoordf64, RangedCoordu32};
 use plotters::prelude::*;
 
 use super::files::{ReportError, write_png};
@@ -97,29 +97,7 @@ pub fn ratio_to_oracle_bars(
             * 1.2;
         let n = modes.len().max(1) as f64;
         let names: Vec<&str> = modes.iter().map(|m| m.mode.as_str()).collect();
-        let mut chart = ChartBuilder::on(area)
-            .caption(caption, (FONT, 26))
-            .margin(18)
-            .x_label_area_size(48)
-            .y_label_area_size(90)
-            .build_cartesian_2d(-0.5f64..n - 0.5, 0f64..y_max)?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_labels(modes.len().max(1))
-            .x_label_formatter(&|x| {
-                let i = x.round();
-                if (x - i).abs() < 1e-6 && i >= 0.0 {
-                    names.get(i as usize).map_or(String::new(), |n| n.to_string())
-                } else {
-                    String::new()
-                }
-            })
-            .x_desc("mode")
-            .y_desc("mean frame time / oracle's")
-            .label_style((FONT, 16))
-            .axis_desc_style((FONT, 18))
-            .draw()?;
+        let mut chart = mode_axes(area, caption, &names, y_max, "mean frame time / oracle's")?;
         chart.draw_series(LineSeries::new([(-0.5, 1.0), (n - 0.5, 1.0)], BLACK.mix(0.5)))?;
         let width = 0.8 / adapters.len().max(1) as f64;
         for (a, adapter) in adapters.iter().enumerate() {
@@ -445,6 +423,44 @@ fn time_vs_error(area: &Area, summary: &Summary, series: &Series) -> DrawResult 
     Ok(())
 }
 
+/// Axes for bars per mode: mode `names` at x = 0, 1, …, values from 0 to
+/// `y_max` up the side, the mesh drawn.
+fn mode_axes<'a, 'b>(
+    area: &'a Area<'b>,
+    caption: &str,
+    names: &[&str],
+    y_max: f64,
+    y_desc: &str,
+) -> Result<ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>, Box<dyn std::error::Error>>
+{
+    let n = names.len().max(1) as f64;
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, 26))
+        .margin(18)
+        .x_label_area_size(48)
+        .y_label_area_size(90)
+        .build_cartesian_2d(-0.5f64..n - 0.5, 0f64..y_max)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(names.len().max(1))
+        .x_label_formatter(&|x| {
+            let i = x.round();
+            if (x - i).abs() < 1e-6 && i >= 0.0 {
+                names.get(i as usize).map_or(String::new(), |n| n.to_string())
+            } else {
+                String::new()
+            }
+        })
+        .x_desc("mode")
+        .y_desc(y_desc)
+        .x_label_style((FONT, 13))
+        .label_style((FONT, 16))
+        .axis_desc_style((FONT, 18))
+        .draw()?;
+    Ok(chart)
+}
+
 fn summary_bars(area: &Area, summary: &Summary, series: &Series) -> DrawResult {
     area.fill(&WHITE)?;
     let bars: Vec<(RGBColor, &ModeSummary, f64, f64)> = series
@@ -456,32 +472,9 @@ fn summary_bars(area: &Area, summary: &Summary, series: &Series) -> DrawResult {
         })
         .collect();
     let y_max = bars.iter().map(|b| b.3).fold(1.0, f64::max) * 1.25;
-    let n = bars.len().max(1) as f64;
-    let names: Vec<String> = bars.iter().map(|b| b.1.name.clone()).collect();
-    let mut chart = ChartBuilder::on(area)
-        .caption(title(summary, "Mean and p95 frame time per mode"), (FONT, 26))
-        .margin(18)
-        .x_label_area_size(48)
-        .y_label_area_size(90)
-        .build_cartesian_2d(-0.5f64..n - 0.5, 0f64..y_max)?;
-    chart
-        .configure_mesh()
-        .disable_x_mesh()
-        .x_labels(bars.len().max(1))
-        .x_label_formatter(&|x| {
-            let i = x.round();
-            if (x - i).abs() < 1e-6 && i >= 0.0 {
-                names.get(i as usize).cloned().unwrap_or_default()
-            } else {
-                String::new()
-            }
-        })
-        .x_desc("mode")
-        .y_desc("frame time (ms)")
-        .x_label_style((FONT, 13))
-        .label_style((FONT, 16))
-        .axis_desc_style((FONT, 18))
-        .draw()?;
+    let names: Vec<&str> = bars.iter().map(|b| b.1.name.as_str()).collect();
+    let caption = title(summary, "Mean and p95 frame time per mode");
+    let mut chart = mode_axes(area, &caption, &names, y_max, "frame time (ms)")?;
     for (i, &(c, m, mean, p95)) in bars.iter().enumerate() {
         let x = i as f64;
         chart.draw_series(std::iter::once(Rectangle::new(
