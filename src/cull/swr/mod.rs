@@ -191,6 +191,7 @@ impl SoftwareOcclusionCulling {
             .map(|_| Rasteriser {
                 buffer: buffer(),
                 projected: Vec::new(),
+                rasterised: 0,
             })
             .collect();
         self.buffer = Some(buffer());
@@ -320,11 +321,11 @@ impl Culler for SoftwareOcclusionCulling {
         "swr"
     }
 
-    /// Its parameters, and the threads they come to on this machine.
+    /// Its parameters as given (`threads` 0 stays 0: the count it comes to
+    /// is the machine's, and `occlu merge` holds one run's parameters equal
+    /// on every machine).
     fn parameters(&self) -> serde_json::Value {
-        let mut parameters = serde_json::json!(self.params);
-        parameters["threads_used"] = serde_json::json!(self.params.threads_used());
-        parameters
+        serde_json::json!(self.params)
     }
 
     fn traverses_hierarchy(&self) -> bool {
@@ -464,6 +465,8 @@ type Projected = Vec<Option<(DVec3, f64)>>;
 struct Rasteriser {
     buffer: OcclusionBuffer,
     projected: Projected,
+    /// The triangles it rasterised this frame.
+    rasterised: u64,
 }
 
 /// A frame uses one thread more for each this many occluder triangles (a
@@ -512,25 +515,24 @@ impl Occluders<'_> {
         let start = |k: usize| if k == 0 { 0 } else { shares[k - 1] };
         let helpers = &mut helpers[..threads as usize - 1];
         let share = |k: usize| &self.objects[start(k)..shares[k]];
-        let rasterised = std::thread::scope(|scope| {
-            let running: Vec<_> = helpers
-                .iter_mut()
-                .enumerate()
-                .filter(|&(k, _)| !share(k + 1).is_empty())
-                .map(|(k, helper)| {
-                    let objects = share(k + 1);
-                    scope.spawn(move || self.rasterise_share(objects, &mut helper.buffer, &mut helper.projected))
-                })
-                .collect();
-            let mut rasterised = self.rasterise_share(share(0), buffer, projected);
-            for thread in running {
-                rasterised += thread.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        let mut rasterised = 0;
+        // A helper's panic ends the scope with it.
+        std::thread::scope(|scope| {
+            for (k, helper) in helpers.iter_mut().enumerate() {
+                let objects = share(k + 1);
+                helper.rasterised = 0;
+                if !objects.is_empty() {
+                    scope.spawn(move || {
+                        helper.rasterised = self.rasterise_share(objects, &mut helper.buffer, &mut helper.projected);
+                    });
+                }
             }
-            rasterised
+            rasterised = self.rasterise_share(share(0), buffer, projected);
         });
         for (k, helper) in helpers.iter().enumerate() {
             if !share(k + 1).is_empty() {
                 buffer.merge(&helper.buffer);
+                rasterised += helper.rasterised;
             }
         }
         rasterised
