@@ -43,6 +43,8 @@
 //! object's box (`FragmentLimit`, gpu/conservative.rs), and an occluder's
 //! triangles lie within its box (the box is its mesh's bounds, placed).
 
+use std::ops::Range;
+
 use glam::DVec3;
 
 use crate::gpu::{BoxPlanes, Resolution, ScreenPlane};
@@ -356,6 +358,29 @@ impl OcclusionBuffer {
     /// Writes `occluder` into the cells it covers (see the module above);
     /// returns how many it wrote.
     pub fn rasterise(&mut self, occluder: &ScreenPolygon) -> u32 {
+        // Most occluder triangles are smaller than a cell on some axis (over
+        // the default city, 99 % of them write nothing): rule those out
+        // from their outline's bounds before any other work. A cell is
+        // written only where its pixel centres lie inside by the cover, so
+        // within the bounds shrunk by it on both axes; a quad's halves lie
+        // within the quad's bounds.
+        let cover = 2.0 * occluder.slack();
+        let corners = &occluder.corners[..occluder.sides];
+        let (lo, hi) = corners
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            });
+        let cells = self.cells();
+        let column_range = cell_range(lo.x, hi.x, cells.width, self.target.width);
+        let row_range = cell_range(lo.y, hi.y, cells.height, self.target.height);
+        let (columns, rows) = (
+            centred_within(&self.columns, column_range.clone(), lo.x + cover, hi.x - cover),
+            centred_within(&self.rows, row_range, lo.y + cover, hi.y - cover),
+        );
+        if columns.is_empty() || rows.is_empty() {
+            return 0;
+        }
         if let Some(halves) = occluder.halves_apart() {
             return halves.iter().map(|half| self.rasterise(half)).sum();
         }
@@ -363,19 +388,12 @@ impl OcclusionBuffer {
             return 0;
         };
         let edges = &edges[..occluder.sides];
-        let (cover, plane) = (2.0 * occluder.slack(), occluder.cell_plane());
-        let corners = &occluder.corners[..occluder.sides];
-        let cells = self.cells();
-        let (lo, hi) = corners
-            .iter()
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
-                (lo.min(p), hi.max(p))
-            });
-        let column_range = cell_range(lo.x, hi.x, cells.width, self.target.width);
-        let row_range = cell_range(lo.y, hi.y, cells.height, self.target.height);
+        // Made for the first cell within the outline (few occluders reach
+        // one).
+        let mut plane = None;
         let mut written = 0;
         let base = &mut self.levels[0];
-        for row in row_range {
+        for row in rows {
             let [y0, y1] = self.rows[row as usize];
             let index = |column: u32| (row * cells.width + column) as usize;
             #[cfg(test)]
@@ -415,12 +433,8 @@ impl OcclusionBuffer {
             if from.is_nan() || to.is_nan() || from > to {
                 continue;
             }
-            // The columns of the span whose centres all lie in [from, to].
-            let (start, stop) = (*column_range.start(), *column_range.end() + 1);
-            let span = &self.columns[start as usize..stop as usize];
-            let first = start + span.partition_point(|&[x0, _]| x0 < from) as u32;
-            let end = start + span.partition_point(|&[_, x1]| x1 <= to) as u32;
-            for column in first..end {
+            for column in centred_within(&self.columns, columns.clone(), from, to) {
+                let plane = *plane.get_or_insert_with(|| occluder.cell_plane());
                 let farthest = plane.min_over(self.columns[column as usize], [y0, y1]);
                 let cell = &mut base.depth[index(column)];
                 // Compared as stored, so a cell keeps the first of occluders
@@ -561,9 +575,19 @@ impl BoxQuery<'_> {
 
 /// The cells along a side whose pixel centres may lie in [lo, hi] (pixel
 /// coordinates), clamped to the side.
-fn cell_range(lo: f64, hi: f64, cells: u32, pixels: u32) -> std::ops::RangeInclusive<u32> {
+fn cell_range(lo: f64, hi: f64, cells: u32, pixels: u32) -> Range<u32> {
     let pixel = |v: f64| v.floor().clamp(0.0, f64::from(pixels - 1)) as u32;
-    cell_of(pixel(lo), cells, pixels)..=cell_of(pixel(hi), cells, pixels)
+    cell_of(pixel(lo), cells, pixels)..cell_of(pixel(hi), cells, pixels) + 1
+}
+
+/// The cells of `range` (along a side whose cells hold the pixel centres
+/// `centres`) whose centres all lie in [from, to]; none for a NaN bound.
+fn centred_within(centres: &[[f64; 2]], range: Range<u32>, from: f64, to: f64) -> Range<u32> {
+    let start = range.start;
+    let span = &centres[start as usize..range.end as usize];
+    let first = start + span.partition_point(|&[first, _]| first < from) as u32;
+    let end = start + span.partition_point(|&[_, last]| last <= to) as u32;
+    first..end.max(first)
 }
 
 /// The largest f32 at most `v` (a plain cast may round up, nearer).
