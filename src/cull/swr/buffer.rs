@@ -45,7 +45,7 @@
 
 use std::ops::Range;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 use crate::gpu::{BoxPlanes, Resolution, ScreenPlane};
 
@@ -229,6 +229,10 @@ pub struct OcclusionBuffer {
     /// per row likewise (y).
     columns: Vec<[f64; 2]>,
     rows: Vec<[f64; 2]>,
+    /// The least distance between a cell's first and last pixel centre,
+    /// across (x) and down (y): an outline narrower than that plus twice
+    /// the cover holds no whole cell.
+    least_held: DVec2,
     /// Level 0 holds the cells (each the least of its plane over its pixel
     /// centres); each further level halves them (rounding up) down to one
     /// texel.
@@ -271,6 +275,14 @@ impl OcclusionBuffer {
                 .map(|c| held_pixels(c, n, pixels).map(|p| f64::from(p) + 0.5))
                 .collect()
         };
+        let (columns, rows): (Vec<[f64; 2]>, Vec<[f64; 2]>) =
+            (centres(width, target.width), centres(height, target.height));
+        let least = |held: &[[f64; 2]]| {
+            held.iter()
+                .map(|[first, last]| last - first)
+                .fold(f64::INFINITY, f64::min)
+        };
+        let least_held = DVec2::new(least(&columns), least(&rows));
         let mut levels = Vec::new();
         let (mut w, mut h) = (width, height);
         loop {
@@ -286,8 +298,9 @@ impl OcclusionBuffer {
         }
         OcclusionBuffer {
             target,
-            columns: centres(width, target.width),
-            rows: centres(height, target.height),
+            columns,
+            rows,
+            least_held,
             levels,
             planes: vec![ScreenPlane::default(); (width * height) as usize],
             #[cfg(test)]
@@ -371,6 +384,10 @@ impl OcclusionBuffer {
             .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
                 (lo.min(p), hi.max(p))
             });
+        let (outline, least) = ((hi - lo).truncate(), self.least_held + 2.0 * cover);
+        if outline.x < least.x || outline.y < least.y {
+            return 0;
+        }
         let cells = self.cells();
         let column_range = cell_range(lo.x, hi.x, cells.width, self.target.width);
         let row_range = cell_range(lo.y, hi.y, cells.height, self.target.height);
