@@ -362,10 +362,37 @@ impl BoxPlanes {
         planes
     }
 
+    /// The planes as a shader evaluates them in f32 at pixel centres of a
+    /// target of `target` pixels ([`ShaderBoxPlanes`]).
+    pub(crate) fn for_shader(&self, target: Resolution) -> ShaderBoxPlanes {
+        let (width, height) = (f64::from(target.width), f64::from(target.height));
+        // Each coefficient rounded to f32, then three products and two sums
+        // in f32 (or fused), move the value by a few steps of 2^-24 of its
+        // terms' size at any centre on the target: 2^-20 of it bounds them.
+        let moved = |p: &ScreenPlane, sign: f64| {
+            let error = (p.constant.abs() + p.per_x.abs() * width + p.per_y.abs() * height) / f64::from(1u32 << 20);
+            [p.per_x as f32, p.per_y as f32, (p.constant + sign * error) as f32, 0.0]
+        };
+        let mut planes = ShaderBoxPlanes {
+            entries: [[0.0, 0.0, UNBOUNDED, 0.0]; 3],
+            exits: [[0.0, 0.0, -UNBOUNDED, 0.0]; 3],
+        };
+        for k in 0..self.count {
+            planes.entries[k] = moved(&self.entries[k], 1.0);
+            planes.exits[k] = moved(&self.exits[k], -1.0);
+        }
+        planes
+    }
+
     /// Planes the depth of any fragment of an object inside the box lies at
     /// or below (see above).
     pub(crate) fn entries(&self) -> &[ScreenPlane] {
         &self.entries[..self.count]
+    }
+
+    /// The planes of the faces opposite the entries, in their order.
+    pub(crate) fn exits(&self) -> &[ScreenPlane] {
+        &self.exits[..self.count]
     }
 
     /// Whether every ray through a pixel centre in the rectangle `x` × `y`
@@ -373,13 +400,29 @@ impl BoxPlanes {
     /// (by another).
     pub(crate) fn missed_over(&self, x: [f64; 2], y: [f64; 2]) -> bool {
         self.entries().iter().enumerate().any(|(i, entry)| {
-            self.exits[..self.count]
+            self.exits()
                 .iter()
                 .enumerate()
                 .any(|(j, exit)| i != j && entry.minus(exit).max_over(x, y) < 0.0)
         })
     }
 }
+
+/// A box's [`BoxPlanes`] as pyramid_test.wgsl reads them: each plane's
+/// `per_x`, `per_y` and `constant` (w pads) in f32, an entry raised and an
+/// exit lowered by what evaluating it in f32 may move it, so the shader's
+/// value at a pixel centre is still at least the entry plane's (at most the
+/// exit plane's) there. A plane of an axis with no face across it holds
+/// [`UNBOUNDED`] (`-UNBOUNDED` for an exit): no bound, and no miss.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct ShaderBoxPlanes {
+    pub(crate) entries: [[f32; 4]; 3],
+    pub(crate) exits: [[f32; 4]; 3],
+}
+
+/// Far beyond any depth, yet finite after any sum the shader makes.
+const UNBOUNDED: f32 = 1e30;
 
 /// Where an object's fragments may lie (rule 2). For each world axis along
 /// which the eye lies outside the object's box, the face across that axis
@@ -556,6 +599,61 @@ pub(crate) mod tests {
             hits > 10_000 && misses_claimed > 10_000,
             "{hits} hits, {misses_claimed} misses claimed"
         );
+    }
+
+    #[test]
+    fn box_planes_as_the_shader_evaluates_them_in_f32_lie_above_their_entries_and_below_their_exits() {
+        use crate::scene::builtin::Rng;
+        let cam = camera();
+        let r = Resolution::DEFAULT;
+        let view = cam.view_rotation();
+        let margins = BoxMargins::new(DepthMargins::for_backend(wgpu::Backend::Gl), &cam, r);
+        let rays = PixelRays::new(&cam, r);
+        let mut rng = Rng::new(47);
+        let mut compared = 0;
+        for _ in 0..200 {
+            let centre =
+                cam.eye + cam.rotation * DVec3::new(rng.range(-8.0, 8.0), rng.range(-6.0, 6.0), -rng.range(0.5, 30.0));
+            let half = DVec3::new(rng.range(0.01, 4.0), rng.range(0.01, 4.0), rng.range(0.01, 4.0));
+            let EyeBox::Testable(q) = eye_relative_box(&cam, &view, margins, &Aabb::new(centre - half, centre + half))
+            else {
+                continue;
+            };
+            let planes = BoxPlanes::new(&cam, &q, &rays, r);
+            let shader = planes.for_shader(r);
+            // The orders a GPU may sum `dot(plane, (x, y, 1))` in, fused or not.
+            let sums = |[a, b, c, _]: [f32; 4], x: f32, y: f32| {
+                [
+                    a * x + b * y + c,
+                    a * x + (b * y + c),
+                    a.mul_add(x, b.mul_add(y, c)),
+                    b.mul_add(y, a * x) + c,
+                ]
+            };
+            for y in (0..r.height).step_by(7) {
+                for x in (0..r.width).step_by(7) {
+                    let (x, y) = (x as f32 + 0.5, y as f32 + 0.5);
+                    let (cx, cy) = (f64::from(x), f64::from(y));
+                    for (k, (entry, exit)) in planes.entries().iter().zip(planes.exits()).enumerate() {
+                        let (above, below) = (entry.at(cx, cy), exit.at(cx, cy));
+                        for value in sums(shader.entries[k], x, y) {
+                            assert!(f64::from(value) >= above, "entry {k} at ({x}, {y}): {value} < {above}");
+                        }
+                        for value in sums(shader.exits[k], x, y) {
+                            assert!(f64::from(value) <= below, "exit {k} at ({x}, {y}): {value} > {below}");
+                        }
+                        compared += 1;
+                    }
+                    // An axis with no face across it bounds nothing and
+                    // meets every exit.
+                    for k in planes.entries().len()..3 {
+                        assert!(sums(shader.entries[k], x, y).iter().all(|&v| v >= 1e29));
+                        assert!(sums(shader.exits[k], x, y).iter().all(|&v| v <= -1e29));
+                    }
+                }
+            }
+        }
+        assert!(compared > 100_000, "{compared} comparisons");
     }
 
     #[test]

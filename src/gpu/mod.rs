@@ -16,7 +16,7 @@ mod timing;
 #[cfg(test)]
 pub(crate) use conservative::tests::{entry_depth, pixel_ray};
 pub use conservative::{BoxMargins, DepthMargins};
-pub(crate) use conservative::{BoxPlanes, EyeBox, PixelRays, QueryBox, ScreenPlane, eye_relative_box};
+pub(crate) use conservative::{BoxPlanes, EyeBox, PixelRays, QueryBox, ScreenPlane, ShaderBoxPlanes, eye_relative_box};
 pub use context::{AdapterReport, BackendChoice, GpuContext, GpuError};
 pub use frame::{Frame, FrameCounters, FrameCtx, FrameOutcome, FrameResources, GpuAudit, GpuFrame, GpuSetup, GpuWork};
 pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};

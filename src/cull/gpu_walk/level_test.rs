@@ -5,11 +5,12 @@
 //! visible node's word of the visibility buffer becomes `VISIBLE`, so the
 //! rest of the walk (pool.rs, walk.wgsl) does not know which ran.
 
+use super::pool::NodeBoxes;
 use super::pyramid::DepthPyramid;
 use super::words::{DISPATCH_OFFSET, boxes_module};
 use crate::gpu::{
-    BOX_TEST, GpuError, GpuSetup, GpuTimer, bind_buffers, bind_group_layout, box_index_buffer, box_test_pipeline,
-    depth_only_pass, set_box_indices,
+    BOX_TEST, GpuContext, GpuError, GpuSetup, GpuTimer, ShaderBoxPlanes, bind_buffers, bind_group_layout,
+    box_index_buffer, box_test_pipeline, depth_only_pass, set_box_indices, storage_buffer,
 };
 
 /// How a level finds which of its queued nodes are visible.
@@ -21,8 +22,23 @@ pub enum NodeTest {
     /// Each box's nearest depth is compared, in a compute pass, with the
     /// farthest depth of a pyramid built from the depth drawn so far over
     /// the box's screen rectangle, read at the finest level where the
-    /// rectangle spans at most `texels` texels across (hiz).
-    Pyramid { texels: u32 },
+    /// rectangle spans at most `texels` texels across (hiz; the base is the
+    /// largest power of two at most the target over `base_divisor`); where that
+    /// fails and the rectangle holds at most `pixels` pixels, the box is
+    /// compared with the depth itself at each of them.
+    Pyramid {
+        texels: u32,
+        base_divisor: u32,
+        pixels: u32,
+    },
+}
+
+impl NodeTest {
+    /// Whether it reads the depth pixel by pixel (and so needs each box's
+    /// planes, [`ShaderBoxPlanes`]).
+    pub fn reads_pixels(&self) -> bool {
+        matches!(self, NodeTest::Pyramid { pixels, .. } if *pixels > 0)
+    }
 }
 
 /// A level's test, with what it binds per queue: `groups[i]` reads queue
@@ -37,6 +53,10 @@ pub(super) enum LevelTest {
         pyramid: DepthPyramid,
         test: wgpu::ComputePipeline,
         groups: [wgpu::BindGroup; 2],
+        /// One [`ShaderBoxPlanes`] per node (one in all where no pixel is
+        /// read), and the depth, for the pixel by pixel test.
+        planes: wgpu::Buffer,
+        pixels_group: wgpu::BindGroup,
     },
 }
 
@@ -51,6 +71,7 @@ impl LevelTest {
         queues: &[wgpu::Buffer; 2],
         level_args: &[wgpu::Buffer; 2],
         node_visible: &wgpu::Buffer,
+        nodes: u32,
     ) -> Result<LevelTest, GpuError> {
         use wgpu::BufferBindingType::{Storage, Uniform};
         use wgpu::ShaderStages as S;
@@ -85,8 +106,16 @@ impl LevelTest {
                     groups: [0, 1].map(|i| bind_buffers(gpu, &mark_layout, &[&queues[i], node_visible])),
                 }
             }
-            NodeTest::Pyramid { texels } => {
-                let module = boxes_module(gpu, "boxes.wgsl + pyramid_test.wgsl", &pyramid_test_source(texels));
+            NodeTest::Pyramid {
+                texels,
+                base_divisor,
+                pixels,
+            } => {
+                let module = boxes_module(
+                    gpu,
+                    "boxes.wgsl + pyramid_test.wgsl",
+                    &pyramid_test_source(texels, pixels),
+                );
                 let test_layout = bind_group_layout(
                     gpu,
                     "pyramid test",
@@ -98,17 +127,65 @@ impl LevelTest {
                         (S::COMPUTE, Uniform),
                     ],
                 );
-                let pyramid = DepthPyramid::new(gpu, setup.resolution, setup.depth)?;
+                let pyramid = DepthPyramid::new(gpu, setup.resolution, base_divisor, setup.depth)?;
                 let [pyramid_texels, shape] = pyramid.bindings();
                 let groups = [0, 1].map(|i| {
                     let buffers = [&queues[i], &level_args[i], node_visible, pyramid_texels, shape];
                     bind_buffers(gpu, &test_layout, &buffers)
                 });
-                let layouts = [Some(box_layout), Some(&test_layout)];
+                let planes_bytes = std::mem::size_of::<ShaderBoxPlanes>() as u64;
+                let planes = storage_buffer(
+                    gpu,
+                    "box planes",
+                    planes_bytes * u64::from(if node_test.reads_pixels() { nodes.max(1) } else { 1 }),
+                    wgpu::BufferUsages::COPY_DST,
+                );
+                let pixels_layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("pixel test"),
+                    entries: &[
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 0,
+                            visibility: S::COMPUTE,
+                            ty: wgpu::BindingType::Buffer {
+                                ty: read,
+                                has_dynamic_offset: false,
+                                min_binding_size: None,
+                            },
+                            count: None,
+                        },
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 1,
+                            visibility: S::COMPUTE,
+                            ty: wgpu::BindingType::Texture {
+                                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                                view_dimension: wgpu::TextureViewDimension::D2,
+                                multisampled: false,
+                            },
+                            count: None,
+                        },
+                    ],
+                });
+                let pixels_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("pixel test"),
+                    layout: &pixels_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: planes.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(setup.depth),
+                        },
+                    ],
+                });
+                let layouts = [Some(box_layout), Some(&test_layout), Some(&pixels_layout)];
                 LevelTest::Pyramid {
                     test: gpu.compute_pipeline(&module, "cs_test", Some(&layouts)),
                     pyramid,
                     groups,
+                    planes,
+                    pixels_group,
                 }
             }
         })
@@ -126,6 +203,16 @@ impl LevelTest {
             if let Some((t, span)) = timer {
                 t.end(encoder, span);
             }
+        }
+    }
+
+    /// Before a walk: stages the tested boxes' planes, where the test
+    /// reads pixels.
+    pub(super) fn stage(&self, gpu: &GpuContext, boxes: &NodeBoxes) {
+        if let LevelTest::Pyramid { planes, .. } = self
+            && !boxes.planes.is_empty()
+        {
+            gpu.queue.write_buffer(planes, 0, bytemuck::cast_slice(&boxes.planes));
         }
     }
 
@@ -153,7 +240,12 @@ impl LevelTest {
                 set_box_indices(&mut pass, box_indices);
                 pass.draw_indexed_indirect(arguments, 0);
             }
-            LevelTest::Pyramid { test, groups, .. } => {
+            LevelTest::Pyramid {
+                test,
+                groups,
+                pixels_group,
+                ..
+            } => {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("test boxes against the pyramid"),
                     timestamp_writes: None,
@@ -161,6 +253,7 @@ impl LevelTest {
                 pass.set_pipeline(test);
                 pass.set_bind_group(0, boxes, &[]);
                 pass.set_bind_group(1, &groups[input], &[]);
+                pass.set_bind_group(2, pixels_group, &[]);
                 pass.dispatch_workgroups_indirect(arguments, DISPATCH_OFFSET);
             }
         }
@@ -176,11 +269,11 @@ impl LevelTest {
     }
 }
 
-/// pyramid_test.wgsl after the one constant it takes from the mode's
+/// pyramid_test.wgsl after the constants it takes from the mode's
 /// parameters (the shared ones come from [`boxes_module`]).
-pub(super) fn pyramid_test_source(texels: u32) -> String {
+pub(super) fn pyramid_test_source(texels: u32, pixels: u32) -> String {
     format!(
-        "const MAX_TEXELS: u32 = {texels}u;\n{}",
+        "const MAX_TEXELS: u32 = {texels}u;\nconst MAX_PIXELS: u32 = {pixels}u;\n{}",
         include_str!("pyramid_test.wgsl")
     )
 }

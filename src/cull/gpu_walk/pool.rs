@@ -15,9 +15,9 @@ use super::words::{
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
 use crate::gpu::{
-    BOX_INDEX_COUNT, BoxMargins, EyeBox, GpuAudit, GpuContext, GpuError, GpuSetup, GpuTimer, GpuWork, IndirectCount,
-    IndirectDraws, QueryBox, Readback, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer,
-    eye_relative_box, storage_buffer,
+    BOX_INDEX_COUNT, BoxMargins, BoxPlanes, EyeBox, GpuAudit, GpuContext, GpuError, GpuSetup, GpuTimer, GpuWork,
+    IndirectCount, IndirectDraws, PixelRays, QueryBox, Readback, Resolution, ShaderBoxPlanes, bind_buffers,
+    bind_group_layout, box_bind_group_layout, box_buffer, eye_relative_box, storage_buffer,
 };
 use crate::object_set::ObjectSet;
 
@@ -114,6 +114,11 @@ pub struct NodeBoxes {
     /// One per node, its state before the walk: [`TO_TEST`],
     /// [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`].
     pub(super) states: Vec<u32>,
+    /// For a test that reads pixels (hiz's), the target it reads them on,
+    /// and one per node, the tested box's planes there (zero for a node
+    /// not tested); empty otherwise.
+    pub(super) planes_on: Option<Resolution>,
+    pub(super) planes: Vec<ShaderBoxPlanes>,
 }
 
 impl NodeBoxes {
@@ -122,8 +127,10 @@ impl NodeBoxes {
     pub fn prepare(&mut self, camera: &Camera, margins: BoxMargins, bounds: impl Iterator<Item = Aabb>) {
         let view = camera.view_rotation();
         let frustum = camera.frustum();
+        let rays = self.planes_on.map(|target| (PixelRays::new(camera, target), target));
         self.boxes.clear();
         self.states.clear();
+        self.planes.clear();
         for b in bounds {
             // A box outside the frustum is hidden, and one reaching the near
             // plane visible, without a test. The first is never queued; the
@@ -138,6 +145,13 @@ impl NodeBoxes {
                     EyeBox::ReachesNear => (bytemuck::Zeroable::zeroed(), REACHES_NEAR),
                 }
             };
+            if let Some((rays, target)) = &rays {
+                let planes = match state {
+                    TO_TEST => BoxPlanes::new(camera, &q, rays, *target).for_shader(*target),
+                    _ => bytemuck::Zeroable::zeroed(),
+                };
+                self.planes.push(planes);
+            }
             self.boxes.push(q);
             self.states.push(state);
         }
@@ -200,7 +214,15 @@ impl GpuWalk {
         let nodes = tree.nodes.len() as u32;
         let scratch = NodeScratch::new(gpu, [&box_layout, &step_layout], camera, nodes);
         let s = &scratch;
-        let test = LevelTest::new(setup, node_test, &box_layout, &s.queues, &s.level_args, &s.node_visible)?;
+        let test = LevelTest::new(
+            setup,
+            node_test,
+            &box_layout,
+            &s.queues,
+            &s.level_args,
+            &s.node_visible,
+            nodes,
+        )?;
         let expand = compute_pipeline(
             gpu,
             "expand a level",
@@ -264,7 +286,10 @@ impl GpuWalk {
             triangles: draws.iter().map(|d| u64::from(d.index_count / 3)).collect(),
             walk: None,
             tree,
-            node_boxes: NodeBoxes::default(),
+            node_boxes: NodeBoxes {
+                planes_on: node_test.reads_pixels().then_some(setup.resolution),
+                ..NodeBoxes::default()
+            },
             seed_queue: Vec::new(),
             words: Vec::new(),
             scratch,
@@ -294,11 +319,12 @@ impl GpuWalk {
         let GpuWork { gpu, encoder, .. } = work;
         let tree = &self.tree;
         let s = &self.scratch;
-        let NodeBoxes { boxes, states } = &self.node_boxes;
+        let NodeBoxes { boxes, states, .. } = &self.node_boxes;
         if !boxes.is_empty() {
             gpu.queue.write_buffer(&s.boxes, 0, bytemuck::cast_slice(boxes));
             gpu.queue.write_buffer(&s.node_visible, 0, bytemuck::cast_slice(states));
         }
+        self.test.stage(gpu, &self.node_boxes);
         // A box outside the frustum cannot be visible: not queueing it
         // spares its test (cs_expand does the same for children).
         self.seed_queue.clear();

@@ -1,13 +1,15 @@
 //! The depth pyramid two-phase hierarchical-depth culling tests boxes
 //! against (issue 20; Unreal's HZB, Bevy's and niagara's depth pyramid):
-//! level 0 a power-of-two size at most the depth target's, each further
-//! level half the one below, down to one texel. Reverse-Z, so a texel keeps
-//! the smallest depth below it: the farthest surface over its footprint.
+//! level 0 a power-of-two size at most the depth target's over a divisor
+//! (1 is niagara's choice), each further level half the one below, down to
+//! one texel. Reverse-Z, so a texel keeps the smallest depth below it: the
+//! farthest surface over its footprint.
 //!
 //! Conservative at every target size, non-power-of-two included (the false
-//! culls of bevy#14062): a base texel covers between one and two target
-//! texels across, and takes the least depth over every target texel its
-//! footprint touches, in part or whole, rather than sampling some of them.
+//! culls of bevy#14062): a base texel covers between one and two times the
+//! divisor's target texels across, and takes the least depth over every
+//! target texel its footprint touches, in part or whole, rather than
+//! sampling some of them.
 //! Halving a power of two is exact, so every further texel covers exactly
 //! 2×2 texels below it. Hence a texel's depth is at most the depth of every
 //! target texel its footprint touches (the test below checks it against
@@ -71,11 +73,13 @@ fn power_of_two_at_most(n: u32) -> u32 {
     1 << (31 - n.max(1).leading_zeros())
 }
 
-/// The levels of the pyramid over a depth target of `resolution`.
-pub fn levels(resolution: Resolution) -> Vec<PyramidLevel> {
+/// The levels of the pyramid over a depth target of `resolution` whose
+/// base is the largest power of two at most its size over `base_divisor`
+/// (and at least one texel) on each side.
+pub fn levels(resolution: Resolution, base_divisor: u32) -> Vec<PyramidLevel> {
     let (mut width, mut height) = (
-        power_of_two_at_most(resolution.width),
-        power_of_two_at_most(resolution.height),
+        power_of_two_at_most(resolution.width / base_divisor),
+        power_of_two_at_most(resolution.height / base_divisor),
     );
     let mut levels = Vec::new();
     let mut offset = 0;
@@ -93,7 +97,12 @@ impl DepthPyramid {
     /// The pyramid over `depth`, a depth target of `resolution`; an error
     /// when its texels exceed what the adapter binds as one buffer (about
     /// 4/3 of the base, which is up to the target's size).
-    pub fn new(gpu: &GpuContext, resolution: Resolution, depth: &wgpu::TextureView) -> Result<DepthPyramid, GpuError> {
+    pub fn new(
+        gpu: &GpuContext,
+        resolution: Resolution,
+        base_divisor: u32,
+        depth: &wgpu::TextureView,
+    ) -> Result<DepthPyramid, GpuError> {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("pyramid.wgsl"),
@@ -103,7 +112,7 @@ impl DepthPyramid {
             gpu.compute_pipeline(&module, "cs_base", None),
             gpu.compute_pipeline(&module, "cs_reduce", None),
         );
-        let levels = levels(resolution);
+        let levels = levels(resolution, base_divisor);
         let last = levels[levels.len() - 1];
         let bytes = u64::from(last.offset + 1) * 4;
         let limit = gpu.device.limits().max_storage_buffer_binding_size;
@@ -300,8 +309,7 @@ mod tests {
         let test = [
             BOXES_WGSL,
             &shader_constants(),
-            "const MAX_TEXELS: u32 = 4u;\n",
-            include_str!("pyramid_test.wgsl"),
+            &super::super::level_test::pyramid_test_source(4, 1024),
         ]
         .concat();
         let (members, size) = struct_layout(&parse(&test), "Pyramid");
@@ -337,7 +345,7 @@ mod tests {
         // came from sizes that are not powers of two.
         let sizes = [(801, 599), (160, 120), (1, 1), (1023, 1), (37, 5), (2, 3)];
         for gpu in &gpus {
-            for (width, height) in sizes {
+            for ((width, height), base_divisor) in sizes.into_iter().flat_map(|s| [(s, 1), (s, 4)]) {
                 let resolution = Resolution { width, height };
                 let options = RunOptions {
                     warmup: 0,
@@ -350,15 +358,17 @@ mod tests {
                 let camera = path.camera(3, resolution.aspect());
                 session.frame(3, &camera, &mut world, &mut dr, 0).unwrap();
                 let depth = session.mode_depth(0).unwrap();
-                let pyramid = DepthPyramid::new(gpu, resolution, &session.targets.mode_depths[0]).unwrap();
+                let pyramid =
+                    DepthPyramid::new(gpu, resolution, base_divisor, &session.targets.mode_depths[0]).unwrap();
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 pyramid.encode(&mut encoder);
                 gpu.queue.submit([encoder.finish()]);
                 let built = pyramid.read(gpu);
                 let base = pyramid.levels()[0];
+                let most = (width / base_divisor).max(1);
                 assert!(
-                    base.width <= width && base.width * 2 > width,
-                    "{width}: base {}",
+                    base.width <= most && base.width * 2 > most,
+                    "{width} over {base_divisor}: base {}",
                     base.width
                 );
                 let last = pyramid.levels()[pyramid.levels().len() - 1];
@@ -377,7 +387,7 @@ mod tests {
                             assert_eq!(
                                 got.to_bits(),
                                 expected.to_bits(),
-                                "{width}x{height} level {k} texel ({x}, {y}) on {}",
+                                "{width}x{height} over {base_divisor}: level {k} texel ({x}, {y}) on {}",
                                 gpu.adapter
                             );
                         }

@@ -20,11 +20,12 @@ struct Level {
 @group(0) @binding(1) var<storage, read_write> pyramid: array<f32>;
 @group(0) @binding(2) var depth: texture_2d<f32>;
 
-// The base: a power-of-two size at most the target's, so each base texel
-// covers source_width / width ∈ [1, 2) target texels across. Its texel
-// takes the least depth over every target texel its footprint touches, in
-// part or whole (two or three across): rounding the footprint outward is
-// what keeps the base conservative at any target size.
+// The base: a power-of-two size at most the target's over a divisor d, so
+// each base texel covers source_width / width ∈ [d, 2d) target texels
+// across (or more, where the target is narrower than d). Its texel takes
+// the least depth over every target texel its footprint touches, in part
+// or whole: rounding the footprint outward is what keeps the base
+// conservative at any target size.
 @compute @workgroup_size(8, 8)
 fn cs_base(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= level.width || id.y >= level.height {

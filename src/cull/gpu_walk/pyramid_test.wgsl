@@ -3,9 +3,11 @@
 // Where raster_mark.wgsl draws each box against the depth drawn so far, this
 // compares each box's nearest depth with the farthest depth of the pyramid
 // (pyramid.rs) over the box's screen rectangle, and marks the node visible
-// unless the box lies behind all of it. TO_TEST, VISIBLE and GROUP_SIZE are
-// written before this text from pool.rs's constants, MAX_TEXELS from hiz's
-// parameter.
+// unless the box lies behind all of it. Where it does not, and the
+// rectangle holds at most MAX_PIXELS pixels, the box is compared with the
+// depth itself at each of them, as raster_mark.wgsl's fragments would be.
+// TO_TEST, VISIBLE and GROUP_SIZE are written before this text from
+// pool.rs's constants, MAX_TEXELS and MAX_PIXELS from hiz's parameters.
 //
 // Why this is conservative (gpu/conservative.rs gives the box its margins):
 // every fragment of the object lies within the box's outline on screen and
@@ -14,6 +16,14 @@
 // read hold every one of those pixels in their footprint, so their least
 // depth is at most the depth drawn at any pixel the object can reach. A box
 // nearer than that at any point passes.
+//
+// Pixel by pixel (gpu/conservative.rs, BoxPlanes): at a pixel centre whose
+// ray meets the box, a fragment of the object lies no nearer than the least
+// of the box's entry planes there (nor than its nearest corner); where an
+// entry plane lies behind another axis's exit plane, the ray misses the box
+// and the object has no fragment at that pixel. The planes come from the
+// CPU in f64, each entry raised and each exit lowered by what their f32
+// evaluation here may move them.
 
 // pyramid.rs's ShapeUniform.
 struct Pyramid {
@@ -31,6 +41,15 @@ struct Pyramid {
 @group(1) @binding(3) var<storage, read> pyramid: array<f32>;
 @group(1) @binding(4) var<uniform> shape: Pyramid;
 
+// gpu/conservative.rs's ShaderBoxPlanes: per plane (per_x, per_y, constant).
+struct BoxPlanes {
+    entries: array<vec4<f32>, 3>,
+    exits: array<vec4<f32>, 3>,
+}
+
+@group(2) @binding(0) var<storage, read> box_planes: array<BoxPlanes>;
+@group(2) @binding(1) var depth: texture_2d<f32>;
+
 @compute @workgroup_size(GROUP_SIZE)
 fn cs_test(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) grid: vec3<u32>) {
     let entries = level_in[1];
@@ -38,13 +57,14 @@ fn cs_test(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
         let node = queue[i];
         // Nodes reaching the near plane are visible already (the CPU marked
         // them); every other queued node is TO_TEST.
-        if node_visible[node] == TO_TEST && box_may_be_visible(boxes[node]) {
+        if node_visible[node] == TO_TEST && box_may_be_visible(node) {
             node_visible[node] = VISIBLE;
         }
     }
 }
 
-fn box_may_be_visible(b: QueryBox) -> bool {
+fn box_may_be_visible(node: u32) -> bool {
+    let b = boxes[node];
     // Every corner lies beyond the near plane (boxes reaching it are never
     // queued as TO_TEST), so w > 0 and the corners bound the projection.
     var low = vec2<f32>(3.4e38);
@@ -88,5 +108,34 @@ fn box_may_be_visible(b: QueryBox) -> bool {
     }
     // Hidden only when the box lies strictly behind (raster_mark.wgsl's
     // boxes pass with GreaterEqual); a NaN counts as visible.
-    return !(nearest < farthest);
+    if nearest < farthest {
+        return false;
+    }
+    let extent = last - first + vec2<u32>(1u);
+    if extent.x * extent.y > MAX_PIXELS {
+        return true;
+    }
+    return pixel_may_show_box(node, first, last, nearest);
+}
+
+// Whether, at some pixel of first..last (inclusive), a ray through its
+// centre meets the box no farther than the depth drawn there.
+fn pixel_may_show_box(node: u32, first: vec2<u32>, last: vec2<u32>, nearest: f32) -> bool {
+    let p = box_planes[node];
+    for (var y = first.y; y <= last.y; y++) {
+        for (var x = first.x; x <= last.x; x++) {
+            let centre = vec3<f32>(f32(x) + 0.5, f32(y) + 0.5, 1.0);
+            let entry = vec3<f32>(dot(p.entries[0].xyz, centre), dot(p.entries[1].xyz, centre), dot(p.entries[2].xyz, centre));
+            let exit = vec3<f32>(dot(p.exits[0].xyz, centre), dot(p.exits[1].xyz, centre), dot(p.exits[2].xyz, centre));
+            let missed = entry.x < exit.y || entry.x < exit.z || entry.y < exit.x || entry.y < exit.z || entry.z < exit.x || entry.z < exit.y;
+            if missed {
+                continue;
+            }
+            let bound = min(nearest, min(entry.x, min(entry.y, entry.z)));
+            if !(bound < textureLoad(depth, vec2<u32>(x, y), 0).r) {
+                return true;
+            }
+        }
+    }
+    return false;
 }

@@ -20,7 +20,7 @@ use super::CullTree;
 use super::pyramid::PyramidLevel;
 use super::words::{OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST};
 use crate::camera::Camera;
-use crate::gpu::{QueryBox, Resolution};
+use crate::gpu::{QueryBox, Resolution, ShaderBoxPlanes};
 
 /// What one walk did, by the CPU's reckoning.
 #[derive(Debug, Default, PartialEq)]
@@ -129,59 +129,147 @@ pub(super) enum Verdict {
     Visible,
     Hidden,
     /// An edge of the box's rectangle within 1e-3 pixel of a pixel's edge,
-    /// or its nearest depth within 1e-5 of the pyramid's: f32 may decide
-    /// either way.
+    /// or a depth compared within 1e-5 of the other (or, for a plane, within
+    /// what its f32 evaluation may move it): f32 may decide either way.
     TooClose,
 }
 
-/// hiz's test of `query` (prepared for `camera` at `size`) against a
-/// pyramid of `levels` holding `texels`, reading the finest level where the
-/// rectangle spans fewer than `span` + 1 texels across, computed in f64.
-pub(super) fn pyramid_verdict(
-    query: &QueryBox,
-    camera: &Camera,
-    size: Resolution,
-    levels: &[PyramidLevel],
-    texels: &[Vec<f32>],
-    span: u32,
-) -> Verdict {
-    let view_projection = camera.projection() * DMat4::from_mat3(camera.view_rotation());
-    let (min, max) = (query.min.xyz().as_dvec3(), query.max.xyz().as_dvec3());
-    let (mut low, mut high, mut nearest) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
-    for corner in 0..8 {
-        let pick = |bit: u32, axis: usize| if corner & bit != 0 { max[axis] } else { min[axis] };
-        let clip = view_projection * DVec3::new(pick(1, 0), pick(2, 1), pick(4, 2)).extend(1.0);
-        let ndc = clip.truncate() / clip.w;
-        low = low.min(ndc.truncate());
-        high = high.max(ndc.truncate());
-        // The raise lifts depth, not the outline (gpu/conservative.rs).
-        nearest = nearest.max(ndc.z + f64::from(query.min.w));
-    }
-    let (width, height) = (f64::from(size.width), f64::from(size.height));
-    // Pixel edges, rows from the top.
-    let edges = [
-        (low.x * 0.5 + 0.5) * width,
-        (high.x * 0.5 + 0.5) * width,
-        (0.5 - high.y * 0.5) * height,
-        (0.5 - low.y * 0.5) * height,
-    ];
-    let pixel = |edge: f64, side: f64| edge.floor().clamp(0.0, side - 1.0) as u32;
-    let first = [pixel(edges[0], width), pixel(edges[2], height)];
-    let last = [pixel(edges[1], width), pixel(edges[3], height)];
-    let (k, [xs, ys]) = texels_read(first, last, size, levels, span);
-    let mut farthest = 1.0f64;
-    for y in ys {
-        for x in xs.clone() {
-            farthest = farthest.min(f64::from(texels[k][(y * levels[k].width + x) as usize]));
+/// A box hiz tests (`query`, prepared for `camera` at `size`), on the
+/// target, in f64: the pixels its rectangle touches and its nearest depth.
+pub(super) struct BoxOnTarget {
+    first: [u32; 2],
+    last: [u32; 2],
+    nearest: f64,
+    on_pixel_edge: bool,
+}
+
+impl BoxOnTarget {
+    pub(super) fn new(query: &QueryBox, camera: &Camera, size: Resolution) -> BoxOnTarget {
+        let view_projection = camera.projection() * DMat4::from_mat3(camera.view_rotation());
+        let (min, max) = (query.min.xyz().as_dvec3(), query.max.xyz().as_dvec3());
+        let (mut low, mut high, mut nearest) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
+        for corner in 0..8 {
+            let pick = |bit: u32, axis: usize| if corner & bit != 0 { max[axis] } else { min[axis] };
+            let clip = view_projection * DVec3::new(pick(1, 0), pick(2, 1), pick(4, 2)).extend(1.0);
+            let ndc = clip.truncate() / clip.w;
+            low = low.min(ndc.truncate());
+            high = high.max(ndc.truncate());
+            // The raise lifts depth, not the outline (gpu/conservative.rs).
+            nearest = nearest.max(ndc.z + f64::from(query.min.w));
+        }
+        let (width, height) = (f64::from(size.width), f64::from(size.height));
+        // Pixel edges, rows from the top.
+        let edges = [
+            (low.x * 0.5 + 0.5) * width,
+            (high.x * 0.5 + 0.5) * width,
+            (0.5 - high.y * 0.5) * height,
+            (0.5 - low.y * 0.5) * height,
+        ];
+        let pixel = |edge: f64, side: f64| edge.floor().clamp(0.0, side - 1.0) as u32;
+        BoxOnTarget {
+            first: [pixel(edges[0], width), pixel(edges[2], height)],
+            last: [pixel(edges[1], width), pixel(edges[3], height)],
+            nearest,
+            on_pixel_edge: edges.iter().any(|e| (e - e.round()).abs() < 1e-3),
         }
     }
-    let on_pixel_edge = edges.iter().any(|e| (e - e.round()).abs() < 1e-3);
-    if on_pixel_edge || (nearest - farthest).abs() <= 1e-5 * farthest {
-        Verdict::TooClose
-    } else if nearest < farthest {
-        Verdict::Hidden
-    } else {
-        Verdict::Visible
+
+    /// Pixels its rectangle holds.
+    pub(super) fn pixels(&self) -> u64 {
+        let side = |axis: usize| u64::from(self.last[axis] - self.first[axis] + 1);
+        side(0) * side(1)
+    }
+
+    /// Whether its rectangle meets the pixels `first` to `last` (x, y,
+    /// inclusive).
+    pub(super) fn meets(&self, first: [u32; 2], last: [u32; 2]) -> bool {
+        (0..2).all(|axis| self.first[axis] <= last[axis] && first[axis] <= self.last[axis])
+    }
+
+    /// The pyramid's part of hiz's test (pyramid_test.wgsl's header): against
+    /// a pyramid of `levels` holding `texels` over a `size` target, reading
+    /// the finest level where the rectangle spans fewer than `span` + 1
+    /// texels across.
+    pub(super) fn pyramid_verdict(
+        &self,
+        size: Resolution,
+        levels: &[PyramidLevel],
+        texels: &[Vec<f32>],
+        span: u32,
+    ) -> Verdict {
+        let (k, [xs, ys]) = texels_read(self.first, self.last, size, levels, span);
+        let mut farthest = 1.0f64;
+        for y in ys {
+            for x in xs.clone() {
+                farthest = farthest.min(f64::from(texels[k][(y * levels[k].width + x) as usize]));
+            }
+        }
+        if self.on_pixel_edge || (self.nearest - farthest).abs() <= 1e-5 * farthest {
+            Verdict::TooClose
+        } else if self.nearest < farthest {
+            Verdict::Hidden
+        } else {
+            Verdict::Visible
+        }
+    }
+
+    /// The pixels' part (pyramid_test.wgsl's `pixel_may_show_box`): each
+    /// pixel of the rectangle against `depth` (of a `size` target, row by
+    /// row) by the box's `planes` as the shader holds them. `Hidden` where
+    /// the box lies behind at every pixel whose ray meets it.
+    pub(super) fn pixel_verdict(&self, planes: &ShaderBoxPlanes, size: Resolution, depth: &[f32]) -> Verdict {
+        // A plane's value at a centre, and what its f32 evaluation may move
+        // it by: a few steps of 2^-24 of its terms' size, 1e-6 of which is
+        // 16 of them.
+        let (width, height) = (f64::from(size.width), f64::from(size.height));
+        let value = |p: &[f32; 4], x: f64, y: f64| {
+            let [a, b, c] = [p[0], p[1], p[2]].map(f64::from);
+            (a * x + b * y + c, 1e-6 * (c.abs() + a.abs() * width + b.abs() * height))
+        };
+        let mut verdict = Verdict::Hidden;
+        for y in self.first[1]..=self.last[1] {
+            for x in self.first[0]..=self.last[0] {
+                let (cx, cy) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+                let entries = planes.entries.map(|p| value(&p, cx, cy));
+                let exits = planes.exits.map(|p| value(&p, cx, cy));
+                // Missed (Hidden), met (Visible), or too close to tell.
+                let mut missed = Verdict::Visible;
+                for (i, (entry, entry_error)) in entries.iter().enumerate() {
+                    for (j, (exit, exit_error)) in exits.iter().enumerate() {
+                        if i == j || missed == Verdict::Hidden {
+                            continue;
+                        } else if (entry - exit).abs() <= entry_error + exit_error {
+                            missed = Verdict::TooClose;
+                        } else if entry < exit {
+                            missed = Verdict::Hidden;
+                        }
+                    }
+                }
+                if missed == Verdict::Hidden {
+                    continue;
+                }
+                let (bound, error) = entries.iter().fold(
+                    (self.nearest, 0.0f64),
+                    |(b, e), &(v, ve)| if v < b { (v, ve) } else { (b, e) },
+                );
+                let drawn = f64::from(depth[(y * size.width + x) as usize]);
+                // In front of what is drawn, the box shows here where its
+                // ray meets it.
+                let here = if (bound - drawn).abs() <= 1e-5 * drawn + error {
+                    Verdict::TooClose
+                } else if bound < drawn {
+                    Verdict::Hidden
+                } else {
+                    missed
+                };
+                match here {
+                    Verdict::Visible => return Verdict::Visible,
+                    Verdict::TooClose => verdict = Verdict::TooClose,
+                    Verdict::Hidden => {}
+                }
+            }
+        }
+        verdict
     }
 }
 
@@ -197,7 +285,9 @@ mod tests {
     use crate::cull::gpu_walk::hiz::{BoxesTested, HizParams, hierarchical_depth_culling};
     use crate::cull::gpu_walk::ioc::iterative_occlusion_culling;
     use crate::cull::gpu_walk::roc::raster_occlusion_culling;
-    use crate::gpu::{BackendChoice, GpuContext, Resolution};
+    use crate::gpu::{
+        BackendChoice, BoxMargins, BoxPlanes, EyeBox, GpuContext, PixelRays, Resolution, eye_relative_box,
+    };
     use crate::hierarchy::{Hierarchy, HierarchyParams};
     use crate::scene::{LoadOptions, SceneSpec, load};
     use crate::world::World;
@@ -208,27 +298,27 @@ mod tests {
     };
 
     /// Runs `mode` through `world` along `path` on `gpu`, holding every
-    /// frame against the twin's walk of `tree` and, for a pyramid test
-    /// reading rectangles of at most `span` texels across, the mark of every
-    /// box it tested against [`pyramid_verdict`]; returns the nodes the
-    /// walks hid.
+    /// frame against the twin's walk of `tree` and, for hiz's test with
+    /// `hiz` parameters, the mark of every box it tested against the
+    /// twin's verdict ([`BoxOnTarget`]); returns the nodes the walks hid.
     fn compare(
         gpu: &GpuContext,
         mut world: World,
         path: &CameraPath,
         mut mode: GpuCulling,
         tree: &CullTree,
-        span: Option<u32>,
+        hiz: Option<HizParams>,
     ) -> u64 {
         let options = RunOptions {
             warmup: 0,
             resolution: RESOLUTION,
             measure_error: false,
         };
-        let mut session = Session::new(gpu, &world, &mut [Box::new(&mut mode)], false, &options).unwrap();
+        // The reference renderer reads each frame's depth back.
+        let mut session = Session::new(gpu, &world, &mut [Box::new(&mut mode)], hiz.is_some(), &options).unwrap();
         let objects = world.scene.objects.len();
         let (mut visible_last, mut hidden) = (vec![false; objects], 0);
-        let (mut tested, mut too_close) = (0, 0);
+        let (mut tested, mut too_close, mut by_pixels) = (0, 0, 0);
         for frame in 0..path.frames {
             world.advance(frame);
             let camera = path.camera(frame, RESOLUTION.aspect());
@@ -240,16 +330,49 @@ mod tests {
             let states = on_gpu.node_states(gpu);
             let twin = walk(tree, &states, &visible_last);
             let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
-            if let Some(span) = span {
+            if let Some(params) = hiz {
                 let (levels, texels) = on_gpu.pyramid(gpu).expect("a pyramid test");
                 let prepared = on_gpu.node_boxes();
+                // The depth as the frame ended: where objects were drawn
+                // after the test (late), nearer than what the test read.
+                let depth = session.mode_depth(0).expect("the session keeps the reference");
+                let (view, rays) = (camera.view_rotation(), PixelRays::new(&camera, RESOLUTION));
+                let margins = BoxMargins::new(gpu.depth_margins, &camera, RESOLUTION);
+                let late: Vec<Option<BoxOnTarget>> = (0..objects)
+                    .filter(|&o| twin.marked[o] && !visible_last[o])
+                    .map(
+                        |o| match eye_relative_box(&camera, &view, margins, &world.scene.objects[o].bounds) {
+                            EyeBox::Testable(q) => Some(BoxOnTarget::new(&q, &camera, RESOLUTION)),
+                            EyeBox::ReachesNear => None,
+                        },
+                    )
+                    .collect();
                 for &node in &twin.queued {
                     let node = node as usize;
                     if prepared.states[node] != TO_TEST {
                         continue;
                     }
                     let marked = states[node] != TO_TEST;
-                    match pyramid_verdict(&prepared.boxes[node], &camera, RESOLUTION, &levels, &texels, span) {
+                    let query = &prepared.boxes[node];
+                    let on_target = BoxOnTarget::new(query, &camera, RESOLUTION);
+                    let verdict = match on_target.pyramid_verdict(RESOLUTION, &levels, &texels, params.texels) {
+                        Verdict::Visible if on_target.pixels() <= u64::from(params.pixels) => {
+                            let planes = BoxPlanes::new(&camera, query, &rays, RESOLUTION).for_shader(RESOLUTION);
+                            let drawn_after =
+                                |b: &Option<BoxOnTarget>| b.as_ref().is_none_or(|b| on_target.meets(b.first, b.last));
+                            match on_target.pixel_verdict(&planes, RESOLUTION, &depth) {
+                                // Hidden by depth drawn after the test proves nothing.
+                                Verdict::Hidden if late.iter().any(drawn_after) => continue,
+                                Verdict::Hidden => {
+                                    by_pixels += 1;
+                                    Verdict::Hidden
+                                }
+                                other => other,
+                            }
+                        }
+                        other => other,
+                    };
+                    match verdict {
                         Verdict::Visible => assert!(marked, "{at}: box {node} is visible"),
                         Verdict::Hidden => assert!(!marked, "{at}: box {node} is hidden"),
                         Verdict::TooClose => too_close += 1,
@@ -280,6 +403,9 @@ mod tests {
             too_close * 50 <= tested,
             "{too_close} of {tested} boxes too close to call"
         );
+        if let Some(params) = hiz.filter(|p| p.pixels > 0) {
+            assert!(by_pixels > 20, "{params:?}: {by_pixels} boxes hidden pixel by pixel");
+        }
         hidden
     }
 
@@ -311,9 +437,9 @@ mod tests {
         ];
         for (width, height) in sizes {
             let size = Resolution { width, height };
-            let levels = super::super::pyramid::levels(size);
-            let base = levels[0];
-            for span in [2, 3, 4, 16] {
+            for (span, base_divisor) in [(2, 1), (3, 1), (4, 1), (16, 1), (4, 4), (2, 8)] {
+                let levels = super::super::pyramid::levels(size, base_divisor);
+                let base = levels[0];
                 for _ in 0..400 {
                     let pick = |side: u32, rng: &mut crate::scene::builtin::Rng| {
                         let a = rng.range(0.0, f64::from(side)) as u32;
@@ -323,7 +449,7 @@ mod tests {
                     let ((x0, x1), (y0, y1)) = (pick(width, &mut rng), pick(height, &mut rng));
                     let (k, [xs, ys]) = texels_read([x0, y0], [x1, y1], size, &levels, span);
                     let at = format!(
-                        "{width}x{height} span {span}: pixels {x0}..={x1} × {y0}..={y1} read level {k} {xs:?} × {ys:?}"
+                        "{width}x{height} over {base_divisor}, span {span}: pixels {x0}..={x1} × {y0}..={y1} read level {k} {xs:?} × {ys:?}"
                     );
                     assert!(xs.end() < &levels[k].width && ys.end() < &levels[k].height, "{at}");
                     if k + 1 < levels.len() {
@@ -384,10 +510,16 @@ mod tests {
             );
             let hidden = compare(gpu, world(), &path, iterative_occlusion_culling(nodes), &cut, None);
             assert!(hidden > 50, "ioc's walks hide nodes ({hidden})");
-            // hiz as it runs by default (objects, 4 texels), as the engines
-            // read (2), and over nodes.
+            // hiz as it runs by default (objects, 4 texels, a base a quarter
+            // the target's, pixel by pixel where that fails), as the engines
+            // read (2 texels, the largest base, no pixels), and over nodes.
             let default = HizParams::from_params(&ModeParams::default()).unwrap();
-            let engines = HizParams { texels: 2, ..default };
+            let engines = HizParams {
+                texels: 2,
+                base_divisor: 1,
+                pixels: 0,
+                ..default
+            };
             let over_nodes = HizParams {
                 boxes: BoxesTested::Nodes,
                 range: nodes,
@@ -395,7 +527,7 @@ mod tests {
             };
             for (params, tree, least) in [(default, &flat, 50), (engines, &flat, 50), (over_nodes, &cut, 20)] {
                 let mode = hierarchical_depth_culling(params);
-                let hidden = compare(gpu, world(), &path, mode, tree, Some(params.texels));
+                let hidden = compare(gpu, world(), &path, mode, tree, Some(params));
                 assert!(hidden > least, "hiz's walks hide boxes ({params:?}: {hidden})");
             }
         }
