@@ -369,17 +369,21 @@ impl BoxPlanes {
         // Each coefficient rounded to f32, then three products and two sums
         // in f32 (or fused), move the value by a few steps of 2^-24 of its
         // terms' size at any centre on the target: 2^-20 of it bounds them.
+        // `None` for a plane f32 cannot hold (a face within f32's smallest
+        // distances of the eye): that axis then bounds nothing.
         let moved = |p: &ScreenPlane, sign: f64| {
             let error = (p.constant.abs() + p.per_x.abs() * width + p.per_y.abs() * height) / f64::from(1u32 << 20);
-            [p.per_x as f32, p.per_y as f32, (p.constant + sign * error) as f32, 0.0]
+            let plane = [p.per_x as f32, p.per_y as f32, (p.constant + sign * error) as f32, 0.0];
+            plane.iter().all(|v| v.abs() < UNBOUNDED / 10.0).then_some(plane)
         };
         let mut planes = ShaderBoxPlanes {
             entries: [[0.0, 0.0, UNBOUNDED, 0.0]; 3],
             exits: [[0.0, 0.0, -UNBOUNDED, 0.0]; 3],
         };
         for k in 0..self.count {
-            planes.entries[k] = moved(&self.entries[k], 1.0);
-            planes.exits[k] = moved(&self.exits[k], -1.0);
+            if let (Some(entry), Some(exit)) = (moved(&self.entries[k], 1.0), moved(&self.exits[k], -1.0)) {
+                (planes.entries[k], planes.exits[k]) = (entry, exit);
+            }
         }
         planes
     }

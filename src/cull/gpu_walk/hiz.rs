@@ -54,7 +54,9 @@
 //!   pyramid's resolution. The pixel by pixel test compares what roc's
 //!   fragments compare, so hiz hides what roc hides; the pyramid then only
 //!   has to hide what lies far behind, and a base a quarter of the target's
-//!   (`base=4`) is built three times faster on llvmpipe for the same result.
+//!   on each side (`base=4`) is built three times faster on llvmpipe for the
+//!   same result. Boxes the pyramid does not hide are queued on the GPU and
+//!   tested one workgroup each, its invocations sharing the pixels.
 
 use std::fmt;
 use std::str::FromStr;
@@ -100,8 +102,8 @@ const PIXELS: ParamInfo = ParamInfo {
     summary: "where the pyramid cannot hide a box whose rectangle holds at most this many pixels, compare it with the depth at each of them, by the planes where pixel rays enter it (0: the pyramid alone, as the engines test; at most 65536)",
 };
 
-/// The most [`PIXELS`] may be.
-const MAX_PIXELS: u32 = 1 << 16;
+/// The range of [`PIXELS`].
+const PIXELS_RANGE: std::ops::RangeInclusive<u32> = 0..=1 << 16;
 
 const BOXES: ParamInfo = ParamInfo {
     key: "boxes",
@@ -176,8 +178,8 @@ impl HizParams {
             let reason = format!("{} is not within 1 to 16", p.base_divisor);
             return Err(ModeError::bad(ModeId::Hiz, &BASE, reason));
         }
-        if p.pixels > MAX_PIXELS {
-            let reason = format!("{} is more than {MAX_PIXELS}", p.pixels);
+        if !PIXELS_RANGE.contains(&p.pixels) {
+            let reason = format!("{} is more than {}", p.pixels, PIXELS_RANGE.end());
             return Err(ModeError::bad(ModeId::Hiz, &PIXELS, reason));
         }
         let fixed = |d| matches!(d, Depth::Fixed(_));

@@ -5,9 +5,8 @@
 //! visible node's word of the visibility buffer becomes `VISIBLE`, so the
 //! rest of the walk (pool.rs, walk.wgsl) does not know which ran.
 
-use super::pool::NodeBoxes;
 use super::pyramid::DepthPyramid;
-use super::words::{DISPATCH_OFFSET, boxes_module};
+use super::words::{DISPATCH_OFFSET, MAX_GROUPS, boxes_module};
 use crate::gpu::{
     BOX_TEST, GpuContext, GpuError, GpuSetup, GpuTimer, ShaderBoxPlanes, bind_buffers, bind_group_layout,
     box_index_buffer, box_test_pipeline, depth_only_pass, set_box_indices, storage_buffer,
@@ -53,11 +52,132 @@ pub(super) enum LevelTest {
         pyramid: DepthPyramid,
         test: wgpu::ComputePipeline,
         groups: [wgpu::BindGroup; 2],
-        /// One [`ShaderBoxPlanes`] per node (one in all where no pixel is
-        /// read), and the depth, for the pixel by pixel test.
-        planes: wgpu::Buffer,
-        pixels_group: wgpu::BindGroup,
+        pixels: Box<PixelTest>,
     },
+}
+
+/// hiz's pixel by pixel test, what pyramid_test.wgsl binds as group 2:
+/// the tested boxes' planes, the depth, and the boxes the pyramid did not
+/// hide (`PixelWork`); where the test reads no pixels, the same bindings,
+/// one entry long, and no passes.
+pub(super) struct PixelTest {
+    /// One [`ShaderBoxPlanes`] per node.
+    planes: wgpu::Buffer,
+    /// `PixelWork`: the indirect dispatch of `cs_pixels`, the count queued,
+    /// the queue.
+    work: wgpu::Buffer,
+    /// `work`'s first words as each level starts: no workgroups, none
+    /// queued.
+    reset: wgpu::Buffer,
+    /// `work` bound to write (binding 2, for `cs_test` and
+    /// `cs_pixel_args`), and to read (binding 3, for `cs_pixels`, whose
+    /// dispatch reads it as arguments too: a buffer bound to write may not
+    /// be read so in the same dispatch).
+    write_group: wgpu::BindGroup,
+    read_group: wgpu::BindGroup,
+    /// `cs_pixel_args` and `cs_pixels`.
+    passes: Option<[wgpu::ComputePipeline; 2]>,
+}
+
+/// Bytes of `PixelWork` before its queue.
+const PIXEL_WORK_HEADER: u64 = 16;
+
+impl PixelTest {
+    /// The test for a tree of `nodes` nodes, reading `depth`, without its
+    /// passes (none where no pixel is read); an error where the planes
+    /// exceed what the adapter binds as one buffer.
+    fn new(
+        gpu: &GpuContext,
+        depth: &wgpu::TextureView,
+        nodes: u32,
+        reads: bool,
+    ) -> Result<(PixelTest, [wgpu::BindGroupLayout; 2]), GpuError> {
+        use wgpu::ShaderStages as S;
+        // Planes for every node; a queue as long as a dispatch is wide.
+        let (planes, queued) = if reads {
+            (nodes.max(1), nodes.clamp(1, MAX_GROUPS))
+        } else {
+            (1, 1)
+        };
+        let plane_bytes = std::mem::size_of::<ShaderBoxPlanes>() as u64 * u64::from(planes);
+        let limit = gpu.device.limits().max_storage_buffer_binding_size;
+        if plane_bytes > limit {
+            return Err(GpuError::TooLarge {
+                what: "storage binding for hiz's box planes (bytes; hiz.pixels=0 needs none)",
+                need: plane_bytes,
+                limit,
+            });
+        }
+        let planes = storage_buffer(gpu, "box planes", plane_bytes, wgpu::BufferUsages::COPY_DST);
+        let work = storage_buffer(
+            gpu,
+            "boxes tested pixel by pixel",
+            // A struct binding is a whole number of its 16-byte alignment.
+            (PIXEL_WORK_HEADER + 4 * u64::from(queued)).next_multiple_of(16),
+            wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::INDIRECT,
+        );
+        let reset = gpu.buffer_with(
+            "no boxes tested pixel by pixel",
+            bytemuck::cast_slice(&[0u32, 1, 1, 0]),
+            wgpu::BufferUsages::COPY_SRC,
+        );
+        let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: S::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let depth_entry = wgpu::BindGroupLayoutEntry {
+            binding: 1,
+            visibility: S::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        // Binding `work_binding` is the queue, to write (2) or read (3).
+        let bind = |work_binding: u32| {
+            let layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("pixel test"),
+                entries: &[storage(0, true), depth_entry, storage(work_binding, work_binding == 3)],
+            });
+            let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("pixel test"),
+                layout: &layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: planes.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(depth),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: work_binding,
+                        resource: work.as_entire_binding(),
+                    },
+                ],
+            });
+            (layout, group)
+        };
+        let ((write_layout, write_group), (read_layout, read_group)) = (bind(2), bind(3));
+        let test = PixelTest {
+            planes,
+            work,
+            reset,
+            write_group,
+            read_group,
+            passes: None,
+        };
+        Ok((test, [write_layout, read_layout]))
+    }
 }
 
 impl LevelTest {
@@ -133,59 +253,23 @@ impl LevelTest {
                     let buffers = [&queues[i], &level_args[i], node_visible, pyramid_texels, shape];
                     bind_buffers(gpu, &test_layout, &buffers)
                 });
-                let planes_bytes = std::mem::size_of::<ShaderBoxPlanes>() as u64;
-                let planes = storage_buffer(
-                    gpu,
-                    "box planes",
-                    planes_bytes * u64::from(if node_test.reads_pixels() { nodes.max(1) } else { 1 }),
-                    wgpu::BufferUsages::COPY_DST,
-                );
-                let pixels_layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                    label: Some("pixel test"),
-                    entries: &[
-                        wgpu::BindGroupLayoutEntry {
-                            binding: 0,
-                            visibility: S::COMPUTE,
-                            ty: wgpu::BindingType::Buffer {
-                                ty: read,
-                                has_dynamic_offset: false,
-                                min_binding_size: None,
-                            },
-                            count: None,
-                        },
-                        wgpu::BindGroupLayoutEntry {
-                            binding: 1,
-                            visibility: S::COMPUTE,
-                            ty: wgpu::BindingType::Texture {
-                                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                                view_dimension: wgpu::TextureViewDimension::D2,
-                                multisampled: false,
-                            },
-                            count: None,
-                        },
-                    ],
-                });
-                let pixels_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("pixel test"),
-                    layout: &pixels_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: planes.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: wgpu::BindingResource::TextureView(setup.depth),
-                        },
-                    ],
-                });
-                let layouts = [Some(box_layout), Some(&test_layout), Some(&pixels_layout)];
+                let (mut pixels, [write_layout, read_layout]) =
+                    PixelTest::new(gpu, setup.depth, nodes, node_test.reads_pixels())?;
+                let pipeline = |entry, pixels_layout| {
+                    let layouts = [Some(box_layout), Some(&test_layout), Some(pixels_layout)];
+                    gpu.compute_pipeline(&module, entry, Some(&layouts))
+                };
+                if node_test.reads_pixels() {
+                    pixels.passes = Some([
+                        pipeline("cs_pixel_args", &write_layout),
+                        pipeline("cs_pixels", &read_layout),
+                    ]);
+                }
                 LevelTest::Pyramid {
-                    test: gpu.compute_pipeline(&module, "cs_test", Some(&layouts)),
+                    test: pipeline("cs_test", &write_layout),
                     pyramid,
                     groups,
-                    planes,
-                    pixels_group,
+                    pixels: Box::new(pixels),
                 }
             }
         })
@@ -206,13 +290,14 @@ impl LevelTest {
         }
     }
 
-    /// Before a walk: stages the tested boxes' planes, where the test
-    /// reads pixels.
-    pub(super) fn stage(&self, gpu: &GpuContext, boxes: &NodeBoxes) {
-        if let LevelTest::Pyramid { planes, .. } = self
-            && !boxes.planes.is_empty()
+    /// Before a walk: stages the tested boxes' `planes` (one per node),
+    /// where the test reads pixels.
+    pub(super) fn stage(&self, gpu: &GpuContext, planes: &[ShaderBoxPlanes]) {
+        if let LevelTest::Pyramid { pixels, .. } = self
+            && pixels.passes.is_some()
+            && !planes.is_empty()
         {
-            gpu.queue.write_buffer(planes, 0, bytemuck::cast_slice(&boxes.planes));
+            gpu.queue.write_buffer(&pixels.planes, 0, bytemuck::cast_slice(planes));
         }
     }
 
@@ -241,20 +326,28 @@ impl LevelTest {
                 pass.draw_indexed_indirect(arguments, 0);
             }
             LevelTest::Pyramid {
-                test,
-                groups,
-                pixels_group,
-                ..
+                test, groups, pixels, ..
             } => {
+                if pixels.passes.is_some() {
+                    encoder.copy_buffer_to_buffer(&pixels.reset, 0, &pixels.work, 0, PIXEL_WORK_HEADER);
+                }
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("test boxes against the pyramid"),
                     timestamp_writes: None,
                 });
-                pass.set_pipeline(test);
                 pass.set_bind_group(0, boxes, &[]);
                 pass.set_bind_group(1, &groups[input], &[]);
-                pass.set_bind_group(2, pixels_group, &[]);
+                pass.set_bind_group(2, &pixels.write_group, &[]);
+                pass.set_pipeline(test);
                 pass.dispatch_workgroups_indirect(arguments, DISPATCH_OFFSET);
+                // The boxes it queued, each by a workgroup of its own.
+                if let Some([sizes, test_pixels]) = &pixels.passes {
+                    pass.set_pipeline(sizes);
+                    pass.dispatch_workgroups(1, 1, 1);
+                    pass.set_bind_group(2, &pixels.read_group, &[]);
+                    pass.set_pipeline(test_pixels);
+                    pass.dispatch_workgroups_indirect(&pixels.work, 0);
+                }
             }
         }
     }

@@ -114,10 +114,10 @@ pub struct NodeBoxes {
     /// One per node, its state before the walk: [`TO_TEST`],
     /// [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`].
     pub(super) states: Vec<u32>,
-    /// For a test that reads pixels (hiz's), the target it reads them on,
-    /// and one per node, the tested box's planes there (zero for a node
-    /// not tested); empty otherwise.
+    /// For a test that reads pixels (hiz's), the target it reads them on.
     pub(super) planes_on: Option<Resolution>,
+    /// With `planes_on`, one per node: the tested box's planes on that
+    /// target (none bounding anything for a node not tested); else empty.
     pub(super) planes: Vec<ShaderBoxPlanes>,
 }
 
@@ -146,11 +146,12 @@ impl NodeBoxes {
                 }
             };
             if let Some((rays, target)) = &rays {
+                // An untested node's planes bound nothing.
                 let planes = match state {
-                    TO_TEST => BoxPlanes::new(camera, &q, rays, *target).for_shader(*target),
-                    _ => bytemuck::Zeroable::zeroed(),
+                    TO_TEST => BoxPlanes::new(camera, &q, rays, *target),
+                    _ => BoxPlanes::default(),
                 };
-                self.planes.push(planes);
+                self.planes.push(planes.for_shader(*target));
             }
             self.boxes.push(q);
             self.states.push(state);
@@ -324,7 +325,7 @@ impl GpuWalk {
             gpu.queue.write_buffer(&s.boxes, 0, bytemuck::cast_slice(boxes));
             gpu.queue.write_buffer(&s.node_visible, 0, bytemuck::cast_slice(states));
         }
-        self.test.stage(gpu, &self.node_boxes);
+        self.test.stage(gpu, &self.node_boxes.planes);
         // A box outside the frustum cannot be visible: not queueing it
         // spares its test (cs_expand does the same for children).
         self.seed_queue.clear();

@@ -22,7 +22,7 @@ struct Level {
 
 // The base: a power-of-two size at most the target's over a divisor d, so
 // each base texel covers source_width / width ∈ [d, 2d) target texels
-// across (or more, where the target is narrower than d). Its texel takes
+// across (the whole side where the target is narrower than d). Its texel takes
 // the least depth over every target texel its footprint touches, in part
 // or whole: rounding the footprint outward is what keeps the base
 // conservative at any target size.

@@ -1,13 +1,16 @@
 // hiz's visibility test (hiz.rs), appended to boxes.wgsl: raster_mark.wgsl's
-// counterpart, a compute pass over the same GPU-built queue of tree nodes.
-// Where raster_mark.wgsl draws each box against the depth drawn so far, this
-// compares each box's nearest depth with the farthest depth of the pyramid
-// (pyramid.rs) over the box's screen rectangle, and marks the node visible
-// unless the box lies behind all of it. Where it does not, and the
-// rectangle holds at most MAX_PIXELS pixels, the box is compared with the
-// depth itself at each of them, as raster_mark.wgsl's fragments would be.
-// TO_TEST, VISIBLE and GROUP_SIZE are written before this text from
-// pool.rs's constants, MAX_TEXELS and MAX_PIXELS from hiz's parameters.
+// counterpart, compute passes over the same GPU-built queue of tree nodes.
+// Where raster_mark.wgsl draws each box against the depth drawn so far,
+// cs_test compares each box's nearest depth with the farthest depth of the
+// pyramid (pyramid.rs) over the box's screen rectangle, and marks the node
+// visible unless the box lies behind all of it. Where it does not, and the
+// rectangle holds at most MAX_PIXELS pixels, the node is queued instead,
+// and cs_pixels compares its box with the depth itself at each of those
+// pixels, as raster_mark.wgsl's fragments would be: one workgroup a box,
+// its invocations sharing the pixels (cs_pixel_args sizes that dispatch).
+// TO_TEST, VISIBLE, GROUP_SIZE and MAX_GROUPS are written before this text
+// from pool.rs's constants, MAX_TEXELS and MAX_PIXELS from hiz's
+// parameters.
 //
 // Why this is conservative (gpu/conservative.rs gives the box its margins):
 // every fragment of the object lies within the box's outline on screen and
@@ -42,13 +45,32 @@ struct Pyramid {
 @group(1) @binding(4) var<uniform> shape: Pyramid;
 
 // gpu/conservative.rs's ShaderBoxPlanes: per plane (per_x, per_y, constant).
-struct BoxPlanes {
+struct ShaderBoxPlanes {
     entries: array<vec4<f32>, 3>,
     exits: array<vec4<f32>, 3>,
 }
 
-@group(2) @binding(0) var<storage, read> box_planes: array<BoxPlanes>;
+// The boxes queued for cs_pixels: the indirect dispatch of cs_pixels first
+// (x, y, z workgroups; level_test.rs resets it to 0, 1, 1 before each
+// level), then how many were queued, then the queue.
+struct PixelWork {
+    groups: vec3<u32>,
+    queued: atomic<u32>,
+    nodes: array<u32>,
+}
+
+// cs_pixels reads the queue (binding 3: the same words) without the
+// atomic, since its dispatch reads them as arguments too.
+struct PixelQueue {
+    groups: vec3<u32>,
+    queued: u32,
+    nodes: array<u32>,
+}
+
+@group(2) @binding(0) var<storage, read> box_planes: array<ShaderBoxPlanes>;
 @group(2) @binding(1) var depth: texture_2d<f32>;
+@group(2) @binding(2) var<storage, read_write> pixel_work: PixelWork;
+@group(2) @binding(3) var<storage, read> pixel_queue: PixelQueue;
 
 @compute @workgroup_size(GROUP_SIZE)
 fn cs_test(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) grid: vec3<u32>) {
@@ -57,14 +79,63 @@ fn cs_test(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
         let node = queue[i];
         // Nodes reaching the near plane are visible already (the CPU marked
         // them); every other queued node is TO_TEST.
-        if node_visible[node] == TO_TEST && box_may_be_visible(node) {
+        if node_visible[node] != TO_TEST {
+            continue;
+        }
+        let on_screen = box_on_screen(boxes[node]);
+        // Hidden only when the box lies strictly behind (raster_mark.wgsl's
+        // boxes pass with GreaterEqual); a NaN counts as visible, and so
+        // does a rectangle a NaN turned inside out.
+        if all(on_screen.first <= on_screen.last) && on_screen.nearest < farthest_over(on_screen) {
+            continue;
+        }
+        let extent = on_screen.last - on_screen.first + vec2<u32>(1u);
+        if all(on_screen.first <= on_screen.last) && extent.x * extent.y <= MAX_PIXELS {
+            let slot = atomicAdd(&pixel_work.queued, 1u);
+            // Past one dispatch's workgroups, it is simply visible.
+            if slot < MAX_GROUPS {
+                pixel_work.nodes[slot] = node;
+                continue;
+            }
+        }
+        node_visible[node] = VISIBLE;
+    }
+}
+
+// One workgroup for each box cs_test queued.
+@compute @workgroup_size(1)
+fn cs_pixel_args() {
+    pixel_work.groups.x = min(atomicLoad(&pixel_work.queued), MAX_GROUPS);
+}
+
+// Set by the first invocation to find the box shown, so the others stop.
+var<workgroup> shown: atomic<u32>;
+
+@compute @workgroup_size(GROUP_SIZE)
+fn cs_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let node = pixel_queue.nodes[group.x];
+    let on_screen = box_on_screen(boxes[node]);
+    let extent = on_screen.last - on_screen.first + vec2<u32>(1u);
+    let planes = box_planes[node];
+    for (var i = lane; i < extent.x * extent.y && atomicLoad(&shown) == 0u; i += GROUP_SIZE) {
+        let pixel = on_screen.first + vec2<u32>(i % extent.x, i / extent.x);
+        if pixel_shows_box(planes, pixel, on_screen.nearest) {
+            atomicStore(&shown, 1u);
             node_visible[node] = VISIBLE;
         }
     }
 }
 
-fn box_may_be_visible(node: u32) -> bool {
-    let b = boxes[node];
+// A box on the target: the framebuffer pixels (rows top down) its outline's
+// bounding rectangle touches, clamped to the target (the object has no
+// pixel beyond it), and its nearest depth, raised.
+struct OnScreen {
+    first: vec2<u32>,
+    last: vec2<u32>,
+    nearest: f32,
+}
+
+fn box_on_screen(b: QueryBox) -> OnScreen {
     // Every corner lies beyond the near plane (boxes reaching it are never
     // queued as TO_TEST), so w > 0 and the corners bound the projection.
     var low = vec2<f32>(3.4e38);
@@ -79,18 +150,23 @@ fn box_may_be_visible(node: u32) -> bool {
         // already raised it.
         nearest = max(nearest, ndc.z);
     }
-    // Framebuffer pixels (rows top down) the rectangle touches, clamped to
-    // the target: the object has no pixel beyond it.
     let size = vec2<f32>(shape.target_size);
     let top_left = (vec2<f32>(low.x, -high.y) * 0.5 + 0.5) * size;
     let bottom_right = (vec2<f32>(high.x, -low.y) * 0.5 + 0.5) * size;
-    let first = vec2<u32>(clamp(floor(top_left), vec2<f32>(0.0), size - 1.0));
-    let last = vec2<u32>(clamp(floor(bottom_right), vec2<f32>(0.0), size - 1.0));
+    return OnScreen(
+        vec2<u32>(clamp(floor(top_left), vec2<f32>(0.0), size - 1.0)),
+        vec2<u32>(clamp(floor(bottom_right), vec2<f32>(0.0), size - 1.0)),
+        nearest,
+    );
+}
+
+// The farthest depth of the pyramid over the rectangle's pixels.
+fn farthest_over(on_screen: OnScreen) -> f32 {
     // Base texel t's footprint spans target pixels [t, t + 1) · target /
     // base, so it touches pixel p when t = ⌊p · base / target⌋; pixels in
     // order map to base texels in order.
-    let base_first = first * shape.base_size / shape.target_size;
-    let base_last = last * shape.base_size / shape.target_size;
+    let base_first = on_screen.first * shape.base_size / shape.target_size;
+    let base_last = on_screen.last * shape.base_size / shape.target_size;
     // The finest level where the rectangle spans at most MAX_TEXELS texels
     // across: a level-k texel holds base texels [t · 2^k, (t + 1) · 2^k).
     var k = 0u;
@@ -106,36 +182,16 @@ fn box_may_be_visible(node: u32) -> bool {
             farthest = min(farthest, pyramid[level.z + y * level.x + x]);
         }
     }
-    // Hidden only when the box lies strictly behind (raster_mark.wgsl's
-    // boxes pass with GreaterEqual); a NaN counts as visible.
-    if nearest < farthest {
-        return false;
-    }
-    let extent = last - first + vec2<u32>(1u);
-    if extent.x * extent.y > MAX_PIXELS {
-        return true;
-    }
-    return pixel_may_show_box(node, first, last, nearest);
+    return farthest;
 }
 
-// Whether, at some pixel of first..last (inclusive), a ray through its
-// centre meets the box no farther than the depth drawn there.
-fn pixel_may_show_box(node: u32, first: vec2<u32>, last: vec2<u32>, nearest: f32) -> bool {
-    let p = box_planes[node];
-    for (var y = first.y; y <= last.y; y++) {
-        for (var x = first.x; x <= last.x; x++) {
-            let centre = vec3<f32>(f32(x) + 0.5, f32(y) + 0.5, 1.0);
-            let entry = vec3<f32>(dot(p.entries[0].xyz, centre), dot(p.entries[1].xyz, centre), dot(p.entries[2].xyz, centre));
-            let exit = vec3<f32>(dot(p.exits[0].xyz, centre), dot(p.exits[1].xyz, centre), dot(p.exits[2].xyz, centre));
-            let missed = entry.x < exit.y || entry.x < exit.z || entry.y < exit.x || entry.y < exit.z || entry.z < exit.x || entry.z < exit.y;
-            if missed {
-                continue;
-            }
-            let bound = min(nearest, min(entry.x, min(entry.y, entry.z)));
-            if !(bound < textureLoad(depth, vec2<u32>(x, y), 0).r) {
-                return true;
-            }
-        }
-    }
-    return false;
+// Whether a ray through the centre of `pixel` meets the box no farther than
+// the depth drawn there.
+fn pixel_shows_box(planes: ShaderBoxPlanes, pixel: vec2<u32>, nearest: f32) -> bool {
+    let centre = vec3<f32>(vec2<f32>(pixel) + 0.5, 1.0);
+    let entry = vec3<f32>(dot(planes.entries[0].xyz, centre), dot(planes.entries[1].xyz, centre), dot(planes.entries[2].xyz, centre));
+    let exit = vec3<f32>(dot(planes.exits[0].xyz, centre), dot(planes.exits[1].xyz, centre), dot(planes.exits[2].xyz, centre));
+    let missed = entry.x < exit.y || entry.x < exit.z || entry.y < exit.x || entry.y < exit.z || entry.z < exit.x || entry.z < exit.y;
+    let bound = min(nearest, min(entry.x, min(entry.y, entry.z)));
+    return !missed && !(bound < textureLoad(depth, pixel, 0).r);
 }

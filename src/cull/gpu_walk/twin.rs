@@ -6,8 +6,9 @@
 //!   frustum and near-plane rules and the level tests' marks) and the
 //!   objects visible in the last frame, what the walk must have counted,
 //!   marked and drawn;
-//! - [`pyramid_verdict`], of hiz's box test (pyramid_test.wgsl's header):
-//!   in f64, whether a box lies behind the pyramid.
+//! - [`BoxOnTarget`], of hiz's box test (pyramid_test.wgsl's header): in
+//!   f64, whether a box lies behind the pyramid, and pixel by pixel behind
+//!   the depth where the pyramid does not hide it.
 //!
 //! The test below holds the GPU's audit and marks against them, frame by
 //! frame.
@@ -314,7 +315,7 @@ mod tests {
             resolution: RESOLUTION,
             measure_error: false,
         };
-        // The reference renderer reads each frame's depth back.
+        // The error meter reads the mode's depth back each frame.
         let mut session = Session::new(gpu, &world, &mut [Box::new(&mut mode)], hiz.is_some(), &options).unwrap();
         let objects = world.scene.objects.len();
         let (mut visible_last, mut hidden) = (vec![false; objects], 0);
@@ -335,7 +336,7 @@ mod tests {
                 let prepared = on_gpu.node_boxes();
                 // The depth as the frame ended: where objects were drawn
                 // after the test (late), nearer than what the test read.
-                let depth = session.mode_depth(0).expect("the session keeps the reference");
+                let depth = session.mode_depth(0).expect("the session has an error meter");
                 let (view, rays) = (camera.view_rotation(), PixelRays::new(&camera, RESOLUTION));
                 let margins = BoxMargins::new(gpu.depth_margins, &camera, RESOLUTION);
                 let late: Vec<Option<BoxOnTarget>> = (0..objects)

@@ -246,7 +246,9 @@ pub struct OcclusionBuffer {
     planes: Vec<ScreenPlane>,
     /// Breaks the rule above on purpose, for the test that sees the error
     /// meter catch it: a cell takes a triangle's depth at its middle
-    /// wherever the triangle covers the middle, as a plain rasteriser does.
+    /// wherever the triangle covers the middle, as a plain rasteriser does
+    /// (among the cells an occluder can cover whole, which the bounds
+    /// check in [`OcclusionBuffer::rasterise`] leaves to it).
     #[cfg(test)]
     pub(super) careless: bool,
 }
@@ -598,7 +600,7 @@ fn cell_range(lo: f64, hi: f64, cells: u32, pixels: u32) -> Range<u32> {
 }
 
 /// The cells of `range` (along a side whose cells hold the pixel centres
-/// `centres`) whose centres all lie in [from, to]; none for a NaN bound.
+/// `centres`) whose centres all lie in [from, to]; none when `to` is NaN.
 fn centred_within(centres: &[[f64; 2]], range: Range<u32>, from: f64, to: f64) -> Range<u32> {
     let start = range.start;
     let span = &centres[start as usize..range.end as usize];
