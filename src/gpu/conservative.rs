@@ -555,9 +555,28 @@ pub(crate) mod tests {
         assert!(hits > 200, "the box must cover a good part of the view: {hits}");
     }
 
+    /// Up to 200 boxes of random size and place in front of [`camera`],
+    /// each with its test box for a `DEFAULT` target, seeded by `seed`.
+    fn random_boxes_in_view(seed: u64) -> Vec<(Aabb, QueryBox)> {
+        let cam = camera();
+        let margins = BoxMargins::new(DepthMargins::for_backend(wgpu::Backend::Gl), &cam, Resolution::DEFAULT);
+        let mut rng = crate::scene::builtin::Rng::new(seed);
+        (0..200)
+            .filter_map(|_| {
+                let centre = cam.eye
+                    + cam.rotation * DVec3::new(rng.range(-8.0, 8.0), rng.range(-6.0, 6.0), -rng.range(0.5, 30.0));
+                let half = DVec3::new(rng.range(0.01, 4.0), rng.range(0.01, 4.0), rng.range(0.01, 4.0));
+                let b = Aabb::new(centre - half, centre + half);
+                match eye_relative_box(&cam, &cam.view_rotation(), margins, &b) {
+                    EyeBox::Testable(q) => Some((b, q)),
+                    EyeBox::ReachesNear => None,
+                }
+            })
+            .collect()
+    }
+
     #[test]
     fn box_planes_lie_above_every_surviving_fragment_and_claim_misses_only_where_rays_miss_the_object() {
-        use crate::scene::builtin::Rng;
         let cam = camera();
         let r = Resolution::DEFAULT;
         let view = cam.view_rotation();
@@ -565,16 +584,8 @@ pub(crate) mod tests {
         let rays = PixelRays::new(&cam, r);
         // The rays as the scene's fragment stage computes them, in f32.
         let [per_x, per_y, constant] = rays.uniform();
-        let mut rng = Rng::new(31);
         let (mut hits, mut misses_claimed) = (0, 0);
-        for _ in 0..200 {
-            let centre =
-                cam.eye + cam.rotation * DVec3::new(rng.range(-8.0, 8.0), rng.range(-6.0, 6.0), -rng.range(0.5, 30.0));
-            let half = DVec3::new(rng.range(0.01, 4.0), rng.range(0.01, 4.0), rng.range(0.01, 4.0));
-            let b = Aabb::new(centre - half, centre + half);
-            let EyeBox::Testable(q) = eye_relative_box(&cam, &view, margins, &b) else {
-                continue;
-            };
+        for (b, q) in random_boxes_in_view(31) {
             let planes = BoxPlanes::new(&cam, &q, &rays, r);
             let limit = FragmentLimit::new(&cam, &view, margins, &b);
             let (min, max) = grown_eye_relative(&cam, &b, margins.growth / 2.0);
@@ -607,22 +618,11 @@ pub(crate) mod tests {
 
     #[test]
     fn box_planes_as_the_shader_evaluates_them_in_f32_lie_above_their_entries_and_below_their_exits() {
-        use crate::scene::builtin::Rng;
         let cam = camera();
         let r = Resolution::DEFAULT;
-        let view = cam.view_rotation();
-        let margins = BoxMargins::new(DepthMargins::for_backend(wgpu::Backend::Gl), &cam, r);
         let rays = PixelRays::new(&cam, r);
-        let mut rng = Rng::new(47);
         let mut compared = 0;
-        for _ in 0..200 {
-            let centre =
-                cam.eye + cam.rotation * DVec3::new(rng.range(-8.0, 8.0), rng.range(-6.0, 6.0), -rng.range(0.5, 30.0));
-            let half = DVec3::new(rng.range(0.01, 4.0), rng.range(0.01, 4.0), rng.range(0.01, 4.0));
-            let EyeBox::Testable(q) = eye_relative_box(&cam, &view, margins, &Aabb::new(centre - half, centre + half))
-            else {
-                continue;
-            };
+        for (_, q) in random_boxes_in_view(47) {
             let planes = BoxPlanes::new(&cam, &q, &rays, r);
             let shader = planes.for_shader(r);
             // The orders a GPU may sum `dot(plane, (x, y, 1))` in, fused or not.

@@ -24,7 +24,7 @@ pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};
 /// way (the GPU walk).
 pub(crate) use queries::{
     BOX_INDEX_COUNT, BOX_TEST, BOXES_WGSL, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer,
-    box_index_buffer, box_test_pipeline, depth_only_pass, set_box_indices, storage_buffer,
+    box_index_buffer, box_test_pipeline, check_storage_binding, depth_only_pass, set_box_indices, storage_buffer,
 };
 pub use queries::{BoxTest, BoxVisibility, QUERIES_PER_SET, QueryPool};
 pub use readback::Readback;

@@ -18,7 +18,7 @@
 use std::time::{Duration, Instant};
 
 use super::conservative::{BoxMargins, EyeBox, QueryBox, eye_relative_box};
-use super::context::GpuContext;
+use super::context::{GpuContext, GpuError};
 use super::readback::Readback;
 use super::targets::DEPTH_FORMAT;
 use crate::bounds::Aabb;
@@ -585,6 +585,20 @@ pub(crate) fn bind_buffers(
         layout,
         entries: &entries,
     })
+}
+
+/// An error where `bytes` exceed what the adapter binds as one storage
+/// buffer; `what` names the binding (and what would fit) in it.
+pub(crate) fn check_storage_binding(gpu: &GpuContext, what: &'static str, bytes: u64) -> Result<(), GpuError> {
+    let limit = gpu.device.limits().max_storage_buffer_binding_size;
+    if bytes > limit {
+        return Err(GpuError::TooLarge {
+            what,
+            need: bytes,
+            limit,
+        });
+    }
+    Ok(())
 }
 
 pub(crate) fn storage_buffer(gpu: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {

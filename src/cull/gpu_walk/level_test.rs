@@ -9,7 +9,7 @@ use super::pyramid::DepthPyramid;
 use super::words::{DISPATCH_OFFSET, MAX_GROUPS, boxes_module};
 use crate::gpu::{
     BOX_TEST, GpuContext, GpuError, GpuSetup, GpuTimer, ShaderBoxPlanes, bind_buffers, bind_group_layout,
-    box_index_buffer, box_test_pipeline, depth_only_pass, set_box_indices, storage_buffer,
+    box_index_buffer, box_test_pipeline, check_storage_binding, depth_only_pass, set_box_indices, storage_buffer,
 };
 
 /// How a level finds which of its queued nodes are visible.
@@ -100,14 +100,11 @@ impl PixelTest {
             (1, 1)
         };
         let plane_bytes = std::mem::size_of::<ShaderBoxPlanes>() as u64 * u64::from(planes);
-        let limit = gpu.device.limits().max_storage_buffer_binding_size;
-        if plane_bytes > limit {
-            return Err(GpuError::TooLarge {
-                what: "storage binding for hiz's box planes (bytes; hiz.pixels=0 needs none)",
-                need: plane_bytes,
-                limit,
-            });
-        }
+        check_storage_binding(
+            gpu,
+            "storage binding for hiz's box planes (bytes; hiz.pixels=0 needs none)",
+            plane_bytes,
+        )?;
         let planes = storage_buffer(gpu, "box planes", plane_bytes, wgpu::BufferUsages::COPY_DST);
         let work = storage_buffer(
             gpu,

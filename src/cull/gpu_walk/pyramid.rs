@@ -16,7 +16,7 @@
 //! target texel its footprint touches (the test below checks it against
 //! that definition, computed from the depth target alone).
 
-use crate::gpu::{GpuContext, GpuError, Resolution, storage_buffer};
+use crate::gpu::{GpuContext, GpuError, Resolution, check_storage_binding, storage_buffer};
 
 /// One level of the pyramid: its size and where it starts in the buffer
 /// (in texels).
@@ -116,14 +116,11 @@ impl DepthPyramid {
         let levels = levels(resolution, base_divisor);
         let last = levels[levels.len() - 1];
         let bytes = u64::from(last.offset + 1) * 4;
-        let limit = gpu.device.limits().max_storage_buffer_binding_size;
-        if bytes > limit {
-            return Err(GpuError::TooLarge {
-                what: "storage binding for hiz's depth pyramid (bytes; a smaller --resolution fits)",
-                need: bytes,
-                limit,
-            });
-        }
+        check_storage_binding(
+            gpu,
+            "storage binding for hiz's depth pyramid (bytes; a smaller --resolution fits)",
+            bytes,
+        )?;
         let mut shape = ShapeUniform {
             target: [resolution.width, resolution.height],
             base: [levels[0].width, levels[0].height],
