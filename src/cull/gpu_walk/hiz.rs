@@ -9,7 +9,7 @@
 //!    each texel keeps the farthest depth below it, conservative at any
 //!    target size; its base is the largest power of two at most the
 //!    target's size over `base` (4 by default).
-//! 3. **Cull**: one compute dispatch a level tests the boxes of every object
+//! 3. **Cull**: a compute pass a level tests the boxes of every object
 //!    in the frustum (`boxes=objects`, as Bevy and niagara do), or of the
 //!    hierarchy's nodes from a start depth (`boxes=nodes`): the box's screen
 //!    rectangle rounded outward, the finest level where it spans at most
@@ -18,7 +18,8 @@
 //!    does not hide it and the rectangle holds at most `pixels` pixels
 //!    (4096 by default), the box is compared with the depth itself at each
 //!    pixel, by the planes where the pixel's ray enters it
-//!    (gpu/conservative.rs's `BoxPlanes`, made on the CPU) or misses it.
+//!    (gpu/conservative.rs's `BoxPlanes`, made on the CPU) or misses it: the
+//!    pass queues such boxes, and a second dispatch gives each a workgroup.
 //!    Boxes reaching the near plane are visible untested, as in niagara.
 //! 4. **Late**: the newly visible objects are drawn (indirect, the count
 //!    from the GPU). Every object found visible in step 3, drawn early or
@@ -70,7 +71,7 @@ use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInf
 /// This mode's entry in the registry.
 pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Hiz,
-    summary: "two-phase hierarchical-depth culling: last frame's visible objects drawn, a depth pyramid built from them, every box tested against it in a compute pass, the newly visible drawn (Unreal's HZB, Bevy, niagara)",
+    summary: "two-phase hierarchical-depth culling: last frame's visible objects drawn, a depth pyramid built from them, every box tested against it in a compute pass (small ones pixel by pixel where it cannot hide them), the newly visible drawn (Unreal's HZB, Bevy, niagara)",
     conservative: true,
     params: &[TEXELS, BASE, PIXELS, BOXES, START, BOTTOM],
     needs: Needs::GpuCulling,

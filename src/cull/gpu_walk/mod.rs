@@ -24,7 +24,8 @@
 //!    with forced early depth testing; a fragment that passes marks its node
 //!    in the visibility buffer (raster_mark.wgsl). hiz instead builds the
 //!    depth pyramid once, before the first level, and a compute pass marks
-//!    every queued box not behind the pyramid (pyramid_test.wgsl). Then
+//!    every queued box not behind the pyramid, or for a small one not
+//!    behind the depth at each of its pixels (pyramid_test.wgsl). Then
 //!    `cs_expand` queues
 //!    the children of visible inner nodes and marks the objects of visible
 //!    leaves (walk.wgsl). The queue's length stays on the GPU: it is
