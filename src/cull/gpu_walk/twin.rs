@@ -249,10 +249,13 @@ impl BoxOnTarget {
                 if missed == Verdict::Hidden {
                     continue;
                 }
-                let (bound, error) = entries.iter().fold(
-                    (self.nearest, 0.0f64),
-                    |(b, e), &(v, ve)| if v < b { (v, ve) } else { (b, e) },
-                );
+                // The shader's least may be another entry within its own
+                // error, so the largest error of a real plane (not one
+                // standing for no bound) bounds the least's.
+                let (bound, error) = entries
+                    .iter()
+                    .filter(|(v, _)| v.abs() < 1e29)
+                    .fold((self.nearest, 0.0f64), |(b, e), &(v, ve)| (b.min(v), e.max(ve)));
                 let drawn = f64::from(depth[(y * size.width + x) as usize]);
                 // In front of what is drawn, the box shows here where its
                 // ray meets it.
