@@ -92,8 +92,9 @@ fn cs_test(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
         let extent = on_screen.last - on_screen.first + vec2<u32>(1u);
         if all(on_screen.first <= on_screen.last) && extent.x * extent.y <= MAX_PIXELS {
             let slot = atomicAdd(&pixel_work.queued, 1u);
-            // Past one dispatch's workgroups, it is simply visible.
-            if slot < MAX_GROUPS {
+            // Past the queue (one dispatch's workgroups at most), it is
+            // simply visible.
+            if slot < min(MAX_GROUPS, arrayLength(&pixel_work.nodes)) {
                 pixel_work.nodes[slot] = node;
                 continue;
             }
@@ -105,7 +106,7 @@ fn cs_test(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
 // One workgroup for each box cs_test queued.
 @compute @workgroup_size(1)
 fn cs_pixel_args() {
-    pixel_work.groups.x = min(atomicLoad(&pixel_work.queued), MAX_GROUPS);
+    pixel_work.groups.x = min(atomicLoad(&pixel_work.queued), min(MAX_GROUPS, arrayLength(&pixel_work.nodes)));
 }
 
 // Set by the first invocation to find the box shown, so the others stop.
@@ -113,8 +114,20 @@ var<workgroup> shown: atomic<u32>;
 
 @compute @workgroup_size(GROUP_SIZE)
 fn cs_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    // Cleared here rather than trusted to start at zero: a flag left set
+    // would skip the test and leave the box hidden.
+    if lane == 0u {
+        atomicStore(&shown, 0u);
+    }
+    workgroupBarrier();
     let node = pixel_queue.nodes[group.x];
     let on_screen = box_on_screen(boxes[node]);
+    // cs_test queued only rectangles the right way round; should this
+    // one's rounding differ, it is visible.
+    if !all(on_screen.first <= on_screen.last) {
+        node_visible[node] = VISIBLE;
+        return;
+    }
     let extent = on_screen.last - on_screen.first + vec2<u32>(1u);
     let planes = box_planes[node];
     for (var i = lane; i < extent.x * extent.y && atomicLoad(&shown) == 0u; i += GROUP_SIZE) {

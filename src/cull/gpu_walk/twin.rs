@@ -214,7 +214,7 @@ impl BoxOnTarget {
         }
     }
 
-    /// The pixels' part (pyramid_test.wgsl's `pixel_may_show_box`): each
+    /// The pixels' part (pyramid_test.wgsl's `cs_pixels` and `pixel_shows_box`): each
     /// pixel of the rectangle against `depth` (of a `size` target, row by
     /// row) by the box's `planes` as the shader holds them. `Hidden` where
     /// the box lies behind at every pixel whose ray meets it.
