@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{THREE_OBJECTS_OBJ, occlu, own_stderr, stdout, write};
+use common::{THREE_OBJECTS_OBJ, TINY_RUN, occlu, own_stderr, stdout, write};
 
 /// Runs occlu and checks it fails with exit code `code` and one line of
 /// stderr that contains every one of `needles`.
@@ -23,22 +23,11 @@ fn said_one_line(out: &std::process::Output, code: i32, needles: &[&str], what: 
     assert!(!lines[0].contains("panicked"), "{what}: {}", lines[0]);
 }
 
-/// Bench arguments that keep a run tiny.
-const QUICK: &[&str] = &[
-    "--scene",
-    "city:blocks=1",
-    "--frames",
-    "2",
-    "--warmup",
-    "0",
-    "--resolution",
-    "64x48",
-];
-
+/// A tiny run at 64×48 into `out`, with `extra`.
 fn bench_args<'a>(extra: &[&'a str], out: &'a str) -> Vec<&'a str> {
     let mut a = vec!["bench"];
-    a.extend_from_slice(QUICK);
-    a.extend_from_slice(&["--out", out]);
+    a.extend_from_slice(TINY_RUN);
+    a.extend_from_slice(&["--resolution", "64x48", "--out", out]);
     a.extend_from_slice(extra);
     a
 }

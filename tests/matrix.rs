@@ -9,7 +9,7 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use common::{THREE_OBJECTS_OBJ, boxes_obj, occlu, own_stderr, stdout, write};
+use common::{THREE_OBJECTS_OBJ, TINY_RUN, boxes_obj, occlu, own_stderr, stdout, write};
 use glam::DVec3;
 use occlu::report::Summary;
 use occlu::report::merge::Merged;
@@ -178,24 +178,21 @@ fn three_shards_run_exactly_the_runs_of_the_whole_matrix() {
     }
     // One run sharded is a matrix of one.
     let one = dir.path().join("one");
-    let quick = [
-        "bench",
-        "--scene",
-        "city:blocks=1",
-        "--frames",
-        "1",
-        "--warmup",
-        "0",
-        "--resolution",
-        "64x48",
-        "--modes",
-        "vfc",
-        "--backend",
-        backend,
-        "--quiet",
-        "--out",
-        s(&one),
-    ];
+    let quick: Vec<&str> = ["bench"]
+        .into_iter()
+        .chain(TINY_RUN.iter().copied())
+        .chain([
+            "--resolution",
+            "64x48",
+            "--modes",
+            "vfc",
+            "--backend",
+            backend,
+            "--quiet",
+            "--out",
+            s(&one),
+        ])
+        .collect();
     let first: Vec<&str> = quick.iter().copied().chain(["--shard", "1/2"]).collect();
     assert!(occlu(&first).status.success());
     assert_eq!(run_folders(&one), ["01-city-blocks-1-generated"]);
@@ -363,24 +360,12 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
     // resolution is refused; a different result on one adapter is
     // ambiguous; the same folder twice counts once.
     let quick = |out: &Path, resolution: &str| {
-        let args = [
-            "bench",
-            "--scene",
-            "city:blocks=1",
-            "--frames",
-            "2",
-            "--warmup",
-            "0",
-            "--modes",
-            "dr,vfc,oracle",
-            "--resolution",
-            resolution,
-            "--backend",
-            backend,
-            "--quiet",
-            "--out",
-            s(out),
-        ];
+        let args: Vec<&str> = ["bench"]
+            .into_iter()
+            .chain(TINY_RUN.iter().copied())
+            .chain(["--modes", "dr,vfc,oracle", "--resolution", resolution])
+            .chain(["--backend", backend, "--quiet", "--out", s(out)])
+            .collect();
         assert!(occlu(&args).status.success());
     };
     let (small, wide, again) = (

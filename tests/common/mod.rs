@@ -16,6 +16,10 @@ use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::scene::{LoadOptions, Scene, SceneBuilder, SceneSpec, load};
 use occlu::world::World;
 
+/// `bench` arguments that keep a run tiny: a one-block city, two frames,
+/// no warm-up (a resolution is the caller's).
+pub const TINY_RUN: &[&str] = &["--scene", "city:blocks=1", "--frames", "2", "--warmup", "0"];
+
 /// Runs the `occlu` binary built for these tests.
 pub fn occlu(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_occlu"))
