@@ -300,7 +300,9 @@ impl LevelTest {
 
     /// Marks the visible nodes of queue `input`, whose level's arguments
     /// (`arguments`) hold an indexed indirect draw of its boxes and, at
-    /// [`DISPATCH_OFFSET`], an indirect dispatch over it.
+    /// [`DISPATCH_OFFSET`], an indirect dispatch over it. The marking pass
+    /// draws against `depth`; the pyramid test reads the depth it was made
+    /// over (the same target: [`GpuSetup::depth`]).
     pub(super) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
