@@ -35,7 +35,7 @@ pub enum NodeTest {
 impl NodeTest {
     /// Whether it reads the depth pixel by pixel (and so needs each box's
     /// planes, [`ShaderBoxPlanes`]).
-    pub fn reads_pixels(&self) -> bool {
+    pub(super) fn reads_pixels(&self) -> bool {
         matches!(self, NodeTest::Pyramid { pixels, .. } if *pixels > 0)
     }
 }
