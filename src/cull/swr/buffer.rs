@@ -7,8 +7,9 @@
 //! Why it is conservative. A box is hidden when, at every pixel centre its
 //! rectangle covers, it lies behind what the buffer holds there (a cell's
 //! depth, or its plane; [`OcclusionBuffer::hides`]) or its pixel ray misses
-//! it. That is safe if, at every pixel centre a cell holds, the occluders
-//! drawn this frame are no farther than the cell's depth and its plane. The
+//! it. That is safe if, at every pixel centre a cell holds, the occluder
+//! it took its depth from is drawn this frame (the mode's step 5) no
+//! farther than the cell's depth and its plane. The
 //! GPU draws a triangle whose corners it placed within some error of ours
 //! (sub-pixel snapping, [`VERTEX_ERROR`]; f32 vertices,
 //! [`VertexError`]), so at a centre it covers it may draw the depth of any

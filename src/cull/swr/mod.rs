@@ -5,9 +5,7 @@
 //! reads nothing back. Each frame, on the CPU:
 //!
 //! 1. **Occluders**: last frame's visible objects, largest on screen first,
-//!    while their triangles fit `swr.triangles`. They are drawn this frame
-//!    whatever the test below finds, so the buffer holds only depth that
-//!    really is on screen.
+//!    while their triangles fit `swr.triangles`.
 //! 2. **Rasterise** their triangles, projected in f64, into a buffer of
 //!    `swr.resolution` cells, conservatively (buffer.rs: a cell takes an
 //!    occluder's farthest depth over the pixel centres it holds, and only
@@ -31,8 +29,13 @@
 //!    may also lie behind the cell's plane. A hidden node stops its
 //!    subtree; a box reaching the near plane is visible. A leaf's objects
 //!    are tested one by one.
-//! 5. **Draw** the visible objects not already drawn as occluders; the
-//!    visible objects are next frame's occluder candidates.
+//! 5. **Draw** the visible objects, the occluders among them first (in
+//!    their order, largest first, for the GPU's early depth test); they are
+//!    next frame's occluder candidates. An occluder found hidden is not
+//!    drawn, and the buffer still holds only depth that is drawn: the
+//!    occluder a cell took its depth and plane from is never found hidden,
+//!    since its own box lies nowhere behind its own triangles, so at that
+//!    cell every test of it, or of a node holding it, fails.
 //!
 //! Departures: MOC keeps coverage masks per tile with two depths (its
 //! "masked" buffer), which merge any triangles covering a tile together,
@@ -151,8 +154,10 @@ pub struct SoftwareOcclusionCulling {
     /// An occluder's vertices on screen, each projected once.
     projected: Projected,
     occluders: Vec<u32>,
-    /// Per object of the scene (sized in the first frame).
+    /// Per object of the scene (sized in the first frame), whether it is
+    /// one of this frame's occluders, and whether it was found visible.
     is_occluder: Vec<bool>,
+    is_found: Vec<bool>,
     /// Where each thread's share of `occluders` ends.
     shares: Vec<usize>,
     found: Vec<u32>,
@@ -175,6 +180,7 @@ impl SoftwareOcclusionCulling {
             occluders: Vec::new(),
             shares: Vec::new(),
             is_occluder: Vec::new(),
+            is_found: Vec::new(),
             found: Vec::new(),
             to_draw: Vec::new(),
             stack: Vec::new(),
@@ -363,6 +369,7 @@ impl Culler for SoftwareOcclusionCulling {
         let frustum = camera.frustum();
 
         self.is_occluder.resize(scene.objects.len(), false);
+        self.is_found.resize(scene.objects.len(), false);
         // 1. Occluders: last frame's visible objects still on screen,
         // largest first.
         self.candidates.clear();
@@ -391,7 +398,6 @@ impl Culler for SoftwareOcclusionCulling {
                 self.is_occluder[o as usize] = true;
             }
         }
-        ctx.draw(&self.occluders);
 
         // 2-3. Their triangles into the buffer, then the pyramid.
         let occluders = Occluders {
@@ -440,14 +446,22 @@ impl Culler for SoftwareOcclusionCulling {
             }
         }
 
-        // 5. The visible objects not drawn yet; they are next frame's
+        // 5. The visible objects, occluders first; they are next frame's
         // candidates.
+        for &o in &self.found {
+            self.is_found[o as usize] = true;
+        }
         self.to_draw.clear();
+        self.to_draw
+            .extend(self.occluders.iter().filter(|&&o| self.is_found[o as usize]));
         self.to_draw
             .extend(self.found.iter().filter(|&&o| !self.is_occluder[o as usize]));
         ctx.draw(&self.to_draw);
         for &o in &self.occluders {
             self.is_occluder[o as usize] = false;
+        }
+        for &o in &self.found {
+            self.is_found[o as usize] = false;
         }
         std::mem::swap(&mut self.visible, &mut self.found);
         stats
@@ -650,7 +664,7 @@ mod tests {
     use crate::cull::recording::{Recording, camera_down_z, cubes, input};
 
     #[test]
-    fn an_object_behind_an_occluder_is_drawn_until_the_occluder_is_known_and_each_object_once() {
+    fn an_object_behind_an_occluder_is_drawn_until_the_occluder_is_known_even_as_an_occluder() {
         // A cube 2 m ahead hides one 17 m further on, right behind the
         // middle of its face, where the face's two triangles meet (taken
         // apart, they leave the cells along their shared edge empty); a
@@ -671,10 +685,13 @@ mod tests {
             objects.sort_unstable();
             drawn.push(objects);
         }
-        // Frame 0 knows no occluder: everything in view. Frame 1 draws those
-        // as occluders and finds the far cube hidden; frame 2 leaves it out.
-        assert_eq!(drawn, [vec![0, 1, 2], vec![0, 1, 2], vec![0, 2]]);
+        // Frame 0 knows no occluder: everything in view. Frame 1 takes those
+        // as occluders, finds the far cube hidden behind the near one and
+        // does not draw it, though it is an occluder; frame 2 leaves it out
+        // of the occluders too.
+        assert_eq!(drawn, [vec![0, 1, 2], vec![0, 2], vec![0, 2]]);
         assert_eq!(stats[0].occluder_triangles, 0);
+        assert_eq!(stats[1].occluder_triangles, 3 * 12, "the three cubes' triangles");
         assert_eq!(stats[2].occluder_triangles, 2 * 12, "the two visible cubes' triangles");
         assert!(stats[1].nodes_culled_occlusion > 0 && stats[2].nodes_culled_occlusion > 0);
 
