@@ -16,10 +16,12 @@
 //!    `texels` × `texels` texels (4 by default), and the box's nearest depth
 //!    against the farthest of those texels (pyramid_test.wgsl). Where that
 //!    does not hide it and the rectangle holds at most `pixels` pixels
-//!    (4096 by default), the box is compared with the depth itself at each
-//!    pixel, by the planes where the pixel's ray enters it
+//!    (65536, the most, by default), the box is compared with the depth
+//!    itself at each pixel, by the planes where the pixel's ray enters it
 //!    (gpu/conservative.rs's `BoxPlanes`, made on the CPU) or misses it: the
-//!    pass queues such boxes, and a second dispatch gives each a workgroup.
+//!    pass queues such boxes, and a second dispatch gives each a workgroup,
+//!    which reads only the pixels of the base texels that do not hide the
+//!    box by its planes on their own.
 //!    Boxes reaching the near plane are visible untested, as in niagara.
 //! 4. **Late**: the newly visible objects are drawn (indirect, the count
 //!    from the GPU). Every object found visible in step 3, drawn early or
@@ -57,7 +59,12 @@
 //!   has to hide what lies far behind, and a base a quarter of the target's
 //!   on each side (`base=4`) is built three times faster on llvmpipe for the
 //!   same result. Boxes the pyramid does not hide are queued on the GPU and
-//!   tested one workgroup each, its invocations sharing the pixels.
+//!   tested one workgroup each, its invocations sharing first the base
+//!   texels under the box, each compared with the box's planes at their
+//!   farthest over its pixels, then the pixels of the texels that did not
+//!   hide it: a large box far behind a wall is decided from its texels, and
+//!   on llvmpipe the tests after the pyramid took 3.1 ms a frame
+//!   instead of 5.1 over the default city walk at `pixels=65536`.
 
 use std::fmt;
 use std::str::FromStr;
@@ -99,7 +106,7 @@ const BASE_RANGE: std::ops::RangeInclusive<u32> = 1..=16;
 
 const PIXELS: ParamInfo = ParamInfo {
     key: "pixels",
-    default: "4096",
+    default: "65536",
     summary: "where the pyramid cannot hide a box whose rectangle holds at most this many pixels, compare it with the depth at each of them, by the planes where pixel rays enter it (0: the pyramid alone, as the engines test; at most 65536)",
 };
 

@@ -7,7 +7,9 @@
 // rectangle holds at most MAX_PIXELS pixels, the node is queued instead,
 // and cs_pixels compares its box with the depth itself at each of those
 // pixels, as raster_mark.wgsl's fragments would be: one workgroup a box,
-// its invocations sharing the pixels (cs_pixel_args sizes that dispatch).
+// its invocations sharing first the base texels under it, then the pixels
+// of those that do not hide it on their own (cs_pixel_args sizes that
+// dispatch).
 // TO_TEST, VISIBLE, GROUP_SIZE and MAX_GROUPS are written before this text
 // from pool.rs's constants, MAX_TEXELS and MAX_PIXELS from hiz's
 // parameters.
@@ -112,31 +114,100 @@ fn cs_pixel_args() {
 // Set by the first invocation to find the box shown, so the others stop.
 var<workgroup> shown: atomic<u32>;
 
+// The base texels of the box's rectangle that do not hide it on their own
+// (cs_pixels' first step), each as y << 16 | x, for the second step.
+const MAX_OPEN_TEXELS: u32 = 2048u;
+var<workgroup> open_texels: array<u32, MAX_OPEN_TEXELS>;
+var<workgroup> open_count: atomic<u32>;
+
 @compute @workgroup_size(GROUP_SIZE)
 fn cs_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     // Cleared here rather than trusted to start at zero: a flag left set
     // would skip the test and leave the box hidden.
     if lane == 0u {
         atomicStore(&shown, 0u);
+        atomicStore(&open_count, 0u);
     }
     workgroupBarrier();
     let node = pixel_queue.nodes[group.x];
     let on_screen = box_on_screen(boxes[node]);
+    let planes = box_planes[node];
     // cs_test queued only rectangles the right way round; should this
-    // one's rounding differ, it is visible.
-    if !all(on_screen.first <= on_screen.last) {
+    // one's rounding differ, it is visible (before the barrier below, so
+    // every invocation still reaches it).
+    let upright = all(on_screen.first <= on_screen.last);
+    // 1. Each base texel under the rectangle, by the box's least entry
+    // plane at its farthest over the rectangle's pixels in the texel: a
+    // texel farther than that at all of them hides the box at each (its
+    // depth is the farthest over its footprint), so its pixels need no
+    // reading. Most of a large box far behind a wall goes here.
+    let base_first = on_screen.first * shape.base_size / shape.target_size;
+    let base_last = on_screen.last * shape.base_size / shape.target_size;
+    let texels = base_last - base_first + vec2<u32>(1u);
+    let base = shape.levels[0];
+    for (var i = lane; upright && i < texels.x * texels.y; i += GROUP_SIZE) {
+        let texel = base_first + vec2<u32>(i % texels.x, i / texels.x);
+        let span = texel_pixels(texel, on_screen);
+        if !(bound_over(planes, span, on_screen.nearest) < pyramid[base.z + texel.y * base.x + texel.x]) {
+            let slot = atomicAdd(&open_count, 1u);
+            if slot < MAX_OPEN_TEXELS {
+                open_texels[slot] = texel.y << 16u | texel.x;
+            } else {
+                // More than the list holds: visible, untested.
+                atomicStore(&shown, 1u);
+            }
+        }
+    }
+    workgroupBarrier();
+    if !upright || atomicLoad(&shown) != 0u {
         node_visible[node] = VISIBLE;
         return;
     }
-    let extent = on_screen.last - on_screen.first + vec2<u32>(1u);
-    let planes = box_planes[node];
-    for (var i = lane; i < extent.x * extent.y && atomicLoad(&shown) == 0u; i += GROUP_SIZE) {
-        let pixel = on_screen.first + vec2<u32>(i % extent.x, i / extent.x);
-        if pixel_shows_box(planes, pixel, on_screen.nearest) {
+    // 2. The pixels of those texels, shared out: a base texel's footprint
+    // holds at most ⌈target / base⌉ pixels across (pyramid.rs).
+    let across = (shape.target_size + shape.base_size - vec2<u32>(1u)) / shape.base_size;
+    let per_texel = across.x * across.y;
+    let open = atomicLoad(&open_count);
+    for (var i = lane; i < open * per_texel && atomicLoad(&shown) == 0u; i += GROUP_SIZE) {
+        let packed = open_texels[i / per_texel];
+        let span = texel_pixels(vec2<u32>(packed & 0xffffu, packed >> 16u), on_screen);
+        let offset = i % per_texel;
+        let pixel = span.first + vec2<u32>(offset % across.x, offset / across.x);
+        if all(pixel <= span.last) && pixel_shows_box(planes, pixel, on_screen.nearest) {
             atomicStore(&shown, 1u);
             node_visible[node] = VISIBLE;
         }
     }
+}
+
+// The first and last pixels of the rectangle in base texel `texel`'s
+// footprint: pixel p lies in texel ⌊p · base / target⌋ (farthest_over), so
+// texel t holds pixels ⌈t · target / base⌉ up to the next texel's first.
+struct PixelSpan {
+    first: vec2<u32>,
+    last: vec2<u32>,
+}
+
+fn texel_pixels(texel: vec2<u32>, on_screen: OnScreen) -> PixelSpan {
+    let target_size = shape.target_size;
+    let base_size = shape.base_size;
+    let first = (texel * target_size + base_size - vec2<u32>(1u)) / base_size;
+    let next = ((texel + vec2<u32>(1u)) * target_size + base_size - vec2<u32>(1u)) / base_size;
+    return PixelSpan(max(first, on_screen.first), min(next - vec2<u32>(1u), on_screen.last));
+}
+
+// The box's depth bound over a span's pixel centres: the least of its entry
+// planes, each at its greatest over the span (a plane's greatest over a
+// rectangle lies at a corner), and its nearest corner. The planes' f32
+// margins hold at any pixel centre, so at those corners too.
+fn bound_over(planes: ShaderBoxPlanes, span: PixelSpan, nearest: f32) -> f32 {
+    var bound = nearest;
+    for (var a = 0u; a < 3u; a++) {
+        let plane = planes.entries[a];
+        let corner = vec2<f32>(f32(select(span.first.x, span.last.x, plane.x > 0.0)), f32(select(span.first.y, span.last.y, plane.y > 0.0)));
+        bound = min(bound, dot(plane.xyz, vec3<f32>(corner + 0.5, 1.0)));
+    }
+    return bound;
 }
 
 // A box on the target: the framebuffer pixels (rows top down) its outline's
