@@ -47,8 +47,9 @@
 //!   cull more (`texels=2` is theirs).
 //! - The pyramid's base is the largest power of two at most the target's
 //!   size over `base` (niagara's choice with `base=1`; each reduction stays
-//!   2×2); base texels take every target texel they touch, so no texel is
-//!   skipped where the size is not a power of two (bevy#14062).
+//!   2×2); each target texel lies in the base texel its test reads it
+//!   by, so none is skipped where the size is not a power of two
+//!   (bevy#14062), and the base reads each once.
 //! - The engines stop at the pyramid. A box's nearest depth against the
 //!   farthest depth over texels of two or more pixels cannot hide a box
 //!   just behind a wall seen at a slant, whose depth changes across a

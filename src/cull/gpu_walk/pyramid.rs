@@ -8,13 +8,15 @@
 //! Conservative at every target size, non-power-of-two included (the false
 //! culls of bevy#14062): a base texel covers between one and two times the
 //! divisor's target texels across (the whole side where the target is
-//! narrower than the divisor), and takes the least depth over every
-//! target texel its footprint touches, in part or whole, rather than
-//! sampling some of them.
-//! Halving a power of two is exact, so every further texel covers exactly
-//! 2×2 texels below it. Hence a texel's depth is at most the depth of every
-//! target texel its footprint touches (the test below checks it against
-//! that definition, computed from the depth target alone).
+//! narrower than the divisor). Target texel p belongs to base texel
+//! ⌊p · base / target⌋ on each side, the map hiz's test reads a box's
+//! pixels by (pyramid_test.wgsl), and a base texel takes the least depth
+//! over every target texel that belongs to it rather than sampling some of
+//! them: each target texel is read once and lies in exactly one base
+//! texel. Halving a power of two is exact, so every further texel covers
+//! exactly 2×2 texels below it. Hence a texel's depth is at most the depth
+//! of every target texel in its footprint (the test below checks it
+//! against that definition, computed from the depth target alone).
 
 use crate::gpu::{GpuContext, GpuError, Resolution, check_storage_binding, storage_buffer};
 
@@ -254,15 +256,15 @@ mod tests {
     use crate::world::World;
 
     /// Texel (`x`, `y`) of `level` by the definition: the least depth of
-    /// every target texel (of a `width` × `height` target) that its
-    /// footprint touches. A level-k texel spans 2^k base texels across,
-    /// each of `width / base width` target texels.
+    /// every target texel (of a `width` × `height` target) in its
+    /// footprint. A level-k texel spans 2^k base texels across; target
+    /// texel p lies in base texel ⌊p · base / side⌋.
     fn by_definition(depth: &[f32], width: u32, height: u32, base: PyramidLevel, k: u32, x: u32, y: u32) -> f32 {
         let span = |i: u32, base_side: u32, side: u32| {
             let (first, end) = ((i << k).min(base_side), ((i + 1) << k).min(base_side));
-            // [first, end) base texels cover [first·side/base, end·side/base)
-            // target texels, touched ones rounded outward.
-            let lo = u64::from(first) * u64::from(side) / u64::from(base_side);
+            // [first, end) base texels hold the target texels p with
+            // first ≤ p·base/side < end.
+            let lo = (u64::from(first) * u64::from(side)).div_ceil(u64::from(base_side));
             let hi = (u64::from(end) * u64::from(side)).div_ceil(u64::from(base_side));
             lo as u32..hi as u32
         };
@@ -342,7 +344,7 @@ mod tests {
     }
 
     #[test]
-    fn every_texel_is_the_farthest_depth_its_footprint_touches_at_any_size() {
+    fn every_texel_is_the_farthest_depth_in_its_footprint_at_any_size() {
         let gpus: Vec<GpuContext> = [BackendChoice::Vulkan, BackendChoice::Gl]
             .into_iter()
             .filter_map(|b| GpuContext::new(b).ok())

@@ -22,19 +22,21 @@ struct Level {
 
 // The base: a power-of-two size at most the target's over a divisor d, so
 // each base texel covers source_width / width ∈ [d, 2d) target texels
-// across (the whole side where the target is narrower than d). Its texel takes
-// the least depth over every target texel its footprint touches, in part
-// or whole: rounding the footprint outward is what keeps the base
-// conservative at any target size.
+// across (the whole side where the target is narrower than d). Target
+// texel p belongs to base texel ⌊p · width / source_width⌋, as the test
+// maps a box's pixels to base texels (pyramid_test.wgsl), so base texel t
+// takes the least depth over target texels ⌈t · source / width⌉ up to the
+// next one's first: every target texel in exactly one base texel, which is
+// what keeps the base conservative at any target size, and each read once.
 @compute @workgroup_size(8, 8)
 fn cs_base(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= level.width || id.y >= level.height {
         return;
     }
-    let x0 = id.x * level.source_width / level.width;
-    let x1 = min((id.x + 1u) * level.source_width + level.width - 1u, level.source_width * level.width) / level.width;
-    let y0 = id.y * level.source_height / level.height;
-    let y1 = min((id.y + 1u) * level.source_height + level.height - 1u, level.source_height * level.height) / level.height;
+    let x0 = (id.x * level.source_width + level.width - 1u) / level.width;
+    let x1 = ((id.x + 1u) * level.source_width + level.width - 1u) / level.width;
+    let y0 = (id.y * level.source_height + level.height - 1u) / level.height;
+    let y1 = ((id.y + 1u) * level.source_height + level.height - 1u) / level.height;
     var farthest = 1.0;
     for (var y = y0; y < y1; y++) {
         for (var x = x0; x < x1; x++) {

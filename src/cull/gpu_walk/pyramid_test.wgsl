@@ -246,9 +246,8 @@ fn box_on_screen(b: QueryBox) -> OnScreen {
 
 // The farthest depth of the pyramid over the rectangle's pixels.
 fn farthest_over(on_screen: OnScreen) -> f32 {
-    // Base texel t's footprint spans target pixels [t, t + 1) · target /
-    // base, so it touches pixel p when t = ⌊p · base / target⌋; pixels in
-    // order map to base texels in order.
+    // Pixel p lies in base texel ⌊p · base / target⌋ (pyramid.wgsl's
+    // cs_base takes it there); pixels in order map to base texels in order.
     let base_first = on_screen.first * shape.base_size / shape.target_size;
     let base_last = on_screen.last * shape.base_size / shape.target_size;
     // The finest level where the rectangle spans at most MAX_TEXELS texels

@@ -413,17 +413,16 @@ mod tests {
         hidden
     }
 
-    /// The target pixels a level-`k` texel's footprint touches along one
-    /// side: its base texels [t · 2^k, (t + 1) · 2^k) span target pixels
-    /// [first · side / base, end · side / base), rounded outward
-    /// (pyramid.rs's definition).
+    /// The target pixels in a level-`k` texel's footprint along one side:
+    /// its base texels [t · 2^k, (t + 1) · 2^k) hold the target pixels p
+    /// with first ≤ p · base / side < end (pyramid.rs's definition).
     fn footprint(t: u32, k: usize, base_side: u32, side: u32) -> std::ops::Range<u64> {
         let (first, end) = (
             u64::from(t << k).min(u64::from(base_side)),
             u64::from((t + 1) << k).min(u64::from(base_side)),
         );
         let (side, base_side) = (u64::from(side), u64::from(base_side));
-        first * side / base_side..(end * side).div_ceil(base_side)
+        (first * side).div_ceil(base_side)..(end * side).div_ceil(base_side)
     }
 
     #[test]
