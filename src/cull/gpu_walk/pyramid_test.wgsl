@@ -139,8 +139,11 @@ fn cs_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
     // 1. Each base texel under the rectangle, by the box's least entry
     // plane at its farthest over the rectangle's pixels in the texel: a
     // texel farther than that at all of them hides the box at each (its
-    // depth is the farthest over its footprint), so its pixels need no
-    // reading. Most of a large box far behind a wall goes here.
+    // depth is the farthest over its footprint), and where an entry plane
+    // lies behind another axis's exit plane all over them, their rays miss
+    // the box; either way its pixels need no reading. Most of a large box
+    // far behind a wall goes here, and most of the rectangle of a long box
+    // seen at a slant, which its outline barely fills.
     let base_first = on_screen.first * shape.base_size / shape.target_size;
     let base_last = on_screen.last * shape.base_size / shape.target_size;
     let texels = base_last - base_first + vec2<u32>(1u);
@@ -148,7 +151,7 @@ fn cs_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
     for (var i = lane; upright && i < texels.x * texels.y; i += GROUP_SIZE) {
         let texel = base_first + vec2<u32>(i % texels.x, i / texels.x);
         let span = texel_pixels(texel, on_screen);
-        if !(bound_over(planes, span, on_screen.nearest) < pyramid[base.z + texel.y * base.x + texel.x]) {
+        if !span_hides_box(planes, span, on_screen.nearest, pyramid[base.z + texel.y * base.x + texel.x]) {
             let slot = atomicAdd(&open_count, 1u);
             if slot < MAX_OPEN_TEXELS {
                 open_texels[slot] = texel.y << 16u | texel.x;
@@ -196,18 +199,27 @@ fn texel_pixels(texel: vec2<u32>, on_screen: OnScreen) -> PixelSpan {
     return PixelSpan(max(first, on_screen.first), min(next - vec2<u32>(1u), on_screen.last));
 }
 
-// The box's depth bound over a span's pixel centres: the least of its entry
-// planes, each at its greatest over the span (a plane's greatest over a
-// rectangle lies at a corner), and its nearest corner. The planes' f32
-// margins hold at any pixel centre, so at those corners too.
-fn bound_over(planes: ShaderBoxPlanes, span: PixelSpan, nearest: f32) -> f32 {
-    var bound = nearest;
+// Whether the box lies behind `farthest` at every pixel centre of a span,
+// or the rays through them all miss it: pixel_shows_box's test with each
+// plane taken at its greatest (entries) or least (exits) over the span,
+// which lie at corners of it. The planes' f32 margins hold at any pixel
+// centre, so at those corners too.
+fn span_hides_box(planes: ShaderBoxPlanes, span: PixelSpan, nearest: f32, farthest: f32) -> bool {
+    var entry = vec3<f32>();
+    var exit = vec3<f32>();
     for (var a = 0u; a < 3u; a++) {
-        let plane = planes.entries[a];
-        let corner = vec2<f32>(f32(select(span.first.x, span.last.x, plane.x > 0.0)), f32(select(span.first.y, span.last.y, plane.y > 0.0)));
-        bound = min(bound, dot(plane.xyz, vec3<f32>(corner + 0.5, 1.0)));
+        entry[a] = at_corner(planes.entries[a], span, true);
+        exit[a] = at_corner(planes.exits[a], span, false);
     }
-    return bound;
+    let missed = entry.x < exit.y || entry.x < exit.z || entry.y < exit.x || entry.y < exit.z || entry.z < exit.x || entry.z < exit.y;
+    return missed || min(nearest, min(entry.x, min(entry.y, entry.z))) < farthest;
+}
+
+// A plane's greatest (or least) over a span's pixel centres.
+fn at_corner(plane: vec4<f32>, span: PixelSpan, greatest: bool) -> f32 {
+    let rising = vec2<bool>(plane.x > 0.0, plane.y > 0.0) == vec2<bool>(greatest);
+    let corner = vec2<f32>(select(span.first, span.last, rising));
+    return dot(plane.xyz, vec3<f32>(corner + 0.5, 1.0));
 }
 
 // A box on the target: the framebuffer pixels (rows top down) its outline's
