@@ -133,17 +133,18 @@ fn cs_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
     let on_screen = box_on_screen(boxes[node]);
     let planes = box_planes[node];
     // cs_test queued only rectangles the right way round; should this
-    // one's rounding differ, it is visible (before the barrier below, so
-    // every invocation still reaches it).
+    // one's rounding differ, the box is marked visible, after the barrier
+    // below, which every invocation must reach.
     let upright = all(on_screen.first <= on_screen.last);
-    // 1. Each base texel under the rectangle, by the box's least entry
-    // plane at its farthest over the rectangle's pixels in the texel: a
-    // texel farther than that at all of them hides the box at each (its
-    // depth is the farthest over its footprint), and where an entry plane
-    // lies behind another axis's exit plane all over them, their rays miss
-    // the box; either way its pixels need no reading. Most of a large box
-    // far behind a wall goes here, and most of the rectangle of a long box
-    // seen at a slant, which its outline barely fills.
+    // 1. Each base texel under the rectangle, by the box's entry planes at
+    // their greatest (nearest) over the rectangle's pixels in the texel: a
+    // texel farther than the least of them hides the box at each of those
+    // pixels (its depth is the farthest over its footprint); and where an
+    // entry plane at its greatest lies behind another axis's exit plane at
+    // its least (farthest), every ray there misses the box. Either way its
+    // pixels need no reading. Most of a large box far behind a wall goes
+    // here, and most of the rectangle of a long box seen at a slant, which
+    // its outline barely fills.
     let base_first = on_screen.first * shape.base_size / shape.target_size;
     let base_last = on_screen.last * shape.base_size / shape.target_size;
     let texels = base_last - base_first + vec2<u32>(1u);
@@ -155,37 +156,52 @@ fn cs_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
             let slot = atomicAdd(&open_count, 1u);
             if slot < MAX_OPEN_TEXELS {
                 open_texels[slot] = texel.y << 16u | texel.x;
-            } else {
-                // More than the list holds: visible, untested.
-                atomicStore(&shown, 1u);
             }
         }
     }
     workgroupBarrier();
-    if !upright || atomicLoad(&shown) != 0u {
+    if !upright {
         node_visible[node] = VISIBLE;
         return;
     }
-    // 2. The pixels of those texels, shared out: a base texel's footprint
-    // holds at most ⌈target / base⌉ pixels across (pyramid.rs).
+    // 2. The pixels of those texels, shared out: a base texel holds at most
+    // ⌈target / base⌉ pixels across (texel_pixels). Where more texels are
+    // open than the list holds (only fine bases, with texels of a pixel or
+    // two, get there), every pixel of the rectangle.
+    let open = atomicLoad(&open_count);
+    if open > MAX_OPEN_TEXELS {
+        let extent = on_screen.last - on_screen.first + vec2<u32>(1u);
+        for (var i = lane; i < extent.x * extent.y && atomicLoad(&shown) == 0u; i += GROUP_SIZE) {
+            mark_if_shown(node, planes, on_screen.first + vec2<u32>(i % extent.x, i / extent.x), on_screen.nearest);
+        }
+        return;
+    }
     let across = (shape.target_size + shape.base_size - vec2<u32>(1u)) / shape.base_size;
     let per_texel = across.x * across.y;
-    let open = atomicLoad(&open_count);
     for (var i = lane; i < open * per_texel && atomicLoad(&shown) == 0u; i += GROUP_SIZE) {
         let packed = open_texels[i / per_texel];
         let span = texel_pixels(vec2<u32>(packed & 0xffffu, packed >> 16u), on_screen);
         let offset = i % per_texel;
         let pixel = span.first + vec2<u32>(offset % across.x, offset / across.x);
-        if all(pixel <= span.last) && pixel_shows_box(planes, pixel, on_screen.nearest) {
-            atomicStore(&shown, 1u);
-            node_visible[node] = VISIBLE;
+        if all(pixel <= span.last) {
+            mark_if_shown(node, planes, pixel, on_screen.nearest);
         }
+    }
+}
+
+// Marks `node` visible, and tells the workgroup so, where a ray through
+// `pixel` meets its box no farther than the depth drawn there.
+fn mark_if_shown(node: u32, planes: ShaderBoxPlanes, pixel: vec2<u32>, nearest: f32) {
+    if pixel_shows_box(planes, pixel, nearest) {
+        atomicStore(&shown, 1u);
+        node_visible[node] = VISIBLE;
     }
 }
 
 // The first and last pixels of the rectangle in base texel `texel`'s
 // footprint: pixel p lies in texel ⌊p · base / target⌋ (farthest_over), so
-// texel t holds pixels ⌈t · target / base⌉ up to the next texel's first.
+// texel t holds pixels ⌈t · target / base⌉ up to the next texel's first,
+// at most ⌈target / base⌉ of them across.
 struct PixelSpan {
     first: vec2<u32>,
     last: vec2<u32>,

@@ -514,9 +514,15 @@ mod tests {
             let hidden = compare(gpu, world(), &path, iterative_occlusion_culling(nodes), &cut, None);
             assert!(hidden > 50, "ioc's walks hide nodes ({hidden})");
             // hiz as it runs by default (objects, 4 texels, a base a quarter
-            // the target's, pixel by pixel where that fails), as the engines
-            // read (2 texels, the largest base, no pixels), and over nodes.
+            // the target's, pixel by pixel where that fails), on the largest
+            // base (whose texels under a large box outnumber the pixel
+            // pass's list of open ones), as the engines read (2 texels, the
+            // largest base, no pixels), and over nodes.
             let default = HizParams::from_params(&ModeParams::default()).unwrap();
+            let finest = HizParams {
+                base_divisor: 1,
+                ..default
+            };
             let engines = HizParams {
                 texels: 2,
                 base_divisor: 1,
@@ -528,7 +534,12 @@ mod tests {
                 range: nodes,
                 ..default
             };
-            for (params, tree, least) in [(default, &flat, 50), (engines, &flat, 50), (over_nodes, &cut, 20)] {
+            for (params, tree, least) in [
+                (default, &flat, 50),
+                (finest, &flat, 50),
+                (engines, &flat, 50),
+                (over_nodes, &cut, 20),
+            ] {
                 let mode = hierarchical_depth_culling(params);
                 let hidden = compare(gpu, world(), &path, mode, tree, Some(params));
                 assert!(hidden > least, "hiz's walks hide boxes ({params:?}: {hidden})");

@@ -5,7 +5,7 @@
 //! reads nothing back. Each frame, on the CPU:
 //!
 //! 1. **Occluders**: last frame's visible objects, largest on screen first,
-//!    while their triangles fit `swr.triangles`.
+//!    each whose triangles still fit `swr.triangles`.
 //! 2. **Rasterise** their triangles, projected in f64, into a buffer of
 //!    `swr.resolution` cells, conservatively (buffer.rs: a cell takes an
 //!    occluder's farthest depth over the pixel centres it holds, and only
