@@ -65,7 +65,7 @@
 //!   their nearest over its pixels (and, for the rays missing the box,
 //!   its exit planes at their farthest), then the pixels of the texels
 //!   that did not hide it (every pixel of the rectangle where more than
-//!   2 048 texels did not, which only fine bases reach): a large box far
+//!   2 048 texels did not, mostly on fine bases): a large box far
 //!   behind a wall, or a long one seen at a slant, is decided mostly from
 //!   its texels. On llvmpipe over the default city walk at
 //!   `pixels=65536`, the tests after the pyramid took 3.1 ms a frame where

@@ -166,8 +166,9 @@ fn cs_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
     }
     // 2. The pixels of those texels, shared out: a base texel holds at most
     // ⌈target / base⌉ pixels across (texel_pixels). Where more texels are
-    // open than the list holds (only fine bases, with texels of a pixel or
-    // two, get there), every pixel of the rectangle.
+    // open than the list holds (a large box on a fine base, whose texels
+    // hold a pixel or two, or one in front of most of what lies under it),
+    // every pixel of the rectangle.
     let open = atomicLoad(&open_count);
     if open > MAX_OPEN_TEXELS {
         let extent = on_screen.last - on_screen.first + vec2<u32>(1u);
