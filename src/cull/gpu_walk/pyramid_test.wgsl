@@ -193,7 +193,7 @@ fn cs_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
 // Marks `node` visible, and tells the workgroup so, where a ray through
 // `pixel` meets its box no farther than the depth drawn there.
 fn mark_if_shown(node: u32, planes: ShaderBoxPlanes, pixel: vec2<u32>, nearest: f32) {
-    if pixel_shows_box(planes, pixel, nearest) {
+    if !span_hides_box(planes, PixelSpan(pixel, pixel), nearest, textureLoad(depth, pixel, 0).r) {
         atomicStore(&shown, 1u);
         node_visible[node] = VISIBLE;
     }
@@ -217,8 +217,11 @@ fn texel_pixels(texel: vec2<u32>, on_screen: OnScreen) -> PixelSpan {
 }
 
 // Whether the box lies behind `farthest` at every pixel centre of a span,
-// or the rays through them all miss it: pixel_shows_box's test with each
-// plane taken at its greatest (entries) or least (exits) over the span,
+// or the rays through them all miss it; over one pixel, against the depth
+// drawn there, the pixel by pixel test itself. At each centre, the box's
+// least entry plane (and its nearest corner) bounds its depth, and an entry
+// plane behind another axis's exit plane means the ray misses it; over a
+// span, each plane is taken at its greatest (entries) or least (exits),
 // which lie at corners of it. The planes' f32 margins hold at any pixel
 // centre, so at those corners too.
 fn span_hides_box(planes: ShaderBoxPlanes, span: PixelSpan, nearest: f32, farthest: f32) -> bool {
@@ -295,15 +298,4 @@ fn farthest_over(on_screen: OnScreen) -> f32 {
         }
     }
     return farthest;
-}
-
-// Whether a ray through the centre of `pixel` meets the box no farther than
-// the depth drawn there.
-fn pixel_shows_box(planes: ShaderBoxPlanes, pixel: vec2<u32>, nearest: f32) -> bool {
-    let centre = vec3<f32>(vec2<f32>(pixel) + 0.5, 1.0);
-    let entry = vec3<f32>(dot(planes.entries[0].xyz, centre), dot(planes.entries[1].xyz, centre), dot(planes.entries[2].xyz, centre));
-    let exit = vec3<f32>(dot(planes.exits[0].xyz, centre), dot(planes.exits[1].xyz, centre), dot(planes.exits[2].xyz, centre));
-    let missed = entry.x < exit.y || entry.x < exit.z || entry.y < exit.x || entry.y < exit.z || entry.z < exit.x || entry.z < exit.y;
-    let bound = min(nearest, min(entry.x, min(entry.y, entry.z)));
-    return !missed && !(bound < textureLoad(depth, pixel, 0).r);
 }

@@ -214,9 +214,10 @@ impl BoxOnTarget {
         }
     }
 
-    /// The pixels' part (pyramid_test.wgsl's `cs_pixels` and `pixel_shows_box`): each
-    /// pixel of the rectangle against `depth` (of a `size` target, row by
-    /// row) by the box's `planes` as the shader holds them. `Hidden` where
+    /// The pixels' part (pyramid_test.wgsl's `cs_pixels`, and its
+    /// `span_hides_box` over one pixel): each pixel of the rectangle against
+    /// `depth` (of a `size` target, row by row) by the box's `planes` as the
+    /// shader holds them. `Hidden` where
     /// the box lies behind at every pixel whose ray meets it.
     pub(super) fn pixel_verdict(&self, planes: &ShaderBoxPlanes, size: Resolution, depth: &[f32]) -> Verdict {
         // A plane's value at a centre, and what its f32 evaluation may move
