@@ -62,6 +62,7 @@ fn walk(scene: &Scene, hierarchy: &Hierarchy, cameras: &[Camera], params: &[&str
                 moved: &[],
                 reference_visible: None,
                 previous: None,
+                warm_up: false,
             };
             let stats = swr.frame(&mut NoDrawing, black_box(&input));
             if count {

@@ -18,7 +18,7 @@ use crate::camera::Camera;
 use crate::camera::generate::default_path;
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
-use crate::cull::{Culler, FrameInput, Labeled, ModeError, PreviousFrame};
+use crate::cull::{Culler, FrameInput, Labeled, ModeError, ModeId, PreviousFrame};
 use crate::gpu::{
     AdapterReport, FrameCtx, FrameResources, GpuContext, GpuError, GpuScene, GpuSetup, GpuTimer, QueryPool,
     RenderTargets, Resolution, SceneRenderer,
@@ -29,7 +29,7 @@ use crate::object_set::ObjectSet;
 use crate::raycast::RayCaster;
 use crate::report::{
     Fingerprint, MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary,
-    SkippedMode, Summary, SweepSummary, ToolInfo, check_writable, prepare_output, write_results, write_whole,
+    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, write_results, write_whole,
 };
 use crate::scene::{Scene, SceneError};
 use crate::world::World;
@@ -79,11 +79,10 @@ pub fn run(
         world.advance(frame);
         // Rotating the order from frame to frame: no mode always runs right
         // after the reference.
-        let frame_rows = session.frame(frame, &camera, world, cullers, step as usize)?;
         if recording {
-            rows.extend(frame_rows);
+            rows.extend(session.frame(frame, &camera, world, cullers, step as usize)?);
         } else {
-            session.missed.clear();
+            session.warm_up_frame(frame, &camera, world, cullers, step as usize)?;
         }
         go_on(progress(step + 1, total))?;
     }
@@ -186,6 +185,33 @@ impl<'a> Session<'a> {
         cullers: &mut [Box<dyn Culler + '_>],
         first: usize,
     ) -> Result<Vec<FrameStats>, GpuError> {
+        self.render(frame, camera, world, cullers, first, false)
+    }
+
+    /// [`Session::frame`] as a warm-up frame, whose rows are not kept
+    /// ([`FrameInput::warm_up`]).
+    pub fn warm_up_frame(
+        &mut self,
+        frame: u32,
+        camera: &Camera,
+        world: &mut World,
+        cullers: &mut [Box<dyn Culler + '_>],
+        first: usize,
+    ) -> Result<(), GpuError> {
+        self.render(frame, camera, world, cullers, first, true)?;
+        self.missed.clear();
+        Ok(())
+    }
+
+    fn render(
+        &mut self,
+        frame: u32,
+        camera: &Camera,
+        world: &mut World,
+        cullers: &mut [Box<dyn Culler + '_>],
+        first: usize,
+        warm_up: bool,
+    ) -> Result<Vec<FrameStats>, GpuError> {
         let gpu = self.gpu;
         self.renderer
             .set_camera(gpu, camera, self.options.resolution, &world.scene.objects);
@@ -220,6 +246,7 @@ impl<'a> Session<'a> {
                     None
                 },
                 previous: self.previous[k],
+                warm_up,
             };
             let resources = FrameResources {
                 gpu,
@@ -259,6 +286,8 @@ impl<'a> Session<'a> {
                 max_depth_error: None,
                 missed_objects: None,
                 visible_objects: visible.as_ref().map(|v| v.len() as u64),
+                strategy: culler.pick().map(|p| p.strategy.to_string()),
+                probe: culler.pick().map(|p| p.probe),
             });
         }
 
@@ -293,6 +322,7 @@ impl<'a> Session<'a> {
                 self.previous[k] = Some(PreviousFrame {
                     frame_ms: row.frame_ms,
                     render_ms: row.render_ms(),
+                    triangles_drawn: row.triangles_drawn,
                 });
                 row
             })
@@ -544,6 +574,8 @@ fn execute_claimed(
             parameters: culler.parameters(),
         })
         .collect();
+    let modes = summarize(&output.rows, &descriptions, plan.resolution.pixels());
+    let ids: Vec<ModeId> = runs.iter().map(|run| run.mode).collect();
     let mut summary = Summary {
         schema_version: SCHEMA_VERSION,
         tool: ToolInfo::current(),
@@ -560,7 +592,8 @@ fn execute_claimed(
         frames: path.frames,
         warmup: plan.warmup,
         error_measured: plan.measure_error,
-        modes: summarize(&output.rows, &descriptions, plan.resolution.pixels()),
+        verdict: Verdict::of(&modes, &ids),
+        modes,
         skipped,
         sweep: plan.sweep.as_ref().map(|s| SweepSummary {
             mode: s.mode.to_string(),

@@ -120,14 +120,13 @@ pub fn render(
         });
     }
     let camera = path.camera(options.frame, resolution.aspect());
-    let mut wrong_pixels = 0;
-    for f in options.frame.saturating_sub(LEAD_IN)..=options.frame {
+    for f in options.frame.saturating_sub(LEAD_IN)..options.frame {
         world.advance(f);
-        let rows = session.frame(f, &path.camera(f, resolution.aspect()), world, &mut cullers, 0)?;
-        wrong_pixels = rows[0].error_pixels.unwrap_or(0);
+        session.warm_up_frame(f, &path.camera(f, resolution.aspect()), world, &mut cullers, 0)?;
     }
-    // Only the pictured frame's: the lead-in frames are not shown.
-    session.missed.retain(|m| m.frame == options.frame);
+    world.advance(options.frame);
+    let rows = session.frame(options.frame, &camera, world, &mut cullers, 0)?;
+    let wrong_pixels = rows[0].error_pixels.unwrap_or(0);
     let wrong = options.show_missed.then(|| WrongInFrame {
         pixels: wrong_pixels,
         objects: std::mem::take(&mut session.missed),

@@ -304,6 +304,66 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
     assert_eq!(lines.count(), 24, "2 frames × 12 modes");
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| oracle |") && report.contains("Adapter:"));
+    // auto's rows name the candidate that drew each frame, and whether it
+    // was a probe; report.md counts them per strategy.
+    let auto = summary["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"] == "auto")
+        .unwrap();
+    let candidates: Vec<&str> = auto["parameters"]["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_str().unwrap())
+        .collect();
+    assert!(
+        candidates.contains(&"vfc") && candidates.contains(&"swr"),
+        "{candidates:?}"
+    );
+    let rows: Vec<occlu::measure::FrameStats> = csv::Reader::from_path(out.join("frames.csv"))
+        .unwrap()
+        .deserialize()
+        .map(Result::unwrap)
+        .collect();
+    for r in &rows {
+        match r.mode.as_str() {
+            "auto" => assert!(
+                r.strategy.as_deref().is_some_and(|s| candidates.contains(&s)) && r.probe.is_some(),
+                "{r:?}"
+            ),
+            _ => assert_eq!((&r.strategy, r.probe), (&None, None), "{r:?}"),
+        }
+    }
+    let strategies = auto["strategies"].as_array().unwrap();
+    let frames: u64 = strategies.iter().map(|s| s["frames"].as_u64().unwrap()).sum();
+    assert_eq!(frames, 2);
+    assert!(report.contains("## auto's strategies"));
+    for s in strategies {
+        let row = format!(
+            "| {} | {} | {} |",
+            s["strategy"].as_str().unwrap(),
+            s["frames"],
+            s["probes"]
+        );
+        assert!(report.contains(&row), "report.md lacks {row}");
+    }
+    // The verdict: the fastest conservative mode but auto and the oracle,
+    // and auto's time over its.
+    let mean = |m: &serde_json::Value| m["stats"]["frame_ms"]["mean"].as_f64().unwrap();
+    let fastest = summary["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["conservative"] == true && m["name"] != "auto" && m["name"] != "oracle")
+        .min_by(|a, b| mean(a).total_cmp(&mean(b)))
+        .unwrap();
+    let verdict = &summary["verdict"];
+    assert_eq!(verdict["fastest"], fastest["name"]);
+    assert_eq!(verdict["auto_ratio"].as_f64(), Some(mean(auto) / mean(fastest)));
+    let first = format!("**Fastest conservative mode: {}**", fastest["name"].as_str().unwrap());
+    assert!(report.lines().take(8).any(|l| l.starts_with(&first)), "{report}");
     // The cost split, where the adapter has timestamps: hiz's pyramid is
     // part of its box tests, and drawing is the rest of its GPU time.
     let hiz = &summary["modes"][8];

@@ -6,10 +6,13 @@ mod common;
 
 use common::{boxes, held, run_modes};
 use glam::DVec3;
-use occlu::cull::{Culler, Labeled, ModeId, ModeParams, create};
-use occlu::gpu::{GpuContext, Resolution};
+use std::rc::Rc;
+
+use occlu::cull::{Culler, FrameInput, Labeled, ModeId, ModeParams, TraversalStats, VisibleLists, create};
+use occlu::gpu::{Frame, GpuAudit, GpuContext, GpuError, GpuSetup, Resolution};
 use occlu::hierarchy::Hierarchy;
 use occlu::measure::FrameStats;
+use occlu::object_set::ObjectSet;
 use occlu::scene::Scene;
 
 const RES: Resolution = Resolution { width: 128, height: 96 };
@@ -125,6 +128,79 @@ fn gpu_walks_draw_what_a_wall_leaves_visible() {
         assert!(
             first("ioc").traversal.nodes_visited > 6,
             "the full walk visits inner nodes too"
+        );
+    }
+}
+
+/// roc on even frames and hiz on odd ones, the two walks sharing one set
+/// of visible lists (as `auto`'s walks do); at frame `upload.0` the lists
+/// are first made to hold `upload.1`.
+struct Alternating {
+    walks: [Box<dyn Culler>; 2],
+    lists: Option<Rc<VisibleLists>>,
+    upload: (u32, Vec<u32>),
+    ran: usize,
+}
+
+impl Culler for Alternating {
+    fn name(&self) -> &str {
+        "roc/hiz"
+    }
+    fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
+        let lists = Rc::new(VisibleLists::new(setup.gpu, setup.draws));
+        for walk in &mut self.walks {
+            walk.share_visible_lists(&lists);
+            walk.prepare(setup)?;
+        }
+        self.lists = Some(lists);
+        Ok(())
+    }
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
+        if input.frame == self.upload.0 {
+            let gpu = ctx.on_gpu().unwrap().gpu();
+            self.lists.as_ref().unwrap().upload(gpu, &self.upload.1);
+        }
+        self.ran = input.frame as usize % 2;
+        self.walks[self.ran].frame(ctx, input)
+    }
+    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        self.walks[self.ran].audit(gpu, drawn)
+    }
+}
+
+#[test]
+fn walks_sharing_visible_lists_start_where_the_last_one_ended_and_from_what_is_uploaded() {
+    let scene = boxes(&[
+        (DVec3::new(-3.0, -3.0, -10.1), DVec3::new(3.0, 3.0, -9.9)), // 0 wall
+        (DVec3::new(-0.5, -0.5, -20.5), DVec3::new(0.5, 0.5, -19.5)), // 1 hidden by it
+        (DVec3::new(10.0, -0.5, -20.5), DVec3::new(11.0, 0.5, -19.5)), // 2 beside it
+    ]);
+    let path = held(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0), 90.0, 5);
+    let hierarchy = Hierarchy::build(&scene.objects, &common::one_object_per_leaf());
+    for gpu in common::gpus() {
+        let alternating = Alternating {
+            walks: [mode(&scene, "roc", "roc", &[]), mode(&scene, "hiz", "hiz", &[])],
+            lists: None,
+            upload: (3, vec![2]),
+            ran: 0,
+        };
+        let mut cullers: Vec<Box<dyn Culler>> = vec![Box::new(alternating)];
+        let rows = run_modes(&gpu, &scene, &hierarchy, &path, &mut cullers, RES).rows;
+        assert_exact(&rows, &gpu);
+        let early_late: Vec<(u64, u64)> = rows
+            .iter()
+            .map(|r| (r.traversal.drawn_early, r.traversal.drawn_late))
+            .collect();
+        // roc finds all three visible at frame 0; hiz draws them first at
+        // frame 1 and hides the box behind the wall; roc draws the two
+        // left at frame 2. At frame 3 the lists hold the box beside the
+        // wall alone: nothing drawn first hides the wall or the box behind
+        // it, so both are drawn late, and at frame 4 roc draws all three.
+        assert_eq!(
+            early_late,
+            [(0, 3), (3, 0), (2, 0), (1, 2), (3, 0)],
+            "on {}",
+            gpu.adapter
         );
     }
 }

@@ -55,7 +55,7 @@ use serde::Serialize;
 
 use super::traversal::{DepthQueue, children, draw_leaf, frustum_cull_subtree, in_frustum, view_depth};
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
-use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
+use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{BoxTest, BoxVisibility, Frame};
 
 /// This mode's entry in the registry.
@@ -65,6 +65,8 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     conservative: false,
     params: &[THRESHOLD, SAMPLING, F_GRAPHICS, EYE_DISTANCE],
     needs: Needs::PixelCounts,
+    carries: Carries::Nothing,
+    auto: Candidacy::Never,
     check: |params| AcParams::from_params(params).map(drop),
     build: |_, params| Ok(Box::new(AdaptiveCulling::new(AcParams::from_params(params)?))),
 };

@@ -1,10 +1,12 @@
 //! The [`Culler`] trait every mode implements, what it is told each frame
 //! ([`FrameInput`]) and what it reports ([`TraversalStats`]).
 
+use std::rc::Rc;
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
+use super::gpu_walk::VisibleLists;
 use crate::camera::Camera;
 use crate::gpu::{Frame, GpuAudit, GpuContext, GpuError, GpuSetup, Resolution};
 use crate::hierarchy::Hierarchy;
@@ -28,6 +30,10 @@ pub struct FrameInput<'a> {
     pub reference_visible: Option<&'a ObjectSet>,
     /// What this mode's previous frame cost; `None` in its first frame.
     pub previous: Option<PreviousFrame>,
+    /// A warm-up frame: run, not recorded. A mode that runs others (`auto`)
+    /// runs each of them in it, so their first frames (pipelines compiled
+    /// on first use, buffers first filled) are not among the recorded ones.
+    pub warm_up: bool,
 }
 
 /// A mode's own previous frame, as measured (cost-adaptive culling budgets
@@ -38,6 +44,17 @@ pub struct PreviousFrame {
     /// Time spent drawing: GPU time outside box tests where timestamps
     /// exist, else the frame minus culling CPU time and waits for results.
     pub render_ms: f64,
+    pub triangles_drawn: u64,
+}
+
+/// Which of its strategies a mode that runs others (`auto`) ran in a frame:
+/// frames.csv's `strategy` and `probe` columns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Pick {
+    /// The mode that drew the frame.
+    pub strategy: &'static str,
+    /// Whether it ran to be measured rather than because it was cheapest.
+    pub probe: bool,
 }
 
 /// Declares [`TraversalStats`] from its counters, once: the struct, and
@@ -171,6 +188,17 @@ pub trait Culler {
     /// frame's visible objects and did not run then (`auto` hands them to
     /// the culler it probes). Modes that keep no such list ignore them.
     fn seed_visible(&mut self, _visible: &[u32]) {}
+
+    /// Before `prepare`: keep the visible set between frames in `lists`,
+    /// which other GPU walks share (`auto` gives one to every walk it runs,
+    /// so each starts where the last one ended). Modes that keep no visible
+    /// set on the GPU ignore them.
+    fn share_visible_lists(&mut self, _lists: &Rc<VisibleLists>) {}
+
+    /// After a frame, for a mode that runs others: which ran.
+    fn pick(&self) -> Option<Pick> {
+        None
+    }
 }
 
 /// A borrowed culler runs as the culler it borrows (so a test can keep the
@@ -202,6 +230,12 @@ impl<C: Culler + ?Sized> Culler for &mut C {
     }
     fn seed_visible(&mut self, visible: &[u32]) {
         (**self).seed_visible(visible)
+    }
+    fn share_visible_lists(&mut self, lists: &Rc<VisibleLists>) {
+        (**self).share_visible_lists(lists)
+    }
+    fn pick(&self) -> Option<Pick> {
+        (**self).pick()
     }
 }
 
@@ -239,5 +273,11 @@ impl Culler for Labeled {
     }
     fn seed_visible(&mut self, visible: &[u32]) {
         self.inner.seed_visible(visible)
+    }
+    fn share_visible_lists(&mut self, lists: &Rc<VisibleLists>) {
+        self.inner.share_visible_lists(lists)
+    }
+    fn pick(&self) -> Option<Pick> {
+        self.inner.pick()
     }
 }

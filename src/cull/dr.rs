@@ -2,7 +2,7 @@
 //! baseline every culler must beat, and the image every culler must match.
 
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
-use crate::cull::mode::{ModeId, ModeInfo, Needs};
+use crate::cull::mode::{Candidacy, Carries, ModeId, ModeInfo, Needs};
 use crate::gpu::Frame;
 use crate::scene::Scene;
 
@@ -13,6 +13,8 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     conservative: true,
     params: &[],
     needs: Needs::Nothing,
+    carries: Carries::Nothing,
+    auto: Candidacy::Never,
     check: |_| Ok(()),
     build: |scene, _| Ok(Box::new(DirectRendering::new(scene))),
 };

@@ -79,6 +79,11 @@ pub struct ModeInfo {
     /// What it needs from the adapter beyond drawing and occlusion queries;
     /// a mode whose needs are not met is skipped, with a message.
     pub needs: Needs,
+    /// What it carries from one frame to the next, which `auto` hands over
+    /// when it switches to it.
+    pub carries: Carries,
+    /// Whether `auto` may run it.
+    pub auto: Candidacy,
     /// Parses the mode's parameters, so a bad value is reported before any
     /// work.
     pub check: fn(&ModeParams) -> Result<(), ModeError>,
@@ -98,6 +103,39 @@ pub enum Needs {
     PixelCounts,
     /// Culling on the GPU alone (`GpuContext::gpu_driven`).
     GpuCulling,
+}
+
+/// What a mode carries from one frame to the next that decides what it
+/// draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Carries {
+    /// Nothing: every frame decides afresh.
+    Nothing,
+    /// Last frame's visible objects, on the CPU; another culler's can be
+    /// handed to it ([`Culler::seed_visible`]).
+    VisibleOnCpu,
+    /// Last frame's visible objects, on the GPU, in lists that other GPU
+    /// walks can share ([`Culler::share_visible_lists`]).
+    VisibleOnGpu,
+    /// State of its own that another culler's cannot stand in for.
+    OwnState,
+}
+
+/// Whether `auto` may run a mode: only conservative modes that can be the
+/// cheapest on some adapter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Candidacy {
+    /// Never: it is not conservative, or another candidate does the same
+    /// work for less on every adapter (dr draws what vfc draws and more; sq
+    /// waits for every query that omq batches), or it is no culler (the
+    /// oracle, auto).
+    Never,
+    /// Only where the adapter cannot walk on the GPU: it waits for each
+    /// batch of query results, where a GPU walk tests the same boxes
+    /// without waiting.
+    WithoutGpuWalks,
+    /// On every adapter that meets its needs.
+    Always,
 }
 
 impl ModeInfo {

@@ -36,7 +36,7 @@ use super::traversal::{DepthQueue, children, draw_leaf, in_frustum, nearest_corn
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
-use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
+use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{BoxTest, BoxVisibility, Frame, Resolution};
 use crate::hierarchy::Hierarchy;
 use crate::scene::Scene;
@@ -48,6 +48,8 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     conservative: true,
     params: &[OM, INITIAL_MAX_TESTS, FACTOR],
     needs: Needs::Nothing,
+    carries: Carries::Nothing,
+    auto: Candidacy::WithoutGpuWalks,
     check: |params| OmqParams::from_params(params).map(drop),
     build: |_, params| Ok(Box::new(OccupancyMapQueries::new(OmqParams::from_params(params)?))),
 };

@@ -4,7 +4,7 @@
 //! visible set alone; no real mode can draw less and still be exact.
 
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
-use crate::cull::mode::{ModeId, ModeInfo, Needs};
+use crate::cull::mode::{Candidacy, Carries, ModeId, ModeInfo, Needs};
 use crate::gpu::Frame;
 
 /// This mode's entry in the registry.
@@ -14,6 +14,8 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     conservative: true,
     params: &[],
     needs: Needs::Nothing,
+    carries: Carries::Nothing,
+    auto: Candidacy::Never,
     check: |_| Ok(()),
     build: |_, _| Ok(Box::new(Oracle::new())),
 };

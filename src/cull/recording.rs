@@ -139,5 +139,6 @@ pub fn input<'a>(frame: u32, camera: &'a Camera, scene: &'a Scene, hierarchy: &'
         moved: &[],
         reference_visible: None,
         previous: None,
+        warm_up: false,
     }
 }

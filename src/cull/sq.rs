@@ -13,7 +13,7 @@
 use super::traversal::{DepthQueue, draw_leaf, nearest_corner};
 use crate::camera::Containment;
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
-use crate::cull::mode::{ModeId, ModeInfo, Needs};
+use crate::cull::mode::{Candidacy, Carries, ModeId, ModeInfo, Needs};
 use crate::gpu::{BoxTest, BoxVisibility, Frame};
 
 /// This mode's entry in the registry.
@@ -23,6 +23,8 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     conservative: true,
     params: &[],
     needs: Needs::Nothing,
+    carries: Carries::Nothing,
+    auto: Candidacy::Never,
     check: |_| Ok(()),
     build: |_, _| Ok(Box::new(SingleQueries::new())),
 };

@@ -14,7 +14,7 @@
 
 use super::traversal::frustum_cull_subtree;
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
-use crate::cull::mode::{ModeId, ModeInfo, Needs};
+use crate::cull::mode::{Candidacy, Carries, ModeId, ModeInfo, Needs};
 use crate::gpu::Frame;
 use crate::scene::Scene;
 
@@ -25,6 +25,8 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     conservative: true,
     params: &[],
     needs: Needs::Nothing,
+    carries: Carries::Nothing,
+    auto: Candidacy::Always,
     check: |_| Ok(()),
     build: |scene, _| Ok(Box::new(FrustumCulling::new(scene))),
 };

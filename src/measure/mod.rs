@@ -6,4 +6,4 @@ mod summary;
 
 pub use reference::{DepthError, ErrorMeter, ObjectError};
 pub use rows::{FrameStats, MissedObject};
-pub use summary::{Distribution, ModeDescription, ModeSummary, summarize};
+pub use summary::{Distribution, ModeDescription, ModeSummary, StrategyShare, summarize};

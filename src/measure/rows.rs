@@ -59,13 +59,22 @@ pub struct FrameStats {
     pub missed_objects: Option<u64>,
     /// Objects visible in the reference frame (the oracle's draw count).
     pub visible_objects: Option<u64>,
+    /// For a mode that runs others (`auto`), the one that drew the frame;
+    /// empty for other modes and in files written before the column
+    /// existed.
+    #[serde(default)]
+    pub strategy: Option<String>,
+    /// With `strategy`: whether it ran to be measured (a probe) rather than
+    /// as the cheapest.
+    #[serde(default)]
+    pub probe: Option<bool>,
 }
 
 /// Flat, a column per field and per counter: CSV has no nesting (and the
 /// csv crate cannot write serde's `flatten`).
 impl Serialize for FrameStats {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        let mut row = serializer.serialize_struct("FrameStats", 17 + TraversalStats::COUNTERS.len())?;
+        let mut row = serializer.serialize_struct("FrameStats", 19 + TraversalStats::COUNTERS.len())?;
         row.serialize_field("mode", &self.mode)?;
         row.serialize_field("frame", &self.frame)?;
         row.serialize_field("frame_ms", &self.frame_ms)?;
@@ -86,6 +95,8 @@ impl Serialize for FrameStats {
         row.serialize_field("max_depth_error", &self.max_depth_error)?;
         row.serialize_field("missed_objects", &self.missed_objects)?;
         row.serialize_field("visible_objects", &self.visible_objects)?;
+        row.serialize_field("strategy", &self.strategy)?;
+        row.serialize_field("probe", &self.probe)?;
         row.end()
     }
 }
@@ -146,6 +157,8 @@ impl FrameStats {
             max_depth_error: None,
             missed_objects: None,
             visible_objects: None,
+            strategy: None,
+            probe: None,
         }
     }
 }

@@ -106,6 +106,54 @@ pub struct ModeSummary {
     pub missed_objects_total: Option<u64>,
     /// Mean fraction of the frame's pixels that are wrong.
     pub error_fraction: Option<f64>,
+    /// For a mode that runs others (`auto`), what each of them drew: in
+    /// order of first use; empty for other modes.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub strategies: Vec<StrategyShare>,
+}
+
+/// The frames one of `auto`'s strategies drew, and what they cost.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StrategyShare {
+    pub strategy: String,
+    pub frames: usize,
+    /// Of them, probes (run to be measured).
+    pub probes: usize,
+    pub mean_frame_ms: f64,
+}
+
+impl StrategyShare {
+    /// Per strategy named in `rows` (one mode's), in order of first use.
+    fn of(rows: &[&FrameStats]) -> Vec<StrategyShare> {
+        let mut shares: Vec<(StrategyShare, f64)> = Vec::new();
+        for r in rows {
+            let Some(name) = &r.strategy else { continue };
+            let at = match shares.iter().position(|(s, _)| &s.strategy == name) {
+                Some(at) => at,
+                None => {
+                    let share = StrategyShare {
+                        strategy: name.clone(),
+                        frames: 0,
+                        probes: 0,
+                        mean_frame_ms: 0.0,
+                    };
+                    shares.push((share, 0.0));
+                    shares.len() - 1
+                }
+            };
+            let (share, total) = &mut shares[at];
+            share.frames += 1;
+            share.probes += usize::from(r.probe == Some(true));
+            *total += r.frame_ms;
+        }
+        shares
+            .into_iter()
+            .map(|(share, total)| StrategyShare {
+                mean_frame_ms: total / share.frames as f64,
+                ..share
+            })
+            .collect()
+    }
 }
 
 /// What summarize needs to know of a mode besides its rows.
@@ -159,6 +207,7 @@ pub fn summarize(rows: &[FrameStats], modes: &[ModeDescription], pixels: u64) ->
                 error_fraction: errors
                     .filter(|e| !e.is_empty())
                     .map(|e| e.iter().sum::<u64>() as f64 / (e.len() as f64 * pixels as f64)),
+                strategies: StrategyShare::of(&mine),
                 stats,
             }
         })

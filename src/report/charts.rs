@@ -254,6 +254,27 @@ where
             .label(mode.name.as_str())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], c.stroke_width(3)));
     }
+    // The frames a mode that runs others (auto) spent measuring one: a
+    // ring on its line.
+    let probes: Vec<(u32, f64, RGBColor)> = series
+        .modes
+        .iter()
+        .flat_map(|(_, rows, c)| {
+            rows.iter()
+                .filter(|r| r.probe == Some(true))
+                .map(|r| (r.frame, f(r), *c))
+        })
+        .collect();
+    if !probes.is_empty() {
+        chart
+            .draw_series(
+                probes
+                    .iter()
+                    .map(|&(x, y, c)| Circle::new((x, y), 5, c.stroke_width(2))),
+            )?
+            .label("probe frame")
+            .legend(|(x, y)| Circle::new((x + 12, y), 5, BLACK.stroke_width(2)));
+    }
     legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     Ok(())
 }

@@ -2,7 +2,7 @@
 
 use std::fmt::Write as _;
 
-use super::summary::{Summary, SweepSummary};
+use super::summary::{Summary, SweepSummary, Verdict};
 use crate::measure::ModeSummary;
 use crate::text::markdown;
 
@@ -23,6 +23,9 @@ pub fn render(s: &Summary) -> String {
         markdown(&s.path.source)
     );
     let _ = writeln!(w, "Adapter: {}.\n", s.adapter);
+    if let Some(v) = &s.verdict {
+        let _ = writeln!(w, "{}\n", verdict(v));
+    }
     let _ = writeln!(
         w,
         "| mode | frame ms (mean ± σ) | median | p95 | triangles | queries | round trips | error px | missed | vs vfc | × oracle |"
@@ -55,6 +58,7 @@ pub fn render(s: &Summary) -> String {
         );
     }
     cost_split(w, &s.modes);
+    strategies(w, &s.modes);
     missed_list(w, s);
     if let Some(sweep) = &s.sweep {
         sweep_table(w, s, sweep);
@@ -83,6 +87,53 @@ pub fn render(s: &Summary) -> String {
         s.schema_version
     );
     md
+}
+
+/// The run's answer in one line.
+fn verdict(v: &Verdict) -> String {
+    let mut line = format!(
+        "**Fastest conservative mode: {}**, {:.2} ms a frame",
+        v.fastest, v.frame_ms
+    );
+    if let Some(x) = v.speedup_vs_vfc {
+        let _ = write!(line, ", {x:.2}× as fast as vfc");
+    }
+    if let Some(x) = v.ratio_to_oracle {
+        let _ = write!(line, ", {x:.2}× the oracle's time");
+    }
+    if let (Some(mean), Some(p95)) = (v.auto_ratio, v.auto_p95_ratio) {
+        let _ = write!(line, "; auto takes {mean:.2}× its time (p95 {p95:.2}×)");
+    }
+    line + "."
+}
+
+/// For each mode that runs others (`auto`), the frames each of them drew
+/// and what they cost.
+fn strategies(w: &mut String, modes: &[ModeSummary]) {
+    for m in modes.iter().filter(|m| !m.strategies.is_empty()) {
+        let _ = writeln!(
+            w,
+            "\n## {}'s strategies\n\n| strategy | frames | of which probes | mean frame ms | share of the time |\n|---|---:|---:|---:|---:|",
+            markdown(&m.name)
+        );
+        let total: f64 = m.strategies.iter().map(|s| s.mean_frame_ms * s.frames as f64).sum();
+        for s in &m.strategies {
+            let time = s.mean_frame_ms * s.frames as f64;
+            let _ = writeln!(
+                w,
+                "| {} | {} | {} | {:.2} | {:.1} % |",
+                markdown(&s.strategy),
+                s.frames,
+                s.probes,
+                s.mean_frame_ms,
+                100.0 * time / total.max(f64::MIN_POSITIVE)
+            );
+        }
+        let _ = writeln!(
+            w,
+            "\nA probe runs a strategy to measure it; the others ran as the cheapest measured. frames.csv's `strategy` and `probe` columns say which, frame by frame."
+        );
+    }
 }
 
 /// Where each mode's frame went (004's Table 1 splits it the same way):

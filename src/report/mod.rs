@@ -20,7 +20,7 @@ pub use files::{ReportError, check_writable, write_png, write_whole};
 pub use markdown::render as render_markdown;
 pub use summary::{
     AnimationFact, CameraFact, Fingerprint, MatrixIdentity, MissedSummary, PathSummary, SCHEMA_VERSION, SceneFacts,
-    SceneSummary, SkippedMode, Summary, SweepSummary, ToolInfo,
+    SceneSummary, SkippedMode, Summary, SweepSummary, ToolInfo, Verdict,
 };
 
 /// The files a run wrote.

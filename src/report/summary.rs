@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::camera::path::CameraPath;
+use crate::cull::ModeId;
 use crate::gpu::{AdapterReport, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams, HierarchyStats};
 use crate::measure::{MissedObject, ModeSummary};
@@ -49,6 +50,53 @@ pub struct Summary {
     /// in files from before it existed, which are read unchecked).
     #[serde(default)]
     pub frames_csv: Option<Fingerprint>,
+    /// The run's answer in one line (absent where no conservative mode ran,
+    /// and in older files).
+    #[serde(default)]
+    pub verdict: Option<Verdict>,
+}
+
+/// The run's answer in one line: the fastest conservative mode, against
+/// `vfc` and the oracle, and how far `auto` is from it.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Verdict {
+    pub fastest: String,
+    /// Its mean frame time.
+    pub frame_ms: f64,
+    pub speedup_vs_vfc: Option<f64>,
+    pub ratio_to_oracle: Option<f64>,
+    /// `auto`'s mean and p95 frame times over the fastest's, where it ran.
+    pub auto_ratio: Option<f64>,
+    pub auto_p95_ratio: Option<f64>,
+}
+
+impl Verdict {
+    /// From `modes`, each run as the mode of `ids` beside it: the fastest
+    /// by mean frame time of the conservative ones, leaving out the oracle
+    /// (it knows the answer) and `auto` (it runs the others).
+    pub fn of(modes: &[ModeSummary], ids: &[ModeId]) -> Option<Verdict> {
+        let frame = |m: &ModeSummary| m.stats.get("frame_ms").copied();
+        let fastest = modes
+            .iter()
+            .zip(ids)
+            .filter(|(m, id)| m.conservative && !matches!(id, ModeId::Oracle | ModeId::Auto))
+            .filter_map(|(m, _)| frame(m).map(|f| (m, f)))
+            .min_by(|a, b| a.1.mean.total_cmp(&b.1.mean))?;
+        let auto = modes
+            .iter()
+            .zip(ids)
+            .find(|(_, id)| **id == ModeId::Auto)
+            .and_then(|(m, _)| frame(m));
+        let (m, f) = fastest;
+        Some(Verdict {
+            fastest: m.name.clone(),
+            frame_ms: f.mean,
+            speedup_vs_vfc: m.speedup_vs_vfc,
+            ratio_to_oracle: m.ratio_to_oracle,
+            auto_ratio: auto.map(|a| a.mean / f.mean),
+            auto_p95_ratio: auto.map(|a| a.p95 / f.p95),
+        })
+    }
 }
 
 /// The head of missed.csv, for report.md and machines.

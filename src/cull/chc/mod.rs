@@ -46,7 +46,7 @@ use super::traversal::{DepthQueue, nearest_corner};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
-use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
+use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{BoxVisibility, Frame, Resolution};
 use crate::scene::Scene;
 use ternary::{Pixels, TernaryTree, TreeParams, facing_axis};
@@ -58,6 +58,8 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     conservative: true,
     params: &[R_SPLIT, O_SPLIT, R_MERGE, O_MERGE, TIGHT_AFTER],
     needs: Needs::PixelCounts,
+    carries: Carries::OwnState,
+    auto: Candidacy::WithoutGpuWalks,
     check: |params| ChcParams::from_params(params).map(drop),
     build: |scene, params| Ok(Box::new(CoherentCulling::new(scene, ChcParams::from_params(params)?))),
 };

@@ -3,8 +3,11 @@
 //! ([`NodeTest`]), and the frame of the module above ([`cull_on_gpu`]).
 //! roc, ioc and hiz differ only in those two choices and their parameters.
 
+use std::rc::Rc;
+
 use super::depths::DepthRange;
 use super::level_test::NodeTest;
+use super::lists::VisibleLists;
 use super::{CullTree, DrawList, GpuWalk};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
@@ -34,6 +37,9 @@ pub struct GpuCulling {
     walk: Option<GpuWalk>,
     /// Over nodes: per tree node, the hierarchy node whose box it tests.
     source: Vec<u32>,
+    /// Lists shared with other walks, given before `prepare`; without them
+    /// `prepare` makes the walk lists of its own.
+    shared_lists: Option<Rc<VisibleLists>>,
 }
 
 impl GpuCulling {
@@ -46,6 +52,7 @@ impl GpuCulling {
             chosen: None,
             walk: None,
             source: Vec::new(),
+            shared_lists: None,
         }
     }
 }
@@ -87,8 +94,16 @@ impl Culler for GpuCulling {
                 tree
             }
         };
-        self.walk = Some(GpuWalk::new(setup, &tree, self.node_test)?);
+        let lists = match &self.shared_lists {
+            Some(shared) => shared.clone(),
+            None => Rc::new(VisibleLists::new(setup.gpu, setup.draws)),
+        };
+        self.walk = Some(GpuWalk::new(setup, &tree, self.node_test, lists)?);
         Ok(())
+    }
+
+    fn share_visible_lists(&mut self, lists: &Rc<VisibleLists>) {
+        self.shared_lists = Some(lists.clone());
     }
 
     /// # Panics

@@ -79,7 +79,7 @@ use serde::Serialize;
 
 use super::depths::{BOTTOM, Depth, DepthRange, START};
 use super::{GpuCulling, NodeTest, Walked};
-use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
+use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 
 /// This mode's entry in the registry.
 pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
@@ -88,6 +88,8 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     conservative: true,
     params: &[TEXELS, BASE, PIXELS, BOXES, START, BOTTOM],
     needs: Needs::GpuCulling,
+    carries: Carries::VisibleOnGpu,
+    auto: Candidacy::Always,
     check: |params| HizParams::from_params(params).map(drop),
     build: |_, params| Ok(Box::new(hierarchical_depth_culling(HizParams::from_params(params)?))),
 };

@@ -24,7 +24,7 @@
 
 use super::depths::{BOTTOM, DepthRange, START};
 use super::{GpuCulling, NodeTest, Walked};
-use crate::cull::mode::{ModeId, ModeInfo, Needs};
+use crate::cull::mode::{Candidacy, Carries, ModeId, ModeInfo, Needs};
 
 /// This mode's entry in the registry.
 pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
@@ -33,6 +33,8 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     conservative: true,
     params: &[START, BOTTOM],
     needs: Needs::GpuCulling,
+    carries: Carries::VisibleOnGpu,
+    auto: Candidacy::Always,
     check: |params| DepthRange::from_params(ModeId::Ioc, params).map(drop),
     build: |_, params| {
         Ok(Box::new(iterative_occlusion_culling(DepthRange::from_params(

@@ -56,6 +56,7 @@ pub mod depths;
 pub mod hiz;
 pub mod ioc;
 mod level_test;
+mod lists;
 mod pool;
 mod pyramid;
 pub mod roc;
@@ -66,5 +67,6 @@ mod words;
 
 pub use culling::{GpuCulling, Walked};
 pub use level_test::NodeTest;
+pub use lists::VisibleLists;
 pub use pool::{DrawList, GpuWalk, NodeBoxes};
 pub use tree::{CullTree, MAX_LEVELS, TreeNode};

@@ -2,9 +2,11 @@
 //! tree on the GPU, the passes of one walk, and the audit after it (see the
 //! module above for the frame they make).
 
+use std::rc::Rc;
 use std::time::Duration;
 
 use super::level_test::{LevelTest, NodeTest};
+use super::lists::VisibleLists;
 #[cfg(test)]
 use super::pyramid::PyramidLevel;
 use super::tree::{CullTree, MAX_LEVELS};
@@ -30,8 +32,8 @@ pub enum DrawList {
     NewlyVisible,
 }
 
-/// A [`CullTree`] on the GPU with the state a mode keeps between frames:
-/// which objects were visible, and the draw lists.
+/// A [`CullTree`] on the GPU, bound with the visible lists the walk keeps
+/// between frames.
 struct TreeOnGpu {
     nodes: u32,
     objects: u32,
@@ -40,13 +42,7 @@ struct TreeOnGpu {
     seed: Vec<u32>,
     tree_group: wgpu::BindGroup,
     lists_group: wgpu::BindGroup,
-    /// The visible list at [0, n), the newly visible one at [n, 2n).
-    commands: wgpu::Buffer,
-    /// The two lists' lengths.
-    counts: wgpu::Buffer,
-    /// The lengths as last read back, where draws cannot take them from
-    /// `counts`.
-    known_counts: [u32; 2],
+    lists: Rc<VisibleLists>,
 }
 
 /// The walk recorded for the audit.
@@ -172,9 +168,15 @@ const PYRAMID_SPAN: usize = 1;
 const AUDIT_DRAWN_OFFSET: u64 = MAX_LEVELS as u64 * LEVEL_BYTES;
 
 impl GpuWalk {
-    /// Puts `tree` on the GPU, with an empty visible list, and makes what
-    /// walking it with `node_test` takes. Needs [`GpuContext::gpu_driven`].
-    pub fn new(setup: &GpuSetup, tree: &CullTree, node_test: NodeTest) -> Result<GpuWalk, GpuError> {
+    /// Puts `tree` on the GPU, bound with `lists` (the visible set it starts
+    /// from and keeps between frames), and makes what walking it with
+    /// `node_test` takes. Needs [`GpuContext::gpu_driven`].
+    pub fn new(
+        setup: &GpuSetup,
+        tree: &CullTree,
+        node_test: NodeTest,
+        lists: Rc<VisibleLists>,
+    ) -> Result<GpuWalk, GpuError> {
         let GpuSetup { gpu, camera, draws, .. } = *setup;
         let device = &gpu.device;
         let cull_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -243,31 +245,15 @@ impl GpuWalk {
             &[Some(&no_bindings), Some(&tree_layout), Some(&lists_layout)],
         );
         let no_bindings = bind_buffers(gpu, &no_bindings, &[]);
-        let commands: Vec<u8> = draws
-            .iter()
-            .enumerate()
-            .flat_map(|(o, d)| {
-                wgpu::util::DrawIndexedIndirectArgs {
-                    index_count: d.index_count,
-                    instance_count: 1,
-                    first_index: d.first_index,
-                    base_vertex: 0,
-                    first_instance: o as u32,
-                }
-                .as_bytes()
-                .to_vec()
-            })
-            .collect();
         let objects = draws.len() as u32;
         let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         assert!(
-            tree.order.len() == objects as usize,
-            "a cull tree orders every object of the scene"
+            tree.order.len() == objects as usize && lists.objects() == objects,
+            "a cull tree and its lists hold every object of the scene"
         );
         assert!((1..=MAX_LEVELS).contains(&tree.levels), "1..={MAX_LEVELS} levels");
-        let all_commands = gpu.buffer_with("all draw commands", &commands, wgpu::BufferUsages::STORAGE);
         let drawn = storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy);
-        let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, &all_commands, &drawn);
+        let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, lists, &drawn);
         let spans = match node_test {
             NodeTest::Raster => 1,
             NodeTest::Pyramid { .. } => 2,
@@ -391,7 +377,7 @@ impl GpuWalk {
     pub fn compact(&mut self, work: GpuWork) {
         let encoder = work.encoder;
         let tree = &self.tree;
-        encoder.clear_buffer(&tree.counts, 0, None);
+        encoder.clear_buffer(&tree.lists.counts, 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("compact draw lists"),
@@ -411,11 +397,11 @@ impl GpuWalk {
     /// Submits `encoder` and reads the lengths of the tree's lists back,
     /// for adapters whose draws cannot take them from a buffer.
     pub fn read_counts(&mut self, gpu: &GpuContext, mut encoder: wgpu::CommandEncoder) {
-        let tree = &mut self.tree;
-        self.counts_readback.copy(&mut encoder, &tree.counts, 0, 0, 8);
+        let lists = &self.tree.lists;
+        self.counts_readback.copy(&mut encoder, &lists.counts, 0, 0, 8);
         gpu.queue.submit([encoder.finish()]);
         self.counts_readback.read(gpu, 8, &mut self.words);
-        tree.known_counts = [self.words[0], self.words[1]];
+        lists.set_known_counts([self.words[0], self.words[1]]);
     }
 
     /// The commands of one of the tree's lists; the count comes from the
@@ -428,16 +414,16 @@ impl GpuWalk {
             DrawList::NewlyVisible => (1, u64::from(tree.objects) * DRAW_COMMAND_BYTES),
         };
         IndirectDraws {
-            commands: &tree.commands,
+            commands: &tree.lists.commands,
             offset,
             count: if indirect_count {
                 IndirectCount::InBuffer {
-                    buffer: &tree.counts,
+                    buffer: &tree.lists.counts,
                     offset: 4 * index as u64,
                     max: tree.objects,
                 }
             } else {
-                IndirectCount::Known(tree.known_counts[index])
+                IndirectCount::Known(tree.lists.known_counts()[index])
             },
         }
     }
@@ -539,48 +525,31 @@ impl GpuWalk {
 }
 
 impl TreeOnGpu {
-    /// `tree` on the GPU, bound with the walk's lists (`draws`: every
-    /// object's draw command; `drawn`: a word per object drawn).
+    /// `tree` on the GPU, bound with `lists` and `drawn` (a word per object
+    /// drawn).
     fn new(
         gpu: &GpuContext,
         tree: &CullTree,
         tree_layout: &wgpu::BindGroupLayout,
         lists_layout: &wgpu::BindGroupLayout,
-        draws: &wgpu::Buffer,
+        lists: Rc<VisibleLists>,
         drawn: &wgpu::Buffer,
     ) -> TreeOnGpu {
-        let objects = tree.order.len() as u32;
         let storage = wgpu::BufferUsages::STORAGE;
         let node_buffer = gpu.buffer_with("tree nodes", bytemuck::cast_slice(&tree.nodes), storage);
         let order = gpu.buffer_with("tree order", bytemuck::cast_slice(&tree.order), storage);
-        let object_state = storage_buffer(
-            gpu,
-            "object state",
-            u64::from(objects.max(1)) * 4,
-            wgpu::BufferUsages::empty(),
-        );
-        let commands = storage_buffer(
-            gpu,
-            "draw lists",
-            2 * u64::from(objects.max(1)) * DRAW_COMMAND_BYTES,
-            wgpu::BufferUsages::INDIRECT,
-        );
-        let counts = storage_buffer(
-            gpu,
-            "draw list lengths",
-            8,
-            wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        );
         TreeOnGpu {
             nodes: tree.nodes.len() as u32,
-            objects,
+            objects: tree.order.len() as u32,
             levels: tree.levels,
             seed: tree.seed.clone(),
-            tree_group: bind_buffers(gpu, tree_layout, &[&node_buffer, &order, &object_state]),
-            lists_group: bind_buffers(gpu, lists_layout, &[draws, &commands, &counts, drawn]),
-            commands,
-            counts,
-            known_counts: [0; 2],
+            tree_group: bind_buffers(gpu, tree_layout, &[&node_buffer, &order, &lists.object_state]),
+            lists_group: bind_buffers(
+                gpu,
+                lists_layout,
+                &[&lists.all_commands, &lists.commands, &lists.counts, drawn],
+            ),
+            lists,
         }
     }
 }

@@ -5,7 +5,7 @@
 //! tested in one level; the frame is the module above's.
 
 use super::{GpuCulling, NodeTest, Walked};
-use crate::cull::mode::{ModeId, ModeInfo, Needs};
+use crate::cull::mode::{Candidacy, Carries, ModeId, ModeInfo, Needs};
 
 /// This mode's entry in the registry.
 pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
@@ -14,6 +14,8 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     conservative: true,
     params: &[],
     needs: Needs::GpuCulling,
+    carries: Carries::VisibleOnGpu,
+    auto: Candidacy::Always,
     check: |_| Ok(()),
     build: |_, _| Ok(Box::new(raster_occlusion_culling())),
 };

@@ -57,7 +57,7 @@ use serde::Serialize;
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
 use crate::cull::culler::{CellDepths, Culler, FrameInput, TraversalStats};
-use crate::cull::mode::{ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
+use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{
     BoxMargins, BoxPlanes, DepthMargins, EyeBox, Frame, GpuError, GpuSetup, PixelRays, QueryBox, Resolution,
     eye_relative_box,
@@ -72,6 +72,8 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     conservative: true,
     params: &[RESOLUTION, TRIANGLES, THREADS],
     needs: Needs::Nothing,
+    carries: Carries::VisibleOnCpu,
+    auto: Candidacy::Always,
     check: |params| SwrParams::from_params(params).map(drop),
     build: |_, params| Ok(Box::new(SoftwareOcclusionCulling::new(SwrParams::from_params(params)?))),
 };

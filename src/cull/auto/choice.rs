@@ -1,0 +1,583 @@
+//! How `auto` chooses a strategy frame by frame: a bandit over measured
+//! frame times, compared in pairs so that what the view costs every
+//! strategy alike cancels out.
+//!
+//! - One strategy is the *incumbent*: it runs unless a probe is due.
+//! - A probe runs another strategy for one frame, or two where it must
+//!   first settle (its first frame is paid for, not measured). Its sample
+//!   is the log of its frame time over the incumbent's on both sides of it,
+//!   so a probe is never followed by another.
+//! - Each strategy keeps its last [`WINDOW`] samples: their median is its
+//!   cost relative to the incumbent, their spread (the MAD, and never less
+//!   than the incumbent's own frame-to-frame noise) its uncertainty.
+//! - Successive elimination with hysteresis: the incumbent is replaced only
+//!   by a strategy cheaper by more than [`HYSTERESIS`] at confidence (its
+//!   upper bound below it). A strategy that may still be cheaper by that
+//!   much is probed every [`EXPLORE`] frames; one known not to be is probed
+//!   again only as often as a budget (`auto.budget`) of the run's time,
+//!   shared among them, pays for at what a probe of it costs (so the dearer
+//!   a strategy, the rarer its rechecks, and a cheap rival's drift is still
+//!   seen).
+//! - Frustum culling is judged before it is run: each measured occlusion
+//!   frame says what share of the frustum's triangles it hid, and frustum
+//!   culling's cost is estimated from it ([`frustum_estimate`]) until
+//!   measured. Where an occlusion frame hid less than [`NOTHING_HIDDEN`]
+//!   of the frustum, there is nothing to skip: once frustum culling is the
+//!   incumbent, occlusion is checked again only when the view has changed
+//!   materially since ([`View::differs`]), by one probe of the most
+//!   promising occlusion culler.
+
+use std::collections::VecDeque;
+
+use glam::DVec3;
+
+/// Samples a strategy keeps.
+const WINDOW: usize = 8;
+/// Gain (log of the cost ratio, about 3 %) a strategy must show at
+/// confidence before it replaces the incumbent.
+const HYSTERESIS: f64 = 0.03;
+/// One-sided 95 % normal quantile: the confidence of every bound here.
+const Z: f64 = 1.64;
+/// Frames between probes of a strategy that may still be cheaper.
+const EXPLORE: u64 = 3;
+/// Fewest frames between rechecks of a strategy known not to be cheaper.
+const RECHECK: u64 = 12;
+/// Share of the frustum's triangles below which occlusion culling has
+/// nothing to skip.
+const NOTHING_HIDDEN: f64 = 0.1;
+/// Frame-to-frame noise (log) assumed before the incumbent has shown its
+/// own.
+const DEFAULT_NOISE: f64 = 0.1;
+/// What a hidden triangle costs frustum culling to draw, as a share of what
+/// a drawn one costs the occlusion culler (whose frame also carries its
+/// full-screen work): a guess on the cheap side, so that frustum culling is
+/// measured early wherever it may pay.
+const HIDDEN_TRIANGLE_COST: f64 = 0.25;
+
+/// What kind of strategy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Family {
+    /// Frustum culling: hides nothing, tests nothing.
+    Frustum,
+    /// An occlusion culler.
+    Occlusion,
+}
+
+/// The plan for one frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Turn {
+    pub strategy: usize,
+    /// Run to be measured, not as the incumbent.
+    pub probe: bool,
+    /// Its time says what the strategy costs (not a probe's settling frame).
+    pub measured: bool,
+}
+
+/// Where a frame looks from, and how much of the scene it holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct View {
+    pub eye: DVec3,
+    /// Unit length.
+    pub forward: DVec3,
+    /// Triangles of the objects in the frustum.
+    pub frustum_triangles: u64,
+}
+
+impl View {
+    /// Turned by more than 30°, moved by more than `reach`, or holding more
+    /// than 1.5 times the triangles or less than 1/1.5 of them.
+    pub fn differs(&self, other: &View, reach: f64) -> bool {
+        let (a, b) = (
+            self.frustum_triangles.max(1) as f64,
+            other.frustum_triangles.max(1) as f64,
+        );
+        self.forward.dot(other.forward) < 30f64.to_radians().cos()
+            || self.eye.distance(other.eye) > reach
+            || a.max(b) > 1.5 * a.min(b)
+    }
+}
+
+/// What one strategy has shown.
+#[derive(Clone, Debug)]
+struct Record {
+    family: Family,
+    /// Log of its frame time over the incumbent's, newest last.
+    samples: VecDeque<f64>,
+    /// The frame it last ran (this chooser's count).
+    last_run: Option<u64>,
+}
+
+/// A probe's measured frame, waiting for the incumbent's frame after it.
+#[derive(Clone, Copy, Debug)]
+struct Pending {
+    strategy: usize,
+    log_ms: f64,
+    /// The incumbent's log frame time just before the probe.
+    before: Option<f64>,
+}
+
+/// What an occlusion frame hid, and where it looked from.
+#[derive(Clone, Copy, Debug)]
+struct Hidden {
+    share: f64,
+    view: View,
+}
+
+pub(super) struct Chooser {
+    records: Vec<Record>,
+    incumbent: usize,
+    /// Frames planned so far.
+    frame: u64,
+    /// The incumbent's last measured frame: when, and its log time.
+    incumbent_ms: Option<(u64, f64)>,
+    /// |log| steps between consecutive frames of the incumbent.
+    steps: VecDeque<f64>,
+    pending: Option<Pending>,
+    /// A probe under way: its strategy and frames left after this one.
+    probing: Option<(usize, u32)>,
+    hidden: Option<Hidden>,
+    /// A move farther than this changes the view materially.
+    reach: f64,
+    /// Share of the run's time that rechecks of strategies known not to be
+    /// cheaper may cost.
+    budget: f64,
+    last: Option<Turn>,
+}
+
+impl Chooser {
+    /// Strategies of `families`, starting with `incumbent`; `reach` is how
+    /// far the eye moves before the view counts as changed, `budget` the
+    /// share of the run's time rechecks may cost.
+    pub fn new(families: &[Family], incumbent: usize, reach: f64, budget: f64) -> Chooser {
+        Chooser {
+            records: families
+                .iter()
+                .map(|&family| Record {
+                    family,
+                    samples: VecDeque::with_capacity(WINDOW),
+                    last_run: None,
+                })
+                .collect(),
+            incumbent,
+            frame: 0,
+            incumbent_ms: None,
+            steps: VecDeque::with_capacity(2 * WINDOW),
+            pending: None,
+            probing: None,
+            hidden: None,
+            reach,
+            budget,
+            last: None,
+        }
+    }
+
+    pub fn incumbent(&self) -> usize {
+        self.incumbent
+    }
+
+    /// This frame's plan. `view` is where it looks from (with the frustum's
+    /// triangles as last known); `settles[s]` says whether strategy `s`
+    /// would first need a frame to settle if it ran now.
+    pub fn plan(&mut self, view: &View, settles: &[bool]) -> Turn {
+        self.frame += 1;
+        let turn = self.next(view, settles);
+        self.records[turn.strategy].last_run = Some(self.frame);
+        self.last = Some(turn);
+        turn
+    }
+
+    fn next(&mut self, view: &View, settles: &[bool]) -> Turn {
+        if let Some((s, left)) = self.probing {
+            self.probing = (left > 0).then(|| (s, left - 1));
+            return Turn {
+                strategy: s,
+                probe: true,
+                measured: left == 0,
+            };
+        }
+        if self.pending.is_none()
+            && let Some(better) = self.cheaper_than_incumbent()
+        {
+            self.switch_to(better);
+        }
+        let after_probe = self.last.is_some_and(|t| t.probe);
+        if !after_probe && let Some(s) = self.most_promising_due(view, settles) {
+            let settling = u32::from(settles[s]);
+            self.probing = (settling > 0).then_some((s, settling - 1));
+            return Turn {
+                strategy: s,
+                probe: true,
+                measured: settling == 0,
+            };
+        }
+        Turn {
+            strategy: self.incumbent,
+            probe: false,
+            measured: true,
+        }
+    }
+
+    /// Learns what the frame planned as `turn` cost (`frame_ms`), and for an
+    /// occlusion frame what share of `view`'s frustum triangles it hid.
+    pub fn learn(&mut self, turn: Turn, frame_ms: f64, hidden_share: Option<f64>, view: &View) {
+        if !turn.measured || !frame_ms.is_finite() || frame_ms <= 0.0 {
+            return;
+        }
+        let log_ms = frame_ms.ln();
+        if let (Family::Occlusion, Some(share)) = (self.records[turn.strategy].family, hidden_share) {
+            self.hidden = Some(Hidden { share, view: *view });
+        }
+        if turn.probe {
+            let before = self
+                .incumbent_ms
+                .filter(|&(f, _)| self.frame - f <= 3)
+                .map(|(_, ms)| ms);
+            self.pending = Some(Pending {
+                strategy: turn.strategy,
+                log_ms,
+                before,
+            });
+            return;
+        }
+        if let Some(p) = self.pending.take() {
+            let baseline = p.before.map_or(log_ms, |b| (b + log_ms) / 2.0);
+            let samples = &mut self.records[p.strategy].samples;
+            if samples.len() == WINDOW {
+                samples.pop_front();
+            }
+            samples.push_back(p.log_ms - baseline);
+        }
+        if let Some((f, before)) = self.incumbent_ms
+            && f + 1 == self.frame
+        {
+            if self.steps.len() == 2 * WINDOW {
+                self.steps.pop_front();
+            }
+            self.steps.push_back((log_ms - before).abs());
+        }
+        self.incumbent_ms = Some((self.frame, log_ms));
+    }
+
+    /// The incumbent's frame-to-frame noise (log): a robust σ of one frame.
+    fn noise(&self) -> f64 {
+        if self.steps.len() < 4 {
+            return DEFAULT_NOISE;
+        }
+        // The median |difference| of two frames is 0.6745 √2 σ.
+        median(self.steps.iter().copied()) / (0.6745 * std::f64::consts::SQRT_2)
+    }
+
+    /// Strategy `s`'s cost relative to the incumbent (log) and its standard
+    /// error: from its samples, or for frustum culling beside an occlusion
+    /// incumbent, estimated from what occlusion hid; `None` when unknown.
+    fn estimate(&self, s: usize) -> Option<(f64, f64)> {
+        // A sample is one probe frame over the mean of two incumbent frames.
+        let one = self.noise() * 1.5f64.sqrt();
+        let r = &self.records[s];
+        if !r.samples.is_empty() {
+            let m = median(r.samples.iter().copied());
+            let n = r.samples.len();
+            let spread = if n >= 3 {
+                (1.4826 * median(r.samples.iter().map(|x| (x - m).abs()))).max(one)
+            } else {
+                one
+            };
+            return Some((m, spread / (n as f64).sqrt()));
+        }
+        let incumbent_occludes = self.records[self.incumbent].family == Family::Occlusion;
+        match (r.family, self.hidden) {
+            (Family::Frustum, Some(h)) if incumbent_occludes => Some((frustum_estimate(h.share), one)),
+            _ => None,
+        }
+    }
+
+    /// The strategy cheaper than the incumbent by more than the hysteresis
+    /// at confidence, the cheapest if several; never on an estimate alone.
+    fn cheaper_than_incumbent(&self) -> Option<usize> {
+        (0..self.records.len())
+            .filter(|&s| s != self.incumbent && self.records[s].samples.len() >= 2)
+            .filter_map(|s| self.estimate(s).map(|(m, se)| (s, m, se)))
+            .filter(|&(_, m, se)| m + Z * se < -HYSTERESIS)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(s, ..)| s)
+    }
+
+    /// Makes `s` the incumbent: every estimate is re-expressed relative to
+    /// it, and the old incumbent's samples are `s`'s, reversed.
+    fn switch_to(&mut self, s: usize) {
+        let shift = median(self.records[s].samples.iter().copied());
+        let reversed: VecDeque<f64> = self.records[s].samples.iter().map(|x| -x).collect();
+        for (k, r) in self.records.iter_mut().enumerate() {
+            if k != s && k != self.incumbent {
+                r.samples.iter_mut().for_each(|x| *x -= shift);
+            }
+        }
+        self.records[self.incumbent].samples = reversed;
+        self.records[s].samples.clear();
+        self.incumbent = s;
+        self.incumbent_ms = None;
+    }
+
+    /// The due strategy whose probe promises most: frustum culling first
+    /// where occlusion hid nothing, then the lowest optimistic bound (an
+    /// unknown strategy's is lowest), the first of equals.
+    fn most_promising_due(&self, view: &View, settles: &[bool]) -> Option<usize> {
+        let nothing_hidden = self.hidden.is_some_and(|h| h.share < NOTHING_HIDDEN);
+        let since = |s: usize| self.frame - self.records[s].last_run.unwrap_or(0);
+        let priority = |s: usize| {
+            let frustum_first = nothing_hidden && self.records[s].family == Family::Frustum;
+            let bound = self.estimate(s).map_or(f64::NEG_INFINITY, |(m, se)| m - Z * se);
+            (!frustum_first, bound)
+        };
+        (0..self.records.len())
+            .filter(|&s| s != self.incumbent)
+            .filter(|&s| self.interval(s, view, settles[s]).is_some_and(|i| since(s) >= i))
+            .min_by(|&a, &b| {
+                let (pa, pb) = (priority(a), priority(b));
+                pa.0.cmp(&pb.0).then(pa.1.total_cmp(&pb.1))
+            })
+    }
+
+    /// Frames between probes of `s` (`None`: not to be probed now).
+    fn interval(&self, s: usize, view: &View, settles: bool) -> Option<u64> {
+        let occlusion = self.records[s].family == Family::Occlusion;
+        if occlusion
+            && self.records[self.incumbent].family == Family::Frustum
+            && let Some(h) = self.hidden
+            && h.share < NOTHING_HIDDEN
+        {
+            // Nothing to skip: one occlusion culler looks again, once the
+            // view has changed, and only the most promising one.
+            return (view.differs(&h.view, self.reach) && Some(s) == self.most_promising_occlusion()).then_some(1);
+        }
+        let Some((m, se)) = self.estimate(s) else {
+            return Some(EXPLORE);
+        };
+        // May still be cheaper by the hysteresis: explore, until a full
+        // window shows it no cheaper than the incumbent in the median.
+        let undecided = self.records[s].samples.len() < WINDOW || m < 0.0;
+        if m - Z * se < -HYSTERESIS && undecided {
+            return Some(EXPLORE);
+        }
+        // Known not to be cheaper: probe as often as the budget pays for.
+        let frames = if settles { 2.0 } else { 1.0 };
+        let cost = frames * (m.exp() - 1.0).max(0.0) + 0.005;
+        let rivals = (self.records.len() - 1) as f64;
+        Some(((rivals * cost / self.budget).ceil() as u64).max(RECHECK))
+    }
+
+    /// The occlusion culler estimated cheapest (the first unknown one if
+    /// none is known).
+    fn most_promising_occlusion(&self) -> Option<usize> {
+        (0..self.records.len())
+            .filter(|&s| self.records[s].family == Family::Occlusion)
+            .min_by(|&a, &b| {
+                let m = |s| self.estimate(s).map_or(f64::NEG_INFINITY, |(m, _)| m);
+                m(a).total_cmp(&m(b))
+            })
+    }
+}
+
+/// Frustum culling's cost relative to an occlusion culler that hid `share`
+/// of the frustum's triangles (log): it draws 1/(1 − share) times the
+/// triangles, each hidden one costing [`HIDDEN_TRIANGLE_COST`] of a drawn
+/// one, and tests nothing.
+pub(super) fn frustum_estimate(share: f64) -> f64 {
+    let share = share.clamp(0.0, 0.999);
+    (HIDDEN_TRIANGLE_COST * share / (1.0 - share)).ln_1p()
+}
+
+fn median(values: impl Iterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = values.collect();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => 0.0,
+        n if n % 2 == 1 => v[n / 2],
+        n => (v[n / 2 - 1] + v[n / 2]) / 2.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin::Rng;
+    use Family::{Frustum, Occlusion};
+
+    /// A run of `frames` frames over strategies of `families`, starting with
+    /// the first occlusion culler: strategy `s` costs `cost(frame, s)` ms
+    /// with log-normal noise of σ `noise`, and an occlusion frame hides
+    /// `hidden` of the frustum. Returns the turns and their costs.
+    fn simulate(
+        families: &[Family],
+        frames: u64,
+        noise: f64,
+        hidden: f64,
+        view: impl Fn(u64) -> View,
+        cost: impl Fn(u64, usize) -> f64,
+    ) -> (Vec<Turn>, Vec<f64>) {
+        let incumbent = families.iter().position(|&f| f == Occlusion).unwrap();
+        let mut chooser = Chooser::new(families, incumbent, 10.0, 0.015);
+        let mut rng = Rng::new(7);
+        let settles = vec![false; families.len()];
+        let (mut turns, mut costs) = (Vec::new(), Vec::new());
+        for f in 0..frames {
+            let v = view(f);
+            let turn = chooser.plan(&v, &settles);
+            // Box–Muller: a standard normal from two uniforms.
+            let normal =
+                (-2.0 * rng.range(1e-12, 1.0).ln()).sqrt() * (std::f64::consts::TAU * rng.range(0.0, 1.0)).cos();
+            let ms = cost(f, turn.strategy) * (noise * normal).exp();
+            let share = (families[turn.strategy] == Occlusion).then_some(hidden);
+            chooser.learn(turn, ms, share, &v);
+            turns.push(turn);
+            costs.push(ms);
+        }
+        (turns, costs)
+    }
+
+    fn still(_: u64) -> View {
+        View {
+            eye: DVec3::ZERO,
+            forward: DVec3::NEG_Z,
+            frustum_triangles: 1000,
+        }
+    }
+
+    /// The view along a street: costs vary by ±40 % from frame to frame,
+    /// smoothly, as they do along a walk.
+    fn street(frame: u64) -> f64 {
+        1.0 + 0.4 * (frame as f64 / 9.0).sin()
+    }
+
+    fn runs(turns: &[Turn], s: usize) -> usize {
+        turns.iter().filter(|t| t.strategy == s).count()
+    }
+
+    /// vfc, roc, ioc, hiz and swr, as `auto` has them on a GPU-driven
+    /// adapter.
+    const FIVE: [Family; 5] = [Frustum, Occlusion, Occlusion, Occlusion, Occlusion];
+
+    #[test]
+    fn on_a_city_the_cheapest_walk_runs_and_dear_rivals_are_dropped_after_a_probe() {
+        // The default city on GL: vfc 3.4× roc, ioc = roc, hiz 2×, swr
+        // 1.2×; occlusion hides 94 % of the frustum.
+        let relative = [3.4, 1.0, 1.0, 2.0, 1.2];
+        for noise in [0.05, 0.15] {
+            let (turns, costs) = simulate(&FIVE, 120, noise, 0.94, still, |f, s| street(f) * relative[s]);
+            let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
+            assert_eq!(runs(&turns, 0), 0, "vfc is judged from what occlusion hid: {s:?}");
+            assert!(runs(&turns, 3) <= 2, "hiz: {s:?}");
+            assert!(runs(&turns, 4) <= 4, "swr: {s:?}");
+            let best: f64 = (0..120).map(street).sum();
+            let mean = costs.iter().sum::<f64>() / best;
+            assert!(
+                mean < 1.05 * (noise * noise / 2.0).exp(),
+                "σ {noise}: {mean:.3}× the best: {s:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_rival_cheaper_beyond_the_noise_takes_over_and_the_old_incumbent_is_rechecked_rarely() {
+        // roc starts; ioc is 25 % cheaper.
+        let relative = [3.4, 1.0, 0.75, 2.0, 1.2];
+        let (turns, _) = simulate(&FIVE, 200, 0.1, 0.94, still, |f, s| street(f) * relative[s]);
+        let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
+        let mostly_ioc_from =
+            (0..s.len()).find(|&f| s[f..].iter().filter(|&&x| x == 2).count() * 10 > (s.len() - f) * 9);
+        assert!(
+            mostly_ioc_from.is_some_and(|f| f < 20),
+            "ioc runs from about frame 20: {s:?}"
+        );
+        assert!(runs(&turns[40..], 1) <= 4, "roc rechecked rarely: {s:?}");
+    }
+
+    #[test]
+    fn rivals_within_the_noise_do_not_take_turns() {
+        // roc and ioc 1 % apart under 15 % noise; hiz and swr dearer.
+        let relative = [3.4, 1.0, 0.99, 1.5, 1.3];
+        let (turns, costs) = simulate(&FIVE, 240, 0.15, 0.94, still, |f, s| street(f) * relative[s]);
+        let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
+        let incumbents: Vec<usize> = turns.iter().filter(|t| !t.probe).map(|t| t.strategy).collect();
+        let switches = incumbents.windows(2).filter(|w| w[0] != w[1]).count();
+        assert!(switches <= 2, "{switches} switches: {s:?}");
+        let probes = turns.iter().filter(|t| t.probe).count();
+        assert!(probes <= 60, "{probes} probes in 240 frames: {s:?}");
+        let best: f64 = (0..240).map(|f| street(f) * 0.99).sum();
+        let mean = costs.iter().sum::<f64>() / best;
+        assert!(mean < 1.05 * (0.15f64 * 0.15 / 2.0).exp(), "{mean:.3}× the best: {s:?}");
+    }
+
+    #[test]
+    fn where_nothing_is_hidden_frustum_culling_takes_over_and_occlusion_is_checked_only_when_the_view_changes() {
+        // A forest: occlusion hides 3 % and costs 25 % more than vfc.
+        let relative = [1.0, 1.25, 1.25, 1.3, 1.2];
+        let turned = |f: u64| View {
+            forward: if f < 60 { DVec3::NEG_Z } else { DVec3::X },
+            ..still(f)
+        };
+        let (turns, costs) = simulate(&FIVE, 120, 0.1, 0.03, turned, |f, s| street(f) * relative[s]);
+        let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
+        let settled = s.iter().position(|&x| x == 0).expect("vfc runs");
+        assert!(settled <= 3, "vfc probed at once: {s:?}");
+        let vfc_from = (0..60).find(|&f| s[f..60].iter().all(|&x| x == 0));
+        assert!(
+            vfc_from.is_some_and(|f| f <= 12),
+            "vfc alone from about frame 12 to the turn: {s:?}"
+        );
+        let after_turn = &s[60..];
+        assert_eq!(
+            after_turn.iter().filter(|&&x| x != 0).count(),
+            1,
+            "one occlusion culler looks again after the turn: {s:?}"
+        );
+        let best: f64 = (0..120).map(street).sum();
+        let mean = costs.iter().sum::<f64>() / best;
+        assert!(mean < 1.03 * (0.01f64 / 2.0).exp(), "{mean:.3}× vfc: {s:?}");
+    }
+
+    #[test]
+    fn where_occlusion_hides_little_but_pays_it_keeps_running() {
+        // 8 % hidden, yet the walk is 10 % cheaper than vfc (a heavy
+        // fragment load behind few objects).
+        let relative = [1.1, 1.0, 1.05, 1.3, 1.2];
+        let (turns, _) = simulate(&FIVE, 120, 0.05, 0.08, still, |f, s| street(f) * relative[s]);
+        let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
+        let incumbents: Vec<usize> = turns.iter().filter(|t| !t.probe).map(|t| t.strategy).collect();
+        assert!(
+            incumbents[20..].iter().all(|&x| x == 1),
+            "roc stays once vfc is measured dearer: {s:?}"
+        );
+    }
+
+    #[test]
+    fn a_probe_that_must_settle_runs_two_frames_and_only_the_second_is_measured() {
+        let mut chooser = Chooser::new(&[Frustum, Occlusion], 1, 10.0, 0.015);
+        let mut turns = Vec::new();
+        for _ in 0..4 {
+            let turn = chooser.plan(&still(0), &[false, true]);
+            chooser.learn(turn, if turn.strategy == 0 { 1.0 } else { 2.0 }, Some(0.02), &still(0));
+            turns.push(turn);
+        }
+        // roc (incumbent) hid 2 %: vfc, which needs no settling, is
+        // probed within EXPLORE frames, for one measured frame.
+        let vfc = turns.iter().position(|t| t.strategy == 0).expect("vfc is probed");
+        assert!(vfc < EXPLORE as usize, "{turns:?}");
+        assert!(turns[vfc].probe && turns[vfc].measured);
+        let mut chooser = Chooser::new(&[Frustum, Occlusion], 0, 10.0, 0.015);
+        let plan: Vec<Turn> = (0..6).map(|_| chooser.plan(&still(0), &[false, true])).collect();
+        let first = plan.iter().position(|t| t.strategy == 1).expect("roc is explored");
+        assert_eq!(
+            (plan[first].measured, plan[first + 1].strategy, plan[first + 1].measured),
+            (false, 1, true)
+        );
+    }
+
+    #[test]
+    fn frustum_estimate_grows_with_what_occlusion_hid() {
+        assert!(frustum_estimate(0.0).abs() < 1e-12);
+        assert!(frustum_estimate(0.05) < HYSTERESIS);
+        assert!(frustum_estimate(0.94) > 1.0, "{}", frustum_estimate(0.94));
+        assert!(frustum_estimate(1.0).is_finite());
+    }
+}

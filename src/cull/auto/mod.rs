@@ -1,0 +1,359 @@
+//! `auto`: the conservative mode that costs least on this adapter and view,
+//! chosen frame by frame from measured frame times, so that a scene with
+//! nothing to cull costs no more than `vfc` and one with much to cull no
+//! more than its best occlusion culler.
+//!
+//! 002 §4.3 notes that culling "does not pay off" where little is hidden
+//! and bounds culling time by the render time it saves (Eq. 2); engines
+//! choose per scene by measurement. Here:
+//!
+//! - **Candidates** are the registry's modes whose entry allows it
+//!   ([`Candidacy`]) and whose needs this adapter meets, each built with the
+//!   run's parameters: `vfc`, the GPU walks (`roc`, `ioc`, `hiz`) and `swr`
+//!   where the adapter walks on the GPU, `vfc`, `omq`, `chc` and `swr`
+//!   elsewhere. Which pays is measured, not assumed.
+//! - **Choice** (choice.rs): one incumbent runs; the others are probed as
+//!   a bandit does, each probe compared with the incumbent's frames on both
+//!   sides; a rival takes over only when cheaper beyond the noise; rivals
+//!   known to be dearer are rechecked within a time budget; where occlusion
+//!   hides next to nothing, `vfc` runs and occlusion is checked again only
+//!   when the view has changed materially.
+//! - **Hand-over** ([`Carries`]): no strategy starts from nothing. The GPU
+//!   walks share one set of visible lists, so a walk takes over the visible
+//!   set the last one found, as if it had run all along; after a frame the
+//!   CPU decided, the walks start from what it drew when an occlusion
+//!   culler drew it (from their own lists, gone stale, after `vfc`), and
+//!   their first frame then only settles them and is not measured. `swr` is
+//!   handed the objects drawn last.
+//! - **Warm-up**: in a warm-up frame every candidate runs, so none pays
+//!   its first frame (pipelines compiled on first use) in a recorded one.
+//!
+//! Every candidate is conservative, so `auto` is too.
+//!
+//! Departures: what a GPU walk drew (handed to `swr`, and counted for the
+//! hidden share that judges `vfc` before it runs) is taken from its untimed
+//! audit; an engine reads it back a frame late, without waiting.
+
+mod choice;
+
+use std::rc::Rc;
+
+use serde::Serialize;
+
+use crate::cull::culler::{Culler, FrameInput, Pick, TraversalStats};
+use crate::cull::gpu_walk::VisibleLists;
+use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
+use crate::cull::traversal::frustum_cull_subtree;
+use crate::gpu::{Frame, GpuAudit, GpuContext, GpuError, GpuSetup};
+use crate::object_set::ObjectSet;
+use crate::scene::Scene;
+use choice::{Chooser, Family, Turn, View};
+
+/// This mode's entry in the registry.
+pub(super) const MODE: ModeInfo = ModeInfo {
+    id: ModeId::Auto,
+    summary: "per frame, the conservative mode measured cheapest here (vfc, roc, ioc, hiz, swr; omq and chc without GPU culling): rivals probed as a bandit does and switched to only when cheaper beyond the noise; vfc where occlusion hides nothing",
+    conservative: true,
+    params: &[BUDGET],
+    needs: Needs::Nothing,
+    carries: Carries::OwnState,
+    auto: Candidacy::Never,
+    check: |params| AutoParams::from_params(params).map(drop),
+    build: |scene, params| Ok(Box::new(AutoCulling::new(scene, params)?)),
+};
+
+const BUDGET: ParamInfo = ParamInfo {
+    key: "budget",
+    default: "1.5",
+    summary: "percent of the run's time that rechecks of strategies known to be no cheaper may cost",
+};
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct AutoParams {
+    /// Share of the run's time (percent) for rechecks.
+    pub budget: f64,
+}
+
+impl AutoParams {
+    pub fn from_params(params: &ModeParams) -> Result<AutoParams, ModeError> {
+        let budget: f64 = params.get(ModeId::Auto, &BUDGET)?;
+        if !(budget > 0.0 && budget <= 100.0) {
+            return Err(ModeError::bad(
+                ModeId::Auto,
+                &BUDGET,
+                "must be a percentage above 0 and at most 100".into(),
+            ));
+        }
+        Ok(AutoParams { budget })
+    }
+}
+
+/// One strategy `auto` may run.
+struct Candidate {
+    id: ModeId,
+    culler: Box<dyn Culler>,
+}
+
+impl Candidate {
+    fn carries(&self) -> Carries {
+        self.id.info().carries
+    }
+
+    fn family(&self) -> Family {
+        match self.id {
+            ModeId::Vfc => Family::Frustum,
+            _ => Family::Occlusion,
+        }
+    }
+}
+
+/// The frame `auto` ran last.
+#[derive(Clone, Copy, Debug)]
+struct Ran {
+    turn: Turn,
+    view: View,
+}
+
+pub struct AutoCulling {
+    params: AutoParams,
+    /// Every candidate built; `prepare` keeps those this adapter runs.
+    candidates: Vec<Candidate>,
+    /// Made in `prepare`, once the candidates are known.
+    chooser: Option<Chooser>,
+    /// The visible lists the GPU walks share.
+    lists: Option<Rc<VisibleLists>>,
+    /// Frames run, warm-up included.
+    frames: u64,
+    /// The frame a GPU walk last ran, which left the lists as it found them.
+    lists_written: Option<u64>,
+    /// The last recorded frame; `None` after a warm-up frame.
+    ran: Option<Ran>,
+    /// The candidates that ran in the current frame (all of them in a
+    /// warm-up frame).
+    running: Vec<usize>,
+    /// The objects the last frame drew, and the family of the culler that
+    /// drew them (`None` before the first frame).
+    last_drawn: Vec<u32>,
+    last_drawn_by: Option<Family>,
+    /// Triangles in the frustum as last counted.
+    frustum_triangles: u64,
+    /// Scratch: the frustum's objects, and a traversal stack.
+    in_frustum: Vec<u32>,
+    stack: Vec<u32>,
+}
+
+impl AutoCulling {
+    /// Builds every mode that may be a candidate, with the run's `params`.
+    pub fn new(scene: &Scene, params: &ModeParams) -> Result<AutoCulling, ModeError> {
+        let candidates = ModeId::ALL
+            .iter()
+            .filter(|id| id.info().auto != Candidacy::Never)
+            .map(|&id| {
+                Ok(Candidate {
+                    id,
+                    culler: id.create(scene, params)?,
+                })
+            })
+            .collect::<Result<_, ModeError>>()?;
+        Ok(AutoCulling {
+            params: AutoParams::from_params(params)?,
+            candidates,
+            chooser: None,
+            lists: None,
+            frames: 0,
+            lists_written: None,
+            ran: None,
+            running: Vec::new(),
+            last_drawn: Vec::new(),
+            last_drawn_by: None,
+            frustum_triangles: 0,
+            in_frustum: Vec::new(),
+            stack: Vec::new(),
+        })
+    }
+
+    /// Whether candidate `k` must first settle: a walk whose lists no walk
+    /// wrote in the last two frames, or a culler whose own state went stale.
+    fn settles(&self, k: usize) -> bool {
+        let ran_last = self.ran.is_some_and(|r| r.turn.strategy == k);
+        match self.candidates[k].carries() {
+            Carries::VisibleOnGpu => self.lists_written.is_none_or(|f| self.frames - f > 2),
+            Carries::OwnState => !ran_last,
+            Carries::Nothing | Carries::VisibleOnCpu => false,
+        }
+    }
+
+    /// Before candidate `k` runs: hands it what the last frame drew, where
+    /// it did not run then.
+    fn hand_over(&mut self, k: usize, ctx: &mut dyn Frame) {
+        if self.ran.is_some_and(|r| r.turn.strategy == k) {
+            return;
+        }
+        let Some(drawn_by) = self.last_drawn_by else {
+            return;
+        };
+        match self.candidates[k].carries() {
+            // Stale lists take what an occlusion culler decided on the CPU
+            // (after `vfc`, all in the frustum, they are better kept).
+            Carries::VisibleOnGpu => {
+                if let (true, Family::Occlusion, Some(lists), Some(gpu)) =
+                    (self.settles(k), drawn_by, &self.lists, ctx.on_gpu())
+                {
+                    lists.upload(gpu.gpu(), &self.last_drawn);
+                }
+            }
+            Carries::VisibleOnCpu => self.candidates[k].culler.seed_visible(&self.last_drawn),
+            Carries::Nothing | Carries::OwnState => {}
+        }
+    }
+
+    /// Triangles of the objects in the frustum.
+    fn count_frustum_triangles(&mut self, input: &FrameInput) -> u64 {
+        self.in_frustum.clear();
+        frustum_cull_subtree(
+            input.scene,
+            input.hierarchy,
+            0,
+            &input.camera.frustum(),
+            &mut self.stack,
+            &mut self.in_frustum,
+            &mut TraversalStats::default(),
+        );
+        let objects = &input.scene.objects;
+        self.in_frustum
+            .iter()
+            .map(|&o| u64::from(objects[o as usize].triangles))
+            .sum()
+    }
+
+    /// A warm-up frame: every candidate runs once, the incumbent last.
+    fn warm_up(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
+        let incumbent = self.chooser.as_ref().map_or(0, Chooser::incumbent);
+        self.running = (0..self.candidates.len()).filter(|&k| k != incumbent).collect();
+        self.running.push(incumbent);
+        let mut stats = TraversalStats::default();
+        for &k in &self.running {
+            stats = self.candidates[k].culler.frame(ctx, input);
+            if self.candidates[k].carries() == Carries::VisibleOnGpu {
+                self.lists_written = Some(self.frames);
+            }
+        }
+        self.ran = None;
+        stats
+    }
+}
+
+impl Culler for AutoCulling {
+    fn name(&self) -> &str {
+        "auto"
+    }
+
+    fn parameters(&self) -> serde_json::Value {
+        let candidates: Vec<&str> = self.candidates.iter().map(|c| c.id.name()).collect();
+        serde_json::json!({ "budget": self.params.budget, "candidates": candidates })
+    }
+
+    fn traverses_hierarchy(&self) -> bool {
+        true
+    }
+
+    fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
+        let gpu = setup.gpu;
+        self.candidates.retain(|c| {
+            let info = c.id.info();
+            let runs_here = match info.auto {
+                Candidacy::Always => true,
+                Candidacy::WithoutGpuWalks => !gpu.gpu_driven,
+                Candidacy::Never => false,
+            };
+            runs_here && info.unsupported_on(gpu).is_none()
+        });
+        if self.candidates.iter().any(|c| c.carries() == Carries::VisibleOnGpu) {
+            let lists = Rc::new(VisibleLists::new(gpu, setup.draws));
+            for c in &mut self.candidates {
+                c.culler.share_visible_lists(&lists);
+            }
+            self.lists = Some(lists);
+        }
+        for c in &mut self.candidates {
+            c.culler.prepare(setup)?;
+        }
+        let families: Vec<Family> = self.candidates.iter().map(Candidate::family).collect();
+        // The first occlusion culler starts: most scenes hide something,
+        // and its first frame tells how much.
+        let incumbent = families.iter().position(|&f| f == Family::Occlusion).unwrap_or(0);
+        let root = setup.hierarchy.root().bounds;
+        let reach = 0.1 * (root.max - root.min).length();
+        self.chooser = Some(Chooser::new(&families, incumbent, reach, self.params.budget / 100.0));
+        Ok(())
+    }
+
+    /// # Panics
+    /// Before `prepare`: a session prepares every mode first.
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
+        self.frames += 1;
+        if input.warm_up {
+            return self.warm_up(ctx, input);
+        }
+        if let (Some(ran), Some(previous)) = (self.ran, input.previous) {
+            let mut view = ran.view;
+            let hidden_share = match self.candidates[ran.turn.strategy].family() {
+                Family::Frustum => {
+                    view.frustum_triangles = previous.triangles_drawn;
+                    self.frustum_triangles = previous.triangles_drawn;
+                    None
+                }
+                Family::Occlusion => (view.frustum_triangles > 0)
+                    .then(|| 1.0 - previous.triangles_drawn as f64 / view.frustum_triangles as f64)
+                    .map(|share| share.max(0.0)),
+            };
+            let chooser = self.chooser.as_mut().expect("the session prepared the mode");
+            chooser.learn(ran.turn, previous.frame_ms, hidden_share, &view);
+        }
+        let view = View {
+            eye: input.camera.eye,
+            forward: input.camera.forward(),
+            frustum_triangles: self.frustum_triangles,
+        };
+        let settles: Vec<bool> = (0..self.candidates.len()).map(|k| self.settles(k)).collect();
+        let chooser = self.chooser.as_mut().expect("the session prepared the mode");
+        let turn = chooser.plan(&view, &settles);
+        let k = turn.strategy;
+        self.hand_over(k, ctx);
+        let stats = self.candidates[k].culler.frame(ctx, input);
+        let mut view = view;
+        if turn.measured && self.candidates[k].family() == Family::Occlusion {
+            self.frustum_triangles = self.count_frustum_triangles(input);
+            view.frustum_triangles = self.frustum_triangles;
+        }
+        if self.candidates[k].carries() == Carries::VisibleOnGpu {
+            self.lists_written = Some(self.frames);
+        }
+        self.running.clear();
+        self.running.push(k);
+        self.ran = Some(Ran { turn, view });
+        stats
+    }
+
+    /// Audits what ran this frame, and remembers what it drew for the next
+    /// hand-over: a walk's drawn set as its audit reads it back after the
+    /// frame (an engine reads it back a frame late, without waiting).
+    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        let mut audit = None;
+        for &k in &self.running {
+            audit = self.candidates[k].culler.audit(gpu, drawn).or(audit);
+        }
+        self.last_drawn.clear();
+        self.last_drawn.extend(drawn.iter());
+        self.last_drawn_by = self.running.last().map(|&k| self.candidates[k].family());
+        audit
+    }
+
+    fn pick(&self) -> Option<Pick> {
+        let ran = self.ran?;
+        Some(Pick {
+            strategy: self.candidates[ran.turn.strategy].id.name(),
+            probe: ran.turn.probe,
+        })
+    }
+}
