@@ -5,7 +5,8 @@
 //! mode) and touches the GPU only through [`crate::gpu::FrameCtx`], which
 //! counts what it draws and queries. To add a mode: write `cull/NAME.rs`
 //! implementing [`Culler`] and declaring its entry (`MODE`: summary,
-//! parameters, needs, constructor), add a line to `modes!` (mode.rs: its
+//! parameters, needs, what it carries between frames, whether `auto` may
+//! run it, constructor), add a line to `modes!` (mode.rs: its
 //! [`ModeId`] and name), and point [`ModeId::info`] at its entry
 //! (registry.rs).
 //!

@@ -40,6 +40,9 @@ const HYSTERESIS: f64 = 0.03;
 const Z: f64 = 1.64;
 /// Frames between probes of a strategy that may still be cheaper.
 const EXPLORE: u64 = 3;
+/// Lower bound (log) above which one sample shows a strategy dearer
+/// (about 1.5×).
+const FAR_DEARER: f64 = 0.4;
 /// Fewest frames between rechecks of a strategy known not to be cheaper.
 const RECHECK: u64 = 12;
 /// Share of the frustum's triangles below which occlusion culling has
@@ -354,9 +357,13 @@ impl Chooser {
             return Some(EXPLORE);
         };
         // May still be cheaper by the hysteresis: explore, until a full
-        // window shows it no cheaper than the incumbent in the median.
-        let undecided = self.records[s].samples.len() < WINDOW || m < 0.0;
-        if m - Z * se < -HYSTERESIS && undecided {
+        // window shows it no cheaper than the incumbent in the median. One
+        // sample settles nothing unless it is far dearer (a single frame
+        // may have met a hiccup of the machine).
+        let n = self.records[s].samples.len();
+        let may_be_cheaper = m - Z * se < -HYSTERESIS && (n < WINDOW || m < 0.0);
+        let one_sample_too_few = n == 1 && m - Z * se < FAR_DEARER;
+        if may_be_cheaper || one_sample_too_few {
             return Some(EXPLORE);
         }
         // Known not to be cheaper: probe as often as the budget pays for.
