@@ -513,6 +513,11 @@ mod tests {
         let best: f64 = (0..240).map(|f| street(f) * 0.99).sum();
         let mean = costs.iter().sum::<f64>() / best;
         assert!(mean < 1.05 * (0.15f64 * 0.15 / 2.0).exp(), "{mean:.3}× the best: {s:?}");
+        // Nor does a rival 2 % cheaper, within the hysteresis, however
+        // quiet the machine.
+        let relative = [3.4, 1.0, 0.98, 1.5, 1.3];
+        let (turns, _) = simulate(&FIVE, 240, 0.002, 0.94, still, |f, s| street(f) * relative[s]);
+        assert!(turns.iter().all(|t| t.probe || t.strategy == 1), "{turns:?}");
     }
 
     #[test]
