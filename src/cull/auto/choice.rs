@@ -25,7 +25,7 @@
 //!   of the frustum, there is nothing to skip: once frustum culling is the
 //!   incumbent, occlusion is checked again only when the view has changed
 //!   materially since ([`View::differs`]), by one probe of the most
-//!   promising occlusion culler.
+//!   promising occlusion culler, within the budget.
 
 use std::collections::VecDeque;
 
@@ -119,11 +119,12 @@ struct Pending {
     before: Option<f64>,
 }
 
-/// What an occlusion frame hid, and where it looked from.
+/// What an occlusion frame hid, where it looked from, and when.
 #[derive(Clone, Copy, Debug)]
 struct Hidden {
     share: f64,
     view: View,
+    frame: u64,
 }
 
 pub(super) struct Chooser {
@@ -228,7 +229,11 @@ impl Chooser {
         }
         let log_ms = frame_ms.ln();
         if let (Family::Occlusion, Some(share)) = (self.records[turn.strategy].family, hidden_share) {
-            self.hidden = Some(Hidden { share, view: *view });
+            self.hidden = Some(Hidden {
+                share,
+                view: *view,
+                frame: self.frame,
+            });
         }
         if turn.probe {
             let before = self
@@ -326,35 +331,45 @@ impl Chooser {
     /// unknown strategy's is lowest), the first of equals.
     fn most_promising_due(&self, view: &View, settles: &[bool]) -> Option<usize> {
         let nothing_hidden = self.hidden.is_some_and(|h| h.share < NOTHING_HIDDEN);
-        let since = |s: usize| self.frame - self.records[s].last_run.unwrap_or(0);
         let priority = |s: usize| {
             let frustum_first = nothing_hidden && self.records[s].family == Family::Frustum;
             let bound = self.estimate(s).map_or(f64::NEG_INFINITY, |(m, se)| m - Z * se);
             (!frustum_first, bound)
         };
         (0..self.records.len())
-            .filter(|&s| s != self.incumbent)
-            .filter(|&s| self.interval(s, view, settles[s]).is_some_and(|i| since(s) >= i))
+            .filter(|&s| s != self.incumbent && self.due(s, view, settles[s]))
             .min_by(|&a, &b| {
                 let (pa, pb) = (priority(a), priority(b));
                 pa.0.cmp(&pb.0).then(pa.1.total_cmp(&pb.1))
             })
     }
 
-    /// Frames between probes of `s` (`None`: not to be probed now).
-    fn interval(&self, s: usize, view: &View, settles: bool) -> Option<u64> {
-        let occlusion = self.records[s].family == Family::Occlusion;
-        if occlusion
-            && self.records[self.incumbent].family == Family::Frustum
-            && let Some(h) = self.hidden
-            && h.share < NOTHING_HIDDEN
-        {
-            // Nothing to skip: one occlusion culler looks again, once the
-            // view has changed, and only the most promising one.
-            return (view.differs(&h.view, self.reach) && Some(s) == self.most_promising_occlusion()).then_some(1);
+    /// Whether a probe of `s` is due.
+    fn due(&self, s: usize, view: &View, settles: bool) -> bool {
+        if let Some(h) = self.nothing_to_skip(s) {
+            // One occlusion culler, the most promising, looks again once
+            // the view has changed since the last look, and no more often
+            // than the budget pays for.
+            return view.differs(&h.view, self.reach)
+                && Some(s) == self.most_promising_occlusion()
+                && self.frame - h.frame >= self.recheck(s, settles, 1);
         }
+        self.frame - self.records[s].last_run.unwrap_or(0) >= self.interval(s, settles)
+    }
+
+    /// For an occlusion culler `s`, while frustum culling runs because the
+    /// last occlusion frame hid next to nothing: what that frame hid.
+    fn nothing_to_skip(&self, s: usize) -> Option<Hidden> {
+        let frustum_runs = self.records[self.incumbent].family == Family::Frustum;
+        (self.records[s].family == Family::Occlusion && frustum_runs)
+            .then_some(self.hidden?)
+            .filter(|h| h.share < NOTHING_HIDDEN)
+    }
+
+    /// Frames between probes of `s`.
+    fn interval(&self, s: usize, settles: bool) -> u64 {
         let Some((m, se)) = self.estimate(s) else {
-            return Some(EXPLORE);
+            return EXPLORE;
         };
         // May still be cheaper by the hysteresis: explore, until a full
         // window shows it no cheaper than the incumbent in the median. One
@@ -364,13 +379,19 @@ impl Chooser {
         let may_be_cheaper = m - Z * se < -HYSTERESIS && (n < WINDOW || m < 0.0);
         let one_sample_too_few = n == 1 && m - Z * se < FAR_DEARER;
         if may_be_cheaper || one_sample_too_few {
-            return Some(EXPLORE);
+            return EXPLORE;
         }
-        // Known not to be cheaper: probe as often as the budget pays for.
+        self.recheck(s, settles, self.records.len() - 1)
+    }
+
+    /// Frames between rechecks of `s`, known not to be cheaper: as often as
+    /// its share of the budget (split `sharing` ways) pays for at what a
+    /// probe of it costs.
+    fn recheck(&self, s: usize, settles: bool, sharing: usize) -> u64 {
+        let m = self.estimate(s).map_or(0.0, |(m, _)| m);
         let frames = if settles { 2.0 } else { 1.0 };
         let cost = frames * (m.exp() - 1.0).max(0.0) + 0.005;
-        let rivals = (self.records.len() - 1) as f64;
-        Some(((rivals * cost / self.budget).ceil() as u64).max(RECHECK))
+        ((sharing as f64 * cost / self.budget).ceil() as u64).max(RECHECK)
     }
 
     /// The occlusion culler estimated cheapest (the first unknown one if
@@ -546,6 +567,27 @@ mod tests {
         let best: f64 = (0..120).map(street).sum();
         let mean = costs.iter().sum::<f64>() / best;
         assert!(mean < 1.03 * (0.01f64 / 2.0).exp(), "{mean:.3}× vfc: {s:?}");
+    }
+
+    #[test]
+    fn where_nothing_is_hidden_a_view_that_keeps_changing_is_rechecked_within_the_budget() {
+        // An orbit turning 12° a frame around a model that hides nothing:
+        // the view changes materially every third frame.
+        let relative = [1.0, 1.25, 1.25, 1.3, 1.35];
+        let orbit = |f: u64| {
+            let a = (12.0 * f as f64).to_radians();
+            View {
+                forward: DVec3::new(a.sin(), 0.0, -a.cos()),
+                ..still(f)
+            }
+        };
+        let (turns, costs) = simulate(&FIVE, 120, 0.05, 0.03, orbit, |f, s| street(f) * relative[s]);
+        let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
+        let occlusion_from_20 = s[20..].iter().filter(|&&x| x != 0).count();
+        assert!(occlusion_from_20 <= 8, "{occlusion_from_20} occlusion frames: {s:?}");
+        let best: f64 = (0..120).map(street).sum();
+        let mean = costs.iter().sum::<f64>() / best;
+        assert!(mean < 1.03 * (0.0025f64 / 2.0).exp(), "{mean:.3}× vfc: {s:?}");
     }
 
     #[test]
