@@ -137,9 +137,11 @@ pub struct AutoCulling {
     last_drawn_by: Option<Family>,
     /// Triangles in the frustum as last counted.
     frustum_triangles: u64,
-    /// Scratch: the frustum's objects, and a traversal stack.
+    /// Scratch: the frustum's objects, a traversal stack, and whether each
+    /// candidate would settle.
     in_frustum: Vec<u32>,
     stack: Vec<u32>,
+    settles: Vec<bool>,
 }
 
 impl AutoCulling {
@@ -169,6 +171,7 @@ impl AutoCulling {
             frustum_triangles: 0,
             in_frustum: Vec::new(),
             stack: Vec::new(),
+            settles: Vec::new(),
         })
     }
 
@@ -315,9 +318,12 @@ impl Culler for AutoCulling {
             forward: input.camera.forward(),
             frustum_triangles: self.frustum_triangles,
         };
-        let settles: Vec<bool> = (0..self.candidates.len()).map(|k| self.settles(k)).collect();
+        let mut settles = std::mem::take(&mut self.settles);
+        settles.clear();
+        settles.extend((0..self.candidates.len()).map(|k| self.settles(k)));
         let chooser = self.chooser.as_mut().expect("the session prepared the mode");
         let turn = chooser.plan(&view, &settles);
+        self.settles = settles;
         let k = turn.strategy;
         self.hand_over(k, ctx);
         let stats = self.candidates[k].culler.frame(ctx, input);
