@@ -76,7 +76,7 @@
 
 use glam::{DMat3, DVec3, Vec4};
 
-use super::targets::Resolution;
+use super::resolution::Resolution;
 use crate::bounds::Aabb;
 use crate::camera::{Camera, nearest_view_depth};
 

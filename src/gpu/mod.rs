@@ -9,6 +9,7 @@ mod picture;
 mod queries;
 mod readback;
 mod renderer;
+mod resolution;
 mod targets;
 mod timing;
 
@@ -29,5 +30,6 @@ pub(crate) use queries::{
 pub use queries::{BoxTest, BoxVisibility, QUERIES_PER_SET, QueryPool};
 pub use readback::Readback;
 pub use renderer::{DrawRange, Draws, GpuScene, IndirectCount, IndirectDraws, SceneRenderer};
-pub use targets::{RenderTargets, Resolution};
+pub use resolution::Resolution;
+pub use targets::RenderTargets;
 pub use timing::GpuTimer;

@@ -3,7 +3,8 @@
 
 use super::context::GpuContext;
 use super::readback::Readback;
-use super::targets::{COLOR_FORMAT, Resolution, texture_2d};
+use super::resolution::Resolution;
+use super::targets::{COLOR_FORMAT, texture_2d};
 
 /// One end of a line: eye-relative world position and colour (0..1).
 #[repr(C)]

@@ -6,7 +6,7 @@ use glam::Mat4;
 
 use super::conservative::{BoxMargins, FragmentLimit, PixelRays};
 use super::context::{GpuContext, GpuError};
-use super::targets::Resolution;
+use super::resolution::Resolution;
 use super::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, RenderTargets};
 use crate::camera::Camera;
 use crate::scene::{Object, Scene};
