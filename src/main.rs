@@ -1004,8 +1004,13 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
         "hierarchy   {} nodes, {} leaves, depth {}, at most {} objects per leaf",
         h.nodes, h.leaves, h.depth, h.max_leaf_objects
     );
-    let _ = writeln!(w, "load        {load_ms:.1} ms");
-    let _ = writeln!(w, "build       {build_ms:.1} ms");
+    let p = report.load_phases;
+    let _ = writeln!(
+        w,
+        "load        {load_ms:.1} ms (read {:.1}, parse {:.1}, validate {:.1}, closed-solid test {:.1}, clustering {:.1})",
+        p.read_ms, p.parse_ms, p.validate_ms, p.closed_ms, p.cluster_ms
+    );
+    let _ = writeln!(w, "build       {build_ms:.1} ms (hierarchy)");
     for c in &report.cameras {
         let fov = c.fov_y_deg.map_or(String::new(), |f| format!(", fov {f:.1}°"));
         let near = c.near.map_or(String::new(), |n| format!(", near {n}"));

@@ -37,6 +37,26 @@ fn info_reports_obj_triangle_counts() {
     assert_eq!(v["triangles"], 7);
     assert_eq!(v["objects"], 3);
     assert!(v["hierarchy"]["nodes"].as_u64().unwrap() >= 1);
+    // Each phase of the load, which together take no longer than the load.
+    let phases = ["read_ms", "parse_ms", "validate_ms", "closed_ms", "cluster_ms"].map(|phase| {
+        v["load_phases"][phase]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{phase} in {v}"))
+    });
+    let sum: f64 = phases.iter().sum();
+    assert!(phases.iter().all(|&ms| ms >= 0.0) && sum > 0.0, "{phases:?}");
+    assert!(sum <= v["load_ms"].as_f64().unwrap(), "{phases:?} in {}", v["load_ms"]);
+
+    let out = occlu(&["info", obj.to_str().unwrap()]);
+    let load = stdout(&out)
+        .lines()
+        .find(|l| l.starts_with("load "))
+        .map(str::to_string);
+    let words = ["read", "parse", "validate", "closed-solid test", "clustering"];
+    assert!(
+        load.as_ref().is_some_and(|l| words.iter().all(|w| l.contains(w))),
+        "{load:?}"
+    );
 }
 
 #[test]
