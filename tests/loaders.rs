@@ -92,6 +92,24 @@ fn degenerate_triangles_are_dropped_with_a_warning() {
 }
 
 #[test]
+fn obj_polylines_are_skipped_not_drawn() {
+    // tobj, which read OBJ files until issue 38, drew a polyline of three
+    // or more points as a triangle fan.
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(
+        dir.path(),
+        "l.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nl 1 2 3 4\nf 2 4 3\np 1\n",
+    );
+    let s = load_file(&obj).unwrap();
+    assert_eq!(s.triangles(), 1, "the face alone");
+    assert_eq!(
+        s.warnings,
+        ["ignored 2 line/point elements ('l'/'p'): only faces are rendered"]
+    );
+}
+
+#[test]
 fn large_meshes_are_clustered_and_keep_every_triangle() {
     // One 20×20 grid (800 triangles) with a 100-triangle cluster budget.
     let mut text = String::from("o grid\n");
