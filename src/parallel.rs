@@ -3,12 +3,22 @@
 //! coordination, so a thread per part is all it takes.
 
 use std::num::NonZero;
+use std::sync::OnceLock;
 
 /// How many parts to cut `work` units into so that each holds at least
 /// `least` of them: one per core at most, and at least one.
 pub fn parts_for(work: usize, least: usize) -> usize {
-    let cores = std::thread::available_parallelism().map_or(1, NonZero::get);
-    cores.min(work / least.max(1)).max(1)
+    match work / least.max(1) {
+        0 | 1 => 1,
+        worth => cores().min(worth),
+    }
+}
+
+/// The cores this process may use, asked once: the answer costs system
+/// calls and file reads (cgroup quotas), and loading asks for every mesh.
+fn cores() -> usize {
+    static CORES: OnceLock<usize> = OnceLock::new();
+    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, NonZero::get))
 }
 
 /// `work` applied to every part, the parts in parallel (the first on the

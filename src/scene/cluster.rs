@@ -28,8 +28,21 @@ pub struct Cluster {
 }
 
 pub fn split(positions: &[DVec3], indices: &[u32], max_triangles: u32) -> Vec<Cluster> {
+    let mesh = Mesh {
+        positions,
+        indices,
+        max_triangles: max_triangles.max(1) as usize,
+    };
+    let count = indices.len() / 3;
+    if count <= mesh.max_triangles {
+        // One cluster or none: no centroids needed.
+        return (count > 0)
+            .then(|| mesh.gather(0..count as u32, &mut Vec::new()))
+            .into_iter()
+            .collect();
+    }
     let corners = |t: usize| [0, 1, 2].map(|k| positions[indices[3 * t + k] as usize]);
-    let mut triangles: Vec<Triangle> = (0..indices.len() / 3)
+    let mut triangles: Vec<Triangle> = (0..count)
         .map(|t| {
             let [a, b, c] = corners(t);
             Triangle {
@@ -38,11 +51,6 @@ pub fn split(positions: &[DVec3], indices: &[u32], max_triangles: u32) -> Vec<Cl
             }
         })
         .collect();
-    let mesh = Mesh {
-        positions,
-        indices,
-        max_triangles: max_triangles.max(1) as usize,
-    };
     let parts = parallel::parts_for(triangles.len(), TRIANGLES_PER_PART);
     mesh.split(&mut triangles, parts, &mut Vec::new())
 }
@@ -74,7 +82,7 @@ impl Mesh<'_> {
             return if triangles.is_empty() {
                 Vec::new()
             } else {
-                vec![self.gather(triangles, local)]
+                vec![self.gather(triangles.iter().map(|t| t.id), local)]
             };
         }
         let bounds = Aabb::from_points(triangles.iter().map(|t| t.centroid));
@@ -98,18 +106,18 @@ impl Mesh<'_> {
         }
     }
 
-    /// One cluster of `triangles`, its vertices in first-use order.
-    fn gather(&self, triangles: &[Triangle], local: &mut Vec<u32>) -> Cluster {
+    /// One cluster of the triangles `ids`, its vertices in first-use order.
+    fn gather(&self, ids: impl ExactSizeIterator<Item = u32>, local: &mut Vec<u32>) -> Cluster {
         if local.is_empty() {
             local.resize(self.positions.len(), u32::MAX);
         }
         let mut cluster = Cluster {
             vertices: Vec::new(),
-            indices: Vec::with_capacity(triangles.len() * 3),
+            indices: Vec::with_capacity(ids.len() * 3),
             bounds: Aabb::EMPTY,
         };
-        for t in triangles {
-            for &v in &self.indices[t.id as usize * 3..t.id as usize * 3 + 3] {
+        for t in ids {
+            for &v in &self.indices[t as usize * 3..t as usize * 3 + 3] {
                 let slot = &mut local[v as usize];
                 if *slot == u32::MAX {
                     *slot = cluster.vertices.len() as u32;
