@@ -9,9 +9,10 @@
 //! In time proportional to the mesh times the depth of the split, with
 //! small constants: each triangle's centroid is computed once and kept
 //! beside it, so every level partitions one contiguous array in place
-//! (`select_nth_unstable_by`) and reads no vertex; the halves of a cut are
-//! split, and their clusters gathered, on separate cores while there are
-//! cores for them.
+//! (`select_nth_unstable_by`) and reads no vertex. The centroids are
+//! computed, and the halves of a cut split and their clusters gathered, on
+//! separate cores while there are cores for them. The clusters are those
+//! of one core, to the index: the same partitions in the same order.
 
 use glam::DVec3;
 
@@ -41,17 +42,25 @@ pub fn split(positions: &[DVec3], indices: &[u32], max_triangles: u32) -> Vec<Cl
             .into_iter()
             .collect();
     }
-    let corners = |t: usize| [0, 1, 2].map(|k| positions[indices[3 * t + k] as usize]);
-    let mut triangles: Vec<Triangle> = (0..count)
-        .map(|t| {
-            let [a, b, c] = corners(t);
-            Triangle {
+    let parts = parallel::parts_for(count, TRIANGLES_PER_PART);
+    let mut triangles = vec![
+        Triangle {
+            centroid: DVec3::ZERO,
+            id: 0,
+        };
+        count
+    ];
+    // Centroids, a share of the triangles a core.
+    let share = count.div_ceil(parts);
+    parallel::map(triangles.chunks_mut(share).enumerate().collect(), |(k, these)| {
+        for (t, triangle) in (k * share..).zip(these) {
+            let [a, b, c] = [0, 1, 2].map(|corner| positions[indices[3 * t + corner] as usize]);
+            *triangle = Triangle {
                 centroid: (a + b + c) / 3.0,
                 id: t as u32,
-            }
-        })
-        .collect();
-    let parts = parallel::parts_for(triangles.len(), TRIANGLES_PER_PART);
+            };
+        }
+    });
     mesh.split(&mut triangles, parts, &mut Vec::new())
 }
 
