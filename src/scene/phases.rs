@@ -24,11 +24,6 @@ pub struct LoadPhases {
 }
 
 impl LoadPhases {
-    /// The whole load: every phase.
-    pub fn total_ms(&self) -> f64 {
-        self.read_ms + self.parse_ms + self.validate_ms + self.closed_ms + self.cluster_ms
-    }
-
     /// Sets `parse_ms` to what of `elapsed` (the load after reading) the
     /// measured phases do not account for.
     pub(super) fn parse_is_the_rest_of(&mut self, elapsed: Duration) {
