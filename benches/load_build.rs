@@ -1,86 +1,185 @@
-//! Load and hierarchy-build throughput on generated models.
+//! Load and hierarchy-build time on generated models, phase by phase.
 //!
-//! `cargo bench --bench load_build` writes a 1 M-triangle OBJ (100 objects of
-//! 8 192 triangles and one 200 000-triangle mesh that must be split into
-//! clusters) and times, over several runs: parsing + validation + clustering
-//! (`load`), BVH build (`build`), and generating the built-in city. Medians
-//! are printed with throughput. Target: load + build of 1 M triangles under
-//! 1 s in release on the 2-core reference machine.
+//! `cargo bench --bench load_build` writes four models into a temporary
+//! folder and loads each several times:
+//!
+//! - `scan-1m.obj` and `scan-8m.obj`: one closed surface of small, even
+//!   triangles (a bumpy sphere, about 1 M and 8 M triangles), in one OBJ
+//!   mesh, as a 3D scanner writes it: the closed-solid test and the
+//!   clustering see the whole mesh at once;
+//! - `tiles.obj`: 100 objects of 8 192 triangles and one of 199 712 (about
+//!   1 M triangles);
+//! - `instances.glb`: 40 closed meshes of 432 to 24 300 triangles, each
+//!   placed 50 times under a node tree (2 000 instances), as in a CAD
+//!   assembly;
+//!
+//! and builds the built-in city. For each it prints the median of every
+//! phase (`LoadPhases`: read, parse, validate, closed-solid test,
+//! clustering; then the hierarchy build) on its own line, and the median of
+//! the whole load + build. Target on the project's 2-core machine: load +
+//! build of the 1 M-triangle scan under 1 s, of the 8 M one under 8 s.
 
 use std::fmt::Write as _;
+use std::path::Path;
 use std::time::{Duration, Instant};
 
+use glam::DVec3;
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
-use occlu::scene::{LoadOptions, SceneSpec, load};
+use occlu::scene::{LoadOptions, LoadPhases, SceneSpec, load};
+use serde_json::json;
 
+#[path = "../tests/common/gltf_writer.rs"]
+#[allow(dead_code)] // the bench writes meshes and nodes only
+mod gltf_writer;
+
+/// Loads of each model; the 8 M-triangle scan gets fewer.
 const RUNS: usize = 5;
+const RUNS_OF_LARGE: usize = 3;
 
 fn main() {
     let dir = std::env::temp_dir().join(format!("occlu-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let obj = dir.join("million.obj");
-    let (text, triangles) = million_triangle_obj();
-    std::fs::write(&obj, &text).expect("write OBJ");
-    let mb = text.len() as f64 / 1e6;
-    println!(
-        "model: {triangles} triangles, {mb:.1} MB of OBJ text ({})",
-        obj.display()
-    );
-
-    let spec = SceneSpec::File(obj);
-    let options = LoadOptions::default();
-    let (load_time, scene) = median_of(|| load(&spec, &options).expect("generated model loads"));
-    let (build_time, hierarchy) = median_of(|| Hierarchy::build(&scene.objects, &HierarchyParams::default()));
-    report("OBJ load (parse, validate, cluster)", load_time, triangles, Some(mb));
-    report("hierarchy build", build_time, triangles, None);
-    println!(
-        "  {} objects after clustering, {} nodes, depth {}",
-        scene.objects.len(),
-        hierarchy.nodes.len(),
-        hierarchy.stats().depth
-    );
-    report("load + build", load_time + build_time, triangles, None);
-
-    let city = SceneSpec::Builtin("city".into());
-    let (city_time, scene) = median_of(|| load(&city, &options).expect("city builds"));
-    let city_tris = scene.triangles() as usize;
-    report("built-in city generation", city_time, city_tris, None);
-    let (city_build, _) = median_of(|| Hierarchy::build(&scene.objects, &HierarchyParams::default()));
-    report("built-in city hierarchy", city_build, city_tris, None);
+    // A cube of n×n quads a face has 12·n² triangles.
+    for (name, n, runs) in [("scan-1m.obj", 289, RUNS), ("scan-8m.obj", 816, RUNS_OF_LARGE)] {
+        let (positions, indices) = scan(n);
+        let file = write(&dir, name, obj_text("scan", &positions, &indices).as_bytes());
+        measure(&SceneSpec::File(file), runs);
+    }
+    let file = write(&dir, "tiles.obj", tiles_obj().as_bytes());
+    measure(&SceneSpec::File(file), RUNS);
+    let file = write(&dir, "instances.glb", &instances_glb());
+    measure(&SceneSpec::File(file), RUNS);
+    measure(&SceneSpec::Builtin("city".into()), RUNS);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Runs `f` RUNS times; the median duration and the last result.
-fn median_of<T>(mut f: impl FnMut() -> T) -> (Duration, T) {
-    let mut times = Vec::with_capacity(RUNS);
-    let mut last = None;
-    for _ in 0..RUNS {
-        let start = Instant::now();
-        last = Some(std::hint::black_box(f()));
-        times.push(start.elapsed());
-    }
-    times.sort();
-    (times[RUNS / 2], last.expect("RUNS > 0"))
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).expect("write model");
+    path
 }
 
-fn report(what: &str, t: Duration, triangles: usize, megabytes: Option<f64>) {
-    let s = t.as_secs_f64();
-    let mut line = format!(
-        "{what:<40} {:>9.1} ms  {:>7.2} M triangles/s",
-        s * 1e3,
-        triangles as f64 / s / 1e6
-    );
-    if let Some(mb) = megabytes {
-        let _ = write!(line, "  {:>7.1} MB/s", mb / s);
+/// Loads and builds `spec` `runs` times and prints the median of each
+/// phase and of the whole.
+fn measure(spec: &SceneSpec, runs: usize) {
+    let options = LoadOptions::default();
+    let mut phases: Vec<(LoadPhases, Duration)> = Vec::with_capacity(runs);
+    let mut wholes = Vec::with_capacity(runs);
+    let mut last = None;
+    for _ in 0..runs {
+        let started = Instant::now();
+        let scene = load(spec, &options).expect("generated model loads");
+        let built = Instant::now();
+        let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+        wholes.push(started.elapsed());
+        phases.push((scene.phases, built.elapsed()));
+        last = Some(std::hint::black_box((scene, hierarchy)));
     }
-    println!("{line}");
+    let (scene, hierarchy) = last.expect("runs > 0");
+    let triangles = scene.triangles();
+    let what = match spec {
+        SceneSpec::File(path) => {
+            let mb = std::fs::metadata(path).map_or(0.0, |m| m.len() as f64 / 1e6);
+            format!(
+                "{} ({mb:.1} MB)",
+                path.file_name().unwrap_or_default().to_string_lossy()
+            )
+        }
+        SceneSpec::Builtin(name) => format!("built-in {name}"),
+    };
+    println!(
+        "{what}: {triangles} triangles, {} parts ({} closed), {} objects, {} nodes; medians of {runs} runs",
+        scene.parts.len(),
+        scene.parts.iter().filter(|p| p.closed).count(),
+        scene.objects.len(),
+        hierarchy.nodes.len()
+    );
+    let ms_of = |pick: fn(&(LoadPhases, Duration)) -> f64| median(phases.iter().map(pick).collect());
+    let lines: [(&str, f64); 6] = [
+        ("read", ms_of(|(p, _)| p.read_ms)),
+        ("parse", ms_of(|(p, _)| p.parse_ms)),
+        ("validate", ms_of(|(p, _)| p.validate_ms)),
+        ("closed-solid test", ms_of(|(p, _)| p.closed_ms)),
+        ("clustering", ms_of(|(p, _)| p.cluster_ms)),
+        ("hierarchy", ms_of(|(_, h)| h.as_secs_f64() * 1e3)),
+    ];
+    for (phase, ms) in lines {
+        println!("  {phase:<20} {ms:>9.1} ms");
+    }
+    let whole = median(wholes.iter().map(|d| d.as_secs_f64() * 1e3).collect());
+    println!(
+        "  {:<20} {whole:>9.1} ms  {:>6.2} M triangles/s\n",
+        "load + build",
+        triangles as f64 / whole / 1e3
+    );
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// A closed bumpy sphere as a scan gives it: a cube of `n`×`n` quads a face,
+/// projected onto the sphere with equal angles (so triangles are about the
+/// same size everywhere) and pushed in and out along the radius by a few
+/// per cent; vertices shared, every triangle wound outward.
+fn scan(n: u32) -> (Vec<DVec3>, Vec<u32>) {
+    let mut ids = std::collections::HashMap::new();
+    let mut positions = Vec::new();
+    let mut vertex = |lattice: [u32; 3]| {
+        *ids.entry(lattice).or_insert_with(|| {
+            let cube = DVec3::from_array(
+                lattice.map(|i| (std::f64::consts::FRAC_PI_4 * (2.0 * f64::from(i) / f64::from(n) - 1.0)).tan()),
+            );
+            let d = cube.normalize();
+            let radius = 1.0 + 0.04 * (7.0 * d.x).sin() * (5.0 * d.y).cos() + 0.02 * (11.0 * d.z).sin();
+            positions.push(d * radius);
+            positions.len() as u32 - 1
+        })
+    };
+    let mut indices = Vec::with_capacity(36 * (n * n) as usize);
+    for axis in 0..3 {
+        for side in [0, n] {
+            // (u, v) run so that u × v points out of the cube.
+            let (mut u, mut v) = ((axis + 1) % 3, (axis + 2) % 3);
+            if side == 0 {
+                std::mem::swap(&mut u, &mut v);
+            }
+            let at = |a: u32, b: u32| {
+                let mut lattice = [side; 3];
+                lattice[u] = a;
+                lattice[v] = b;
+                lattice
+            };
+            for a in 0..n {
+                for b in 0..n {
+                    let [p00, p10, p11, p01] =
+                        [at(a, b), at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)].map(&mut vertex);
+                    indices.extend([p00, p10, p11, p00, p11, p01]);
+                }
+            }
+        }
+    }
+    (positions, indices)
+}
+
+/// One OBJ object `name` of the triangles `indices` over `positions`.
+fn obj_text(name: &str, positions: &[DVec3], indices: &[u32]) -> String {
+    let mut text = String::with_capacity(positions.len() * 32 + indices.len() * 9);
+    let _ = writeln!(text, "o {name}");
+    for p in positions {
+        let _ = writeln!(text, "v {:.6} {:.6} {:.6}", p.x, p.y, p.z);
+    }
+    for t in indices.chunks_exact(3) {
+        let _ = writeln!(text, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    text
 }
 
 /// 100 terrain-like grids of 8 192 triangles and one of 199 712: 1 018 912.
-fn million_triangle_obj() -> (String, usize) {
+fn tiles_obj() -> String {
     let mut text = String::with_capacity(64 << 20);
     let mut base = 1usize;
-    let mut triangles = 0;
     let mut grid = |name: &str, n: usize, origin: (f64, f64), text: &mut String| {
         let _ = writeln!(text, "o {name}");
         for z in 0..=n {
@@ -97,7 +196,6 @@ fn million_triangle_obj() -> (String, usize) {
             }
         }
         base += (n + 1) * (n + 1);
-        triangles += 2 * n * n;
     };
     for i in 0..100 {
         grid(
@@ -108,5 +206,33 @@ fn million_triangle_obj() -> (String, usize) {
         );
     }
     grid("terrain", 316, (-200.0, -200.0), &mut text);
-    (text, triangles)
+    text
+}
+
+/// 40 bumpy spheres of 6 to 45 quads a cube face, each placed at 50 spots:
+/// 50 assemblies, each a node whose 40 children are the spheres.
+fn instances_glb() -> Vec<u8> {
+    let mut writer = gltf_writer::GltfWriter::default();
+    let meshes: Vec<usize> = (6..46)
+        .map(|n| {
+            let (positions, indices) = scan(n);
+            let positions: Vec<[f32; 3]> = positions.iter().map(|p| p.as_vec3().to_array()).collect();
+            writer.mesh(&format!("part{n}"), &[(&positions, Some(&indices), 4)])
+        })
+        .collect();
+    let roots: Vec<usize> = (0..50)
+        .map(|assembly| {
+            let children: Vec<usize> = meshes
+                .iter()
+                .enumerate()
+                .map(|(k, &mesh)| {
+                    let at = [(k % 8) as f64 * 2.5, (k / 8) as f64 * 2.5, 0.0];
+                    writer.node(json!({"mesh": mesh, "translation": at}))
+                })
+                .collect();
+            let at = [(assembly % 10) as f64 * 25.0, 0.0, (assembly / 10) as f64 * 25.0];
+            writer.node(json!({"name": format!("assembly{assembly}"), "children": children, "translation": at}))
+        })
+        .collect();
+    writer.glb(&roots)
 }

@@ -23,6 +23,7 @@ pub mod input;
 pub mod matrix;
 pub mod measure;
 pub mod object_set;
+mod parallel;
 pub mod picture;
 pub mod raycast;
 pub mod report;

@@ -748,7 +748,8 @@ fn heard(progress: &mut Progress, event: BenchEvent, note: &dyn Fn(String)) {
 
 /// Progress of a bench run on stderr: a bar over the recorded frames in a
 /// terminal (warm-up frames first show as such), and outside one (a CI log)
-/// a line every few seconds; nothing when quiet.
+/// a line every few seconds; nothing when quiet. Both say which frame of
+/// how many, the time spent and, once it can tell, how long is left.
 struct Progress {
     bar: Option<ProgressBar>,
     quiet: bool,
@@ -756,6 +757,7 @@ struct Progress {
     prefix: String,
     started: Instant,
     last_line: Option<Instant>,
+    pace: Pace,
 }
 
 /// Seconds between progress lines outside a terminal.
@@ -770,6 +772,7 @@ impl Progress {
             prefix,
             started: Instant::now(),
             last_line: None,
+            pace: Pace::default(),
         }
     }
 
@@ -778,45 +781,76 @@ impl Progress {
         if self.quiet {
             return;
         }
+        let now = Instant::now();
+        let status = self.status(done, total, now);
         let recorded = total.saturating_sub(self.warmup);
-        let (phase, at, of) = if done <= self.warmup {
-            ("warm-up frame", done, self.warmup)
-        } else {
-            ("frame", done - self.warmup, recorded)
-        };
         if std::io::stderr().is_terminal() {
             // Created with its length known, so it never shows 0/0.
             let bar = self.bar.get_or_insert_with(|| {
                 ProgressBar::new(u64::from(recorded)).with_style(
-                    ProgressStyle::with_template("{prefix} [{bar:32}] {msg} {pos}/{len}, {elapsed} elapsed, eta {eta}")
+                    ProgressStyle::with_template("{prefix} [{bar:32}] {msg}")
                         .expect("static template")
                         .progress_chars("=> "),
                 )
             });
             bar.set_prefix(self.prefix.clone());
-            bar.set_message(if phase == "frame" { "frames" } else { "warming up" });
-            bar.set_position(u64::from(if phase == "frame" { at } else { 0 }));
+            bar.set_position(u64::from(done.saturating_sub(self.warmup)));
+            bar.set_message(status);
         } else {
-            let now = Instant::now();
             let due = self
                 .last_line
                 .is_none_or(|t| now.duration_since(t).as_secs_f64() >= PROGRESS_EVERY);
             if due || done == total {
                 self.last_line = Some(now);
-                let elapsed = now.duration_since(self.started).as_secs_f64();
-                let left = elapsed / f64::from(done.max(1)) * f64::from(total - done);
-                say!(
-                    "{}: {phase} {at} of {of}, {elapsed:.0} s elapsed, about {left:.0} s left",
-                    self.prefix
-                );
+                say!("{}: {status}", self.prefix);
             }
         }
+    }
+
+    /// Which frame of how many is done, the time spent and the time left.
+    fn status(&mut self, done: u32, total: u32, now: Instant) -> String {
+        let (phase, at, of) = if done <= self.warmup {
+            ("warm-up frame", done, self.warmup)
+        } else {
+            ("frame", done - self.warmup, total - self.warmup)
+        };
+        let elapsed = now.duration_since(self.started).as_secs_f64();
+        let left = match self.pace.seconds_left(done, total, self.warmup, now) {
+            Some(left) => format!("about {left:.0} s left"),
+            None => "estimating the time left".into(),
+        };
+        format!("{phase} {at} of {of}, {elapsed:.0} s elapsed, {left}")
     }
 
     fn finish(&self) {
         if let Some(bar) = &self.bar {
             bar.finish_and_clear();
         }
+    }
+}
+
+/// How long a run has left, at the pace of its recorded frames alone: the
+/// first frames, on a cold shader cache, take tens of seconds each on a
+/// software rasteriser and say nothing of the rest. So the pace is taken
+/// from the end of warm-up (or of the first frame, without warm-up on).
+#[derive(Default)]
+struct Pace {
+    /// When the pace is taken from, and the frames done by then.
+    from: Option<(Instant, u32)>,
+}
+
+impl Pace {
+    /// Notes that `done` of `total` frames, the first `warmup` of them
+    /// warm-up, have run at `now`; the seconds left, once a frame has run
+    /// since the pace is taken from.
+    fn seconds_left(&mut self, done: u32, total: u32, warmup: u32, now: Instant) -> Option<f64> {
+        if done < warmup.max(1) {
+            return None;
+        }
+        let (from, done_then) = *self.from.get_or_insert((now, done));
+        let paced = done - done_then;
+        (paced > 0)
+            .then(|| now.duration_since(from).as_secs_f64() / f64::from(paced) * f64::from(total.saturating_sub(done)))
     }
 }
 
@@ -1004,8 +1038,13 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
         "hierarchy   {} nodes, {} leaves, depth {}, at most {} objects per leaf",
         h.nodes, h.leaves, h.depth, h.max_leaf_objects
     );
-    let _ = writeln!(w, "load        {load_ms:.1} ms");
-    let _ = writeln!(w, "build       {build_ms:.1} ms");
+    let p = report.load_phases;
+    let _ = writeln!(
+        w,
+        "load        {load_ms:.1} ms (read {:.1}, parse {:.1}, validate {:.1}, closed-solid test {:.1}, clustering {:.1})",
+        p.read_ms, p.parse_ms, p.validate_ms, p.closed_ms, p.cluster_ms
+    );
+    let _ = writeln!(w, "build       {build_ms:.1} ms (hierarchy)");
     for c in &report.cameras {
         let fov = c.fov_y_deg.map_or(String::new(), |f| format!(", fov {f:.1}°"));
         let near = c.near.map_or(String::new(), |n| format!(", near {n}"));
@@ -1105,4 +1144,41 @@ fn path_gen(
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    /// The seconds left after each frame of a run whose frames took
+    /// `seconds` each, `warmup` of them warm-up.
+    fn estimates(seconds: &[u64], warmup: u32) -> Vec<Option<f64>> {
+        let mut pace = Pace::default();
+        let mut now = Instant::now();
+        let total = seconds.len() as u32;
+        (1..=total)
+            .map(|done| {
+                now += Duration::from_secs(seconds[done as usize - 1]);
+                pace.seconds_left(done, total, warmup, now)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_time_left_comes_from_recorded_frames_not_warm_up() {
+        // Three warm-up frames compiling shaders for 100 s each, then 100
+        // frames of 2 s.
+        let seconds: Vec<u64> = [100; 3].into_iter().chain([2; 100]).collect();
+        let left = estimates(&seconds, 3);
+        assert_eq!(left[..3], [None; 3], "estimating during warm-up");
+        assert_eq!(left[3], Some(2.0 * 99.0), "after the first recorded frame");
+        assert_eq!(left[52], Some(2.0 * 50.0));
+        assert_eq!(left[102], Some(0.0));
+        // Without warm-up the first frame compiles the shaders: the pace
+        // starts after it.
+        let seconds: Vec<u64> = [100].into_iter().chain([2; 9]).collect();
+        let left = estimates(&seconds, 0);
+        assert_eq!(left[..2], [None, Some(2.0 * 8.0)]);
+    }
 }

@@ -37,6 +37,26 @@ fn info_reports_obj_triangle_counts() {
     assert_eq!(v["triangles"], 7);
     assert_eq!(v["objects"], 3);
     assert!(v["hierarchy"]["nodes"].as_u64().unwrap() >= 1);
+    // Each phase of the load, which together take no longer than the load.
+    let phases = ["read_ms", "parse_ms", "validate_ms", "closed_ms", "cluster_ms"].map(|phase| {
+        v["load_phases"][phase]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{phase} in {v}"))
+    });
+    let sum: f64 = phases.iter().sum();
+    assert!(phases.iter().all(|&ms| ms >= 0.0) && sum > 0.0, "{phases:?}");
+    assert!(sum <= v["load_ms"].as_f64().unwrap(), "{phases:?} in {}", v["load_ms"]);
+
+    let out = occlu(&["info", obj.to_str().unwrap()]);
+    let load = stdout(&out)
+        .lines()
+        .find(|l| l.starts_with("load "))
+        .map(str::to_string);
+    let words = ["read", "parse", "validate", "closed-solid test", "clustering"];
+    assert!(
+        load.as_ref().is_some_and(|l| words.iter().all(|w| l.contains(w))),
+        "{load:?}"
+    );
 }
 
 #[test]
@@ -69,6 +89,24 @@ fn degenerate_triangles_are_dropped_with_a_warning() {
             .any(|w| w.contains("dropped 2 degenerate triangles ('d': 2)"))
     );
     assert!(s.warnings.iter().any(|w| w.contains("ignored 1 line/point elements")));
+}
+
+#[test]
+fn obj_polylines_are_skipped_not_drawn() {
+    // tobj, which read OBJ files until issue 38, drew a polyline of three
+    // or more points as a triangle fan.
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(
+        dir.path(),
+        "l.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nl 1 2 3 4\nf 2 4 3\np 1\n",
+    );
+    let s = load_file(&obj).unwrap();
+    assert_eq!(s.triangles(), 1, "the face alone");
+    assert_eq!(
+        s.warnings,
+        ["ignored 2 line/point elements ('l'/'p'): only faces are rendered"]
+    );
 }
 
 #[test]

@@ -6,10 +6,9 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use common::{gpus, hierarchy, run_modes};
+use common::{gpus, hierarchy, run_modes, shared_models, shared_models_dir};
 use occlu::camera::generate::default_path;
 use occlu::camera::path::CameraPath;
 use occlu::cull::{Culler, ModeParams, create, modes};
@@ -19,53 +18,14 @@ use occlu::scene::{LoadOptions, SceneSpec, load};
 /// Frames of the generated path of a model without a path file.
 const GENERATED_FRAMES: u32 = 8;
 
-fn models_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models")
-}
-
-/// Model files under `dir`, in sorted order, with the path file of each
-/// (`NAME.*.json` beside `NAME.ext`), if any.
-fn models(dir: &Path) -> Vec<(PathBuf, Option<PathBuf>)> {
-    let mut files: Vec<PathBuf> = Vec::new();
-    let mut folders = vec![dir.to_path_buf()];
-    while let Some(folder) = folders.pop() {
-        for entry in std::fs::read_dir(&folder).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                folders.push(path);
-            } else {
-                files.push(path);
-            }
-        }
-    }
-    files.sort();
-    let extension = |p: &Path| p.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    files
-        .iter()
-        .filter(|p| matches!(extension(p).as_deref(), Some("obj" | "gltf" | "glb")))
-        .map(|model| {
-            let stem = model.file_stem().unwrap().to_string_lossy();
-            let path = files.iter().find(|p| {
-                extension(p).as_deref() == Some("json")
-                    && p.parent() == model.parent()
-                    && p.file_name()
-                        .unwrap()
-                        .to_string_lossy()
-                        .starts_with(&format!("{stem}."))
-            });
-            (model.clone(), path.cloned())
-        })
-        .collect()
-}
-
 #[test]
 fn every_conservative_mode_is_exact_on_every_shared_model() {
-    let dir = models_dir();
+    let dir = shared_models_dir();
     if !dir.is_dir() {
         eprintln!("skipped: no real models at {} (../shared/models)", dir.display());
         return;
     }
-    let models = models(&dir);
+    let models = shared_models(&dir);
     assert!(!models.is_empty(), "{} holds no .obj, .gltf or .glb", dir.display());
     let gpus = gpus();
     let mut failures = Vec::new();

@@ -8,8 +8,8 @@ use crate::cull::ModeId;
 use crate::gpu::{AdapterReport, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams, HierarchyStats};
 use crate::measure::{MissedObject, ModeSummary};
-use crate::scene::Scene;
 use crate::scene::up::Up;
+use crate::scene::{LoadPhases, Scene};
 
 /// Bumped whenever a field of summary.json changes meaning or disappears
 /// (adding fields does not bump it).
@@ -193,6 +193,9 @@ pub struct SceneFacts {
     pub warnings: Vec<String>,
     pub load_ms: f64,
     pub build_ms: f64,
+    /// Where `load_ms` went (absent in files from before it was recorded).
+    #[serde(default)]
+    pub load_phases: LoadPhases,
 }
 
 impl SceneFacts {
@@ -233,6 +236,7 @@ impl SceneFacts {
             warnings: scene.warnings.clone(),
             load_ms,
             build_ms,
+            load_phases: scene.phases,
         }
     }
 }

@@ -2,8 +2,10 @@
 //! then choosing its up axis.
 
 use std::path::Path;
+use std::time::Instant;
 
 use super::model::{Object, Scene, SceneBuilder};
+use super::phases::timed;
 use super::source::{LoadOptions, SceneError, SceneSpec, read_model_file};
 use super::up::{Up, UpAxis, UpChoice};
 use super::{builtin, gltf, obj};
@@ -15,8 +17,10 @@ pub fn load(spec: &SceneSpec, options: &LoadOptions) -> Result<Scene, SceneError
     }
     match spec {
         SceneSpec::Builtin(name) => {
+            let started = Instant::now();
             let mut scene = builtin::build(name, options)?;
             scene.up = choose(options.up, Source::Builtin, &scene);
+            scene.phases.parse_is_the_rest_of(started.elapsed());
             Ok(scene)
         }
         SceneSpec::File(path) => load_file(path, options),
@@ -26,11 +30,14 @@ pub fn load(spec: &SceneSpec, options: &LoadOptions) -> Result<Scene, SceneError
 fn load_file(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     // The format is checked before reading, so a wrong file is not read whole.
     loader_for(path)?;
-    let bytes = read_model_file(path, options).map_err(|error| SceneError::Io {
+    let (bytes, read_ms) = timed(|| read_model_file(path, options));
+    let bytes = bytes.map_err(|error| SceneError::Io {
         path: path.into(),
         error,
     })?;
-    load_bytes(path, &bytes, options)
+    let mut scene = load_bytes(path, &bytes, options)?;
+    scene.phases.read_ms = read_ms;
+    Ok(scene)
 }
 
 /// Parses a model already in memory; `path` names it in errors, chooses the
@@ -40,12 +47,14 @@ pub fn load_bytes(path: &Path, bytes: &[u8], options: &LoadOptions) -> Result<Sc
         return Err(SceneError::ZeroClusterSize);
     }
     let (loader, source) = loader_for(path)?;
+    let started = Instant::now();
     let mut builder = SceneBuilder::new(path.display().to_string(), options.cluster_triangles);
     loader(path, bytes, options, &mut builder)?;
     let mut scene = builder
         .finish()
         .ok_or_else(|| SceneError::Empty { path: path.into() })?;
     scene.up = choose(options.up, source, &scene);
+    scene.phases.parse_is_the_rest_of(started.elapsed());
     Ok(scene)
 }
 

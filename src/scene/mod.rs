@@ -17,11 +17,13 @@ mod meshopt;
 mod model;
 pub mod motion;
 mod obj;
+mod phases;
 mod source;
 pub mod up;
 mod validate;
 
 pub use load::{load, load_bytes, looks_z_up};
 pub use model::{DEFAULT_CLUSTER_TRIANGLES, Mesh, MeshGroup, Object, Part, Scene, SceneBuilder, TriangleSoup};
+pub use phases::LoadPhases;
 pub use source::{LoadOptions, SceneError, SceneSpec};
 pub use validate::{GeometryError, MAX_COORDINATE, within_range};

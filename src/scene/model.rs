@@ -6,6 +6,7 @@ use glam::{DAffine3, DVec3};
 
 use super::cameras::{FileAnimation, FileCamera};
 use super::motion::{Mover, Route};
+use super::phases::{LoadPhases, timed};
 use super::up::Up;
 use super::{closed, cluster, validate};
 use crate::bounds::Aabb;
@@ -82,6 +83,8 @@ pub struct Scene {
     pub cameras: Vec<FileCamera>,
     /// The file's animations (glTF), with the poses of the cameras they move.
     pub animations: Vec<FileAnimation>,
+    /// How long each phase of loading it took.
+    pub phases: LoadPhases,
 }
 
 impl Scene {
@@ -128,6 +131,7 @@ pub struct SceneBuilder {
     cameras: Vec<FileCamera>,
     animations: Vec<FileAnimation>,
     movers: Vec<Mover>,
+    phases: LoadPhases,
 }
 
 impl SceneBuilder {
@@ -146,6 +150,7 @@ impl SceneBuilder {
             cameras: Vec::new(),
             animations: Vec::new(),
             movers: Vec::new(),
+            phases: LoadPhases::default(),
         }
     }
 
@@ -155,12 +160,23 @@ impl SceneBuilder {
     /// triangles gives an empty group.
     pub fn add_mesh(&mut self, name: &str, positions: &[DVec3], indices: &[u32]) -> Result<MeshGroup, GeometryError> {
         let name = &one_line(name);
-        let triangles = validate::triangles(name, positions, indices)?;
+        let (triangles, spent) = timed(|| validate::triangles(name, positions, indices));
+        self.phases.validate_ms += spent;
+        let triangles = triangles?;
         if triangles.degenerate > 0 {
             self.degenerate.push((name.to_string(), triangles.degenerate));
         }
-        let clusters = cluster::split(positions, &triangles.indices, self.cluster_triangles);
-        let group = clusters
+        let (closed, spent) = timed(|| closed::is_closed(positions, &triangles.indices));
+        self.phases.closed_ms += spent;
+        let (clusters, spent) = timed(|| self.store_clusters(positions, &triangles.indices));
+        self.phases.cluster_ms += spent;
+        Ok(MeshGroup { clusters, closed })
+    }
+
+    /// Splits a validated mesh into clusters and stores each as a mesh,
+    /// its vertices relative to its centre; returns (mesh id, centre).
+    fn store_clusters(&mut self, positions: &[DVec3], indices: &[u32]) -> Vec<(u32, DVec3)> {
+        cluster::split(positions, indices, self.cluster_triangles)
             .into_iter()
             .map(|c| {
                 let first_index = self.indices.len() as u32;
@@ -180,11 +196,7 @@ impl SceneBuilder {
                 });
                 (self.meshes.len() as u32 - 1, origin)
             })
-            .collect();
-        Ok(MeshGroup {
-            clusters: group,
-            closed: closed::is_closed(positions, &triangles.indices),
-        })
+            .collect()
     }
 
     /// Places every cluster of `group` in the world under `transform`. A
@@ -304,6 +316,7 @@ impl SceneBuilder {
             cameras: self.cameras,
             animations: self.animations,
             movers: self.movers,
+            phases: self.phases,
         })
     }
 }

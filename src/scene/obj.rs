@@ -1,7 +1,28 @@
-//! Wavefront OBJ through tobj: each `o`/`g` becomes an object; materials,
-//! normals and texture coordinates are not needed and not loaded.
+//! Wavefront OBJ: each `o`/`g` starts an object, faces become triangle
+//! fans; positions are read (a fourth number `w` divides them, a colour is
+//! skipped), texture coordinates and normals are only counted (faces name
+//! them), materials are never read, and `l`/`p` elements are skipped and
+//! counted for a warning.
+//!
+//! Read here rather than by tobj, as it was until issue 38: tobj makes a
+//! String of every line and a Vec of every face and looks every corner up
+//! in a hash map, and none of its options avoids that. On the generated
+//! scans of benches/load_build.rs, read in turn on the project's 2-core
+//! machine, tobj took 0.37–0.49 s for 1 M triangles and 3.3–3.6 s for
+//! 8 M, this reader 0.17 s and 1.35–1.5 s. It gives every file the meshes
+//! tobj gave (tests/fuzz.rs holds the two against each other) but one: an
+//! `l` polyline of three or more points was a filled triangle fan there,
+//! and is skipped here. So, as in tobj:
+//! - an object's vertices are the distinct (position, texture coordinate,
+//!   normal) index triples of its corners, in first-use order;
+//! - indices count from 1, negative ones back from the elements read so
+//!   far, and a texture coordinate or normal index of 0 means none; face
+//!   indices are checked when the object ends, against everything read;
+//! - a new `o`/`g` ends an object that has any face (a one- or two-corner
+//!   face or an `l` too, which draw nothing), and the end of the file ends
+//!   the last one however empty; consecutive objects of one name are one.
 
-use std::io::Cursor;
+use std::collections::HashMap;
 use std::path::Path;
 
 use glam::{DAffine3, DVec3};
@@ -12,72 +33,383 @@ use super::source::{LoadOptions, SceneError};
 /// Loads an OBJ model. The options on reading further files do not apply:
 /// an OBJ file's geometry is all in it, and its material files are not read.
 pub fn load(path: &Path, bytes: &[u8], _: &LoadOptions, builder: &mut SceneBuilder) -> Result<(), SceneError> {
-    let options = tobj::LoadOptions {
-        single_index: true,
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-    };
-    // Materials never affect visibility: refuse to open .mtl files at all.
-    let (models, _materials) = tobj::load_obj_buf(&mut Cursor::new(bytes), &options, |_| {
-        Err(tobj::LoadError::GenericFailure)
-    })
-    .map_err(|e| SceneError::Parse {
+    let obj = parse(bytes).map_err(|message| SceneError::Parse {
         path: path.into(),
-        message: format!("invalid OBJ: {e}"),
+        message: format!("invalid OBJ: {message}"),
     })?;
-
-    // tobj starts a new model at every `usemtl` too: consecutive models with
-    // the same name are one `o`/`g` and are merged back. Two separate `o a`
-    // statements stay two objects.
-    let mut names: Vec<String> = Vec::new();
-    let mut meshes: Vec<(Vec<DVec3>, Vec<u32>)> = Vec::new();
-    for model in models {
-        let name = if model.name.is_empty() {
-            "(unnamed)".to_string()
-        } else {
-            model.name
-        };
-        if names.last() != Some(&name) {
-            names.push(name);
-            meshes.push(Default::default());
-        }
-        let (positions, indices) = meshes.last_mut().expect("pushed above");
-        let base = positions.len() as u32;
-        positions.extend(
-            model
-                .mesh
-                .positions
-                .chunks_exact(3)
-                .map(|p| DVec3::new(p[0], p[1], p[2])),
-        );
-        indices.extend(model.mesh.indices.iter().map(|&i| base + i));
-    }
-    for (name, (positions, indices)) in names.iter().zip(&meshes) {
+    for object in &obj.objects {
         let geometry = |error| SceneError::Geometry {
             path: path.into(),
             error,
         };
-        let group = builder.add_mesh(name, positions, indices).map_err(geometry)?;
-        builder.add_object(name, &group, DAffine3::IDENTITY).map_err(geometry)?;
+        let group = builder
+            .add_mesh(&object.name, &object.positions, &object.indices)
+            .map_err(geometry)?;
+        builder
+            .add_object(&object.name, &group, DAffine3::IDENTITY)
+            .map_err(geometry)?;
     }
-    let skipped = count_line_and_point_elements(bytes);
-    if skipped > 0 {
+    if obj.skipped > 0 {
         builder.warn(format!(
-            "ignored {skipped} line/point elements ('l'/'p'): only faces are rendered"
+            "ignored {} line/point elements ('l'/'p'): only faces are rendered",
+            obj.skipped
         ));
     }
     Ok(())
 }
 
-/// Lines and points draw no depth in a triangle renderer; they are counted so
-/// that skipping them is reported, not silent.
-fn count_line_and_point_elements(bytes: &[u8]) -> usize {
-    bytes
-        .split(|&b| b == b'\n')
-        .filter(|line| {
-            let line = line.trim_ascii_start();
-            (line.starts_with(b"l") || line.starts_with(b"p")) && line.get(1).is_some_and(|c| c.is_ascii_whitespace())
+/// What an OBJ file holds for occlu.
+struct Obj {
+    objects: Vec<Object>,
+    /// `l` and `p` elements.
+    skipped: usize,
+}
+
+struct Object {
+    name: String,
+    positions: Vec<DVec3>,
+    /// Triangles, as indices into `positions`.
+    indices: Vec<u32>,
+}
+
+/// A face corner's position, texture coordinate and normal, counted from
+/// 0; [`NONE`] where the corner names none.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+struct Corner {
+    v: usize,
+    vt: usize,
+    vn: usize,
+}
+
+/// No element: what an index of 0 (or one counting back to just before
+/// the first element) comes to, as in tobj.
+const NONE: usize = usize::MAX;
+
+fn parse(bytes: &[u8]) -> Result<Obj, String> {
+    let text = std::str::from_utf8(bytes).map_err(|e| format!("not UTF-8 text (byte {})", e.valid_up_to()))?;
+    let mut reader = Reader {
+        name: "unnamed_object".into(),
+        ..Reader::default()
+    };
+    for (number, line) in text.lines().enumerate() {
+        reader.line = number + 1;
+        // Words as `split_whitespace` finds them, byte by byte where the
+        // line is ASCII (almost every line of almost every file).
+        if line.is_ascii() {
+            reader.read(line, ascii_words(line))?;
+        } else {
+            reader.read(line, line.split_whitespace())?;
+        }
+    }
+    reader.end_object()?;
+    Ok(Obj {
+        objects: reader.objects,
+        skipped: reader.skipped,
+    })
+}
+
+#[derive(Default)]
+struct Reader {
+    /// The line being read, from 1.
+    line: usize,
+    /// Every `v` so far.
+    positions: Vec<DVec3>,
+    /// Colour components given with positions (a face's vertex must have
+    /// one, once any has: tobj's rule).
+    colour_values: usize,
+    texcoords: usize,
+    normals: usize,
+    /// The object being read: its name, its triangles' corners, whether
+    /// any names a texture coordinate or normal, whether it has any face.
+    name: String,
+    corners: Vec<Corner>,
+    with_attributes: bool,
+    has_faces: bool,
+    /// Its corners that named an element not read yet (or none that
+    /// exists), with their lines: checked when it ends.
+    unresolved: Vec<(usize, Corner)>,
+    /// One face's corners, before they are cut into triangles.
+    face: Vec<Corner>,
+    /// The object's vertex of each position so far (`u32::MAX`: none),
+    /// while its corners are gathered.
+    vertex_of: Vec<u32>,
+    objects: Vec<Object>,
+    skipped: usize,
+}
+
+impl Reader {
+    /// `message`, at the line being read.
+    fn fail(&self, message: impl std::fmt::Display) -> String {
+        format!("line {}: {message}", self.line)
+    }
+
+    /// Reads `line`, split into `words`.
+    fn read<'a>(&mut self, line: &str, mut words: impl Iterator<Item = &'a str>) -> Result<(), String> {
+        match words.next() {
+            Some("v") => self.vertex(words)?,
+            Some("vt") => {
+                numbers::<2>(&mut words).ok_or_else(|| self.fail("a texture coordinate needs two numbers"))?;
+                self.texcoords += 1;
+            }
+            Some("vn") => {
+                numbers::<3>(&mut words).ok_or_else(|| self.fail("a normal needs three numbers"))?;
+                self.normals += 1;
+            }
+            Some("f") => self.face(words)?,
+            Some("l") => {
+                self.skipped += 1;
+                self.has_faces = true;
+            }
+            Some("p") => self.skipped += 1,
+            Some("o" | "g") => {
+                if self.has_faces {
+                    self.end_object()?;
+                }
+                // The line after its first character, as tobj reads it.
+                let first = line.chars().next().map_or(0, char::len_utf8);
+                self.name = match line[first..].trim() {
+                    "" => "unnamed_object".into(),
+                    name => name.into(),
+                };
+            }
+            Some("usemtl") if line.split_once(' ').is_none_or(|(_, name)| name.trim().is_empty()) => {
+                return Err(self.fail("usemtl names no material"));
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn vertex<'a>(&mut self, mut words: impl Iterator<Item = &'a str>) -> Result<(), String> {
+        let position = numbers::<3>(&mut words).ok_or_else(|| self.fail("a vertex needs three numbers"))?;
+        let mut position = DVec3::from_array(position);
+        match (words.next(), words.next(), words.next(), words.next()) {
+            (None, ..) => {}
+            (Some(w), None, ..) => match w.parse::<f64>() {
+                Ok(0.0) => return Err(self.fail("a vertex's w is 0")),
+                Ok(w) => position /= w,
+                Err(_) => return Err(self.fail(format_args!("a vertex's w '{w}' is not a number"))),
+            },
+            // A colour: its components up to the first that is not a
+            // number count.
+            (Some(r), Some(g), Some(b), None) => {
+                self.colour_values += [r, g, b].iter().take_while(|c| c.parse::<f64>().is_ok()).count();
+            }
+            _ => return Err(self.fail("a vertex has three numbers, and a w or a colour")),
+        }
+        self.positions.push(position);
+        Ok(())
+    }
+
+    fn face<'a>(&mut self, words: impl Iterator<Item = &'a str>) -> Result<(), String> {
+        self.face.clear();
+        for word in words {
+            let corner = self
+                .corner(word)
+                .ok_or_else(|| self.fail(format_args!("face corner '{word}' is not v, v/vt, v//vn or v/vt/vn")))?;
+            self.face.push(corner);
+        }
+        self.has_faces = true;
+        match self.face.as_slice() {
+            [] => return Err(self.fail("a face without corners")),
+            // A point or a line: nothing to draw.
+            [_] | [_, _] => {}
+            [first, rest @ ..] => {
+                for pair in rest.windows(2) {
+                    self.corners.extend([*first, pair[0], pair[1]]);
+                }
+                let named = |index: usize, count: usize| index == NONE || index < count;
+                for &corner in &self.face {
+                    let (vt, vn) = (named(corner.vt, self.texcoords), named(corner.vn, self.normals));
+                    if !(corner.v < self.positions.len() && vt && vn) {
+                        self.unresolved.push((self.line, corner));
+                    }
+                    self.with_attributes |= corner.vt != NONE || corner.vn != NONE;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A corner `v`, `v/vt`, `v//vn` or `v/vt/vn`, its indices resolved
+    /// against the elements read so far. Out of range they wrap, as in
+    /// tobj, and fail the check when the object ends.
+    fn corner(&self, word: &str) -> Option<Corner> {
+        let counts = [self.positions.len(), self.texcoords, self.normals];
+        let resolve = |k: usize, i: isize| {
+            if i < 0 {
+                (counts[k] as isize).wrapping_add(i) as usize
+            } else {
+                i.wrapping_sub(1) as usize
+            }
+        };
+        let mut index = [NONE; 3];
+        if word.contains('/') {
+            for (k, part) in word.split('/').enumerate().filter(|(_, part)| !part.is_empty()) {
+                *index.get_mut(k)? = resolve(k, part.parse().ok()?);
+            }
+        } else {
+            index[0] = resolve(0, word.parse().ok()?);
+        }
+        Some(Corner {
+            v: index[0],
+            vt: index[1],
+            vn: index[2],
         })
-        .count()
+    }
+
+    /// Ends the object being read: its faces' indices checked against
+    /// everything read, its vertices gathered, appended to the previous
+    /// object when that has the same name.
+    fn end_object(&mut self) -> Result<(), String> {
+        for &(line, corner) in &self.unresolved {
+            self.check(corner).map_err(|e| format!("line {line}: {e}"))?;
+        }
+        if self.colour_values > 0 {
+            for &corner in &self.corners {
+                if corner.v * 3 + 2 >= self.colour_values {
+                    return Err(format!(
+                        "object '{}': a face names vertex {}, which has no colour where earlier ones have",
+                        self.name,
+                        corner.v + 1
+                    ));
+                }
+            }
+        }
+        let mut by_triple = HashMap::with_hasher(foldhash::fast::FixedState::default());
+        if !self.with_attributes {
+            self.vertex_of.resize(self.positions.len(), u32::MAX);
+        }
+        let mut used = Vec::new();
+        let mut indices = Vec::with_capacity(self.corners.len());
+        for &corner in &self.corners {
+            // Without texture coordinates or normals, a triple is its
+            // position: an array finds it faster than a map.
+            let vertex = if self.with_attributes {
+                by_triple.entry(corner).or_insert(u32::MAX)
+            } else {
+                &mut self.vertex_of[corner.v]
+            };
+            if *vertex == u32::MAX {
+                *vertex = used.len() as u32;
+                used.push(corner.v);
+            }
+            indices.push(*vertex);
+        }
+        if !self.with_attributes {
+            for &v in &used {
+                self.vertex_of[v] = u32::MAX;
+            }
+        }
+        let positions = used.iter().map(|&v| self.positions[v]);
+        match self.objects.last_mut() {
+            Some(last) if last.name == self.name => {
+                let base = last.positions.len() as u32;
+                last.positions.extend(positions);
+                last.indices.extend(indices.iter().map(|&i| base + i));
+            }
+            _ => self.objects.push(Object {
+                name: self.name.clone(),
+                positions: positions.collect(),
+                indices,
+            }),
+        }
+        self.corners.clear();
+        self.unresolved.clear();
+        self.with_attributes = false;
+        self.has_faces = false;
+        Ok(())
+    }
+
+    /// That `corner` names elements that exist (a texture coordinate or
+    /// normal only where the file has any).
+    fn check(&self, corner: Corner) -> Result<(), String> {
+        let missing = |what: &str, index: usize, count: usize| {
+            // 1-based, as the file wrote it (0 and what counted back too
+            // far show as such).
+            let written = index.wrapping_add(1) as isize;
+            Err(format!("a face names {what} {written} of {count}"))
+        };
+        if corner.v >= self.positions.len() {
+            return missing("vertex", corner.v, self.positions.len());
+        }
+        for (what, index, count) in [
+            ("texture coordinate", corner.vt, self.texcoords),
+            ("normal", corner.vn, self.normals),
+        ] {
+            if count > 0 && index != NONE && index >= count {
+                return missing(what, index, count);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The words of an ASCII `line`: what `split_whitespace` gives, found
+/// without decoding characters.
+fn ascii_words(line: &str) -> impl Iterator<Item = &str> {
+    let bytes = line.as_bytes();
+    bytes
+        .split(|b| *b == b' ' || (b'\t'..=b'\r').contains(b))
+        .filter(|word| !word.is_empty())
+        .map(move |word| {
+            let start = word.as_ptr() as usize - bytes.as_ptr() as usize;
+            &line[start..start + word.len()]
+        })
+}
+
+/// The next `N` words as numbers, if they are.
+fn numbers<'a, const N: usize>(words: &mut impl Iterator<Item = &'a str>) -> Option<[f64; N]> {
+    let mut values = [0.0; N];
+    for value in &mut values {
+        *value = words.next()?.parse().ok()?;
+    }
+    Some(values)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ascii_words_are_the_words_split_whitespace_finds() {
+        let whitespace = [" ", "\t", "\n", "\u{b}", "\u{c}", "\r", "  "];
+        let mut line = String::new();
+        for (k, gap) in whitespace.iter().cycle().take(40).enumerate() {
+            line += gap;
+            line += &format!("w{k}");
+            line += ["", "/", "-1", "e5"][k % 4];
+        }
+        line += "\u{b} ";
+        let expected: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(ascii_words(&line).collect::<Vec<_>>(), expected);
+        assert_eq!(expected.len(), 40);
+        assert_eq!(ascii_words(" \t\u{b}").count(), 0);
+    }
+
+    #[test]
+    fn errors_name_the_line_and_what_is_wrong() {
+        let error = |text: &str| parse(text.as_bytes()).err().unwrap();
+        assert_eq!(error("v 0 0 0\nv 1 0\n"), "line 2: a vertex needs three numbers");
+        assert_eq!(
+            error("v 0 0 0\n\nf 1 2 x\n"),
+            "line 3: face corner 'x' is not v, v/vt, v//vn or v/vt/vn"
+        );
+        // Checked when the object ends, against everything read by then.
+        assert_eq!(
+            error("f 1 2 3\nv 0 0 0\nv 1 0 0\no b\n"),
+            "line 1: a face names vertex 3 of 2"
+        );
+        assert!(
+            parse(b"f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n").is_ok(),
+            "named before given"
+        );
+        assert_eq!(
+            error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 1 2\n"),
+            "line 4: a face names vertex 0 of 3"
+        );
+        assert_eq!(error("v 0 0 0 0\n"), "line 1: a vertex's w is 0");
+        assert_eq!(error("usemtl\n"), "line 1: usemtl names no material");
+        assert_eq!(parse(b"v 0 0 \xff\n").err().unwrap(), "not UTF-8 text (byte 6)");
+    }
 }

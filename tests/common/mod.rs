@@ -52,6 +52,47 @@ pub fn write(dir: &Path, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
     p
 }
 
+/// `../shared/models` beside the project root: third-party models that
+/// tests skip, saying so, where the folder is absent.
+pub fn shared_models_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models")
+}
+
+/// Model files under `dir`, in sorted order, with the path file of each
+/// (`NAME.*.json` beside `NAME.ext`), if any.
+pub fn shared_models(dir: &Path) -> Vec<(PathBuf, Option<PathBuf>)> {
+    let mut files: Vec<PathBuf> = Vec::new();
+    let mut folders = vec![dir.to_path_buf()];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                folders.push(path);
+            } else {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    let extension = |p: &Path| p.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    files
+        .iter()
+        .filter(|p| matches!(extension(p).as_deref(), Some("obj" | "gltf" | "glb")))
+        .map(|model| {
+            let stem = model.file_stem().unwrap().to_string_lossy();
+            let path = files.iter().find(|p| {
+                extension(p).as_deref() == Some("json")
+                    && p.parent() == model.parent()
+                    && p.file_name()
+                        .unwrap()
+                        .to_string_lossy()
+                        .starts_with(&format!("{stem}."))
+            });
+            (model.clone(), path.cloned())
+        })
+        .collect()
+}
+
 /// Two objects (a quad and a tetrahedron) and a 'g' group: 2 + 4 + 1 = 7 triangles.
 pub const THREE_OBJECTS_OBJ: &str = "\
 # three objects

@@ -1,0 +1,58 @@
+//! Work shared over the cores with scoped threads: loading cuts one large
+//! job into parts (ranges of vertices, halves of a mesh) that need no
+//! coordination, so a thread per part is all it takes.
+
+use std::num::NonZero;
+use std::sync::OnceLock;
+
+/// How many parts to cut `work` units into so that each holds at least
+/// `least` of them: one per core at most, and at least one.
+pub fn parts_for(work: usize, least: usize) -> usize {
+    match work / least.max(1) {
+        0 | 1 => 1,
+        worth => cores().min(worth),
+    }
+}
+
+/// The cores this process may use, asked once: the answer costs system
+/// calls and file reads (cgroup quotas), and loading asks for every mesh.
+fn cores() -> usize {
+    static CORES: OnceLock<usize> = OnceLock::new();
+    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, NonZero::get))
+}
+
+/// `work` applied to every part, the parts in parallel (the first on the
+/// calling thread), the results in the parts' order. A panic in any part
+/// is raised again here.
+pub fn map<P: Send, R: Send>(parts: Vec<P>, work: impl Fn(P) -> R + Sync) -> Vec<R> {
+    let mut parts = parts.into_iter();
+    let Some(first) = parts.next() else {
+        return Vec::new();
+    };
+    let work = &work;
+    std::thread::scope(|scope| {
+        let others: Vec<_> = parts.map(|part| scope.spawn(move || work(part))).collect();
+        let mut results = vec![work(first)];
+        results.extend(
+            others
+                .into_iter()
+                .map(|handle| handle.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))),
+        );
+        results
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parts_hold_at_least_the_least_work_and_results_keep_their_order() {
+        assert_eq!(parts_for(10, 100), 1);
+        assert_eq!(parts_for(0, 100), 1);
+        assert!(parts_for(1 << 30, 1) >= 1);
+        let squares = map((0..9u64).collect(), |k| k * k);
+        assert_eq!(squares, [0, 1, 4, 9, 16, 25, 36, 49, 64]);
+        assert!(map(Vec::<u8>::new(), |k| k).is_empty());
+    }
+}
