@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{THREE_OBJECTS_OBJ, TINY_RUN, occlu, own_stderr, stdout, write};
+use common::{THREE_OBJECTS_OBJ, TINY_RUN, occlu, own_stderr, stdout, tampered_copy, write};
 
 /// Runs occlu and checks it fails with exit code `code` and one line of
 /// stderr that contains every one of `needles`.
@@ -442,26 +442,6 @@ fn png_colours(path: &std::path::Path) -> (u32, u32, std::collections::HashSet<[
         .map(|c| [c[0], c[1], c[2]])
         .collect();
     (info.width, info.height, colours)
-}
-
-/// Copies a run and rewrites its frames.csv with `edit` applied to each row.
-fn tampered_copy(run: &std::path::Path, to: &std::path::Path, edit: &dyn Fn(&mut occlu::measure::FrameStats)) {
-    std::fs::create_dir_all(to).unwrap();
-    let mut reader = csv::Reader::from_path(run.join("frames.csv")).unwrap();
-    let mut writer = csv::Writer::from_path(to.join("frames.csv")).unwrap();
-    for row in reader.deserialize() {
-        let mut row: occlu::measure::FrameStats = row.unwrap();
-        edit(&mut row);
-        writer.serialize(row).unwrap();
-    }
-    writer.flush().unwrap();
-    // As a run that measured these rows would have: summary.json records
-    // frames.csv's fingerprint.
-    let mut summary: occlu::report::Summary =
-        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
-    let frames = std::fs::read(to.join("frames.csv")).unwrap();
-    summary.frames_csv = Some(occlu::report::Fingerprint::of(&frames));
-    std::fs::write(to.join("summary.json"), serde_json::to_string_pretty(&summary).unwrap()).unwrap();
 }
 
 #[test]

@@ -274,3 +274,31 @@ pub fn town(swap: bool) -> Vec<(String, DVec3, DVec3)> {
     }
     boxes.into_iter().map(|(n, a, b)| (n, place(a), place(b))).collect()
 }
+
+/// Copies a run and rewrites its frames.csv with `edit` applied to each row.
+pub fn tampered_copy(run: &Path, to: &Path, edit: &dyn Fn(&mut occlu::measure::FrameStats)) {
+    rewritten_copy(run, to, &mut |rows| rows.iter_mut().for_each(edit));
+}
+
+/// Copies a run with its frames.csv rows rewritten by `edit` (which may
+/// drop or add rows), and summary.json recording the new file's
+/// fingerprint, as a run that measured those rows would have.
+pub fn rewritten_copy(run: &Path, to: &Path, edit: &mut dyn FnMut(&mut Vec<occlu::measure::FrameStats>)) {
+    std::fs::create_dir_all(to).unwrap();
+    let mut rows: Vec<occlu::measure::FrameStats> = csv::Reader::from_path(run.join("frames.csv"))
+        .unwrap()
+        .deserialize()
+        .map(Result::unwrap)
+        .collect();
+    edit(&mut rows);
+    let mut writer = csv::Writer::from_path(to.join("frames.csv")).unwrap();
+    for row in rows {
+        writer.serialize(row).unwrap();
+    }
+    writer.flush().unwrap();
+    let mut summary: occlu::report::Summary =
+        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+    let frames = std::fs::read(to.join("frames.csv")).unwrap();
+    summary.frames_csv = Some(occlu::report::Fingerprint::of(&frames));
+    std::fs::write(to.join("summary.json"), serde_json::to_string_pretty(&summary).unwrap()).unwrap();
+}
