@@ -856,9 +856,11 @@ fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
     let markdown = occlu::stress::render_markdown(&report);
     emit(&markdown)?;
     if let Some(out) = &args.out {
-        let write = |name: &str, text: String| occlu::report::write_whole(&out.join(name), text.as_bytes());
-        write("stress.md", markdown)?;
-        write("stress.json", serde_json::to_string_pretty(&report)? + "\n")?;
+        let json = serde_json::to_string_pretty(&report)? + "\n";
+        occlu::report::publish_files(
+            out,
+            &[("stress.md", markdown.as_bytes()), ("stress.json", json.as_bytes())],
+        )?;
         say!("results: stress.md and stress.json in {}", out.display());
     }
     let (_, failed) = report.verdicts();

@@ -142,13 +142,7 @@ fn claim(out: &Path) -> Result<OutputLock, ReportError> {
     }
     std::fs::create_dir_all(out).map_err(io(out))?;
     let path = out.join(LOCK);
-    let mut file = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .create(true)
-        .truncate(false)
-        .open(&path)
-        .map_err(io(&path))?;
+    let mut file = open_lock(&path).map_err(io(&path))?;
     match file.try_lock() {
         Ok(()) => {
             use std::io::{Seek as _, Write as _};
@@ -177,6 +171,38 @@ fn claim(out: &Path) -> Result<OutputLock, ReportError> {
         }
         Err(std::fs::TryLockError::Error(e)) => Err(io(&path)(e)),
     }
+}
+
+/// Opens (or creates) the lock file `path`, which must be a regular file of
+/// its own: a link is never followed (an `--out` in a shared temporary
+/// folder may hold one planted to make the run write its process id over
+/// another file, or create one where the link points), nor is a device or
+/// pipe opened for writing, nor a file with other names (a hard link)
+/// truncated.
+fn open_lock(path: &Path) -> std::io::Result<std::fs::File> {
+    let refused = || {
+        std::io::Error::other(
+            "not a regular file of this folder's own (a link, a device, a pipe or a file with other names): occlu writes through none; remove it or write elsewhere",
+        )
+    };
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true).write(true).create(true).truncate(false);
+    // Non-blocking: a pipe opened for writing could wait for a reader.
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NOFOLLOW | libc::O_NONBLOCK);
+    let file = options.open(path).map_err(|e| {
+        #[cfg(unix)]
+        if e.raw_os_error() == Some(libc::ELOOP) {
+            return refused();
+        }
+        e
+    })?;
+    let metadata = file.metadata()?;
+    #[cfg(unix)]
+    let own = std::os::unix::fs::MetadataExt::nlink(&metadata) == 1;
+    #[cfg(not(unix))]
+    let own = true;
+    if metadata.is_file() && own { Ok(file) } else { Err(refused()) }
 }
 
 /// Writes a set of result files (or folders of them) into `out` so that each is whole or absent:
@@ -217,6 +243,19 @@ fn publish(
     });
     let _ = std::fs::remove_dir_all(&staging);
     moved
+}
+
+/// Writes `files` (names and contents) into `out` as [`publish`] does:
+/// each whole or absent, a file or link of the same name replaced, never
+/// written through.
+pub fn publish_files(out: &Path, files: &[(&str, &[u8])]) -> Result<(), ReportError> {
+    publish(out, &[], |staging| {
+        for (name, bytes) in files {
+            write_file(&staging.join(name), bytes)?;
+        }
+        Ok(files.iter().map(|(name, _)| name.to_string()).collect())
+    })
+    .map(drop)
 }
 
 /// Writes a run's result files into `out` (see [`publish`]). summary.json

@@ -1,0 +1,122 @@
+//! Hostile inputs, as a careless CI or a hostile user hands them to occlu
+//! (issue 35): links and devices where result files go, result folders
+//! that lie, models that make path planning endless, signals at every
+//! moment. Each must end in a clear line and the documented exit status,
+//! never a clobbered file, a hang or a misleading result.
+
+mod common;
+
+use std::os::unix::fs::symlink;
+use std::path::Path;
+use std::process::Command;
+
+use common::{occlu, own_stderr, write};
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// `out` exited with `code` after one line on stderr holding `needles`.
+fn refused_with(out: &std::process::Output, code: i32, needles: &[&str], what: &str) {
+    let lines = own_stderr(out);
+    assert_eq!(out.status.code(), Some(code), "{what}: {lines:?}");
+    assert_eq!(lines.len(), 1, "{what}: one line expected, got {lines:?}");
+    for n in needles {
+        assert!(lines[0].contains(n), "{what}: '{}' lacks '{n}'", lines[0]);
+    }
+}
+
+/// Runs occlu with `args` and checks it is refused with exit 2 in one line
+/// holding `needles`.
+fn refused(args: &[&str], needles: &[&str]) {
+    refused_with(&occlu(args), 2, needles, &format!("{args:?}"));
+}
+
+/// `bench` of the one-block city at 64×48 into `out`, with `extra`: two
+/// frames of vfc unless `extra` gives `--frames` or `--modes`.
+fn tiny_bench<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
+        "bench",
+        "--scene",
+        "city:blocks=1",
+        "--warmup",
+        "0",
+        "--resolution",
+        "64x48",
+        "--out",
+        s(out),
+    ];
+    for (flag, default) in [("--frames", "2"), ("--modes", "vfc")] {
+        if !extra.contains(&flag) {
+            args.extend([flag, default]);
+        }
+    }
+    args.extend_from_slice(extra);
+    args
+}
+
+/// A tiny run into `out`, which must succeed.
+fn tiny_run(out: &Path, extra: &[&str]) {
+    let run = occlu(&tiny_bench(out, extra));
+    assert!(run.status.success(), "{:?}", own_stderr(&run));
+}
+
+fn mkfifo(path: &Path) {
+    assert!(Command::new("mkfifo").arg(path).status().unwrap().success());
+}
+
+// Item 1: the lock and every file a command puts into --out.
+#[test]
+fn no_command_follows_a_link_or_opens_a_device_in_its_out_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let victim = write(dir.path(), "victim.txt", "keep me");
+    let run = dir.path().join("run");
+    tiny_run(&run, &[]);
+    let lock = |out: &Path| out.join(".occlu.lock");
+    let linked = |out: &Path, target: &Path| {
+        std::fs::create_dir_all(out).unwrap();
+        let _ = std::fs::remove_file(lock(out));
+        symlink(target, lock(out)).unwrap();
+    };
+    let (bench, merged, stressed) = (dir.path().join("b"), dir.path().join("m"), dir.path().join("st"));
+    let commands: [(&Path, Vec<&str>); 4] = [
+        (&bench, tiny_bench(&bench, &[])),
+        (&run, vec!["plot", s(&run)]),
+        (&merged, vec!["merge", s(&run), "--out", s(&merged)]),
+        (
+            &stressed,
+            vec!["stress", "--cases", "size-1x1", "--modes", "vfc", "--out", s(&stressed)],
+        ),
+    ];
+    for (out, args) in &commands {
+        linked(out, &victim);
+        refused(args, &[".occlu.lock", "not a regular file"]);
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep me", "{args:?}");
+    }
+    // A dangling link creates nothing, and a pipe is no lock either.
+    let nowhere = dir.path().join("made-by-the-link");
+    linked(&bench, &nowhere);
+    refused(&commands[0].1, &[".occlu.lock", "not a regular file"]);
+    assert!(!nowhere.exists(), "the link's target was created");
+    std::fs::remove_file(lock(&bench)).unwrap();
+    mkfifo(&lock(&bench));
+    refused(&commands[0].1, &[".occlu.lock", "not a regular file"]);
+    // stress.md and stress.json replace a link in --out; they do not write
+    // through it.
+    let stress_out = dir.path().join("stress");
+    std::fs::create_dir(&stress_out).unwrap();
+    symlink(&victim, stress_out.join("stress.md")).unwrap();
+    let stress = occlu(&[
+        "stress",
+        "--cases",
+        "size-1x1",
+        "--modes",
+        "vfc",
+        "--out",
+        s(&stress_out),
+    ]);
+    assert!(stress.status.success(), "{:?}", own_stderr(&stress));
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep me");
+    let md = std::fs::symlink_metadata(stress_out.join("stress.md")).unwrap();
+    assert!(md.is_file(), "stress.md is the report itself");
+}
