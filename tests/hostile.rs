@@ -9,6 +9,7 @@ mod common;
 use std::os::unix::fs::symlink;
 use std::path::Path;
 use std::process::Command;
+use std::time::{Duration, Instant};
 
 use common::{occlu, own_stderr, write};
 
@@ -59,6 +60,17 @@ fn tiny_bench<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
 fn tiny_run(out: &Path, extra: &[&str]) {
     let run = occlu(&tiny_bench(out, extra));
     assert!(run.status.success(), "{:?}", own_stderr(&run));
+}
+
+/// The plain files of a run folder, copied into `to`.
+fn copy_run(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        if entry.file_type().unwrap().is_file() && !entry.file_name().to_string_lossy().starts_with('.') {
+            std::fs::copy(entry.path(), to.join(entry.file_name())).unwrap();
+        }
+    }
 }
 
 fn mkfifo(path: &Path) {
@@ -119,4 +131,29 @@ fn no_command_follows_a_link_or_opens_a_device_in_its_out_folder() {
     assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep me");
     let md = std::fs::symlink_metadata(stress_out.join("stress.md")).unwrap();
     assert!(md.is_file(), "stress.md is the report itself");
+}
+
+// Item 2.
+#[test]
+fn merge_copies_a_runs_regular_files_only_and_names_any_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    tiny_run(&run, &[]);
+    let secret = write(dir.path(), "secret.txt", "s3cret");
+    let cases: [(&str, &dyn Fn(&Path)); 3] = [
+        ("report.md", &|p| symlink(&secret, p).unwrap()),
+        ("report.md", &|p| mkfifo(p)),
+        ("frame_time.png", &|p| symlink("/dev/zero", p).unwrap()),
+    ];
+    for (k, (name, plant)) in cases.iter().enumerate() {
+        let copy = dir.path().join(format!("copy{k}"));
+        copy_run(&run, &copy);
+        std::fs::remove_file(copy.join(name)).unwrap();
+        plant(&copy.join(name));
+        let out = dir.path().join(format!("merged{k}"));
+        let started = Instant::now();
+        refused(&["merge", s(&copy), "--out", s(&out)], &[name, "not a regular file"]);
+        assert!(started.elapsed() < Duration::from_secs(30), "{name}: read to its end");
+        assert!(!out.exists(), "{name}: nothing merged");
+    }
 }

@@ -224,6 +224,8 @@ impl MergeError {
 struct RunFolder {
     dir: PathBuf,
     summary: Summary,
+    /// The result files it holds, to be copied.
+    files: Vec<&'static str>,
 }
 
 impl RunFolder {
@@ -335,7 +337,12 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged, MergeError> {
                 continue;
             }
             let (summary, _) = read_results(&run_dir)?;
-            folders.push(RunFolder { dir: run_dir, summary });
+            let files = result_files(&run_dir)?;
+            folders.push(RunFolder {
+                dir: run_dir,
+                summary,
+                files,
+            });
         }
     }
     let groups = group(folders)?;
@@ -353,7 +360,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged, MergeError> {
         }
         for (group, run) in groups.iter().zip(&mut merged.runs) {
             for (folder, column) in group.iter().zip(&run.adapters) {
-                copy_run(&folder.dir, &staging.join(&column.folder))?;
+                copy_run(folder, &staging.join(&column.folder))?;
             }
             draw_chart(staging, run, &mut used)?;
         }
@@ -594,19 +601,38 @@ fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreemen
     found
 }
 
-/// Copies a run folder's result files (not its lock or anything else).
-fn copy_run(from: &Path, to: &Path) -> Result<(), ReportError> {
-    std::fs::create_dir_all(to).map_err(ReportError::at(to))?;
-    let files = ["summary.json", "frames.csv", "missed.csv", "report.md"]
+/// The result files a run folder holds (not its lock or anything else),
+/// each a regular file: a link, device or pipe of one of their names is
+/// refused by name, since copying it would put another file into the
+/// merged artefact (or read forever).
+fn result_files(dir: &Path) -> Result<Vec<&'static str>, ReportError> {
+    let names = ["summary.json", "frames.csv", "missed.csv", "report.md"]
         .into_iter()
         .chain(CHARTS);
-    for name in files {
-        let (source, target) = (from.join(name), to.join(name));
-        if source.is_file() {
-            // Read, then written: an error names the file at fault.
-            let bytes = std::fs::read(&source).map_err(ReportError::at(&source))?;
-            std::fs::write(&target, bytes).map_err(ReportError::at(&target))?;
+    let mut present = Vec::new();
+    for name in names {
+        let path = dir.join(name);
+        match std::fs::symlink_metadata(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+            Ok(m) if m.is_file() => present.push(name),
+            Ok(_) => {
+                let error = std::io::Error::other("not a regular file (a link, a device or a pipe): merge copies a run's own files only");
+                return Err(ReportError::at(&path)(error));
+            }
+            Err(e) => return Err(ReportError::at(&path)(e)),
         }
+    }
+    Ok(present)
+}
+
+/// Copies a run folder's result files.
+fn copy_run(run: &RunFolder, to: &Path) -> Result<(), ReportError> {
+    std::fs::create_dir_all(to).map_err(ReportError::at(to))?;
+    for name in &run.files {
+        let (source, target) = (run.dir.join(name), to.join(name));
+        // Read, then written: an error names the file at fault.
+        let bytes = crate::input::read_unlinked(&source, crate::input::MODEL_LIMIT).map_err(ReportError::at(&source))?;
+        std::fs::write(&target, bytes).map_err(ReportError::at(&target))?;
     }
     Ok(())
 }
