@@ -105,8 +105,10 @@ impl Matrix {
         let scenes: Vec<String> = list(file, "scenes", scenes)?;
         let paths: Vec<PathBuf> = list(file, "paths", paths)?;
         // Counted before the runs are made: a huge product is refused
-        // before it takes the memory.
-        let listed_runs = entries.len() + (models.len() + scenes.len()).max(1) * paths.len().max(1);
+        // before it takes the memory. A list left out takes the defaults'
+        // scene or path; when all three are, they add no run.
+        let crossed = (models.len() + scenes.len()).max(1) * paths.len().max(1);
+        let listed_runs = entries.len() + if models.len() + scenes.len() + paths.len() > 0 { crossed } else { 0 };
         if listed_runs > MAX_RUNS {
             return Err(MatrixError::TooManyRuns {
                 path: file.display().to_string(),
@@ -462,6 +464,18 @@ mod tests {
         assert!(e.to_string().contains("scenes: invalid type"), "{e}");
         let e = plan(r#"{"scenes": ["city"], "export_github_benchmark": "g.json"}"#).unwrap_err();
         assert!(matches!(e, MatrixError::GithubExport));
+    }
+
+    #[test]
+    fn a_matrix_of_exactly_the_most_runs_is_taken_and_one_more_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let runs = |n: usize| format!(r#"{{"runs": [{}]}}"#, vec!["{}"; n].join(","));
+        let m = matrix(dir.path(), &runs(MAX_RUNS)).unwrap();
+        assert_eq!(m.entries.len(), MAX_RUNS);
+        let e = matrix(dir.path(), &runs(MAX_RUNS + 1)).unwrap_err();
+        assert!(e.to_string().contains("lists 10001 runs"), "{e}");
+        let listed = format!(r#"{{"runs": [{}], "scenes": ["city", "forest"]}}"#, vec!["{}"; MAX_RUNS - 2].join(","));
+        assert_eq!(matrix(dir.path(), &listed).unwrap().entries.len(), MAX_RUNS);
     }
 
     #[test]
