@@ -45,6 +45,23 @@ pub fn count(n: usize, noun: &str) -> String {
     }
 }
 
+/// `x` as a message shows it: as Rust writes it, but in scientific
+/// notation beyond everyday magnitudes, so `1e308` does not print 309
+/// digits.
+pub fn number(x: f64) -> String {
+    let magnitude = x.abs();
+    if magnitude != 0.0 && magnitude.is_finite() && !(1e-4..1e16).contains(&magnitude) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+/// `v`'s components as [`number`] writes them: `[0, 1, 0]`.
+pub fn vector(v: [f64; 3]) -> String {
+    format!("[{}, {}, {}]", number(v[0]), number(v[1]), number(v[2]))
+}
+
 /// The longest [`slug`].
 pub const SLUG_LENGTH: usize = 40;
 

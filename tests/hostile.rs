@@ -7,7 +7,7 @@
 mod common;
 
 use std::os::unix::fs::symlink;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
@@ -156,4 +156,38 @@ fn merge_copies_a_runs_regular_files_only_and_names_any_other() {
         assert!(started.elapsed() < Duration::from_secs(30), "{name}: read to its end");
         assert!(!out.exists(), "{name}: nothing merged");
     }
+}
+
+/// A one-keyframe path over the one-block city with `extra` fields at the
+/// top and `key` fields in its keyframe.
+fn path_with(dir: &Path, name: &str, top: &str, key: &str) -> PathBuf {
+    write(
+        dir,
+        name,
+        format!(
+            r#"{{"frames": 2, {top} "keyframes": [{{"time": 0, "position": [0, 30, -40], {key}}}]}}"#
+        ),
+    )
+}
+
+// Item 5.
+#[test]
+fn a_zero_up_or_one_along_the_view_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let cases = [
+        ("top.json", r#""up": [0, 0, 0],"#, r#""target": [0, 0, 0]"#, "up must not be zero"),
+        ("key.json", "", r#""target": [0, 0, 0], "up": [0, 0, 0]"#, "keyframe 0: up must not be zero"),
+        ("along.json", "", r#""direction": [0, -1, 0]"#, "keyframe 0: up [0, 1, 0] lies along the view"),
+    ];
+    for (name, top, key, message) in cases {
+        let path = path_with(dir.path(), name, top, key);
+        refused(&tiny_bench(&out, &["--path", s(&path)]), &[name, message]);
+        refused(
+            &["export", "--scene", "city:blocks=1", "--path", s(&path), "-o", s(&dir.path().join("x.glb"))],
+            &[name, message],
+        );
+    }
+    let across = path_with(dir.path(), "across.json", "", r#""direction": [0, -1, 0], "up": [0, 0, 1]"#);
+    tiny_run(&out, &["--path", s(&across)]);
 }
