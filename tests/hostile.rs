@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use common::{occlu, own_stderr, write};
+use common::{occlu, own_stderr, rewritten_copy, tampered_copy, write};
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -190,4 +190,61 @@ fn a_zero_up_or_one_along_the_view_is_refused() {
     }
     let across = path_with(dir.path(), "across.json", "", r#""direction": [0, -1, 0], "up": [0, 0, 1]"#);
     tiny_run(&out, &["--path", s(&across)]);
+}
+
+// Item 6.
+#[test]
+fn compare_and_merge_take_statistics_only_from_valid_rows_of_frames_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = dir.path().join("base");
+    tiny_run(&base, &["--modes", "vfc,dr"]);
+    let bad: [(&str, f64); 3] = [("NaN", f64::NAN), ("inf", f64::INFINITY), ("-1", -1.0)];
+    for (k, (shown, value)) in bad.into_iter().enumerate() {
+        let new = dir.path().join(format!("bad{k}"));
+        tampered_copy(&base, &new, &|r| {
+            if r.mode == "vfc" && r.frame == 1 {
+                r.frame_ms = value;
+            }
+        });
+        refused(
+            &["compare", s(&base), s(&new)],
+            &["frames.csv", "vfc", "frame 1", "frame_ms", shown],
+        );
+        refused(
+            &["merge", s(&new), "--out", s(&dir.path().join("m"))],
+            &["frames.csv", "frame_ms", shown],
+        );
+    }
+    // Rows per mode must be the run's frames.
+    let short = dir.path().join("short");
+    rewritten_copy(&base, &short, &mut |rows| rows.retain(|r| !(r.mode == "dr" && r.frame == 0)));
+    refused(&["compare", s(&base), s(&short)], &["frames.csv", "dr", "1 row", "2 frames"]);
+    // Without its fingerprint, a frames.csv of its header alone is no run.
+    let bare = dir.path().join("bare");
+    rewritten_copy(&base, &bare, &mut |rows| rows.clear());
+    let mut summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(bare.join("summary.json")).unwrap()).unwrap();
+    summary.as_object_mut().unwrap().remove("frames_csv");
+    std::fs::write(bare.join("summary.json"), summary.to_string()).unwrap();
+    refused(
+        &["compare", s(&base), s(&bare), "--allow-missing"],
+        &["frames.csv", "0 rows", "2 frames"],
+    );
+    // Statistics come from frames.csv for merge as for compare: an edited
+    // mean in summary.json changes neither.
+    let edited = dir.path().join("edited");
+    copy_run(&base, &edited);
+    let mut summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(edited.join("summary.json")).unwrap()).unwrap();
+    let measured = summary["modes"][0]["stats"]["frame_ms"]["mean"].as_f64().unwrap();
+    summary["modes"][0]["stats"]["frame_ms"]["mean"] = 999.0.into();
+    std::fs::write(edited.join("summary.json"), summary.to_string()).unwrap();
+    let merged = dir.path().join("merged");
+    let merge = occlu(&["merge", s(&edited), "--out", s(&merged)]);
+    assert!(merge.status.success(), "{:?}", own_stderr(&merge));
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(merged.join("merged.json")).unwrap()).unwrap();
+    assert_eq!(m["runs"][0]["modes"][0]["results"][0]["frame_ms"].as_f64(), Some(measured));
+    let same = occlu(&["compare", s(&base), s(&edited)]);
+    assert!(same.status.success(), "{:?}", own_stderr(&same));
 }

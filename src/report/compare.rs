@@ -9,7 +9,8 @@
 //! regression. Frame time does: it regresses only when its mean grows beyond
 //! `--max-regression` percent *and* the new median minus its MAD lies above
 //! the base median plus its MAD, so noise within the measured spread passes.
-//! Statistics are recomputed from each run's frames.csv.
+//! Statistics are those [`read_results`] recomputes from each run's
+//! checked frames.csv, as `occlu merge` and `occlu plot` take them.
 //!
 //! A comparison cannot pass by leaving things out: a mode or a measured
 //! metric of the base missing from the new run fails it (unless
@@ -23,7 +24,7 @@ use serde::Serialize;
 
 use super::merge::{Merged, read_merged};
 use super::{ReportError, Summary, read_results};
-use crate::measure::{Distribution, FrameStats, ModeDescription, ModeSummary, summarize};
+use crate::measure::{Distribution, ModeSummary};
 
 /// A metric compare can gate on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -188,8 +189,8 @@ pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comp
 /// Two run folders (not merged ones).
 fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comparison, CompareError> {
     let max_regression_pct = options.max_regression_pct;
-    let (base_summary, base_rows) = read_results(base)?;
-    let (new_summary, new_rows) = read_results(new)?;
+    let (base_summary, _) = read_results(base)?;
+    let (new_summary, _) = read_results(new)?;
     let workload = |s: &Summary| {
         (
             s.scene.facts.source.clone(),
@@ -226,15 +227,14 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
             "{frames} frames: frame_ms is 'within noise' when the new mean is at most {max_regression_pct}% above the base's or the new median − MAD does not clear the base median + MAD; on fewer than {FEW_FRAMES} frames that spread says little"
         ));
     }
-    let base_modes = recompute(&base_summary, &base_rows);
-    let new_modes = recompute(&new_summary, &new_rows);
+    let (base_modes, new_modes) = (&base_summary.modes, &new_summary.modes);
     let missing = if options.allow_missing {
         Verdict::Unmeasured
     } else {
         Verdict::Missing
     };
     let mut changes = Vec::new();
-    for b in &base_modes {
+    for b in base_modes {
         let n = new_modes.iter().find(|n| n.name == b.name);
         if n.is_none() {
             notes.push(format!("mode {} is in the base run only", b.name));
@@ -358,21 +358,6 @@ fn label(folder: &Path) -> String {
     folder
         .file_name()
         .map_or(String::new(), |n| n.to_string_lossy().into_owned())
-}
-
-/// Statistics from frames.csv, with the conservative flags and parameters
-/// the summary recorded.
-fn recompute(summary: &Summary, rows: &[FrameStats]) -> Vec<ModeSummary> {
-    let modes: Vec<ModeDescription> = summary
-        .modes
-        .iter()
-        .map(|m| ModeDescription {
-            name: m.name.clone(),
-            conservative: m.conservative,
-            parameters: m.parameters.clone(),
-        })
-        .collect();
-    summarize(rows, &modes, summary.resolution.pixels())
 }
 
 /// Relative tolerance for "unchanged" on means of deterministic counters

@@ -14,7 +14,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::measure::{FrameStats, MissedObject};
+use crate::measure::{FrameStats, MissedObject, ModeDescription, RowLimits, summarize};
+use crate::text;
 
 pub use files::{ReportError, check_writable, write_png, write_whole};
 pub use markdown::render as render_markdown;
@@ -49,8 +50,11 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     std::fs::write(path, bytes).map_err(ReportError::at(path))
 }
 
-/// Reads a run directory's summary.json and frames.csv (for `occlu plot`
-/// and `occlu compare`).
+/// Reads a run directory's summary.json and frames.csv (for `occlu plot`,
+/// `occlu compare` and `occlu merge`): the rows checked against the
+/// summary (every mode's every frame once, every value one a run can
+/// measure), and the summary's statistics recomputed from them, so that
+/// every command that reads a folder judges it by the same numbers.
 pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportError> {
     let io = ReportError::at;
     let json_path = dir.join("summary.json");
@@ -77,7 +81,69 @@ pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportErro
         .deserialize()
         .collect::<Result<Vec<FrameStats>, _>>()
         .map_err(|e| io(&csv_path)(std::io::Error::other(format!("not an occlu frames.csv: {e}"))))?;
+    check_rows(&summary, &rows).map_err(|e| io(&csv_path)(std::io::Error::other(e)))?;
+    let modes: Vec<ModeDescription> = summary
+        .modes
+        .iter()
+        .map(|m| ModeDescription {
+            name: m.name.clone(),
+            conservative: m.conservative,
+            parameters: m.parameters.clone(),
+        })
+        .collect();
+    let summary = Summary {
+        modes: summarize(&rows, &modes, summary.resolution.pixels()),
+        ..summary
+    };
     Ok((summary, rows))
+}
+
+/// Whether `rows` are what a run of `summary` measured: each of its modes
+/// (named once) with one row for each of its frames, and no value a run
+/// cannot measure ([`FrameStats::implausible`]); else what is wrong.
+fn check_rows(summary: &Summary, rows: &[FrameStats]) -> Result<(), String> {
+    let frames = summary.frames;
+    if frames == 0 || frames > crate::camera::path::MAX_FRAMES {
+        return Err(format!("summary.json's frames {frames} is not a frame count a run has"));
+    }
+    let limits = RowLimits {
+        pixels: summary.resolution.pixels(),
+        objects: summary.scene.facts.objects as u64,
+    };
+    // Each mode's frames seen so far, by the mode's place in the summary.
+    let mut seen: Vec<Vec<bool>> = Vec::with_capacity(summary.modes.len());
+    for (k, mode) in summary.modes.iter().enumerate() {
+        if summary.modes[..k].iter().any(|m| m.name == mode.name) {
+            return Err(format!("summary.json names mode {} twice", text::one_line(&mode.name)));
+        }
+        seen.push(vec![false; frames as usize]);
+    }
+    for (k, row) in rows.iter().enumerate() {
+        let at = || format!("row {} ({}, frame {})", k + 1, text::one_line(&row.mode), row.frame);
+        let Some(mode) = summary.modes.iter().position(|m| m.name == row.mode) else {
+            return Err(format!("{}: a mode summary.json does not list", at()));
+        };
+        match seen[mode].get_mut(row.frame as usize) {
+            None => return Err(format!("{}: beyond the run's {frames} frames", at())),
+            Some(true) => return Err(format!("{}: the frame's second row", at())),
+            Some(first) => *first = true,
+        }
+        if let Some(fault) = row.implausible(limits) {
+            return Err(format!("{}: {fault}", at()));
+        }
+    }
+    for (mode, frames_seen) in summary.modes.iter().zip(&seen) {
+        let count = frames_seen.iter().filter(|&&s| s).count();
+        if count != frames as usize {
+            return Err(format!(
+                "mode {} has {}, not one for each of the run's {}",
+                text::one_line(&mode.name),
+                text::count(count, "row"),
+                text::count(frames as usize, "frame")
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A run's claim on its `--out` folder: an exclusive lock on
