@@ -126,6 +126,12 @@ enum Command {
         /// Where merged.json, report.md, charts/ and runs/ go.
         #[arg(long, short, value_name = "MERGED")]
         out: PathBuf,
+        /// Merge a matrix that lacks runs (a shard left out, a run that
+        /// failed): the runs present are merged and the missing ones named
+        /// in the report and merged.json. Without it such a merge is
+        /// refused (exit 2), naming them.
+        #[arg(long)]
+        allow_partial: bool,
     },
     /// Compare two bench runs for CI: exit 1 when a counter (triangles,
     /// queries, round trips, wrong pixels, missed objects) grows, or when the
@@ -423,7 +429,11 @@ fn main() -> ExitCode {
         Command::Export { scene, output } => export(&scene, &output).map(|()| ExitCode::SUCCESS),
         Command::Plot { run_dir } => plot(&run_dir).map(|()| ExitCode::SUCCESS),
         Command::Render(args) => render(args).map(|()| ExitCode::SUCCESS),
-        Command::Merge { dirs, out } => merge(&dirs, &out).map(|()| ExitCode::SUCCESS),
+        Command::Merge {
+            dirs,
+            out,
+            allow_partial,
+        } => merge(&dirs, &out, allow_partial).map(|()| ExitCode::SUCCESS),
         Command::Compare {
             base,
             new,
@@ -688,8 +698,8 @@ fn bench_one(
     Ok(outcome)
 }
 
-fn merge(dirs: &[PathBuf], out: &std::path::Path) -> anyhow::Result<()> {
-    let merged = occlu::report::merge::merge(dirs, out)?;
+fn merge(dirs: &[PathBuf], out: &std::path::Path, allow_partial: bool) -> anyhow::Result<()> {
+    let merged = occlu::report::merge::merge(dirs, out, allow_partial)?;
     emit(&occlu::report::merge::render(&merged))?;
     let adapters: std::collections::BTreeSet<String> = merged
         .runs
@@ -702,6 +712,9 @@ fn merge(dirs: &[PathBuf], out: &std::path::Path) -> anyhow::Result<()> {
         occlu::text::count(adapters.len(), "adapter"),
         out.display()
     );
+    for partial in &merged.missing {
+        say!("warning: a partial matrix, merged as asked (--allow-partial): {}", partial.describe());
+    }
     for run in &merged.runs {
         for d in &run.disagreements {
             say!("warning: {}: {}: a backend-specific bug?", run.name, d.describe());

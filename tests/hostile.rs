@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use common::{occlu, own_stderr, rewritten_copy, tampered_copy, write};
+use common::{occlu, own_stderr, rewritten_copy, stdout, tampered_copy, write};
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -158,6 +158,48 @@ fn merge_copies_a_runs_regular_files_only_and_names_any_other() {
     }
 }
 
+/// A config of a matrix of two runs of the one-block city.
+fn matrix_of_two(dir: &Path) -> PathBuf {
+    write(
+        dir,
+        "two.json",
+        r#"{"runs": [{"scene": "city:blocks=1"}, {"scene": "city:blocks=1,seed=2"}],
+            "modes": ["vfc"], "frames": 2, "warmup": 0, "resolution": "64x48"}"#,
+    )
+}
+
+// Item 4.
+#[test]
+fn merge_names_the_runs_a_matrix_lacks_and_refuses_them_unless_allowed() {
+    let dir = tempfile::tempdir().unwrap();
+    let matrix = matrix_of_two(dir.path());
+    let shard = dir.path().join("shard1");
+    let run = occlu(&[
+        "bench",
+        "--config",
+        s(&matrix),
+        "--shard",
+        "1/2",
+        "--quiet",
+        "--out",
+        s(&shard),
+    ]);
+    assert!(run.status.success(), "{:?}", own_stderr(&run));
+    let out = dir.path().join("merged");
+    refused(
+        &["merge", s(&shard), "--out", s(&out)],
+        &["02", "1 of the matrix's 2 runs", "--allow-partial"],
+    );
+    assert!(!out.exists(), "nothing merged");
+    let partial = occlu(&["merge", s(&shard), "--out", s(&out), "--allow-partial"]);
+    assert!(partial.status.success(), "{:?}", own_stderr(&partial));
+    assert!(own_stderr(&partial).iter().any(|l| l.contains("02")), "{:?}", own_stderr(&partial));
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("run 02"), "{report}");
+    let help = stdout(&occlu(&["merge", "--help"]));
+    assert!(help.contains("--allow-partial"));
+}
+
 /// A one-keyframe path over the one-block city with `extra` fields at the
 /// top and `key` fields in its keyframe.
 fn path_with(dir: &Path, name: &str, top: &str, key: &str) -> PathBuf {
@@ -247,4 +289,31 @@ fn compare_and_merge_take_statistics_only_from_valid_rows_of_frames_csv() {
     assert_eq!(m["runs"][0]["modes"][0]["results"][0]["frame_ms"].as_f64(), Some(measured));
     let same = occlu(&["compare", s(&base), s(&edited)]);
     assert!(same.status.success(), "{:?}", own_stderr(&same));
+}
+
+// Item 8.
+#[test]
+fn merged_runs_have_names_of_their_own_whatever_the_order_of_the_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    // With the oracle, so each run has its chart.
+    tiny_run(&a, &["--modes", "vfc,oracle"]);
+    tiny_run(&b, &["--modes", "vfc,oracle", "--frames", "3"]);
+    let (ab, ba) = (dir.path().join("ab"), dir.path().join("ba"));
+    for (out, first, second) in [(&ab, &a, &b), (&ba, &b, &a)] {
+        let merged = occlu(&["merge", s(first), s(second), "--out", s(out)]);
+        assert!(merged.status.success(), "{:?}", own_stderr(&merged));
+        let m: occlu::report::merge::Merged =
+            serde_json::from_str(&std::fs::read_to_string(out.join("merged.json")).unwrap()).unwrap();
+        assert_eq!(m.runs.len(), 2);
+        assert_ne!(m.runs[0].name, m.runs[1].name, "two runs, two names");
+        for run in &m.runs {
+            let chart = run.chart.as_deref().unwrap();
+            assert!(chart.ends_with(".png") && out.join(chart).is_file(), "{chart}");
+        }
+    }
+    for (base, new) in [(&ab, &ba), (&ba, &ab)] {
+        let compared = occlu(&["compare", s(base), s(new)]);
+        assert!(compared.status.success(), "{:?}", own_stderr(&compared));
+    }
 }

@@ -294,9 +294,17 @@ fn shards_and_a_gl_run_merge_into_one_report_that_compare_gates() {
     let same = occlu(&["compare", s(&out), s(&out)]);
     assert!(same.status.success(), "{:?}", own_stderr(&same));
     assert!(stdout(&same).contains("01-town-street--"));
-    // …and a merge that lacks runs the base had fails.
+    // …and a merge that lacks runs the base had (asked for) fails.
     let partial = dir.path().join("partial");
-    assert!(occlu(&["merge", s(&dirs[0]), "--out", s(&partial)]).status.success());
+    refused(
+        &["merge", s(&dirs[0]), "--out", s(&partial)],
+        &["a partial matrix", "2 of the matrix's 4 runs", "missing: run 02, 03"],
+    );
+    assert!(
+        occlu(&["merge", s(&dirs[0]), "--out", s(&partial), "--allow-partial"])
+            .status
+            .success()
+    );
     let missing = occlu(&["compare", s(&out), s(&partial)]);
     assert_eq!(missing.status.code(), Some(1), "{:?}", own_stderr(&missing));
     assert!(stdout(&missing).contains("MISSING"));

@@ -164,6 +164,15 @@ pub enum CompareError {
         merged.display()
     )]
     NotARunFolder { merged: PathBuf, folder: String },
+    #[error(
+        "{}: lists run {run} on {adapter} twice: not a merged.json occlu wrote, or edited since",
+        merged.display()
+    )]
+    ListedTwice {
+        merged: PathBuf,
+        run: String,
+        adapter: String,
+    },
     #[error("{}: {error}", run.display())]
     InRun { run: PathBuf, error: Box<CompareError> },
 }
@@ -315,14 +324,13 @@ fn compare_merged(
     Ok(Comparison { changes, notes })
 }
 
-/// What a merged folder's run folder holds: the run's name, the adapter's
-/// name and backend, and which of that name it is (runs outside a matrix
-/// may share a name).
-type Identity = (String, String, String, usize);
+/// What a merged folder's run folder holds: the run's name (unique in a
+/// merge), the adapter's name and backend.
+type Identity = (String, String, String);
 
 /// Every run folder of a merged folder with what it holds; its folder must
-/// be a folder directly in `dir`'s runs/ (merged.json is read, not
-/// trusted).
+/// be a folder directly in `dir`'s runs/, and no run on one adapter may be
+/// listed twice (merged.json is read, not trusted).
 fn columns(dir: &Path, merged: &Merged) -> Result<Vec<(Identity, PathBuf)>, CompareError> {
     let runs = dir.join("runs");
     let mut found: Vec<(Identity, PathBuf)> = Vec::new();
@@ -343,11 +351,15 @@ fn columns(dir: &Path, merged: &Merged) -> Result<Vec<(Identity, PathBuf)>, Comp
             if !plain || name.starts_with('.') || !is_folder {
                 return Err(bad());
             }
-            let seen = found
-                .iter()
-                .filter(|((r, n, b, _), _)| (r, n, b) == (&run.name, &a.name, &a.backend))
-                .count();
-            found.push(((run.name.clone(), a.name.clone(), a.backend.clone(), seen), folder));
+            let identity = (run.name.clone(), a.name.clone(), a.backend.clone());
+            if found.iter().any(|(i, _)| *i == identity) {
+                return Err(CompareError::ListedTwice {
+                    merged: dir.join("merged.json"),
+                    run: run.name.clone(),
+                    adapter: a.label(),
+                });
+            }
+            found.push((identity, folder));
         }
     }
     Ok(found)
