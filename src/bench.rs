@@ -29,7 +29,8 @@ use crate::object_set::ObjectSet;
 use crate::raycast::RayCaster;
 use crate::report::{
     Fingerprint, MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary,
-    SkippedMode, Summary, SweepSummary, ToolInfo, check_writable, prepare_output, write_results, write_whole,
+    SkippedMode, Summary, SweepSummary, ToolInfo, check_writable, prepare_output, refuse_result_file, write_results,
+    write_whole,
 };
 use crate::scene::{Scene, SceneError};
 use crate::world::World;
@@ -449,9 +450,18 @@ fn execute_claimed(
     // A bad path file or output directory is reported before a long scene
     // load, not after the run.
     let path_file = plan.path.as_deref().map(CameraPath::load).transpose()?;
+    // A merged folder's report.md and this run's would share a name.
+    let merged = plan.out.join("merged.json");
+    if merged.exists() {
+        let error = std::io::Error::other(
+            "--out holds a merged result: a run there would replace its report.md; choose another --out",
+        );
+        return Err(ReportError::at(&merged)(error).into());
+    }
     // Held until the results are written: no second run writes here.
     let _claim = prepare_output(&plan.out)?;
     if let Some(path) = &plan.export_github_benchmark {
+        refuse_result_file(path, &plan.out)?;
         check_writable(path)?;
     }
     let start = Instant::now();

@@ -225,6 +225,15 @@ struct SceneAndPath {
 }
 
 impl SceneAndPath {
+    /// Refuses an `output` that is one of the files this reads.
+    fn refuse_as_output(&self, output: &std::path::Path) -> anyhow::Result<()> {
+        let inputs: Vec<&std::path::Path> = [self.scene.model.as_deref(), self.path.as_deref()]
+            .into_iter()
+            .flatten()
+            .collect();
+        Ok(occlu::report::refuse_input_as_output(output, &inputs)?)
+    }
+
     fn load(&self) -> anyhow::Result<(Scene, CameraPath)> {
         // Read first: a bad path file fails before a long scene load.
         let path_file = self.path.as_deref().map(CameraPath::load).transpose()?;
@@ -609,6 +618,17 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
     };
     if !matrix.lists_runs() && args.shard.is_none() {
         let plan = matrix.single_run(&flags)?;
+        if let Some(export) = &plan.export_github_benchmark {
+            let model = match &plan.scene {
+                SceneSpec::File(model) => Some(model.as_path()),
+                SceneSpec::Builtin(_) => None,
+            };
+            let inputs: Vec<&std::path::Path> = [model, plan.path.as_deref(), args.config.as_deref()]
+                .into_iter()
+                .flatten()
+                .collect();
+            occlu::report::refuse_input_as_output(export, &inputs)?;
+        }
         let outcome = bench_one(&plan, &note, quiet, format!("{} modes", plan.modes.len()))?;
         return if args.json {
             emit(&(serde_json::to_string_pretty(&outcome.summary)? + "\n"))
@@ -924,6 +944,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         anyhow::bail!(ModeError::NotOne(args.mode.clone()));
     };
     let params = ModeParams::parse(&args.params, &modes)?;
+    args.scene.refuse_as_output(&args.output)?;
     let (scene, path) = args.scene.load()?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
@@ -1068,6 +1089,7 @@ fn emit(text: &str) -> anyhow::Result<()> {
 }
 
 fn export(input: &SceneAndPath, output: &std::path::Path) -> anyhow::Result<()> {
+    input.refuse_as_output(output)?;
     occlu::report::check_writable(output)?;
     let (scene, path) = input.load()?;
     if !scene.movers.is_empty() {
@@ -1097,6 +1119,9 @@ fn path_gen(
 ) -> anyhow::Result<()> {
     if frames.is_some_and(|n| n == 0 || n > occlu::camera::path::MAX_FRAMES) {
         return Err(PathError::FrameCount.into());
+    }
+    if let Some(model) = &scene_args.model {
+        occlu::report::refuse_input_as_output(&output, &[model])?;
     }
     let scene: Scene = load(&scene_args.spec()?, &scene_args.options())?;
     let generated = plan(request.as_ref(), &scene, frames)?;

@@ -291,6 +291,62 @@ fn compare_and_merge_take_statistics_only_from_valid_rows_of_frames_csv() {
     assert!(same.status.success(), "{:?}", own_stderr(&same));
 }
 
+// Item 7.
+#[test]
+fn no_output_may_be_an_input_or_one_of_the_runs_own_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    tiny_run(&run, &[]);
+    let summary = std::fs::read(run.join("summary.json")).unwrap();
+    let own = run.join("summary.json");
+    refused(
+        &tiny_bench(&run, &["--export-github-benchmark", s(&own)]),
+        &["summary.json", "one of the run's own files"],
+    );
+    assert_eq!(std::fs::read(&own).unwrap(), summary);
+    let report = std::fs::read(run.join("report.md")).unwrap();
+    let other = dir.path().join("other");
+    tiny_run(&other, &[]);
+    refused(
+        &["merge", s(&other), "--out", s(&run)],
+        &["holds a bench run", "report.md"],
+    );
+    assert_eq!(std::fs::read(run.join("report.md")).unwrap(), report);
+    let merged = dir.path().join("merged");
+    assert!(occlu(&["merge", s(&other), "--out", s(&merged)]).status.success());
+    refused(&tiny_bench(&merged, &[]), &["merged.json", "holds a merged result"]);
+
+    let model = write(dir.path(), "model.obj", common::THREE_OBJECTS_OBJ);
+    let path = write(
+        dir.path(),
+        "path.json",
+        r#"{"frames": 2, "keyframes": [{"time": 0, "position": [2, 2, 9], "target": [2, 0, 0]}]}"#,
+    );
+    let config = write(dir.path(), "config.json", r#"{"frames": 2}"#);
+    for args in [
+        vec!["render", s(&model), "--frame", "0", "--mode", "vfc", "-o", s(&model)],
+        vec!["render", s(&model), "--path", s(&path), "--frame", "0", "--mode", "vfc", "-o", s(&path)],
+        vec!["export", s(&model), "-o", s(&model)],
+        vec!["path", "gen", s(&model), "-o", s(&model)],
+        vec![
+            "bench",
+            s(&model),
+            "--config",
+            s(&config),
+            "--modes",
+            "vfc",
+            "--out",
+            s(&dir.path().join("b")),
+            "--export-github-benchmark",
+            s(&config),
+        ],
+    ] {
+        refused(&args, &["is an input"]);
+    }
+    assert_eq!(std::fs::read_to_string(&model).unwrap(), common::THREE_OBJECTS_OBJ);
+    assert_eq!(std::fs::read_to_string(&config).unwrap(), r#"{"frames": 2}"#);
+}
+
 // Item 8.
 #[test]
 fn merged_runs_have_names_of_their_own_whatever_the_order_of_the_inputs() {

@@ -32,7 +32,7 @@ use serde::{Deserialize, Serialize};
 use super::charts::{CHARTS, RatioBars, ratio_to_oracle_bars};
 use super::files::ReportError;
 use super::summary::{Fingerprint, MatrixIdentity, SkippedMode, Summary, ToolInfo};
-use super::{prepare_output, publish, read_results};
+use super::{RESULT_FILES, prepare_output, publish, read_results};
 use crate::gpu::Resolution;
 use crate::measure::ModeSummary;
 use crate::text::{markdown, slug};
@@ -219,6 +219,8 @@ pub enum MergeError {
     NotARun { matrix: PathBuf, folder: PathBuf },
     #[error("a partial matrix: {}: merge every shard's folder, or give --allow-partial to merge these alone", .0.describe())]
     Partial(MissingRuns),
+    #[error("--out {} holds a bench run: merging into it would replace its report.md; choose another --out", .0.display())]
+    OutHoldsRun(PathBuf),
     #[error("--out {} is, holds or lies in the input {}: the merge would write over what it reads; choose another --out", out.display(), input.display())]
     OutOverlapsInput { out: PathBuf, input: PathBuf },
     #[error(
@@ -383,6 +385,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Merged
                 files,
             });
         }
+    }
+    // A run's report.md and the merged one would share a name (a merged
+    // folder, which holds neither of these, may be merged into again).
+    if ["summary.json", "frames.csv"].iter().any(|f| out.join(f).exists()) {
+        return Err(MergeError::OutHoldsRun(out.to_path_buf()));
     }
     let groups = named(group(folders)?);
     let missing = missing_runs(&groups);
@@ -716,9 +723,7 @@ fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreemen
 /// refused by name, since copying it would put another file into the
 /// merged artefact (or read forever).
 fn result_files(dir: &Path) -> Result<Vec<&'static str>, ReportError> {
-    let names = ["summary.json", "frames.csv", "missed.csv", "report.md"]
-        .into_iter()
-        .chain(CHARTS);
+    let names = RESULT_FILES.into_iter().chain(CHARTS);
     let mut present = Vec::new();
     for name in names {
         let path = dir.join(name);

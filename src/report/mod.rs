@@ -17,7 +17,7 @@ use serde::Serialize;
 use crate::measure::{FrameStats, MissedObject, ModeDescription, RowLimits, summarize};
 use crate::text;
 
-pub use files::{ReportError, check_writable, write_png, write_whole};
+pub use files::{ReportError, check_writable, refuse_input_as_output, write_png, write_whole};
 pub use markdown::render as render_markdown;
 pub use summary::{
     AnimationFact, CameraFact, Fingerprint, MatrixIdentity, MissedSummary, PathSummary, SCHEMA_VERSION, SceneFacts,
@@ -166,6 +166,18 @@ impl OutputLock {
 
 /// The lock file a claimed results folder holds.
 const LOCK: &str = ".occlu.lock";
+
+/// The files a run writes into its folder (its charts, [`charts::CHARTS`],
+/// besides), in the order merge copies them.
+pub const RESULT_FILES: [&str; 4] = ["summary.json", "frames.csv", "missed.csv", "report.md"];
+
+/// Refuses an `output` that is one of the files a run writes into `out`
+/// (`--export-github-benchmark OUT/summary.json` would replace the run's
+/// own), its lock included.
+pub fn refuse_result_file(output: &Path, out: &Path) -> Result<(), ReportError> {
+    let names: Vec<&str> = RESULT_FILES.into_iter().chain(charts::CHARTS).chain([LOCK]).collect();
+    files::refuse_own_file(output, out, &names)
+}
 
 /// Removes `out` when it holds nothing but its lock: what a run that made
 /// it and then failed leaves, which would read as a run that never
