@@ -428,22 +428,10 @@ pub struct BenchOutcome {
 /// Loads the scene, builds the hierarchy, runs every mode and writes the
 /// result files. `events` hears how it goes; when it breaks, the run stops
 /// there with [`BenchError::Interrupted`] and writes nothing. A run that
-/// fails leaves no folder behind that it made (a matrix's run folder with
-/// only a lock in it would read as a run still going).
+/// fails leaves no folder behind that it made (its claim takes it away: a
+/// matrix's run folder with only a lock in it would read as a run still
+/// going).
 pub fn execute(
-    plan: &BenchPlan,
-    events: &mut dyn FnMut(BenchEvent) -> ControlFlow<()>,
-) -> Result<BenchOutcome, BenchError> {
-    let made_here = !plan.out.exists();
-    let outcome = execute_claimed(plan, events);
-    if outcome.is_err() && made_here {
-        crate::report::remove_unused_output(&plan.out);
-    }
-    outcome
-}
-
-/// [`execute`] but for the cleaning up after a failure.
-fn execute_claimed(
     plan: &BenchPlan,
     events: &mut dyn FnMut(BenchEvent) -> ControlFlow<()>,
 ) -> Result<BenchOutcome, BenchError> {

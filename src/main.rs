@@ -66,7 +66,7 @@ fn after_help() -> String {
         .collect();
     let scenes: Vec<String> = SCENES.iter().map(|(n, s)| format!("  {n:<8} {s}")).collect();
     format!(
-        "Modes:\n{}\n\nBuilt-in scenes (--scene NAME[:key=value,...]):\n{}\n\nExit status: 0 success (a closed output pipe included), 2 bad input, 1 failure while running.",
+        "Modes:\n{}\n\nBuilt-in scenes (--scene NAME[:key=value,...]):\n{}\n\nExit status: 0 success (a closed output pipe included), 2 bad input, 1 failure while running, 130 interrupted (Ctrl-C, SIGTERM, SIGHUP).",
         modes.join("\n"),
         scenes.join("\n")
     )
@@ -495,8 +495,9 @@ static LISTENING: AtomicBool = AtomicBool::new(false);
 /// or case (stress), writes nothing, and ends the process.
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
-/// The first Ctrl-C asks listening work to stop (see [`LISTENING`]); a
-/// second one, or one while nothing listens, ends the process at once.
+/// The first Ctrl-C (or SIGTERM, or SIGHUP: a terminal closed, a job
+/// cancelled) asks listening work to stop (see [`LISTENING`]); a second
+/// one, or one while nothing listens, ends the process at once.
 fn listen_for_ctrl_c() {
     let _ = ctrlc::set_handler(|| {
         if !LISTENING.load(Ordering::SeqCst) || INTERRUPTED.swap(true, Ordering::SeqCst) {
@@ -507,8 +508,10 @@ fn listen_for_ctrl_c() {
 
 /// Ends the process as killed by SIGINT, so a calling shell or script sees
 /// the interruption (status 130) and stops as well, which an exit code
-/// alone would not make it do.
+/// alone would not make it do. A results folder this process made and
+/// wrote no results into goes first.
 fn end_by_sigint() -> ! {
+    occlu::report::abandon_unfinished();
     #[cfg(unix)]
     // SAFETY: restores SIGINT's default action and raises it; neither call
     // touches memory, and the default action ends the process.

@@ -6,9 +6,12 @@
 
 mod common;
 
+use std::io::BufRead as _;
 use std::os::unix::fs::symlink;
+use std::os::unix::process::ExitStatusExt as _;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use common::{occlu, own_stderr, rewritten_copy, stdout, tampered_copy, write};
@@ -75,6 +78,74 @@ fn copy_run(from: &Path, to: &Path) {
 
 fn mkfifo(path: &Path) {
     assert!(Command::new("mkfifo").arg(path).status().unwrap().success());
+}
+
+/// An occlu process whose stderr is read line by line as it comes.
+struct Running {
+    child: Child,
+    lines: Arc<Mutex<Vec<String>>>,
+    reader: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Running {
+    fn start(args: &[&str]) -> Running {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_occlu"))
+            .args(args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let lines = Arc::new(Mutex::new(Vec::new()));
+        let stderr = child.stderr.take().unwrap();
+        let sink = lines.clone();
+        let reader = std::thread::spawn(move || {
+            for line in std::io::BufReader::new(stderr).lines() {
+                sink.lock().unwrap().push(line.unwrap_or_default());
+            }
+        });
+        Running {
+            child,
+            lines,
+            reader: Some(reader),
+        }
+    }
+
+    fn lines(&self) -> Vec<String> {
+        self.lines.lock().unwrap().clone()
+    }
+
+    fn signal(&self, name: &str) {
+        let sent = Command::new("kill")
+            .args([&format!("-{name}"), &self.child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(sent.success());
+    }
+
+    /// Waits up to `limit` for the process to end; kills it and returns
+    /// `None` when it does not.
+    fn finish(mut self, limit: Duration) -> Option<(ExitStatus, Vec<String>)> {
+        let start = Instant::now();
+        loop {
+            if let Some(status) = self.child.try_wait().unwrap() {
+                self.reader.take().unwrap().join().unwrap();
+                return Some((status, self.lines()));
+            }
+            if start.elapsed() > limit {
+                let _ = self.child.kill();
+                let _ = self.child.wait();
+                return None;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
 }
 
 // Item 1: the lock and every file a command puts into --out.
@@ -372,4 +443,89 @@ fn merged_runs_have_names_of_their_own_whatever_the_order_of_the_inputs() {
         let compared = occlu(&["compare", s(base), s(new)]);
         assert!(compared.status.success(), "{:?}", own_stderr(&compared));
     }
+}
+
+/// Whether `out` was left behind.
+fn left(out: &Path) -> Vec<String> {
+    std::fs::read_dir(out)
+        .map(|e| e.map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect())
+        .unwrap_or_default()
+}
+
+// Item 9.
+#[test]
+fn a_run_that_ends_without_results_takes_the_folder_it_made_with_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let long_bench = |out: &Path| {
+        vec![
+            "bench".to_string(),
+            "--scene".into(),
+            "city:blocks=2".into(),
+            "--frames".into(),
+            "5000".into(),
+            "--resolution".into(),
+            "64x48".into(),
+            "--out".into(),
+            s(out).into(),
+        ]
+    };
+    let loading = |out: &Path| {
+        vec![
+            "bench".to_string(),
+            "--scene".into(),
+            "city:blocks=24".into(),
+            "--out".into(),
+            s(out).into(),
+        ]
+    };
+    let stress = |out: &Path| vec!["stress".to_string(), "--out".into(), s(out).into()];
+    type Args = dyn Fn(&Path) -> Vec<String>;
+    // What to run, how long to let it run, and the signals to send.
+    let cases: [(&str, &Args, u64, &[&str]); 4] = [
+        ("SIGINT while loading", &loading, 500, &["INT"]),
+        ("two SIGINTs", &long_bench, 1500, &["INT", "INT"]),
+        ("SIGTERM", &long_bench, 1500, &["TERM"]),
+        ("SIGINT in stress", &stress, 1500, &["INT"]),
+    ];
+    for (k, (what, args, after, signals)) in cases.into_iter().enumerate() {
+        let out = dir.path().join(format!("out{k}"));
+        let args = args(&out);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let running = Running::start(&args);
+        std::thread::sleep(Duration::from_millis(after));
+        for signal in signals {
+            running.signal(signal);
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let Some((status, lines)) = running.finish(Duration::from_secs(60)) else {
+            panic!("{what}: still running a minute later");
+        };
+        assert!(status.signal().is_some(), "{what}: {status:?} {lines:?}");
+        assert_eq!(left(&out), Vec::<String>::new(), "{what}: {lines:?}");
+        assert!(!out.exists(), "{what}: the folder it made is gone");
+    }
+}
+
+// Item 9: a merge that fails on a full disk.
+#[test]
+fn a_merge_that_fails_on_a_full_disk_leaves_no_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    tiny_run(&run, &[]);
+    let mount = dir.path().join("small");
+    std::fs::create_dir(&mount).unwrap();
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=64k", "tmpfs", s(&mount)])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !mounted {
+        eprintln!("skipped: mounting a small tmpfs needs root");
+        return;
+    }
+    let out = mount.join("merged");
+    let merge = occlu(&["merge", s(&run), "--out", s(&out)]);
+    let gone = !out.exists();
+    let _ = Command::new("umount").arg(&mount).status();
+    assert_eq!(merge.status.code(), Some(1), "{:?}", own_stderr(&merge));
+    assert!(gone, "the folder it made is gone");
 }

@@ -3,6 +3,7 @@
 //! `occlu compare` and `occlu merge` read them back.
 
 pub mod charts;
+mod claim;
 pub mod compare;
 mod files;
 pub mod github;
@@ -17,6 +18,8 @@ use serde::Serialize;
 use crate::measure::{FrameStats, MissedObject, ModeDescription, RowLimits, summarize};
 use crate::text;
 
+use claim::{LOCK, STAGING, claim, staging};
+pub use claim::{OutputLock, abandon_unfinished};
 pub use files::{ReportError, check_writable, refuse_input_as_output, write_png, write_whole};
 pub use markdown::render as render_markdown;
 pub use summary::{
@@ -146,27 +149,6 @@ fn check_rows(summary: &Summary, rows: &[FrameStats]) -> Result<(), String> {
     Ok(())
 }
 
-/// A run's claim on its `--out` folder: an exclusive lock on
-/// `.occlu.lock`, held by the operating system for as long as this value
-/// lives, and released by it when the process ends however it ends (a kill
-/// included), so no claim outlives its run and no run can take over a live
-/// one. The file itself stays; it holds the last claimant's process id, for
-/// the message a refused run prints.
-#[must_use = "the folder is claimed only while the lock lives"]
-pub struct OutputLock {
-    file: Option<std::fs::File>,
-}
-
-impl OutputLock {
-    /// Whether the lock is held (false on a file system without locks).
-    fn held(&self) -> bool {
-        self.file.is_some()
-    }
-}
-
-/// The lock file a claimed results folder holds.
-const LOCK: &str = ".occlu.lock";
-
 /// The files a run writes into its folder (its charts, [`charts::CHARTS`],
 /// besides), in the order merge copies them.
 pub const RESULT_FILES: [&str; 4] = ["summary.json", "frames.csv", "missed.csv", "report.md"];
@@ -177,17 +159,6 @@ pub const RESULT_FILES: [&str; 4] = ["summary.json", "frames.csv", "missed.csv",
 pub fn refuse_result_file(output: &Path, out: &Path) -> Result<(), ReportError> {
     let names: Vec<&str> = RESULT_FILES.into_iter().chain(charts::CHARTS).chain([LOCK]).collect();
     files::refuse_own_file(output, out, &names)
-}
-
-/// Removes `out` when it holds nothing but its lock: what a run that made
-/// it and then failed leaves, which would read as a run that never
-/// finished. Called once the claim is released.
-pub fn remove_unused_output(out: &Path) {
-    let only_lock = std::fs::read_dir(out).is_ok_and(|entries| entries.flatten().all(|e| e.file_name() == LOCK));
-    if only_lock {
-        let _ = std::fs::remove_file(out.join(LOCK));
-        let _ = std::fs::remove_dir(out);
-    }
 }
 
 /// Creates `out`, claims it (a second run into the same folder is refused
@@ -209,78 +180,6 @@ pub fn prepare_output(out: &Path) -> Result<OutputLock, ReportError> {
         }
     }
     Ok(claim)
-}
-
-/// Creates `out` and takes the lock on it.
-fn claim(out: &Path) -> Result<OutputLock, ReportError> {
-    let io = ReportError::at;
-    if out.exists() && !out.is_dir() {
-        let error = std::io::Error::other("exists and is not a directory: --out names the folder results go to");
-        return Err(io(out)(error));
-    }
-    std::fs::create_dir_all(out).map_err(io(out))?;
-    let path = out.join(LOCK);
-    let mut file = open_lock(&path).map_err(io(&path))?;
-    match file.try_lock() {
-        Ok(()) => {
-            use std::io::{Seek as _, Write as _};
-            file.set_len(0)
-                .and_then(|()| file.rewind())
-                .and_then(|()| write!(file, "{}", std::process::id()))
-                .map_err(io(&path))?;
-            Ok(OutputLock { file: Some(file) })
-        }
-        Err(std::fs::TryLockError::WouldBlock) => {
-            use std::io::Read as _;
-            let mut holder = String::new();
-            let _ = (&file).take(32).read_to_string(&mut holder);
-            let last = holder
-                .trim()
-                .parse::<u32>()
-                .map_or(String::new(), |pid| format!(" (occlu process {pid} claimed it last)"));
-            Err(io(&path)(std::io::Error::other(format!(
-                "another occlu run{last} is writing results into this folder; wait for it, or write elsewhere"
-            ))))
-        }
-        // A file system without locks (some network mounts) cannot hold a
-        // claim; the run goes on unclaimed rather than not at all.
-        Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
-            Ok(OutputLock { file: None })
-        }
-        Err(std::fs::TryLockError::Error(e)) => Err(io(&path)(e)),
-    }
-}
-
-/// Opens (or creates) the lock file `path`, which must be a regular file of
-/// its own: a link is never followed (an `--out` in a shared temporary
-/// folder may hold one planted to make the run write its process id over
-/// another file, or create one where the link points), nor is a device or
-/// pipe opened for writing, nor a file with other names (a hard link)
-/// truncated.
-fn open_lock(path: &Path) -> std::io::Result<std::fs::File> {
-    let refused = || {
-        std::io::Error::other(
-            "not a regular file of this folder's own (a link, a device, a pipe or a file with other names): occlu writes through none; remove it or write elsewhere",
-        )
-    };
-    let mut options = std::fs::OpenOptions::new();
-    options.read(true).write(true).create(true).truncate(false);
-    // Non-blocking: a pipe opened for writing could wait for a reader.
-    #[cfg(unix)]
-    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NOFOLLOW | libc::O_NONBLOCK);
-    let file = options.open(path).map_err(|e| {
-        #[cfg(unix)]
-        if e.raw_os_error() == Some(libc::ELOOP) {
-            return refused();
-        }
-        e
-    })?;
-    let metadata = file.metadata()?;
-    #[cfg(unix)]
-    let own = std::os::unix::fs::MetadataExt::nlink(&metadata) == 1;
-    #[cfg(not(unix))]
-    let own = true;
-    if metadata.is_file() && own { Ok(file) } else { Err(refused()) }
 }
 
 /// Writes a set of result files (or folders of them) into `out` so that each is whole or absent:
@@ -400,16 +299,6 @@ fn write_report_and_charts(dir: &Path, summary: &Summary, rows: &[FrameStats]) -
         );
     }
     Ok(names)
-}
-
-/// The start of the name of the folder inside `--out` that a run writes its
-/// results into before they are moved into place.
-const STAGING: &str = ".occlu-staging";
-
-/// This process's staging folder in `out`: one per process, so that runs
-/// on a file system without locks do not write into each other's.
-fn staging(out: &Path) -> PathBuf {
-    out.join(format!("{STAGING}-{}", std::process::id()))
 }
 
 /// `missed` with object names that a spreadsheet would run as a formula
