@@ -15,7 +15,7 @@ use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
 use crate::camera::Camera;
-use crate::camera::generate::default_path;
+use crate::camera::generate::{PLANNING_TESTS, default_path_heard};
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
 use crate::cull::{Culler, FrameInput, Labeled, ModeError, PreviousFrame};
@@ -26,7 +26,7 @@ use crate::gpu::{
 use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{ErrorMeter, FrameStats, MissedObject, ModeDescription, ObjectError, summarize};
 use crate::object_set::ObjectSet;
-use crate::raycast::RayCaster;
+use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::report::{
     Fingerprint, MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary,
     SkippedMode, Summary, SweepSummary, ToolInfo, check_writable, prepare_output, refuse_result_file, write_results,
@@ -414,6 +414,14 @@ pub enum BenchEvent<'a> {
         mode: &'a str,
         reason: &'a str,
     },
+    /// A step of ray casts (planning the path, counting frames with
+    /// geometry within the near plane) has spent `spent` of its `budget`
+    /// box and triangle tests; said every few milliseconds while it works.
+    Work {
+        what: &'static str,
+        spent: u64,
+        budget: u64,
+    },
     Frame {
         done: u32,
         total: u32,
@@ -470,20 +478,50 @@ pub fn execute(
 
     let (path, generated) = match path_file {
         Some(path) => (path, None),
-        None => default_path(scene).map(|(path, why)| (path, Some(why)))?,
+        None => {
+            let heard = |spent, budget| {
+                events(BenchEvent::Work {
+                    what: "planning the path",
+                    spent,
+                    budget,
+                })
+            };
+            match default_path_heard(scene, Box::new(heard)) {
+                Err(PathError::Interrupted) => return Err(BenchError::Interrupted),
+                planned => planned.map(|(path, why)| (path, Some(why)))?,
+            }
+        }
     };
     let path = match plan.frames {
         Some(n) => path.with_frames(n)?,
         None => path,
     };
+    let heard = |spent, budget| {
+        events(BenchEvent::Work {
+            what: "counting frames with geometry within the near plane",
+            spent,
+            budget,
+        })
+    };
+    let caster = RayCaster::with_budget(
+        scene,
+        Budget {
+            tests: PLANNING_TESTS,
+            listener: Box::new(heard),
+        },
+    );
+    // Not counted (None) when it spent its budget.
+    let within_near = match path.frames_with_geometry_within_near(&caster, plan.resolution.aspect()) {
+        Err(Stopped::Interrupted) => return Err(BenchError::Interrupted),
+        counted => counted.ok(),
+    };
+    drop(caster);
     let path_summary = PathSummary {
         source: path.source.clone(),
         keyframes: path.keyframes.len(),
         near: path.near,
         generated,
-        frames_with_geometry_within_near: Some(
-            path.frames_with_geometry_within_near(&RayCaster::new(scene), plan.resolution.aspect()),
-        ),
+        frames_with_geometry_within_near: within_near,
         cameras: Some(Fingerprint::of_path(&path)),
     };
     go_on(events(BenchEvent::Path(&path_summary, path.frames)))?;

@@ -14,7 +14,7 @@ use anyhow::Context as _;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use occlu::bench::{BenchError, BenchEvent, execute};
-use occlu::camera::generate::{PathRequest, plan};
+use occlu::camera::generate::{PathRequest, plan_heard};
 use occlu::camera::path::{CameraPath, PathError};
 use occlu::config::{BenchConfig, BenchPlan, ConfigError, load_options, scene_spec};
 use occlu::cull::{ModeError, ModeParams, parse_modes};
@@ -23,7 +23,7 @@ use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::input::ByteSize;
 use occlu::matrix::{Matrix, MatrixError, Shard};
 use occlu::picture::{PictureError, PictureOptions};
-use occlu::raycast::RayCaster;
+use occlu::raycast::{Budget, RayCaster, Stopped};
 use occlu::report::compare::{CompareError, CompareOptions, Metric};
 use occlu::report::merge::MergeError;
 use occlu::report::{ReportError, SceneFacts};
@@ -240,7 +240,10 @@ impl SceneAndPath {
         let scene = load(&self.scene.spec()?, &self.scene.options())?;
         let path = match path_file {
             Some(p) => p,
-            None => occlu::camera::generate::default_path(&scene)?.0,
+            None => {
+                let mut progress = Progress::new(false, 0, String::new());
+                occlu::camera::generate::default_path_heard(&scene, progress.listener("planning the path"))?.0
+            }
         };
         let path = match self.frames {
             Some(n) => path.with_frames(n)?,
@@ -537,6 +540,7 @@ fn was_interrupted(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {
         matches!(c.downcast_ref::<BenchError>(), Some(BenchError::Interrupted))
             || matches!(c.downcast_ref::<StressError>(), Some(StressError::Interrupted))
+            || matches!(c.downcast_ref::<PathError>(), Some(PathError::Interrupted))
     })
 }
 
@@ -767,19 +771,31 @@ fn heard(progress: &mut Progress, event: BenchEvent, note: &dyn Fn(String)) {
             }
         }
         BenchEvent::Skipped { mode, reason } => note(format!("skipped: {mode}: {reason}")),
+        BenchEvent::Work { what, spent, budget } => progress.work(what, spent, budget),
         BenchEvent::Adapter(adapter) => note(format!("adapter: {adapter}")),
         BenchEvent::Path(path, frames) => {
             let why = path.generated.as_ref().map(|w| format!(" ({w})")).unwrap_or_default();
             note(format!("path: {}{why}", path.source));
-            if let Some(n) = path.frames_with_geometry_within_near.filter(|&n| n > 0) {
-                note(format!(
+            match path.frames_with_geometry_within_near {
+                Some(0) => {}
+                Some(n) => note(format!(
                     "warning: {n} of {frames} frames have geometry nearer than the near plane's corners ({}): it may be clipped",
                     path.near
-                ));
+                )),
+                None => note(near_not_counted()),
             }
         }
         BenchEvent::Frame { done, total } => progress.frame(done, total),
     }
+}
+
+/// What a run says when counting frames with geometry within the near
+/// plane spent its budget of ray casts.
+fn near_not_counted() -> String {
+    format!(
+        "note: frames with geometry nearer than the near plane were not counted: the count spent its budget of {} M box and triangle tests",
+        occlu::camera::generate::PLANNING_TESTS / 1_000_000
+    )
 }
 
 /// Progress of a bench run on stderr: a bar over the recorded frames in a
@@ -792,6 +808,8 @@ struct Progress {
     prefix: String,
     started: Instant,
     last_line: Option<Instant>,
+    /// The step of ray casts under way (planning a path), and when it began.
+    step: Option<(&'static str, Instant)>,
 }
 
 /// Seconds between progress lines outside a terminal.
@@ -806,7 +824,47 @@ impl Progress {
             prefix,
             started: Instant::now(),
             last_line: None,
+            step: None,
         }
+    }
+
+    /// A step of ray casts, `what`, has spent `spent` of its `budget` box
+    /// and triangle tests: said once the step has taken a second (most take
+    /// less), then every few seconds.
+    fn work(&mut self, what: &'static str, spent: u64, budget: u64) {
+        if self.quiet {
+            return;
+        }
+        let now = Instant::now();
+        let began = match self.step {
+            Some((step, began)) if step == what => began,
+            _ => {
+                self.step = Some((what, now));
+                self.last_line = None;
+                now
+            }
+        };
+        let taken = now.duration_since(began).as_secs_f64();
+        let due = self
+            .last_line
+            .map_or(taken >= 1.0, |t| now.duration_since(t).as_secs_f64() >= PROGRESS_EVERY);
+        if due {
+            self.last_line = Some(now);
+            say!(
+                "{what}: {taken:.0} s, {} M of at most {} M box and triangle tests",
+                spent / 1_000_000,
+                budget / 1_000_000
+            );
+        }
+    }
+
+    /// A listener for a step of ray casts, `what`: progress as [`Progress::work`]
+    /// says it, and Ctrl-C heard.
+    fn listener(&mut self, what: &'static str) -> occlu::camera::generate::PlanListener<'_> {
+        Box::new(move |spent, budget| {
+            self.work(what, spent, budget);
+            go_on()
+        })
     }
 
     /// `done` of `total` frames, warm-up frames included, have run.
@@ -1127,7 +1185,8 @@ fn path_gen(
         occlu::report::refuse_input_as_output(&output, &[model])?;
     }
     let scene: Scene = load(&scene_args.spec()?, &scene_args.options())?;
-    let generated = plan(request.as_ref(), &scene, frames)?;
+    let mut progress = Progress::new(false, 0, String::new());
+    let generated = plan_heard(request.as_ref(), &scene, frames, progress.listener("planning the path"))?;
     // Validate what is written, so a generated file always loads.
     let path = CameraPath::from_file(&generated.file, &output.display().to_string())?;
     let text = serde_json::to_string_pretty(&generated.file)? + "\n";
@@ -1140,12 +1199,19 @@ fn path_gen(
         path.frames,
         generated.file.keyframes.len()
     );
-    let near = path.frames_with_geometry_within_near(&RayCaster::new(&scene), Resolution::DEFAULT.aspect());
-    if near > 0 {
-        say!(
+    let budget = Budget {
+        tests: occlu::camera::generate::PLANNING_TESTS,
+        listener: progress.listener("counting frames with geometry within the near plane"),
+    };
+    let caster = RayCaster::with_budget(&scene, budget);
+    match path.frames_with_geometry_within_near(&caster, Resolution::DEFAULT.aspect()) {
+        Ok(0) => {}
+        Ok(near) => say!(
             "warning: {near} of {} frames have geometry nearer than the near plane's corners (at 4:3)",
             path.frames
-        );
+        ),
+        Err(Stopped::Spent) => say!("{}", near_not_counted()),
+        Err(Stopped::Interrupted) => return Err(PathError::Interrupted.into()),
     }
     Ok(())
 }

@@ -14,6 +14,7 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use common::gltf_writer::GltfWriter;
 use common::{occlu, own_stderr, rewritten_copy, stdout, tampered_copy, write};
 
 fn s(p: &Path) -> &str {
@@ -112,6 +113,22 @@ impl Running {
 
     fn lines(&self) -> Vec<String> {
         self.lines.lock().unwrap().clone()
+    }
+
+    /// Waits up to `limit` for a line of stderr that `wanted` accepts.
+    fn wait_for_line(&mut self, limit: Duration, wanted: impl Fn(&str) -> bool) -> Option<String> {
+        let start = Instant::now();
+        while start.elapsed() < limit {
+            if let Some(line) = self.lines().into_iter().find(|l| wanted(l)) {
+                return Some(line);
+            }
+            if self.child.try_wait().unwrap().is_some() {
+                std::thread::sleep(Duration::from_millis(50));
+                return self.lines().into_iter().find(|l| wanted(l));
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        None
     }
 
     fn signal(&self, name: &str) {
@@ -227,6 +244,104 @@ fn merge_copies_a_runs_regular_files_only_and_names_any_other() {
         assert!(started.elapsed() < Duration::from_secs(30), "{name}: read to its end");
         assert!(!out.exists(), "{name}: nothing merged");
     }
+}
+
+/// A sphere of `n`×`n` quads (2n² triangles) of radius 1 at the origin.
+fn sphere(n: u32) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (theta, phi) = (
+                std::f32::consts::PI * j as f32 / n as f32,
+                std::f32::consts::TAU * i as f32 / n as f32,
+            );
+            positions.push([theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()]);
+        }
+    }
+    let mut indices = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let k = j * (n + 1) + i;
+            indices.extend([k, k + n + 2, k + 1, k, k + n + 1, k + n + 2]);
+        }
+    }
+    (positions, indices)
+}
+
+/// A GLB whose `instances` nodes all place one mesh at the origin: every
+/// ray planning a walk meets every instance.
+fn pile_of_instances(dir: &Path, instances: usize, mesh: (Vec<[f32; 3]>, Vec<u32>)) -> PathBuf {
+    let mut w = GltfWriter::default();
+    let m = w.mesh("ball", &[(&mesh.0, Some(&mesh.1), 4)]);
+    let roots: Vec<usize> = (0..instances)
+        .map(|k| w.node(serde_json::json!({"name": format!("n{k}"), "mesh": m})))
+        .collect();
+    write(dir, "pile.glb", w.glb(&roots))
+}
+
+// Item 3.
+#[test]
+fn path_planning_is_bounded_says_so_and_shows_progress() {
+    let dir = tempfile::tempdir().unwrap();
+    // 2 000 instances of a 20 000-triangle sphere in one place: 40 M
+    // triangles on every ray down the grid.
+    let pile = pile_of_instances(dir.path(), 2000, sphere(100));
+    let written = dir.path().join("path.json");
+    let started = Instant::now();
+    let planning = Running::start(&["path", "gen", s(&pile), "-o", s(&written)]);
+    let Some((status, lines)) = planning.finish(Duration::from_secs(120)) else {
+        panic!("path gen still planning after 120 s");
+    };
+    let took = started.elapsed();
+    assert!(status.success(), "{lines:?}");
+    assert!(
+        lines.iter().any(|l| l.contains("budget") && l.contains("orbit")),
+        "the fallback is said: {lines:?}"
+    );
+    let path: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&written).unwrap()).unwrap();
+    assert_eq!(path["keyframes"].as_array().unwrap().len(), 25, "an orbit: {path}");
+    if took > Duration::from_secs(2) {
+        assert!(
+            lines.iter().any(|l| l.starts_with("planning the path:")),
+            "{took:?} without progress: {lines:?}"
+        );
+    }
+}
+
+// Item 3: Ctrl-C while a path is planned stops it.
+#[test]
+fn ctrl_c_stops_path_planning() {
+    let dir = tempfile::tempdir().unwrap();
+    // 20 000 cubes in one place: little to draw, much to plan.
+    let (cube, indices) = common::gltf_writer::cube();
+    let pile = pile_of_instances(dir.path(), 20_000, (cube, indices));
+    let out = dir.path().join("run");
+    let mut bench = Running::start(&[
+        "bench",
+        s(&pile),
+        "--modes",
+        "vfc",
+        "--frames",
+        "2",
+        "--warmup",
+        "0",
+        "--resolution",
+        "64x48",
+        "--out",
+        s(&out),
+    ]);
+    let loaded = bench.wait_for_line(Duration::from_secs(60), |l| l.starts_with("scene: "));
+    assert!(loaded.is_some(), "{:?}", bench.lines());
+    std::thread::sleep(Duration::from_millis(500));
+    bench.signal("INT");
+    let Some((status, lines)) = bench.finish(Duration::from_secs(20)) else {
+        panic!("Ctrl-C did not stop the run within 20 s");
+    };
+    assert_eq!(status.signal(), Some(2), "{lines:?}");
+    assert!(
+        lines.last().unwrap().starts_with("occlu: interrupted"),
+        "{lines:?}"
+    );
 }
 
 /// A config of a matrix of two runs of the one-block city.

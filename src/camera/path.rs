@@ -92,6 +92,9 @@ pub enum PathError {
     /// A path from the model file that the file does not hold.
     #[error("{0}")]
     NotInFile(String),
+    /// Planning a path was asked to stop (Ctrl-C).
+    #[error("interrupted while a camera path was planned")]
+    Interrupted,
 }
 
 /// A validated keyframe.
@@ -352,16 +355,23 @@ impl CameraPath {
     /// How many frames have a surface of `caster`'s scene closer to the eye
     /// than the corners of the near plane (a sphere around the eye holding
     /// the near plane): such a surface may be clipped away, showing what
-    /// lies behind it. Movers are counted where frame 0 puts them.
-    pub fn frames_with_geometry_within_near(&self, caster: &crate::raycast::RayCaster, aspect: f64) -> u32 {
-        (0..self.frames)
-            .filter(|&f| {
-                let camera = self.camera(f, aspect);
-                let t = (camera.fov_y / 2.0).tan();
-                let corner = camera.near * (1.0 + t * t * (1.0 + aspect * aspect)).sqrt();
-                caster.nearest_distance(camera.eye, corner).is_some()
-            })
-            .count() as u32
+    /// lies behind it. Movers are counted where frame 0 puts them. Not
+    /// counted when `caster` stops (its budget spent, or Ctrl-C).
+    pub fn frames_with_geometry_within_near(
+        &self,
+        caster: &crate::raycast::RayCaster,
+        aspect: f64,
+    ) -> Result<u32, crate::raycast::Stopped> {
+        let mut near = 0;
+        for f in 0..self.frames {
+            let camera = self.camera(f, aspect);
+            let t = (camera.fov_y / 2.0).tan();
+            let corner = camera.near * (1.0 + t * t * (1.0 + aspect * aspect)).sqrt();
+            let found = caster.nearest_distance(camera.eye, corner).is_some();
+            caster.searching()?;
+            near += u32::from(found);
+        }
+        Ok(near)
     }
 }
 
