@@ -644,3 +644,14 @@ fn a_merge_that_fails_on_a_full_disk_leaves_no_folder() {
     assert_eq!(merge.status.code(), Some(1), "{:?}", own_stderr(&merge));
     assert!(gone, "the folder it made is gone");
 }
+
+#[test]
+fn swr_records_the_buffer_it_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    tiny_run(&out, &["--modes", "swr", "--param", "swr.resolution=4096x4096"]);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["modes"][0]["name"], "swr");
+    assert_eq!(summary["modes"][0]["parameters"]["resolution"], "64x48");
+}
