@@ -147,9 +147,15 @@ fn read_regular(path: &Path, limit: u64, follow_links: bool) -> std::io::Result<
     Ok(bytes)
 }
 
-/// [`read_file`] as UTF-8 text.
+/// [`read_file`] as UTF-8 text, without the byte order mark some editors
+/// on Windows put first (JSON parsers refuse it as a value).
 pub fn read_text(path: &Path, limit: u64) -> std::io::Result<String> {
-    String::from_utf8(read_file(path, limit)?).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
+    let text =
+        String::from_utf8(read_file(path, limit)?).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))?;
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    })
 }
 
 #[cfg(test)]

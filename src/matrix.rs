@@ -84,6 +84,9 @@ impl Matrix {
     /// relative to the file.
     pub fn load(file: &Path) -> Result<Matrix, MatrixError> {
         let mut json = read_json(file)?;
+        if let Some(fields) = json.as_object() {
+            refuse_unknown_fields(file, fields)?;
+        }
         let [runs, models, scenes, paths] = match json.as_object_mut() {
             Some(fields) => LISTS.map(|key| fields.remove(key)),
             None => [None, None, None, None],
@@ -244,6 +247,36 @@ impl Matrix {
                 Ok(MatrixRun { name, plan })
             })
             .collect()
+    }
+}
+
+/// Refuses a field a configuration file cannot have, listing every one it
+/// can: a run's ([`BenchConfig`]'s) and the [`LISTS`] (which the run's
+/// own refusal would leave out, as they are taken off first).
+fn refuse_unknown_fields(
+    file: &Path,
+    fields: &serde_json::Map<String, serde_json::Value>,
+) -> Result<(), ConfigError> {
+    // Every field of a run, as a default one serialises (None as null).
+    let run = serde_json::to_value(BenchConfig::default()).expect("a configuration serialises");
+    let known: Vec<&str> = run
+        .as_object()
+        .into_iter()
+        .flat_map(|run| run.keys().map(String::as_str))
+        .chain(LISTS)
+        .collect();
+    match fields.keys().find(|key| !known.contains(&key.as_str())) {
+        Some(unknown) => {
+            let expected: Vec<String> = known.iter().map(|k| format!("`{k}`")).collect();
+            Err(ConfigError::Json {
+                path: file.display().to_string(),
+                message: crate::text::one_line(&format!(
+                    "unknown field `{unknown}`, expected one of {}",
+                    expected.join(", ")
+                )),
+            })
+        }
+        None => Ok(()),
     }
 }
 

@@ -645,6 +645,23 @@ fn a_merge_that_fails_on_a_full_disk_leaves_no_folder() {
     assert!(gone, "the folder it made is gone");
 }
 
+// Item 11.
+#[test]
+fn duplicate_keys_are_refused_in_configs_and_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    for (name, json) in [
+        ("top.json", r#"{"frames": 2, "frames": 3}"#),
+        ("run.json", r#"{"runs": [{"frames": 2, "frames": 3}]}"#),
+        ("lists.json", r#"{"scenes": ["city"], "scenes": ["forest"]}"#),
+    ] {
+        let config = write(dir.path(), name, json);
+        refused(&tiny_bench(&out, &["--config", s(&config)]), &[name, "duplicate"]);
+    }
+    let path = path_with(dir.path(), "path.json", r#""near": 1, "near": 2,"#, r#""target": [0, 0, 0]"#);
+    refused(&tiny_bench(&out, &["--path", s(&path)]), &["path.json", "duplicate"]);
+}
+
 #[test]
 fn swr_records_the_buffer_it_used() {
     let dir = tempfile::tempdir().unwrap();
