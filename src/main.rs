@@ -33,12 +33,15 @@ use occlu::scene::{LoadOptions, Scene, SceneError, SceneSpec, load};
 use occlu::stress::{StressError, StressEvent};
 use occlu::world::World;
 
-/// Writes a line to standard error. A closed or full standard error is no
-/// reason to fail a run (and must not panic, as `eprintln!` does): the line
-/// is dropped.
+/// Writes a line to standard error, its control and reordering characters
+/// escaped ([`occlu::text::one_line`]): file, object and parser names reach
+/// it from anyone's files, and must neither drive the terminal nor break
+/// the line. A closed or full standard error is no reason to fail a run
+/// (and must not panic, as `eprintln!` does): the line is dropped.
 macro_rules! say {
     ($($arg:tt)*) => {{
-        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+        let line = occlu::text::one_line(&format!($($arg)*));
+        let _ = writeln!(std::io::stderr().lock(), "{line}");
     }};
 }
 
@@ -470,12 +473,12 @@ fn main() -> ExitCode {
     };
     let code = match result {
         Err(e) if was_interrupted(&e) => {
-            say!("occlu: {}", occlu::text::one_line(&format!("{e:#}")));
+            say!("occlu: {e:#}");
             end_by_sigint()
         }
         Ok(code) => code,
         Err(e) => {
-            say!("occlu: error: {}", occlu::text::one_line(&format!("{e:#}")));
+            say!("occlu: error: {e:#}");
             ExitCode::from(if is_input_error(&e) { 2 } else { 1 })
         }
     };
@@ -1051,7 +1054,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             say!(
                 "  object {} '{}': {drawn}, {} wrong pixels{first}",
                 m.object,
-                occlu::text::one_line(&m.name),
+                m.name,
                 m.wrong_pixels
             );
         }
@@ -1087,7 +1090,9 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
     let h = report.hierarchy;
     let mut text = String::new();
     let w = &mut text;
-    let _ = writeln!(w, "source      {}", report.source);
+    // Names from the file, shown as themselves (see say!).
+    let shown = occlu::text::one_line;
+    let _ = writeln!(w, "source      {}", shown(&report.source));
     let _ = writeln!(w, "objects     {} ({} meshes)", report.objects, report.meshes);
     if report.movers > 0 {
         let _ = writeln!(w, "movers      {} objects move from frame to frame", report.movers);
@@ -1127,7 +1132,7 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
         let _ = writeln!(w, "warnings    none");
     }
     for warning in &scene.warnings {
-        let _ = writeln!(w, "warning     {warning}");
+        let _ = writeln!(w, "warning     {}", shown(warning));
     }
     emit(&text)
 }

@@ -672,3 +672,53 @@ fn swr_records_the_buffer_it_used() {
     assert_eq!(summary["modes"][0]["name"], "swr");
     assert_eq!(summary["modes"][0]["parameters"]["resolution"], "64x48");
 }
+
+#[test]
+fn names_from_files_reach_stderr_and_results_as_themselves_escaped_only_where_shown() {
+    let dir = tempfile::tempdir().unwrap();
+    // An object with a tab, a right-to-left override and an escape sequence
+    // in its name and a degenerate triangle (so a warning names it), in a
+    // file whose name holds an escape sequence and a newline.
+    let name = "wall\tx\u{202E}gpj.exe\u{1b}[2J";
+    let obj = format!("o {name}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\nf 1 1 1\n");
+    let model = write(dir.path(), "ev\u{1b}il\nname.obj", obj);
+    let out = dir.path().join("run");
+    let bench = occlu(&[
+        "bench",
+        s(&model),
+        "--modes",
+        "vfc",
+        "--frames",
+        "2",
+        "--warmup",
+        "0",
+        "--resolution",
+        "64x48",
+        "--out",
+        s(&out),
+    ]);
+    assert!(bench.status.success(), "{:?}", own_stderr(&bench));
+    let err = common::stderr(&bench);
+    assert!(
+        !err.contains('\u{1b}') && !err.contains('\u{202E}') && !err.contains('\t'),
+        "{err:?}"
+    );
+    assert!(err.contains("ev\\u{1b}il\\nname.obj"), "{err}");
+    assert!(err.contains("wall\\tx\\u{202e}gpj.exe\\u{1b}[2J"), "{err}");
+    // summary.json holds the name as the file has it (JSON escapes it).
+    let summary: occlu::report::Summary =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(summary.scene.facts.warnings[0].contains(name), "{:?}", summary.scene.facts.warnings);
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(!report.contains('\u{202E}') && !report.contains('\u{1b}'), "{report}");
+    // Object names are kept as they are, for summary.json and missed.csv
+    // to escape as each needs.
+    let mut w = GltfWriter::default();
+    let (p, i) = common::gltf_writer::cube();
+    let mesh = w.mesh("cube", &[(&p, Some(&i), 4)]);
+    let root = w.node(serde_json::json!({"name": "door\n2\u{202E}", "mesh": mesh}));
+    let glb = write(dir.path(), "door.glb", w.glb(&[root]));
+    let options = occlu::scene::LoadOptions::default();
+    let scene = occlu::scene::load(&occlu::scene::SceneSpec::File(glb), &options).unwrap();
+    assert_eq!(scene.objects[0].name, "door\n2\u{202E}");
+}

@@ -379,10 +379,7 @@ fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Result<Optio
     };
     let name = &scene.parts[hider as usize].name;
     Ok((targets.len() > 1 && 10 * n >= 9 * rays).then(|| {
-        format!(
-            "from the orbit, '{}' hides {n} of {rays} lines of sight to the other objects",
-            crate::text::one_line(name)
-        )
+        format!("from the orbit, '{name}' hides {n} of {rays} lines of sight to the other objects")
     }))
 }
 

@@ -434,7 +434,7 @@ pub fn render(c: &Comparison) -> String {
         let _ = writeln!(
             out,
             "{:<24} {:<16} {:>14} {:>14} {:>9}  {verdict}",
-            ch.mode,
+            crate::text::one_line(&ch.mode),
             ch.metric,
             num(ch.base),
             num(ch.new),
@@ -442,7 +442,7 @@ pub fn render(c: &Comparison) -> String {
         );
     }
     for note in &c.notes {
-        let _ = writeln!(out, "note: {note}");
+        let _ = writeln!(out, "note: {}", crate::text::one_line(note));
     }
     out
 }

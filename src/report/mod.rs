@@ -301,15 +301,16 @@ fn write_report_and_charts(dir: &Path, summary: &Summary, rows: &[FrameStats]) -
     Ok(names)
 }
 
-/// `missed` with object names that a spreadsheet would run as a formula
-/// (starting with `=`, `+`, `-`, `@`, a tab or a carriage return, as OWASP
-/// lists them) prefixed by `'`, which spreadsheets read as "text follows".
-/// Names come from model files, which may come from anyone.
+/// `missed` with object names as a spreadsheet should show them: on one
+/// line, with nothing that reorders or hides text ([`text::one_line`]),
+/// and prefixed by `'` (which spreadsheets read as "text follows") where
+/// it would run as a formula (starting with `=`, `+`, `-`, `@`, as OWASP
+/// lists them). Names come from model files, which may come from anyone.
 fn escape_formulas(missed: &[MissedObject]) -> Vec<MissedObject> {
     missed
         .iter()
         .map(|m| MissedObject {
-            name: crate::text::spreadsheet_safe(&m.name),
+            name: text::spreadsheet_safe(&text::one_line(&m.name)),
             ..m.clone()
         })
         .collect()
@@ -318,6 +319,22 @@ fn escape_formulas(missed: &[MissedObject]) -> Vec<MissedObject> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn missed_csv_names_run_no_formula_and_hide_nothing() {
+        let missed = MissedObject {
+            mode: "vfc".into(),
+            frame: 0,
+            object: 3,
+            name: "=wall\u{202E}gpj.exe\n".into(),
+            drawn: false,
+            wrong_pixels: 0,
+            first_x: None,
+            first_y: None,
+        };
+        let written = escape_formulas(std::slice::from_ref(&missed));
+        assert_eq!(written[0].name, "'=wall\\u{202e}gpj.exe\\n");
+    }
 
     #[test]
     fn whole_files_follow_links_and_write_devices_in_place() {

@@ -154,8 +154,8 @@ impl SceneBuilder {
     /// Degenerate triangles are dropped and counted; a mesh left with no
     /// triangles gives an empty group.
     pub fn add_mesh(&mut self, name: &str, positions: &[DVec3], indices: &[u32]) -> Result<MeshGroup, GeometryError> {
-        let name = &one_line(name);
-        let triangles = validate::triangles(name, positions, indices)?;
+        // The name as the file has it; escaped where a message quotes it.
+        let triangles = validate::triangles(&one_line(name), positions, indices)?;
         if triangles.degenerate > 0 {
             self.degenerate.push((name.to_string(), triangles.degenerate));
         }
@@ -221,7 +221,6 @@ impl SceneBuilder {
         transform: DAffine3,
     ) -> Result<std::ops::Range<usize>, GeometryError> {
         let first = self.objects.len();
-        let name = &one_line(name);
         let split = group.clusters.len() > 1;
         let part = self.parts.len() as u32;
         for (i, &(mesh, origin)) in group.clusters.iter().enumerate() {
@@ -229,9 +228,7 @@ impl SceneBuilder {
             let transform = transform * DAffine3::from_translation(origin);
             let bounds = m.bounds.transformed(&transform);
             if !transform.is_finite() || !validate::within_range(bounds.min) || !validate::within_range(bounds.max) {
-                return Err(GeometryError::ObjectOutOfRange {
-                    object: name.to_string(),
-                });
+                return Err(GeometryError::ObjectOutOfRange { object: one_line(name) });
             }
             self.objects.push(Object {
                 name: if split { format!("{name}#{i}") } else { name.to_string() },
