@@ -426,6 +426,9 @@ pub enum BenchEvent<'a> {
         done: u32,
         total: u32,
     },
+    /// The reference showed no object in any frame: every mode's numbers
+    /// are those of an empty picture.
+    NothingVisible,
 }
 
 pub struct BenchOutcome {
@@ -443,9 +446,10 @@ pub fn execute(
     plan: &BenchPlan,
     events: &mut dyn FnMut(BenchEvent) -> ControlFlow<()>,
 ) -> Result<BenchOutcome, BenchError> {
-    // A bad path file or output directory is reported before a long scene
-    // load, not after the run.
+    // A bad path file, WGPU_BACKEND or output directory is reported before
+    // a long scene load, not after the run.
     let path_file = plan.path.as_deref().map(CameraPath::load).transpose()?;
+    plan.backend.backends()?;
     // A merged folder's report.md and this run's would share a name.
     let merged = plan.out.join("merged.json");
     if merged.exists() {
@@ -570,6 +574,9 @@ pub fn execute(
     let output = run(&gpu, &mut world, &path, &mut cullers, &options, &mut |done, total| {
         events(BenchEvent::Frame { done, total })
     })?;
+    if plan.measure_error && output.rows.iter().all(|r| r.visible_objects == Some(0)) {
+        go_on(events(BenchEvent::NothingVisible))?;
+    }
 
     let descriptions: Vec<ModeDescription> = runs
         .iter()

@@ -166,6 +166,12 @@ enum Command {
     },
 }
 
+/// A frame count as `--frames` takes it: 1 to the most a path may have,
+/// said in the message for any other number (u32's own range would be).
+fn frame_count() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..=i64::from(occlu::camera::path::MAX_FRAMES))
+}
+
 /// Where the scene comes from: a file, or a built-in scene (the city by default).
 #[derive(Args)]
 struct SceneArgs {
@@ -223,7 +229,7 @@ struct SceneAndPath {
     path: Option<PathBuf>,
     /// Resamples the path to this many frames, as bench's --frames does
     /// [default: the path's].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = frame_count())]
     frames: Option<u32>,
 }
 
@@ -268,10 +274,10 @@ struct BenchArgs {
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     modes: Option<Vec<String>>,
     /// Frames to record; resamples the path [default: the path's].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = frame_count())]
     frames: Option<u32>,
     /// Frames run before recording starts [default: 3].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=i64::from(occlu::config::MAX_WARMUP)))]
     warmup: Option<u32>,
     /// Render size [default: 800x600].
     #[arg(long, value_name = "WxH")]
@@ -403,7 +409,7 @@ enum PathCommand {
         kind: Option<PathRequest>,
         /// Frames of the path [default: 120; one per camera for cameras; the
         /// animation's own time at 30 per second for animation].
-        #[arg(long, value_name = "N")]
+        #[arg(long, value_name = "N", value_parser = frame_count())]
         frames: Option<u32>,
         /// Output file.
         #[arg(long, short, value_name = "FILE")]
@@ -590,6 +596,8 @@ fn is_input_error(e: &anyhow::Error) -> bool {
             || c.is::<ModeError>()
             || c.is::<occlu::export::ExportError>()
             || c.downcast_ref::<StressError>().is_some_and(StressError::is_input_error)
+            || c.downcast_ref::<occlu::gpu::GpuError>()
+                .is_some_and(occlu::gpu::GpuError::is_input_error)
             || c.downcast_ref::<PictureError>()
                 .is_some_and(PictureError::is_input_error)
     })
@@ -789,6 +797,9 @@ fn heard(progress: &mut Progress, event: BenchEvent, note: &dyn Fn(String)) {
             }
         }
         BenchEvent::Frame { done, total } => progress.frame(done, total),
+        BenchEvent::NothingVisible => note(
+            "warning: no object was visible in any frame (the reference drew nothing): check the camera path, and the model's place and size".into(),
+        ),
     }
 }
 
@@ -928,8 +939,10 @@ fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
         emit(&list)?;
         return Ok(ExitCode::SUCCESS);
     }
+    let backend = args.backend.unwrap_or_default();
+    backend.backends()?;
     let _claim = args.out.as_deref().map(occlu::report::prepare_output).transpose()?;
-    let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
+    let gpu = occlu::gpu::GpuContext::new(backend)?;
     say!("adapter: {}", gpu.adapter);
     let bar = ProgressBar::new(0).with_style(
         ProgressStyle::with_template("{prefix:<15} [{bar:32}] {pos}/{len} frames, {elapsed} elapsed")
@@ -1009,9 +1022,11 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     };
     let params = ModeParams::parse(&args.params, &modes)?;
     args.scene.refuse_as_output(&args.output)?;
+    let backend = args.backend.unwrap_or_default();
+    backend.backends()?;
     let (scene, path) = args.scene.load()?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-    let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
+    let gpu = occlu::gpu::GpuContext::new(backend)?;
     if let Some(reason) = mode.info().unsupported_on(&gpu) {
         anyhow::bail!("mode '{mode}' cannot run on {}: {reason}", gpu.adapter);
     }
@@ -1183,9 +1198,6 @@ fn path_gen(
     frames: Option<u32>,
     output: PathBuf,
 ) -> anyhow::Result<()> {
-    if frames.is_some_and(|n| n == 0 || n > occlu::camera::path::MAX_FRAMES) {
-        return Err(PathError::FrameCount.into());
-    }
     if let Some(model) = &scene_args.model {
         occlu::report::refuse_input_as_output(&output, &[model])?;
     }
@@ -1193,7 +1205,7 @@ fn path_gen(
     let mut progress = Progress::new(false, 0, String::new());
     let generated = plan_heard(request.as_ref(), &scene, frames, progress.listener("planning the path"))?;
     // Validate what is written, so a generated file always loads.
-    let path = CameraPath::from_file(&generated.file, &output.display().to_string())?;
+    let path = CameraPath::from_file(&generated.file, &format!("generated:{}", generated.kind))?;
     let text = serde_json::to_string_pretty(&generated.file)? + "\n";
     occlu::report::write_whole(&output, text.as_bytes())?;
     say!(

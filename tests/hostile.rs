@@ -673,6 +673,54 @@ fn swr_records_the_buffer_it_used() {
     assert_eq!(summary["modes"][0]["parameters"]["resolution"], "64x48");
 }
 
+/// A unit cube's OBJ, moved by `offset` along x.
+fn cube_obj(offset: f64) -> String {
+    let mut obj = String::from("o cube\n");
+    for k in 0..8 {
+        let bit = |b: usize| f64::from(u8::from(k & b != 0));
+        obj += &format!("v {:?} {} {}\n", offset + bit(1), bit(2), bit(4));
+    }
+    for t in common::gltf_writer::cube_indices().chunks(3) {
+        obj += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    obj
+}
+
+#[test]
+fn a_model_too_far_out_for_its_size_is_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let far = write(dir.path(), "far.obj", cube_obj(1e17));
+    let info = occlu(&["info", s(&far), "--json"]);
+    assert!(info.status.success(), "{:?}", own_stderr(&info));
+    let facts: serde_json::Value = serde_json::from_str(&stdout(&info)).unwrap();
+    let warnings = facts["warnings"].to_string();
+    assert!(warnings.contains("1e17") && warnings.contains("nearer the origin"), "{warnings}");
+    let near = write(dir.path(), "near.obj", cube_obj(1e6));
+    let facts: serde_json::Value = serde_json::from_str(&stdout(&occlu(&["info", s(&near), "--json"]))).unwrap();
+    assert_eq!(facts["warnings"], serde_json::json!([]));
+    let out = dir.path().join("run");
+    let bench = occlu(&[
+        "bench",
+        s(&far),
+        "--modes",
+        "vfc",
+        "--frames",
+        "2",
+        "--warmup",
+        "0",
+        "--resolution",
+        "64x48",
+        "--out",
+        s(&out),
+    ]);
+    assert!(bench.status.success(), "{:?}", own_stderr(&bench));
+    assert!(
+        own_stderr(&bench).iter().any(|l| l.contains("no object was visible in any frame")),
+        "{:?}",
+        own_stderr(&bench)
+    );
+}
+
 #[test]
 fn names_from_files_reach_stderr_and_results_as_themselves_escaped_only_where_shown() {
     let dir = tempfile::tempdir().unwrap();
@@ -721,4 +769,49 @@ fn names_from_files_reach_stderr_and_results_as_themselves_escaped_only_where_sh
     let options = occlu::scene::LoadOptions::default();
     let scene = occlu::scene::load(&occlu::scene::SceneSpec::File(glb), &options).unwrap();
     assert_eq!(scene.objects[0].name, "door\n2\u{202E}");
+}
+
+#[test]
+fn small_input_faults_get_the_right_status_and_a_plain_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let bogus = Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .args(tiny_bench(&out, &[]))
+        .env("WGPU_BACKEND", "bogus")
+        .output()
+        .unwrap();
+    refused_with(&bogus, 2, &["WGPU_BACKEND", "bogus"], "WGPU_BACKEND=bogus");
+
+    let far = path_with(dir.path(), "near.json", r#""near": 1e308,"#, r#""target": [0, 0, 0]"#);
+    let run = occlu(&tiny_bench(&out, &["--path", s(&far)]));
+    refused_with(&run, 2, &["near.json", "got 1e308"], "near 1e308");
+    assert!(own_stderr(&run)[0].len() < 200, "{:?}", own_stderr(&run));
+
+    let tiny = write(dir.path(), "tiny.obj", "v 0 0 0\nv 1e-9 0 0\nv 0 1e-9 0\nf 1 2 3\n");
+    let x = dir.path().join("x.json");
+    let generated = occlu(&["path", "gen", s(&tiny), "-o", s(&x)]);
+    refused_with(&generated, 2, &["tiny.obj"], "path gen tiny.obj");
+    assert!(!own_stderr(&generated)[0].contains("x.json"), "{:?}", own_stderr(&generated));
+
+    let unknown = write(dir.path(), "unknown.json", r#"{"frams": 2}"#);
+    refused(
+        &tiny_bench(&out, &["--config", s(&unknown)]),
+        &["unknown field `frams`", "`sweep`", "`runs`", "`models`", "`scenes`", "`paths`"],
+    );
+
+    for command in [
+        vec!["bench", "--frames", "4294967296"],
+        vec!["path", "gen", "--frames", "0", "-o", "x.json"],
+        vec!["export", "--frames", "100001", "-o", "x.glb"],
+    ] {
+        refused(&command, &["1..=100000"]);
+    }
+    refused(&["bench", "--warmup", "10001"], &["0..=10000"]);
+
+    // A byte order mark, as Windows editors write, is not JSON's business.
+    let config = write(dir.path(), "bom.json", "\u{feff}{\"frames\": 2}");
+    let path = path_with(dir.path(), "path.json", "", r#""target": [0, 0, 0]"#);
+    let with_bom = [b"\xef\xbb\xbf".as_slice(), &std::fs::read(&path).unwrap()].concat();
+    std::fs::write(&path, with_bom).unwrap();
+    tiny_run(&out, &["--config", s(&config), "--path", s(&path)]);
 }

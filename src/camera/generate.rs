@@ -7,7 +7,7 @@ use std::str::FromStr;
 
 use glam::DVec3;
 
-use super::path::{CameraPath, DEFAULT_FOV_Y_DEG, Interpolation, KeyframeFile, PathError, PathFile};
+use super::path::{CameraPath, DEFAULT_FOV_Y_DEG, Interpolation, KeyframeFile, NEAR_RANGE, PathError, PathFile};
 use super::walk::{self, Walk};
 use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::scene::Scene;
@@ -169,6 +169,9 @@ pub fn plan_heard(
         },
     };
     let shape_frames = frames.unwrap_or(DEFAULT_FRAMES);
+    if kind.shape().is_some() {
+        too_small(scene)?;
+    }
     let (file, note) = match (kind, kind.shape()) {
         (_, Some(shape)) => generate_with(shape, scene, shape_frames, || match planned {
             Some(planned) => Ok(Some(planned)),
@@ -282,6 +285,27 @@ const OPEN_PLACE: f64 = 0.75;
 /// How long a walk must be, in its grid's cells, for a place to be walked
 /// rather than circled.
 const LONG_WALK: f64 = walk::LONG_ROUTE as f64;
+
+/// The near plane of a path made from a scene's shape, as a share of the
+/// scene's diagonal.
+const NEAR_SHARE: f64 = 1e-4;
+
+/// Refuses a scene too small for a path made from its shape: its near
+/// plane would be below the least a path may have, naming the model (not
+/// the path, which is not at fault).
+fn too_small(scene: &Scene) -> Result<(), PathError> {
+    let diagonal = scene.bounds.extent().length();
+    let least = *NEAR_RANGE.start();
+    if diagonal * NEAR_SHARE >= least {
+        return Ok(());
+    }
+    Err(PathError::Invalid {
+        path: scene.source.clone(),
+        message: format!(
+            "the model is {diagonal:.2e} units across, too small to make a path from: its near plane ({NEAR_SHARE:e} of that) would be below the {least:e} a camera path may have; scale the model up, or write the path by hand"
+        ),
+    })
+}
 
 /// What a path says when its planning spent [`PLANNING_TESTS`].
 fn spent() -> String {
@@ -443,7 +467,7 @@ fn generate_with(
     let file = PathFile {
         frames: Some(frames),
         fps: None,
-        near: Some(diagonal * 1e-4),
+        near: Some(diagonal * NEAR_SHARE),
         fov_y_deg: Some(DEFAULT_FOV_Y_DEG),
         up: Some(ground.up.to_array()),
         interpolation: Interpolation::CatmullRom,
@@ -512,7 +536,7 @@ impl Ground {
 
 /// Circles the scene's centre `c` about its up axis at 25° elevation, far
 /// enough that the bounding sphere (of diameter `diagonal`) fits the
-/// vertical field of view.
+/// vertical field of view, looking at `c`.
 fn orbit(ground: &Ground, c: DVec3, diagonal: f64) -> Vec<KeyframeFile> {
     let radius = 0.5 * diagonal / (DEFAULT_FOV_Y_DEG.to_radians() / 2.0).sin();
     let elevation = 25f64.to_radians();
@@ -523,10 +547,12 @@ fn orbit(ground: &Ground, c: DVec3, diagonal: f64) -> Vec<KeyframeFile> {
             let a = std::f64::consts::TAU * f64::from(k) / f64::from(steps);
             // For +Y up, (+X, −Z): anticlockwise seen from above.
             let around = right * a.cos() - ahead * a.sin();
-            let p = c + radius * (around * elevation.cos() + ground.up * elevation.sin());
+            let outward = around * elevation.cos() + ground.up * elevation.sin();
+            // Looking back along the offset, not at the centre: far from
+            // the origin, eye − centre would lose what f64 drops of both.
             KeyframeFile {
-                target: Some(c.to_array()),
-                ..key(f64::from(k), p)
+                direction: Some((-outward).to_array()),
+                ..key(f64::from(k), c + radius * outward)
             }
         })
         .collect()

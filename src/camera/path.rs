@@ -74,7 +74,7 @@ pub const MAX_FRAMES: u32 = 100_000;
 /// Near planes outside this range make reverse-Z depth of the farthest
 /// renderable geometry (`MAX_COORDINATE`) leave f32's normal range, or cull
 /// everything.
-const NEAR_RANGE: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
+pub const NEAR_RANGE: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
 /// Fields of view, degrees: narrower or wider would make the projection
 /// degenerate in f32.
 const FOV_RANGE: std::ops::RangeInclusive<f64> = 1e-3..=179.9;

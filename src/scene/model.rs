@@ -269,6 +269,7 @@ impl SceneBuilder {
         }
         let bounds = self.objects.iter().fold(Aabb::EMPTY, |b, o| b.union(o.bounds));
         let mut warnings = self.warnings;
+        warnings.extend(validate::coarse_coordinates(&bounds));
         let dropped: usize = self.degenerate.iter().map(|(_, n)| n).sum();
         if dropped > 0 {
             let worst: Vec<String> = self
