@@ -97,7 +97,11 @@ pub fn read_unlinked(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
 
 fn read_regular(path: &Path, limit: u64, follow_links: bool) -> std::io::Result<Vec<u8>> {
     let not_regular = || {
-        let what = if follow_links { "" } else { " (a link, a device or a pipe)" };
+        let what = if follow_links {
+            ""
+        } else {
+            " (a link, a device or a pipe)"
+        };
         std::io::Error::other(format!("not a regular file{what}"))
     };
     // Checked before opening, since opening some devices acts on them, and
@@ -150,8 +154,8 @@ fn read_regular(path: &Path, limit: u64, follow_links: bool) -> std::io::Result<
 /// [`read_file`] as UTF-8 text, without the byte order mark some editors
 /// on Windows put first (JSON parsers refuse it as a value).
 pub fn read_text(path: &Path, limit: u64) -> std::io::Result<String> {
-    let text =
-        String::from_utf8(read_file(path, limit)?).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))?;
+    let text = String::from_utf8(read_file(path, limit)?)
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))?;
     Ok(match text.strip_prefix('\u{feff}') {
         Some(rest) => rest.to_string(),
         None => text,

@@ -751,7 +751,10 @@ fn merge(dirs: &[PathBuf], out: &std::path::Path, allow_partial: bool) -> anyhow
         out.display()
     );
     for partial in &merged.missing {
-        say!("warning: a partial matrix, merged as asked (--allow-partial): {}", partial.describe());
+        say!(
+            "warning: a partial matrix, merged as asked (--allow-partial): {}",
+            partial.describe()
+        );
     }
     for run in &merged.runs {
         for d in &run.disagreements {

@@ -111,7 +111,12 @@ impl Matrix {
         // before it takes the memory. A list left out takes the defaults'
         // scene or path; when all three are, they add no run.
         let crossed = (models.len() + scenes.len()).max(1) * paths.len().max(1);
-        let listed_runs = entries.len() + if models.len() + scenes.len() + paths.len() > 0 { crossed } else { 0 };
+        let listed_runs = entries.len()
+            + if models.len() + scenes.len() + paths.len() > 0 {
+                crossed
+            } else {
+                0
+            };
         if listed_runs > MAX_RUNS {
             return Err(MatrixError::TooManyRuns {
                 path: file.display().to_string(),
@@ -253,10 +258,7 @@ impl Matrix {
 /// Refuses a field a configuration file cannot have, listing every one it
 /// can: a run's ([`BenchConfig`]'s) and the [`LISTS`] (which the run's
 /// own refusal would leave out, as they are taken off first).
-fn refuse_unknown_fields(
-    file: &Path,
-    fields: &serde_json::Map<String, serde_json::Value>,
-) -> Result<(), ConfigError> {
+fn refuse_unknown_fields(file: &Path, fields: &serde_json::Map<String, serde_json::Value>) -> Result<(), ConfigError> {
     // Every field of a run, as a default one serialises (None as null).
     let run = serde_json::to_value(BenchConfig::default()).expect("a configuration serialises");
     let known: Vec<&str> = run
@@ -507,7 +509,10 @@ mod tests {
         assert_eq!(m.entries.len(), MAX_RUNS);
         let e = matrix(dir.path(), &runs(MAX_RUNS + 1)).unwrap_err();
         assert!(e.to_string().contains("lists 10001 runs"), "{e}");
-        let listed = format!(r#"{{"runs": [{}], "scenes": ["city", "forest"]}}"#, vec!["{}"; MAX_RUNS - 2].join(","));
+        let listed = format!(
+            r#"{{"runs": [{}], "scenes": ["city", "forest"]}}"#,
+            vec!["{}"; MAX_RUNS - 2].join(",")
+        );
         assert_eq!(matrix(dir.path(), &listed).unwrap().entries.len(), MAX_RUNS);
     }
 

@@ -447,10 +447,15 @@ mod tests {
             }),
         };
         let limited = RayCaster::with_budget(&scene, budget);
-        let rays = (0..100).take_while(|_| limited.first_hit(origin, across, 10.0).is_some()).count();
+        let rays = (0..100)
+            .take_while(|_| limited.first_hit(origin, across, 10.0).is_some())
+            .count();
         assert_eq!(rays, 10, "the eleventh ray passes the budget");
         assert_eq!(limited.searching(), Err(Stopped::Spent));
-        assert!(limited.first_hit(origin, across, 10.0).is_none(), "nothing found once spent");
+        assert!(
+            limited.first_hit(origin, across, 10.0).is_none(),
+            "nothing found once spent"
+        );
         assert_eq!(told.get(), 1);
 
         let listening = Budget {
@@ -464,7 +469,11 @@ mod tests {
             cast += 1;
         }
         assert_eq!(stopped.searching(), Err(Stopped::Interrupted));
-        assert_eq!(cast as u64, Budget::TELL_EVERY.div_ceil(per_ray), "stopped when first told");
+        assert_eq!(
+            cast as u64,
+            Budget::TELL_EVERY.div_ceil(per_ray),
+            "stopped when first told"
+        );
     }
 
     #[test]

@@ -228,7 +228,9 @@ fn merge_copies_a_runs_regular_files_only_and_names_any_other() {
     let run = dir.path().join("run");
     tiny_run(&run, &[]);
     let secret = write(dir.path(), "secret.txt", "s3cret");
-    let cases: [(&str, &dyn Fn(&Path)); 3] = [
+    // Which file is replaced, and by what.
+    type Plant<'a> = dyn Fn(&Path) + 'a;
+    let cases: [(&str, &Plant); 3] = [
         ("report.md", &|p| symlink(&secret, p).unwrap()),
         ("report.md", &|p| mkfifo(p)),
         ("frame_time.png", &|p| symlink("/dev/zero", p).unwrap()),
@@ -338,10 +340,7 @@ fn ctrl_c_stops_path_planning() {
         panic!("Ctrl-C did not stop the run within 20 s");
     };
     assert_eq!(status.signal(), Some(2), "{lines:?}");
-    assert!(
-        lines.last().unwrap().starts_with("occlu: interrupted"),
-        "{lines:?}"
-    );
+    assert!(lines.last().unwrap().starts_with("occlu: interrupted"), "{lines:?}");
 }
 
 /// A config of a matrix of two runs of the one-block city.
@@ -379,7 +378,11 @@ fn merge_names_the_runs_a_matrix_lacks_and_refuses_them_unless_allowed() {
     assert!(!out.exists(), "nothing merged");
     let partial = occlu(&["merge", s(&shard), "--out", s(&out), "--allow-partial"]);
     assert!(partial.status.success(), "{:?}", own_stderr(&partial));
-    assert!(own_stderr(&partial).iter().any(|l| l.contains("02")), "{:?}", own_stderr(&partial));
+    assert!(
+        own_stderr(&partial).iter().any(|l| l.contains("02")),
+        "{:?}",
+        own_stderr(&partial)
+    );
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("run 02"), "{report}");
     let help = stdout(&occlu(&["merge", "--help"]));
@@ -392,9 +395,7 @@ fn path_with(dir: &Path, name: &str, top: &str, key: &str) -> PathBuf {
     write(
         dir,
         name,
-        format!(
-            r#"{{"frames": 2, {top} "keyframes": [{{"time": 0, "position": [0, 30, -40], {key}}}]}}"#
-        ),
+        format!(r#"{{"frames": 2, {top} "keyframes": [{{"time": 0, "position": [0, 30, -40], {key}}}]}}"#),
     )
 }
 
@@ -404,19 +405,47 @@ fn a_zero_up_or_one_along_the_view_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let cases = [
-        ("top.json", r#""up": [0, 0, 0],"#, r#""target": [0, 0, 0]"#, "up must not be zero"),
-        ("key.json", "", r#""target": [0, 0, 0], "up": [0, 0, 0]"#, "keyframe 0: up must not be zero"),
-        ("along.json", "", r#""direction": [0, -1, 0]"#, "keyframe 0: up [0, 1, 0] lies along the view"),
+        (
+            "top.json",
+            r#""up": [0, 0, 0],"#,
+            r#""target": [0, 0, 0]"#,
+            "up must not be zero",
+        ),
+        (
+            "key.json",
+            "",
+            r#""target": [0, 0, 0], "up": [0, 0, 0]"#,
+            "keyframe 0: up must not be zero",
+        ),
+        (
+            "along.json",
+            "",
+            r#""direction": [0, -1, 0]"#,
+            "keyframe 0: up [0, 1, 0] lies along the view",
+        ),
     ];
     for (name, top, key, message) in cases {
         let path = path_with(dir.path(), name, top, key);
         refused(&tiny_bench(&out, &["--path", s(&path)]), &[name, message]);
         refused(
-            &["export", "--scene", "city:blocks=1", "--path", s(&path), "-o", s(&dir.path().join("x.glb"))],
+            &[
+                "export",
+                "--scene",
+                "city:blocks=1",
+                "--path",
+                s(&path),
+                "-o",
+                s(&dir.path().join("x.glb")),
+            ],
             &[name, message],
         );
     }
-    let across = path_with(dir.path(), "across.json", "", r#""direction": [0, -1, 0], "up": [0, 0, 1]"#);
+    let across = path_with(
+        dir.path(),
+        "across.json",
+        "",
+        r#""direction": [0, -1, 0], "up": [0, 0, 1]"#,
+    );
     tiny_run(&out, &["--path", s(&across)]);
 }
 
@@ -445,8 +474,13 @@ fn compare_and_merge_take_statistics_only_from_valid_rows_of_frames_csv() {
     }
     // Rows per mode must be the run's frames.
     let short = dir.path().join("short");
-    rewritten_copy(&base, &short, &mut |rows| rows.retain(|r| !(r.mode == "dr" && r.frame == 0)));
-    refused(&["compare", s(&base), s(&short)], &["frames.csv", "dr", "1 row", "2 frames"]);
+    rewritten_copy(&base, &short, &mut |rows| {
+        rows.retain(|r| !(r.mode == "dr" && r.frame == 0))
+    });
+    refused(
+        &["compare", s(&base), s(&short)],
+        &["frames.csv", "dr", "1 row", "2 frames"],
+    );
     // Without its fingerprint, a frames.csv of its header alone is no run.
     let bare = dir.path().join("bare");
     rewritten_copy(&base, &bare, &mut |rows| rows.clear());
@@ -472,7 +506,10 @@ fn compare_and_merge_take_statistics_only_from_valid_rows_of_frames_csv() {
     assert!(merge.status.success(), "{:?}", own_stderr(&merge));
     let m: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(merged.join("merged.json")).unwrap()).unwrap();
-    assert_eq!(m["runs"][0]["modes"][0]["results"][0]["frame_ms"].as_f64(), Some(measured));
+    assert_eq!(
+        m["runs"][0]["modes"][0]["results"][0]["frame_ms"].as_f64(),
+        Some(measured)
+    );
     let same = occlu(&["compare", s(&base), s(&edited)]);
     assert!(same.status.success(), "{:?}", own_stderr(&same));
 }
@@ -511,7 +548,18 @@ fn no_output_may_be_an_input_or_one_of_the_runs_own_files() {
     let config = write(dir.path(), "config.json", r#"{"frames": 2}"#);
     for args in [
         vec!["render", s(&model), "--frame", "0", "--mode", "vfc", "-o", s(&model)],
-        vec!["render", s(&model), "--path", s(&path), "--frame", "0", "--mode", "vfc", "-o", s(&path)],
+        vec![
+            "render",
+            s(&model),
+            "--path",
+            s(&path),
+            "--frame",
+            "0",
+            "--mode",
+            "vfc",
+            "-o",
+            s(&path),
+        ],
         vec!["export", s(&model), "-o", s(&model)],
         vec!["path", "gen", s(&model), "-o", s(&model)],
         vec![
@@ -563,7 +611,10 @@ fn merged_runs_have_names_of_their_own_whatever_the_order_of_the_inputs() {
 /// Whether `out` was left behind.
 fn left(out: &Path) -> Vec<String> {
     std::fs::read_dir(out)
-        .map(|e| e.map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect())
+        .map(|e| {
+            e.map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect()
+        })
         .unwrap_or_default()
 }
 
@@ -658,7 +709,12 @@ fn duplicate_keys_are_refused_in_configs_and_paths() {
         let config = write(dir.path(), name, json);
         refused(&tiny_bench(&out, &["--config", s(&config)]), &[name, "duplicate"]);
     }
-    let path = path_with(dir.path(), "path.json", r#""near": 1, "near": 2,"#, r#""target": [0, 0, 0]"#);
+    let path = path_with(
+        dir.path(),
+        "path.json",
+        r#""near": 1, "near": 2,"#,
+        r#""target": [0, 0, 0]"#,
+    );
     refused(&tiny_bench(&out, &["--path", s(&path)]), &["path.json", "duplicate"]);
 }
 
@@ -694,7 +750,10 @@ fn a_model_too_far_out_for_its_size_is_warned_of() {
     assert!(info.status.success(), "{:?}", own_stderr(&info));
     let facts: serde_json::Value = serde_json::from_str(&stdout(&info)).unwrap();
     let warnings = facts["warnings"].to_string();
-    assert!(warnings.contains("1e17") && warnings.contains("nearer the origin"), "{warnings}");
+    assert!(
+        warnings.contains("1e17") && warnings.contains("nearer the origin"),
+        "{warnings}"
+    );
     let near = write(dir.path(), "near.obj", cube_obj(1e6));
     let facts: serde_json::Value = serde_json::from_str(&stdout(&occlu(&["info", s(&near), "--json"]))).unwrap();
     assert_eq!(facts["warnings"], serde_json::json!([]));
@@ -715,7 +774,9 @@ fn a_model_too_far_out_for_its_size_is_warned_of() {
     ]);
     assert!(bench.status.success(), "{:?}", own_stderr(&bench));
     assert!(
-        own_stderr(&bench).iter().any(|l| l.contains("no object was visible in any frame")),
+        own_stderr(&bench)
+            .iter()
+            .any(|l| l.contains("no object was visible in any frame")),
         "{:?}",
         own_stderr(&bench)
     );
@@ -756,7 +817,11 @@ fn names_from_files_reach_stderr_and_results_as_themselves_escaped_only_where_sh
     // summary.json holds the name as the file has it (JSON escapes it).
     let summary: occlu::report::Summary =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    assert!(summary.scene.facts.warnings[0].contains(name), "{:?}", summary.scene.facts.warnings);
+    assert!(
+        summary.scene.facts.warnings[0].contains(name),
+        "{:?}",
+        summary.scene.facts.warnings
+    );
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(!report.contains('\u{202E}') && !report.contains('\u{1b}'), "{report}");
     // Object names are kept as they are, for summary.json and missed.csv
@@ -791,12 +856,23 @@ fn small_input_faults_get_the_right_status_and_a_plain_message() {
     let x = dir.path().join("x.json");
     let generated = occlu(&["path", "gen", s(&tiny), "-o", s(&x)]);
     refused_with(&generated, 2, &["tiny.obj"], "path gen tiny.obj");
-    assert!(!own_stderr(&generated)[0].contains("x.json"), "{:?}", own_stderr(&generated));
+    assert!(
+        !own_stderr(&generated)[0].contains("x.json"),
+        "{:?}",
+        own_stderr(&generated)
+    );
 
     let unknown = write(dir.path(), "unknown.json", r#"{"frams": 2}"#);
     refused(
         &tiny_bench(&out, &["--config", s(&unknown)]),
-        &["unknown field `frams`", "`sweep`", "`runs`", "`models`", "`scenes`", "`paths`"],
+        &[
+            "unknown field `frams`",
+            "`sweep`",
+            "`runs`",
+            "`models`",
+            "`scenes`",
+            "`paths`",
+        ],
     );
 
     for command in [

@@ -402,9 +402,8 @@ fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Result<Optio
         return Ok(None);
     };
     let name = &scene.parts[hider as usize].name;
-    Ok((targets.len() > 1 && 10 * n >= 9 * rays).then(|| {
-        format!("from the orbit, '{name}' hides {n} of {rays} lines of sight to the other objects")
-    }))
+    Ok((targets.len() > 1 && 10 * n >= 9 * rays)
+        .then(|| format!("from the orbit, '{name}' hides {n} of {rays} lines of sight to the other objects")))
 }
 
 /// [`generate`], with `walk` planning the walk a scene without streets

@@ -195,7 +195,9 @@ impl CameraPath {
                     }
                     looking(forward)?
                 }
-                (None, Some(d), None) => looking(nonzero(vec3(d, "direction").map_err(&at)?, "direction").map_err(&at)?)?,
+                (None, Some(d), None) => {
+                    looking(nonzero(vec3(d, "direction").map_err(&at)?, "direction").map_err(&at)?)?
+                }
                 (None, None, Some(q)) => {
                     let q = DVec4::from(q);
                     // Scaled to unit size first, so huge or tiny components
@@ -458,14 +460,20 @@ mod tests {
                 .contains("keyframe 0: up [0, 1, 0] lies along the view direction [0, -10, 0]"),
             "{e}"
         );
-        let p = parse(&format!(r#"{{"frames": 1, "keyframes": [{down}, "up": [0, 0, -1]}}]}}"#)).unwrap();
+        let p = parse(&format!(
+            r#"{{"frames": 1, "keyframes": [{down}, "up": [0, 0, -1]}}]}}"#
+        ))
+        .unwrap();
         let c = p.camera(0, 1.0);
         assert!((c.forward() - DVec3::NEG_Y).length() < 1e-12);
         assert!((c.rotation * DVec3::Y - DVec3::NEG_Z).length() < 1e-12, "up as given");
         for zero in [r#""up": [0, 0, 0], "#, ""] {
             let key = if zero.is_empty() { r#", "up": [0, 0, 0]"# } else { "" };
             let json = format!(r#"{{"frames": 1, {zero}"keyframes": [{down}{key}}}]}}"#);
-            assert!(parse(&json).unwrap_err().to_string().contains("up must not be zero"), "{json}");
+            assert!(
+                parse(&json).unwrap_err().to_string().contains("up must not be zero"),
+                "{json}"
+            );
         }
     }
 

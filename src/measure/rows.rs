@@ -147,9 +147,24 @@ impl FrameStats {
         }
         let counts = [
             ("error_pixels", self.error_pixels, limits.pixels, "pixels in the frame"),
-            ("objects_drawn", Some(self.objects_drawn), limits.objects, "objects in the scene"),
-            ("visible_objects", self.visible_objects, limits.objects, "objects in the scene"),
-            ("missed_objects", self.missed_objects, limits.objects, "objects in the scene"),
+            (
+                "objects_drawn",
+                Some(self.objects_drawn),
+                limits.objects,
+                "objects in the scene",
+            ),
+            (
+                "visible_objects",
+                self.visible_objects,
+                limits.objects,
+                "objects in the scene",
+            ),
+            (
+                "missed_objects",
+                self.missed_objects,
+                limits.objects,
+                "objects in the scene",
+            ),
         ];
         counts.into_iter().find_map(|(column, value, most, what)| {
             value

@@ -70,11 +70,8 @@ pub fn abandon_unfinished() {
 /// the claim created) while they are empty.
 fn remove_unfinished(out: &Path, made: &Path) {
     let ours = staging(out);
-    let unused = std::fs::read_dir(out).is_ok_and(|entries| {
-        entries
-            .flatten()
-            .all(|e| e.file_name() == LOCK || e.path() == ours)
-    });
+    let unused = std::fs::read_dir(out)
+        .is_ok_and(|entries| entries.flatten().all(|e| e.file_name() == LOCK || e.path() == ours));
     if !unused {
         return;
     }
@@ -187,5 +184,9 @@ fn open_lock(path: &Path) -> std::io::Result<std::fs::File> {
     let own = std::os::unix::fs::MetadataExt::nlink(&metadata) == 1;
     #[cfg(not(unix))]
     let own = true;
-    if metadata.is_file() && own { Ok(file) } else { Err(refused()) }
+    if metadata.is_file() && own {
+        Ok(file)
+    } else {
+        Err(refused())
+    }
 }

@@ -98,7 +98,10 @@ pub fn refuse_own_file(output: &Path, dir: &Path, names: &[&str]) -> Result<(), 
     let resolved = |p: &Path| std::fs::canonicalize(p).ok();
     // Where the file is or would be: a link leads to what write_whole writes.
     let target = resolved(output).or_else(|| {
-        let parent = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let parent = output
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
         Some(resolved(parent)?.join(output.file_name()?))
     });
     let own = target.as_deref().is_some_and(|t| {

@@ -577,10 +577,7 @@ fn missing_runs(runs: &[(String, Vec<RunFolder>)]) -> Vec<MissingRuns> {
         let (Some(matrix), Some(name)) = (s.matrix, &s.run) else {
             continue;
         };
-        let place = name
-            .split('-')
-            .next()
-            .and_then(|digits| digits.parse::<usize>().ok());
+        let place = name.split('-').next().and_then(|digits| digits.parse::<usize>().ok());
         let at = match matrices.iter().position(|(m, _)| *m == matrix) {
             Some(at) => at,
             None => {
@@ -731,7 +728,9 @@ fn result_files(dir: &Path) -> Result<Vec<&'static str>, ReportError> {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
             Ok(m) if m.is_file() => present.push(name),
             Ok(_) => {
-                let error = std::io::Error::other("not a regular file (a link, a device or a pipe): merge copies a run's own files only");
+                let error = std::io::Error::other(
+                    "not a regular file (a link, a device or a pipe): merge copies a run's own files only",
+                );
                 return Err(ReportError::at(&path)(error));
             }
             Err(e) => return Err(ReportError::at(&path)(e)),
@@ -746,7 +745,8 @@ fn copy_run(run: &RunFolder, to: &Path) -> Result<(), ReportError> {
     for name in &run.files {
         let (source, target) = (run.dir.join(name), to.join(name));
         // Read, then written: an error names the file at fault.
-        let bytes = crate::input::read_unlinked(&source, crate::input::MODEL_LIMIT).map_err(ReportError::at(&source))?;
+        let bytes =
+            crate::input::read_unlinked(&source, crate::input::MODEL_LIMIT).map_err(ReportError::at(&source))?;
         std::fs::write(&target, bytes).map_err(ReportError::at(&target))?;
     }
     Ok(())

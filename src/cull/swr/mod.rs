@@ -343,7 +343,10 @@ impl Culler for SoftwareOcclusionCulling {
     /// at most the render size on each side.
     fn parameters(&self) -> serde_json::Value {
         let used = SwrParams {
-            resolution: self.buffer.as_ref().map_or(self.params.resolution, OcclusionBuffer::cells),
+            resolution: self
+                .buffer
+                .as_ref()
+                .map_or(self.params.resolution, OcclusionBuffer::cells),
             ..self.params
         };
         serde_json::json!(used)
