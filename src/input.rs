@@ -95,6 +95,36 @@ pub fn read_unlinked(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
     read_regular(path, limit, false)
 }
 
+/// Opens `path` with `options`, non-blocking (opening a pipe waits for its
+/// other end) and, unless `follow_links`, without following a link; what
+/// was opened must be a regular file. A link or anything else fails as
+/// `refused` says. Checked on what was opened, so the path cannot be
+/// swapped between a check and the open.
+pub fn open_regular(
+    options: &mut std::fs::OpenOptions,
+    path: &Path,
+    follow_links: bool,
+    refused: &dyn Fn() -> std::io::Error,
+) -> std::io::Result<(std::fs::File, std::fs::Metadata)> {
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(
+        options,
+        libc::O_NONBLOCK | if follow_links { 0 } else { libc::O_NOFOLLOW },
+    );
+    let file = options.open(path).map_err(|e| {
+        #[cfg(unix)]
+        if e.raw_os_error() == Some(libc::ELOOP) {
+            return refused();
+        }
+        e
+    })?;
+    let metadata = file.metadata()?;
+    if !metadata.is_file() {
+        return Err(refused());
+    }
+    Ok((file, metadata))
+}
+
 fn read_regular(path: &Path, limit: u64, follow_links: bool) -> std::io::Result<Vec<u8>> {
     let not_regular = || {
         let what = if follow_links {
@@ -115,24 +145,7 @@ fn read_regular(path: &Path, limit: u64, follow_links: bool) -> std::io::Result<
     if !metadata?.is_file() {
         return Err(not_regular());
     }
-    let mut options = std::fs::OpenOptions::new();
-    options.read(true);
-    #[cfg(unix)]
-    std::os::unix::fs::OpenOptionsExt::custom_flags(
-        &mut options,
-        libc::O_NONBLOCK | if follow_links { 0 } else { libc::O_NOFOLLOW },
-    );
-    let file = options.open(path).map_err(|e| {
-        #[cfg(unix)]
-        if e.raw_os_error() == Some(libc::ELOOP) {
-            return not_regular();
-        }
-        e
-    })?;
-    let metadata = file.metadata()?;
-    if !metadata.is_file() {
-        return Err(not_regular());
-    }
+    let (file, metadata) = open_regular(std::fs::OpenOptions::new().read(true), path, follow_links, &not_regular)?;
     let too_large = || {
         std::io::Error::new(
             std::io::ErrorKind::FileTooLarge,

@@ -3,24 +3,12 @@
 
 mod common;
 
-use common::{THREE_OBJECTS_OBJ, TINY_RUN, occlu, own_stderr, stdout, tampered_copy, write};
+use common::{THREE_OBJECTS_OBJ, TINY_RUN, occlu, own_stderr, said_one_line, stdout, tampered_copy, write};
 
 /// Runs occlu and checks it fails with exit code `code` and one line of
 /// stderr that contains every one of `needles`.
 fn fails_with(args: &[&str], code: i32, needles: &[&str]) {
     said_one_line(&occlu(args), code, needles, &format!("{args:?}"));
-}
-
-/// `out` exited with `code` after one line on stderr holding `needles`;
-/// `what` names the command in a failure.
-fn said_one_line(out: &std::process::Output, code: i32, needles: &[&str], what: &str) {
-    let lines = own_stderr(out);
-    assert_eq!(out.status.code(), Some(code), "{what}: {lines:?}");
-    assert_eq!(lines.len(), 1, "{what}: one line expected, got {lines:?}");
-    for n in needles {
-        assert!(lines[0].contains(n), "{what}: '{}' lacks '{n}'", lines[0]);
-    }
-    assert!(!lines[0].contains("panicked"), "{what}: {}", lines[0]);
 }
 
 /// A tiny run at 64×48 into `out`, with `extra`.

@@ -15,42 +15,25 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use common::gltf_writer::GltfWriter;
-use common::{occlu, own_stderr, rewritten_copy, stdout, tampered_copy, write};
+use common::{occlu, own_stderr, rewritten_copy, said_one_line, stdout, tampered_copy, write};
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// `out` exited with `code` after one line on stderr holding `needles`.
-fn refused_with(out: &std::process::Output, code: i32, needles: &[&str], what: &str) {
-    let lines = own_stderr(out);
-    assert_eq!(out.status.code(), Some(code), "{what}: {lines:?}");
-    assert_eq!(lines.len(), 1, "{what}: one line expected, got {lines:?}");
-    for n in needles {
-        assert!(lines[0].contains(n), "{what}: '{}' lacks '{n}'", lines[0]);
-    }
-}
-
 /// Runs occlu with `args` and checks it is refused with exit 2 in one line
 /// holding `needles`.
 fn refused(args: &[&str], needles: &[&str]) {
-    refused_with(&occlu(args), 2, needles, &format!("{args:?}"));
+    said_one_line(&occlu(args), 2, needles, &format!("{args:?}"));
 }
 
-/// `bench` of the one-block city at 64×48 into `out`, with `extra`: two
-/// frames of vfc unless `extra` gives `--frames` or `--modes`.
-fn tiny_bench<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
-    let mut args = vec![
-        "bench",
-        "--scene",
-        "city:blocks=1",
-        "--warmup",
-        "0",
-        "--resolution",
-        "64x48",
-        "--out",
-        s(out),
-    ];
+/// `bench` of `scene` (a model file, or `--scene` and a spec) at 64×48
+/// into `out`, with `extra`: two frames of vfc unless `extra` gives
+/// `--frames` or `--modes`.
+fn bench_of<'a>(scene: &[&'a str], out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec!["bench"];
+    args.extend_from_slice(scene);
+    args.extend(["--warmup", "0", "--resolution", "64x48", "--out", s(out)]);
     for (flag, default) in [("--frames", "2"), ("--modes", "vfc")] {
         if !extra.contains(&flag) {
             args.extend([flag, default]);
@@ -58,6 +41,11 @@ fn tiny_bench<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
     }
     args.extend_from_slice(extra);
     args
+}
+
+/// [`bench_of`] the one-block city.
+fn tiny_bench<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+    bench_of(&["--scene", "city:blocks=1"], out, extra)
 }
 
 /// A tiny run into `out`, which must succeed.
@@ -318,20 +306,7 @@ fn ctrl_c_stops_path_planning() {
     let (cube, indices) = common::gltf_writer::cube();
     let pile = pile_of_instances(dir.path(), 20_000, (cube, indices));
     let out = dir.path().join("run");
-    let mut bench = Running::start(&[
-        "bench",
-        s(&pile),
-        "--modes",
-        "vfc",
-        "--frames",
-        "2",
-        "--warmup",
-        "0",
-        "--resolution",
-        "64x48",
-        "--out",
-        s(&out),
-    ]);
+    let mut bench = Running::start(&bench_of(&[s(&pile)], &out, &[]));
     let loaded = bench.wait_for_line(Duration::from_secs(60), |l| l.starts_with("scene: "));
     assert!(loaded.is_some(), "{:?}", bench.lines());
     std::thread::sleep(Duration::from_millis(500));
@@ -758,20 +733,7 @@ fn a_model_too_far_out_for_its_size_is_warned_of() {
     let facts: serde_json::Value = serde_json::from_str(&stdout(&occlu(&["info", s(&near), "--json"]))).unwrap();
     assert_eq!(facts["warnings"], serde_json::json!([]));
     let out = dir.path().join("run");
-    let bench = occlu(&[
-        "bench",
-        s(&far),
-        "--modes",
-        "vfc",
-        "--frames",
-        "2",
-        "--warmup",
-        "0",
-        "--resolution",
-        "64x48",
-        "--out",
-        s(&out),
-    ]);
+    let bench = occlu(&bench_of(&[s(&far)], &out, &[]));
     assert!(bench.status.success(), "{:?}", own_stderr(&bench));
     assert!(
         own_stderr(&bench)
@@ -792,20 +754,7 @@ fn names_from_files_reach_stderr_and_results_as_themselves_escaped_only_where_sh
     let obj = format!("o {name}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\nf 1 1 1\n");
     let model = write(dir.path(), "ev\u{1b}il\nname.obj", obj);
     let out = dir.path().join("run");
-    let bench = occlu(&[
-        "bench",
-        s(&model),
-        "--modes",
-        "vfc",
-        "--frames",
-        "2",
-        "--warmup",
-        "0",
-        "--resolution",
-        "64x48",
-        "--out",
-        s(&out),
-    ]);
+    let bench = occlu(&bench_of(&[s(&model)], &out, &[]));
     assert!(bench.status.success(), "{:?}", own_stderr(&bench));
     let err = common::stderr(&bench);
     assert!(
@@ -845,17 +794,17 @@ fn small_input_faults_get_the_right_status_and_a_plain_message() {
         .env("WGPU_BACKEND", "bogus")
         .output()
         .unwrap();
-    refused_with(&bogus, 2, &["WGPU_BACKEND", "bogus"], "WGPU_BACKEND=bogus");
+    said_one_line(&bogus, 2, &["WGPU_BACKEND", "bogus"], "WGPU_BACKEND=bogus");
 
     let far = path_with(dir.path(), "near.json", r#""near": 1e308,"#, r#""target": [0, 0, 0]"#);
     let run = occlu(&tiny_bench(&out, &["--path", s(&far)]));
-    refused_with(&run, 2, &["near.json", "got 1e308"], "near 1e308");
+    said_one_line(&run, 2, &["near.json", "got 1e308"], "near 1e308");
     assert!(own_stderr(&run)[0].len() < 200, "{:?}", own_stderr(&run));
 
     let tiny = write(dir.path(), "tiny.obj", "v 0 0 0\nv 1e-9 0 0\nv 0 1e-9 0\nf 1 2 3\n");
     let x = dir.path().join("x.json");
     let generated = occlu(&["path", "gen", s(&tiny), "-o", s(&x)]);
-    refused_with(&generated, 2, &["tiny.obj"], "path gen tiny.obj");
+    said_one_line(&generated, 2, &["tiny.obj"], "path gen tiny.obj");
     assert!(
         !own_stderr(&generated)[0].contains("x.json"),
         "{:?}",

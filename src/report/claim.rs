@@ -169,24 +169,10 @@ fn open_lock(path: &Path) -> std::io::Result<std::fs::File> {
     };
     let mut options = std::fs::OpenOptions::new();
     options.read(true).write(true).create(true).truncate(false);
-    // Non-blocking: a pipe opened for writing could wait for a reader.
-    #[cfg(unix)]
-    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NOFOLLOW | libc::O_NONBLOCK);
-    let file = options.open(path).map_err(|e| {
-        #[cfg(unix)]
-        if e.raw_os_error() == Some(libc::ELOOP) {
-            return refused();
-        }
-        e
-    })?;
-    let metadata = file.metadata()?;
+    let (file, metadata) = crate::input::open_regular(&mut options, path, false, &refused)?;
     #[cfg(unix)]
     let own = std::os::unix::fs::MetadataExt::nlink(&metadata) == 1;
     #[cfg(not(unix))]
     let own = true;
-    if metadata.is_file() && own {
-        Ok(file)
-    } else {
-        Err(refused())
-    }
+    if own { Ok(file) } else { Err(refused()) }
 }

@@ -46,6 +46,18 @@ pub fn own_stderr(o: &Output) -> Vec<String> {
         .collect()
 }
 
+/// `out` exited with `code` after one line on stderr holding `needles`;
+/// `what` names the command in a failure.
+pub fn said_one_line(out: &Output, code: i32, needles: &[&str], what: &str) {
+    let lines = own_stderr(out);
+    assert_eq!(out.status.code(), Some(code), "{what}: {lines:?}");
+    assert_eq!(lines.len(), 1, "{what}: one line expected, got {lines:?}");
+    for n in needles {
+        assert!(lines[0].contains(n), "{what}: '{}' lacks '{n}'", lines[0]);
+    }
+    assert!(!lines[0].contains("panicked"), "{what}: {}", lines[0]);
+}
+
 pub fn write(dir: &Path, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, contents).expect("fixture written");
