@@ -22,7 +22,8 @@ pub fn one_line(text: &str) -> String {
 /// Whether `c` acts on text instead of showing: a control character, or
 /// one of Unicode's invisible format characters, which reorder what
 /// follows ("Trojan Source": U+202E makes `gpj.exe` read `exe.jpg`) or
-/// hide (zero-width characters, the byte order mark).
+/// hide (zero-width characters, the byte order mark, tag characters that
+/// spell invisible text).
 fn is_hidden(c: char) -> bool {
     c.is_control()
         || matches!(
@@ -35,6 +36,7 @@ fn is_hidden(c: char) -> bool {
                 | '\u{2060}'..='\u{206F}'
                 | '\u{FEFF}'
                 | '\u{FFF9}'..='\u{FFFB}'
+                | '\u{E0000}'..='\u{E007F}'
         )
 }
 
