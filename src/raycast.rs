@@ -70,34 +70,90 @@ pub enum Stopped {
     Interrupted,
 }
 
-/// The tests a caster has spent against its budget.
+/// The tests a caster has spent against its budget. Each test costs a
+/// decrement; the listener is told, and the budget checked, at the end of
+/// a stretch of tests.
 struct Work<'a> {
     budget: RefCell<Budget<'a>>,
-    spent: Cell<u64>,
-    /// When the listener is told next.
-    tell_at: Cell<u64>,
+    /// Tests counted up to the start of the current stretch.
+    counted: Cell<u64>,
+    /// The tests of the current stretch before the next telling, and
+    /// those left of them; both 0 once stopped.
+    stretch: Cell<u64>,
+    left: Cell<u64>,
     stopped: Cell<Option<Stopped>>,
 }
 
-impl Work<'_> {
+impl<'a> Work<'a> {
+    fn new(budget: Budget<'a>) -> Work<'a> {
+        let work = Work {
+            budget: RefCell::new(budget),
+            counted: Cell::new(0),
+            stretch: Cell::new(0),
+            left: Cell::new(0),
+            stopped: Cell::new(None),
+        };
+        work.next_stretch();
+        work
+    }
+
+    /// Tests spent so far.
+    fn spent(&self) -> u64 {
+        self.counted.get() + self.stretch.get() - self.left.get()
+    }
+
     /// Charges one test; whether the search may go on.
+    #[inline]
     fn charge(&self) -> bool {
+        match self.left.get() {
+            0 => self.tell(),
+            left => {
+                self.left.set(left - 1);
+                true
+            }
+        }
+    }
+
+    /// The test that ends a stretch: the listener told, the budget checked.
+    #[cold]
+    fn tell(&self) -> bool {
         if self.stopped.get().is_some() {
             return false;
         }
-        let spent = self.spent.get() + 1;
-        self.spent.set(spent);
-        if spent >= self.tell_at.get() {
-            self.tell_at.set(spent.saturating_add(Budget::TELL_EVERY));
+        let spent = self.counted.get() + self.stretch.get() + 1;
+        self.counted.set(spent);
+        let stopped = {
             let mut budget = self.budget.borrow_mut();
             let tests = budget.tests;
             if (budget.listener)(spent, tests).is_break() {
-                self.stopped.set(Some(Stopped::Interrupted));
-            } else if spent > tests {
-                self.stopped.set(Some(Stopped::Spent));
+                Some(Stopped::Interrupted)
+            } else {
+                (spent > tests).then_some(Stopped::Spent)
+            }
+        };
+        self.stopped.set(stopped);
+        match stopped {
+            Some(_) => {
+                self.stretch.set(0);
+                self.left.set(0);
+                false
+            }
+            None => {
+                self.next_stretch();
+                true
             }
         }
-        self.stopped.get().is_none()
+    }
+
+    /// Starts the stretch that ends at the next telling: after
+    /// [`Budget::TELL_EVERY`] tests, or with the first test past the budget.
+    fn next_stretch(&self) {
+        let counted = self.counted.get();
+        let tests = self.budget.borrow().tests;
+        let end = counted.saturating_add(Budget::TELL_EVERY).min(tests.saturating_add(1));
+        let stretch = end - counted - 1;
+        self.stretch.set(stretch);
+        self.left.set(stretch);
     }
 }
 
@@ -140,19 +196,12 @@ impl<'a> RayCaster<'a> {
     /// A caster that stops searching once `budget` is spent or its
     /// listener breaks.
     pub fn with_budget(scene: &'a Scene, budget: Budget<'a>) -> RayCaster<'a> {
-        // The listener is told at the budget's end, whatever TELL_EVERY.
-        let tell_at = Budget::TELL_EVERY.min(budget.tests.saturating_add(1));
         RayCaster {
             hierarchy: Hierarchy::build(&scene.objects, &HierarchyParams::default()),
             to_local: scene.objects.iter().map(|o| o.transform.inverse()).collect(),
             mesh_trees: scene.meshes.iter().map(|_| OnceLock::new()).collect(),
             scene,
-            work: Work {
-                budget: RefCell::new(budget),
-                spent: Cell::new(0),
-                tell_at: Cell::new(tell_at),
-                stopped: Cell::new(None),
-            },
+            work: Work::new(budget),
         }
     }
 
@@ -164,7 +213,7 @@ impl<'a> RayCaster<'a> {
 
     /// The box and triangle tests done so far.
     pub fn tests(&self) -> u64 {
-        self.work.spent.get()
+        self.work.spent()
     }
 
     /// The nearest surface along `origin + t·direction` for `t` in
