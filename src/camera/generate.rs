@@ -117,7 +117,7 @@ pub type PlanListener<'a> = Box<dyn FnMut(u64, u64) -> ControlFlow<()> + 'a>;
 /// The box and triangle tests planning one path may spend (walk and
 /// enclosure rays together): about 6 times what the most planning of the
 /// models in ../shared/models needs (two-cylinder-engine.glb, 91 M tests,
-/// 1.5 s on this project's 2-core machine; den-haag.obj 40 M), and 8 to 17 s
+/// 1.5 s on this project's 2-core machine; den-haag.obj 40 M), and 5 to 12 s
 /// of work there. A model beyond it (thousands of instances of one mesh in
 /// one place: every ray meets millions of triangles) gets the path that
 /// needs no planning: an orbit by default, a straight line for a walk.
