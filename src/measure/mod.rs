@@ -5,5 +5,5 @@ mod rows;
 mod summary;
 
 pub use reference::{DepthError, ErrorMeter, ObjectError};
-pub use rows::{FrameStats, MissedObject};
+pub use rows::{FrameStats, MissedObject, RowLimits};
 pub use summary::{Distribution, ModeDescription, ModeSummary, StrategyShare, summarize};
