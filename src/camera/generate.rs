@@ -9,9 +9,10 @@ use glam::DVec3;
 
 use super::path::{CameraPath, DEFAULT_FOV_Y_DEG, Interpolation, KeyframeFile, NEAR_RANGE, PathError, PathFile};
 use super::walk::{self, Walk};
+use crate::bounds::Aabb;
 use crate::raycast::{Budget, RayCaster, Stopped};
-use crate::scene::Scene;
 use crate::scene::cameras::{CameraPose, FileAnimation, SAMPLES_PER_SECOND};
+use crate::scene::{Focus, Scene};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PathKind {
@@ -127,6 +128,8 @@ pub const PLANNING_TESTS: u64 = 1 << 29;
 /// where the scene suggests one (the built-in scenes' streets), or where
 /// circling the model would show nothing but one object (a sky dome around
 /// it, or a closed shell hiding everything else); an orbit otherwise.
+/// Paths made from the scene's shape frame its focus ([`Focus`]), not a
+/// ground plane or sky dome around it.
 pub fn default_path(scene: &Scene) -> Result<(CameraPath, String), PathError> {
     default_path_heard(scene, Box::new(|_, _| ControlFlow::Continue(())))
 }
@@ -160,7 +163,8 @@ pub fn plan_heard(
         listener,
     };
     let caster = RayCaster::with_budget(scene, budget);
-    let walk = || walk::plan(scene, &caster);
+    let focus = Focus::of(scene);
+    let walk = || walk::plan(scene, &focus.bounds, &caster);
     let (kind, why, planned) = match request {
         Some(r) => (r.kind, "asked for".to_string(), None),
         None => match default_kind(scene, &caster, walk) {
@@ -170,10 +174,10 @@ pub fn plan_heard(
     };
     let shape_frames = frames.unwrap_or(DEFAULT_FRAMES);
     if kind.shape().is_some() {
-        too_small(scene)?;
+        too_small(scene, &focus)?;
     }
     let (file, note) = match (kind, kind.shape()) {
-        (_, Some(shape)) => generate_with(shape, scene, shape_frames, || match planned {
+        (_, Some(shape)) => generate_with(shape, scene, &focus, shape_frames, || match planned {
             Some(planned) => Ok(Some(planned)),
             None => walk(),
         })
@@ -291,10 +295,10 @@ const LONG_WALK: f64 = walk::LONG_ROUTE as f64;
 const NEAR_SHARE: f64 = 1e-4;
 
 /// Refuses a scene too small for a path made from its shape: its near
-/// plane would be below the least a path may have, naming the model (not
-/// the path, which is not at fault).
-fn too_small(scene: &Scene) -> Result<(), PathError> {
-    let diagonal = scene.bounds.extent().length();
+/// plane (a share of its focus) would be below the least a path may have,
+/// naming the model (not the path, which is not at fault).
+fn too_small(scene: &Scene, focus: &Focus) -> Result<(), PathError> {
+    let diagonal = focus.bounds.extent().length();
     let least = *NEAR_RANGE.start();
     if diagonal * NEAR_SHARE >= least {
         return Ok(());
@@ -337,9 +341,8 @@ fn default_kind(
             None,
         ));
     }
-    let ground = Ground::of(scene);
     let circle = "circled from outside";
-    let enclosed = enclosing(scene, caster, &ground)?;
+    let enclosed = enclosing(scene, caster)?;
     let Some(planned) = walk()? else {
         let why = enclosed.map_or("a model".to_string(), |e| format!("{e}, but"));
         return Ok((PathKind::Orbit, format!("{why} with no ground to walk: {circle}"), None));
@@ -368,13 +371,14 @@ fn default_kind(
     })
 }
 
-/// Why circling `scene` would show one object only, if it would: from the
-/// orbit (which circles outside the scene's bounds) one object is the first
-/// thing met on the way to nearly every other (a sky dome or a closed
-/// shell around the rest).
-fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Result<Option<String>, Stopped> {
+/// Why circling `scene` would show one object only, if it would: from an
+/// orbit outside the scene's bounds (ground planes and sky domes
+/// included) one object is the first thing met on the way to nearly every
+/// other (a sky dome or a closed shell around the rest).
+fn enclosing(scene: &Scene, caster: &RayCaster) -> Result<Option<String>, Stopped> {
     let b = scene.bounds;
-    let eyes: Vec<DVec3> = orbit(ground, b.center(), b.extent().length().max(1e-6))
+    let ground = Ground::of(scene, &b);
+    let eyes: Vec<DVec3> = orbit(&ground, b.center(), b.extent().length().max(1e-6))
         .iter()
         .map(|k| DVec3::from(k.position))
         .collect();
@@ -412,11 +416,12 @@ fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Result<Optio
 fn generate_with(
     kind: Shape,
     scene: &Scene,
+    focus: &Focus,
     frames: u32,
     walk: impl FnOnce() -> Result<Option<Walk>, Stopped>,
 ) -> Result<(PathFile, Option<String>), Stopped> {
-    let ground = Ground::of(scene);
-    let b = scene.bounds;
+    let b = focus.bounds;
+    let ground = Ground::of(scene, &b);
     let diagonal = b.extent().length().max(1e-6);
     let mut note = None;
     let keyframes = match kind {
@@ -463,6 +468,10 @@ fn generate_with(
                 .to_vec()
         }
     };
+    let note = match (note, focus.note(scene)) {
+        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
+        (a, b) => a.or(b),
+    };
     let file = PathFile {
         frames: Some(frames),
         fps: None,
@@ -487,21 +496,21 @@ fn key(time: f64, position: DVec3) -> KeyframeFile {
     }
 }
 
-/// The scene's ground plane, as its up axis defines it.
+/// The ground plane under a box of the scene (its bounds, or its focus),
+/// as the scene's up axis defines it.
 struct Ground {
     up: DVec3,
-    /// The two axes spanning the ground, and the scene's extent along each.
+    /// The two axes spanning the ground, and the box's extent along each.
     across: [(DVec3, f64); 2],
-    /// The scene's lowest and highest points along `up`.
+    /// The box's lowest and highest points along `up`.
     lowest: f64,
     highest: f64,
 }
 
 impl Ground {
-    fn of(scene: &Scene) -> Ground {
+    fn of(scene: &Scene, b: &Aabb) -> Ground {
         let up = scene.up.axis.vector();
         let (right, ahead) = scene.up.axis.ground_axes();
-        let b = scene.bounds;
         let along = |axis: DVec3| {
             let (least, greatest) = b.span_along(axis);
             greatest - least

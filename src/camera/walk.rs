@@ -3,7 +3,9 @@
 //! corridors (streets, naves, rooms), never through geometry.
 //!
 //! The ground plane (the scene's up axis) is laid with a grid of cells no
-//! wider than the eye is high, within bounds on the work. Down each cell's
+//! wider than the eye is high, within bounds on the work, over the model's
+//! focus (its bounds without a huge ground plane or sky dome,
+//! [`crate::scene::Focus`]). Down each cell's
 //! vertical line a ray cast finds every surface; a surface with room for an
 //! eye above it (eye height and a margin up to the next surface) is a
 //! floor, unless that room lies inside a closed part (the ray has crossed
@@ -87,13 +89,14 @@ struct Floor {
     height: f64,
 }
 
-/// Plans a walk through `scene`, or `None` when it has no ground with room
+/// Plans a walk through the part of `scene` within `bounds` (its focus:
+/// the grid covers that box), or `None` when it has no ground with room
 /// to walk (fewer than [`MIN_CELLS`] joined cells); stopped when `caster`
 /// stops (its budget spent, or Ctrl-C).
-pub fn plan(scene: &Scene, caster: &RayCaster) -> Result<Option<Walk>, Stopped> {
+pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<Walk>, Stopped> {
     let up = scene.up.axis.vector();
     let (right, ahead) = scene.up.axis.ground_axes();
-    let b = scene.bounds;
+    let b = *bounds;
     let (low, high) = b.span_along(up);
     let ((x0, x1), (y0, y1)) = (b.span_along(right), b.span_along(ahead));
     let (width, depth) = (x1 - x0, y1 - y0);
@@ -112,7 +115,7 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Result<Option<Walk>, Stopped> 
         right * (x0 + (i as f64 + 0.5) * cell) + ahead * (y0 + (j as f64 + 0.5) * cell) + up * height
     };
 
-    let solid = solid_parts(scene, right, ahead, up);
+    let solid = solid_parts(scene, &b, right, ahead, up);
     // Floors, cell by cell: surfaces with room for the eye and a margin
     // above them, outside every solid, below the model's top.
     let room = eye * 1.5;
@@ -258,12 +261,12 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Result<Option<Walk>, Stopped> 
 /// Which parts are solids to stand outside of: closed parts, but not a
 /// shell as tall as half the model that covers most of its ground (a hall,
 /// a sky box), which is space to walk in.
-fn solid_parts(scene: &Scene, right: DVec3, ahead: DVec3, up: DVec3) -> Vec<bool> {
+fn solid_parts(scene: &Scene, model: &Aabb, right: DVec3, ahead: DVec3, up: DVec3) -> Vec<bool> {
     let footprint = |b: &Aabb| {
         let e = b.extent();
         (e.dot(right.abs()), e.dot(ahead.abs()), e.dot(up.abs()))
     };
-    let (model_w, model_d, model_h) = footprint(&scene.bounds);
+    let (model_w, model_d, model_h) = footprint(model);
     let mut bounds = vec![Aabb::EMPTY; scene.parts.len()];
     for o in &scene.objects {
         bounds[o.part as usize] = bounds[o.part as usize].union(o.bounds);
