@@ -1,15 +1,18 @@
-//! The default path where it used to miss the model: a furnished room on a
-//! huge plane is framed, not the plane. Checked by the test's own
-//! computations: the room's box from the list the test built it from, the
-//! camera's pixel rays through that box, distances to every triangle.
+//! The default path's class where it used to miss the model: an interior
+//! (a hall under a roof) is walked inside, alone or on a ground plane 20
+//! times wider; a furnished room on a huge plane is framed, not the plane.
+//! Each is checked by the test's own computations: rays tried against
+//! every triangle in turn, the room's box from the list the test built it
+//! from, the camera's pixel rays through that box.
 
 mod common;
 
-use common::{boxes_obj, frames_too_near, world_triangles, write};
+use common::hall::hall;
+use common::{boxes_obj, first_hit, frames_too_near, occlu, stderr, world_triangles, write};
 use glam::DVec3;
 use occlu::bounds::Aabb;
-use occlu::camera::generate::{Generated, plan};
-use occlu::camera::path::CameraPath;
+use occlu::camera::generate::{Generated, PathKind, plan};
+use occlu::camera::path::{CameraPath, PathFile};
 use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
 
 type Boxes = Vec<(String, DVec3, DVec3)>;
@@ -35,8 +38,23 @@ fn plane_under(boxes: &[(String, DVec3, DVec3)], times: f64, top: f64) -> (Strin
 }
 
 fn load_boxes(dir: &std::path::Path, boxes: &[(String, DVec3, DVec3)]) -> Scene {
-    let model = write(dir, "model.obj", boxes_obj(boxes));
+    load_obj(dir, boxes_obj(boxes))
+}
+
+fn load_obj(dir: &std::path::Path, obj: String) -> Scene {
+    let model = write(dir, "model.obj", obj);
     load(&SceneSpec::File(model), &LoadOptions::default()).unwrap()
+}
+
+/// `boxes` as one OBJ object, one mesh (as a scan or a merged export
+/// gives a model).
+fn one_object(boxes: &[(String, DVec3, DVec3)]) -> String {
+    let obj = boxes_obj(boxes);
+    let faces = obj.lines().filter(|line| !line.starts_with("o "));
+    std::iter::once("o model")
+        .chain(faces)
+        .map(|line| format!("{line}\n"))
+        .collect()
 }
 
 /// The default path of `scene`, in `frames` frames.
@@ -44,6 +62,130 @@ fn default_of(scene: &Scene, frames: u32) -> (Generated, CameraPath) {
     let generated = plan(None, scene, Some(frames)).unwrap();
     let path = CameraPath::from_file(&generated.file, "default").unwrap();
     (generated, path)
+}
+
+/// Every keyframe of `generated` stands inside the model (a ray straight
+/// up meets it, and level rays meet it in at least six of eight directions
+/// within `reach`), `eye` above a floor, looking level and along the route.
+fn assert_walked_inside(scene: &Scene, generated: &Generated, reach: f64, eye: f64) {
+    let why = &generated.why;
+    assert_eq!(generated.kind, PathKind::Walk, "{why}");
+    let triangles = world_triangles(scene);
+    let keys = &generated.file.keyframes;
+    assert!(keys.len() >= 32, "{} keyframes ({why})", keys.len());
+    for (k, key) in keys.iter().enumerate() {
+        let p = DVec3::from(key.position);
+        assert!(
+            first_hit(&triangles, p, DVec3::Y, f64::INFINITY).is_some(),
+            "key {k} at {p}: open to the sky ({why})"
+        );
+        let walls = (0..8)
+            .filter(|&a| {
+                let angle = std::f64::consts::TAU * f64::from(a) / 8.0;
+                let direction = DVec3::new(angle.cos(), 0.0, angle.sin());
+                first_hit(&triangles, p, direction, reach).is_some()
+            })
+            .count();
+        assert!(walls >= 6, "key {k} at {p}: walls in {walls} of 8 directions ({why})");
+        let floor = first_hit(&triangles, p, DVec3::NEG_Y, f64::INFINITY);
+        assert!(
+            floor.is_some_and(|t| (t - eye).abs() < 1e-6),
+            "key {k} at {p}: floor {floor:?} below ({why})"
+        );
+        let look = DVec3::from(key.target.expect("a walk looks at a point ahead")) - p;
+        let along = match keys.get(k + 1) {
+            Some(next) => DVec3::from(next.position) - p,
+            None => p - DVec3::from(keys[k - 1].position),
+        };
+        assert!(
+            look.y.abs() < 1e-9 && look.dot(along) > 0.0,
+            "key {k} at {p}: looks {look}, the route goes {along}"
+        );
+    }
+}
+
+#[test]
+fn a_hall_under_a_roof_is_walked_inside() {
+    let dir = tempfile::tempdir().unwrap();
+    let boxes = hall();
+    // A piece an object, and the whole hall one mesh: what the orbit
+    // would miss is judged by triangles, whatever the objects.
+    for scene in [load_boxes(dir.path(), &boxes), load_obj(dir.path(), one_object(&boxes))] {
+        let (generated, path) = default_of(&scene, 120);
+        assert!(generated.why.starts_with("an interior"), "{}", generated.why);
+        assert_walked_inside(&scene, &generated, box_of(&boxes).extent().length(), 1.7);
+        assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+    }
+}
+
+#[test]
+fn a_roofed_porch_outside_the_door_is_left_out_of_the_walk() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = hall();
+    let reach = box_of(&boxes).extent().length();
+    // Outside the door (x 48, z 10 to 14): a floor and a roof 5 high on
+    // two posts, 12 deep and 16 wide, open on three sides.
+    boxes.extend([
+        part("porch_floor", [48.0, -0.5, 4.0], [60.0, 0.0, 20.0]),
+        part("porch_roof", [48.0, 5.0, 4.0], [60.0, 5.5, 20.0]),
+        part("porch_post_a", [59.0, 0.0, 4.0], [60.0, 5.0, 5.0]),
+        part("porch_post_b", [59.0, 0.0, 19.0], [60.0, 5.0, 20.0]),
+    ]);
+    let scene = load_boxes(dir.path(), &boxes);
+    let (generated, path) = default_of(&scene, 120);
+    assert!(generated.why.starts_with("an interior"), "{}", generated.why);
+    assert_walked_inside(&scene, &generated, reach, 1.7);
+    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+}
+
+#[test]
+fn a_hall_on_a_ground_plane_20_times_wider_is_walked_inside() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = hall();
+    let reach = box_of(&boxes).extent().length();
+    boxes.push(plane_under(&boxes, 20.0, -0.5));
+    let scene = load_boxes(dir.path(), &boxes);
+    let (generated, path) = default_of(&scene, 120);
+    let why = &generated.why;
+    assert!(
+        why.starts_with("an interior") && why.contains("without 'ground'"),
+        "{why}"
+    );
+    assert_walked_inside(&scene, &generated, reach, 1.7);
+    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+}
+
+#[test]
+fn path_gen_says_the_class_and_why_and_kind_still_overrides_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = hall();
+    let walls = box_of(&boxes);
+    boxes.push(plane_under(&boxes, 20.0, -0.5));
+    let model = write(dir.path(), "hall.obj", boxes_obj(&boxes));
+    let output = dir.path().join("path.json");
+    let path_gen = |kind: &[&str]| {
+        let out = occlu(
+            &[
+                &["path", "gen", model.to_str().unwrap(), "-o", output.to_str().unwrap()],
+                kind,
+            ]
+            .concat(),
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        let file: PathFile = serde_json::from_slice(&std::fs::read(&output).unwrap()).unwrap();
+        (stderr(&out), file)
+    };
+    let (said, _) = path_gen(&[]);
+    assert!(said.contains("(walk: an interior ("), "{said}");
+    assert!(said.contains("without 'ground'"), "{said}");
+    // Asked for, an orbit circles the hall, not the plane.
+    let (said, orbit) = path_gen(&["--kind", "orbit"]);
+    assert!(said.contains("(orbit: asked for; framing its detail"), "{said}");
+    let size = walls.extent().length();
+    for key in &orbit.keyframes {
+        let away = distance_to_box(DVec3::from(key.position), &walls);
+        assert!(away <= 3.0 * size, "{away:.1} from the hall, {size:.1} across");
+    }
 }
 
 /// A room 10 × 10 in metres, +Y up, without a roof: walls 3 tall (a door

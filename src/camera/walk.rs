@@ -5,23 +5,25 @@
 //! The ground plane (the scene's up axis) is laid with a grid of cells no
 //! wider than the eye is high, within bounds on the work, over the model's
 //! focus (its bounds without a huge ground plane or sky dome,
-//! [`crate::scene::Focus`]). Down each cell's
-//! vertical line a ray cast finds every surface; a surface with room for an
-//! eye above it (eye height and a margin up to the next surface) is a
-//! floor, unless that room lies inside a closed part (the ray has crossed
-//! its surface an odd number of times: inside a thick ground slab, a closed
-//! building; a closed hall or sky box around everything is space, not a
-//! solid), or the floor is the model's top (nothing rises two eye heights
-//! above it: a tower's roof). Floors of neighbouring cells within a step
-//! (half the eye height) of each other are linked, so the ground may slope,
-//! climb stairs and lie at several levels (an island and the sea, storeys).
-//! A floor linked on all four sides is open (the eye stays a cell from every
-//! wall), and two linked open floors are joined when a ray at eye height
-//! passes between them. The walk is the longest of the shortest routes
-//! through the largest joined region (two breadth-first searches), in cell
-//! steps, of the streets (open floors with walls near in half the
-//! directions) when they hold a long enough one and a quarter of the open
-//! ground joined to them, else of all open floors.
+//! [`crate::scene::Focus`]). Down each cell's vertical line a ray cast finds
+//! every surface; a surface with room for an eye above it (eye height and a
+//! margin up to the next surface) is a floor, unless that room lies inside a
+//! closed part (the ray has crossed its surface an odd number of times:
+//! inside a thick ground slab, a closed building; a closed hall or sky box
+//! around everything is space, not a solid), or the floor is the model's top
+//! (nothing rises two eye heights above it: a tower's roof). Floors of
+//! neighbouring cells within a step (half the eye height) of each other are
+//! linked, so the ground may slope, climb stairs and lie at several levels
+//! (an island and the sea, storeys). A floor linked on all four sides is
+//! open (the eye stays a cell from every wall), and two linked open floors
+//! are joined when a ray at eye height passes between them. The walk is the
+//! longest of the shortest routes through the largest joined region (two
+//! breadth-first searches), in cell steps, of the interior (open floors
+//! indoors: a ray up meets the model, and level rays meet it in six of
+//! eight directions) when it holds at least half of the open floors; else
+//! of the streets (open floors with walls near in half the directions)
+//! when they hold a long enough one and a quarter of the open ground
+//! joined to them; else of all open floors.
 
 use std::collections::VecDeque;
 
@@ -30,6 +32,27 @@ use glam::DVec3;
 use crate::bounds::Aabb;
 use crate::raycast::{Hit, RayCaster, Stopped};
 use crate::scene::Scene;
+
+/// What a walk's route goes through.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Through {
+    /// Open floors indoors: under a roof, with walls around ([`plan`]).
+    Interior,
+    /// Open floors with walls near in half the directions.
+    Streets,
+    /// Any open floors.
+    OpenGround,
+}
+
+impl std::fmt::Display for Through {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(match self {
+            Through::Interior => "the interior",
+            Through::Streets => "the streets",
+            Through::OpenGround => "the open ground",
+        })
+    }
+}
 
 /// A planned walk: eye positions along the route, and what it rests on.
 #[derive(Clone, Debug, PartialEq)]
@@ -45,6 +68,12 @@ pub struct Walk {
     /// The share of the route's cells open to the sky (nothing above the
     /// eye): streets are, the inside of an object is not.
     pub open_sky: f64,
+    /// What the route goes through.
+    pub through: Through,
+    /// The share of the open floors indoors (under a roof, walls around)
+    /// and joined (the largest region of them): most of an interior's,
+    /// none of a town's.
+    pub indoors: f64,
 }
 
 impl Walk {
@@ -209,25 +238,27 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         }
         Some((route, size))
     };
-    // Streets: open floors with walls around, where at least half of eight
-    // level rays meet something within [`STREET_REACH`] cells; a walk along
-    // them sees occlusion, one round the open outskirts does not.
-    let walled = |f: usize| {
+    // Of eight level rays from floor `f`'s eye, how many meet something
+    // within `reach`.
+    let walls = |f: usize, reach: f64| {
         let p = point(f);
-        let reach = STREET_REACH * cell;
-        let walls = (0..8)
+        (0..8)
             .filter(|&a| {
                 let angle = std::f64::consts::TAU * f64::from(a) / 8.0;
                 let direction = right * angle.cos() + ahead * angle.sin();
                 caster.first_hit(p, direction, reach).is_some()
             })
-            .count();
-        // At a crossing only the four diagonals meet walls.
-        walls >= 4
+            .count()
     };
-    // Where a street meets a crossing, a cell or two see too few walls:
-    // streets take in the open floors that near.
-    let walled: Vec<bool> = (0..floors.len()).map(|f| open[f] && walled(f)).collect();
+    // Streets: open floors with walls around, where at least half of eight
+    // level rays meet something within [`STREET_REACH`] cells (at a
+    // crossing only the four diagonals do); a walk along them sees
+    // occlusion, one round the open outskirts does not. Where a street
+    // meets a crossing, a cell or two see too few walls: streets take in
+    // the open floors that near.
+    let walled: Vec<bool> = (0..floors.len())
+        .map(|f| open[f] && walls(f, STREET_REACH * cell) >= 4)
+        .collect();
     caster.searching()?;
     let streets = widen(&walled, &links, &open, STREET_GAP);
     // The streets' route when it is long, and its streets are a good part
@@ -237,7 +268,31 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         let (_, _, around) = farthest(&open_edges, route[0]);
         route.len() >= LONG_ROUTE && *size as f64 >= STREET_SHARE * around as f64
     });
-    let Some((route, region)) = street_route.or_else(|| longest_route(&open)) else {
+    // Interiors: open floors indoors, under a roof (a ray up meets the
+    // model below its top) with walls around (level rays meet the model
+    // within its size in six of eight directions), not under a porch or a
+    // canopy open at the sides. When their largest joined region holds
+    // most of the open floor, the walk goes through it.
+    let open_count = open.iter().filter(|&&o| o).count();
+    let reach = b.extent().length();
+    let indoors: Vec<bool> = (0..floors.len())
+        .map(|f| {
+            let p = point(f);
+            open[f] && caster.first_hit(p, up, top - p.dot(up)).is_some() && walls(f, reach) >= INTERIOR_WALLS
+        })
+        .collect();
+    caster.searching()?;
+    let interior = longest_route(&indoors);
+    let indoors_share = interior
+        .as_ref()
+        .map_or(0.0, |(_, size)| *size as f64 / open_count.max(1) as f64);
+    let interior = interior.filter(|(route, size)| route.len() >= LONG_ROUTE && 2 * size >= open_count);
+    let (through, found) = match (interior, street_route) {
+        (Some(interior), _) => (Through::Interior, Some(interior)),
+        (None, Some(streets)) => (Through::Streets, Some(streets)),
+        (None, None) => (Through::OpenGround, longest_route(&open)),
+    };
+    let Some((route, region)) = found else {
         return Ok(None);
     };
     if route.len() < MIN_CELLS {
@@ -255,6 +310,8 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         cell,
         region: region as f64 / (nx * ny) as f64,
         open_sky: sky as f64 / points.len() as f64,
+        through,
+        indoors: indoors_share,
     }))
 }
 
@@ -282,6 +339,10 @@ fn solid_parts(scene: &Scene, model: &Aabb, right: DVec3, ahead: DVec3, up: DVec
         })
         .collect()
 }
+
+/// Of eight level rays from an interior's floor, how many must meet the
+/// model.
+const INTERIOR_WALLS: usize = 6;
 
 /// How far (in cells) a street's walls may lie.
 const STREET_REACH: f64 = 16.0;
