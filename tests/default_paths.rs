@@ -1,14 +1,17 @@
 //! The default path's class where it used to miss the model: an interior
 //! (a hall under a roof) is walked inside, alone or on a ground plane 20
-//! times wider; a furnished room on a huge plane is framed, not the plane.
-//! Each is checked by the test's own computations: rays tried against
-//! every triangle in turn, the room's box from the list the test built it
-//! from, the camera's pixel rays through that box.
+//! times wider; a furnished room on a huge plane is framed, not the plane;
+//! and every model in ../shared/models and every built-in scene keeps the
+//! kind of path it had. Each is checked by the test's own computations:
+//! rays tried against every triangle in turn, the room's box from the list
+//! the test built it from, the camera's pixel rays through that box.
 
 mod common;
 
 use common::hall::hall;
-use common::{boxes_obj, first_hit, frames_too_near, occlu, stderr, world_triangles, write};
+use common::{
+    boxes_obj, first_hit, frames_too_near, occlu, shared_models, shared_models_dir, stderr, world_triangles, write,
+};
 use glam::DVec3;
 use occlu::bounds::Aabb;
 use occlu::camera::generate::{Generated, PathKind, plan};
@@ -277,4 +280,56 @@ fn a_furnished_room_on_a_huge_plane_is_framed_not_the_plane() {
         );
     }
     assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+}
+
+/// The kind of default path each model in ../shared/models had before
+/// interiors and focus bounds, by file name.
+const SHARED_KINDS: &[(&str, PathKind)] = &[
+    ("bunny.obj", PathKind::Orbit),
+    ("den-haag.obj", PathKind::Walk),
+    ("teapot.obj", PathKind::Orbit),
+    ("two-cylinder-engine.glb", PathKind::Orbit),
+    ("building-garage.glb", PathKind::Orbit),
+    ("building-small-a.glb", PathKind::Orbit),
+    ("building-small-b.glb", PathKind::Orbit),
+    ("building-small-c.glb", PathKind::Orbit),
+    ("building-small-d.glb", PathKind::Orbit),
+    ("grass-trees-tall.glb", PathKind::Orbit),
+    ("grass-trees.glb", PathKind::Orbit),
+    ("grass.glb", PathKind::Orbit),
+    ("pavement-fountain.glb", PathKind::Walk),
+    ("pavement.glb", PathKind::Orbit),
+    ("road-corner.glb", PathKind::Walk),
+    ("road-intersection.glb", PathKind::Walk),
+    ("road-split.glb", PathKind::Walk),
+    ("road-straight-lightposts.glb", PathKind::Walk),
+    ("road-straight.glb", PathKind::Walk),
+];
+
+#[test]
+fn every_shared_model_and_built_in_scene_keeps_its_kind_of_path() {
+    for spec in ["city", "forest"] {
+        let mut scene = load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).unwrap();
+        let generated = plan(None, &scene, Some(10)).unwrap();
+        assert_eq!(generated.kind, PathKind::Walk, "{spec}: {}", generated.why);
+        // Without the streets it was built with, as a file of it loads: a
+        // place with open ground.
+        scene.walk_hint = None;
+        let generated = plan(None, &scene, Some(10)).unwrap();
+        assert_eq!(generated.kind, PathKind::Walk, "{spec} as a file: {}", generated.why);
+    }
+    let dir = shared_models_dir();
+    if !dir.exists() {
+        eprintln!("skipped the shared models: {} is absent", dir.display());
+        return;
+    }
+    for (model, _) in shared_models(&dir) {
+        let name = model.file_name().unwrap().to_string_lossy().into_owned();
+        let Some(&(_, kind)) = SHARED_KINDS.iter().find(|(n, _)| *n == name) else {
+            panic!("{name}: not in SHARED_KINDS; add the kind of path it gets today");
+        };
+        let scene = load(&SceneSpec::File(model.clone()), &LoadOptions::default()).unwrap();
+        let generated = plan(None, &scene, Some(10)).unwrap();
+        assert_eq!(generated.kind, kind, "{name}: {}", generated.why);
+    }
 }
