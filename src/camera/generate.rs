@@ -353,7 +353,11 @@ fn default_kind(
     };
     let length = planned.length();
     let long = length >= LONG_WALK * planned.cell;
-    let (open, indoors) = (100.0 * planned.open_sky, 100.0 * planned.indoors);
+    let (open, roofed, indoors) = (
+        100.0 * planned.open_sky,
+        100.0 * planned.roofed,
+        100.0 * planned.indoors,
+    );
     let unseen = sight.unseen_note();
     Ok(match enclosed {
         Some(why) => (PathKind::Walk, why, Some(planned)),
@@ -364,13 +368,15 @@ fn default_kind(
         ),
         None if planned.through == Through::Interior && long && sight.misses_most() => (
             PathKind::Walk,
-            format!("an interior ({indoors:.0}% of the walkable floor indoors and joined, {unseen})"),
+            format!(
+                "an interior ({indoors:.0}% of the walkable floor indoors, under a roof with walls around, and joined; {unseen})"
+            ),
             Some(planned),
         ),
         None => (
             PathKind::Orbit,
             format!(
-                "an object (its longest walk {length:.1} units over {:.0} cells, {open:.0}% under the sky; {indoors:.0}% of the walkable floor indoors and joined, {unseen}): {circle}",
+                "an object (its longest walk {length:.1} units over {:.0} cells, {open:.0}% under the sky; {roofed:.0}% of the walkable floor under a roof and joined; {unseen}): {circle}",
                 length / planned.cell,
             ),
             None,

@@ -70,9 +70,12 @@ pub struct Walk {
     pub open_sky: f64,
     /// What the route goes through.
     pub through: Through,
+    /// The share of the open floors under a roof and joined (the largest
+    /// region of them): most of an interior's, none of a town's.
+    pub roofed: f64,
     /// The share of the open floors indoors (under a roof, walls around)
-    /// and joined (the largest region of them): most of an interior's,
-    /// none of a town's.
+    /// and joined; judged only where the roofed share is at least half,
+    /// 0 otherwise.
     pub indoors: f64,
 }
 
@@ -219,8 +222,8 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         .collect();
     caster.searching()?;
     // The longest shortest route through the largest joined region of
-    // `chosen` open floors, and the region's size.
-    let longest_route = |chosen: &[bool]| -> Option<(Vec<usize>, usize)> {
+    // `chosen` open floors, and the region's floors.
+    let longest_route = |chosen: &[bool]| -> Option<(Vec<usize>, Vec<usize>)> {
         let edges: Vec<Vec<usize>> = open_edges
             .iter()
             .enumerate()
@@ -231,12 +234,12 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
             .collect();
         let start = largest_region(&edges, chosen)?;
         let (far, _, _) = farthest(&edges, start);
-        let (end, parents, size) = farthest(&edges, far);
+        let (end, parents, region) = farthest(&edges, far);
         let mut route = vec![end];
         while let Some(previous) = parents[route[route.len() - 1]] {
             route.push(previous);
         }
-        Some((route, size))
+        Some((route, region))
     };
     // Of eight level rays from floor `f`'s eye, how many meet something
     // within `reach`.
@@ -264,29 +267,39 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
     // The streets' route when it is long, and its streets are a good part
     // of the open ground around them, not a lane between a few walls in a
     // park or a forest.
-    let street_route = longest_route(&streets).filter(|(route, size)| {
+    let street_route = longest_route(&streets).filter(|(route, region)| {
         let (_, _, around) = farthest(&open_edges, route[0]);
-        route.len() >= LONG_ROUTE && *size as f64 >= STREET_SHARE * around as f64
+        route.len() >= LONG_ROUTE && region.len() as f64 >= STREET_SHARE * around.len() as f64
     });
     // Interiors: open floors indoors, under a roof (a ray up meets the
     // model below its top) with walls around (level rays meet the model
     // within its size in six of eight directions), not under a porch or a
     // canopy open at the sides. When their largest joined region holds
-    // most of the open floor, the walk goes through it.
+    // most of the open floor, the walk goes through it. It lies in one
+    // joined region of roofed floors, so only one that large is searched
+    // for walls (the inside of an object is roofed, but seldom most).
     let open_count = open.iter().filter(|&&o| o).count();
-    let reach = b.extent().length();
-    let indoors: Vec<bool> = (0..floors.len())
+    let most = |region: &[usize]| 2 * region.len() >= open_count;
+    let roofed: Vec<bool> = (0..floors.len())
         .map(|f| {
             let p = point(f);
-            open[f] && caster.first_hit(p, up, top - p.dot(up)).is_some() && walls(f, reach) >= INTERIOR_WALLS
+            open[f] && caster.first_hit(p, up, top - p.dot(up)).is_some()
         })
         .collect();
     caster.searching()?;
+    let roofed = longest_route(&roofed).map_or_else(Vec::new, |(_, region)| region);
+    let mut indoors = vec![false; floors.len()];
+    if most(&roofed) {
+        let reach = b.extent().length();
+        for &f in &roofed {
+            indoors[f] = walls(f, reach) >= INTERIOR_WALLS;
+        }
+        caster.searching()?;
+    }
     let interior = longest_route(&indoors);
-    let indoors_share = interior
-        .as_ref()
-        .map_or(0.0, |(_, size)| *size as f64 / open_count.max(1) as f64);
-    let interior = interior.filter(|(route, size)| route.len() >= LONG_ROUTE && 2 * size >= open_count);
+    let share = |region: &[usize]| region.len() as f64 / open_count.max(1) as f64;
+    let indoors_share = interior.as_ref().map_or(0.0, |(_, region)| share(region));
+    let interior = interior.filter(|(route, region)| route.len() >= LONG_ROUTE && most(region));
     let (through, found) = match (interior, street_route) {
         (Some(interior), _) => (Through::Interior, Some(interior)),
         (None, Some(streets)) => (Through::Streets, Some(streets)),
@@ -295,6 +308,7 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
     let Some((route, region)) = found else {
         return Ok(None);
     };
+    let region = region.len();
     if route.len() < MIN_CELLS {
         return Ok(None);
     }
@@ -311,6 +325,7 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         region: region as f64 / (nx * ny) as f64,
         open_sky: sky as f64 / points.len() as f64,
         through,
+        roofed: share(&roofed),
         indoors: indoors_share,
     }))
 }
@@ -408,16 +423,16 @@ fn largest_region(edges: &[Vec<usize>], open: &[bool]) -> Option<usize> {
 }
 
 /// The cell farthest from `start` in steps, each reached cell's parent on a
-/// shortest route from `start`, and how many cells were reached.
-fn farthest(edges: &[Vec<usize>], start: usize) -> (usize, Vec<Option<usize>>, usize) {
+/// shortest route from `start`, and the cells reached.
+fn farthest(edges: &[Vec<usize>], start: usize) -> (usize, Vec<Option<usize>>, Vec<usize>) {
     let mut parent = vec![None; edges.len()];
     let mut seen = vec![false; edges.len()];
     seen[start] = true;
-    let (mut last, mut reached) = (start, 0);
+    let (mut last, mut reached) = (start, Vec::new());
     let mut queue = VecDeque::from([start]);
     while let Some(k) = queue.pop_front() {
         last = k;
-        reached += 1;
+        reached.push(k);
         for &n in &edges[k] {
             if !seen[n] {
                 seen[n] = true;
