@@ -19,7 +19,6 @@
 
 use glam::DVec3;
 
-use crate::bench::{RunOptions, Session};
 use crate::bounds::Aabb;
 use crate::camera::path::CameraPath;
 use crate::camera::{Camera, Containment, look_rotation};
@@ -29,6 +28,7 @@ use crate::gpu::{
 };
 use crate::measure::MissedObject;
 use crate::scene::Scene;
+use crate::session::{RunOptions, Session};
 use crate::world::World;
 
 #[derive(Clone, Copy, Debug)]

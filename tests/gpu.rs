@@ -391,7 +391,7 @@ fn a_lost_device_ends_the_run_with_an_error_not_a_panic() {
                 .iter()
                 .map(|m| create(m, &scene, &ModeParams::default()).unwrap())
                 .collect();
-            let options = occlu::bench::RunOptions {
+            let options = occlu::session::RunOptions {
                 warmup: 0,
                 resolution: Resolution { width: 32, height: 24 },
                 measure_error: true,

@@ -7,13 +7,14 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use glam::{DAffine3, DVec3};
-use occlu::bench::{RunOptions, RunOutput, run};
+use occlu::bench::{RunOutput, run};
 use occlu::camera::generate::{PathKind, generate};
 use occlu::camera::path::{CameraPath, Interpolation, KeyframeFile, PathFile};
 use occlu::cull::{Culler, FrameInput, TraversalStats};
 use occlu::gpu::{BackendChoice, Frame, GpuContext, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::scene::{LoadOptions, Scene, SceneBuilder, SceneSpec, load};
+use occlu::session::RunOptions;
 use occlu::world::World;
 
 /// `bench` arguments that keep a run tiny: a one-block city, two frames,
@@ -242,7 +243,7 @@ pub fn reference_depth(scene: &Scene, camera: &occlu::camera::Camera, resolution
     };
     let mut world = World::new(scene.clone(), hierarchy(scene));
     let mut dr = vec![occlu::cull::create("dr", scene, &occlu::cull::ModeParams::default()).unwrap()];
-    let mut session = occlu::bench::Session::new(&gpu, &world, &mut dr, true, &options).unwrap();
+    let mut session = occlu::session::Session::new(&gpu, &world, &mut dr, true, &options).unwrap();
     let camera = occlu::camera::Camera {
         aspect: resolution.aspect(),
         ..*camera

@@ -244,7 +244,6 @@ impl DepthPyramid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::{RunOptions, Session};
     use crate::camera::generate::default_path;
     use crate::cull::create;
     use crate::cull::culler::Culler;
@@ -253,6 +252,7 @@ mod tests {
     use crate::gpu::BackendChoice;
     use crate::hierarchy::{Hierarchy, HierarchyParams};
     use crate::scene::{LoadOptions, SceneSpec, load};
+    use crate::session::{RunOptions, Session};
     use crate::world::World;
 
     /// Texel (`x`, `y`) of `level` by the definition: the least depth of

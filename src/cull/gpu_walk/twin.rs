@@ -281,7 +281,6 @@ impl BoxOnTarget {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::{RunOptions, Session};
     use crate::camera::generate::default_path;
     use crate::camera::path::CameraPath;
     use crate::cull::ModeParams;
@@ -295,6 +294,7 @@ mod tests {
     };
     use crate::hierarchy::{Hierarchy, HierarchyParams};
     use crate::scene::{LoadOptions, SceneSpec, load};
+    use crate::session::{RunOptions, Session};
     use crate::world::World;
 
     const RESOLUTION: Resolution = Resolution {
