@@ -13,17 +13,20 @@
 use std::ops::ControlFlow;
 use std::time::Instant;
 
+use crate::animation::{AnimationError, AnimationOptions, DEFAULT_SCALE, Filmstrip, FrameRange, Reel};
 use crate::camera::generate::default_path;
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
 use crate::cull::{Culler, Labeled, ModeError, ModeId};
 use crate::gpu::{AdapterReport, GpuContext, GpuError};
 use crate::hierarchy::{Hierarchy, HierarchyParams};
-use crate::measure::{FrameStats, MissedObject, ModeDescription, summarize};
+use crate::measure::{FrameStats, FrameTimeline, MissedObject, ModeDescription, summarize};
+use crate::picture::Look;
 use crate::raycast::RayCaster;
 use crate::report::{
     Fingerprint, MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary,
-    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, write_results, write_whole,
+    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, trace_json, write_results,
+    write_whole,
 };
 use crate::scene::{Scene, SceneError};
 use crate::session::{RunOptions, Session, ms};
@@ -35,11 +38,16 @@ pub struct RunOutput {
     /// What the modes got wrong, frame by frame (empty when every mode was
     /// exact or error was not measured).
     pub missed: Vec<MissedObject>,
+    /// When each part of each recorded frame ran, one for each of `rows`.
+    pub timelines: Vec<FrameTimeline>,
+    /// With an animation asked for, every recorded frame pictured.
+    pub reel: Option<Reel>,
     pub upload_ms: f64,
 }
 
 /// Runs `cullers` over every frame of `path`, moving `world`'s movers as
-/// the frames go. `progress` is called after each frame with (frames done,
+/// the frames go, and with `animation` pictures every recorded frame
+/// (untimed). `progress` is called after each frame with (frames done,
 /// frames in all) including warm-up frames; when it breaks, the run stops
 /// there with [`BenchError::Interrupted`].
 pub fn run(
@@ -48,13 +56,18 @@ pub fn run(
     path: &CameraPath,
     cullers: &mut [Box<dyn Culler + '_>],
     options: &RunOptions,
+    animation: Option<&AnimationOptions>,
     progress: &mut dyn FnMut(u32, u32) -> ControlFlow<()>,
 ) -> Result<RunOutput, BenchError> {
     let mut session = Session::new(gpu, world, cullers, options.measure_error, options)?;
+    let mut film = animation
+        .map(|a| Filmstrip::new(gpu, &mut session, cullers, a, FrameRange::all(path.frames)))
+        .transpose()?;
     let frames = path.frames;
     // Both are capped (MAX_FRAMES, MAX_WARMUP), so the sum cannot overflow.
     let total = options.warmup + frames;
     let mut rows = Vec::new();
+    let mut timelines = Vec::new();
     for step in 0..total {
         let recording = step >= options.warmup;
         let frame = if recording {
@@ -67,7 +80,12 @@ pub fn run(
         // Rotating the order from frame to frame: no mode always runs right
         // after the reference.
         if recording {
-            rows.extend(session.frame(frame, &camera, world, cullers, step as usize)?);
+            let these = session.frame(frame, &camera, world, cullers, step as usize)?;
+            if let Some(film) = &mut film {
+                film.capture(&mut session, world, &camera, cullers, &these)?;
+            }
+            rows.extend(these);
+            timelines.append(&mut session.timelines);
         } else {
             session.warm_up_frame(frame, &camera, world, cullers, step as usize)?;
         }
@@ -76,6 +94,8 @@ pub fn run(
     Ok(RunOutput {
         rows,
         missed: std::mem::take(&mut session.missed),
+        timelines,
+        reel: film.map(|f| f.reel),
         upload_ms: session.upload_ms,
     })
 }
@@ -92,6 +112,8 @@ pub enum BenchError {
     Gpu(#[from] GpuError),
     #[error(transparent)]
     Report(#[from] ReportError),
+    #[error(transparent)]
+    Animation(#[from] AnimationError),
     /// The caller asked the run to stop (Ctrl-C); nothing was written.
     #[error("interrupted: no results written, the folder's earlier contents stand")]
     Interrupted,
@@ -104,6 +126,7 @@ impl BenchError {
             BenchError::Gpu(e) => e.is_input_error(),
             BenchError::Interrupted => false,
             BenchError::Report(e) => e.is_input_error(),
+            BenchError::Animation(e) => e.is_input_error(),
             _ => true,
         }
     }
@@ -137,6 +160,10 @@ pub enum BenchEvent<'a> {
     Frame {
         done: u32,
         total: u32,
+    },
+    /// The run is over; its animation of this many frames is being encoded.
+    Encoding {
+        frames: u32,
     },
 }
 
@@ -172,7 +199,7 @@ fn execute_claimed(
     let path_file = plan.path.as_deref().map(CameraPath::load).transpose()?;
     // Held until the results are written: no second run writes here.
     let _claim = prepare_output(&plan.out)?;
-    if let Some(path) = &plan.export_github_benchmark {
+    for path in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
         check_writable(path)?;
     }
     let start = Instant::now();
@@ -252,9 +279,34 @@ fn execute_claimed(
         measure_error: plan.measure_error,
     };
     let facts = SceneFacts::of(scene, hierarchy, load_ms, build_ms);
-    let output = run(&gpu, &mut world, &path, &mut cullers, &options, &mut |done, total| {
-        events(BenchEvent::Frame { done, total })
-    })?;
+    // The overview shows what each mode culled: the point of the animation.
+    let animation = plan.animate.then_some(AnimationOptions {
+        look: Look {
+            resolution: plan.resolution,
+            overview: true,
+            heat: false,
+            show_missed: false,
+            occluders: false,
+        },
+        scale: DEFAULT_SCALE,
+        true_colour: false,
+    });
+    let mut output = run(
+        &gpu,
+        &mut world,
+        &path,
+        &mut cullers,
+        &options,
+        animation.as_ref(),
+        &mut |done, total| events(BenchEvent::Frame { done, total }),
+    )?;
+    let animation = match output.reel.take() {
+        Some(reel) => {
+            go_on(events(BenchEvent::Encoding { frames: reel.frames() }))?;
+            Some(reel.encode()?)
+        }
+        None => None,
+    };
 
     let descriptions: Vec<ModeDescription> = runs
         .iter()
@@ -293,12 +345,24 @@ fn execute_claimed(
         }),
         missed: MissedSummary::of(&output.missed),
         frames_csv: None,
+        animation: None,
     };
-    let files = write_results(&plan.out, &mut summary, &output.rows, &output.missed)?;
+    let png = animation.as_ref().map(|a| a.png.as_slice());
+    let files = write_results(&plan.out, &mut summary, &output.rows, &output.missed, png)?;
     if let Some(path) = &plan.export_github_benchmark {
         let entries = crate::report::github::entries(&summary);
         let json = serde_json::to_string_pretty(&entries).expect("entries serialise: strings and numbers") + "\n";
         write_whole(path, json.as_bytes())?;
+    }
+    if let Some(path) = &plan.trace {
+        let run = format!(
+            "{} along {}, {} frames at {}",
+            summary.scene.facts.source, summary.path.source, summary.frames, summary.resolution
+        );
+        write_whole(
+            path,
+            trace_json(&summary.adapter, &run, &output.rows, &output.timelines).as_bytes(),
+        )?;
     }
     Ok(BenchOutcome { summary, files })
 }

@@ -48,6 +48,10 @@ pub struct BenchConfig {
     pub up: Option<UpChoice>,
     /// Also write the run for github-action-benchmark here.
     pub export_github_benchmark: Option<PathBuf>,
+    /// Also write the run's timeline here (Trace Event JSON).
+    pub trace: Option<PathBuf>,
+    /// Also write an animated flythrough of every mode beside the charts.
+    pub animate: Option<bool>,
     /// Mode parameters, `MODE.KEY=VALUE`.
     pub params: Option<Vec<String>>,
     /// One mode at several values of one parameter, `MODE.KEY=V1,V2,...`.
@@ -148,6 +152,10 @@ pub struct BenchPlan {
     pub load: LoadOptions,
     /// Also write the run in github-action-benchmark's format here.
     pub export_github_benchmark: Option<PathBuf>,
+    /// Also write the run's timeline here, in the Trace Event format.
+    pub trace: Option<PathBuf>,
+    /// Also write an animated flythrough of every mode beside the charts.
+    pub animate: bool,
     /// The run's name in a matrix (summary.json's `run`); `None` for a
     /// single run.
     pub run: Option<String>,
@@ -160,7 +168,10 @@ impl BenchConfig {
     /// the configuration file `file`.
     pub fn relative_to(mut self, file: &Path) -> BenchConfig {
         let base = file.parent().unwrap_or(Path::new(""));
-        for p in [&mut self.model, &mut self.path, &mut self.out].into_iter().flatten() {
+        for p in [&mut self.model, &mut self.path, &mut self.out, &mut self.trace]
+            .into_iter()
+            .flatten()
+        {
             if p.is_relative() {
                 *p = base.join(&*p);
             }
@@ -190,6 +201,8 @@ impl BenchConfig {
             external_buffers: self.external_buffers.or(fallback.external_buffers),
             up: self.up.or(fallback.up),
             export_github_benchmark: self.export_github_benchmark.or(fallback.export_github_benchmark),
+            trace: self.trace.or(fallback.trace),
+            animate: self.animate.or(fallback.animate),
             // Per key, a flag wins over the file: later entries override.
             sweep: self.sweep.or(fallback.sweep),
             params: match (fallback.params, self.params) {
@@ -261,6 +274,8 @@ impl BenchConfig {
                 self.up,
             ),
             export_github_benchmark: self.export_github_benchmark,
+            trace: self.trace,
+            animate: self.animate.unwrap_or(false),
             run: None,
             matrix: None,
         })

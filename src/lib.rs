@@ -9,9 +9,10 @@
 //! many runs' into one report), [`session`] renders one frame in
 //! every mode, timed, [`bench`] runs the whole flow, [`matrix`]
 //! lists the runs of a matrix configuration and shards them, [`picture`]
-//! renders one frame to look at, and [`stress`] runs the numerically hard
+//! renders one frame to look at, [`animation`] many frames of many modes, and [`stress`] runs the numerically hard
 //! cases.
 
+pub mod animation;
 pub mod bench;
 pub mod bounds;
 pub mod camera;

@@ -13,6 +13,7 @@ use std::time::Instant;
 use anyhow::Context as _;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use occlu::animation::{AnimationError, AnimationOptions, DEFAULT_SCALE, FrameRange};
 use occlu::bench::{BenchError, BenchEvent, execute};
 use occlu::camera::generate::{PathRequest, plan};
 use occlu::camera::path::{CameraPath, PathError};
@@ -22,7 +23,7 @@ use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::input::ByteSize;
 use occlu::matrix::{Matrix, MatrixError, Shard};
-use occlu::picture::{PictureError, PictureOptions};
+use occlu::picture::{LEAD_IN, Look, PictureError};
 use occlu::raycast::RayCaster;
 use occlu::report::compare::{CompareError, CompareOptions, Metric};
 use occlu::report::merge::MergeError;
@@ -90,6 +91,11 @@ enum Command {
     /// depth complexity), optionally beside a bird's-eye view marking its
     /// frustum and the boxes it culled.
     Render(RenderArgs),
+    /// Fly a path in one or more modes and write it as an animated PNG:
+    /// each frame the modes side by side as render paints them (the
+    /// overview beside each with --overview), each under a caption with the
+    /// mode, the frame and its frame time.
+    Flythrough(Box<FlythroughArgs>),
     /// Run the built-in matrix of numerically hard cases (eye inside boxes,
     /// near-plane crossings, 1e7 offsets, tiny and huge scales, flat boxes,
     /// coplanar walls, 1° and 170° fields of view, vertical views,
@@ -275,6 +281,11 @@ struct BenchArgs {
     /// Skip the reference render and error measure (faster; error columns stay empty).
     #[arg(long)]
     no_error: bool,
+    /// Also write flythrough.png beside the charts: every recorded frame,
+    /// each mode's picture beside the scene from above (as render
+    /// --overview paints it, at half size), with its frame time.
+    #[arg(long)]
+    animate: bool,
     /// Print summary.json (every mode's statistics) to stdout instead of
     /// report.md; report.md is still written.
     #[arg(long)]
@@ -283,6 +294,12 @@ struct BenchArgs {
     /// per mode frame ms mean and p95, triangles drawn, wrong pixels.
     #[arg(long, value_name = "FILE")]
     export_github_benchmark: Option<PathBuf>,
+    /// Also write the run's timeline to FILE as Trace Event JSON (open it
+    /// in ui.perfetto.dev or chrome://tracing): per mode, each frame's
+    /// culling, commands and waits on the CPU, and its box tests and
+    /// drawing on the GPU where the adapter has timestamps.
+    #[arg(long, value_name = "FILE")]
+    trace: Option<PathBuf>,
     /// Print no progress and no notes on stderr, only errors.
     #[arg(long, short)]
     quiet: bool,
@@ -334,6 +351,48 @@ struct RenderArgs {
     /// Graphics API [default: auto].
     #[arg(long, value_enum)]
     backend: Option<BackendChoice>,
+}
+
+#[derive(Args)]
+struct FlythroughArgs {
+    #[command(flatten)]
+    scene: SceneAndPath,
+    /// Modes side by side, comma-separated, or "all".
+    #[arg(long, value_delimiter = ',', value_name = "LIST", required = true)]
+    modes: Vec<String>,
+    /// Frames A to B-1 of the path, every STEP-th pictured (all of them
+    /// run; the two before A first, as render runs them) [default: the
+    /// whole path].
+    #[arg(long, value_name = "A..B[:STEP]")]
+    range: Option<FrameRange>,
+    /// A mode parameter, MODE.KEY=VALUE (repeatable).
+    #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
+    params: Vec<String>,
+    /// Output animated PNG.
+    #[arg(long, short, value_name = "FILE")]
+    output: PathBuf,
+    /// Add a bird's-eye view beside each mode: the frustum in red, culled objects' boxes in yellow.
+    #[arg(long)]
+    overview: bool,
+    /// Colour pixels by depth complexity (surfaces drawn over them) instead of shading.
+    #[arg(long)]
+    heat: bool,
+    /// Panels are the pictures shrunk by K: each pixel the mean of K x K [default: 2].
+    #[arg(long, value_name = "K")]
+    scale: Option<u32>,
+    /// Every pixel as painted (24-bit) instead of one palette of 256
+    /// colours for the whole animation: exact, about three times larger.
+    #[arg(long)]
+    true_colour: bool,
+    /// Render size of each mode's picture [default: 800x600].
+    #[arg(long, value_name = "WxH")]
+    resolution: Option<Resolution>,
+    /// Graphics API [default: auto].
+    #[arg(long, value_enum)]
+    backend: Option<BackendChoice>,
+    /// Print no progress and no notes on stderr, only errors.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(Args)]
@@ -423,6 +482,7 @@ fn main() -> ExitCode {
         Command::Export { scene, output } => export(&scene, &output).map(|()| ExitCode::SUCCESS),
         Command::Plot { run_dir } => plot(&run_dir).map(|()| ExitCode::SUCCESS),
         Command::Render(args) => render(args).map(|()| ExitCode::SUCCESS),
+        Command::Flythrough(args) => flythrough(*args).map(|()| ExitCode::SUCCESS),
         Command::Merge { dirs, out } => merge(&dirs, &out).map(|()| ExitCode::SUCCESS),
         Command::Compare {
             base,
@@ -515,6 +575,7 @@ fn was_interrupted(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {
         matches!(c.downcast_ref::<BenchError>(), Some(BenchError::Interrupted))
             || matches!(c.downcast_ref::<StressError>(), Some(StressError::Interrupted))
+            || matches!(c.downcast_ref::<AnimationError>(), Some(AnimationError::Interrupted))
     })
 }
 
@@ -563,6 +624,8 @@ fn is_input_error(e: &anyhow::Error) -> bool {
             || c.downcast_ref::<StressError>().is_some_and(StressError::is_input_error)
             || c.downcast_ref::<PictureError>()
                 .is_some_and(PictureError::is_input_error)
+            || c.downcast_ref::<AnimationError>()
+                .is_some_and(AnimationError::is_input_error)
     })
 }
 
@@ -584,6 +647,8 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         external_buffers: args.scene.external_buffers,
         up: args.scene.up,
         export_github_benchmark: args.export_github_benchmark,
+        trace: args.trace,
+        animate: args.animate.then_some(true),
         params: (!args.params.is_empty()).then_some(args.params),
         sweep: args.sweep,
     };
@@ -668,7 +733,7 @@ fn bench_one(
         go_on()
     })?;
     progress.finish();
-    if let Some(path) = &plan.export_github_benchmark {
+    for path in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
         note(format!("wrote {}", path.display()));
     }
     let files = &outcome.files;
@@ -743,6 +808,10 @@ fn heard(progress: &mut Progress, event: BenchEvent, note: &dyn Fn(String)) {
             }
         }
         BenchEvent::Frame { done, total } => progress.frame(done, total),
+        BenchEvent::Encoding { frames } => {
+            progress.finish();
+            note(format!("encoding the animation's {frames} frames"));
+        }
     }
 }
 
@@ -951,15 +1020,14 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     }
     let culler = mode.create(&scene, &params)?;
     let mut world = World::new(scene, hierarchy);
-    let options = PictureOptions {
-        frame: args.frame,
+    let look = Look {
         resolution: args.resolution.unwrap_or(Resolution::DEFAULT),
         overview: args.overview,
         heat: args.heat,
         show_missed: args.show_missed,
         occluders: args.occluders,
     };
-    let picture = occlu::picture::render(&gpu, &mut world, &path, culler, &options)?;
+    let picture = occlu::picture::render(&gpu, &mut world, &path, culler, args.frame, &look)?;
     occlu::report::write_png(&args.output, picture.width, picture.height, &picture.rgb)?;
     say!(
         "wrote {} ({}x{}): {mode} drew {} objects at frame {}, culled {} inside the frustum",
@@ -993,6 +1061,69 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             );
         }
     }
+    Ok(())
+}
+
+fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
+    let modes = parse_modes(&args.modes)?;
+    let params = ModeParams::parse(&args.params, &modes)?;
+    occlu::report::check_writable(&args.output)?;
+    let note = |text: String| {
+        if !args.quiet {
+            say!("{text}");
+        }
+    };
+    let (scene, path) = args.scene.load()?;
+    let range = args.range.unwrap_or(FrameRange::all(path.frames));
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
+    note(format!("adapter: {}", gpu.adapter));
+    let mut cullers = Vec::new();
+    for mode in modes {
+        match mode.info().unsupported_on(&gpu) {
+            Some(reason) => note(format!("skipped: {mode}: {reason}")),
+            None => cullers.push(mode.create(&scene, &params)?),
+        }
+    }
+    anyhow::ensure!(!cullers.is_empty(), "no mode of --modes runs on {}", gpu.adapter);
+    let mut world = World::new(scene, hierarchy);
+    let options = AnimationOptions {
+        look: Look {
+            resolution: args.resolution.unwrap_or(Resolution::DEFAULT),
+            overview: args.overview,
+            heat: args.heat,
+            show_missed: false,
+            occluders: false,
+        },
+        scale: args.scale.unwrap_or(DEFAULT_SCALE),
+        true_colour: args.true_colour,
+    };
+    let lead_in = range.start.min(LEAD_IN);
+    let mut progress = Progress::new(args.quiet, lead_in, format!("{} modes", cullers.len()));
+    let reel = occlu::animation::flythrough(
+        &gpu,
+        &mut world,
+        &path,
+        &mut cullers,
+        &options,
+        range,
+        &mut |done, total| {
+            progress.frame(done, total);
+            go_on()
+        },
+    )?;
+    progress.finish();
+    note(format!("encoding {} frames", reel.frames()));
+    let animation = reel.encode()?;
+    occlu::report::write_whole(&args.output, &animation.png)?;
+    note(format!(
+        "wrote {} ({}x{}, {} frames, {:.1} MB)",
+        args.output.display(),
+        animation.width,
+        animation.height,
+        animation.frames,
+        animation.png.len() as f64 / 1e6
+    ));
     Ok(())
 }
 

@@ -53,6 +53,8 @@ pub enum MatrixError {
         "--export-github-benchmark writes one run's file and a matrix has many runs: export from one run's summary.json instead"
     )]
     GithubExport,
+    #[error("--trace writes one run's timeline and a matrix has many runs: trace one run at a time")]
+    Trace,
     #[error("run {run}: {error}")]
     Plan { run: String, error: ConfigError },
     #[error("run {run}: {error}")]
@@ -183,6 +185,9 @@ impl Matrix {
             .collect();
         if configs.iter().any(|c| c.export_github_benchmark.is_some()) {
             return Err(MatrixError::GithubExport);
+        }
+        if configs.iter().any(|c| c.trace.is_some()) {
+            return Err(MatrixError::Trace);
         }
         let out = flags
             .out
@@ -462,6 +467,8 @@ mod tests {
         assert!(e.to_string().contains("scenes: invalid type"), "{e}");
         let e = plan(r#"{"scenes": ["city"], "export_github_benchmark": "g.json"}"#).unwrap_err();
         assert!(matches!(e, MatrixError::GithubExport));
+        let e = plan(r#"{"scenes": ["city"], "trace": "t.json"}"#).unwrap_err();
+        assert!(matches!(e, MatrixError::Trace));
     }
 
     #[test]

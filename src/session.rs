@@ -8,10 +8,10 @@ use std::time::{Duration, Instant};
 use crate::camera::Camera;
 use crate::cull::{Culler, FrameInput, PreviousFrame};
 use crate::gpu::{
-    FrameCtx, FrameResources, GpuContext, GpuError, GpuScene, GpuSetup, GpuTimer, QueryPool, RenderTargets, Resolution,
-    SceneRenderer,
+    FrameCtx, FrameResources, GpuAudit, GpuContext, GpuError, GpuScene, GpuSetup, GpuTimer, OpSpan, QueryPool,
+    RenderTargets, Resolution, SceneRenderer, picture_target, read_rgb,
 };
-use crate::measure::{ErrorMeter, FrameStats, MissedObject, ObjectError};
+use crate::measure::{CpuClock, ErrorMeter, FrameStats, FrameTimeline, GpuClock, MissedObject, ObjectError};
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
 use crate::world::World;
@@ -34,6 +34,8 @@ pub struct Session<'a> {
     timer: Option<GpuTimer>,
     queries: QueryPool,
     draw_queue: Vec<u32>,
+    /// Scratch for each mode's log of GPU operations.
+    ops: Vec<OpSpan>,
     /// What each mode drew in the last frame.
     pub(crate) drawn: Vec<ObjectSet>,
     previous: Vec<Option<PreviousFrame>>,
@@ -44,6 +46,13 @@ pub struct Session<'a> {
     pub missed: Vec<MissedObject>,
     /// Scratch for [`ErrorMeter::attribute_wrong_pixels`].
     object_errors: Vec<ObjectError>,
+    /// When the session was ready to run frames: where timelines start.
+    started: Instant,
+    /// The last frame's timeline of each mode, in the order of the cullers.
+    pub timelines: Vec<FrameTimeline>,
+    /// Each mode's colour target as its last frame left it, where kept
+    /// ([`Session::keep_colours`]).
+    colours: Vec<wgpu::Texture>,
 }
 
 impl<'a> Session<'a> {
@@ -86,12 +95,16 @@ impl<'a> Session<'a> {
             timer: GpuTimer::new(gpu, modes),
             queries: QueryPool::new(gpu, renderer.camera_uniform()),
             draw_queue: Vec::new(),
+            ops: Vec::new(),
             drawn: (0..modes).map(|_| ObjectSet::new(scene.objects.len())).collect(),
             previous: vec![None; modes],
             options: *options,
             upload_ms,
             missed: Vec::new(),
             object_errors: Vec::new(),
+            started: Instant::now(),
+            timelines: Vec::new(),
+            colours: Vec::new(),
             renderer,
             targets,
         })
@@ -155,6 +168,7 @@ impl<'a> Session<'a> {
             .map(|m| m.render_reference(gpu, &self.renderer, &self.targets));
 
         let mut rows: Vec<Option<FrameStats>> = vec![None; cullers.len()];
+        let mut clocks: Vec<Option<ModeClocks>> = vec![None; cullers.len()];
         for turn in 0..cullers.len() {
             let k = (turn + first) % cullers.len();
             let culler = &mut cullers[k];
@@ -186,18 +200,37 @@ impl<'a> Session<'a> {
                 queries: &mut self.queries,
                 timer: self.timer.as_ref(),
                 draw_queue: &mut self.draw_queue,
+                ops: &mut self.ops,
             };
             let mut ctx = FrameCtx::begin(resources, k, camera, &mut self.drawn[k]);
             let cull_start = Instant::now();
             let mut traversal = culler.frame(&mut ctx, &input);
-            let cull_time = cull_start.elapsed();
+            let cull_end = Instant::now();
+            let cull_time = cull_end - cull_start;
             let mut outcome = ctx.finish();
             let frame_time = frame_start.elapsed();
             // Untimed: what the mode's own GPU work drew and tested.
-            if let Some(audit) = culler.audit(gpu, &mut self.drawn[k]) {
-                outcome.add_gpu_audit(&audit);
-                traversal.add_gpu_audit(&audit);
+            let audit = culler.audit(gpu, &mut self.drawn[k]);
+            if let Some(audit) = &audit {
+                outcome.add_gpu_audit(audit);
+                traversal.add_gpu_audit(audit);
             }
+            // Untimed: the colour of a mode's frame, kept for a picture
+            // before the next mode draws over it.
+            if let Some(kept) = self.colours.get(k) {
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                let color = &self.targets.color_texture;
+                encoder.copy_texture_to_texture(color.as_image_copy(), kept.as_image_copy(), color.size());
+                gpu.queue.submit([encoder.finish()]);
+                gpu.wait_idle();
+            }
+            clocks[k] = Some(ModeClocks {
+                frame_start,
+                refit: refit_time,
+                culling: cull_start..cull_end,
+                ops: self.ops.clone(),
+                audit,
+            });
             rows[k] = Some(FrameStats {
                 mode: culler.name().to_string(),
                 frame,
@@ -234,13 +267,19 @@ impl<'a> Session<'a> {
                 None
             }
         };
-        let gpu_ms = self.timer.as_mut().map(|t| t.read_ms(gpu));
+        let gpu_spans = self.timer.as_mut().map(|t| t.read_spans(gpu));
+        self.timelines.clear();
         let rows = rows
             .into_iter()
+            .zip(clocks)
             .enumerate()
-            .map(|(k, row)| {
+            .map(|(k, (row, clocks))| {
                 let mut row = row.expect("every mode ran this frame");
-                row.gpu_ms = gpu_ms.as_ref().map(|t| t[k]);
+                let clocks = clocks.expect("every mode ran this frame");
+                let gpu_frame = gpu_spans.as_ref().map(|spans| spans[k]);
+                row.gpu_ms = gpu_frame.map(|span| span.ms());
+                self.timelines
+                    .push(clocks.timeline(self.started, gpu_frame, row.frame_ms));
                 if let (Some(wrong), Some(visible)) = (&wrong, &visible) {
                     row.error_pixels = Some(wrong[k].wrong_pixels);
                     row.max_depth_error = Some(f64::from(wrong[k].max_difference));
@@ -295,6 +334,23 @@ impl<'a> Session<'a> {
         }
     }
 
+    /// From now on, keeps a copy of what each mode drew in each frame (the
+    /// session's colour target is shared: each mode's frame draws over the
+    /// last one's), for [`Session::colour`].
+    pub fn keep_colours(&mut self) {
+        let n = self.drawn.len();
+        self.colours = (0..n)
+            .map(|_| picture_target(self.gpu, self.options.resolution))
+            .collect();
+    }
+
+    /// What mode `k` drew in the last frame, shaded, as RGB rows from the
+    /// top left; `None` unless the session keeps colours.
+    pub fn colour(&self, k: usize) -> Option<Vec<u8>> {
+        let kept = self.colours.get(k)?;
+        Some(read_rgb(self.gpu, kept, self.options.resolution))
+    }
+
     /// The reference depth of the last frame, row-major from the top-left
     /// pixel; `None` when the session renders no reference.
     pub fn reference_depth(&mut self) -> Option<Vec<f32>> {
@@ -312,6 +368,34 @@ impl<'a> Session<'a> {
         let mut depth = Vec::new();
         meter.read_depth(self.gpu, &self.targets, mode, &mut depth);
         Some(depth)
+    }
+}
+
+/// When the parts of a mode's frame ran, until its GPU time is known.
+#[derive(Clone)]
+struct ModeClocks {
+    frame_start: Instant,
+    refit: Duration,
+    culling: std::ops::Range<Instant>,
+    ops: Vec<OpSpan>,
+    audit: Option<GpuAudit>,
+}
+
+impl ModeClocks {
+    fn timeline(&self, run_start: Instant, gpu_frame: Option<crate::gpu::GpuSpan>, frame_ms: f64) -> FrameTimeline {
+        let cpu = CpuClock {
+            run_start,
+            frame_start: self.frame_start,
+            refit: self.refit,
+            culling: self.culling.clone(),
+            ops: &self.ops,
+        };
+        let gpu = gpu_frame.map(|frame| GpuClock {
+            frame,
+            walk: self.audit.and_then(|a| a.cull_gpu),
+            pyramid: self.audit.and_then(|a| a.pyramid_gpu),
+        });
+        FrameTimeline::new(&cpu, gpu.as_ref(), frame_ms)
     }
 }
 

@@ -401,7 +401,7 @@ fn a_lost_device_ends_the_run_with_an_error_not_a_panic() {
             if lost_after_frames == 0 {
                 gpu.device.destroy();
             }
-            let outcome = occlu::bench::run(&gpu, &mut world, &path, &mut cullers, &options, &mut |done, _| {
+            let outcome = occlu::bench::run(&gpu, &mut world, &path, &mut cullers, &options, None, &mut |done, _| {
                 if done == lost_after_frames {
                     gpu.device.destroy();
                 }

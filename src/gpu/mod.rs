@@ -19,7 +19,9 @@ pub(crate) use conservative::tests::{entry_depth, pixel_ray};
 pub use conservative::{BoxMargins, DepthMargins};
 pub(crate) use conservative::{BoxPlanes, EyeBox, PixelRays, QueryBox, ScreenPlane, ShaderBoxPlanes, eye_relative_box};
 pub use context::{AdapterReport, BackendChoice, GpuContext, GpuError};
-pub use frame::{Frame, FrameCounters, FrameCtx, FrameOutcome, FrameResources, GpuAudit, GpuFrame, GpuSetup, GpuWork};
+pub use frame::{
+    Frame, FrameCounters, FrameCtx, FrameOutcome, FrameResources, GpuAudit, GpuFrame, GpuSetup, GpuWork, OpKind, OpSpan,
+};
 pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};
 /// The building blocks of box tests, for modes that test boxes their own
 /// way (the GPU walk).
@@ -32,4 +34,4 @@ pub use readback::Readback;
 pub use renderer::{DrawRange, Draws, GpuScene, IndirectCount, IndirectDraws, SceneRenderer};
 pub use resolution::Resolution;
 pub use targets::RenderTargets;
-pub use timing::GpuTimer;
+pub use timing::{GpuSpan, GpuTimer};

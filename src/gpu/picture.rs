@@ -101,9 +101,9 @@ impl LinePainter {
     }
 }
 
-/// A colour texture that can be drawn into and read back.
+/// A colour texture that can be drawn into, copied into and read back.
 pub fn picture_target(gpu: &GpuContext, resolution: Resolution) -> wgpu::Texture {
-    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST;
     texture_2d(gpu, "picture", resolution, COLOR_FORMAT, usage)
 }
 

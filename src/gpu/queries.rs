@@ -21,6 +21,7 @@ use super::conservative::{BoxMargins, EyeBox, QueryBox, eye_relative_box};
 use super::context::{GpuContext, GpuError};
 use super::readback::Readback;
 use super::targets::DEPTH_FORMAT;
+use super::timing::GpuSpan;
 use crate::bounds::Aabb;
 use crate::camera::Camera;
 
@@ -78,10 +79,12 @@ pub struct BatchAnswers<'a> {
 pub struct BatchCost {
     /// Boxes actually tested (unqueried ones excluded).
     pub queries: u64,
-    /// Time from submitting the batch until its results were on the CPU.
+    /// When the batch was submitted, and how long after it its results
+    /// were on the CPU.
+    pub submitted: Instant,
     pub wait: Duration,
-    /// GPU time of the test passes alone (timestamps), where available.
-    pub gpu: Option<Duration>,
+    /// The test passes alone on the GPU (timestamps), where available.
+    pub gpu: Option<GpuSpan>,
     /// CPU time spent preparing the boxes (made eye-relative, grown, the
     /// near-plane rule applied): culling work rather than GPU work.
     pub prepare: Duration,
@@ -268,6 +271,7 @@ impl QueryPool {
             gpu.queue.submit([encoder.finish()]);
             return BatchCost {
                 queries: 0,
+                submitted: Instant::now(),
                 wait: Duration::ZERO,
                 gpu: None,
                 prepare,
@@ -327,10 +331,11 @@ impl QueryPool {
         }
         let gpu_time = self.timestamps.as_ref().map(|&(_, period_ns)| {
             let tick = |i: usize| u64::from(self.words[2 * i]) | (u64::from(self.words[2 * i + 1]) << 32);
-            Duration::from_nanos((tick(1).saturating_sub(tick(0)) as f64 * period_ns) as u64)
+            GpuSpan::of_ticks(tick(0), tick(1), period_ns)
         });
         BatchCost {
             queries: u64::from(count),
+            submitted,
             wait,
             gpu: gpu_time,
             prepare,

@@ -9,6 +9,7 @@ pub mod github;
 mod markdown;
 pub mod merge;
 mod summary;
+mod trace;
 
 use std::path::{Path, PathBuf};
 
@@ -22,6 +23,10 @@ pub use summary::{
     AnimationFact, CameraFact, Fingerprint, MatrixIdentity, MissedSummary, PathSummary, SCHEMA_VERSION, SceneFacts,
     SceneSummary, SkippedMode, Summary, SweepSummary, ToolInfo, Verdict,
 };
+pub use trace::trace_json;
+
+/// The animated flythrough of `bench --animate`, beside the charts.
+pub const ANIMATION: &str = "flythrough.png";
 
 /// The files a run wrote.
 pub struct ResultFiles {
@@ -31,6 +36,8 @@ pub struct ResultFiles {
     /// Written only when a mode got something wrong.
     pub missed_csv: Option<PathBuf>,
     pub charts: Vec<PathBuf>,
+    /// With `--animate`.
+    pub animation: Option<PathBuf>,
 }
 
 /// `rows` as CSV with a header of field names. Made in memory, so writing
@@ -219,19 +226,25 @@ fn publish(
     moved
 }
 
-/// Writes a run's result files into `out` (see [`publish`]). summary.json
-/// records frames.csv's fingerprint and is moved into place last, so
+/// Writes a run's result files into `out` (see [`publish`]), with its
+/// `animation` (an APNG) where there is one. summary.json records
+/// frames.csv's fingerprint and is moved into place last, so
 /// [`read_results`] refuses a folder caught between two runs' files.
 pub fn write_results(
     out: &Path,
     summary: &mut Summary,
     rows: &[FrameStats],
     missed: &[MissedObject],
+    animation: Option<&[u8]>,
 ) -> Result<ResultFiles, ReportError> {
     debug_assert_eq!(summary.missed, MissedSummary::of(missed), "the summary heads this list");
-    // An earlier run's list must not pass for this run's.
-    let stale: &[&str] = if missed.is_empty() { &["missed.csv"] } else { &[] };
-    let names = publish(out, stale, |staging| {
+    summary.animation = animation.map(|_| ANIMATION.to_string());
+    // An earlier run's list or animation must not pass for this run's.
+    let stale: Vec<&str> = [(missed.is_empty(), "missed.csv"), (animation.is_none(), ANIMATION)]
+        .into_iter()
+        .filter_map(|(gone, name)| gone.then_some(name))
+        .collect();
+    let names = publish(out, &stale, |staging| {
         let frames_csv = csv_bytes(&staging.join("frames.csv"), rows)?;
         summary.frames_csv = Some(Fingerprint::of(&frames_csv));
         write_file(&staging.join("frames.csv"), &frames_csv)?;
@@ -240,6 +253,10 @@ pub fn write_results(
             let path = staging.join("missed.csv");
             write_file(&path, &csv_bytes(&path, &escape_formulas(missed))?)?;
             names.push("missed.csv".into());
+        }
+        if let Some(png) = animation {
+            write_file(&staging.join(ANIMATION), png)?;
+            names.push(ANIMATION.into());
         }
         names.extend(write_report_and_charts(staging, summary, rows)?);
         let json = serde_json::to_string_pretty(summary).expect("summary serialises: no maps with non-string keys");
@@ -253,7 +270,12 @@ pub fn write_results(
         summary_json: path("summary.json"),
         report_md: path("report.md"),
         missed_csv: (!missed.is_empty()).then(|| path("missed.csv")),
-        charts: names.iter().filter(|n| n.ends_with(".png")).map(|n| path(n)).collect(),
+        charts: names
+            .iter()
+            .filter(|n| n.ends_with(".png") && *n != ANIMATION)
+            .map(|n| path(n))
+            .collect(),
+        animation: animation.map(|_| path(ANIMATION)),
     })
 }
 

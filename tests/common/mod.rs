@@ -134,6 +134,11 @@ pub fn gpus() -> Vec<GpuContext> {
     found
 }
 
+/// The backends present here, by the names `--backend` takes.
+pub fn backends() -> Vec<String> {
+    gpus().iter().map(|g| g.adapter.backend.to_lowercase()).collect()
+}
+
 /// A one-frame path: the camera at `eye` looking at `target`.
 pub fn still(eye: DVec3, target: DVec3, fov_y_deg: f64) -> CameraPath {
     held(eye, target, fov_y_deg, 1)
@@ -212,7 +217,7 @@ pub fn run_modes(
         measure_error: true,
     };
     let mut world = World::new(scene.clone(), hierarchy.clone());
-    run(gpu, &mut world, path, cullers, &options, &mut |_, _| {
+    run(gpu, &mut world, path, cullers, &options, None, &mut |_, _| {
         std::ops::ControlFlow::Continue(())
     })
     .unwrap()

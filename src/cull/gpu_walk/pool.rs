@@ -3,7 +3,6 @@
 //! module above for the frame they make).
 
 use std::rc::Rc;
-use std::time::Duration;
 
 use super::level_test::{LevelTest, NodeTest};
 use super::lists::VisibleLists;
@@ -484,10 +483,9 @@ impl GpuWalk {
             audit.triangles_drawn += self.triangles[object];
         }
         if let Some(t) = &mut self.timer {
-            let spans = t.read_ms(gpu);
-            let time = |span: usize| spans.get(span).map(|&ms| Duration::from_secs_f64(ms / 1e3));
-            audit.cull_gpu = time(WALK_SPAN);
-            audit.pyramid_gpu = time(PYRAMID_SPAN);
+            let spans = t.read_spans(gpu);
+            audit.cull_gpu = spans.get(WALK_SPAN).copied();
+            audit.pyramid_gpu = spans.get(PYRAMID_SPAN).copied();
         }
         Some(audit)
     }
