@@ -63,6 +63,17 @@ impl FrameRange {
     pub fn pictured(&self) -> u32 {
         (self.end - self.start).div_ceil(self.step)
     }
+
+    /// Whether the range lies within a path of `frames`.
+    pub fn check(&self, frames: u32) -> Result<(), AnimationError> {
+        if self.end > frames {
+            return Err(AnimationError::RangeBeyondPath {
+                range: format!("{}..{}", self.start, self.end),
+                frames,
+            });
+        }
+        Ok(())
+    }
 }
 
 impl FromStr for FrameRange {
@@ -156,12 +167,7 @@ pub fn flythrough(
     range: FrameRange,
     progress: &mut dyn FnMut(u32, u32) -> ControlFlow<()>,
 ) -> Result<Reel, AnimationError> {
-    if range.end > path.frames {
-        return Err(AnimationError::RangeBeyondPath {
-            range: format!("{}..{}", range.start, range.end),
-            frames: path.frames,
-        });
-    }
+    range.check(path.frames)?;
     let mut session = session_for(gpu, world, cullers, &options.look)?;
     let mut film = Filmstrip::new(gpu, &mut session, cullers, options, range)?;
     let aspect = options.look.resolution.aspect();

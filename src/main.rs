@@ -13,7 +13,7 @@ use std::time::Instant;
 use anyhow::Context as _;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use occlu::animation::{AnimationError, AnimationOptions, DEFAULT_SCALE, FrameRange};
+use occlu::animation::{AnimationError, AnimationOptions, DEFAULT_SCALE, FrameRange, MAX_SCALE};
 use occlu::bench::{BenchError, BenchEvent, execute};
 use occlu::camera::generate::{PathRequest, plan};
 use occlu::camera::path::{CameraPath, PathError};
@@ -378,7 +378,7 @@ struct FlythroughArgs {
     #[arg(long)]
     heat: bool,
     /// Panels are the pictures shrunk by K: each pixel the mean of K x K [default: 2].
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_SCALE)))]
     scale: Option<u32>,
     /// Every pixel as painted (24-bit) instead of one palette of 256
     /// colours for the whole animation: exact, about three times larger.
@@ -1075,6 +1075,7 @@ fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
     };
     let (scene, path) = args.scene.load()?;
     let range = args.range.unwrap_or(FrameRange::all(path.frames));
+    range.check(path.frames)?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
     note(format!("adapter: {}", gpu.adapter));
