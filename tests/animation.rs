@@ -204,6 +204,16 @@ fn bench_animates_its_run_beside_the_charts_and_report_md_shows_it() {
         assert!(report.contains("](flythrough.png)"), "{report}");
         let (summary, _) = occlu::report::read_results(&out).unwrap();
         assert_eq!(summary.animation.as_deref(), Some("flythrough.png"));
+        // A merged report's copy of the run keeps what its report.md shows.
+        let merged = dir.path().join("merged");
+        let merge = occlu(&["merge", s(&out), "--out", s(&merged)]);
+        assert!(merge.status.success(), "{:?}", own_stderr(&merge));
+        let copies: Vec<PathBuf> = std::fs::read_dir(merged.join("runs"))
+            .unwrap()
+            .map(|e| e.unwrap().path().join("flythrough.png"))
+            .collect();
+        assert!(copies.len() == 1 && copies[0].is_file(), "{copies:?}");
+        std::fs::remove_dir_all(&merged).unwrap();
         // A run without one removes the earlier run's.
         bench(&[]);
         assert!(!out.join("flythrough.png").exists(), "a stale animation is removed");

@@ -597,7 +597,7 @@ fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreemen
 /// Copies a run folder's result files (not its lock or anything else).
 fn copy_run(from: &Path, to: &Path) -> Result<(), ReportError> {
     std::fs::create_dir_all(to).map_err(ReportError::at(to))?;
-    let files = ["summary.json", "frames.csv", "missed.csv", "report.md"]
+    let files = ["summary.json", "frames.csv", "missed.csv", "report.md", super::ANIMATION]
         .into_iter()
         .chain(CHARTS);
     for name in files {
