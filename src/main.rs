@@ -322,18 +322,8 @@ struct RenderArgs {
     /// The culling mode whose frame is rendered.
     #[arg(long, value_name = "MODE")]
     mode: String,
-    /// A mode parameter, MODE.KEY=VALUE (repeatable).
-    #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
-    params: Vec<String>,
-    /// Output PNG.
-    #[arg(long, short, value_name = "FILE")]
-    output: PathBuf,
-    /// Add a bird's-eye view: the frustum in red, culled objects' boxes in yellow.
-    #[arg(long)]
-    overview: bool,
-    /// Colour pixels by depth complexity (surfaces drawn over them) instead of shading.
-    #[arg(long)]
-    heat: bool,
+    #[command(flatten)]
+    picture: PictureArgs,
     /// Compare the frame with direct rendering: paint the pixels whose depth
     /// differs in magenta and outline the boxes of the objects the mode
     /// missed, and list them.
@@ -345,12 +335,43 @@ struct RenderArgs {
     /// of the frame dimmed.
     #[arg(long)]
     occluders: bool,
+}
+
+/// How `render` and `flythrough` picture a mode's frame, and where to.
+#[derive(Args)]
+struct PictureArgs {
+    /// A mode parameter, MODE.KEY=VALUE (repeatable).
+    #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
+    params: Vec<String>,
+    /// Output PNG (animated, for flythrough).
+    #[arg(long, short, value_name = "FILE")]
+    output: PathBuf,
+    /// Add a bird's-eye view beside each mode's frame: the frustum in red,
+    /// culled objects' boxes in yellow.
+    #[arg(long)]
+    overview: bool,
+    /// Colour pixels by depth complexity (surfaces drawn over them) instead of shading.
+    #[arg(long)]
+    heat: bool,
     /// Render size [default: 800x600].
     #[arg(long, value_name = "WxH")]
     resolution: Option<Resolution>,
     /// Graphics API [default: auto].
     #[arg(long, value_enum)]
     backend: Option<BackendChoice>,
+}
+
+impl PictureArgs {
+    /// The look these flags ask for, with `render`'s own two.
+    fn look(&self, show_missed: bool, occluders: bool) -> Look {
+        Look {
+            resolution: self.resolution.unwrap_or(Resolution::DEFAULT),
+            overview: self.overview,
+            heat: self.heat,
+            show_missed,
+            occluders,
+        }
+    }
 }
 
 #[derive(Args)]
@@ -365,18 +386,8 @@ struct FlythroughArgs {
     /// whole path].
     #[arg(long, value_name = "A..B[:STEP]")]
     range: Option<FrameRange>,
-    /// A mode parameter, MODE.KEY=VALUE (repeatable).
-    #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
-    params: Vec<String>,
-    /// Output animated PNG.
-    #[arg(long, short, value_name = "FILE")]
-    output: PathBuf,
-    /// Add a bird's-eye view beside each mode: the frustum in red, culled objects' boxes in yellow.
-    #[arg(long)]
-    overview: bool,
-    /// Colour pixels by depth complexity (surfaces drawn over them) instead of shading.
-    #[arg(long)]
-    heat: bool,
+    #[command(flatten)]
+    picture: PictureArgs,
     /// Panels are the pictures shrunk by K: each pixel the mean of K x K [default: 2].
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_SCALE)))]
     scale: Option<u32>,
@@ -384,12 +395,6 @@ struct FlythroughArgs {
     /// colours for the whole animation: exact, about three times larger.
     #[arg(long)]
     true_colour: bool,
-    /// Render size of each mode's picture [default: 800x600].
-    #[arg(long, value_name = "WxH")]
-    resolution: Option<Resolution>,
-    /// Graphics API [default: auto].
-    #[arg(long, value_enum)]
-    backend: Option<BackendChoice>,
     /// Print no progress and no notes on stderr, only errors.
     #[arg(long, short)]
     quiet: bool,
@@ -1011,27 +1016,22 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let [mode] = modes[..] else {
         anyhow::bail!(ModeError::NotOne(args.mode.clone()));
     };
-    let params = ModeParams::parse(&args.params, &modes)?;
+    let params = ModeParams::parse(&args.picture.params, &modes)?;
     let (scene, path) = args.scene.load()?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-    let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
+    let gpu = occlu::gpu::GpuContext::new(args.picture.backend.unwrap_or_default())?;
     if let Some(reason) = mode.info().unsupported_on(&gpu) {
         anyhow::bail!("mode '{mode}' cannot run on {}: {reason}", gpu.adapter);
     }
     let culler = mode.create(&scene, &params)?;
     let mut world = World::new(scene, hierarchy);
-    let look = Look {
-        resolution: args.resolution.unwrap_or(Resolution::DEFAULT),
-        overview: args.overview,
-        heat: args.heat,
-        show_missed: args.show_missed,
-        occluders: args.occluders,
-    };
+    let look = args.picture.look(args.show_missed, args.occluders);
     let picture = occlu::picture::render(&gpu, &mut world, &path, culler, args.frame, &look)?;
-    occlu::report::write_png(&args.output, picture.width, picture.height, &picture.rgb)?;
+    let output = &args.picture.output;
+    occlu::report::write_png(output, picture.width, picture.height, &picture.rgb)?;
     say!(
         "wrote {} ({}x{}): {mode} drew {} objects at frame {}, culled {} inside the frustum",
-        args.output.display(),
+        output.display(),
         picture.width,
         picture.height,
         picture.drawn,
@@ -1066,8 +1066,9 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
 
 fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
     let modes = parse_modes(&args.modes)?;
-    let params = ModeParams::parse(&args.params, &modes)?;
-    occlu::report::check_writable(&args.output)?;
+    let params = ModeParams::parse(&args.picture.params, &modes)?;
+    let output = &args.picture.output;
+    occlu::report::check_writable(output)?;
     let note = |text: String| {
         if !args.quiet {
             say!("{text}");
@@ -1077,7 +1078,7 @@ fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
     let range = args.range.unwrap_or(FrameRange::all(path.frames));
     range.check(path.frames)?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-    let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
+    let gpu = occlu::gpu::GpuContext::new(args.picture.backend.unwrap_or_default())?;
     note(format!("adapter: {}", gpu.adapter));
     let mut cullers = Vec::new();
     for mode in modes {
@@ -1089,13 +1090,7 @@ fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
     anyhow::ensure!(!cullers.is_empty(), "no mode of --modes runs on {}", gpu.adapter);
     let mut world = World::new(scene, hierarchy);
     let options = AnimationOptions {
-        look: Look {
-            resolution: args.resolution.unwrap_or(Resolution::DEFAULT),
-            overview: args.overview,
-            heat: args.heat,
-            show_missed: false,
-            occluders: false,
-        },
+        look: args.picture.look(false, false),
         scale: args.scale.unwrap_or(DEFAULT_SCALE),
         true_colour: args.true_colour,
     };
@@ -1116,10 +1111,10 @@ fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
     progress.finish();
     note(format!("encoding {} frames", reel.frames()));
     let animation = reel.encode()?;
-    occlu::report::write_whole(&args.output, &animation.png)?;
+    occlu::report::write_whole(output, &animation.png)?;
     note(format!(
         "wrote {} ({}x{}, {} frames, {:.1} MB)",
-        args.output.display(),
+        output.display(),
         animation.width,
         animation.height,
         animation.frames,

@@ -597,9 +597,15 @@ fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreemen
 /// Copies a run folder's result files (not its lock or anything else).
 fn copy_run(from: &Path, to: &Path) -> Result<(), ReportError> {
     std::fs::create_dir_all(to).map_err(ReportError::at(to))?;
-    let files = ["summary.json", "frames.csv", "missed.csv", "report.md", super::ANIMATION]
-        .into_iter()
-        .chain(CHARTS);
+    let files = [
+        "summary.json",
+        "frames.csv",
+        "missed.csv",
+        "report.md",
+        super::ANIMATION,
+    ]
+    .into_iter()
+    .chain(CHARTS);
     for name in files {
         let (source, target) = (from.join(name), to.join(name));
         if source.is_file() {
