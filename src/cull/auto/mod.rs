@@ -112,7 +112,13 @@ impl Candidate {
 struct Ran {
     turn: Turn,
     view: View,
+    /// Whether the frustum's triangles were counted in it.
+    counted: bool,
 }
+
+/// Frames between counts of the frustum's triangles while an occlusion
+/// culler runs.
+const COUNT_EVERY: u64 = 8;
 
 pub struct AutoCulling {
     params: AutoParams,
@@ -306,7 +312,7 @@ impl Culler for AutoCulling {
                     self.frustum_triangles = previous.triangles_drawn;
                     None
                 }
-                Family::Occlusion => (view.frustum_triangles > 0)
+                Family::Occlusion => (ran.counted && view.frustum_triangles > 0)
                     .then(|| 1.0 - previous.triangles_drawn as f64 / view.frustum_triangles as f64)
                     .map(|share| share.max(0.0)),
             };
@@ -328,7 +334,13 @@ impl Culler for AutoCulling {
         self.hand_over(k, ctx);
         let stats = self.candidates[k].culler.frame(ctx, input);
         let mut view = view;
-        if turn.measured && self.candidates[k].family() == Family::Occlusion {
+        // What occlusion hides changes with the view, slowly: counted on a
+        // probe and every COUNT_EVERY frames, so the count (a frustum
+        // traversal) costs little on a GPU whose frames are short.
+        let counted = turn.measured
+            && self.candidates[k].family() == Family::Occlusion
+            && (turn.probe || self.frames % COUNT_EVERY == 0 || self.frustum_triangles == 0);
+        if counted {
             self.frustum_triangles = self.count_frustum_triangles(input);
             view.frustum_triangles = self.frustum_triangles;
         }
@@ -337,7 +349,7 @@ impl Culler for AutoCulling {
         }
         self.running.clear();
         self.running.push(k);
-        self.ran = Some(Ran { turn, view });
+        self.ran = Some(Ran { turn, view, counted });
         stats
     }
 
