@@ -455,7 +455,7 @@ fn the_ray_caster_agrees_with_every_triangle_tried_in_turn() {
 fn den_haag_is_walked_without_clipping() {
     let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/den-haag.obj");
     if !model.exists() {
-        eprintln!("skipped: {} is absent", model.display());
+        common::cannot_run(&format!("{} is absent", model.display()));
         return;
     }
     let scene = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();

@@ -66,6 +66,18 @@ pub fn write(dir: &Path, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
 
 /// `../shared/models` beside the project root: third-party models that
 /// tests skip, saying so, where the folder is absent.
+/// Says that a test cannot run here, and why: a line on a developer's
+/// machine, where the fixtures are optional; a failure where they are
+/// required (`OCCLU_REQUIRE_FIXTURES=1`, which `.ci/run` sets), so that CI
+/// never passes a test that did not run.
+pub fn cannot_run(why: &str) {
+    assert!(
+        std::env::var_os("OCCLU_REQUIRE_FIXTURES").is_none_or(|v| v != "1"),
+        "{why}: OCCLU_REQUIRE_FIXTURES=1 requires it"
+    );
+    eprintln!("skipped: {why}");
+}
+
 pub fn shared_models_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models")
 }
