@@ -7,9 +7,10 @@
 //!   first settle (its first frame is paid for, not measured). Its sample
 //!   is the log of its frame time over the incumbent's on both sides of it,
 //!   so a probe is never followed by another.
-//! - Each strategy keeps its last [`WINDOW`] samples: their median is its
-//!   cost relative to the incumbent, their spread (the MAD, and never less
-//!   than the incumbent's own frame-to-frame noise) its uncertainty.
+//! - Each strategy keeps its last [`WINDOW`] samples: the mean of their
+//!   middle half is its cost relative to the incumbent, their spread (the
+//!   MAD, and never less than the incumbent's own frame-to-frame noise) its
+//!   uncertainty.
 //! - Successive elimination with hysteresis: the incumbent is replaced only
 //!   by a strategy cheaper by more than [`HYSTERESIS`] at confidence (its
 //!   upper bound below it). A strategy that may still be cheaper by that
@@ -306,7 +307,7 @@ impl Chooser {
         if samples.is_empty() {
             return None;
         }
-        let m = median(samples.iter().copied());
+        let m = central(&samples);
         let n = samples.len();
         let spread = if n >= 3 {
             (1.4826 * median(samples.iter().map(|x| (x - m).abs()))).max(one)
@@ -335,7 +336,7 @@ impl Chooser {
     /// Makes `s` the incumbent: every estimate is re-expressed relative to
     /// it, and the old incumbent's samples are `s`'s, reversed.
     fn switch_to(&mut self, s: usize) {
-        let shift = median(self.records[s].samples.iter().copied());
+        let shift = central(&self.records[s].samples.iter().copied().collect::<Vec<_>>());
         let reversed: VecDeque<f64> = self.records[s].samples.iter().map(|x| -x).collect();
         for (k, r) in self.records.iter_mut().enumerate() {
             if k != s && k != self.incumbent {
@@ -442,6 +443,20 @@ impl Chooser {
 pub(super) fn frustum_estimate(share: f64, drawing: f64) -> f64 {
     let share = share.clamp(0.0, 0.999);
     drawing.clamp(0.01, 1.0).ln() + (HIDDEN_TRIANGLE_COST * share / (1.0 - share)).ln_1p()
+}
+
+/// The mean of the middle half of `values` (their interquartile mean): as
+/// robust as the median to a frame the machine spoiled, and nearly as
+/// efficient as the mean on the rest.
+fn central(values: &[f64]) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let cut = v.len() / 4;
+    let middle = &v[cut..v.len() - cut];
+    if middle.is_empty() {
+        return 0.0;
+    }
+    middle.iter().sum::<f64>() / middle.len() as f64
 }
 
 fn median(values: impl Iterator<Item = f64>) -> f64 {
@@ -664,6 +679,21 @@ mod tests {
             (plan[first].measured, plan[first + 1].strategy, plan[first + 1].measured),
             (false, 1, true)
         );
+    }
+
+    #[test]
+    fn one_spoiled_frame_does_not_move_an_estimate() {
+        let quiet = [0.10, 0.12, 0.08, 0.11, 0.09, 0.10, 0.12, 0.08];
+        let mut spoiled = quiet;
+        spoiled[3] = 2.0;
+        assert!((central(&quiet) - 0.1).abs() < 0.005);
+        assert!(
+            (central(&spoiled) - central(&quiet)).abs() < 0.01,
+            "{}",
+            central(&spoiled)
+        );
+        assert_eq!(central(&[0.3]), 0.3);
+        assert_eq!(central(&[]), 0.0);
     }
 
     #[test]
