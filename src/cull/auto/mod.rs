@@ -340,7 +340,7 @@ impl Culler for AutoCulling {
         // traversal) costs little on a GPU whose frames are short.
         let counted = turn.measured
             && self.candidates[k].family() == Family::Occlusion
-            && (turn.probe || self.frames % COUNT_EVERY == 0 || self.frustum_triangles == 0);
+            && (turn.probe || self.frames.is_multiple_of(COUNT_EVERY) || self.frustum_triangles == 0);
         if counted {
             self.frustum_triangles = self.count_frustum_triangles(input);
             view.frustum_triangles = self.frustum_triangles;
