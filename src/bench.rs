@@ -14,7 +14,7 @@ use std::ops::ControlFlow;
 use std::time::Instant;
 
 use crate::animation::{AnimationError, AnimationOptions, DEFAULT_SCALE, Filmstrip, FrameRange, Reel};
-use crate::camera::generate::default_path;
+use crate::camera::generate::{PLANNING_TESTS, default_path_heard};
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
 use crate::cull::{Culler, Labeled, ModeError, ModeId};
@@ -22,11 +22,11 @@ use crate::gpu::{AdapterReport, GpuContext, GpuError};
 use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{FrameStats, FrameTimeline, MissedObject, ModeDescription, summarize};
 use crate::picture::Look;
-use crate::raycast::RayCaster;
+use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::report::{
     Fingerprint, MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary,
-    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, trace_json, write_results,
-    write_whole,
+    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, refuse_result_file,
+    trace_json, write_results, write_whole,
 };
 use crate::scene::{Scene, SceneError};
 use crate::session::{RunOptions, Session, ms};
@@ -157,10 +157,21 @@ pub enum BenchEvent<'a> {
         mode: &'a str,
         reason: &'a str,
     },
+    /// A step of ray casts (planning the path, counting frames with
+    /// geometry within the near plane) has spent `spent` of its `budget`
+    /// box and triangle tests; said every few milliseconds while it works.
+    Work {
+        what: &'static str,
+        spent: u64,
+        budget: u64,
+    },
     Frame {
         done: u32,
         total: u32,
     },
+    /// The reference showed no object in any frame: every mode's numbers
+    /// are those of an empty picture.
+    NothingVisible,
     /// The run is over; its animation of this many frames is being encoded.
     Encoding {
         frames: u32,
@@ -175,31 +186,29 @@ pub struct BenchOutcome {
 /// Loads the scene, builds the hierarchy, runs every mode and writes the
 /// result files. `events` hears how it goes; when it breaks, the run stops
 /// there with [`BenchError::Interrupted`] and writes nothing. A run that
-/// fails leaves no folder behind that it made (a matrix's run folder with
-/// only a lock in it would read as a run still going).
+/// fails leaves no folder behind that it made (its claim takes it away: a
+/// matrix's run folder with only a lock in it would read as a run still
+/// going).
 pub fn execute(
     plan: &BenchPlan,
     events: &mut dyn FnMut(BenchEvent) -> ControlFlow<()>,
 ) -> Result<BenchOutcome, BenchError> {
-    let made_here = !plan.out.exists();
-    let outcome = execute_claimed(plan, events);
-    if outcome.is_err() && made_here {
-        crate::report::remove_unused_output(&plan.out);
-    }
-    outcome
-}
-
-/// [`execute`] but for the cleaning up after a failure.
-fn execute_claimed(
-    plan: &BenchPlan,
-    events: &mut dyn FnMut(BenchEvent) -> ControlFlow<()>,
-) -> Result<BenchOutcome, BenchError> {
-    // A bad path file or output directory is reported before a long scene
-    // load, not after the run.
+    // A bad path file, WGPU_BACKEND or output directory is reported before
+    // a long scene load, not after the run.
     let path_file = plan.path.as_deref().map(CameraPath::load).transpose()?;
+    plan.backend.backends()?;
+    // A merged folder's report.md and this run's would share a name.
+    let merged = plan.out.join("merged.json");
+    if merged.exists() {
+        let error = std::io::Error::other(
+            "--out holds a merged result: a run there would replace its report.md; choose another --out",
+        );
+        return Err(ReportError::at(&merged)(error).into());
+    }
     // Held until the results are written: no second run writes here.
     let _claim = prepare_output(&plan.out)?;
     for path in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
+        refuse_result_file(path, &plan.out)?;
         check_writable(path)?;
     }
     let start = Instant::now();
@@ -220,20 +229,50 @@ fn execute_claimed(
 
     let (path, generated) = match path_file {
         Some(path) => (path, None),
-        None => default_path(scene).map(|(path, why)| (path, Some(why)))?,
+        None => {
+            let heard = |spent, budget| {
+                events(BenchEvent::Work {
+                    what: "planning the path",
+                    spent,
+                    budget,
+                })
+            };
+            match default_path_heard(scene, Box::new(heard)) {
+                Err(PathError::Interrupted) => return Err(BenchError::Interrupted),
+                planned => planned.map(|(path, why)| (path, Some(why)))?,
+            }
+        }
     };
     let path = match plan.frames {
         Some(n) => path.with_frames(n)?,
         None => path,
     };
+    let heard = |spent, budget| {
+        events(BenchEvent::Work {
+            what: "counting frames with geometry within the near plane",
+            spent,
+            budget,
+        })
+    };
+    let caster = RayCaster::with_budget(
+        scene,
+        Budget {
+            tests: PLANNING_TESTS,
+            listener: Box::new(heard),
+        },
+    );
+    // Not counted (None) when it spent its budget.
+    let within_near = match path.frames_with_geometry_within_near(&caster, plan.resolution.aspect()) {
+        Err(Stopped::Interrupted) => return Err(BenchError::Interrupted),
+        counted => counted.ok(),
+    };
+    drop(caster);
     let path_summary = PathSummary {
         source: path.source.clone(),
         keyframes: path.keyframes.len(),
         near: path.near,
         generated,
-        frames_with_geometry_within_near: Some(
-            path.frames_with_geometry_within_near(&RayCaster::new(scene), plan.resolution.aspect()),
-        ),
+        frames_with_geometry_within_near: within_near,
         cameras: Some(Fingerprint::of_path(&path)),
     };
     go_on(events(BenchEvent::Path(&path_summary, path.frames)))?;
@@ -300,6 +339,9 @@ fn execute_claimed(
         animation.as_ref(),
         &mut |done, total| events(BenchEvent::Frame { done, total }),
     )?;
+    if plan.measure_error && output.rows.iter().all(|r| r.visible_objects == Some(0)) {
+        go_on(events(BenchEvent::NothingVisible))?;
+    }
     let animation = match output.reel.take() {
         Some(reel) => {
             go_on(events(BenchEvent::Encoding { frames: reel.frames() }))?;

@@ -88,13 +88,80 @@ pub enum ConfigError {
     SweptTwice { key: String, value: String },
 }
 
-/// A configuration file's JSON, read within [`crate::input::TEXT_LIMIT`].
+/// A configuration file's JSON, read within [`crate::input::TEXT_LIMIT`];
+/// an object that names a key twice is refused (a JSON value keeps the
+/// last, so a second `"frames"` would silently win over the first).
 pub fn read_json(path: &Path) -> Result<serde_json::Value, ConfigError> {
     let text = crate::input::read_text(path, crate::input::TEXT_LIMIT).map_err(|error| ConfigError::Io {
         path: path.display().to_string(),
         error,
     })?;
-    serde_json::from_str(&text).map_err(|e| invalid(path, "", &e))
+    serde_json::from_str::<Unique>(&text)
+        .map(|json| json.0)
+        .map_err(|e| invalid(path, "", &e))
+}
+
+/// A JSON value whose objects name each key once.
+struct Unique(serde_json::Value);
+
+impl<'de> Deserialize<'de> for Unique {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Unique, D::Error> {
+        d.deserialize_any(UniqueVisitor).map(Unique)
+    }
+}
+
+struct UniqueVisitor;
+
+impl<'de> serde::de::Visitor<'de> for UniqueVisitor {
+    type Value = serde_json::Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+
+    fn visit_bool<E>(self, v: bool) -> Result<serde_json::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_i64<E>(self, v: i64) -> Result<serde_json::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_u64<E>(self, v: u64) -> Result<serde_json::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_f64<E>(self, v: f64) -> Result<serde_json::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_str<E>(self, v: &str) -> Result<serde_json::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_unit<E>(self) -> Result<serde_json::Value, E> {
+        Ok(serde_json::Value::Null)
+    }
+
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<serde_json::Value, A::Error> {
+        let mut items = Vec::new();
+        while let Some(Unique(item)) = seq.next_element()? {
+            items.push(item);
+        }
+        Ok(items.into())
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<serde_json::Value, A::Error> {
+        let mut fields = serde_json::Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if fields.contains_key(&key) {
+                return Err(serde::de::Error::custom(format_args!("duplicate field `{key}`")));
+            }
+            let Unique(value) = map.next_value()?;
+            fields.insert(key, value);
+        }
+        Ok(fields.into())
+    }
 }
 
 /// `json` (a whole file, or the part `at` names, such as `runs[2]: `) as

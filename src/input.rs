@@ -82,23 +82,70 @@ impl<'de> serde::Deserialize<'de> for ByteSize {
     }
 }
 
-/// Reads all of `path`, a regular file of at most `limit` bytes.
+/// Reads all of `path`, a regular file of at most `limit` bytes (or a link
+/// to one).
 pub fn read_file(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    read_regular(path, limit, true)
+}
+
+/// Reads all of `path` as [`read_file`] does, but refuses a link: for a
+/// folder's own files, where a link could bring any file the user may read
+/// (`/etc/passwd`) into what occlu copies on (a merged artefact).
+pub fn read_unlinked(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    read_regular(path, limit, false)
+}
+
+/// Opens `path` with `options`, non-blocking (opening a pipe waits for its
+/// other end) and, unless `follow_links`, without following a link; what
+/// was opened must be a regular file. A link or anything else fails as
+/// `refused` says. Checked on what was opened, so the path cannot be
+/// swapped between a check and the open.
+pub fn open_regular(
+    options: &mut std::fs::OpenOptions,
+    path: &Path,
+    follow_links: bool,
+    refused: &dyn Fn() -> std::io::Error,
+) -> std::io::Result<(std::fs::File, std::fs::Metadata)> {
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(
+        options,
+        libc::O_NONBLOCK | if follow_links { 0 } else { libc::O_NOFOLLOW },
+    );
+    let file = options.open(path).map_err(|e| {
+        #[cfg(unix)]
+        if e.raw_os_error() == Some(libc::ELOOP) {
+            return refused();
+        }
+        e
+    })?;
+    let metadata = file.metadata()?;
+    if !metadata.is_file() {
+        return Err(refused());
+    }
+    Ok((file, metadata))
+}
+
+fn read_regular(path: &Path, limit: u64, follow_links: bool) -> std::io::Result<Vec<u8>> {
+    let not_regular = || {
+        let what = if follow_links {
+            ""
+        } else {
+            " (a link, a device or a pipe)"
+        };
+        std::io::Error::other(format!("not a regular file{what}"))
+    };
     // Checked before opening, since opening some devices acts on them, and
     // again on what was opened (non-blocking, since opening a FIFO waits for
     // a writer), so the path cannot be swapped between check and open.
-    if !std::fs::metadata(path)?.is_file() {
-        return Err(std::io::Error::other("not a regular file"));
+    let metadata = if follow_links {
+        std::fs::metadata(path)
+    } else {
+        std::fs::symlink_metadata(path)
+    };
+    if !metadata?.is_file() {
+        return Err(not_regular());
     }
-    let mut options = std::fs::OpenOptions::new();
-    options.read(true);
-    #[cfg(unix)]
-    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
-    let file = options.open(path)?;
-    let metadata = file.metadata()?;
-    if !metadata.is_file() {
-        return Err(std::io::Error::other("not a regular file"));
-    }
+    let (file, metadata) = open_regular(std::fs::OpenOptions::new().read(true), path, follow_links, &not_regular)?;
     let too_large = || {
         std::io::Error::new(
             std::io::ErrorKind::FileTooLarge,
@@ -117,9 +164,15 @@ pub fn read_file(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// [`read_file`] as UTF-8 text.
+/// [`read_file`] as UTF-8 text, without the byte order mark some editors
+/// on Windows put first (JSON parsers refuse it as a value).
 pub fn read_text(path: &Path, limit: u64) -> std::io::Result<String> {
-    String::from_utf8(read_file(path, limit)?).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
+    let text = String::from_utf8(read_file(path, limit)?)
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))?;
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    })
 }
 
 #[cfg(test)]

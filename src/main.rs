@@ -15,7 +15,7 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use occlu::animation::{AnimationError, AnimationOptions, DEFAULT_SCALE, FrameRange, MAX_SCALE};
 use occlu::bench::{BenchError, BenchEvent, execute};
-use occlu::camera::generate::{PathRequest, plan};
+use occlu::camera::generate::{PathRequest, plan_heard};
 use occlu::camera::path::{CameraPath, PathError};
 use occlu::config::{BenchConfig, BenchPlan, ConfigError, load_options, scene_spec};
 use occlu::cull::{ModeError, ModeParams, parse_modes};
@@ -24,7 +24,7 @@ use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::input::ByteSize;
 use occlu::matrix::{Matrix, MatrixError, Shard};
 use occlu::picture::{LEAD_IN, Look, PictureError};
-use occlu::raycast::RayCaster;
+use occlu::raycast::{Budget, RayCaster, Stopped};
 use occlu::report::compare::{CompareError, CompareOptions, Metric};
 use occlu::report::merge::MergeError;
 use occlu::report::{ReportError, SceneFacts};
@@ -34,12 +34,15 @@ use occlu::scene::{LoadOptions, Scene, SceneError, SceneSpec, load};
 use occlu::stress::{StressError, StressEvent};
 use occlu::world::World;
 
-/// Writes a line to standard error. A closed or full standard error is no
-/// reason to fail a run (and must not panic, as `eprintln!` does): the line
-/// is dropped.
+/// Writes a line to standard error, its control and reordering characters
+/// escaped ([`occlu::text::one_line`]): file, object and parser names reach
+/// it from anyone's files, and must neither drive the terminal nor break
+/// the line. A closed or full standard error is no reason to fail a run
+/// (and must not panic, as `eprintln!` does): the line is dropped.
 macro_rules! say {
     ($($arg:tt)*) => {{
-        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+        let line = occlu::text::one_line(&format!($($arg)*));
+        let _ = writeln!(std::io::stderr().lock(), "{line}");
     }};
 }
 
@@ -67,7 +70,7 @@ fn after_help() -> String {
         .collect();
     let scenes: Vec<String> = SCENES.iter().map(|(n, s)| format!("  {n:<8} {s}")).collect();
     format!(
-        "Modes:\n{}\n\nBuilt-in scenes (--scene NAME[:key=value,...]):\n{}\n\nExit status: 0 success (a closed output pipe included), 2 bad input, 1 failure while running.",
+        "Modes:\n{}\n\nBuilt-in scenes (--scene NAME[:key=value,...]):\n{}\n\nExit status: 0 success (a closed output pipe included), 2 bad input, 1 failure while running, 130 interrupted (Ctrl-C, SIGTERM, SIGHUP).",
         modes.join("\n"),
         scenes.join("\n")
     )
@@ -132,6 +135,12 @@ enum Command {
         /// Where merged.json, report.md, charts/ and runs/ go.
         #[arg(long, short, value_name = "MERGED")]
         out: PathBuf,
+        /// Merge a matrix that lacks runs (a shard left out, a run that
+        /// failed): the runs present are merged and the missing ones named
+        /// in the report and merged.json. Without it such a merge is
+        /// refused (exit 2), naming them.
+        #[arg(long)]
+        allow_partial: bool,
     },
     /// Compare two bench runs for CI: exit 1 when a counter (triangles,
     /// queries, round trips, wrong pixels, missed objects) grows, or when the
@@ -161,6 +170,12 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+/// A frame count as `--frames` takes it: 1 to the most a path may have,
+/// said in the message for any other number (u32's own range would be).
+fn frame_count() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..=i64::from(occlu::camera::path::MAX_FRAMES))
 }
 
 /// Where the scene comes from: a file, or a built-in scene (the city by default).
@@ -220,18 +235,30 @@ struct SceneAndPath {
     path: Option<PathBuf>,
     /// Resamples the path to this many frames, as bench's --frames does
     /// [default: the path's].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = frame_count())]
     frames: Option<u32>,
 }
 
 impl SceneAndPath {
+    /// Refuses an `output` that is one of the files this reads.
+    fn refuse_as_output(&self, output: &std::path::Path) -> anyhow::Result<()> {
+        let inputs: Vec<&std::path::Path> = [self.scene.model.as_deref(), self.path.as_deref()]
+            .into_iter()
+            .flatten()
+            .collect();
+        Ok(occlu::report::refuse_input_as_output(output, &inputs)?)
+    }
+
     fn load(&self) -> anyhow::Result<(Scene, CameraPath)> {
         // Read first: a bad path file fails before a long scene load.
         let path_file = self.path.as_deref().map(CameraPath::load).transpose()?;
         let scene = load(&self.scene.spec()?, &self.scene.options())?;
         let path = match path_file {
             Some(p) => p,
-            None => occlu::camera::generate::default_path(&scene)?.0,
+            None => {
+                let mut progress = Progress::new(false, 0, String::new());
+                occlu::camera::generate::default_path_heard(&scene, progress.listener("planning the path"))?.0
+            }
         };
         let path = match self.frames {
             Some(n) => path.with_frames(n)?,
@@ -253,10 +280,10 @@ struct BenchArgs {
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     modes: Option<Vec<String>>,
     /// Frames to record; resamples the path [default: the path's].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = frame_count())]
     frames: Option<u32>,
     /// Frames run before recording starts [default: 3].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=i64::from(occlu::config::MAX_WARMUP)))]
     warmup: Option<u32>,
     /// Render size [default: 800x600].
     #[arg(long, value_name = "WxH")]
@@ -446,7 +473,7 @@ enum PathCommand {
         kind: Option<PathRequest>,
         /// Frames of the path [default: 120; one per camera for cameras; the
         /// animation's own time at 30 per second for animation].
-        #[arg(long, value_name = "N")]
+        #[arg(long, value_name = "N", value_parser = frame_count())]
         frames: Option<u32>,
         /// Output file.
         #[arg(long, short, value_name = "FILE")]
@@ -488,7 +515,11 @@ fn main() -> ExitCode {
         Command::Plot { run_dir } => plot(&run_dir).map(|()| ExitCode::SUCCESS),
         Command::Render(args) => render(args).map(|()| ExitCode::SUCCESS),
         Command::Flythrough(args) => flythrough(*args).map(|()| ExitCode::SUCCESS),
-        Command::Merge { dirs, out } => merge(&dirs, &out).map(|()| ExitCode::SUCCESS),
+        Command::Merge {
+            dirs,
+            out,
+            allow_partial,
+        } => merge(&dirs, &out, allow_partial).map(|()| ExitCode::SUCCESS),
         Command::Compare {
             base,
             new,
@@ -513,12 +544,12 @@ fn main() -> ExitCode {
     };
     let code = match result {
         Err(e) if was_interrupted(&e) => {
-            say!("occlu: {}", occlu::text::one_line(&format!("{e:#}")));
+            say!("occlu: {e:#}");
             end_by_sigint()
         }
         Ok(code) => code,
         Err(e) => {
-            say!("occlu: error: {}", occlu::text::one_line(&format!("{e:#}")));
+            say!("occlu: error: {e:#}");
             ExitCode::from(if is_input_error(&e) { 2 } else { 1 })
         }
     };
@@ -541,8 +572,9 @@ static LISTENING: AtomicBool = AtomicBool::new(false);
 /// or case (stress), writes nothing, and ends the process.
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
-/// The first Ctrl-C asks listening work to stop (see [`LISTENING`]); a
-/// second one, or one while nothing listens, ends the process at once.
+/// The first Ctrl-C (or SIGTERM, or SIGHUP: a terminal closed, a job
+/// cancelled) asks listening work to stop (see [`LISTENING`]); a second
+/// one, or one while nothing listens, ends the process at once.
 fn listen_for_ctrl_c() {
     let _ = ctrlc::set_handler(|| {
         if !LISTENING.load(Ordering::SeqCst) || INTERRUPTED.swap(true, Ordering::SeqCst) {
@@ -553,8 +585,10 @@ fn listen_for_ctrl_c() {
 
 /// Ends the process as killed by SIGINT, so a calling shell or script sees
 /// the interruption (status 130) and stops as well, which an exit code
-/// alone would not make it do.
+/// alone would not make it do. A results folder this process made and
+/// wrote no results into goes first.
 fn end_by_sigint() -> ! {
+    occlu::report::abandon_unfinished();
     #[cfg(unix)]
     // SAFETY: restores SIGINT's default action and raises it; neither call
     // touches memory, and the default action ends the process.
@@ -581,6 +615,7 @@ fn was_interrupted(e: &anyhow::Error) -> bool {
         matches!(c.downcast_ref::<BenchError>(), Some(BenchError::Interrupted))
             || matches!(c.downcast_ref::<StressError>(), Some(StressError::Interrupted))
             || matches!(c.downcast_ref::<AnimationError>(), Some(AnimationError::Interrupted))
+            || matches!(c.downcast_ref::<PathError>(), Some(PathError::Interrupted))
     })
 }
 
@@ -627,6 +662,8 @@ fn is_input_error(e: &anyhow::Error) -> bool {
             || c.is::<ModeError>()
             || c.is::<occlu::export::ExportError>()
             || c.downcast_ref::<StressError>().is_some_and(StressError::is_input_error)
+            || c.downcast_ref::<occlu::gpu::GpuError>()
+                .is_some_and(occlu::gpu::GpuError::is_input_error)
             || c.downcast_ref::<PictureError>()
                 .is_some_and(PictureError::is_input_error)
             || c.downcast_ref::<AnimationError>()
@@ -669,6 +706,17 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
     };
     if !matrix.lists_runs() && args.shard.is_none() {
         let plan = matrix.single_run(&flags)?;
+        let model = match &plan.scene {
+            SceneSpec::File(model) => Some(model.as_path()),
+            SceneSpec::Builtin(_) => None,
+        };
+        let inputs: Vec<&std::path::Path> = [model, plan.path.as_deref(), args.config.as_deref()]
+            .into_iter()
+            .flatten()
+            .collect();
+        for output in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
+            occlu::report::refuse_input_as_output(output, &inputs)?;
+        }
         let outcome = bench_one(&plan, &note, quiet, format!("{} modes", plan.modes.len()))?;
         return if args.json {
             emit(&(serde_json::to_string_pretty(&outcome.summary)? + "\n"))
@@ -758,8 +806,8 @@ fn bench_one(
     Ok(outcome)
 }
 
-fn merge(dirs: &[PathBuf], out: &std::path::Path) -> anyhow::Result<()> {
-    let merged = occlu::report::merge::merge(dirs, out)?;
+fn merge(dirs: &[PathBuf], out: &std::path::Path, allow_partial: bool) -> anyhow::Result<()> {
+    let merged = occlu::report::merge::merge(dirs, out, allow_partial)?;
     emit(&occlu::report::merge::render(&merged))?;
     let adapters: std::collections::BTreeSet<String> = merged
         .runs
@@ -772,6 +820,12 @@ fn merge(dirs: &[PathBuf], out: &std::path::Path) -> anyhow::Result<()> {
         occlu::text::count(adapters.len(), "adapter"),
         out.display()
     );
+    for partial in &merged.missing {
+        say!(
+            "warning: a partial matrix, merged as asked (--allow-partial): {}",
+            partial.describe()
+        );
+    }
     for run in &merged.runs {
         for d in &run.disagreements {
             say!("warning: {}: {}: a backend-specific bug?", run.name, d.describe());
@@ -801,15 +855,18 @@ fn heard(progress: &mut Progress, event: BenchEvent, note: &dyn Fn(String)) {
             }
         }
         BenchEvent::Skipped { mode, reason } => note(format!("skipped: {mode}: {reason}")),
+        BenchEvent::Work { what, spent, budget } => progress.work(what, spent, budget),
         BenchEvent::Adapter(adapter) => note(format!("adapter: {adapter}")),
         BenchEvent::Path(path, frames) => {
             let why = path.generated.as_ref().map(|w| format!(" ({w})")).unwrap_or_default();
             note(format!("path: {}{why}", path.source));
-            if let Some(n) = path.frames_with_geometry_within_near.filter(|&n| n > 0) {
-                note(format!(
+            match path.frames_with_geometry_within_near {
+                Some(0) => {}
+                Some(n) => note(format!(
                     "warning: {n} of {frames} frames have geometry nearer than the near plane's corners ({}): it may be clipped",
                     path.near
-                ));
+                )),
+                None => note(near_not_counted()),
             }
         }
         BenchEvent::Frame { done, total } => progress.frame(done, total),
@@ -817,7 +874,19 @@ fn heard(progress: &mut Progress, event: BenchEvent, note: &dyn Fn(String)) {
             progress.finish();
             note(format!("encoding the animation's {frames} frames"));
         }
+        BenchEvent::NothingVisible => note(
+            "warning: no object was visible in any frame (the reference drew nothing): check the camera path, and the model's place and size".into(),
+        ),
     }
+}
+
+/// What a run says when counting frames with geometry within the near
+/// plane spent its budget of ray casts.
+fn near_not_counted() -> String {
+    format!(
+        "note: frames with geometry nearer than the near plane were not counted: the count spent its budget of {} M box and triangle tests",
+        occlu::camera::generate::PLANNING_TESTS / 1_000_000
+    )
 }
 
 /// Progress of a bench run on stderr: a bar over the recorded frames in a
@@ -832,6 +901,8 @@ struct Progress {
     started: Instant,
     last_line: Option<Instant>,
     pace: Pace,
+    /// The step of ray casts under way (planning a path), and when it began.
+    step: Option<(&'static str, Instant)>,
 }
 
 /// Seconds between progress lines outside a terminal.
@@ -847,7 +918,47 @@ impl Progress {
             started: Instant::now(),
             last_line: None,
             pace: Pace::default(),
+            step: None,
         }
+    }
+
+    /// A step of ray casts, `what`, has spent `spent` of its `budget` box
+    /// and triangle tests: said once the step has taken a second (most take
+    /// less), then every few seconds.
+    fn work(&mut self, what: &'static str, spent: u64, budget: u64) {
+        if self.quiet {
+            return;
+        }
+        let now = Instant::now();
+        let began = match self.step {
+            Some((step, began)) if step == what => began,
+            _ => {
+                self.step = Some((what, now));
+                self.last_line = None;
+                now
+            }
+        };
+        let taken = now.duration_since(began).as_secs_f64();
+        let due = self
+            .last_line
+            .map_or(taken >= 1.0, |t| now.duration_since(t).as_secs_f64() >= PROGRESS_EVERY);
+        if due {
+            self.last_line = Some(now);
+            say!(
+                "{what}: {taken:.0} s, {} M of at most {} M box and triangle tests",
+                spent / 1_000_000,
+                budget / 1_000_000
+            );
+        }
+    }
+
+    /// A listener for a step of ray casts, `what`: progress as [`Progress::work`]
+    /// says it, and Ctrl-C heard.
+    fn listener(&mut self, what: &'static str) -> occlu::camera::generate::PlanListener<'_> {
+        Box::new(move |spent, budget| {
+            self.work(what, spent, budget);
+            go_on()
+        })
     }
 
     /// `done` of `total` frames, warm-up frames included, have run.
@@ -939,8 +1050,10 @@ fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
         emit(&list)?;
         return Ok(ExitCode::SUCCESS);
     }
+    let backend = args.backend.unwrap_or_default();
+    backend.backends()?;
     let _claim = args.out.as_deref().map(occlu::report::prepare_output).transpose()?;
-    let gpu = occlu::gpu::GpuContext::new(args.backend.unwrap_or_default())?;
+    let gpu = occlu::gpu::GpuContext::new(backend)?;
     say!("adapter: {}", gpu.adapter);
     let bar = ProgressBar::new(0).with_style(
         ProgressStyle::with_template("{prefix:<15} [{bar:32}] {pos}/{len} frames, {elapsed} elapsed")
@@ -964,9 +1077,11 @@ fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
     let markdown = occlu::stress::render_markdown(&report);
     emit(&markdown)?;
     if let Some(out) = &args.out {
-        let write = |name: &str, text: String| occlu::report::write_whole(&out.join(name), text.as_bytes());
-        write("stress.md", markdown)?;
-        write("stress.json", serde_json::to_string_pretty(&report)? + "\n")?;
+        let json = serde_json::to_string_pretty(&report)? + "\n";
+        occlu::report::publish_files(
+            out,
+            &[("stress.md", markdown.as_bytes()), ("stress.json", json.as_bytes())],
+        )?;
         say!("results: stress.md and stress.json in {}", out.display());
     }
     let (_, failed) = report.verdicts();
@@ -1017,9 +1132,12 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         anyhow::bail!(ModeError::NotOne(args.mode.clone()));
     };
     let params = ModeParams::parse(&args.picture.params, &modes)?;
+    args.scene.refuse_as_output(&args.picture.output)?;
+    let backend = args.picture.backend.unwrap_or_default();
+    backend.backends()?;
     let (scene, path) = args.scene.load()?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-    let gpu = occlu::gpu::GpuContext::new(args.picture.backend.unwrap_or_default())?;
+    let gpu = occlu::gpu::GpuContext::new(backend)?;
     if let Some(reason) = mode.info().unsupported_on(&gpu) {
         anyhow::bail!("mode '{mode}' cannot run on {}: {reason}", gpu.adapter);
     }
@@ -1056,7 +1174,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             say!(
                 "  object {} '{}': {drawn}, {} wrong pixels{first}",
                 m.object,
-                occlu::text::one_line(&m.name),
+                m.name,
                 m.wrong_pixels
             );
         }
@@ -1068,7 +1186,10 @@ fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
     let modes = parse_modes(&args.modes)?;
     let params = ModeParams::parse(&args.picture.params, &modes)?;
     let output = &args.picture.output;
+    args.scene.refuse_as_output(output)?;
     occlu::report::check_writable(output)?;
+    let backend = args.picture.backend.unwrap_or_default();
+    backend.backends()?;
     let note = |text: String| {
         if !args.quiet {
             say!("{text}");
@@ -1078,7 +1199,7 @@ fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
     let range = args.range.unwrap_or(FrameRange::all(path.frames));
     range.check(path.frames)?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-    let gpu = occlu::gpu::GpuContext::new(args.picture.backend.unwrap_or_default())?;
+    let gpu = occlu::gpu::GpuContext::new(backend)?;
     note(format!("adapter: {}", gpu.adapter));
     let mut cullers = Vec::new();
     for mode in modes {
@@ -1151,7 +1272,9 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
     let h = report.hierarchy;
     let mut text = String::new();
     let w = &mut text;
-    let _ = writeln!(w, "source      {}", report.source);
+    // Names from the file, shown as themselves (see say!).
+    let shown = occlu::text::one_line;
+    let _ = writeln!(w, "source      {}", shown(&report.source));
     let _ = writeln!(w, "objects     {} ({} meshes)", report.objects, report.meshes);
     if report.movers > 0 {
         let _ = writeln!(w, "movers      {} objects move from frame to frame", report.movers);
@@ -1196,7 +1319,7 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
         let _ = writeln!(w, "warnings    none");
     }
     for warning in &scene.warnings {
-        let _ = writeln!(w, "warning     {warning}");
+        let _ = writeln!(w, "warning     {}", shown(warning));
     }
     emit(&text)
 }
@@ -1219,6 +1342,7 @@ fn emit(text: &str) -> anyhow::Result<()> {
 }
 
 fn export(input: &SceneAndPath, output: &std::path::Path) -> anyhow::Result<()> {
+    input.refuse_as_output(output)?;
     occlu::report::check_writable(output)?;
     let (scene, path) = input.load()?;
     if !scene.movers.is_empty() {
@@ -1246,13 +1370,14 @@ fn path_gen(
     frames: Option<u32>,
     output: PathBuf,
 ) -> anyhow::Result<()> {
-    if frames.is_some_and(|n| n == 0 || n > occlu::camera::path::MAX_FRAMES) {
-        return Err(PathError::FrameCount.into());
+    if let Some(model) = &scene_args.model {
+        occlu::report::refuse_input_as_output(&output, &[model])?;
     }
     let scene: Scene = load(&scene_args.spec()?, &scene_args.options())?;
-    let generated = plan(request.as_ref(), &scene, frames)?;
+    let mut progress = Progress::new(false, 0, String::new());
+    let generated = plan_heard(request.as_ref(), &scene, frames, progress.listener("planning the path"))?;
     // Validate what is written, so a generated file always loads.
-    let path = CameraPath::from_file(&generated.file, &output.display().to_string())?;
+    let path = CameraPath::from_file(&generated.file, &format!("generated:{}", generated.kind))?;
     let text = serde_json::to_string_pretty(&generated.file)? + "\n";
     occlu::report::write_whole(&output, text.as_bytes())?;
     say!(
@@ -1263,12 +1388,19 @@ fn path_gen(
         path.frames,
         generated.file.keyframes.len()
     );
-    let near = path.frames_with_geometry_within_near(&RayCaster::new(&scene), Resolution::DEFAULT.aspect());
-    if near > 0 {
-        say!(
+    let budget = Budget {
+        tests: occlu::camera::generate::PLANNING_TESTS,
+        listener: progress.listener("counting frames with geometry within the near plane"),
+    };
+    let caster = RayCaster::with_budget(&scene, budget);
+    match path.frames_with_geometry_within_near(&caster, Resolution::DEFAULT.aspect()) {
+        Ok(0) => {}
+        Ok(near) => say!(
             "warning: {near} of {} frames have geometry nearer than the near plane's corners (at 4:3)",
             path.frames
-        );
+        ),
+        Err(Stopped::Spent) => say!("{}", near_not_counted()),
+        Err(Stopped::Interrupted) => return Err(PathError::Interrupted.into()),
     }
     Ok(())
 }

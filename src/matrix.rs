@@ -86,6 +86,9 @@ impl Matrix {
     /// relative to the file.
     pub fn load(file: &Path) -> Result<Matrix, MatrixError> {
         let mut json = read_json(file)?;
+        if let Some(fields) = json.as_object() {
+            refuse_unknown_fields(file, fields)?;
+        }
         let [runs, models, scenes, paths] = match json.as_object_mut() {
             Some(fields) => LISTS.map(|key| fields.remove(key)),
             None => [None, None, None, None],
@@ -107,8 +110,15 @@ impl Matrix {
         let scenes: Vec<String> = list(file, "scenes", scenes)?;
         let paths: Vec<PathBuf> = list(file, "paths", paths)?;
         // Counted before the runs are made: a huge product is refused
-        // before it takes the memory.
-        let listed_runs = entries.len() + (models.len() + scenes.len()).max(1) * paths.len().max(1);
+        // before it takes the memory. A list left out takes the defaults'
+        // scene or path; when all three are, they add no run.
+        let crossed = (models.len() + scenes.len()).max(1) * paths.len().max(1);
+        let listed_runs = entries.len()
+            + if models.len() + scenes.len() + paths.len() > 0 {
+                crossed
+            } else {
+                0
+            };
         if listed_runs > MAX_RUNS {
             return Err(MatrixError::TooManyRuns {
                 path: file.display().to_string(),
@@ -247,6 +257,33 @@ impl Matrix {
                 Ok(MatrixRun { name, plan })
             })
             .collect()
+    }
+}
+
+/// Refuses a field a configuration file cannot have, listing every one it
+/// can: a run's ([`BenchConfig`]'s) and the [`LISTS`] (which the run's
+/// own refusal would leave out, as they are taken off first).
+fn refuse_unknown_fields(file: &Path, fields: &serde_json::Map<String, serde_json::Value>) -> Result<(), ConfigError> {
+    // Every field of a run, as a default one serialises (None as null).
+    let run = serde_json::to_value(BenchConfig::default()).expect("a configuration serialises");
+    let known: Vec<&str> = run
+        .as_object()
+        .into_iter()
+        .flat_map(|run| run.keys().map(String::as_str))
+        .chain(LISTS)
+        .collect();
+    match fields.keys().find(|key| !known.contains(&key.as_str())) {
+        Some(unknown) => {
+            let expected: Vec<String> = known.iter().map(|k| format!("`{k}`")).collect();
+            Err(ConfigError::Json {
+                path: file.display().to_string(),
+                message: crate::text::one_line(&format!(
+                    "unknown field `{unknown}`, expected one of {}",
+                    expected.join(", ")
+                )),
+            })
+        }
+        None => Ok(()),
     }
 }
 
@@ -469,6 +506,21 @@ mod tests {
         assert!(matches!(e, MatrixError::GithubExport));
         let e = plan(r#"{"scenes": ["city"], "trace": "t.json"}"#).unwrap_err();
         assert!(matches!(e, MatrixError::Trace));
+    }
+
+    #[test]
+    fn a_matrix_of_exactly_the_most_runs_is_taken_and_one_more_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let runs = |n: usize| format!(r#"{{"runs": [{}]}}"#, vec!["{}"; n].join(","));
+        let m = matrix(dir.path(), &runs(MAX_RUNS)).unwrap();
+        assert_eq!(m.entries.len(), MAX_RUNS);
+        let e = matrix(dir.path(), &runs(MAX_RUNS + 1)).unwrap_err();
+        assert!(e.to_string().contains("lists 10001 runs"), "{e}");
+        let listed = format!(
+            r#"{{"runs": [{}], "scenes": ["city", "forest"]}}"#,
+            vec!["{}"; MAX_RUNS - 2].join(",")
+        );
+        assert_eq!(matrix(dir.path(), &listed).unwrap().entries.len(), MAX_RUNS);
     }
 
     #[test]

@@ -8,8 +8,16 @@
 //! per mesh over its triangles in the mesh's own frame, built the first time
 //! a search reaches the mesh (a planned walk casts tens of thousands of
 //! rays; a mesh is thousands of triangles).
+//!
+//! A caster may be given a [`Budget`]: its box and triangle tests are
+//! counted, told to a listener now and then (progress, and a way to stop),
+//! and once the budget is spent or the listener asks to stop, every search
+//! finds nothing and [`RayCaster::stopped`] says why. A model whose every
+//! ray meets millions of triangles (50 000 instances of one mesh in one
+//! place) then costs a known amount of work, not hours.
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
+use std::ops::ControlFlow;
 use std::sync::OnceLock;
 
 use glam::{DAffine3, DVec3};
@@ -27,6 +35,126 @@ pub struct RayCaster<'a> {
     /// Each mesh's tree over its triangles (indices into the mesh's
     /// triangle list), built on first use.
     mesh_trees: Vec<OnceLock<Hierarchy>>,
+    work: Work<'a>,
+}
+
+/// How much a caster may search: box and triangle tests, each a unit of
+/// work, and whom it tells as they are spent.
+pub struct Budget<'a> {
+    /// Tests allowed in all.
+    pub tests: u64,
+    /// Told the tests spent and allowed every [`Budget::TELL_EVERY`] tests;
+    /// breaking stops every search.
+    pub listener: Box<dyn FnMut(u64, u64) -> ControlFlow<()> + 'a>,
+}
+
+impl Budget<'_> {
+    /// Tests between two calls of the listener (a few milliseconds).
+    pub const TELL_EVERY: u64 = 1 << 18;
+
+    /// No limit, no listener.
+    pub fn unlimited() -> Budget<'static> {
+        Budget {
+            tests: u64::MAX,
+            listener: Box::new(|_, _| ControlFlow::Continue(())),
+        }
+    }
+}
+
+/// Why a caster's searches stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stopped {
+    /// Its budget was spent.
+    Spent,
+    /// Its listener asked it to stop (Ctrl-C).
+    Interrupted,
+}
+
+/// The tests a caster has spent against its budget. Each test costs a
+/// decrement; the listener is told, and the budget checked, at the end of
+/// a stretch of tests.
+struct Work<'a> {
+    budget: RefCell<Budget<'a>>,
+    /// Tests counted up to the start of the current stretch.
+    counted: Cell<u64>,
+    /// The tests of the current stretch before the next telling, and
+    /// those left of them; both 0 once stopped.
+    stretch: Cell<u64>,
+    left: Cell<u64>,
+    stopped: Cell<Option<Stopped>>,
+}
+
+impl<'a> Work<'a> {
+    fn new(budget: Budget<'a>) -> Work<'a> {
+        let work = Work {
+            budget: RefCell::new(budget),
+            counted: Cell::new(0),
+            stretch: Cell::new(0),
+            left: Cell::new(0),
+            stopped: Cell::new(None),
+        };
+        work.next_stretch();
+        work
+    }
+
+    /// Tests spent so far.
+    fn spent(&self) -> u64 {
+        self.counted.get() + self.stretch.get() - self.left.get()
+    }
+
+    /// Charges one test; whether the search may go on.
+    #[inline]
+    fn charge(&self) -> bool {
+        match self.left.get() {
+            0 => self.tell(),
+            left => {
+                self.left.set(left - 1);
+                true
+            }
+        }
+    }
+
+    /// The test that ends a stretch: the listener told, the budget checked.
+    #[cold]
+    fn tell(&self) -> bool {
+        if self.stopped.get().is_some() {
+            return false;
+        }
+        let spent = self.counted.get() + self.stretch.get() + 1;
+        self.counted.set(spent);
+        let stopped = {
+            let mut budget = self.budget.borrow_mut();
+            let tests = budget.tests;
+            if (budget.listener)(spent, tests).is_break() {
+                Some(Stopped::Interrupted)
+            } else {
+                (spent > tests).then_some(Stopped::Spent)
+            }
+        };
+        self.stopped.set(stopped);
+        match stopped {
+            Some(_) => {
+                self.stretch.set(0);
+                self.left.set(0);
+                false
+            }
+            None => {
+                self.next_stretch();
+                true
+            }
+        }
+    }
+
+    /// Starts the stretch that ends at the next telling: after
+    /// [`Budget::TELL_EVERY`] tests, or with the first test past the budget.
+    fn next_stretch(&self) {
+        let counted = self.counted.get();
+        let tests = self.budget.borrow().tests;
+        let end = counted.saturating_add(Budget::TELL_EVERY).min(tests.saturating_add(1));
+        let stretch = end - counted - 1;
+        self.stretch.set(stretch);
+        self.left.set(stretch);
+    }
 }
 
 /// A surface a ray met: its distance along the ray (in units of the ray's
@@ -60,13 +188,32 @@ const MESH_TREE: HierarchyParams = HierarchyParams {
 };
 
 impl<'a> RayCaster<'a> {
+    /// A caster without limit.
     pub fn new(scene: &'a Scene) -> RayCaster<'a> {
+        RayCaster::with_budget(scene, Budget::unlimited())
+    }
+
+    /// A caster that stops searching once `budget` is spent or its
+    /// listener breaks.
+    pub fn with_budget(scene: &'a Scene, budget: Budget<'a>) -> RayCaster<'a> {
         RayCaster {
             hierarchy: Hierarchy::build(&scene.objects, &HierarchyParams::default()),
             to_local: scene.objects.iter().map(|o| o.transform.inverse()).collect(),
             mesh_trees: scene.meshes.iter().map(|_| OnceLock::new()).collect(),
             scene,
+            work: Work::new(budget),
         }
+    }
+
+    /// Why the searches stopped, if they did: from then on every search
+    /// finds nothing, so what was found since the last check may be wrong.
+    pub fn searching(&self) -> Result<(), Stopped> {
+        self.work.stopped.get().map_or(Ok(()), Err)
+    }
+
+    /// The box and triangle tests done so far.
+    pub fn tests(&self) -> u64 {
+        self.work.spent()
     }
 
     /// The nearest surface along `origin + t·direction` for `t` in
@@ -146,8 +293,8 @@ impl<'a> RayCaster<'a> {
     /// hierarchy nodes' boxes it accepts too; `wanted` is asked as the search
     /// goes, so a bound `visit` tightens prunes what is left.
     fn visit_objects(&self, wanted: &dyn Fn(&Aabb) -> bool, visit: &mut dyn FnMut(u32)) {
-        descend(&self.hierarchy, wanted, &mut |object| {
-            if wanted(&self.scene.objects[object as usize].bounds) {
+        descend(&self.hierarchy, &self.work, wanted, &mut |object| {
+            if self.work.charge() && wanted(&self.scene.objects[object as usize].bounds) {
                 visit(object);
             }
         });
@@ -163,7 +310,11 @@ impl<'a> RayCaster<'a> {
                 .collect();
             Hierarchy::build(&boxes, &MESH_TREE)
         });
-        descend(tree, wanted, &mut |triangle| visit(self.triangle(mesh, triangle)));
+        descend(tree, &self.work, wanted, &mut |triangle| {
+            if self.work.charge() {
+                visit(self.triangle(mesh, triangle));
+            }
+        });
     }
 
     /// The triangles of a mesh, in its local frame.
@@ -179,11 +330,15 @@ impl<'a> RayCaster<'a> {
 }
 
 /// Calls `visit` with the items of every leaf of `tree` reached through
-/// boxes `wanted` accepts (asked as the search goes).
-fn descend(tree: &Hierarchy, wanted: &dyn Fn(&Aabb) -> bool, visit: &mut dyn FnMut(u32)) {
+/// boxes `wanted` accepts (asked as the search goes), each box charged to
+/// `work` (an exhausted budget ends the search).
+fn descend(tree: &Hierarchy, work: &Work, wanted: &dyn Fn(&Aabb) -> bool, visit: &mut dyn FnMut(u32)) {
     let mut stack = vec![0usize];
     while let Some(n) = stack.pop() {
         let node = &tree.nodes[n];
+        if !work.charge() {
+            return;
+        }
         if !wanted(&node.bounds) {
             continue;
         }
@@ -316,6 +471,58 @@ mod tests {
             })
             .collect();
         (positions, indices)
+    }
+
+    #[test]
+    fn a_spent_budget_or_a_listener_that_breaks_stops_every_search() {
+        let (positions, indices) = tube(48);
+        let mut builder = crate::scene::SceneBuilder::new("test".into(), 1 << 20);
+        let group = builder.add_mesh("tube", &positions, &indices).unwrap();
+        builder.add_object("tube", &group, DAffine3::IDENTITY).unwrap();
+        let scene = builder.finish().unwrap();
+        let (origin, across) = (DVec3::new(-5.0, 0.0, 2.0), DVec3::X);
+        let unlimited = RayCaster::new(&scene);
+        assert!(unlimited.first_hit(origin, across, 10.0).is_some());
+        let per_ray = unlimited.tests();
+        assert!(per_ray > 0);
+
+        let told = Cell::new(0);
+        let budget = Budget {
+            tests: 10 * per_ray,
+            listener: Box::new(|spent, tests| {
+                told.set(told.get() + 1);
+                assert!(spent <= tests + 1, "told once the budget is passed");
+                ControlFlow::Continue(())
+            }),
+        };
+        let limited = RayCaster::with_budget(&scene, budget);
+        let rays = (0..100)
+            .take_while(|_| limited.first_hit(origin, across, 10.0).is_some())
+            .count();
+        assert_eq!(rays, 10, "the eleventh ray passes the budget");
+        assert_eq!(limited.searching(), Err(Stopped::Spent));
+        assert!(
+            limited.first_hit(origin, across, 10.0).is_none(),
+            "nothing found once spent"
+        );
+        assert_eq!(told.get(), 1);
+
+        let listening = Budget {
+            tests: u64::MAX,
+            listener: Box::new(|_, _| ControlFlow::Break(())),
+        };
+        let stopped = RayCaster::with_budget(&scene, listening);
+        let mut cast = 0;
+        while stopped.searching().is_ok() {
+            stopped.first_hit(origin, across, 10.0);
+            cast += 1;
+        }
+        assert_eq!(stopped.searching(), Err(Stopped::Interrupted));
+        assert_eq!(
+            cast as u64,
+            Budget::TELL_EVERY.div_ceil(per_ray),
+            "stopped when first told"
+        );
     }
 
     #[test]

@@ -1,21 +1,43 @@
 //! Text from users' files inside messages and result files.
 
-/// `text` with control characters (newlines, tabs, escapes) written as
-/// escape sequences: names and parser messages quote the input, and an
-/// error must stay one line, a CSV row one row.
+/// `text` with control characters (newlines, tabs, escapes) and characters
+/// that reorder or hide text written as escape sequences: names and parser
+/// messages quote the input, an error must stay one line, a CSV row one
+/// row, and a name must read as what it is.
 pub fn one_line(text: &str) -> String {
-    if !text.chars().any(char::is_control) {
+    if !text.chars().any(is_hidden) {
         return text.to_string();
     }
     text.chars()
         .map(|c| {
-            if c.is_control() {
+            if is_hidden(c) {
                 c.escape_default().to_string()
             } else {
                 c.to_string()
             }
         })
         .collect()
+}
+
+/// Whether `c` acts on text instead of showing: a control character, or
+/// one of Unicode's invisible format characters, which reorder what
+/// follows ("Trojan Source": U+202E makes `gpj.exe` read `exe.jpg`) or
+/// hide (zero-width characters, the byte order mark, tag characters that
+/// spell invisible text).
+fn is_hidden(c: char) -> bool {
+    c.is_control()
+        || matches!(
+            c,
+            '\u{00AD}'
+                | '\u{061C}'
+                | '\u{180E}'
+                | '\u{200B}'..='\u{200F}'
+                | '\u{202A}'..='\u{202E}'
+                | '\u{2060}'..='\u{206F}'
+                | '\u{FEFF}'
+                | '\u{FFF9}'..='\u{FFFB}'
+                | '\u{E0000}'..='\u{E007F}'
+        )
 }
 
 /// `text` as part of a file name that means the same on every system: ASCII
@@ -43,6 +65,23 @@ pub fn count(n: usize, noun: &str) -> String {
     } else {
         format!("{n} {noun}s")
     }
+}
+
+/// `x` as a message shows it: as Rust writes it, but in scientific
+/// notation beyond everyday magnitudes, so `1e308` does not print 309
+/// digits.
+pub fn number(x: f64) -> String {
+    let magnitude = x.abs();
+    if magnitude != 0.0 && magnitude.is_finite() && !(1e-4..1e16).contains(&magnitude) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+/// `v`'s components as [`number`] writes them: `[0, 1, 0]`.
+pub fn vector(v: [f64; 3]) -> String {
+    format!("[{}, {}, {}]", number(v[0]), number(v[1]), number(v[2]))
 }
 
 /// The longest [`slug`].
@@ -100,6 +139,19 @@ mod tests {
         assert_eq!(one_line("plain 'é' ü"), "plain 'é' ü");
         assert_eq!(one_line("a\nb\r\tc\u{1b}[2J\0"), "a\\nb\\r\\tc\\u{1b}[2J\\u{0}");
         assert!(!one_line("x\u{85}y\u{7f}").chars().any(char::is_control));
+    }
+
+    #[test]
+    fn characters_that_reorder_or_hide_text_are_escaped_too() {
+        // Trojan Source's bidirectional overrides and isolates, and
+        // invisible characters: shown raw, they make a name read as another.
+        assert_eq!(one_line("wall\u{202E}gpj.exe"), "wall\\u{202e}gpj.exe");
+        assert_eq!(
+            one_line("a\u{2066}b\u{200B}c\u{FEFF}d\u{200F}"),
+            "a\\u{2066}b\\u{200b}c\\u{feff}d\\u{200f}"
+        );
+        assert_eq!(markdown("x\u{202E}y"), "x\\\\u{202e}y");
+        assert_eq!(one_line("naïve ünïcode 日本"), "naïve ünïcode 日本");
     }
 
     #[test]

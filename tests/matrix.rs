@@ -286,9 +286,17 @@ fn shards_and_a_gl_run_merge_into_one_report_that_compare_gates() {
     let same = occlu(&["compare", s(&out), s(&out)]);
     assert!(same.status.success(), "{:?}", own_stderr(&same));
     assert!(stdout(&same).contains("01-town-street--"));
-    // …and a merge that lacks runs the base had fails.
+    // …and a merge that lacks runs the base had (asked for) fails.
     let partial = dir.path().join("partial");
-    assert!(occlu(&["merge", s(&dirs[0]), "--out", s(&partial)]).status.success());
+    refused(
+        &["merge", s(&dirs[0]), "--out", s(&partial)],
+        &["a partial matrix", "2 of the matrix's 4 runs", "missing: run 02, 03"],
+    );
+    assert!(
+        occlu(&["merge", s(&dirs[0]), "--out", s(&partial), "--allow-partial"])
+            .status
+            .success()
+    );
     let missing = occlu(&["compare", s(&out), s(&partial)]);
     assert_eq!(missing.status.code(), Some(1), "{:?}", own_stderr(&missing));
     assert!(stdout(&missing).contains("MISSING"));
@@ -384,17 +392,16 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
     // flagged, in the report and merged.json, without failing the merge;
     // one of another backend may differ. A summary.json from before the
     // fingerprints (no run, geometry, cameras) still merges.
+    // (Merge reads statistics from frames.csv, as compare does.)
+    let more_triangles = dir.path().join("more-triangles");
+    common::tampered_copy(&small, &more_triangles, &|r| {
+        if r.mode == "vfc" {
+            r.triangles_drawn += 12;
+        }
+    });
     let same_backend = dir.path().join("other-gpu");
-    edited_copy(&small, &same_backend, |j| {
+    edited_copy(&more_triangles, &same_backend, |j| {
         j["adapter"]["name"] = "Other GPU".into();
-        let vfc = j["modes"]
-            .as_array_mut()
-            .unwrap()
-            .iter_mut()
-            .find(|m| m["name"] == "vfc")
-            .unwrap();
-        let mean = vfc["stats"]["triangles_drawn"]["mean"].as_f64().unwrap();
-        vfc["stats"]["triangles_drawn"]["mean"] = (mean + 12.0).into();
     });
     let other_backend = dir.path().join("other-backend");
     edited_copy(&same_backend, &other_backend, |j| {

@@ -2,13 +2,14 @@
 //! `occlu path gen`.
 
 use std::fmt;
+use std::ops::ControlFlow;
 use std::str::FromStr;
 
 use glam::DVec3;
 
-use super::path::{CameraPath, DEFAULT_FOV_Y_DEG, Interpolation, KeyframeFile, PathError, PathFile};
+use super::path::{CameraPath, DEFAULT_FOV_Y_DEG, Interpolation, KeyframeFile, NEAR_RANGE, PathError, PathFile};
 use super::walk::{self, Walk};
-use crate::raycast::RayCaster;
+use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::scene::Scene;
 use crate::scene::cameras::{CameraPose, FileAnimation, SAMPLES_PER_SECOND};
 
@@ -108,12 +109,31 @@ pub struct Generated {
     pub why: String,
 }
 
+/// Told, now and then while a path is planned, the box and triangle tests
+/// spent and allowed ([`Budget`]); breaking stops the planning
+/// ([`PathError::Interrupted`]).
+pub type PlanListener<'a> = Box<dyn FnMut(u64, u64) -> ControlFlow<()> + 'a>;
+
+/// The box and triangle tests planning one path may spend (walk and
+/// enclosure rays together): about 6 times what the most planning of the
+/// models in ../shared/models needs (two-cylinder-engine.glb, 91 M tests,
+/// 1.5 s on this project's 2-core machine; den-haag.obj 40 M), and 5 to 12 s
+/// of work there. A model beyond it (thousands of instances of one mesh in
+/// one place: every ray meets millions of triangles) gets the path that
+/// needs no planning: an orbit by default, a straight line for a walk.
+pub const PLANNING_TESTS: u64 = 1 << 29;
+
 /// The path used when none is given ([`DEFAULT_FRAMES`] frames): a walk
 /// where the scene suggests one (the built-in scenes' streets), or where
 /// circling the model would show nothing but one object (a sky dome around
 /// it, or a closed shell hiding everything else); an orbit otherwise.
 pub fn default_path(scene: &Scene) -> Result<(CameraPath, String), PathError> {
-    let generated = plan(None, scene, None)?;
+    default_path_heard(scene, Box::new(|_, _| ControlFlow::Continue(())))
+}
+
+/// [`default_path`], with `listener` told how the planning goes.
+pub fn default_path_heard(scene: &Scene, listener: PlanListener) -> Result<(CameraPath, String), PathError> {
+    let generated = plan_heard(None, scene, None, listener)?;
     let path = CameraPath::from_file(&generated.file, &format!("generated:{}", generated.kind))?;
     Ok((path, generated.why))
 }
@@ -123,15 +143,41 @@ pub fn default_path(scene: &Scene) -> Result<(CameraPath, String), PathError> {
 /// per camera for `cameras`, the animation's own time at
 /// [`SAMPLES_PER_SECOND`] for `animation`, [`DEFAULT_FRAMES`] otherwise).
 pub fn plan(request: Option<&PathRequest>, scene: &Scene, frames: Option<u32>) -> Result<Generated, PathError> {
-    let caster = RayCaster::new(scene);
+    plan_heard(request, scene, frames, Box::new(|_, _| ControlFlow::Continue(())))
+}
+
+/// [`plan`], with `listener` told how the planning goes. Planning spends
+/// at most [`PLANNING_TESTS`]; past them the kinds that need planning fall
+/// back to one that does not, and `why` says so.
+pub fn plan_heard(
+    request: Option<&PathRequest>,
+    scene: &Scene,
+    frames: Option<u32>,
+    listener: PlanListener,
+) -> Result<Generated, PathError> {
+    let budget = Budget {
+        tests: PLANNING_TESTS,
+        listener,
+    };
+    let caster = RayCaster::with_budget(scene, budget);
     let walk = || walk::plan(scene, &caster);
     let (kind, why, planned) = match request {
         Some(r) => (r.kind, "asked for".to_string(), None),
-        None => default_kind(scene, &caster, walk),
+        None => match default_kind(scene, &caster, walk) {
+            Err(Stopped::Spent) => (PathKind::Orbit, format!("{}: circled from outside", spent()), None),
+            chosen => chosen.map_err(interrupted)?,
+        },
     };
     let shape_frames = frames.unwrap_or(DEFAULT_FRAMES);
+    if kind.shape().is_some() {
+        too_small(scene)?;
+    }
     let (file, note) = match (kind, kind.shape()) {
-        (_, Some(shape)) => generate_with(shape, scene, shape_frames, || planned.or_else(walk)),
+        (_, Some(shape)) => generate_with(shape, scene, shape_frames, || match planned {
+            Some(planned) => Ok(Some(planned)),
+            None => walk(),
+        })
+        .map_err(interrupted)?,
         (PathKind::Cameras, None) => (from_cameras(scene, frames)?, None),
         (_, None) => {
             let name = request.and_then(|r| r.animation.as_deref());
@@ -240,32 +286,67 @@ const OPEN_PLACE: f64 = 0.75;
 /// rather than circled.
 const LONG_WALK: f64 = walk::LONG_ROUTE as f64;
 
+/// The near plane of a path made from a scene's shape, as a share of the
+/// scene's diagonal.
+const NEAR_SHARE: f64 = 1e-4;
+
+/// Refuses a scene too small for a path made from its shape: its near
+/// plane would be below the least a path may have, naming the model (not
+/// the path, which is not at fault).
+fn too_small(scene: &Scene) -> Result<(), PathError> {
+    let diagonal = scene.bounds.extent().length();
+    let least = *NEAR_RANGE.start();
+    if diagonal * NEAR_SHARE >= least {
+        return Ok(());
+    }
+    Err(PathError::Invalid {
+        path: scene.source.clone(),
+        message: format!(
+            "the model is {diagonal:.2e} units across, too small to make a path from: its near plane ({NEAR_SHARE:e} of that) would be below the {least:e} a camera path may have; scale the model up, or write the path by hand"
+        ),
+    })
+}
+
+/// What a path says when its planning spent [`PLANNING_TESTS`].
+fn spent() -> String {
+    format!(
+        "planning a walk stopped at its budget of {} M box and triangle tests (its rays met too much geometry)",
+        PLANNING_TESTS / 1_000_000
+    )
+}
+
+/// A stopped caster as the planner's error: only an interruption gets
+/// here (a spent budget falls back to a simpler path).
+fn interrupted(_: Stopped) -> PathError {
+    PathError::Interrupted
+}
+
 /// The default kind for `scene`, why, and the walk planned to decide it.
 fn default_kind(
     scene: &Scene,
     caster: &RayCaster,
-    walk: impl Fn() -> Option<Walk>,
-) -> (PathKind, String, Option<Walk>) {
+    walk: impl Fn() -> Result<Option<Walk>, Stopped>,
+) -> Result<(PathKind, String, Option<Walk>), Stopped> {
     if scene.walk_hint.is_some() {
-        return (PathKind::Walk, "the scene's streets".into(), None);
+        return Ok((PathKind::Walk, "the scene's streets".into(), None));
     }
     if let Some(camera) = scene.animations.iter().find_map(|a| a.camera.as_ref()) {
-        return (
+        return Ok((
             PathKind::Animation,
             format!("the file's animated camera '{}'", camera.name),
             None,
-        );
+        ));
     }
     let ground = Ground::of(scene);
     let circle = "circled from outside";
-    let enclosed = enclosing(scene, caster, &ground);
-    let Some(planned) = walk() else {
+    let enclosed = enclosing(scene, caster, &ground)?;
+    let Some(planned) = walk()? else {
         let why = enclosed.map_or("a model".to_string(), |e| format!("{e}, but"));
-        return (PathKind::Orbit, format!("{why} with no ground to walk: {circle}"), None);
+        return Ok((PathKind::Orbit, format!("{why} with no ground to walk: {circle}"), None));
     };
     let length = planned.length();
     let open = planned.open_sky;
-    match enclosed {
+    Ok(match enclosed {
         Some(why) => (PathKind::Walk, why, Some(planned)),
         None if open >= OPEN_PLACE && length >= LONG_WALK * planned.cell => (
             PathKind::Walk,
@@ -284,14 +365,14 @@ fn default_kind(
             ),
             None,
         ),
-    }
+    })
 }
 
 /// Why circling `scene` would show one object only, if it would: from the
 /// orbit (which circles outside the scene's bounds) one object is the first
 /// thing met on the way to nearly every other (a sky dome or a closed
 /// shell around the rest).
-fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Option<String> {
+fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Result<Option<String>, Stopped> {
     let b = scene.bounds;
     let eyes: Vec<DVec3> = orbit(ground, b.center(), b.extent().length().max(1e-6))
         .iter()
@@ -305,6 +386,7 @@ fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Option<Strin
     let mut first: std::collections::HashMap<u32, usize> = Default::default();
     let mut rays = 0;
     for eye in eyes.iter().step_by(4) {
+        caster.searching()?;
         for &t in &targets {
             let to = scene.objects[t].bounds.center() - *eye;
             if let Some(hit) = caster.first_hit(*eye, to, 1.0)
@@ -315,24 +397,24 @@ fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Option<Strin
             rays += 1;
         }
     }
-    let (&hider, &n) = first.iter().max_by_key(|&(p, n)| (*n, std::cmp::Reverse(*p)))?;
+    caster.searching()?;
+    let Some((&hider, &n)) = first.iter().max_by_key(|&(p, n)| (*n, std::cmp::Reverse(*p))) else {
+        return Ok(None);
+    };
     let name = &scene.parts[hider as usize].name;
-    (targets.len() > 1 && 10 * n >= 9 * rays).then(|| {
-        format!(
-            "from the orbit, '{}' hides {n} of {rays} lines of sight to the other objects",
-            crate::text::one_line(name)
-        )
-    })
+    Ok((targets.len() > 1 && 10 * n >= 9 * rays)
+        .then(|| format!("from the orbit, '{name}' hides {n} of {rays} lines of sight to the other objects")))
 }
 
 /// [`generate`], with `walk` planning the walk a scene without streets
-/// gets; for such a walk also what it rests on.
+/// gets; for such a walk also what it rests on. A planning that spent its
+/// budget walks a straight line, as one that found no ground does.
 fn generate_with(
     kind: Shape,
     scene: &Scene,
     frames: u32,
-    walk: impl FnOnce() -> Option<Walk>,
-) -> (PathFile, Option<String>) {
+    walk: impl FnOnce() -> Result<Option<Walk>, Stopped>,
+) -> Result<(PathFile, Option<String>), Stopped> {
     let ground = Ground::of(scene);
     let b = scene.bounds;
     let diagonal = b.extent().length().max(1e-6);
@@ -342,7 +424,7 @@ fn generate_with(
         Shape::Walk => match &scene.walk_hint {
             Some(line) if line.len() >= 2 => walk_along(line, (diagonal * 0.02).max(1.0)),
             _ => match walk() {
-                Some(w) => {
+                Ok(Some(w)) => {
                     let length = w.length();
                     note = Some(format!(
                         "a walk along the longest open route, {length:.1} units at eye height {:.3} (cells of {:.3}, {:.0}% of them joined to it)",
@@ -352,8 +434,13 @@ fn generate_with(
                     ));
                     walk_along(&w.line, w.cell)
                 }
-                None => {
-                    note = Some("no ground with room to walk was found: a straight line through the middle".into());
+                Err(Stopped::Interrupted) => return Err(Stopped::Interrupted),
+                found => {
+                    let why = match found {
+                        Err(_) => spent(),
+                        Ok(_) => "no ground with room to walk was found".into(),
+                    };
+                    note = Some(format!("{why}: a straight line through the middle"));
                     let (axis, length) = ground.longer_axis();
                     let height = ground.lowest + 0.05 * ground.height();
                     let at = |t: f64| ground.lift(b.center() + axis * length * t, height);
@@ -379,13 +466,13 @@ fn generate_with(
     let file = PathFile {
         frames: Some(frames),
         fps: None,
-        near: Some(diagonal * 1e-4),
+        near: Some(diagonal * NEAR_SHARE),
         fov_y_deg: Some(DEFAULT_FOV_Y_DEG),
         up: Some(ground.up.to_array()),
         interpolation: Interpolation::CatmullRom,
         keyframes,
     };
-    (file, note)
+    Ok((file, note))
 }
 
 fn key(time: f64, position: DVec3) -> KeyframeFile {
@@ -448,7 +535,7 @@ impl Ground {
 
 /// Circles the scene's centre `c` about its up axis at 25° elevation, far
 /// enough that the bounding sphere (of diameter `diagonal`) fits the
-/// vertical field of view.
+/// vertical field of view, looking at `c`.
 fn orbit(ground: &Ground, c: DVec3, diagonal: f64) -> Vec<KeyframeFile> {
     let radius = 0.5 * diagonal / (DEFAULT_FOV_Y_DEG.to_radians() / 2.0).sin();
     let elevation = 25f64.to_radians();
@@ -459,10 +546,12 @@ fn orbit(ground: &Ground, c: DVec3, diagonal: f64) -> Vec<KeyframeFile> {
             let a = std::f64::consts::TAU * f64::from(k) / f64::from(steps);
             // For +Y up, (+X, −Z): anticlockwise seen from above.
             let around = right * a.cos() - ahead * a.sin();
-            let p = c + radius * (around * elevation.cos() + ground.up * elevation.sin());
+            let outward = around * elevation.cos() + ground.up * elevation.sin();
+            // Looking back along the offset, not at the centre: far from
+            // the origin, eye − centre would lose what f64 drops of both.
             KeyframeFile {
-                target: Some(c.to_array()),
-                ..key(f64::from(k), p)
+                direction: Some((-outward).to_array()),
+                ..key(f64::from(k), c + radius * outward)
             }
         })
         .collect()

@@ -80,11 +80,9 @@ pub fn nearest_view_depth(view: &DMat3, min: DVec3, max: DVec3) -> f64 {
 /// `forward` (looking straight up or down), the world axis least aligned with
 /// `forward` stands in for it, so every direction gives a valid camera.
 pub fn look_rotation(forward: DVec3, up: DVec3) -> DQuat {
-    // Scaled to unit size first, so huge or tiny vectors cannot overflow.
-    let unit = |v: DVec3| (v / v.abs().max_element()).normalize();
     let (f, up) = (unit(forward), unit(up));
     let mut right = f.cross(up);
-    if right.length_squared() < 1e-12 {
+    if up_along_view(f, up) {
         let a = f.abs();
         let fallback = if a.x <= a.y && a.x <= a.z {
             DVec3::X
@@ -98,6 +96,20 @@ pub fn look_rotation(forward: DVec3, up: DVec3) -> DQuat {
     let right = right.normalize();
     let true_up = right.cross(f);
     DQuat::from_mat3(&DMat3::from_cols(right, true_up, -f)).normalize()
+}
+
+/// `v` scaled to unit length, by its largest component first so that huge
+/// or tiny vectors cannot overflow.
+fn unit(v: DVec3) -> DVec3 {
+    (v / v.abs().max_element()).normalize()
+}
+
+/// Whether `up` is (nearly) parallel to the view direction `forward`
+/// (both non-zero), so that it leaves the camera's roll undefined: within
+/// about 1e-6 radians. [`look_rotation`] takes another axis then; a camera
+/// path refuses such a keyframe.
+pub fn up_along_view(forward: DVec3, up: DVec3) -> bool {
+    unit(forward).cross(unit(up)).length_squared() < 1e-12
 }
 
 /// Where a box lies relative to the frustum.

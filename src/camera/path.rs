@@ -11,9 +11,9 @@ use std::path::Path;
 use glam::{DQuat, DVec3, DVec4};
 use serde::{Deserialize, Serialize};
 
-use super::{Camera, look_rotation};
+use super::{Camera, look_rotation, up_along_view};
 use crate::scene::{MAX_COORDINATE, within_range};
-use crate::text::one_line;
+use crate::text::{number, one_line, vector};
 
 /// The file format, as written and read.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -74,7 +74,7 @@ pub const MAX_FRAMES: u32 = 100_000;
 /// Near planes outside this range make reverse-Z depth of the farthest
 /// renderable geometry (`MAX_COORDINATE`) leave f32's normal range, or cull
 /// everything.
-const NEAR_RANGE: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
+pub const NEAR_RANGE: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
 /// Fields of view, degrees: narrower or wider would make the projection
 /// degenerate in f32.
 const FOV_RANGE: std::ops::RangeInclusive<f64> = 1e-3..=179.9;
@@ -92,6 +92,9 @@ pub enum PathError {
     /// A path from the model file that the file does not hold.
     #[error("{0}")]
     NotInFile(String),
+    /// Planning a path was asked to stop (Ctrl-C).
+    #[error("interrupted while a camera path was planned")]
+    Interrupted,
 }
 
 /// A validated keyframe.
@@ -141,12 +144,13 @@ impl CameraPath {
         let near = file.near.unwrap_or(DEFAULT_NEAR);
         if !NEAR_RANGE.contains(&near) {
             return Err(invalid(format!(
-                "near must be in {:e}..={:e}, got {near}",
+                "near must be in {:e}..={:e}, got {}",
                 NEAR_RANGE.start(),
-                NEAR_RANGE.end()
+                NEAR_RANGE.end(),
+                number(near)
             )));
         }
-        let default_up = vec3(file.up.unwrap_or([0.0, 1.0, 0.0]), "up").map_err(&invalid)?;
+        let default_up = up(file.up.unwrap_or([0.0, 1.0, 0.0])).map_err(&invalid)?;
         let default_fov = file.fov_y_deg.unwrap_or(DEFAULT_FOV_Y_DEG);
         if file.keyframes.is_empty() {
             return Err(invalid("no keyframes".into()));
@@ -155,20 +159,33 @@ impl CameraPath {
         for (i, k) in file.keyframes.iter().enumerate() {
             let at = |m: String| invalid(format!("keyframe {i}: {m}"));
             if !k.time.is_finite() {
-                return Err(at(format!("time must be finite, got {}", k.time)));
+                return Err(at(format!("time must be finite, got {}", number(k.time))));
             }
             if let Some(prev) = keyframes.last().map(|p: &Keyframe| p.time)
                 && k.time <= prev
             {
                 return Err(at(format!(
-                    "time {} is not after the previous keyframe's {prev}",
-                    k.time
+                    "time {} is not after the previous keyframe's {}",
+                    number(k.time),
+                    number(prev)
                 )));
             }
             let position = vec3(k.position, "position").map_err(&at)?;
             let up = match k.up {
-                Some(u) => vec3(u, "up").map_err(&at)?,
+                Some(u) => self::up(u).map_err(&at)?,
                 None => default_up,
+            };
+            // A view along `up` leaves the camera's roll to chance.
+            let looking = |forward: DVec3| {
+                if up_along_view(forward, up) {
+                    Err(at(format!(
+                        "up {} lies along the view direction {}, which leaves the camera's roll undefined: give the keyframe an up across its view, or an orientation",
+                        vector(up.to_array()),
+                        vector(forward.to_array())
+                    )))
+                } else {
+                    Ok(look_rotation(forward, up))
+                }
             };
             let rotation = match (k.target, k.direction, k.orientation) {
                 (Some(t), None, None) => {
@@ -176,12 +193,11 @@ impl CameraPath {
                     if forward.length_squared() == 0.0 {
                         return Err(at("target equals position".into()));
                     }
-                    look_rotation(forward, up)
+                    looking(forward)?
                 }
-                (None, Some(d), None) => look_rotation(
-                    nonzero(vec3(d, "direction").map_err(&at)?, "direction").map_err(&at)?,
-                    up,
-                ),
+                (None, Some(d), None) => {
+                    looking(nonzero(vec3(d, "direction").map_err(&at)?, "direction").map_err(&at)?)?
+                }
                 (None, None, Some(q)) => {
                     let q = DVec4::from(q);
                     // Scaled to unit size first, so huge or tiny components
@@ -197,9 +213,10 @@ impl CameraPath {
             let fov = k.fov_y_deg.unwrap_or(default_fov);
             if !FOV_RANGE.contains(&fov) {
                 return Err(at(format!(
-                    "fov_y_deg must be in {}..={}, got {fov}",
+                    "fov_y_deg must be in {}..={}, got {}",
                     FOV_RANGE.start(),
-                    FOV_RANGE.end()
+                    FOV_RANGE.end(),
+                    number(fov)
                 )));
             }
             keyframes.push(Keyframe {
@@ -222,11 +239,17 @@ impl CameraPath {
             (None, Some(fps)) if fps.is_finite() && fps > 0.0 => {
                 let n = (span * fps).floor() + 1.0;
                 if n > f64::from(MAX_FRAMES) {
-                    return Err(invalid(format!("fps {fps} gives {n} frames, more than {MAX_FRAMES}")));
+                    return Err(invalid(format!(
+                        "fps {} gives {} frames, more than {MAX_FRAMES}",
+                        number(fps),
+                        number(n)
+                    )));
                 }
                 n as u32
             }
-            (None, Some(fps)) => return Err(invalid(format!("fps must be a positive number, got {fps}"))),
+            (None, Some(fps)) => {
+                return Err(invalid(format!("fps must be a positive number, got {}", number(fps))));
+            }
             (None, None) => return Err(invalid("give frames or fps".into())),
         };
         Ok(CameraPath {
@@ -310,10 +333,16 @@ fn vec3(v: [f64; 3], what: &str) -> Result<DVec3, String> {
         Ok(v)
     } else {
         Err(format!(
-            "{what} must be finite and within ±{MAX_COORDINATE:e}, got {:?}",
-            v.to_array()
+            "{what} must be finite and within ±{MAX_COORDINATE:e}, got {}",
+            vector(v.to_array())
         ))
     }
+}
+
+/// An up vector: finite, within range, and not zero (a zero up gives a
+/// camera no orientation at all).
+fn up(v: [f64; 3]) -> Result<DVec3, String> {
+    nonzero(vec3(v, "up")?, "up")
 }
 
 fn nonzero(v: DVec3, what: &str) -> Result<DVec3, String> {
@@ -328,16 +357,23 @@ impl CameraPath {
     /// How many frames have a surface of `caster`'s scene closer to the eye
     /// than the corners of the near plane (a sphere around the eye holding
     /// the near plane): such a surface may be clipped away, showing what
-    /// lies behind it. Movers are counted where frame 0 puts them.
-    pub fn frames_with_geometry_within_near(&self, caster: &crate::raycast::RayCaster, aspect: f64) -> u32 {
-        (0..self.frames)
-            .filter(|&f| {
-                let camera = self.camera(f, aspect);
-                let t = (camera.fov_y / 2.0).tan();
-                let corner = camera.near * (1.0 + t * t * (1.0 + aspect * aspect)).sqrt();
-                caster.nearest_distance(camera.eye, corner).is_some()
-            })
-            .count() as u32
+    /// lies behind it. Movers are counted where frame 0 puts them. Not
+    /// counted when `caster` stops (its budget spent, or Ctrl-C).
+    pub fn frames_with_geometry_within_near(
+        &self,
+        caster: &crate::raycast::RayCaster,
+        aspect: f64,
+    ) -> Result<u32, crate::raycast::Stopped> {
+        let mut near = 0;
+        for f in 0..self.frames {
+            let camera = self.camera(f, aspect);
+            let t = (camera.fov_y / 2.0).tan();
+            let corner = camera.near * (1.0 + t * t * (1.0 + aspect * aspect)).sqrt();
+            let found = caster.nearest_distance(camera.eye, corner).is_some();
+            caster.searching()?;
+            near += u32::from(found);
+        }
+        Ok(near)
     }
 }
 
@@ -416,15 +452,29 @@ mod tests {
     }
 
     #[test]
-    fn straight_down_view_is_a_valid_camera() {
-        let p = parse(
-            r#"{"frames": 1, "keyframes": [
-            {"time": 0, "position": [0, 10, 0], "target": [0, 0, 0]}]}"#,
-        )
+    fn a_view_along_up_needs_an_up_across_it() {
+        let down = r#"{"time": 0, "position": [0, 10, 0], "target": [0, 0, 0]"#;
+        let e = parse(&format!(r#"{{"frames": 1, "keyframes": [{down}}}]}}"#)).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("keyframe 0: up [0, 1, 0] lies along the view direction [0, -10, 0]"),
+            "{e}"
+        );
+        let p = parse(&format!(
+            r#"{{"frames": 1, "keyframes": [{down}, "up": [0, 0, -1]}}]}}"#
+        ))
         .unwrap();
         let c = p.camera(0, 1.0);
         assert!((c.forward() - DVec3::NEG_Y).length() < 1e-12);
-        assert!(c.rotation.is_finite());
+        assert!((c.rotation * DVec3::Y - DVec3::NEG_Z).length() < 1e-12, "up as given");
+        for zero in [r#""up": [0, 0, 0], "#, ""] {
+            let key = if zero.is_empty() { r#", "up": [0, 0, 0]"# } else { "" };
+            let json = format!(r#"{{"frames": 1, {zero}"keyframes": [{down}{key}}}]}}"#);
+            assert!(
+                parse(&json).unwrap_err().to_string().contains("up must not be zero"),
+                "{json}"
+            );
+        }
     }
 
     #[test]

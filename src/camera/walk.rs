@@ -26,7 +26,7 @@ use std::collections::VecDeque;
 use glam::DVec3;
 
 use crate::bounds::Aabb;
-use crate::raycast::{Hit, RayCaster};
+use crate::raycast::{Hit, RayCaster, Stopped};
 use crate::scene::Scene;
 
 /// A planned walk: eye positions along the route, and what it rests on.
@@ -88,8 +88,9 @@ struct Floor {
 }
 
 /// Plans a walk through `scene`, or `None` when it has no ground with room
-/// to walk (fewer than [`MIN_CELLS`] joined cells).
-pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
+/// to walk (fewer than [`MIN_CELLS`] joined cells); stopped when `caster`
+/// stops (its budget spent, or Ctrl-C).
+pub fn plan(scene: &Scene, caster: &RayCaster) -> Result<Option<Walk>, Stopped> {
     let up = scene.up.axis.vector();
     let (right, ahead) = scene.up.axis.ground_axes();
     let b = scene.bounds;
@@ -100,7 +101,7 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
     let side = ((width.max(depth) / eye).ceil() as usize).clamp(MIN_SIDE_CELLS, MAX_SIDE_CELLS);
     let cell = width.max(depth) / side as f64;
     if !(cell > 0.0 && cell.is_finite()) {
-        return None;
+        return Ok(None);
     }
     let (nx, ny) = (
         ((width / cell).ceil() as usize).max(1),
@@ -121,6 +122,7 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
     let mut inside: Vec<u32> = Vec::new();
     let top = high + cell;
     for k in 0..nx * ny {
+        caster.searching()?;
         first.push(floors.len());
         caster.all_hits(at(k, top), -up, top - low + cell, &mut hits);
         let part = |hit: &Hit| scene.objects[hit.object as usize].part;
@@ -183,6 +185,7 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
             linked.filter(|&g| open[g] && joined(f, g)).collect()
         })
         .collect();
+    caster.searching()?;
     // The longest shortest route through the largest joined region of
     // `chosen` open floors, and the region's size.
     let longest_route = |chosen: &[bool]| -> Option<(Vec<usize>, usize)> {
@@ -222,6 +225,7 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
     // Where a street meets a crossing, a cell or two see too few walls:
     // streets take in the open floors that near.
     let walled: Vec<bool> = (0..floors.len()).map(|f| open[f] && walled(f)).collect();
+    caster.searching()?;
     let streets = widen(&walled, &links, &open, STREET_GAP);
     // The streets' route when it is long, and its streets are a good part
     // of the open ground around them, not a lane between a few walls in a
@@ -230,22 +234,25 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Option<Walk> {
         let (_, _, around) = farthest(&open_edges, route[0]);
         route.len() >= LONG_ROUTE && *size as f64 >= STREET_SHARE * around as f64
     });
-    let (route, region) = street_route.or_else(|| longest_route(&open))?;
+    let Some((route, region)) = street_route.or_else(|| longest_route(&open)) else {
+        return Ok(None);
+    };
     if route.len() < MIN_CELLS {
-        return None;
+        return Ok(None);
     }
     let points: Vec<DVec3> = route.iter().map(|&f| point(f)).collect();
     let sky = points
         .iter()
         .filter(|&&p| caster.first_hit(p, up, f64::INFINITY).is_none())
         .count();
-    Some(Walk {
+    caster.searching()?;
+    Ok(Some(Walk {
         line: turns(&points),
         eye_height: eye,
         cell,
         region: region as f64 / (nx * ny) as f64,
         open_sky: sky as f64 / points.len() as f64,
-    })
+    }))
 }
 
 /// Which parts are solids to stand outside of: closed parts, but not a

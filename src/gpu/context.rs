@@ -23,14 +23,28 @@ pub enum BackendChoice {
 }
 
 impl BackendChoice {
-    fn backends(self) -> wgpu::Backends {
-        match self {
-            BackendChoice::Auto => wgpu::Backends::all().with_env(),
+    /// The backends the choice allows. `auto` takes `WGPU_BACKEND` into
+    /// account, as wgpu does; a name in it that wgpu does not know is
+    /// refused (wgpu would drop it, and with it every adapter), so a
+    /// misspelt variable fails at once as bad input, before any work.
+    pub fn backends(self) -> Result<wgpu::Backends, GpuError> {
+        Ok(match self {
+            BackendChoice::Auto => {
+                if let Ok(names) = std::env::var("WGPU_BACKEND") {
+                    let unknown = names
+                        .split(',')
+                        .find(|name| wgpu::Backends::from_comma_list(name).is_empty());
+                    if let Some(name) = unknown {
+                        return Err(GpuError::UnknownBackend(crate::text::one_line(name.trim())));
+                    }
+                }
+                wgpu::Backends::all().with_env()
+            }
             BackendChoice::Vulkan => wgpu::Backends::VULKAN,
             BackendChoice::Gl => wgpu::Backends::GL,
             BackendChoice::Metal => wgpu::Backends::METAL,
             BackendChoice::Dx12 => wgpu::Backends::DX12,
-        }
+        })
     }
 }
 
@@ -81,6 +95,10 @@ pub enum GpuError {
         env = narrowed_by_env(*.0)
     )]
     NoAdapter(BackendChoice),
+    #[error(
+        "WGPU_BACKEND names '{0}', which is no backend wgpu knows (vulkan, gl, metal, dx12, comma-separated): correct or unset it, or give --backend"
+    )]
+    UnknownBackend(String),
     #[error("the adapter {adapter} refused a device: {message}")]
     Device { adapter: String, message: String },
     #[error("the run needs a {what} of {need}, but the adapter allows {limit}")]
@@ -96,7 +114,7 @@ impl GpuError {
     /// hold (a smaller --resolution or model fits), as opposed to the GPU
     /// or its driver failing.
     pub fn is_input_error(&self) -> bool {
-        matches!(self, GpuError::TooLarge { .. })
+        matches!(self, GpuError::TooLarge { .. } | GpuError::UnknownBackend(_))
     }
 }
 
@@ -136,7 +154,7 @@ impl GpuContext {
     /// Opens the best adapter the choice allows: real GPUs before software
     /// ones, and a native API before GL on the same device.
     pub fn new(choice: BackendChoice) -> Result<GpuContext, GpuError> {
-        let backends = choice.backends();
+        let backends = choice.backends()?;
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends,
             flags: wgpu::InstanceFlags::default().with_env(),

@@ -7,6 +7,6 @@ mod summary;
 mod timeline;
 
 pub use reference::{DepthError, ErrorMeter, ObjectError};
-pub use rows::{FrameStats, MissedObject};
+pub use rows::{FrameStats, MissedObject, RowLimits};
 pub use summary::{Distribution, ModeDescription, ModeSummary, StrategyShare, summarize};
 pub use timeline::{CpuClock, FrameTimeline, GpuClock, Stretch, Work};

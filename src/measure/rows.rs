@@ -122,7 +122,68 @@ pub struct MissedObject {
     pub first_y: Option<u32>,
 }
 
+/// What a run's rows may hold at most: its frame's pixels (wrong pixels)
+/// and its scene's objects (drawn, visible, missed).
+#[derive(Clone, Copy, Debug)]
+pub struct RowLimits {
+    pub pixels: u64,
+    pub objects: u64,
+}
+
 impl FrameStats {
+    /// What in this row no run can have measured, if anything: a time (or
+    /// depth error) that is not a number of 0 or more (NaN, infinite,
+    /// negative), more wrong pixels than the frame has, more objects than
+    /// the scene has. frames.csv is read back by `compare` and `merge`,
+    /// and a value like these would pass their verdicts as "better".
+    pub fn implausible(&self, limits: RowLimits) -> Option<String> {
+        let times = [
+            ("frame_ms", Some(self.frame_ms)),
+            ("cpu_ms", Some(self.cpu_ms)),
+            ("maintenance_ms", Some(self.maintenance_ms)),
+            ("gpu_ms", self.gpu_ms),
+            ("query_wait_ms", Some(self.query_wait_ms)),
+            ("query_gpu_ms", self.query_gpu_ms),
+            ("pyramid_gpu_ms", self.pyramid_gpu_ms),
+            ("max_depth_error", self.max_depth_error),
+        ];
+        if let Some((column, value)) = times
+            .into_iter()
+            .find_map(|(column, v)| v.filter(|v| !(v.is_finite() && *v >= 0.0)).map(|v| (column, v)))
+        {
+            return Some(format!(
+                "{column} is {}, not a number of 0 or more",
+                crate::text::number(value)
+            ));
+        }
+        let counts = [
+            ("error_pixels", self.error_pixels, limits.pixels, "pixels in the frame"),
+            (
+                "objects_drawn",
+                Some(self.objects_drawn),
+                limits.objects,
+                "objects in the scene",
+            ),
+            (
+                "visible_objects",
+                self.visible_objects,
+                limits.objects,
+                "objects in the scene",
+            ),
+            (
+                "missed_objects",
+                self.missed_objects,
+                limits.objects,
+                "objects in the scene",
+            ),
+        ];
+        counts.into_iter().find_map(|(column, value, most, what)| {
+            value
+                .filter(|&v| v > most)
+                .map(|v| format!("{column} is {v}, more than the {most} {what}"))
+        })
+    }
+
     /// Drawing time: GPU time outside box tests where timestamps exist, else
     /// the frame minus culling CPU time and waits for test results.
     pub fn render_ms(&self) -> f64 {

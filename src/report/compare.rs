@@ -9,7 +9,8 @@
 //! regression. Frame time does: it regresses only when its mean grows beyond
 //! `--max-regression` percent *and* the new median minus its MAD lies above
 //! the base median plus its MAD, so noise within the measured spread passes.
-//! Statistics are recomputed from each run's frames.csv.
+//! Statistics are those [`read_results`] recomputes from each run's
+//! checked frames.csv, as `occlu merge` and `occlu plot` take them.
 //!
 //! A comparison cannot pass by leaving things out: a mode or a measured
 //! metric of the base missing from the new run fails it (unless
@@ -23,7 +24,7 @@ use serde::Serialize;
 
 use super::merge::{Merged, read_merged};
 use super::{ReportError, Summary, read_results};
-use crate::measure::{Distribution, FrameStats, ModeDescription, ModeSummary, summarize};
+use crate::measure::{Distribution, ModeSummary};
 
 /// A metric compare can gate on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -163,6 +164,15 @@ pub enum CompareError {
         merged.display()
     )]
     NotARunFolder { merged: PathBuf, folder: String },
+    #[error(
+        "{}: lists run {run} on {adapter} twice: not a merged.json occlu wrote, or edited since",
+        merged.display()
+    )]
+    ListedTwice {
+        merged: PathBuf,
+        run: String,
+        adapter: String,
+    },
     #[error("{}: {error}", run.display())]
     InRun { run: PathBuf, error: Box<CompareError> },
 }
@@ -188,8 +198,8 @@ pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comp
 /// Two run folders (not merged ones).
 fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comparison, CompareError> {
     let max_regression_pct = options.max_regression_pct;
-    let (base_summary, base_rows) = read_results(base)?;
-    let (new_summary, new_rows) = read_results(new)?;
+    let (base_summary, _) = read_results(base)?;
+    let (new_summary, _) = read_results(new)?;
     let workload = |s: &Summary| {
         (
             s.scene.facts.source.clone(),
@@ -226,15 +236,14 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
             "{frames} frames: frame_ms is 'within noise' when the new mean is at most {max_regression_pct}% above the base's or the new median − MAD does not clear the base median + MAD; on fewer than {FEW_FRAMES} frames that spread says little"
         ));
     }
-    let base_modes = recompute(&base_summary, &base_rows);
-    let new_modes = recompute(&new_summary, &new_rows);
+    let (base_modes, new_modes) = (&base_summary.modes, &new_summary.modes);
     let missing = if options.allow_missing {
         Verdict::Unmeasured
     } else {
         Verdict::Missing
     };
     let mut changes = Vec::new();
-    for b in &base_modes {
+    for b in base_modes {
         let n = new_modes.iter().find(|n| n.name == b.name);
         if n.is_none() {
             notes.push(format!("mode {} is in the base run only", b.name));
@@ -315,14 +324,13 @@ fn compare_merged(
     Ok(Comparison { changes, notes })
 }
 
-/// What a merged folder's run folder holds: the run's name, the adapter's
-/// name and backend, and which of that name it is (runs outside a matrix
-/// may share a name).
-type Identity = (String, String, String, usize);
+/// What a merged folder's run folder holds: the run's name (unique in a
+/// merge), the adapter's name and backend.
+type Identity = (String, String, String);
 
 /// Every run folder of a merged folder with what it holds; its folder must
-/// be a folder directly in `dir`'s runs/ (merged.json is read, not
-/// trusted).
+/// be a folder directly in `dir`'s runs/, and no run on one adapter may be
+/// listed twice (merged.json is read, not trusted).
 fn columns(dir: &Path, merged: &Merged) -> Result<Vec<(Identity, PathBuf)>, CompareError> {
     let runs = dir.join("runs");
     let mut found: Vec<(Identity, PathBuf)> = Vec::new();
@@ -343,11 +351,15 @@ fn columns(dir: &Path, merged: &Merged) -> Result<Vec<(Identity, PathBuf)>, Comp
             if !plain || name.starts_with('.') || !is_folder {
                 return Err(bad());
             }
-            let seen = found
-                .iter()
-                .filter(|((r, n, b, _), _)| (r, n, b) == (&run.name, &a.name, &a.backend))
-                .count();
-            found.push(((run.name.clone(), a.name.clone(), a.backend.clone(), seen), folder));
+            let identity = (run.name.clone(), a.name.clone(), a.backend.clone());
+            if found.iter().any(|(i, _)| *i == identity) {
+                return Err(CompareError::ListedTwice {
+                    merged: dir.join("merged.json"),
+                    run: run.name.clone(),
+                    adapter: a.label(),
+                });
+            }
+            found.push((identity, folder));
         }
     }
     Ok(found)
@@ -358,21 +370,6 @@ fn label(folder: &Path) -> String {
     folder
         .file_name()
         .map_or(String::new(), |n| n.to_string_lossy().into_owned())
-}
-
-/// Statistics from frames.csv, with the conservative flags and parameters
-/// the summary recorded.
-fn recompute(summary: &Summary, rows: &[FrameStats]) -> Vec<ModeSummary> {
-    let modes: Vec<ModeDescription> = summary
-        .modes
-        .iter()
-        .map(|m| ModeDescription {
-            name: m.name.clone(),
-            conservative: m.conservative,
-            parameters: m.parameters.clone(),
-        })
-        .collect();
-    summarize(rows, &modes, summary.resolution.pixels())
 }
 
 /// Relative tolerance for "unchanged" on means of deterministic counters
@@ -437,7 +434,7 @@ pub fn render(c: &Comparison) -> String {
         let _ = writeln!(
             out,
             "{:<24} {:<16} {:>14} {:>14} {:>9}  {verdict}",
-            ch.mode,
+            crate::text::one_line(&ch.mode),
             ch.metric,
             num(ch.base),
             num(ch.new),
@@ -445,7 +442,7 @@ pub fn render(c: &Comparison) -> String {
         );
     }
     for note in &c.notes {
-        let _ = writeln!(out, "note: {note}");
+        let _ = writeln!(out, "note: {}", crate::text::one_line(note));
     }
     out
 }

@@ -71,6 +71,50 @@ pub fn check_writable(path: &Path) -> Result<(), ReportError> {
     }
 }
 
+/// Refuses an `output` that is one of `inputs` (the same file, however
+/// named: by device and inode), so that writing it cannot destroy what the
+/// command reads (`occlu render model.obj -o model.obj`).
+pub fn refuse_input_as_output(output: &Path, inputs: &[&Path]) -> Result<(), ReportError> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt as _;
+        let identity = |p: &Path| std::fs::metadata(p).ok().map(|m| (m.dev(), m.ino()));
+        let Some(written) = identity(output) else {
+            return Ok(());
+        };
+        if let Some(input) = inputs.iter().find(|i| identity(i) == Some(written)) {
+            return Err(ReportError::at(output)(std::io::Error::other(format!(
+                "is an input of this command ({}): writing it would destroy what it reads; choose another output file",
+                input.display()
+            ))));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses an `output` that is, or would be, one of `names` in the folder
+/// `dir` (a run's own files, which the run writes itself).
+pub fn refuse_own_file(output: &Path, dir: &Path, names: &[&str]) -> Result<(), ReportError> {
+    let resolved = |p: &Path| std::fs::canonicalize(p).ok();
+    // Where the file is or would be: a link leads to what write_whole writes.
+    let target = resolved(output).or_else(|| {
+        let parent = output
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        Some(resolved(parent)?.join(output.file_name()?))
+    });
+    let own = target.as_deref().is_some_and(|t| {
+        t.parent() == resolved(dir).as_deref() && t.file_name().is_some_and(|n| names.iter().any(|own| n == *own))
+    });
+    if own {
+        return Err(ReportError::at(output)(std::io::Error::other(
+            "is one of the run's own files in --out: writing it there would replace what the run wrote; choose another file",
+        )));
+    }
+    Ok(())
+}
+
 /// The temporary twin [`write_whole`] writes `path` into first.
 fn partial(path: &Path) -> PathBuf {
     let mut name = path.as_os_str().to_owned();

@@ -72,7 +72,7 @@ pub fn render(s: &Summary) -> String {
     if !s.scene.facts.warnings.is_empty() {
         let _ = writeln!(w, "\nScene warnings:\n");
         for warning in &s.scene.facts.warnings {
-            let _ = writeln!(w, "- {warning}");
+            let _ = writeln!(w, "- {}", markdown(warning));
         }
     }
     let _ = writeln!(

@@ -31,8 +31,8 @@ use serde::{Deserialize, Serialize};
 
 use super::charts::{CHARTS, RatioBars, ratio_to_oracle_bars};
 use super::files::ReportError;
-use super::summary::{Fingerprint, SkippedMode, Summary, ToolInfo};
-use super::{prepare_output, publish, read_results};
+use super::summary::{Fingerprint, MatrixIdentity, SkippedMode, Summary, ToolInfo};
+use super::{RESULT_FILES, prepare_output, publish, read_results};
 use crate::gpu::Resolution;
 use crate::measure::ModeSummary;
 use crate::text::{markdown, slug};
@@ -46,6 +46,38 @@ pub struct Merged {
     pub schema_version: u32,
     pub tool: ToolInfo,
     pub runs: Vec<MergedRun>,
+    /// Runs of a matrix that no merged folder held (merged with
+    /// `--allow-partial`); absent in files from before it was recorded.
+    #[serde(default)]
+    pub missing: Vec<MissingRuns>,
+}
+
+/// The runs of one matrix that a partial merge lacks.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct MissingRuns {
+    pub matrix: MatrixIdentity,
+    /// Runs of the matrix that are here.
+    pub present: usize,
+    /// The places of those that are not (`02`: the folder `02-…`).
+    pub runs: Vec<String>,
+}
+
+impl MissingRuns {
+    /// Which runs are missing, as plain text: the error, the report and
+    /// the warning on stderr all say it.
+    pub fn describe(&self) -> String {
+        const SHOWN: usize = 10;
+        let mut places = self.runs.iter().take(SHOWN).cloned().collect::<Vec<_>>().join(", ");
+        if self.runs.len() > SHOWN {
+            places += &format!(" and {} more", self.runs.len() - SHOWN);
+        }
+        format!(
+            "{} of the matrix's {} here (#{:016x}); missing: run {places} (a shard not merged, or a run that failed)",
+            self.present,
+            crate::text::count(self.matrix.runs, "run"),
+            self.matrix.names
+        )
+    }
 }
 
 /// One run (a matrix run, or a scene and path) on every adapter that ran it.
@@ -185,6 +217,10 @@ pub enum MergeError {
         folder.display(), matrix.display()
     )]
     NotARun { matrix: PathBuf, folder: PathBuf },
+    #[error("a partial matrix: {}: merge every shard's folder, or give --allow-partial to merge these alone", .0.describe())]
+    Partial(MissingRuns),
+    #[error("--out {} holds a bench run: merging into it would replace its report.md; choose another --out", .0.display())]
+    OutHoldsRun(PathBuf),
     #[error("--out {} is, holds or lies in the input {}: the merge would write over what it reads; choose another --out", out.display(), input.display())]
     OutOverlapsInput { out: PathBuf, input: PathBuf },
     #[error(
@@ -224,6 +260,8 @@ impl MergeError {
 struct RunFolder {
     dir: PathBuf,
     summary: Summary,
+    /// The result files it holds, to be copied.
+    files: Vec<&'static str>,
 }
 
 impl RunFolder {
@@ -319,7 +357,12 @@ fn same_thing((source_a, fa): (&String, Option<Fingerprint>), (source_b, fb): (&
 /// Reads every run folder in `dirs` (each one, or the folders in it that
 /// hold a run), checks that the folders of each run agree, and writes the
 /// merged report into `out` (claimed while it is written, each file whole).
-pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged, MergeError> {
+///
+/// A matrix's runs must all be there: the runs a matrix lists and no folder
+/// holds (a shard not merged, a run that failed) are refused by place
+/// unless `allow_partial`, which merges the rest and names them in the
+/// report and merged.json.
+pub fn merge(dirs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Merged, MergeError> {
     if dirs.is_empty() {
         return Err(MergeError::NoFolders);
     }
@@ -335,25 +378,43 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged, MergeError> {
                 continue;
             }
             let (summary, _) = read_results(&run_dir)?;
-            folders.push(RunFolder { dir: run_dir, summary });
+            let files = result_files(&run_dir)?;
+            folders.push(RunFolder {
+                dir: run_dir,
+                summary,
+                files,
+            });
         }
     }
-    let groups = group(folders)?;
+    // A run's report.md and the merged one would share a name (a merged
+    // folder, which holds neither of these, may be merged into again).
+    if ["summary.json", "frames.csv"].iter().any(|f| out.join(f).exists()) {
+        return Err(MergeError::OutHoldsRun(out.to_path_buf()));
+    }
+    let groups = named(group(folders)?);
+    let missing = missing_runs(&groups);
+    if let Some(partial) = missing.first().filter(|_| !allow_partial) {
+        return Err(MergeError::Partial(partial.clone()));
+    }
     let _claim = prepare_output(out)?;
     let mut used = BTreeSet::new();
     let mut merged = Merged {
         schema_version: MERGED_SCHEMA_VERSION,
         tool: ToolInfo::current(),
-        runs: groups.iter().map(|g| merged_run(g, &mut used)).collect(),
+        runs: groups
+            .iter()
+            .map(|(name, folders)| merged_run(name, folders, &mut used))
+            .collect(),
+        missing,
     };
     publish(out, &[], |staging| {
         for dir in ["runs", "charts"] {
             let path = staging.join(dir);
             std::fs::create_dir(&path).map_err(ReportError::at(&path))?;
         }
-        for (group, run) in groups.iter().zip(&mut merged.runs) {
+        for ((_, group), run) in groups.iter().zip(&mut merged.runs) {
             for (folder, column) in group.iter().zip(&run.adapters) {
-                copy_run(&folder.dir, &staging.join(&column.folder))?;
+                copy_run(folder, &staging.join(&column.folder))?;
             }
             draw_chart(staging, run, &mut used)?;
         }
@@ -482,13 +543,76 @@ fn group(mut folders: Vec<RunFolder>) -> Result<Vec<Vec<RunFolder>>, MergeError>
     Ok(groups)
 }
 
-/// `name`, or `name-2`, `name-3`, … when `used` has it; marked used.
-fn unique(name: String, used: &mut BTreeSet<String>) -> String {
-    let mut candidate = name.clone();
+/// Each run's folders under a name of its own, runs in name order. A run
+/// is named by its matrix run's name, unique in its matrix (two matrices
+/// are never merged), or by its scene's and path's; two runs outside a
+/// matrix that measured other scenes or paths of one name (a changed file,
+/// a generated path of other frames) get their fingerprints' hash after
+/// it, so the name is the same whatever order the folders came in.
+fn named(groups: Vec<Vec<RunFolder>>) -> Vec<(String, Vec<RunFolder>)> {
+    let plain: Vec<String> = groups.iter().map(|g| g[0].run()).collect();
+    let mut named: Vec<(String, Vec<RunFolder>)> = groups
+        .into_iter()
+        .zip(&plain)
+        .map(|(folders, name)| {
+            if plain.iter().filter(|&n| n == name).count() == 1 {
+                return (name.clone(), folders);
+            }
+            let s = &folders[0].summary;
+            let identity = format!("{:?}\n{:?}", s.scene.facts.geometry, s.path.cameras);
+            let hash = Fingerprint::of(identity.as_bytes()).fnv1a >> 32;
+            (format!("{name} #{hash:08x}"), folders)
+        })
+        .collect();
+    named.sort_by(|a, b| a.0.cmp(&b.0));
+    named
+}
+
+/// The runs of each matrix among `runs` that none of them is: by place
+/// (`02`), as the matrix's run folders are named.
+fn missing_runs(runs: &[(String, Vec<RunFolder>)]) -> Vec<MissingRuns> {
+    let mut matrices: Vec<(MatrixIdentity, BTreeSet<usize>)> = Vec::new();
+    for (_, folders) in runs {
+        let s = &folders[0].summary;
+        let (Some(matrix), Some(name)) = (s.matrix, &s.run) else {
+            continue;
+        };
+        let place = name.split('-').next().and_then(|digits| digits.parse::<usize>().ok());
+        let at = match matrices.iter().position(|(m, _)| *m == matrix) {
+            Some(at) => at,
+            None => {
+                matrices.push((matrix, BTreeSet::new()));
+                matrices.len() - 1
+            }
+        };
+        matrices[at].1.extend(place);
+    }
+    matrices
+        .into_iter()
+        .filter_map(|(matrix, present)| {
+            let width = matrix.runs.to_string().len().max(2);
+            let absent: Vec<String> = (1..=matrix.runs)
+                .filter(|p| !present.contains(p))
+                .map(|p| format!("{p:0width$}"))
+                .collect();
+            (!absent.is_empty()).then_some(MissingRuns {
+                matrix,
+                present: matrix.runs - absent.len(),
+                runs: absent,
+            })
+        })
+        .collect()
+}
+
+/// `stem` + `extension`, or with `-2`, `-3`, … after the stem when `used`
+/// has it; marked used. (Names are unique by construction, a hash of what
+/// they name included; this keeps a collision from overwriting a file.)
+fn unique(stem: String, extension: &str, used: &mut BTreeSet<String>) -> String {
+    let mut candidate = format!("{stem}{extension}");
     let mut n = 1;
     while !used.insert(candidate.clone()) {
         n += 1;
-        candidate = format!("{name}-{n}");
+        candidate = format!("{stem}-{n}{extension}");
     }
     candidate
 }
@@ -508,16 +632,13 @@ fn column_folder(run: &str, adapter: &str, backend: &str) -> String {
 }
 
 /// One run's table, columns and cross-check (its chart comes later).
-fn merged_run(folders: &[RunFolder], used: &mut BTreeSet<String>) -> MergedRun {
+fn merged_run(name: &str, folders: &[RunFolder], used: &mut BTreeSet<String>) -> MergedRun {
     let first = &folders[0].summary;
-    let name = folders[0].run();
     let adapters: Vec<AdapterColumn> = folders
         .iter()
         .map(|f| {
             let a = &f.summary.adapter;
-            // Two runs outside a matrix may share a name (other frames);
-            // the suffix keeps their folders apart.
-            let folder = unique(column_folder(&name, &a.name, &a.backend), used);
+            let folder = unique(column_folder(name, &a.name, &a.backend), "", used);
             AdapterColumn {
                 name: a.name.clone(),
                 backend: a.backend.clone(),
@@ -547,7 +668,7 @@ fn merged_run(folders: &[RunFolder], used: &mut BTreeSet<String>) -> MergedRun {
         .collect();
     let disagreements = cross_check(&adapters, &modes);
     MergedRun {
-        name,
+        name: name.to_string(),
         scene: first.scene.facts.source.clone(),
         path: first.path.source.clone(),
         resolution: first.resolution,
@@ -594,25 +715,39 @@ fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreemen
     found
 }
 
-/// Copies a run folder's result files (not its lock or anything else).
-fn copy_run(from: &Path, to: &Path) -> Result<(), ReportError> {
-    std::fs::create_dir_all(to).map_err(ReportError::at(to))?;
-    let files = [
-        "summary.json",
-        "frames.csv",
-        "missed.csv",
-        "report.md",
-        super::ANIMATION,
-    ]
-    .into_iter()
-    .chain(CHARTS);
-    for name in files {
-        let (source, target) = (from.join(name), to.join(name));
-        if source.is_file() {
-            // Read, then written: an error names the file at fault.
-            let bytes = std::fs::read(&source).map_err(ReportError::at(&source))?;
-            std::fs::write(&target, bytes).map_err(ReportError::at(&target))?;
+/// The result files a run folder holds (not its lock or anything else),
+/// each a regular file: a link, device or pipe of one of their names is
+/// refused by name, since copying it would put another file into the
+/// merged artefact (or read forever).
+fn result_files(dir: &Path) -> Result<Vec<&'static str>, ReportError> {
+    let names = RESULT_FILES.into_iter().chain(CHARTS);
+    let mut present = Vec::new();
+    for name in names {
+        let path = dir.join(name);
+        match std::fs::symlink_metadata(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+            Ok(m) if m.is_file() => present.push(name),
+            Ok(_) => {
+                let error = std::io::Error::other(
+                    "not a regular file (a link, a device or a pipe): merge copies a run's own files only",
+                );
+                return Err(ReportError::at(&path)(error));
+            }
+            Err(e) => return Err(ReportError::at(&path)(e)),
         }
+    }
+    Ok(present)
+}
+
+/// Copies a run folder's result files.
+fn copy_run(run: &RunFolder, to: &Path) -> Result<(), ReportError> {
+    std::fs::create_dir_all(to).map_err(ReportError::at(to))?;
+    for name in &run.files {
+        let (source, target) = (run.dir.join(name), to.join(name));
+        // Read, then written: an error names the file at fault.
+        let bytes =
+            crate::input::read_unlinked(&source, crate::input::MODEL_LIMIT).map_err(ReportError::at(&source))?;
+        std::fs::write(&target, bytes).map_err(ReportError::at(&target))?;
     }
     Ok(())
 }
@@ -636,7 +771,8 @@ fn draw_chart(staging: &Path, run: &mut MergedRun, used: &mut BTreeSet<String>) 
     if !bars.iter().any(|b| b.ratios.iter().any(Option::is_some)) {
         return Ok(());
     }
-    let name = unique(format!("charts/{}.png", slug(&run.name)), used);
+    let hash = Fingerprint::of(run.name.as_bytes()).fnv1a >> 32;
+    let name = unique(format!("charts/{}-{hash:08x}", slug(&run.name)), ".png", used);
     let labels: Vec<String> = run.adapters.iter().map(AdapterColumn::label).collect();
     let caption = format!("Mean frame time over the oracle's — {} at {}", run.name, run.resolution);
     ratio_to_oracle_bars(&staging.join(&name), &caption, &labels, &bars)?;
@@ -663,6 +799,9 @@ pub fn render(merged: &Merged) -> String {
         crate::text::count(merged.runs.len(), "run"),
         crate::text::count(adapters.len(), "adapter")
     );
+    for partial in &merged.missing {
+        let _ = writeln!(w, "**A partial matrix**: {}.\n", markdown(&partial.describe()));
+    }
     for run in &merged.runs {
         let _ = writeln!(w, "## {}\n", markdown(&run.name));
         let _ = writeln!(

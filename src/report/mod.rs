@@ -3,6 +3,7 @@
 //! `occlu compare` and `occlu merge` read them back.
 
 pub mod charts;
+mod claim;
 pub mod compare;
 mod files;
 pub mod github;
@@ -15,9 +16,12 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::measure::{FrameStats, MissedObject};
+use crate::measure::{FrameStats, MissedObject, ModeDescription, RowLimits, summarize};
+use crate::text;
 
-pub use files::{ReportError, check_writable, write_png, write_whole};
+use claim::{LOCK, STAGING, claim, staging};
+pub use claim::{OutputLock, abandon_unfinished};
+pub use files::{ReportError, check_writable, refuse_input_as_output, write_png, write_whole};
 pub use markdown::render as render_markdown;
 pub use summary::{
     AnimationFact, CameraFact, Fingerprint, MatrixIdentity, MissedSummary, PathSummary, SCHEMA_VERSION, SceneFacts,
@@ -56,8 +60,11 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     std::fs::write(path, bytes).map_err(ReportError::at(path))
 }
 
-/// Reads a run directory's summary.json and frames.csv (for `occlu plot`
-/// and `occlu compare`).
+/// Reads a run directory's summary.json and frames.csv (for `occlu plot`,
+/// `occlu compare` and `occlu merge`): the rows checked against the
+/// summary (every mode's every frame once, every value one a run can
+/// measure), and the summary's statistics recomputed from them, so that
+/// every command that reads a folder judges it by the same numbers.
 pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportError> {
     let io = ReportError::at;
     let json_path = dir.join("summary.json");
@@ -84,39 +91,81 @@ pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportErro
         .deserialize()
         .collect::<Result<Vec<FrameStats>, _>>()
         .map_err(|e| io(&csv_path)(std::io::Error::other(format!("not an occlu frames.csv: {e}"))))?;
+    check_rows(&summary, &rows).map_err(|e| io(&csv_path)(std::io::Error::other(e)))?;
+    let modes: Vec<ModeDescription> = summary
+        .modes
+        .iter()
+        .map(|m| ModeDescription {
+            name: m.name.clone(),
+            conservative: m.conservative,
+            parameters: m.parameters.clone(),
+        })
+        .collect();
+    let summary = Summary {
+        modes: summarize(&rows, &modes, summary.resolution.pixels()),
+        ..summary
+    };
     Ok((summary, rows))
 }
 
-/// A run's claim on its `--out` folder: an exclusive lock on
-/// `.occlu.lock`, held by the operating system for as long as this value
-/// lives, and released by it when the process ends however it ends (a kill
-/// included), so no claim outlives its run and no run can take over a live
-/// one. The file itself stays; it holds the last claimant's process id, for
-/// the message a refused run prints.
-#[must_use = "the folder is claimed only while the lock lives"]
-pub struct OutputLock {
-    file: Option<std::fs::File>,
+/// Whether `rows` are what a run of `summary` measured: each of its modes
+/// (named once) with one row for each of its frames, and no value a run
+/// cannot measure ([`FrameStats::implausible`]); else what is wrong.
+fn check_rows(summary: &Summary, rows: &[FrameStats]) -> Result<(), String> {
+    let frames = summary.frames;
+    if frames == 0 || frames > crate::camera::path::MAX_FRAMES {
+        return Err(format!("summary.json's frames {frames} is not a frame count a run has"));
+    }
+    let limits = RowLimits {
+        pixels: summary.resolution.pixels(),
+        objects: summary.scene.facts.objects as u64,
+    };
+    // Each mode's frames seen so far, by the mode's place in the summary.
+    let mut seen: Vec<Vec<bool>> = Vec::with_capacity(summary.modes.len());
+    for (k, mode) in summary.modes.iter().enumerate() {
+        if summary.modes[..k].iter().any(|m| m.name == mode.name) {
+            return Err(format!("summary.json names mode {} twice", text::one_line(&mode.name)));
+        }
+        seen.push(vec![false; frames as usize]);
+    }
+    for (k, row) in rows.iter().enumerate() {
+        let at = || format!("row {} ({}, frame {})", k + 1, text::one_line(&row.mode), row.frame);
+        let Some(mode) = summary.modes.iter().position(|m| m.name == row.mode) else {
+            return Err(format!("{}: a mode summary.json does not list", at()));
+        };
+        match seen[mode].get_mut(row.frame as usize) {
+            None => return Err(format!("{}: beyond the run's {frames} frames", at())),
+            Some(true) => return Err(format!("{}: the frame's second row", at())),
+            Some(first) => *first = true,
+        }
+        if let Some(fault) = row.implausible(limits) {
+            return Err(format!("{}: {fault}", at()));
+        }
+    }
+    for (mode, frames_seen) in summary.modes.iter().zip(&seen) {
+        let count = frames_seen.iter().filter(|&&s| s).count();
+        if count != frames as usize {
+            return Err(format!(
+                "mode {} has {}, not one for each of the run's {}",
+                text::one_line(&mode.name),
+                text::count(count, "row"),
+                text::count(frames as usize, "frame")
+            ));
+        }
+    }
+    Ok(())
 }
 
-impl OutputLock {
-    /// Whether the lock is held (false on a file system without locks).
-    fn held(&self) -> bool {
-        self.file.is_some()
-    }
-}
+/// The files a run writes into its folder (its charts, [`charts::CHARTS`],
+/// besides), in the order merge copies them.
+pub const RESULT_FILES: [&str; 5] = ["summary.json", "frames.csv", "missed.csv", "report.md", ANIMATION];
 
-/// The lock file a claimed results folder holds.
-const LOCK: &str = ".occlu.lock";
-
-/// Removes `out` when it holds nothing but its lock: what a run that made
-/// it and then failed leaves, which would read as a run that never
-/// finished. Called once the claim is released.
-pub fn remove_unused_output(out: &Path) {
-    let only_lock = std::fs::read_dir(out).is_ok_and(|entries| entries.flatten().all(|e| e.file_name() == LOCK));
-    if only_lock {
-        let _ = std::fs::remove_file(out.join(LOCK));
-        let _ = std::fs::remove_dir(out);
-    }
+/// Refuses an `output` that is one of the files a run writes into `out`
+/// (`--export-github-benchmark OUT/summary.json` would replace the run's
+/// own), its lock included.
+pub fn refuse_result_file(output: &Path, out: &Path) -> Result<(), ReportError> {
+    let names: Vec<&str> = RESULT_FILES.into_iter().chain(charts::CHARTS).chain([LOCK]).collect();
+    files::refuse_own_file(output, out, &names)
 }
 
 /// Creates `out`, claims it (a second run into the same folder is refused
@@ -138,52 +187,6 @@ pub fn prepare_output(out: &Path) -> Result<OutputLock, ReportError> {
         }
     }
     Ok(claim)
-}
-
-/// Creates `out` and takes the lock on it.
-fn claim(out: &Path) -> Result<OutputLock, ReportError> {
-    let io = ReportError::at;
-    if out.exists() && !out.is_dir() {
-        let error = std::io::Error::other("exists and is not a directory: --out names the folder results go to");
-        return Err(io(out)(error));
-    }
-    std::fs::create_dir_all(out).map_err(io(out))?;
-    let path = out.join(LOCK);
-    let mut file = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .create(true)
-        .truncate(false)
-        .open(&path)
-        .map_err(io(&path))?;
-    match file.try_lock() {
-        Ok(()) => {
-            use std::io::{Seek as _, Write as _};
-            file.set_len(0)
-                .and_then(|()| file.rewind())
-                .and_then(|()| write!(file, "{}", std::process::id()))
-                .map_err(io(&path))?;
-            Ok(OutputLock { file: Some(file) })
-        }
-        Err(std::fs::TryLockError::WouldBlock) => {
-            use std::io::Read as _;
-            let mut holder = String::new();
-            let _ = (&file).take(32).read_to_string(&mut holder);
-            let last = holder
-                .trim()
-                .parse::<u32>()
-                .map_or(String::new(), |pid| format!(" (occlu process {pid} claimed it last)"));
-            Err(io(&path)(std::io::Error::other(format!(
-                "another occlu run{last} is writing results into this folder; wait for it, or write elsewhere"
-            ))))
-        }
-        // A file system without locks (some network mounts) cannot hold a
-        // claim; the run goes on unclaimed rather than not at all.
-        Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
-            Ok(OutputLock { file: None })
-        }
-        Err(std::fs::TryLockError::Error(e)) => Err(io(&path)(e)),
-    }
 }
 
 /// Writes a set of result files (or folders of them) into `out` so that each is whole or absent:
@@ -224,6 +227,19 @@ fn publish(
     });
     let _ = std::fs::remove_dir_all(&staging);
     moved
+}
+
+/// Writes `files` (names and contents) into `out` as [`publish`] does:
+/// each whole or absent, a file or link of the same name replaced, never
+/// written through.
+pub fn publish_files(out: &Path, files: &[(&str, &[u8])]) -> Result<(), ReportError> {
+    publish(out, &[], |staging| {
+        for (name, bytes) in files {
+            write_file(&staging.join(name), bytes)?;
+        }
+        Ok(files.iter().map(|(name, _)| name.to_string()).collect())
+    })
+    .map(drop)
 }
 
 /// Writes a run's result files into `out` (see [`publish`]), with its
@@ -307,25 +323,16 @@ fn write_report_and_charts(dir: &Path, summary: &Summary, rows: &[FrameStats]) -
     Ok(names)
 }
 
-/// The start of the name of the folder inside `--out` that a run writes its
-/// results into before they are moved into place.
-const STAGING: &str = ".occlu-staging";
-
-/// This process's staging folder in `out`: one per process, so that runs
-/// on a file system without locks do not write into each other's.
-fn staging(out: &Path) -> PathBuf {
-    out.join(format!("{STAGING}-{}", std::process::id()))
-}
-
-/// `missed` with object names that a spreadsheet would run as a formula
-/// (starting with `=`, `+`, `-`, `@`, a tab or a carriage return, as OWASP
-/// lists them) prefixed by `'`, which spreadsheets read as "text follows".
-/// Names come from model files, which may come from anyone.
+/// `missed` with object names as a spreadsheet should show them: on one
+/// line, with nothing that reorders or hides text ([`text::one_line`]),
+/// and prefixed by `'` (which spreadsheets read as "text follows") where
+/// it would run as a formula (starting with `=`, `+`, `-`, `@`, as OWASP
+/// lists them). Names come from model files, which may come from anyone.
 fn escape_formulas(missed: &[MissedObject]) -> Vec<MissedObject> {
     missed
         .iter()
         .map(|m| MissedObject {
-            name: crate::text::spreadsheet_safe(&m.name),
+            name: text::spreadsheet_safe(&text::one_line(&m.name)),
             ..m.clone()
         })
         .collect()
@@ -334,6 +341,22 @@ fn escape_formulas(missed: &[MissedObject]) -> Vec<MissedObject> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn missed_csv_names_run_no_formula_and_hide_nothing() {
+        let missed = MissedObject {
+            mode: "vfc".into(),
+            frame: 0,
+            object: 3,
+            name: "=wall\u{202E}gpj.exe\n".into(),
+            drawn: false,
+            wrong_pixels: 0,
+            first_x: None,
+            first_y: None,
+        };
+        let written = escape_formulas(std::slice::from_ref(&missed));
+        assert_eq!(written[0].name, "'=wall\\u{202e}gpj.exe\\n");
+    }
 
     #[test]
     fn whole_files_follow_links_and_write_devices_in_place() {

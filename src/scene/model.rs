@@ -159,8 +159,8 @@ impl SceneBuilder {
     /// Degenerate triangles are dropped and counted; a mesh left with no
     /// triangles gives an empty group.
     pub fn add_mesh(&mut self, name: &str, positions: &[DVec3], indices: &[u32]) -> Result<MeshGroup, GeometryError> {
-        let name = &one_line(name);
-        let (triangles, spent) = timed(|| validate::triangles(name, positions, indices));
+        // The name as the file has it; escaped where a message quotes it.
+        let (triangles, spent) = timed(|| validate::triangles(&one_line(name), positions, indices));
         self.phases.validate_ms += spent;
         let triangles = triangles?;
         if triangles.degenerate > 0 {
@@ -233,7 +233,6 @@ impl SceneBuilder {
         transform: DAffine3,
     ) -> Result<std::ops::Range<usize>, GeometryError> {
         let first = self.objects.len();
-        let name = &one_line(name);
         let split = group.clusters.len() > 1;
         let part = self.parts.len() as u32;
         for (i, &(mesh, origin)) in group.clusters.iter().enumerate() {
@@ -241,9 +240,7 @@ impl SceneBuilder {
             let transform = transform * DAffine3::from_translation(origin);
             let bounds = m.bounds.transformed(&transform);
             if !transform.is_finite() || !validate::within_range(bounds.min) || !validate::within_range(bounds.max) {
-                return Err(GeometryError::ObjectOutOfRange {
-                    object: name.to_string(),
-                });
+                return Err(GeometryError::ObjectOutOfRange { object: one_line(name) });
             }
             self.objects.push(Object {
                 name: if split { format!("{name}#{i}") } else { name.to_string() },
@@ -284,6 +281,7 @@ impl SceneBuilder {
         }
         let bounds = self.objects.iter().fold(Aabb::EMPTY, |b, o| b.union(o.bounds));
         let mut warnings = self.warnings;
+        warnings.extend(validate::coarse_coordinates(&bounds));
         let dropped: usize = self.degenerate.iter().map(|(_, n)| n).sum();
         if dropped > 0 {
             let worst: Vec<String> = self

@@ -3,6 +3,9 @@
 
 use glam::DVec3;
 
+use crate::bounds::Aabb;
+use crate::text::number;
+
 /// Coordinates beyond this are refused: the renderer works in f32
 /// (camera-relative), and 1e18 units leave ample room below f32's 3.4e38
 /// for every product the pipeline forms.
@@ -10,6 +13,29 @@ pub const MAX_COORDINATE: f64 = 1e18;
 
 pub fn within_range(p: DVec3) -> bool {
     p.is_finite() && p.abs().max_element() <= MAX_COORDINATE
+}
+
+/// The finest detail positions may keep, as a share of the model's size:
+/// the spacing of f64 at the model's farthest coordinate beyond it means
+/// the file's positions were rounded coarser than that when read.
+const FINEST_SHARE: f64 = 1e-5;
+
+/// A warning when the model lies so far from the origin for its size that
+/// f64 rounded its positions coarser than [`FINEST_SHARE`] of the size
+/// (a 1-unit model at 1e17, where f64 steps by 16: its shape is gone, and
+/// it may render as nothing).
+pub fn coarse_coordinates(bounds: &Aabb) -> Option<String> {
+    let reach = bounds.min.abs().max(bounds.max.abs()).max_element();
+    let size = bounds.extent().max_element();
+    let step = f64::from_bits(reach.to_bits() + 1) - reach;
+    (step > FINEST_SHARE * size).then(|| {
+        format!(
+            "coordinates reach {}, where f64 keeps steps of {} units, more than {FINEST_SHARE:e} of the model's size ({} units): its shape may be lost as read; move it nearer the origin",
+            number(reach),
+            number(step),
+            number(size)
+        )
+    })
 }
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

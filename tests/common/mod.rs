@@ -47,10 +47,34 @@ pub fn own_stderr(o: &Output) -> Vec<String> {
         .collect()
 }
 
+/// `out` exited with `code` after one line on stderr holding `needles`;
+/// `what` names the command in a failure.
+pub fn said_one_line(out: &Output, code: i32, needles: &[&str], what: &str) {
+    let lines = own_stderr(out);
+    assert_eq!(out.status.code(), Some(code), "{what}: {lines:?}");
+    assert_eq!(lines.len(), 1, "{what}: one line expected, got {lines:?}");
+    for n in needles {
+        assert!(lines[0].contains(n), "{what}: '{}' lacks '{n}'", lines[0]);
+    }
+    assert!(!lines[0].contains("panicked"), "{what}: {}", lines[0]);
+}
+
 pub fn write(dir: &Path, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, contents).expect("fixture written");
     p
+}
+
+/// Says that a test cannot run here, and why: a line on a developer's
+/// machine, where the fixtures are optional; a failure where they are
+/// required (`OCCLU_REQUIRE_FIXTURES=1`, which `.ci/run` sets), so that CI
+/// never passes a test that did not run.
+pub fn cannot_run(why: &str) {
+    assert!(
+        std::env::var_os("OCCLU_REQUIRE_FIXTURES").is_none_or(|v| v != "1"),
+        "{why}: OCCLU_REQUIRE_FIXTURES=1 requires it"
+    );
+    eprintln!("skipped: {why}");
 }
 
 /// `../shared/models` beside the project root: third-party models that
@@ -320,4 +344,32 @@ pub fn town(swap: bool) -> Vec<(String, DVec3, DVec3)> {
         }
     }
     boxes.into_iter().map(|(n, a, b)| (n, place(a), place(b))).collect()
+}
+
+/// Copies a run and rewrites its frames.csv with `edit` applied to each row.
+pub fn tampered_copy(run: &Path, to: &Path, edit: &dyn Fn(&mut occlu::measure::FrameStats)) {
+    rewritten_copy(run, to, &mut |rows| rows.iter_mut().for_each(edit));
+}
+
+/// Copies a run with its frames.csv rows rewritten by `edit` (which may
+/// drop or add rows), and summary.json recording the new file's
+/// fingerprint, as a run that measured those rows would have.
+pub fn rewritten_copy(run: &Path, to: &Path, edit: &mut dyn FnMut(&mut Vec<occlu::measure::FrameStats>)) {
+    std::fs::create_dir_all(to).unwrap();
+    let mut rows: Vec<occlu::measure::FrameStats> = csv::Reader::from_path(run.join("frames.csv"))
+        .unwrap()
+        .deserialize()
+        .map(Result::unwrap)
+        .collect();
+    edit(&mut rows);
+    let mut writer = csv::Writer::from_path(to.join("frames.csv")).unwrap();
+    for row in rows {
+        writer.serialize(row).unwrap();
+    }
+    writer.flush().unwrap();
+    let mut summary: occlu::report::Summary =
+        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+    let frames = std::fs::read(to.join("frames.csv")).unwrap();
+    summary.frames_csv = Some(occlu::report::Fingerprint::of(&frames));
+    std::fs::write(to.join("summary.json"), serde_json::to_string_pretty(&summary).unwrap()).unwrap();
 }

@@ -341,8 +341,17 @@ impl Culler for SoftwareOcclusionCulling {
     /// Its parameters as given (`threads` 0 stays 0: the count it comes to
     /// is the machine's, and `occlu merge` holds one run's parameters equal
     /// on every machine).
+    /// As given, but for `resolution`: the cells its buffer had, which are
+    /// at most the render size on each side.
     fn parameters(&self) -> serde_json::Value {
-        serde_json::json!(self.params)
+        let used = SwrParams {
+            resolution: self
+                .buffer
+                .as_ref()
+                .map_or(self.params.resolution, OcclusionBuffer::cells),
+            ..self.params
+        };
+        serde_json::json!(used)
     }
 
     fn traverses_hierarchy(&self) -> bool {
