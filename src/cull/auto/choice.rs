@@ -423,13 +423,16 @@ impl Chooser {
         ((sharing as f64 * cost / self.budget).ceil() as u64).max(RECHECK)
     }
 
-    /// The occlusion culler estimated cheapest (the first unknown one if
-    /// none is known).
+    /// The occlusion culler estimated cheapest; one never measured only
+    /// where none is. It looks again where the last look hid next to
+    /// nothing: any occlusion culler tells whether that has changed, and
+    /// the cheapest known one at the least cost (exploring the others
+    /// there would pay their first frames for nothing).
     fn most_promising_occlusion(&self) -> Option<usize> {
         (0..self.records.len())
             .filter(|&s| self.records[s].family == Family::Occlusion)
             .min_by(|&a, &b| {
-                let m = |s| self.estimate(s).map_or(f64::NEG_INFINITY, |(m, _)| m);
+                let m = |s| self.estimate(s).map_or(f64::INFINITY, |(m, _)| m);
                 m(a).total_cmp(&m(b))
             })
     }
@@ -630,6 +633,10 @@ mod tests {
         let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
         let occlusion_from_20 = s[20..].iter().filter(|&&x| x != 0).count();
         assert!(occlusion_from_20 <= 8, "{occlusion_from_20} occlusion frames: {s:?}");
+        assert!(
+            (2..5).all(|k| runs(&turns, k) == 0),
+            "only roc, which measured what is hidden, looks again: {s:?}"
+        );
         let best: f64 = (0..120).map(street).sum();
         let mean = costs.iter().sum::<f64>() / best;
         assert!(mean < 1.03 * (0.0025f64 / 2.0).exp(), "{mean:.3}× vfc: {s:?}");
