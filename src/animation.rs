@@ -276,15 +276,14 @@ impl Reel {
         for pixel in rgb.chunks_exact(3).step_by(self.sample_every) {
             self.sample.extend_from_slice(&[pixel[0], pixel[1], pixel[2], 255]);
         }
-        let deflated = encode(
+        let still = PngFormat {
             width,
             height,
-            png::ColorType::Rgb,
-            None,
-            &[&rgb],
-            png::Compression::Fast,
-            None,
-        )?;
+            colour: png::ColorType::Rgb,
+            palette: None,
+            compression: png::Compression::Fast,
+        };
+        let deflated = encode(&still, None, [Ok(rgb)])?;
         self.frames.push(deflated);
         Ok(())
     }
@@ -311,45 +310,62 @@ impl Reel {
         Ok((width, height, rgb))
     }
 
-    /// The animation of every frame pictured.
-    pub fn encode(self) -> Result<Animation, AnimationError> {
+    /// The animation of every frame pictured. `progress` hears (frames
+    /// encoded, frames in all) as each frame is written; when it breaks,
+    /// encoding stops with [`AnimationError::Interrupted`].
+    pub fn encode(self, progress: &mut dyn FnMut(u32, u32) -> ControlFlow<()>) -> Result<Animation, AnimationError> {
         let Some((width, height)) = self.size else {
             return Err(AnimationError::Encoding("no frame was pictured".into()));
         };
-        let frames: Vec<Vec<u8>> = self
-            .frames
-            .iter()
-            .map(|png| decode_png(png))
-            .collect::<Result<_, _>>()?;
+        let count = self.frames();
         let delay = Some((u16::try_from(self.range.step).unwrap_or(u16::MAX), FRAMES_A_SECOND));
-        let best = png::Compression::Best;
+        // One frame at a time: all frames' pixels at once would take 1.5 GB
+        // for a default bench --animate (120 frames of twelve modes).
+        let rgb_frames = self.frames.iter().enumerate().map(|(done, deflated)| {
+            if progress(done as u32, count).is_break() {
+                return Err(AnimationError::Interrupted);
+            }
+            decode_png(deflated)
+        });
         let png = if self.options.true_colour {
-            let refs: Vec<&[u8]> = frames.iter().map(Vec::as_slice).collect();
-            encode(width, height, png::ColorType::Rgb, None, &refs, best, delay)?
+            let format = PngFormat {
+                width,
+                height,
+                colour: png::ColorType::Rgb,
+                palette: None,
+                compression: png::Compression::Best,
+            };
+            encode(&format, delay, rgb_frames)?
         } else {
             let palette = color_quant::NeuQuant::new(10, 256, &self.sample);
             let mut lookup: foldhash::HashMap<[u8; 3], u8> = foldhash::HashMap::default();
-            let indexed: Vec<Vec<u8>> = frames
-                .iter()
-                .map(|rgb| {
-                    rgb.chunks_exact(3)
-                        .map(|p| {
-                            *lookup
-                                .entry([p[0], p[1], p[2]])
-                                .or_insert_with(|| palette.index_of(&[p[0], p[1], p[2], 255]) as u8)
-                        })
-                        .collect()
-                })
-                .collect();
-            let refs: Vec<&[u8]> = indexed.iter().map(Vec::as_slice).collect();
-            let colours = Some(palette.color_map_rgb());
-            encode(width, height, png::ColorType::Indexed, colours, &refs, best, delay)?
+            let indexed = rgb_frames.map(|rgb| {
+                Ok(rgb?
+                    .chunks_exact(3)
+                    .map(|p| {
+                        *lookup
+                            .entry([p[0], p[1], p[2]])
+                            .or_insert_with(|| palette.index_of(&[p[0], p[1], p[2], 255]) as u8)
+                    })
+                    .collect::<Vec<u8>>())
+            });
+            let format = PngFormat {
+                width,
+                height,
+                colour: png::ColorType::Indexed,
+                palette: Some(palette.color_map_rgb()),
+                compression: png::Compression::Best,
+            };
+            encode(&format, delay, indexed)?
         };
+        if progress(count, count).is_break() {
+            return Err(AnimationError::Interrupted);
+        }
         Ok(Animation {
             png,
             width,
             height,
-            frames: frames.len() as u32,
+            frames: count,
         })
     }
 }
@@ -389,25 +405,32 @@ fn encoding(e: impl std::fmt::Display) -> AnimationError {
     AnimationError::Encoding(e.to_string())
 }
 
-/// A PNG of `frames`: one, a still; with a `delay` = (numerator,
-/// denominator) seconds a frame, an animation that loops.
-fn encode(
+/// How a PNG's pixels are stored.
+struct PngFormat {
     width: u32,
     height: u32,
     colour: png::ColorType,
     palette: Option<Vec<u8>>,
-    frames: &[&[u8]],
     compression: png::Compression,
+}
+
+/// A PNG of `frames`, each made as it is written (the first error ends
+/// it): one, a still; with a `delay` = (numerator, denominator) seconds a
+/// frame, an animation that loops.
+fn encode(
+    format: &PngFormat,
     delay: Option<(u16, u16)>,
+    frames: impl IntoIterator<Item = Result<Vec<u8>, AnimationError>, IntoIter: ExactSizeIterator>,
 ) -> Result<Vec<u8>, AnimationError> {
+    let frames = frames.into_iter();
     let mut out = Vec::new();
     {
-        let mut encoder = png::Encoder::new(&mut out, width, height);
-        encoder.set_color(colour);
+        let mut encoder = png::Encoder::new(&mut out, format.width, format.height);
+        encoder.set_color(format.colour);
         encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_compression(compression);
-        if let Some(palette) = palette {
-            encoder.set_palette(palette);
+        encoder.set_compression(format.compression);
+        if let Some(palette) = &format.palette {
+            encoder.set_palette(palette.clone());
         }
         if let Some((numerator, denominator)) = delay {
             encoder.set_animated(frames.len() as u32, 0).map_err(encoding)?;
@@ -415,7 +438,7 @@ fn encode(
         }
         let mut writer = encoder.write_header().map_err(encoding)?;
         for frame in frames {
-            writer.write_image_data(frame).map_err(encoding)?;
+            writer.write_image_data(&frame?).map_err(encoding)?;
         }
         writer.finish().map_err(encoding)?;
     }
@@ -444,6 +467,83 @@ mod tests {
         assert_eq!("0..120".parse::<FrameRange>().unwrap(), FrameRange::all(120));
         for bad in ["5..5", "7..3", "0..4:0", "0-4", "a..b", "1..2:x", ""] {
             assert!(bad.parse::<FrameRange>().is_err(), "{bad}");
+        }
+    }
+
+    /// A reel of `n` frames of 4 × 2 pixels, frame k grey level 40 k.
+    fn reel_of(n: u32, true_colour: bool) -> Reel {
+        let still = PngFormat {
+            width: 4,
+            height: 2,
+            colour: png::ColorType::Rgb,
+            palette: None,
+            compression: png::Compression::Fast,
+        };
+        let grey = |k: u32| vec![(40 * k) as u8; 4 * 2 * 3];
+        Reel {
+            options: AnimationOptions {
+                look: Look {
+                    resolution: crate::gpu::Resolution::DEFAULT,
+                    overview: false,
+                    heat: false,
+                    show_missed: false,
+                    occluders: false,
+                },
+                scale: 1,
+                true_colour,
+            },
+            range: FrameRange::all(n),
+            frames: (0..n).map(|k| encode(&still, None, [Ok(grey(k))]).unwrap()).collect(),
+            size: Some((4, 2)),
+            sample: (0..n)
+                .flat_map(|k| [(40 * k) as u8, (40 * k) as u8, (40 * k) as u8, 255])
+                .collect(),
+            sample_every: 1,
+        }
+    }
+
+    #[test]
+    fn encoding_says_how_far_it_got_and_stops_when_asked() {
+        for true_colour in [true, false] {
+            let mut heard = Vec::new();
+            let animation = reel_of(3, true_colour)
+                .encode(&mut |done, total| {
+                    heard.push((done, total));
+                    ControlFlow::Continue(())
+                })
+                .unwrap();
+            assert_eq!(heard, [(0, 3), (1, 3), (2, 3), (3, 3)]);
+            assert_eq!((animation.width, animation.height, animation.frames), (4, 2, 3));
+            let mut decoder = png::Decoder::new(animation.png.as_slice());
+            decoder.set_transformations(png::Transformations::EXPAND);
+            let mut reader = decoder.read_info().unwrap();
+            assert_eq!(reader.info().animation_control.unwrap().num_frames, 3);
+            for k in 0..3 {
+                let mut rgb = vec![0; reader.output_buffer_size()];
+                reader.next_frame(&mut rgb).unwrap();
+                // Exact in true colour; the palette's nearest colour else.
+                let off = if true_colour { 0 } else { 20 };
+                assert!(
+                    rgb.iter().all(|&c| c.abs_diff((40 * k) as u8) <= off),
+                    "frame {k}: {rgb:?}"
+                );
+            }
+
+            let mut heard = Vec::new();
+            let stopped = reel_of(3, true_colour).encode(&mut |done, _| {
+                heard.push(done);
+                if done == 1 {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            });
+            assert!(matches!(stopped, Err(AnimationError::Interrupted)));
+            assert_eq!(heard, [0, 1], "nothing encoded after the break");
+            assert!(matches!(
+                crate::bench::BenchError::from(AnimationError::Interrupted),
+                crate::bench::BenchError::Interrupted
+            ));
         }
     }
 

@@ -113,10 +113,20 @@ pub enum BenchError {
     #[error(transparent)]
     Report(#[from] ReportError),
     #[error(transparent)]
-    Animation(#[from] AnimationError),
+    Animation(AnimationError),
     /// The caller asked the run to stop (Ctrl-C); nothing was written.
     #[error("interrupted: no results written, the folder's earlier contents stand")]
     Interrupted,
+}
+
+impl From<AnimationError> for BenchError {
+    /// An animation stopped by the caller stops the run, as a frame does.
+    fn from(e: AnimationError) -> BenchError {
+        match e {
+            AnimationError::Interrupted => BenchError::Interrupted,
+            e => BenchError::Animation(e),
+        }
+    }
 }
 
 impl BenchError {
@@ -172,9 +182,11 @@ pub enum BenchEvent<'a> {
     /// The reference showed no object in any frame: every mode's numbers
     /// are those of an empty picture.
     NothingVisible,
-    /// The run is over; its animation of this many frames is being encoded.
+    /// The run is over and its animation is being encoded: `done` of its
+    /// `total` frames so far.
     Encoding {
-        frames: u32,
+        done: u32,
+        total: u32,
     },
 }
 
@@ -342,13 +354,11 @@ pub fn execute(
     if plan.measure_error && output.rows.iter().all(|r| r.visible_objects == Some(0)) {
         go_on(events(BenchEvent::NothingVisible))?;
     }
-    let animation = match output.reel.take() {
-        Some(reel) => {
-            go_on(events(BenchEvent::Encoding { frames: reel.frames() }))?;
-            Some(reel.encode()?)
-        }
-        None => None,
-    };
+    let animation = output
+        .reel
+        .take()
+        .map(|reel| reel.encode(&mut |done, total| events(BenchEvent::Encoding { done, total })))
+        .transpose()?;
 
     let descriptions: Vec<ModeDescription> = runs
         .iter()

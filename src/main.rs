@@ -790,13 +790,13 @@ fn bench_one(
         note(format!("wrote {}", path.display()));
     }
     let files = &outcome.files;
-    let missed = files
-        .missed_csv
-        .as_ref()
+    let optional: String = [&files.missed_csv, &files.animation]
+        .into_iter()
+        .flatten()
         .map(|p| format!(", {}", p.display()))
-        .unwrap_or_default();
+        .collect();
     note(format!(
-        "results: {}, {}, {}{missed} and {} charts in {}",
+        "results: {}, {}, {}{optional} and {} charts in {}",
         files.report_md.display(),
         files.summary_json.display(),
         files.frames_csv.display(),
@@ -870,9 +870,12 @@ fn heard(progress: &mut Progress, event: BenchEvent, note: &dyn Fn(String)) {
             }
         }
         BenchEvent::Frame { done, total } => progress.frame(done, total),
-        BenchEvent::Encoding { frames } => {
-            progress.finish();
-            note(format!("encoding the animation's {frames} frames"));
+        BenchEvent::Encoding { done, total } => {
+            if done == 0 {
+                progress.finish();
+                note(format!("encoding the animation's {total} frames"));
+            }
+            progress.encoding(done, total);
         }
         BenchEvent::NothingVisible => note(
             "warning: no object was visible in any frame (the reference drew nothing): check the camera path, and the model's place and size".into(),
@@ -923,9 +926,26 @@ impl Progress {
     }
 
     /// A step of ray casts, `what`, has spent `spent` of its `budget` box
-    /// and triangle tests: said once the step has taken a second (most take
-    /// less), then every few seconds.
+    /// and triangle tests.
     fn work(&mut self, what: &'static str, spent: u64, budget: u64) {
+        self.report_step(what, || {
+            format!(
+                "{} M of at most {} M box and triangle tests",
+                spent / 1_000_000,
+                budget / 1_000_000
+            )
+        });
+    }
+
+    /// `done` of an animation's `total` frames are encoded.
+    fn encoding(&mut self, done: u32, total: u32) {
+        self.report_step("encoding the animation", || format!("frame {done} of {total}"));
+    }
+
+    /// A step before or after the frames, `what`, has got as far as
+    /// `so_far` says: said once the step has taken a second (most take
+    /// less), then every few seconds.
+    fn report_step(&mut self, what: &'static str, so_far: impl FnOnce() -> String) {
         if self.quiet {
             return;
         }
@@ -944,11 +964,7 @@ impl Progress {
             .map_or(taken >= 1.0, |t| now.duration_since(t).as_secs_f64() >= PROGRESS_EVERY);
         if due {
             self.last_line = Some(now);
-            say!(
-                "{what}: {taken:.0} s, {} M of at most {} M box and triangle tests",
-                spent / 1_000_000,
-                budget / 1_000_000
-            );
+            say!("{what}: {taken:.0} s, {}", so_far());
         }
     }
 
@@ -1230,8 +1246,11 @@ fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
         },
     )?;
     progress.finish();
-    note(format!("encoding {} frames", reel.frames()));
-    let animation = reel.encode()?;
+    note(format!("encoding the animation's {} frames", reel.frames()));
+    let animation = reel.encode(&mut |done, total| {
+        progress.encoding(done, total);
+        go_on()
+    })?;
     occlu::report::write_whole(output, &animation.png)?;
     note(format!(
         "wrote {} ({}x{}, {} frames, {:.1} MB)",

@@ -42,7 +42,7 @@ pub struct Session<'a> {
     options: RunOptions,
     pub upload_ms: f64,
     /// What the modes got wrong in the frames run so far (missed.csv's
-    /// rows); [`run`] drops the warm-up frames'.
+    /// rows); [`Session::warm_up_frame`] drops its own.
     pub missed: Vec<MissedObject>,
     /// Scratch for [`ErrorMeter::attribute_wrong_pixels`].
     object_errors: Vec<ObjectError>,
