@@ -501,7 +501,17 @@ fn no_output_may_be_an_input_or_one_of_the_runs_own_files() {
         &tiny_bench(&run, &["--export-github-benchmark", s(&own)]),
         &["summary.json", "one of the run's own files"],
     );
+    refused(
+        &tiny_bench(&run, &["--trace", s(&own)]),
+        &["summary.json", "one of the run's own files"],
+    );
     assert_eq!(std::fs::read(&own).unwrap(), summary);
+    // The animation is one of them too, where --animate writes it.
+    let animation = run.join("flythrough.png");
+    refused(
+        &tiny_bench(&run, &["--animate", "--trace", s(&animation)]),
+        &["flythrough.png", "one of the run's own files"],
+    );
     let report = std::fs::read(run.join("report.md")).unwrap();
     let other = dir.path().join("other");
     tiny_run(&other, &[]);
@@ -536,6 +546,17 @@ fn no_output_may_be_an_input_or_one_of_the_runs_own_files() {
             s(&path),
         ],
         vec!["export", s(&model), "-o", s(&model)],
+        vec!["flythrough", s(&model), "--modes", "vfc", "-o", s(&model)],
+        vec![
+            "flythrough",
+            s(&model),
+            "--path",
+            s(&path),
+            "--modes",
+            "vfc",
+            "-o",
+            s(&path),
+        ],
         vec!["path", "gen", s(&model), "-o", s(&model)],
         vec![
             "bench",
@@ -549,11 +570,95 @@ fn no_output_may_be_an_input_or_one_of_the_runs_own_files() {
             "--export-github-benchmark",
             s(&config),
         ],
+        vec![
+            "bench",
+            s(&model),
+            "--path",
+            s(&path),
+            "--modes",
+            "vfc",
+            "--out",
+            s(&dir.path().join("b")),
+            "--trace",
+            s(&path),
+        ],
     ] {
         refused(&args, &["is an input"]);
     }
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        r#"{"frames": 2, "keyframes": [{"time": 0, "position": [2, 2, 9], "target": [2, 0, 0]}]}"#
+    );
     assert_eq!(std::fs::read_to_string(&model).unwrap(), common::THREE_OBJECTS_OBJ);
     assert_eq!(std::fs::read_to_string(&config).unwrap(), r#"{"frames": 2}"#);
+}
+
+// Item 7, for issue 37's outputs: one that cannot be written is refused
+// before the run (one line: no adapter, no progress), and a run that made
+// its --out takes it away again.
+#[test]
+fn a_flythrough_or_trace_that_cannot_be_written_is_refused_before_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let nowhere = dir.path().join("no-such-folder").join("fly.png");
+    let out = dir.path().join("run");
+    refused(
+        &tiny_bench(&out, &["--trace", s(&nowhere)]),
+        &["no-such-folder", "No such file"],
+    );
+    assert!(!out.exists(), "the folder the run made is gone");
+    let flythrough = |output: &Path| {
+        vec![
+            "flythrough".to_string(),
+            "--scene".into(),
+            "city:blocks=1".into(),
+            "--modes".into(),
+            "vfc".into(),
+            "-o".into(),
+            s(output).into(),
+        ]
+    };
+    for (output, needle) in [
+        (&nowhere, "No such file"),
+        (&dir.path().to_path_buf(), "is a directory"),
+    ] {
+        let args = flythrough(output);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        refused(&args, &[s(output), needle]);
+    }
+}
+
+// Item 9, for issue 37: Ctrl-C stops a flythrough between frames, and no
+// animation is written.
+#[test]
+fn ctrl_c_stops_a_flythrough_and_writes_no_animation() {
+    let dir = tempfile::tempdir().unwrap();
+    let fly = dir.path().join("fly.png");
+    let mut running = Running::start(&[
+        "flythrough",
+        "--scene",
+        "city:blocks=2",
+        "--modes",
+        "vfc,roc",
+        "--frames",
+        "5000",
+        "--resolution",
+        "64x48",
+        "-o",
+        s(&fly),
+    ]);
+    let flying = running.wait_for_line(Duration::from_secs(60), |l| l.contains("frame 1 of 5000"));
+    assert!(flying.is_some(), "{:?}", running.lines());
+    running.signal("INT");
+    let Some((status, lines)) = running.finish(Duration::from_secs(20)) else {
+        panic!("Ctrl-C did not stop the flythrough within 20 s");
+    };
+    assert_eq!(status.signal(), Some(2), "{lines:?}");
+    assert_eq!(
+        lines.last().map(String::as_str),
+        Some("occlu: interrupted: no animation written"),
+        "{lines:?}"
+    );
+    assert!(!fly.exists(), "no animation");
 }
 
 // Item 8.
