@@ -223,7 +223,7 @@ fn a_trace_holds_every_frame_of_every_mode_and_its_parts_within_it() {
             let (out_s, trace_s) = (out.to_str().unwrap(), trace.to_str().unwrap());
             args.extend_from_slice(&[
                 "--modes",
-                "vfc,sq,chc,roc,hiz,swr",
+                "vfc,sq,chc,roc,hiz,swr,auto",
                 "--frames",
                 "3",
                 "--warmup",
