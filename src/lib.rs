@@ -27,6 +27,7 @@ mod parallel;
 pub mod picture;
 pub mod raycast;
 pub mod report;
+pub mod rng;
 pub mod scene;
 pub mod stress;
 pub mod text;

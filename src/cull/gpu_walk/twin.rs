@@ -428,7 +428,7 @@ mod tests {
 
     #[test]
     fn the_texels_read_hold_every_pixel_of_the_rectangle_and_span_at_most_the_limit() {
-        let mut rng = crate::scene::builtin::Rng::new(20);
+        let mut rng = crate::rng::Rng::new(20);
         let sizes = [
             (801, 599),
             (1, 1),
@@ -445,7 +445,7 @@ mod tests {
                 let levels = super::super::pyramid::levels(size, base_divisor);
                 let base = levels[0];
                 for _ in 0..400 {
-                    let pick = |side: u32, rng: &mut crate::scene::builtin::Rng| {
+                    let pick = |side: u32, rng: &mut crate::rng::Rng| {
                         let a = rng.range(0.0, f64::from(side)) as u32;
                         let b = rng.range(0.0, f64::from(side)) as u32;
                         (a.min(b), a.max(b))
