@@ -11,6 +11,7 @@
 //! renders one frame to look at, and [`stress`] runs the numerically hard
 //! cases.
 
+pub mod auto_or;
 pub mod bench;
 pub mod bounds;
 pub mod camera;

@@ -281,12 +281,13 @@ impl BoxOnTarget {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::auto_or::AutoOr;
     use crate::bench::{RunOptions, Session};
     use crate::camera::generate::default_path;
     use crate::camera::path::CameraPath;
     use crate::cull::ModeParams;
     use crate::cull::gpu_walk::GpuCulling;
-    use crate::cull::gpu_walk::depths::{Depth, DepthRange};
+    use crate::cull::gpu_walk::depths::{DepthRange, Level};
     use crate::cull::gpu_walk::hiz::{BoxesTested, HizParams, hierarchical_depth_culling};
     use crate::cull::gpu_walk::ioc::iterative_occlusion_culling;
     use crate::cull::gpu_walk::roc::raster_occlusion_culling;
@@ -502,8 +503,8 @@ mod tests {
         let flat = CullTree::flat(scene.objects.len() as u32);
         let (cut, _) = CullTree::cut(&hierarchy, 2, 6);
         let nodes = DepthRange {
-            start: Depth::Fixed(2),
-            bottom: Depth::Fixed(6),
+            start: AutoOr::Given(Level(2)),
+            bottom: AutoOr::Given(Level(6)),
         };
         for gpu in &gpus {
             let world = || World::new(scene.clone(), hierarchy.clone());
