@@ -18,8 +18,8 @@ use std::ops::RangeInclusive;
 use glam::{DMat4, DVec2, DVec3, Vec4Swizzles};
 
 use super::CullTree;
+use super::layout::{OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST};
 use super::pyramid::PyramidLevel;
-use super::words::{OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST};
 use crate::camera::Camera;
 use crate::gpu::{QueryBox, Resolution, ShaderBoxPlanes};
 
