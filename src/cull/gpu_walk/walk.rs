@@ -635,8 +635,8 @@ fn groups_for(n: u32) -> u32 {
 mod tests {
     use super::*;
     use crate::cull::gpu_walk::TreeNode;
-    use crate::cull::gpu_walk::layout::{parse, struct_layout as layout};
-    use crate::gpu::BOXES_WGSL;
+    use crate::gpu::wgsl::{parse, struct_layout as layout};
+    use crate::gpu::{BOXES_WGSL, CAMERA_WGSL};
 
     #[test]
     fn the_shaders_lay_out_what_this_file_writes_and_reads() {
@@ -657,6 +657,14 @@ mod tests {
         let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(names, ["first_child", "child_count", "first_object", "object_count"]);
         assert_eq!(u64::from(layout(&module, "DrawCommand").1), DRAW_COMMAND_BYTES);
-        parse(&[BOXES_WGSL, &shader_constants(), include_str!("raster_mark.wgsl")].concat());
+        parse(
+            &[
+                CAMERA_WGSL,
+                BOXES_WGSL,
+                &shader_constants(),
+                include_str!("raster_mark.wgsl"),
+            ]
+            .concat(),
+        );
     }
 }
