@@ -12,6 +12,8 @@ mod renderer;
 mod resolution;
 mod targets;
 mod timing;
+#[cfg(test)]
+pub(crate) mod wgsl;
 
 /// A ray caster's view of pixels and boxes, for tests of box tests.
 #[cfg(test)]
@@ -31,6 +33,9 @@ pub(crate) use queries::{
 };
 pub use queries::{BoxTest, BoxVisibility, QUERIES_PER_SET, QueryPool};
 pub use readback::Readback;
+#[cfg(test)]
+pub(crate) use renderer::CAMERA_WGSL;
+pub(crate) use renderer::module_with_camera;
 pub use renderer::{DrawRange, Draws, GpuScene, IndirectCount, IndirectDraws, SceneRenderer};
 pub use resolution::Resolution;
 pub use targets::RenderTargets;

@@ -475,7 +475,7 @@ fn median(values: impl Iterator<Item = f64>) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::builtin::Rng;
+    use crate::rng::Rng;
     use Family::{Frustum, Occlusion};
 
     /// A run of `frames` frames over strategies of `families`, starting with
