@@ -717,6 +717,9 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         for output in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
             occlu::report::refuse_input_as_output(output, &inputs)?;
         }
+        if let (Some(export), Some(trace)) = (&plan.export_github_benchmark, &plan.trace) {
+            occlu::report::refuse_one_file_twice(export, trace)?;
+        }
         let outcome = bench_one(&plan, &note, quiet, format!("{} modes", plan.modes.len()))?;
         return if args.json {
             emit(&(serde_json::to_string_pretty(&outcome.summary)? + "\n"))

@@ -512,6 +512,14 @@ fn no_output_may_be_an_input_or_one_of_the_runs_own_files() {
         &tiny_bench(&run, &["--animate", "--trace", s(&animation)]),
         &["flythrough.png", "one of the run's own files"],
     );
+    // Nor may two outputs be one file, even by two spellings.
+    let export = dir.path().join("bench.json");
+    let same = dir.path().join(".").join("bench.json");
+    refused(
+        &tiny_bench(&run, &["--export-github-benchmark", s(&export), "--trace", s(&same)]),
+        &["bench.json", "another output of this command"],
+    );
+    assert!(!export.exists(), "nothing written");
     let report = std::fs::read(run.join("report.md")).unwrap();
     let other = dir.path().join("other");
     tiny_run(&other, &[]);
