@@ -147,6 +147,9 @@ impl<'a> Session<'a> {
         Ok(())
     }
 
+    /// One frame in every mode: the reference first, then each mode in
+    /// turn from `first` (timed), then, untimed, every mode's GPU time and
+    /// error.
     fn render(
         &mut self,
         frame: u32,
@@ -156,106 +159,132 @@ impl<'a> Session<'a> {
         first: usize,
         warm_up: bool,
     ) -> Result<Vec<FrameStats>, GpuError> {
+        let visible = self.begin_frame(camera, world);
+        let mut ran: Vec<Option<(FrameStats, ModeClocks)>> = (0..cullers.len()).map(|_| None).collect();
+        for turn in 0..cullers.len() {
+            let k = (turn + first) % cullers.len();
+            let step = Step { frame, camera, warm_up };
+            ran[k] = Some(self.run_mode(k, cullers[k].as_mut(), step, world, visible.as_ref()));
+        }
+        self.end_frame(ran, visible.as_ref(), &world.scene)
+    }
+
+    /// Places the camera, flushes the upload so that no mode's timed submit
+    /// carries it, and renders the reference: the objects it shows, where
+    /// errors are measured.
+    fn begin_frame(&mut self, camera: &Camera, world: &World) -> Option<ObjectSet> {
         let gpu = self.gpu;
         self.renderer
             .set_camera(gpu, camera, self.options.resolution, &world.scene.objects);
-        // Flush the upload now, so no mode's timed submit carries it.
         gpu.queue.submit([]);
         gpu.wait_idle();
-        let visible = self
-            .meter
+        self.meter
             .as_mut()
-            .map(|m| m.render_reference(gpu, &self.renderer, &self.targets));
+            .map(|m| m.render_reference(gpu, &self.renderer, &self.targets))
+    }
 
-        let mut rows: Vec<Option<FrameStats>> = vec![None; cullers.len()];
-        let mut clocks: Vec<Option<ModeClocks>> = vec![None; cullers.len()];
-        for turn in 0..cullers.len() {
-            let k = (turn + first) % cullers.len();
-            let culler = &mut cullers[k];
-            let frame_start = Instant::now();
-            let refit_time = if culler.traverses_hierarchy() {
-                world.refit()
-            } else {
-                Duration::ZERO
-            };
-            let input = FrameInput {
-                frame,
-                camera,
-                resolution: self.options.resolution,
-                scene: &world.scene,
-                hierarchy: &world.hierarchy,
-                moved: world.moved(),
-                reference_visible: if culler.needs_reference() {
-                    visible.as_ref()
-                } else {
-                    None
-                },
-                previous: self.previous[k],
-                warm_up,
-            };
-            let resources = FrameResources {
-                gpu,
-                renderer: &self.renderer,
-                targets: &self.targets,
-                queries: &mut self.queries,
-                timer: self.timer.as_ref(),
-                draw_queue: &mut self.draw_queue,
-                ops: &mut self.ops,
-            };
-            let mut ctx = FrameCtx::begin(resources, k, camera, &mut self.drawn[k]);
-            let cull_start = Instant::now();
-            let mut traversal = culler.frame(&mut ctx, &input);
-            let cull_end = Instant::now();
-            let cull_time = cull_end - cull_start;
-            let mut outcome = ctx.finish();
-            let frame_time = frame_start.elapsed();
-            // Untimed: what the mode's own GPU work drew and tested.
-            let audit = culler.audit(gpu, &mut self.drawn[k]);
-            if let Some(audit) = &audit {
-                outcome.add_gpu_audit(audit);
-                traversal.add_gpu_audit(audit);
-            }
-            // Untimed: the colour of a mode's frame, kept for a picture
-            // before the next mode draws over it.
-            if let Some(kept) = self.colours.get(k) {
-                let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                let color = &self.targets.color_texture;
-                encoder.copy_texture_to_texture(color.as_image_copy(), kept.as_image_copy(), color.size());
-                gpu.queue.submit([encoder.finish()]);
-                gpu.wait_idle();
-            }
-            clocks[k] = Some(ModeClocks {
-                frame_start,
-                refit: refit_time,
-                culling: cull_start..cull_end,
-                ops: self.ops.clone(),
-                audit,
-            });
-            rows[k] = Some(FrameStats {
-                mode: culler.name().to_string(),
-                frame,
-                frame_ms: ms(frame_time),
-                cpu_ms: ms(refit_time + cull_time.saturating_sub(outcome.gpu_ops)),
-                maintenance_ms: ms(refit_time + traversal.maintenance),
-                gpu_ms: None,
-                objects_drawn: outcome.counters.objects_drawn,
-                triangles_drawn: outcome.counters.triangles_drawn,
-                queries: outcome.counters.queries,
-                query_batches: outcome.counters.query_batches,
-                traversal,
-                query_wait_ms: ms(outcome.counters.query_wait),
-                query_gpu_ms: outcome.counters.query_gpu.map(ms),
-                pyramid_gpu_ms: outcome.counters.pyramid_gpu.map(ms),
-                error_pixels: None,
-                max_depth_error: None,
-                missed_objects: None,
-                visible_objects: visible.as_ref().map(|v| v.len() as u64),
-                strategy: culler.pick().map(|p| p.strategy.to_string()),
-                probe: culler.pick().map(|p| p.probe),
-            });
+    /// Mode `k`'s frame, timed from the refit of the hierarchy (for a mode
+    /// that traverses it) to the end of its GPU work; then, untimed, its
+    /// audit and, where kept, its colour.
+    fn run_mode(
+        &mut self,
+        k: usize,
+        culler: &mut (dyn Culler + '_),
+        step: Step<'_>,
+        world: &mut World,
+        visible: Option<&ObjectSet>,
+    ) -> (FrameStats, ModeClocks) {
+        let gpu = self.gpu;
+        let frame_start = Instant::now();
+        let refit_time = if culler.traverses_hierarchy() {
+            world.refit()
+        } else {
+            Duration::ZERO
+        };
+        let input = FrameInput {
+            frame: step.frame,
+            camera: step.camera,
+            resolution: self.options.resolution,
+            scene: &world.scene,
+            hierarchy: &world.hierarchy,
+            moved: world.moved(),
+            reference_visible: visible.filter(|_| culler.needs_reference()),
+            previous: self.previous[k],
+            warm_up: step.warm_up,
+        };
+        let resources = FrameResources {
+            gpu,
+            renderer: &self.renderer,
+            targets: &self.targets,
+            queries: &mut self.queries,
+            timer: self.timer.as_ref(),
+            draw_queue: &mut self.draw_queue,
+            ops: &mut self.ops,
+        };
+        let mut ctx = FrameCtx::begin(resources, k, input.camera, &mut self.drawn[k]);
+        let cull_start = Instant::now();
+        let mut traversal = culler.frame(&mut ctx, &input);
+        let cull_end = Instant::now();
+        let cull_time = cull_end - cull_start;
+        let mut outcome = ctx.finish();
+        let frame_time = frame_start.elapsed();
+        // Untimed: what the mode's own GPU work drew and tested.
+        let audit = culler.audit(gpu, &mut self.drawn[k]);
+        if let Some(audit) = &audit {
+            outcome.add_gpu_audit(audit);
+            traversal.add_gpu_audit(audit);
         }
+        // Untimed: the colour of a mode's frame, kept for a picture before
+        // the next mode draws over it.
+        if let Some(kept) = self.colours.get(k) {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            let color = &self.targets.color_texture;
+            encoder.copy_texture_to_texture(color.as_image_copy(), kept.as_image_copy(), color.size());
+            gpu.queue.submit([encoder.finish()]);
+            gpu.wait_idle();
+        }
+        let clocks = ModeClocks {
+            frame_start,
+            refit: refit_time,
+            culling: cull_start..cull_end,
+            ops: self.ops.clone(),
+            audit,
+        };
+        let row = FrameStats {
+            mode: culler.name().to_string(),
+            frame: input.frame,
+            frame_ms: ms(frame_time),
+            cpu_ms: ms(refit_time + cull_time.saturating_sub(outcome.gpu_ops)),
+            maintenance_ms: ms(refit_time + traversal.maintenance),
+            gpu_ms: None,
+            objects_drawn: outcome.counters.objects_drawn,
+            triangles_drawn: outcome.counters.triangles_drawn,
+            queries: outcome.counters.queries,
+            query_batches: outcome.counters.query_batches,
+            traversal,
+            query_wait_ms: ms(outcome.counters.query_wait),
+            query_gpu_ms: outcome.counters.query_gpu.map(ms),
+            pyramid_gpu_ms: outcome.counters.pyramid_gpu.map(ms),
+            error_pixels: None,
+            max_depth_error: None,
+            missed_objects: None,
+            visible_objects: visible.map(|v| v.len() as u64),
+            strategy: culler.pick().map(|p| p.strategy.to_string()),
+            probe: culler.pick().map(|p| p.probe),
+        };
+        (row, clocks)
+    }
 
-        // End of frame, untimed: GPU times and errors of every mode.
+    /// Untimed, after every mode ran: each mode's GPU time, timeline and
+    /// error against the reference (`visible`), and what it carries into
+    /// the next frame.
+    fn end_frame(
+        &mut self,
+        ran: Vec<Option<(FrameStats, ModeClocks)>>,
+        visible: Option<&ObjectSet>,
+        scene: &Scene,
+    ) -> Result<Vec<FrameStats>, GpuError> {
+        let gpu = self.gpu;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         if let Some(t) = &self.timer {
             t.resolve(&mut encoder);
@@ -269,24 +298,22 @@ impl<'a> Session<'a> {
         };
         let gpu_spans = self.timer.as_mut().map(|t| t.read_spans(gpu));
         self.timelines.clear();
-        let rows = rows
+        let rows = ran
             .into_iter()
-            .zip(clocks)
             .enumerate()
-            .map(|(k, (row, clocks))| {
-                let mut row = row.expect("every mode ran this frame");
-                let clocks = clocks.expect("every mode ran this frame");
+            .map(|(k, ran)| {
+                let (mut row, clocks) = ran.expect("every mode ran this frame");
                 let gpu_frame = gpu_spans.as_ref().map(|spans| spans[k]);
                 row.gpu_ms = gpu_frame.map(|span| span.ms());
                 self.timelines
                     .push(clocks.timeline(self.started, gpu_frame, row.frame_ms));
-                if let (Some(wrong), Some(visible)) = (&wrong, &visible) {
+                if let (Some(wrong), Some(visible)) = (&wrong, visible) {
                     row.error_pixels = Some(wrong[k].wrong_pixels);
                     row.max_depth_error = Some(f64::from(wrong[k].max_difference));
                     let missed = visible.count_missing_from(&self.drawn[k]) as u64;
                     row.missed_objects = Some(missed);
                     if wrong[k].wrong_pixels > 0 || missed > 0 {
-                        self.name_what_was_missed(k, &row, visible, &world.scene);
+                        self.name_what_was_missed(k, &row, visible, scene);
                     }
                 }
                 self.previous[k] = Some(PreviousFrame {
@@ -371,8 +398,16 @@ impl<'a> Session<'a> {
     }
 }
 
+/// Which frame a mode runs: its number, camera, and whether it is a
+/// warm-up frame.
+#[derive(Clone, Copy)]
+struct Step<'c> {
+    frame: u32,
+    camera: &'c Camera,
+    warm_up: bool,
+}
+
 /// When the parts of a mode's frame ran, until its GPU time is known.
-#[derive(Clone)]
 struct ModeClocks {
     frame_start: Instant,
     refit: Duration,
