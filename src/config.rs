@@ -173,7 +173,7 @@ pub fn from_json<T: serde::de::DeserializeOwned>(
 fn invalid(path: &Path, at: &str, e: &serde_json::Error) -> ConfigError {
     ConfigError::Json {
         path: path.display().to_string(),
-        message: crate::text::one_line(&format!("{at}{e}")),
+        message: format!("{at}{e}"),
     }
 }
 

@@ -1171,18 +1171,21 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
         let _ = writeln!(
             w,
             "camera      '{}' (node {}, {}{fov}{near})",
-            c.name, c.node, c.projection
+            shown(&c.name),
+            c.node,
+            c.projection
         );
     }
     for a in &report.animations {
-        let moves = a
-            .camera
-            .as_ref()
-            .map_or("moves no camera".to_string(), |c| format!("moves camera '{c}'"));
+        let moves = a.camera.as_ref().map_or("moves no camera".to_string(), |c| {
+            format!("moves camera '{}'", shown(c))
+        });
         let _ = writeln!(
             w,
             "animation   '{}' ({} channels, {:.2} s, {moves})",
-            a.name, a.channels, a.duration
+            shown(&a.name),
+            a.channels,
+            a.duration
         );
     }
     if scene.warnings.is_empty() {

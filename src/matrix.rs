@@ -272,10 +272,7 @@ fn refuse_unknown_fields(file: &Path, fields: &serde_json::Map<String, serde_jso
             let expected: Vec<String> = known.iter().map(|k| format!("`{k}`")).collect();
             Err(ConfigError::Json {
                 path: file.display().to_string(),
-                message: crate::text::one_line(&format!(
-                    "unknown field `{unknown}`, expected one of {}",
-                    expected.join(", ")
-                )),
+                message: format!("unknown field `{unknown}`, expected one of {}", expected.join(", ")),
             })
         }
         None => Ok(()),

@@ -13,7 +13,6 @@ use gltf::mesh::Mode;
 use super::model::{MeshGroup, SceneBuilder};
 use super::source::{LoadOptions, SceneError, read_model_file};
 use super::{cameras, meshopt};
-use crate::text::one_line;
 
 pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut SceneBuilder) -> Result<(), SceneError> {
     let parse_error = |message: String| SceneError::Parse {
@@ -162,7 +161,7 @@ const DECODED: [&str; 2] = ["KHR_mesh_quantization", "EXT_meshopt_compression"];
 /// accessors[0].bufferView)"), not one entry per element.
 fn summarise(e: &gltf::Error) -> String {
     let gltf::Error::Validation(problems) = e else {
-        return one_line(&e.to_string());
+        return e.to_string();
     };
     let mut kinds: Vec<(String, usize, String)> = Vec::new();
     for (path, problem) in problems {
@@ -179,7 +178,7 @@ fn summarise(e: &gltf::Error) -> String {
             n => format!("{n} × {kind} (first at {first})"),
         })
         .collect();
-    one_line(&parts.join("; "))
+    parts.join("; ")
 }
 
 /// Every buffer's bytes, with `EXT_meshopt_compression` views decoded into
@@ -277,7 +276,7 @@ fn raw_json(bytes: &[u8]) -> Result<serde_json::Value, String> {
     } else {
         bytes.to_vec()
     };
-    serde_json::from_slice(&text).map_err(|e| format!("invalid glTF JSON: {}", one_line(&e.to_string())))
+    serde_json::from_slice(&text).map_err(|e| format!("invalid glTF JSON: {e}"))
 }
 
 /// Accessor indices of every primitive must exist.
@@ -364,8 +363,7 @@ fn load_mesh(
     use gltf::accessor::{DataType, Dimensions};
     let mesh_name = mesh
         .name()
-        .map(one_line)
-        .unwrap_or_else(|| format!("mesh{}", mesh.index()));
+        .map_or_else(|| format!("mesh{}", mesh.index()), str::to_string);
     let buffer_bytes = buffers.iter().map(Vec::len).sum();
     let mut groups = Vec::new();
     for primitive in mesh.primitives() {
@@ -527,7 +525,7 @@ fn beside_the_model(model: &Path, uri: &str) -> Result<std::path::PathBuf, Strin
     let refuse = |why: &str| {
         Err(format!(
             "URI '{}' {why}: buffers must lie in the model's folder or below it (--external-buffers allows others)",
-            one_line(uri)
+            uri
         ))
     };
     if uri.contains(':') {

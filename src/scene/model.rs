@@ -10,7 +10,6 @@ use super::phases::{LoadPhases, timed};
 use super::up::Up;
 use super::{closed, cluster, validate};
 use crate::bounds::Aabb;
-use crate::text::one_line;
 use validate::GeometryError;
 
 /// Default triangle budget of one cluster: meshes above it are split.
@@ -159,8 +158,8 @@ impl SceneBuilder {
     /// Degenerate triangles are dropped and counted; a mesh left with no
     /// triangles gives an empty group.
     pub fn add_mesh(&mut self, name: &str, positions: &[DVec3], indices: &[u32]) -> Result<MeshGroup, GeometryError> {
-        // The name as the file has it; escaped where a message quotes it.
-        let (triangles, spent) = timed(|| validate::triangles(&one_line(name), positions, indices));
+        // The name as the file has it; escaped where a message is shown.
+        let (triangles, spent) = timed(|| validate::triangles(name, positions, indices));
         self.phases.validate_ms += spent;
         let triangles = triangles?;
         if triangles.degenerate > 0 {
@@ -240,7 +239,7 @@ impl SceneBuilder {
             let transform = transform * DAffine3::from_translation(origin);
             let bounds = m.bounds.transformed(&transform);
             if !transform.is_finite() || !validate::within_range(bounds.min) || !validate::within_range(bounds.max) {
-                return Err(GeometryError::ObjectOutOfRange { object: one_line(name) });
+                return Err(GeometryError::ObjectOutOfRange { object: name.into() });
             }
             self.objects.push(Object {
                 name: if split { format!("{name}#{i}") } else { name.to_string() },
