@@ -222,6 +222,26 @@ fn gltf_buffers_outside_the_models_folder_are_refused() {
             "{uri}: {e}"
         );
     }
+    // A model named without its folder, as `occlu info m.gltf` in the
+    // folder names it: the link is followed no further (its folder is
+    // `.`, not the empty path, which resolves to nothing), nor is a link
+    // that leads nowhere.
+    std::os::unix::fs::symlink(root.path().join("absent.bin"), model_dir.join("dangling.bin")).unwrap();
+    for (uri, why) in [("link.bin", "through a link"), ("dangling.bin", "dangling.bin")] {
+        write(&model_dir, "m.gltf", w.gltf_external(&[n], uri));
+        let info = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+            .args(["info", "m.gltf"])
+            .current_dir(&model_dir)
+            .output()
+            .unwrap();
+        common::said_one_line(
+            &info,
+            2,
+            &["m.gltf", "buffer 0", why],
+            &format!("info m.gltf with {uri}"),
+        );
+        assert!(stdout(&info).is_empty(), "{uri}: {}", stdout(&info));
+    }
     // Unless the user allows buffers elsewhere.
     let external = LoadOptions {
         external_buffers: true,

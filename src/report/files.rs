@@ -97,13 +97,8 @@ pub fn refuse_input_as_output(output: &Path, inputs: &[&Path]) -> Result<(), Rep
 pub fn refuse_own_file(output: &Path, dir: &Path, names: &[&str]) -> Result<(), ReportError> {
     let resolved = |p: &Path| std::fs::canonicalize(p).ok();
     // Where the file is or would be: a link leads to what write_whole writes.
-    let target = resolved(output).or_else(|| {
-        let parent = output
-            .parent()
-            .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        Some(resolved(parent)?.join(output.file_name()?))
-    });
+    let target =
+        resolved(output).or_else(|| Some(resolved(crate::input::folder_of(output))?.join(output.file_name()?)));
     let own = target.as_deref().is_some_and(|t| {
         t.parent() == resolved(dir).as_deref() && t.file_name().is_some_and(|n| names.iter().any(|own| n == *own))
     });

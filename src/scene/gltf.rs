@@ -13,6 +13,7 @@ use gltf::mesh::Mode;
 use super::model::{MeshGroup, SceneBuilder};
 use super::source::{LoadOptions, SceneError, read_model_file};
 use super::{cameras, meshopt};
+use crate::input::folder_of;
 
 pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut SceneBuilder) -> Result<(), SceneError> {
     let parse_error = |message: String| SceneError::Parse {
@@ -539,12 +540,13 @@ fn beside_the_model(model: &Path, uri: &str) -> Result<std::path::PathBuf, Strin
     {
         return refuse("leaves the model's folder");
     }
-    let folder = model.parent().unwrap_or(Path::new("."));
-    let file = buffer_file(model, uri);
-    // Resolved, a link inside the folder may still point out of it.
-    if let (Ok(folder), Ok(real)) = (folder.canonicalize(), file.canonicalize())
-        && !real.starts_with(&folder)
-    {
+    // Resolved, a link inside the folder may still point out of it. A
+    // path that cannot be resolved is not read either, so the check is
+    // never skipped; and the file read is the one resolved, so a link
+    // changed after the check leads nowhere new.
+    let resolved = |p: &Path| p.canonicalize().map_err(|e| format!("{}: {e}", p.display()));
+    let (folder, file) = (resolved(folder_of(model))?, resolved(&buffer_file(model, uri))?);
+    if !file.starts_with(&folder) {
         return refuse("leads out of the model's folder through a link");
     }
     Ok(file)
@@ -554,7 +556,7 @@ fn beside_the_model(model: &Path, uri: &str) -> Result<std::path::PathBuf, Strin
 /// absolute path stays absolute).
 fn buffer_file(model: &Path, uri: &str) -> std::path::PathBuf {
     let relative = percent_decode(uri.strip_prefix("file://").unwrap_or(uri));
-    model.parent().unwrap_or(Path::new(".")).join(relative)
+    folder_of(model).join(relative)
 }
 
 /// URIs in glTF are percent-encoded (a space is `%20`).
