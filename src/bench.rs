@@ -29,8 +29,8 @@ use crate::object_set::ObjectSet;
 use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::report::{
     Fingerprint, MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary,
-    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, refuse_result_file,
-    write_results, write_whole,
+    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, refuse_input_as_output,
+    refuse_result_file, write_results, write_whole,
 };
 use crate::scene::{Scene, SceneError};
 use crate::world::World;
@@ -497,6 +497,11 @@ pub fn execute(
     let start = Instant::now();
     let scene = crate::scene::load(&plan.scene, &plan.load)?;
     let load_ms = ms(start.elapsed());
+    if let Some(path) = &plan.export_github_benchmark {
+        // The model and path are checked before: a glTF file's buffer
+        // files are known now.
+        refuse_input_as_output(path, &scene.files)?;
+    }
     let start = Instant::now();
     let params = HierarchyParams::default();
     let hierarchy = Hierarchy::build(&scene.objects, &params);

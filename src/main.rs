@@ -243,10 +243,13 @@ impl SceneAndPath {
         Ok(occlu::report::refuse_input_as_output(output, &inputs)?)
     }
 
-    fn load(&self) -> anyhow::Result<(Scene, CameraPath)> {
+    /// The scene and the path; an `output` that is one of the files the
+    /// scene was read from (a glTF file's buffers) is refused.
+    fn load(&self, output: &std::path::Path) -> anyhow::Result<(Scene, CameraPath)> {
         // Read first: a bad path file fails before a long scene load.
         let path_file = self.path.as_deref().map(CameraPath::load).transpose()?;
         let scene = load(&self.scene.spec()?, &self.scene.options())?;
+        occlu::report::refuse_input_as_output(output, &scene.files)?;
         let path = match path_file {
             Some(p) => p,
             None => {
@@ -1061,7 +1064,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     args.scene.refuse_as_output(&args.output)?;
     let backend = args.backend.unwrap_or_default();
     backend.backends()?;
-    let (scene, path) = args.scene.load()?;
+    let (scene, path) = args.scene.load(&args.output)?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let gpu = occlu::gpu::GpuContext::new(backend)?;
     if let Some(reason) = mode.info().unsupported_on(&gpu) {
@@ -1217,7 +1220,7 @@ fn emit(text: &str) -> anyhow::Result<()> {
 fn export(input: &SceneAndPath, output: &std::path::Path) -> anyhow::Result<()> {
     input.refuse_as_output(output)?;
     occlu::report::check_writable(output)?;
-    let (scene, path) = input.load()?;
+    let (scene, path) = input.load(output)?;
     if !scene.movers.is_empty() {
         say!(
             "warning: {} moving objects are written where frame 0 puts them (glTF animation of objects is not exported)",
@@ -1247,6 +1250,7 @@ fn path_gen(
         occlu::report::refuse_input_as_output(&output, &[model])?;
     }
     let scene: Scene = load(&scene_args.spec()?, &scene_args.options())?;
+    occlu::report::refuse_input_as_output(&output, &scene.files)?;
     let mut progress = Progress::new(false, 0, String::new());
     let generated = plan_heard(request.as_ref(), &scene, frames, progress.listener("planning the path"))?;
     // Validate what is written, so a generated file always loads.

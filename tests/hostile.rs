@@ -840,3 +840,30 @@ fn small_input_faults_get_the_right_status_and_a_plain_message() {
     std::fs::write(&path, with_bom).unwrap();
     tiny_run(&out, &["--config", s(&config), "--path", s(&path)]);
 }
+
+// The review of the fixes above (main at 75d5cfd), finding by finding;
+// findings 1, 4, 5, 8 and the loaders' messages of 9 are tested beside
+// their code (tests/loaders.rs, tests/compressed.rs, unit tests).
+
+// Review finding 2: a glTF file's buffer files are inputs too.
+#[test]
+fn no_output_may_be_a_gltf_buffer_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut w = GltfWriter::default();
+    let (p, i) = common::gltf_writer::cube();
+    let m = w.mesh("cube", &[(&p, Some(&i), 4)]);
+    let n = w.node(serde_json::json!({"mesh": m}));
+    let bin = write(dir.path(), "cube.bin", w.bin());
+    let model = write(dir.path(), "cube.gltf", w.gltf_external(&[n], "cube.bin"));
+    let out = dir.path().join("run");
+    for args in [
+        vec!["render", s(&model), "--frame", "0", "--mode", "vfc", "-o", s(&bin)],
+        vec!["export", s(&model), "-o", s(&bin)],
+        vec!["path", "gen", s(&model), "-o", s(&bin)],
+        bench_of(&[s(&model)], &out, &["--export-github-benchmark", s(&bin)]),
+    ] {
+        refused(&args, &["cube.bin", "is an input"]);
+    }
+    assert_eq!(std::fs::read(&bin).unwrap(), w.bin());
+    assert!(!out.exists(), "the refused bench's folder is gone");
+}

@@ -55,7 +55,7 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
     {
         builder.warn("skins and morph targets are ignored: meshes are drawn in their rest pose".into());
     }
-    let buffers = load_buffers(path, bytes, &gltf, options)?;
+    let buffers = load_buffers(path, bytes, &gltf, options, builder)?;
 
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
     let roots: Vec<gltf::Node> = match &scene {
@@ -183,12 +183,13 @@ fn summarise(e: &gltf::Error) -> String {
 }
 
 /// Every buffer's bytes, with `EXT_meshopt_compression` views decoded into
-/// their placeholder buffers.
+/// their placeholder buffers; each file read is noted in `builder`.
 fn load_buffers(
     path: &Path,
     bytes: &[u8],
     gltf: &gltf::Gltf,
     options: &LoadOptions,
+    builder: &mut SceneBuilder,
 ) -> Result<Vec<Vec<u8>>, SceneError> {
     let parse_error = |message: String| SceneError::Parse {
         path: path.into(),
@@ -253,7 +254,7 @@ fn load_buffers(
             zeros.resize(length, 0);
             buffers.push(zeros);
         } else {
-            buffers.push(buffer_data(path, gltf, &buffer, options)?);
+            buffers.push(buffer_data(path, gltf, &buffer, options, builder)?);
         }
     }
     if let Some((_, views)) = &compressed {
@@ -474,11 +475,14 @@ fn triangle_list(mode: Mode, stream: &[u32]) -> Vec<u32> {
     }
 }
 
+/// A buffer's bytes, from the GLB's binary chunk, a data URI or a file
+/// (noted in `builder`).
 fn buffer_data(
     path: &Path,
     gltf: &gltf::Gltf,
     buffer: &gltf::Buffer,
     options: &LoadOptions,
+    builder: &mut SceneBuilder,
 ) -> Result<Vec<u8>, SceneError> {
     let error = |what: String| SceneError::Parse {
         path: path.into(),
@@ -503,7 +507,9 @@ fn buffer_data(
             } else {
                 beside_the_model(path, uri).map_err(error)?
             };
-            read_model_file(&file, options).map_err(|e| error(format!("{}: {e}", file.display())))?
+            let data = read_model_file(&file, options).map_err(|e| error(format!("{}: {e}", file.display())))?;
+            builder.read_from(file);
+            data
         }
     };
     if data.len() < buffer.length() {

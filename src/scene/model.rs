@@ -2,6 +2,8 @@
 //! that place them, the parts they were cut from ([`Scene`]), and the one
 //! builder every loader feeds ([`SceneBuilder`]).
 
+use std::path::PathBuf;
+
 use glam::{DAffine3, DVec3};
 
 use super::cameras::{FileAnimation, FileCamera};
@@ -84,6 +86,10 @@ pub struct Scene {
     pub animations: Vec<FileAnimation>,
     /// How long each phase of loading it took.
     pub phases: LoadPhases,
+    /// Every file it was read from: the model file, then a glTF file's
+    /// buffer files; none for a built-in scene. No output may be one of
+    /// them.
+    pub files: Vec<PathBuf>,
 }
 
 impl Scene {
@@ -131,6 +137,7 @@ pub struct SceneBuilder {
     animations: Vec<FileAnimation>,
     movers: Vec<Mover>,
     phases: LoadPhases,
+    files: Vec<PathBuf>,
 }
 
 impl SceneBuilder {
@@ -150,7 +157,13 @@ impl SceneBuilder {
             animations: Vec::new(),
             movers: Vec::new(),
             phases: LoadPhases::default(),
+            files: Vec::new(),
         }
+    }
+
+    /// Notes that the scene was read from `file` too (a glTF buffer file).
+    pub fn read_from(&mut self, file: PathBuf) {
+        self.files.push(file);
     }
 
     /// Validates one mesh (positions in its own frame, a triangle list) and
@@ -314,6 +327,7 @@ impl SceneBuilder {
             animations: self.animations,
             movers: self.movers,
             phases: self.phases,
+            files: self.files,
         })
     }
 }
