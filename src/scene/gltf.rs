@@ -224,42 +224,49 @@ fn load_buffers(
             .as_ref()
             .is_some_and(|(raw, _)| meshopt::is_placeholder(raw, index))
     };
+    // The buffers with data of their own first, placeholders empty.
     let mut buffers = Vec::new();
     for buffer in gltf.buffers() {
-        if placeholder(buffer.index()) {
-            // Filled by decoding, and only as far as the views decoded into
-            // it reach (their sum is bounded above), whatever it declares.
-            let reach = compressed
-                .iter()
-                .flat_map(|(_, views)| views)
-                .filter(|v| v.target == buffer.index());
-            let length = reach
-                .map(|v| v.target_offset.saturating_add(v.decoded_length()))
-                .max()
-                .unwrap_or(0);
-            if length > buffer.length() {
-                return Err(parse_error(format!(
-                    "buffer {}: its compressed views decode to {length} bytes, more than the {} it declares",
-                    buffer.index(),
-                    buffer.length()
-                )));
-            }
-            if length as u64 > most {
-                return Err(too_much(format!("buffer {} needs {length}", buffer.index())));
-            }
-            let mut zeros = Vec::new();
-            zeros
-                .try_reserve_exact(length)
-                .map_err(|e| parse_error(format!("buffer {}: {e}", buffer.index())))?;
-            zeros.resize(length, 0);
-            buffers.push(zeros);
+        buffers.push(if placeholder(buffer.index()) {
+            Vec::new()
         } else {
-            buffers.push(buffer_data(path, gltf, &buffer, options, builder)?);
+            buffer_data(path, gltf, &buffer, options, builder)?
+        });
+    }
+    let Some((_, views)) = &compressed else {
+        return Ok(buffers);
+    };
+    // Every view's stream lies in data the file holds, and claims no more
+    // than its length can hold (`meshopt::compressed_views`), before any
+    // placeholder is allocated: what they claim is bounded by real bytes.
+    for v in views {
+        v.stream(&buffers).map_err(parse_error)?;
+    }
+    for buffer in gltf.buffers().filter(|b| placeholder(b.index())) {
+        // Filled by decoding, and only as far as the views decoded into
+        // it reach (their sum is bounded above), whatever it declares.
+        let reach = views.iter().filter(|v| v.target == buffer.index());
+        let length = reach
+            .map(|v| v.target_offset.saturating_add(v.decoded_length()))
+            .max()
+            .unwrap_or(0);
+        if length > buffer.length() {
+            return Err(parse_error(format!(
+                "buffer {}: its compressed views decode to {length} bytes, more than the {} it declares",
+                buffer.index(),
+                buffer.length()
+            )));
         }
+        if length as u64 > most {
+            return Err(too_much(format!("buffer {} needs {length}", buffer.index())));
+        }
+        let zeros = &mut buffers[buffer.index()];
+        zeros
+            .try_reserve_exact(length)
+            .map_err(|e| parse_error(format!("buffer {}: {e}", buffer.index())))?;
+        zeros.resize(length, 0);
     }
-    if let Some((_, views)) = &compressed {
-        meshopt::decode(&mut buffers, views, options.max_file_size).map_err(parse_error)?;
-    }
+    meshopt::decode(&mut buffers, views, options.max_file_size).map_err(parse_error)?;
     Ok(buffers)
 }
 
