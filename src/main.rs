@@ -7,7 +7,7 @@ use std::io::{IsTerminal as _, Write as _};
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicU8, Ordering};
 use std::time::Instant;
 
 use anyhow::Context as _;
@@ -254,7 +254,10 @@ impl SceneAndPath {
             Some(p) => p,
             None => {
                 let mut progress = Progress::new(false, 0, String::new());
-                occlu::camera::generate::default_path_heard(&scene, progress.listener("planning the path"))?.0
+                let planned =
+                    occlu::camera::generate::default_path_heard(&scene, progress.listener("planning the path"))?.0;
+                stop_listening()?;
+                planned
             }
         };
         let path = match self.frames {
@@ -493,29 +496,40 @@ fn main() -> ExitCode {
     };
     // Ctrl-C while the results were written: they are whole, and the
     // interruption still reaches the caller.
-    if INTERRUPTED.load(Ordering::SeqCst) {
+    if CTRL_C.load(Ordering::SeqCst) == HEARD {
         say!("occlu: interrupted");
         end_by_sigint();
     }
     code
 }
 
-/// Whether a command that stops cleanly on Ctrl-C is running: until one
-/// says so through [`go_on`], Ctrl-C ends the process at once, as it would
-/// without a handler. Nothing is half-written then: the operating system
-/// drops the claim on --out, and result files are moved into place whole.
-static LISTENING: AtomicBool = AtomicBool::new(false);
+/// What Ctrl-C does now: [`ENDS_AT_ONCE`], [`LISTENED`] or [`HEARD`]. One
+/// value, so that the handler and a step that stops listening cannot both
+/// miss a Ctrl-C between them.
+static CTRL_C: AtomicU8 = AtomicU8::new(ENDS_AT_ONCE);
 
-/// Set by Ctrl-C while listening: the work stops at its next frame (bench)
-/// or case (stress), writes nothing, and ends the process.
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// No step that stops cleanly is running: Ctrl-C ends the process at once,
+/// as it would without a handler. Nothing is half-written then: the
+/// operating system drops the claim on --out, and result files are moved
+/// into place whole.
+const ENDS_AT_ONCE: u8 = 0;
+/// A step that stops cleanly on Ctrl-C is running (see [`go_on`]): the
+/// first Ctrl-C asks it to stop.
+const LISTENED: u8 = 1;
+/// Ctrl-C came while a step listened: the work stops at its next frame
+/// (bench), case (stress) or stretch of ray casts (planning), writes
+/// nothing, and ends the process.
+const HEARD: u8 = 2;
 
 /// The first Ctrl-C (or SIGTERM, or SIGHUP: a terminal closed, a job
-/// cancelled) asks listening work to stop (see [`LISTENING`]); a second
+/// cancelled) asks a listening step to stop (see [`CTRL_C`]); a second
 /// one, or one while nothing listens, ends the process at once.
 fn listen_for_ctrl_c() {
     let _ = ctrlc::set_handler(|| {
-        if !LISTENING.load(Ordering::SeqCst) || INTERRUPTED.swap(true, Ordering::SeqCst) {
+        if CTRL_C
+            .compare_exchange(LISTENED, HEARD, Ordering::SeqCst, Ordering::SeqCst)
+            .is_err()
+        {
             end_by_sigint();
         }
     });
@@ -538,19 +552,38 @@ fn end_by_sigint() -> ! {
 }
 
 /// Whether the work should go on (no Ctrl-C yet); from its first call on,
-/// Ctrl-C asks the work to stop instead of ending the process.
+/// Ctrl-C asks the work to stop instead of ending the process, until
+/// [`stop_listening`].
 fn go_on() -> ControlFlow<()> {
-    LISTENING.store(true, Ordering::SeqCst);
-    if INTERRUPTED.load(Ordering::SeqCst) {
-        ControlFlow::Break(())
-    } else {
-        ControlFlow::Continue(())
+    match CTRL_C.compare_exchange(ENDS_AT_ONCE, LISTENED, Ordering::SeqCst, Ordering::SeqCst) {
+        Err(HEARD) => ControlFlow::Break(()),
+        _ => ControlFlow::Continue(()),
+    }
+}
+
+/// A command heard Ctrl-C while a step of it listened, and stopped before
+/// writing anything.
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted: nothing written")]
+struct Interrupted;
+
+/// Ends a step that listened for Ctrl-C (path planning in `render`,
+/// `export` and `path gen`), for a command whose later steps do not ask
+/// [`go_on`]: from here on Ctrl-C ends the process at once again, rather
+/// than being heard by nothing while the command runs to its end and
+/// writes. A Ctrl-C that the step heard after it last asked stops the
+/// command here.
+fn stop_listening() -> Result<(), Interrupted> {
+    match CTRL_C.compare_exchange(LISTENED, ENDS_AT_ONCE, Ordering::SeqCst, Ordering::SeqCst) {
+        Err(HEARD) => Err(Interrupted),
+        _ => Ok(()),
     }
 }
 
 fn was_interrupted(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {
-        matches!(c.downcast_ref::<BenchError>(), Some(BenchError::Interrupted))
+        c.is::<Interrupted>()
+            || matches!(c.downcast_ref::<BenchError>(), Some(BenchError::Interrupted))
             || matches!(c.downcast_ref::<StressError>(), Some(StressError::Interrupted))
             || matches!(c.downcast_ref::<PathError>(), Some(PathError::Interrupted))
     })
@@ -1255,6 +1288,22 @@ fn path_gen(
     let generated = plan_heard(request.as_ref(), &scene, frames, progress.listener("planning the path"))?;
     // Validate what is written, so a generated file always loads.
     let path = CameraPath::from_file(&generated.file, &format!("generated:{}", generated.kind))?;
+    let budget = Budget {
+        tests: occlu::camera::generate::PLANNING_TESTS,
+        listener: progress.listener("counting frames with geometry within the near plane"),
+    };
+    let caster = RayCaster::with_budget(&scene, budget);
+    // Counted before the file is written, so Ctrl-C meanwhile writes nothing.
+    let near = match path.frames_with_geometry_within_near(&caster, Resolution::DEFAULT.aspect()) {
+        Ok(0) => None,
+        Ok(near) => Some(format!(
+            "warning: {near} of {} frames have geometry nearer than the near plane's corners (at 4:3)",
+            path.frames
+        )),
+        Err(Stopped::Spent) => Some(near_not_counted()),
+        Err(Stopped::Interrupted) => return Err(PathError::Interrupted.into()),
+    };
+    stop_listening()?;
     let text = serde_json::to_string_pretty(&generated.file)? + "\n";
     occlu::report::write_whole(&output, text.as_bytes())?;
     say!(
@@ -1265,19 +1314,8 @@ fn path_gen(
         path.frames,
         generated.file.keyframes.len()
     );
-    let budget = Budget {
-        tests: occlu::camera::generate::PLANNING_TESTS,
-        listener: progress.listener("counting frames with geometry within the near plane"),
-    };
-    let caster = RayCaster::with_budget(&scene, budget);
-    match path.frames_with_geometry_within_near(&caster, Resolution::DEFAULT.aspect()) {
-        Ok(0) => {}
-        Ok(near) => say!(
-            "warning: {near} of {} frames have geometry nearer than the near plane's corners (at 4:3)",
-            path.frames
-        ),
-        Err(Stopped::Spent) => say!("{}", near_not_counted()),
-        Err(Stopped::Interrupted) => return Err(PathError::Interrupted.into()),
+    if let Some(near) = near {
+        say!("{near}");
     }
     Ok(())
 }

@@ -867,3 +867,65 @@ fn no_output_may_be_a_gltf_buffer_file() {
     assert_eq!(std::fs::read(&bin).unwrap(), w.bin());
     assert!(!out.exists(), "the refused bench's folder is gone");
 }
+
+/// An OBJ of `n` unit boxes in rows of ten: its exported scene, its
+/// picture and its planned path are each larger than a page.
+fn grid_of_boxes(n: u32) -> String {
+    let boxes: Vec<(String, glam::DVec3, glam::DVec3)> = (0..n)
+        .map(|k| {
+            let min = glam::DVec3::new(f64::from(k % 10) * 3.0, 0.0, f64::from(k / 10) * 3.0);
+            (format!("box{k}"), min, min + glam::DVec3::ONE)
+        })
+        .collect();
+    common::boxes_obj(&boxes)
+}
+
+// Review finding 3: once path planning, which hears Ctrl-C, is done,
+// render, export and path gen end at once on a signal, as the README
+// says, rather than hear it and run on to write their output.
+#[test]
+fn after_planning_a_signal_ends_render_export_and_path_gen_at_once() {
+    use std::io::Read as _;
+    use std::os::fd::AsRawFd as _;
+    use std::os::unix::fs::OpenOptionsExt as _;
+    let dir = tempfile::tempdir().unwrap();
+    let model = write(dir.path(), "boxes.obj", grid_of_boxes(100));
+    let commands: [&[&str]; 3] = [
+        &["export"],
+        &["render", "--frame", "0", "--mode", "vfc"],
+        &["path", "gen"],
+    ];
+    for (k, command) in commands.into_iter().enumerate() {
+        // The output is a pipe of one page that nothing empties: the
+        // command writes its first bytes after every step before it (the
+        // path planned), then waits there.
+        let fifo = dir.path().join(format!("out{k}"));
+        mkfifo(&fifo);
+        let mut reader = std::fs::OpenOptions::new()
+            .read(true)
+            .custom_flags(libc::O_NONBLOCK)
+            .open(&fifo)
+            .unwrap();
+        // SAFETY: an fcntl on a descriptor this test owns, with an integer.
+        let resized = unsafe { libc::fcntl(reader.as_raw_fd(), libc::F_SETPIPE_SZ, 4096) };
+        assert!(resized >= 0, "F_SETPIPE_SZ");
+        let mut args = command.to_vec();
+        args.extend([s(&model), "-o", s(&fifo)]);
+        let mut running = Running::start(&args);
+        let start = Instant::now();
+        while !matches!(reader.read(&mut [0]), Ok(1)) {
+            let ended = running.child.try_wait().unwrap();
+            assert!(
+                ended.is_none() && start.elapsed() < Duration::from_secs(60),
+                "{command:?}: wrote nothing ({ended:?}): {:?}",
+                running.lines()
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        running.signal("TERM");
+        let Some((status, lines)) = running.finish(Duration::from_secs(10)) else {
+            panic!("{command:?}: still running 10 s after SIGTERM");
+        };
+        assert_eq!(status.signal(), Some(libc::SIGINT), "{command:?}: {lines:?}");
+    }
+}
