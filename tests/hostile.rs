@@ -929,3 +929,42 @@ fn after_planning_a_signal_ends_render_export_and_path_gen_at_once() {
         assert_eq!(status.signal(), Some(libc::SIGINT), "{command:?}: {lines:?}");
     }
 }
+
+// Review finding 6: values no run can have measured, though each is a
+// number of 0 or more.
+#[test]
+fn compare_merge_and_plot_refuse_impossible_times_and_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = dir.path().join("base");
+    tiny_run(&base, &[]);
+    type Edit = dyn Fn(&mut occlu::measure::FrameStats);
+    let cases: [(&str, &Edit, &[&str]); 4] = [
+        ("time", &|r| r.frame_ms = 1e308, &["frame_ms is 1e308"]),
+        (
+            "triangles",
+            &|r| r.triangles_drawn = 100_000_000_000,
+            &["triangles_drawn is 100000000000", "triangles in the scene"],
+        ),
+        (
+            "missed",
+            &|r| {
+                r.visible_objects = Some(1);
+                r.missed_objects = Some(2);
+            },
+            &["missed_objects is 2", "1 visible_objects"],
+        ),
+        ("depth", &|r| r.max_depth_error = Some(2.0), &["max_depth_error is 2"]),
+    ];
+    for (name, edit, needles) in cases {
+        let new = dir.path().join(name);
+        tampered_copy(&base, &new, &|r| {
+            if r.frame == 1 {
+                edit(r);
+            }
+        });
+        let needles = [&["frames.csv", "frame 1"], needles].concat();
+        refused(&["compare", s(&base), s(&new)], &needles);
+        refused(&["merge", s(&new), "--out", s(&dir.path().join("m"))], &needles);
+        refused(&["plot", s(&new)], &needles);
+    }
+}

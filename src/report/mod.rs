@@ -112,6 +112,7 @@ fn check_rows(summary: &Summary, rows: &[FrameStats]) -> Result<(), String> {
     let limits = RowLimits {
         pixels: summary.resolution.pixels(),
         objects: summary.scene.facts.objects as u64,
+        triangles: summary.scene.facts.triangles,
     };
     // Each mode's frames seen so far, by the mode's place in the summary.
     let mut seen: Vec<Vec<bool>> = Vec::with_capacity(summary.modes.len());
