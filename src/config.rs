@@ -167,7 +167,24 @@ pub fn from_json<T: serde::de::DeserializeOwned>(
     at: &str,
     json: serde_json::Value,
 ) -> Result<T, ConfigError> {
-    serde_json::from_value(json).map_err(|e| invalid(path, at, &e))
+    serde_path_to_error::deserialize(json).map_err(|e| {
+        // The field whose value is wrong (`frames`, `runs[1].modes`), up to
+        // the field a message names itself ("unknown field `runs`, ...");
+        // `.` is the whole.
+        let whole = e.path().to_string();
+        let named = e.path().iter().next_back().map(ToString::to_string);
+        let field = match named {
+            Some(last) if e.inner().to_string().contains(&format!("`{last}`")) => {
+                whole.strip_suffix(&last).unwrap_or(&whole).trim_end_matches('.')
+            }
+            _ => whole.as_str(),
+        };
+        let at = match field {
+            "" | "." => at.to_string(),
+            field => format!("{at}{field}: "),
+        };
+        invalid(path, &at, e.inner())
+    })
 }
 
 fn invalid(path: &Path, at: &str, e: &serde_json::Error) -> ConfigError {

@@ -968,3 +968,27 @@ fn compare_merge_and_plot_refuse_impossible_times_and_counts() {
         refused(&["plot", s(&new)], &needles);
     }
 }
+
+// Review finding 7.
+#[test]
+fn a_configuration_value_of_the_wrong_type_is_named_by_its_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    for (name, json, field) in [
+        ("sweep.json", r#"{"sweep": []}"#, "sweep: invalid type: sequence"),
+        (
+            "size.json",
+            r#"{"resolution": [160, 120]}"#,
+            "resolution: invalid type: sequence",
+        ),
+        ("count.json", r#"{"frames": "x"}"#, "frames: invalid type: string"),
+        (
+            "second.json",
+            r#"{"runs": [{"scene": "city:blocks=1"}, {"warmup": -1}]}"#,
+            "runs[1]: warmup: invalid value: integer `-1`",
+        ),
+    ] {
+        let config = write(dir.path(), name, json);
+        refused(&tiny_bench(&out, &["--config", s(&config)]), &[name, field]);
+    }
+}
