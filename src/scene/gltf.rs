@@ -21,6 +21,18 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
         message,
     };
     let invalid = |e: gltf::Error| parse_error(format!("invalid glTF: {}", summarise(&e)));
+    // glTF is a GLB (binary, starting with its magic) or JSON (an object,
+    // perhaps after the byte order mark some editors write): anything else
+    // (an OBJ named .glb, a GLB with a wrong magic) is said to be neither,
+    // not reported as a JSON syntax error at its first byte.
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
+    let first = bytes.iter().find(|b| !b.is_ascii_whitespace());
+    if !bytes.starts_with(b"glTF") && first != Some(&b'{') {
+        return Err(parse_error(
+            "not glTF: neither a GLB (which starts with the bytes 'glTF') nor glTF JSON (an object, starting with '{')"
+                .into(),
+        ));
+    }
     // gltf-json's validator indexes primitive accessors without a bounds
     // check, so those are checked first; validation then also refuses files
     // that require an extension occlu does not read.
