@@ -403,7 +403,7 @@ pub enum BenchError {
     #[error(transparent)]
     Report(#[from] ReportError),
     /// The caller asked the run to stop (Ctrl-C); nothing was written.
-    #[error("interrupted: no results written, the folder's earlier contents stand")]
+    #[error("interrupted: no results written, --out left as it was before the run")]
     Interrupted,
 }
 

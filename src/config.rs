@@ -66,6 +66,9 @@ pub enum ConfigError {
     Io { path: String, error: std::io::Error },
     #[error("{path}: invalid run configuration: {message}")]
     Json { path: String, message: String },
+    /// What the fields of the configuration file at `path` make wrong.
+    #[error("{path}: {error}")]
+    InFile { path: String, error: Box<ConfigError> },
     #[error("give a model file or --scene, not both")]
     ModelAndScene,
     #[error("--movers animates built-in scenes; a model file has no movers")]

@@ -434,9 +434,12 @@ fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         Err(e) => {
+            // The message with the lines that complete it (the values a
+            // flag takes, the arguments missing), up to the usage.
             let text = e.render().to_string();
-            let line = text.lines().next().unwrap_or("invalid arguments");
-            say!("occlu: {}", line.trim_start_matches("error: ").trim());
+            let lines: Vec<&str> = text.lines().map(str::trim).take_while(|l| !l.is_empty()).collect();
+            let message = lines.join(" ");
+            say!("occlu: {}", message.trim_start_matches("error: "));
             return ExitCode::from(2);
         }
     };

@@ -644,6 +644,11 @@ fn a_run_that_ends_without_results_takes_the_folder_it_made_with_it() {
         assert!(status.signal().is_some(), "{what}: {status:?} {lines:?}");
         assert_eq!(left(&out), Vec::<String>::new(), "{what}: {lines:?}");
         assert!(!out.exists(), "{what}: the folder it made is gone");
+        // Review finding 9: so no line may say that its contents stand.
+        assert!(
+            lines.iter().all(|l| !l.contains("earlier contents")),
+            "{what}: {lines:?}"
+        );
     }
 }
 
@@ -991,4 +996,32 @@ fn a_configuration_value_of_the_wrong_type_is_named_by_its_field() {
         let config = write(dir.path(), name, json);
         refused(&tiny_bench(&out, &["--config", s(&config)]), &[name, field]);
     }
+}
+
+// Review finding 9: messages that left out what a user needs.
+#[test]
+fn messages_list_the_values_allowed_and_name_the_file_at_fault() {
+    refused(
+        &["bench", "--backend", "bogus"],
+        &["'bogus'", "--backend", "auto", "vulkan", "gl"],
+    );
+    refused(
+        &["compare", "a", "b", "--metric", "bogus"],
+        &["'bogus'", "--metric", "frame_ms", "triangles_drawn"],
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let none = write(dir.path(), "none.json", r#"{"modes": []}"#);
+    let listed = write(dir.path(), "listed.json", r#"{"runs": [{"modes": []}]}"#);
+    for config in [&none, &listed] {
+        refused(
+            &["bench", "--config", s(config), "--out", s(&out)],
+            &[s(config), "no modes given"],
+        );
+    }
+    // Flags that make the fault are not blamed on the file.
+    let fine = write(dir.path(), "fine.json", r#"{"frames": 2}"#);
+    let flags = occlu(&["bench", "--config", s(&fine), "--sweep", "bogus", "--out", s(&out)]);
+    said_one_line(&flags, 2, &["--sweep 'bogus'"], "--sweep bogus");
+    assert!(!own_stderr(&flags)[0].contains("fine.json"), "{:?}", own_stderr(&flags));
 }
