@@ -11,6 +11,7 @@
 //! renders one frame to look at, and [`stress`] runs the numerically hard
 //! cases.
 
+pub mod auto_or;
 pub mod bench;
 pub mod bounds;
 pub mod camera;
@@ -27,6 +28,7 @@ mod parallel;
 pub mod picture;
 pub mod raycast;
 pub mod report;
+pub mod rng;
 pub mod scene;
 pub mod stress;
 pub mod text;

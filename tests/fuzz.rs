@@ -19,7 +19,7 @@ use glam::{DAffine3, DVec3};
 use occlu::camera::path::CameraPath;
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::report::Fingerprint;
-use occlu::scene::builtin::Rng;
+use occlu::rng::Rng;
 use occlu::scene::{DEFAULT_CLUSTER_TRIANGLES, LoadOptions, Scene, SceneBuilder, load_bytes};
 
 /// Mutated inputs per corpus entry.

@@ -108,11 +108,8 @@ fn ray_cast(list: &[(DVec3, DVec3)], eye: DVec3, fov_y: f64, aspect: f64, sx: f6
 #[test]
 fn reference_visible_set_matches_cpu_ray_casting() {
     // 60 seeded boxes in front of the camera, many hiding others.
-    let mut seed = 7u64;
-    let mut rand = || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = occlu::rng::Rng::new(7);
+    let mut rand = || rng.range(0.0, 1.0);
     let list: Vec<(DVec3, DVec3)> = (0..60)
         .map(|_| {
             let c = DVec3::new(rand() * 16.0 - 8.0, rand() * 12.0 - 6.0, -5.0 - rand() * 25.0);

@@ -64,8 +64,6 @@ pub fn write(dir: &Path, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
     p
 }
 
-/// `../shared/models` beside the project root: third-party models that
-/// tests skip, saying so, where the folder is absent.
 /// Says that a test cannot run here, and why: a line on a developer's
 /// machine, where the fixtures are optional; a failure where they are
 /// required (`OCCLU_REQUIRE_FIXTURES=1`, which `.ci/run` sets), so that CI
@@ -78,6 +76,8 @@ pub fn cannot_run(why: &str) {
     eprintln!("skipped: {why}");
 }
 
+/// `../shared/models` beside the project root: third-party models that
+/// tests skip, saying so, where the folder is absent.
 pub fn shared_models_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models")
 }

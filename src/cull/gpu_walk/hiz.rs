@@ -77,8 +77,9 @@ use std::str::FromStr;
 
 use serde::Serialize;
 
-use super::depths::{BOTTOM, Depth, DepthRange, START};
+use super::depths::{BOTTOM, DepthRange, START};
 use super::{GpuCulling, NodeTest, Walked};
+use crate::auto_or::AutoOr;
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 
 /// This mode's entry in the registry.
@@ -198,7 +199,7 @@ impl HizParams {
             let reason = format!("{} is more than {}", p.pixels, PIXELS_RANGE.end());
             return Err(ModeError::bad(ModeId::Hiz, &PIXELS, reason));
         }
-        let fixed = |d| matches!(d, Depth::Fixed(_));
+        let fixed = |d| matches!(d, AutoOr::Given(_));
         if p.boxes == BoxesTested::Objects && (fixed(p.range.start) || fixed(p.range.bottom)) {
             let reason = "start and bottom depths apply only with hiz.boxes=nodes".to_string();
             return Err(ModeError::bad(ModeId::Hiz, &BOXES, reason));
@@ -234,6 +235,7 @@ pub fn hierarchical_depth_culling(params: HizParams) -> GpuCulling {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cull::gpu_walk::depths::Level;
 
     fn parse(items: &[&str]) -> Result<HizParams, ModeError> {
         let items: Vec<String> = items.iter().map(|s| s.to_string()).collect();
@@ -244,7 +246,10 @@ mod tests {
     fn depths_are_taken_only_with_nodes() {
         assert_eq!(parse(&[]).unwrap().boxes, BoxesTested::Objects);
         let nodes = parse(&["hiz.boxes=nodes", "hiz.start=3"]).unwrap();
-        assert_eq!((nodes.boxes, nodes.range.start), (BoxesTested::Nodes, Depth::Fixed(3)));
+        assert_eq!(
+            (nodes.boxes, nodes.range.start),
+            (BoxesTested::Nodes, AutoOr::Given(Level(3)))
+        );
         let err = parse(&["hiz.start=3"]).unwrap_err().to_string();
         assert!(err.contains("only with hiz.boxes=nodes"), "{err}");
         let err = parse(&["hiz.boxes=meshlets"]).unwrap_err().to_string();

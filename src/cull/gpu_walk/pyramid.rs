@@ -248,7 +248,7 @@ mod tests {
     use crate::camera::generate::default_path;
     use crate::cull::create;
     use crate::cull::culler::Culler;
-    use crate::cull::gpu_walk::words::{parse, shader_constants, struct_layout};
+    use crate::cull::gpu_walk::layout::{parse, shader_constants, struct_layout};
     use crate::gpu::BOXES_WGSL;
     use crate::gpu::BackendChoice;
     use crate::hierarchy::{Hierarchy, HierarchyParams};

@@ -5,15 +5,15 @@
 use std::rc::Rc;
 use std::time::Duration;
 
+use super::layout::{
+    DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_WORDS,
+    MAX_GROUPS, OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST, shader_constants,
+};
 use super::level_test::{LevelTest, NodeTest};
 use super::lists::VisibleLists;
 #[cfg(test)]
 use super::pyramid::PyramidLevel;
 use super::tree::{CullTree, MAX_LEVELS};
-use super::words::{
-    DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_WORDS,
-    MAX_GROUPS, OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST, shader_constants,
-};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
 use crate::gpu::{
@@ -510,7 +510,7 @@ impl GpuWalk {
     /// Every node's word of the visibility buffer as the last walk left it
     /// (before it: [`TO_TEST`], [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`];
     /// the level test turned the boxes it found visible into
-    /// [`VISIBLE`](super::words::VISIBLE)),
+    /// [`VISIBLE`](super::layout::VISIBLE)),
     /// for the CPU twin of the walk.
     pub(super) fn node_states(&self, gpu: &GpuContext) -> Vec<u32> {
         let bytes = u64::from(self.tree.nodes) * 4;
@@ -635,7 +635,7 @@ fn groups_for(n: u32) -> u32 {
 mod tests {
     use super::*;
     use crate::cull::gpu_walk::TreeNode;
-    use crate::cull::gpu_walk::words::{parse, struct_layout as layout};
+    use crate::cull::gpu_walk::layout::{parse, struct_layout as layout};
     use crate::gpu::BOXES_WGSL;
 
     #[test]
