@@ -25,8 +25,8 @@ use crate::picture::Look;
 use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::report::{
     Fingerprint, MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary,
-    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, refuse_result_file,
-    trace_json, write_results, write_whole,
+    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, refuse_input_as_output,
+    refuse_result_file, trace_json, write_results, write_whole,
 };
 use crate::scene::{Scene, SceneError};
 use crate::session::{RunOptions, Session, ms};
@@ -115,7 +115,7 @@ pub enum BenchError {
     #[error(transparent)]
     Animation(AnimationError),
     /// The caller asked the run to stop (Ctrl-C); nothing was written.
-    #[error("interrupted: no results written, the folder's earlier contents stand")]
+    #[error("interrupted: no results written, --out left as it was before the run")]
     Interrupted,
 }
 
@@ -226,6 +226,11 @@ pub fn execute(
     let start = Instant::now();
     let scene = crate::scene::load(&plan.scene, &plan.load)?;
     let load_ms = ms(start.elapsed());
+    for path in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
+        // The model and path are checked before: a glTF file's buffer
+        // files are known now.
+        refuse_input_as_output(path, &scene.files)?;
+    }
     let start = Instant::now();
     let params = HierarchyParams::default();
     let hierarchy = Hierarchy::build(&scene.objects, &params);

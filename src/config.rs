@@ -70,6 +70,9 @@ pub enum ConfigError {
     Io { path: String, error: std::io::Error },
     #[error("{path}: invalid run configuration: {message}")]
     Json { path: String, message: String },
+    /// What the fields of the configuration file at `path` make wrong.
+    #[error("{path}: {error}")]
+    InFile { path: String, error: Box<ConfigError> },
     #[error("give a model file or --scene, not both")]
     ModelAndScene,
     #[error("--movers animates built-in scenes; a model file has no movers")]
@@ -171,13 +174,30 @@ pub fn from_json<T: serde::de::DeserializeOwned>(
     at: &str,
     json: serde_json::Value,
 ) -> Result<T, ConfigError> {
-    serde_json::from_value(json).map_err(|e| invalid(path, at, &e))
+    serde_path_to_error::deserialize(json).map_err(|e| {
+        // The field whose value is wrong (`frames`, `runs[1].modes`), up to
+        // the field a message names itself ("unknown field `runs`, ...");
+        // `.` is the whole.
+        let whole = e.path().to_string();
+        let named = e.path().iter().next_back().map(ToString::to_string);
+        let field = match named {
+            Some(last) if e.inner().to_string().contains(&format!("`{last}`")) => {
+                whole.strip_suffix(&last).unwrap_or(&whole).trim_end_matches('.')
+            }
+            _ => whole.as_str(),
+        };
+        let at = match field {
+            "" | "." => at.to_string(),
+            field => format!("{at}{field}: "),
+        };
+        invalid(path, &at, e.inner())
+    })
 }
 
 fn invalid(path: &Path, at: &str, e: &serde_json::Error) -> ConfigError {
     ConfigError::Json {
         path: path.display().to_string(),
-        message: crate::text::one_line(&format!("{at}{e}")),
+        message: format!("{at}{e}"),
     }
 }
 

@@ -7,7 +7,7 @@ use std::io::{IsTerminal as _, Write as _};
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicU8, Ordering};
 use std::time::Instant;
 
 use anyhow::Context as _;
@@ -249,15 +249,21 @@ impl SceneAndPath {
         Ok(occlu::report::refuse_input_as_output(output, &inputs)?)
     }
 
-    fn load(&self) -> anyhow::Result<(Scene, CameraPath)> {
+    /// The scene and the path; an `output` that is one of the files the
+    /// scene was read from (a glTF file's buffers) is refused.
+    fn load(&self, output: &std::path::Path) -> anyhow::Result<(Scene, CameraPath)> {
         // Read first: a bad path file fails before a long scene load.
         let path_file = self.path.as_deref().map(CameraPath::load).transpose()?;
         let scene = load(&self.scene.spec()?, &self.scene.options())?;
+        occlu::report::refuse_input_as_output(output, &scene.files)?;
         let path = match path_file {
             Some(p) => p,
             None => {
                 let mut progress = Progress::new(false, 0, String::new());
-                occlu::camera::generate::default_path_heard(&scene, progress.listener("planning the path"))?.0
+                let planned =
+                    occlu::camera::generate::default_path_heard(&scene, progress.listener("planning the path"))?.0;
+                stop_listening()?;
+                planned
             }
         };
         let path = match self.frames {
@@ -492,9 +498,12 @@ fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         Err(e) => {
+            // The message with the lines that complete it (the values a
+            // flag takes, the arguments missing), up to the usage.
             let text = e.render().to_string();
-            let line = text.lines().next().unwrap_or("invalid arguments");
-            say!("occlu: {}", line.trim_start_matches("error: ").trim());
+            let lines: Vec<&str> = text.lines().map(str::trim).take_while(|l| !l.is_empty()).collect();
+            let message = lines.join(" ");
+            say!("occlu: {}", message.trim_start_matches("error: "));
             return ExitCode::from(2);
         }
     };
@@ -555,29 +564,40 @@ fn main() -> ExitCode {
     };
     // Ctrl-C while the results were written: they are whole, and the
     // interruption still reaches the caller.
-    if INTERRUPTED.load(Ordering::SeqCst) {
+    if CTRL_C.load(Ordering::SeqCst) == HEARD {
         say!("occlu: interrupted");
         end_by_sigint();
     }
     code
 }
 
-/// Whether a command that stops cleanly on Ctrl-C is running: until one
-/// says so through [`go_on`], Ctrl-C ends the process at once, as it would
-/// without a handler. Nothing is half-written then: the operating system
-/// drops the claim on --out, and result files are moved into place whole.
-static LISTENING: AtomicBool = AtomicBool::new(false);
+/// What Ctrl-C does now: [`ENDS_AT_ONCE`], [`LISTENED`] or [`HEARD`]. One
+/// value, so that the handler and a step that stops listening cannot both
+/// miss a Ctrl-C between them.
+static CTRL_C: AtomicU8 = AtomicU8::new(ENDS_AT_ONCE);
 
-/// Set by Ctrl-C while listening: the work stops at its next frame (bench)
-/// or case (stress), writes nothing, and ends the process.
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// No step that stops cleanly is running: Ctrl-C ends the process at once,
+/// as it would without a handler. Nothing is half-written then: the
+/// operating system drops the claim on --out, and result files are moved
+/// into place whole.
+const ENDS_AT_ONCE: u8 = 0;
+/// A step that stops cleanly on Ctrl-C is running (see [`go_on`]): the
+/// first Ctrl-C asks it to stop.
+const LISTENED: u8 = 1;
+/// Ctrl-C came while a step listened: the work stops at its next frame
+/// (bench), case (stress) or stretch of ray casts (planning), writes
+/// nothing, and ends the process.
+const HEARD: u8 = 2;
 
 /// The first Ctrl-C (or SIGTERM, or SIGHUP: a terminal closed, a job
-/// cancelled) asks listening work to stop (see [`LISTENING`]); a second
+/// cancelled) asks a listening step to stop (see [`CTRL_C`]); a second
 /// one, or one while nothing listens, ends the process at once.
 fn listen_for_ctrl_c() {
     let _ = ctrlc::set_handler(|| {
-        if !LISTENING.load(Ordering::SeqCst) || INTERRUPTED.swap(true, Ordering::SeqCst) {
+        if CTRL_C
+            .compare_exchange(LISTENED, HEARD, Ordering::SeqCst, Ordering::SeqCst)
+            .is_err()
+        {
             end_by_sigint();
         }
     });
@@ -600,19 +620,38 @@ fn end_by_sigint() -> ! {
 }
 
 /// Whether the work should go on (no Ctrl-C yet); from its first call on,
-/// Ctrl-C asks the work to stop instead of ending the process.
+/// Ctrl-C asks the work to stop instead of ending the process, until
+/// [`stop_listening`].
 fn go_on() -> ControlFlow<()> {
-    LISTENING.store(true, Ordering::SeqCst);
-    if INTERRUPTED.load(Ordering::SeqCst) {
-        ControlFlow::Break(())
-    } else {
-        ControlFlow::Continue(())
+    match CTRL_C.compare_exchange(ENDS_AT_ONCE, LISTENED, Ordering::SeqCst, Ordering::SeqCst) {
+        Err(HEARD) => ControlFlow::Break(()),
+        _ => ControlFlow::Continue(()),
+    }
+}
+
+/// A command heard Ctrl-C while a step of it listened, and stopped before
+/// writing anything.
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted: nothing written")]
+struct Interrupted;
+
+/// Ends a step that listened for Ctrl-C (path planning in `render`,
+/// `export` and `path gen`), for a command whose later steps do not ask
+/// [`go_on`]: from here on Ctrl-C ends the process at once again, rather
+/// than being heard by nothing while the command runs to its end and
+/// writes. A Ctrl-C that the step heard after it last asked stops the
+/// command here.
+fn stop_listening() -> Result<(), Interrupted> {
+    match CTRL_C.compare_exchange(LISTENED, ENDS_AT_ONCE, Ordering::SeqCst, Ordering::SeqCst) {
+        Err(HEARD) => Err(Interrupted),
+        _ => Ok(()),
     }
 }
 
 fn was_interrupted(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {
-        matches!(c.downcast_ref::<BenchError>(), Some(BenchError::Interrupted))
+        c.is::<Interrupted>()
+            || matches!(c.downcast_ref::<BenchError>(), Some(BenchError::Interrupted))
             || matches!(c.downcast_ref::<StressError>(), Some(StressError::Interrupted))
             || matches!(c.downcast_ref::<AnimationError>(), Some(AnimationError::Interrupted))
             || matches!(c.downcast_ref::<PathError>(), Some(PathError::Interrupted))
@@ -1154,7 +1193,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     args.scene.refuse_as_output(&args.picture.output)?;
     let backend = args.picture.backend.unwrap_or_default();
     backend.backends()?;
-    let (scene, path) = args.scene.load()?;
+    let (scene, path) = args.scene.load(&args.picture.output)?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let gpu = occlu::gpu::GpuContext::new(backend)?;
     if let Some(reason) = mode.info().unsupported_on(&gpu) {
@@ -1214,7 +1253,7 @@ fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
             say!("{text}");
         }
     };
-    let (scene, path) = args.scene.load()?;
+    let (scene, path) = args.scene.load(output)?;
     let range = args.range.unwrap_or(FrameRange::all(path.frames));
     range.check(path.frames)?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
@@ -1323,18 +1362,21 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
         let _ = writeln!(
             w,
             "camera      '{}' (node {}, {}{fov}{near})",
-            c.name, c.node, c.projection
+            shown(&c.name),
+            c.node,
+            c.projection
         );
     }
     for a in &report.animations {
-        let moves = a
-            .camera
-            .as_ref()
-            .map_or("moves no camera".to_string(), |c| format!("moves camera '{c}'"));
+        let moves = a.camera.as_ref().map_or("moves no camera".to_string(), |c| {
+            format!("moves camera '{}'", shown(c))
+        });
         let _ = writeln!(
             w,
             "animation   '{}' ({} channels, {:.2} s, {moves})",
-            a.name, a.channels, a.duration
+            shown(&a.name),
+            a.channels,
+            a.duration
         );
     }
     if scene.warnings.is_empty() {
@@ -1366,7 +1408,7 @@ fn emit(text: &str) -> anyhow::Result<()> {
 fn export(input: &SceneAndPath, output: &std::path::Path) -> anyhow::Result<()> {
     input.refuse_as_output(output)?;
     occlu::report::check_writable(output)?;
-    let (scene, path) = input.load()?;
+    let (scene, path) = input.load(output)?;
     if !scene.movers.is_empty() {
         say!(
             "warning: {} moving objects are written where frame 0 puts them (glTF animation of objects is not exported)",
@@ -1396,10 +1438,27 @@ fn path_gen(
         occlu::report::refuse_input_as_output(&output, &[model])?;
     }
     let scene: Scene = load(&scene_args.spec()?, &scene_args.options())?;
+    occlu::report::refuse_input_as_output(&output, &scene.files)?;
     let mut progress = Progress::new(false, 0, String::new());
     let generated = plan_heard(request.as_ref(), &scene, frames, progress.listener("planning the path"))?;
     // Validate what is written, so a generated file always loads.
     let path = CameraPath::from_file(&generated.file, &format!("generated:{}", generated.kind))?;
+    let budget = Budget {
+        tests: occlu::camera::generate::PLANNING_TESTS,
+        listener: progress.listener("counting frames with geometry within the near plane"),
+    };
+    let caster = RayCaster::with_budget(&scene, budget);
+    // Counted before the file is written, so Ctrl-C meanwhile writes nothing.
+    let near = match path.frames_with_geometry_within_near(&caster, Resolution::DEFAULT.aspect()) {
+        Ok(0) => None,
+        Ok(near) => Some(format!(
+            "warning: {near} of {} frames have geometry nearer than the near plane's corners (at 4:3)",
+            path.frames
+        )),
+        Err(Stopped::Spent) => Some(near_not_counted()),
+        Err(Stopped::Interrupted) => return Err(PathError::Interrupted.into()),
+    };
+    stop_listening()?;
     let text = serde_json::to_string_pretty(&generated.file)? + "\n";
     occlu::report::write_whole(&output, text.as_bytes())?;
     say!(
@@ -1410,19 +1469,8 @@ fn path_gen(
         path.frames,
         generated.file.keyframes.len()
     );
-    let budget = Budget {
-        tests: occlu::camera::generate::PLANNING_TESTS,
-        listener: progress.listener("counting frames with geometry within the near plane"),
-    };
-    let caster = RayCaster::with_budget(&scene, budget);
-    match path.frames_with_geometry_within_near(&caster, Resolution::DEFAULT.aspect()) {
-        Ok(0) => {}
-        Ok(near) => say!(
-            "warning: {near} of {} frames have geometry nearer than the near plane's corners (at 4:3)",
-            path.frames
-        ),
-        Err(Stopped::Spent) => say!("{}", near_not_counted()),
-        Err(Stopped::Interrupted) => return Err(PathError::Interrupted.into()),
+    if let Some(near) = near {
+        say!("{near}");
     }
     Ok(())
 }

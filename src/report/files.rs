@@ -74,7 +74,7 @@ pub fn check_writable(path: &Path) -> Result<(), ReportError> {
 /// Refuses an `output` that is one of `inputs` (the same file, however
 /// named: by device and inode), so that writing it cannot destroy what the
 /// command reads (`occlu render model.obj -o model.obj`).
-pub fn refuse_input_as_output(output: &Path, inputs: &[&Path]) -> Result<(), ReportError> {
+pub fn refuse_input_as_output<P: AsRef<Path>>(output: &Path, inputs: &[P]) -> Result<(), ReportError> {
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt as _;
@@ -82,10 +82,10 @@ pub fn refuse_input_as_output(output: &Path, inputs: &[&Path]) -> Result<(), Rep
         let Some(written) = identity(output) else {
             return Ok(());
         };
-        if let Some(input) = inputs.iter().find(|i| identity(i) == Some(written)) {
+        if let Some(input) = inputs.iter().find(|i| identity(i.as_ref()) == Some(written)) {
             return Err(ReportError::at(output)(std::io::Error::other(format!(
                 "is an input of this command ({}): writing it would destroy what it reads; choose another output file",
-                input.display()
+                input.as_ref().display()
             ))));
         }
     }
@@ -123,13 +123,7 @@ pub fn refuse_one_file_twice(first: &Path, second: &Path) -> Result<(), ReportEr
 /// [`write_whole`] writes.
 fn where_written(output: &Path) -> Option<PathBuf> {
     let resolved = |p: &Path| std::fs::canonicalize(p).ok();
-    resolved(output).or_else(|| {
-        let parent = output
-            .parent()
-            .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        Some(resolved(parent)?.join(output.file_name()?))
-    })
+    resolved(output).or_else(|| Some(resolved(crate::input::folder_of(output))?.join(output.file_name()?)))
 }
 
 /// The temporary twin [`write_whole`] writes `path` into first.

@@ -119,17 +119,18 @@ fn check_rows(summary: &Summary, rows: &[FrameStats]) -> Result<(), String> {
     let limits = RowLimits {
         pixels: summary.resolution.pixels(),
         objects: summary.scene.facts.objects as u64,
+        triangles: summary.scene.facts.triangles,
     };
     // Each mode's frames seen so far, by the mode's place in the summary.
     let mut seen: Vec<Vec<bool>> = Vec::with_capacity(summary.modes.len());
     for (k, mode) in summary.modes.iter().enumerate() {
         if summary.modes[..k].iter().any(|m| m.name == mode.name) {
-            return Err(format!("summary.json names mode {} twice", text::one_line(&mode.name)));
+            return Err(format!("summary.json names mode {} twice", mode.name));
         }
         seen.push(vec![false; frames as usize]);
     }
     for (k, row) in rows.iter().enumerate() {
-        let at = || format!("row {} ({}, frame {})", k + 1, text::one_line(&row.mode), row.frame);
+        let at = || format!("row {} ({}, frame {})", k + 1, row.mode, row.frame);
         let Some(mode) = summary.modes.iter().position(|m| m.name == row.mode) else {
             return Err(format!("{}: a mode summary.json does not list", at()));
         };
@@ -147,7 +148,7 @@ fn check_rows(summary: &Summary, rows: &[FrameStats]) -> Result<(), String> {
         if count != frames as usize {
             return Err(format!(
                 "mode {} has {}, not one for each of the run's {}",
-                text::one_line(&mode.name),
+                mode.name,
                 text::count(count, "row"),
                 text::count(frames as usize, "frame")
             ));

@@ -38,6 +38,7 @@ fn load_file(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     })?;
     let mut scene = load_bytes(path, &bytes, options)?;
     scene.phases.read_ms = read_ms;
+    scene.files.insert(0, path.to_path_buf());
     Ok(scene)
 }
 
