@@ -74,11 +74,8 @@ fn main() {
 
 /// Rectangles of 1–25% of the map's width and height, seeded.
 fn random_rects(cols: u32, rows: u32, n: usize) -> Vec<ScreenRect> {
-    let mut seed = 99u64;
-    let mut next = |m: u32| {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((seed >> 33) % u64::from(m.max(1))) as u32
-    };
+    let mut rng = occlu::rng::Rng::new(99);
+    let mut next = |m: u32| rng.int(0, m.max(1) - 1);
     (0..n)
         .map(|_| {
             let (w, h) = (1 + next(cols / 4), 1 + next(rows / 4));

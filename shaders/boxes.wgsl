@@ -6,20 +6,8 @@
 // visible without a test). Indexing shades 8 vertices a box instead of 36.
 // pixel_count.wgsl holds the fragment stage that counts visible pixels per
 // box; raster_mark.wgsl, appended to this file, draws boxes named by a
-// GPU-built queue.
-
-// CameraUniform in gpu/renderer.rs.
-struct Camera {
-    projection: mat4x4<f32>,
-    // Projection times the world-to-camera rotation: for eye-relative
-    // world positions.
-    view_projection: mat4x4<f32>,
-    // The world direction of the ray through pixel (x, y), at view depth 1,
-    // is x * ray_x + y * ray_y + ray_c (gpu/conservative.rs).
-    ray_x: vec4<f32>,
-    ray_y: vec4<f32>,
-    ray_c: vec4<f32>,
-}
+// GPU-built queue. `camera` (binding 0) is camera.wgsl, written before this
+// text.
 
 struct QueryBox {
     // Eye-relative world coordinates, already grown (gpu/conservative.rs);
@@ -28,7 +16,6 @@ struct QueryBox {
     max: vec4<f32>,
 }
 
-@group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<storage, read> boxes: array<QueryBox>;
 
 struct BoxVertex {

@@ -1,20 +1,6 @@
 // Coloured line lists for the overview picture: frustum edges and the boxes
 // of culled objects, in eye-relative world coordinates of the viewing camera.
-
-// CameraUniform in gpu/renderer.rs.
-struct Camera {
-    projection: mat4x4<f32>,
-    // Projection times the world-to-camera rotation: for eye-relative
-    // world positions.
-    view_projection: mat4x4<f32>,
-    // The world direction of the ray through pixel (x, y), at view depth 1,
-    // is x * ray_x + y * ray_y + ray_c (gpu/conservative.rs).
-    ray_x: vec4<f32>,
-    ray_y: vec4<f32>,
-    ray_c: vec4<f32>,
-}
-
-@group(0) @binding(0) var<uniform> camera: Camera;
+// `camera` (binding 0) is camera.wgsl, written before this text.
 
 struct LineVertex {
     @builtin(position) clip: vec4<f32>,

@@ -4,20 +4,8 @@
 // reference pass (untimed) that records which object owns each pixel. Error
 // is measured by comparing depth between the two, so the vertex position is
 // @invariant: both pipelines must compute bit-identical depth for the same
-// triangle, whatever each program's other outputs are.
-
-// CameraUniform in gpu/renderer.rs.
-struct Camera {
-    projection: mat4x4<f32>,
-    // Projection times the world-to-camera rotation: for eye-relative
-    // world positions.
-    view_projection: mat4x4<f32>,
-    // The world direction of the ray through pixel (x, y), at view depth 1,
-    // is x * ray_x + y * ray_y + ray_c (gpu/conservative.rs).
-    ray_x: vec4<f32>,
-    ray_y: vec4<f32>,
-    ray_c: vec4<f32>,
-}
+// triangle, whatever each program's other outputs are. `camera` (binding 0)
+// is camera.wgsl, written before this text.
 
 struct Object {
     // Object-to-camera transform, built camera-relative in f64 on the CPU.
@@ -28,7 +16,6 @@ struct Object {
     limit: vec4<f32>,
 }
 
-@group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
 
 struct VertexOut {

@@ -10,38 +10,27 @@
 //! always runs right after the reference (whose work warms caches). Warm-up
 //! frames run the path's first frames and are not recorded.
 
-use std::collections::BTreeSet;
 use std::ops::ControlFlow;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-use crate::camera::Camera;
+use crate::animation::{AnimationError, AnimationOptions, DEFAULT_SCALE, Filmstrip, FrameRange, Reel};
 use crate::camera::generate::{PLANNING_TESTS, default_path_heard};
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::BenchPlan;
-use crate::cull::{Culler, FrameInput, Labeled, ModeError, ModeId, PreviousFrame};
-use crate::gpu::{
-    AdapterReport, FrameCtx, FrameResources, GpuContext, GpuError, GpuScene, GpuSetup, GpuTimer, QueryPool,
-    RenderTargets, Resolution, SceneRenderer,
-};
+use crate::cull::{Culler, Labeled, ModeError, ModeId};
+use crate::gpu::{AdapterReport, GpuContext, GpuError};
 use crate::hierarchy::{Hierarchy, HierarchyParams};
-use crate::measure::{ErrorMeter, FrameStats, MissedObject, ModeDescription, ObjectError, summarize};
-use crate::object_set::ObjectSet;
+use crate::measure::{FrameStats, FrameTimeline, MissedObject, ModeDescription, summarize};
+use crate::picture::Look;
 use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::report::{
     Fingerprint, MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary,
-    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, refuse_result_file,
-    write_results, write_whole,
+    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, refuse_input_as_output,
+    refuse_result_file, trace_json, write_results, write_whole,
 };
 use crate::scene::{Scene, SceneError};
+use crate::session::{RunOptions, Session, ms};
 use crate::world::World;
-
-#[derive(Clone, Copy, Debug)]
-pub struct RunOptions {
-    pub warmup: u32,
-    pub resolution: Resolution,
-    /// Render the reference and measure every mode's error.
-    pub measure_error: bool,
-}
 
 pub struct RunOutput {
     /// Frame-major, modes in the order given.
@@ -49,11 +38,16 @@ pub struct RunOutput {
     /// What the modes got wrong, frame by frame (empty when every mode was
     /// exact or error was not measured).
     pub missed: Vec<MissedObject>,
+    /// When each part of each recorded frame ran, one for each of `rows`.
+    pub timelines: Vec<FrameTimeline>,
+    /// With an animation asked for, every recorded frame pictured.
+    pub reel: Option<Reel>,
     pub upload_ms: f64,
 }
 
 /// Runs `cullers` over every frame of `path`, moving `world`'s movers as
-/// the frames go. `progress` is called after each frame with (frames done,
+/// the frames go, and with `animation` pictures every recorded frame
+/// (untimed). `progress` is called after each frame with (frames done,
 /// frames in all) including warm-up frames; when it breaks, the run stops
 /// there with [`BenchError::Interrupted`].
 pub fn run(
@@ -62,13 +56,18 @@ pub fn run(
     path: &CameraPath,
     cullers: &mut [Box<dyn Culler + '_>],
     options: &RunOptions,
+    animation: Option<&AnimationOptions>,
     progress: &mut dyn FnMut(u32, u32) -> ControlFlow<()>,
 ) -> Result<RunOutput, BenchError> {
     let mut session = Session::new(gpu, world, cullers, options.measure_error, options)?;
+    let mut film = animation
+        .map(|a| Filmstrip::new(gpu, &mut session, cullers, a, FrameRange::all(path.frames)))
+        .transpose()?;
     let frames = path.frames;
     // Both are capped (MAX_FRAMES, MAX_WARMUP), so the sum cannot overflow.
     let total = options.warmup + frames;
     let mut rows = Vec::new();
+    let mut timelines = Vec::new();
     for step in 0..total {
         let recording = step >= options.warmup;
         let frame = if recording {
@@ -81,7 +80,12 @@ pub fn run(
         // Rotating the order from frame to frame: no mode always runs right
         // after the reference.
         if recording {
-            rows.extend(session.frame(frame, &camera, world, cullers, step as usize)?);
+            let these = session.frame(frame, &camera, world, cullers, step as usize)?;
+            if let Some(film) = &mut film {
+                film.capture(&mut session, world, &camera, cullers, &these)?;
+            }
+            rows.extend(these);
+            timelines.append(&mut session.timelines);
         } else {
             session.warm_up_frame(frame, &camera, world, cullers, step as usize)?;
         }
@@ -90,304 +94,10 @@ pub fn run(
     Ok(RunOutput {
         rows,
         missed: std::mem::take(&mut session.missed),
+        timelines,
+        reel: film.map(|f| f.reel),
         upload_ms: session.upload_ms,
     })
-}
-
-/// The GPU resources of a run, and what each mode carries from one frame to
-/// the next (its drawn set, its previous frame's cost).
-pub struct Session<'a> {
-    gpu: &'a GpuContext,
-    pub(crate) renderer: SceneRenderer,
-    pub(crate) targets: RenderTargets,
-    meter: Option<ErrorMeter>,
-    timer: Option<GpuTimer>,
-    queries: QueryPool,
-    draw_queue: Vec<u32>,
-    /// What each mode drew in the last frame.
-    pub(crate) drawn: Vec<ObjectSet>,
-    previous: Vec<Option<PreviousFrame>>,
-    options: RunOptions,
-    pub upload_ms: f64,
-    /// What the modes got wrong in the frames run so far (missed.csv's
-    /// rows); [`run`] drops the warm-up frames'.
-    pub missed: Vec<MissedObject>,
-    /// Scratch for [`ErrorMeter::attribute_wrong_pixels`].
-    object_errors: Vec<ObjectError>,
-}
-
-impl<'a> Session<'a> {
-    /// Uploads `world`'s scene, creates targets for every one of `cullers`
-    /// and lets each prepare its own GPU resources. The reference is
-    /// rendered each frame when `reference` or a culler needs it.
-    pub fn new(
-        gpu: &'a GpuContext,
-        world: &World,
-        cullers: &mut [Box<dyn Culler + '_>],
-        reference: bool,
-        options: &RunOptions,
-    ) -> Result<Session<'a>, GpuError> {
-        let (scene, modes) = (&world.scene, cullers.len());
-        let needs_reference = reference || cullers.iter().any(|c| c.needs_reference());
-        gpu.check()?;
-        RenderTargets::check(gpu, options.resolution)?;
-        let start = Instant::now();
-        let renderer = SceneRenderer::new(gpu, GpuScene::upload(gpu, scene)?);
-        let targets = RenderTargets::new(gpu, options.resolution, modes);
-        gpu.wait_idle();
-        let upload_ms = ms(start.elapsed());
-        // The modes' own resources (pipelines, trees) are not the scene's
-        // upload.
-        for (culler, depth) in cullers.iter_mut().zip(&targets.mode_depths) {
-            culler.prepare(&GpuSetup {
-                gpu,
-                camera: renderer.camera_uniform(),
-                draws: &renderer.scene.draws,
-                scene,
-                hierarchy: &world.hierarchy,
-                depth,
-                resolution: options.resolution,
-            })?;
-        }
-        gpu.wait_idle();
-        Ok(Session {
-            gpu,
-            meter: needs_reference.then(|| ErrorMeter::new(gpu, &targets, scene.objects.len())),
-            timer: GpuTimer::new(gpu, modes),
-            queries: QueryPool::new(gpu, renderer.camera_uniform()),
-            draw_queue: Vec::new(),
-            drawn: (0..modes).map(|_| ObjectSet::new(scene.objects.len())).collect(),
-            previous: vec![None; modes],
-            options: *options,
-            upload_ms,
-            missed: Vec::new(),
-            object_errors: Vec::new(),
-            renderer,
-            targets,
-        })
-    }
-
-    /// Renders one frame of `world` (its movers already placed) in every
-    /// mode, starting with mode `first % n`, and returns one row per mode in
-    /// the order of `cullers`.
-    ///
-    /// Untimed: the per-object matrix upload, the reference, GPU times and
-    /// errors. Timed, per mode: from the start of its frame on the CPU until
-    /// the GPU finished it, including the refit of the hierarchy around
-    /// moved objects for modes that traverse it.
-    ///
-    /// `cullers` are the ones this session was made with (and prepared), in
-    /// the same order.
-    pub fn frame(
-        &mut self,
-        frame: u32,
-        camera: &Camera,
-        world: &mut World,
-        cullers: &mut [Box<dyn Culler + '_>],
-        first: usize,
-    ) -> Result<Vec<FrameStats>, GpuError> {
-        self.render(frame, camera, world, cullers, first, false)
-    }
-
-    /// [`Session::frame`] as a warm-up frame, whose rows are not kept
-    /// ([`FrameInput::warm_up`]).
-    pub fn warm_up_frame(
-        &mut self,
-        frame: u32,
-        camera: &Camera,
-        world: &mut World,
-        cullers: &mut [Box<dyn Culler + '_>],
-        first: usize,
-    ) -> Result<(), GpuError> {
-        self.render(frame, camera, world, cullers, first, true)?;
-        self.missed.clear();
-        Ok(())
-    }
-
-    fn render(
-        &mut self,
-        frame: u32,
-        camera: &Camera,
-        world: &mut World,
-        cullers: &mut [Box<dyn Culler + '_>],
-        first: usize,
-        warm_up: bool,
-    ) -> Result<Vec<FrameStats>, GpuError> {
-        let gpu = self.gpu;
-        self.renderer
-            .set_camera(gpu, camera, self.options.resolution, &world.scene.objects);
-        // Flush the upload now, so no mode's timed submit carries it.
-        gpu.queue.submit([]);
-        gpu.wait_idle();
-        let visible = self
-            .meter
-            .as_mut()
-            .map(|m| m.render_reference(gpu, &self.renderer, &self.targets));
-
-        let mut rows: Vec<Option<FrameStats>> = vec![None; cullers.len()];
-        for turn in 0..cullers.len() {
-            let k = (turn + first) % cullers.len();
-            let culler = &mut cullers[k];
-            let frame_start = Instant::now();
-            let refit_time = if culler.traverses_hierarchy() {
-                world.refit()
-            } else {
-                Duration::ZERO
-            };
-            let input = FrameInput {
-                frame,
-                camera,
-                resolution: self.options.resolution,
-                scene: &world.scene,
-                hierarchy: &world.hierarchy,
-                moved: world.moved(),
-                reference_visible: if culler.needs_reference() {
-                    visible.as_ref()
-                } else {
-                    None
-                },
-                previous: self.previous[k],
-                warm_up,
-            };
-            let resources = FrameResources {
-                gpu,
-                renderer: &self.renderer,
-                targets: &self.targets,
-                queries: &mut self.queries,
-                timer: self.timer.as_ref(),
-                draw_queue: &mut self.draw_queue,
-            };
-            let mut ctx = FrameCtx::begin(resources, k, camera, &mut self.drawn[k]);
-            let cull_start = Instant::now();
-            let mut traversal = culler.frame(&mut ctx, &input);
-            let cull_time = cull_start.elapsed();
-            let mut outcome = ctx.finish();
-            let frame_time = frame_start.elapsed();
-            // Untimed: what the mode's own GPU work drew and tested.
-            if let Some(audit) = culler.audit(gpu, &mut self.drawn[k]) {
-                outcome.add_gpu_audit(&audit);
-                traversal.add_gpu_audit(&audit);
-            }
-            rows[k] = Some(FrameStats {
-                mode: culler.name().to_string(),
-                frame,
-                frame_ms: ms(frame_time),
-                cpu_ms: ms(refit_time + cull_time.saturating_sub(outcome.gpu_ops)),
-                maintenance_ms: ms(refit_time + traversal.maintenance),
-                gpu_ms: None,
-                objects_drawn: outcome.counters.objects_drawn,
-                triangles_drawn: outcome.counters.triangles_drawn,
-                queries: outcome.counters.queries,
-                query_batches: outcome.counters.query_batches,
-                traversal,
-                query_wait_ms: ms(outcome.counters.query_wait),
-                query_gpu_ms: outcome.counters.query_gpu.map(ms),
-                pyramid_gpu_ms: outcome.counters.pyramid_gpu.map(ms),
-                error_pixels: None,
-                max_depth_error: None,
-                missed_objects: None,
-                visible_objects: visible.as_ref().map(|v| v.len() as u64),
-                strategy: culler.pick().map(|p| p.strategy.to_string()),
-                probe: culler.pick().map(|p| p.probe),
-            });
-        }
-
-        // End of frame, untimed: GPU times and errors of every mode.
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        if let Some(t) = &self.timer {
-            t.resolve(&mut encoder);
-        }
-        let wrong = match (&mut self.meter, self.options.measure_error) {
-            (Some(m), true) => Some(m.count_wrong_pixels(gpu, &self.targets, encoder)),
-            _ => {
-                gpu.queue.submit([encoder.finish()]);
-                None
-            }
-        };
-        let gpu_ms = self.timer.as_mut().map(|t| t.read_ms(gpu));
-        let rows = rows
-            .into_iter()
-            .enumerate()
-            .map(|(k, row)| {
-                let mut row = row.expect("every mode ran this frame");
-                row.gpu_ms = gpu_ms.as_ref().map(|t| t[k]);
-                if let (Some(wrong), Some(visible)) = (&wrong, &visible) {
-                    row.error_pixels = Some(wrong[k].wrong_pixels);
-                    row.max_depth_error = Some(f64::from(wrong[k].max_difference));
-                    let missed = visible.count_missing_from(&self.drawn[k]) as u64;
-                    row.missed_objects = Some(missed);
-                    if wrong[k].wrong_pixels > 0 || missed > 0 {
-                        self.name_what_was_missed(k, &row, visible, &world.scene);
-                    }
-                }
-                self.previous[k] = Some(PreviousFrame {
-                    frame_ms: row.frame_ms,
-                    render_ms: row.render_ms(),
-                    triangles_drawn: row.triangles_drawn,
-                });
-                row
-            })
-            .collect();
-        // A frame the GPU failed in measured nothing.
-        gpu.check()?;
-        Ok(rows)
-    }
-
-    /// Appends to [`Session::missed`] what mode `k` got wrong in this frame
-    /// (`row`): the objects the reference shows (`visible`) that it did not
-    /// draw, and the objects owning pixels it got wrong.
-    fn name_what_was_missed(&mut self, k: usize, row: &FrameStats, visible: &ObjectSet, scene: &Scene) {
-        let meter = self.meter.as_mut().expect("errors were measured");
-        meter.attribute_wrong_pixels(self.gpu, &self.targets, k, &mut self.object_errors);
-        let drawn = &self.drawn[k];
-        let errors = &self.object_errors;
-        let objects: BTreeSet<u32> = visible
-            .iter()
-            .filter(|&o| !drawn.contains(o))
-            .chain(errors.iter().map(|e| e.object))
-            .collect();
-        for object in objects {
-            // `errors` ascends by object id.
-            let error = errors
-                .binary_search_by_key(&object, |e| e.object)
-                .ok()
-                .map(|i| errors[i]);
-            self.missed.push(MissedObject {
-                mode: row.mode.clone(),
-                frame: row.frame,
-                object,
-                name: scene.objects[object as usize].name.clone(),
-                drawn: drawn.contains(object),
-                wrong_pixels: error.map_or(0, |e| e.wrong_pixels),
-                first_x: error.map(|e| e.first_pixel.0),
-                first_y: error.map(|e| e.first_pixel.1),
-            });
-        }
-    }
-
-    /// The reference depth of the last frame, row-major from the top-left
-    /// pixel; `None` when the session renders no reference.
-    pub fn reference_depth(&mut self) -> Option<Vec<f32>> {
-        self.depth(None)
-    }
-
-    /// The depth mode `k` drew in the last frame, as
-    /// [`Session::reference_depth`]; `None` without a reference.
-    pub fn mode_depth(&mut self, k: usize) -> Option<Vec<f32>> {
-        self.depth(Some(k))
-    }
-
-    fn depth(&mut self, mode: Option<usize>) -> Option<Vec<f32>> {
-        let meter = self.meter.as_mut()?;
-        let mut depth = Vec::new();
-        meter.read_depth(self.gpu, &self.targets, mode, &mut depth);
-        Some(depth)
-    }
-}
-
-/// Milliseconds, rounded to 0.1 µs (finer than any timer here resolves).
-fn ms(d: Duration) -> f64 {
-    (d.as_secs_f64() * 1e7).round() / 1e4
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -402,9 +112,21 @@ pub enum BenchError {
     Gpu(#[from] GpuError),
     #[error(transparent)]
     Report(#[from] ReportError),
+    #[error(transparent)]
+    Animation(AnimationError),
     /// The caller asked the run to stop (Ctrl-C); nothing was written.
-    #[error("interrupted: no results written, the folder's earlier contents stand")]
+    #[error("interrupted: no results written, --out left as it was before the run")]
     Interrupted,
+}
+
+impl From<AnimationError> for BenchError {
+    /// An animation stopped by the caller stops the run, as a frame does.
+    fn from(e: AnimationError) -> BenchError {
+        match e {
+            AnimationError::Interrupted => BenchError::Interrupted,
+            e => BenchError::Animation(e),
+        }
+    }
 }
 
 impl BenchError {
@@ -414,6 +136,7 @@ impl BenchError {
             BenchError::Gpu(e) => e.is_input_error(),
             BenchError::Interrupted => false,
             BenchError::Report(e) => e.is_input_error(),
+            BenchError::Animation(e) => e.is_input_error(),
             _ => true,
         }
     }
@@ -459,6 +182,12 @@ pub enum BenchEvent<'a> {
     /// The reference showed no object in any frame: every mode's numbers
     /// are those of an empty picture.
     NothingVisible,
+    /// The run is over and its animation is being encoded: `done` of its
+    /// `total` frames so far.
+    Encoding {
+        done: u32,
+        total: u32,
+    },
 }
 
 pub struct BenchOutcome {
@@ -490,13 +219,18 @@ pub fn execute(
     }
     // Held until the results are written: no second run writes here.
     let _claim = prepare_output(&plan.out)?;
-    if let Some(path) = &plan.export_github_benchmark {
+    for path in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
         refuse_result_file(path, &plan.out)?;
         check_writable(path)?;
     }
     let start = Instant::now();
     let scene = crate::scene::load(&plan.scene, &plan.load)?;
     let load_ms = ms(start.elapsed());
+    for path in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
+        // The model and path are checked before: a glTF file's buffer
+        // files are known now.
+        refuse_input_as_output(path, &scene.files)?;
+    }
     let start = Instant::now();
     let params = HierarchyParams::default();
     let hierarchy = Hierarchy::build(&scene.objects, &params);
@@ -601,12 +335,35 @@ pub fn execute(
         measure_error: plan.measure_error,
     };
     let facts = SceneFacts::of(scene, hierarchy, load_ms, build_ms);
-    let output = run(&gpu, &mut world, &path, &mut cullers, &options, &mut |done, total| {
-        events(BenchEvent::Frame { done, total })
-    })?;
+    // The overview shows what each mode culled: the point of the animation.
+    let animation = plan.animate.then_some(AnimationOptions {
+        look: Look {
+            resolution: plan.resolution,
+            overview: true,
+            heat: false,
+            show_missed: false,
+            occluders: false,
+        },
+        scale: DEFAULT_SCALE,
+        true_colour: false,
+    });
+    let mut output = run(
+        &gpu,
+        &mut world,
+        &path,
+        &mut cullers,
+        &options,
+        animation.as_ref(),
+        &mut |done, total| events(BenchEvent::Frame { done, total }),
+    )?;
     if plan.measure_error && output.rows.iter().all(|r| r.visible_objects == Some(0)) {
         go_on(events(BenchEvent::NothingVisible))?;
     }
+    let animation = output
+        .reel
+        .take()
+        .map(|reel| reel.encode(&mut |done, total| events(BenchEvent::Encoding { done, total })))
+        .transpose()?;
 
     let descriptions: Vec<ModeDescription> = runs
         .iter()
@@ -645,12 +402,24 @@ pub fn execute(
         }),
         missed: MissedSummary::of(&output.missed),
         frames_csv: None,
+        animation: None,
     };
-    let files = write_results(&plan.out, &mut summary, &output.rows, &output.missed)?;
+    let png = animation.as_ref().map(|a| a.png.as_slice());
+    let files = write_results(&plan.out, &mut summary, &output.rows, &output.missed, png)?;
     if let Some(path) = &plan.export_github_benchmark {
         let entries = crate::report::github::entries(&summary);
         let json = serde_json::to_string_pretty(&entries).expect("entries serialise: strings and numbers") + "\n";
         write_whole(path, json.as_bytes())?;
+    }
+    if let Some(path) = &plan.trace {
+        let run = format!(
+            "{} along {}, {} frames at {}",
+            summary.scene.facts.source, summary.path.source, summary.frames, summary.resolution
+        );
+        write_whole(
+            path,
+            trace_json(&summary.adapter, &run, &output.rows, &output.timelines).as_bytes(),
+        )?;
     }
     Ok(BenchOutcome { summary, files })
 }

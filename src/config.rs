@@ -48,6 +48,10 @@ pub struct BenchConfig {
     pub up: Option<UpChoice>,
     /// Also write the run for github-action-benchmark here.
     pub export_github_benchmark: Option<PathBuf>,
+    /// Also write the run's timeline here (Trace Event JSON).
+    pub trace: Option<PathBuf>,
+    /// Also write an animated flythrough of every mode beside the charts.
+    pub animate: Option<bool>,
     /// Mode parameters, `MODE.KEY=VALUE`.
     pub params: Option<Vec<String>>,
     /// One mode at several values of one parameter, `MODE.KEY=V1,V2,...`.
@@ -66,6 +70,9 @@ pub enum ConfigError {
     Io { path: String, error: std::io::Error },
     #[error("{path}: invalid run configuration: {message}")]
     Json { path: String, message: String },
+    /// What the fields of the configuration file at `path` make wrong.
+    #[error("{path}: {error}")]
+    InFile { path: String, error: Box<ConfigError> },
     #[error("give a model file or --scene, not both")]
     ModelAndScene,
     #[error("--movers animates built-in scenes; a model file has no movers")]
@@ -167,13 +174,30 @@ pub fn from_json<T: serde::de::DeserializeOwned>(
     at: &str,
     json: serde_json::Value,
 ) -> Result<T, ConfigError> {
-    serde_json::from_value(json).map_err(|e| invalid(path, at, &e))
+    serde_path_to_error::deserialize(json).map_err(|e| {
+        // The field whose value is wrong (`frames`, `runs[1].modes`), up to
+        // the field a message names itself ("unknown field `runs`, ...");
+        // `.` is the whole.
+        let whole = e.path().to_string();
+        let named = e.path().iter().next_back().map(ToString::to_string);
+        let field = match named {
+            Some(last) if e.inner().to_string().contains(&format!("`{last}`")) => {
+                whole.strip_suffix(&last).unwrap_or(&whole).trim_end_matches('.')
+            }
+            _ => whole.as_str(),
+        };
+        let at = match field {
+            "" | "." => at.to_string(),
+            field => format!("{at}{field}: "),
+        };
+        invalid(path, &at, e.inner())
+    })
 }
 
 fn invalid(path: &Path, at: &str, e: &serde_json::Error) -> ConfigError {
     ConfigError::Json {
         path: path.display().to_string(),
-        message: crate::text::one_line(&format!("{at}{e}")),
+        message: format!("{at}{e}"),
     }
 }
 
@@ -215,6 +239,10 @@ pub struct BenchPlan {
     pub load: LoadOptions,
     /// Also write the run in github-action-benchmark's format here.
     pub export_github_benchmark: Option<PathBuf>,
+    /// Also write the run's timeline here, in the Trace Event format.
+    pub trace: Option<PathBuf>,
+    /// Also write an animated flythrough of every mode beside the charts.
+    pub animate: bool,
     /// The run's name in a matrix (summary.json's `run`); `None` for a
     /// single run.
     pub run: Option<String>,
@@ -227,7 +255,10 @@ impl BenchConfig {
     /// the configuration file `file`.
     pub fn relative_to(mut self, file: &Path) -> BenchConfig {
         let base = file.parent().unwrap_or(Path::new(""));
-        for p in [&mut self.model, &mut self.path, &mut self.out].into_iter().flatten() {
+        for p in [&mut self.model, &mut self.path, &mut self.out, &mut self.trace]
+            .into_iter()
+            .flatten()
+        {
             if p.is_relative() {
                 *p = base.join(&*p);
             }
@@ -257,6 +288,8 @@ impl BenchConfig {
             external_buffers: self.external_buffers.or(fallback.external_buffers),
             up: self.up.or(fallback.up),
             export_github_benchmark: self.export_github_benchmark.or(fallback.export_github_benchmark),
+            trace: self.trace.or(fallback.trace),
+            animate: self.animate.or(fallback.animate),
             // Per key, a flag wins over the file: later entries override.
             sweep: self.sweep.or(fallback.sweep),
             params: match (fallback.params, self.params) {
@@ -328,6 +361,8 @@ impl BenchConfig {
                 self.up,
             ),
             export_github_benchmark: self.export_github_benchmark,
+            trace: self.trace,
+            animate: self.animate.unwrap_or(false),
             run: None,
             matrix: None,
         })

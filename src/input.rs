@@ -82,6 +82,16 @@ impl<'de> serde::Deserialize<'de> for ByteSize {
     }
 }
 
+/// The folder the file `path` names lies in: its parent, or `.` for a bare
+/// file name (whose parent is the empty path, which names no folder and
+/// cannot be resolved).
+pub fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    }
+}
+
 /// Reads all of `path`, a regular file of at most `limit` bytes (or a link
 /// to one).
 pub fn read_file(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {

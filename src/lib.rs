@@ -6,11 +6,14 @@
 //! the device, the scene's buffers and the per-frame operations, [`cull`]
 //! holds one file per culling mode, [`measure`] computes error and
 //! statistics, [`report`] writes the result files and charts (and merges
-//! many runs' into one report), [`bench`] runs the whole flow, [`matrix`]
-//! lists the runs of a matrix configuration and shards them, [`picture`]
-//! renders one frame to look at, and [`stress`] runs the numerically hard
-//! cases.
+//! many runs' into one report), [`session`] renders one frame in every
+//! mode, timed, [`bench`] runs the whole flow, [`matrix`] lists the runs of
+//! a matrix configuration and shards them, [`picture`] renders one frame to
+//! look at, [`animation`] many frames of many modes, and [`stress`] runs the
+//! numerically hard cases.
 
+pub mod animation;
+pub mod auto_or;
 pub mod bench;
 pub mod bounds;
 pub mod camera;
@@ -27,7 +30,9 @@ mod parallel;
 pub mod picture;
 pub mod raycast;
 pub mod report;
+pub mod rng;
 pub mod scene;
+pub mod session;
 pub mod stress;
 pub mod text;
 pub mod world;

@@ -7,12 +7,13 @@ use std::io::{IsTerminal as _, Write as _};
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicU8, Ordering};
 use std::time::Instant;
 
 use anyhow::Context as _;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use occlu::animation::{AnimationError, AnimationOptions, DEFAULT_SCALE, FrameRange, MAX_SCALE};
 use occlu::bench::{BenchError, BenchEvent, execute};
 use occlu::camera::generate::{PathRequest, plan_heard};
 use occlu::camera::path::{CameraPath, PathError};
@@ -22,7 +23,7 @@ use occlu::gpu::{BackendChoice, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::input::ByteSize;
 use occlu::matrix::{Matrix, MatrixError, Shard};
-use occlu::picture::{PictureError, PictureOptions};
+use occlu::picture::{LEAD_IN, Look, PictureError};
 use occlu::raycast::{Budget, RayCaster, Stopped};
 use occlu::report::compare::{CompareError, CompareOptions, Metric};
 use occlu::report::merge::MergeError;
@@ -93,6 +94,11 @@ enum Command {
     /// depth complexity), optionally beside a bird's-eye view marking its
     /// frustum and the boxes it culled.
     Render(RenderArgs),
+    /// Fly a path in one or more modes and write it as an animated PNG:
+    /// each frame the modes side by side as render paints them (the
+    /// overview beside each with --overview), each under a caption with the
+    /// mode, the frame and its frame time.
+    Flythrough(Box<FlythroughArgs>),
     /// Run the built-in matrix of numerically hard cases (eye inside boxes,
     /// near-plane crossings, 1e7 offsets, tiny and huge scales, flat boxes,
     /// coplanar walls, 1° and 170° fields of view, vertical views,
@@ -243,15 +249,21 @@ impl SceneAndPath {
         Ok(occlu::report::refuse_input_as_output(output, &inputs)?)
     }
 
-    fn load(&self) -> anyhow::Result<(Scene, CameraPath)> {
+    /// The scene and the path; an `output` that is one of the files the
+    /// scene was read from (a glTF file's buffers) is refused.
+    fn load(&self, output: &std::path::Path) -> anyhow::Result<(Scene, CameraPath)> {
         // Read first: a bad path file fails before a long scene load.
         let path_file = self.path.as_deref().map(CameraPath::load).transpose()?;
         let scene = load(&self.scene.spec()?, &self.scene.options())?;
+        occlu::report::refuse_input_as_output(output, &scene.files)?;
         let path = match path_file {
             Some(p) => p,
             None => {
                 let mut progress = Progress::new(false, 0, String::new());
-                occlu::camera::generate::default_path_heard(&scene, progress.listener("planning the path"))?.0
+                let planned =
+                    occlu::camera::generate::default_path_heard(&scene, progress.listener("planning the path"))?.0;
+                stop_listening()?;
+                planned
             }
         };
         let path = match self.frames {
@@ -302,6 +314,11 @@ struct BenchArgs {
     /// Skip the reference render and error measure (faster; error columns stay empty).
     #[arg(long)]
     no_error: bool,
+    /// Also write flythrough.png beside the charts: every recorded frame,
+    /// each mode's picture beside the scene from above (as render
+    /// --overview paints it, at half size), with its frame time.
+    #[arg(long)]
+    animate: bool,
     /// Print summary.json (every mode's statistics) to stdout instead of
     /// report.md; report.md is still written.
     #[arg(long)]
@@ -310,6 +327,12 @@ struct BenchArgs {
     /// per mode frame ms mean and p95, triangles drawn, wrong pixels.
     #[arg(long, value_name = "FILE")]
     export_github_benchmark: Option<PathBuf>,
+    /// Also write the run's timeline to FILE as Trace Event JSON (open it
+    /// in ui.perfetto.dev or chrome://tracing): per mode, each frame's
+    /// culling, commands and waits on the CPU, and its box tests and
+    /// drawing on the GPU where the adapter has timestamps.
+    #[arg(long, value_name = "FILE")]
+    trace: Option<PathBuf>,
     /// Print no progress and no notes on stderr, only errors.
     #[arg(long, short)]
     quiet: bool,
@@ -332,18 +355,8 @@ struct RenderArgs {
     /// The culling mode whose frame is rendered.
     #[arg(long, value_name = "MODE")]
     mode: String,
-    /// A mode parameter, MODE.KEY=VALUE (repeatable).
-    #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
-    params: Vec<String>,
-    /// Output PNG.
-    #[arg(long, short, value_name = "FILE")]
-    output: PathBuf,
-    /// Add a bird's-eye view: the frustum in red, culled objects' boxes in yellow.
-    #[arg(long)]
-    overview: bool,
-    /// Colour pixels by depth complexity (surfaces drawn over them) instead of shading.
-    #[arg(long)]
-    heat: bool,
+    #[command(flatten)]
+    picture: PictureArgs,
     /// Compare the frame with direct rendering: paint the pixels whose depth
     /// differs in magenta and outline the boxes of the objects the mode
     /// missed, and list them.
@@ -355,12 +368,69 @@ struct RenderArgs {
     /// of the frame dimmed.
     #[arg(long)]
     occluders: bool,
+}
+
+/// How `render` and `flythrough` picture a mode's frame, and where to.
+#[derive(Args)]
+struct PictureArgs {
+    /// A mode parameter, MODE.KEY=VALUE (repeatable).
+    #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
+    params: Vec<String>,
+    /// Output PNG (animated, for flythrough).
+    #[arg(long, short, value_name = "FILE")]
+    output: PathBuf,
+    /// Add a bird's-eye view beside each mode's frame: the frustum in red,
+    /// culled objects' boxes in yellow.
+    #[arg(long)]
+    overview: bool,
+    /// Colour pixels by depth complexity (surfaces drawn over them) instead of shading.
+    #[arg(long)]
+    heat: bool,
     /// Render size [default: 800x600].
     #[arg(long, value_name = "WxH")]
     resolution: Option<Resolution>,
     /// Graphics API [default: auto].
     #[arg(long, value_enum)]
     backend: Option<BackendChoice>,
+}
+
+impl PictureArgs {
+    /// The look these flags ask for, with `render`'s own two.
+    fn look(&self, show_missed: bool, occluders: bool) -> Look {
+        Look {
+            resolution: self.resolution.unwrap_or(Resolution::DEFAULT),
+            overview: self.overview,
+            heat: self.heat,
+            show_missed,
+            occluders,
+        }
+    }
+}
+
+#[derive(Args)]
+struct FlythroughArgs {
+    #[command(flatten)]
+    scene: SceneAndPath,
+    /// Modes side by side, comma-separated, or "all".
+    #[arg(long, value_delimiter = ',', value_name = "LIST", required = true)]
+    modes: Vec<String>,
+    /// Frames A to B-1 of the path, every STEP-th pictured (all of them
+    /// run; the two before A first, as render runs them) [default: the
+    /// whole path].
+    #[arg(long, value_name = "A..B[:STEP]")]
+    range: Option<FrameRange>,
+    #[command(flatten)]
+    picture: PictureArgs,
+    /// Panels are the pictures shrunk by K: each pixel the mean of K x K [default: 2].
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_SCALE)))]
+    scale: Option<u32>,
+    /// Every pixel as painted (24-bit) instead of one palette of 256
+    /// colours for the whole animation: exact, about three times larger.
+    #[arg(long)]
+    true_colour: bool,
+    /// Print no progress and no notes on stderr, only errors.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(Args)]
@@ -428,9 +498,12 @@ fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         Err(e) => {
+            // The message with the lines that complete it (the values a
+            // flag takes, the arguments missing), up to the usage.
             let text = e.render().to_string();
-            let line = text.lines().next().unwrap_or("invalid arguments");
-            say!("occlu: {}", line.trim_start_matches("error: ").trim());
+            let lines: Vec<&str> = text.lines().map(str::trim).take_while(|l| !l.is_empty()).collect();
+            let message = lines.join(" ");
+            say!("occlu: {}", message.trim_start_matches("error: "));
             return ExitCode::from(2);
         }
     };
@@ -450,6 +523,7 @@ fn main() -> ExitCode {
         Command::Export { scene, output } => export(&scene, &output).map(|()| ExitCode::SUCCESS),
         Command::Plot { run_dir } => plot(&run_dir).map(|()| ExitCode::SUCCESS),
         Command::Render(args) => render(args).map(|()| ExitCode::SUCCESS),
+        Command::Flythrough(args) => flythrough(*args).map(|()| ExitCode::SUCCESS),
         Command::Merge {
             dirs,
             out,
@@ -490,29 +564,40 @@ fn main() -> ExitCode {
     };
     // Ctrl-C while the results were written: they are whole, and the
     // interruption still reaches the caller.
-    if INTERRUPTED.load(Ordering::SeqCst) {
+    if CTRL_C.load(Ordering::SeqCst) == HEARD {
         say!("occlu: interrupted");
         end_by_sigint();
     }
     code
 }
 
-/// Whether a command that stops cleanly on Ctrl-C is running: until one
-/// says so through [`go_on`], Ctrl-C ends the process at once, as it would
-/// without a handler. Nothing is half-written then: the operating system
-/// drops the claim on --out, and result files are moved into place whole.
-static LISTENING: AtomicBool = AtomicBool::new(false);
+/// What Ctrl-C does now: [`ENDS_AT_ONCE`], [`LISTENED`] or [`HEARD`]. One
+/// value, so that the handler and a step that stops listening cannot both
+/// miss a Ctrl-C between them.
+static CTRL_C: AtomicU8 = AtomicU8::new(ENDS_AT_ONCE);
 
-/// Set by Ctrl-C while listening: the work stops at its next frame (bench)
-/// or case (stress), writes nothing, and ends the process.
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// No step that stops cleanly is running: Ctrl-C ends the process at once,
+/// as it would without a handler. Nothing is half-written then: the
+/// operating system drops the claim on --out, and result files are moved
+/// into place whole.
+const ENDS_AT_ONCE: u8 = 0;
+/// A step that stops cleanly on Ctrl-C is running (see [`go_on`]): the
+/// first Ctrl-C asks it to stop.
+const LISTENED: u8 = 1;
+/// Ctrl-C came while a step listened: the work stops at its next frame
+/// (bench), case (stress) or stretch of ray casts (planning), writes
+/// nothing, and ends the process.
+const HEARD: u8 = 2;
 
 /// The first Ctrl-C (or SIGTERM, or SIGHUP: a terminal closed, a job
-/// cancelled) asks listening work to stop (see [`LISTENING`]); a second
+/// cancelled) asks a listening step to stop (see [`CTRL_C`]); a second
 /// one, or one while nothing listens, ends the process at once.
 fn listen_for_ctrl_c() {
     let _ = ctrlc::set_handler(|| {
-        if !LISTENING.load(Ordering::SeqCst) || INTERRUPTED.swap(true, Ordering::SeqCst) {
+        if CTRL_C
+            .compare_exchange(LISTENED, HEARD, Ordering::SeqCst, Ordering::SeqCst)
+            .is_err()
+        {
             end_by_sigint();
         }
     });
@@ -535,20 +620,40 @@ fn end_by_sigint() -> ! {
 }
 
 /// Whether the work should go on (no Ctrl-C yet); from its first call on,
-/// Ctrl-C asks the work to stop instead of ending the process.
+/// Ctrl-C asks the work to stop instead of ending the process, until
+/// [`stop_listening`].
 fn go_on() -> ControlFlow<()> {
-    LISTENING.store(true, Ordering::SeqCst);
-    if INTERRUPTED.load(Ordering::SeqCst) {
-        ControlFlow::Break(())
-    } else {
-        ControlFlow::Continue(())
+    match CTRL_C.compare_exchange(ENDS_AT_ONCE, LISTENED, Ordering::SeqCst, Ordering::SeqCst) {
+        Err(HEARD) => ControlFlow::Break(()),
+        _ => ControlFlow::Continue(()),
+    }
+}
+
+/// A command heard Ctrl-C while a step of it listened, and stopped before
+/// writing anything.
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted: nothing written")]
+struct Interrupted;
+
+/// Ends a step that listened for Ctrl-C (path planning in `render`,
+/// `export` and `path gen`), for a command whose later steps do not ask
+/// [`go_on`]: from here on Ctrl-C ends the process at once again, rather
+/// than being heard by nothing while the command runs to its end and
+/// writes. A Ctrl-C that the step heard after it last asked stops the
+/// command here.
+fn stop_listening() -> Result<(), Interrupted> {
+    match CTRL_C.compare_exchange(LISTENED, ENDS_AT_ONCE, Ordering::SeqCst, Ordering::SeqCst) {
+        Err(HEARD) => Err(Interrupted),
+        _ => Ok(()),
     }
 }
 
 fn was_interrupted(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {
-        matches!(c.downcast_ref::<BenchError>(), Some(BenchError::Interrupted))
+        c.is::<Interrupted>()
+            || matches!(c.downcast_ref::<BenchError>(), Some(BenchError::Interrupted))
             || matches!(c.downcast_ref::<StressError>(), Some(StressError::Interrupted))
+            || matches!(c.downcast_ref::<AnimationError>(), Some(AnimationError::Interrupted))
             || matches!(c.downcast_ref::<PathError>(), Some(PathError::Interrupted))
     })
 }
@@ -600,6 +705,8 @@ fn is_input_error(e: &anyhow::Error) -> bool {
                 .is_some_and(occlu::gpu::GpuError::is_input_error)
             || c.downcast_ref::<PictureError>()
                 .is_some_and(PictureError::is_input_error)
+            || c.downcast_ref::<AnimationError>()
+                .is_some_and(AnimationError::is_input_error)
     })
 }
 
@@ -621,6 +728,8 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         external_buffers: args.scene.external_buffers,
         up: args.scene.up,
         export_github_benchmark: args.export_github_benchmark,
+        trace: args.trace,
+        animate: args.animate.then_some(true),
         params: (!args.params.is_empty()).then_some(args.params),
         sweep: args.sweep,
     };
@@ -636,16 +745,19 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
     };
     if !matrix.lists_runs() && args.shard.is_none() {
         let plan = matrix.single_run(&flags)?;
-        if let Some(export) = &plan.export_github_benchmark {
-            let model = match &plan.scene {
-                SceneSpec::File(model) => Some(model.as_path()),
-                SceneSpec::Builtin(_) => None,
-            };
-            let inputs: Vec<&std::path::Path> = [model, plan.path.as_deref(), args.config.as_deref()]
-                .into_iter()
-                .flatten()
-                .collect();
-            occlu::report::refuse_input_as_output(export, &inputs)?;
+        let model = match &plan.scene {
+            SceneSpec::File(model) => Some(model.as_path()),
+            SceneSpec::Builtin(_) => None,
+        };
+        let inputs: Vec<&std::path::Path> = [model, plan.path.as_deref(), args.config.as_deref()]
+            .into_iter()
+            .flatten()
+            .collect();
+        for output in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
+            occlu::report::refuse_input_as_output(output, &inputs)?;
+        }
+        if let (Some(export), Some(trace)) = (&plan.export_github_benchmark, &plan.trace) {
+            occlu::report::refuse_one_file_twice(export, trace)?;
         }
         let outcome = bench_one(&plan, &note, quiet, format!("{} modes", plan.modes.len()))?;
         return if args.json {
@@ -716,17 +828,17 @@ fn bench_one(
         go_on()
     })?;
     progress.finish();
-    if let Some(path) = &plan.export_github_benchmark {
+    for path in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
         note(format!("wrote {}", path.display()));
     }
     let files = &outcome.files;
-    let missed = files
-        .missed_csv
-        .as_ref()
+    let optional: String = [&files.missed_csv, &files.animation]
+        .into_iter()
+        .flatten()
         .map(|p| format!(", {}", p.display()))
-        .unwrap_or_default();
+        .collect();
     note(format!(
-        "results: {}, {}, {}{missed} and {} charts in {}",
+        "results: {}, {}, {}{optional} and {} charts in {}",
         files.report_md.display(),
         files.summary_json.display(),
         files.frames_csv.display(),
@@ -800,6 +912,13 @@ fn heard(progress: &mut Progress, event: BenchEvent, note: &dyn Fn(String)) {
             }
         }
         BenchEvent::Frame { done, total } => progress.frame(done, total),
+        BenchEvent::Encoding { done, total } => {
+            if done == 0 {
+                progress.finish();
+                note(format!("encoding the animation's {total} frames"));
+            }
+            progress.encoding(done, total);
+        }
         BenchEvent::NothingVisible => note(
             "warning: no object was visible in any frame (the reference drew nothing): check the camera path, and the model's place and size".into(),
         ),
@@ -849,9 +968,26 @@ impl Progress {
     }
 
     /// A step of ray casts, `what`, has spent `spent` of its `budget` box
-    /// and triangle tests: said once the step has taken a second (most take
-    /// less), then every few seconds.
+    /// and triangle tests.
     fn work(&mut self, what: &'static str, spent: u64, budget: u64) {
+        self.report_step(what, || {
+            format!(
+                "{} M of at most {} M box and triangle tests",
+                spent / 1_000_000,
+                budget / 1_000_000
+            )
+        });
+    }
+
+    /// `done` of an animation's `total` frames are encoded.
+    fn encoding(&mut self, done: u32, total: u32) {
+        self.report_step("encoding the animation", || format!("frame {done} of {total}"));
+    }
+
+    /// A step before or after the frames, `what`, has got as far as
+    /// `so_far` says: said once the step has taken a second (most take
+    /// less), then every few seconds.
+    fn report_step(&mut self, what: &'static str, so_far: impl FnOnce() -> String) {
         if self.quiet {
             return;
         }
@@ -870,11 +1006,7 @@ impl Progress {
             .map_or(taken >= 1.0, |t| now.duration_since(t).as_secs_f64() >= PROGRESS_EVERY);
         if due {
             self.last_line = Some(now);
-            say!(
-                "{what}: {taken:.0} s, {} M of at most {} M box and triangle tests",
-                spent / 1_000_000,
-                budget / 1_000_000
-            );
+            say!("{what}: {taken:.0} s, {}", so_far());
         }
     }
 
@@ -1057,11 +1189,11 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let [mode] = modes[..] else {
         anyhow::bail!(ModeError::NotOne(args.mode.clone()));
     };
-    let params = ModeParams::parse(&args.params, &modes)?;
-    args.scene.refuse_as_output(&args.output)?;
-    let backend = args.backend.unwrap_or_default();
+    let params = ModeParams::parse(&args.picture.params, &modes)?;
+    args.scene.refuse_as_output(&args.picture.output)?;
+    let backend = args.picture.backend.unwrap_or_default();
     backend.backends()?;
-    let (scene, path) = args.scene.load()?;
+    let (scene, path) = args.scene.load(&args.picture.output)?;
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let gpu = occlu::gpu::GpuContext::new(backend)?;
     if let Some(reason) = mode.info().unsupported_on(&gpu) {
@@ -1069,19 +1201,13 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     }
     let culler = mode.create(&scene, &params)?;
     let mut world = World::new(scene, hierarchy);
-    let options = PictureOptions {
-        frame: args.frame,
-        resolution: args.resolution.unwrap_or(Resolution::DEFAULT),
-        overview: args.overview,
-        heat: args.heat,
-        show_missed: args.show_missed,
-        occluders: args.occluders,
-    };
-    let picture = occlu::picture::render(&gpu, &mut world, &path, culler, &options)?;
-    occlu::report::write_png(&args.output, picture.width, picture.height, &picture.rgb)?;
+    let look = args.picture.look(args.show_missed, args.occluders);
+    let picture = occlu::picture::render(&gpu, &mut world, &path, culler, args.frame, &look)?;
+    let output = &args.picture.output;
+    occlu::report::write_png(output, picture.width, picture.height, &picture.rgb)?;
     say!(
         "wrote {} ({}x{}): {mode} drew {} objects at frame {}, culled {} inside the frustum",
-        args.output.display(),
+        output.display(),
         picture.width,
         picture.height,
         picture.drawn,
@@ -1111,6 +1237,71 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             );
         }
     }
+    Ok(())
+}
+
+fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
+    let modes = parse_modes(&args.modes)?;
+    let params = ModeParams::parse(&args.picture.params, &modes)?;
+    let output = &args.picture.output;
+    args.scene.refuse_as_output(output)?;
+    occlu::report::check_writable(output)?;
+    let backend = args.picture.backend.unwrap_or_default();
+    backend.backends()?;
+    let note = |text: String| {
+        if !args.quiet {
+            say!("{text}");
+        }
+    };
+    let (scene, path) = args.scene.load(output)?;
+    let range = args.range.unwrap_or(FrameRange::all(path.frames));
+    range.check(path.frames)?;
+    let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
+    let gpu = occlu::gpu::GpuContext::new(backend)?;
+    note(format!("adapter: {}", gpu.adapter));
+    let mut cullers = Vec::new();
+    for mode in modes {
+        match mode.info().unsupported_on(&gpu) {
+            Some(reason) => note(format!("skipped: {mode}: {reason}")),
+            None => cullers.push(mode.create(&scene, &params)?),
+        }
+    }
+    anyhow::ensure!(!cullers.is_empty(), "no mode of --modes runs on {}", gpu.adapter);
+    let mut world = World::new(scene, hierarchy);
+    let options = AnimationOptions {
+        look: args.picture.look(false, false),
+        scale: args.scale.unwrap_or(DEFAULT_SCALE),
+        true_colour: args.true_colour,
+    };
+    let lead_in = range.start.min(LEAD_IN);
+    let mut progress = Progress::new(args.quiet, lead_in, format!("{} modes", cullers.len()));
+    let reel = occlu::animation::flythrough(
+        &gpu,
+        &mut world,
+        &path,
+        &mut cullers,
+        &options,
+        range,
+        &mut |done, total| {
+            progress.frame(done, total);
+            go_on()
+        },
+    )?;
+    progress.finish();
+    note(format!("encoding the animation's {} frames", reel.frames()));
+    let animation = reel.encode(&mut |done, total| {
+        progress.encoding(done, total);
+        go_on()
+    })?;
+    occlu::report::write_whole(output, &animation.png)?;
+    note(format!(
+        "wrote {} ({}x{}, {} frames, {:.1} MB)",
+        output.display(),
+        animation.width,
+        animation.height,
+        animation.frames,
+        animation.png.len() as f64 / 1e6
+    ));
     Ok(())
 }
 
@@ -1171,18 +1362,21 @@ fn info(args: InfoArgs) -> anyhow::Result<()> {
         let _ = writeln!(
             w,
             "camera      '{}' (node {}, {}{fov}{near})",
-            c.name, c.node, c.projection
+            shown(&c.name),
+            c.node,
+            c.projection
         );
     }
     for a in &report.animations {
-        let moves = a
-            .camera
-            .as_ref()
-            .map_or("moves no camera".to_string(), |c| format!("moves camera '{c}'"));
+        let moves = a.camera.as_ref().map_or("moves no camera".to_string(), |c| {
+            format!("moves camera '{}'", shown(c))
+        });
         let _ = writeln!(
             w,
             "animation   '{}' ({} channels, {:.2} s, {moves})",
-            a.name, a.channels, a.duration
+            shown(&a.name),
+            a.channels,
+            a.duration
         );
     }
     if scene.warnings.is_empty() {
@@ -1214,7 +1408,7 @@ fn emit(text: &str) -> anyhow::Result<()> {
 fn export(input: &SceneAndPath, output: &std::path::Path) -> anyhow::Result<()> {
     input.refuse_as_output(output)?;
     occlu::report::check_writable(output)?;
-    let (scene, path) = input.load()?;
+    let (scene, path) = input.load(output)?;
     if !scene.movers.is_empty() {
         say!(
             "warning: {} moving objects are written where frame 0 puts them (glTF animation of objects is not exported)",
@@ -1244,10 +1438,27 @@ fn path_gen(
         occlu::report::refuse_input_as_output(&output, &[model])?;
     }
     let scene: Scene = load(&scene_args.spec()?, &scene_args.options())?;
+    occlu::report::refuse_input_as_output(&output, &scene.files)?;
     let mut progress = Progress::new(false, 0, String::new());
     let generated = plan_heard(request.as_ref(), &scene, frames, progress.listener("planning the path"))?;
     // Validate what is written, so a generated file always loads.
     let path = CameraPath::from_file(&generated.file, &format!("generated:{}", generated.kind))?;
+    let budget = Budget {
+        tests: occlu::camera::generate::PLANNING_TESTS,
+        listener: progress.listener("counting frames with geometry within the near plane"),
+    };
+    let caster = RayCaster::with_budget(&scene, budget);
+    // Counted before the file is written, so Ctrl-C meanwhile writes nothing.
+    let near = match path.frames_with_geometry_within_near(&caster, Resolution::DEFAULT.aspect()) {
+        Ok(0) => None,
+        Ok(near) => Some(format!(
+            "warning: {near} of {} frames have geometry nearer than the near plane's corners (at 4:3)",
+            path.frames
+        )),
+        Err(Stopped::Spent) => Some(near_not_counted()),
+        Err(Stopped::Interrupted) => return Err(PathError::Interrupted.into()),
+    };
+    stop_listening()?;
     let text = serde_json::to_string_pretty(&generated.file)? + "\n";
     occlu::report::write_whole(&output, text.as_bytes())?;
     say!(
@@ -1258,19 +1469,8 @@ fn path_gen(
         path.frames,
         generated.file.keyframes.len()
     );
-    let budget = Budget {
-        tests: occlu::camera::generate::PLANNING_TESTS,
-        listener: progress.listener("counting frames with geometry within the near plane"),
-    };
-    let caster = RayCaster::with_budget(&scene, budget);
-    match path.frames_with_geometry_within_near(&caster, Resolution::DEFAULT.aspect()) {
-        Ok(0) => {}
-        Ok(near) => say!(
-            "warning: {near} of {} frames have geometry nearer than the near plane's corners (at 4:3)",
-            path.frames
-        ),
-        Err(Stopped::Spent) => say!("{}", near_not_counted()),
-        Err(Stopped::Interrupted) => return Err(PathError::Interrupted.into()),
+    if let Some(near) = near {
+        say!("{near}");
     }
     Ok(())
 }

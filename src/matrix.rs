@@ -26,6 +26,8 @@ use crate::scene::{SceneError, SceneSpec};
 /// The runs of one configuration file, before flags and planning.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Matrix {
+    /// The configuration file, if any.
+    file: Option<PathBuf>,
     /// The file's own fields: every run's defaults.
     defaults: BenchConfig,
     /// Each run's own fields, in the matrix's order; empty for a file that
@@ -53,6 +55,8 @@ pub enum MatrixError {
         "--export-github-benchmark writes one run's file and a matrix has many runs: export from one run's summary.json instead"
     )]
     GithubExport,
+    #[error("--trace writes one run's timeline and a matrix has many runs: trace one run at a time")]
+    Trace,
     #[error("run {run}: {error}")]
     Plan { run: String, error: ConfigError },
     #[error("run {run}: {error}")]
@@ -161,7 +165,11 @@ impl Matrix {
                 path: file.display().to_string(),
             });
         }
-        Ok(Matrix { defaults, entries })
+        Ok(Matrix {
+            file: Some(file.to_path_buf()),
+            defaults,
+            entries,
+        })
     }
 
     /// Whether the file lists runs (else it is one run, which writes into
@@ -172,7 +180,27 @@ impl Matrix {
 
     /// The one run of a file that lists none: `flags` over the file.
     pub fn single_run(&self, flags: &BenchConfig) -> Result<BenchPlan, ConfigError> {
-        flags.clone().or(self.defaults.clone()).plan()
+        flags
+            .clone()
+            .or(self.defaults.clone())
+            .plan()
+            .map_err(|error| self.blamed(error, &self.defaults))
+    }
+
+    /// `error`, made planning `flags` over `fields` (the file's), as the
+    /// file's when its fields make it on their own (planned alone, they
+    /// fail the same way), so the message names the file; else as the
+    /// flags' own.
+    fn blamed(&self, error: ConfigError, fields: &BenchConfig) -> ConfigError {
+        match &self.file {
+            Some(file) if fields.clone().plan().is_err_and(|e| e.to_string() == error.to_string()) => {
+                ConfigError::InFile {
+                    path: file.display().to_string(),
+                    error: Box::new(error),
+                }
+            }
+            _ => error,
+        }
     }
 
     /// Every run, `flags` over its own fields over the defaults, each
@@ -187,12 +215,16 @@ impl Matrix {
         } else {
             self.entries.clone()
         };
-        let configs: Vec<BenchConfig> = entries
+        let fields: Vec<BenchConfig> = entries
             .into_iter()
-            .map(|entry| flags.clone().or(entry.or(self.defaults.clone())))
+            .map(|entry| entry.or(self.defaults.clone()))
             .collect();
+        let configs: Vec<BenchConfig> = fields.iter().map(|f| flags.clone().or(f.clone())).collect();
         if configs.iter().any(|c| c.export_github_benchmark.is_some()) {
             return Err(MatrixError::GithubExport);
+        }
+        if configs.iter().any(|c| c.trace.is_some()) {
+            return Err(MatrixError::Trace);
         }
         let out = flags
             .out
@@ -209,11 +241,12 @@ impl Matrix {
         let mut paths_read = BTreeSet::new();
         configs
             .into_iter()
+            .zip(&fields)
             .zip(names)
-            .map(|(config, name)| {
+            .map(|((config, fields), name)| {
                 let mut plan = config.plan().map_err(|error| MatrixError::Plan {
                     run: name.clone(),
-                    error,
+                    error: self.blamed(error, fields),
                 })?;
                 if let Some(path) = plan.path.as_ref().filter(|p| !paths_read.contains(*p)) {
                     CameraPath::load(path).map_err(|error| MatrixError::Path {
@@ -272,10 +305,7 @@ fn refuse_unknown_fields(file: &Path, fields: &serde_json::Map<String, serde_jso
             let expected: Vec<String> = known.iter().map(|k| format!("`{k}`")).collect();
             Err(ConfigError::Json {
                 path: file.display().to_string(),
-                message: crate::text::one_line(&format!(
-                    "unknown field `{unknown}`, expected one of {}",
-                    expected.join(", ")
-                )),
+                message: format!("unknown field `{unknown}`, expected one of {}", expected.join(", ")),
             })
         }
         None => Ok(()),
@@ -499,6 +529,8 @@ mod tests {
         assert!(e.to_string().contains("scenes: invalid type"), "{e}");
         let e = plan(r#"{"scenes": ["city"], "export_github_benchmark": "g.json"}"#).unwrap_err();
         assert!(matches!(e, MatrixError::GithubExport));
+        let e = plan(r#"{"scenes": ["city"], "trace": "t.json"}"#).unwrap_err();
+        assert!(matches!(e, MatrixError::Trace));
     }
 
     #[test]

@@ -19,7 +19,6 @@
 
 use glam::DVec3;
 
-use crate::bench::{RunOptions, Session};
 use crate::bounds::Aabb;
 use crate::camera::path::CameraPath;
 use crate::camera::{Camera, Containment, look_rotation};
@@ -29,11 +28,12 @@ use crate::gpu::{
 };
 use crate::measure::MissedObject;
 use crate::scene::{Focus, Scene};
+use crate::session::{RunOptions, Session};
 use crate::world::World;
 
+/// How a mode's frame is pictured: at what size, and what is added to it.
 #[derive(Clone, Copy, Debug)]
-pub struct PictureOptions {
-    pub frame: u32,
+pub struct Look {
     pub resolution: Resolution,
     pub overview: bool,
     pub heat: bool,
@@ -86,144 +86,228 @@ impl PictureError {
 }
 
 /// Frames run before the pictured one, for the mode's temporal state.
-const LEAD_IN: u32 = 2;
+pub const LEAD_IN: u32 = 2;
 
 const YELLOW: [f32; 3] = [1.0, 0.85, 0.0];
 const RED: [f32; 3] = [0.9, 0.1, 0.1];
 const MAGENTA: [f32; 3] = [1.0, 0.0, 1.0];
 
+/// Frame `frame` of `path` as `culler` draws it, after the [`LEAD_IN`]
+/// frames before it.
 pub fn render(
     gpu: &GpuContext,
     world: &mut World,
     path: &CameraPath,
     culler: Box<dyn Culler>,
-    options: &PictureOptions,
+    frame: u32,
+    look: &Look,
 ) -> Result<Picture, PictureError> {
-    if options.frame >= path.frames {
+    if frame >= path.frames {
         return Err(PictureError::FrameOutOfRange {
-            frame: options.frame,
+            frame,
             frames: path.frames,
         });
     }
-    let resolution = options.resolution;
+    let mut cullers = [culler];
+    let mut session = session_for(gpu, world, &mut cullers, look)?;
+    let mut painter = Painter::new(gpu, &mut session, &cullers, look)?;
+    let aspect = look.resolution.aspect();
+    for f in frame.saturating_sub(LEAD_IN)..frame {
+        world.advance(f);
+        session.warm_up_frame(f, &path.camera(f, aspect), world, &mut cullers, 0)?;
+    }
+    world.advance(frame);
+    let camera = path.camera(frame, aspect);
+    session.frame(frame, &camera, world, &mut cullers, 0)?;
+    let [picture] = painter
+        .paint(&mut session, world, frame, &camera, &cullers)?
+        .try_into()
+        .unwrap_or_else(|_| unreachable!("one picture for one mode"));
+    Ok(picture)
+}
+
+/// A session of `cullers` that renders what `look` needs: the reference
+/// only to show what was missed.
+pub fn session_for<'g>(
+    gpu: &'g GpuContext,
+    world: &World,
+    cullers: &mut [Box<dyn Culler + '_>],
+    look: &Look,
+) -> Result<Session<'g>, GpuError> {
     let run = RunOptions {
         warmup: 0,
-        resolution,
-        measure_error: options.show_missed,
+        resolution: look.resolution,
+        measure_error: look.show_missed,
     };
-    let mut cullers = [culler];
-    let mut session = Session::new(gpu, world, &mut cullers, options.show_missed, &run)?;
-    // A mode keeps its buffer from `prepare` on, before any frame is spent.
-    if options.occluders && cullers[0].occluder_depths().is_none() {
-        return Err(PictureError::NoOccluderDepths {
-            mode: cullers[0].name().to_string(),
-        });
-    }
-    let camera = path.camera(options.frame, resolution.aspect());
-    for f in options.frame.saturating_sub(LEAD_IN)..options.frame {
-        world.advance(f);
-        session.warm_up_frame(f, &path.camera(f, resolution.aspect()), world, &mut cullers, 0)?;
-    }
-    world.advance(options.frame);
-    let rows = session.frame(options.frame, &camera, world, &mut cullers, 0)?;
-    let wrong_pixels = rows[0].error_pixels.unwrap_or(0);
-    let wrong = options.show_missed.then(|| WrongInFrame {
-        pixels: wrong_pixels,
-        objects: std::mem::take(&mut session.missed),
-    });
-    let occluders = options.occluders.then(|| cullers[0].occluder_depths()).flatten();
-    let scene = &world.scene;
-    let drawn: Vec<u32> = session.drawn[0].iter().collect();
-    let frustum = camera.frustum();
-    let culled: Vec<&Aabb> = scene
-        .objects
-        .iter()
-        .enumerate()
-        .filter(|&(i, o)| !session.drawn[0].contains(i as u32) && frustum.classify(&o.bounds) != Containment::Outside)
-        .map(|(_, o)| &o.bounds)
-        .collect();
+    Session::new(gpu, world, cullers, look.show_missed, &run)
+}
 
-    let mut main = if options.heat {
-        let target = picture_target(gpu, resolution);
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        let view = target.create_view(&Default::default());
-        session.renderer.encode_depth_complexity(&mut encoder, &view, &drawn);
-        gpu.queue.submit([encoder.finish()]);
-        let counts = read_rgb(gpu, &target, resolution);
-        heat_colours(&counts)
-    } else {
-        read_rgb(gpu, &session.targets.color_texture, resolution)
-    };
-    if let Some(depths) = &occluders {
-        paint_occluder_depths(depths, resolution, &mut main);
-    }
-    if let Some(wrong) = &wrong {
-        paint_wrong_pixels(&mut session, &mut main);
-        // The frame's camera is still in the uniform the lines are drawn with.
-        let mut lines = Vec::new();
-        for m in &wrong.objects {
-            box_lines(
-                &scene.objects[m.object as usize].bounds,
-                camera.eye,
-                MAGENTA,
-                &mut lines,
-            );
+/// Paints what each mode of a [`Session`] showed in its last frame, as
+/// `occlu render` does for one: what it drew, shaded (or its depth
+/// complexity), with what the [`Look`] adds.
+pub struct Painter<'g> {
+    gpu: &'g GpuContext,
+    look: Look,
+    lines: LinePainter,
+    /// The overview's targets: the scene from above, drawn once a frame,
+    /// and a copy each mode's lines are drawn over.
+    overview: Option<(RenderTargets, wgpu::Texture)>,
+}
+
+impl<'g> Painter<'g> {
+    /// A painter of `session`'s frames (which from now on keeps each mode's
+    /// colour). Fails on `occluders` for a mode that keeps no CPU depth
+    /// buffer.
+    pub fn new(
+        gpu: &'g GpuContext,
+        session: &mut Session,
+        cullers: &[Box<dyn Culler + '_>],
+        look: &Look,
+    ) -> Result<Painter<'g>, PictureError> {
+        // A mode keeps its buffer from `prepare` on, before any frame is spent.
+        if let Some(mode) = cullers.iter().find(|c| look.occluders && c.occluder_depths().is_none()) {
+            return Err(PictureError::NoOccluderDepths {
+                mode: mode.name().to_string(),
+            });
         }
-        let target = picture_target(gpu, resolution);
-        let view = target.create_view(&Default::default());
-        LinePainter::new(gpu, session.renderer.camera_uniform()).draw(gpu, &view, &lines);
-        let outlines = read_rgb(gpu, &target, resolution);
-        for (pixel, line) in main.chunks_mut(3).zip(outlines.chunks(3)) {
-            if line != [0, 0, 0] {
-                pixel.copy_from_slice(line);
+        session.keep_colours();
+        let resolution = look.resolution;
+        Ok(Painter {
+            gpu,
+            look: *look,
+            lines: LinePainter::new(gpu, session.renderer.camera_uniform()),
+            overview: look
+                .overview
+                .then(|| (RenderTargets::new(gpu, resolution, 1), picture_target(gpu, resolution))),
+        })
+    }
+
+    /// The picture of each mode (in the order of `cullers`, the session's)
+    /// in the session's last frame, `frame`, seen from `camera` in `world`.
+    pub fn paint(
+        &mut self,
+        session: &mut Session,
+        world: &World,
+        frame: u32,
+        camera: &Camera,
+        cullers: &[Box<dyn Culler + '_>],
+    ) -> Result<Vec<Picture>, GpuError> {
+        let (gpu, look, resolution) = (self.gpu, self.look, self.look.resolution);
+        let scene = &world.scene;
+        let frustum = camera.frustum();
+        // Each mode's own view first: the frame's camera is still in the
+        // uniform that depth complexity and outlines are drawn with.
+        let mut pictures = Vec::with_capacity(cullers.len());
+        for (k, culler) in cullers.iter().enumerate() {
+            let drawn: Vec<u32> = session.drawn[k].iter().collect();
+            let culled = scene
+                .objects
+                .iter()
+                .enumerate()
+                .filter(|&(i, o)| {
+                    !session.drawn[k].contains(i as u32) && frustum.classify(&o.bounds) != Containment::Outside
+                })
+                .count();
+            let mut rgb = if look.heat {
+                let target = picture_target(gpu, resolution);
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                let view = target.create_view(&Default::default());
+                session.renderer.encode_depth_complexity(&mut encoder, &view, &drawn);
+                gpu.queue.submit([encoder.finish()]);
+                heat_colours(&read_rgb(gpu, &target, resolution))
+            } else {
+                session.colour(k).expect("the painter keeps every mode's colour")
+            };
+            let occluders = look.occluders.then(|| culler.occluder_depths()).flatten();
+            if let Some(depths) = &occluders {
+                paint_occluder_depths(depths, resolution, &mut rgb);
+            }
+            let wrong = look.show_missed.then(|| {
+                let pixels = paint_wrong_pixels(session, k, &mut rgb);
+                let objects: Vec<MissedObject> = session
+                    .missed
+                    .iter()
+                    .filter(|m| m.mode == culler.name() && m.frame == frame)
+                    .cloned()
+                    .collect();
+                let mut lines = Vec::new();
+                for m in &objects {
+                    box_lines(
+                        &scene.objects[m.object as usize].bounds,
+                        camera.eye,
+                        MAGENTA,
+                        &mut lines,
+                    );
+                }
+                let target = picture_target(gpu, resolution);
+                self.lines.draw(gpu, &target.create_view(&Default::default()), &lines);
+                let outlines = read_rgb(gpu, &target, resolution);
+                for (pixel, line) in rgb.chunks_mut(3).zip(outlines.chunks(3)) {
+                    if line != [0, 0, 0] {
+                        pixel.copy_from_slice(line);
+                    }
+                }
+                WrongInFrame { pixels, objects }
+            });
+            pictures.push(Picture {
+                width: resolution.width,
+                height: resolution.height,
+                rgb,
+                drawn: drawn.len(),
+                culled_in_frustum: culled,
+                wrong,
+                occluder_cells: occluders.map(|d| [d.depths.iter().filter(|&&c| c > 0.0).count(), d.depths.len()]),
+            });
+        }
+        if let Some((targets, picture)) = &self.overview {
+            // The scene from above once; each mode's frustum and culled
+            // boxes over a copy of it.
+            let above = overview_camera(scene, resolution);
+            session.renderer.set_camera(gpu, &above, resolution, &scene.objects);
+            let all: Vec<u32> = (0..scene.objects.len() as u32).collect();
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            session.renderer.encode_shaded(
+                &mut encoder,
+                targets,
+                &targets.mode_depths[0],
+                true,
+                Draws::Objects(&all),
+            );
+            gpu.queue.submit([encoder.finish()]);
+            // The frustum has no far plane: draw it out to the farthest
+            // corner of the scene, so every yellow box lies inside the red
+            // lines.
+            let reach = scene
+                .bounds
+                .corners()
+                .iter()
+                .map(|c| c.distance(camera.eye))
+                .fold(0.0, f64::max);
+            for (k, main) in pictures.iter_mut().enumerate() {
+                let mut lines = Vec::new();
+                for (i, o) in scene.objects.iter().enumerate() {
+                    if !session.drawn[k].contains(i as u32) && frustum.classify(&o.bounds) != Containment::Outside {
+                        box_lines(&o.bounds, above.eye, YELLOW, &mut lines);
+                    }
+                }
+                frustum_lines(camera, reach, above.eye, &mut lines);
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                encoder.copy_texture_to_texture(
+                    targets.color_texture.as_image_copy(),
+                    picture.as_image_copy(),
+                    picture.size(),
+                );
+                gpu.queue.submit([encoder.finish()]);
+                self.lines.draw(gpu, &picture.create_view(&Default::default()), &lines);
+                let side = read_rgb(gpu, picture, resolution);
+                main.rgb = side_by_side(&main.rgb, &side, resolution);
+                main.width = 2 * resolution.width;
             }
         }
+        // A picture the GPU failed in shows nothing true.
+        gpu.check()?;
+        Ok(pictures)
     }
-
-    let (width, rgb) = if options.overview {
-        let above = overview_camera(scene, resolution);
-        session.renderer.set_camera(gpu, &above, resolution, &scene.objects);
-        let targets = RenderTargets::new(gpu, resolution, 1);
-        let all: Vec<u32> = (0..scene.objects.len() as u32).collect();
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        session.renderer.encode_shaded(
-            &mut encoder,
-            &targets,
-            &targets.mode_depths[0],
-            true,
-            Draws::Objects(&all),
-        );
-        gpu.queue.submit([encoder.finish()]);
-        let mut lines = Vec::new();
-        for b in &culled {
-            box_lines(b, above.eye, YELLOW, &mut lines);
-        }
-        // The frustum has no far plane: draw it out to the farthest corner of
-        // the scene, so every yellow box lies inside the red lines.
-        let reach = scene
-            .bounds
-            .corners()
-            .iter()
-            .map(|c| c.distance(camera.eye))
-            .fold(0.0, f64::max);
-        frustum_lines(&camera, reach, above.eye, &mut lines);
-        LinePainter::new(gpu, session.renderer.camera_uniform()).draw(gpu, &targets.color, &lines);
-        let side = read_rgb(gpu, &targets.color_texture, resolution);
-        (resolution.width * 2, side_by_side(&main, &side, resolution))
-    } else {
-        (resolution.width, main)
-    };
-    // A picture the GPU failed in shows nothing true.
-    gpu.check()?;
-    Ok(Picture {
-        width,
-        height: resolution.height,
-        rgb,
-        drawn: drawn.len(),
-        culled_in_frustum: culled.len(),
-        wrong,
-        occluder_cells: occluders.map(|d| [d.depths.iter().filter(|&&c| c > 0.0).count(), d.depths.len()]),
-    })
 }
 
 /// Lays `depths` over `rgb` (the pictured frame, `resolution` pixels): a
@@ -251,16 +335,20 @@ fn paint_occluder_depths(depths: &CellDepths, resolution: Resolution, rgb: &mut 
 }
 
 /// Paints magenta the pixels of `rgb` (the pictured frame) whose depth in
-/// the session's only mode differs from the reference's in any bit.
-fn paint_wrong_pixels(session: &mut Session, rgb: &mut [u8]) {
-    let (Some(reference), Some(mode)) = (session.reference_depth(), session.mode_depth(0)) else {
-        return;
+/// the session's mode `k` differs from the reference's in any bit; returns
+/// how many there are.
+fn paint_wrong_pixels(session: &mut Session, k: usize, rgb: &mut [u8]) -> u64 {
+    let (Some(reference), Some(mode)) = (session.reference_depth(), session.mode_depth(k)) else {
+        return 0;
     };
+    let mut wrong = 0;
     for ((pixel, r), m) in rgb.chunks_mut(3).zip(&reference).zip(&mode) {
         if r.to_bits() != m.to_bits() {
             pixel.copy_from_slice(&[255, 0, 255]);
+            wrong += 1;
         }
     }
+    wrong
 }
 
 /// Straight down the scene's up axis on the scene's detail (for +Y up, −Z

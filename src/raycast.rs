@@ -540,11 +540,8 @@ mod tests {
             .map(|corners| corners.map(|v| object.transform.transform_point3(v)))
             .collect();
         assert_eq!(world.len(), 2 * 48 * 48);
-        let mut seed = 99u64;
-        let mut random = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::rng::Rng::new(99);
+        let mut random = || rng.range(0.0, 1.0);
         let (mut hits, mut all) = (0, Vec::new());
         for _ in 0..300 {
             let origin = object.bounds.center() + DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5) * 12.0;

@@ -1,42 +1,63 @@
 //! Text from users' files inside messages and result files.
 
 /// `text` with control characters (newlines, tabs, escapes) and characters
-/// that reorder or hide text written as escape sequences: names and parser
-/// messages quote the input, an error must stay one line, a CSV row one
-/// row, and a name must read as what it is.
+/// that reorder, hide or break text written as escape sequences, and each
+/// backslash doubled, so that an escape sequence in the result always
+/// stands for the character it names (a name that holds the six
+/// characters `\u{1b}` shows as `\\u{1b}`): names and parser messages
+/// quote the input, an error must stay one line, a CSV row one row, and a
+/// name must read as what it is. Apply it once, where text is shown (a
+/// second pass doubles the backslashes of the first).
 pub fn one_line(text: &str) -> String {
-    if !text.chars().any(is_hidden) {
+    if !text.chars().any(|c| c == '\\' || is_hidden(c)) {
         return text.to_string();
     }
-    text.chars()
-        .map(|c| {
-            if is_hidden(c) {
-                c.escape_default().to_string()
-            } else {
-                c.to_string()
-            }
-        })
-        .collect()
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        match c {
+            '\\' => out.push_str("\\\\"),
+            c if is_hidden(c) => out.extend(c.escape_default()),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
-/// Whether `c` acts on text instead of showing: a control character, or
-/// one of Unicode's invisible format characters, which reorder what
-/// follows ("Trojan Source": U+202E makes `gpj.exe` read `exe.jpg`) or
-/// hide (zero-width characters, the byte order mark, tag characters that
-/// spell invisible text).
+/// Whether `c` acts on text instead of showing: a control character; a
+/// line or paragraph separator (U+2028, U+2029: a line break to many
+/// terminals and editors); or a default-ignorable code point, which
+/// Unicode says to render invisibly (DerivedCoreProperties.txt, Unicode
+/// 16): bidirectional controls that reorder what follows ("Trojan Source":
+/// U+202E makes `gpj.exe` read `exe.jpg`), zero-width characters, the
+/// combining grapheme joiner, fillers, variation selectors, the byte order
+/// mark, tag characters that spell invisible text; and the interlinear
+/// annotation marks, which hide what they enclose.
 fn is_hidden(c: char) -> bool {
     c.is_control()
         || matches!(
             c,
-            '\u{00AD}'
+            '\u{2028}'
+                | '\u{2029}'
+                // Default_Ignorable_Code_Point.
+                | '\u{00AD}'
+                | '\u{034F}'
                 | '\u{061C}'
-                | '\u{180E}'
+                | '\u{115F}'..='\u{1160}'
+                | '\u{17B4}'..='\u{17B5}'
+                | '\u{180B}'..='\u{180F}'
                 | '\u{200B}'..='\u{200F}'
                 | '\u{202A}'..='\u{202E}'
                 | '\u{2060}'..='\u{206F}'
+                | '\u{3164}'
+                | '\u{FE00}'..='\u{FE0F}'
                 | '\u{FEFF}'
+                | '\u{FFA0}'
+                | '\u{FFF0}'..='\u{FFF8}'
+                | '\u{1BCA0}'..='\u{1BCA3}'
+                | '\u{1D173}'..='\u{1D17A}'
+                | '\u{E0000}'..='\u{E0FFF}'
+                // Interlinear annotations.
                 | '\u{FFF9}'..='\u{FFFB}'
-                | '\u{E0000}'..='\u{E007F}'
         )
 }
 
@@ -139,6 +160,31 @@ mod tests {
         assert_eq!(one_line("plain 'é' ü"), "plain 'é' ü");
         assert_eq!(one_line("a\nb\r\tc\u{1b}[2J\0"), "a\\nb\\r\\tc\\u{1b}[2J\\u{0}");
         assert!(!one_line("x\u{85}y\u{7f}").chars().any(char::is_control));
+    }
+
+    #[test]
+    fn an_escape_in_the_result_always_stands_for_the_character_it_names() {
+        // The six characters of an escape, and the escape character itself:
+        // shown alike, one would pass for the other.
+        assert_eq!(one_line("a\\u{1b}b"), "a\\\\u{1b}b");
+        assert_eq!(one_line("a\u{1b}b"), "a\\u{1b}b");
+        assert_eq!(one_line("C:\\models"), "C:\\\\models");
+        assert_eq!(markdown("a\\n"), "a\\\\\\\\n");
+    }
+
+    #[test]
+    fn line_separators_and_every_default_ignorable_character_are_escaped() {
+        for (c, escaped) in [
+            ('\u{2028}', "\\u{2028}"),
+            ('\u{2029}', "\\u{2029}"),
+            ('\u{034F}', "\\u{34f}"),
+            ('\u{115F}', "\\u{115f}"),
+            ('\u{3164}', "\\u{3164}"),
+            ('\u{FE0F}', "\\u{fe0f}"),
+            ('\u{E0100}', "\\u{e0100}"),
+        ] {
+            assert_eq!(one_line(&format!("a{c}b")), format!("a{escaped}b"), "{c:?}");
+        }
     }
 
     #[test]

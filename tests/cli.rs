@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{THREE_OBJECTS_OBJ, TINY_RUN, occlu, own_stderr, said_one_line, stdout, tampered_copy, write};
+use common::{THREE_OBJECTS_OBJ, TINY_RUN, cannot_run, occlu, own_stderr, said_one_line, stdout, tampered_copy, write};
 
 /// Runs occlu and checks it fails with exit code `code` and one line of
 /// stderr that contains every one of `needles`.
@@ -962,7 +962,7 @@ fn a_full_disk_fails_with_exit_1_and_leaves_the_earlier_results() {
         .map(|o| o.status.success())
         .unwrap_or(false);
     if !mounted {
-        eprintln!("skipped: mounting a small tmpfs needs root");
+        cannot_run("mounting a small tmpfs needs root");
         return;
     }
     let unmount = || {

@@ -257,6 +257,17 @@ fn malformed_meshopt_data_is_an_error_not_a_crash() {
             "data lies outside its buffer",
         ),
         (edited(&|e| e["filter"] = "SPIRAL".into()), "unknown 'filter'"),
+        // 256 MiB claimed from its 238 bytes, the view and its buffer made
+        // to agree: refused before the 256 MiB are allocated.
+        (
+            {
+                let mut json = edited(&|e| e["count"] = (1u64 << 26).into());
+                json["bufferViews"][0]["byteLength"] = (1u64 << 28).into();
+                json["buffers"][1]["byteLength"] = ((1u64 << 28) + 4096).into();
+                json
+            },
+            "claims 67108864 elements of 4 bytes, more than its 238 compressed bytes can hold",
+        ),
     ];
     for (json, why) in refused {
         let e = try_load(&json, &bin).unwrap_err();

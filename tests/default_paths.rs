@@ -10,7 +10,8 @@ mod common;
 
 use common::hall::hall;
 use common::{
-    boxes_obj, first_hit, frames_too_near, occlu, shared_models, shared_models_dir, stderr, world_triangles, write,
+    boxes_obj, cannot_run, first_hit, frames_too_near, occlu, shared_models, shared_models_dir, stderr,
+    world_triangles, write,
 };
 use glam::DVec3;
 use occlu::bounds::Aabb;
@@ -320,7 +321,7 @@ fn every_shared_model_and_built_in_scene_keeps_its_kind_of_path() {
     }
     let dir = shared_models_dir();
     if !dir.exists() {
-        eprintln!("skipped the shared models: {} is absent", dir.display());
+        cannot_run(&format!("no real models at {} (../shared/models)", dir.display()));
         return;
     }
     for (model, _) in shared_models(&dir) {

@@ -15,7 +15,7 @@ mod common;
 
 use std::fmt::Write as _;
 
-use common::{shared_models, shared_models_dir};
+use common::{cannot_run, shared_models, shared_models_dir};
 use occlu::report::Fingerprint;
 use occlu::scene::{DEFAULT_CLUSTER_TRIANGLES, LoadOptions, Scene, SceneSpec, load};
 
@@ -164,7 +164,7 @@ fn builtin_scenes_load_as_before() {
 fn shared_models_load_as_before() {
     let dir = shared_models_dir();
     if !dir.is_dir() {
-        eprintln!("skipped: no real models at {} (../shared/models)", dir.display());
+        cannot_run(&format!("no real models at {} (../shared/models)", dir.display()));
         return;
     }
     let mut actual = Vec::new();

@@ -222,6 +222,26 @@ fn gltf_buffers_outside_the_models_folder_are_refused() {
             "{uri}: {e}"
         );
     }
+    // A model named without its folder, as `occlu info m.gltf` in the
+    // folder names it: the link is followed no further (its folder is
+    // `.`, not the empty path, which resolves to nothing), nor is a link
+    // that leads nowhere.
+    std::os::unix::fs::symlink(root.path().join("absent.bin"), model_dir.join("dangling.bin")).unwrap();
+    for (uri, why) in [("link.bin", "through a link"), ("dangling.bin", "dangling.bin")] {
+        write(&model_dir, "m.gltf", w.gltf_external(&[n], uri));
+        let info = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+            .args(["info", "m.gltf"])
+            .current_dir(&model_dir)
+            .output()
+            .unwrap();
+        common::said_one_line(
+            &info,
+            2,
+            &["m.gltf", "buffer 0", why],
+            &format!("info m.gltf with {uri}"),
+        );
+        assert!(stdout(&info).is_empty(), "{uri}: {}", stdout(&info));
+    }
     // Unless the user allows buffers elsewhere.
     let external = LoadOptions {
         external_buffers: true,
@@ -333,6 +353,40 @@ fn bad_gltf_input_is_a_clear_error() {
         r#"{"asset": {"version": "2.0"}, "meshes": [{"primitives": []}]"#,
     );
     assert!(load_file(&text).unwrap_err().to_string().contains("invalid glTF"));
+    // Neither a GLB nor JSON: said so, not as a JSON syntax error at byte 1.
+    for (name, bytes) in [
+        ("magic.glb", b"glTX\x02\0\0\0garbage".as_slice()),
+        ("obj.glb", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+    ] {
+        let e = load_file(&write(dir.path(), name, bytes)).unwrap_err().to_string();
+        assert!(
+            e.contains("neither a GLB") && !e.contains("line 1 column 1"),
+            "{name}: {e}"
+        );
+    }
+    // glTF JSON after a byte order mark, as some editors write it, loads.
+    let mut w = GltfWriter::default();
+    let (p, i) = cube();
+    let m = w.mesh("cube", &[(&p, Some(&i), 4)]);
+    let n = w.node(json!({"mesh": m}));
+    let bom = format!("\u{feff}{}", w.gltf_embedded(&[n]));
+    assert_eq!(load_file(&write(dir.path(), "bom.gltf", bom)).unwrap().triangles(), 12);
+}
+
+#[test]
+fn a_model_scaled_to_a_point_is_warned_of_as_such() {
+    let mut w = GltfWriter::default();
+    let (p, i) = cube();
+    let m = w.mesh("cube", &[(&p, Some(&i), 4)]);
+    let n = w.node(json!({"mesh": m, "scale": [0.0, 0.0, 0.0], "translation": [3.0, 0.0, 0.0]}));
+    let dir = tempfile::tempdir().unwrap();
+    let scene = load_file(&write(dir.path(), "point.glb", w.glb(&[n]))).unwrap();
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    let warning = &scene.warnings[0];
+    assert!(
+        warning.contains("one point ([3, 0, 0])") && warning.contains("no size") && !warning.contains("origin"),
+        "{warning}"
+    );
 }
 
 #[test]

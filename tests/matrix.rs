@@ -46,14 +46,6 @@ fn two_by_two(dir: &Path) -> PathBuf {
     )
 }
 
-/// The backends present here, by the names `--backend` takes.
-fn backends() -> Vec<String> {
-    common::gpus()
-        .iter()
-        .map(|g| g.adapter.backend.to_lowercase())
-        .collect()
-}
-
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -128,7 +120,7 @@ fn refused(args: &[&str], needles: &[&str]) {
 fn three_shards_run_exactly_the_runs_of_the_whole_matrix() {
     let dir = tempfile::tempdir().unwrap();
     let matrix = two_by_two(dir.path());
-    let backend = &backends()[0];
+    let backend = &common::backends()[0];
     let whole = dir.path().join("whole");
     bench_matrix(&matrix, backend, &whole, &["--quiet"]);
     assert_eq!(
@@ -220,7 +212,7 @@ fn three_shards_run_exactly_the_runs_of_the_whole_matrix() {
 fn shards_and_a_gl_run_merge_into_one_report_that_compare_gates() {
     let dir = tempfile::tempdir().unwrap();
     let matrix = two_by_two(dir.path());
-    let backends = backends();
+    let backends = common::backends();
     // As the workflow: three shards on one runner, the whole matrix on
     // another adapter (GL here) when there is one.
     let mut dirs = Vec::new();
@@ -330,7 +322,7 @@ fn edited_copy(from: &Path, to: &Path, edit: impl Fn(&mut serde_json::Value)) {
 #[test]
 fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on() {
     let dir = tempfile::tempdir().unwrap();
-    let backend = &backends()[0];
+    let backend = &common::backends()[0];
     // One matrix, run on two machines whose model files differ: the same
     // path, other content.
     let matrix = write(
@@ -487,7 +479,7 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
 fn matrix_of_one(dir: &Path) -> (PathBuf, PathBuf) {
     let matrix = tiny_matrix(dir, "m.json", r#"["city:blocks=1"]"#);
     let full = dir.join("full");
-    bench_matrix(&matrix, &backends()[0], &full, &["--quiet"]);
+    bench_matrix(&matrix, &common::backends()[0], &full, &["--quiet"]);
     let run = full.join("01-city-blocks-1-generated");
     (full, run)
 }
@@ -505,7 +497,7 @@ fn tiny_matrix(dir: &Path, name: &str, scenes: &str) -> PathBuf {
 #[test]
 fn a_bad_run_fails_every_shard_up_front_and_a_failing_run_leaves_no_folder() {
     let dir = tempfile::tempdir().unwrap();
-    let backend = &backends()[0];
+    let backend = &common::backends()[0];
     std::fs::create_dir(dir.path().join("adir")).unwrap();
     let out = dir.path().join("out");
     // A built-in scene that does not parse, or a model that is a folder:
@@ -653,7 +645,7 @@ fn merge_refuses_to_write_over_its_input_or_a_partial_matrix_and_takes_odd_names
 #[test]
 fn merge_refuses_runs_of_two_matrices_and_names_a_frame_count_that_differs() {
     let dir = tempfile::tempdir().unwrap();
-    let backend = &backends()[0];
+    let backend = &common::backends()[0];
     // Run 01 of a matrix of one and of a matrix of two: the same name, not
     // one run of one matrix.
     let one = tiny_matrix(dir.path(), "one.json", r#"["city:blocks=1"]"#);

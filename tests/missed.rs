@@ -12,7 +12,7 @@ use occlu::cull::{Culler, ModeParams, create};
 use occlu::gpu::Resolution;
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::measure::MissedObject;
-use occlu::picture::{PictureError, PictureOptions, render};
+use occlu::picture::{Look, PictureError, render};
 use occlu::report::{MissedSummary, read_results, render_markdown, write_results};
 use occlu::world::World;
 
@@ -129,7 +129,7 @@ fn missed_csv_and_report_list_what_was_missed_and_an_exact_run_removes_the_list(
         first_y: (k > 2).then_some(k),
     }));
     summary.missed = MissedSummary::of(&missed);
-    let files = write_results(&run, &mut summary, &rows, &missed).unwrap();
+    let files = write_results(&run, &mut summary, &rows, &missed, None).unwrap();
     let csv_path = files.missed_csv.expect("written when something was missed");
     let csv = std::fs::read_to_string(&csv_path).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
@@ -153,7 +153,7 @@ fn missed_csv_and_report_list_what_was_missed_and_an_exact_run_removes_the_list(
     );
     assert!(!report.contains("part\\|10"), "only the first ten");
     summary.missed = MissedSummary::default();
-    let files = write_results(&run, &mut summary, &rows, &[]).unwrap();
+    let files = write_results(&run, &mut summary, &rows, &[], None).unwrap();
     assert!(
         files.missed_csv.is_none() && !csv_path.exists(),
         "a stale list is removed"
@@ -166,8 +166,7 @@ fn show_missed_paints_the_dropped_object_magenta_and_nothing_else() {
     let scene = boxes(&quads);
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let path = still(DVec3::ZERO, DVec3::NEG_Z, 90.0);
-    let options = PictureOptions {
-        frame: 0,
+    let look = Look {
         resolution: SIZE,
         overview: false,
         heat: false,
@@ -177,7 +176,7 @@ fn show_missed_paints_the_dropped_object_magenta_and_nothing_else() {
     let magenta = [255u8, 0, 255];
     for gpu in common::gpus() {
         let mut world = World::new(scene.clone(), hierarchy.clone());
-        let picture = render(&gpu, &mut world, &path, Box::new(DropOneVisible(Vec::new())), &options).unwrap();
+        let picture = render(&gpu, &mut world, &path, Box::new(DropOneVisible(Vec::new())), 0, &look).unwrap();
         let wrong = picture.wrong.as_ref().expect("asked for");
         assert_eq!(wrong.pixels, 80, "{}", gpu.adapter);
         assert_eq!(wrong.objects.len(), 1);
@@ -197,12 +196,12 @@ fn show_missed_paints_the_dropped_object_magenta_and_nothing_else() {
         let painted = picture.rgb.chunks(3).filter(|p| *p == magenta).count();
         assert!(painted > 80, "{painted} magenta pixels");
 
-        let plain = PictureOptions {
+        let plain = Look {
             show_missed: false,
-            ..options
+            ..look
         };
         let mut world = World::new(scene.clone(), hierarchy.clone());
-        let picture = render(&gpu, &mut world, &path, Box::new(DropOneVisible(Vec::new())), &plain).unwrap();
+        let picture = render(&gpu, &mut world, &path, Box::new(DropOneVisible(Vec::new())), 0, &plain).unwrap();
         assert!(picture.wrong.is_none());
         assert!(picture.rgb.chunks(3).all(|p| p != magenta), "only when asked");
     }
@@ -215,8 +214,7 @@ fn occluders_lays_swrs_buffer_over_the_quads_it_culled_with_and_dims_the_rest() 
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     // Frame 2: the quads drawn in frame 1 are frame 2's occluders.
     let path = held(DVec3::ZERO, DVec3::NEG_Z, 90.0, 3);
-    let options = PictureOptions {
-        frame: 2,
+    let look = Look {
         resolution: SIZE,
         overview: false,
         heat: false,
@@ -229,7 +227,7 @@ fn occluders_lays_swrs_buffer_over_the_quads_it_culled_with_and_dims_the_rest() 
     for gpu in common::gpus() {
         let mut world = World::new(scene.clone(), hierarchy.clone());
         let swr = create("swr", &scene, &one_cell_per_pixel).unwrap();
-        let picture = render(&gpu, &mut world, &path, swr, &options).unwrap();
+        let picture = render(&gpu, &mut world, &path, swr, 2, &look).unwrap();
         let at = |(x, y): (u32, u32)| {
             let i = 3 * (y * SIZE.width + x) as usize;
             [picture.rgb[i], picture.rgb[i + 1], picture.rgb[i + 2]]
@@ -250,7 +248,7 @@ fn occluders_lays_swrs_buffer_over_the_quads_it_culled_with_and_dims_the_rest() 
 
         let mut world = World::new(scene.clone(), hierarchy.clone());
         let roc = create("roc", &scene, &ModeParams::default()).unwrap();
-        match render(&gpu, &mut world, &path, roc, &options) {
+        match render(&gpu, &mut world, &path, roc, 2, &look) {
             Err(e @ PictureError::NoOccluderDepths { .. }) => assert!(e.is_input_error()),
             other => panic!("roc keeps no CPU buffer: {:?}", other.map(|p| p.drawn)),
         }

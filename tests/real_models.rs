@@ -8,7 +8,7 @@ mod common;
 
 use std::time::Instant;
 
-use common::{gpus, hierarchy, run_modes, shared_models, shared_models_dir};
+use common::{cannot_run, gpus, hierarchy, run_modes, shared_models, shared_models_dir};
 use occlu::camera::generate::default_path;
 use occlu::camera::path::CameraPath;
 use occlu::cull::{Culler, ModeParams, create, modes};
@@ -22,7 +22,7 @@ const GENERATED_FRAMES: u32 = 8;
 fn every_conservative_mode_is_exact_on_every_shared_model() {
     let dir = shared_models_dir();
     if !dir.is_dir() {
-        eprintln!("skipped: no real models at {} (../shared/models)", dir.display());
+        cannot_run(&format!("no real models at {} (../shared/models)", dir.display()));
         return;
     }
     let models = shared_models(&dir);

@@ -13,7 +13,7 @@ use occlu::camera::{Camera, look_rotation};
 use occlu::cull::{Culler, ModeId, ModeParams, create, modes};
 use occlu::gpu::Resolution;
 use occlu::hierarchy::HierarchyParams;
-use occlu::scene::builtin::Rng;
+use occlu::rng::Rng;
 use occlu::stress::{DepthTolerance, StressCase, StressRow, run_case, select};
 use serde_json::Value;
 

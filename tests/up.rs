@@ -5,6 +5,7 @@ mod common;
 
 use common::{boxes_obj, occlu, stdout, town, write};
 use glam::DVec3;
+use occlu::auto_or::AutoOr;
 use occlu::camera::generate::{PathKind, generate};
 use occlu::camera::path::CameraPath;
 use occlu::scene::up::{UpAxis, UpChoice};
@@ -22,14 +23,14 @@ fn load_obj(dir: &std::path::Path, name: &str, boxes: &[(String, DVec3, DVec3)],
 #[test]
 fn auto_picks_z_for_a_z_up_town_and_y_otherwise() {
     let dir = tempfile::tempdir().unwrap();
-    let z_up = load_obj(dir.path(), "z.obj", &town(false), UpChoice::Auto);
+    let z_up = load_obj(dir.path(), "z.obj", &town(false), AutoOr::Auto);
     assert_eq!(z_up.up.axis, UpAxis::Z, "{}", z_up.up.why);
     assert!(
         z_up.up.why.contains("objects standing on its Z minimum"),
         "{}",
         z_up.up.why
     );
-    let y_up = load_obj(dir.path(), "y.obj", &town(true), UpChoice::Auto);
+    let y_up = load_obj(dir.path(), "y.obj", &town(true), AutoOr::Auto);
     assert_eq!(y_up.up.axis, UpAxis::Y, "{}", y_up.up.why);
     // A facade, thin in Z, whose parts span its whole depth: +Y.
     let facade: Vec<_> = (0..6)
@@ -43,10 +44,10 @@ fn auto_picks_z_for_a_z_up_town_and_y_otherwise() {
             )
         })
         .collect();
-    let facade = load_obj(dir.path(), "f.obj", &facade, UpChoice::Auto);
+    let facade = load_obj(dir.path(), "f.obj", &facade, AutoOr::Auto);
     assert_eq!(facade.up.axis, UpAxis::Y, "{}", facade.up.why);
     // --up wins.
-    let forced = load_obj(dir.path(), "z2.obj", &town(false), UpChoice::Axis(UpAxis::Y));
+    let forced = load_obj(dir.path(), "z2.obj", &town(false), AutoOr::Given(UpAxis::Y));
     assert_eq!(forced.up.axis, UpAxis::Y);
 }
 
@@ -54,7 +55,7 @@ fn auto_picks_z_for_a_z_up_town_and_y_otherwise() {
 fn generated_paths_circle_and_walk_about_the_up_axis() {
     let dir = tempfile::tempdir().unwrap();
     for (swap, up) in [(false, DVec3::Z), (true, DVec3::Y)] {
-        let scene = load_obj(dir.path(), "t.obj", &town(swap), UpChoice::Auto);
+        let scene = load_obj(dir.path(), "t.obj", &town(swap), AutoOr::Auto);
         let c = scene.bounds.center();
         // One frame per keyframe, so each lies on the circle exactly.
         let orbit = CameraPath::from_file(&generate(PathKind::Orbit, &scene, 25).unwrap(), "orbit").unwrap();

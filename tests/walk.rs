@@ -359,11 +359,8 @@ fn the_ray_caster_agrees_with_every_triangle_tried_in_turn() {
     let scene = load_obj(dir.path(), &town(false));
     let caster = RayCaster::new(&scene);
     let triangles = world_triangles(&scene);
-    let mut seed = 12345u64;
-    let mut random = || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = occlu::rng::Rng::new(12345);
+    let mut random = || rng.range(0.0, 1.0);
     let mut hits = 0;
     for _ in 0..400 {
         let origin = DVec3::new(random() * 160.0 - 20.0, random() * 160.0 - 20.0, random() * 50.0);
@@ -394,7 +391,7 @@ fn the_ray_caster_agrees_with_every_triangle_tried_in_turn() {
 fn den_haag_is_walked_without_clipping() {
     let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/den-haag.obj");
     if !model.exists() {
-        eprintln!("skipped: {} is absent", model.display());
+        common::cannot_run(&format!("{} is absent", model.display()));
         return;
     }
     let scene = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();

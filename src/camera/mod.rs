@@ -264,11 +264,8 @@ mod tests {
         // outside the same clip plane; inside when all corners are inside.
         let cam = camera(DVec3::new(1.0, 2.0, 3.0), DVec3::new(0.3, -0.1, -1.0));
         let f = cam.frustum();
-        let mut rng = 1u64;
-        let mut rand = || {
-            rng = rng.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (rng >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::rng::Rng::new(1);
+        let mut rand = || rng.range(0.0, 1.0);
         let inside_clip = |c: DVec4| c.w > 0.0 && c.x.abs() <= c.w && c.y.abs() <= c.w && c.z <= c.w;
         let mut seen = [0; 3];
         for _ in 0..2000 {

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{Camera, look_rotation, up_along_view};
 use crate::scene::{MAX_COORDINATE, within_range};
-use crate::text::{number, one_line, vector};
+use crate::text::{number, vector};
 
 /// The file format, as written and read.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -131,7 +131,7 @@ impl CameraPath {
     pub fn parse(text: &str, source: &str) -> Result<CameraPath, PathError> {
         let file: PathFile = serde_json::from_str(text).map_err(|e| PathError::Json {
             path: source.to_string(),
-            message: one_line(&e.to_string()),
+            message: e.to_string(),
         })?;
         CameraPath::from_file(&file, source)
     }

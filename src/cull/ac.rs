@@ -54,6 +54,7 @@ use std::time::{Duration, Instant};
 use serde::Serialize;
 
 use super::traversal::{DepthQueue, children, draw_leaf, frustum_cull_subtree, in_frustum, view_depth};
+use crate::auto_or::AutoOr;
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{BoxTest, BoxVisibility, Frame};
@@ -95,13 +96,13 @@ const EYE_DISTANCE: ParamInfo = ParamInfo {
     summary: "Dist(Eye) of Eq. 1: the near plane, or a distance",
 };
 
-/// The threshold of Eq. 1, in pixels.
+/// The threshold of Eq. 1: `auto` is the paper's 100 pixels on 650×650,
+/// scaled to the viewport.
+pub type Threshold = AutoOr<Pixels>;
+
+/// A number of pixels, at least 0.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Threshold {
-    /// The paper's 100 pixels on 650×650, scaled to the viewport.
-    Auto,
-    Pixels(f64),
-}
+pub struct Pixels(pub f64);
 
 /// Dist(Eye) of Eq. 1.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -150,20 +151,17 @@ const PAPER_VIEW_PLANE: f64 = 650.0 * 650.0;
 impl Threshold {
     fn pixels(self, viewport_pixels: u64) -> f64 {
         match self {
-            Threshold::Auto => PAPER_THRESHOLD * viewport_pixels as f64 / PAPER_VIEW_PLANE,
-            Threshold::Pixels(p) => p,
+            AutoOr::Auto => PAPER_THRESHOLD * viewport_pixels as f64 / PAPER_VIEW_PLANE,
+            AutoOr::Given(Pixels(p)) => p,
         }
     }
 }
 
-impl FromStr for Threshold {
+impl FromStr for Pixels {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        if s == "auto" {
-            return Ok(Threshold::Auto);
-        }
         match s.parse::<f64>() {
-            Ok(p) if p >= 0.0 && p.is_finite() => Ok(Threshold::Pixels(p)),
+            Ok(p) if p >= 0.0 && p.is_finite() => Ok(Pixels(p)),
             _ => Err("expected 'auto' or a number of pixels ≥ 0".into()),
         }
     }
@@ -182,12 +180,9 @@ impl FromStr for EyeDistance {
     }
 }
 
-impl fmt::Display for Threshold {
+impl fmt::Display for Pixels {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        match self {
-            Threshold::Auto => f.write_str("auto"),
-            Threshold::Pixels(p) => write!(f, "{p}"),
-        }
+        write!(f, "{}", self.0)
     }
 }
 
@@ -201,12 +196,6 @@ impl fmt::Display for EyeDistance {
 }
 
 // Recorded in summary.json as written on the command line.
-impl Serialize for Threshold {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_str(self)
-    }
-}
-
 impl Serialize for EyeDistance {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         s.collect_str(self)
@@ -336,15 +325,15 @@ mod tests {
 
     #[test]
     fn the_default_threshold_is_the_papers_scaled_to_the_viewport() {
-        assert_eq!(Threshold::Auto.pixels(650 * 650), 100.0);
-        assert!((Threshold::Auto.pixels(800 * 600) - 113.6).abs() < 0.1);
-        assert_eq!(Threshold::Pixels(7.0).pixels(1), 7.0);
+        assert_eq!(AutoOr::Auto.pixels(650 * 650), 100.0);
+        assert!((AutoOr::Auto.pixels(800 * 600) - 113.6).abs() < 0.1);
+        assert_eq!(AutoOr::Given(Pixels(7.0)).pixels(1), 7.0);
     }
 
     #[test]
     fn parameters_parse_and_reject_nonsense() {
         assert_eq!("auto".parse(), Ok(Threshold::Auto));
-        assert_eq!("50".parse(), Ok(Threshold::Pixels(50.0)));
+        assert_eq!("50".parse(), Ok(AutoOr::Given(Pixels(50.0))));
         assert!("-1".parse::<Threshold>().is_err());
         assert_eq!("near".parse(), Ok(EyeDistance::Near));
         assert!("0".parse::<EyeDistance>().is_err());
@@ -353,7 +342,7 @@ mod tests {
             ModeParams::parse(&items, &[ModeId::Ac]).and_then(|m| AcParams::from_params(&m))
         };
         let defaults = p(&[]).unwrap();
-        assert_eq!(defaults.threshold, Threshold::Auto);
+        assert_eq!(defaults.threshold, AutoOr::Auto);
         assert_eq!((defaults.sampling, defaults.eye_distance), (1, EyeDistance::Near));
         assert!((defaults.f_graphics - 1.0 / 3.0).abs() < 1e-9);
         assert!(p(&["ac.f_graphics=inf"]).unwrap().f_graphics.is_infinite());

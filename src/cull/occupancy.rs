@@ -180,11 +180,8 @@ mod tests {
             cols,
             cells: vec![false; (cols * rows) as usize],
         };
-        let mut seed = 3u64;
-        let mut next = |n: u32| {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((seed >> 33) % u64::from(n)) as u32
-        };
+        let mut rng = crate::rng::Rng::new(3);
+        let mut next = |n: u32| rng.int(0, n - 1);
         for round in 0..4000 {
             let (x0, y0) = (next(cols), next(rows));
             let r = ScreenRect {
@@ -283,11 +280,8 @@ mod tests {
         let cam = camera();
         let (cols, rows) = (80u32, 60u32);
         let mvp = cam.projection() * glam::DMat4::from(cam.model_view(&glam::DAffine3::IDENTITY));
-        let mut seed = 11u64;
-        let mut rand = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::rng::Rng::new(11);
+        let mut rand = || rng.range(0.0, 1.0);
         let forward = cam.forward();
         let mut checked = 0;
         for _ in 0..300 {

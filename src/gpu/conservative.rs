@@ -560,7 +560,7 @@ pub(crate) mod tests {
     fn random_boxes_in_view(seed: u64) -> Vec<(Aabb, QueryBox)> {
         let cam = camera();
         let margins = BoxMargins::new(DepthMargins::for_backend(wgpu::Backend::Gl), &cam, Resolution::DEFAULT);
-        let mut rng = crate::scene::builtin::Rng::new(seed);
+        let mut rng = crate::rng::Rng::new(seed);
         (0..200)
             .filter_map(|_| {
                 let centre = cam.eye

@@ -35,7 +35,7 @@ impl BackendChoice {
                         .split(',')
                         .find(|name| wgpu::Backends::from_comma_list(name).is_empty());
                     if let Some(name) = unknown {
-                        return Err(GpuError::UnknownBackend(crate::text::one_line(name.trim())));
+                        return Err(GpuError::UnknownBackend(name.trim().to_string()));
                     }
                 }
                 wgpu::Backends::all().with_env()
@@ -122,10 +122,9 @@ impl GpuError {
 /// (wgpu reads it and drops names it does not know).
 fn narrowed_by_env(choice: BackendChoice) -> String {
     match std::env::var("WGPU_BACKEND") {
-        Ok(value) if choice == BackendChoice::Auto => format!(
-            " narrowed by WGPU_BACKEND={} (names wgpu knows: vulkan, gl, metal, dx12, comma-separated)",
-            crate::text::one_line(&value)
-        ),
+        Ok(value) if choice == BackendChoice::Auto => {
+            format!(" narrowed by WGPU_BACKEND={value} (names wgpu knows: vulkan, gl, metal, dx12, comma-separated)")
+        }
         _ => String::new(),
     }
 }
@@ -308,7 +307,7 @@ impl GpuContext {
 /// Keeps `message` as the device's failure unless one came first.
 fn record_failure(failure: &Mutex<Option<String>>, message: &str) {
     let mut first = failure.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-    first.get_or_insert_with(|| crate::text::one_line(message));
+    first.get_or_insert_with(|| message.to_string());
 }
 
 fn device_rank(t: wgpu::DeviceType) -> u8 {

@@ -15,7 +15,7 @@ use super::renderer::DrawRange;
 use super::renderer::{Draws, IndirectDraws, SceneRenderer};
 use super::resolution::Resolution;
 use super::targets::RenderTargets;
-use super::timing::GpuTimer;
+use super::timing::{GpuSpan, GpuTimer};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
 use crate::hierarchy::Hierarchy;
@@ -49,9 +49,34 @@ pub struct FrameOutcome {
     pub gpu_ops: Duration,
 }
 
+/// What the CPU did during a GPU operation of a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OpKind {
+    /// Encoding and submitting commands.
+    Commands,
+    /// Waiting for results on the CPU: a batch of box tests (and reading
+    /// them out), or a mode's own read-back.
+    WaitForResults,
+    /// Waiting for the GPU to finish the frame.
+    WaitForGpu,
+}
+
+/// A stretch of a frame the CPU spent in a GPU operation, on its own clock:
+/// the frame's timeline ([`crate::measure::FrameTimeline`]) is made from
+/// these, the gaps between them inside the mode's `frame` call being its
+/// culling.
+#[derive(Clone, Copy, Debug)]
+pub struct OpSpan {
+    pub kind: OpKind,
+    pub start: Instant,
+    pub end: Instant,
+    /// For a wait for box tests, where the tests ran on the GPU (timestamps).
+    pub tests: Option<GpuSpan>,
+}
+
 /// What a mode's own GPU work drew and tested in a frame, read back after
 /// it, untimed ([`crate::cull::Culler::audit`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GpuAudit {
     pub triangles_drawn: u64,
     /// Nodes the walk reached.
@@ -66,10 +91,10 @@ pub struct GpuAudit {
     /// walk, newly visible: every object the walk drew.
     pub drawn_early: u64,
     pub drawn_late: u64,
-    /// GPU time of the walk and the compaction, where timestamps exist.
-    pub cull_gpu: Option<Duration>,
-    /// Of that, the depth pyramid's build (hiz).
-    pub pyramid_gpu: Option<Duration>,
+    /// The walk and the compaction on the GPU, where timestamps exist.
+    pub cull_gpu: Option<GpuSpan>,
+    /// Within it, the depth pyramid's build (hiz).
+    pub pyramid_gpu: Option<GpuSpan>,
 }
 
 impl FrameOutcome {
@@ -82,10 +107,10 @@ impl FrameOutcome {
         c.triangles_drawn += audit.triangles_drawn;
         c.queries += audit.nodes_tested;
         if let Some(t) = audit.cull_gpu {
-            *c.query_gpu.get_or_insert(Duration::ZERO) += t;
+            *c.query_gpu.get_or_insert(Duration::ZERO) += t.duration();
         }
         if let Some(t) = audit.pyramid_gpu {
-            *c.pyramid_gpu.get_or_insert(Duration::ZERO) += t;
+            *c.pyramid_gpu.get_or_insert(Duration::ZERO) += t.duration();
         }
     }
 }
@@ -190,6 +215,7 @@ pub struct FrameCtx<'a> {
     counters: FrameCounters,
     drawn: &'a mut ObjectSet,
     gpu_ops: Duration,
+    ops: &'a mut Vec<OpSpan>,
 }
 
 /// Everything a frame of one mode renders with.
@@ -201,6 +227,8 @@ pub struct FrameResources<'a> {
     pub timer: Option<&'a GpuTimer>,
     /// Scratch for queued draws, reused from frame to frame.
     pub draw_queue: &'a mut Vec<u32>,
+    /// Where the frame's GPU operations are logged, cleared first.
+    pub ops: &'a mut Vec<OpSpan>,
 }
 
 impl<'a> FrameCtx<'a> {
@@ -212,6 +240,7 @@ impl<'a> FrameCtx<'a> {
         camera: &'a Camera,
         drawn: &'a mut ObjectSet,
     ) -> FrameCtx<'a> {
+        let start = Instant::now();
         let FrameResources {
             gpu,
             renderer,
@@ -219,15 +248,18 @@ impl<'a> FrameCtx<'a> {
             queries,
             timer,
             draw_queue: queued,
+            ops,
         } = resources;
         drawn.clear();
         queued.clear();
+        ops.clear();
         let depth = &targets.mode_depths[slot];
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         if let Some(t) = timer {
             t.begin(&mut encoder, slot);
         }
         renderer.encode_shaded(&mut encoder, targets, depth, true, Draws::Objects(&[]));
+        log(ops, OpKind::Commands, start, Instant::now());
         FrameCtx {
             gpu,
             renderer,
@@ -242,6 +274,7 @@ impl<'a> FrameCtx<'a> {
             counters: FrameCounters::default(),
             drawn,
             gpu_ops: Duration::ZERO,
+            ops,
         }
     }
 
@@ -261,16 +294,27 @@ impl<'a> FrameCtx<'a> {
             visibility: out,
             totals,
         };
+        let tested = Instant::now();
         let cost = self.queries.test(self.gpu, encoder, target, boxes, kind, answers);
+        let end = Instant::now();
         if cost.queries > 0 {
             self.counters.queries += cost.queries;
             self.counters.query_batches += 1;
             self.counters.query_wait += cost.wait;
             if let Some(gpu) = cost.gpu {
-                *self.counters.query_gpu.get_or_insert(Duration::ZERO) += gpu;
+                *self.counters.query_gpu.get_or_insert(Duration::ZERO) += gpu.duration();
             }
         }
-        self.gpu_ops += start.elapsed().saturating_sub(cost.prepare);
+        self.gpu_ops += (end - start).saturating_sub(cost.prepare);
+        // Preparing the boxes is culling: it stays out of the log. A batch
+        // whose boxes all reached the near plane waited for nothing; the
+        // wait of another holds reading its results out (microseconds).
+        let waited = if cost.queries > 0 { cost.submitted } else { end };
+        log(self.ops, OpKind::Commands, start, tested);
+        log(self.ops, OpKind::Commands, tested + cost.prepare, waited);
+        if let Some(wait) = log(self.ops, OpKind::WaitForResults, waited, end) {
+            wait.tests = cost.gpu;
+        }
     }
 
     fn encode_queued_draws(&mut self) {
@@ -288,12 +332,16 @@ impl<'a> FrameCtx<'a> {
 
     /// Submits the rest of the frame and waits until the GPU has finished it.
     pub(crate) fn finish(mut self) -> FrameOutcome {
+        let start = Instant::now();
         self.encode_queued_draws();
         if let Some((t, slot)) = self.timer {
             t.end(&mut self.encoder, slot);
         }
         self.gpu.queue.submit([self.encoder.finish()]);
+        let submitted = Instant::now();
         self.gpu.wait_idle();
+        log(self.ops, OpKind::Commands, start, submitted);
+        log(self.ops, OpKind::WaitForGpu, submitted, Instant::now());
         FrameOutcome {
             counters: self.counters,
             gpu_ops: self.gpu_ops,
@@ -349,7 +397,9 @@ impl GpuFrame for FrameCtx<'_> {
             encoder: &mut self.encoder,
             depth: self.depth,
         });
-        self.gpu_ops += start.elapsed();
+        let end = Instant::now();
+        self.gpu_ops += end - start;
+        log(self.ops, OpKind::Commands, start, end);
     }
 
     fn round_trip(&mut self, read: &mut dyn FnMut(&GpuContext, wgpu::CommandEncoder)) {
@@ -361,9 +411,12 @@ impl GpuFrame for FrameCtx<'_> {
         );
         let submitted = Instant::now();
         read(self.gpu, encoder);
+        let end = Instant::now();
         self.counters.query_batches += 1;
-        self.counters.query_wait += submitted.elapsed();
-        self.gpu_ops += start.elapsed();
+        self.counters.query_wait += end - submitted;
+        self.gpu_ops += end - start;
+        log(self.ops, OpKind::Commands, start, submitted);
+        log(self.ops, OpKind::WaitForResults, submitted, end);
     }
 
     fn draw_indirect(&mut self, draws: IndirectDraws) {
@@ -376,6 +429,22 @@ impl GpuFrame for FrameCtx<'_> {
             false,
             Draws::Indirect(draws),
         );
-        self.gpu_ops += start.elapsed();
+        let end = Instant::now();
+        self.gpu_ops += end - start;
+        log(self.ops, OpKind::Commands, start, end);
     }
+}
+
+/// Appends a span of `kind` from `start` to `end` to `ops` and returns it,
+/// unless it is empty.
+fn log(ops: &mut Vec<OpSpan>, kind: OpKind, start: Instant, end: Instant) -> Option<&mut OpSpan> {
+    (end > start).then(|| {
+        ops.push(OpSpan {
+            kind,
+            start,
+            end,
+            tests: None,
+        });
+        ops.last_mut().expect("just pushed")
+    })
 }

@@ -12,6 +12,8 @@ mod renderer;
 mod resolution;
 mod targets;
 mod timing;
+#[cfg(test)]
+pub(crate) mod wgsl;
 
 /// A ray caster's view of pixels and boxes, for tests of box tests.
 #[cfg(test)]
@@ -19,7 +21,9 @@ pub(crate) use conservative::tests::{entry_depth, pixel_ray};
 pub use conservative::{BoxMargins, DepthMargins};
 pub(crate) use conservative::{BoxPlanes, EyeBox, PixelRays, QueryBox, ScreenPlane, ShaderBoxPlanes, eye_relative_box};
 pub use context::{AdapterReport, BackendChoice, GpuContext, GpuError};
-pub use frame::{Frame, FrameCounters, FrameCtx, FrameOutcome, FrameResources, GpuAudit, GpuFrame, GpuSetup, GpuWork};
+pub use frame::{
+    Frame, FrameCounters, FrameCtx, FrameOutcome, FrameResources, GpuAudit, GpuFrame, GpuSetup, GpuWork, OpKind, OpSpan,
+};
 pub use picture::{LinePainter, LineVertex, picture_target, read_rgb};
 /// The building blocks of box tests, for modes that test boxes their own
 /// way (the GPU walk).
@@ -29,7 +33,10 @@ pub(crate) use queries::{
 };
 pub use queries::{BoxTest, BoxVisibility, QUERIES_PER_SET, QueryPool};
 pub use readback::Readback;
+#[cfg(test)]
+pub(crate) use renderer::CAMERA_WGSL;
+pub(crate) use renderer::module_with_camera;
 pub use renderer::{DrawRange, Draws, GpuScene, IndirectCount, IndirectDraws, SceneRenderer};
 pub use resolution::Resolution;
 pub use targets::RenderTargets;
-pub use timing::GpuTimer;
+pub use timing::{GpuSpan, GpuTimer};

@@ -3,6 +3,7 @@
 
 use super::context::GpuContext;
 use super::readback::Readback;
+use super::renderer::module_with_camera;
 use super::resolution::Resolution;
 use super::targets::{COLOR_FORMAT, texture_2d};
 
@@ -23,10 +24,7 @@ pub struct LinePainter {
 impl LinePainter {
     pub fn new(gpu: &GpuContext, camera: &wgpu::Buffer) -> LinePainter {
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("lines.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/lines.wgsl").into()),
-        });
+        let module = module_with_camera(gpu, "lines.wgsl", &[include_str!("../../shaders/lines.wgsl")]);
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("lines"),
             layout: None,
@@ -101,9 +99,9 @@ impl LinePainter {
     }
 }
 
-/// A colour texture that can be drawn into and read back.
+/// A colour texture that can be drawn into, copied into and read back.
 pub fn picture_target(gpu: &GpuContext, resolution: Resolution) -> wgpu::Texture {
-    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST;
     texture_2d(gpu, "picture", resolution, COLOR_FORMAT, usage)
 }
 

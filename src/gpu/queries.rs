@@ -20,7 +20,9 @@ use std::time::{Duration, Instant};
 use super::conservative::{BoxMargins, EyeBox, QueryBox, eye_relative_box};
 use super::context::{GpuContext, GpuError};
 use super::readback::Readback;
+use super::renderer::module_with_camera;
 use super::targets::DEPTH_FORMAT;
+use super::timing::GpuSpan;
 use crate::bounds::Aabb;
 use crate::camera::Camera;
 
@@ -78,10 +80,12 @@ pub struct BatchAnswers<'a> {
 pub struct BatchCost {
     /// Boxes actually tested (unqueried ones excluded).
     pub queries: u64,
-    /// Time from submitting the batch until its results were on the CPU.
+    /// When the batch was submitted, and how long after it its results
+    /// were on the CPU.
+    pub submitted: Instant,
     pub wait: Duration,
-    /// GPU time of the test passes alone (timestamps), where available.
-    pub gpu: Option<Duration>,
+    /// The test passes alone on the GPU (timestamps), where available.
+    pub gpu: Option<GpuSpan>,
     /// CPU time spent preparing the boxes (made eye-relative, grown, the
     /// near-plane rule applied): culling work rather than GPU work.
     pub prepare: Duration,
@@ -135,17 +139,15 @@ pub struct QueryPool {
 }
 
 /// The box vertex stage every box test draws with (a box per instance,
-/// eye-relative, raised in depth: see conservative.rs).
+/// eye-relative, raised in depth: see conservative.rs), written after
+/// camera.wgsl.
 pub(crate) const BOXES_WGSL: &str = include_str!("../../shaders/boxes.wgsl");
 
 impl QueryPool {
     /// `camera` is the uniform buffer the scene renderer fills per frame.
     pub fn new(gpu: &GpuContext, camera: &wgpu::Buffer) -> QueryPool {
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("boxes.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(BOXES_WGSL.into()),
-        });
+        let module = module_with_camera(gpu, "boxes.wgsl", &[BOXES_WGSL]);
         let box_layout = box_bind_group_layout(gpu);
         // Only on adapters that have the feature: the module is invalid elsewhere.
         let count_module = gpu.pixel_counts.then(|| {
@@ -268,6 +270,7 @@ impl QueryPool {
             gpu.queue.submit([encoder.finish()]);
             return BatchCost {
                 queries: 0,
+                submitted: Instant::now(),
                 wait: Duration::ZERO,
                 gpu: None,
                 prepare,
@@ -327,10 +330,11 @@ impl QueryPool {
         }
         let gpu_time = self.timestamps.as_ref().map(|&(_, period_ns)| {
             let tick = |i: usize| u64::from(self.words[2 * i]) | (u64::from(self.words[2 * i + 1]) << 32);
-            Duration::from_nanos((tick(1).saturating_sub(tick(0)) as f64 * period_ns) as u64)
+            GpuSpan::of_ticks(tick(0), tick(1), period_ns)
         });
         BatchCost {
             queries: u64::from(count),
+            submitted,
             wait,
             gpu: gpu_time,
             prepare,
@@ -653,4 +657,27 @@ fn query_set(gpu: &GpuContext) -> wgpu::QuerySet {
         ty: wgpu::QueryType::Occlusion,
         count: QUERIES_PER_SET,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use std::mem::{offset_of, size_of};
+
+    use super::*;
+    use crate::gpu::CAMERA_WGSL;
+    use crate::gpu::wgsl::{parse, struct_layout};
+
+    #[test]
+    fn a_box_and_the_sampling_are_laid_out_as_the_shaders_read_them() {
+        let (members, size) = struct_layout(&parse(&[CAMERA_WGSL, BOXES_WGSL].concat()), "QueryBox");
+        assert_eq!(members, [("min".to_string(), 0), ("max".to_string(), 16)]);
+        assert_eq!(size_of::<QueryBox>(), size as usize);
+        assert_eq!(offset_of!(QueryBox, max), 16);
+        let counting = parse(include_str!("../../shaders/pixel_count.wgsl"));
+        let (members, size) = struct_layout(&counting, "Sampling");
+        assert_eq!(members, [("step".to_string(), 0), ("span".to_string(), 4)]);
+        assert_eq!(offset_of!(Sampling, span), 4);
+        // The uniform is padded to 16 bytes, as uniforms are bound.
+        assert_eq!(size_of::<Sampling>(), (size as usize).next_multiple_of(16));
+    }
 }

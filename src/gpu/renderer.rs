@@ -99,7 +99,20 @@ impl GpuScene {
     }
 }
 
-/// The camera as every shader reads it (`struct Camera` in the WGSL files).
+/// camera.wgsl: `struct Camera` ([`CameraUniform`]) and its binding, which
+/// every shader that reads the camera starts with.
+pub(crate) const CAMERA_WGSL: &str = include_str!("../../shaders/camera.wgsl");
+
+/// A shader module of camera.wgsl followed by `parts`.
+pub(crate) fn module_with_camera(gpu: &GpuContext, label: &str, parts: &[&str]) -> wgpu::ShaderModule {
+    let source: String = std::iter::once(CAMERA_WGSL).chain(parts.iter().copied()).collect();
+    gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    })
+}
+
+/// The camera as every shader reads it (`struct Camera` in camera.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct CameraUniform {
@@ -126,10 +139,7 @@ pub struct SceneRenderer {
 impl SceneRenderer {
     pub fn new(gpu: &GpuContext, scene: GpuScene) -> SceneRenderer {
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("scene.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/scene.wgsl").into()),
-        });
+        let module = module_with_camera(gpu, "scene.wgsl", &[include_str!("../../shaders/scene.wgsl")]);
         let camera = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("camera"),
             size: std::mem::size_of::<CameraUniform>() as u64,
@@ -437,4 +447,56 @@ fn begin_pass<'e>(
         occlusion_query_set: None,
         multiview_mask: None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use std::mem::{offset_of, size_of};
+
+    use super::*;
+    use crate::gpu::wgsl::{parse, struct_layout};
+
+    fn members(names: &[(&str, u32)]) -> Vec<(String, u32)> {
+        names.iter().map(|&(n, o)| (n.to_string(), o)).collect()
+    }
+
+    #[test]
+    fn the_camera_and_an_object_are_laid_out_as_the_shaders_read_them() {
+        let module = parse(&[CAMERA_WGSL, include_str!("../../shaders/scene.wgsl")].concat());
+        let (camera, size) = struct_layout(&module, "Camera");
+        assert_eq!(
+            camera,
+            members(&[
+                ("projection", 0),
+                ("view_projection", 64),
+                ("ray_x", 128),
+                ("ray_y", 144),
+                ("ray_c", 160)
+            ])
+        );
+        assert_eq!(size_of::<CameraUniform>(), size as usize);
+        assert_eq!(offset_of!(CameraUniform, view_projection), 64);
+        assert_eq!(offset_of!(CameraUniform, rays), 128);
+        let (object, size) = struct_layout(&module, "Object");
+        assert_eq!(object, members(&[("model_view", 0), ("limit", 64)]));
+        assert_eq!(size_of::<ObjectData>(), size as usize);
+        assert_eq!(offset_of!(ObjectData, limit), 64);
+    }
+
+    #[test]
+    fn every_shader_that_reads_the_camera_parses_after_camera_wgsl() {
+        for source in [
+            include_str!("../../shaders/scene.wgsl"),
+            include_str!("../../shaders/lines.wgsl"),
+            super::super::BOXES_WGSL,
+        ] {
+            let module = parse(&[CAMERA_WGSL, source].concat());
+            assert!(
+                module
+                    .global_variables
+                    .iter()
+                    .any(|(_, v)| v.name.as_deref() == Some("camera"))
+            );
+        }
+    }
 }

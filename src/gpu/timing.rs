@@ -1,4 +1,5 @@
-//! GPU time per span (one span per mode and frame) from timestamp queries.
+//! GPU time per span (one span per mode and frame) from timestamp queries,
+//! and where each span lies on the GPU's clock ([`GpuSpan`]).
 
 use super::context::GpuContext;
 use super::readback::Readback;
@@ -56,12 +57,44 @@ impl GpuTimer {
             .copy(encoder, &self.resolved, 0, 0, u64::from(self.spans) * 16);
     }
 
-    /// Milliseconds of each span, after [`GpuTimer::resolve`] was submitted.
-    pub fn read_ms(&mut self, gpu: &GpuContext) -> Vec<f64> {
+    /// Each span, after [`GpuTimer::resolve`] was submitted.
+    pub fn read_spans(&mut self, gpu: &GpuContext) -> Vec<GpuSpan> {
         self.readback.read(gpu, u64::from(self.spans) * 16, &mut self.ticks);
         self.ticks
             .chunks_exact(2)
-            .map(|t| t[1].saturating_sub(t[0]) as f64 * self.period_ns / 1e6)
+            .map(|t| GpuSpan::of_ticks(t[0], t[1], self.period_ns))
             .collect()
+    }
+}
+
+/// A stretch of GPU work between two timestamps: where it starts on the
+/// GPU's clock (which no CPU clock shares: only spans of one device compare)
+/// and how long it took.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GpuSpan {
+    /// Nanoseconds on the GPU's clock.
+    pub start_ns: f64,
+    pub duration_ns: f64,
+}
+
+impl GpuSpan {
+    /// The span between two timestamps of `period_ns` nanoseconds a tick.
+    pub fn of_ticks(begin: u64, end: u64, period_ns: f64) -> GpuSpan {
+        GpuSpan {
+            start_ns: begin as f64 * period_ns,
+            duration_ns: end.saturating_sub(begin) as f64 * period_ns,
+        }
+    }
+
+    pub fn end_ns(&self) -> f64 {
+        self.start_ns + self.duration_ns
+    }
+
+    pub fn ms(&self) -> f64 {
+        self.duration_ns / 1e6
+    }
+
+    pub fn duration(&self) -> std::time::Duration {
+        std::time::Duration::from_nanos(self.duration_ns as u64)
     }
 }

@@ -123,38 +123,49 @@ pub struct MissedObject {
 }
 
 /// What a run's rows may hold at most: its frame's pixels (wrong pixels)
-/// and its scene's objects (drawn, visible, missed).
+/// and its scene's objects (drawn, visible, missed) and triangles (drawn).
 #[derive(Clone, Copy, Debug)]
 pub struct RowLimits {
     pub pixels: u64,
     pub objects: u64,
+    pub triangles: u64,
 }
 
+/// The longest time a row may hold, in milliseconds: no frame takes a day,
+/// and a time beyond it is no measurement (1e308 ms would also overflow
+/// the statistics' sums into an infinite mean).
+const LONGEST_MS: f64 = 86_400_000.0;
+
 impl FrameStats {
-    /// What in this row no run can have measured, if anything: a time (or
-    /// depth error) that is not a number of 0 or more (NaN, infinite,
-    /// negative), more wrong pixels than the frame has, more objects than
-    /// the scene has. frames.csv is read back by `compare` and `merge`,
-    /// and a value like these would pass their verdicts as "better".
+    /// What in this row no run can have measured, if anything: a time that
+    /// is not a number from 0 to a day (NaN, infinite, negative, 1e308),
+    /// a depth error outside depth's 0 to 1, more wrong pixels than the
+    /// frame has, more objects or triangles than the scene has, more
+    /// objects missed than the frame shows. frames.csv is read back by
+    /// `compare` and `merge`, and a value like these would pass their
+    /// verdicts as "better" or "within noise".
     pub fn implausible(&self, limits: RowLimits) -> Option<String> {
-        let times = [
-            ("frame_ms", Some(self.frame_ms)),
-            ("cpu_ms", Some(self.cpu_ms)),
-            ("maintenance_ms", Some(self.maintenance_ms)),
-            ("gpu_ms", self.gpu_ms),
-            ("query_wait_ms", Some(self.query_wait_ms)),
-            ("query_gpu_ms", self.query_gpu_ms),
-            ("pyramid_gpu_ms", self.pyramid_gpu_ms),
-            ("max_depth_error", self.max_depth_error),
+        let measures = [
+            ("frame_ms", Some(self.frame_ms), LONGEST_MS),
+            ("cpu_ms", Some(self.cpu_ms), LONGEST_MS),
+            ("maintenance_ms", Some(self.maintenance_ms), LONGEST_MS),
+            ("gpu_ms", self.gpu_ms, LONGEST_MS),
+            ("query_wait_ms", Some(self.query_wait_ms), LONGEST_MS),
+            ("query_gpu_ms", self.query_gpu_ms, LONGEST_MS),
+            ("pyramid_gpu_ms", self.pyramid_gpu_ms, LONGEST_MS),
+            ("max_depth_error", self.max_depth_error, 1.0),
         ];
-        if let Some((column, value)) = times
-            .into_iter()
-            .find_map(|(column, v)| v.filter(|v| !(v.is_finite() && *v >= 0.0)).map(|v| (column, v)))
-        {
-            return Some(format!(
-                "{column} is {}, not a number of 0 or more",
-                crate::text::number(value)
-            ));
+        let outside = |(column, value, most): (&str, Option<f64>, f64)| {
+            value.filter(|v| !(0.0..=most).contains(v)).map(|v| {
+                format!(
+                    "{column} is {}, not a number from 0 to {}",
+                    crate::text::number(v),
+                    crate::text::number(most)
+                )
+            })
+        };
+        if let Some(fault) = measures.into_iter().find_map(outside) {
+            return Some(fault);
         }
         let counts = [
             ("error_pixels", self.error_pixels, limits.pixels, "pixels in the frame"),
@@ -163,6 +174,12 @@ impl FrameStats {
                 Some(self.objects_drawn),
                 limits.objects,
                 "objects in the scene",
+            ),
+            (
+                "triangles_drawn",
+                Some(self.triangles_drawn),
+                limits.triangles,
+                "triangles in the scene",
             ),
             (
                 "visible_objects",
@@ -177,10 +194,16 @@ impl FrameStats {
                 "objects in the scene",
             ),
         ];
-        counts.into_iter().find_map(|(column, value, most, what)| {
+        let beyond = counts.into_iter().find_map(|(column, value, most, what)| {
             value
                 .filter(|&v| v > most)
                 .map(|v| format!("{column} is {v}, more than the {most} {what}"))
+        });
+        beyond.or_else(|| match (self.missed_objects, self.visible_objects) {
+            (Some(missed), Some(visible)) if missed > visible => Some(format!(
+                "missed_objects is {missed}, more than the {visible} visible_objects of its frame"
+            )),
+            _ => None,
         })
     }
 

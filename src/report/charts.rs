@@ -11,7 +11,8 @@
 //!   vfc and the ratio to the oracle written on the bars.
 //!
 //! `occlu merge` draws one more per run, [`ratio_to_oracle_bars`]: each
-//! mode's ratio to the oracle on each adapter.
+//! mode's ratio to the oracle on each adapter; an animation's panels take
+//! their [`caption`]s in the same font.
 
 use std::path::{Path, PathBuf};
 use std::sync::Once;
@@ -125,6 +126,24 @@ pub fn ratio_to_oracle_bars(
         Ok(())
     })
 }
+
+/// A strip of `width` × `height` pixels (RGB) holding `text` in white on
+/// dark grey, in the charts' font: the captions of an animation's panels.
+pub fn caption(width: u32, height: u32, text: &str) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
+    register_font();
+    let mut rgb = vec![0u8; (width * height * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (width, height)).into_drawing_area();
+        root.fill(&CAPTION_GREY)?;
+        let style = (FONT, f64::from(height) * 0.7).into_font().color(&WHITE);
+        root.draw_text(text, &style, (4, (height / 8) as i32))?;
+        root.present()?;
+    }
+    Ok(rgb)
+}
+
+/// The background of captions.
+pub const CAPTION_GREY: RGBColor = RGBColor(40, 40, 40);
 
 type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
 type DrawResult = Result<(), Box<dyn std::error::Error>>;

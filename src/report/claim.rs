@@ -34,34 +34,46 @@ impl OutputLock {
 
 impl Drop for OutputLock {
     fn drop(&mut self) {
+        forget(&self.out);
         if let Some(made) = &self.made {
-            forget(&self.out);
             // Still locked: no other run can claim the folder meanwhile.
             remove_unfinished(&self.out, made);
         }
     }
 }
 
-/// The folders this process made and claims, with the topmost folder each
-/// claim made: what ending the process at once (a second Ctrl-C, or one
-/// before the work listens) leaves when no claim is dropped.
-static MADE: Mutex<Vec<(PathBuf, PathBuf)>> = Mutex::new(Vec::new());
+/// The folders this process claims, with the topmost folder each claim
+/// made (if it made its folder): what ending the process at once (a second
+/// Ctrl-C, or one before the work listens) leaves when no claim is dropped.
+static CLAIMED: Mutex<Vec<(PathBuf, Option<PathBuf>)>> = Mutex::new(Vec::new());
 
 fn forget(out: &Path) {
-    if let Ok(mut made) = MADE.lock() {
-        made.retain(|(o, _)| o != out);
+    if let Ok(mut claimed) = CLAIMED.lock() {
+        claimed.retain(|(o, _)| o != out);
     }
 }
 
-/// Takes away every folder this process made whose run has written no
-/// results yet: for a process about to end at once, which drops no claim.
+/// Tidies every folder this process claims, for a process about to end at
+/// once, which drops no claim: [`abandon`] each.
 pub fn abandon_unfinished() {
     // A claim being dropped on another thread holds the list briefly.
-    let Ok(made) = MADE.lock() else {
+    let Ok(claimed) = CLAIMED.lock() else {
         return;
     };
-    for (out, topmost) in made.iter() {
-        remove_unfinished(out, topmost);
+    for (out, made) in claimed.iter() {
+        abandon(out, made.as_deref());
+    }
+}
+
+/// Takes away this process's staging folder in `out` (results it was
+/// writing, now never to be whole) and, when the claim made `out` (`made`
+/// its topmost new folder) and no results were written, the folder too.
+fn abandon(out: &Path, made: Option<&Path>) {
+    match made {
+        Some(made) => remove_unfinished(out, made),
+        None => {
+            let _ = std::fs::remove_dir_all(staging(out));
+        }
     }
 }
 
@@ -70,12 +82,11 @@ pub fn abandon_unfinished() {
 /// the claim created) while they are empty.
 fn remove_unfinished(out: &Path, made: &Path) {
     let ours = staging(out);
-    let unused = std::fs::read_dir(out)
-        .is_ok_and(|entries| entries.flatten().all(|e| e.file_name() == LOCK || e.path() == ours));
+    let _ = std::fs::remove_dir_all(&ours);
+    let unused = std::fs::read_dir(out).is_ok_and(|entries| entries.flatten().all(|e| e.file_name() == LOCK));
     if !unused {
         return;
     }
-    let _ = std::fs::remove_dir_all(&ours);
     let _ = std::fs::remove_file(out.join(LOCK));
     for folder in out.ancestors() {
         if std::fs::remove_dir(folder).is_err() || folder == made {
@@ -115,10 +126,8 @@ pub(super) fn claim(out: &Path) -> Result<OutputLock, ReportError> {
         out: out.to_path_buf(),
         made,
     };
-    if let Some(made) = &lock.made
-        && let Ok(mut list) = MADE.lock()
-    {
-        list.push((out.to_path_buf(), made.clone()));
+    if let Ok(mut claimed) = CLAIMED.lock() {
+        claimed.push((out.to_path_buf(), lock.made.clone()));
     }
     // From here on, a failure drops `lock`, which removes what it made.
     let path = out.join(LOCK);
@@ -175,4 +184,35 @@ fn open_lock(path: &Path) -> std::io::Result<std::fs::File> {
     #[cfg(not(unix))]
     let own = true;
     if own { Ok(file) } else { Err(refused()) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ending_at_once_takes_the_staging_folder_from_a_folder_that_was_there() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("report.md"), "earlier").unwrap();
+        let claim = claim(&out).unwrap();
+        // Part of a merge's copies, staged when the process is told to end.
+        let staged = staging(&out);
+        std::fs::create_dir_all(staged.join("runs")).unwrap();
+        std::fs::write(staged.join("report.md"), "half").unwrap();
+        // What `abandon_unfinished` does for this claim (the list holds
+        // other tests' claims too, which this test must not touch).
+        let listed = CLAIMED.lock().unwrap().iter().find(|(o, _)| *o == out).cloned();
+        let (listed, made) = listed.expect("a folder that was there is listed too");
+        abandon(&listed, made.as_deref());
+        assert!(!staged.exists(), "the staging folder is gone");
+        assert_eq!(std::fs::read_to_string(out.join("report.md")).unwrap(), "earlier");
+        drop(claim);
+        assert!(
+            CLAIMED.lock().unwrap().iter().all(|(o, _)| *o != out),
+            "forgotten once released"
+        );
+        assert!(out.join("report.md").exists());
+    }
 }

@@ -74,7 +74,7 @@ pub fn check_writable(path: &Path) -> Result<(), ReportError> {
 /// Refuses an `output` that is one of `inputs` (the same file, however
 /// named: by device and inode), so that writing it cannot destroy what the
 /// command reads (`occlu render model.obj -o model.obj`).
-pub fn refuse_input_as_output(output: &Path, inputs: &[&Path]) -> Result<(), ReportError> {
+pub fn refuse_input_as_output<P: AsRef<Path>>(output: &Path, inputs: &[P]) -> Result<(), ReportError> {
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt as _;
@@ -82,10 +82,10 @@ pub fn refuse_input_as_output(output: &Path, inputs: &[&Path]) -> Result<(), Rep
         let Some(written) = identity(output) else {
             return Ok(());
         };
-        if let Some(input) = inputs.iter().find(|i| identity(i) == Some(written)) {
+        if let Some(input) = inputs.iter().find(|i| identity(i.as_ref()) == Some(written)) {
             return Err(ReportError::at(output)(std::io::Error::other(format!(
                 "is an input of this command ({}): writing it would destroy what it reads; choose another output file",
-                input.display()
+                input.as_ref().display()
             ))));
         }
     }
@@ -95,17 +95,9 @@ pub fn refuse_input_as_output(output: &Path, inputs: &[&Path]) -> Result<(), Rep
 /// Refuses an `output` that is, or would be, one of `names` in the folder
 /// `dir` (a run's own files, which the run writes itself).
 pub fn refuse_own_file(output: &Path, dir: &Path, names: &[&str]) -> Result<(), ReportError> {
-    let resolved = |p: &Path| std::fs::canonicalize(p).ok();
-    // Where the file is or would be: a link leads to what write_whole writes.
-    let target = resolved(output).or_else(|| {
-        let parent = output
-            .parent()
-            .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        Some(resolved(parent)?.join(output.file_name()?))
-    });
-    let own = target.as_deref().is_some_and(|t| {
-        t.parent() == resolved(dir).as_deref() && t.file_name().is_some_and(|n| names.iter().any(|own| n == *own))
+    let own = where_written(output).is_some_and(|t| {
+        t.parent() == std::fs::canonicalize(dir).ok().as_deref()
+            && t.file_name().is_some_and(|n| names.iter().any(|own| n == *own))
     });
     if own {
         return Err(ReportError::at(output)(std::io::Error::other(
@@ -113,6 +105,25 @@ pub fn refuse_own_file(output: &Path, dir: &Path, names: &[&str]) -> Result<(), 
         )));
     }
     Ok(())
+}
+
+/// Refuses two outputs of one command that are, or would be, one file:
+/// the second written would replace the first.
+pub fn refuse_one_file_twice(first: &Path, second: &Path) -> Result<(), ReportError> {
+    match (where_written(first), where_written(second)) {
+        (Some(a), Some(b)) if a == b => Err(ReportError::at(second)(std::io::Error::other(format!(
+            "is also {}, another output of this command: one would replace the other; choose another file",
+            first.display()
+        )))),
+        _ => Ok(()),
+    }
+}
+
+/// Where `output` is or would be written: a link leads to what
+/// [`write_whole`] writes.
+fn where_written(output: &Path) -> Option<PathBuf> {
+    let resolved = |p: &Path| std::fs::canonicalize(p).ok();
+    resolved(output).or_else(|| Some(resolved(crate::input::folder_of(output))?.join(output.file_name()?)))
 }
 
 /// The temporary twin [`write_whole`] writes `path` into first.

@@ -81,6 +81,12 @@ pub fn render(s: &Summary) -> String {
          ![Box tests and round trips per frame](queries.png)\n\n![Run time against image error](time_vs_error.png)\n\n\
          ![Mean and p95 frame time per mode](summary.png)"
     );
+    if let Some(file) = &s.animation {
+        let _ = writeln!(
+            w,
+            "\n## Flythrough\n\n![Each mode's frames side by side]({file})\n\nEach frame of the run in every mode: what it drew, beside the scene from above (the frustum in red, the boxes of objects in it that the mode did not draw in yellow), with the frame's time."
+        );
+    }
     let _ = writeln!(
         w,
         "\nPer-frame figures: frames.csv. Every statistic: summary.json (schema {}).",

@@ -10,6 +10,7 @@ pub mod github;
 mod markdown;
 pub mod merge;
 mod summary;
+mod trace;
 
 use std::path::{Path, PathBuf};
 
@@ -20,12 +21,16 @@ use crate::text;
 
 use claim::{LOCK, STAGING, claim, staging};
 pub use claim::{OutputLock, abandon_unfinished};
-pub use files::{ReportError, check_writable, refuse_input_as_output, write_png, write_whole};
+pub use files::{ReportError, check_writable, refuse_input_as_output, refuse_one_file_twice, write_png, write_whole};
 pub use markdown::render as render_markdown;
 pub use summary::{
     AnimationFact, CameraFact, Fingerprint, MatrixIdentity, MissedSummary, PathSummary, SCHEMA_VERSION, SceneFacts,
     SceneSummary, SkippedMode, Summary, SweepSummary, ToolInfo, Verdict,
 };
+pub use trace::trace_json;
+
+/// The animated flythrough of `bench --animate`, beside the charts.
+pub const ANIMATION: &str = "flythrough.png";
 
 /// The files a run wrote.
 pub struct ResultFiles {
@@ -35,6 +40,8 @@ pub struct ResultFiles {
     /// Written only when a mode got something wrong.
     pub missed_csv: Option<PathBuf>,
     pub charts: Vec<PathBuf>,
+    /// With `--animate`.
+    pub animation: Option<PathBuf>,
 }
 
 /// `rows` as CSV with a header of field names. Made in memory, so writing
@@ -112,17 +119,18 @@ fn check_rows(summary: &Summary, rows: &[FrameStats]) -> Result<(), String> {
     let limits = RowLimits {
         pixels: summary.resolution.pixels(),
         objects: summary.scene.facts.objects as u64,
+        triangles: summary.scene.facts.triangles,
     };
     // Each mode's frames seen so far, by the mode's place in the summary.
     let mut seen: Vec<Vec<bool>> = Vec::with_capacity(summary.modes.len());
     for (k, mode) in summary.modes.iter().enumerate() {
         if summary.modes[..k].iter().any(|m| m.name == mode.name) {
-            return Err(format!("summary.json names mode {} twice", text::one_line(&mode.name)));
+            return Err(format!("summary.json names mode {} twice", mode.name));
         }
         seen.push(vec![false; frames as usize]);
     }
     for (k, row) in rows.iter().enumerate() {
-        let at = || format!("row {} ({}, frame {})", k + 1, text::one_line(&row.mode), row.frame);
+        let at = || format!("row {} ({}, frame {})", k + 1, row.mode, row.frame);
         let Some(mode) = summary.modes.iter().position(|m| m.name == row.mode) else {
             return Err(format!("{}: a mode summary.json does not list", at()));
         };
@@ -140,7 +148,7 @@ fn check_rows(summary: &Summary, rows: &[FrameStats]) -> Result<(), String> {
         if count != frames as usize {
             return Err(format!(
                 "mode {} has {}, not one for each of the run's {}",
-                text::one_line(&mode.name),
+                mode.name,
                 text::count(count, "row"),
                 text::count(frames as usize, "frame")
             ));
@@ -151,7 +159,7 @@ fn check_rows(summary: &Summary, rows: &[FrameStats]) -> Result<(), String> {
 
 /// The files a run writes into its folder (its charts, [`charts::CHARTS`],
 /// besides), in the order merge copies them.
-pub const RESULT_FILES: [&str; 4] = ["summary.json", "frames.csv", "missed.csv", "report.md"];
+pub const RESULT_FILES: [&str; 5] = ["summary.json", "frames.csv", "missed.csv", "report.md", ANIMATION];
 
 /// Refuses an `output` that is one of the files a run writes into `out`
 /// (`--export-github-benchmark OUT/summary.json` would replace the run's
@@ -235,19 +243,25 @@ pub fn publish_files(out: &Path, files: &[(&str, &[u8])]) -> Result<(), ReportEr
     .map(drop)
 }
 
-/// Writes a run's result files into `out` (see [`publish`]). summary.json
-/// records frames.csv's fingerprint and is moved into place last, so
+/// Writes a run's result files into `out` (see [`publish`]), with its
+/// `animation` (an APNG) where there is one. summary.json records
+/// frames.csv's fingerprint and is moved into place last, so
 /// [`read_results`] refuses a folder caught between two runs' files.
 pub fn write_results(
     out: &Path,
     summary: &mut Summary,
     rows: &[FrameStats],
     missed: &[MissedObject],
+    animation: Option<&[u8]>,
 ) -> Result<ResultFiles, ReportError> {
     debug_assert_eq!(summary.missed, MissedSummary::of(missed), "the summary heads this list");
-    // An earlier run's list must not pass for this run's.
-    let stale: &[&str] = if missed.is_empty() { &["missed.csv"] } else { &[] };
-    let names = publish(out, stale, |staging| {
+    summary.animation = animation.map(|_| ANIMATION.to_string());
+    // An earlier run's list or animation must not pass for this run's.
+    let stale: Vec<&str> = [(missed.is_empty(), "missed.csv"), (animation.is_none(), ANIMATION)]
+        .into_iter()
+        .filter_map(|(gone, name)| gone.then_some(name))
+        .collect();
+    let names = publish(out, &stale, |staging| {
         let frames_csv = csv_bytes(&staging.join("frames.csv"), rows)?;
         summary.frames_csv = Some(Fingerprint::of(&frames_csv));
         write_file(&staging.join("frames.csv"), &frames_csv)?;
@@ -256,6 +270,10 @@ pub fn write_results(
             let path = staging.join("missed.csv");
             write_file(&path, &csv_bytes(&path, &escape_formulas(missed))?)?;
             names.push("missed.csv".into());
+        }
+        if let Some(png) = animation {
+            write_file(&staging.join(ANIMATION), png)?;
+            names.push(ANIMATION.into());
         }
         names.extend(write_report_and_charts(staging, summary, rows)?);
         let json = serde_json::to_string_pretty(summary).expect("summary serialises: no maps with non-string keys");
@@ -269,7 +287,12 @@ pub fn write_results(
         summary_json: path("summary.json"),
         report_md: path("report.md"),
         missed_csv: (!missed.is_empty()).then(|| path("missed.csv")),
-        charts: names.iter().filter(|n| n.ends_with(".png")).map(|n| path(n)).collect(),
+        charts: names
+            .iter()
+            .filter(|n| n.ends_with(".png") && *n != ANIMATION)
+            .map(|n| path(n))
+            .collect(),
+        animation: animation.map(|_| path(ANIMATION)),
     })
 }
 

@@ -54,6 +54,10 @@ pub struct Summary {
     /// and in older files).
     #[serde(default)]
     pub verdict: Option<Verdict>,
+    /// The animated flythrough beside the charts (`bench --animate`), by
+    /// its file name; absent without one.
+    #[serde(default)]
+    pub animation: Option<String>,
 }
 
 /// The run's answer in one line: the fastest conservative mode, against

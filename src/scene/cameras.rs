@@ -17,8 +17,6 @@ use glam::{DMat4, DQuat, DVec3};
 use gltf::animation::util::ReadOutputs;
 use gltf::animation::{Interpolation, Property};
 
-use crate::text::one_line;
-
 /// A camera pose: the eye and the camera-to-world rotation (looking down its
 /// −Z with +Y up, as glTF cameras do), and its perspective, if any.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -207,7 +205,7 @@ pub fn read(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], check: &Ch
     let mut chains = Vec::new();
     for node in gltf.nodes().filter(|n| reached[n.index()]) {
         let Some(camera) = node.camera() else { continue };
-        let name = node.name().map_or_else(|| name_of_camera(&camera), one_line);
+        let name = node.name().map_or_else(|| name_of_camera(&camera), str::to_string);
         let chain = nodes.chain(node.index());
         match pose_of(&camera, Nodes::world(&chain, &rest)) {
             Some(pose) => {
@@ -235,7 +233,7 @@ pub fn read(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], check: &Ch
     for animation in gltf.animations() {
         let name = animation
             .name()
-            .map_or_else(|| format!("animation{}", animation.index()), one_line);
+            .map_or_else(|| format!("animation{}", animation.index()), str::to_string);
         let moved = Moved {
             cameras: &cameras,
             chains: &chains,
@@ -479,5 +477,5 @@ fn decimal(v: f32) -> f64 {
 fn name_of_camera(camera: &gltf::Camera) -> String {
     camera
         .name()
-        .map_or_else(|| format!("camera{}", camera.index()), one_line)
+        .map_or_else(|| format!("camera{}", camera.index()), str::to_string)
 }

@@ -214,7 +214,7 @@ mod tests {
 
     #[test]
     fn agrees_with_the_definition_on_solids_with_corners_split_moved_flipped_dropped_or_doubled() {
-        let mut rng = crate::scene::builtin::Rng::new(38);
+        let mut rng = crate::rng::Rng::new(38);
         let mut verdicts = [0; 2];
         for case in 0..600 {
             let (mut positions, mut indices) = solids().swap_remove(case % 3);

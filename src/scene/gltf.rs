@@ -13,7 +13,7 @@ use gltf::mesh::Mode;
 use super::model::{MeshGroup, SceneBuilder};
 use super::source::{LoadOptions, SceneError, read_model_file};
 use super::{cameras, meshopt};
-use crate::text::one_line;
+use crate::input::folder_of;
 
 pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut SceneBuilder) -> Result<(), SceneError> {
     let parse_error = |message: String| SceneError::Parse {
@@ -21,6 +21,18 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
         message,
     };
     let invalid = |e: gltf::Error| parse_error(format!("invalid glTF: {}", summarise(&e)));
+    // glTF is a GLB (binary, starting with its magic) or JSON (an object,
+    // perhaps after the byte order mark some editors write): anything else
+    // (an OBJ named .glb, a GLB with a wrong magic) is said to be neither,
+    // not reported as a JSON syntax error at its first byte.
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
+    let first = bytes.iter().find(|b| !b.is_ascii_whitespace());
+    if !bytes.starts_with(b"glTF") && first != Some(&b'{') {
+        return Err(parse_error(
+            "not glTF: neither a GLB (which starts with the bytes 'glTF') nor glTF JSON (an object, starting with '{')"
+                .into(),
+        ));
+    }
     // gltf-json's validator indexes primitive accessors without a bounds
     // check, so those are checked first; validation then also refuses files
     // that require an extension occlu does not read.
@@ -55,7 +67,7 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
     {
         builder.warn("skins and morph targets are ignored: meshes are drawn in their rest pose".into());
     }
-    let buffers = load_buffers(path, bytes, &gltf, options)?;
+    let buffers = load_buffers(path, bytes, &gltf, options, builder)?;
 
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
     let roots: Vec<gltf::Node> = match &scene {
@@ -162,7 +174,7 @@ const DECODED: [&str; 2] = ["KHR_mesh_quantization", "EXT_meshopt_compression"];
 /// accessors[0].bufferView)"), not one entry per element.
 fn summarise(e: &gltf::Error) -> String {
     let gltf::Error::Validation(problems) = e else {
-        return one_line(&e.to_string());
+        return e.to_string();
     };
     let mut kinds: Vec<(String, usize, String)> = Vec::new();
     for (path, problem) in problems {
@@ -179,16 +191,17 @@ fn summarise(e: &gltf::Error) -> String {
             n => format!("{n} × {kind} (first at {first})"),
         })
         .collect();
-    one_line(&parts.join("; "))
+    parts.join("; ")
 }
 
 /// Every buffer's bytes, with `EXT_meshopt_compression` views decoded into
-/// their placeholder buffers.
+/// their placeholder buffers; each file read is noted in `builder`.
 fn load_buffers(
     path: &Path,
     bytes: &[u8],
     gltf: &gltf::Gltf,
     options: &LoadOptions,
+    builder: &mut SceneBuilder,
 ) -> Result<Vec<Vec<u8>>, SceneError> {
     let parse_error = |message: String| SceneError::Parse {
         path: path.into(),
@@ -223,42 +236,49 @@ fn load_buffers(
             .as_ref()
             .is_some_and(|(raw, _)| meshopt::is_placeholder(raw, index))
     };
+    // The buffers with data of their own first, placeholders empty.
     let mut buffers = Vec::new();
     for buffer in gltf.buffers() {
-        if placeholder(buffer.index()) {
-            // Filled by decoding, and only as far as the views decoded into
-            // it reach (their sum is bounded above), whatever it declares.
-            let reach = compressed
-                .iter()
-                .flat_map(|(_, views)| views)
-                .filter(|v| v.target == buffer.index());
-            let length = reach
-                .map(|v| v.target_offset.saturating_add(v.decoded_length()))
-                .max()
-                .unwrap_or(0);
-            if length > buffer.length() {
-                return Err(parse_error(format!(
-                    "buffer {}: its compressed views decode to {length} bytes, more than the {} it declares",
-                    buffer.index(),
-                    buffer.length()
-                )));
-            }
-            if length as u64 > most {
-                return Err(too_much(format!("buffer {} needs {length}", buffer.index())));
-            }
-            let mut zeros = Vec::new();
-            zeros
-                .try_reserve_exact(length)
-                .map_err(|e| parse_error(format!("buffer {}: {e}", buffer.index())))?;
-            zeros.resize(length, 0);
-            buffers.push(zeros);
+        buffers.push(if placeholder(buffer.index()) {
+            Vec::new()
         } else {
-            buffers.push(buffer_data(path, gltf, &buffer, options)?);
+            buffer_data(path, gltf, &buffer, options, builder)?
+        });
+    }
+    let Some((_, views)) = &compressed else {
+        return Ok(buffers);
+    };
+    // Every view's stream lies in data the file holds, and claims no more
+    // than its length can hold (`meshopt::compressed_views`), before any
+    // placeholder is allocated: what they claim is bounded by real bytes.
+    for v in views {
+        v.stream(&buffers).map_err(parse_error)?;
+    }
+    for buffer in gltf.buffers().filter(|b| placeholder(b.index())) {
+        // Filled by decoding, and only as far as the views decoded into
+        // it reach (their sum is bounded above), whatever it declares.
+        let reach = views.iter().filter(|v| v.target == buffer.index());
+        let length = reach
+            .map(|v| v.target_offset.saturating_add(v.decoded_length()))
+            .max()
+            .unwrap_or(0);
+        if length > buffer.length() {
+            return Err(parse_error(format!(
+                "buffer {}: its compressed views decode to {length} bytes, more than the {} it declares",
+                buffer.index(),
+                buffer.length()
+            )));
         }
+        if length as u64 > most {
+            return Err(too_much(format!("buffer {} needs {length}", buffer.index())));
+        }
+        let zeros = &mut buffers[buffer.index()];
+        zeros
+            .try_reserve_exact(length)
+            .map_err(|e| parse_error(format!("buffer {}: {e}", buffer.index())))?;
+        zeros.resize(length, 0);
     }
-    if let Some((_, views)) = &compressed {
-        meshopt::decode(&mut buffers, views, options.max_file_size).map_err(parse_error)?;
-    }
+    meshopt::decode(&mut buffers, views, options.max_file_size).map_err(parse_error)?;
     Ok(buffers)
 }
 
@@ -277,7 +297,7 @@ fn raw_json(bytes: &[u8]) -> Result<serde_json::Value, String> {
     } else {
         bytes.to_vec()
     };
-    serde_json::from_slice(&text).map_err(|e| format!("invalid glTF JSON: {}", one_line(&e.to_string())))
+    serde_json::from_slice(&text).map_err(|e| format!("invalid glTF JSON: {e}"))
 }
 
 /// Accessor indices of every primitive must exist.
@@ -364,8 +384,7 @@ fn load_mesh(
     use gltf::accessor::{DataType, Dimensions};
     let mesh_name = mesh
         .name()
-        .map(one_line)
-        .unwrap_or_else(|| format!("mesh{}", mesh.index()));
+        .map_or_else(|| format!("mesh{}", mesh.index()), str::to_string);
     let buffer_bytes = buffers.iter().map(Vec::len).sum();
     let mut groups = Vec::new();
     for primitive in mesh.primitives() {
@@ -475,11 +494,14 @@ fn triangle_list(mode: Mode, stream: &[u32]) -> Vec<u32> {
     }
 }
 
+/// A buffer's bytes, from the GLB's binary chunk, a data URI or a file
+/// (noted in `builder`).
 fn buffer_data(
     path: &Path,
     gltf: &gltf::Gltf,
     buffer: &gltf::Buffer,
     options: &LoadOptions,
+    builder: &mut SceneBuilder,
 ) -> Result<Vec<u8>, SceneError> {
     let error = |what: String| SceneError::Parse {
         path: path.into(),
@@ -504,7 +526,9 @@ fn buffer_data(
             } else {
                 beside_the_model(path, uri).map_err(error)?
             };
-            read_model_file(&file, options).map_err(|e| error(format!("{}: {e}", file.display())))?
+            let data = read_model_file(&file, options).map_err(|e| error(format!("{}: {e}", file.display())))?;
+            builder.read_from(file);
+            data
         }
     };
     if data.len() < buffer.length() {
@@ -527,7 +551,7 @@ fn beside_the_model(model: &Path, uri: &str) -> Result<std::path::PathBuf, Strin
     let refuse = |why: &str| {
         Err(format!(
             "URI '{}' {why}: buffers must lie in the model's folder or below it (--external-buffers allows others)",
-            one_line(uri)
+            uri
         ))
     };
     if uri.contains(':') {
@@ -541,12 +565,13 @@ fn beside_the_model(model: &Path, uri: &str) -> Result<std::path::PathBuf, Strin
     {
         return refuse("leaves the model's folder");
     }
-    let folder = model.parent().unwrap_or(Path::new("."));
-    let file = buffer_file(model, uri);
-    // Resolved, a link inside the folder may still point out of it.
-    if let (Ok(folder), Ok(real)) = (folder.canonicalize(), file.canonicalize())
-        && !real.starts_with(&folder)
-    {
+    // Resolved, a link inside the folder may still point out of it. A
+    // path that cannot be resolved is not read either, so the check is
+    // never skipped; and the file read is the one resolved, so a link
+    // changed after the check leads nowhere new.
+    let resolved = |p: &Path| p.canonicalize().map_err(|e| format!("{}: {e}", p.display()));
+    let (folder, file) = (resolved(folder_of(model))?, resolved(&buffer_file(model, uri))?);
+    if !file.starts_with(&folder) {
         return refuse("leads out of the model's folder through a link");
     }
     Ok(file)
@@ -556,7 +581,7 @@ fn beside_the_model(model: &Path, uri: &str) -> Result<std::path::PathBuf, Strin
 /// absolute path stays absolute).
 fn buffer_file(model: &Path, uri: &str) -> std::path::PathBuf {
     let relative = percent_decode(uri.strip_prefix("file://").unwrap_or(uri));
-    model.parent().unwrap_or(Path::new(".")).join(relative)
+    folder_of(model).join(relative)
 }
 
 /// URIs in glTF are percent-encoded (a space is `%20`).

@@ -9,6 +9,7 @@ use super::phases::timed;
 use super::source::{LoadOptions, SceneError, SceneSpec, read_model_file};
 use super::up::{Up, UpAxis, UpChoice};
 use super::{builtin, gltf, obj};
+use crate::auto_or::AutoOr;
 
 /// Loads a scene from a file or builds a built-in one.
 pub fn load(spec: &SceneSpec, options: &LoadOptions) -> Result<Scene, SceneError> {
@@ -37,6 +38,7 @@ fn load_file(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     })?;
     let mut scene = load_bytes(path, &bytes, options)?;
     scene.phases.read_ms = read_ms;
+    scene.files.insert(0, path.to_path_buf());
     Ok(scene)
 }
 
@@ -80,19 +82,19 @@ pub enum Source {
 /// The up axis of `scene`, loaded from `source`, as `choice` asks.
 pub fn choose(choice: UpChoice, source: Source, scene: &Scene) -> Up {
     match (choice, source) {
-        (UpChoice::Axis(axis), _) => Up {
+        (AutoOr::Given(axis), _) => Up {
             axis,
             why: "given by --up".into(),
         },
-        (UpChoice::Auto, Source::Gltf) => Up {
+        (AutoOr::Auto, Source::Gltf) => Up {
             axis: UpAxis::Y,
             why: "auto: glTF is +Y up".into(),
         },
-        (UpChoice::Auto, Source::Builtin) => Up {
+        (AutoOr::Auto, Source::Builtin) => Up {
             axis: UpAxis::Y,
             why: "auto: built-in scenes are +Y up".into(),
         },
-        (UpChoice::Auto, Source::Obj) => match looks_z_up(scene) {
+        (AutoOr::Auto, Source::Obj) => match looks_z_up(scene) {
             Some(evidence) => Up {
                 axis: UpAxis::Z,
                 why: format!("auto: OBJ {evidence}"),

@@ -2,6 +2,8 @@
 //! that place them, the parts they were cut from ([`Scene`]), and the one
 //! builder every loader feeds ([`SceneBuilder`]).
 
+use std::path::PathBuf;
+
 use glam::{DAffine3, DVec3};
 
 use super::cameras::{FileAnimation, FileCamera};
@@ -10,7 +12,6 @@ use super::phases::{LoadPhases, timed};
 use super::up::Up;
 use super::{closed, cluster, validate};
 use crate::bounds::Aabb;
-use crate::text::one_line;
 use validate::GeometryError;
 
 /// Default triangle budget of one cluster: meshes above it are split.
@@ -85,6 +86,10 @@ pub struct Scene {
     pub animations: Vec<FileAnimation>,
     /// How long each phase of loading it took.
     pub phases: LoadPhases,
+    /// Every file it was read from: the model file, then a glTF file's
+    /// buffer files; none for a built-in scene. No output may be one of
+    /// them.
+    pub files: Vec<PathBuf>,
 }
 
 impl Scene {
@@ -139,6 +144,7 @@ pub struct SceneBuilder {
     animations: Vec<FileAnimation>,
     movers: Vec<Mover>,
     phases: LoadPhases,
+    files: Vec<PathBuf>,
 }
 
 impl SceneBuilder {
@@ -158,7 +164,13 @@ impl SceneBuilder {
             animations: Vec::new(),
             movers: Vec::new(),
             phases: LoadPhases::default(),
+            files: Vec::new(),
         }
+    }
+
+    /// Notes that the scene was read from `file` too (a glTF buffer file).
+    pub fn read_from(&mut self, file: PathBuf) {
+        self.files.push(file);
     }
 
     /// Validates one mesh (positions in its own frame, a triangle list) and
@@ -166,8 +178,8 @@ impl SceneBuilder {
     /// Degenerate triangles are dropped and counted; a mesh left with no
     /// triangles gives an empty group.
     pub fn add_mesh(&mut self, name: &str, positions: &[DVec3], indices: &[u32]) -> Result<MeshGroup, GeometryError> {
-        // The name as the file has it; escaped where a message quotes it.
-        let (triangles, spent) = timed(|| validate::triangles(&one_line(name), positions, indices));
+        // The name as the file has it; escaped where a message is shown.
+        let (triangles, spent) = timed(|| validate::triangles(name, positions, indices));
         self.phases.validate_ms += spent;
         let triangles = triangles?;
         if triangles.degenerate > 0 {
@@ -247,7 +259,7 @@ impl SceneBuilder {
             let transform = transform * DAffine3::from_translation(origin);
             let bounds = m.bounds.transformed(&transform);
             if !transform.is_finite() || !validate::within_range(bounds.min) || !validate::within_range(bounds.max) {
-                return Err(GeometryError::ObjectOutOfRange { object: one_line(name) });
+                return Err(GeometryError::ObjectOutOfRange { object: name.into() });
             }
             self.objects.push(Object {
                 name: if split { format!("{name}#{i}") } else { name.to_string() },
@@ -322,6 +334,7 @@ impl SceneBuilder {
             animations: self.animations,
             movers: self.movers,
             phases: self.phases,
+            files: self.files,
         })
     }
 }

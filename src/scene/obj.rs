@@ -85,6 +85,11 @@ struct Corner {
 /// the first element) comes to, as in tobj.
 const NONE: usize = usize::MAX;
 
+/// A corner's indices as the file wrote them (0 where it names none), for
+/// a message about one that names nothing: a negative index resolved too
+/// far back no longer says what was written.
+type Written = [isize; 3];
+
 fn parse(bytes: &[u8]) -> Result<Obj, String> {
     let text = std::str::from_utf8(bytes).map_err(|e| format!("not UTF-8 text (byte {})", e.valid_up_to()))?;
     let mut reader = Reader {
@@ -126,10 +131,13 @@ struct Reader {
     with_attributes: bool,
     has_faces: bool,
     /// Its corners that named an element not read yet (or none that
-    /// exists), with their lines: checked when it ends.
-    unresolved: Vec<(usize, Corner)>,
-    /// One face's corners, before they are cut into triangles.
+    /// exists), with their lines and indices as written: checked when it
+    /// ends.
+    unresolved: Vec<(usize, Corner, Written)>,
+    /// One face's corners, before they are cut into triangles, and their
+    /// indices as written.
     face: Vec<Corner>,
+    face_written: Vec<Written>,
     /// The object's vertex of each position so far (`u32::MAX`: none),
     /// while its corners are gathered.
     vertex_of: Vec<u32>,
@@ -203,11 +211,13 @@ impl Reader {
 
     fn face<'a>(&mut self, words: impl Iterator<Item = &'a str>) -> Result<(), String> {
         self.face.clear();
+        self.face_written.clear();
         for word in words {
-            let corner = self
+            let (corner, written) = self
                 .corner(word)
                 .ok_or_else(|| self.fail(format_args!("face corner '{word}' is not v, v/vt, v//vn or v/vt/vn")))?;
             self.face.push(corner);
+            self.face_written.push(written);
         }
         self.has_faces = true;
         match self.face.as_slice() {
@@ -218,13 +228,16 @@ impl Reader {
                 for pair in rest.windows(2) {
                     self.corners.extend([*first, pair[0], pair[1]]);
                 }
-                let named = |index: usize, count: usize| index == NONE || index < count;
-                for &corner in &self.face {
-                    let (vt, vn) = (named(corner.vt, self.texcoords), named(corner.vn, self.normals));
+                // Whether an index names none (0 as written: an index that
+                // counts back one too far resolves to NONE too) or one read.
+                let named = |index: usize, written: isize, count: usize| written == 0 || index < count;
+                for (&corner, &written) in self.face.iter().zip(&self.face_written) {
+                    let vt = named(corner.vt, written[1], self.texcoords);
+                    let vn = named(corner.vn, written[2], self.normals);
                     if !(corner.v < self.positions.len() && vt && vn) {
-                        self.unresolved.push((self.line, corner));
+                        self.unresolved.push((self.line, corner, written));
                     }
-                    self.with_attributes |= corner.vt != NONE || corner.vn != NONE;
+                    self.with_attributes |= written[1] != 0 || written[2] != 0;
                 }
             }
         }
@@ -232,9 +245,9 @@ impl Reader {
     }
 
     /// A corner `v`, `v/vt`, `v//vn` or `v/vt/vn`, its indices resolved
-    /// against the elements read so far. Out of range they wrap, as in
-    /// tobj, and fail the check when the object ends.
-    fn corner(&self, word: &str) -> Option<Corner> {
+    /// against the elements read so far, and as written. Out of range they
+    /// wrap, as in tobj, and fail the check when the object ends.
+    fn corner(&self, word: &str) -> Option<(Corner, Written)> {
         let counts = [self.positions.len(), self.texcoords, self.normals];
         let resolve = |k: usize, i: isize| {
             if i < 0 {
@@ -243,27 +256,29 @@ impl Reader {
                 i.wrapping_sub(1) as usize
             }
         };
-        let mut index = [NONE; 3];
+        let mut written = [0; 3];
         if word.contains('/') {
             for (k, part) in word.split('/').enumerate().filter(|(_, part)| !part.is_empty()) {
-                *index.get_mut(k)? = resolve(k, part.parse().ok()?);
+                *written.get_mut(k)? = part.parse().ok()?;
             }
         } else {
-            index[0] = resolve(0, word.parse().ok()?);
+            written[0] = word.parse().ok()?;
         }
-        Some(Corner {
-            v: index[0],
-            vt: index[1],
-            vn: index[2],
-        })
+        let index = |k: usize| if written[k] == 0 { NONE } else { resolve(k, written[k]) };
+        let corner = Corner {
+            v: index(0),
+            vt: index(1),
+            vn: index(2),
+        };
+        Some((corner, written))
     }
 
     /// Ends the object being read: its faces' indices checked against
     /// everything read, its vertices gathered, appended to the previous
     /// object when that has the same name.
     fn end_object(&mut self) -> Result<(), String> {
-        for &(line, corner) in &self.unresolved {
-            self.check(corner).map_err(|e| format!("line {line}: {e}"))?;
+        for &(line, corner, written) in &self.unresolved {
+            self.check(corner, written).map_err(|e| format!("line {line}: {e}"))?;
         }
         if self.colour_values > 0 {
             for &corner in &self.corners {
@@ -321,24 +336,20 @@ impl Reader {
         Ok(())
     }
 
-    /// That `corner` names elements that exist (a texture coordinate or
-    /// normal only where the file has any).
-    fn check(&self, corner: Corner) -> Result<(), String> {
-        let missing = |what: &str, index: usize, count: usize| {
-            // 1-based, as the file wrote it (0 and what counted back too
-            // far show as such).
-            let written = index.wrapping_add(1) as isize;
-            Err(format!("a face names {what} {written} of {count}"))
-        };
+    /// That `corner` (`written` so) names elements that exist (a texture
+    /// coordinate or normal only where the file has any).
+    fn check(&self, corner: Corner, written: Written) -> Result<(), String> {
+        let missing =
+            |what: &str, written: isize, count: usize| Err(format!("a face names {what} {written} of {count}"));
         if corner.v >= self.positions.len() {
-            return missing("vertex", corner.v, self.positions.len());
+            return missing("vertex", written[0], self.positions.len());
         }
-        for (what, index, count) in [
-            ("texture coordinate", corner.vt, self.texcoords),
-            ("normal", corner.vn, self.normals),
+        for (what, index, written, count) in [
+            ("texture coordinate", corner.vt, written[1], self.texcoords),
+            ("normal", corner.vn, written[2], self.normals),
         ] {
-            if count > 0 && index != NONE && index >= count {
-                return missing(what, index, count);
+            if count > 0 && written != 0 && index >= count {
+                return missing(what, written, count);
             }
         }
         Ok(())
@@ -406,6 +417,19 @@ mod tests {
         );
         assert_eq!(
             error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 1 2\n"),
+            "line 4: a face names vertex -4 of 3",
+            "as written, not as counted back"
+        );
+        assert_eq!(
+            error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9\n"),
+            "line 4: a face names vertex -9 of 3"
+        );
+        assert_eq!(
+            error("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//-2 3//1\n"),
+            "line 5: a face names normal -2 of 1"
+        );
+        assert_eq!(
+            error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"),
             "line 4: a face names vertex 0 of 3"
         );
         assert_eq!(error("v 0 0 0 0\n"), "line 1: a vertex's w is 0");

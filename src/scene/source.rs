@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use super::model::DEFAULT_CLUSTER_TRIANGLES;
 use super::up::UpChoice;
 use super::validate::GeometryError;
+use crate::auto_or::AutoOr;
 
 /// Where a scene comes from, as the command line names it.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,7 +35,7 @@ impl Default for LoadOptions {
             cluster_triangles: DEFAULT_CLUSTER_TRIANGLES,
             max_file_size: crate::input::MODEL_LIMIT,
             external_buffers: false,
-            up: UpChoice::Auto,
+            up: AutoOr::Auto,
         }
     }
 }

@@ -13,6 +13,8 @@ use std::str::FromStr;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use crate::auto_or::AutoOr;
+
 /// One of the six axis directions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum UpAxis {
@@ -75,47 +77,9 @@ impl FromStr for UpAxis {
     }
 }
 
-/// What `--up` asks for.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum UpChoice {
-    /// The format's convention, or for OBJ the rule of [`looks_z_up`](crate::scene::looks_z_up).
-    #[default]
-    Auto,
-    Axis(UpAxis),
-}
-
-impl FromStr for UpChoice {
-    type Err = String;
-
-    fn from_str(text: &str) -> Result<UpChoice, String> {
-        if text.eq_ignore_ascii_case("auto") {
-            Ok(UpChoice::Auto)
-        } else {
-            text.parse().map(UpChoice::Axis)
-        }
-    }
-}
-
-impl fmt::Display for UpChoice {
-    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        match self {
-            UpChoice::Auto => f.write_str("auto"),
-            UpChoice::Axis(axis) => axis.fmt(f),
-        }
-    }
-}
-
-impl Serialize for UpChoice {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_str(self)
-    }
-}
-
-impl<'de> Deserialize<'de> for UpChoice {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<UpChoice, D::Error> {
-        String::deserialize(d)?.parse().map_err(serde::de::Error::custom)
-    }
-}
+/// What `--up` asks for: `auto` is the format's convention, or for OBJ
+/// the rule of [`looks_z_up`](crate::scene::looks_z_up).
+pub type UpChoice = AutoOr<UpAxis>;
 
 /// A scene's up axis and why it was chosen (`info` prints both, and
 /// summary.json records them).
@@ -170,7 +134,7 @@ mod tests {
             assert_eq!(right.dot(axis.vector()), 0.0);
         }
         assert_eq!(UpAxis::Y.ground_axes(), (DVec3::X, DVec3::NEG_Z));
-        assert_eq!("z".parse(), Ok(UpChoice::Axis(UpAxis::Z)));
+        assert_eq!("z".parse(), Ok(AutoOr::Given(UpAxis::Z)));
         assert_eq!("AUTO".parse(), Ok(UpChoice::Auto));
         assert!("up".parse::<UpChoice>().is_err());
     }

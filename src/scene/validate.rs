@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use crate::bounds::Aabb;
-use crate::text::number;
+use crate::text::{number, vector};
 
 /// Coordinates beyond this are refused: the renderer works in f32
 /// (camera-relative), and 1e18 units leave ample room below f32's 3.4e38
@@ -23,10 +23,17 @@ const FINEST_SHARE: f64 = 1e-5;
 /// A warning when the model lies so far from the origin for its size that
 /// f64 rounded its positions coarser than [`FINEST_SHARE`] of the size
 /// (a 1-unit model at 1e17, where f64 steps by 16: its shape is gone, and
-/// it may render as nothing).
+/// it may render as nothing), or has no size at all (its transforms scale
+/// it to a point, wherever it lies).
 pub fn coarse_coordinates(bounds: &Aabb) -> Option<String> {
     let reach = bounds.min.abs().max(bounds.max.abs()).max_element();
     let size = bounds.extent().max_element();
+    if size == 0.0 {
+        return Some(format!(
+            "every position lies at one point ({}): the model has no size, and nothing of it can be seen",
+            vector(bounds.min.to_array())
+        ));
+    }
     let step = f64::from_bits(reach.to_bits() + 1) - reach;
     (step > FINEST_SHARE * size).then(|| {
         format!(

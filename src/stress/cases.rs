@@ -15,7 +15,7 @@ use glam::DVec3;
 use super::case::{Baseline, DepthTolerance, StressCase};
 use crate::camera::{Camera, look_rotation};
 use crate::gpu::Resolution;
-use crate::scene::builtin::Rng;
+use crate::rng::Rng;
 use crate::scene::builtin::shapes::cuboid;
 use crate::scene::{SceneBuilder, TriangleSoup};
 

@@ -16,13 +16,13 @@ use std::ops::ControlFlow;
 
 use serde::Serialize;
 
-use crate::bench::{RunOptions, Session};
 use crate::camera::Camera;
 use crate::cull::{Culler, ModeError, ModeId, ModeInfo, ModeParams};
 use crate::gpu::{AdapterReport, GpuContext, GpuError, RenderTargets, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{FrameStats, MissedObject};
 use crate::report::SkippedMode;
+use crate::session::{RunOptions, Session};
 use crate::world::World;
 
 pub use case::{Baseline, DepthTolerance, StressCase};

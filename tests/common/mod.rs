@@ -8,13 +8,14 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use glam::{DAffine3, DVec3};
-use occlu::bench::{RunOptions, RunOutput, run};
+use occlu::bench::{RunOutput, run};
 use occlu::camera::generate::{PathKind, generate};
 use occlu::camera::path::{CameraPath, Interpolation, KeyframeFile, PathFile};
 use occlu::cull::{Culler, FrameInput, TraversalStats};
 use occlu::gpu::{BackendChoice, Frame, GpuContext, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::scene::{LoadOptions, Scene, SceneBuilder, SceneSpec, load};
+use occlu::session::RunOptions;
 use occlu::world::World;
 
 /// `bench` arguments that keep a run tiny: a one-block city, two frames,
@@ -63,6 +64,18 @@ pub fn write(dir: &Path, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, contents).expect("fixture written");
     p
+}
+
+/// Says that a test cannot run here, and why: a line on a developer's
+/// machine, where the fixtures are optional; a failure where they are
+/// required (`OCCLU_REQUIRE_FIXTURES=1`, which `.ci/run` sets), so that CI
+/// never passes a test that did not run.
+pub fn cannot_run(why: &str) {
+    assert!(
+        std::env::var_os("OCCLU_REQUIRE_FIXTURES").is_none_or(|v| v != "1"),
+        "{why}: OCCLU_REQUIRE_FIXTURES=1 requires it"
+    );
+    eprintln!("skipped: {why}");
 }
 
 /// `../shared/models` beside the project root: third-party models that
@@ -213,6 +226,11 @@ pub fn gpus() -> Vec<GpuContext> {
     found
 }
 
+/// The backends present here, by the names `--backend` takes.
+pub fn backends() -> Vec<String> {
+    gpus().iter().map(|g| g.adapter.backend.to_lowercase()).collect()
+}
+
 /// A one-frame path: the camera at `eye` looking at `target`.
 pub fn still(eye: DVec3, target: DVec3, fov_y_deg: f64) -> CameraPath {
     held(eye, target, fov_y_deg, 1)
@@ -291,7 +309,7 @@ pub fn run_modes(
         measure_error: true,
     };
     let mut world = World::new(scene.clone(), hierarchy.clone());
-    run(gpu, &mut world, path, cullers, &options, &mut |_, _| {
+    run(gpu, &mut world, path, cullers, &options, None, &mut |_, _| {
         std::ops::ControlFlow::Continue(())
     })
     .unwrap()
@@ -322,7 +340,7 @@ pub fn reference_depth(scene: &Scene, camera: &occlu::camera::Camera, resolution
     };
     let mut world = World::new(scene.clone(), hierarchy(scene));
     let mut dr = vec![occlu::cull::create("dr", scene, &occlu::cull::ModeParams::default()).unwrap()];
-    let mut session = occlu::bench::Session::new(&gpu, &world, &mut dr, true, &options).unwrap();
+    let mut session = occlu::session::Session::new(&gpu, &world, &mut dr, true, &options).unwrap();
     let camera = occlu::camera::Camera {
         aspect: resolution.aspect(),
         ..*camera

@@ -47,7 +47,7 @@ use crate::cull::traversal::frustum_cull_subtree;
 use crate::gpu::{Frame, GpuAudit, GpuContext, GpuError, GpuSetup};
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
-use choice::{Chooser, Family, Turn, View};
+use choice::{Chooser, Family, Occluded, Turn, View};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
@@ -112,7 +112,13 @@ impl Candidate {
 struct Ran {
     turn: Turn,
     view: View,
+    /// Whether the frustum's triangles were counted in it.
+    counted: bool,
 }
+
+/// Frames between counts of the frustum's triangles while an occlusion
+/// culler runs.
+const COUNT_EVERY: u64 = 8;
 
 pub struct AutoCulling {
     params: AutoParams,
@@ -300,18 +306,19 @@ impl Culler for AutoCulling {
         }
         if let (Some(ran), Some(previous)) = (self.ran, input.previous) {
             let mut view = ran.view;
-            let hidden_share = match self.candidates[ran.turn.strategy].family() {
+            let occluded = match self.candidates[ran.turn.strategy].family() {
                 Family::Frustum => {
                     view.frustum_triangles = previous.triangles_drawn;
                     self.frustum_triangles = previous.triangles_drawn;
                     None
                 }
-                Family::Occlusion => (view.frustum_triangles > 0)
-                    .then(|| 1.0 - previous.triangles_drawn as f64 / view.frustum_triangles as f64)
-                    .map(|share| share.max(0.0)),
+                Family::Occlusion => (ran.counted && view.frustum_triangles > 0).then(|| Occluded {
+                    hidden: (1.0 - previous.triangles_drawn as f64 / view.frustum_triangles as f64).max(0.0),
+                    drawing: previous.render_ms / previous.frame_ms,
+                }),
             };
             let chooser = self.chooser.as_mut().expect("the session prepared the mode");
-            chooser.learn(ran.turn, previous.frame_ms, hidden_share, &view);
+            chooser.learn(ran.turn, previous.frame_ms, occluded, &view);
         }
         let view = View {
             eye: input.camera.eye,
@@ -328,7 +335,13 @@ impl Culler for AutoCulling {
         self.hand_over(k, ctx);
         let stats = self.candidates[k].culler.frame(ctx, input);
         let mut view = view;
-        if turn.measured && self.candidates[k].family() == Family::Occlusion {
+        // What occlusion hides changes with the view, slowly: counted on a
+        // probe and every COUNT_EVERY frames, so the count (a frustum
+        // traversal) costs little on a GPU whose frames are short.
+        let counted = turn.measured
+            && self.candidates[k].family() == Family::Occlusion
+            && (turn.probe || self.frames.is_multiple_of(COUNT_EVERY) || self.frustum_triangles == 0);
+        if counted {
             self.frustum_triangles = self.count_frustum_triangles(input);
             view.frustum_triangles = self.frustum_triangles;
         }
@@ -337,7 +350,7 @@ impl Culler for AutoCulling {
         }
         self.running.clear();
         self.running.push(k);
-        self.ran = Some(Ran { turn, view });
+        self.ran = Some(Ran { turn, view, counted });
         stats
     }
 

@@ -9,6 +9,7 @@ use std::str::FromStr;
 use serde::Serialize;
 
 use super::MAX_LEVELS;
+use crate::auto_or::AutoOr;
 use crate::cull::mode::{ModeError, ModeId, ModeParams, ParamInfo};
 use crate::hierarchy::Hierarchy;
 use crate::scene::Object;
@@ -25,37 +26,25 @@ pub(super) const BOTTOM: ParamInfo = ParamInfo {
     summary: "depth below which nodes are not tested: a visible node there draws its subtree; auto: from the hierarchy",
 };
 
-/// A depth of the hierarchy (root 0), given or chosen from the hierarchy.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Depth {
-    Auto,
-    Fixed(u32),
-}
+/// A depth of the hierarchy, given or chosen from the hierarchy (`auto`).
+pub type Depth = AutoOr<Level>;
 
-impl FromStr for Depth {
+/// A depth of the hierarchy: the root is 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Level(pub u32);
+
+impl FromStr for Level {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        if s == "auto" {
-            return Ok(Depth::Auto);
-        }
         s.parse()
-            .map(Depth::Fixed)
+            .map(Level)
             .map_err(|_| "expected 'auto' or a depth ≥ 0 (the root is 0)".into())
     }
 }
 
-impl fmt::Display for Depth {
+impl fmt::Display for Level {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        match self {
-            Depth::Auto => f.write_str("auto"),
-            Depth::Fixed(d) => write!(f, "{d}"),
-        }
-    }
-}
-
-impl Serialize for Depth {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_str(self)
+        write!(f, "{}", self.0)
     }
 }
 
@@ -74,7 +63,7 @@ impl DepthRange {
             start: params.get(mode, &START)?,
             bottom: params.get(mode, &BOTTOM)?,
         };
-        if let (Depth::Fixed(start), Depth::Fixed(bottom)) = (p.start, p.bottom) {
+        if let (AutoOr::Given(Level(start)), AutoOr::Given(Level(bottom))) = (p.start, p.bottom) {
             if start > bottom {
                 let reason = format!("start depth {start} is below the bottom depth {bottom}");
                 return Err(ModeError::bad(mode, &START, reason));
@@ -96,13 +85,13 @@ impl DepthRange {
         let deepest = hierarchy.stats().depth.saturating_sub(1);
         let (auto_start, auto_bottom) = auto_depths(hierarchy, objects);
         let start = match (self.start, self.bottom) {
-            (Depth::Fixed(d), _) => d.min(deepest),
-            (Depth::Auto, Depth::Fixed(bottom)) => auto_start.min(bottom),
-            (Depth::Auto, Depth::Auto) => auto_start,
+            (AutoOr::Given(Level(d)), _) => d.min(deepest),
+            (AutoOr::Auto, AutoOr::Given(Level(bottom))) => auto_start.min(bottom),
+            (AutoOr::Auto, AutoOr::Auto) => auto_start,
         };
         let bottom = match self.bottom {
-            Depth::Fixed(d) => d.min(deepest).max(start),
-            Depth::Auto => auto_bottom.max(start),
+            AutoOr::Given(Level(d)) => d.min(deepest).max(start),
+            AutoOr::Auto => auto_bottom.max(start),
         };
         (start, bottom.min(start.saturating_add(MAX_LEVELS - 1)))
     }
@@ -232,10 +221,10 @@ mod tests {
         let (h, objects) = grid(2000, 1000);
         let (auto_start, auto_bottom) = auto_depths(&h, &objects);
         let with = |start, bottom| DepthRange { start, bottom }.choose(&h, &objects);
-        assert_eq!(with(Depth::Auto, Depth::Auto), (auto_start, auto_bottom));
-        assert_eq!(with(Depth::Fixed(2), Depth::Fixed(3)), (2, 3));
+        assert_eq!(with(AutoOr::Auto, AutoOr::Auto), (auto_start, auto_bottom));
+        assert_eq!(with(AutoOr::Given(Level(2)), AutoOr::Given(Level(3))), (2, 3));
         assert_eq!(
-            with(Depth::Auto, Depth::Fixed(1)),
+            with(AutoOr::Auto, AutoOr::Given(Level(1))),
             (1, 1),
             "an auto start stays above a given bottom"
         );
@@ -245,14 +234,14 @@ mod tests {
         let (_, bottom40) = auto_depths(&h40, &objects40);
         assert!(bottom40 + 1 < h40.stats().depth);
         let below = DepthRange {
-            start: Depth::Fixed(bottom40 + 1),
-            bottom: Depth::Auto,
+            start: AutoOr::Given(Level(bottom40 + 1)),
+            bottom: AutoOr::Auto,
         };
         assert_eq!(below.choose(&h40, &objects40), (bottom40 + 1, bottom40 + 1));
-        let beyond = Depth::Fixed(u32::MAX);
+        let beyond = AutoOr::Given(Level(u32::MAX));
         let deepest = h.stats().depth - 1;
         assert_eq!(with(beyond, beyond), (deepest, deepest), "no deeper than the hierarchy");
-        assert_eq!(with(Depth::Fixed(2), beyond), (2, deepest));
+        assert_eq!(with(AutoOr::Given(Level(2)), beyond), (2, deepest));
         let (tree, _) = CullTree::cut(&h, u32::MAX, u32::MAX);
         assert_eq!(tree.levels, 1, "one level: every leaf, as the seed");
     }

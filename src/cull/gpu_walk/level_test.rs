@@ -3,10 +3,10 @@
 //! pass, raster_mark.wgsl: roc, ioc), or by comparing each box with a depth
 //! pyramid built from that depth (pyramid_test.wgsl: hiz). Either way a
 //! visible node's word of the visibility buffer becomes `VISIBLE`, so the
-//! rest of the walk (pool.rs, walk.wgsl) does not know which ran.
+//! rest of the walk (walk.rs, walk.wgsl) does not know which ran.
 
+use super::layout::{DISPATCH_OFFSET, MAX_GROUPS, boxes_module};
 use super::pyramid::DepthPyramid;
-use super::words::{DISPATCH_OFFSET, MAX_GROUPS, boxes_module};
 use crate::gpu::{
     BOX_TEST, GpuContext, GpuError, GpuSetup, GpuTimer, ShaderBoxPlanes, bind_buffers, bind_group_layout,
     box_index_buffer, box_test_pipeline, check_storage_binding, depth_only_pass, set_box_indices, storage_buffer,

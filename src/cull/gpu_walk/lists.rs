@@ -10,7 +10,7 @@
 
 use std::cell::Cell;
 
-use super::words::{DRAW_COMMAND_BYTES, VISIBLE_LAST_FRAME};
+use super::layout::{DRAW_COMMAND_BYTES, VISIBLE_LAST_FRAME};
 use crate::gpu::{DrawRange, GpuContext, storage_buffer};
 
 pub struct VisibleLists {

@@ -13,7 +13,7 @@
 //!   pyramid.rs).
 //!
 //! What the GPU walks is a [`CullTree`] (tree.rs); each mode owns its
-//! [`GpuWalk`] (pool.rs: pipelines, scratch, the tree on the GPU), made in
+//! [`GpuWalk`] (walk.rs: pipelines, scratch, the tree on the GPU), made in
 //! [`Culler::prepare`](super::Culler::prepare).
 //!
 //! One frame (culling.rs's `cull_on_gpu`), every step through `GpuFrame`:
@@ -55,18 +55,18 @@ mod culling;
 pub mod depths;
 pub mod hiz;
 pub mod ioc;
+mod layout;
 mod level_test;
 mod lists;
-mod pool;
 mod pyramid;
 pub mod roc;
 mod tree;
 #[cfg(test)]
 mod twin;
-mod words;
+mod walk;
 
 pub use culling::{GpuCulling, Walked};
 pub use level_test::NodeTest;
 pub use lists::VisibleLists;
-pub use pool::{DrawList, GpuWalk, NodeBoxes};
 pub use tree::{CullTree, MAX_LEVELS, TreeNode};
+pub use walk::{DrawList, GpuWalk, NodeBoxes};

@@ -244,15 +244,16 @@ impl DepthPyramid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::{RunOptions, Session};
     use crate::camera::generate::default_path;
     use crate::cull::create;
     use crate::cull::culler::Culler;
-    use crate::cull::gpu_walk::words::{parse, shader_constants, struct_layout};
-    use crate::gpu::BOXES_WGSL;
+    use crate::cull::gpu_walk::layout::shader_constants;
     use crate::gpu::BackendChoice;
+    use crate::gpu::wgsl::{parse, struct_layout};
+    use crate::gpu::{BOXES_WGSL, CAMERA_WGSL};
     use crate::hierarchy::{Hierarchy, HierarchyParams};
     use crate::scene::{LoadOptions, SceneSpec, load};
+    use crate::session::{RunOptions, Session};
     use crate::world::World;
 
     /// Texel (`x`, `y`) of `level` by the definition: the least depth of
@@ -307,6 +308,7 @@ mod tests {
         // The box test's view of the pyramid (pyramid_test.wgsl, after what
         // it is appended to and the constants it takes).
         let test = [
+            CAMERA_WGSL,
             BOXES_WGSL,
             &shader_constants(),
             &super::super::level_test::pyramid_test_source(4, 1024),

@@ -11,7 +11,7 @@
 // of those that do not hide it on their own (cs_pixel_args sizes that
 // dispatch).
 // TO_TEST, VISIBLE, GROUP_SIZE and MAX_GROUPS are written before this text
-// from pool.rs's constants, MAX_TEXELS and MAX_PIXELS from hiz's
+// from layout.rs's constants, MAX_TEXELS and MAX_PIXELS from hiz's
 // parameters.
 //
 // Why this is conservative (gpu/conservative.rs gives the box its margins):

@@ -5,7 +5,7 @@
 // fragment reaches fs_mark only if it passes the depth test against the
 // occluders drawn so far, and then marks its node visible in the visibility
 // buffer. Every writer stores the same value, so plain stores suffice.
-// VISIBLE is written before this text from pool.rs's constants.
+// VISIBLE is written before this text from layout.rs's constants.
 
 @group(1) @binding(0) var<storage, read> queue: array<u32>;
 @group(1) @binding(1) var<storage, read_write> node_visible: array<u32>;

@@ -18,8 +18,8 @@ use std::ops::RangeInclusive;
 use glam::{DMat4, DVec2, DVec3, Vec4Swizzles};
 
 use super::CullTree;
+use super::layout::{OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST};
 use super::pyramid::PyramidLevel;
-use super::words::{OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST};
 use crate::camera::Camera;
 use crate::gpu::{QueryBox, Resolution, ShaderBoxPlanes};
 
@@ -281,12 +281,12 @@ impl BoxOnTarget {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::{RunOptions, Session};
+    use crate::auto_or::AutoOr;
     use crate::camera::generate::default_path;
     use crate::camera::path::CameraPath;
     use crate::cull::ModeParams;
     use crate::cull::gpu_walk::GpuCulling;
-    use crate::cull::gpu_walk::depths::{Depth, DepthRange};
+    use crate::cull::gpu_walk::depths::{DepthRange, Level};
     use crate::cull::gpu_walk::hiz::{BoxesTested, HizParams, hierarchical_depth_culling};
     use crate::cull::gpu_walk::ioc::iterative_occlusion_culling;
     use crate::cull::gpu_walk::roc::raster_occlusion_culling;
@@ -295,6 +295,7 @@ mod tests {
     };
     use crate::hierarchy::{Hierarchy, HierarchyParams};
     use crate::scene::{LoadOptions, SceneSpec, load};
+    use crate::session::{RunOptions, Session};
     use crate::world::World;
 
     const RESOLUTION: Resolution = Resolution {
@@ -428,7 +429,7 @@ mod tests {
 
     #[test]
     fn the_texels_read_hold_every_pixel_of_the_rectangle_and_span_at_most_the_limit() {
-        let mut rng = crate::scene::builtin::Rng::new(20);
+        let mut rng = crate::rng::Rng::new(20);
         let sizes = [
             (801, 599),
             (1, 1),
@@ -445,7 +446,7 @@ mod tests {
                 let levels = super::super::pyramid::levels(size, base_divisor);
                 let base = levels[0];
                 for _ in 0..400 {
-                    let pick = |side: u32, rng: &mut crate::scene::builtin::Rng| {
+                    let pick = |side: u32, rng: &mut crate::rng::Rng| {
                         let a = rng.range(0.0, f64::from(side)) as u32;
                         let b = rng.range(0.0, f64::from(side)) as u32;
                         (a.min(b), a.max(b))
@@ -502,8 +503,8 @@ mod tests {
         let flat = CullTree::flat(scene.objects.len() as u32);
         let (cut, _) = CullTree::cut(&hierarchy, 2, 6);
         let nodes = DepthRange {
-            start: Depth::Fixed(2),
-            bottom: Depth::Fixed(6),
+            start: AutoOr::Given(Level(2)),
+            bottom: AutoOr::Given(Level(6)),
         };
         for gpu in &gpus {
             let world = || World::new(scene.clone(), hierarchy.clone());

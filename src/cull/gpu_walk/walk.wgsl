@@ -55,7 +55,7 @@ struct Counts {
 // object_state bits (VISIBLE_LAST_FRAME persists from frame to frame;
 // MARKED lives from the level walk to compaction), drawn words
 // (DRAWN_EARLY, DRAWN_LATE), GROUP_SIZE and MAX_GROUPS are written before
-// this text from pool.rs's constants.
+// this text from layout.rs's constants.
 
 @group(0) @binding(0) var<storage, read> queue_in: array<u32>;
 // Level as plain words: [1] is the number of entries in queue_in.

@@ -619,7 +619,7 @@ fn f32_at_most(v: f64) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::builtin::Rng;
+    use crate::rng::Rng;
 
     /// The triangles an occluder stands for.
     fn triangles_of(occluder: &ScreenPolygon) -> Vec<[DVec3; 3]> {

@@ -723,7 +723,7 @@ mod tests {
         // The ray through a pixel centre and where it enters a box, from
         // the field of view and a slab test alone.
         use crate::gpu::{entry_depth, pixel_ray};
-        use crate::scene::builtin::Rng;
+        use crate::rng::Rng;
         let mut rng = Rng::new(23);
         let size = Resolution {
             width: 401,

@@ -16,8 +16,9 @@
 
 use glam::{DAffine3, DQuat, DVec3};
 
-use super::build::{Params, Rng, add, mesh, place, read_params};
+use super::build::{Params, add, mesh, place, read_params};
 use super::shapes::{cuboid, cylinder};
+use crate::rng::Rng;
 use crate::scene::motion::Route;
 use crate::scene::{MeshGroup, SceneBuilder, TriangleSoup};
 

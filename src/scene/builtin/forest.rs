@@ -13,9 +13,10 @@
 
 use glam::DVec3;
 
-use super::build::{Params, Rng, add, read_params};
+use super::build::{Params, add, read_params};
 use super::city::EYE_HEIGHT;
 use super::shapes::{cuboid, cylinder};
+use crate::rng::Rng;
 use crate::scene::{SceneBuilder, TriangleSoup};
 
 /// Ground per tree: one tree per 8 m × 8 m on average.

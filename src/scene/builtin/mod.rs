@@ -11,7 +11,6 @@ use super::model::{Scene, SceneBuilder};
 use super::source::{LoadOptions, SceneError};
 use build::Params;
 
-pub use build::Rng;
 pub use city::{CityParams, EYE_HEIGHT};
 pub use forest::ForestParams;
 
@@ -114,7 +113,7 @@ mod tests {
 
     #[test]
     fn rng_is_deterministic_and_in_range() {
-        let (mut a, mut b) = (Rng::new(5), Rng::new(5));
+        let (mut a, mut b) = (crate::rng::Rng::new(5), crate::rng::Rng::new(5));
         for _ in 0..1000 {
             let x = a.range(2.0, 3.0);
             assert_eq!(x, b.range(2.0, 3.0));

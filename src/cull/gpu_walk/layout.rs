@@ -2,7 +2,7 @@
 //! shaders share with the Rust side: written as WGSL before each shader's
 //! text ([`shader_constants`]), so the two cannot drift apart.
 
-use crate::gpu::{BOXES_WGSL, GpuContext};
+use crate::gpu::{BOXES_WGSL, GpuContext, module_with_camera};
 
 /// Threads per workgroup of walk.wgsl, and its grid limit.
 pub(super) const GROUP_SIZE: u32 = 64;
@@ -55,38 +55,8 @@ pub(super) fn shader_constants() -> String {
     .collect()
 }
 
-/// A shader module of boxes.wgsl (the camera, the boxes, `box_clip`), the
+/// A shader module of camera.wgsl, boxes.wgsl (the boxes, `box_clip`), the
 /// shared constants and `source`.
 pub(super) fn boxes_module(gpu: &GpuContext, label: &str, source: &str) -> wgpu::ShaderModule {
-    gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl([BOXES_WGSL, &shader_constants(), source].concat().into()),
-    })
-}
-
-/// WGSL `source` parsed, or the test fails with the parser's message.
-#[cfg(test)]
-pub(super) fn parse(source: &str) -> wgpu::naga::Module {
-    wgpu::naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)))
-}
-
-/// The members (name, byte offset) and size of struct `name` in `module`,
-/// for tests that hold a shader's structs against what Rust writes.
-#[cfg(test)]
-pub(super) fn struct_layout(module: &wgpu::naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
-    let (_, ty) = module
-        .types
-        .iter()
-        .find(|(_, t)| t.name.as_deref() == Some(name))
-        .unwrap_or_else(|| panic!("no struct {name}"));
-    match &ty.inner {
-        wgpu::naga::TypeInner::Struct { members, span } => (
-            members
-                .iter()
-                .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
-                .collect(),
-            *span,
-        ),
-        other => panic!("{name} is {other:?}"),
-    }
+    module_with_camera(gpu, label, &[BOXES_WGSL, &shader_constants(), source])
 }

@@ -3,17 +3,16 @@
 //! module above for the frame they make).
 
 use std::rc::Rc;
-use std::time::Duration;
 
+use super::layout::{
+    DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_WORDS,
+    MAX_GROUPS, OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST, shader_constants,
+};
 use super::level_test::{LevelTest, NodeTest};
 use super::lists::VisibleLists;
 #[cfg(test)]
 use super::pyramid::PyramidLevel;
 use super::tree::{CullTree, MAX_LEVELS};
-use super::words::{
-    DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_WORDS,
-    MAX_GROUPS, OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST, shader_constants,
-};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
 use crate::gpu::{
@@ -484,10 +483,9 @@ impl GpuWalk {
             audit.triangles_drawn += self.triangles[object];
         }
         if let Some(t) = &mut self.timer {
-            let spans = t.read_ms(gpu);
-            let time = |span: usize| spans.get(span).map(|&ms| Duration::from_secs_f64(ms / 1e3));
-            audit.cull_gpu = time(WALK_SPAN);
-            audit.pyramid_gpu = time(PYRAMID_SPAN);
+            let spans = t.read_spans(gpu);
+            audit.cull_gpu = spans.get(WALK_SPAN).copied();
+            audit.pyramid_gpu = spans.get(PYRAMID_SPAN).copied();
         }
         Some(audit)
     }
@@ -510,7 +508,7 @@ impl GpuWalk {
     /// Every node's word of the visibility buffer as the last walk left it
     /// (before it: [`TO_TEST`], [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`];
     /// the level test turned the boxes it found visible into
-    /// [`VISIBLE`](super::words::VISIBLE)),
+    /// [`VISIBLE`](super::layout::VISIBLE)),
     /// for the CPU twin of the walk.
     pub(super) fn node_states(&self, gpu: &GpuContext) -> Vec<u32> {
         let bytes = u64::from(self.tree.nodes) * 4;
@@ -635,8 +633,8 @@ fn groups_for(n: u32) -> u32 {
 mod tests {
     use super::*;
     use crate::cull::gpu_walk::TreeNode;
-    use crate::cull::gpu_walk::words::{parse, struct_layout as layout};
-    use crate::gpu::BOXES_WGSL;
+    use crate::gpu::wgsl::{parse, struct_layout as layout};
+    use crate::gpu::{BOXES_WGSL, CAMERA_WGSL};
 
     #[test]
     fn the_shaders_lay_out_what_this_file_writes_and_reads() {
@@ -657,6 +655,14 @@ mod tests {
         let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(names, ["first_child", "child_count", "first_object", "object_count"]);
         assert_eq!(u64::from(layout(&module, "DrawCommand").1), DRAW_COMMAND_BYTES);
-        parse(&[BOXES_WGSL, &shader_constants(), include_str!("raster_mark.wgsl")].concat());
+        parse(
+            &[
+                CAMERA_WGSL,
+                BOXES_WGSL,
+                &shader_constants(),
+                include_str!("raster_mark.wgsl"),
+            ]
+            .concat(),
+        );
     }
 }
