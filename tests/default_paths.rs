@@ -108,55 +108,56 @@ fn assert_walked_inside(scene: &Scene, generated: &Generated, reach: f64, eye: f
     }
 }
 
+/// The default path of `scene` (in 120 frames) walks inside it as
+/// [`assert_walked_inside`] says, with walls within `reach`, and comes
+/// near no surface; its reason.
+fn walked_inside(scene: &Scene, reach: f64) -> String {
+    let (generated, path) = default_of(scene, 120);
+    assert!(generated.why.starts_with("an interior"), "{}", generated.why);
+    assert_walked_inside(scene, &generated, reach, 1.7);
+    assert_eq!(frames_too_near(&path, &world_triangles(scene)), Vec::<u32>::new());
+    generated.why
+}
+
+/// The hall with `beside` added: [`walked_inside`], walls within the
+/// hall's own size.
+fn hall_walked_inside(beside: Boxes) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = hall();
+    let reach = box_of(&boxes).extent().length();
+    boxes.extend(beside);
+    walked_inside(&load_boxes(dir.path(), &boxes), reach)
+}
+
 #[test]
 fn a_hall_under_a_roof_is_walked_inside() {
+    hall_walked_inside(Vec::new());
+    // The whole hall one mesh: what the orbit would miss is judged by
+    // triangles, whatever the objects.
     let dir = tempfile::tempdir().unwrap();
     let boxes = hall();
-    // A piece an object, and the whole hall one mesh: what the orbit
-    // would miss is judged by triangles, whatever the objects.
-    for scene in [load_boxes(dir.path(), &boxes), load_obj(dir.path(), one_object(&boxes))] {
-        let (generated, path) = default_of(&scene, 120);
-        assert!(generated.why.starts_with("an interior"), "{}", generated.why);
-        assert_walked_inside(&scene, &generated, box_of(&boxes).extent().length(), 1.7);
-        assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
-    }
+    walked_inside(
+        &load_obj(dir.path(), one_object(&boxes)),
+        box_of(&boxes).extent().length(),
+    );
 }
 
 #[test]
 fn a_roofed_porch_outside_the_door_is_left_out_of_the_walk() {
-    let dir = tempfile::tempdir().unwrap();
-    let mut boxes = hall();
-    let reach = box_of(&boxes).extent().length();
     // Outside the door (x 48, z 10 to 14): a floor and a roof 5 high on
     // two posts, 12 deep and 16 wide, open on three sides.
-    boxes.extend([
+    hall_walked_inside(vec![
         part("porch_floor", [48.0, -0.5, 4.0], [60.0, 0.0, 20.0]),
         part("porch_roof", [48.0, 5.0, 4.0], [60.0, 5.5, 20.0]),
         part("porch_post_a", [59.0, 0.0, 4.0], [60.0, 5.0, 5.0]),
         part("porch_post_b", [59.0, 0.0, 19.0], [60.0, 5.0, 20.0]),
     ]);
-    let scene = load_boxes(dir.path(), &boxes);
-    let (generated, path) = default_of(&scene, 120);
-    assert!(generated.why.starts_with("an interior"), "{}", generated.why);
-    assert_walked_inside(&scene, &generated, reach, 1.7);
-    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
 }
 
 #[test]
 fn a_hall_on_a_ground_plane_20_times_wider_is_walked_inside() {
-    let dir = tempfile::tempdir().unwrap();
-    let mut boxes = hall();
-    let reach = box_of(&boxes).extent().length();
-    boxes.push(plane_under(&boxes, 20.0, -0.5));
-    let scene = load_boxes(dir.path(), &boxes);
-    let (generated, path) = default_of(&scene, 120);
-    let why = &generated.why;
-    assert!(
-        why.starts_with("an interior") && why.contains("without 'ground'"),
-        "{why}"
-    );
-    assert_walked_inside(&scene, &generated, reach, 1.7);
-    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+    let why = hall_walked_inside(vec![plane_under(&hall(), 20.0, -0.5)]);
+    assert!(why.contains("without 'ground'"), "{why}");
 }
 
 #[test]
