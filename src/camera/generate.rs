@@ -117,10 +117,10 @@ pub struct Generated {
 pub type PlanListener<'a> = Box<dyn FnMut(u64, u64) -> ControlFlow<()> + 'a>;
 
 /// The box and triangle tests planning one path may spend (the orbit's
-/// lines of sight and the walk's rays together): about 5 times what the
+/// lines of sight and the walk's rays together): about 6 times what the
 /// most planning of the models in ../shared/models needs
-/// (two-cylinder-engine.glb, 101 M tests, 1.2 s on this project's 2-core
-/// machine; den-haag.obj 42 M; `cargo bench --bench planning`), and 5 to
+/// (two-cylinder-engine.glb, 91 M tests, 1.1 s on this project's 2-core
+/// machine; den-haag.obj 40 M; `cargo bench --bench planning`), and 5 to
 /// 12 s of work there. A model beyond it (thousands of instances of one
 /// mesh in one place: every ray meets millions of triangles) gets the path
 /// that needs no planning: an orbit by default, a straight line for a walk.

@@ -119,6 +119,9 @@ const FLAT_EYE_FRACTION: f64 = 0.01;
 struct Floor {
     cell: usize,
     height: f64,
+    /// The cell's ray met a surface above it (below the model's top): a
+    /// roof.
+    roofed: bool,
 }
 
 /// Plans a walk through the part of `scene` within `bounds` (its focus:
@@ -169,7 +172,11 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         for hit in &hits {
             let height = top - hit.t;
             if above - height >= room && inside.is_empty() && height + 2.0 * eye <= high {
-                floors.push(Floor { cell: k, height });
+                floors.push(Floor {
+                    cell: k,
+                    height,
+                    roofed: above.is_finite(),
+                });
             }
             let part = part(hit);
             if solid[part as usize] {
@@ -271,8 +278,8 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         let (_, _, around) = farthest(&open_edges, route[0]);
         route.len() >= LONG_ROUTE && region.len() as f64 >= STREET_SHARE * around.len() as f64
     });
-    // Interiors: open floors indoors, under a roof (a ray up meets the
-    // model below its top) with walls around (level rays meet the model
+    // Interiors: open floors indoors, under a roof (the cell's ray met
+    // the model above the floor) with walls around (level rays meet the model
     // within its size in six of eight directions), not under a porch or a
     // canopy open at the sides. When their largest joined region holds
     // most of the open floor, the walk goes through it. It lies in one
@@ -280,13 +287,7 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
     // for walls (the inside of an object is roofed, but seldom most).
     let open_count = open.iter().filter(|&&o| o).count();
     let most = |region: &[usize]| 2 * region.len() >= open_count;
-    let roofed: Vec<bool> = (0..floors.len())
-        .map(|f| {
-            let p = point(f);
-            open[f] && caster.first_hit(p, up, top - p.dot(up)).is_some()
-        })
-        .collect();
-    caster.searching()?;
+    let roofed: Vec<bool> = (0..floors.len()).map(|f| open[f] && floors[f].roofed).collect();
     let roofed = longest_route(&roofed).map_or_else(Vec::new, |(_, region)| region);
     let mut indoors = vec![false; floors.len()];
     if most(&roofed) {
