@@ -473,8 +473,8 @@ enum PathCommand {
         scene: SceneArgs,
         /// orbit, walk, flyover, cameras (the file's cameras in order) or
         /// animation[=NAME] (an animation that moves a camera) [default: the
-        /// file's animated camera; a walk for streets, places and domes; an
-        /// orbit for objects].
+        /// file's animated camera; a walk for streets, places, interiors
+        /// and domes; an orbit for objects].
         #[arg(long, value_name = "KIND")]
         kind: Option<PathRequest>,
         /// Frames of the path [default: 120; one per camera for cameras; the

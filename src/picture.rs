@@ -27,7 +27,7 @@ use crate::gpu::{
     Draws, GpuContext, GpuError, LinePainter, LineVertex, RenderTargets, Resolution, picture_target, read_rgb,
 };
 use crate::measure::MissedObject;
-use crate::scene::Scene;
+use crate::scene::{Focus, Scene};
 use crate::session::{RunOptions, Session};
 use crate::world::World;
 
@@ -351,10 +351,11 @@ fn paint_wrong_pixels(session: &mut Session, k: usize, rgb: &mut [u8]) -> u64 {
     wrong
 }
 
-/// Straight down the scene's up axis on the whole scene (for +Y up, −Z at
-/// the top of the picture), far enough that its bounds fit the view.
+/// Straight down the scene's up axis on the scene's detail (for +Y up, −Z
+/// at the top of the picture), far enough that its focus (the bounds
+/// without a huge ground plane or sky dome) fits the view.
 fn overview_camera(scene: &Scene, resolution: Resolution) -> Camera {
-    let b = scene.bounds;
+    let b = Focus::of(scene).bounds;
     let (c, e) = (b.center(), b.extent());
     let up = scene.up.axis.vector();
     let (right, ahead) = scene.up.axis.ground_axes();
@@ -461,6 +462,31 @@ mod tests {
         lines.clear();
         frustum_lines(&cam, 10.0, DVec3::ZERO, &mut lines);
         assert_eq!(lines.len(), 16);
+    }
+
+    #[test]
+    fn the_overview_frames_a_room_not_the_huge_plane_it_stands_on() {
+        use crate::scene::fixtures::{ROOM, boxes, ground, room};
+        let scene = boxes(&[room(), vec![ground()]].concat());
+        let resolution = Resolution {
+            width: 160,
+            height: 120,
+        };
+        let above = overview_camera(&scene, resolution);
+        // The room's corners in the view, in units of its half-height.
+        let t = (above.fov_y / 2.0).tan();
+        let view = above.view_rotation();
+        let (mut x, mut y) = ((f64::INFINITY, f64::NEG_INFINITY), (f64::INFINITY, f64::NEG_INFINITY));
+        for corner in ROOM.corners() {
+            let v = view * (corner - above.eye);
+            let (cx, cy) = (v.x / (-v.z * t * above.aspect), v.y / (-v.z * t));
+            (x, y) = ((x.0.min(cx), x.1.max(cx)), (y.0.min(cy), y.1.max(cy)));
+        }
+        assert!(
+            x.0 >= -1.0 && x.1 <= 1.0 && y.0 >= -1.0 && y.1 <= 1.0,
+            "in view: {x:?} {y:?}"
+        );
+        assert!(x.1 - x.0 >= 1.5 || y.1 - y.0 >= 1.5, "fills the view: {x:?} {y:?}");
     }
 
     #[test]

@@ -312,20 +312,14 @@ impl<'a> RayCaster<'a> {
         });
         descend(tree, &self.work, wanted, &mut |triangle| {
             if self.work.charge() {
-                visit(self.triangle(mesh, triangle));
+                visit(self.scene.triangle(mesh, triangle));
             }
         });
     }
 
     /// The triangles of a mesh, in its local frame.
     fn triangles(&self, mesh: u32) -> impl Iterator<Item = [DVec3; 3]> + '_ {
-        (0..self.scene.meshes[mesh as usize].triangles()).map(move |t| self.triangle(mesh, t))
-    }
-
-    /// Triangle `triangle` of `mesh`, in its local frame.
-    fn triangle(&self, mesh: u32, triangle: u32) -> [DVec3; 3] {
-        let first = (self.scene.meshes[mesh as usize].first_index + 3 * triangle) as usize;
-        [0, 1, 2].map(|k| DVec3::from(self.scene.vertices[self.scene.indices[first + k] as usize].map(f64::from)))
+        (0..self.scene.meshes[mesh as usize].triangles()).map(move |t| self.scene.triangle(mesh, t))
     }
 }
 

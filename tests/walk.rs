@@ -6,64 +6,12 @@
 
 mod common;
 
-use common::{boxes_obj, town, write};
+use common::{boxes_obj, distance, first_hit, frames_too_near, town, world_triangles, write};
 use glam::DVec3;
 use occlu::camera::generate::{PathKind, default_path, plan};
 use occlu::camera::path::CameraPath;
 use occlu::raycast::RayCaster;
 use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
-
-/// Every triangle of `scene` in world space.
-fn world_triangles(scene: &Scene) -> Vec<[DVec3; 3]> {
-    let mut out = Vec::new();
-    for o in &scene.objects {
-        let m = &scene.meshes[o.mesh as usize];
-        let indices = &scene.indices[m.first_index as usize..(m.first_index + m.index_count) as usize];
-        for t in indices.chunks(3) {
-            out.push([0, 1, 2].map(|k| {
-                let v = DVec3::from(scene.vertices[t[k] as usize].map(f64::from));
-                o.transform.transform_point3(v)
-            }));
-        }
-    }
-    out
-}
-
-/// The distance from `p` to triangle `t`: to its plane when the foot lies
-/// inside, else to the nearest of its edges.
-fn distance(p: DVec3, t: &[DVec3; 3]) -> f64 {
-    let [a, b, c] = *t;
-    let n = (b - a).cross(c - a);
-    if n.length_squared() > 0.0 {
-        let n = n.normalize();
-        let foot = p - n * n.dot(p - a);
-        let inside = [(a, b), (b, c), (c, a)]
-            .iter()
-            .all(|&(u, v)| (v - u).cross(foot - u).dot(n) >= 0.0);
-        if inside {
-            return (p - foot).length();
-        }
-    }
-    let segment = |u: DVec3, v: DVec3| {
-        let s = ((p - u).dot(v - u) / (v - u).length_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
-        (p - (u + (v - u) * s)).length()
-    };
-    segment(a, b).min(segment(b, c)).min(segment(c, a))
-}
-
-/// Frames of `path` with a surface nearer the eye than the near plane's
-/// corners, by brute force.
-fn frames_too_near(path: &CameraPath, triangles: &[[DVec3; 3]]) -> Vec<u32> {
-    let aspect = 4.0 / 3.0;
-    (0..path.frames)
-        .filter(|&f| {
-            let camera = path.camera(f, aspect);
-            let t = (camera.fov_y / 2.0).tan();
-            let corner = camera.near * (1.0 + t * t * (1.0 + aspect * aspect)).sqrt();
-            triangles.iter().any(|tri| distance(camera.eye, tri) < corner)
-        })
-        .collect()
-}
 
 fn load_obj(dir: &std::path::Path, boxes: &[(String, DVec3, DVec3)]) -> Scene {
     let model = write(dir, "model.obj", boxes_obj(boxes));
@@ -417,16 +365,7 @@ fn the_ray_caster_agrees_with_every_triangle_tried_in_turn() {
     for _ in 0..400 {
         let origin = DVec3::new(random() * 160.0 - 20.0, random() * 160.0 - 20.0, random() * 50.0);
         let direction = DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5);
-        let expected = triangles
-            .iter()
-            .filter_map(|&[a, b, c]| {
-                // The ray meets the plane, and the point lies in the triangle.
-                let n = (b - a).cross(c - a);
-                let t = n.dot(a - origin) / n.dot(direction);
-                let p = origin + direction * t;
-                (t > 0.0 && t <= 400.0 && distance(p, &[a, b, c]) < 1e-9).then_some(t)
-            })
-            .fold(f64::INFINITY, f64::min);
+        let expected = first_hit(&triangles, origin, direction, 400.0).unwrap_or(f64::INFINITY);
         match caster.first_hit(origin, direction, 400.0) {
             Some(hit) => {
                 hits += 1;

@@ -8,17 +8,19 @@ use std::str::FromStr;
 use glam::DVec3;
 
 use super::path::{CameraPath, DEFAULT_FOV_Y_DEG, Interpolation, KeyframeFile, NEAR_RANGE, PathError, PathFile};
-use super::walk::{self, Walk};
+use super::walk::{self, Through, Walk};
+use crate::bounds::Aabb;
 use crate::raycast::{Budget, RayCaster, Stopped};
-use crate::scene::Scene;
 use crate::scene::cameras::{CameraPose, FileAnimation, SAMPLES_PER_SECOND};
+use crate::scene::{Focus, Scene};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PathKind {
     /// Circle the scene at 25° elevation, looking at its centre.
     Orbit,
     /// Eye height along the scene's streets (built-in scenes), or through a
-    /// model's free space ([`walk`]).
+    /// model's free space ([`walk`]): its streets, its interior, its open
+    /// ground.
     Walk,
     /// Straight across above the scene, looking ahead and down.
     Flyover,
@@ -114,19 +116,24 @@ pub struct Generated {
 /// ([`PathError::Interrupted`]).
 pub type PlanListener<'a> = Box<dyn FnMut(u64, u64) -> ControlFlow<()> + 'a>;
 
-/// The box and triangle tests planning one path may spend (walk and
-/// enclosure rays together): about 6 times what the most planning of the
-/// models in ../shared/models needs (two-cylinder-engine.glb, 91 M tests,
-/// 1.5 s on this project's 2-core machine; den-haag.obj 40 M), and 5 to 12 s
-/// of work there. A model beyond it (thousands of instances of one mesh in
-/// one place: every ray meets millions of triangles) gets the path that
-/// needs no planning: an orbit by default, a straight line for a walk.
+/// The box and triangle tests planning one path may spend (the orbit's
+/// lines of sight and the walk's rays together): about 6 times what the
+/// most planning of the models in ../shared/models needs
+/// (two-cylinder-engine.glb, 91 M tests, 1.1 s on this project's 2-core
+/// machine; den-haag.obj 40 M; `cargo bench --bench planning`), and 5 to
+/// 12 s of work there. A model beyond it (thousands of instances of one
+/// mesh in one place: every ray meets millions of triangles) gets the path
+/// that needs no planning: an orbit by default, a straight line for a walk.
 pub const PLANNING_TESTS: u64 = 1 << 29;
 
 /// The path used when none is given ([`DEFAULT_FRAMES`] frames): a walk
-/// where the scene suggests one (the built-in scenes' streets), or where
+/// where the scene suggests one (the built-in scenes' streets), where
 /// circling the model would show nothing but one object (a sky dome around
-/// it, or a closed shell hiding everything else); an orbit otherwise.
+/// it, or a closed shell hiding everything else), through a place's open
+/// ground, and through an interior (most of the walkable floor indoors
+/// and joined, and most of the model's triangles unseen from the orbit);
+/// an orbit otherwise. Paths made from the scene's shape frame its focus
+/// ([`Focus`]), not a ground plane or sky dome around it.
 pub fn default_path(scene: &Scene) -> Result<(CameraPath, String), PathError> {
     default_path_heard(scene, Box::new(|_, _| ControlFlow::Continue(())))
 }
@@ -160,7 +167,8 @@ pub fn plan_heard(
         listener,
     };
     let caster = RayCaster::with_budget(scene, budget);
-    let walk = || walk::plan(scene, &caster);
+    let focus = Focus::of(scene);
+    let walk = || walk::plan(scene, &focus.bounds, &caster);
     let (kind, why, planned) = match request {
         Some(r) => (r.kind, "asked for".to_string(), None),
         None => match default_kind(scene, &caster, walk) {
@@ -170,10 +178,10 @@ pub fn plan_heard(
     };
     let shape_frames = frames.unwrap_or(DEFAULT_FRAMES);
     if kind.shape().is_some() {
-        too_small(scene)?;
+        too_small(scene, &focus)?;
     }
     let (file, note) = match (kind, kind.shape()) {
-        (_, Some(shape)) => generate_with(shape, scene, shape_frames, || match planned {
+        (_, Some(shape)) => generate_with(shape, scene, &focus, shape_frames, || match planned {
             Some(planned) => Ok(Some(planned)),
             None => walk(),
         })
@@ -291,10 +299,10 @@ const LONG_WALK: f64 = walk::LONG_ROUTE as f64;
 const NEAR_SHARE: f64 = 1e-4;
 
 /// Refuses a scene too small for a path made from its shape: its near
-/// plane would be below the least a path may have, naming the model (not
-/// the path, which is not at fault).
-fn too_small(scene: &Scene) -> Result<(), PathError> {
-    let diagonal = scene.bounds.extent().length();
+/// plane (a share of its focus) would be below the least a path may have,
+/// naming the model (not the path, which is not at fault).
+fn too_small(scene: &Scene, focus: &Focus) -> Result<(), PathError> {
+    let diagonal = focus.bounds.extent().length();
     let least = *NEAR_RANGE.start();
     if diagonal * NEAR_SHARE >= least {
         return Ok(());
@@ -337,73 +345,161 @@ fn default_kind(
             None,
         ));
     }
-    let ground = Ground::of(scene);
     let circle = "circled from outside";
-    let enclosed = enclosing(scene, caster, &ground)?;
+    let sight = Sight::from_orbit(scene, caster)?;
+    let enclosed = sight.enclosure(scene);
     let Some(planned) = walk()? else {
         let why = enclosed.map_or("a model".to_string(), |e| format!("{e}, but"));
         return Ok((PathKind::Orbit, format!("{why} with no ground to walk: {circle}"), None));
     };
     let length = planned.length();
-    let open = planned.open_sky;
+    let long = length >= LONG_WALK * planned.cell;
+    let (open, roofed, indoors) = (
+        100.0 * planned.open_sky,
+        100.0 * planned.roofed,
+        100.0 * planned.indoors,
+    );
+    let unseen = sight.unseen_note();
     Ok(match enclosed {
         Some(why) => (PathKind::Walk, why, Some(planned)),
-        None if open >= OPEN_PLACE && length >= LONG_WALK * planned.cell => (
+        None if planned.open_sky >= OPEN_PLACE && long => (
+            PathKind::Walk,
+            format!("a place with open ground ({open:.0}% of the walk under the sky)"),
+            Some(planned),
+        ),
+        None if planned.through == Through::Interior && long && sight.misses_most() => (
             PathKind::Walk,
             format!(
-                "a place with open ground ({:.0}% of the walk under the sky)",
-                100.0 * open
+                "an interior ({indoors:.0}% of the walkable floor indoors, under a roof with walls around, and joined; {unseen})"
             ),
             Some(planned),
         ),
         None => (
             PathKind::Orbit,
             format!(
-                "an object (its longest walk {length:.1} units over {:.0} cells, {:.0}% under the sky): {circle}",
+                "an object (its longest walk {length:.1} units over {:.0} cells, {open:.0}% under the sky; {roofed:.0}% of the walkable floor under a roof and joined; {unseen}): {circle}",
                 length / planned.cell,
-                100.0 * open
             ),
             None,
         ),
     })
 }
 
-/// Why circling `scene` would show one object only, if it would: from the
-/// orbit (which circles outside the scene's bounds) one object is the first
-/// thing met on the way to nearly every other (a sky dome or a closed
-/// shell around the rest).
-fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Result<Option<String>, Stopped> {
-    let b = scene.bounds;
-    let eyes: Vec<DVec3> = orbit(ground, b.center(), b.extent().length().max(1e-6))
-        .iter()
-        .map(|k| DVec3::from(k.position))
-        .collect();
-    // Clusters of one split mesh ("dome#0", "dome#1") are one part.
-    let part = |object: usize| scene.objects[object].part;
-    let targets: Vec<usize> = (0..scene.objects.len())
-        .step_by(scene.objects.len().div_ceil(64))
-        .collect();
-    let mut first: std::collections::HashMap<u32, usize> = Default::default();
-    let mut rays = 0;
-    for eye in eyes.iter().step_by(4) {
-        caster.searching()?;
-        for &t in &targets {
-            let to = scene.objects[t].bounds.center() - *eye;
-            if let Some(hit) = caster.first_hit(*eye, to, 1.0)
-                && part(hit.object as usize) != part(t)
-            {
-                *first.entry(part(hit.object as usize)).or_default() += 1;
+/// What circling the whole scene sees from its orbit (outside the
+/// scene's bounds, ground planes and sky domes included): which object
+/// lines of sight to a sample of the others meet first, and how much of
+/// the model no eye of the orbit sees at all.
+struct Sight {
+    /// Lines of sight cast to the sampled objects.
+    rays: usize,
+    /// The part that hid the most of them (met first on the way to an
+    /// object of another part), and how many.
+    hider: Option<(u32, usize)>,
+    /// Objects aimed at.
+    targets: usize,
+    /// Triangles sampled, and those seen from no eye of the orbit.
+    sampled: u64,
+    unseen: u64,
+}
+
+/// Triangles sampled to judge how much of a model its orbit sees.
+const SIGHT_TRIANGLES: u64 = 256;
+
+/// A surface met this close before a sampled triangle's centroid (a share
+/// of the line of sight) is the triangle itself, or one lying on it.
+const SAME_SURFACE: f64 = 1e-6;
+
+impl Sight {
+    fn from_orbit(scene: &Scene, caster: &RayCaster) -> Result<Sight, Stopped> {
+        let b = scene.bounds;
+        let ground = Ground::of(scene, &b);
+        let keys = orbit(&ground, b.center(), b.extent().length().max(1e-6));
+        // The orbit ends where it starts: its last eye is its first.
+        let eyes: Vec<DVec3> = keys[..keys.len() - 1].iter().map(|k| DVec3::from(k.position)).collect();
+        // Clusters of one split mesh ("dome#0", "dome#1") are one part.
+        let part = |object: usize| scene.objects[object].part;
+        let targets: Vec<usize> = (0..scene.objects.len())
+            .step_by(scene.objects.len().div_ceil(64))
+            .collect();
+        let mut first: std::collections::HashMap<u32, usize> = Default::default();
+        let mut rays = 0;
+        for eye in eyes.iter().step_by(4) {
+            caster.searching()?;
+            for &t in &targets {
+                let to = scene.objects[t].bounds.center() - *eye;
+                if let Some(hit) = caster.first_hit(*eye, to, 1.0)
+                    && part(hit.object as usize) != part(t)
+                {
+                    *first.entry(part(hit.object as usize)).or_default() += 1;
+                }
+                rays += 1;
             }
-            rays += 1;
         }
+        // Every `stride`-th triangle in the scene's order (a sample weighed
+        // by triangles, whatever the objects): seen when the line from
+        // some eye to its centroid meets nothing before it.
+        let stride = scene.triangles().div_ceil(SIGHT_TRIANGLES).max(1);
+        let (mut sampled, mut unseen) = (0, 0);
+        let mut before = 0;
+        for object in &scene.objects {
+            caster.searching()?;
+            let end = before + u64::from(object.triangles);
+            for index in (before.next_multiple_of(stride)..end).step_by(stride as usize) {
+                let corners = scene.triangle(object.mesh, (index - before) as u32);
+                let centroid = object
+                    .transform
+                    .transform_point3((corners[0] + corners[1] + corners[2]) / 3.0);
+                let seen = eyes.iter().step_by(2).any(|&eye| {
+                    caster
+                        .first_hit(eye, centroid - eye, 1.0)
+                        .is_none_or(|hit| hit.t >= 1.0 - SAME_SURFACE)
+                });
+                sampled += 1;
+                unseen += u64::from(!seen);
+            }
+            before = end;
+        }
+        caster.searching()?;
+        Ok(Sight {
+            rays,
+            hider: first
+                .iter()
+                .max_by_key(|&(p, n)| (*n, std::cmp::Reverse(*p)))
+                .map(|(&p, &n)| (p, n)),
+            targets: targets.len(),
+            sampled,
+            unseen,
+        })
     }
-    caster.searching()?;
-    let Some((&hider, &n)) = first.iter().max_by_key(|&(p, n)| (*n, std::cmp::Reverse(*p))) else {
-        return Ok(None);
-    };
-    let name = &scene.parts[hider as usize].name;
-    Ok((targets.len() > 1 && 10 * n >= 9 * rays)
-        .then(|| format!("from the orbit, '{name}' hides {n} of {rays} lines of sight to the other objects")))
+
+    /// Why circling `scene` would show one object only, if it would: one
+    /// object is the first thing met on the way to nearly every other (a
+    /// sky dome or a closed shell around the rest).
+    fn enclosure(&self, scene: &Scene) -> Option<String> {
+        let (hider, n) = self.hider?;
+        let name = &scene.parts[hider as usize].name;
+        (self.targets > 1 && 10 * n >= 9 * self.rays).then(|| {
+            format!(
+                "from the orbit, '{name}' hides {n} of {} lines of sight to the other objects",
+                self.rays
+            )
+        })
+    }
+
+    /// Whether the orbit would miss most of the model: most of its
+    /// triangles are seen from no eye of it (what an interior holds; an
+    /// empty shell shows most of its triangles outside).
+    fn misses_most(&self) -> bool {
+        2 * self.unseen > self.sampled
+    }
+
+    /// The share of the model no eye of the orbit sees, for a reason.
+    fn unseen_note(&self) -> String {
+        format!(
+            "{:.0}% of its triangles unseen from the orbit",
+            100.0 * self.unseen as f64 / self.sampled.max(1) as f64
+        )
+    }
 }
 
 /// [`generate`], with `walk` planning the walk a scene without streets
@@ -412,11 +508,12 @@ fn enclosing(scene: &Scene, caster: &RayCaster, ground: &Ground) -> Result<Optio
 fn generate_with(
     kind: Shape,
     scene: &Scene,
+    focus: &Focus,
     frames: u32,
     walk: impl FnOnce() -> Result<Option<Walk>, Stopped>,
 ) -> Result<(PathFile, Option<String>), Stopped> {
-    let ground = Ground::of(scene);
-    let b = scene.bounds;
+    let b = focus.bounds;
+    let ground = Ground::of(scene, &b);
     let diagonal = b.extent().length().max(1e-6);
     let mut note = None;
     let keyframes = match kind {
@@ -427,7 +524,8 @@ fn generate_with(
                 Ok(Some(w)) => {
                     let length = w.length();
                     note = Some(format!(
-                        "a walk along the longest open route, {length:.1} units at eye height {:.3} (cells of {:.3}, {:.0}% of them joined to it)",
+                        "a walk along the longest route through {}, {length:.1} units at eye height {:.3} (cells of {:.3}, {:.0}% of them joined to it)",
+                        w.through,
                         w.eye_height,
                         w.cell,
                         100.0 * w.region
@@ -463,6 +561,10 @@ fn generate_with(
                 .to_vec()
         }
     };
+    let note = match (note, focus.note(scene)) {
+        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
+        (a, b) => a.or(b),
+    };
     let file = PathFile {
         frames: Some(frames),
         fps: None,
@@ -487,21 +589,21 @@ fn key(time: f64, position: DVec3) -> KeyframeFile {
     }
 }
 
-/// The scene's ground plane, as its up axis defines it.
+/// The ground plane under a box of the scene (its bounds, or its focus),
+/// as the scene's up axis defines it.
 struct Ground {
     up: DVec3,
-    /// The two axes spanning the ground, and the scene's extent along each.
+    /// The two axes spanning the ground, and the box's extent along each.
     across: [(DVec3, f64); 2],
-    /// The scene's lowest and highest points along `up`.
+    /// The box's lowest and highest points along `up`.
     lowest: f64,
     highest: f64,
 }
 
 impl Ground {
-    fn of(scene: &Scene) -> Ground {
+    fn of(scene: &Scene, b: &Aabb) -> Ground {
         let up = scene.up.axis.vector();
         let (right, ahead) = scene.up.axis.ground_axes();
-        let b = scene.bounds;
         let along = |axis: DVec3| {
             let (least, greatest) = b.span_along(axis);
             greatest - least

@@ -3,23 +3,27 @@
 //! corridors (streets, naves, rooms), never through geometry.
 //!
 //! The ground plane (the scene's up axis) is laid with a grid of cells no
-//! wider than the eye is high, within bounds on the work. Down each cell's
-//! vertical line a ray cast finds every surface; a surface with room for an
-//! eye above it (eye height and a margin up to the next surface) is a
-//! floor, unless that room lies inside a closed part (the ray has crossed
-//! its surface an odd number of times: inside a thick ground slab, a closed
-//! building; a closed hall or sky box around everything is space, not a
-//! solid), or the floor is the model's top (nothing rises two eye heights
-//! above it: a tower's roof). Floors of neighbouring cells within a step
-//! (half the eye height) of each other are linked, so the ground may slope,
-//! climb stairs and lie at several levels (an island and the sea, storeys).
-//! A floor linked on all four sides is open (the eye stays a cell from every
-//! wall), and two linked open floors are joined when a ray at eye height
-//! passes between them. The walk is the longest of the shortest routes
-//! through the largest joined region (two breadth-first searches), in cell
-//! steps, of the streets (open floors with walls near in half the
-//! directions) when they hold a long enough one and a quarter of the open
-//! ground joined to them, else of all open floors.
+//! wider than the eye is high, within bounds on the work, over the model's
+//! focus (its bounds without a huge ground plane or sky dome,
+//! [`crate::scene::Focus`]). Down each cell's vertical line a ray cast finds
+//! every surface; a surface with room for an eye above it (eye height and a
+//! margin up to the next surface) is a floor, unless that room lies inside a
+//! closed part (the ray has crossed its surface an odd number of times:
+//! inside a thick ground slab, a closed building; a closed hall or sky box
+//! around everything is space, not a solid), or the floor is the model's top
+//! (nothing rises two eye heights above it: a tower's roof). Floors of
+//! neighbouring cells within a step (half the eye height) of each other are
+//! linked, so the ground may slope, climb stairs and lie at several levels
+//! (an island and the sea, storeys). A floor linked on all four sides is
+//! open (the eye stays a cell from every wall), and two linked open floors
+//! are joined when a ray at eye height passes between them. The walk is the
+//! longest of the shortest routes through the largest joined region (two
+//! breadth-first searches), in cell steps, of the interior (open floors
+//! indoors: a ray up meets the model, and level rays meet it in six of
+//! eight directions) when it holds at least half of the open floors; else
+//! of the streets (open floors with walls near in half the directions)
+//! when they hold a long enough one and a quarter of the open ground
+//! joined to them; else of all open floors.
 
 use std::collections::VecDeque;
 
@@ -28,6 +32,27 @@ use glam::DVec3;
 use crate::bounds::Aabb;
 use crate::raycast::{Hit, RayCaster, Stopped};
 use crate::scene::Scene;
+
+/// What a walk's route goes through.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Through {
+    /// Open floors indoors: under a roof, with walls around ([`plan`]).
+    Interior,
+    /// Open floors with walls near in half the directions.
+    Streets,
+    /// Any open floors.
+    OpenGround,
+}
+
+impl std::fmt::Display for Through {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(match self {
+            Through::Interior => "the interior",
+            Through::Streets => "the streets",
+            Through::OpenGround => "the open ground",
+        })
+    }
+}
 
 /// A planned walk: eye positions along the route, and what it rests on.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,6 +68,15 @@ pub struct Walk {
     /// The share of the route's cells open to the sky (nothing above the
     /// eye): streets are, the inside of an object is not.
     pub open_sky: f64,
+    /// What the route goes through.
+    pub through: Through,
+    /// The share of the open floors under a roof and joined (the largest
+    /// region of them): most of an interior's, none of a town's.
+    pub roofed: f64,
+    /// The share of the open floors indoors (under a roof, walls around)
+    /// and joined; judged only where the roofed share is at least half,
+    /// 0 otherwise.
+    pub indoors: f64,
 }
 
 impl Walk {
@@ -85,15 +119,19 @@ const FLAT_EYE_FRACTION: f64 = 0.01;
 struct Floor {
     cell: usize,
     height: f64,
+    /// The cell's ray met a surface above it (below the model's top): a
+    /// roof.
+    roofed: bool,
 }
 
-/// Plans a walk through `scene`, or `None` when it has no ground with room
+/// Plans a walk through the part of `scene` within `bounds` (its focus:
+/// the grid covers that box), or `None` when it has no ground with room
 /// to walk (fewer than [`MIN_CELLS`] joined cells); stopped when `caster`
 /// stops (its budget spent, or Ctrl-C).
-pub fn plan(scene: &Scene, caster: &RayCaster) -> Result<Option<Walk>, Stopped> {
+pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<Walk>, Stopped> {
     let up = scene.up.axis.vector();
     let (right, ahead) = scene.up.axis.ground_axes();
-    let b = scene.bounds;
+    let b = *bounds;
     let (low, high) = b.span_along(up);
     let ((x0, x1), (y0, y1)) = (b.span_along(right), b.span_along(ahead));
     let (width, depth) = (x1 - x0, y1 - y0);
@@ -112,7 +150,7 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Result<Option<Walk>, Stopped> 
         right * (x0 + (i as f64 + 0.5) * cell) + ahead * (y0 + (j as f64 + 0.5) * cell) + up * height
     };
 
-    let solid = solid_parts(scene, right, ahead, up);
+    let solid = solid_parts(scene, &b, right, ahead, up);
     // Floors, cell by cell: surfaces with room for the eye and a margin
     // above them, outside every solid, below the model's top.
     let room = eye * 1.5;
@@ -134,7 +172,11 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Result<Option<Walk>, Stopped> 
         for hit in &hits {
             let height = top - hit.t;
             if above - height >= room && inside.is_empty() && height + 2.0 * eye <= high {
-                floors.push(Floor { cell: k, height });
+                floors.push(Floor {
+                    cell: k,
+                    height,
+                    roofed: above.is_finite(),
+                });
             }
             let part = part(hit);
             if solid[part as usize] {
@@ -187,8 +229,8 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Result<Option<Walk>, Stopped> 
         .collect();
     caster.searching()?;
     // The longest shortest route through the largest joined region of
-    // `chosen` open floors, and the region's size.
-    let longest_route = |chosen: &[bool]| -> Option<(Vec<usize>, usize)> {
+    // `chosen` open floors, and the region's floors.
+    let longest_route = |chosen: &[bool]| -> Option<(Vec<usize>, Vec<usize>)> {
         let edges: Vec<Vec<usize>> = open_edges
             .iter()
             .enumerate()
@@ -199,44 +241,75 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Result<Option<Walk>, Stopped> 
             .collect();
         let start = largest_region(&edges, chosen)?;
         let (far, _, _) = farthest(&edges, start);
-        let (end, parents, size) = farthest(&edges, far);
+        let (end, parents, region) = farthest(&edges, far);
         let mut route = vec![end];
         while let Some(previous) = parents[route[route.len() - 1]] {
             route.push(previous);
         }
-        Some((route, size))
+        Some((route, region))
     };
-    // Streets: open floors with walls around, where at least half of eight
-    // level rays meet something within [`STREET_REACH`] cells; a walk along
-    // them sees occlusion, one round the open outskirts does not.
-    let walled = |f: usize| {
+    // Of eight level rays from floor `f`'s eye, how many meet something
+    // within `reach`.
+    let walls = |f: usize, reach: f64| {
         let p = point(f);
-        let reach = STREET_REACH * cell;
-        let walls = (0..8)
+        (0..8)
             .filter(|&a| {
                 let angle = std::f64::consts::TAU * f64::from(a) / 8.0;
                 let direction = right * angle.cos() + ahead * angle.sin();
                 caster.first_hit(p, direction, reach).is_some()
             })
-            .count();
-        // At a crossing only the four diagonals meet walls.
-        walls >= 4
+            .count()
     };
-    // Where a street meets a crossing, a cell or two see too few walls:
-    // streets take in the open floors that near.
-    let walled: Vec<bool> = (0..floors.len()).map(|f| open[f] && walled(f)).collect();
+    // Streets: open floors with walls around, where at least half of eight
+    // level rays meet something within [`STREET_REACH`] cells (at a
+    // crossing only the four diagonals do); a walk along them sees
+    // occlusion, one round the open outskirts does not. Where a street
+    // meets a crossing, a cell or two see too few walls: streets take in
+    // the open floors that near.
+    let walled: Vec<bool> = (0..floors.len())
+        .map(|f| open[f] && walls(f, STREET_REACH * cell) >= 4)
+        .collect();
     caster.searching()?;
     let streets = widen(&walled, &links, &open, STREET_GAP);
     // The streets' route when it is long, and its streets are a good part
     // of the open ground around them, not a lane between a few walls in a
     // park or a forest.
-    let street_route = longest_route(&streets).filter(|(route, size)| {
+    let street_route = longest_route(&streets).filter(|(route, region)| {
         let (_, _, around) = farthest(&open_edges, route[0]);
-        route.len() >= LONG_ROUTE && *size as f64 >= STREET_SHARE * around as f64
+        route.len() >= LONG_ROUTE && region.len() as f64 >= STREET_SHARE * around.len() as f64
     });
-    let Some((route, region)) = street_route.or_else(|| longest_route(&open)) else {
+    // Interiors: open floors indoors, under a roof (the cell's ray met
+    // the model above the floor) with walls around (level rays meet the model
+    // within its size in six of eight directions), not under a porch or a
+    // canopy open at the sides. When their largest joined region holds
+    // most of the open floor, the walk goes through it. It lies in one
+    // joined region of roofed floors, so only one that large is searched
+    // for walls (the inside of an object is roofed, but seldom most).
+    let open_count = open.iter().filter(|&&o| o).count();
+    let most = |region: &[usize]| 2 * region.len() >= open_count;
+    let roofed: Vec<bool> = (0..floors.len()).map(|f| open[f] && floors[f].roofed).collect();
+    let roofed = longest_route(&roofed).map_or_else(Vec::new, |(_, region)| region);
+    let mut indoors = vec![false; floors.len()];
+    if most(&roofed) {
+        let reach = b.extent().length();
+        for &f in &roofed {
+            indoors[f] = walls(f, reach) >= INTERIOR_WALLS;
+        }
+        caster.searching()?;
+    }
+    let interior = longest_route(&indoors);
+    let share = |region: &[usize]| region.len() as f64 / open_count.max(1) as f64;
+    let indoors_share = interior.as_ref().map_or(0.0, |(_, region)| share(region));
+    let interior = interior.filter(|(route, region)| route.len() >= LONG_ROUTE && most(region));
+    let (through, found) = match (interior, street_route) {
+        (Some(interior), _) => (Through::Interior, Some(interior)),
+        (None, Some(streets)) => (Through::Streets, Some(streets)),
+        (None, None) => (Through::OpenGround, longest_route(&open)),
+    };
+    let Some((route, region)) = found else {
         return Ok(None);
     };
+    let region = region.len();
     if route.len() < MIN_CELLS {
         return Ok(None);
     }
@@ -252,18 +325,21 @@ pub fn plan(scene: &Scene, caster: &RayCaster) -> Result<Option<Walk>, Stopped> 
         cell,
         region: region as f64 / (nx * ny) as f64,
         open_sky: sky as f64 / points.len() as f64,
+        through,
+        roofed: share(&roofed),
+        indoors: indoors_share,
     }))
 }
 
 /// Which parts are solids to stand outside of: closed parts, but not a
 /// shell as tall as half the model that covers most of its ground (a hall,
 /// a sky box), which is space to walk in.
-fn solid_parts(scene: &Scene, right: DVec3, ahead: DVec3, up: DVec3) -> Vec<bool> {
+fn solid_parts(scene: &Scene, model: &Aabb, right: DVec3, ahead: DVec3, up: DVec3) -> Vec<bool> {
     let footprint = |b: &Aabb| {
         let e = b.extent();
         (e.dot(right.abs()), e.dot(ahead.abs()), e.dot(up.abs()))
     };
-    let (model_w, model_d, model_h) = footprint(&scene.bounds);
+    let (model_w, model_d, model_h) = footprint(model);
     let mut bounds = vec![Aabb::EMPTY; scene.parts.len()];
     for o in &scene.objects {
         bounds[o.part as usize] = bounds[o.part as usize].union(o.bounds);
@@ -279,6 +355,10 @@ fn solid_parts(scene: &Scene, right: DVec3, ahead: DVec3, up: DVec3) -> Vec<bool
         })
         .collect()
 }
+
+/// Of eight level rays from an interior's floor, how many must meet the
+/// model.
+const INTERIOR_WALLS: usize = 6;
 
 /// How far (in cells) a street's walls may lie.
 const STREET_REACH: f64 = 16.0;
@@ -344,16 +424,16 @@ fn largest_region(edges: &[Vec<usize>], open: &[bool]) -> Option<usize> {
 }
 
 /// The cell farthest from `start` in steps, each reached cell's parent on a
-/// shortest route from `start`, and how many cells were reached.
-fn farthest(edges: &[Vec<usize>], start: usize) -> (usize, Vec<Option<usize>>, usize) {
+/// shortest route from `start`, and the cells reached.
+fn farthest(edges: &[Vec<usize>], start: usize) -> (usize, Vec<Option<usize>>, Vec<usize>) {
     let mut parent = vec![None; edges.len()];
     let mut seen = vec![false; edges.len()];
     seen[start] = true;
-    let (mut last, mut reached) = (start, 0);
+    let (mut last, mut reached) = (start, Vec::new());
     let mut queue = VecDeque::from([start]);
     while let Some(k) = queue.pop_front() {
         last = k;
-        reached += 1;
+        reached.push(k);
         for &n in &edges[k] {
             if !seen[n] {
                 seen[n] = true;

@@ -11,6 +11,7 @@ pub mod builtin;
 pub mod cameras;
 mod closed;
 mod cluster;
+mod focus;
 mod gltf;
 mod load;
 mod meshopt;
@@ -22,6 +23,9 @@ mod source;
 pub mod up;
 mod validate;
 
+pub use focus::Focus;
+#[cfg(test)]
+pub(crate) use focus::fixtures;
 pub use load::{load, load_bytes, looks_z_up};
 pub use model::{DEFAULT_CLUSTER_TRIANGLES, Mesh, MeshGroup, Object, Part, Scene, SceneBuilder, TriangleSoup};
 pub use phases::LoadPhases;

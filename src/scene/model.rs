@@ -97,6 +97,13 @@ impl Scene {
         self.objects.iter().map(|o| u64::from(o.triangles)).sum()
     }
 
+    /// The corners of triangle `triangle` of mesh `mesh`, in the mesh's
+    /// local frame.
+    pub fn triangle(&self, mesh: u32, triangle: u32) -> [DVec3; 3] {
+        let first = (self.meshes[mesh as usize].first_index + 3 * triangle) as usize;
+        [0, 1, 2].map(|k| DVec3::from(self.vertices[self.indices[first + k] as usize].map(f64::from)))
+    }
+
     /// Puts every mover where `frame` has it (transform and world bounds)
     /// and appends the ids of the objects that changed to `moved`.
     pub fn pose(&mut self, frame: u32, moved: &mut Vec<u32>) {

@@ -2,6 +2,7 @@
 #![allow(dead_code)] // each test binary uses its own subset
 
 pub mod gltf_writer;
+pub mod hall;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -114,6 +115,73 @@ pub fn shared_models(dir: &Path) -> Vec<(PathBuf, Option<PathBuf>)> {
                         .starts_with(&format!("{stem}."))
             });
             (model.clone(), path.cloned())
+        })
+        .collect()
+}
+
+/// Every triangle of `scene` in world space.
+pub fn world_triangles(scene: &Scene) -> Vec<[DVec3; 3]> {
+    let mut out = Vec::new();
+    for o in &scene.objects {
+        let m = &scene.meshes[o.mesh as usize];
+        let indices = &scene.indices[m.first_index as usize..(m.first_index + m.index_count) as usize];
+        for t in indices.chunks(3) {
+            out.push([0, 1, 2].map(|k| {
+                let v = DVec3::from(scene.vertices[t[k] as usize].map(f64::from));
+                o.transform.transform_point3(v)
+            }));
+        }
+    }
+    out
+}
+
+/// The distance from `p` to triangle `t`: to its plane when the foot lies
+/// inside, else to the nearest of its edges.
+pub fn distance(p: DVec3, t: &[DVec3; 3]) -> f64 {
+    let [a, b, c] = *t;
+    let n = (b - a).cross(c - a);
+    if n.length_squared() > 0.0 {
+        let n = n.normalize();
+        let foot = p - n * n.dot(p - a);
+        let inside = [(a, b), (b, c), (c, a)]
+            .iter()
+            .all(|&(u, v)| (v - u).cross(foot - u).dot(n) >= 0.0);
+        if inside {
+            return (p - foot).length();
+        }
+    }
+    let segment = |u: DVec3, v: DVec3| {
+        let s = ((p - u).dot(v - u) / (v - u).length_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+        (p - (u + (v - u) * s)).length()
+    };
+    segment(a, b).min(segment(b, c)).min(segment(c, a))
+}
+
+/// The nearest `t` in `(0, max_t]` where `origin + t·direction` meets one
+/// of `triangles`, tried one by one: the ray meets the triangle's plane,
+/// and the point lies in the triangle.
+pub fn first_hit(triangles: &[[DVec3; 3]], origin: DVec3, direction: DVec3, max_t: f64) -> Option<f64> {
+    triangles
+        .iter()
+        .filter_map(|&[a, b, c]| {
+            let n = (b - a).cross(c - a);
+            let t = n.dot(a - origin) / n.dot(direction);
+            let p = origin + direction * t;
+            (t > 0.0 && t <= max_t && distance(p, &[a, b, c]) < 1e-9).then_some(t)
+        })
+        .min_by(f64::total_cmp)
+}
+
+/// Frames of `path` with a surface nearer the eye than the near plane's
+/// corners, by brute force.
+pub fn frames_too_near(path: &CameraPath, triangles: &[[DVec3; 3]]) -> Vec<u32> {
+    let aspect = 4.0 / 3.0;
+    (0..path.frames)
+        .filter(|&f| {
+            let camera = path.camera(f, aspect);
+            let t = (camera.fov_y / 2.0).tan();
+            let corner = camera.near * (1.0 + t * t * (1.0 + aspect * aspect)).sqrt();
+            triangles.iter().any(|tri| distance(camera.eye, tri) < corner)
         })
         .collect()
 }

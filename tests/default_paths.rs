@@ -1,0 +1,337 @@
+//! The default path's class where it used to miss the model: an interior
+//! (a hall under a roof) is walked inside, alone or on a ground plane 20
+//! times wider; a furnished room on a huge plane is framed, not the plane;
+//! and every model in ../shared/models and every built-in scene keeps the
+//! kind of path it had. Each is checked by the test's own computations:
+//! rays tried against every triangle in turn, the room's box from the list
+//! the test built it from, the camera's pixel rays through that box.
+
+mod common;
+
+use common::hall::hall;
+use common::{
+    boxes_obj, cannot_run, first_hit, frames_too_near, occlu, shared_models, shared_models_dir, stderr,
+    world_triangles, write,
+};
+use glam::DVec3;
+use occlu::bounds::Aabb;
+use occlu::camera::generate::{Generated, PathKind, plan};
+use occlu::camera::path::{CameraPath, PathFile};
+use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
+
+type Boxes = Vec<(String, DVec3, DVec3)>;
+
+fn part(name: &str, min: [f64; 3], max: [f64; 3]) -> (String, DVec3, DVec3) {
+    (name.to_string(), DVec3::from(min), DVec3::from(max))
+}
+
+/// The box of `boxes`, as the test built them.
+fn box_of(boxes: &[(String, DVec3, DVec3)]) -> Aabb {
+    boxes
+        .iter()
+        .fold(Aabb::EMPTY, |b, (_, min, max)| b.union(Aabb::new(*min, *max)))
+}
+
+/// A flat plane under `boxes`, `times` as wide as their box and centred
+/// under it, its top at `top`.
+fn plane_under(boxes: &[(String, DVec3, DVec3)], times: f64, top: f64) -> (String, DVec3, DVec3) {
+    let b = box_of(boxes);
+    let (c, half) = (b.center(), b.extent() * 0.5 * times);
+    let (min, max) = (c - half, c + half);
+    part("ground", [min.x, top - 0.1, min.z], [max.x, top, max.z])
+}
+
+fn load_boxes(dir: &std::path::Path, boxes: &[(String, DVec3, DVec3)]) -> Scene {
+    load_obj(dir, boxes_obj(boxes))
+}
+
+fn load_obj(dir: &std::path::Path, obj: String) -> Scene {
+    let model = write(dir, "model.obj", obj);
+    load(&SceneSpec::File(model), &LoadOptions::default()).unwrap()
+}
+
+/// `boxes` as one OBJ object, one mesh (as a scan or a merged export
+/// gives a model).
+fn one_object(boxes: &[(String, DVec3, DVec3)]) -> String {
+    let obj = boxes_obj(boxes);
+    let faces = obj.lines().filter(|line| !line.starts_with("o "));
+    std::iter::once("o model")
+        .chain(faces)
+        .map(|line| format!("{line}\n"))
+        .collect()
+}
+
+/// The default path of `scene`, in `frames` frames.
+fn default_of(scene: &Scene, frames: u32) -> (Generated, CameraPath) {
+    let generated = plan(None, scene, Some(frames)).unwrap();
+    let path = CameraPath::from_file(&generated.file, "default").unwrap();
+    (generated, path)
+}
+
+/// Every keyframe of `generated` stands inside the model (a ray straight
+/// up meets it, and level rays meet it in at least six of eight directions
+/// within `reach`), `eye` above a floor, looking level and along the route.
+fn assert_walked_inside(scene: &Scene, generated: &Generated, reach: f64, eye: f64) {
+    let why = &generated.why;
+    assert_eq!(generated.kind, PathKind::Walk, "{why}");
+    let triangles = world_triangles(scene);
+    let keys = &generated.file.keyframes;
+    assert!(keys.len() >= 32, "{} keyframes ({why})", keys.len());
+    for (k, key) in keys.iter().enumerate() {
+        let p = DVec3::from(key.position);
+        assert!(
+            first_hit(&triangles, p, DVec3::Y, f64::INFINITY).is_some(),
+            "key {k} at {p}: open to the sky ({why})"
+        );
+        let walls = (0..8)
+            .filter(|&a| {
+                let angle = std::f64::consts::TAU * f64::from(a) / 8.0;
+                let direction = DVec3::new(angle.cos(), 0.0, angle.sin());
+                first_hit(&triangles, p, direction, reach).is_some()
+            })
+            .count();
+        assert!(walls >= 6, "key {k} at {p}: walls in {walls} of 8 directions ({why})");
+        let floor = first_hit(&triangles, p, DVec3::NEG_Y, f64::INFINITY);
+        assert!(
+            floor.is_some_and(|t| (t - eye).abs() < 1e-6),
+            "key {k} at {p}: floor {floor:?} below ({why})"
+        );
+        let look = DVec3::from(key.target.expect("a walk looks at a point ahead")) - p;
+        let along = match keys.get(k + 1) {
+            Some(next) => DVec3::from(next.position) - p,
+            None => p - DVec3::from(keys[k - 1].position),
+        };
+        assert!(
+            look.y.abs() < 1e-9 && look.dot(along) > 0.0,
+            "key {k} at {p}: looks {look}, the route goes {along}"
+        );
+    }
+}
+
+/// The default path of `scene` (in 120 frames) walks inside it as
+/// [`assert_walked_inside`] says, with walls within `reach`, and comes
+/// near no surface; its reason.
+fn walked_inside(scene: &Scene, reach: f64) -> String {
+    let (generated, path) = default_of(scene, 120);
+    assert!(generated.why.starts_with("an interior"), "{}", generated.why);
+    assert_walked_inside(scene, &generated, reach, 1.7);
+    assert_eq!(frames_too_near(&path, &world_triangles(scene)), Vec::<u32>::new());
+    generated.why
+}
+
+/// The hall with `beside` added: [`walked_inside`], walls within the
+/// hall's own size.
+fn hall_walked_inside(beside: Boxes) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = hall();
+    let reach = box_of(&boxes).extent().length();
+    boxes.extend(beside);
+    walked_inside(&load_boxes(dir.path(), &boxes), reach)
+}
+
+#[test]
+fn a_hall_under_a_roof_is_walked_inside() {
+    hall_walked_inside(Vec::new());
+    // The whole hall one mesh: what the orbit would miss is judged by
+    // triangles, whatever the objects.
+    let dir = tempfile::tempdir().unwrap();
+    let boxes = hall();
+    walked_inside(
+        &load_obj(dir.path(), one_object(&boxes)),
+        box_of(&boxes).extent().length(),
+    );
+}
+
+#[test]
+fn a_roofed_porch_outside_the_door_is_left_out_of_the_walk() {
+    // Outside the door (x 48, z 10 to 14): a floor and a roof 5 high on
+    // two posts, 12 deep and 16 wide, open on three sides.
+    hall_walked_inside(vec![
+        part("porch_floor", [48.0, -0.5, 4.0], [60.0, 0.0, 20.0]),
+        part("porch_roof", [48.0, 5.0, 4.0], [60.0, 5.5, 20.0]),
+        part("porch_post_a", [59.0, 0.0, 4.0], [60.0, 5.0, 5.0]),
+        part("porch_post_b", [59.0, 0.0, 19.0], [60.0, 5.0, 20.0]),
+    ]);
+}
+
+#[test]
+fn a_hall_on_a_ground_plane_20_times_wider_is_walked_inside() {
+    let why = hall_walked_inside(vec![plane_under(&hall(), 20.0, -0.5)]);
+    assert!(why.contains("without 'ground'"), "{why}");
+}
+
+#[test]
+fn path_gen_says_the_class_and_why_and_kind_still_overrides_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = hall();
+    let walls = box_of(&boxes);
+    boxes.push(plane_under(&boxes, 20.0, -0.5));
+    let model = write(dir.path(), "hall.obj", boxes_obj(&boxes));
+    let output = dir.path().join("path.json");
+    let path_gen = |kind: &[&str]| {
+        let out = occlu(
+            &[
+                &["path", "gen", model.to_str().unwrap(), "-o", output.to_str().unwrap()],
+                kind,
+            ]
+            .concat(),
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        let file: PathFile = serde_json::from_slice(&std::fs::read(&output).unwrap()).unwrap();
+        (stderr(&out), file)
+    };
+    let (said, _) = path_gen(&[]);
+    assert!(said.contains("(walk: an interior ("), "{said}");
+    assert!(said.contains("without 'ground'"), "{said}");
+    // Asked for, an orbit circles the hall, not the plane.
+    let (said, orbit) = path_gen(&["--kind", "orbit"]);
+    assert!(said.contains("(orbit: asked for; framing its detail"), "{said}");
+    let size = walls.extent().length();
+    for key in &orbit.keyframes {
+        let away = distance_to_box(DVec3::from(key.position), &walls);
+        assert!(away <= 3.0 * size, "{away:.1} from the hall, {size:.1} across");
+    }
+}
+
+/// A room 10 × 10 in metres, +Y up, without a roof: walls 3 tall (a door
+/// in the south one) and furniture, each piece an object.
+fn furnished_room() -> Boxes {
+    vec![
+        part("wall_north", [0.0, 0.0, 9.8], [10.0, 3.0, 10.0]),
+        part("wall_west", [0.0, 0.0, 0.0], [0.2, 3.0, 9.8]),
+        part("wall_east", [9.8, 0.0, 0.0], [10.0, 3.0, 9.8]),
+        part("wall_south_a", [0.2, 0.0, 0.0], [4.0, 3.0, 0.2]),
+        part("wall_south_b", [6.0, 0.0, 0.0], [9.8, 3.0, 0.2]),
+        part("table", [4.0, 0.0, 4.0], [6.0, 0.8, 5.5]),
+        part("chair_a", [4.5, 0.0, 3.2], [5.0, 1.0, 3.7]),
+        part("chair_b", [5.0, 0.0, 5.8], [5.5, 1.0, 6.3]),
+        part("bed", [7.0, 0.0, 1.0], [9.5, 0.6, 3.0]),
+        part("wardrobe", [0.2, 0.0, 7.0], [1.2, 2.2, 9.8]),
+        part("sofa", [3.0, 0.0, 8.4], [7.0, 0.9, 9.6]),
+        part("shelf", [9.2, 0.0, 5.0], [9.8, 2.0, 8.0]),
+    ]
+}
+
+/// Whether the ray `origin + t·direction`, `t >= 0`, meets `b` (slab test).
+fn meets(b: &Aabb, origin: DVec3, direction: DVec3) -> bool {
+    let (mut near, mut far) = (0.0f64, f64::INFINITY);
+    for axis in 0..3 {
+        let (o, d, lo, hi) = (origin[axis], direction[axis], b.min[axis], b.max[axis]);
+        if d == 0.0 {
+            if o < lo || o > hi {
+                return false;
+            }
+            continue;
+        }
+        let (a, c) = ((lo - o) / d, (hi - o) / d);
+        near = near.max(a.min(c));
+        far = far.min(a.max(c));
+    }
+    near <= far
+}
+
+/// The share of the frame's height from the highest to the lowest row of
+/// pixels whose rays meet `b`, over a grid of 64 × 48 pixel rays.
+fn height_share(camera: &occlu::camera::Camera, b: &Aabb) -> f64 {
+    let (columns, rows) = (64, 48);
+    let t = (camera.fov_y / 2.0).tan();
+    let (right, up, forward) = (camera.rotation * DVec3::X, camera.rotation * DVec3::Y, camera.forward());
+    let seen: Vec<usize> = (0..rows)
+        .filter(|&row| {
+            let y = 1.0 - (row as f64 + 0.5) / rows as f64 * 2.0;
+            (0..columns).any(|column| {
+                let x = (column as f64 + 0.5) / columns as f64 * 2.0 - 1.0;
+                let direction = forward + right * (x * t * camera.aspect) + up * (y * t);
+                meets(b, camera.eye, direction)
+            })
+        })
+        .collect();
+    match (seen.first(), seen.last()) {
+        (Some(top), Some(bottom)) => (bottom - top + 1) as f64 / rows as f64,
+        _ => 0.0,
+    }
+}
+
+/// The distance from `p` to `b` (0 inside).
+fn distance_to_box(p: DVec3, b: &Aabb) -> f64 {
+    (b.min - p).max(p - b.max).max(DVec3::ZERO).length()
+}
+
+#[test]
+fn a_furnished_room_on_a_huge_plane_is_framed_not_the_plane() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = furnished_room();
+    let room = box_of(&boxes);
+    boxes.push(plane_under(&boxes, 22.0, 0.0));
+    let scene = load_boxes(dir.path(), &boxes);
+    let (generated, path) = default_of(&scene, 60);
+    let why = &generated.why;
+    assert!(why.contains("without 'ground'"), "{why}");
+    let size = room.extent().length();
+    for f in 0..path.frames {
+        let camera = path.camera(f, 4.0 / 3.0);
+        let away = distance_to_box(camera.eye, &room);
+        assert!(
+            away <= 3.0 * size,
+            "frame {f}: {away:.1} from the room, {size:.1} across ({why})"
+        );
+        let share = height_share(&camera, &room);
+        assert!(
+            share >= 1.0 / 3.0,
+            "frame {f}: the room fills {share:.2} of the height ({why})"
+        );
+    }
+    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+}
+
+/// The kind of default path each model in ../shared/models had before
+/// interiors and focus bounds, by file name.
+const SHARED_KINDS: &[(&str, PathKind)] = &[
+    ("bunny.obj", PathKind::Orbit),
+    ("den-haag.obj", PathKind::Walk),
+    ("teapot.obj", PathKind::Orbit),
+    ("two-cylinder-engine.glb", PathKind::Orbit),
+    ("building-garage.glb", PathKind::Orbit),
+    ("building-small-a.glb", PathKind::Orbit),
+    ("building-small-b.glb", PathKind::Orbit),
+    ("building-small-c.glb", PathKind::Orbit),
+    ("building-small-d.glb", PathKind::Orbit),
+    ("grass-trees-tall.glb", PathKind::Orbit),
+    ("grass-trees.glb", PathKind::Orbit),
+    ("grass.glb", PathKind::Orbit),
+    ("pavement-fountain.glb", PathKind::Walk),
+    ("pavement.glb", PathKind::Orbit),
+    ("road-corner.glb", PathKind::Walk),
+    ("road-intersection.glb", PathKind::Walk),
+    ("road-split.glb", PathKind::Walk),
+    ("road-straight-lightposts.glb", PathKind::Walk),
+    ("road-straight.glb", PathKind::Walk),
+];
+
+#[test]
+fn every_shared_model_and_built_in_scene_keeps_its_kind_of_path() {
+    for spec in ["city", "forest"] {
+        let mut scene = load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).unwrap();
+        let generated = plan(None, &scene, Some(10)).unwrap();
+        assert_eq!(generated.kind, PathKind::Walk, "{spec}: {}", generated.why);
+        // Without the streets it was built with, as a file of it loads: a
+        // place with open ground.
+        scene.walk_hint = None;
+        let generated = plan(None, &scene, Some(10)).unwrap();
+        assert_eq!(generated.kind, PathKind::Walk, "{spec} as a file: {}", generated.why);
+    }
+    let dir = shared_models_dir();
+    if !dir.exists() {
+        cannot_run(&format!("no real models at {} (../shared/models)", dir.display()));
+        return;
+    }
+    for (model, _) in shared_models(&dir) {
+        let name = model.file_name().unwrap().to_string_lossy().into_owned();
+        let Some(&(_, kind)) = SHARED_KINDS.iter().find(|(n, _)| *n == name) else {
+            panic!("{name}: not in SHARED_KINDS; add the kind of path it gets today");
+        };
+        let scene = load(&SceneSpec::File(model.clone()), &LoadOptions::default()).unwrap();
+        let generated = plan(None, &scene, Some(10)).unwrap();
+        assert_eq!(generated.kind, kind, "{name}: {}", generated.why);
+    }
+}
