@@ -291,8 +291,10 @@ impl Reel {
     /// The panels of one frame side by side: each picture shrunk, under its
     /// caption.
     fn compose(&self, pictures: &[Picture], rows: &[FrameStats]) -> Result<(u32, u32, Vec<u8>), AnimationError> {
-        let scale = self.options.scale;
-        let (panel_w, picture_h) = (pictures[0].width / scale, pictures[0].height / scale);
+        // A picture smaller than the scale is shrunk to one pixel, not none.
+        let (picture_w, picture_h) = (pictures[0].width, pictures[0].height);
+        let scale = self.options.scale.min(picture_w).min(picture_h).max(1);
+        let (panel_w, picture_h) = (picture_w / scale, picture_h / scale);
         let panel_h = CAPTION + picture_h;
         let columns = (ROW_WIDTH / panel_w).clamp(1, pictures.len() as u32);
         let lines = (pictures.len() as u32).div_ceil(columns);

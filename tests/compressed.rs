@@ -268,6 +268,17 @@ fn malformed_meshopt_data_is_an_error_not_a_crash() {
             },
             "claims 67108864 elements of 4 bytes, more than its 238 compressed bytes can hold",
         ),
+        // A view decoded 2 GiB into its buffer, which declares that much:
+        // refused before the zeros before it are allocated.
+        (
+            {
+                let mut json = json.clone();
+                json["bufferViews"][0]["byteOffset"] = (1u64 << 31).into();
+                json["buffers"][1]["byteLength"] = ((1u64 << 31) + (1 << 20)).into();
+                json
+            },
+            "more than padding between them",
+        ),
     ];
     for (json, why) in refused {
         let e = try_load(&json, &bin).unwrap_err();

@@ -1138,3 +1138,70 @@ fn messages_list_the_values_allowed_and_name_the_file_at_fault() {
     said_one_line(&flags, 2, &["--sweep 'bogus'"], "--sweep bogus");
     assert!(!own_stderr(&flags)[0].contains("fine.json"), "{:?}", own_stderr(&flags));
 }
+
+// The second review of issue 35: a single-file output is written through a
+// temporary file beside it, and whatever was planted under that file's name
+// (a link to another file, a FIFO) is unlinked, never written through or
+// opened.
+#[test]
+fn a_link_or_fifo_planted_as_an_outputs_temporary_file_is_neither_written_nor_waited_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let victim = write(dir.path(), "victim.txt", "precious\n");
+    let glb = dir.path().join("o.glb");
+    symlink(&victim, dir.path().join("o.glb.occlu-partial")).unwrap();
+    let export = occlu(&["export", "--scene", "city:blocks=1", "-o", s(&glb)]);
+    assert!(export.status.success(), "{:?}", own_stderr(&export));
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious\n");
+    assert!(std::fs::symlink_metadata(&glb).unwrap().is_file());
+    assert!(std::fs::read(&glb).unwrap().starts_with(b"glTF"));
+
+    let png = dir.path().join("o.png");
+    mkfifo(&dir.path().join("o.png.occlu-partial"));
+    let mut render = Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .args(["render", "--scene", "city:blocks=1", "--frame", "0", "--mode", "vfc"])
+        .args(["--resolution", "64x48", "-o", s(&png)])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = render.try_wait().unwrap() {
+            break status;
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            render.kill().unwrap();
+            panic!("render waited on the FIFO for 60 s");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(status.success(), "{status:?}");
+    assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
+}
+
+// The second review of issue 35: a picture smaller than --scale is shrunk
+// to one pixel a panel, not divided by zero.
+#[test]
+fn a_flythrough_smaller_than_its_scale_shrinks_each_panel_to_a_pixel() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("a.png");
+    let run = occlu(&[
+        "flythrough",
+        "--scene",
+        "city:blocks=1",
+        "--frames",
+        "2",
+        "--resolution",
+        "7x5",
+        "--modes",
+        "vfc",
+        "--scale",
+        "8",
+        "-o",
+        s(&output),
+    ]);
+    assert!(run.status.success(), "{:?}", own_stderr(&run));
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&output).unwrap()));
+    let reader = decoder.read_info().unwrap();
+    assert_eq!(reader.info().animation_control().map(|a| a.num_frames), Some(2));
+}

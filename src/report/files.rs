@@ -1,6 +1,7 @@
 //! Writing a file whole or not at all, and the one error of the result
 //! files ([`ReportError`]: the path and what went wrong).
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
@@ -42,7 +43,8 @@ pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
         return std::fs::write(&target, bytes).map_err(fail);
     }
     let temporary = partial(&target);
-    let written = std::fs::write(&temporary, bytes)
+    let written = create_partial(&temporary)
+        .and_then(|mut file| file.write_all(bytes))
         .and_then(|()| match &existing {
             Some(m) => std::fs::set_permissions(&temporary, m.permissions()),
             None => Ok(()),
@@ -65,7 +67,7 @@ pub fn check_writable(path: &Path) -> Result<(), ReportError> {
         Ok(m) if !m.is_file() => Ok(()),
         _ => {
             let temporary = partial(&target);
-            std::fs::File::create(&temporary).map_err(&fail)?;
+            create_partial(&temporary).map_err(&fail)?;
             std::fs::remove_file(&temporary).map_err(fail)
         }
     }
@@ -124,6 +126,24 @@ pub fn refuse_one_file_twice(first: &Path, second: &Path) -> Result<(), ReportEr
 fn where_written(output: &Path) -> Option<PathBuf> {
     let resolved = |p: &Path| std::fs::canonicalize(p).ok();
     resolved(output).or_else(|| Some(resolved(crate::input::folder_of(output))?.join(output.file_name()?)))
+}
+
+/// Creates the temporary twin `temporary` anew: whatever has its name (a
+/// file left by an earlier run, or a link, FIFO or hard link planted there)
+/// is unlinked, never opened or written through, and the file is created
+/// exclusively, so a name planted again in between is refused.
+fn create_partial(temporary: &Path) -> std::io::Result<std::fs::File> {
+    match std::fs::symlink_metadata(temporary) {
+        Ok(m) if m.is_dir() => {
+            return Err(std::io::Error::other(format!(
+                "{} is a folder where occlu writes its temporary file",
+                temporary.display()
+            )));
+        }
+        Ok(_) => std::fs::remove_file(temporary)?,
+        Err(_) => {}
+    }
+    std::fs::OpenOptions::new().write(true).create_new(true).open(temporary)
 }
 
 /// The temporary twin [`write_whole`] writes `path` into first.

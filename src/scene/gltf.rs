@@ -257,11 +257,26 @@ fn load_buffers(
     for buffer in gltf.buffers().filter(|b| placeholder(b.index())) {
         // Filled by decoding, and only as far as the views decoded into
         // it reach (their sum is bounded above), whatever it declares.
-        let reach = views.iter().filter(|v| v.target == buffer.index());
-        let length = reach
+        let into: Vec<_> = views.iter().filter(|v| v.target == buffer.index()).collect();
+        let length = into
+            .iter()
             .map(|v| v.target_offset.saturating_add(v.decoded_length()))
             .max()
             .unwrap_or(0);
+        // It holds what its views decode to and the padding between them:
+        // a view placed far out would have zeros allocated for nothing.
+        let decoded = into
+            .iter()
+            .map(|v| v.decoded_length())
+            .fold(0usize, usize::saturating_add);
+        let room = decoded.saturating_add(VIEW_PADDING * into.len());
+        if length > room {
+            return Err(parse_error(format!(
+                "buffer {}: its EXT_meshopt_compression views decode to {decoded} bytes but reach byte \
+                 {length}: more than padding between them",
+                buffer.index()
+            )));
+        }
         if length > buffer.length() {
             return Err(parse_error(format!(
                 "buffer {}: its compressed views decode to {length} bytes, more than the {} it declares",
@@ -281,6 +296,10 @@ fn load_buffers(
     meshopt::decode(&mut buffers, views, options.max_file_size).map_err(parse_error)?;
     Ok(buffers)
 }
+
+/// Bytes of padding a decoded buffer may hold per view beside the views'
+/// data: glTF aligns a view to at most 4 bytes, exporters to 16.
+const VIEW_PADDING: usize = 16;
 
 /// Decompressed bytes allowed per byte --max-file-size allows: meshopt
 /// rarely shrinks real geometry more than 4:1.
