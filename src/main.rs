@@ -421,7 +421,8 @@ struct FlythroughArgs {
     range: Option<FrameRange>,
     #[command(flatten)]
     picture: PictureArgs,
-    /// Panels are the pictures shrunk by K: each pixel the mean of K x K [default: 2].
+    /// Panels are the pictures shrunk by K: each pixel the mean of K x K
+    /// (a picture smaller than K across is shrunk to one pixel) [default: 2].
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_SCALE)))]
     scale: Option<u32>,
     /// Every pixel as painted (24-bit) instead of one palette of 256

@@ -140,7 +140,15 @@ fn create_partial(temporary: &Path) -> std::io::Result<std::fs::File> {
                 temporary.display()
             )));
         }
-        Ok(_) => std::fs::remove_file(temporary)?,
+        Ok(_) => std::fs::remove_file(temporary).map_err(|e| {
+            std::io::Error::new(
+                e.kind(),
+                format!(
+                    "cannot remove {}, where occlu writes its temporary file: {e}",
+                    temporary.display()
+                ),
+            )
+        })?,
         Err(_) => {}
     }
     std::fs::OpenOptions::new().write(true).create_new(true).open(temporary)
