@@ -142,8 +142,9 @@ impl<'a> Session<'a> {
         cullers: &mut [Box<dyn Culler + '_>],
         first: usize,
     ) -> Result<(), GpuError> {
+        let kept = self.missed.len();
         self.render(frame, camera, world, cullers, first, true)?;
-        self.missed.clear();
+        self.missed.truncate(kept);
         Ok(())
     }
 
