@@ -12,7 +12,7 @@
 //! the frame is compared with direct rendering: pixels whose depth differs
 //! turn magenta and the boxes of the objects the mode got wrong are
 //! outlined in magenta, so the picture shows a culling bug. With
-//! `occluders`, the depth buffer a CPU culling mode (swr) culled the frame
+//! `occluders`, the depth buffer a CPU culling mode culled the frame
 //! with is laid over it: each cell holding an occluder's depth in a colour
 //! from near (white) to far (deep blue), the frame dimmed where no cell
 //! holds one, so the picture shows what could hide what.
@@ -69,7 +69,7 @@ pub struct Picture {
 pub enum PictureError {
     #[error("--frame {frame} is beyond the path's {frames} frames (0..={})", frames - 1)]
     FrameOutOfRange { frame: u32, frames: u32 },
-    #[error("--occluders: mode '{mode}' keeps no depth buffer on the CPU (swr does)")]
+    #[error("--occluders: mode '{mode}' keeps no depth buffer on the CPU (CPU software occlusion culling does)")]
     NoOccluderDepths { mode: String },
     #[error(transparent)]
     Gpu(#[from] GpuError),

@@ -63,6 +63,7 @@ use crate::gpu::{BoxTest, BoxVisibility, Frame};
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Ac,
     summary: "V+O with adaptive culling (Eq. 1) and a cost-adaptive budget (Eq. 2) by visible-pixel counts (002 §4.2-4.4)",
+    chart_colour: [148, 103, 189],
     conservative: false,
     params: &[THRESHOLD, SAMPLING, F_GRAPHICS, EYE_DISTANCE],
     needs: Needs::PixelCounts,
@@ -224,7 +225,7 @@ impl AdaptiveCulling {
 
 impl Culler for AdaptiveCulling {
     fn name(&self) -> &str {
-        "ac"
+        ModeId::Ac.name()
     }
 
     fn traverses_hierarchy(&self) -> bool {

@@ -95,10 +95,10 @@ traversal_stats! {
     /// Nodes found hidden by a test.
     nodes_culled_occlusion,
     /// Queries made unnecessary (the Occupancy Map's empty-area rule, or
-    /// chc's nodes visible in the last frame).
+    /// coherent culling's nodes visible in the last frame).
     queries_skipped,
     /// Queries held back because a nearer query in flight covered part of
-    /// their screen rectangle (chc, 001 §3.5).
+    /// their screen rectangle (coherent culling, 001 §3.5).
     queries_delayed,
     /// Nodes visible but treated as occluded for their small contribution
     /// (adaptive culling, 002 Eq. 1).
@@ -112,7 +112,7 @@ traversal_stats! {
     /// Objects a GPU walk drew after its test, newly visible (the late
     /// pass).
     drawn_late,
-    /// Occluder triangles a CPU occlusion buffer rasterised (swr).
+    /// Occluder triangles a CPU occlusion buffer rasterised.
     occluder_triangles,
 }
 
@@ -128,7 +128,7 @@ impl TraversalStats {
     }
 }
 
-/// A depth buffer a mode keeps on the CPU (swr's occlusion buffer), as it
+/// A depth buffer a mode keeps on the CPU (a CPU occlusion buffer), as it
 /// stood when the mode last culled: cells row by row, each a reverse-Z
 /// depth, 0 where no occluder wrote one. Cell (x, y) holds the render
 /// target's pixels p whose `⌊p · cells / pixels⌋` is (x, y) on each side.

@@ -10,6 +10,7 @@ use crate::scene::Scene;
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Dr,
     summary: "direct rendering: every object, no culling (002 §5)",
+    chart_colour: [127, 127, 127],
     conservative: true,
     params: &[],
     needs: Needs::Nothing,
@@ -33,7 +34,7 @@ impl DirectRendering {
 
 impl Culler for DirectRendering {
     fn name(&self) -> &str {
-        "dr"
+        ModeId::Dr.name()
     }
 
     fn frame(&mut self, ctx: &mut dyn Frame, _input: &FrameInput) -> TraversalStats {

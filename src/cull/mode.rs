@@ -10,10 +10,10 @@ use super::culler::Culler;
 use crate::gpu::GpuContext;
 use crate::scene::Scene;
 
-/// Declares [`ModeId`] from one line per mode (its variant and name): the
-/// enum, [`ModeId::ALL`] and [`ModeId::name`], which cannot disagree.
-macro_rules! modes {
-    ($($id:ident => $name:literal,)*) => {
+/// Declares [`ModeId`] from `mode_table!`'s lines (cull/mod.rs): the enum,
+/// [`ModeId::ALL`] and [`ModeId::name`].
+macro_rules! declare_mode_ids {
+    ($($id:ident => $name:literal, $($module:ident)::+;)*) => {
         /// Every mode, in the order `all` runs them and `--help` lists them;
         /// each one's entry (what it does, needs and takes) is declared in
         /// its own file, and found by [`ModeId::info`] (registry.rs).
@@ -35,20 +35,7 @@ macro_rules! modes {
     };
 }
 
-modes! {
-    Dr => "dr",
-    Vfc => "vfc",
-    Sq => "sq",
-    Omq => "omq",
-    Ac => "ac",
-    Chc => "chc",
-    Roc => "roc",
-    Ioc => "ioc",
-    Hiz => "hiz",
-    Swr => "swr",
-    Auto => "auto",
-    Oracle => "oracle",
-}
+mode_table!(declare_mode_ids);
 
 impl Display for ModeId {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -72,6 +59,8 @@ impl FromStr for ModeId {
 pub struct ModeInfo {
     pub id: ModeId,
     pub summary: &'static str,
+    /// The colour (sRGB) its lines and bars keep in every chart.
+    pub chart_colour: [u8; 3],
     /// Whether the mode may never change a pixel (0 error required).
     pub conservative: bool,
     /// Parameters it takes as `--param NAME.KEY=VALUE`.

@@ -45,6 +45,7 @@ use crate::scene::Scene;
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Omq,
     summary: "Occupancy Map + multiple occlusion queries in three stages (003 §3-4)",
+    chart_colour: [44, 160, 44],
     conservative: true,
     params: &[OM, INITIAL_MAX_TESTS, FACTOR],
     needs: Needs::Nothing,
@@ -195,7 +196,7 @@ impl OccupancyMapQueries {
 
 impl Culler for OccupancyMapQueries {
     fn name(&self) -> &str {
-        "omq"
+        ModeId::Omq.name()
     }
 
     fn traverses_hierarchy(&self) -> bool {

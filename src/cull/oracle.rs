@@ -11,6 +11,7 @@ use crate::gpu::Frame;
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Oracle,
     summary: "draws exactly the objects visible in the reference frame: the floor for object-level culling",
+    chart_colour: [20, 20, 20],
     conservative: true,
     params: &[],
     needs: Needs::Nothing,
@@ -33,7 +34,7 @@ impl Oracle {
 
 impl Culler for Oracle {
     fn name(&self) -> &str {
-        "oracle"
+        ModeId::Oracle.name()
     }
 
     fn needs_reference(&self) -> bool {

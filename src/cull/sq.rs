@@ -20,6 +20,7 @@ use crate::gpu::{BoxTest, BoxVisibility, Frame};
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Sq,
     summary: "front-to-back traversal, one occlusion query per node, each awaited (003 §5 b)",
+    chart_colour: [255, 127, 14],
     conservative: true,
     params: &[],
     needs: Needs::Nothing,
@@ -44,7 +45,7 @@ impl SingleQueries {
 
 impl Culler for SingleQueries {
     fn name(&self) -> &str {
-        "sq"
+        ModeId::Sq.name()
     }
 
     fn traverses_hierarchy(&self) -> bool {

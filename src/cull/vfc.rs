@@ -22,6 +22,7 @@ use crate::scene::Scene;
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Vfc,
     summary: "hierarchical view-frustum culling with the fully-inside shortcut (002 §4.1)",
+    chart_colour: [31, 119, 180],
     conservative: true,
     params: &[],
     needs: Needs::Nothing,
@@ -48,7 +49,7 @@ impl FrustumCulling {
 
 impl Culler for FrustumCulling {
     fn name(&self) -> &str {
-        "vfc"
+        ModeId::Vfc.name()
     }
 
     fn traverses_hierarchy(&self) -> bool {

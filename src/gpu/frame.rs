@@ -93,7 +93,8 @@ pub struct GpuAudit {
     pub drawn_late: u64,
     /// The walk and the compaction on the GPU, where timestamps exist.
     pub cull_gpu: Option<GpuSpan>,
-    /// Within it, the depth pyramid's build (hiz).
+    /// Within it, the depth pyramid's build, for a walk that tests
+    /// against one.
     pub pyramid_gpu: Option<GpuSpan>,
 }
 

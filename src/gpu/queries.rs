@@ -558,8 +558,8 @@ pub(crate) fn bind_group_layout(
 
 /// Group 0 of boxes.wgsl: the camera uniform and the boxes.
 pub(crate) fn box_bind_group_layout(gpu: &GpuContext) -> wgpu::BindGroupLayout {
-    // Drawn boxes read them in the vertex stage, hiz's test in a compute
-    // pass.
+    // Drawn boxes read them in the vertex stage, a depth pyramid's test in
+    // a compute pass.
     let vertex = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::COMPUTE;
     bind_group_layout(
         gpu,

@@ -21,7 +21,7 @@ pub struct FrameStats {
     pub cpu_ms: f64,
     /// Part of cpu_ms spent keeping a spatial structure current with moved
     /// objects: the refit of the shared hierarchy, or a mode's own tree
-    /// updates (chc). 0 in static scenes and in files written before the
+    /// updates (coherent culling's ternary tree). 0 in static scenes and in files written before the
     /// column existed.
     #[serde(default)]
     pub maintenance_ms: f64,
@@ -44,7 +44,7 @@ pub struct FrameStats {
     /// timestamp queries or without queries.
     pub query_gpu_ms: Option<f64>,
     /// Part of query_gpu_ms spent building a depth pyramid to test boxes
-    /// against (hiz); empty for other modes, without timestamp queries, and
+    /// against (two-phase culling); empty for other modes, without timestamp queries, and
     /// in files written before the column existed.
     #[serde(default)]
     pub pyramid_gpu_ms: Option<f64>,

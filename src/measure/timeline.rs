@@ -1,7 +1,7 @@
 //! When each part of a mode's frame ran, for `bench --trace`: on the CPU
 //! the refit, the culling, the commands encoded and submitted and the waits;
 //! on the GPU, where the adapter has timestamps, the box tests (and within
-//! them hiz's pyramid) and the drawing.
+//! them a depth pyramid's build) and the drawing.
 //!
 //! The CPU's stretches are measured on its clock. The GPU's are measured on
 //! the GPU's, which no CPU clock shares, so they are placed by what the
@@ -31,7 +31,7 @@ pub enum Work {
     WaitForGpu,
     /// The GPU testing boxes: query passes, or a GPU walk's passes.
     BoxTests,
-    /// The GPU building hiz's depth pyramid, within its box tests.
+    /// The GPU building a depth pyramid, within its box tests.
     Pyramid,
     /// The GPU's frame outside its box tests: drawing, clears and copies.
     Drawing,

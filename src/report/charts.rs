@@ -24,6 +24,7 @@ use plotters::prelude::*;
 
 use super::files::{ReportError, write_png};
 use super::summary::Summary;
+use crate::cull::ModeId;
 use crate::measure::{FrameStats, ModeSummary};
 
 pub const WIDTH: u32 = 1200;
@@ -196,27 +197,23 @@ impl<'a> Series<'a> {
     }
 }
 
-/// The colour a mode keeps in every chart and run; labels of other runs
-/// (sweep values) take [`OTHER_COLOURS`] in order.
+/// The colour a mode keeps in every chart and run, from its registry entry;
+/// labels of other runs (sweep values) take [`OTHER_COLOURS`] in order.
 fn colour(name: &str) -> Option<RGBColor> {
-    Some(match name {
-        "dr" => RGBColor(127, 127, 127),
-        "vfc" => RGBColor(31, 119, 180),
-        "sq" => RGBColor(255, 127, 14),
-        "omq" => RGBColor(44, 160, 44),
-        "ac" => RGBColor(148, 103, 189),
-        "oracle" => RGBColor(20, 20, 20),
-        _ => return None,
-    })
+    let [r, g, b] = name.parse::<ModeId>().ok()?.info().chart_colour;
+    Some(RGBColor(r, g, b))
 }
 
-const OTHER_COLOURS: [RGBColor; 6] = [
-    RGBColor(214, 39, 40),
-    RGBColor(23, 190, 207),
-    RGBColor(188, 189, 34),
-    RGBColor(227, 119, 194),
-    RGBColor(140, 86, 75),
-    RGBColor(255, 187, 120),
+/// Colours apart from every mode's: for sweep values and adapters.
+const OTHER_COLOURS: [RGBColor; 8] = [
+    RGBColor(57, 59, 121),
+    RGBColor(140, 162, 82),
+    RGBColor(189, 158, 57),
+    RGBColor(173, 73, 74),
+    RGBColor(165, 81, 148),
+    RGBColor(107, 110, 207),
+    RGBColor(206, 109, 189),
+    RGBColor(99, 121, 57),
 ];
 
 fn title(summary: &Summary, what: &str) -> String {
@@ -544,4 +541,24 @@ fn summary_bars(area: &Area, summary: &Summary, series: &Series) -> DrawResult {
     ))?;
     area.present()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_mode_keeps_a_colour_no_other_line_takes() {
+        let mut taken: Vec<RGBColor> = OTHER_COLOURS.to_vec();
+        for id in ModeId::ALL {
+            let c = colour(id.name()).unwrap_or_else(|| panic!("{id} has no colour"));
+            assert!(!taken.contains(&c), "{id}'s colour is taken");
+            taken.push(c);
+        }
+        assert_eq!(
+            colour("ac[threshold=50]"),
+            None,
+            "a sweep's label takes the next other colour"
+        );
+    }
 }

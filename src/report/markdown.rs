@@ -143,8 +143,8 @@ fn strategies(w: &mut String, modes: &[ModeSummary]) {
 }
 
 /// Where each mode's frame went (004's Table 1 splits it the same way):
-/// deciding on the CPU, testing boxes on the GPU (hiz: of which building
-/// its pyramid), drawing, waiting for results; and for GPU walks the
+/// deciding on the CPU, testing boxes on the GPU (of which building a
+/// depth pyramid), drawing, waiting for results; and for GPU walks the
 /// objects drawn before and after the test. Only with GPU timestamps.
 fn cost_split(w: &mut String, modes: &[ModeSummary]) {
     if !modes.iter().any(|m| m.stats.contains_key("gpu_ms")) {
@@ -285,16 +285,16 @@ mod tests {
     #[test]
     fn the_cost_split_spreads_box_tests_over_every_frame() {
         use crate::measure::{FrameStats, ModeDescription, summarize};
-        // auto: two frames of hiz (10 ms of GPU, 4 of box tests, 3 of them
-        // the pyramid) and two of vfc (10 ms of drawing, no tests).
+        // auto: two frames of a pyramid test (10 ms of GPU, 4 of box tests,
+        // 3 of them the pyramid) and two of vfc (10 ms of drawing, no tests).
         let rows: Vec<FrameStats> = (0..4)
             .map(|frame| {
-                let hiz = frame < 2;
+                let tested = frame < 2;
                 FrameStats {
                     frame,
                     gpu_ms: Some(10.0),
-                    query_gpu_ms: hiz.then_some(4.0),
-                    pyramid_gpu_ms: hiz.then_some(3.0),
+                    query_gpu_ms: tested.then_some(4.0),
+                    pyramid_gpu_ms: tested.then_some(3.0),
                     ..FrameStats::blank("auto")
                 }
             })

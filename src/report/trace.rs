@@ -5,7 +5,7 @@
 //! is a slice (`frame N`, as long as its `frame_ms`) holding what the CPU
 //! did in it (refit, culling, commands, waits for results, the wait for the
 //! GPU), and `GPU`, where timestamps exist, where the frame's GPU work is a
-//! slice holding its box tests (and in them hiz's pyramid) and its drawing.
+//! slice holding its box tests (and in them a depth pyramid's build) and its drawing.
 //! How the GPU's clock is placed on the CPU's is in the file's metadata
 //! (`otherData`), with the adapter; without timestamps the GPU tracks are
 //! absent and the metadata says so.

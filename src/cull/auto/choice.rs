@@ -537,21 +537,21 @@ mod tests {
         turns.iter().filter(|t| t.strategy == s).count()
     }
 
-    /// vfc, roc, ioc, hiz and swr, as `auto` has them on a GPU-driven
-    /// adapter.
+    /// vfc, three GPU walks (roc, ioc and the pyramid test) and the CPU
+    /// culler, as `auto` has them on a GPU-driven adapter.
     const FIVE: [Family; 5] = [Frustum, Occlusion, Occlusion, Occlusion, Occlusion];
 
     #[test]
     fn on_a_city_the_cheapest_walk_runs_and_dear_rivals_are_dropped_after_a_probe() {
-        // The default city on GL: vfc 3.4× roc, ioc = roc, hiz 2×, swr
-        // 1.2×; occlusion hides 94 % of the frustum.
+        // The default city on GL: vfc 3.4× roc, ioc = roc, the pyramid
+        // test 2×, the CPU culler 1.2×; occlusion hides 94 % of the frustum.
         let relative = [3.4, 1.0, 1.0, 2.0, 1.2];
         for noise in [0.05, 0.15] {
             let (turns, costs) = simulate(&FIVE, 120, noise, 0.94, still, |f, s| street(f) * relative[s]);
             let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
             assert_eq!(runs(&turns, 0), 0, "vfc is judged from what occlusion hid: {s:?}");
-            assert!(runs(&turns, 3) <= 2, "hiz: {s:?}");
-            assert!(runs(&turns, 4) <= 4, "swr: {s:?}");
+            assert!(runs(&turns, 3) <= 2, "the pyramid test: {s:?}");
+            assert!(runs(&turns, 4) <= 4, "the CPU culler: {s:?}");
             let mean = over_best(&costs, 1.0, noise);
             assert!(mean < 1.05, "σ {noise}: {mean:.3}× the best: {s:?}");
         }
@@ -574,7 +574,8 @@ mod tests {
 
     #[test]
     fn rivals_within_the_noise_do_not_take_turns() {
-        // roc and ioc 1 % apart under 15 % noise; hiz and swr dearer.
+        // roc and ioc 1 % apart under 15 % noise; the pyramid test and the
+        // CPU culler dearer.
         let relative = [3.4, 1.0, 0.99, 1.5, 1.3];
         let (turns, costs) = simulate(&FIVE, 240, 0.15, 0.94, still, |f, s| street(f) * relative[s]);
         let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();

@@ -9,9 +9,9 @@
 //!
 //! - **Candidates** are the registry's modes whose entry allows it
 //!   ([`Candidacy`]) and whose needs this adapter meets, each built with the
-//!   run's parameters: `vfc`, the GPU walks (`roc`, `ioc`, `hiz`) and `swr`
-//!   where the adapter walks on the GPU, `vfc`, `omq`, `chc` and `swr`
-//!   elsewhere. Which pays is measured, not assumed.
+//!   run's parameters: `vfc`, the GPU walks and CPU occlusion culling where
+//!   the adapter walks on the GPU; `vfc`, the query-batching modes and CPU
+//!   occlusion culling elsewhere. Which pays is measured, not assumed.
 //! - **Choice** (choice.rs): one incumbent runs; the others are probed as
 //!   a bandit does, each probe compared with the incumbent's frames on both
 //!   sides; a rival takes over only when cheaper beyond the noise; rivals
@@ -23,16 +23,16 @@
 //!   set the last one found, as if it had run all along; after a frame the
 //!   CPU decided, the walks start from what it drew when an occlusion
 //!   culler drew it (from their own lists, gone stale, after `vfc`), and
-//!   their first frame then only settles them and is not measured. `swr` is
-//!   handed the objects drawn last.
+//!   their first frame then only settles them and is not measured. A culler
+//!   that keeps its visible set on the CPU is handed the objects drawn last.
 //! - **Warm-up**: in a warm-up frame every candidate runs, so none pays
 //!   its first frame (pipelines compiled on first use) in a recorded one.
 //!
 //! Every candidate is conservative, so `auto` is too.
 //!
-//! Departures: what a GPU walk drew (handed to `swr`, and counted for the
-//! hidden share that judges `vfc` before it runs) is taken from its untimed
-//! audit; an engine reads it back a frame late, without waiting.
+//! Departures: what a GPU walk drew (handed to the CPU cullers, and counted
+//! for the hidden share that judges `vfc` before it runs) is taken from its
+//! untimed audit; an engine reads it back a frame late, without waiting.
 
 mod choice;
 
@@ -52,7 +52,8 @@ use choice::{Chooser, Family, Occluded, Turn, View};
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Auto,
-    summary: "per frame, the conservative mode measured cheapest here (vfc, roc, ioc, hiz, swr; omq and chc without GPU culling): rivals probed as a bandit does and switched to only when cheaper beyond the noise; vfc where occlusion hides nothing",
+    summary: "per frame, the conservative mode measured cheapest here (vfc, the GPU walks and CPU culling; the query-batching modes without GPU culling): rivals probed as a bandit does and switched to only when cheaper beyond the noise; vfc where occlusion hides nothing",
+    chart_colour: [255, 187, 120],
     conservative: true,
     params: &[BUDGET],
     needs: Needs::Nothing,
@@ -254,7 +255,7 @@ impl AutoCulling {
 
 impl Culler for AutoCulling {
     fn name(&self) -> &str {
-        "auto"
+        ModeId::Auto.name()
     }
 
     fn parameters(&self) -> serde_json::Value {

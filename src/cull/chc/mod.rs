@@ -55,6 +55,7 @@ use ternary::{Pixels, TernaryTree, TreeParams, facing_axis};
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Chc,
     summary: "coherent culling on a ternary tree: last frame's visible nodes unwaited, TightBoxes, split/merge, colliding queries wait (001)",
+    chart_colour: [214, 39, 40],
     conservative: true,
     params: &[R_SPLIT, O_SPLIT, R_MERGE, O_MERGE, TIGHT_AFTER],
     needs: Needs::PixelCounts,
@@ -265,7 +266,7 @@ impl CoherentCulling {
 
 impl Culler for CoherentCulling {
     fn name(&self) -> &str {
-        "chc"
+        ModeId::Chc.name()
     }
 
     fn parameters(&self) -> serde_json::Value {

@@ -12,6 +12,7 @@ use super::{CullTree, DrawList, GpuWalk};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::mode::ModeId;
 use crate::gpu::{Frame, GpuAudit, GpuContext, GpuError, GpuSetup};
 use crate::object_set::ObjectSet;
 
@@ -26,7 +27,7 @@ pub enum Walked {
 
 /// A mode that culls on the GPU by a [`GpuWalk`].
 pub struct GpuCulling {
-    name: &'static str,
+    mode: ModeId,
     walked: Walked,
     node_test: NodeTest,
     /// What summary.json records, before `prepare` adds the depths chosen.
@@ -43,9 +44,9 @@ pub struct GpuCulling {
 }
 
 impl GpuCulling {
-    pub fn new(name: &'static str, walked: Walked, node_test: NodeTest, parameters: serde_json::Value) -> GpuCulling {
+    pub fn new(mode: ModeId, walked: Walked, node_test: NodeTest, parameters: serde_json::Value) -> GpuCulling {
         GpuCulling {
-            name,
+            mode,
             walked,
             node_test,
             parameters,
@@ -67,7 +68,7 @@ impl GpuCulling {
 
 impl Culler for GpuCulling {
     fn name(&self) -> &str {
-        self.name
+        self.mode.name()
     }
 
     fn parameters(&self) -> serde_json::Value {

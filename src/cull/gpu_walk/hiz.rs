@@ -37,6 +37,7 @@ use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModePar
 pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Hiz,
     summary: "two-phase hierarchical-depth culling: last frame's visible objects drawn, a depth pyramid built from them, every box tested against it in a compute pass (small ones pixel by pixel where it cannot hide them), the newly visible drawn (Unreal's HZB, Bevy, niagara)",
+    chart_colour: [227, 119, 194],
     conservative: true,
     params: &[TEXELS, BASE, PIXELS, BOXES, START, BOTTOM],
     needs: Needs::GpuCulling,
@@ -180,7 +181,7 @@ pub fn hierarchical_depth_culling(params: HizParams) -> GpuCulling {
         }),
         BoxesTested::Nodes => serde_json::json!(params),
     };
-    GpuCulling::new("hiz", walked, test, recorded)
+    GpuCulling::new(ModeId::Hiz, walked, test, recorded)
 }
 
 #[cfg(test)]

@@ -30,6 +30,7 @@ use crate::cull::mode::{Candidacy, Carries, ModeId, ModeInfo, Needs};
 pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Ioc,
     summary: "iterative hierarchical raster occlusion culling: roc over the hierarchy, level by level from a start to a bottom depth (004 §2)",
+    chart_colour: [188, 189, 34],
     conservative: true,
     params: &[START, BOTTOM],
     needs: Needs::GpuCulling,
@@ -47,5 +48,10 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
 /// ioc: the hierarchy's nodes over `range`, their boxes drawn against the
 /// depth.
 pub fn iterative_occlusion_culling(range: DepthRange) -> GpuCulling {
-    GpuCulling::new("ioc", Walked::Nodes(range), NodeTest::Raster, serde_json::json!(range))
+    GpuCulling::new(
+        ModeId::Ioc,
+        Walked::Nodes(range),
+        NodeTest::Raster,
+        serde_json::json!(range),
+    )
 }

@@ -11,6 +11,7 @@ use crate::cull::mode::{Candidacy, Carries, ModeId, ModeInfo, Needs};
 pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Roc,
     summary: "raster occlusion culling on the GPU: every object's box marks a visibility buffer, indirect multi-draw (004's ROC)",
+    chart_colour: [23, 190, 207],
     conservative: true,
     params: &[],
     needs: Needs::GpuCulling,
@@ -22,5 +23,5 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
 
 /// roc: every object's box, drawn against the depth.
 pub fn raster_occlusion_culling() -> GpuCulling {
-    GpuCulling::new("roc", Walked::Objects, NodeTest::Raster, serde_json::json!({}))
+    GpuCulling::new(ModeId::Roc, Walked::Objects, NodeTest::Raster, serde_json::json!({}))
 }

@@ -69,6 +69,7 @@ use buffer::{OcclusionBuffer, ScreenPolygon, VertexError};
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Swr,
     summary: "CPU software occlusion culling: last frame's visible objects rasterised conservatively into a small depth buffer on the CPU, the hierarchy's boxes tested against it (Intel's MOC, Godot, Umbra)",
+    chart_colour: [140, 86, 75],
     conservative: true,
     params: &[RESOLUTION, TRIANGLES, THREADS],
     needs: Needs::Nothing,
@@ -335,7 +336,7 @@ impl Tester<'_> {
 
 impl Culler for SoftwareOcclusionCulling {
     fn name(&self) -> &str {
-        "swr"
+        ModeId::Swr.name()
     }
 
     /// Its parameters as given (`threads` 0 stays 0: the count it comes to
