@@ -1,42 +1,16 @@
 //! `ac`: view-frustum and occlusion culling with adaptive culling and a
 //! cost-adaptive budget, paper 002 §4.2–4.4.
 //!
-//! Traversal (002 §4.4, "Overall Refined Algorithm"): a DepthList ordered
-//! by z_min starts with the root's children inside the frustum; the head
-//! node's box is tested against everything drawn so far by counting its
-//! visible pixels (the "virtual occlusion buffer" of §4.2, here a forced
-//! early depth test adding into a counter per box; see
-//! shaders/pixel_count.wgsl); a node with no visible pixel is occluded; a
-//! visible leaf is drawn; a visible inner node's children inside the
-//! frustum join the DepthList.
-//!
-//! Adaptive culling (§4.3, Eq. 1): a node that is visible but contributes
-//! little is treated as occluded. Its measure, in pixels, is
-//!
-//! ```text
-//! measure = V · (Dist(Eye) + Dist(Obj)) / Dist(Eye)
-//! ```
-//!
-//! V being its visible pixels (the footprint relative to the view plane, in
-//! pixels of it), Dist(Eye) the distance from the eye to the view plane (the
-//! near plane, unless `ac.eye_distance` sets one) and Dist(Obj) the distance
-//! from the view plane to the box's nearest corner. The node is culled when
-//! `measure < ac.threshold`. Default threshold: the paper's "100 (0.02 % of
-//! view plane) … on a view plane of 650 by 650 pixels" scaled to the
-//! viewport (114 at 800×600). Distant nodes weigh more, as §4.3 argues ("a
-//! large but distant object might have a larger visual impact").
-//!
-//! Progressive sampling (§4.2): with `ac.sampling` k > 1 only every k-th row
-//! of ten-pixel spans is counted and V is the count times k; a footprint
-//! the sampled rows miss reads as occluded. Not conservative, like adaptive
-//! culling: its error is measured, not assumed.
-//!
-//! Cost-adaptive culling (§4.4, Eq. 2): the culling budget of a frame is
-//! `T_culling = T_render · F_graphics`, T_render being the previous frame's
-//! drawing time and F_graphics `ac.f_graphics` (1/3 as on the O2). "Once the
-//! accumulated culling time of the current frame exceeds T_culling, the
-//! remaining nodes are simply culled against the view-frustum and sent to
-//! the rendering pipeline", with the fully-inside shortcut of §4.1.
+//! Traversal (§4.4, "Overall Refined Algorithm"): a DepthList ordered by
+//! z_min; the head node's box is tested against everything drawn so far by
+//! counting its visible pixels (§4.2's "virtual occlusion buffer", here a
+//! forced early depth test adding into a counter per box,
+//! shaders/pixel_count.wgsl). Adaptive culling (§4.3, Eq. 1) treats a
+//! visible node that contributes too little as occluded; cost-adaptive
+//! culling (§4.4, Eq. 2) only frustum-culls what is left once the frame's
+//! culling budget is spent. Progressive sampling (§4.2, `ac.sampling`)
+//! counts every k-th row of spans. Neither adaptive culling nor sampling is
+//! conservative: their error is measured, not assumed.
 //!
 //! Departures: the listing renders a leaf taken from the DepthList without
 //! testing it; here leaves are tested like every node, since the pixel count
@@ -145,7 +119,8 @@ impl AcParams {
     }
 }
 
-/// The paper's view plane: 650×650 pixels, threshold 100.
+/// The paper's view plane and threshold, "100 (0.02 % of view plane) … on a
+/// view plane of 650 by 650 pixels", scaled to the viewport by default.
 const PAPER_THRESHOLD: f64 = 100.0;
 const PAPER_VIEW_PLANE: f64 = 650.0 * 650.0;
 
@@ -247,7 +222,9 @@ impl Culler for AdaptiveCulling {
             EyeDistance::Near => camera.near,
             EyeDistance::Units(d) => d,
         };
-        // Eq. 2; no budget in the first frame, which has no previous one.
+        // Eq. 2: T_culling = T_render · F_graphics, T_render being the
+        // previous frame's drawing time (1/3 as on the O2 by default). No
+        // budget in the first frame, which has no previous one.
         let budget = input
             .previous
             .map(|p| p.render_ms * self.params.f_graphics)
@@ -267,7 +244,10 @@ impl Culler for AdaptiveCulling {
 
         while let Some(index) = self.depth_list.pop() {
             if budget.is_some_and(|b| start.elapsed() >= b) {
-                // The budget is spent: the rest is only frustum-culled.
+                // "Once the accumulated culling time of the current frame
+                // exceeds T_culling, the remaining nodes are simply culled
+                // against the view-frustum and sent to the rendering
+                // pipeline", with §4.1's fully-inside shortcut.
                 self.objects.clear();
                 let mut rest = Some(index);
                 while let Some(node) = rest {
@@ -299,6 +279,13 @@ impl Culler for AdaptiveCulling {
                     stats.nodes_culled_occlusion += 1;
                     continue;
                 }
+                // Eq. 1: measure = V · (Dist(Eye) + Dist(Obj)) / Dist(Eye),
+                // V the visible pixels (the footprint on the view plane),
+                // Dist(Eye) the eye's distance to the view plane and
+                // Dist(Obj) the view plane's to the box's nearest corner:
+                // distant nodes weigh more, as §4.3 argues ("a large but
+                // distant object might have a larger visual impact"). With
+                // sampling, V is the count times k.
                 let visible = (counted * u64::from(self.params.sampling)) as f64;
                 let distance = (view_depth(&node.bounds, camera) - camera.near).max(0.0);
                 let measure = visible * (eye_distance + distance) / eye_distance;

@@ -1,5 +1,5 @@
 //! Culling modes: one file (or directory) per mode, each behind the
-//! [`Culler`] trait (culler.rs), and one line per mode in [`mode_table!`].
+//! [`Culler`] trait (culler.rs), and one line per mode in `mode_table!`.
 //!
 //! A mode owns its state between frames (temporal coherence lives inside the
 //! mode) and touches the GPU only through [`crate::gpu::FrameCtx`], which

@@ -1,78 +1,21 @@
 //! The numerical rules that make box tests conservative: a box test never
 //! judges hidden an object that direct rendering shows in any pixel.
 //!
-//! A box test (an occlusion query, a pixel count, or 004's marking pass)
-//! draws an object's or node's bounding box against depth already drawn and
-//! calls the object hidden when no fragment of the box passes. That is safe
-//! only if, at every pixel, each fragment of the object lies no nearer than
-//! the box's front face at that pixel. In exact arithmetic every point of an
-//! object lies inside its box, so it does. A rasteriser working in f32 breaks
-//! it in two ways, and each has a rule here:
+//! A box test calls an object hidden when no fragment of its bounding box
+//! passes the depth test. In exact arithmetic that is safe; a rasteriser in
+//! f32 breaks it in two ways, and each has a rule here:
 //!
-//! 1. **Rounding of surfaces that coincide with a box face** (a building
-//!    part lying on its building's wall, a box face on its own wall). Both
-//!    are rounded, so the box face may land a hair behind the surface. The
-//!    error has three parts, and each has a margin ([`BoxMargins`]):
-//!    - *relative to the depth at the pixel*, about 2^-24: boxes are grown by
-//!      at least [`BOX_GROWTH`] = 1e-4 of their reach (largest eye-relative
-//!      coordinate), hundreds of times that.
-//!    - *relative to the largest depth of the triangle*: a triangle's depth is
-//!      interpolated in f32 across the screen from its vertices, so at its
-//!      far end the error is a few 2^-24 of its near end's depth. An object's
-//!      triangles and the faces of any box holding it reach no nearer than
-//!      that box's nearest corner, so a box is raised in depth by 2^-22 (4
-//!      steps of 2^-24) of its nearest corner's depth.
-//!    - *absolute*, on GL without clip control (every GLES adapter): wgpu
-//!      rewrites `z` as `2z − w` for GL's [−1, 1] clip range, and
-//!      `(2z − w) / w`, close to −1 for all but the nearest surfaces, keeps
-//!      only the absolute precision of numbers near 1 whatever the depth.
-//!      At reverse-Z depth `near / distance` = 0.08 / 500 m = 1.6e-4 one step
-//!      of 2^-24 is 4e-4 of the depth, four times the relative growth:
-//!      distant coplanar parts were missed on GL and not on Vulkan. A
-//!      fragment takes about two such roundings (the subtraction and the
-//!      division), so two coplanar surfaces differ by at most a few steps
-//!      (measured: at most 5e-8, under one step, on den-haag.obj). On GL
-//!      boxes are raised by a further 2^-22 (4 steps; half of it separates
-//!      the box test from the fragment bound of rule 2). In distance that is
-//!      `raise · distance² / near`: 2.4 cm at 100 m with near 0.1, 0.75 m
-//!      at 500 m with near 0.08 (where one step of GL's depth is 0.19 m).
+//! 1. **Rounding** of surfaces that coincide with a box face: boxes are
+//!    grown ([`BOX_GROWTH`], and enough to cover sub-pixel snapping,
+//!    [`SNAP_MARGIN`]) and raised in depth by the backend's rounding error,
+//!    relative and, on GL's clip range, absolute ([`BoxMargins`]).
+//! 2. **Depth extrapolated on triangles seen edge-on**, which may land
+//!    outside the object's box: the scene's fragment stage discards every
+//!    fragment nearer than where its pixel's ray enters the object's box
+//!    ([`FragmentLimit`]), for every mode and the reference alike.
 //!
-//!    The raise is added to clip z in the box vertex stage (z += offset · w),
-//!    which moves no box edge on screen.
-//!
-//! 2. **Depth extrapolated on triangles seen edge-on.** A triangle whose
-//!    plane nearly holds the eye projects to a sliver far thinner than a
-//!    pixel. Snapped to the rasteriser's sub-pixel grid it may still cover
-//!    the odd pixel centre, and its depth plane, ill-conditioned across the
-//!    sliver, is evaluated there far outside the triangle's own depths, or
-//!    is not a number at all. Measured on llvmpipe (two-cylinder-engine.glb,
-//!    frame 23 of its orbit): a sliver of 5e-4 square pixels whose vertices
-//!    lie at depths 1.18e-4 to 1.25e-4 (560 m) wrote 7.4e-4 (115 m) into a
-//!    pixel, in front of a surface that hides its whole box; 2 000 triangles
-//!    seen exactly edge-on wrote about 290 such pixels, some at depth 1 (a
-//!    NaN clamped). No box test can see such a fragment: it lies outside the
-//!    box. So the scene's fragment stage discards every fragment nearer than
-//!    the point where its pixel's ray enters its object's box
-//!    ([`FragmentLimit`]). Direct rendering, the reference and every mode
-//!    draw through that one stage, so the rule changes no comparison: it
-//!    only removes fragments that lie off the geometry.
-//!
-//! Why the two rules together suffice: at a pixel p inside an object's
-//! footprint, a fragment that survives lies at most at [`FragmentLimit`]'s
-//! depth: the entry depth of the object's box grown by half of its box
-//! test's growth and raised by half of its raise. The front face at p of any
-//! box test holding the object is the entry depth of a box at least as
-//! large, grown and raised by all of margins at least as large: nearer by
-//! half the growth (at least 5e-5 of the depth) and half the raise, each
-//! more than the rounding of either computation. A fragment lies at most a
-//! sub-pixel snap from its triangle, and a box test's edges move by as much:
-//! at most 1/32 pixel each with the 4 sub-pixel bits Vulkan requires (most
-//! GPUs and llvmpipe snap to 1/256). So boxes are also grown by enough to
-//! move their outline [`SNAP_MARGIN`] = 1/16 pixel out at the frame's field
-//! of view and resolution ([`BoxMargins::new`]): about 2e-4 of their reach
-//! at 800×600 and 60°, 1e-3 at 160×120. The box test covers every pixel
-//! where a fragment of the object may land. Nothing rounds a surviving
-//! fragment of an object past its box test.
+//! docs/box-tests.md gives the argument that the two together suffice, with
+//! the measurements on real models that found each rule.
 
 use glam::{DMat3, DVec3, Vec4};
 

@@ -133,9 +133,31 @@ impl Culler for GpuCulling {
 }
 
 /// One frame of GPU-driven culling over `walk`'s tree, whose nodes have the
-/// boxes `bounds` this frame: steps 1-4 of the module above. The traversal
-/// figures are counted on the GPU and added after the frame (the mode's
-/// audit): the ones returned are empty.
+/// boxes `bounds` this frame, every step through `GpuFrame`:
+///
+/// 1. Last frame's visible objects are drawn first: they are this frame's
+///    occluders, and part of its image.
+/// 2. Per level: the queued nodes' boxes are tested against that depth.
+///    [`NodeTest::Raster`] draws them with forced early depth testing, and
+///    a fragment that passes marks its node visible (raster_mark.wgsl);
+///    [`NodeTest::Pyramid`] builds the depth pyramid once, before the first
+///    level, and a compute pass marks every queued box not behind the
+///    pyramid, or for a small one not behind the depth at each of its pixels
+///    (pyramid_test.wgsl). Then `cs_expand` queues the children of visible
+///    inner nodes and marks the objects of visible leaves (walk.wgsl). The
+///    queue's length stays on the GPU: it is the instance count of the next
+///    level's indirect draw and dispatch. Boxes that reach the near plane
+///    are marked by the CPU, which cannot rasterise them, and boxes outside
+///    the frustum are never queued.
+/// 3. `cs_compact` turns the marks into next frame's visible list and the
+///    list of objects visible now but not drawn in step 1.
+/// 4. That list is drawn by indirect multi-draw (its length read back
+///    first where indirect draws cannot take their count from a buffer).
+///
+/// The traversal figures are counted on the GPU and read back after the
+/// frame, untimed (the mode's audit: objects drawn early and late, nodes
+/// tested and hidden per level, the GPU time of steps 2-3): the ones
+/// returned are empty.
 ///
 /// # Panics
 /// Without a GPU frame: a session runs GPU walks on the GPU.

@@ -1,41 +1,12 @@
 //! `swr`: CPU software occlusion culling, the family Intel's Masked
-//! Software Occlusion Culling (O3DE), Godot 4's occlusion culling and Umbra
-//! belong to: occluders are rasterised on the CPU into a small depth buffer
-//! and boxes tested against it, so culling never waits for the GPU and
-//! reads nothing back. Each frame, on the CPU:
-//!
-//! 1. **Occluders**: last frame's visible objects, largest on screen first,
-//!    each whose triangles still fit `swr.triangles`.
-//! 2. **Rasterise** their triangles, projected in f64, into a buffer of
-//!    `swr.resolution` cells, conservatively (buffer.rs: a cell takes an
-//!    occluder's farthest depth over the pixel centres it holds, and only
-//!    where the occluder covers all of them, with the GPU's snapping and
-//!    f32 error as margins; it also keeps that occluder's depth plane, so a
-//!    box can be compared with it centre by centre). A mesh's consecutive
-//!    triangles that share an edge are one quad occluder: the GPU draws
-//!    them without a gap, and a triangle alone leaves the cells along its
-//!    edges empty. Triangles reaching the near plane are left out (fewer
-//!    occluders is always safe).
-//! 3. **Pyramid** of the buffer's farthest depths.
-//! 4. **Test**: the hierarchy is walked as `vfc` walks it; a node in the
-//!    frustum is also tested by its box (grown and raised as every box test
-//!    here, gpu/conservative.rs). Its screen rectangle's pixels, rounded
-//!    outward, are read at the pyramid level where they span at most 8
-//!    texels; at each texel the box must lie behind the texel's farthest
-//!    depth, by its nearest corner or by the planes where pixel rays enter
-//!    it (`BoxPlanes`: a box seen at a slant is far nearer at one end), or
-//!    no ray through the texel's pixel centres may meet it; a texel that
-//!    fails is tried again by its children, down to the cells, where the box
-//!    may also lie behind the cell's plane. A hidden node stops its
-//!    subtree; a box reaching the near plane is visible. A leaf's objects
-//!    are tested one by one.
-//! 5. **Draw** the visible objects, the occluders among them first (in
-//!    their order, largest first, for the GPU's early depth test); they are
-//!    next frame's occluder candidates. An occluder found hidden is not
-//!    drawn, and the buffer still holds only depth that is drawn: the
-//!    occluder a cell took its depth and plane from is never found hidden,
-//!    since its own box lies nowhere behind its own triangles, so at that
-//!    cell every test of it, or of a node holding it, fails.
+//! Software Occlusion Culling (MOC; O3DE), Godot 4's occlusion culling and
+//! Umbra belong to: occluders are rasterised on the CPU into a small depth
+//! buffer and boxes tested against it, so culling never waits for the GPU
+//! and reads nothing back. A frame (`frame` below, step by step) takes last
+//! frame's visible objects as occluders, rasterises them conservatively
+//! into the buffer (buffer.rs), builds a pyramid of its farthest depths,
+//! walks the hierarchy as `vfc` does testing each box in the frustum
+//! against it, and draws what is visible, occluders first.
 //!
 //! Departures: MOC keeps coverage masks per tile with two depths (its
 //! "masked" buffer), which merge any triangles covering a tile together,
@@ -44,9 +15,8 @@
 //! f64. Like MOC it shares the occluders among threads (`swr.threads`),
 //! each into a buffer of its own, merged after; the box tests run on one
 //! thread. Occluders are whole visible objects (MOC and Godot take
-//! authored occluder meshes). A cell
-//! holds depth only where an occluder covers all its pixels, so at the
-//! default 256×192 over 800×600 a box within about a cell of an occluder's
+//! authored occluder meshes). A cell holds depth only where an occluder
+//! covers all its pixels, so a box within about a cell of an occluder's
 //! outline is not hidden by it; `swr.resolution` trades that against time.
 
 mod buffer;
@@ -365,7 +335,42 @@ impl Culler for SoftwareOcclusionCulling {
         Ok(())
     }
 
-    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
+    /// One frame, on the CPU:
+    ///
+    /// 1. **Occluders**: last frame's visible objects, largest on screen first,
+    ///    each whose triangles still fit `swr.triangles`.
+    /// 2. **Rasterise** their triangles, projected in f64, into a buffer of
+    ///    `swr.resolution` cells, conservatively (buffer.rs: a cell takes an
+    ///    occluder's farthest depth over the pixel centres it holds, and only
+    ///    where the occluder covers all of them, with the GPU's snapping and
+    ///    f32 error as margins; it also keeps that occluder's depth plane, so a
+    ///    box can be compared with it centre by centre). A mesh's consecutive
+    ///    triangles that share an edge are one quad occluder: the GPU draws
+    ///    them without a gap, and a triangle alone leaves the cells along its
+    ///    edges empty. Triangles reaching the near plane are left out (fewer
+    ///    occluders is always safe).
+    /// 3. **Pyramid** of the buffer's farthest depths.
+    /// 4. **Test**: the hierarchy is walked as `vfc` walks it; a node in the
+    ///    frustum is also tested by its box (grown and raised as every box test
+    ///    here, gpu/conservative.rs). Its screen rectangle's pixels, rounded
+    ///    outward, are read at the pyramid level where they span at most 8
+    ///    texels; at each texel the box must lie behind the texel's farthest
+    ///    depth, by its nearest corner or by the planes where pixel rays enter
+    ///    it (`BoxPlanes`: a box seen at a slant is far nearer at one end), or
+    ///    no ray through the texel's pixel centres may meet it; a texel that
+    ///    fails is tried again by its children, down to the cells, where the box
+    ///    may also lie behind the cell's plane. A hidden node stops its
+    ///    subtree; a box reaching the near plane is visible. A leaf's objects
+    ///    are tested one by one.
+    /// 5. **Draw** the visible objects, the occluders among them first (in
+    ///    their order, largest first, for the GPU's early depth test); they are
+    ///    next frame's occluder candidates. An occluder found hidden is not
+    ///    drawn, and the buffer still holds only depth that is drawn: the
+    ///    occluder a cell took its depth and plane from is never found hidden,
+    ///    since its own box lies nowhere behind its own triangles, so at that
+    ///    cell every test of it, or of a node holding it, fails.
+    ///
+        fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let (camera, scene, size) = (input.camera, input.scene, input.resolution);
         let mut stats = TraversalStats::default();
         if self.buffer.as_ref().is_none_or(|b| b.target() != size) {
