@@ -136,8 +136,10 @@ pub struct Frustum {
 }
 
 /// Relative slack of the outside test: a box must be clearly outside, by more
-/// than f32 rasterisation could blur, before it is culled.
-const OUTSIDE_SLACK: f64 = 1e-6;
+/// than f32 rasterisation could blur, before it is culled. Twice the GPU
+/// walks' own test's slack and error (`gpu_walk/frustum.rs`), so that test
+/// culls every object this one does.
+pub const OUTSIDE_SLACK: f64 = 4e-6;
 
 impl Frustum {
     fn new(cam: &Camera) -> Frustum {
@@ -161,6 +163,13 @@ impl Frustum {
                 plane(DVec3::new(0.0, -1.0, -ty), 0.0),
             ],
         }
+    }
+
+    /// The eye, and the five planes (unit normal pointing inwards, and
+    /// offset) in eye-centred world coordinates: a point p is inside where
+    /// `normal · (p − eye) + offset ≥ 0` for every plane.
+    pub fn planes(&self) -> (DVec3, [(DVec3, f64); 5]) {
+        (self.eye, self.planes.map(|p| (p.normal, p.offset)))
     }
 
     /// Conservative: `Outside` only when the box lies wholly behind one plane.

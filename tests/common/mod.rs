@@ -258,6 +258,32 @@ pub fn held(eye: DVec3, target: DVec3, fov_y_deg: f64, frames: u32) -> CameraPat
     CameraPath::from_file(&file, "test").unwrap()
 }
 
+/// The camera at `eye` looking along `directions[f]` in frame `f`.
+pub fn turning(eye: DVec3, directions: &[DVec3], fov_y_deg: f64) -> CameraPath {
+    let file = PathFile {
+        frames: None,
+        fps: Some(1.0),
+        near: Some(0.1),
+        fov_y_deg: Some(fov_y_deg),
+        up: None,
+        interpolation: Interpolation::Linear,
+        keyframes: directions
+            .iter()
+            .enumerate()
+            .map(|(f, d)| KeyframeFile {
+                time: f as f64,
+                position: eye.to_array(),
+                target: None,
+                direction: Some(d.to_array()),
+                orientation: None,
+                up: None,
+                fov_y_deg: None,
+            })
+            .collect(),
+    };
+    CameraPath::from_file(&file, "test").unwrap()
+}
+
 /// A scene of axis-aligned boxes, one object each.
 pub fn boxes(list: &[(DVec3, DVec3)]) -> Scene {
     let mut b = SceneBuilder::new("test boxes".into(), 4096);

@@ -10,7 +10,6 @@ use super::level_test::NodeTest;
 use super::lists::VisibleLists;
 use super::{CullTree, DrawList, GpuWalk};
 use crate::bounds::Aabb;
-use crate::camera::Camera;
 use crate::cull::culler::{Culler, FrameInput, TraversalStats};
 use crate::cull::mode::ModeId;
 use crate::gpu::{Frame, GpuAudit, GpuContext, GpuError, GpuSetup};
@@ -117,12 +116,12 @@ impl Culler for GpuCulling {
         match self.walked {
             Walked::Objects => {
                 let bounds = input.scene.objects.iter().map(|o| o.bounds);
-                cull_on_gpu(ctx, input.camera, walk, bounds)
+                cull_on_gpu(ctx, input, walk, bounds)
             }
             Walked::Nodes(_) => {
                 let nodes = &input.hierarchy.nodes;
                 let bounds = self.source.iter().map(|&n| nodes[n as usize].bounds);
-                cull_on_gpu(ctx, input.camera, walk, bounds)
+                cull_on_gpu(ctx, input, walk, bounds)
             }
         }
     }
@@ -136,7 +135,8 @@ impl Culler for GpuCulling {
 /// boxes `bounds` this frame, every step through `GpuFrame`:
 ///
 /// 1. Last frame's visible objects are drawn first: they are this frame's
-///    occluders, and part of its image.
+///    occluders, and part of its image. Those that have left the frustum
+///    are taken out first, each by its own box (frustum.rs).
 /// 2. Per level: the queued nodes' boxes are tested against that depth.
 ///    [`NodeTest::Raster`] draws them with forced early depth testing, and
 ///    a fragment that passes marks its node visible (raster_mark.wgsl);
@@ -149,8 +149,9 @@ impl Culler for GpuCulling {
 ///    level's indirect draw and dispatch. Boxes that reach the near plane
 ///    are marked by the CPU, which cannot rasterise them, and boxes outside
 ///    the frustum are never queued.
-/// 3. `cs_compact` turns the marks into next frame's visible list and the
-///    list of objects visible now but not drawn in step 1.
+/// 3. `cs_compact` turns the marks of objects inside the frustum (a
+///    visible node's subtree may reach out of it) into next frame's visible
+///    list and the list of objects visible now but not drawn in step 1.
 /// 4. That list is drawn by indirect multi-draw (its length read back
 ///    first where indirect draws cannot take their count from a buffer).
 ///
@@ -163,14 +164,17 @@ impl Culler for GpuCulling {
 /// Without a GPU frame: a session runs GPU walks on the GPU.
 fn cull_on_gpu(
     frame: &mut dyn Frame,
-    camera: &Camera,
+    input: &FrameInput,
     walk: &mut GpuWalk,
     bounds: impl ExactSizeIterator<Item = Aabb>,
 ) -> TraversalStats {
     let ctx = frame.on_gpu().expect("the session runs GPU walks on the GPU");
-    let indirect_count = ctx.gpu().indirect_count;
+    let (camera, indirect_count) = (input.camera, ctx.gpu().indirect_count);
+    // Preparing the frustum and boxes is culling work on the CPU, outside
+    // `record`.
+    walk.prepare_frustum(camera, input.scene, input.moved, input.frame);
+    ctx.record(&mut |work| walk.drop_what_left_the_frustum(work));
     ctx.draw_indirect(walk.list(DrawList::Visible, indirect_count));
-    // Preparing the boxes is culling work on the CPU, outside `record`.
     walk.prepare_boxes(camera, ctx.margins(), bounds);
     ctx.record(&mut |work| walk.begin(work));
     for _ in 0..walk.levels() {

@@ -2,6 +2,7 @@
 //! shaders share with the Rust side: written as WGSL before each shader's
 //! text ([`shader_constants`]), so the two cannot drift apart.
 
+use super::frustum::{GPU_ABSOLUTE_ERROR, GPU_OUTSIDE_SLACK};
 use crate::gpu::{BOXES_WGSL, GpuContext, module_with_camera};
 
 /// Threads per workgroup of walk.wgsl, and its grid limit.
@@ -52,6 +53,14 @@ pub(super) fn shader_constants() -> String {
     ]
     .iter()
     .map(|(name, value)| format!("const {name}: u32 = {value}u;\n"))
+    .chain(
+        [
+            ("OUTSIDE_SLACK", GPU_OUTSIDE_SLACK),
+            ("ABSOLUTE_ERROR", GPU_ABSOLUTE_ERROR),
+        ]
+        .iter()
+        .map(|(name, value)| format!("const {name}: f32 = {value:e};\n")),
+    )
     .collect()
 }
 

@@ -21,6 +21,7 @@
 
 mod culling;
 pub mod depths;
+mod frustum;
 pub mod hiz;
 pub mod ioc;
 mod layout;

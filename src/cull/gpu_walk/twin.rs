@@ -1,11 +1,12 @@
 //! CPU twins of the walk's compute stages, written from their contracts,
 //! not from the shaders:
 //!
-//! - [`walk`], of `cs_expand` and `cs_compact` (004 §2 and the module
-//!   above): given the tree, the node states the walk left (the CPU's
-//!   frustum and near-plane rules and the level tests' marks) and the
-//!   objects visible in the last frame, what the walk must have counted,
-//!   marked and drawn;
+//! - [`walk`], of `cs_early_frustum`, `cs_expand` and `cs_compact` (004 §2
+//!   and the module above): given the tree, the node states the walk left
+//!   (the CPU's frustum and near-plane rules and the level tests' marks),
+//!   the objects visible in the last frame and those outside the frustum
+//!   (frustum.rs's `gpu_verdict`), what the walk must have counted, marked
+//!   and drawn;
 //! - [`BoxOnTarget`], of hiz's box test (pyramid_test.wgsl's header): in
 //!   f64, whether a box lies behind the pyramid, and pixel by pixel behind
 //!   the depth where the pyramid does not hide it.
@@ -38,16 +39,20 @@ pub(super) struct CpuWalk {
     /// Every node reached and not outside the frustum: queued for a test
     /// (those reaching the near plane pass it untested).
     pub queued: Vec<u32>,
-    /// Objects of visible leaves: this frame's visible list.
+    /// Objects of visible leaves inside the frustum: this frame's visible
+    /// list.
     pub marked: Vec<bool>,
-    /// Objects drawn: visible in the last frame (drawn first, as
-    /// occluders) or marked now (drawn after the walk).
+    /// Objects of last frame's visible list inside the frustum: drawn
+    /// first, as occluders.
+    pub early: Vec<bool>,
+    /// Objects drawn: early, or marked now (drawn after the walk).
     pub drawn: Vec<bool>,
 }
 
 /// The walk of `tree` whose nodes ended in `states`, after a frame in
-/// which `visible_last` were visible.
-pub(super) fn walk(tree: &CullTree, states: &[u32], visible_last: &[bool]) -> CpuWalk {
+/// which `visible_last` were visible, with the objects `outside` the
+/// frustum.
+pub(super) fn walk(tree: &CullTree, states: &[u32], visible_last: &[bool], outside: &[bool]) -> CpuWalk {
     let objects = tree.order.len();
     let mut w = CpuWalk {
         marked: vec![false; objects],
@@ -82,7 +87,7 @@ pub(super) fn walk(tree: &CullTree, states: &[u32], visible_last: &[bool]) -> Cp
             if n.child_count == 0 {
                 let first = n.first_object as usize;
                 for &object in &tree.order[first..first + n.object_count as usize] {
-                    w.marked[object as usize] = true;
+                    w.marked[object as usize] = !outside[object as usize];
                 }
             } else {
                 for child in n.first_child..n.first_child + n.child_count {
@@ -93,7 +98,8 @@ pub(super) fn walk(tree: &CullTree, states: &[u32], visible_last: &[bool]) -> Cp
         queue = next;
     }
     w.tested = w.visited - w.outside - near;
-    w.drawn = w.marked.iter().zip(visible_last).map(|(&m, &v)| m || v).collect();
+    w.early = visible_last.iter().zip(outside).map(|(&v, &o)| v && !o).collect();
+    w.drawn = w.marked.iter().zip(&w.early).map(|(&m, &e)| m || e).collect();
     w
 }
 
@@ -287,6 +293,7 @@ mod tests {
     use crate::cull::ModeParams;
     use crate::cull::gpu_walk::GpuCulling;
     use crate::cull::gpu_walk::depths::{DepthRange, Level};
+    use crate::cull::gpu_walk::frustum::gpu_verdict;
     use crate::cull::gpu_walk::hiz::{BoxesTested, HizParams, hierarchical_depth_culling};
     use crate::cull::gpu_walk::ioc::iterative_occlusion_culling;
     use crate::cull::gpu_walk::roc::raster_occlusion_culling;
@@ -334,7 +341,18 @@ mod tests {
                 .remove(0);
             let on_gpu = mode.gpu_walk().expect("the session prepared the walk");
             let states = on_gpu.node_states(gpu);
-            let twin = walk(tree, &states, &visible_last);
+            let outside: Vec<bool> = world
+                .scene
+                .objects
+                .iter()
+                .enumerate()
+                .map(|(o, object)| {
+                    gpu_verdict(&camera, &object.bounds).unwrap_or_else(|| {
+                        panic!("frame {frame}: object {o} lies where the GPU may call it either way")
+                    })
+                })
+                .collect();
+            let twin = walk(tree, &states, &visible_last, &outside);
             let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
             if let Some(params) = hiz {
                 let (levels, texels) = on_gpu.pyramid(gpu).expect("a pyramid test");
@@ -345,7 +363,7 @@ mod tests {
                 let (view, rays) = (camera.view_rotation(), PixelRays::new(&camera, RESOLUTION));
                 let margins = BoxMargins::new(gpu.depth_margins, &camera, RESOLUTION);
                 let late: Vec<Option<BoxOnTarget>> = (0..objects)
-                    .filter(|&o| twin.marked[o] && !visible_last[o])
+                    .filter(|&o| twin.marked[o] && !twin.early[o])
                     .map(
                         |o| match eye_relative_box(&camera, &view, margins, &world.scene.objects[o].bounds) {
                             EyeBox::Testable(q) => Some(BoxOnTarget::new(&q, &camera, RESOLUTION)),
@@ -392,13 +410,8 @@ mod tests {
             let drawn: Vec<bool> = (0..objects as u32).map(|o| session.drawn[0].contains(o)).collect();
             assert_eq!(drawn, twin.drawn, "{at}");
             // Early: last frame's visible list; late: marked now, not in it.
-            let early = visible_last.iter().filter(|&&v| v).count() as u64;
-            let late = twin
-                .marked
-                .iter()
-                .zip(&visible_last)
-                .filter(|&(&m, &v)| m && !v)
-                .count() as u64;
+            let early = twin.early.iter().filter(|&&e| e).count() as u64;
+            let late = twin.marked.iter().zip(&twin.early).filter(|&(&m, &e)| m && !e).count() as u64;
             assert_eq!(row.traversal.drawn_early, early, "{at}");
             assert_eq!(row.traversal.drawn_late, late, "{at}");
             hidden += twin.hidden;

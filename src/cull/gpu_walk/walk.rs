@@ -4,6 +4,7 @@
 
 use std::rc::Rc;
 
+use super::frustum::ObjectFrustum;
 use super::layout::{
     DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_WORDS,
     MAX_GROUPS, OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST, shader_constants,
@@ -21,6 +22,7 @@ use crate::gpu::{
     bind_group_layout, box_bind_group_layout, box_buffer, eye_relative_box, storage_buffer,
 };
 use crate::object_set::ObjectSet;
+use crate::scene::Scene;
 
 /// Which of a tree's two draw lists.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -73,7 +75,8 @@ pub struct GpuWalk {
     test: LevelTest,
     expand: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
-    /// `compact`'s empty group 0.
+    early_frustum: wgpu::ComputePipeline,
+    /// `compact`'s and `early_frustum`'s empty group 0.
     no_bindings: wgpu::BindGroup,
     scratch: NodeScratch,
     /// An empty level, copied over a level before its queue is filled.
@@ -92,6 +95,9 @@ pub struct GpuWalk {
     counts_readback: Readback,
     walk: Option<Walk>,
     tree: TreeOnGpu,
+    /// The objects' boxes and the frame's frustum, for the object-level
+    /// frustum test of `early_frustum` and `compact`.
+    object_frustum: ObjectFrustum,
     /// Scratch, reused so a frame allocates nothing once warm.
     node_boxes: NodeBoxes,
     seed_queue: Vec<u32>,
@@ -211,6 +217,8 @@ impl GpuWalk {
                 (S::COMPUTE, write),
                 (S::COMPUTE, write),
                 (S::COMPUTE, write),
+                (S::COMPUTE, read),
+                (S::COMPUTE, wgpu::BufferBindingType::Uniform),
             ],
         );
         let nodes = tree.nodes.len() as u32;
@@ -232,17 +240,21 @@ impl GpuWalk {
             "cs_expand",
             &[Some(&step_layout), Some(&tree_layout)],
         );
-        // cs_compact shares the module's groups 1 and 2 and binds nothing at
-        // 0: an empty group there keeps it within 8 storage buffers, the
-        // minimum an adapter guarantees.
+        // cs_compact and cs_early_frustum share the module's groups 1 and 2
+        // and bind nothing at 0: an empty group there keeps them within 8
+        // storage buffers, the minimum an adapter guarantees.
         let no_bindings = bind_group_layout(gpu, "no bindings", &[]);
-        let compact = compute_pipeline(
-            gpu,
-            "compact draw lists",
-            &cull_module,
-            "cs_compact",
-            &[Some(&no_bindings), Some(&tree_layout), Some(&lists_layout)],
-        );
+        let lists_pipeline = |label: &str, entry: &str| {
+            compute_pipeline(
+                gpu,
+                label,
+                &cull_module,
+                entry,
+                &[Some(&no_bindings), Some(&tree_layout), Some(&lists_layout)],
+            )
+        };
+        let compact = lists_pipeline("compact draw lists", "cs_compact");
+        let early_frustum = lists_pipeline("frustum test of the early list", "cs_early_frustum");
         let no_bindings = bind_buffers(gpu, &no_bindings, &[]);
         let objects = draws.len() as u32;
         let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
@@ -252,7 +264,8 @@ impl GpuWalk {
         );
         assert!((1..=MAX_LEVELS).contains(&tree.levels), "1..={MAX_LEVELS} levels");
         let drawn = storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy);
-        let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, lists, &drawn);
+        let object_frustum = ObjectFrustum::new(gpu, objects);
+        let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, lists, &drawn, &object_frustum);
         let spans = match node_test {
             NodeTest::Raster => 1,
             NodeTest::Pyramid { .. } => 2,
@@ -272,6 +285,7 @@ impl GpuWalk {
             triangles: draws.iter().map(|d| u64::from(d.index_count / 3)).collect(),
             walk: None,
             tree,
+            object_frustum,
             node_boxes: NodeBoxes {
                 planes_on: node_test.reads_pixels().then_some(setup.resolution),
                 ..NodeBoxes::default()
@@ -282,6 +296,7 @@ impl GpuWalk {
             test,
             expand,
             compact,
+            early_frustum,
             no_bindings,
         })
     }
@@ -289,6 +304,29 @@ impl GpuWalk {
     /// Levels a walk of the tree takes.
     pub fn levels(&self) -> u32 {
         self.tree.levels
+    }
+
+    /// On the CPU, before frame `frame`'s early draw: stages `camera`'s
+    /// frustum and the boxes of the objects of `scene` that moved (`moved`,
+    /// or every object where this walk did not run in the frame before).
+    pub fn prepare_frustum(&mut self, camera: &Camera, scene: &Scene, moved: &[u32], frame: u32) {
+        self.object_frustum.prepare(camera, scene, moved, frame);
+    }
+
+    /// Takes the objects that have left the frustum out of last frame's
+    /// visible list, before it is drawn (`cs_early_frustum`).
+    pub fn drop_what_left_the_frustum(&mut self, work: GpuWork) {
+        let GpuWork { gpu, encoder, .. } = work;
+        self.object_frustum.write(gpu);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("frustum test of the early list"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.early_frustum);
+        pass.set_bind_group(0, &self.no_bindings, &[]);
+        pass.set_bind_group(1, &self.tree.tree_group, &[]);
+        pass.set_bind_group(2, &self.tree.lists_group, &[]);
+        pass.dispatch_workgroups(groups_for(self.objects), 1, 1);
     }
 
     /// Prepares the tree's node boxes (`bounds`, one per node, in node
@@ -523,8 +561,8 @@ impl GpuWalk {
 }
 
 impl TreeOnGpu {
-    /// `tree` on the GPU, bound with `lists` and `drawn` (a word per object
-    /// drawn).
+    /// `tree` on the GPU, bound with `lists`, `drawn` (a word per object
+    /// drawn) and the objects' boxes and frustum.
     fn new(
         gpu: &GpuContext,
         tree: &CullTree,
@@ -532,6 +570,7 @@ impl TreeOnGpu {
         lists_layout: &wgpu::BindGroupLayout,
         lists: Rc<VisibleLists>,
         drawn: &wgpu::Buffer,
+        object_frustum: &ObjectFrustum,
     ) -> TreeOnGpu {
         let storage = wgpu::BufferUsages::STORAGE;
         let node_buffer = gpu.buffer_with("tree nodes", bytemuck::cast_slice(&tree.nodes), storage);
@@ -545,7 +584,14 @@ impl TreeOnGpu {
             lists_group: bind_buffers(
                 gpu,
                 lists_layout,
-                &[&lists.all_commands, &lists.commands, &lists.counts, drawn],
+                &[
+                    &lists.all_commands,
+                    &lists.commands,
+                    &lists.counts,
+                    drawn,
+                    &object_frustum.boxes,
+                    &object_frustum.frustum,
+                ],
             ),
             lists,
         }
@@ -633,6 +679,7 @@ fn groups_for(n: u32) -> u32 {
 mod tests {
     use super::*;
     use crate::cull::gpu_walk::TreeNode;
+    use crate::cull::gpu_walk::frustum::{ObjectBox, ShaderFrustum};
     use crate::gpu::wgsl::{parse, struct_layout as layout};
     use crate::gpu::{BOXES_WGSL, CAMERA_WGSL};
 
@@ -655,6 +702,14 @@ mod tests {
         let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(names, ["first_child", "child_count", "first_object", "object_count"]);
         assert_eq!(u64::from(layout(&module, "DrawCommand").1), DRAW_COMMAND_BYTES);
+        let (members, size) = layout(&module, "ObjectBox");
+        assert_eq!(size as usize, std::mem::size_of::<ObjectBox>());
+        let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["centre_high", "centre_low", "extent"]);
+        let (members, size) = layout(&module, "ObjectFrustum");
+        assert_eq!(size as usize, std::mem::size_of::<ShaderFrustum>());
+        let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["eye_high", "eye_low", "planes"]);
         parse(
             &[
                 CAMERA_WGSL,

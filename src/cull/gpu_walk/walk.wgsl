@@ -77,6 +77,50 @@ struct Counts {
 // for the statistics).
 @group(2) @binding(3) var<storage, read_write> drawn: array<u32>;
 
+// An object's box: its centre in two parts (high and low) and its half
+// extent, rounded up (frustum.rs).
+struct ObjectBox {
+    centre_high: vec4<f32>,
+    centre_low: vec4<f32>,
+    extent: vec4<f32>,
+}
+
+// The frame's eye in two parts and the frustum's planes: inward unit normal
+// (xyz) and offset (w), eye-centred.
+struct ObjectFrustum {
+    eye_high: vec4<f32>,
+    eye_low: vec4<f32>,
+    planes: array<vec4<f32>, 5>,
+}
+
+@group(2) @binding(4) var<storage, read> object_boxes: array<ObjectBox>;
+@group(2) @binding(5) var<uniform> frustum: ObjectFrustum;
+
+fn max_abs(v: vec3<f32>) -> f32 {
+    let a = abs(v);
+    return max(max(a.x, a.y), a.z);
+}
+
+// Whether the object lies wholly behind one of the frustum's planes, by
+// more than the test's rounding could move it (frustum.rs: what vfc finds
+// outside, this finds outside too). The centre is made eye-relative part by
+// part, so far from the origin the low parts still count.
+fn outside_frustum(object: u32) -> bool {
+    let b = object_boxes[object];
+    let centre = (b.centre_high.xyz - frustum.eye_high.xyz) + (b.centre_low.xyz - frustum.eye_low.xyz);
+    let extent = b.extent.xyz;
+    let reach = max_abs(abs(centre) + extent);
+    let world = max(max_abs(frustum.eye_high.xyz), max_abs(b.centre_high.xyz));
+    let slack = OUTSIDE_SLACK * reach + ABSOLUTE_ERROR * world;
+    for (var k = 0u; k < 5u; k++) {
+        let plane = frustum.planes[k];
+        if dot(plane.xyz, centre) + dot(abs(plane.xyz), extent) + plane.w < -slack {
+            return true;
+        }
+    }
+    return false;
+}
+
 // 004 §2: "If the node is culled, we stop the traversal for the node [...].
 // If the node is a leaf, we directly mark it as a potentially visible
 // occludee in the VB. Otherwise, we tightly pack and enqueue them for the
@@ -129,7 +173,23 @@ fn cs_expand(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     }
 }
 
-// The objects marked this frame become the visible list (next frame's
+// Before last frame's visible list is drawn as this frame's occluders: an
+// object of it that has left the frustum is drawn with no instance, and no
+// longer counts as visible last frame (marked again, it is drawn late).
+@compute @workgroup_size(GROUP_SIZE)
+fn cs_early_frustum(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) grid: vec3<u32>) {
+    let listed = atomicLoad(&counts.visible);
+    for (var i = id.x; i < listed; i += grid.x * GROUP_SIZE) {
+        let object = commands[i].first_instance;
+        if outside_frustum(object) {
+            commands[i].instance_count = 0u;
+            object_state[object] &= ~VISIBLE_LAST_FRAME;
+        }
+    }
+}
+
+// The objects marked this frame and inside the frustum (a visible node's
+// subtree may reach out of it) become the visible list (next frame's
 // occluders); those not drawn as occluders this frame also go to the newly
 // visible list, drawn now.
 @compute @workgroup_size(GROUP_SIZE)
@@ -138,7 +198,7 @@ fn cs_compact(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
     for (var object = id.x; object < n; object += grid.x * GROUP_SIZE) {
         let state = object_state[object];
         let was_visible = (state & VISIBLE_LAST_FRAME) != 0u;
-        let marked = (state & MARKED) != 0u;
+        let marked = (state & MARKED) != 0u && !outside_frustum(object);
         object_state[object] = select(0u, VISIBLE_LAST_FRAME, marked);
         drawn[object] = select(select(0u, DRAWN_LATE, marked), DRAWN_EARLY, was_visible);
         if marked {

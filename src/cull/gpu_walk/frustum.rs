@@ -1,0 +1,208 @@
+//! The frustum test of single objects on the GPU, which keeps a walk from
+//! drawing what `vfc` leaves out: last frame's visible objects that have
+//! left the frustum (drawn early, as occluders, without a test) and the
+//! objects of a visible bottom-depth node that lie outside it (marked with
+//! their node). `cs_early_frustum` takes the first out of the early list,
+//! `cs_compact` the second out of the marks (walk.wgsl).
+//!
+//! Each object's box is uploaded once as its centre in two f32 parts (high
+//! and low, as large-world renderers keep positions) and its half extent
+//! rounded up, and again only when the object moves; each frame brings the
+//! eye in two parts and the frustum's planes. The shader makes the centre
+//! eye-relative part by part, so a box 1e7 from the origin is tested as
+//! precisely as one beside it.
+//!
+//! Precision: the eye-relative centre is within 3 · 2^-24 of the reach (the
+//! box's largest eye-relative coordinate) on each axis, and within 2^-45 of
+//! the larger of the eye's and the centre's distance from the origin for
+//! the low parts' rounding ([`GPU_ABSOLUTE_ERROR`]); the planes' normals are
+//! within 2^-24 on each axis, and the plane sum's roundings within 6 · 2^-24
+//! of twice the reach: the test's value is within [`GPU_ERROR`] = 1.2e-6 of
+//! the reach, plus the absolute part, of the exact one. An object is outside
+//! where the value falls below −([`GPU_OUTSIDE_SLACK`] = 2e-6 of the reach
+//! plus the absolute part), so it is truly outside (the slack exceeds the
+//! error), and every object `vfc` finds outside (by [`OUTSIDE_SLACK`], 4e-6,
+//! at least the slack plus the error) is, but for boxes far smaller than a
+//! millionth of their distance from the origin.
+
+use glam::DVec3;
+
+use crate::bounds::Aabb;
+use crate::camera::{Camera, OUTSIDE_SLACK};
+use crate::gpu::{GpuContext, storage_buffer};
+use crate::scene::Scene;
+
+/// Relative slack of the GPU's outside test (see the module's header).
+pub(super) const GPU_OUTSIDE_SLACK: f64 = 2e-6;
+/// Bound on the GPU test's error, relative to the box's reach.
+pub(super) const GPU_ERROR: f64 = 1.2e-6;
+/// Bound on the error the low parts' rounding adds, relative to the eye's or
+/// the box's distance from the origin (2^-45), both in the slack.
+pub(super) const GPU_ABSOLUTE_ERROR: f64 = 1.0 / (1u64 << 45) as f64;
+
+const _: () = assert!(GPU_OUTSIDE_SLACK > GPU_ERROR && OUTSIDE_SLACK >= GPU_OUTSIDE_SLACK + GPU_ERROR);
+
+/// An object's box as walk.wgsl's `ObjectBox` reads it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(super) struct ObjectBox {
+    centre_high: [f32; 4],
+    centre_low: [f32; 4],
+    /// Half the box's size on each axis, rounded up.
+    extent: [f32; 4],
+}
+
+/// The frame's eye and frustum as walk.wgsl's `ObjectFrustum` reads them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(super) struct ShaderFrustum {
+    eye_high: [f32; 4],
+    eye_low: [f32; 4],
+    /// Each plane's inward unit normal (xyz) and offset (w), eye-centred.
+    planes: [[f32; 4]; 5],
+}
+
+/// The objects' boxes on the GPU and the frame's frustum, for one walk.
+pub(super) struct ObjectFrustum {
+    pub(super) boxes: wgpu::Buffer,
+    pub(super) frustum: wgpu::Buffer,
+    /// The frame whose poses `boxes` hold; a walk that did not run in the
+    /// frame before (`auto` ran another) uploads every box again.
+    frame: Option<u32>,
+    /// Staged on the CPU, written in [`ObjectFrustum::write`].
+    staged_frustum: ShaderFrustum,
+    staged_boxes: Vec<(u32, ObjectBox)>,
+}
+
+impl ObjectFrustum {
+    pub(super) fn new(gpu: &GpuContext, objects: u32) -> ObjectFrustum {
+        let copy = wgpu::BufferUsages::COPY_DST;
+        let bytes = |n: u64, size: usize| n * size as u64;
+        ObjectFrustum {
+            boxes: storage_buffer(
+                gpu,
+                "object boxes",
+                bytes(u64::from(objects.max(1)), size_of::<ObjectBox>()),
+                copy,
+            ),
+            frustum: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("object frustum"),
+                size: bytes(1, size_of::<ShaderFrustum>()),
+                usage: wgpu::BufferUsages::UNIFORM | copy,
+                mapped_at_creation: false,
+            }),
+            frame: None,
+            staged_frustum: ShaderFrustum::default(),
+            staged_boxes: Vec::new(),
+        }
+    }
+
+    /// On the CPU, before frame `frame`: stages `camera`'s frustum, and the
+    /// boxes of the objects `moved` since the previous frame, or of every
+    /// object where this walk did not run in it.
+    pub(super) fn prepare(&mut self, camera: &Camera, scene: &Scene, moved: &[u32], frame: u32) {
+        let (eye, planes) = camera.frustum().planes();
+        let (eye_high, eye_low) = split(eye);
+        self.staged_frustum = ShaderFrustum {
+            eye_high,
+            eye_low,
+            planes: planes.map(|(n, offset)| [n.x as f32, n.y as f32, n.z as f32, offset as f32]),
+        };
+        self.staged_boxes.clear();
+        let all = self.frame.is_none_or(|f| f.checked_add(1) != Some(frame));
+        let changed: Box<dyn Iterator<Item = u32>> = if all {
+            Box::new(0..scene.objects.len() as u32)
+        } else {
+            Box::new(moved.iter().copied())
+        };
+        let boxes = changed.map(|o| (o, object_box(&scene.objects[o as usize].bounds)));
+        self.staged_boxes.extend(boxes);
+        self.frame = Some(frame);
+    }
+
+    /// Writes what [`ObjectFrustum::prepare`] staged.
+    pub(super) fn write(&self, gpu: &GpuContext) {
+        gpu.queue
+            .write_buffer(&self.frustum, 0, bytemuck::bytes_of(&self.staged_frustum));
+        let size = size_of::<ObjectBox>() as u64;
+        // Consecutive objects in one write: every object at once after a
+        // gap, a few for the movers.
+        for run in self.staged_boxes.chunk_by(|a, b| a.0 + 1 == b.0) {
+            let data: Vec<ObjectBox> = run.iter().map(|&(_, b)| b).collect();
+            gpu.queue
+                .write_buffer(&self.boxes, u64::from(run[0].0) * size, bytemuck::cast_slice(&data));
+        }
+    }
+}
+
+/// `v` as f32 high parts and the f32 remainders, the w's 0.
+fn split(v: DVec3) -> ([f32; 4], [f32; 4]) {
+    let high = v.as_vec3();
+    let low = (v - high.as_dvec3()).as_vec3();
+    ([high.x, high.y, high.z, 0.0], [low.x, low.y, low.z, 0.0])
+}
+
+/// `b` as its centre in two parts and its half extent, rounded up.
+fn object_box(b: &Aabb) -> ObjectBox {
+    let (centre_high, centre_low) = split((b.min + b.max) / 2.0);
+    let half = (b.max - b.min) / 2.0;
+    let up = |x: f64| {
+        let r = x as f32;
+        if f64::from(r) < x { r.next_up() } else { r }
+    };
+    ObjectBox {
+        centre_high,
+        centre_low,
+        extent: [up(half.x), up(half.y), up(half.z), 0.0],
+    }
+}
+
+/// What the GPU's test says of `b` from `camera`, computed in f64: `Some`
+/// outside or not, `None` where its value lies within the GPU's error of the
+/// slack, so the f32 test may say either (the twin of walk.wgsl's
+/// `outside_frustum`).
+#[cfg(test)]
+pub(super) fn gpu_verdict(camera: &Camera, b: &Aabb) -> Option<bool> {
+    let (eye, planes) = camera.frustum().planes();
+    let world_centre = (b.min + b.max) / 2.0;
+    let (centre, half) = (world_centre - eye, (b.max - b.min) / 2.0);
+    let reach = (centre.abs() + half).max_element();
+    let absolute = GPU_ABSOLUTE_ERROR * eye.abs().max(world_centre.abs()).max_element();
+    let least = planes
+        .iter()
+        .map(|&(n, offset)| n.dot(centre) + n.abs().dot(half) + offset)
+        .fold(f64::INFINITY, f64::min);
+    let margin = least + GPU_OUTSIDE_SLACK * reach + absolute;
+    (margin.abs() > GPU_ERROR * reach + absolute).then_some(margin < 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn boxes_split_into_parts_that_sum_to_their_centre_and_cover_their_extent() {
+        let b = Aabb {
+            min: DVec3::new(1e7 + 0.123_456_789, -3.5, 0.1),
+            max: DVec3::new(1e7 + 2.987_654_321, 4.25, 0.100_000_001),
+        };
+        let o = object_box(&b);
+        let centre = (b.min + b.max) / 2.0;
+        for axis in 0..3 {
+            let sum = f64::from(o.centre_high[axis]) + f64::from(o.centre_low[axis]);
+            // The low part rounds what the high one leaves (2^-48 of it).
+            let within = GPU_ABSOLUTE_ERROR / 8.0 * centre[axis].abs();
+            assert!(
+                (sum - centre[axis]).abs() <= within,
+                "axis {axis}: {sum} for {}",
+                centre[axis]
+            );
+            let half = (b.max[axis] - b.min[axis]) / 2.0;
+            assert!(f64::from(o.extent[axis]) >= half, "axis {axis} covers");
+            assert!(
+                f64::from(o.extent[axis]) <= half * (1.0 + 1e-7),
+                "axis {axis} by a step"
+            );
+        }
+    }
+}
