@@ -1,4 +1,5 @@
-//! Every conservative mode is exact on real third-party models: every model
+//! Every conservative mode is exact on real third-party models, and no GPU
+//! walk draws more than `vfc` in any frame: every model
 //! in ../shared/models (beside the project root; CI has it too), with its
 //! path file where one sits beside it (`NAME.*.json`, the paths its
 //! failures were found on) or else a short generated path, on every backend
@@ -44,7 +45,25 @@ fn every_conservative_mode_is_exact_on_every_shared_model() {
                 .collect();
             let out = run_modes(gpu, &scene, &hierarchy, &path, &mut cullers, Resolution::DEFAULT);
             assert_eq!(out.rows.len(), cullers.len() * path.frames as usize);
+            let vfc_triangles = |frame: u32| {
+                out.rows
+                    .iter()
+                    .find(|r| r.mode == "vfc" && r.frame == frame)
+                    .map(|r| r.triangles_drawn)
+            };
             for row in &out.rows {
+                // A GPU walk draws nothing the frustum leaves out.
+                let walk = row.traversal.drawn_early + row.traversal.drawn_late > 0;
+                if let Some(vfc) = vfc_triangles(row.frame).filter(|&vfc| walk && row.triangles_drawn > vfc) {
+                    failures.push(format!(
+                        "{} on {}: {} frame {}: {} triangles, vfc {vfc}",
+                        model.display(),
+                        gpu.adapter.backend,
+                        row.mode,
+                        row.frame,
+                        row.triangles_drawn
+                    ));
+                }
                 if row.error_pixels != Some(0) || row.missed_objects != Some(0) {
                     failures.push(format!(
                         "{} on {}: {} frame {}: {:?} wrong pixels, {:?} missed",
@@ -69,7 +88,7 @@ fn every_conservative_mode_is_exact_on_every_shared_model() {
     }
     assert!(
         failures.is_empty(),
-        "{} frames not exact:\n{}",
+        "{} frames not exact or drawing more than vfc:\n{}",
         failures.len(),
         failures.join("\n")
     );
