@@ -24,6 +24,9 @@ use crate::scene::{MeshGroup, SceneBuilder, TriangleSoup};
 
 /// Movers beyond this are surely a mistake.
 const MAX_MOVERS: u64 = 100_000;
+/// Props: enough objects to measure culling cost per object at a game
+/// level's instance count and beyond.
+const MAX_PROPS: u64 = 1_000_000;
 /// Side of a lot; a block holds 2×2 lots.
 const LOT: f64 = 32.0;
 const BLOCK: f64 = 2.0 * LOT;
@@ -44,6 +47,9 @@ pub struct CityParams {
     pub seed: u64,
     /// Cars driving round the blocks (001 §4's moving objects).
     pub movers: u32,
+    /// Small street furniture (bollards, bins, lamp posts) on the
+    /// pavements round the blocks: many objects of a few triangles each.
+    pub props: u32,
 }
 
 impl Default for CityParams {
@@ -54,6 +60,7 @@ impl Default for CityParams {
             blocks: 8,
             seed: 1,
             movers: 0,
+            props: 0,
         }
     }
 }
@@ -61,31 +68,37 @@ impl Default for CityParams {
 impl CityParams {
     pub(super) fn from_params(params: &Params) -> Result<Self, String> {
         let d = CityParams::default();
-        let (mut blocks, mut seed, mut movers) = (u64::from(d.blocks), d.seed, u64::from(d.movers));
+        let (mut blocks, mut seed) = (u64::from(d.blocks), d.seed);
+        let (mut movers, mut props) = (u64::from(d.movers), u64::from(d.props));
         read_params(
             params,
             &mut [
                 ("blocks", &mut blocks, 1..=64),
                 ("seed", &mut seed, 0..=u64::MAX),
                 ("movers", &mut movers, 0..=MAX_MOVERS),
+                ("props", &mut props, 0..=MAX_PROPS),
             ],
         )?;
         Ok(CityParams {
             blocks: blocks as u32,
             seed,
             movers: movers as u32,
+            props: props as u32,
         })
     }
 
-    /// The canonical spec, with every parameter spelled out (movers only
-    /// when there are some, so static specs read as before).
+    /// The canonical spec, with every parameter spelled out (movers and
+    /// props only when there are some, so specs without them read as
+    /// before).
     pub fn spec(&self) -> String {
-        let movers = if self.movers > 0 {
-            format!(",movers={}", self.movers)
-        } else {
-            String::new()
-        };
-        format!("city:blocks={},seed={}{movers}", self.blocks, self.seed)
+        let some = |key: &str, n: u32| if n > 0 { format!(",{key}={n}") } else { String::new() };
+        format!(
+            "city:blocks={},seed={}{}{}",
+            self.blocks,
+            self.seed,
+            some("movers", self.movers),
+            some("props", self.props)
+        )
     }
 }
 
@@ -114,6 +127,7 @@ pub fn generate(p: &CityParams, builder: &mut SceneBuilder) {
     parked_cars(n, &models, &mut rng, builder);
     // Their own generator: adding movers leaves the static city as it was.
     moving_cars(n, p.movers, &models, &mut Rng::new(p.seed ^ 0x6d6f_7665), builder);
+    props(n, p.props, &mut Rng::new(p.seed ^ 0x7072_6f70), builder);
     let (m, mx) = (n / 2, (n / 2).max(1));
     let at = |x: f64, z: f64| DVec3::new(x, EYE_HEIGHT, z);
     builder.set_walk_hint(vec![
@@ -293,6 +307,50 @@ fn parked_cars(n: u32, models: &[MeshGroup], rng: &mut Rng, builder: &mut SceneB
     }
 }
 
+/// `count` props on the pavements: each on a random side of a random block,
+/// 0.4–1 m inside its kerb, where no building stands (a shell's pilasters
+/// keep 1.7 m from a lot's edge) and no car drives or parks. Three shared meshes,
+/// so the scene grows in objects, not in meshes.
+fn props(n: u32, count: u32, rng: &mut Rng, builder: &mut SceneBuilder) {
+    if count == 0 {
+        return;
+    }
+    let models: Vec<MeshGroup> = [("bollard", 0.25, 1.0), ("bin", 0.6, 0.9), ("lamp", 0.2, 4.5)]
+        .iter()
+        .map(|&(name, side, height)| {
+            let mut soup = TriangleSoup::default();
+            cuboid(
+                &mut soup,
+                DVec3::new(-side / 2.0, 0.0, -side / 2.0),
+                DVec3::new(side / 2.0, height, side / 2.0),
+            );
+            mesh(builder, name, &soup)
+        })
+        .collect();
+    for k in 0..count {
+        let block = DVec3::new(
+            f64::from(rng.int(0, n - 1)) * PITCH,
+            0.15,
+            f64::from(rng.int(0, n - 1)) * PITCH,
+        );
+        let along = rng.range(0.5, BLOCK - 0.5);
+        let inside = rng.range(0.4, 1.0);
+        let at = match rng.int(0, 3) {
+            0 => DVec3::new(along, 0.0, inside),
+            1 => DVec3::new(along, 0.0, BLOCK - inside),
+            2 => DVec3::new(inside, 0.0, along),
+            _ => DVec3::new(BLOCK - inside, 0.0, along),
+        };
+        let model = &models[rng.int(0, models.len() as u32 - 1) as usize];
+        place(
+            builder,
+            &format!("prop{k}"),
+            model,
+            DAffine3::from_translation(block + at),
+        );
+    }
+}
+
 /// `count` cars driving round blocks at 0.3–0.6 m a frame (9–18 m/s at 30
 /// frames a second), each on a loop just inside the centre lines of the
 /// streets round its block, half of them clockwise.
@@ -348,6 +406,7 @@ fn car(length: f64, width: f64, height: f64) -> TriangleSoup {
 
 #[cfg(test)]
 mod tests {
+    use super::{BLOCK, PITCH};
     use crate::scene::{LoadOptions, SceneSpec, load};
 
     #[test]
@@ -384,6 +443,43 @@ mod tests {
         }
         assert!(s.objects.iter().any(|o| o.name.starts_with("carx")));
         assert!(s.walk_hint.as_ref().is_some_and(|w| w.len() == 3));
+    }
+
+    #[test]
+    fn props_stand_on_the_pavements_and_leave_the_city_alone() {
+        let load_spec = |spec: &str| load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).unwrap();
+        let city = load_spec("city:blocks=2");
+        let with = load_spec("city:blocks=2,props=5000");
+        assert_eq!(with.source, "builtin:city:blocks=2,seed=1,props=5000");
+        assert_eq!(with.objects.len(), city.objects.len() + 5000);
+        let props: Vec<_> = with.objects.iter().filter(|o| o.name.starts_with("prop")).collect();
+        assert_eq!(props.len(), 5000);
+        for (a, b) in city.objects.iter().zip(&with.objects) {
+            assert_eq!((&a.name, a.bounds), (&b.name, b.bounds), "the city is as it was");
+        }
+        // On a pavement: clear of every building shell and of the streets.
+        let shells: Vec<_> = city.objects.iter().filter(|o| o.name.ends_with("/shell")).collect();
+        for p in &props {
+            let on_block = |x: f64| (x % PITCH) >= 0.0 && (x % PITCH) <= BLOCK;
+            assert!(
+                on_block(p.bounds.min.x) && on_block(p.bounds.max.x),
+                "{}: {:?}",
+                p.name,
+                p.bounds
+            );
+            assert!(
+                on_block(p.bounds.min.z) && on_block(p.bounds.max.z),
+                "{}: {:?}",
+                p.name,
+                p.bounds
+            );
+            for s in &shells {
+                let apart = (0..3).any(|k| p.bounds.max[k] <= s.bounds.min[k] || p.bounds.min[k] >= s.bounds.max[k]);
+                assert!(apart, "{} stands in {}", p.name, s.name);
+            }
+        }
+        let mesh_count = |s: &crate::scene::Scene| s.meshes.len();
+        assert_eq!(mesh_count(&with), mesh_count(&city) + 3, "props share three meshes");
     }
 
     #[test]

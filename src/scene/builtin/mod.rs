@@ -18,7 +18,7 @@ pub use forest::ForestParams;
 pub const SCENES: &[(&str, &str)] = &[
     (
         "city",
-        "grid of closed buildings with furniture inside and cars in the streets: heavy occlusion (params: blocks, seed, movers)",
+        "grid of closed buildings with furniture inside and cars in the streets: heavy occlusion (params: blocks, seed, movers, props)",
     ),
     (
         "forest",
