@@ -12,9 +12,6 @@ use crate::report::files::ReportError;
 use crate::report::summary::Fingerprint;
 use crate::text::{markdown, slug};
 
-/// Shows one metric of a [`ModeResult`] in a table cell.
-type Cell = fn(&ModeResult) -> String;
-
 /// The merged report.md.
 pub fn render(merged: &Merged) -> String {
     let mut out = String::new();
@@ -35,93 +32,108 @@ pub fn render(merged: &Merged) -> String {
         let _ = writeln!(w, "**A partial matrix**: {}.\n", markdown(&partial.describe()));
     }
     for run in &merged.runs {
-        let _ = writeln!(w, "## {}\n", markdown(&run.name));
-        let _ = writeln!(
-            w,
-            "Scene {}, path {}, {}, {} frames.\n",
-            markdown(&run.scene),
-            markdown(&run.path),
-            run.resolution,
-            run.frames
-        );
-        let _ = write!(w, "| mode | metric |");
-        for a in &run.adapters {
-            let _ = write!(w, " {} |", markdown(&a.label()));
-        }
-        let _ = write!(w, "\n|---|---|");
-        for _ in &run.adapters {
-            let _ = write!(w, "---:|");
-        }
-        let _ = writeln!(w);
-        let metrics: [(&str, Cell); 7] = [
-            ("frame ms (mean)", |r| number(r.frame_ms, 3)),
-            ("× oracle", |r| {
-                r.ratio_to_oracle.map_or("–".into(), |v| format!("{v:.2}×"))
-            }),
-            ("wrong pixels", |r| number(r.error_pixels.map(|v| v as f64), 0)),
-            ("objects", |r| number(r.objects_drawn, 1)),
-            ("triangles", |r| number(r.triangles_drawn, 1)),
-            ("queries", |r| number(r.queries, 1)),
-            ("round trips", |r| number(r.round_trips, 1)),
-        ];
-        for row in &run.modes {
-            for (k, (metric, show)) in metrics.iter().enumerate() {
-                let mode = if k == 0 { markdown(&row.mode) } else { String::new() };
-                let _ = write!(w, "| {mode} | {metric} |");
-                for (a, result) in run.adapters.iter().zip(&row.results) {
-                    let cell = match result {
-                        Some(r) => show(r),
-                        None if a.skipped.iter().any(|s| s.mode == row.mode) => "skipped".into(),
-                        None => "not run".into(),
-                    };
-                    let _ = write!(w, " {cell} |");
-                }
-                let _ = writeln!(w);
-            }
-        }
-        let _ = writeln!(w);
-        let unmeasured: Vec<String> = run
-            .adapters
-            .iter()
-            .filter(|a| !a.error_measured)
-            .map(|a| markdown(&a.label()))
-            .collect();
-        if !unmeasured.is_empty() {
-            let _ = writeln!(
-                w,
-                "Wrong pixels not measured on {} (run with --no-error).\n",
-                unmeasured.join(", ")
-            );
-        }
-        match &run.chart {
-            Some(chart) => {
-                let _ = writeln!(w, "![ratio to the oracle per adapter]({chart})\n");
-            }
-            None => {
-                let _ = writeln!(
-                    w,
-                    "No adapter ran the oracle, so there is no ratio to it (add `oracle` to the modes).\n"
-                );
-            }
-        }
-        for d in &run.disagreements {
-            let _ = writeln!(
-                w,
-                "- **{}**: a counter that does not depend on the adapter, so one backend's path has a bug.",
-                markdown(&d.describe())
-            );
-        }
-        if !run.disagreements.is_empty() {
-            let _ = writeln!(w);
-        }
-        let sources: Vec<String> = run
-            .adapters
-            .iter()
-            .map(|a| format!("{} from {}", a.folder, markdown(&a.merged_from)))
-            .collect();
-        let _ = writeln!(w, "Run folders: {}.\n", sources.join("; "));
+        run_section(w, run);
     }
     out
+}
+
+/// One run's section of report.md: what it measured, its table, what was
+/// not measured, its chart, the counters adapters disagree on and where
+/// each column came from.
+fn run_section(w: &mut String, run: &MergedRun) {
+    let _ = writeln!(w, "## {}\n", markdown(&run.name));
+    let _ = writeln!(
+        w,
+        "Scene {}, path {}, {}, {} frames.\n",
+        markdown(&run.scene),
+        markdown(&run.path),
+        run.resolution,
+        run.frames
+    );
+    mode_table(w, run);
+    let unmeasured: Vec<String> = run
+        .adapters
+        .iter()
+        .filter(|a| !a.error_measured)
+        .map(|a| markdown(&a.label()))
+        .collect();
+    if !unmeasured.is_empty() {
+        let _ = writeln!(
+            w,
+            "Wrong pixels not measured on {} (run with --no-error).\n",
+            unmeasured.join(", ")
+        );
+    }
+    match &run.chart {
+        Some(chart) => {
+            let _ = writeln!(w, "![ratio to the oracle per adapter]({chart})\n");
+        }
+        None => {
+            let _ = writeln!(
+                w,
+                "No adapter ran the oracle, so there is no ratio to it (add `oracle` to the modes).\n"
+            );
+        }
+    }
+    for d in &run.disagreements {
+        let _ = writeln!(
+            w,
+            "- **{}**: a counter that does not depend on the adapter, so one backend's path has a bug.",
+            markdown(&d.describe())
+        );
+    }
+    if !run.disagreements.is_empty() {
+        let _ = writeln!(w);
+    }
+    let sources: Vec<String> = run
+        .adapters
+        .iter()
+        .map(|a| format!("{} from {}", a.folder, markdown(&a.merged_from)))
+        .collect();
+    let _ = writeln!(w, "Run folders: {}.\n", sources.join("; "));
+}
+
+/// Shows one metric of a [`ModeResult`] in a table cell.
+type Cell = fn(&ModeResult) -> String;
+
+/// A run's table: a row per mode and metric, a column per adapter.
+fn mode_table(w: &mut String, run: &MergedRun) {
+    let _ = write!(w, "| mode | metric |");
+    for a in &run.adapters {
+        let _ = write!(w, " {} |", markdown(&a.label()));
+    }
+    let _ = write!(w, "\n|---|---|");
+    for _ in &run.adapters {
+        let _ = write!(w, "---:|");
+    }
+    let _ = writeln!(w);
+    let metrics: [(&str, Cell); 7] = [
+        ("frame ms (mean)", |r| number(r.frame_ms, 3)),
+        ("× oracle", |r| {
+            r.ratio_to_oracle.map_or("–".into(), |v| format!("{v:.2}×"))
+        }),
+        ("wrong pixels", |r| number(r.error_pixels.map(|v| v as f64), 0)),
+        ("objects", |r| number(r.objects_drawn, 1)),
+        ("triangles", |r| number(r.triangles_drawn, 1)),
+        ("queries", |r| number(r.queries, 1)),
+        ("round trips", |r| number(r.round_trips, 1)),
+    ];
+    for row in &run.modes {
+        for (k, (metric, show)) in metrics.iter().enumerate() {
+            let mode = if k == 0 { markdown(&row.mode) } else { String::new() };
+            let _ = write!(w, "| {mode} | {metric} |");
+            for (a, result) in run.adapters.iter().zip(&row.results) {
+                let cell = match result {
+                    Some(r) => show(r),
+                    None if a.skipped.iter().any(|s| s.mode == row.mode) => "skipped".into(),
+                    None => "not run".into(),
+                };
+                let _ = write!(w, " {cell} |");
+            }
+            let _ = writeln!(w);
+        }
+    }
+    let _ = writeln!(w);
 }
 
 /// Draws `run`'s ratio-to-oracle chart into `staging`'s charts folder and
