@@ -8,7 +8,7 @@ use std::path::Path;
 use anyhow::Context as _;
 use occlu::bench::{BenchOutcome, execute};
 use occlu::config::{BenchConfig, BenchPlan};
-use occlu::matrix::{Matrix, Shard};
+use occlu::matrix::{Matrix, MatrixRun, Shard};
 use occlu::scene::SceneSpec;
 
 use super::args::BenchArgs;
@@ -53,30 +53,44 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
     };
     if !matrix.lists_runs() && args.shard.is_none() {
         let plan = matrix.single_run(&flags)?;
-        let model = match &plan.scene {
-            SceneSpec::File(model) => Some(model.as_path()),
-            SceneSpec::Builtin(_) => None,
-        };
-        let inputs: Vec<&Path> = [model, plan.path.as_deref(), args.config.as_deref()]
-            .into_iter()
-            .flatten()
-            .collect();
-        for output in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
-            occlu::report::refuse_input_as_output(output, &inputs)?;
-        }
-        if let (Some(export), Some(trace)) = (&plan.export_github_benchmark, &plan.trace) {
-            occlu::report::refuse_one_file_twice(export, trace)?;
-        }
-        let outcome = bench_one(&plan, &note, quiet, format!("{} modes", plan.modes.len()))?;
-        return if args.json {
-            emit(&(serde_json::to_string_pretty(&outcome.summary)? + "\n"))
-        } else {
-            emit(&occlu::report::render_markdown(&outcome.summary))
-        };
+        return bench_single(&plan, args.config.as_deref(), &note, quiet, args.json);
     }
     // Every run is checked before any runs, on every shard alike.
     let runs = matrix.plan(&flags)?;
-    let shard = args.shard.unwrap_or(Shard::WHOLE);
+    bench_shard(&runs, args.shard.unwrap_or(Shard::WHOLE), &note, quiet, args.json)
+}
+
+/// Runs a configuration that lists no runs (read from `config`, if any):
+/// its report.md, or its summary.json with `json`, on stdout.
+fn bench_single(
+    plan: &BenchPlan,
+    config: Option<&Path>,
+    note: &dyn Fn(String),
+    quiet: bool,
+    json: bool,
+) -> anyhow::Result<()> {
+    let model = match &plan.scene {
+        SceneSpec::File(model) => Some(model.as_path()),
+        SceneSpec::Builtin(_) => None,
+    };
+    let inputs: Vec<&Path> = [model, plan.path.as_deref(), config].into_iter().flatten().collect();
+    for output in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
+        occlu::report::refuse_input_as_output(output, &inputs)?;
+    }
+    if let (Some(export), Some(trace)) = (&plan.export_github_benchmark, &plan.trace) {
+        occlu::report::refuse_one_file_twice(export, trace)?;
+    }
+    let outcome = bench_one(plan, note, quiet, format!("{} modes", plan.modes.len()))?;
+    if json {
+        emit(&(serde_json::to_string_pretty(&outcome.summary)? + "\n"))
+    } else {
+        emit(&occlu::report::render_markdown(&outcome.summary))
+    }
+}
+
+/// Runs `shard`'s share of a matrix's `runs`, one after the other: a table
+/// of them, or a list of their summaries with `json`, on stdout.
+fn bench_shard(runs: &[MatrixRun], shard: Shard, note: &dyn Fn(String), quiet: bool, json: bool) -> anyhow::Result<()> {
     let mine: Vec<_> = runs
         .iter()
         .enumerate()
@@ -89,7 +103,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
             occlu::text::count(runs.len(), "run")
         ));
         // --json still prints a list, of no summaries.
-        return if args.json { emit("[]\n") } else { Ok(()) };
+        return if json { emit("[]\n") } else { Ok(()) };
     }
     let mut summaries = Vec::new();
     let mut table = String::from("| run | scene | path | adapter | folder |\n|---|---|---|---|---|\n");
@@ -102,7 +116,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
             run.name
         ));
         let outcome =
-            bench_one(&run.plan, &note, quiet, run.name.clone()).with_context(|| format!("run {}", run.name))?;
+            bench_one(&run.plan, note, quiet, run.name.clone()).with_context(|| format!("run {}", run.name))?;
         let s = &outcome.summary;
         let _ = writeln!(
             table,
@@ -115,7 +129,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<()> {
         );
         summaries.push(outcome.summary);
     }
-    if args.json {
+    if json {
         emit(&(serde_json::to_string_pretty(&summaries)? + "\n"))
     } else {
         emit(&table)
