@@ -13,20 +13,20 @@
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use crate::animation::{AnimationError, AnimationOptions, DEFAULT_SCALE, Filmstrip, FrameRange, Reel};
+use crate::animation::{Animation, AnimationError, AnimationOptions, DEFAULT_SCALE, Filmstrip, FrameRange, Reel};
 use crate::camera::generate::{PLANNING_TESTS, default_path_heard};
 use crate::camera::path::{CameraPath, PathError};
-use crate::config::BenchPlan;
+use crate::config::{BenchPlan, ModeRun};
 use crate::cull::{Culler, Labeled, ModeError, ModeId};
 use crate::gpu::{AdapterReport, GpuContext, GpuError};
 use crate::hierarchy::{Hierarchy, HierarchyParams};
-use crate::measure::{FrameStats, FrameTimeline, MissedObject, ModeDescription, summarize};
+use crate::measure::{FrameStats, FrameTimeline, MissedObject, ModeDescription, ModeSummary, summarize};
 use crate::picture::Look;
 use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::report::{
-    Fingerprint, MissedSummary, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts, SceneSummary,
-    SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output, refuse_input_as_output,
-    refuse_result_file, trace_json, write_results, write_whole,
+    Fingerprint, MissedSummary, OutputLock, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts,
+    SceneSummary, SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output,
+    refuse_input_as_output, refuse_result_file, trace_json, write_results, write_whole,
 };
 use crate::scene::{Scene, SceneError};
 use crate::session::{RunOptions, Session, ms};
@@ -209,6 +209,70 @@ pub fn execute(
     // a long scene load, not after the run.
     let path_file = plan.path.as_deref().map(CameraPath::load).transpose()?;
     plan.backend.backends()?;
+    // Held until the results are written: no second run writes here.
+    let _claim = claim_outputs(plan)?;
+    let params = HierarchyParams::default();
+    let (mut world, load_ms, build_ms) = load_world(plan, &params)?;
+    let (scene, hierarchy) = (&world.scene, &world.hierarchy);
+    go_on(events(BenchEvent::Loaded {
+        scene,
+        hierarchy,
+        load_ms,
+        build_ms,
+    }))?;
+    let (path, path_summary) = camera_path(plan, path_file, scene, events)?;
+    go_on(events(BenchEvent::Path(&path_summary, path.frames)))?;
+    let gpu = GpuContext::new(plan.backend)?;
+    go_on(events(BenchEvent::Adapter(&gpu.adapter)))?;
+    let (runs, skipped) = runs_on(plan, &gpu);
+    for s in &skipped {
+        go_on(events(BenchEvent::Skipped {
+            mode: &s.mode,
+            reason: &s.reason,
+        }))?;
+    }
+    let mut cullers = create_cullers(&runs, scene)?;
+    let facts = SceneFacts::of(scene, hierarchy, load_ms, build_ms);
+    let (output, animation) = record(plan, &gpu, &mut world, &path, &mut cullers, events)?;
+    let (modes, verdict) = mode_summaries(plan, &runs, &cullers, &output.rows);
+    let mut summary = Summary {
+        schema_version: SCHEMA_VERSION,
+        tool: ToolInfo::current(),
+        run: plan.run.clone(),
+        matrix: plan.matrix,
+        adapter: gpu.adapter.clone(),
+        scene: SceneSummary {
+            facts,
+            hierarchy_params: params,
+            upload_ms: output.upload_ms,
+        },
+        path: path_summary,
+        resolution: plan.resolution,
+        frames: path.frames,
+        warmup: plan.warmup,
+        error_measured: plan.measure_error,
+        verdict,
+        modes,
+        skipped,
+        sweep: plan.sweep.as_ref().map(|s| SweepSummary {
+            mode: s.mode.to_string(),
+            key: s.key.clone(),
+            values: s.values.clone(),
+        }),
+        missed: MissedSummary::of(&output.missed),
+        frames_csv: None,
+        animation: None,
+    };
+    let png = animation.as_ref().map(|a| a.png.as_slice());
+    let files = write_results(&plan.out, &mut summary, &output.rows, &output.missed, png)?;
+    write_extras(plan, &summary, &output)?;
+    Ok(BenchOutcome { summary, files })
+}
+
+/// Claims `plan`'s --out for the run (refused when it holds a merged
+/// result) and checks that --export-github-benchmark and --trace can be
+/// written, and not over one of the run's own result files.
+fn claim_outputs(plan: &BenchPlan) -> Result<OutputLock, BenchError> {
     // A merged folder's report.md and this run's would share a name.
     let merged = plan.out.join("merged.json");
     if merged.exists() {
@@ -217,12 +281,18 @@ pub fn execute(
         );
         return Err(ReportError::at(&merged)(error).into());
     }
-    // Held until the results are written: no second run writes here.
-    let _claim = prepare_output(&plan.out)?;
+    let claim = prepare_output(&plan.out)?;
     for path in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
         refuse_result_file(path, &plan.out)?;
         check_writable(path)?;
     }
+    Ok(claim)
+}
+
+/// The scene loaded and its hierarchy built with `params`, and how many
+/// milliseconds each took; an extra output that is one of the files the
+/// scene was read from is refused.
+fn load_world(plan: &BenchPlan, params: &HierarchyParams) -> Result<(World, f64, f64), BenchError> {
     let start = Instant::now();
     let scene = crate::scene::load(&plan.scene, &plan.load)?;
     let load_ms = ms(start.elapsed());
@@ -232,18 +302,21 @@ pub fn execute(
         refuse_input_as_output(path, &scene.files)?;
     }
     let start = Instant::now();
-    let params = HierarchyParams::default();
-    let hierarchy = Hierarchy::build(&scene.objects, &params);
+    let hierarchy = Hierarchy::build(&scene.objects, params);
     let build_ms = ms(start.elapsed());
-    let mut world = World::new(scene, hierarchy);
-    let (scene, hierarchy) = (&world.scene, &world.hierarchy);
-    go_on(events(BenchEvent::Loaded {
-        scene,
-        hierarchy,
-        load_ms,
-        build_ms,
-    }))?;
+    Ok((World::new(scene, hierarchy), load_ms, build_ms))
+}
 
+/// The run's camera path (`path_file`, or the default path planned for
+/// `scene`, resampled to --frames) and its summary, with the frames whose
+/// geometry reaches within the near plane counted (not counted when the
+/// count spent its budget).
+fn camera_path(
+    plan: &BenchPlan,
+    path_file: Option<CameraPath>,
+    scene: &Scene,
+    events: &mut dyn FnMut(BenchEvent) -> ControlFlow<()>,
+) -> Result<(CameraPath, PathSummary), BenchError> {
     let (path, generated) = match path_file {
         Some(path) => (path, None),
         None => {
@@ -284,7 +357,7 @@ pub fn execute(
         counted => counted.ok(),
     };
     drop(caster);
-    let path_summary = PathSummary {
+    let summary = PathSummary {
         source: path.source.clone(),
         keyframes: path.keyframes.len(),
         near: path.near,
@@ -292,13 +365,16 @@ pub fn execute(
         frames_with_geometry_within_near: within_near,
         cameras: Some(Fingerprint::of_path(&path)),
     };
-    go_on(events(BenchEvent::Path(&path_summary, path.frames)))?;
-    let gpu = GpuContext::new(plan.backend)?;
-    go_on(events(BenchEvent::Adapter(&gpu.adapter)))?;
+    Ok((path, summary))
+}
+
+/// The plan's runs the adapter can run, and the modes it cannot, each once
+/// with why.
+fn runs_on(plan: &BenchPlan, gpu: &GpuContext) -> (Vec<ModeRun>, Vec<SkippedMode>) {
     let mut skipped: Vec<SkippedMode> = Vec::new();
     let mut runs = plan.runs();
     runs.retain(|run| {
-        let Some(reason) = run.mode.info().unsupported_on(&gpu) else {
+        let Some(reason) = run.mode.info().unsupported_on(gpu) else {
             return true;
         };
         if !skipped.iter().any(|s| s.mode == run.mode.name()) {
@@ -309,14 +385,13 @@ pub fn execute(
         }
         false
     });
-    for s in &skipped {
-        go_on(events(BenchEvent::Skipped {
-            mode: &s.mode,
-            reason: &s.reason,
-        }))?;
-    }
-    let mut cullers = runs
-        .iter()
+    (runs, skipped)
+}
+
+/// A culler for each run, under the run's label when it is not the mode's
+/// name (a sweep's value).
+fn create_cullers(runs: &[ModeRun], scene: &Scene) -> Result<Vec<Box<dyn Culler>>, ModeError> {
+    runs.iter()
         .map(|run| {
             let culler = run.mode.create(scene, &run.params)?;
             Ok(if run.label == run.mode.name() {
@@ -328,13 +403,24 @@ pub fn execute(
                 }) as Box<dyn Culler>
             })
         })
-        .collect::<Result<Vec<_>, ModeError>>()?;
+        .collect()
+}
+
+/// Runs `cullers` over `path` (the frame loop, [`run`]), says when nothing
+/// was visible, and encodes the animation when `plan` asks for one.
+fn record(
+    plan: &BenchPlan,
+    gpu: &GpuContext,
+    world: &mut World,
+    path: &CameraPath,
+    cullers: &mut [Box<dyn Culler>],
+    events: &mut dyn FnMut(BenchEvent) -> ControlFlow<()>,
+) -> Result<(RunOutput, Option<Animation>), BenchError> {
     let options = RunOptions {
         warmup: plan.warmup,
         resolution: plan.resolution,
         measure_error: plan.measure_error,
     };
-    let facts = SceneFacts::of(scene, hierarchy, load_ms, build_ms);
     // The overview shows what each mode culled: the point of the animation.
     let animation = plan.animate.then_some(AnimationOptions {
         look: Look {
@@ -348,10 +434,10 @@ pub fn execute(
         true_colour: false,
     });
     let mut output = run(
-        &gpu,
-        &mut world,
-        &path,
-        &mut cullers,
+        gpu,
+        world,
+        path,
+        cullers,
         &options,
         animation.as_ref(),
         &mut |done, total| events(BenchEvent::Frame { done, total }),
@@ -364,50 +450,36 @@ pub fn execute(
         .take()
         .map(|reel| reel.encode(&mut |done, total| events(BenchEvent::Encoding { done, total })))
         .transpose()?;
+    Ok((output, animation))
+}
 
+/// Each run's statistics over `rows`, and the verdict on them.
+fn mode_summaries(
+    plan: &BenchPlan,
+    runs: &[ModeRun],
+    cullers: &[Box<dyn Culler>],
+    rows: &[FrameStats],
+) -> (Vec<ModeSummary>, Option<Verdict>) {
     let descriptions: Vec<ModeDescription> = runs
         .iter()
-        .zip(&cullers)
+        .zip(cullers)
         .map(|(run, culler)| ModeDescription {
             name: run.label.clone(),
             conservative: run.mode.info().conservative,
             parameters: culler.parameters(),
         })
         .collect();
-    let modes = summarize(&output.rows, &descriptions, plan.resolution.pixels());
+    let modes = summarize(rows, &descriptions, plan.resolution.pixels());
     let ids: Vec<ModeId> = runs.iter().map(|run| run.mode).collect();
-    let mut summary = Summary {
-        schema_version: SCHEMA_VERSION,
-        tool: ToolInfo::current(),
-        run: plan.run.clone(),
-        matrix: plan.matrix,
-        adapter: gpu.adapter.clone(),
-        scene: SceneSummary {
-            facts,
-            hierarchy_params: params,
-            upload_ms: output.upload_ms,
-        },
-        path: path_summary,
-        resolution: plan.resolution,
-        frames: path.frames,
-        warmup: plan.warmup,
-        error_measured: plan.measure_error,
-        verdict: Verdict::of(&modes, &ids),
-        modes,
-        skipped,
-        sweep: plan.sweep.as_ref().map(|s| SweepSummary {
-            mode: s.mode.to_string(),
-            key: s.key.clone(),
-            values: s.values.clone(),
-        }),
-        missed: MissedSummary::of(&output.missed),
-        frames_csv: None,
-        animation: None,
-    };
-    let png = animation.as_ref().map(|a| a.png.as_slice());
-    let files = write_results(&plan.out, &mut summary, &output.rows, &output.missed, png)?;
+    let verdict = Verdict::of(&modes, &ids);
+    (modes, verdict)
+}
+
+/// The files `plan` asks for beside the results: github-action-benchmark's
+/// entries and the trace.
+fn write_extras(plan: &BenchPlan, summary: &Summary, output: &RunOutput) -> Result<(), BenchError> {
     if let Some(path) = &plan.export_github_benchmark {
-        let entries = crate::report::github::entries(&summary);
+        let entries = crate::report::github::entries(summary);
         let json = serde_json::to_string_pretty(&entries).expect("entries serialise: strings and numbers") + "\n";
         write_whole(path, json.as_bytes())?;
     }
@@ -421,5 +493,5 @@ pub fn execute(
             trace_json(&summary.adapter, &run, &output.rows, &output.timelines).as_bytes(),
         )?;
     }
-    Ok(BenchOutcome { summary, files })
+    Ok(())
 }

@@ -21,13 +21,14 @@ use glam::DVec3;
 
 use crate::bounds::Aabb;
 use crate::camera::path::CameraPath;
-use crate::camera::{Camera, Containment, look_rotation};
+use crate::camera::{Camera, Containment, Frustum, look_rotation};
 use crate::cull::{CellDepths, Culler};
 use crate::gpu::{
     Draws, GpuContext, GpuError, LinePainter, LineVertex, RenderTargets, Resolution, picture_target, read_rgb,
 };
 use crate::measure::MissedObject;
-use crate::scene::{Focus, Scene};
+use crate::object_set::ObjectSet;
+use crate::scene::{Focus, Object, Scene};
 use crate::session::{RunOptions, Session};
 use crate::world::World;
 
@@ -192,122 +193,164 @@ impl<'g> Painter<'g> {
         camera: &Camera,
         cullers: &[Box<dyn Culler + '_>],
     ) -> Result<Vec<Picture>, GpuError> {
-        let (gpu, look, resolution) = (self.gpu, self.look, self.look.resolution);
-        let scene = &world.scene;
-        let frustum = camera.frustum();
         // Each mode's own view first: the frame's camera is still in the
         // uniform that depth complexity and outlines are drawn with.
         let mut pictures = Vec::with_capacity(cullers.len());
         for (k, culler) in cullers.iter().enumerate() {
-            let drawn: Vec<u32> = session.drawn[k].iter().collect();
-            let culled = scene
-                .objects
-                .iter()
-                .enumerate()
-                .filter(|&(i, o)| {
-                    !session.drawn[k].contains(i as u32) && frustum.classify(&o.bounds) != Containment::Outside
-                })
-                .count();
-            let mut rgb = if look.heat {
-                let target = picture_target(gpu, resolution);
-                let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                let view = target.create_view(&Default::default());
-                session.renderer.encode_depth_complexity(&mut encoder, &view, &drawn);
-                gpu.queue.submit([encoder.finish()]);
-                heat_colours(&read_rgb(gpu, &target, resolution))
-            } else {
-                session.colour(k).expect("the painter keeps every mode's colour")
-            };
-            let occluders = look.occluders.then(|| culler.occluder_depths()).flatten();
-            if let Some(depths) = &occluders {
-                paint_occluder_depths(depths, resolution, &mut rgb);
-            }
-            let wrong = look.show_missed.then(|| {
-                let pixels = paint_wrong_pixels(session, k, &mut rgb);
-                let objects: Vec<MissedObject> = session
-                    .missed
-                    .iter()
-                    .filter(|m| m.mode == culler.name() && m.frame == frame)
-                    .cloned()
-                    .collect();
-                let mut lines = Vec::new();
-                for m in &objects {
-                    box_lines(
-                        &scene.objects[m.object as usize].bounds,
-                        camera.eye,
-                        MAGENTA,
-                        &mut lines,
-                    );
-                }
-                let target = picture_target(gpu, resolution);
-                self.lines.draw(gpu, &target.create_view(&Default::default()), &lines);
-                let outlines = read_rgb(gpu, &target, resolution);
-                for (pixel, line) in rgb.chunks_mut(3).zip(outlines.chunks(3)) {
-                    if line != [0, 0, 0] {
-                        pixel.copy_from_slice(line);
-                    }
-                }
-                WrongInFrame { pixels, objects }
-            });
-            pictures.push(Picture {
-                width: resolution.width,
-                height: resolution.height,
-                rgb,
-                drawn: drawn.len(),
-                culled_in_frustum: culled,
-                wrong,
-                occluder_cells: occluders.map(|d| [d.depths.iter().filter(|&&c| c > 0.0).count(), d.depths.len()]),
-            });
+            pictures.push(self.mode_view(session, &world.scene, frame, camera, k, culler.as_ref()));
         }
-        if let Some((targets, picture)) = &self.overview {
-            // The scene from above once; each mode's frustum and culled
-            // boxes over a copy of it.
-            let above = overview_camera(scene, resolution);
-            session.renderer.set_camera(gpu, &above, resolution, &scene.objects);
-            let all: Vec<u32> = (0..scene.objects.len() as u32).collect();
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            session.renderer.encode_shaded(
-                &mut encoder,
-                targets,
-                &targets.mode_depths[0],
-                true,
-                Draws::Objects(&all),
-            );
-            gpu.queue.submit([encoder.finish()]);
-            // The frustum has no far plane: draw it out to the farthest
-            // corner of the scene, so every yellow box lies inside the red
-            // lines.
-            let reach = scene
-                .bounds
-                .corners()
-                .iter()
-                .map(|c| c.distance(camera.eye))
-                .fold(0.0, f64::max);
-            for (k, main) in pictures.iter_mut().enumerate() {
-                let mut lines = Vec::new();
-                for (i, o) in scene.objects.iter().enumerate() {
-                    if !session.drawn[k].contains(i as u32) && frustum.classify(&o.bounds) != Containment::Outside {
-                        box_lines(&o.bounds, above.eye, YELLOW, &mut lines);
-                    }
-                }
-                frustum_lines(camera, reach, above.eye, &mut lines);
-                let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                encoder.copy_texture_to_texture(
-                    targets.color_texture.as_image_copy(),
-                    picture.as_image_copy(),
-                    picture.size(),
-                );
-                gpu.queue.submit([encoder.finish()]);
-                self.lines.draw(gpu, &picture.create_view(&Default::default()), &lines);
-                let side = read_rgb(gpu, picture, resolution);
-                main.rgb = side_by_side(&main.rgb, &side, resolution);
-                main.width = 2 * resolution.width;
-            }
-        }
+        self.add_overviews(session, &world.scene, camera, &mut pictures);
         // A picture the GPU failed in shows nothing true.
-        gpu.check()?;
+        self.gpu.check()?;
         Ok(pictures)
     }
+
+    /// The session's mode `k` (`culler`) in its last frame, `frame`, as
+    /// seen from `camera`: what it drew, shaded or by depth complexity,
+    /// with the occluders and the pixels and objects it got wrong when the
+    /// look asks for them.
+    fn mode_view(
+        &self,
+        session: &mut Session,
+        scene: &Scene,
+        frame: u32,
+        camera: &Camera,
+        k: usize,
+        culler: &dyn Culler,
+    ) -> Picture {
+        let (gpu, look, resolution) = (self.gpu, self.look, self.look.resolution);
+        let drawn: Vec<u32> = session.drawn[k].iter().collect();
+        let culled = culled_in_frustum(scene, &session.drawn[k], &camera.frustum()).count();
+        let mut rgb = if look.heat {
+            let target = picture_target(gpu, resolution);
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            let view = target.create_view(&Default::default());
+            session.renderer.encode_depth_complexity(&mut encoder, &view, &drawn);
+            gpu.queue.submit([encoder.finish()]);
+            heat_colours(&read_rgb(gpu, &target, resolution))
+        } else {
+            session.colour(k).expect("the painter keeps every mode's colour")
+        };
+        let occluders = look.occluders.then(|| culler.occluder_depths()).flatten();
+        if let Some(depths) = &occluders {
+            paint_occluder_depths(depths, resolution, &mut rgb);
+        }
+        let wrong = look.show_missed.then(|| {
+            let objects: Vec<MissedObject> = session
+                .missed
+                .iter()
+                .filter(|m| m.mode == culler.name() && m.frame == frame)
+                .cloned()
+                .collect();
+            self.mark_wrong(session, scene, camera, k, objects, &mut rgb)
+        });
+        Picture {
+            width: resolution.width,
+            height: resolution.height,
+            rgb,
+            drawn: drawn.len(),
+            culled_in_frustum: culled,
+            wrong,
+            occluder_cells: occluders.map(|d| [d.depths.iter().filter(|&&c| c > 0.0).count(), d.depths.len()]),
+        }
+    }
+
+    /// Marks on `rgb` what the session's mode `k` got wrong in its last
+    /// frame: its wrong pixels in magenta, and the boxes of `objects` (the
+    /// objects it got wrong there) outlined in magenta as seen from
+    /// `camera`.
+    fn mark_wrong(
+        &self,
+        session: &mut Session,
+        scene: &Scene,
+        camera: &Camera,
+        k: usize,
+        objects: Vec<MissedObject>,
+        rgb: &mut [u8],
+    ) -> WrongInFrame {
+        let (gpu, resolution) = (self.gpu, self.look.resolution);
+        let pixels = paint_wrong_pixels(session, k, rgb);
+        let mut lines = Vec::new();
+        for m in &objects {
+            box_lines(
+                &scene.objects[m.object as usize].bounds,
+                camera.eye,
+                MAGENTA,
+                &mut lines,
+            );
+        }
+        let target = picture_target(gpu, resolution);
+        self.lines.draw(gpu, &target.create_view(&Default::default()), &lines);
+        let outlines = read_rgb(gpu, &target, resolution);
+        for (pixel, line) in rgb.chunks_mut(3).zip(outlines.chunks(3)) {
+            if line != [0, 0, 0] {
+                pixel.copy_from_slice(line);
+            }
+        }
+        WrongInFrame { pixels, objects }
+    }
+
+    /// With the overview asked for, puts the scene from above beside each
+    /// of `pictures` (the session's modes'), with the mode's frustum from
+    /// `camera` and the boxes it culled inside it: the scene drawn once,
+    /// each mode's lines over a copy of it.
+    fn add_overviews(&self, session: &mut Session, scene: &Scene, camera: &Camera, pictures: &mut [Picture]) {
+        let Some((targets, picture)) = &self.overview else {
+            return;
+        };
+        let (gpu, resolution) = (self.gpu, self.look.resolution);
+        let frustum = camera.frustum();
+        let above = overview_camera(scene, resolution);
+        session.renderer.set_camera(gpu, &above, resolution, &scene.objects);
+        let all: Vec<u32> = (0..scene.objects.len() as u32).collect();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        session.renderer.encode_shaded(
+            &mut encoder,
+            targets,
+            &targets.mode_depths[0],
+            true,
+            Draws::Objects(&all),
+        );
+        gpu.queue.submit([encoder.finish()]);
+        // The frustum has no far plane: draw it out to the farthest
+        // corner of the scene, so every yellow box lies inside the red
+        // lines.
+        let reach = scene
+            .bounds
+            .corners()
+            .iter()
+            .map(|c| c.distance(camera.eye))
+            .fold(0.0, f64::max);
+        for (k, main) in pictures.iter_mut().enumerate() {
+            let mut lines = Vec::new();
+            for o in culled_in_frustum(scene, &session.drawn[k], &frustum) {
+                box_lines(&o.bounds, above.eye, YELLOW, &mut lines);
+            }
+            frustum_lines(camera, reach, above.eye, &mut lines);
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            encoder.copy_texture_to_texture(
+                targets.color_texture.as_image_copy(),
+                picture.as_image_copy(),
+                picture.size(),
+            );
+            gpu.queue.submit([encoder.finish()]);
+            self.lines.draw(gpu, &picture.create_view(&Default::default()), &lines);
+            let side = read_rgb(gpu, picture, resolution);
+            main.rgb = side_by_side(&main.rgb, &side, resolution);
+            main.width = 2 * resolution.width;
+        }
+    }
+}
+
+/// The objects of `scene` inside `frustum` (or crossing it) that a mode
+/// did not draw (`drawn`): the ones it culled, in id order.
+fn culled_in_frustum<'s>(scene: &'s Scene, drawn: &ObjectSet, frustum: &Frustum) -> impl Iterator<Item = &'s Object> {
+    scene
+        .objects
+        .iter()
+        .enumerate()
+        .filter(|&(i, o)| !drawn.contains(i as u32) && frustum.classify(&o.bounds) != Containment::Outside)
+        .map(|(_, o)| o)
 }
 
 /// Lays `depths` over `rgb` (the pictured frame, `resolution` pixels): a

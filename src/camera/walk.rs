@@ -129,40 +129,137 @@ struct Floor {
 /// to walk (fewer than [`MIN_CELLS`] joined cells); stopped when `caster`
 /// stops (its budget spent, or Ctrl-C).
 pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<Walk>, Stopped> {
-    let up = scene.up.axis.vector();
-    let (right, ahead) = scene.up.axis.ground_axes();
-    let b = *bounds;
-    let (low, high) = b.span_along(up);
-    let ((x0, x1), (y0, y1)) = (b.span_along(right), b.span_along(ahead));
-    let (width, depth) = (x1 - x0, y1 - y0);
-    let eye = eye_height(width.max(depth), high - low);
-    let side = ((width.max(depth) / eye).ceil() as usize).clamp(MIN_SIDE_CELLS, MAX_SIDE_CELLS);
-    let cell = width.max(depth) / side as f64;
-    if !(cell > 0.0 && cell.is_finite()) {
+    let Some(grid) = Grid::over(scene, bounds) else {
+        return Ok(None);
+    };
+    let (floors, first) = find_floors(scene, bounds, &grid, caster)?;
+    let ground = Ground::link(grid, floors, &first, caster)?;
+    let streets = ground.street_route()?;
+    let interior = ground.interior(bounds)?;
+    let (through, found) = match (interior.route, streets) {
+        (Some(interior), _) => (Through::Interior, Some(interior)),
+        (None, Some(streets)) => (Through::Streets, Some(streets)),
+        (None, None) => (Through::OpenGround, ground.longest_route(&ground.open)),
+    };
+    let Some((route, region)) = found else {
+        return Ok(None);
+    };
+    if route.len() < MIN_CELLS {
         return Ok(None);
     }
-    let (nx, ny) = (
-        ((width / cell).ceil() as usize).max(1),
-        ((depth / cell).ceil() as usize).max(1),
-    );
-    let at = |k: usize, height: f64| {
-        let (i, j) = (k % nx, k / nx);
-        right * (x0 + (i as f64 + 0.5) * cell) + ahead * (y0 + (j as f64 + 0.5) * cell) + up * height
-    };
+    let points: Vec<DVec3> = route.iter().map(|&f| ground.point(f)).collect();
+    let sky = points
+        .iter()
+        .filter(|&&p| caster.first_hit(p, grid.up, f64::INFINITY).is_none())
+        .count();
+    caster.searching()?;
+    Ok(Some(Walk {
+        line: turns(&points),
+        eye_height: grid.eye,
+        cell: grid.cell,
+        region: region.len() as f64 / grid.cells() as f64,
+        open_sky: sky as f64 / points.len() as f64,
+        through,
+        roofed: interior.roofed,
+        indoors: interior.indoors,
+    }))
+}
 
-    let solid = solid_parts(scene, &b, right, ahead, up);
-    // Floors, cell by cell: surfaces with room for the eye and a margin
-    // above them, outside every solid, below the model's top.
+/// The ground grid: square cells about an eye height wide over the model's
+/// focus, along its ground axes.
+#[derive(Clone, Copy)]
+struct Grid {
+    up: DVec3,
+    right: DVec3,
+    ahead: DVec3,
+    /// The grid's corner along `right` and `ahead`.
+    x0: f64,
+    y0: f64,
+    cell: f64,
+    /// Cells along `right` and `ahead`.
+    nx: usize,
+    ny: usize,
+    eye: f64,
+    /// The model's bottom and top along `up`.
+    low: f64,
+    high: f64,
+}
+
+impl Grid {
+    /// The grid over `bounds`, about `scene`'s up axis; `None` when the box
+    /// has no width to lay cells on.
+    fn over(scene: &Scene, bounds: &Aabb) -> Option<Grid> {
+        let up = scene.up.axis.vector();
+        let (right, ahead) = scene.up.axis.ground_axes();
+        let (low, high) = bounds.span_along(up);
+        let ((x0, x1), (y0, y1)) = (bounds.span_along(right), bounds.span_along(ahead));
+        let (width, depth) = (x1 - x0, y1 - y0);
+        let eye = eye_height(width.max(depth), high - low);
+        let side = ((width.max(depth) / eye).ceil() as usize).clamp(MIN_SIDE_CELLS, MAX_SIDE_CELLS);
+        let cell = width.max(depth) / side as f64;
+        if !(cell > 0.0 && cell.is_finite()) {
+            return None;
+        }
+        let (nx, ny) = (
+            ((width / cell).ceil() as usize).max(1),
+            ((depth / cell).ceil() as usize).max(1),
+        );
+        Some(Grid {
+            up,
+            right,
+            ahead,
+            x0,
+            y0,
+            cell,
+            nx,
+            ny,
+            eye,
+            low,
+            high,
+        })
+    }
+
+    fn cells(&self) -> usize {
+        self.nx * self.ny
+    }
+
+    /// The point `height` up over the centre of cell `k`.
+    fn at(&self, k: usize, height: f64) -> DVec3 {
+        let (i, j) = (k % self.nx, k / self.nx);
+        self.right * (self.x0 + (i as f64 + 0.5) * self.cell)
+            + self.ahead * (self.y0 + (j as f64 + 0.5) * self.cell)
+            + self.up * height
+    }
+}
+
+/// Floors, cell by cell: surfaces with room for the eye and a margin
+/// above them, outside every solid, below the model's top; and where each
+/// cell's floors start among them (and, last, where they end).
+fn find_floors(
+    scene: &Scene,
+    bounds: &Aabb,
+    grid: &Grid,
+    caster: &RayCaster,
+) -> Result<(Vec<Floor>, Vec<usize>), Stopped> {
+    let Grid {
+        up,
+        cell,
+        eye,
+        low,
+        high,
+        ..
+    } = *grid;
+    let solid = solid_parts(scene, bounds, grid.right, grid.ahead, up);
     let room = eye * 1.5;
     let mut floors: Vec<Floor> = Vec::new();
-    let mut first = Vec::with_capacity(nx * ny + 1);
+    let mut first = Vec::with_capacity(grid.cells() + 1);
     let mut hits: Vec<Hit> = Vec::new();
     let mut inside: Vec<u32> = Vec::new();
     let top = high + cell;
-    for k in 0..nx * ny {
+    for k in 0..grid.cells() {
         caster.searching()?;
         first.push(floors.len());
-        caster.all_hits(at(k, top), -up, top - low + cell, &mut hits);
+        caster.all_hits(grid.at(k, top), -up, top - low + cell, &mut hits);
         let part = |hit: &Hit| scene.objects[hit.object as usize].part;
         // A ray through an edge meets both triangles at one point, maybe
         // of two clusters of one part: one crossing.
@@ -191,47 +288,101 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         }
     }
     first.push(floors.len());
+    Ok((floors, first))
+}
 
-    // Links: the floor of each neighbouring cell within a step. Floors of
-    // one cell lie at least `room` apart, so at most one is.
-    let step = 0.5 * eye;
-    let links: Vec<[Option<usize>; 4]> = floors
-        .iter()
-        .map(|f| {
-            let (i, j) = (f.cell % nx, f.cell / nx);
-            [
-                (i > 0).then(|| f.cell - 1),
-                (i + 1 < nx).then(|| f.cell + 1),
-                (j > 0).then(|| f.cell - nx),
-                (j + 1 < ny).then(|| f.cell + nx),
-            ]
-            .map(|neighbour| {
-                let n = neighbour?;
-                (first[n]..first[n + 1]).find(|&g| (floors[g].height - f.height).abs() <= step)
+/// A route's floors, end to start, and the floors of the joined region it
+/// was taken from.
+type Route = (Vec<usize>, Vec<usize>);
+
+/// The floors linked into ground to walk on: which are open, and which
+/// open ones are joined.
+struct Ground<'c, 'a> {
+    grid: Grid,
+    floors: Vec<Floor>,
+    /// Each floor's linked floor in the cells on its four sides.
+    links: Vec<[Option<usize>; 4]>,
+    /// Floors linked on all four sides.
+    open: Vec<bool>,
+    /// The joined links between open floors: every route takes them.
+    open_edges: Vec<Vec<usize>>,
+    caster: &'c RayCaster<'a>,
+}
+
+/// What the interior's search found: its route, when it is long and holds
+/// most of the open floors, and [`Walk::roofed`] and [`Walk::indoors`].
+struct Interior {
+    route: Option<Route>,
+    roofed: f64,
+    indoors: f64,
+}
+
+impl<'c, 'a> Ground<'c, 'a> {
+    /// Links each floor to the floor of each neighbouring cell within a
+    /// step (floors of one cell lie at least the eye's room apart, so at
+    /// most one is), and joins open floors a ray at eye height passes
+    /// between.
+    fn link(
+        grid: Grid,
+        floors: Vec<Floor>,
+        first: &[usize],
+        caster: &'c RayCaster<'a>,
+    ) -> Result<Ground<'c, 'a>, Stopped> {
+        let (nx, ny) = (grid.nx, grid.ny);
+        let step = 0.5 * grid.eye;
+        let links: Vec<[Option<usize>; 4]> = floors
+            .iter()
+            .map(|f| {
+                let (i, j) = (f.cell % nx, f.cell / nx);
+                [
+                    (i > 0).then(|| f.cell - 1),
+                    (i + 1 < nx).then(|| f.cell + 1),
+                    (j > 0).then(|| f.cell - nx),
+                    (j + 1 < ny).then(|| f.cell + nx),
+                ]
+                .map(|neighbour| {
+                    let n = neighbour?;
+                    (first[n]..first[n + 1]).find(|&g| (floors[g].height - f.height).abs() <= step)
+                })
             })
-        })
-        .collect();
-    let open: Vec<bool> = links.iter().map(|l| l.iter().all(Option::is_some)).collect();
-    let point = |f: usize| at(floors[f].cell, floors[f].height + eye);
-    let joined = |a: usize, b: usize| {
-        let (p, q) = (point(a), point(b));
-        caster.first_hit(p, q - p, 1.0).is_none()
-    };
-    // The joined links between open floors: every route takes them.
-    let open_edges: Vec<Vec<usize>> = (0..floors.len())
-        .map(|f| {
-            if !open[f] {
-                return Vec::new();
-            }
-            let linked = links[f].iter().flatten().copied();
-            linked.filter(|&g| open[g] && joined(f, g)).collect()
-        })
-        .collect();
-    caster.searching()?;
-    // The longest shortest route through the largest joined region of
-    // `chosen` open floors, and the region's floors.
-    let longest_route = |chosen: &[bool]| -> Option<(Vec<usize>, Vec<usize>)> {
-        let edges: Vec<Vec<usize>> = open_edges
+            .collect();
+        let open: Vec<bool> = links.iter().map(|l| l.iter().all(Option::is_some)).collect();
+        let mut ground = Ground {
+            grid,
+            floors,
+            links,
+            open,
+            open_edges: Vec::new(),
+            caster,
+        };
+        let joined = |a: usize, b: usize| {
+            let (p, q) = (ground.point(a), ground.point(b));
+            caster.first_hit(p, q - p, 1.0).is_none()
+        };
+        let open_edges = (0..ground.floors.len())
+            .map(|f| {
+                if !ground.open[f] {
+                    return Vec::new();
+                }
+                let linked = ground.links[f].iter().flatten().copied();
+                linked.filter(|&g| ground.open[g] && joined(f, g)).collect()
+            })
+            .collect();
+        ground.open_edges = open_edges;
+        caster.searching()?;
+        Ok(ground)
+    }
+
+    /// Floor `f`'s eye.
+    fn point(&self, f: usize) -> DVec3 {
+        self.grid.at(self.floors[f].cell, self.floors[f].height + self.grid.eye)
+    }
+
+    /// The longest shortest route through the largest joined region of
+    /// `chosen` open floors, and the region's floors.
+    fn longest_route(&self, chosen: &[bool]) -> Option<Route> {
+        let edges: Vec<Vec<usize>> = self
+            .open_edges
             .iter()
             .enumerate()
             .map(|(f, e)| match chosen[f] {
@@ -247,88 +398,72 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
             route.push(previous);
         }
         Some((route, region))
-    };
-    // Of eight level rays from floor `f`'s eye, how many meet something
-    // within `reach`.
-    let walls = |f: usize, reach: f64| {
-        let p = point(f);
+    }
+
+    /// Of eight level rays from floor `f`'s eye, how many meet something
+    /// within `reach`.
+    fn walls(&self, f: usize, reach: f64) -> usize {
+        let p = self.point(f);
         (0..8)
             .filter(|&a| {
                 let angle = std::f64::consts::TAU * f64::from(a) / 8.0;
-                let direction = right * angle.cos() + ahead * angle.sin();
-                caster.first_hit(p, direction, reach).is_some()
+                let direction = self.grid.right * angle.cos() + self.grid.ahead * angle.sin();
+                self.caster.first_hit(p, direction, reach).is_some()
             })
             .count()
-    };
-    // Streets: open floors with walls around, where at least half of eight
-    // level rays meet something within [`STREET_REACH`] cells (at a
-    // crossing only the four diagonals do); a walk along them sees
-    // occlusion, one round the open outskirts does not. Where a street
-    // meets a crossing, a cell or two see too few walls: streets take in
-    // the open floors that near.
-    let walled: Vec<bool> = (0..floors.len())
-        .map(|f| open[f] && walls(f, STREET_REACH * cell) >= 4)
-        .collect();
-    caster.searching()?;
-    let streets = widen(&walled, &links, &open, STREET_GAP);
-    // The streets' route when it is long, and its streets are a good part
-    // of the open ground around them, not a lane between a few walls in a
-    // park or a forest.
-    let street_route = longest_route(&streets).filter(|(route, region)| {
-        let (_, _, around) = farthest(&open_edges, route[0]);
-        route.len() >= LONG_ROUTE && region.len() as f64 >= STREET_SHARE * around.len() as f64
-    });
-    // Interiors: open floors indoors, under a roof (the cell's ray met
-    // the model above the floor) with walls around (level rays meet the model
-    // within its size in six of eight directions), not under a porch or a
-    // canopy open at the sides. When their largest joined region holds
-    // most of the open floor, the walk goes through it. It lies in one
-    // joined region of roofed floors, so only one that large is searched
-    // for walls (the inside of an object is roofed, but seldom most).
-    let open_count = open.iter().filter(|&&o| o).count();
-    let most = |region: &[usize]| 2 * region.len() >= open_count;
-    let roofed: Vec<bool> = (0..floors.len()).map(|f| open[f] && floors[f].roofed).collect();
-    let roofed = longest_route(&roofed).map_or_else(Vec::new, |(_, region)| region);
-    let mut indoors = vec![false; floors.len()];
-    if most(&roofed) {
-        let reach = b.extent().length();
-        for &f in &roofed {
-            indoors[f] = walls(f, reach) >= INTERIOR_WALLS;
+    }
+
+    /// The streets' route: through open floors with walls around, where at
+    /// least half of eight level rays meet something within
+    /// [`STREET_REACH`] cells (at a crossing only the four diagonals do); a
+    /// walk along them sees occlusion, one round the open outskirts does
+    /// not. Where a street meets a crossing, a cell or two see too few
+    /// walls: streets take in the open floors that near. `None` unless the
+    /// route is long, and its streets are a good part of the open ground
+    /// around them, not a lane between a few walls in a park or a forest.
+    fn street_route(&self) -> Result<Option<Route>, Stopped> {
+        let walled: Vec<bool> = (0..self.floors.len())
+            .map(|f| self.open[f] && self.walls(f, STREET_REACH * self.grid.cell) >= 4)
+            .collect();
+        self.caster.searching()?;
+        let streets = widen(&walled, &self.links, &self.open, STREET_GAP);
+        Ok(self.longest_route(&streets).filter(|(route, region)| {
+            let (_, _, around) = farthest(&self.open_edges, route[0]);
+            route.len() >= LONG_ROUTE && region.len() as f64 >= STREET_SHARE * around.len() as f64
+        }))
+    }
+
+    /// The interior: open floors indoors, under a roof (the cell's ray met
+    /// the model above the floor) with walls around (level rays meet the
+    /// model within its size, `bounds`, in six of eight directions), not
+    /// under a porch or a canopy open at the sides. When their largest
+    /// joined region holds most of the open floor, the walk goes through
+    /// it. It lies in one joined region of roofed floors, so only one that
+    /// large is searched for walls (the inside of an object is roofed, but
+    /// seldom most).
+    fn interior(&self, bounds: &Aabb) -> Result<Interior, Stopped> {
+        let open_count = self.open.iter().filter(|&&o| o).count();
+        let most = |region: &[usize]| 2 * region.len() >= open_count;
+        let roofed: Vec<bool> = (0..self.floors.len())
+            .map(|f| self.open[f] && self.floors[f].roofed)
+            .collect();
+        let roofed = self.longest_route(&roofed).map_or_else(Vec::new, |(_, region)| region);
+        let mut indoors = vec![false; self.floors.len()];
+        if most(&roofed) {
+            let reach = bounds.extent().length();
+            for &f in &roofed {
+                indoors[f] = self.walls(f, reach) >= INTERIOR_WALLS;
+            }
+            self.caster.searching()?;
         }
-        caster.searching()?;
+        let interior = self.longest_route(&indoors);
+        let share = |region: &[usize]| region.len() as f64 / open_count.max(1) as f64;
+        Ok(Interior {
+            indoors: interior.as_ref().map_or(0.0, |(_, region)| share(region)),
+            route: interior.filter(|(route, region)| route.len() >= LONG_ROUTE && most(region)),
+            roofed: share(&roofed),
+        })
     }
-    let interior = longest_route(&indoors);
-    let share = |region: &[usize]| region.len() as f64 / open_count.max(1) as f64;
-    let indoors_share = interior.as_ref().map_or(0.0, |(_, region)| share(region));
-    let interior = interior.filter(|(route, region)| route.len() >= LONG_ROUTE && most(region));
-    let (through, found) = match (interior, street_route) {
-        (Some(interior), _) => (Through::Interior, Some(interior)),
-        (None, Some(streets)) => (Through::Streets, Some(streets)),
-        (None, None) => (Through::OpenGround, longest_route(&open)),
-    };
-    let Some((route, region)) = found else {
-        return Ok(None);
-    };
-    let region = region.len();
-    if route.len() < MIN_CELLS {
-        return Ok(None);
-    }
-    let points: Vec<DVec3> = route.iter().map(|&f| point(f)).collect();
-    let sky = points
-        .iter()
-        .filter(|&&p| caster.first_hit(p, up, f64::INFINITY).is_none())
-        .count();
-    caster.searching()?;
-    Ok(Some(Walk {
-        line: turns(&points),
-        eye_height: eye,
-        cell,
-        region: region as f64 / (nx * ny) as f64,
-        open_sky: sky as f64 / points.len() as f64,
-        through,
-        roofed: share(&roofed),
-        indoors: indoors_share,
-    }))
 }
 
 /// Which parts are solids to stand outside of: closed parts, but not a

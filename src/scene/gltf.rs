@@ -15,17 +15,39 @@ use super::source::{LoadOptions, SceneError, read_model_file};
 use super::{cameras, meshopt};
 use crate::input::folder_of;
 
+/// Reads `bytes`, the glTF or GLB file `path`, into `builder`: its buffers,
+/// an object for each mesh group of each node of its scene, its cameras
+/// and camera animations, and warnings of what is ignored.
 pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut SceneBuilder) -> Result<(), SceneError> {
-    let parse_error = |message: String| SceneError::Parse {
+    // glTF JSON may start with the byte order mark some editors write: it
+    // is dropped before the JSON is read, here and for the buffers.
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
+    let gltf = parse(path, bytes)?;
+    warn_of_what_is_ignored(&gltf, builder);
+    let buffers = load_buffers(path, bytes, &gltf, options, builder)?;
+    let reached = add_node_trees(path, &gltf, &buffers, builder)?;
+    add_cameras(&gltf, &buffers, &reached, builder);
+    Ok(())
+}
+
+/// A file's error at parsing, with the file named.
+fn parse_error(path: &Path) -> impl Fn(String) -> SceneError + Copy + '_ {
+    move |message| SceneError::Parse {
         path: path.into(),
         message,
-    };
+    }
+}
+
+/// The document, validated, with the extensions occlu decodes itself
+/// taken off its required list; refused when it is not glTF, is invalid,
+/// or requires Draco.
+fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
+    let parse_error = parse_error(path);
     let invalid = |e: gltf::Error| parse_error(format!("invalid glTF: {}", summarise(&e)));
     // glTF is a GLB (binary, starting with its magic) or JSON (an object,
     // perhaps after the byte order mark some editors write): anything else
     // (an OBJ named .glb, a GLB with a wrong magic) is said to be neither,
     // not reported as a JSON syntax error at its first byte.
-    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     let first = bytes.iter().find(|b| !b.is_ascii_whitespace());
     if !bytes.starts_with(b"glTF") && first != Some(&b'{') {
         return Err(parse_error(
@@ -52,10 +74,15 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
     let draco_used = json.extensions_used.iter().any(|e| e == DRACO);
     json.extensions_required.retain(|e| !DECODED.contains(&e.as_str()));
     let document = gltf::Document::from_json(json).map_err(|e| if draco_used { draco() } else { invalid(e) })?;
-    let gltf = gltf::Gltf {
+    Ok(gltf::Gltf {
         document,
         blob: unvalidated.blob,
-    };
+    })
+}
+
+/// Warns of what the file holds and occlu does not draw as the file means
+/// it: instancing, skins and morph targets.
+fn warn_of_what_is_ignored(gltf: &gltf::Gltf, builder: &mut SceneBuilder) {
     if gltf.extensions_used().any(|e| e == "EXT_mesh_gpu_instancing") {
         builder.warn("EXT_mesh_gpu_instancing is not supported: each node is drawn once".into());
     }
@@ -67,8 +94,19 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
     {
         builder.warn("skins and morph targets are ignored: meshes are drawn in their rest pose".into());
     }
-    let buffers = load_buffers(path, bytes, &gltf, options, builder)?;
+}
 
+/// Adds an object for each mesh group of each node that has a mesh,
+/// depth-first over the node trees of the default scene (or the first),
+/// or, with no scene, of every node that is nobody's child; the nodes
+/// reached. A mesh used by several nodes is loaded once.
+fn add_node_trees(
+    path: &Path,
+    gltf: &gltf::Gltf,
+    buffers: &[Vec<u8>],
+    builder: &mut SceneBuilder,
+) -> Result<Vec<bool>, SceneError> {
+    let parse_error = parse_error(path);
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
     let roots: Vec<gltf::Node> = match &scene {
         Some(scene) => scene.nodes().collect(),
@@ -79,11 +117,10 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
             gltf.nodes().filter(|n| !children.contains(&n.index())).collect()
         }
     };
-
     let mut mesh_groups: HashMap<usize, Vec<MeshGroup>> = HashMap::new();
-    // Depth-first over the node trees. glTF requires disjoint trees; the
-    // validator does not check it, and a node reached twice (shared children,
-    // a cycle) would multiply the scene or never end, so it is an error.
+    // glTF requires disjoint trees; the validator does not check it, and a
+    // node reached twice (shared children, a cycle) would multiply the
+    // scene or never end, so it is an error.
     let mut reached = vec![false; gltf.nodes().len()];
     let mut stack: Vec<(gltf::Node, DMat4)> = roots.into_iter().map(|n| (n, DMat4::IDENTITY)).collect();
     while let Some((node, parent)) = stack.pop() {
@@ -93,17 +130,10 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
                 "node {index} is reached twice: glTF node hierarchies must be trees"
             )));
         }
-        let matrix = node.transform().matrix();
-        if matrix.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(parse_error(format!("node {index}: transform is not finite in f32")));
-        }
-        if matrix.iter().map(|column| column[3]).ne([0.0, 0.0, 0.0, 1.0]) {
-            return Err(parse_error(format!("node {index}: matrix is not affine")));
-        }
-        let world = parent * DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)));
+        let world = parent * local_transform(&node).map_err(parse_error)?;
         if let Some(mesh) = node.mesh() {
             if let std::collections::hash_map::Entry::Vacant(slot) = mesh_groups.entry(mesh.index()) {
-                slot.insert(load_mesh(path, &mesh, &buffers, builder)?);
+                slot.insert(load_mesh(path, &mesh, buffers, builder)?);
             }
             let node_name = node
                 .name()
@@ -135,6 +165,26 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
             lost.index()
         )));
     }
+    Ok(reached)
+}
+
+/// A node's transform relative to its parent, in f64; refused when it is
+/// not finite in f32 or not affine.
+fn local_transform(node: &gltf::Node) -> Result<DMat4, String> {
+    let index = node.index();
+    let matrix = node.transform().matrix();
+    if matrix.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(format!("node {index}: transform is not finite in f32"));
+    }
+    if matrix.iter().map(|column| column[3]).ne([0.0, 0.0, 0.0, 1.0]) {
+        return Err(format!("node {index}: matrix is not affine"));
+    }
+    Ok(DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from))))
+}
+
+/// The file's cameras and camera animations (of the nodes `reached`), with
+/// a warning for each animation that moves no camera.
+fn add_cameras(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], builder: &mut SceneBuilder) {
     let buffer_bytes = buffers.iter().map(Vec::len).sum();
     let check = |accessor: &gltf::Accessor, what: &str, types: &[gltf::accessor::DataType], dims| {
         check_accessor(accessor, what, types, dims, buffer_bytes)
@@ -143,7 +193,7 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
         cameras,
         animations,
         warnings,
-    } = cameras::read(&gltf, &buffers, &reached, &check);
+    } = cameras::read(gltf, buffers, reached, &check);
     for warning in warnings {
         builder.warn(warning);
     }
@@ -160,7 +210,6 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
         ));
     }
     builder.set_cameras(cameras, animations);
-    Ok(())
 }
 
 /// Draco geometry compression, which no well-kept Rust crate decodes.
@@ -203,10 +252,7 @@ fn load_buffers(
     options: &LoadOptions,
     builder: &mut SceneBuilder,
 ) -> Result<Vec<Vec<u8>>, SceneError> {
-    let parse_error = |message: String| SceneError::Parse {
-        path: path.into(),
-        message,
-    };
+    let parse_error = parse_error(path);
     let compressed = if gltf.extensions_used().any(|e| e == "EXT_meshopt_compression") {
         let raw = raw_json(bytes).map_err(parse_error)?;
         let views = meshopt::compressed_views(&raw).map_err(parse_error)?;

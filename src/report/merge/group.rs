@@ -1,0 +1,302 @@
+//! Which folders are one run, and whether they agree: folders grouped by
+//! run (refused when one run's folders measured different things, or one
+//! adapter holds two results), runs named, a matrix's missing runs found,
+//! and each run's table of modes by adapter, cross-checked between
+//! adapters of one backend.
+
+use std::collections::BTreeSet;
+
+use super::error::MergeError;
+use super::merged::{
+    AdapterColumn, Disagreement, MergedRun, MissingRuns, ModeResult, ModeRow, adapter_label, column_folder, unique,
+};
+use super::read::RunFolder;
+use crate::report::summary::{Fingerprint, MatrixIdentity, Summary};
+
+impl RunFolder {
+    /// Which run it is: its matrix run's name, or its scene's and path's.
+    fn run(&self) -> String {
+        let s = &self.summary;
+        s.run
+            .clone()
+            .unwrap_or_else(|| format!("{}, {}", s.scene.facts.source, s.path.source))
+    }
+
+    /// Whether `other` is the same run: the same matrix run by name, or,
+    /// outside a matrix, the same scene and path by their fingerprints (by
+    /// their sources' names for files from before fingerprints, so that
+    /// `held.json` and `/abs/held.json` are one path when they can be told).
+    fn same_run(&self, other: &RunFolder) -> bool {
+        let (a, b) = (&self.summary, &other.summary);
+        match (&a.run, &b.run) {
+            (Some(x), Some(y)) => x == y,
+            (None, None) => {
+                same_thing(
+                    (&a.scene.facts.source, a.scene.facts.geometry),
+                    (&b.scene.facts.source, b.scene.facts.geometry),
+                ) && same_thing((&a.path.source, a.path.cameras), (&b.path.source, b.path.cameras))
+            }
+            _ => false,
+        }
+    }
+
+    /// The first thing `other`, the same run, measured differently, if
+    /// any: what it is and each folder's value. What a user sets (frames,
+    /// resolution, warmup, mode parameters) comes before the fingerprints,
+    /// which a different frame count changes too, so the message names the
+    /// real difference.
+    fn differs_from(&self, other: &RunFolder) -> Option<(&'static str, String, String)> {
+        let (a, b) = (&self.summary, &other.summary);
+        let identity = |what, (source_a, fa): (&String, Option<Fingerprint>), (source_b, fb)| {
+            let show = |source: &String, f: Option<Fingerprint>| match f {
+                Some(f) if source_a == source_b => format!("{source} #{:016x}", f.fnv1a),
+                _ => source.clone(),
+            };
+            (!same_thing((source_a, fa), (source_b, fb))).then(|| (what, show(source_a, fa), show(source_b, fb)))
+        };
+        let plain = |what, x: String, y: String| (x != y).then_some((what, x, y));
+        let params = |s: &Summary, other: &Summary| -> String {
+            s.modes
+                .iter()
+                .filter(|m| other.modes.iter().any(|o| o.name == m.name))
+                .map(|m| format!("{} {}", m.name, m.parameters))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let matrices = match (a.matrix, b.matrix) {
+            (Some(x), Some(y)) => plain("matrices", x.to_string(), y.to_string()),
+            // A file from before matrices were recorded is judged by the rest.
+            _ => None,
+        };
+        matrices
+            .or_else(|| plain("frame counts", a.frames.to_string(), b.frames.to_string()))
+            .or_else(|| plain("resolutions", a.resolution.to_string(), b.resolution.to_string()))
+            .or_else(|| plain("warmup frames", a.warmup.to_string(), b.warmup.to_string()))
+            .or_else(|| plain("mode parameters", params(a, b), params(b, a)))
+            .or_else(|| {
+                identity(
+                    "scenes",
+                    (&a.scene.facts.source, a.scene.facts.geometry),
+                    (&b.scene.facts.source, b.scene.facts.geometry),
+                )
+            })
+            .or_else(|| {
+                identity(
+                    "paths",
+                    (&a.path.source, a.path.cameras),
+                    (&b.path.source, b.path.cameras),
+                )
+            })
+    }
+
+    fn adapter(&self) -> (String, String) {
+        (self.summary.adapter.name.clone(), self.summary.adapter.backend.clone())
+    }
+}
+
+/// Whether two scenes or paths (a source's name and its fingerprint) are
+/// one: by fingerprint when both have one, else by name.
+fn same_thing((source_a, fa): (&String, Option<Fingerprint>), (source_b, fb): (&String, Option<Fingerprint>)) -> bool {
+    match (fa, fb) {
+        (Some(fa), Some(fb)) => fa == fb,
+        _ => source_a == source_b,
+    }
+}
+
+/// The folders of each run, runs in name order (a matrix's order), each
+/// run's folders in adapter order; refuses folders of one run that differ
+/// in what they measured, and two different results of one run on one
+/// adapter (copies of one result count once).
+pub(super) fn group(mut folders: Vec<RunFolder>) -> Result<Vec<Vec<RunFolder>>, MergeError> {
+    folders.sort_by_key(|f| (f.run(), f.adapter()));
+    let mut groups: Vec<Vec<RunFolder>> = Vec::new();
+    for folder in folders {
+        let Some(group) = groups.iter_mut().find(|g| g[0].same_run(&folder)) else {
+            groups.push(vec![folder]);
+            continue;
+        };
+        let first = &group[0];
+        if let Some((what, first_value, second_value)) = first.differs_from(&folder) {
+            return Err(MergeError::NotOneRun {
+                run: folder.run(),
+                folders: Box::new([first.dir.clone(), folder.dir]),
+                what,
+                values: Box::new([first_value, second_value]),
+            });
+        }
+        if let Some(same_adapter) = group.iter().find(|f| f.adapter() == folder.adapter()) {
+            let summary = &same_adapter.summary;
+            let copies = summary.frames_csv.is_some() && summary.frames_csv == folder.summary.frames_csv;
+            if copies {
+                continue;
+            }
+            return Err(MergeError::Ambiguous {
+                run: folder.run(),
+                adapter: adapter_label(&folder.summary.adapter.name, &folder.summary.adapter.backend),
+                first: same_adapter.dir.clone(),
+                second: folder.dir,
+            });
+        }
+        group.push(folder);
+    }
+    for group in &mut groups {
+        group.sort_by_key(RunFolder::adapter);
+    }
+    Ok(groups)
+}
+
+/// Each run's folders under a name of its own, runs in name order. A run
+/// is named by its matrix run's name, unique in its matrix (two matrices
+/// are never merged), or by its scene's and path's; two runs outside a
+/// matrix that measured other scenes or paths of one name (a changed file,
+/// a generated path of other frames) get their fingerprints' hash after
+/// it, so the name is the same whatever order the folders came in.
+pub(super) fn named(groups: Vec<Vec<RunFolder>>) -> Vec<(String, Vec<RunFolder>)> {
+    let plain: Vec<String> = groups.iter().map(|g| g[0].run()).collect();
+    let mut named: Vec<(String, Vec<RunFolder>)> = groups
+        .into_iter()
+        .zip(&plain)
+        .map(|(folders, name)| {
+            if plain.iter().filter(|&n| n == name).count() == 1 {
+                return (name.clone(), folders);
+            }
+            let s = &folders[0].summary;
+            let identity = format!("{:?}\n{:?}", s.scene.facts.geometry, s.path.cameras);
+            let hash = Fingerprint::of(identity.as_bytes()).fnv1a >> 32;
+            (format!("{name} #{hash:08x}"), folders)
+        })
+        .collect();
+    named.sort_by(|a, b| a.0.cmp(&b.0));
+    named
+}
+
+/// The runs of each matrix among `runs` that none of them is: by place
+/// (`02`), as the matrix's run folders are named.
+pub(super) fn missing_runs(runs: &[(String, Vec<RunFolder>)]) -> Vec<MissingRuns> {
+    let mut matrices: Vec<(MatrixIdentity, BTreeSet<usize>)> = Vec::new();
+    for (_, folders) in runs {
+        let s = &folders[0].summary;
+        let (Some(matrix), Some(name)) = (s.matrix, &s.run) else {
+            continue;
+        };
+        let place = name.split('-').next().and_then(|digits| digits.parse::<usize>().ok());
+        let at = match matrices.iter().position(|(m, _)| *m == matrix) {
+            Some(at) => at,
+            None => {
+                matrices.push((matrix, BTreeSet::new()));
+                matrices.len() - 1
+            }
+        };
+        matrices[at].1.extend(place);
+    }
+    matrices
+        .into_iter()
+        .filter_map(|(matrix, present)| {
+            let width = matrix.runs.to_string().len().max(2);
+            let absent: Vec<String> = (1..=matrix.runs)
+                .filter(|p| !present.contains(p))
+                .map(|p| format!("{p:0width$}"))
+                .collect();
+            (!absent.is_empty()).then_some(MissingRuns {
+                matrix,
+                present: matrix.runs - absent.len(),
+                runs: absent,
+            })
+        })
+        .collect()
+}
+
+/// One run's table, columns and cross-check (its chart comes later).
+pub(super) fn merged_run(name: &str, folders: &[RunFolder], used: &mut BTreeSet<String>) -> MergedRun {
+    let first = &folders[0].summary;
+    let adapters: Vec<AdapterColumn> = folders
+        .iter()
+        .map(|f| {
+            let a = &f.summary.adapter;
+            let folder = unique(column_folder(name, &a.name, &a.backend), "", used);
+            AdapterColumn {
+                name: a.name.clone(),
+                backend: a.backend.clone(),
+                device_type: a.device_type.clone(),
+                folder,
+                merged_from: f.dir.to_string_lossy().into_owned(),
+                skipped: f.summary.skipped.clone(),
+                error_measured: f.summary.error_measured,
+            }
+        })
+        .collect();
+    let mut names: Vec<&str> = Vec::new();
+    for m in folders.iter().flat_map(|f| &f.summary.modes) {
+        if !names.contains(&m.name.as_str()) {
+            names.push(&m.name);
+        }
+    }
+    let modes: Vec<ModeRow> = names
+        .iter()
+        .map(|&mode| ModeRow {
+            mode: mode.to_string(),
+            results: folders
+                .iter()
+                .map(|f| f.summary.modes.iter().find(|m| m.name == mode).map(ModeResult::of))
+                .collect(),
+        })
+        .collect();
+    let disagreements = cross_check(&adapters, &modes);
+    MergedRun {
+        name: name.to_string(),
+        scene: first.scene.facts.source.clone(),
+        path: first.path.source.clone(),
+        resolution: first.resolution,
+        frames: first.frames,
+        adapters,
+        modes,
+        disagreements,
+        chart: None,
+    }
+}
+
+/// Reads a counter of a [`ModeResult`].
+type Counter = fn(&ModeResult) -> Option<f64>;
+
+/// The counters every adapter of one backend must agree on, by name.
+const SAME_ON_EVERY_ADAPTER: [(&str, Counter); 4] = [
+    ("objects_drawn", |r| r.objects_drawn),
+    ("triangles_drawn", |r| r.triangles_drawn),
+    ("queries", |r| r.queries),
+    ("error_pixels", |r| r.error_pixels.map(|v| v as f64)),
+];
+
+/// Relative tolerance for "equal" means of deterministic counters (sums of
+/// integers over the same frame count).
+const SAME: f64 = 1e-9;
+
+/// The counters of [`SAME_ON_EVERY_ADAPTER`] that differ between adapters
+/// of one backend.
+fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreement> {
+    let backends: BTreeSet<&str> = adapters.iter().map(|a| a.backend.as_str()).collect();
+    let mut found = Vec::new();
+    for row in modes {
+        for &backend in &backends {
+            for (counter, value) in SAME_ON_EVERY_ADAPTER {
+                let values: Vec<(String, f64)> = adapters
+                    .iter()
+                    .zip(&row.results)
+                    .filter(|(a, _)| a.backend == backend)
+                    .filter_map(|(a, r)| Some((a.name.clone(), value(r.as_ref()?)?)))
+                    .collect();
+                let differ = values
+                    .iter()
+                    .any(|(_, v)| (v - values[0].1).abs() > SAME * values[0].1.abs().max(1.0));
+                if differ {
+                    found.push(Disagreement {
+                        mode: row.mode.clone(),
+                        counter: counter.into(),
+                        backend: backend.into(),
+                        values,
+                    });
+                }
+            }
+        }
+    }
+    found
+}
