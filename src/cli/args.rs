@@ -253,7 +253,7 @@ pub struct RenderArgs {
     /// missed, and list them.
     #[arg(long)]
     pub show_missed: bool,
-    /// Lay the depth buffer a CPU culling mode (swr) culled the frame with
+    /// Lay the depth buffer a CPU culling mode culled the frame with
     /// over the picture: cells holding an occluder's depth from white (near)
     /// to deep blue (far; all of them when they share one depth), the rest
     /// of the frame dimmed.

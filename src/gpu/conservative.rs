@@ -66,6 +66,29 @@ impl BoxMargins {
     }
 }
 
+impl BoxMargins {
+    /// These margins as a shader that makes boxes from f32 parts reads
+    /// them (gpu_walk's prepare_objects.wgsl): the growth per unit of reach,
+    /// the raise's absolute part and its part per unit of depth, and the
+    /// nearest view depth at which a box reaches the near plane for
+    /// `camera`. The raise and that depth are taken [`SHADER_SAFETY`] larger,
+    /// so their f32 rounding, and the shader's of the quotient it makes of
+    /// them, never leaves them below what [`eye_relative_box`] uses.
+    pub(crate) fn for_shader(&self, camera: &Camera) -> [f32; 4] {
+        let safe = 1.0 + SHADER_SAFETY;
+        [
+            self.growth as f32,
+            (self.depth.absolute * safe) as f32,
+            (RAISE_PER_DEPTH * safe) as f32,
+            (camera.near / (1.0 - MAX_RAISE) * safe) as f32,
+        ]
+    }
+}
+
+/// How much larger [`BoxMargins::for_shader`] takes what must not come out
+/// smaller: a hundred times f32's rounding.
+const SHADER_SAFETY: f64 = 1e-5;
+
 /// The depth margins of one backend (rule 1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DepthMargins {

@@ -621,7 +621,9 @@ pub(crate) fn box_buffer(
     capacity: u32,
 ) -> (wgpu::Buffer, wgpu::BindGroup) {
     let size = u64::from(capacity) * std::mem::size_of::<QueryBox>() as u64;
-    let boxes = storage_buffer(gpu, "test boxes", size, wgpu::BufferUsages::COPY_DST);
+    // Copied from by the tests that hold boxes made on the GPU to the CPU's.
+    let usage = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+    let boxes = storage_buffer(gpu, "test boxes", size, usage);
     let group = bind_buffers(gpu, layout, &[camera, &boxes]);
     (boxes, group)
 }

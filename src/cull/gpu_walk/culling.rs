@@ -172,7 +172,7 @@ fn cull_on_gpu(
     let (camera, indirect_count) = (input.camera, ctx.gpu().indirect_count);
     // Preparing the frustum and boxes is culling work on the CPU, outside
     // `record`.
-    walk.prepare_frustum(camera, input.scene, input.moved, input.frame);
+    walk.prepare_frustum(camera, ctx.margins(), input.scene, input.moved, input.frame);
     ctx.record(&mut |work| walk.drop_what_left_the_frustum(work));
     ctx.draw_indirect(walk.list(DrawList::Visible, indirect_count));
     walk.prepare_boxes(camera, ctx.margins(), bounds);

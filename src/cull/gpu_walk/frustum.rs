@@ -3,7 +3,10 @@
 //! left the frustum (drawn early, as occluders, without a test) and the
 //! objects of a visible bottom-depth node that lie outside it (marked with
 //! their node). `cs_early_frustum` takes the first out of the early list,
-//! `cs_compact` the second out of the marks (walk.wgsl).
+//! `cs_compact` the second out of the marks (walk.wgsl). For roc the same
+//! boxes and frame make every object's tested box on the GPU
+//! (prepare_objects.wgsl), so its CPU hands over only the camera.
+//! object_frustum.wgsl holds what those passes share, bound as group 3.
 //!
 //! Each object's box is uploaded once as its centre in two f32 parts (high
 //! and low, as large-world renderers keep positions) and its half extent
@@ -29,7 +32,7 @@ use glam::DVec3;
 
 use crate::bounds::Aabb;
 use crate::camera::{Camera, OUTSIDE_SLACK};
-use crate::gpu::{GpuContext, storage_buffer};
+use crate::gpu::{BoxMargins, GpuContext, bind_buffers, bind_group_layout, storage_buffer};
 use crate::scene::Scene;
 
 /// Relative slack of the GPU's outside test (see the module's header).
@@ -52,7 +55,8 @@ pub(super) struct ObjectBox {
     extent: [f32; 4],
 }
 
-/// The frame's eye and frustum as walk.wgsl's `ObjectFrustum` reads them.
+/// The frame's eye, frustum and box margins as object_frustum.wgsl's
+/// `ObjectFrustum` reads them.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(super) struct ShaderFrustum {
@@ -60,12 +64,19 @@ pub(super) struct ShaderFrustum {
     eye_low: [f32; 4],
     /// Each plane's inward unit normal (xyz) and offset (w), eye-centred.
     planes: [[f32; 4]; 5],
+    /// The view direction (xyz) and the near distance (w).
+    forward: [f32; 4],
+    /// [`BoxMargins::for_shader`].
+    margins: [f32; 4],
 }
 
 /// The objects' boxes on the GPU and the frame's frustum, for one walk.
 pub(super) struct ObjectFrustum {
-    pub(super) boxes: wgpu::Buffer,
-    pub(super) frustum: wgpu::Buffer,
+    boxes: wgpu::Buffer,
+    frustum: wgpu::Buffer,
+    /// Group 3 of the passes that read them, and its layout.
+    pub(super) layout: wgpu::BindGroupLayout,
+    pub(super) group: wgpu::BindGroup,
     /// The frame whose poses `boxes` hold; a walk that did not run in the
     /// frame before (`auto` ran another) uploads every box again.
     frame: Option<u32>,
@@ -77,36 +88,54 @@ pub(super) struct ObjectFrustum {
 impl ObjectFrustum {
     pub(super) fn new(gpu: &GpuContext, objects: u32) -> ObjectFrustum {
         let copy = wgpu::BufferUsages::COPY_DST;
-        let bytes = |n: u64, size: usize| n * size as u64;
+        let boxes = storage_buffer(
+            gpu,
+            "object boxes",
+            u64::from(objects.max(1)) * size_of::<ObjectBox>() as u64,
+            copy,
+        );
+        let frustum = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("object frustum"),
+            size: size_of::<ShaderFrustum>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | copy,
+            mapped_at_creation: false,
+        });
+        let layout = bind_group_layout(
+            gpu,
+            "object frustum",
+            &[
+                (
+                    wgpu::ShaderStages::COMPUTE,
+                    wgpu::BufferBindingType::Storage { read_only: true },
+                ),
+                (wgpu::ShaderStages::COMPUTE, wgpu::BufferBindingType::Uniform),
+            ],
+        );
         ObjectFrustum {
-            boxes: storage_buffer(
-                gpu,
-                "object boxes",
-                bytes(u64::from(objects.max(1)), size_of::<ObjectBox>()),
-                copy,
-            ),
-            frustum: gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("object frustum"),
-                size: bytes(1, size_of::<ShaderFrustum>()),
-                usage: wgpu::BufferUsages::UNIFORM | copy,
-                mapped_at_creation: false,
-            }),
+            group: bind_buffers(gpu, &layout, &[&boxes, &frustum]),
+            layout,
+            boxes,
+            frustum,
             frame: None,
             staged_frustum: ShaderFrustum::default(),
             staged_boxes: Vec::new(),
         }
     }
 
-    /// On the CPU, before frame `frame`: stages `camera`'s frustum, and the
-    /// boxes of the objects `moved` since the previous frame, or of every
-    /// object where this walk did not run in it.
-    pub(super) fn prepare(&mut self, camera: &Camera, scene: &Scene, moved: &[u32], frame: u32) {
+    /// On the CPU, before frame `frame`: stages `camera`'s frustum and the
+    /// frame's box `margins`, and the boxes of the objects `moved` since the
+    /// previous frame, or of every object where this walk did not run in
+    /// it.
+    pub(super) fn prepare(&mut self, camera: &Camera, margins: BoxMargins, scene: &Scene, moved: &[u32], frame: u32) {
         let (eye, planes) = camera.frustum().planes();
         let (eye_high, eye_low) = split(eye);
+        let forward = camera.forward().as_vec3();
         self.staged_frustum = ShaderFrustum {
             eye_high,
             eye_low,
             planes: planes.map(|(n, offset)| [n.x as f32, n.y as f32, n.z as f32, offset as f32]),
+            forward: [forward.x, forward.y, forward.z, camera.near as f32],
+            margins: margins.for_shader(camera),
         };
         self.staged_boxes.clear();
         let all = self.frame.is_none_or(|f| f.checked_add(1) != Some(frame));

@@ -14,9 +14,15 @@ pub(super) const MAX_GROUPS: u32 = 65_535;
 /// outside the frustum and reaching the near plane (3).
 pub(super) const LEVEL_WORDS: usize = 11;
 pub(super) const LEVEL_BYTES: u64 = LEVEL_WORDS as u64 * 4;
-/// Where the dispatch arguments and the hidden count start in a level.
-pub(super) const DISPATCH_OFFSET: u64 = 5 * 4;
+/// Words of a level: its queue's length (the draw's instance count), its
+/// dispatch's workgroups across, and the counts of the nodes it found
+/// hidden and outside the frustum.
+pub(super) const LEVEL_ENTRIES: usize = 1;
+pub(super) const LEVEL_GROUPS_X: usize = 5;
 pub(super) const HIDDEN: usize = 8;
+pub(super) const LEVEL_OUTSIDE: usize = HIDDEN + 1;
+/// Where the dispatch arguments start in a level.
+pub(super) const DISPATCH_OFFSET: u64 = LEVEL_GROUPS_X as u64 * 4;
 
 /// What a node's word of the visibility buffer says: set by the CPU before
 /// a walk, and to [`VISIBLE`] by the level's test (raster_mark.wgsl's
@@ -50,6 +56,9 @@ pub(super) fn shader_constants() -> String {
         ("DRAWN_LATE", DRAWN_LATE),
         ("GROUP_SIZE", GROUP_SIZE),
         ("MAX_GROUPS", MAX_GROUPS),
+        ("LEVEL_ENTRIES", LEVEL_ENTRIES as u32),
+        ("LEVEL_GROUPS_X", LEVEL_GROUPS_X as u32),
+        ("LEVEL_OUTSIDE", LEVEL_OUTSIDE as u32),
     ]
     .iter()
     .map(|(name, value)| format!("const {name}: u32 = {value}u;\n"))

@@ -49,6 +49,19 @@ impl CullTree {
         }
     }
 
+    /// Whether it is [`CullTree::flat`]'s: node k is object k, seeded.
+    pub fn is_flat(&self) -> bool {
+        self.levels == 1
+            && self.seed.len() == self.nodes.len()
+            && self.order.iter().enumerate().all(|(k, &o)| o as usize == k)
+            && self
+                .nodes
+                .iter()
+                .enumerate()
+                .all(|(k, n)| (n.first_object as usize, n.object_count, n.child_count) == (k, 1, 0))
+            && self.seed.iter().enumerate().all(|(k, &n)| n as usize == k)
+    }
+
     /// `hierarchy` cut at depth `bottom` (its nodes there become leaves) and
     /// walked from its nodes at depth `start` (or leaves above it); the root
     /// is at depth 0. Also returns, per tree node, the hierarchy node it

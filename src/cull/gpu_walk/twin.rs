@@ -296,7 +296,9 @@ mod tests {
     use crate::cull::gpu_walk::frustum::gpu_verdict;
     use crate::cull::gpu_walk::hiz::{BoxesTested, HizParams, hierarchical_depth_culling};
     use crate::cull::gpu_walk::ioc::iterative_occlusion_culling;
+    use crate::cull::gpu_walk::layout::VISIBLE;
     use crate::cull::gpu_walk::roc::raster_occlusion_culling;
+    use crate::cull::gpu_walk::{GpuWalk, NodeBoxes};
     use crate::gpu::{
         BackendChoice, BoxMargins, BoxPlanes, EyeBox, GpuContext, PixelRays, Resolution, eye_relative_box,
     };
@@ -331,7 +333,7 @@ mod tests {
         let mut session = Session::new(gpu, &world, &mut [Box::new(&mut mode)], hiz.is_some(), &options).unwrap();
         let objects = world.scene.objects.len();
         let (mut visible_last, mut hidden) = (vec![false; objects], 0);
-        let (mut tested, mut too_close, mut by_pixels) = (0, 0, 0);
+        let (mut tested, mut too_close, mut by_pixels, mut held) = (0, 0, 0, 0);
         for frame in 0..path.frames {
             world.advance(frame);
             let camera = path.camera(frame, RESOLUTION.aspect());
@@ -353,6 +355,12 @@ mod tests {
                 })
                 .collect();
             let twin = walk(tree, &states, &visible_last, &outside);
+            if on_gpu.boxes_on_gpu() {
+                let margins = BoxMargins::new(gpu.depth_margins, &camera, RESOLUTION);
+                let mut cpu = NodeBoxes::default();
+                cpu.prepare(&camera, margins, world.scene.objects.iter().map(|o| o.bounds));
+                held += hold_boxes_made_on_the_gpu(&cpu, &states, &on_gpu.tested_boxes(gpu), frame);
+            }
             let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
             if let Some(params) = hiz {
                 let (levels, texels) = on_gpu.pyramid(gpu).expect("a pyramid test");
@@ -422,10 +430,50 @@ mod tests {
             too_close * 50 <= tested,
             "{too_close} of {tested} boxes too close to call"
         );
+        assert!(
+            held > 0 || !mode.gpu_walk().is_some_and(GpuWalk::boxes_on_gpu),
+            "boxes made on the GPU held to the CPU's"
+        );
         if let Some(params) = hiz.filter(|p| p.pixels > 0) {
             assert!(by_pixels > 20, "{params:?}: {by_pixels} boxes hidden pixel by pixel");
         }
         hidden
+    }
+
+    /// Holds the boxes and words a flat tree's walk made on the GPU to those
+    /// the CPU prepares in f64: every node the CPU finds outside the frustum
+    /// the GPU does too; one the GPU tests, the CPU tests too, and the GPU's
+    /// box holds the CPU's, raised at least as much.
+    /// Returns how many boxes it held.
+    fn hold_boxes_made_on_the_gpu(cpu: &NodeBoxes, states: &[u32], boxes: &[[f32; 8]], frame: u32) -> u64 {
+        let mut tested = 0;
+        for (node, (&cpu_state, gpu_box)) in cpu.states.iter().zip(boxes).enumerate() {
+            let at = format!("frame {frame} node {node}");
+            let gpu_tested = matches!(states[node], TO_TEST | VISIBLE);
+            if cpu_state == OUTSIDE_FRUSTUM {
+                assert_eq!(states[node], OUTSIDE_FRUSTUM, "{at}: outside on the CPU");
+            }
+            if !gpu_tested {
+                continue;
+            }
+            assert_eq!(cpu_state, TO_TEST, "{at}: tested on the GPU only");
+            let q = &cpu.boxes[node];
+            let (min, max) = (q.min.to_array(), q.max.to_array());
+            for k in 0..3 {
+                assert!(
+                    gpu_box[k] <= min[k] && gpu_box[4 + k] >= max[k],
+                    "{at}: {gpu_box:?} holds {q:?}"
+                );
+            }
+            assert!(
+                gpu_box[3] >= min[3],
+                "{at}: raised {} at least as {}",
+                gpu_box[3],
+                min[3]
+            );
+            tested += 1;
+        }
+        tested
     }
 
     /// The target pixels in a level-`k` texel's footprint along one side:

@@ -6,8 +6,8 @@ use std::rc::Rc;
 
 use super::frustum::ObjectFrustum;
 use super::layout::{
-    DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_WORDS,
-    MAX_GROUPS, OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST, shader_constants,
+    DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_OUTSIDE,
+    LEVEL_WORDS, MAX_GROUPS, OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST, shader_constants,
 };
 use super::level_test::{LevelTest, NodeTest};
 use super::lists::VisibleLists;
@@ -48,10 +48,17 @@ struct TreeOnGpu {
 
 /// The walk recorded for the audit.
 struct Walk {
-    /// Seed nodes, and of them those outside the frustum (never queued).
+    /// Seed nodes (those outside the frustum, never queued, are counted in
+    /// the seed level's arguments).
     seed_len: u32,
-    seed_outside: u32,
     levels: u32,
+}
+
+/// A flat tree's boxes made on the GPU (prepare_objects.wgsl): its pipeline
+/// and what it writes, the node scratch's boxes, words and first queue.
+struct BoxesOnGpu {
+    prepare: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
 }
 
 /// Per-node scratch for a tree of `capacity` nodes.
@@ -76,6 +83,9 @@ pub struct GpuWalk {
     expand: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
     early_frustum: wgpu::ComputePipeline,
+    /// Where a flat tree's boxes are made on the GPU (roc); else they are
+    /// prepared on the CPU (`node_boxes`).
+    boxes_on_gpu: Option<BoxesOnGpu>,
     /// `compact`'s and `early_frustum`'s empty group 0.
     no_bindings: wgpu::BindGroup,
     scratch: NodeScratch,
@@ -169,8 +179,11 @@ impl NodeBoxes {
 const WALK_SPAN: usize = 0;
 const PYRAMID_SPAN: usize = 1;
 
-/// Where the audit's parts sit in its read-back buffer.
-const AUDIT_DRAWN_OFFSET: u64 = MAX_LEVELS as u64 * LEVEL_BYTES;
+/// Where the audit's parts sit in its read-back buffer (and, but for the
+/// drawn words, in `level_stats`): each level's arguments after it ran, the
+/// seed level's as it began, then a word per object drawn.
+const SEED_LEVEL_OFFSET: u64 = MAX_LEVELS as u64 * LEVEL_BYTES;
+const AUDIT_DRAWN_OFFSET: u64 = SEED_LEVEL_OFFSET + LEVEL_BYTES;
 
 impl GpuWalk {
     /// Puts `tree` on the GPU, bound with `lists` (the visible set it starts
@@ -186,7 +199,11 @@ impl GpuWalk {
         let device = &gpu.device;
         let cull_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("walk.wgsl"),
-            source: wgpu::ShaderSource::Wgsl([&shader_constants(), include_str!("walk.wgsl")].concat().into()),
+            source: wgpu::ShaderSource::Wgsl(
+                [&shader_constants(), OBJECT_FRUSTUM_WGSL, include_str!("walk.wgsl")]
+                    .concat()
+                    .into(),
+            ),
         });
         use wgpu::BufferBindingType::Storage;
         use wgpu::ShaderStages as S;
@@ -217,8 +234,6 @@ impl GpuWalk {
                 (S::COMPUTE, write),
                 (S::COMPUTE, write),
                 (S::COMPUTE, write),
-                (S::COMPUTE, read),
-                (S::COMPUTE, wgpu::BufferBindingType::Uniform),
             ],
         );
         let nodes = tree.nodes.len() as u32;
@@ -240,17 +255,23 @@ impl GpuWalk {
             "cs_expand",
             &[Some(&step_layout), Some(&tree_layout)],
         );
-        // cs_compact and cs_early_frustum share the module's groups 1 and 2
+        // cs_compact and cs_early_frustum share the module's groups 1 to 3
         // and bind nothing at 0: an empty group there keeps them within 8
         // storage buffers, the minimum an adapter guarantees.
         let no_bindings = bind_group_layout(gpu, "no bindings", &[]);
+        let object_frustum = ObjectFrustum::new(gpu, draws.len() as u32);
         let lists_pipeline = |label: &str, entry: &str| {
             compute_pipeline(
                 gpu,
                 label,
                 &cull_module,
                 entry,
-                &[Some(&no_bindings), Some(&tree_layout), Some(&lists_layout)],
+                &[
+                    Some(&no_bindings),
+                    Some(&tree_layout),
+                    Some(&lists_layout),
+                    Some(&object_frustum.layout),
+                ],
             )
         };
         let compact = lists_pipeline("compact draw lists", "cs_compact");
@@ -264,18 +285,19 @@ impl GpuWalk {
         );
         assert!((1..=MAX_LEVELS).contains(&tree.levels), "1..={MAX_LEVELS} levels");
         let drawn = storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy);
-        let object_frustum = ObjectFrustum::new(gpu, objects);
-        let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, lists, &drawn, &object_frustum);
+        let boxes_on_gpu = (node_test == NodeTest::Raster && tree.is_flat())
+            .then(|| BoxesOnGpu::new(gpu, &scratch, &object_frustum.layout));
+        let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, lists, &drawn);
         let spans = match node_test {
             NodeTest::Raster => 1,
             NodeTest::Pyramid { .. } => 2,
         };
         Ok(GpuWalk {
             drawn,
-            level_stats: storage_buffer(gpu, "level statistics", u64::from(MAX_LEVELS) * LEVEL_BYTES, copy),
+            level_stats: storage_buffer(gpu, "level statistics", AUDIT_DRAWN_OFFSET, copy),
             empty_level: gpu.buffer_with(
                 "empty level",
-                bytemuck::cast_slice(&level_args(0)),
+                bytemuck::cast_slice(&level_args(0, 0)),
                 wgpu::BufferUsages::COPY_SRC,
             ),
             timer: GpuTimer::new(gpu, spans),
@@ -297,6 +319,7 @@ impl GpuWalk {
             expand,
             compact,
             early_frustum,
+            boxes_on_gpu,
             no_bindings,
         })
     }
@@ -307,10 +330,11 @@ impl GpuWalk {
     }
 
     /// On the CPU, before frame `frame`'s early draw: stages `camera`'s
-    /// frustum and the boxes of the objects of `scene` that moved (`moved`,
-    /// or every object where this walk did not run in the frame before).
-    pub fn prepare_frustum(&mut self, camera: &Camera, scene: &Scene, moved: &[u32], frame: u32) {
-        self.object_frustum.prepare(camera, scene, moved, frame);
+    /// frustum and box `margins`, and the boxes of the objects of `scene`
+    /// that moved (`moved`, or every object where this walk did not run in
+    /// the frame before).
+    pub fn prepare_frustum(&mut self, camera: &Camera, margins: BoxMargins, scene: &Scene, moved: &[u32], frame: u32) {
+        self.object_frustum.prepare(camera, margins, scene, moved, frame);
     }
 
     /// Takes the objects that have left the frustum out of last frame's
@@ -326,48 +350,71 @@ impl GpuWalk {
         pass.set_bind_group(0, &self.no_bindings, &[]);
         pass.set_bind_group(1, &self.tree.tree_group, &[]);
         pass.set_bind_group(2, &self.tree.lists_group, &[]);
+        pass.set_bind_group(3, &self.object_frustum.group, &[]);
         pass.dispatch_workgroups(groups_for(self.objects), 1, 1);
     }
 
     /// Prepares the tree's node boxes (`bounds`, one per node, in node
-    /// order) for `camera` with the frame's `margins`, on the CPU.
+    /// order) for `camera` with the frame's `margins`, on the CPU; nothing
+    /// where the GPU makes them (then `bounds` is not read).
     pub fn prepare_boxes(&mut self, camera: &Camera, margins: BoxMargins, bounds: impl ExactSizeIterator<Item = Aabb>) {
+        if self.boxes_on_gpu.is_some() {
+            return;
+        }
         assert_eq!(bounds.len(), self.tree.nodes as usize, "one box per tree node");
         self.node_boxes.prepare(camera, margins, bounds);
     }
 
-    /// Starts a walk with the prepared boxes: stages them, marks those that
-    /// reach the near plane visible, and queues the seed nodes not outside
-    /// the frustum.
+    /// Starts a walk: stages the boxes prepared on the CPU, or makes them on
+    /// the GPU; either way marks those that reach the near plane visible and
+    /// queues the seed nodes not outside the frustum, counting the others
+    /// in the seed level's arguments (kept for the audit).
     pub fn begin(&mut self, work: GpuWork) {
         let GpuWork { gpu, encoder, .. } = work;
         let tree = &self.tree;
         let s = &self.scratch;
-        let NodeBoxes { boxes, states, .. } = &self.node_boxes;
-        if !boxes.is_empty() {
-            gpu.queue.write_buffer(&s.boxes, 0, bytemuck::cast_slice(boxes));
-            gpu.queue.write_buffer(&s.node_visible, 0, bytemuck::cast_slice(states));
-        }
-        self.test.stage(gpu, &self.node_boxes.planes);
-        // A box outside the frustum cannot be visible: not queueing it
-        // spares its test (cs_expand does the same for children).
-        self.seed_queue.clear();
-        let in_frustum = tree.seed.iter().filter(|&&n| states[n as usize] != OUTSIDE_FRUSTUM);
-        self.seed_queue.extend(in_frustum);
-        if !self.seed_queue.is_empty() {
-            gpu.queue
-                .write_buffer(&s.queues[0], 0, bytemuck::cast_slice(&self.seed_queue));
-        }
-        let seed_level = level_args(self.seed_queue.len() as u32);
-        gpu.queue
-            .write_buffer(&s.level_args[0], 0, bytemuck::cast_slice(&seed_level));
         if let Some(t) = &self.timer {
             t.begin(encoder, WALK_SPAN);
         }
+        match &self.boxes_on_gpu {
+            Some(on_gpu) => {
+                gpu.queue
+                    .write_buffer(&s.level_args[0], 0, bytemuck::cast_slice(&level_args(0, 0)));
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("prepare object boxes"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(&on_gpu.prepare);
+                pass.set_bind_group(0, &on_gpu.group, &[]);
+                pass.set_bind_group(3, &self.object_frustum.group, &[]);
+                pass.dispatch_workgroups(groups_for(self.objects), 1, 1);
+            }
+            None => {
+                let NodeBoxes { boxes, states, .. } = &self.node_boxes;
+                if !boxes.is_empty() {
+                    gpu.queue.write_buffer(&s.boxes, 0, bytemuck::cast_slice(boxes));
+                    gpu.queue.write_buffer(&s.node_visible, 0, bytemuck::cast_slice(states));
+                }
+                // A box outside the frustum cannot be visible: not queueing
+                // it spares its test (cs_expand does the same for children).
+                self.seed_queue.clear();
+                let in_frustum = tree.seed.iter().filter(|&&n| states[n as usize] != OUTSIDE_FRUSTUM);
+                self.seed_queue.extend(in_frustum);
+                if !self.seed_queue.is_empty() {
+                    gpu.queue
+                        .write_buffer(&s.queues[0], 0, bytemuck::cast_slice(&self.seed_queue));
+                }
+                let outside = (tree.seed.len() - self.seed_queue.len()) as u32;
+                let seed_level = level_args(self.seed_queue.len() as u32, outside);
+                gpu.queue
+                    .write_buffer(&s.level_args[0], 0, bytemuck::cast_slice(&seed_level));
+            }
+        }
+        encoder.copy_buffer_to_buffer(&s.level_args[0], 0, &self.level_stats, SEED_LEVEL_OFFSET, LEVEL_BYTES);
+        self.test.stage(gpu, &self.node_boxes.planes);
         self.test.begin(encoder, self.timer.as_ref().map(|t| (t, PYRAMID_SPAN)));
         self.walk = Some(Walk {
             seed_len: tree.seed.len() as u32,
-            seed_outside: (tree.seed.len() - self.seed_queue.len()) as u32,
             levels: 0,
         });
     }
@@ -424,6 +471,7 @@ impl GpuWalk {
             pass.set_bind_group(0, &self.no_bindings, &[]);
             pass.set_bind_group(1, &tree.tree_group, &[]);
             pass.set_bind_group(2, &tree.lists_group, &[]);
+            pass.set_bind_group(3, &self.object_frustum.group, &[]);
             pass.dispatch_workgroups(groups_for(self.objects), 1, 1);
         }
         if let Some(t) = &self.timer {
@@ -475,10 +523,8 @@ impl GpuWalk {
             t.resolve(&mut encoder);
         }
         let level_bytes = u64::from(walk.levels) * LEVEL_BYTES;
-        if level_bytes > 0 {
-            self.audit_readback
-                .copy(&mut encoder, &self.level_stats, 0, 0, level_bytes);
-        }
+        self.audit_readback
+            .copy(&mut encoder, &self.level_stats, 0, 0, AUDIT_DRAWN_OFFSET);
         let drawn_bytes = u64::from(self.objects) * 4;
         if drawn_bytes > 0 {
             self.audit_readback
@@ -490,9 +536,10 @@ impl GpuWalk {
 
         let word = |offset: u64| (offset / 4) as usize;
         let levels = &self.words[..word(level_bytes)];
+        let seed_outside = self.words[word(SEED_LEVEL_OFFSET) + LEVEL_OUTSIDE];
         let mut audit = GpuAudit {
             nodes_visited: u64::from(walk.seed_len),
-            nodes_outside_frustum: u64::from(walk.seed_outside),
+            nodes_outside_frustum: u64::from(seed_outside),
             ..GpuAudit::default()
         };
         let mut reaching_near = 0;
@@ -549,10 +596,31 @@ impl GpuWalk {
     /// [`VISIBLE`](super::layout::VISIBLE)),
     /// for the CPU twin of the walk.
     pub(super) fn node_states(&self, gpu: &GpuContext) -> Vec<u32> {
-        let bytes = u64::from(self.tree.nodes) * 4;
-        let readback = Readback::new(gpu, "node states", bytes);
+        self.read_words(gpu, &self.scratch.node_visible, 1)
+    }
+
+    /// Whether the last walk's boxes were made on the GPU.
+    pub(super) fn boxes_on_gpu(&self) -> bool {
+        self.boxes_on_gpu.is_some()
+    }
+
+    /// The boxes the last walk tested, as its test read them (made on the
+    /// GPU, or staged from [`GpuWalk::node_boxes`]): per node, min with the
+    /// raise in w, then max.
+    pub(super) fn tested_boxes(&self, gpu: &GpuContext) -> Vec<[f32; 8]> {
+        let words = self.read_words(gpu, &self.scratch.boxes, 8);
+        words
+            .chunks_exact(8)
+            .map(|b| std::array::from_fn(|k| f32::from_bits(b[k])))
+            .collect()
+    }
+
+    /// `words_per_node` words a node of `buffer`, read back.
+    fn read_words(&self, gpu: &GpuContext, buffer: &wgpu::Buffer, words_per_node: u64) -> Vec<u32> {
+        let bytes = u64::from(self.tree.nodes) * 4 * words_per_node;
+        let readback = Readback::new(gpu, "node words", bytes);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        readback.copy(&mut encoder, &self.scratch.node_visible, 0, 0, bytes);
+        readback.copy(&mut encoder, buffer, 0, 0, bytes);
         gpu.queue.submit([encoder.finish()]);
         let mut words = Vec::new();
         readback.read(gpu, bytes, &mut words);
@@ -561,8 +629,8 @@ impl GpuWalk {
 }
 
 impl TreeOnGpu {
-    /// `tree` on the GPU, bound with `lists`, `drawn` (a word per object
-    /// drawn) and the objects' boxes and frustum.
+    /// `tree` on the GPU, bound with `lists` and `drawn` (a word per object
+    /// drawn).
     fn new(
         gpu: &GpuContext,
         tree: &CullTree,
@@ -570,7 +638,6 @@ impl TreeOnGpu {
         lists_layout: &wgpu::BindGroupLayout,
         lists: Rc<VisibleLists>,
         drawn: &wgpu::Buffer,
-        object_frustum: &ObjectFrustum,
     ) -> TreeOnGpu {
         let storage = wgpu::BufferUsages::STORAGE;
         let node_buffer = gpu.buffer_with("tree nodes", bytemuck::cast_slice(&tree.nodes), storage);
@@ -584,16 +651,53 @@ impl TreeOnGpu {
             lists_group: bind_buffers(
                 gpu,
                 lists_layout,
-                &[
-                    &lists.all_commands,
-                    &lists.commands,
-                    &lists.counts,
-                    drawn,
-                    &object_frustum.boxes,
-                    &object_frustum.frustum,
-                ],
+                &[&lists.all_commands, &lists.commands, &lists.counts, drawn],
             ),
             lists,
+        }
+    }
+}
+
+/// What the passes that test single objects against the frustum share
+/// (frustum.rs), written before their own text.
+const OBJECT_FRUSTUM_WGSL: &str = include_str!("object_frustum.wgsl");
+
+impl BoxesOnGpu {
+    /// The pass that makes a flat tree's boxes, words and seed queue in
+    /// `scratch` from the objects' boxes bound by `objects` (group 3).
+    fn new(gpu: &GpuContext, scratch: &NodeScratch, objects: &wgpu::BindGroupLayout) -> BoxesOnGpu {
+        let module = gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("prepare_objects.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(
+                [
+                    &shader_constants(),
+                    OBJECT_FRUSTUM_WGSL,
+                    include_str!("prepare_objects.wgsl"),
+                ]
+                .concat()
+                .into(),
+            ),
+        });
+        let write = wgpu::BufferBindingType::Storage { read_only: false };
+        let layout = bind_group_layout(gpu, "prepare object boxes", &[(wgpu::ShaderStages::COMPUTE, write); 4]);
+        BoxesOnGpu {
+            prepare: compute_pipeline(
+                gpu,
+                "prepare object boxes",
+                &module,
+                "cs_prepare",
+                &[Some(&layout), None, None, Some(objects)],
+            ),
+            group: bind_buffers(
+                gpu,
+                &layout,
+                &[
+                    &scratch.boxes,
+                    &scratch.node_visible,
+                    &scratch.queues[0],
+                    &scratch.level_args[0],
+                ],
+            ),
         }
     }
 }
@@ -665,8 +769,20 @@ fn compute_pipeline(
 /// A level's arguments (`Level` in walk.wgsl) for a queue of
 /// `entries` nodes: an indexed indirect draw of one box per entry, an
 /// indirect dispatch over the entries, and no nodes counted yet.
-fn level_args(entries: u32) -> [u32; LEVEL_WORDS] {
-    [BOX_INDEX_COUNT, entries, 0, 0, 0, groups_for(entries), 1, 1, 0, 0, 0]
+fn level_args(entries: u32, outside: u32) -> [u32; LEVEL_WORDS] {
+    [
+        BOX_INDEX_COUNT,
+        entries,
+        0,
+        0,
+        0,
+        groups_for(entries),
+        1,
+        1,
+        0,
+        outside,
+        0,
+    ]
 }
 
 /// Workgroups that cover `n` items, within the grid limit (the shaders
@@ -685,7 +801,7 @@ mod tests {
 
     #[test]
     fn the_shaders_lay_out_what_this_file_writes_and_reads() {
-        let module = parse(&[&shader_constants(), include_str!("walk.wgsl")].concat());
+        let module = parse(&[&shader_constants(), OBJECT_FRUSTUM_WGSL, include_str!("walk.wgsl")].concat());
         let (members, size) = layout(&module, "Level");
         assert_eq!(u64::from(size), LEVEL_BYTES, "level_args writes LEVEL_WORDS words");
         let offset = |name: &str| members.iter().find(|(n, _)| n == name).map(|&(_, o)| u64::from(o));
@@ -709,7 +825,7 @@ mod tests {
         let (members, size) = layout(&module, "ObjectFrustum");
         assert_eq!(size as usize, std::mem::size_of::<ShaderFrustum>());
         let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
-        assert_eq!(names, ["eye_high", "eye_low", "planes"]);
+        assert_eq!(names, ["eye_high", "eye_low", "planes", "forward", "margins"]);
         parse(
             &[
                 CAMERA_WGSL,

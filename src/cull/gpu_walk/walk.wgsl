@@ -77,50 +77,6 @@ struct Counts {
 // for the statistics).
 @group(2) @binding(3) var<storage, read_write> drawn: array<u32>;
 
-// An object's box: its centre in two parts (high and low) and its half
-// extent, rounded up (frustum.rs).
-struct ObjectBox {
-    centre_high: vec4<f32>,
-    centre_low: vec4<f32>,
-    extent: vec4<f32>,
-}
-
-// The frame's eye in two parts and the frustum's planes: inward unit normal
-// (xyz) and offset (w), eye-centred.
-struct ObjectFrustum {
-    eye_high: vec4<f32>,
-    eye_low: vec4<f32>,
-    planes: array<vec4<f32>, 5>,
-}
-
-@group(2) @binding(4) var<storage, read> object_boxes: array<ObjectBox>;
-@group(2) @binding(5) var<uniform> frustum: ObjectFrustum;
-
-fn max_abs(v: vec3<f32>) -> f32 {
-    let a = abs(v);
-    return max(max(a.x, a.y), a.z);
-}
-
-// Whether the object lies wholly behind one of the frustum's planes, by
-// more than the test's rounding could move it (frustum.rs: what vfc finds
-// outside, this finds outside too). The centre is made eye-relative part by
-// part, so far from the origin the low parts still count.
-fn outside_frustum(object: u32) -> bool {
-    let b = object_boxes[object];
-    let centre = (b.centre_high.xyz - frustum.eye_high.xyz) + (b.centre_low.xyz - frustum.eye_low.xyz);
-    let extent = b.extent.xyz;
-    let reach = max_abs(abs(centre) + extent);
-    let world = max(max_abs(frustum.eye_high.xyz), max_abs(b.centre_high.xyz));
-    let slack = OUTSIDE_SLACK * reach + ABSOLUTE_ERROR * world;
-    for (var k = 0u; k < 5u; k++) {
-        let plane = frustum.planes[k];
-        if dot(plane.xyz, centre) + dot(abs(plane.xyz), extent) + plane.w < -slack {
-            return true;
-        }
-    }
-    return false;
-}
-
 // 004 §2: "If the node is culled, we stop the traversal for the node [...].
 // If the node is a leaf, we directly mark it as a potentially visible
 // occludee in the VB. Otherwise, we tightly pack and enqueue them for the
