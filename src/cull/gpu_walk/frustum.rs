@@ -78,7 +78,7 @@ pub(super) struct ObjectFrustum {
     pub(super) layout: wgpu::BindGroupLayout,
     pub(super) group: wgpu::BindGroup,
     /// The frame whose poses `boxes` hold; a walk that did not run in the
-    /// frame before (`auto` ran another) uploads every box again.
+    /// frame before (`auto` ran another) uploads every mover's box again.
     frame: Option<u32>,
     /// Staged on the CPU, written in [`ObjectFrustum::write`].
     staged_frustum: ShaderFrustum,
@@ -124,8 +124,7 @@ impl ObjectFrustum {
 
     /// On the CPU, before frame `frame`: stages `camera`'s frustum and the
     /// frame's box `margins`, and the boxes of the objects `moved` since the
-    /// previous frame, or of every object where this walk did not run in
-    /// it.
+    /// previous frame (of every mover where this walk did not run in it).
     pub(super) fn prepare(&mut self, camera: &Camera, margins: BoxMargins, scene: &Scene, moved: &[u32], frame: u32) {
         let (eye, planes) = camera.frustum().planes();
         let (eye_high, eye_low) = split(eye);
@@ -138,11 +137,13 @@ impl ObjectFrustum {
             margins: margins.for_shader(camera),
         };
         self.staged_boxes.clear();
-        let all = self.frame.is_none_or(|f| f.checked_add(1) != Some(frame));
-        let changed: Box<dyn Iterator<Item = u32>> = if all {
-            Box::new(0..scene.objects.len() as u32)
-        } else {
-            Box::new(moved.iter().copied())
+        // Every box in the first frame; after a gap in the frames this walk
+        // ran, every mover's (the only objects that ever change); else those
+        // that moved since the frame before.
+        let changed: Box<dyn Iterator<Item = u32>> = match self.frame {
+            None => Box::new(0..scene.objects.len() as u32),
+            Some(f) if f.checked_add(1) != Some(frame) => Box::new(scene.movers.iter().map(|m| m.object)),
+            Some(_) => Box::new(moved.iter().copied()),
         };
         let boxes = changed.map(|o| (o, object_box(&scene.objects[o as usize].bounds)));
         self.staged_boxes.extend(boxes);
