@@ -175,7 +175,7 @@ fn cull_on_gpu(
     walk.prepare_frustum(camera, ctx.margins(), input.scene, input.moved, input.frame);
     ctx.record(&mut |work| walk.drop_what_left_the_frustum(work));
     ctx.draw_indirect(walk.list(DrawList::Visible, indirect_count));
-    walk.prepare_boxes(camera, ctx.margins(), bounds);
+    walk.prepare_boxes(input, ctx.margins(), bounds);
     ctx.record(&mut |work| walk.begin(work));
     for _ in 0..walk.levels() {
         ctx.record(&mut |work| walk.walk_level(work));

@@ -150,6 +150,11 @@ impl ObjectFrustum {
         self.frame = Some(frame);
     }
 
+    /// Every object's box, as object_frustum.wgsl's `object_boxes`.
+    pub(super) fn boxes(&self) -> &wgpu::Buffer {
+        &self.boxes
+    }
+
     /// Writes what [`ObjectFrustum::prepare`] staged.
     pub(super) fn write(&self, gpu: &GpuContext) {
         gpu.queue
@@ -173,7 +178,7 @@ fn split(v: DVec3) -> ([f32; 4], [f32; 4]) {
 }
 
 /// `b` as its centre in two parts and its half extent, rounded up.
-fn object_box(b: &Aabb) -> ObjectBox {
+pub(super) fn object_box(b: &Aabb) -> ObjectBox {
     let (centre_high, centre_low) = split((b.min + b.max) / 2.0);
     let half = (b.max - b.min) / 2.0;
     let up = |x: f64| {

@@ -45,11 +45,16 @@ fn rounding(b: ObjectBox, reach: f32) -> f32 {
     return OUTSIDE_SLACK * reach + ABSOLUTE_ERROR * world;
 }
 
-// Whether the object lies wholly behind one of the frustum's planes, by
-// more than the test's rounding could move it (frustum.rs: what vfc finds
-// outside, this finds outside too).
+// Whether the object lies wholly behind one of the frustum's planes (see
+// box_outside_frustum).
 fn outside_frustum(object: u32) -> bool {
-    let b = object_boxes[object];
+    return box_outside_frustum(object_boxes[object]);
+}
+
+// Whether box `b` lies wholly behind one of the frustum's planes, by more
+// than the test's rounding could move it (frustum.rs: what vfc finds
+// outside, this finds outside too).
+fn box_outside_frustum(b: ObjectBox) -> bool {
     let centre = eye_relative_centre(b);
     let extent = b.extent.xyz;
     let slack = rounding(b, max_abs(abs(centre) + extent));

@@ -1,11 +1,13 @@
-// roc's boxes made on the GPU, from every object's box (object_frustum.wgsl),
-// so the CPU hands over only the camera: what walk.rs's NodeBoxes::prepare
-// and gpu/conservative.rs's eye_relative_box make on the CPU in f64, with
-// margins for f32 (frustum.rs, BoxMargins::for_shader). Per object, which
-// is its flat tree's node: its word of the visibility buffer
-// (OUTSIDE_FRUSTUM, REACHES_NEAR or TO_TEST), its QueryBox (boxes.wgsl: min
-// with the raise in w, then max; empty unless tested), and, unless outside
-// the frustum, a place in the seed level's queue.
+// The boxes of a walk that draws them (roc, ioc) made on the GPU, from each
+// tree node's box in two f32 parts (object_frustum.wgsl's ObjectBox: the
+// objects' own for roc's flat tree, the hierarchy's nodes for ioc), so the
+// CPU hands over only the camera: what walk.rs's NodeBoxes::prepare and
+// gpu/conservative.rs's eye_relative_box make on the CPU in f64, with
+// margins for f32 (frustum.rs, BoxMargins::for_shader).
+// cs_prepare, per node: its word of the visibility buffer (OUTSIDE_FRUSTUM,
+// REACHES_NEAR or TO_TEST) and its QueryBox (boxes.wgsl: min with the raise
+// in w, then max; empty unless tested). cs_seed then queues the seed nodes
+// not outside the frustum in the seed level, and counts the others.
 // GROUP_SIZE, MAX_GROUPS, the node words and the LEVEL_* word indices are
 // written before this text from layout.rs's constants.
 
@@ -14,18 +16,20 @@
 @group(0) @binding(2) var<storage, read_write> queue: array<u32>;
 // The seed level's arguments as words (walk.wgsl's Level).
 @group(0) @binding(3) var<storage, read_write> level: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read> node_boxes: array<ObjectBox>;
+@group(0) @binding(5) var<storage, read> seeds: array<u32>;
 
 @compute @workgroup_size(GROUP_SIZE)
 fn cs_prepare(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) grid: vec3<u32>) {
-    let n = arrayLength(&object_boxes);
-    for (var o = id.x; o < n; o += grid.x * GROUP_SIZE) {
+    let n = arrayLength(&node_boxes);
+    for (var node = id.x; node < n; node += grid.x * GROUP_SIZE) {
+        let b = node_boxes[node];
         var state = OUTSIDE_FRUSTUM;
         var low = vec4<f32>(0.0);
         var high = vec4<f32>(0.0);
         // The frustum test first: the near-plane rule must not take a box
         // beside the camera for one that holds it.
-        if !outside_frustum(o) {
-            let b = object_boxes[o];
+        if !box_outside_frustum(b) {
             let centre = eye_relative_centre(b);
             let reach = max_abs(abs(centre) + b.extent.xyz);
             // Grown as on the CPU, and by the rounding of this arithmetic
@@ -44,14 +48,22 @@ fn cs_prepare(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
                 high = vec4<f32>(hi, 0.0);
             }
         }
-        node_visible[o] = state;
-        boxes[2u * o] = low;
-        boxes[2u * o + 1u] = high;
-        if state == OUTSIDE_FRUSTUM {
+        node_visible[node] = state;
+        boxes[2u * node] = low;
+        boxes[2u * node + 1u] = high;
+    }
+}
+
+@compute @workgroup_size(GROUP_SIZE)
+fn cs_seed(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) grid: vec3<u32>) {
+    let n = arrayLength(&seeds);
+    for (var i = id.x; i < n; i += grid.x * GROUP_SIZE) {
+        let node = seeds[i];
+        if node_visible[node] == OUTSIDE_FRUSTUM {
             atomicAdd(&level[LEVEL_OUTSIDE], 1u);
         } else {
             let slot = atomicAdd(&level[LEVEL_ENTRIES], 1u);
-            queue[slot] = o;
+            queue[slot] = node;
             atomicMax(&level[LEVEL_GROUPS_X], min(slot / GROUP_SIZE + 1u, MAX_GROUPS));
         }
     }

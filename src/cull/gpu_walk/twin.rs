@@ -288,6 +288,7 @@ impl BoxOnTarget {
 mod tests {
     use super::*;
     use crate::auto_or::AutoOr;
+    use crate::bounds::Aabb;
     use crate::camera::generate::default_path;
     use crate::camera::path::CameraPath;
     use crate::cull::ModeParams;
@@ -321,7 +322,7 @@ mod tests {
         mut world: World,
         path: &CameraPath,
         mut mode: GpuCulling,
-        tree: &CullTree,
+        (tree, source): (&CullTree, Option<&[u32]>),
         hiz: Option<HizParams>,
     ) -> u64 {
         let options = RunOptions {
@@ -358,7 +359,15 @@ mod tests {
             if on_gpu.boxes_on_gpu() {
                 let margins = BoxMargins::new(gpu.depth_margins, &camera, RESOLUTION);
                 let mut cpu = NodeBoxes::default();
-                cpu.prepare(&camera, margins, world.scene.objects.iter().map(|o| o.bounds));
+                // Each node's box: its object's, or its hierarchy node's.
+                let bounds: Vec<Aabb> = match source {
+                    Some(source) => source
+                        .iter()
+                        .map(|&n| world.hierarchy.nodes[n as usize].bounds)
+                        .collect(),
+                    None => world.scene.objects.iter().map(|o| o.bounds).collect(),
+                };
+                cpu.prepare(&camera, margins, bounds.into_iter());
                 held += hold_boxes_made_on_the_gpu(&cpu, &states, &on_gpu.tested_boxes(gpu), frame);
             }
             let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
@@ -562,19 +571,26 @@ mod tests {
         // roc's and hiz's flat tree, and ioc's and hiz's hierarchy cut from
         // depth 2 to 6.
         let flat = CullTree::flat(scene.objects.len() as u32);
-        let (cut, _) = CullTree::cut(&hierarchy, 2, 6);
+        let (cut, source) = CullTree::cut(&hierarchy, 2, 6);
         let nodes = DepthRange {
             start: AutoOr::Given(Level(2)),
             bottom: AutoOr::Given(Level(6)),
         };
         for gpu in &gpus {
             let world = || World::new(scene.clone(), hierarchy.clone());
-            let hidden = compare(gpu, world(), &path, raster_occlusion_culling(), &flat, None);
+            let hidden = compare(gpu, world(), &path, raster_occlusion_culling(), (&flat, None), None);
             assert!(
                 hidden > 50,
                 "roc's walks hide nodes, so the comparison means something ({hidden})"
             );
-            let hidden = compare(gpu, world(), &path, iterative_occlusion_culling(nodes), &cut, None);
+            let hidden = compare(
+                gpu,
+                world(),
+                &path,
+                iterative_occlusion_culling(nodes),
+                (&cut, Some(&source)),
+                None,
+            );
             assert!(hidden > 50, "ioc's walks hide nodes ({hidden})");
             // hiz as it runs by default (objects, 4 texels, a base a quarter
             // the target's, pixel by pixel where that fails), on the largest
@@ -604,7 +620,7 @@ mod tests {
                 (over_nodes, &cut, 20),
             ] {
                 let mode = hierarchical_depth_culling(params);
-                let hidden = compare(gpu, world(), &path, mode, tree, Some(params));
+                let hidden = compare(gpu, world(), &path, mode, (tree, None), Some(params));
                 assert!(hidden > least, "hiz's walks hide boxes ({params:?}: {hidden})");
             }
         }

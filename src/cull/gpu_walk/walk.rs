@@ -4,7 +4,7 @@
 
 use std::rc::Rc;
 
-use super::frustum::ObjectFrustum;
+use super::frustum::{ObjectBox, ObjectFrustum, object_box};
 use super::layout::{
     DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_OUTSIDE,
     LEVEL_WORDS, MAX_GROUPS, OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST, shader_constants,
@@ -16,6 +16,7 @@ use super::pyramid::PyramidLevel;
 use super::tree::{CullTree, MAX_LEVELS};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
+use crate::cull::culler::FrameInput;
 use crate::gpu::{
     BOX_INDEX_COUNT, BoxMargins, BoxPlanes, EyeBox, GpuAudit, GpuContext, GpuError, GpuSetup, GpuTimer, GpuWork,
     IndirectCount, IndirectDraws, PixelRays, QueryBox, Readback, Resolution, ShaderBoxPlanes, bind_buffers,
@@ -54,11 +55,26 @@ struct Walk {
     levels: u32,
 }
 
-/// A flat tree's boxes made on the GPU (prepare_objects.wgsl): its pipeline
-/// and what it writes, the node scratch's boxes, words and first queue.
+/// A walk's boxes made on the GPU (prepare_objects.wgsl): its pipelines,
+/// what they read (each node's box in two f32 parts, and the seed nodes)
+/// and write (the node scratch's boxes, words and first queue).
 struct BoxesOnGpu {
     prepare: wgpu::ComputePipeline,
+    seed: wgpu::ComputePipeline,
     group: wgpu::BindGroup,
+    seeds: u32,
+    /// The nodes' boxes where they are not the objects' (a flat tree's
+    /// nodes are its objects, whose boxes [`ObjectFrustum`] keeps), with
+    /// those staged for the next walk and the frame they were made for.
+    node_boxes: Option<NodeSources>,
+}
+
+/// A tree's node boxes on the GPU, made again only when they may have
+/// changed.
+struct NodeSources {
+    buffer: wgpu::Buffer,
+    staged: Vec<ObjectBox>,
+    frame: Option<u32>,
 }
 
 /// Per-node scratch for a tree of `capacity` nodes.
@@ -285,8 +301,8 @@ impl GpuWalk {
         );
         assert!((1..=MAX_LEVELS).contains(&tree.levels), "1..={MAX_LEVELS} levels");
         let drawn = storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy);
-        let boxes_on_gpu = (node_test == NodeTest::Raster && tree.is_flat())
-            .then(|| BoxesOnGpu::new(gpu, &scratch, &object_frustum.layout));
+        let boxes_on_gpu =
+            (node_test == NodeTest::Raster).then(|| BoxesOnGpu::new(gpu, tree, &scratch, &object_frustum));
         let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, lists, &drawn);
         let spans = match node_test {
             NodeTest::Raster => 1,
@@ -355,14 +371,31 @@ impl GpuWalk {
     }
 
     /// Prepares the tree's node boxes (`bounds`, one per node, in node
-    /// order) for `camera` with the frame's `margins`, on the CPU; nothing
-    /// where the GPU makes them (then `bounds` is not read).
-    pub fn prepare_boxes(&mut self, camera: &Camera, margins: BoxMargins, bounds: impl ExactSizeIterator<Item = Aabb>) {
-        if self.boxes_on_gpu.is_some() {
-            return;
-        }
+    /// order, as `input`'s frame has them) for its camera with the frame's
+    /// `margins`, on the CPU. Where the GPU makes them, `bounds` are only
+    /// staged where they may have changed: in the first frame, when objects
+    /// moved, and after a gap in the frames this walk ran in a scene with
+    /// movers; a flat tree's are the objects' own, staged with the frustum.
+    pub fn prepare_boxes(
+        &mut self,
+        input: &FrameInput,
+        margins: BoxMargins,
+        bounds: impl ExactSizeIterator<Item = Aabb>,
+    ) {
         assert_eq!(bounds.len(), self.tree.nodes as usize, "one box per tree node");
-        self.node_boxes.prepare(camera, margins, bounds);
+        match self.boxes_on_gpu.as_mut().map(|b| &mut b.node_boxes) {
+            None => self.node_boxes.prepare(input.camera, margins, bounds),
+            Some(None) => {}
+            Some(Some(sources)) => {
+                let gap = sources.frame.is_none_or(|f| f.checked_add(1) != Some(input.frame));
+                let changed = !input.moved.is_empty() || (gap && !input.scene.movers.is_empty());
+                sources.staged.clear();
+                if sources.frame.is_none() || changed {
+                    sources.staged.extend(bounds.map(|b| object_box(&b)));
+                }
+                sources.frame = Some(input.frame);
+            }
+        }
     }
 
     /// Starts a walk: stages the boxes prepared on the CPU, or makes them on
@@ -378,16 +411,22 @@ impl GpuWalk {
         }
         match &self.boxes_on_gpu {
             Some(on_gpu) => {
+                if let Some(sources) = on_gpu.node_boxes.as_ref().filter(|n| !n.staged.is_empty()) {
+                    gpu.queue
+                        .write_buffer(&sources.buffer, 0, bytemuck::cast_slice(&sources.staged));
+                }
                 gpu.queue
                     .write_buffer(&s.level_args[0], 0, bytemuck::cast_slice(&level_args(0, 0)));
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("prepare object boxes"),
+                    label: Some("prepare boxes"),
                     timestamp_writes: None,
                 });
-                pass.set_pipeline(&on_gpu.prepare);
                 pass.set_bind_group(0, &on_gpu.group, &[]);
                 pass.set_bind_group(3, &self.object_frustum.group, &[]);
-                pass.dispatch_workgroups(groups_for(self.objects), 1, 1);
+                pass.set_pipeline(&on_gpu.prepare);
+                pass.dispatch_workgroups(groups_for(tree.nodes), 1, 1);
+                pass.set_pipeline(&on_gpu.seed);
+                pass.dispatch_workgroups(groups_for(on_gpu.seeds), 1, 1);
             }
             None => {
                 let NodeBoxes { boxes, states, .. } = &self.node_boxes;
@@ -663,9 +702,11 @@ impl TreeOnGpu {
 const OBJECT_FRUSTUM_WGSL: &str = include_str!("object_frustum.wgsl");
 
 impl BoxesOnGpu {
-    /// The pass that makes a flat tree's boxes, words and seed queue in
-    /// `scratch` from the objects' boxes bound by `objects` (group 3).
-    fn new(gpu: &GpuContext, scratch: &NodeScratch, objects: &wgpu::BindGroupLayout) -> BoxesOnGpu {
+    /// The passes that make `tree`'s boxes, words and seed queue in
+    /// `scratch`, from its nodes' boxes: the objects' own in `objects` for a
+    /// flat tree, else a buffer of their own, staged each frame they may
+    /// have changed.
+    fn new(gpu: &GpuContext, tree: &CullTree, scratch: &NodeScratch, objects: &ObjectFrustum) -> BoxesOnGpu {
         let module = gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("prepare_objects.wgsl"),
             source: wgpu::ShaderSource::Wgsl(
@@ -678,16 +719,41 @@ impl BoxesOnGpu {
                 .into(),
             ),
         });
-        let write = wgpu::BufferBindingType::Storage { read_only: false };
-        let layout = bind_group_layout(gpu, "prepare object boxes", &[(wgpu::ShaderStages::COMPUTE, write); 4]);
-        BoxesOnGpu {
-            prepare: compute_pipeline(
+        use wgpu::BufferBindingType::Storage;
+        let (read, write) = (Storage { read_only: true }, Storage { read_only: false });
+        let layout = bind_group_layout(
+            gpu,
+            "prepare boxes",
+            &[write, write, write, write, read, read].map(|t| (wgpu::ShaderStages::COMPUTE, t)),
+        );
+        let pipeline = |entry: &str| {
+            compute_pipeline(
                 gpu,
-                "prepare object boxes",
+                entry,
                 &module,
-                "cs_prepare",
-                &[Some(&layout), None, None, Some(objects)],
+                entry,
+                &[Some(&layout), None, None, Some(&objects.layout)],
+            )
+        };
+        let node_boxes = (!tree.is_flat()).then(|| NodeSources {
+            buffer: storage_buffer(
+                gpu,
+                "node boxes",
+                u64::from(tree.nodes.len().max(1) as u32) * size_of::<ObjectBox>() as u64,
+                wgpu::BufferUsages::COPY_DST,
             ),
+            staged: Vec::new(),
+            frame: None,
+        });
+        let seeds = gpu.buffer_with(
+            "seed nodes",
+            bytemuck::cast_slice(&tree.seed),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let sources = node_boxes.as_ref().map_or(objects.boxes(), |n| &n.buffer);
+        BoxesOnGpu {
+            prepare: pipeline("cs_prepare"),
+            seed: pipeline("cs_seed"),
             group: bind_buffers(
                 gpu,
                 &layout,
@@ -696,8 +762,12 @@ impl BoxesOnGpu {
                     &scratch.node_visible,
                     &scratch.queues[0],
                     &scratch.level_args[0],
+                    sources,
+                    &seeds,
                 ],
             ),
+            seeds: tree.seed.len() as u32,
+            node_boxes,
         }
     }
 }
