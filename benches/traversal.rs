@@ -6,9 +6,9 @@
 //! - **front-to-back order**: every node in the frustum through the
 //!   nearest-corner queue (003 §4.2), the order `sq`, `omq` and `chc` visit
 //!   nodes in; an upper bound, since those stop below hidden nodes;
-//! - **box preparation**: the eye-relative f64 boxes `ioc` (its cut tree
-//!   at the automatic depths) and `roc` (one per object) stage for the GPU
-//!   every frame.
+//! - **box preparation**: the eye-relative f64 boxes `hiz` (one per
+//!   object) stages for the GPU every frame, before its planes (`roc` and
+//!   `ioc` make theirs on the GPU: `benches/culling_cpu.rs`).
 //!
 //! Means per frame over the walk, each the median of several passes.
 
@@ -20,8 +20,7 @@ use std::time::{Duration, Instant};
 use occlu::bounds::Aabb;
 use occlu::camera::{Camera, Containment};
 use occlu::cull::TraversalStats;
-use occlu::cull::gpu_walk::depths::auto_depths;
-use occlu::cull::gpu_walk::{CullTree, NodeBoxes};
+use occlu::cull::gpu_walk::NodeBoxes;
 use occlu::cull::traversal::{DepthQueue, frustum_cull_subtree, nearest_corner};
 use occlu::gpu::{BoxMargins, DepthMargins, Resolution};
 use occlu::hierarchy::Hierarchy;
@@ -62,12 +61,8 @@ fn main() {
         });
         report("front-to-back order", order, popped / (PASSES * cameras.len()), "nodes");
 
-        let (start, bottom) = auto_depths(&hierarchy, &scene.objects);
-        let (_, source) = CullTree::cut(&hierarchy, start, bottom);
-        let bounds: Vec<Aabb> = source.iter().map(|&n| hierarchy.nodes[n as usize].bounds).collect();
-        prepare_boxes(&format!("ioc boxes (depths {start}-{bottom})"), &cameras, &bounds);
         let objects: Vec<Aabb> = scene.objects.iter().map(|o| o.bounds).collect();
-        prepare_boxes("roc boxes (every object)", &cameras, &objects);
+        prepare_boxes("hiz boxes (every object, without planes)", &cameras, &objects);
         println!();
     }
 }

@@ -64,11 +64,9 @@ impl BoxMargins {
             depth,
         }
     }
-}
 
-impl BoxMargins {
     /// These margins as a shader that makes boxes from f32 parts reads
-    /// them (gpu_walk's prepare_objects.wgsl): the growth per unit of reach,
+    /// them (gpu_walk's prepare_nodes.wgsl): the growth per unit of reach,
     /// the raise's absolute part and its part per unit of depth, and the
     /// nearest view depth at which a box reaches the near plane for
     /// `camera`. The raise and that depth are taken [`SHADER_SAFETY`] larger,

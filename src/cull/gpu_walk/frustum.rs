@@ -3,9 +3,10 @@
 //! left the frustum (drawn early, as occluders, without a test) and the
 //! objects of a visible bottom-depth node that lie outside it (marked with
 //! their node). `cs_early_frustum` takes the first out of the early list,
-//! `cs_compact` the second out of the marks (walk.wgsl). For roc the same
-//! boxes and frame make every object's tested box on the GPU
-//! (prepare_objects.wgsl), so its CPU hands over only the camera.
+//! `cs_compact` the second out of the marks (walk.wgsl). For roc and ioc the
+//! same frame (and the boxes: the objects' own, or the nodes' in the same
+//! form) make every tested box on the GPU (prepare_nodes.wgsl), so their
+//! CPU hands over only the camera.
 //! object_frustum.wgsl holds what those passes share, bound as group 3.
 //!
 //! Each object's box is uploaded once as its centre in two f32 parts (high
@@ -15,33 +16,38 @@
 //! eye-relative part by part, so a box 1e7 from the origin is tested as
 //! precisely as one beside it.
 //!
-//! Precision: the eye-relative centre is within 3 · 2^-24 of the reach (the
-//! box's largest eye-relative coordinate) on each axis, and within 2^-45 of
-//! the larger of the eye's and the centre's distance from the origin for
-//! the low parts' rounding ([`GPU_ABSOLUTE_ERROR`]); the planes' normals are
-//! within 2^-24 on each axis, and the plane sum's roundings within 6 · 2^-24
-//! of twice the reach: the test's value is within [`GPU_ERROR`] = 1.2e-6 of
-//! the reach, plus the absolute part, of the exact one. An object is outside
-//! where the value falls below −([`GPU_OUTSIDE_SLACK`] = 2e-6 of the reach
-//! plus the absolute part), so it is truly outside (the slack exceeds the
-//! error), and every object `vfc` finds outside (by [`OUTSIDE_SLACK`], 4e-6,
-//! at least the slack plus the error) is, but for boxes far smaller than a
-//! millionth of their distance from the origin.
+//! Precision, counting each f32 operation as one unit in the last place
+//! (2^-23, what WGSL, Vulkan and GLSL ES promise; round-to-nearest halves
+//! it): the eye-relative centre is within 3 · 2^-23 of the reach (the box's
+//! largest eye-relative coordinate) on each axis, and within 2^-44 of the
+//! larger of the eye's and the centre's distance from the origin for the low
+//! parts ([`GPU_ABSOLUTE_ERROR`]); dotted with a unit normal (‖n‖₁ ≤ √3),
+//! with the normal's own rounding, the extent rounded up and the plane sum's
+//! six roundings, the test's value is within 17 · 2^-23 ≈ [`GPU_ERROR`] =
+//! 2.4e-6 of the reach, plus the absolute part, of the exact one. An object
+//! is outside where the value falls below −([`GPU_OUTSIDE_SLACK`] = 3e-6 of
+//! the reach plus the absolute part), so it is truly outside (the slack
+//! exceeds the error), and every object `vfc` finds outside (by
+//! [`OUTSIDE_SLACK`], 6e-6, at least the slack plus the error) is, but for
+//! boxes whose reach from the eye is under about 1e-7 of their distance
+//! from the origin (0.7 m at 1e7), where the absolute part dominates.
 
 use glam::DVec3;
 
 use crate::bounds::Aabb;
 use crate::camera::{Camera, OUTSIDE_SLACK};
-use crate::gpu::{BoxMargins, GpuContext, bind_buffers, bind_group_layout, storage_buffer};
+use crate::gpu::{
+    BoxMargins, GpuContext, GpuError, bind_buffers, bind_group_layout, check_storage_binding, storage_buffer,
+};
 use crate::scene::Scene;
 
 /// Relative slack of the GPU's outside test (see the module's header).
-pub(super) const GPU_OUTSIDE_SLACK: f64 = 2e-6;
+pub(super) const GPU_OUTSIDE_SLACK: f64 = 3e-6;
 /// Bound on the GPU test's error, relative to the box's reach.
-pub(super) const GPU_ERROR: f64 = 1.2e-6;
+pub(super) const GPU_ERROR: f64 = 2.4e-6;
 /// Bound on the error the low parts' rounding adds, relative to the eye's or
-/// the box's distance from the origin (2^-45), both in the slack.
-pub(super) const GPU_ABSOLUTE_ERROR: f64 = 1.0 / (1u64 << 45) as f64;
+/// the box's distance from the origin (2^-44), both in the slack.
+pub(super) const GPU_ABSOLUTE_ERROR: f64 = 1.0 / (1u64 << 44) as f64;
 
 const _: () = assert!(GPU_OUTSIDE_SLACK > GPU_ERROR && OUTSIDE_SLACK >= GPU_OUTSIDE_SLACK + GPU_ERROR);
 
@@ -79,21 +85,50 @@ pub(super) struct ObjectFrustum {
     pub(super) group: wgpu::BindGroup,
     /// The frame whose poses `boxes` hold; a walk that did not run in the
     /// frame before (`auto` ran another) uploads every mover's box again.
-    frame: Option<u32>,
-    /// Staged on the CPU, written in [`ObjectFrustum::write`].
+    frame: LastFrame,
+    /// Staged on the CPU, written in [`ObjectFrustum::write`]: the frustum,
+    /// and the objects whose boxes changed, in increasing order, with their
+    /// boxes.
     staged_frustum: ShaderFrustum,
-    staged_boxes: Vec<(u32, ObjectBox)>,
+    staged_objects: Vec<u32>,
+    staged_boxes: Vec<ObjectBox>,
+}
+
+/// The last frame something was made for, to tell what may have changed
+/// since.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct LastFrame(Option<u32>);
+
+/// How a frame follows the last one made for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Since {
+    First,
+    /// Frames were skipped (or the path started again).
+    Gap,
+    Next,
+}
+
+impl LastFrame {
+    /// How `frame` follows the last; it becomes the last.
+    pub(super) fn advance(&mut self, frame: u32) -> Since {
+        let since = match self.0 {
+            None => Since::First,
+            Some(f) if f.checked_add(1) == Some(frame) => Since::Next,
+            Some(_) => Since::Gap,
+        };
+        self.0 = Some(frame);
+        since
+    }
 }
 
 impl ObjectFrustum {
-    pub(super) fn new(gpu: &GpuContext, objects: u32) -> ObjectFrustum {
+    /// For `objects` objects; fails where the adapter cannot bind a box for
+    /// each.
+    pub(super) fn new(gpu: &GpuContext, objects: u32) -> Result<ObjectFrustum, GpuError> {
         let copy = wgpu::BufferUsages::COPY_DST;
-        let boxes = storage_buffer(
-            gpu,
-            "object boxes",
-            u64::from(objects.max(1)) * size_of::<ObjectBox>() as u64,
-            copy,
-        );
+        let bytes = u64::from(objects.max(1)) * size_of::<ObjectBox>() as u64;
+        check_storage_binding(gpu, "storage binding for the objects' boxes (bytes)", bytes)?;
+        let boxes = storage_buffer(gpu, "object boxes", bytes, copy);
         let frustum = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("object frustum"),
             size: size_of::<ShaderFrustum>() as u64,
@@ -111,15 +146,16 @@ impl ObjectFrustum {
                 (wgpu::ShaderStages::COMPUTE, wgpu::BufferBindingType::Uniform),
             ],
         );
-        ObjectFrustum {
+        Ok(ObjectFrustum {
             group: bind_buffers(gpu, &layout, &[&boxes, &frustum]),
             layout,
             boxes,
             frustum,
-            frame: None,
+            frame: LastFrame::default(),
             staged_frustum: ShaderFrustum::default(),
+            staged_objects: Vec::new(),
             staged_boxes: Vec::new(),
-        }
+        })
     }
 
     /// On the CPU, before frame `frame`: stages `camera`'s frustum and the
@@ -136,18 +172,22 @@ impl ObjectFrustum {
             forward: [forward.x, forward.y, forward.z, camera.near as f32],
             margins: margins.for_shader(camera),
         };
-        self.staged_boxes.clear();
         // Every box in the first frame; after a gap in the frames this walk
         // ran, every mover's (the only objects that ever change); else those
         // that moved since the frame before.
-        let changed: Box<dyn Iterator<Item = u32>> = match self.frame {
-            None => Box::new(0..scene.objects.len() as u32),
-            Some(f) if f.checked_add(1) != Some(frame) => Box::new(scene.movers.iter().map(|m| m.object)),
-            Some(_) => Box::new(moved.iter().copied()),
-        };
-        let boxes = changed.map(|o| (o, object_box(&scene.objects[o as usize].bounds)));
+        self.staged_objects.clear();
+        match self.frame.advance(frame) {
+            Since::First => self.staged_objects.extend(0..scene.objects.len() as u32),
+            Since::Gap => self.staged_objects.extend(scene.movers.iter().map(|m| m.object)),
+            Since::Next => self.staged_objects.extend_from_slice(moved),
+        }
+        self.staged_objects.sort_unstable();
+        self.staged_boxes.clear();
+        let boxes = self
+            .staged_objects
+            .iter()
+            .map(|&o| object_box(&scene.objects[o as usize].bounds));
         self.staged_boxes.extend(boxes);
-        self.frame = Some(frame);
     }
 
     /// Every object's box, as object_frustum.wgsl's `object_boxes`.
@@ -160,12 +200,17 @@ impl ObjectFrustum {
         gpu.queue
             .write_buffer(&self.frustum, 0, bytemuck::bytes_of(&self.staged_frustum));
         let size = size_of::<ObjectBox>() as u64;
-        // Consecutive objects in one write: every object at once after a
-        // gap, a few for the movers.
-        for run in self.staged_boxes.chunk_by(|a, b| a.0 + 1 == b.0) {
-            let data: Vec<ObjectBox> = run.iter().map(|&(_, b)| b).collect();
-            gpu.queue
-                .write_buffer(&self.boxes, u64::from(run[0].0) * size, bytemuck::cast_slice(&data));
+        // Consecutive objects in one write: every object at once in the
+        // first frame, a few for the movers.
+        let ids = &self.staged_objects;
+        let mut start = 0;
+        while start < ids.len() {
+            let end = (start + 1..ids.len())
+                .find(|&k| ids[k] != ids[k - 1] + 1)
+                .unwrap_or(ids.len());
+            let boxes = bytemuck::cast_slice(&self.staged_boxes[start..end]);
+            gpu.queue.write_buffer(&self.boxes, u64::from(ids[start]) * size, boxes);
+            start = end;
         }
     }
 }

@@ -64,8 +64,8 @@ pub(super) fn shader_constants() -> String {
     .map(|(name, value)| format!("const {name}: u32 = {value}u;\n"))
     .chain(
         [
-            ("OUTSIDE_SLACK", GPU_OUTSIDE_SLACK),
-            ("ABSOLUTE_ERROR", GPU_ABSOLUTE_ERROR),
+            ("GPU_OUTSIDE_SLACK", GPU_OUTSIDE_SLACK),
+            ("GPU_ABSOLUTE_ERROR", GPU_ABSOLUTE_ERROR),
         ]
         .iter()
         .map(|(name, value)| format!("const {name}: f32 = {value:e};\n")),

@@ -1,7 +1,7 @@
 // Every object's box and the frame's frustum (frustum.rs), bound as group 3
-// by every pass that tests single objects against the frustum: walk.wgsl's
-// cs_early_frustum and cs_compact, prepare_objects.wgsl's cs_prepare.
-// OUTSIDE_SLACK and ABSOLUTE_ERROR are written before this text.
+// by every pass that tests boxes against the frustum: walk.wgsl's
+// cs_early_frustum and cs_compact, prepare_nodes.wgsl's cs_prepare.
+// GPU_OUTSIDE_SLACK and GPU_ABSOLUTE_ERROR are written before this text.
 
 // An object's box: its centre in two parts (high and low) and its half
 // extent, rounded up.
@@ -13,7 +13,7 @@ struct ObjectBox {
 
 // The frame's eye in two parts, the frustum's planes (inward unit normal in
 // xyz, offset in w, eye-centred), the view direction (xyz) with the near
-// distance (w), and the box margins of prepare_objects.wgsl: growth per
+// distance (w), and the box margins of prepare_nodes.wgsl: growth per
 // reach, raise (absolute, per unit of depth) and the nearest view depth at
 // which a box counts as reaching the near plane.
 struct ObjectFrustum {
@@ -38,11 +38,11 @@ fn eye_relative_centre(b: ObjectBox) -> vec3<f32> {
     return (b.centre_high.xyz - frustum.eye_high.xyz) + (b.centre_low.xyz - frustum.eye_low.xyz);
 }
 
-// What rounding may move a value of the box's by: OUTSIDE_SLACK of its
-// reach, and ABSOLUTE_ERROR of the larger distance from the origin.
+// What rounding may move a value of the box's by: GPU_OUTSIDE_SLACK of
+// its reach, and GPU_ABSOLUTE_ERROR of the larger distance from the origin.
 fn rounding(b: ObjectBox, reach: f32) -> f32 {
     let world = max(max_abs(frustum.eye_high.xyz), max_abs(b.centre_high.xyz));
-    return OUTSIDE_SLACK * reach + ABSOLUTE_ERROR * world;
+    return GPU_OUTSIDE_SLACK * reach + GPU_ABSOLUTE_ERROR * world;
 }
 
 // Whether the object lies wholly behind one of the frustum's planes (see

@@ -290,7 +290,6 @@ mod tests {
     use crate::auto_or::AutoOr;
     use crate::bounds::Aabb;
     use crate::camera::generate::default_path;
-    use crate::camera::path::CameraPath;
     use crate::cull::ModeParams;
     use crate::cull::gpu_walk::GpuCulling;
     use crate::cull::gpu_walk::depths::{DepthRange, Level};
@@ -313,14 +312,14 @@ mod tests {
         height: 120,
     };
 
-    /// Runs `mode` through `world` along `path` on `gpu`, holding every
+    /// Runs `mode` through `world` from `cameras` on `gpu`, holding every
     /// frame against the twin's walk of `tree` and, for hiz's test with
     /// `hiz` parameters, the mark of every box it tested against the
     /// twin's verdict ([`BoxOnTarget`]); returns the nodes the walks hid.
     fn compare(
         gpu: &GpuContext,
         mut world: World,
-        path: &CameraPath,
+        cameras: &[Camera],
         mut mode: GpuCulling,
         (tree, source): (&CullTree, Option<&[u32]>),
         hiz: Option<HizParams>,
@@ -335,9 +334,8 @@ mod tests {
         let objects = world.scene.objects.len();
         let (mut visible_last, mut hidden) = (vec![false; objects], 0);
         let (mut tested, mut too_close, mut by_pixels, mut held) = (0, 0, 0, 0);
-        for frame in 0..path.frames {
+        for (frame, &camera) in (0..).zip(cameras) {
             world.advance(frame);
-            let camera = path.camera(frame, RESOLUTION.aspect());
             let row = session
                 .frame(frame, &camera, &mut world, &mut [Box::new(&mut mode)], 0)
                 .unwrap()
@@ -449,7 +447,7 @@ mod tests {
         hidden
     }
 
-    /// Holds the boxes and words a flat tree's walk made on the GPU to those
+    /// Holds the boxes and words a walk made on the GPU to those
     /// the CPU prepares in f64: every node the CPU finds outside the frustum
     /// the GPU does too; one the GPU tests, the CPU tests too, and the GPU's
     /// box holds the CPU's, raised at least as much.
@@ -556,18 +554,9 @@ mod tests {
         .unwrap();
         let (path, _) = default_path(&scene).unwrap();
         let path = path.with_frames(12).unwrap();
+        let path: Vec<Camera> = (0..path.frames).map(|f| path.camera(f, RESOLUTION.aspect())).collect();
         let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-        let gpus: Vec<GpuContext> = [BackendChoice::Vulkan, BackendChoice::Gl]
-            .into_iter()
-            .filter_map(|b| GpuContext::new(b).ok())
-            .filter(|g| g.gpu_driven)
-            .collect();
-        // Needs a GPU: scripts/test installs Mesa's software ones, which
-        // cull on the GPU.
-        assert!(
-            !gpus.is_empty(),
-            "no adapter culls on the GPU: install Mesa (scripts/install-deps)"
-        );
+        let gpus = gpu_driven_adapters();
         // roc's and hiz's flat tree, and ioc's and hiz's hierarchy cut from
         // depth 2 to 6.
         let flat = CullTree::flat(scene.objects.len() as u32);
@@ -623,6 +612,57 @@ mod tests {
                 let hidden = compare(gpu, world(), &path, mode, (tree, None), Some(params));
                 assert!(hidden > least, "hiz's walks hide boxes ({params:?}: {hidden})");
             }
+        }
+    }
+
+    /// Every adapter here that culls on the GPU, of Vulkan and GL.
+    fn gpu_driven_adapters() -> Vec<GpuContext> {
+        let gpus: Vec<GpuContext> = [BackendChoice::Vulkan, BackendChoice::Gl]
+            .into_iter()
+            .filter_map(|b| GpuContext::new(b).ok())
+            .filter(|g| g.gpu_driven)
+            .collect();
+        // Needs a GPU: scripts/test installs Mesa's software ones, which
+        // cull on the GPU.
+        assert!(
+            !gpus.is_empty(),
+            "no adapter culls on the GPU: install Mesa (scripts/install-deps)"
+        );
+        gpus
+    }
+
+    #[test]
+    fn boxes_made_on_the_gpu_hold_the_cpus_far_from_the_origin() {
+        // The stress case whose town lies 1e7 from the origin, where f32
+        // steps by a metre: the boxes' two f32 parts are what keep them
+        // there. Its coordinates are whole metres, so the eye is moved off
+        // them, to give it low parts.
+        let case = crate::stress::select(&["offset-1e7".to_string()])
+            .unwrap()
+            .into_iter()
+            .find(|c| c.name == "offset-1e7")
+            .expect("the case, after its baseline");
+        let cameras: Vec<Camera> = case
+            .cameras
+            .iter()
+            .map(|c| Camera {
+                aspect: RESOLUTION.aspect(),
+                eye: c.eye + DVec3::new(0.37, 0.21, 0.13),
+                ..*c
+            })
+            .collect();
+        let hierarchy = Hierarchy::build(&case.scene.objects, &HierarchyParams::default());
+        let flat = CullTree::flat(case.scene.objects.len() as u32);
+        let (cut, source) = CullTree::cut(&hierarchy, 1, 4);
+        let nodes = DepthRange {
+            start: AutoOr::Given(Level(1)),
+            bottom: AutoOr::Given(Level(4)),
+        };
+        for gpu in gpu_driven_adapters() {
+            let world = || World::new(case.scene.clone(), hierarchy.clone());
+            compare(&gpu, world(), &cameras, raster_occlusion_culling(), (&flat, None), None);
+            let ioc = iterative_occlusion_culling(nodes);
+            compare(&gpu, world(), &cameras, ioc, (&cut, Some(&source)), None);
         }
     }
 }

@@ -4,7 +4,7 @@
 
 use std::rc::Rc;
 
-use super::frustum::{ObjectBox, ObjectFrustum, object_box};
+use super::frustum::{LastFrame, ObjectBox, ObjectFrustum, Since, object_box};
 use super::layout::{
     DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_OUTSIDE,
     LEVEL_WORDS, MAX_GROUPS, OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST, shader_constants,
@@ -20,7 +20,7 @@ use crate::cull::culler::FrameInput;
 use crate::gpu::{
     BOX_INDEX_COUNT, BoxMargins, BoxPlanes, EyeBox, GpuAudit, GpuContext, GpuError, GpuSetup, GpuTimer, GpuWork,
     IndirectCount, IndirectDraws, PixelRays, QueryBox, Readback, Resolution, ShaderBoxPlanes, bind_buffers,
-    bind_group_layout, box_bind_group_layout, box_buffer, eye_relative_box, storage_buffer,
+    bind_group_layout, box_bind_group_layout, box_buffer, check_storage_binding, eye_relative_box, storage_buffer,
 };
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
@@ -55,7 +55,7 @@ struct Walk {
     levels: u32,
 }
 
-/// A walk's boxes made on the GPU (prepare_objects.wgsl): its pipelines,
+/// A walk's boxes made on the GPU (prepare_nodes.wgsl): its pipelines,
 /// what they read (each node's box in two f32 parts, and the seed nodes)
 /// and write (the node scratch's boxes, words and first queue).
 struct BoxesOnGpu {
@@ -74,7 +74,7 @@ struct BoxesOnGpu {
 struct NodeSources {
     buffer: wgpu::Buffer,
     staged: Vec<ObjectBox>,
-    frame: Option<u32>,
+    frame: LastFrame,
 }
 
 /// Per-node scratch for a tree of `capacity` nodes.
@@ -99,8 +99,8 @@ pub struct GpuWalk {
     expand: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
     early_frustum: wgpu::ComputePipeline,
-    /// Where a flat tree's boxes are made on the GPU (roc); else they are
-    /// prepared on the CPU (`node_boxes`).
+    /// Where the boxes are made on the GPU (a walk that draws them: roc,
+    /// ioc); else they are prepared on the CPU (`node_boxes`: hiz).
     boxes_on_gpu: Option<BoxesOnGpu>,
     /// `compact`'s and `early_frustum`'s empty group 0.
     no_bindings: wgpu::BindGroup,
@@ -212,46 +212,13 @@ impl GpuWalk {
         lists: Rc<VisibleLists>,
     ) -> Result<GpuWalk, GpuError> {
         let GpuSetup { gpu, camera, draws, .. } = *setup;
-        let device = &gpu.device;
-        let cull_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("walk.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(
-                [&shader_constants(), OBJECT_FRUSTUM_WGSL, include_str!("walk.wgsl")]
-                    .concat()
-                    .into(),
-            ),
-        });
-        use wgpu::BufferBindingType::Storage;
-        use wgpu::ShaderStages as S;
-        let read = Storage { read_only: true };
-        let write = Storage { read_only: false };
-        let box_layout = box_bind_group_layout(gpu);
-        let step_layout = bind_group_layout(
-            gpu,
-            "level step",
-            &[
-                (S::COMPUTE, read),
-                (S::COMPUTE, read),
-                (S::COMPUTE, read),
-                (S::COMPUTE, write),
-                (S::COMPUTE, write),
-            ],
-        );
-        let tree_layout = bind_group_layout(
-            gpu,
-            "tree",
-            &[(S::COMPUTE, read), (S::COMPUTE, read), (S::COMPUTE, write)],
-        );
-        let lists_layout = bind_group_layout(
-            gpu,
-            "lists",
-            &[
-                (S::COMPUTE, read),
-                (S::COMPUTE, write),
-                (S::COMPUTE, write),
-                (S::COMPUTE, write),
-            ],
-        );
+        let cull_module = frustum_module(gpu, "walk.wgsl", include_str!("walk.wgsl"));
+        let WalkLayouts {
+            boxes: box_layout,
+            step: step_layout,
+            tree: tree_layout,
+            lists: lists_layout,
+        } = WalkLayouts::new(gpu);
         let nodes = tree.nodes.len() as u32;
         let scratch = NodeScratch::new(gpu, [&box_layout, &step_layout], camera, nodes);
         let s = &scratch;
@@ -275,7 +242,7 @@ impl GpuWalk {
         // and bind nothing at 0: an empty group there keeps them within 8
         // storage buffers, the minimum an adapter guarantees.
         let no_bindings = bind_group_layout(gpu, "no bindings", &[]);
-        let object_frustum = ObjectFrustum::new(gpu, draws.len() as u32);
+        let object_frustum = ObjectFrustum::new(gpu, draws.len() as u32)?;
         let lists_pipeline = |label: &str, entry: &str| {
             compute_pipeline(
                 gpu,
@@ -301,8 +268,9 @@ impl GpuWalk {
         );
         assert!((1..=MAX_LEVELS).contains(&tree.levels), "1..={MAX_LEVELS} levels");
         let drawn = storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy);
-        let boxes_on_gpu =
-            (node_test == NodeTest::Raster).then(|| BoxesOnGpu::new(gpu, tree, &scratch, &object_frustum));
+        let boxes_on_gpu = (node_test == NodeTest::Raster)
+            .then(|| BoxesOnGpu::new(gpu, tree, &scratch, &object_frustum))
+            .transpose()?;
         let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, lists, &drawn);
         let spans = match node_test {
             NodeTest::Raster => 1,
@@ -387,13 +355,15 @@ impl GpuWalk {
             None => self.node_boxes.prepare(input.camera, margins, bounds),
             Some(None) => {}
             Some(Some(sources)) => {
-                let gap = sources.frame.is_none_or(|f| f.checked_add(1) != Some(input.frame));
-                let changed = !input.moved.is_empty() || (gap && !input.scene.movers.is_empty());
+                let changed = match sources.frame.advance(input.frame) {
+                    Since::First => true,
+                    Since::Gap => !input.scene.movers.is_empty(),
+                    Since::Next => !input.moved.is_empty(),
+                };
                 sources.staged.clear();
-                if sources.frame.is_none() || changed {
+                if changed {
                     sources.staged.extend(bounds.map(|b| object_box(&b)));
                 }
-                sources.frame = Some(input.frame);
             }
         }
     }
@@ -697,28 +667,55 @@ impl TreeOnGpu {
     }
 }
 
-/// What the passes that test single objects against the frustum share
-/// (frustum.rs), written before their own text.
+/// What the passes that test boxes against the frustum share (frustum.rs),
+/// written before their own text.
 const OBJECT_FRUSTUM_WGSL: &str = include_str!("object_frustum.wgsl");
+
+/// A module of the shared constants, object_frustum.wgsl and `source`.
+fn frustum_module(gpu: &GpuContext, label: &str, source: &str) -> wgpu::ShaderModule {
+    gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl([&shader_constants(), OBJECT_FRUSTUM_WGSL, source].concat().into()),
+    })
+}
+
+/// The bind group layouts of a walk's passes: the boxes a level tests
+/// (boxes.wgsl's group 0), a level's step (queues, arguments and node
+/// words), the tree with the objects' state, and the draw lists.
+struct WalkLayouts {
+    boxes: wgpu::BindGroupLayout,
+    step: wgpu::BindGroupLayout,
+    tree: wgpu::BindGroupLayout,
+    lists: wgpu::BindGroupLayout,
+}
+
+impl WalkLayouts {
+    fn new(gpu: &GpuContext) -> WalkLayouts {
+        use wgpu::BufferBindingType::Storage;
+        let read = (wgpu::ShaderStages::COMPUTE, Storage { read_only: true });
+        let write = (wgpu::ShaderStages::COMPUTE, Storage { read_only: false });
+        WalkLayouts {
+            boxes: box_bind_group_layout(gpu),
+            step: bind_group_layout(gpu, "level step", &[read, read, read, write, write]),
+            tree: bind_group_layout(gpu, "tree", &[read, read, write]),
+            lists: bind_group_layout(gpu, "lists", &[read, write, write, write]),
+        }
+    }
+}
 
 impl BoxesOnGpu {
     /// The passes that make `tree`'s boxes, words and seed queue in
     /// `scratch`, from its nodes' boxes: the objects' own in `objects` for a
     /// flat tree, else a buffer of their own, staged each frame they may
     /// have changed.
-    fn new(gpu: &GpuContext, tree: &CullTree, scratch: &NodeScratch, objects: &ObjectFrustum) -> BoxesOnGpu {
-        let module = gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("prepare_objects.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(
-                [
-                    &shader_constants(),
-                    OBJECT_FRUSTUM_WGSL,
-                    include_str!("prepare_objects.wgsl"),
-                ]
-                .concat()
-                .into(),
-            ),
-        });
+    /// Fails where the adapter cannot bind a box for each node.
+    fn new(
+        gpu: &GpuContext,
+        tree: &CullTree,
+        scratch: &NodeScratch,
+        objects: &ObjectFrustum,
+    ) -> Result<BoxesOnGpu, GpuError> {
+        let module = frustum_module(gpu, "prepare_nodes.wgsl", include_str!("prepare_nodes.wgsl"));
         use wgpu::BufferBindingType::Storage;
         let (read, write) = (Storage { read_only: true }, Storage { read_only: false });
         let layout = bind_group_layout(
@@ -735,23 +732,24 @@ impl BoxesOnGpu {
                 &[Some(&layout), None, None, Some(&objects.layout)],
             )
         };
-        let node_boxes = (!tree.is_flat()).then(|| NodeSources {
-            buffer: storage_buffer(
-                gpu,
-                "node boxes",
-                u64::from(tree.nodes.len().max(1) as u32) * size_of::<ObjectBox>() as u64,
-                wgpu::BufferUsages::COPY_DST,
-            ),
-            staged: Vec::new(),
-            frame: None,
-        });
+        let bytes = tree.nodes.len().max(1) as u64 * size_of::<ObjectBox>() as u64;
+        let node_boxes = if tree.is_flat() {
+            None
+        } else {
+            check_storage_binding(gpu, "storage binding for the walk's node boxes (bytes)", bytes)?;
+            Some(NodeSources {
+                buffer: storage_buffer(gpu, "node boxes", bytes, wgpu::BufferUsages::COPY_DST),
+                staged: Vec::new(),
+                frame: LastFrame::default(),
+            })
+        };
         let seeds = gpu.buffer_with(
             "seed nodes",
             bytemuck::cast_slice(&tree.seed),
             wgpu::BufferUsages::STORAGE,
         );
         let sources = node_boxes.as_ref().map_or(objects.boxes(), |n| &n.buffer);
-        BoxesOnGpu {
+        Ok(BoxesOnGpu {
             prepare: pipeline("cs_prepare"),
             seed: pipeline("cs_seed"),
             group: bind_buffers(
@@ -768,7 +766,7 @@ impl BoxesOnGpu {
             ),
             seeds: tree.seed.len() as u32,
             node_boxes,
-        }
+        })
     }
 }
 
