@@ -217,6 +217,8 @@ fn gpu_walks_are_exact_on_the_moving_city_within_their_round_trips() {
             mode(&scene, "ioc", "ioc", &[]),
             mode(&scene, "hiz", "hiz", &[]),
             mode(&scene, "hiz[nodes]", "hiz", &["hiz.boxes=nodes"]),
+            // Without the pixel test its boxes are made on the GPU.
+            mode(&scene, "hiz[pixels=0]", "hiz", &["hiz.pixels=0"]),
         ];
         let rows = run_modes(&gpu, &scene, &hierarchy, &path, &mut cullers, common::SMALL).rows;
         assert_exact(&rows, &gpu);

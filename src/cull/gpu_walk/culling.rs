@@ -147,8 +147,8 @@ impl Culler for GpuCulling {
 ///    inner nodes and marks the objects of visible leaves (walk.wgsl). The
 ///    queue's length stays on the GPU: it is the instance count of the next
 ///    level's indirect draw and dispatch. Boxes that reach the near plane
-///    are marked visible before the walk (by the CPU, or for roc and ioc by
-///    `cs_prepare`, which makes the boxes), since they cannot be
+///    are marked visible before the walk (by `cs_prepare`, which makes the
+///    boxes, or by the CPU where it makes them), since they cannot be
 ///    rasterised, and boxes outside the frustum are never queued.
 /// 3. `cs_compact` turns the marks of objects inside the frustum (a
 ///    visible node's subtree may reach out of it) into next frame's visible

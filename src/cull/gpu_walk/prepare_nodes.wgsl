@@ -1,6 +1,7 @@
-// The boxes of a walk that draws them (roc, ioc) made on the GPU, from each
-// tree node's box in two f32 parts (object_frustum.wgsl's ObjectBox: the
-// objects' own for roc's flat tree, the hierarchy's nodes for ioc), so the
+// The boxes of a walk that reads no pixels (roc, ioc, hiz.pixels=0) made on
+// the GPU, from each tree node's box in two f32 parts (object_frustum.wgsl's
+// ObjectBox: the objects' own for a flat tree, the hierarchy's nodes for a
+// cut one), so the
 // CPU hands over only the camera: what walk.rs's NodeBoxes::prepare and
 // gpu/conservative.rs's eye_relative_box make on the CPU in f64, with
 // margins for f32 (frustum.rs, BoxMargins::for_shader).

@@ -371,7 +371,7 @@ mod tests {
             let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
             if let Some(params) = hiz {
                 let (levels, texels) = on_gpu.pyramid(gpu).expect("a pyramid test");
-                let prepared = on_gpu.node_boxes();
+                let tested = on_gpu.tested_boxes(gpu);
                 // The depth as the frame ended: where objects were drawn
                 // after the test (late), nearer than what the test read.
                 let depth = session.mode_depth(0).expect("the session has an error meter");
@@ -388,11 +388,11 @@ mod tests {
                     .collect();
                 for &node in &twin.queued {
                     let node = node as usize;
-                    if prepared.states[node] != TO_TEST {
+                    if !matches!(states[node], TO_TEST | VISIBLE) {
                         continue;
                     }
                     let marked = states[node] != TO_TEST;
-                    let query = &prepared.boxes[node];
+                    let query = &tested[node];
                     let on_target = BoxOnTarget::new(query, &camera, RESOLUTION);
                     let verdict = match on_target.pyramid_verdict(RESOLUTION, &levels, &texels, params.texels) {
                         Verdict::Visible if on_target.pixels() <= u64::from(params.pixels) => {
@@ -452,7 +452,7 @@ mod tests {
     /// the GPU does too; one the GPU tests, the CPU tests too, and the GPU's
     /// box holds the CPU's, raised at least as much.
     /// Returns how many boxes it held.
-    fn hold_boxes_made_on_the_gpu(cpu: &NodeBoxes, states: &[u32], boxes: &[[f32; 8]], frame: u32) -> u64 {
+    fn hold_boxes_made_on_the_gpu(cpu: &NodeBoxes, states: &[u32], boxes: &[QueryBox], frame: u32) -> u64 {
         let mut tested = 0;
         for (node, (&cpu_state, gpu_box)) in cpu.states.iter().zip(boxes).enumerate() {
             let at = format!("frame {frame} node {node}");
@@ -465,19 +465,10 @@ mod tests {
             }
             assert_eq!(cpu_state, TO_TEST, "{at}: tested on the GPU only");
             let q = &cpu.boxes[node];
-            let (min, max) = (q.min.to_array(), q.max.to_array());
-            for k in 0..3 {
-                assert!(
-                    gpu_box[k] <= min[k] && gpu_box[4 + k] >= max[k],
-                    "{at}: {gpu_box:?} holds {q:?}"
-                );
-            }
-            assert!(
-                gpu_box[3] >= min[3],
-                "{at}: raised {} at least as {}",
-                gpu_box[3],
-                min[3]
-            );
+            let holds = gpu_box.min.truncate().cmple(q.min.truncate()).all()
+                && gpu_box.max.truncate().cmpge(q.max.truncate()).all();
+            assert!(holds, "{at}: {gpu_box:?} holds {q:?}");
+            assert!(gpu_box.min.w >= q.min.w, "{at}: {gpu_box:?} raised at least as {q:?}");
             tested += 1;
         }
         tested

@@ -99,8 +99,9 @@ pub struct GpuWalk {
     expand: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
     early_frustum: wgpu::ComputePipeline,
-    /// Where the boxes are made on the GPU (a walk that draws them: roc,
-    /// ioc); else they are prepared on the CPU (`node_boxes`: hiz).
+    /// Where the boxes are made on the GPU (roc, ioc, and hiz where it
+    /// reads no pixels); else they are prepared on the CPU (`node_boxes`,
+    /// with the planes hiz's pixel test reads).
     boxes_on_gpu: Option<BoxesOnGpu>,
     /// `compact`'s and `early_frustum`'s empty group 0.
     no_bindings: wgpu::BindGroup,
@@ -268,7 +269,7 @@ impl GpuWalk {
         );
         assert!((1..=MAX_LEVELS).contains(&tree.levels), "1..={MAX_LEVELS} levels");
         let drawn = storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy);
-        let boxes_on_gpu = (node_test == NodeTest::Raster)
+        let boxes_on_gpu = (!node_test.reads_pixels())
             .then(|| BoxesOnGpu::new(gpu, tree, &scratch, &object_frustum))
             .transpose()?;
         let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, lists, &drawn);
@@ -587,11 +588,6 @@ impl GpuWalk {
 
 #[cfg(test)]
 impl GpuWalk {
-    /// The boxes the last walk tested, as prepared.
-    pub(super) fn node_boxes(&self) -> &NodeBoxes {
-        &self.node_boxes
-    }
-
     /// The pyramid the last walk tested against, for a walk with a
     /// pyramid test: its levels, and their texels read back.
     pub(super) fn pyramid(&self, gpu: &GpuContext) -> Option<(Vec<PyramidLevel>, Vec<Vec<f32>>)> {
@@ -614,13 +610,16 @@ impl GpuWalk {
     }
 
     /// The boxes the last walk tested, as its test read them (made on the
-    /// GPU, or staged from [`GpuWalk::node_boxes`]): per node, min with the
-    /// raise in w, then max.
-    pub(super) fn tested_boxes(&self, gpu: &GpuContext) -> Vec<[f32; 8]> {
+    /// GPU, or staged from those prepared on the CPU), one per node.
+    pub(super) fn tested_boxes(&self, gpu: &GpuContext) -> Vec<QueryBox> {
         let words = self.read_words(gpu, &self.scratch.boxes, 8);
-        words
+        let floats: Vec<f32> = words.into_iter().map(f32::from_bits).collect();
+        floats
             .chunks_exact(8)
-            .map(|b| std::array::from_fn(|k| f32::from_bits(b[k])))
+            .map(|b| QueryBox {
+                min: glam::Vec4::from_slice(&b[..4]),
+                max: glam::Vec4::from_slice(&b[4..]),
+            })
             .collect()
     }
 
