@@ -316,8 +316,8 @@ impl GpuWalk {
 
     /// On the CPU, before frame `frame`'s early draw: stages `camera`'s
     /// frustum and box `margins`, and the boxes of the objects of `scene`
-    /// that moved (`moved`, or every object where this walk did not run in
-    /// the frame before).
+    /// that moved (`moved`; every mover's where this walk did not run in the
+    /// frame before, every object's in its first frame).
     pub fn prepare_frustum(&mut self, camera: &Camera, margins: BoxMargins, scene: &Scene, moved: &[u32], frame: u32) {
         self.object_frustum.prepare(camera, margins, scene, moved, frame);
     }
@@ -533,8 +533,18 @@ impl GpuWalk {
             t.resolve(&mut encoder);
         }
         let level_bytes = u64::from(walk.levels) * LEVEL_BYTES;
-        self.audit_readback
-            .copy(&mut encoder, &self.level_stats, 0, 0, AUDIT_DRAWN_OFFSET);
+        // The levels this walk ran, and the seed level.
+        if level_bytes > 0 {
+            self.audit_readback
+                .copy(&mut encoder, &self.level_stats, 0, 0, level_bytes);
+        }
+        self.audit_readback.copy(
+            &mut encoder,
+            &self.level_stats,
+            SEED_LEVEL_OFFSET,
+            SEED_LEVEL_OFFSET,
+            LEVEL_BYTES,
+        );
         let drawn_bytes = u64::from(self.objects) * 4;
         if drawn_bytes > 0 {
             self.audit_readback
