@@ -1,221 +1,42 @@
-//! `swr`'s occlusion buffer: occluder triangles rasterised on the CPU,
-//! conservatively, into a low-resolution depth buffer of cells; a pyramid
-//! of the buffer's farthest depths; and the test of a box against it.
-//! Screen positions are framebuffer pixels (x right, y down); depth is
-//! reverse-Z (`near / distance`, 0 = nothing drawn).
+//! `swr`'s occlusion buffer, laid out as Intel's Masked Software Occlusion
+//! Culling lays out its own (Hasselgren, Andersson, Akenine-Möller, HPG
+//! 2016, section 3): cells of a few pixels, each with a **reference
+//! layer**, a depth every pixel centre of the cell is drawn at or nearer,
+//! and a **working layer**, a coverage mask of the cell's pixels (up to
+//! 8 × 8 groups of them) with the farthest depth of the occluders that
+//! covered them. Occluders that each cover part of a cell merge in the
+//! working layer; once its mask is full, its depth becomes the reference
+//! (section 3.2's update). A pyramid of the reference layer's farthest
+//! depths serves the box test. Screen positions are framebuffer pixels
+//! (x right, y down); depth is reverse-Z (`near / distance`, 0 = nothing
+//! drawn).
 //!
 //! Why it is conservative. A box is hidden when, at every pixel centre its
-//! rectangle covers, it lies behind what the buffer holds there (a cell's
-//! depth, or its plane; [`OcclusionBuffer::hides`]) or its pixel ray misses
-//! it. That is safe if, at every pixel centre a cell holds, the occluder
-//! it took its depth from is drawn this frame (the mode's step 5) no
-//! farther than the cell's depth and its plane. The
-//! GPU draws a triangle whose corners it placed within some error of ours
-//! (sub-pixel snapping, [`VERTEX_ERROR`]; f32 vertices,
-//! [`VertexError`]), so at a centre it covers it may draw the depth of any
-//! point that near the centre. An occluder is a triangle, or two triangles
-//! of one mesh sharing an edge taken as one quad ([`ScreenPolygon`]). It
-//! writes a cell only where every pixel centre the cell holds (not merely
-//! the cell's middle) lies inside its outline by twice that error, so the
-//! disc of that radius round the centre lies inside the shape (for a quad,
-//! inside every edge's line puts a point in the quad: that region is the
-//! quad's kernel). The GPU's placement moves every point of the shape by
-//! at most the error, continuously across a shared edge, and a map that
-//! moves each point of a disc by less than its radius still covers the
-//! disc's centre and the points round it; the GPU draws every pixel centre
-//! inside the triangles it placed, one of the two where a centre lies on
-//! their shared edge (the fill rule). So the centre is drawn. Its depth
-//! is that of a point of either triangle within that error of it, which
-//! the cell's plane lies below: the first triangle's plane, lowered by its
-//! greatest change within the error, and further by as much as it ever
-//! lies above the second's plane over the quad, then moved farther by the
-//! GPU's depth rounding ([`DEPTH_MARGIN`]). The cell's depth is that
-//! plane's least over its centres (depth is affine across a triangle on
-//! screen, so at a corner of their rectangle). A cell keeps the nearest
-//! such depth of the occluders covering it, with its plane. A pyramid level
-//! keeps the least of the 2×2 texels below it. Both halves of a quad must
-//! be at least [`QUAD_HALF_HEIGHT`] covers high over their shared edge: the
-//! depth margins bound f32 interpolation over triangles, not over slivers
-//! (gpu/conservative.rs, rule 2), and a centre inside a quad may lie in
-//! either half.
-//!
-//! The GPU must also draw every fragment of an occluder the buffer counts:
-//! the scene's fragment stage discards only fragments nearer than the
-//! object's box (`FragmentLimit`, gpu/conservative.rs), and an occluder's
-//! triangles lie within its box (the box is its mesh's bounds, placed).
+//! rectangle covers, it lies behind what the reference layer holds there
+//! (a cell's depth, or its plane; [`OcclusionBuffer::hides`]) or its pixel
+//! ray misses it. That is safe if, at every pixel centre a cell holds, an
+//! occluder drawn this frame (the mode's step 5) is drawn no farther than
+//! the cell's depth and its plane. Each occluder object hands its cells a
+//! mask of the pixel groups it is sure to draw, with a depth and plane it
+//! is sure to draw them at or nearer (mesh.rs says how, from the GPU's
+//! placement and rounding); a cell's working layer keeps the least of the
+//! depths merged into it, so its mask's every centre is drawn at least that
+//! near, and a full mask vouches for the whole cell. A layer is dropped,
+//! never narrowed, when it stops paying (MOC's heuristic, [`Cells::merge`]):
+//! dropping what is known is always safe. A pyramid level keeps the least
+//! of the 2×2 texels below it.
 
 use std::ops::Range;
 
-use glam::{DVec2, DVec3};
-
 use crate::gpu::{BoxPlanes, Resolution, ScreenPlane};
 
-/// Pixels the GPU may place a triangle's corner from where the CPU
-/// projects it, on each axis, besides a triangle's own
-/// [`VertexError`]: twice the largest sub-pixel snap Vulkan
-/// allows (1/32).
-const VERTEX_ERROR: f64 = 1.0 / 16.0;
-
-/// A cell's depth is moved farther by this fraction, and by
-/// [`DEPTH_ABSOLUTE`], than the triangle's exact depth: the GPU
-/// interpolates depth in f32, and GL keeps only absolute precision of it
-/// (gpu/conservative.rs, rule 1); both apply on every backend.
-const DEPTH_MARGIN: f64 = 1.0 / (1u32 << 18) as f64;
-const DEPTH_ABSOLUTE: f64 = 1.0 / (1u32 << 21) as f64;
-
-/// How high each triangle of a quad must stand over their shared edge, in
-/// multiples of the cover, for the quad to be rasterised as one: at least
-/// 0.375 pixel, so a corner's sub-pixel snap tilts the triangle's depth
-/// plane by at most a twelfth of its rise across it, as for a triangle that
-/// covers a centre by the cover on its own.
-const QUAD_HALF_HEIGHT: f64 = 3.0;
+/// Pixel groups of a cell's mask along each side, at most: 8 × 8 bits of a
+/// `u64`, row after row.
+pub(super) const MASK_SIDE: u32 = 8;
 
 /// Texels across a box's rectangle may span at the pyramid level it is
 /// read at.
 const TEST_SPAN: u32 = 8;
-
-/// An occluder on screen: per corner its pixel position (x, y) and depth
-/// (z). Three corners are a triangle; four are two triangles abc and acd
-/// of one mesh that share the edge a–c, so the GPU draws them without a
-/// gap (the fill rule gives each pixel centre on a shared edge to one of
-/// them), and the buffer may take them as one quad: a triangle alone
-/// leaves empty every cell along its edges, and a mesh of quads would
-/// occlude nothing along their diagonals. With them, how far beyond
-/// [`VERTEX_ERROR`] the GPU's f32 vertex transform may place the corners.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ScreenPolygon {
-    corners: [DVec3; 4],
-    sides: usize,
-    error: VertexError,
-}
-
-impl ScreenPolygon {
-    pub fn triangle([a, b, c]: [DVec3; 3], error: VertexError) -> ScreenPolygon {
-        ScreenPolygon {
-            corners: [a, b, c, c],
-            sides: 3,
-            error,
-        }
-    }
-
-    /// Triangles abc and acd, which share the edge a–c.
-    pub fn quad(corners: [DVec3; 4], error: VertexError) -> ScreenPolygon {
-        ScreenPolygon {
-            corners,
-            sides: 4,
-            error,
-        }
-    }
-
-    /// How far the GPU may place a corner from ours, in pixels on each axis.
-    fn slack(&self) -> f64 {
-        VERTEX_ERROR + self.error.pixels
-    }
-
-    /// A quad's two triangles, when it must be rasterised as them: folded
-    /// on screen (both on one side of a–c; they cover less than the quad)
-    /// or a half too thin (see the module's doc). Each alone is safe.
-    fn halves_apart(&self) -> Option<[ScreenPolygon; 2]> {
-        let [a, b, c, d] = self.corners;
-        let (first, second) = (twice_area(a, b, c), twice_area(a, c, d));
-        let least = QUAD_HALF_HEIGHT * 2.0 * self.slack() * (c - a).truncate().length();
-        let whole = first * second > 0.0 && first.abs().min(second.abs()) >= least;
-        (self.sides == 4 && !whole).then(|| [[a, b, c], [a, c, d]].map(|t| ScreenPolygon::triangle(t, self.error)))
-    }
-
-    /// Its outline's inward edge functions, scaled to distances in pixels
-    /// (a point is inside by `cover` when every one is at least that); `None`
-    /// when it is too small to hold a disc of radius `cover` (a triangle
-    /// needs 3√3 · cover² of area, any shape π · cover²), so covers no centre
-    /// by that much. Not for a quad to be rasterised as its halves.
-    fn inward_edges(&self) -> Option<[[f64; 3]; 4]> {
-        let [a, b, c, d] = self.corners;
-        let area = twice_area(a, b, c) + if self.sides == 4 { twice_area(a, c, d) } else { 0.0 };
-        let cover = 2.0 * self.slack();
-        let disc_factor = if self.sides == 3 {
-            3.0 * 3f64.sqrt()
-        } else {
-            std::f64::consts::PI
-        };
-        if !area.is_finite() || area.abs() / 2.0 < disc_factor * cover * cover {
-            return None;
-        }
-        let mut edges = [[0.0; 3]; 4];
-        for (k, edge) in edges.iter_mut().enumerate().take(self.sides) {
-            let (p, q) = (self.corners[k], self.corners[(k + 1) % self.sides]);
-            let (dx, dy) = (q.x - p.x, q.y - p.y);
-            let s = area.signum() / (dx * dx + dy * dy).sqrt();
-            // inside(x, y) = s · ((q − p) × ((x, y) − p))
-            *edge = [-dy * s, dx * s, (dy * p.x - dx * p.y) * s];
-        }
-        Some(edges)
-    }
-
-    /// The depth plane through the first triangle's corners.
-    fn first_plane(&self) -> ScreenPlane {
-        let [a, b, c, _] = self.corners;
-        plane_through([a, b, c])
-    }
-
-    /// What a cell it covers holds at each centre: the first triangle's
-    /// plane lowered by its change within the slack, and for a quad until
-    /// it lies below the second's wherever the GPU may draw either (within
-    /// the slack of the corners' hull: the difference is affine, so at a
-    /// corner; nothing for a flat quad), then moved farther by the depth
-    /// margins (all affine).
-    fn cell_plane(&self) -> ScreenPlane {
-        let [a, _, c, d] = self.corners;
-        let (first, slack) = (self.first_plane(), self.slack());
-        let below_second = if self.sides == 4 {
-            let second = plane_through([a, c, d]);
-            let (dx, dy) = (first.per_x - second.per_x, first.per_y - second.per_y);
-            let widest = self
-                .corners
-                .iter()
-                .map(|p| first.at(p.x, p.y) - second.at(p.x, p.y))
-                .fold(f64::NEG_INFINITY, f64::max);
-            // A NaN stays one, and writes nothing.
-            let below = widest + slack * (dx.abs() + dy.abs());
-            if below < 0.0 { 0.0 } else { below }
-        } else {
-            0.0
-        };
-        let keep = 1.0 - DEPTH_MARGIN - self.error.depth;
-        ScreenPlane {
-            per_x: first.per_x * keep,
-            per_y: first.per_y * keep,
-            constant: (first.constant - slack * (first.per_x.abs() + first.per_y.abs()) - below_second) * keep
-                - DEPTH_ABSOLUTE,
-        }
-    }
-}
-
-/// Twice the signed area of the screen triangle pqr: its sign is its
-/// winding.
-fn twice_area(p: DVec3, q: DVec3, r: DVec3) -> f64 {
-    (q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x)
-}
-
-/// The depth plane through the corners of screen triangle pqr.
-fn plane_through([p, q, r]: [DVec3; 3]) -> ScreenPlane {
-    let area = twice_area(p, q, r);
-    let per_x = ((q.z - p.z) * (r.y - p.y) - (r.z - p.z) * (q.y - p.y)) / area;
-    let per_y = ((r.z - p.z) * (q.x - p.x) - (q.z - p.z) * (r.x - p.x)) / area;
-    ScreenPlane {
-        per_x,
-        per_y,
-        constant: p.z - per_x * p.x - per_y * p.y,
-    }
-}
-
-/// How far the GPU may place a triangle's corners from the CPU's
-/// projection: `pixels` on each axis, and `depth` as a fraction of their
-/// depth.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct VertexError {
-    pub pixels: f64,
-    pub depth: f64,
-}
 
 /// One level of the buffer's pyramid.
 struct Level {
@@ -224,34 +45,18 @@ struct Level {
     depth: Vec<f32>,
 }
 
-pub struct OcclusionBuffer {
-    target: Resolution,
-    /// Per column of cells, the first and last pixel centre it holds (x);
-    /// per row likewise (y).
-    columns: Vec<[f64; 2]>,
-    rows: Vec<[f64; 2]>,
-    /// The least distance between a cell's first and last pixel centre,
-    /// across (x) and down (y): an outline narrower than that plus twice
-    /// the cover holds no whole cell.
-    least_held: DVec2,
-    /// Level 0 holds the cells (each the least of its plane over its pixel
-    /// centres); each further level halves them (rounding up) down to one
-    /// texel.
-    levels: Vec<Level>,
-    /// Per cell, the depth it holds at each pixel centre: the plane of the
-    /// occluder that wrote it, lowered by the GPU's placement and rounding
-    /// ([`OcclusionBuffer::rasterise`]), so a box just behind a wall seen at
-    /// a slant is hidden even where the wall's depth changes across the
-    /// cell by more than the gap; meaningless where the cell holds no
-    /// depth.
-    planes: Vec<ScreenPlane>,
-    /// Breaks the rule above on purpose, for the test that sees the error
-    /// meter catch it: a cell takes a triangle's depth at its middle
-    /// wherever the triangle covers the middle, as a plain rasteriser does
-    /// (among the cells an occluder can cover whole, which the bounds
-    /// check in [`OcclusionBuffer::rasterise`] leaves to it).
-    #[cfg(test)]
-    pub(super) careless: bool,
+/// One side of the target (across or down): how its pixels fall into
+/// cells, and each cell's into the groups its mask holds one bit for.
+pub(super) struct Axis {
+    /// Per cell, its first and last pixel centre.
+    cells: Vec<[f64; 2]>,
+    /// Per cell, its first group; one more entry ends the last.
+    first_group: Vec<u32>,
+    /// Per pixel, its group; per group, its cell and its first and last
+    /// pixel centre.
+    group_of: Vec<u32>,
+    cell_of_group: Vec<u32>,
+    group_centres: Vec<[f64; 2]>,
 }
 
 /// The pixels cell `c` of `cells` along a side of `pixels` holds: those
@@ -268,24 +73,290 @@ fn cell_of(pixel: u32, cells: u32, pixels: u32) -> u32 {
     (u64::from(pixel) * u64::from(cells) / u64::from(pixels)) as u32
 }
 
+impl Axis {
+    /// `cells` cells over `pixels` pixels: a cell's n pixels split into
+    /// min(n, 8) groups, the k-th from its pixel ⌈k · n / groups⌉.
+    fn new(cells: u32, pixels: u32) -> Axis {
+        let mut axis = Axis {
+            cells: Vec::with_capacity(cells as usize),
+            first_group: vec![0],
+            group_of: Vec::with_capacity(pixels as usize),
+            cell_of_group: Vec::new(),
+            group_centres: Vec::new(),
+        };
+        for c in 0..cells {
+            let [first, last] = held_pixels(c, cells, pixels);
+            axis.cells.push([f64::from(first) + 0.5, f64::from(last) + 0.5]);
+            let n = last - first + 1;
+            let groups = n.min(MASK_SIDE);
+            let base = axis.cell_of_group.len() as u32;
+            axis.group_of.extend((0..n).map(|p| base + p * groups / n));
+            axis.cell_of_group.extend((0..groups).map(|_| c));
+            // Group k holds the pixels p with ⌊p · groups / n⌋ = k.
+            let start = |k: u32| first + (k * n).div_ceil(groups);
+            axis.group_centres.extend((0..groups).map(|k| [start(k), start(k + 1) - 1].map(|p| f64::from(p) + 0.5)));
+            axis.first_group.push(base + groups);
+        }
+        axis
+    }
+
+    /// The first and last pixel centre of cell `c`.
+    pub(super) fn cell(&self, c: u32) -> [f64; 2] {
+        self.cells[c as usize]
+    }
+
+    /// The pixels whose centres lie in [`lo`, `hi`] (none for NaN).
+    fn pixels_within(&self, lo: f64, hi: f64) -> Range<u32> {
+        let n = self.group_of.len() as f64;
+        // Nothing between them, or a NaN.
+        if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
+            return 0..0;
+        }
+        // From pixel ⌈lo − 0.5⌉ to ⌊hi − 0.5⌋, clamped to the side first,
+        // so casts round them (a cast truncates; `ceil` and `floor` are
+        // calls into libm on a plain x86-64 target).
+        let start = (lo - 0.5).clamp(0.0, n);
+        let first = start as u32 + u32::from(f64::from(start as u32) < start);
+        let end = (hi + 0.5).clamp(0.0, n) as u32;
+        if first < end { first..end } else { 0..0 }
+    }
+
+    /// The cells holding a pixel centre in [`lo`, `hi`].
+    pub(super) fn cells_reaching(&self, lo: f64, hi: f64) -> Range<u32> {
+        let pixels = self.pixels_within(lo, hi);
+        match pixels.is_empty() {
+            true => 0..0,
+            false => {
+                let cell = |p: u32| self.cell_of_group[self.group_of[p as usize] as usize];
+                cell(pixels.start)..cell(pixels.end - 1) + 1
+            }
+        }
+    }
+
+    /// The cells whose every pixel centre lies in [`lo`, `hi`], limited to
+    /// `cells`.
+    pub(super) fn cells_within(&self, lo: f64, hi: f64, cells: &Range<u32>) -> Range<u32> {
+        let groups = self.groups_within(lo, hi, cells);
+        if groups.is_empty() {
+            return 0..0;
+        }
+        // Cells whose first and last groups are both in.
+        let (first, last) = (self.group(groups.start).0, self.group(groups.end - 1).0);
+        let first = first + u32::from(self.first_group[first as usize] < groups.start);
+        let end = last + u32::from(self.first_group[last as usize + 1] == groups.end);
+        first..end.max(first)
+    }
+
+    /// The groups of `cells`.
+    pub(super) fn groups_of(&self, cells: &Range<u32>) -> Range<u32> {
+        self.first_group[cells.start as usize]..self.first_group[cells.end as usize]
+    }
+
+    /// The groups holding a pixel centre in [`lo`, `hi`], and the groups
+    /// whose every pixel centre lies there, each limited to `cells`.
+    pub(super) fn groups_reaching(&self, lo: f64, hi: f64, cells: &Range<u32>) -> Range<u32> {
+        let pixels = self.pixels_within(lo, hi);
+        if pixels.is_empty() {
+            return 0..0;
+        }
+        let (first, last) = (self.group_of[pixels.start as usize], self.group_of[pixels.end as usize - 1]);
+        self.limited(first..last + 1, cells)
+    }
+
+    pub(super) fn groups_within(&self, lo: f64, hi: f64, cells: &Range<u32>) -> Range<u32> {
+        let pixels = self.pixels_within(lo, hi);
+        if pixels.is_empty() {
+            return 0..0;
+        }
+        let (p, q) = (pixels.start as usize, pixels.end as usize - 1);
+        // A group starts at a pixel whose predecessor is in another group.
+        let first = self.group_of[p] + u32::from(p > 0 && self.group_of[p - 1] == self.group_of[p]);
+        let end = self.group_of[q] + u32::from(q + 1 >= self.group_of.len() || self.group_of[q + 1] != self.group_of[q]);
+        self.limited(first..end.max(first), cells)
+    }
+
+    fn limited(&self, groups: Range<u32>, cells: &Range<u32>) -> Range<u32> {
+        let (from, to) = (self.first_group[cells.start as usize], self.first_group[cells.end as usize]);
+        let start = groups.start.max(from);
+        start..groups.end.min(to).max(start)
+    }
+
+    /// The cells the groups `groups` lie in, each with the bits (as one row
+    /// of a mask: bit k for its k-th group) of the groups it holds.
+    pub(super) fn cells_of(&self, groups: Range<u32>) -> impl Iterator<Item = (u32, u64)> + '_ {
+        let cells = match groups.is_empty() {
+            true => 0..0,
+            false => self.cell_of_group[groups.start as usize]..self.cell_of_group[groups.end as usize - 1] + 1,
+        };
+        cells.map(move |c| {
+            let first = self.first_group[c as usize];
+            let from = groups.start.max(first) - first;
+            let to = groups.end.min(self.first_group[c as usize + 1]) - first;
+            (c, (1u64 << to) - (1u64 << from))
+        })
+    }
+
+    /// Groups cell `c` holds.
+    fn groups_in(&self, c: u32) -> u32 {
+        self.first_group[c as usize + 1] - self.first_group[c as usize]
+    }
+
+    /// The cell of group `g`, its place there, and its first and last
+    /// pixel centre.
+    pub(super) fn group(&self, g: u32) -> (u32, u32, [f64; 2]) {
+        let cell = self.cell_of_group[g as usize];
+        (cell, g - self.first_group[cell as usize], self.group_centres[g as usize])
+    }
+}
+
+/// Where the buffer's cells and their mask groups lie on the target:
+/// fixed for a target and a cell count.
+pub struct Grid {
+    target: Resolution,
+    cells: Resolution,
+    pub(super) across: Axis,
+    pub(super) down: Axis,
+}
+
+impl Grid {
+    fn new(target: Resolution, cells: Resolution) -> Grid {
+        let (width, height) = (cells.width.min(target.width), cells.height.min(target.height));
+        Grid {
+            target,
+            cells: Resolution { width, height },
+            across: Axis::new(width, target.width),
+            down: Axis::new(height, target.height),
+        }
+    }
+
+    /// The mask of every group of cell (`column`, `row`).
+    pub(super) fn full_mask(&self, column: u32, row: u32) -> u64 {
+        let across = (1u64 << self.across.groups_in(column)) - 1;
+        (0..self.down.groups_in(row)).fold(0, |mask, k| mask | across << (k * MASK_SIDE))
+    }
+}
+
+/// The level-0 layers of a run of rows of cells (all of them, or a
+/// thread's band).
+pub struct Cells<'a> {
+    grid: &'a Grid,
+    /// The rows of cells it holds.
+    rows: Range<u32>,
+    /// Per cell, row by row from `rows.start`: the reference layer's depth
+    /// and plane, and the working layer's mask and depth.
+    depth: &'a mut [f32],
+    planes: &'a mut [ScreenPlane],
+    masks: &'a mut [u64],
+    working: &'a mut [f32],
+    #[cfg(test)]
+    careless: bool,
+}
+
+/// What an occluder vouches for in one cell: the mask groups it is sure
+/// to draw, and a depth and a plane it draws each of them at or nearer.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Coverage {
+    pub(super) mask: u64,
+    pub(super) depth: f64,
+    pub(super) plane: ScreenPlane,
+}
+
+impl Cells<'_> {
+    pub(super) fn grid(&self) -> &Grid {
+        self.grid
+    }
+
+    /// The rows of cells it holds.
+    pub(super) fn rows(&self) -> Range<u32> {
+        self.rows.clone()
+    }
+
+    /// Forgets every occluder.
+    fn clear(&mut self) {
+        self.depth.fill(0.0);
+        self.masks.fill(0);
+    }
+
+    /// The reference depth of cell (`column`, `row`).
+    pub(super) fn reference(&self, column: u32, row: u32) -> f32 {
+        self.depth[((row - self.rows.start) * self.grid.cells.width + column) as usize]
+    }
+
+    /// Merges `coverage` into cell (`column`, `row`), as MOC updates a
+    /// tile (section 3.2), in reverse-Z: a cell the occluder covers whole
+    /// takes its depth and plane where they are nearer than its reference
+    /// layer; otherwise the occluder joins the working layer, which keeps
+    /// the union of the masks and the least of the depths, and becomes the
+    /// reference (with a plane of that one depth) once its mask is full.
+    /// The working layer is dropped first when it has fallen behind the
+    /// reference, or when the occluder lies nearer than it by more than it
+    /// lies nearer than the reference (merging would pull the new layer
+    /// back to a depth nearly no better than the reference's).
+    pub(super) fn merge(&mut self, column: u32, row: u32, coverage: &Coverage) {
+        let full = self.grid.full_mask(column, row);
+        let index = ((row - self.rows.start) * self.grid.cells.width + column) as usize;
+        let mask = coverage.mask & full;
+        // Stored rounded farther; a NaN or nothing in front vouches for nothing.
+        let depth = f32_at_most(coverage.depth);
+        let reference = self.depth[index];
+        if mask == 0 || coverage.depth.is_nan() || depth <= reference.max(0.0) {
+            return;
+        }
+        if mask == full {
+            self.depth[index] = depth;
+            self.planes[index] = coverage.plane;
+            return;
+        }
+        let working = &mut self.working[index];
+        let held = &mut self.masks[index];
+        if *held != 0 && (*working <= reference || depth - *working > *working - reference) {
+            *held = 0;
+        }
+        *working = if *held == 0 { depth } else { working.min(depth) };
+        *held |= mask;
+        #[cfg(test)]
+        let careless = self.careless;
+        #[cfg(not(test))]
+        let careless = false;
+        if *held == full || careless {
+            self.depth[index] = *working;
+            self.planes[index] = ScreenPlane {
+                per_x: 0.0,
+                per_y: 0.0,
+                constant: f64::from(*working),
+            };
+            *held = 0;
+        }
+    }
+}
+
+pub struct OcclusionBuffer {
+    grid: Grid,
+    /// Level 0 holds the cells' reference depths; each further level
+    /// halves them (rounding up) down to one texel.
+    levels: Vec<Level>,
+    /// Per cell, the depth its reference layer vouches for at each pixel
+    /// centre besides its depth: a plane of the occluder that wrote it
+    /// (mesh.rs), so a box just behind a wall seen at a slant is hidden
+    /// even where the wall's depth changes across the cell by more than
+    /// the gap; meaningless where the cell holds no depth.
+    planes: Vec<ScreenPlane>,
+    /// Per cell, its working layer's mask and depth.
+    masks: Vec<u64>,
+    working: Vec<f32>,
+    /// Breaks the conservative rule on purpose, for the test that sees the
+    /// error meter catch it: a working layer becomes the reference as soon
+    /// as it holds anything, whether or not its mask is full.
+    #[cfg(test)]
+    pub(super) careless: bool,
+}
+
 impl OcclusionBuffer {
     /// A buffer of `cells` (at most the target's size on each side) over a
     /// target of `target` pixels.
     pub fn new(target: Resolution, cells: Resolution) -> OcclusionBuffer {
-        let (width, height) = (cells.width.min(target.width), cells.height.min(target.height));
-        let centres = |n: u32, pixels: u32| {
-            (0..n)
-                .map(|c| held_pixels(c, n, pixels).map(|p| f64::from(p) + 0.5))
-                .collect()
-        };
-        let (columns, rows): (Vec<[f64; 2]>, Vec<[f64; 2]>) =
-            (centres(width, target.width), centres(height, target.height));
-        let least = |held: &[[f64; 2]]| {
-            held.iter()
-                .map(|[first, last]| last - first)
-                .fold(f64::INFINITY, f64::min)
-        };
-        let least_held = DVec2::new(least(&columns), least(&rows));
+        let grid = Grid::new(target, cells);
+        let (width, height) = (grid.cells.width, grid.cells.height);
         let mut levels = Vec::new();
         let (mut w, mut h) = (width, height);
         loop {
@@ -299,13 +370,13 @@ impl OcclusionBuffer {
             }
             (w, h) = (w.div_ceil(2), h.div_ceil(2));
         }
+        let count = (width * height) as usize;
         OcclusionBuffer {
-            target,
-            columns,
-            rows,
-            least_held,
+            grid,
             levels,
-            planes: vec![ScreenPlane::default(); (width * height) as usize],
+            planes: vec![ScreenPlane::default(); count],
+            masks: vec![0; count],
+            working: vec![0.0; count],
             #[cfg(test)]
             careless: false,
         }
@@ -313,24 +384,21 @@ impl OcclusionBuffer {
 
     /// The render size it was made for.
     pub fn target(&self) -> Resolution {
-        self.target
+        self.grid.target
     }
 
     /// The buffer's size in cells.
     pub fn cells(&self) -> Resolution {
-        Resolution {
-            width: self.levels[0].width,
-            height: self.levels[0].height,
-        }
+        self.grid.cells
     }
 
-    /// Every cell's plane, row by row.
+    /// Every cell's reference plane, row by row.
     #[cfg(test)]
     pub fn planes(&self) -> &[ScreenPlane] {
         &self.planes
     }
 
-    /// Every cell's depth, row by row.
+    /// Every cell's reference depth, row by row.
     pub fn depths(&self) -> &[f32] {
         &self.levels[0].depth
     }
@@ -340,10 +408,10 @@ impl OcclusionBuffer {
     /// is nearer; 0 where the cell is empty.
     #[cfg(test)]
     pub fn vouched_at(&self, x: f64, y: f64) -> f64 {
-        let cells = self.cells();
+        let (cells, target) = (self.grid.cells, self.grid.target);
         let cell = |v: f64, cells: u32, pixels: u32| cell_of(v as u32, cells, pixels);
-        let index = (cell(y, cells.height, self.target.height) * cells.width + cell(x, cells.width, self.target.width))
-            as usize;
+        let index =
+            (cell(y, cells.height, target.height) * cells.width + cell(x, cells.width, target.width)) as usize;
         let depth = f64::from(self.levels[0].depth[index]);
         if depth == 0.0 {
             0.0
@@ -352,124 +420,36 @@ impl OcclusionBuffer {
         }
     }
 
-    /// Forgets every occluder.
-    pub fn clear(&mut self) {
-        self.levels[0].depth.fill(0.0);
-    }
-
-    /// Takes each cell of `other` (a buffer of the same size) that is
-    /// nearer than this one's, with its plane: as if `other`'s occluders
-    /// had been rasterised here after this one's.
-    pub fn merge(&mut self, other: &OcclusionBuffer) {
-        debug_assert_eq!(self.cells(), other.cells());
-        let cells = self.levels[0].depth.iter_mut().zip(&mut self.planes);
-        for ((depth, plane), (&theirs, their_plane)) in cells.zip(other.levels[0].depth.iter().zip(&other.planes)) {
-            if theirs > *depth {
-                *depth = theirs;
-                *plane = *their_plane;
-            }
-        }
-    }
-
-    /// Writes `occluder` into the cells it covers (see the module above);
-    /// returns how many it wrote.
-    pub fn rasterise(&mut self, occluder: &ScreenPolygon) -> u32 {
-        // Most occluder triangles are smaller than a cell on some axis (over
-        // the default city, 99 % of them write nothing): rule those out
-        // from their outline's bounds before any other work. A cell is
-        // written only where its pixel centres lie inside by the cover, so
-        // within the bounds shrunk by it on both axes; a quad's halves lie
-        // within the quad's bounds.
-        let cover = 2.0 * occluder.slack();
-        let corners = &occluder.corners[..occluder.sides];
-        let (lo, hi) = corners
-            .iter()
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
-                (lo.min(p), hi.max(p))
-            });
-        let (outline, least) = ((hi - lo).truncate(), self.least_held + 2.0 * cover);
-        if outline.x < least.x || outline.y < least.y {
-            return 0;
-        }
-        let cells = self.cells();
-        let column_range = cell_range(lo.x, hi.x, cells.width, self.target.width);
-        let row_range = cell_range(lo.y, hi.y, cells.height, self.target.height);
-        let (columns, rows) = (
-            centred_within(&self.columns, column_range.clone(), lo.x + cover, hi.x - cover),
-            centred_within(&self.rows, row_range, lo.y + cover, hi.y - cover),
-        );
-        if columns.is_empty() || rows.is_empty() {
-            return 0;
-        }
-        if let Some(halves) = occluder.halves_apart() {
-            return halves.iter().map(|half| self.rasterise(half)).sum();
-        }
-        let Some(edges) = occluder.inward_edges() else {
-            return 0;
-        };
-        let edges = &edges[..occluder.sides];
-        // Made for the first cell within the outline (few occluders reach
-        // one).
-        let mut plane = None;
-        let mut written = 0;
-        let base = &mut self.levels[0];
-        for row in rows {
-            let [y0, y1] = self.rows[row as usize];
-            let index = |column: u32| (row * cells.width + column) as usize;
-            #[cfg(test)]
-            if self.careless {
-                for column in column_range.clone() {
-                    let [x0, x1] = self.columns[column as usize];
-                    let (x, y) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-                    if edges.iter().all(|e| e[0] * x + e[1] * y + e[2] >= 0.0) {
-                        let first_plane = occluder.first_plane();
-                        let depth = first_plane.at(x, y);
-                        let cell = &mut base.depth[index(column)];
-                        if f64::from(*cell) < depth {
-                            *cell = depth as f32;
-                            self.planes[index(column)] = first_plane;
-                        }
-                        written += 1;
-                    }
-                }
-                continue;
-            }
-            // The x every edge keeps inside by `cover` on both rows of
-            // centres (edges are linear, so both rows at both ends of an x
-            // range bound the whole rectangle).
-            let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
-            for &[ex, ey, ec] in edges {
-                let needed = |y: f64| cover - ey * y - ec;
-                let (n0, n1) = (needed(y0), needed(y1));
-                if ex > 0.0 {
-                    from = from.max(n0.max(n1) / ex);
-                } else if ex < 0.0 {
-                    to = to.min(n0.max(n1) / ex);
-                } else if n0.max(n1) > 0.0 {
-                    to = f64::NEG_INFINITY;
-                }
-            }
-            // Nothing admitted (a NaN admits nothing either).
-            if from.is_nan() || to.is_nan() || from > to {
-                continue;
-            }
-            for column in centred_within(&self.columns, columns.clone(), from, to) {
-                let plane = *plane.get_or_insert_with(|| occluder.cell_plane());
-                let farthest = plane.min_over(self.columns[column as usize], [y0, y1]);
-                let cell = &mut base.depth[index(column)];
-                // Compared as stored, so a cell keeps the first of occluders
-                // that round alike (as `merge` keeps the earlier buffer's).
-                // A NaN writes nothing.
-                let depth = f32_at_most(farthest);
-                if farthest.is_nan() || depth <= cell.max(0.0) {
-                    continue;
-                }
-                *cell = depth;
-                self.planes[index(column)] = plane;
-                written += 1;
-            }
-        }
-        written
+    /// The cells, cleared, in bands of `rows_per_band` rows of cells (the
+    /// last band holds the rest), for threads to fill one band each.
+    pub fn cleared_bands(&mut self, rows_per_band: u32) -> impl Iterator<Item = Cells<'_>> {
+        let grid = &self.grid;
+        let width = grid.cells.width as usize;
+        let chunk = width * rows_per_band.max(1) as usize;
+        #[cfg(test)]
+        let careless = self.careless;
+        self.levels[0]
+            .depth
+            .chunks_mut(chunk)
+            .zip(self.planes.chunks_mut(chunk))
+            .zip(self.masks.chunks_mut(chunk))
+            .zip(self.working.chunks_mut(chunk))
+            .enumerate()
+            .map(move |(k, (((depth, planes), masks), working))| {
+                let first = (k * chunk / width) as u32;
+                let mut cells = Cells {
+                    grid,
+                    rows: first..first + (depth.len() / width) as u32,
+                    depth,
+                    planes,
+                    masks,
+                    working,
+                    #[cfg(test)]
+                    careless,
+                };
+                cells.clear();
+                cells
+            })
     }
 
     /// Builds the pyramid over the cells written since [`Self::clear`].
@@ -508,12 +488,12 @@ impl OcclusionBuffer {
             buffer: self,
             pixels: [first, last],
             columns: [
-                cell_of(first[0], cells.width, self.target.width),
-                cell_of(last[0], cells.width, self.target.width),
+                cell_of(first[0], cells.width, self.grid.target.width),
+                cell_of(last[0], cells.width, self.grid.target.width),
             ],
             rows: [
-                cell_of(first[1], cells.height, self.target.height),
-                cell_of(last[1], cells.height, self.target.height),
+                cell_of(first[1], cells.height, self.grid.target.height),
+                cell_of(last[1], cells.height, self.grid.target.height),
             ],
             nearest,
             planes,
@@ -563,8 +543,8 @@ impl BoxQuery<'_> {
             ]
         };
         let (xs, ys) = (
-            centres(&self.buffer.columns, columns, 0),
-            centres(&self.buffer.rows, rows, 1),
+            centres(&self.buffer.grid.across.cells, columns, 0),
+            centres(&self.buffer.grid.down.cells, rows, 1),
         );
         // Each entry plane bounds the box's depth on its own, so the least
         // of them does; a NaN among them is passed over by `min`, and a NaN
@@ -593,206 +573,101 @@ impl BoxQuery<'_> {
     }
 }
 
-/// The cells along a side whose pixel centres may lie in [lo, hi] (pixel
-/// coordinates), clamped to the side.
-fn cell_range(lo: f64, hi: f64, cells: u32, pixels: u32) -> Range<u32> {
-    let pixel = |v: f64| v.floor().clamp(0.0, f64::from(pixels - 1)) as u32;
-    cell_of(pixel(lo), cells, pixels)..cell_of(pixel(hi), cells, pixels) + 1
-}
-
-/// The cells of `range` (along a side whose cells hold the pixel centres
-/// `centres`) whose centres all lie in [from, to]; none when `to` is NaN.
-fn centred_within(centres: &[[f64; 2]], range: Range<u32>, from: f64, to: f64) -> Range<u32> {
-    let start = range.start;
-    let span = &centres[start as usize..range.end as usize];
-    let first = start + span.partition_point(|&[first, _]| first < from) as u32;
-    let end = start + span.partition_point(|&[_, last]| last <= to) as u32;
-    first..end.max(first)
-}
-
 /// The largest f32 at most `v` (a plain cast may round up, nearer).
-fn f32_at_most(v: f64) -> f32 {
+pub(super) fn f32_at_most(v: f64) -> f32 {
     let f = v as f32;
     if f64::from(f) > v { f.next_down() } else { f }
 }
 
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
 
-    /// The triangles an occluder stands for.
-    fn triangles_of(occluder: &ScreenPolygon) -> Vec<[DVec3; 3]> {
-        let [a, b, c, d] = occluder.corners;
-        if occluder.sides == 3 {
-            vec![[a, b, c]]
-        } else {
-            vec![[a, b, c], [a, c, d]]
-        }
-    }
-
-    /// The nearest depth (greatest) of `triangles` at point (x, y), by
-    /// barycentric coordinates; 0 where none covers it.
-    fn nearest_at(triangles: &[[DVec3; 3]], x: f64, y: f64) -> f64 {
-        let mut nearest = 0.0f64;
-        for &[a, b, c] in triangles {
-            let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-            let wa = ((b.x - x) * (c.y - y) - (b.y - y) * (c.x - x)) / area;
-            let wb = ((c.x - x) * (a.y - y) - (c.y - y) * (a.x - x)) / area;
-            let wc = 1.0 - wa - wb;
-            if wa >= 0.0 && wb >= 0.0 && wc >= 0.0 {
-                nearest = nearest.max(wa * a.z + wb * b.z + wc * c.z);
-            }
-        }
-        nearest
-    }
-
-    /// Triangles and quads from a fraction of a pixel to beyond the screen;
-    /// most quads are near parallelograms, some fold on screen (both
-    /// triangles on one side of their shared edge) or bend (a reflex
-    /// corner).
-    fn random_occluders(rng: &mut Rng, size: Resolution, count: usize) -> Vec<ScreenPolygon> {
-        let (w, h) = (f64::from(size.width), f64::from(size.height));
-        (0..count)
-            .map(|_| {
-                let centre = DVec3::new(rng.range(-0.2 * w, 1.2 * w), rng.range(-0.2 * h, 1.2 * h), 0.0);
-                let reach = rng.range(0.5, 0.8 * w.max(h));
-                let mut corner = || {
-                    let offset = DVec3::new(rng.range(-reach, reach), rng.range(-reach, reach), 0.0);
-                    (centre + offset).with_z(rng.range(1e-4, 0.9))
-                };
-                let [a, b, c] = [corner(), corner(), corner()];
-                let d = corner();
-                let error = VertexError::default();
-                match rng.range(0.0, 4.0) as u32 {
-                    0 | 1 => ScreenPolygon::triangle([a, b, c], error),
-                    2 => {
-                        let opposite = a + c - b;
-                        let d = opposite.lerp(d, 0.2).with_z(d.z);
-                        ScreenPolygon::quad([a, b, c, d], error)
-                    }
-                    _ => ScreenPolygon::quad([a, b, c, d], error),
-                }
-            })
-            .collect()
-    }
-
-    /// `occluder` as the GPU may place it: every corner moved by up to the
-    /// snap bound on each axis, at the extremes (a shared corner moves
-    /// once, for both triangles).
-    fn as_the_gpu_may_place(occluder: &ScreenPolygon, rng: &mut Rng) -> ScreenPolygon {
-        let mut shift = || {
-            if rng.range(0.0, 1.0) < 0.5 {
-                -VERTEX_ERROR
-            } else {
-                VERTEX_ERROR
-            }
-        };
-        ScreenPolygon {
-            corners: occluder.corners.map(|c| c + DVec3::new(shift(), shift(), 0.0)),
-            ..*occluder
+    /// A coverage of one depth everywhere.
+    fn flat(depth: f64, mask: u64) -> Coverage {
+        Coverage {
+            mask,
+            depth,
+            plane: ScreenPlane {
+                constant: depth,
+                ..ScreenPlane::default()
+            },
         }
     }
 
     #[test]
-    fn a_cell_holds_no_depth_nearer_than_the_occluders_as_the_gpu_may_draw_them_at_any_pixel_centre_it_holds() {
-        let mut rng = Rng::new(21);
-        let cases = [
-            ((801, 599), (256, 192)),
-            ((160, 120), (160, 120)),
-            ((37, 5), (10, 3)),
-            ((1, 1), (1, 1)),
-            ((640, 480), (97, 61)),
-        ];
-        let (mut written_by_quads, mut written) = (0, 0);
-        for ((tw, th), (cw, ch)) in cases {
-            let target = Resolution { width: tw, height: th };
-            let mut buffer = OcclusionBuffer::new(target, Resolution { width: cw, height: ch });
-            let occluders = random_occluders(&mut rng, target, 60);
-            for o in &occluders {
-                let cells = buffer.rasterise(o);
-                written += cells;
-                if o.sides == 4 {
-                    written_by_quads += cells;
-                }
-            }
-            let triangles: Vec<[DVec3; 3]> = occluders
-                .iter()
-                .flat_map(|o| triangles_of(&as_the_gpu_may_place(o, &mut rng)))
-                .collect();
-            // Every pixel, with the cell a box test reads for it (written
-            // out here, not taken from the code under test).
-            let cells = buffer.cells();
-            for py in 0..th {
-                for px in 0..tw {
-                    let cx = u64::from(px) * u64::from(cells.width) / u64::from(tw);
-                    let cy = u64::from(py) * u64::from(cells.height) / u64::from(th);
-                    let cell = (cy * u64::from(cells.width) + cx) as usize;
-                    let depth = f64::from(buffer.depths()[cell]);
-                    if depth == 0.0 {
-                        continue;
-                    }
-                    let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
-                    let drawn = nearest_at(&triangles, x, y);
-                    let plane = buffer.planes[cell].at(x, y);
-                    assert!(
-                        depth <= plane && plane <= drawn,
-                        "{tw}x{th} in {cw}x{ch}: cell ({cx}, {cy}) holds {depth}, its plane {plane} at pixel ({px}, {py}), which shows {drawn}"
-                    );
-                }
-            }
+    fn a_working_layer_becomes_the_reference_once_its_mask_is_full_at_the_least_depth_merged_into_it() {
+        // 20 × 12 pixels in 5 × 3 cells of 4 × 4 pixels: 16 groups a cell.
+        let mut buffer = OcclusionBuffer::new(Resolution { width: 20, height: 12 }, Resolution { width: 5, height: 3 });
+        let full = buffer.grid.full_mask(2, 1);
+        assert_eq!(full, 0x0f0f_0f0f, "four rows of four groups");
+        let (left, right) = (0x0303_0303, 0x0c0c_0c0c);
+        {
+            let mut cells = buffer.cleared_bands(3).next().unwrap();
+            // (Depths that f32 holds exactly.) Half a cell at 0.5: nothing
+            // vouched for yet.
+            cells.merge(2, 1, &flat(0.5, left));
+            assert_eq!(cells.reference(2, 1), 0.0);
+            // The other half at 0.375: the cell holds the farther, 0.375.
+            cells.merge(2, 1, &flat(0.375, right));
+            assert_eq!(cells.reference(2, 1), 0.375);
+            // Half again at 0.4375, then at 0.875: 0.875 lies nearer than the
+            // working layer by more than that lies before the reference, so
+            // the layer starts again from it; the other half at 0.75 fills
+            // it.
+            cells.merge(2, 1, &flat(0.4375, left));
+            cells.merge(2, 1, &flat(0.875, right));
+            cells.merge(2, 1, &flat(0.75, left));
+            assert_eq!(cells.reference(2, 1), 0.75);
+            // Nothing behind the reference changes it, whole or in part.
+            cells.merge(2, 1, &flat(0.625, full));
+            cells.merge(2, 1, &flat(0.6875, left));
+            cells.merge(2, 1, &flat(0.5, right));
+            assert_eq!(cells.reference(2, 1), 0.75);
+            // A whole cover nearer takes the cell, with its plane.
+            cells.merge(2, 1, &flat(0.8125, full));
+            assert_eq!(cells.reference(2, 1), 0.8125);
         }
-        assert!(written > 1000, "the occluders cover cells ({written})");
-        assert!(written_by_quads > 500, "quads cover cells ({written_by_quads})");
+        assert_eq!(buffer.planes()[7].constant, 0.8125);
+        // Cells of 4 and 3 pixels across, 3 down.
+        let edge = OcclusionBuffer::new(Resolution { width: 10, height: 3 }, Resolution { width: 3, height: 1 });
+        assert_eq!([0, 2].map(|c| edge.grid.full_mask(c, 0)), [0x0f_0f0f, 0x07_0707]);
     }
 
     #[test]
-    fn a_quad_fills_the_cells_along_its_shared_edge_that_its_triangles_alone_leave_empty() {
-        let target = Resolution { width: 64, height: 48 };
-        let cells = Resolution { width: 16, height: 12 };
-        let at = |x: f64, y: f64| DVec3::new(x, y, 0.5 - 0.2 * x / 64.0);
-        // A screen-filling quad whose shared edge runs corner to corner.
-        let [a, b, c, d] = [at(-8.0, -8.0), at(72.0, -8.0), at(72.0, 56.0), at(-8.0, 56.0)];
-        let error = VertexError::default();
-        let mut apart = OcclusionBuffer::new(target, cells);
-        let alone = apart.rasterise(&ScreenPolygon::triangle([a, b, c], error))
-            + apart.rasterise(&ScreenPolygon::triangle([a, c, d], error));
-        let mut together = OcclusionBuffer::new(target, cells);
-        assert_eq!(together.rasterise(&ScreenPolygon::quad([a, b, c, d], error)), 192);
-        assert!(
-            alone < 192 - 12,
-            "the diagonal's cells stay empty apart ({alone} written)"
-        );
-        // Where both write, they agree: the quad's depth is its triangles'.
-        for (apart, together) in apart.depths().iter().zip(together.depths()) {
-            assert!(*apart == 0.0 || apart == together, "{apart} against {together}");
-        }
-        // Folded (d on b's side of a–c): each triangle is rasterised alone.
-        let folded = at(60.0, 4.0);
-        let mut buffer = OcclusionBuffer::new(target, cells);
-        let written = buffer.rasterise(&ScreenPolygon::quad([a, b, c, folded], error));
-        let mut first_alone = OcclusionBuffer::new(target, cells);
-        let expected = first_alone.rasterise(&ScreenPolygon::triangle([a, b, c], error))
-            + first_alone.rasterise(&ScreenPolygon::triangle([a, c, folded], error));
-        assert_eq!(written, expected);
+    fn the_careless_buffer_takes_a_working_layer_that_is_not_full() {
+        let mut buffer = OcclusionBuffer::new(Resolution { width: 20, height: 12 }, Resolution { width: 5, height: 3 });
+        buffer.careless = true;
+        let mut cells = buffer.cleared_bands(3).next().unwrap();
+        cells.merge(2, 1, &flat(0.5, 0x0303_0303));
+        assert_eq!(cells.reference(2, 1), 0.5);
     }
 
     #[test]
-    fn a_triangle_over_the_whole_screen_fills_every_cell_with_its_farthest_depth() {
-        let target = Resolution { width: 64, height: 48 };
-        let mut buffer = OcclusionBuffer::new(target, Resolution { width: 16, height: 12 });
-        // A plane leaning in x: depth 0.5 at x = 0, 0.3 at x = 64.
-        let at = |x: f64, y: f64| DVec3::new(x, y, 0.5 - 0.2 * x / 64.0);
-        let whole = ScreenPolygon::triangle(
-            [at(-100.0, -100.0), at(300.0, -100.0), at(-100.0, 300.0)],
-            VertexError::default(),
-        );
-        assert_eq!(buffer.rasterise(&whole), 192);
-        // Column 0 holds pixels 0..=3, centres 0.5 to 3.5: its farthest is
-        // where the GPU may sample beside 3.5.
-        let x = 3.5 + VERTEX_ERROR;
-        let expected = (0.5 - 0.2 * x / 64.0) * (1.0 - DEPTH_MARGIN) - DEPTH_ABSOLUTE;
-        assert_eq!(buffer.depths()[0], f32_at_most(expected));
-        assert!(f64::from(buffer.depths()[0]) <= expected);
+    fn groups_split_a_cells_pixels_and_ranges_find_them_by_their_centres() {
+        // 10 pixels in 3 cells: 4, 3 and 3 pixels (⌊p · 3 / 10⌋).
+        let axis = Axis::new(3, 10);
+        assert_eq!(axis.cells, [[0.5, 3.5], [4.5, 6.5], [7.5, 9.5]]);
+        assert_eq!(axis.first_group, [0, 4, 7, 10]);
+        let all = 0..3;
+        // Centres 2.5 to 6.5: pixels 2 to 6.
+        assert_eq!(axis.groups_reaching(2.2, 6.7, &all), 2..7);
+        assert_eq!(axis.groups_within(2.2, 6.7, &all), 2..7);
+        assert_eq!(axis.cells_reaching(2.2, 6.7), 0..2);
+        assert_eq!(axis.cells_within(2.2, 6.7, &all), 1..2);
+        assert_eq!(axis.groups_reaching(2.6, 2.9, &all), 0..0, "no centre between");
+        assert_eq!(axis.groups_reaching(f64::NAN, 3.0, &all), 0..0);
+        assert_eq!(axis.groups_reaching(-1e300, 1e300, &(1..2)), 4..7);
+        assert_eq!(axis.cells_of(2..8).collect::<Vec<_>>(), [(0, 0b1100), (1, 0b111), (2, 0b1)]);
+        // 20 pixels in 2 cells: 10 each, in 8 groups of 1 or 2 pixels.
+        let coarse = Axis::new(2, 20);
+        assert_eq!(coarse.first_group, [0, 8, 16]);
+        assert_eq!(coarse.group(0), (0, 0, [0.5, 1.5]));
+        assert_eq!(coarse.group(1), (0, 1, [2.5, 2.5]));
+        assert_eq!(coarse.group(12), (1, 4, [15.5, 16.5]));
+        assert_eq!(coarse.groups_within(0.5, 1.0, &(0..2)), 0..0, "a group needs all its centres");
+        assert_eq!(coarse.groups_reaching(0.5, 1.0, &(0..2)), 0..1);
+        assert_eq!(coarse.groups_within(0.5, 2.5, &(0..2)), 0..2);
     }
 }

@@ -1,25 +1,31 @@
 //! `swr`: CPU software occlusion culling, the family Intel's Masked
-//! Software Occlusion Culling (MOC; O3DE), Godot 4's occlusion culling and
-//! Umbra belong to: occluders are rasterised on the CPU into a small depth
-//! buffer and boxes tested against it, so culling never waits for the GPU
-//! and reads nothing back. A frame (`frame` below, step by step) takes last
-//! frame's visible objects as occluders, rasterises them conservatively
-//! into the buffer (buffer.rs), builds a pyramid of its farthest depths,
-//! walks the hierarchy as `vfc` does testing each box in the frustum
-//! against it, and draws what is visible, occluders first.
+//! Software Occlusion Culling (MOC: Hasselgren, Andersson, Akenine-Möller,
+//! HPG 2016; O3DE), Godot 4's occlusion culling and Umbra belong to:
+//! occluders are rasterised on the CPU into a small depth buffer and boxes
+//! tested against it, so culling never waits for the GPU and reads nothing
+//! back. A frame (`frame` below, step by step) takes last frame's visible
+//! objects as occluders, rasterises them conservatively into the buffer's
+//! masked cells (mesh.rs, buffer.rs), builds a pyramid of its farthest
+//! depths, walks the hierarchy as `vfc` does testing each box in the
+//! frustum against it, and draws what is visible, occluders first.
 //!
-//! Departures: MOC keeps coverage masks per tile with two depths (its
-//! "masked" buffer), which merge any triangles covering a tile together,
-//! and rasterises with SIMD; this version merges only the two triangles of
-//! a quad, keeps one depth and one plane per cell, and rasterises scalar in
-//! f64. Like MOC it shares the occluders among threads (`swr.threads`),
-//! each into a buffer of its own, merged after; the box tests run on one
-//! thread. Occluders are whole visible objects (MOC and Godot take
-//! authored occluder meshes). A cell holds depth only where an occluder
-//! covers all its pixels, so a box within about a cell of an occluder's
-//! outline is not hidden by it; `swr.resolution` trades that against time.
+//! Departures from MOC: its coverage is the pixels whose centres its own
+//! rasteriser puts inside a triangle; here it is the centres the GPU is
+//! sure to draw whatever its sub-pixel placement (mesh.rs), so a pixel
+//! counts only clear of an occluder's outline by about a sixth of a pixel,
+//! which costs the seams between objects. A cell's depth and plane are
+//! the occluder's own where one object covers it whole; MOC keeps one
+//! depth per tile. Occluders are whole visible objects, their triangles
+//! taken in the f64 projection (MOC and Godot take authored occluder
+//! meshes, rasterised in f32 with SIMD: here it is scalar). Like MOC it
+//! shares the work among threads (`swr.threads`), each over a band of the
+//! buffer's rows; the box tests run on one thread. `swr.resolution` sets
+//! the cells (each of up to 8 × 8 pixel groups), trading the box test's
+//! precision against time.
 
 mod buffer;
+mod mesh;
+mod neighbours;
 
 use glam::{DMat3, DMat4, DVec2, DVec3, Vec4Swizzles};
 use serde::Serialize;
@@ -33,7 +39,8 @@ use crate::gpu::{
     eye_relative_box,
 };
 use crate::scene::Scene;
-use buffer::{OcclusionBuffer, ScreenPolygon, VertexError};
+use buffer::{Cells, OcclusionBuffer};
+use mesh::{Rasteriser, ScreenMesh, ScreenVertex, VERTEX_ERROR};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
@@ -64,7 +71,7 @@ const TRIANGLES: ParamInfo = ParamInfo {
 const THREADS: ParamInfo = ParamInfo {
     key: "threads",
     default: "0",
-    summary: "threads rasterising occluders, each into a buffer of its own, merged after (0: one per core; at most 64)",
+    summary: "threads rasterising occluders, each over a band of the buffer's rows (0: one per core; at most 64)",
 };
 
 /// The most threads `swr.threads` may ask for: each holds a buffer.
@@ -111,8 +118,13 @@ pub struct SoftwareOcclusionCulling {
     params: SwrParams,
     /// Made for the frame's render size, and again when it changes.
     buffer: Option<OcclusionBuffer>,
-    /// The threads besides the frame's own that rasterise occluders.
-    helpers: Vec<Rasteriser>,
+    /// What each thread rasterising occluders works with, the frame's own
+    /// first.
+    workers: Vec<Worker>,
+    /// Per mesh of the scene (sized in the first frame), its triangles'
+    /// neighbours, made the first time one of its objects is an occluder.
+    neighbours: Vec<Vec<[u32; 3]>>,
+    made_neighbours: Vec<bool>,
     /// The backend's depth margins, known once prepared (GL's, the larger,
     /// until then).
     depth_margins: DepthMargins,
@@ -123,16 +135,12 @@ pub struct SoftwareOcclusionCulling {
     /// The objects found visible last frame.
     visible: Vec<u32>,
     /// Scratch, reused so a frame allocates nothing once warm.
-    candidates: Vec<(f64, u32)>,
-    /// An occluder's vertices on screen, each projected once.
-    projected: Projected,
+    candidates: Vec<Candidate>,
     occluders: Vec<u32>,
     /// Per object of the scene (sized in the first frame), whether it is
     /// one of this frame's occluders, and whether it was found visible.
     is_occluder: Vec<bool>,
     is_found: Vec<bool>,
-    /// Where each thread's share of `occluders` ends.
-    shares: Vec<usize>,
     found: Vec<u32>,
     to_draw: Vec<u32>,
     stack: Vec<u32>,
@@ -143,15 +151,15 @@ impl SoftwareOcclusionCulling {
         SoftwareOcclusionCulling {
             params,
             buffer: None,
-            helpers: Vec::new(),
+            workers: Vec::new(),
+            neighbours: Vec::new(),
+            made_neighbours: Vec::new(),
             depth_margins: DepthMargins::for_backend(wgpu::Backend::Gl),
             #[cfg(test)]
             careless: false,
             visible: Vec::new(),
             candidates: Vec::new(),
-            projected: Vec::new(),
             occluders: Vec::new(),
-            shares: Vec::new(),
             is_occluder: Vec::new(),
             is_found: Vec::new(),
             found: Vec::new(),
@@ -162,28 +170,38 @@ impl SoftwareOcclusionCulling {
 }
 
 impl SoftwareOcclusionCulling {
-    /// Its buffer and its helper threads' for render size `size`.
+    /// Its buffer for render size `size`, and its threads' scratch.
     fn make_buffers(&mut self, size: Resolution) {
-        let threads = self.params.threads_used();
-        let buffer = || OcclusionBuffer::new(size, self.params.resolution);
-        self.helpers = (1..threads)
-            .map(|_| Rasteriser {
-                buffer: buffer(),
-                projected: Vec::new(),
-                rasterised: 0,
-            })
-            .collect();
-        self.buffer = Some(buffer());
+        self.workers = (0..self.params.threads_used()).map(|_| Worker::default()).collect();
+        self.buffer = Some(OcclusionBuffer::new(size, self.params.resolution));
         #[cfg(test)]
-        for buffer in self
-            .helpers
-            .iter_mut()
-            .map(|h| &mut h.buffer)
-            .chain(self.buffer.as_mut())
-        {
+        if let Some(buffer) = &mut self.buffer {
             buffer.careless = self.careless;
         }
     }
+
+    /// Makes the neighbours of each occluder's mesh that has none yet.
+    fn make_neighbours(&mut self, scene: &Scene) {
+        self.neighbours.resize(scene.meshes.len(), Vec::new());
+        self.made_neighbours.resize(scene.meshes.len(), false);
+        for &o in &self.occluders {
+            let m = scene.objects[o as usize].mesh as usize;
+            if !self.made_neighbours[m] {
+                let mesh = &scene.meshes[m];
+                let indices = &scene.indices[mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize];
+                self.neighbours[m] = neighbours::neighbours(indices, |v| scene.vertices[v as usize]);
+                self.made_neighbours[m] = true;
+            }
+        }
+    }
+}
+
+/// An object that may be an occluder this frame.
+struct Candidate {
+    /// Pixels its box covers on screen, and the box's nearest depth.
+    area: f64,
+    nearest: f64,
+    object: u32,
 }
 
 /// A camera's projection to framebuffer pixels and reverse-Z depth.
@@ -338,17 +356,19 @@ impl Culler for SoftwareOcclusionCulling {
     /// One frame, on the CPU:
     ///
     /// 1. **Occluders**: last frame's visible objects, largest on screen first,
-    ///    each whose triangles still fit `swr.triangles`.
+    ///    each whose triangles still fit `swr.triangles`, rasterised nearest
+    ///    first.
     /// 2. **Rasterise** their triangles, projected in f64, into a buffer of
-    ///    `swr.resolution` cells, conservatively (buffer.rs: a cell takes an
-    ///    occluder's farthest depth over the pixel centres it holds, and only
-    ///    where the occluder covers all of them, with the GPU's snapping and
-    ///    f32 error as margins; it also keeps that occluder's depth plane, so a
-    ///    box can be compared with it centre by centre). A mesh's consecutive
-    ///    triangles that share an edge are one quad occluder: the GPU draws
-    ///    them without a gap, and a triangle alone leaves the cells along its
-    ///    edges empty. Triangles reaching the near plane are left out (fewer
-    ///    occluders is always safe).
+    ///    `swr.resolution` cells, conservatively. Each object's triangles that
+    ///    turn one way and join along shared edges are one surface (a patch,
+    ///    mesh.rs): it marks the pixel groups of a cell the GPU is sure to draw
+    ///    it over, with the GPU's snapping and f32 error as margins from its
+    ///    outline, and the least depth it may draw there. A cell merges the
+    ///    patches' marks (buffer.rs, MOC's working layer) and takes the
+    ///    farthest of their depths once every pixel is marked; a patch
+    ///    covering a cell whole gives it its depth plane too, so a box can be
+    ///    compared with it centre by centre. Triangles reaching the near plane
+    ///    are left out (fewer occluders is always safe).
     /// 3. **Pyramid** of the buffer's farthest depths.
     /// 4. **Test**: the hierarchy is walked as `vfc` walks it; a node in the
     ///    frustum is also tested by its box (grown and raised as every box test
@@ -363,22 +383,19 @@ impl Culler for SoftwareOcclusionCulling {
     ///    subtree; a box reaching the near plane is visible. A leaf's objects
     ///    are tested one by one.
     /// 5. **Draw** the visible objects, the occluders among them first (in
-    ///    their order, largest first, for the GPU's early depth test); they are
+    ///    their order, nearest first, for the GPU's early depth test); they are
     ///    next frame's occluder candidates. An occluder found hidden is not
-    ///    drawn, and the buffer still holds only depth that is drawn: the
-    ///    occluder a cell took its depth and plane from is never found hidden,
-    ///    since its own box lies nowhere behind its own triangles, so at that
-    ///    cell every test of it, or of a node holding it, fails.
-    ///
-        fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
+    ///    drawn, and the buffer still holds only depth that is drawn: no
+    ///    occluder a cell took its depth from is found hidden, since at the
+    ///    pixel centres it vouched for there its own box lies nowhere behind
+    ///    its own triangles, and so nowhere behind the cell's depth and plane,
+    ///    so at that cell every test of it, or of a node holding it, fails.
+    fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let (camera, scene, size) = (input.camera, input.scene, input.resolution);
         let mut stats = TraversalStats::default();
         if self.buffer.as_ref().is_none_or(|b| b.target() != size) {
             self.make_buffers(size);
         }
-        let Some(buffer) = &mut self.buffer else {
-            unreachable!("made above")
-        };
         let projector = Projector::new(camera, size);
         let margins = BoxMargins::new(self.depth_margins, camera, size);
         let view = camera.view_rotation();
@@ -395,36 +412,48 @@ impl Culler for SoftwareOcclusionCulling {
             if frustum.classify(bounds) == Containment::Outside {
                 continue;
             }
-            let area = match eye_relative_box(camera, &view, margins, bounds) {
-                EyeBox::ReachesNear => f64::INFINITY,
-                EyeBox::Testable(q) => projector.box_on_screen(&q).map_or(0.0, |b| b.area),
+            let (area, nearest) = match eye_relative_box(camera, &view, margins, bounds) {
+                EyeBox::ReachesNear => (f64::INFINITY, f64::INFINITY),
+                EyeBox::Testable(q) => projector.box_on_screen(&q).map_or((0.0, 0.0), |b| (b.area, b.nearest)),
             };
             if area > 0.0 {
-                self.candidates.push((area, o));
+                self.candidates.push(Candidate { area, nearest, object: o });
             }
         }
         self.candidates
-            .sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        self.occluders.clear();
+            .sort_unstable_by(|a, b| b.area.total_cmp(&a.area).then(a.object.cmp(&b.object)));
         let mut budget = self.params.triangles;
-        for &(_, o) in &self.candidates {
-            let triangles = u64::from(scene.objects[o as usize].triangles);
-            if triangles <= budget {
-                budget -= triangles;
-                self.occluders.push(o);
-                self.is_occluder[o as usize] = true;
-            }
+        self.candidates.retain(|c| {
+            let triangles = u64::from(scene.objects[c.object as usize].triangles);
+            let fits = triangles <= budget;
+            budget -= if fits { triangles } else { 0 };
+            fits
+        });
+        // Nearest first: a cell an occluder has filled turns away the
+        // triangles behind it.
+        self.candidates
+            .sort_unstable_by(|a, b| b.nearest.total_cmp(&a.nearest).then(a.object.cmp(&b.object)));
+        self.occluders.clear();
+        for c in &self.candidates {
+            self.occluders.push(c.object);
+            self.is_occluder[c.object as usize] = true;
         }
 
+        stats.occluder_triangles = self.params.triangles - budget;
+
         // 2-3. Their triangles into the buffer, then the pyramid.
+        self.make_neighbours(scene);
+        let Some(buffer) = &mut self.buffer else {
+            unreachable!("made above")
+        };
         let occluders = Occluders {
             objects: &self.occluders,
             projector: &projector,
             camera,
             scene,
+            neighbours: &self.neighbours,
         };
-        stats.occluder_triangles =
-            occluders.rasterise(buffer, &mut self.projected, &mut self.helpers, &mut self.shares);
+        occluders.rasterise(buffer, &mut self.workers);
         buffer.build_pyramid();
 
         // 4. The hierarchy, in the frustum and not hidden.
@@ -498,15 +527,12 @@ impl Culler for SoftwareOcclusionCulling {
     }
 }
 
-/// Vertices on screen, each projected once: scratch for one object.
-type Projected = Vec<Option<(DVec3, f64)>>;
-
-/// The buffer and scratch of a thread that helps rasterise occluders.
-struct Rasteriser {
-    buffer: OcclusionBuffer,
-    projected: Projected,
-    /// The triangles it rasterised this frame.
-    rasterised: u64,
+/// A thread's scratch: one object's vertices on screen, and what
+/// rasterises them.
+#[derive(Default)]
+struct Worker {
+    vertices: Vec<Option<ScreenVertex>>,
+    rasteriser: Rasteriser,
 }
 
 /// A frame uses one thread more for each this many occluder triangles (a
@@ -519,71 +545,38 @@ struct Occluders<'a> {
     projector: &'a Projector,
     camera: &'a Camera,
     scene: &'a Scene,
+    /// Per mesh of the scene, its triangles' neighbours (made for every
+    /// occluder's mesh).
+    neighbours: &'a [Vec<[u32; 3]>],
 }
 
 impl Occluders<'_> {
-    /// Rasterises every occluder into `buffer` (cleared first),
-    /// sharing them out by triangles with `helpers` when there are enough:
-    /// each helper rasterises its share into a buffer of its own on a
-    /// thread of its own, and the buffers are merged in the shares' order,
-    /// which leaves the same cells as one thread taking them in turn.
-    /// Returns how many triangles were rasterised; `shares` is scratch.
-    fn rasterise(
-        &self,
-        buffer: &mut OcclusionBuffer,
-        projected: &mut Projected,
-        helpers: &mut [Rasteriser],
-        shares: &mut Vec<usize>,
-    ) -> u64 {
-        let triangles = |o: u32| u64::from(self.scene.objects[o as usize].triangles);
-        let total: u64 = self.objects.iter().map(|&o| triangles(o)).sum();
-        let threads = (1 + total / TRIANGLES_PER_THREAD).min(1 + helpers.len() as u64);
-        // Share k < threads − 1 ends where the triangles so far first reach
-        // (k + 1) / threads of them; the last ends with the objects.
-        shares.clear();
-        let mut so_far = 0;
-        for (i, &o) in self.objects.iter().enumerate() {
-            if shares.len() as u64 + 1 >= threads {
-                break;
-            }
-            so_far += triangles(o);
-            if so_far * threads >= total * (shares.len() as u64 + 1) {
-                shares.push(i + 1);
-            }
-        }
-        shares.resize(threads as usize, self.objects.len());
-        let start = |k: usize| if k == 0 { 0 } else { shares[k - 1] };
-        let helpers = &mut helpers[..threads as usize - 1];
-        let share = |k: usize| &self.objects[start(k)..shares[k]];
-        let mut rasterised = 0;
+    /// Rasterises every occluder into `buffer` (cleared first), with as
+    /// many of `workers` as there are triangles to share (one each per
+    /// [`TRIANGLES_PER_THREAD`]), each on a thread of its own over a band of
+    /// the buffer's rows: every worker takes every occluder, in order, into
+    /// its rows, so the cells are those one thread leaves.
+    fn rasterise(&self, buffer: &mut OcclusionBuffer, workers: &mut [Worker]) {
+        let total: u64 = self.objects.iter().map(|&o| u64::from(self.scene.objects[o as usize].triangles)).sum();
+        let rows = buffer.cells().height;
+        let threads = (1 + total / TRIANGLES_PER_THREAD).min(workers.len() as u64).min(u64::from(rows)) as u32;
+        let mut bands = buffer.cleared_bands(rows.div_ceil(threads.max(1))).zip(workers.iter_mut());
+        let Some((mut first_band, first_worker)) = bands.next() else {
+            return;
+        };
         // A helper's panic ends the scope with it.
         std::thread::scope(|scope| {
-            for (k, helper) in helpers.iter_mut().enumerate() {
-                let objects = share(k + 1);
-                helper.rasterised = 0;
-                if !objects.is_empty() {
-                    scope.spawn(move || {
-                        helper.rasterised = self.rasterise_share(objects, &mut helper.buffer, &mut helper.projected);
-                    });
-                }
+            for (mut cells, worker) in bands {
+                scope.spawn(move || self.rasterise_band(&mut cells, worker));
             }
-            rasterised = self.rasterise_share(share(0), buffer, projected);
+            self.rasterise_band(&mut first_band, first_worker);
         });
-        for (k, helper) in helpers.iter().enumerate() {
-            if !share(k + 1).is_empty() {
-                buffer.merge(&helper.buffer);
-                rasterised += helper.rasterised;
-            }
-        }
-        rasterised
     }
 
-    fn rasterise_share(&self, objects: &[u32], buffer: &mut OcclusionBuffer, projected: &mut Projected) -> u64 {
-        buffer.clear();
-        objects
-            .iter()
-            .map(|&o| rasterise_object(buffer, self.projector, self.camera, self.scene, o, projected))
-            .sum()
+    fn rasterise_band(&self, cells: &mut Cells, worker: &mut Worker) {
+        for &o in self.objects {
+            rasterise_object(cells, worker, self, o);
+        }
     }
 }
 
@@ -592,25 +585,17 @@ impl Occluders<'_> {
 const F32_POSITION_ERROR: f64 = 4.0 / (1u32 << 24) as f64;
 
 /// Rasterises object `o`'s triangles (placed where the scene has it this
-/// frame) into `buffer`; returns how many it rasterised.
+/// frame) into `cells`.
 ///
 /// The GPU transforms the object's f32 vertices by an f32 model-view whose
-/// translation is about as long as the object's reach from the eye, so its
-/// corners may land a few steps of 2^-24 of that reach from ours: that
-/// error, over the corner's view depth, in pixels and in relative depth, is
-/// the triangle's [`VertexError`]. Triangles with a corner within that
-/// error (and 2^-10 of the near distance) of the near plane are left out:
-/// the GPU may clip them.
-///
-/// Each vertex is projected once, into `projected` (reused scratch).
-fn rasterise_object(
-    buffer: &mut OcclusionBuffer,
-    projector: &Projector,
-    camera: &Camera,
-    scene: &Scene,
-    o: u32,
-    projected: &mut Projected,
-) -> u64 {
+/// translation is about as long as the object's reach from the eye, so a
+/// vertex may land a few steps of 2^-24 of that reach from ours: that
+/// error, over the vertex's view depth, in pixels and in relative depth,
+/// is its part of its [`ScreenVertex`]'s slack and depth error. Vertices
+/// within that error (and 2^-10 of the near distance) of the near plane
+/// are left out, and their triangles with them: the GPU may clip them.
+fn rasterise_object(cells: &mut Cells, worker: &mut Worker, occluders: &Occluders, o: u32) {
+    let (camera, scene, projector) = (occluders.camera, occluders.scene, occluders.projector);
     let object = &scene.objects[o as usize];
     let (min, max) = (object.bounds.min - camera.eye, object.bounds.max - camera.eye);
     let position_error = F32_POSITION_ERROR * min.abs().max(max.abs()).max_element();
@@ -622,57 +607,28 @@ fn rasterise_object(
     let (first, last) = indices
         .iter()
         .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-    projected.clear();
+    worker.vertices.clear();
     if first <= last {
-        projected.extend(scene.vertices[first as usize..=last as usize].iter().map(|p| {
-            let local = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
-            projector.project(object.transform.transform_point3(local) - camera.eye, near)
-        }));
+        worker
+            .vertices
+            .extend(scene.vertices[first as usize..=last as usize].iter().map(|p| {
+                let local = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+                let (at, view_depth) = projector.project(object.transform.transform_point3(local) - camera.eye, near)?;
+                Some(ScreenVertex {
+                    at,
+                    slack: VERTEX_ERROR + position_error * pixels_at_unit_depth / view_depth,
+                    depth_error: position_error / view_depth,
+                })
+            }));
     }
-    let vertex = |index: u32| projected[(index - first) as usize];
-    let position = |index: u32| scene.vertices[index as usize];
-    let error_at = |nearest: f64| VertexError {
-        pixels: position_error * pixels_at_unit_depth / nearest,
-        depth: position_error / nearest,
+    let mesh = ScreenMesh {
+        vertices: &worker.vertices,
+        first,
+        indices,
+        neighbours: &occluders.neighbours[object.mesh as usize],
+        closed: scene.parts[object.part as usize].closed,
     };
-    let mut rasterised = 0;
-    let mut triangles = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).peekable();
-    while let Some(triangle) = triangles.next() {
-        // Meshes list a quad's two triangles one after the other: taken
-        // together they leave no empty cells along their shared edge.
-        let quad = triangles.peek().and_then(|&next| quad_of(triangle, next, position));
-        if let Some([Some(a), Some(b), Some(c), Some(d)]) = quad.map(|corners| corners.map(vertex)) {
-            triangles.next();
-            let nearest = [a, b, c, d].iter().map(|&(_, w)| w).fold(f64::INFINITY, f64::min);
-            buffer.rasterise(&ScreenPolygon::quad([a, b, c, d].map(|(p, _)| p), error_at(nearest)));
-            rasterised += 2;
-        } else if let [Some((a, wa)), Some((b, wb)), Some((c, wc))] = triangle.map(vertex) {
-            buffer.rasterise(&ScreenPolygon::triangle([a, b, c], error_at(wa.min(wb).min(wc))));
-            rasterised += 1;
-        }
-    }
-    rasterised
-}
-
-/// Triangles `first` and `second` of a mesh as the corners a, b, c, d of a
-/// quad whose triangles are abc and acd, when they share an edge: two
-/// corners at the same position (the GPU places equal f32 positions of one
-/// object at the same point, so the shared edge has no gap).
-fn quad_of(first: [u32; 3], second: [u32; 3], position: impl Fn(u32) -> [f32; 3]) -> Option<[u32; 4]> {
-    let same = |u: u32, v: u32| u == v || position(u) == position(v);
-    // The shared edge u–v, first's corners k and k + 1; first is (u, v, b),
-    // which is abc with a = v and c = u in its own winding.
-    (0..3).find_map(|k| {
-        let (u, v, b) = (first[k], first[(k + 1) % 3], first[(k + 2) % 3]);
-        let holds = |w: u32| second.iter().position(|&s| same(s, w));
-        match (holds(u), holds(v)) {
-            (Some(i), Some(j)) if i != j => {
-                let d = second[3 - i - j];
-                Some([v, b, u, d])
-            }
-            _ => None,
-        }
-    })
+    worker.rasteriser.rasterise(cells, &mesh);
 }
 
 #[cfg(test)]
@@ -764,12 +720,22 @@ mod tests {
         let (mut tested, mut hidden, mut by_planes) = (0, 0, 0);
         for cells in [Resolution { width: 97, height: 61 }, size] {
             let mut buffer = OcclusionBuffer::new(size, cells);
-            for wall in &walls {
-                let on_screen = wall.map(|c| projector.project(c - camera.eye, camera.near).map(|(p, _)| p));
-                if let [Some(a), Some(b), Some(c), Some(d)] = on_screen {
-                    buffer.rasterise(&ScreenPolygon::quad([a, b, c, d], VertexError::default()));
-                }
-            }
+            let meshes: Vec<_> = walls
+                .iter()
+                .filter_map(|wall| {
+                    let on_screen = wall.map(|c| projector.project(c - camera.eye, camera.near).map(|(p, _)| p));
+                    let [Some(a), Some(b), Some(c), Some(d)] = on_screen else {
+                        return None;
+                    };
+                    let corners = [a, b, c, d].map(|at| ScreenVertex {
+                        at,
+                        slack: VERTEX_ERROR,
+                        depth_error: 0.0,
+                    });
+                    Some((corners.to_vec(), vec![0, 1, 2, 0, 2, 3]))
+                })
+                .collect();
+            mesh::rasterise_meshes(&mut buffer, &meshes);
             buffer.build_pyramid();
             let tester = Tester {
                 buffer: &buffer,
@@ -888,29 +854,6 @@ mod tests {
             1
         );
         assert_eq!(params(&["swr.threads=3"]).unwrap().threads_used(), 3);
-    }
-
-    #[test]
-    fn consecutive_triangles_sharing_an_edge_make_a_quad_that_keeps_the_first_ones_winding() {
-        // Corners 0 and 4, and 2 and 5, stand at one position.
-        let positions = [
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [2.0, 2.0, 0.0],
-        ];
-        let position = |v: u32| positions[v as usize];
-        // (0, 1, 2) then (0, 2, 3) by index, and by position alone.
-        assert_eq!(quad_of([0, 1, 2], [0, 2, 3], position), Some([0, 1, 2, 3]));
-        assert_eq!(quad_of([0, 1, 2], [4, 5, 3], position), Some([0, 1, 2, 3]));
-        // The shared edge as the first's second and third corners.
-        assert_eq!(quad_of([1, 2, 0], [3, 0, 2], position), Some([0, 1, 2, 3]));
-        // One corner in common is no edge.
-        assert_eq!(quad_of([0, 1, 2], [2, 6, 3], position), None);
-        assert_eq!(quad_of([0, 1, 3], [1, 2, 5], position), None);
     }
 
     #[test]

@@ -1,0 +1,776 @@
+//! One occluder object rasterised into the buffer's cells: which pixel
+//! groups of which cells the GPU is sure to draw it over, and a depth it
+//! draws them at or nearer (buffer.rs merges them, MOC's way).
+//!
+//! Why a pixel centre is drawn. The GPU places each corner of a triangle
+//! within some error of where the CPU projects it (sub-pixel snapping,
+//! [`VERTEX_ERROR`]; f32 vertices, [`ScreenVertex::slack`]), and places
+//! equal positions of one object at one point, so triangles sharing an
+//! edge stay joined. Take the object's triangles that face one way on
+//! screen and are not slivers (a **patch**; each object has two, front and
+//! back, and the GPU draws both since the scene renders without face
+//! culling); an edge shared by exactly two of them, in opposite directions,
+//! is inner, every other edge of theirs is the patch's **border**. At a
+//! point p, the border winds round p once for each patch triangle that
+//! holds p (they all turn one way). The GPU's placement moves each point of
+//! a border edge by less than twice its corners' error: where p lies
+//! farther than that from every border edge, the placed border winds round
+//! p as often, so the placed triangles, counted with their turn, still hold
+//! p at least once, and one that turns the patch's way holds p (a
+//! rasteriser's fill rule counts a centre on a shared edge as the winding
+//! does). So a pixel centre inside the patch and clear of its border by
+//! that margin is drawn ([`Rasteriser::mark`], [`Rasteriser::erase`]),
+//! whatever the triangles' size: a mesh of triangles far smaller than a
+//! cell covers the cell as one surface does. This is MOC's masked
+//! coverage made exact for a GPU that rasterises the same triangles.
+//!
+//! Its depth there is that of a point of the triangle drawn, within that
+//! error of p: at least the triangle's plane lowered by its greatest change
+//! within the error, then moved farther by the GPU's depth rounding
+//! ([`DEPTH_MARGIN`]); the triangle is one whose corners' bounds, grown by
+//! the error, hold p. So each cell keeps the least of those planes over the
+//! part of it each such triangle can reach ([`Rasteriser::add_depth`]),
+//! and one plane below all of them there. The margins bound f32
+//! interpolation over triangles, not over slivers (gpu/conservative.rs,
+//! rule 2): a triangle less than [`LEAST_HEIGHT`] errors high over any of
+//! its edges is left out of the patches, and its edges border them.
+//!
+//! The GPU must also draw every fragment an occluder vouches for: the
+//! scene's fragment stage discards only fragments nearer than the object's
+//! box (`FragmentLimit`, gpu/conservative.rs), and an occluder's triangles
+//! lie within its box (the box is its mesh's bounds, placed).
+
+use std::ops::Range;
+
+use glam::DVec3;
+
+use super::buffer::{Cells, Coverage, Grid, MASK_SIDE};
+use crate::gpu::ScreenPlane;
+
+/// Pixels the GPU may place a triangle's corner from where the CPU
+/// projects it, on each axis, besides a vertex's own f32 error: twice the
+/// largest sub-pixel snap Vulkan allows (1/32).
+pub(super) const VERTEX_ERROR: f64 = 1.0 / 16.0;
+
+/// A cell's depth is moved farther by this fraction, and by
+/// [`DEPTH_ABSOLUTE`], than the triangle's exact depth: the GPU
+/// interpolates depth in f32, and GL keeps only absolute precision of it
+/// (gpu/conservative.rs, rule 1); both apply on every backend.
+const DEPTH_MARGIN: f64 = 1.0 / (1u32 << 18) as f64;
+const DEPTH_ABSOLUTE: f64 = 1.0 / (1u32 << 21) as f64;
+
+/// How high a patch triangle must stand over each of its edges, in
+/// multiples of twice its corners' error (0.375 pixel at least): so a
+/// corner's placement tilts its depth plane by at most a twelfth of its
+/// rise across it, and its f32 interpolation stays within the margins.
+const LEAST_HEIGHT: f64 = 3.0;
+
+/// No triangle across this edge of a mesh triangle ([`super::neighbours`]).
+pub(super) const NO_NEIGHBOUR: u32 = u32::MAX;
+
+/// A vertex on screen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScreenVertex {
+    /// Pixel position (x, y) and depth (z).
+    pub at: DVec3,
+    /// How far the GPU may place it from `at`, in pixels on each axis.
+    pub slack: f64,
+    /// How far its depth may be from `at.z` as the GPU computes it, as a
+    /// fraction of it (its f32 position's error).
+    pub depth_error: f64,
+}
+
+/// An occluder object on screen.
+pub struct ScreenMesh<'a> {
+    /// Its vertices, index `first` first; `None` for one the GPU may clip
+    /// (at or behind the near plane) or not place at all.
+    pub vertices: &'a [Option<ScreenVertex>],
+    pub first: u32,
+    /// Three indices per triangle.
+    pub indices: &'a [u32],
+    /// Per triangle, the triangle across each edge (corner k to k + 1), or
+    /// [`NO_NEIGHBOUR`].
+    pub neighbours: &'a [[u32; 3]],
+    /// Whether it is part of a closed solid: its far side lies behind its
+    /// near side wherever it is drawn.
+    pub closed: bool,
+}
+
+/// Which way a triangle turns on screen (x right, y down), if it may
+/// belong to a patch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Turn {
+    Counter,
+    Clockwise,
+    /// In no patch: clipped, a sliver, or not a number.
+    None,
+}
+
+/// What one patch vouches for in one cell while it is rasterised.
+#[derive(Clone, Copy, Debug)]
+struct CellCover {
+    mask: u64,
+    /// The least depth of the triangles that may be drawn over the cell,
+    /// and a plane at most each of them where it may be drawn.
+    depth: f64,
+    plane: Option<ScreenPlane>,
+}
+
+const EMPTY: CellCover = CellCover {
+    mask: 0,
+    depth: f64::INFINITY,
+    plane: None,
+};
+
+/// A thread's scratch for rasterising objects, reused so a frame allocates
+/// nothing once warm.
+#[derive(Default)]
+pub struct Rasteriser {
+    /// Per triangle of the object, its turn, and its patch as a tree of
+    /// triangles (union-find: the root names the patch).
+    turns: Vec<Turn>,
+    parent: Vec<u32>,
+    /// The patches' triangles, patch by patch: (root, triangle).
+    by_patch: Vec<(u32, u32)>,
+    /// The cells the current patch may reach, and what it vouches for in
+    /// each.
+    columns: Range<u32>,
+    rows: Range<u32>,
+    cover: Vec<CellCover>,
+}
+
+impl Rasteriser {
+    /// Rasterises `mesh` into `cells` (only the rows of cells they hold),
+    /// patch by patch.
+    pub fn rasterise(&mut self, cells: &mut Cells, mesh: &ScreenMesh) {
+        self.find_patches(mesh);
+        let mut start = 0;
+        while start < self.by_patch.len() {
+            let root = self.by_patch[start].0;
+            let end = start + self.by_patch[start..].partition_point(|&(r, _)| r == root);
+            self.rasterise_patch(cells, mesh, start..end);
+            start = end;
+        }
+    }
+
+    /// Sorts the triangles into patches: those turning one way, joined by
+    /// inner edges.
+    fn find_patches(&mut self, mesh: &ScreenMesh) {
+        self.turns.clear();
+        self.turns.extend((0..mesh.neighbours.len()).map(|t| corners(mesh, t).map_or(Turn::None, turn_of)));
+        self.parent.clear();
+        self.parent.extend(0..self.turns.len() as u32);
+        for t in 0..self.turns.len() {
+            for across in mesh.neighbours[t] {
+                if self.turns[t] != Turn::None && across != NO_NEIGHBOUR && self.turns[across as usize] == self.turns[t] {
+                    let (a, b) = (self.root(t as u32), self.root(across));
+                    self.parent[a.max(b) as usize] = a.min(b);
+                }
+            }
+        }
+        let behind = if mesh.closed { behind_turn(mesh, &self.turns) } else { None };
+        self.by_patch.clear();
+        for t in 0..self.turns.len() as u32 {
+            if self.turns[t as usize] != Turn::None && Some(self.turns[t as usize]) != behind {
+                let root = self.root(t);
+                self.by_patch.push((root, t));
+            }
+        }
+        self.by_patch.sort_unstable();
+    }
+
+    /// The root of triangle `t`'s patch (halving the path on the way).
+    fn root(&mut self, mut t: u32) -> u32 {
+        while self.parent[t as usize] != t {
+            let up = self.parent[self.parent[t as usize] as usize];
+            self.parent[t as usize] = up;
+            t = up;
+        }
+        t
+    }
+
+    /// Rasterises the patch `self.by_patch[patch]`.
+    fn rasterise_patch(&mut self, cells: &mut Cells, mesh: &ScreenMesh, patch: Range<usize>) {
+        let corners_at = |k: usize| corners(mesh, self.by_patch[k].1 as usize);
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for c in patch.clone().filter_map(corners_at) {
+            let (l, h) = bounds(&c, slack_of(&c));
+            (lo, hi) = (lo.min(l), hi.max(h));
+        }
+        let grid = cells.grid();
+        self.columns = grid.across.cells_reaching(lo.x, hi.x);
+        self.rows = clamp(grid.down.cells_reaching(lo.y, hi.y), &cells.rows());
+        if self.columns.is_empty() || self.rows.is_empty() {
+            return;
+        }
+        self.cover.clear();
+        self.cover.resize(self.columns.len() * self.rows.len(), EMPTY);
+        for k in patch.clone() {
+            if let Some(c) = corners(mesh, self.by_patch[k].1 as usize) {
+                let triangle = Triangle::new(c);
+                if self.add_depth(cells, &triangle) {
+                    self.mark(grid, &triangle);
+                }
+            }
+        }
+        for k in patch {
+            let t = self.by_patch[k].1 as usize;
+            let Some(c) = corners(mesh, t) else { continue };
+            for (edge, across) in mesh.neighbours[t].into_iter().enumerate() {
+                if across == NO_NEIGHBOUR || self.turns[across as usize] != self.turns[t] {
+                    self.erase(grid, c[edge], c[(edge + 1) % 3]);
+                }
+            }
+        }
+        let width = self.columns.len();
+        for (i, cover) in self.cover.iter().enumerate() {
+            if let (true, Some(plane)) = (cover.mask != 0, cover.plane) {
+                let (column, row) = (self.columns.start + (i % width) as u32, self.rows.start + (i / width) as u32);
+                let depth = if cover.depth.is_nan() { f64::NEG_INFINITY } else { cover.depth };
+                cells.merge(
+                    column,
+                    row,
+                    &Coverage {
+                        mask: cover.mask,
+                        depth,
+                        plane,
+                    },
+                );
+            }
+        }
+    }
+
+    /// What the current patch vouches for in cell (`column`, `row`), which
+    /// must lie within its cells.
+    fn cover_at(&mut self, column: u32, row: u32) -> &mut CellCover {
+        let width = self.columns.len() as u32;
+        &mut self.cover[((row - self.rows.start) * width + column - self.columns.start) as usize]
+    }
+
+    /// Lowers the depth and plane of each cell where the GPU may draw
+    /// `corners`' triangle to what it vouches for there: at the pixel
+    /// centres within its error of the triangle (on each axis).
+    /// A cell where the triangle lies nowhere nearer than the cell's
+    /// reference layer is left to the patch no more: whatever the patch
+    /// vouches for there, the least of its triangles' depths, the reference
+    /// holds already (MOC's depth test of occluders against the buffer,
+    /// which front-to-back occluders make pay).
+    /// Returns whether it reached a cell still left to the patch.
+    fn add_depth(&mut self, cells: &Cells, triangle: &Triangle) -> bool {
+        let grid = cells.grid();
+        let mut reached = false;
+        let Triangle { slack, plane, edges, .. } = *triangle;
+        let (lo, hi) = bounds(&triangle.corners, slack);
+        for row in clamp(grid.down.cells_reaching(lo.y, hi.y), &self.rows) {
+            let [y0, y1] = grid.down.cell(row);
+            let ys = [y0.max(lo.y), y1.min(hi.y)];
+            // Where in x some point of these rows lies within the slack of
+            // every edge's half-plane (a distance of s on each axis is at
+            // most s · (|ex| + |ey|) across a unit normal).
+            let [from, to] = x_range(&edges, ys, |[ex, ey, _]| slack * (ex.abs() + ey.abs()), f64::min);
+            let xs = [from.max(lo.x), to.min(hi.x)];
+            for column in clamp(grid.across.cells_reaching(xs[0], xs[1]), &self.columns) {
+                let [x0, x1] = grid.across.cell(column);
+                let xs = [x0.max(xs[0]), x1.min(xs[1])];
+                let cover = self.cover_at(column, row);
+                if cover.depth == f64::NEG_INFINITY {
+                    continue;
+                }
+                let nearest = plane.max_over(xs, ys);
+                // Not nearer (or a NaN).
+                if nearest.partial_cmp(&f64::from(cells.reference(column, row))).is_none_or(|o| o.is_le()) {
+                    cover.depth = f64::NEG_INFINITY;
+                    continue;
+                }
+                reached = true;
+                let least = plane.min_over(xs, ys);
+                // A NaN vouches for nothing (and stays one).
+                cover.depth = if least.is_nan() { f64::NAN } else { cover.depth.min(least) };
+                cover.plane = Some(match cover.plane {
+                    None => plane,
+                    Some(held) => {
+                        let above = held.minus(&plane).max_over(xs, ys);
+                        if above > 0.0 {
+                            ScreenPlane {
+                                constant: held.constant - above,
+                                ..held
+                            }
+                        } else {
+                            held
+                        }
+                    }
+                });
+            }
+        }
+        reached
+    }
+
+    /// Marks the pixel groups whose centres all lie inside `triangle` or
+    /// within [`VERTEX_ERROR`] of it (less than any border's margin, so a
+    /// centre outside the patch it marks is erased): row of cells by row of
+    /// cells, first the cells whose every centre is in, then group row by
+    /// group row the cells on either side of them.
+    fn mark(&mut self, grid: &Grid, triangle: &Triangle) {
+        let edges = triangle.edges;
+        let (lo, hi) = bounds(&triangle.corners, VERTEX_ERROR);
+        for row in clamp(grid.down.cells_reaching(lo.y, hi.y), &self.rows) {
+            // Edges are linear, so the first and last rows of centres at both
+            // ends of an x range bound the whole rectangle.
+            let [from, to] = x_range(&edges, grid.down.cell(row), |_| VERTEX_ERROR, f64::max);
+            let whole = grid.across.cells_within(from, to, &self.columns);
+            for column in whole.clone() {
+                self.cover_at(column, row).mask |= grid.full_mask(column, row);
+            }
+            let inner = grid.across.groups_of(&whole); 
+            for g in grid.down.groups_of(&(row..row + 1)) {
+                let (_, k, ys) = grid.down.group(g);
+                let [from, to] = x_range(&edges, ys, |_| VERTEX_ERROR, f64::max);
+                let groups = grid.across.groups_within(from, to, &self.columns);
+                let (left, right) = (groups.start..groups.end.min(inner.start), groups.start.max(inner.end)..groups.end);
+                for (column, bits) in grid.across.cells_of(left).chain(grid.across.cells_of(right)) {
+                    self.cover_at(column, row).mask |= bits << (k * MASK_SIDE);
+                }
+            }
+        }
+    }
+
+    /// Clears the mark of every pixel group with a centre nearer than twice
+    /// the error of the border edge `p`–`q`'s corners to it (a square
+    /// round each point of the edge, which holds that disc).
+    fn erase(&mut self, grid: &Grid, p: ScreenVertex, q: ScreenVertex) {
+        let margin = 2.0 * p.slack.max(q.slack);
+        let (p, q) = (p.at, q.at);
+        for g in grid.down.groups_reaching(p.y.min(q.y) - margin, p.y.max(q.y) + margin, &self.rows) {
+            let (row, k, [y0, y1]) = grid.down.group(g);
+            // The edge's part within the margin of the group's rows, and
+            // its x range.
+            let [from, to] = if p.y == q.y {
+                [0.0, 1.0]
+            } else {
+                let at = |y: f64| (y - p.y) / (q.y - p.y);
+                let (s, t) = (at(y0 - margin), at(y1 + margin));
+                [s.min(t).max(0.0), s.max(t).min(1.0)]
+            };
+            let (xa, xb) = (p.x + (q.x - p.x) * from, p.x + (q.x - p.x) * to);
+            let groups = grid.across.groups_reaching(xa.min(xb) - margin, xa.max(xb) + margin, &self.columns);
+            for (column, bits) in grid.across.cells_of(groups) {
+                self.cover_at(column, row).mask &= !(bits << (k * MASK_SIDE));
+            }
+        }
+    }
+}
+
+/// The x range in which every edge of `edges` (inward, scaled to
+/// distances) is at least −`margin(edge)` at `ys`' first and last y, for
+/// `pick` = `f64::max` (all of them), or at one of them, for `f64::min`
+/// (some point between them, taken edge by edge: a wider range). Empty
+/// (or NaN) when there is none.
+fn x_range(edges: &[[f64; 3]; 3], ys: [f64; 2], margin: impl Fn([f64; 3]) -> f64, pick: fn(f64, f64) -> f64) -> [f64; 2] {
+    let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
+    for &[ex, ey, ec] in edges {
+        let needed = |y: f64| -margin([ex, ey, ec]) - ey * y - ec;
+        let n = pick(needed(ys[0]), needed(ys[1]));
+        if ex > 0.0 {
+            from = from.max(n / ex);
+        } else if ex < 0.0 {
+            to = to.min(n / ex);
+        } else if n.partial_cmp(&0.0).is_none_or(|o| o.is_gt()) {
+            to = f64::NEG_INFINITY;
+        }
+    }
+    [from, to]
+}
+
+/// A patch triangle, with what rasterising it takes.
+struct Triangle {
+    corners: [ScreenVertex; 3],
+    /// Its corners' error ([`slack_of`]), its inward edges and the plane it
+    /// vouches for ([`lowered_plane`]).
+    slack: f64,
+    edges: [[f64; 3]; 3],
+    plane: ScreenPlane,
+}
+
+impl Triangle {
+    fn new(corners: [ScreenVertex; 3]) -> Triangle {
+        let slack = slack_of(&corners);
+        Triangle {
+            corners,
+            slack,
+            edges: inward_edges(&corners),
+            plane: lowered_plane(&corners, slack),
+        }
+    }
+}
+
+/// Triangle `t`'s corners, when the GPU places them all.
+fn corners(mesh: &ScreenMesh, t: usize) -> Option<[ScreenVertex; 3]> {
+    let vertex = |k: usize| mesh.vertices[(mesh.indices[3 * t + k] - mesh.first) as usize];
+    Some([vertex(0)?, vertex(1)?, vertex(2)?])
+}
+
+/// The error of a triangle's corners: the largest.
+fn slack_of(corners: &[ScreenVertex; 3]) -> f64 {
+    corners.iter().map(|c| c.slack).fold(0.0, f64::max)
+}
+
+/// The bounds of `corners` grown by `by` (x, y; z unused).
+fn bounds(corners: &[ScreenVertex; 3], by: f64) -> (DVec3, DVec3) {
+    let (lo, hi) = corners
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), c| {
+            (lo.min(c.at), hi.max(c.at))
+        });
+    (lo - DVec3::splat(by), hi + DVec3::splat(by))
+}
+
+/// The turn of a closed solid's triangles that lies behind the other
+/// turn's and covers no more of the screen (its far side), if one does: it
+/// is left out, since the other turn's triangles hide it wherever it would
+/// be drawn (leaving out a patch is always safe).
+fn behind_turn(mesh: &ScreenMesh, turns: &[Turn]) -> Option<Turn> {
+    // Per turn: screen area, and area times mean depth.
+    let mut sums = [[0.0f64; 2]; 2];
+    for (t, &turn) in turns.iter().enumerate() {
+        if let (Turn::Counter | Turn::Clockwise, Some(c)) = (turn, corners(mesh, t)) {
+            let area = twice_area(c[0].at, c[1].at, c[2].at).abs();
+            let sum = &mut sums[usize::from(turn == Turn::Clockwise)];
+            sum[0] += area;
+            sum[1] += area * (c[0].at.z + c[1].at.z + c[2].at.z);
+        }
+    }
+    let [[counter, counter_depth], [clockwise, clockwise_depth]] = sums;
+    // Nearer means a greater mean depth (reverse-Z); areas a twentieth
+    // apart count as alike (slivers left out of the nearer side).
+    if clockwise <= counter * 1.05 && clockwise_depth * counter < counter_depth * clockwise {
+        Some(Turn::Clockwise)
+    } else if counter <= clockwise * 1.05 && counter_depth * clockwise < clockwise_depth * counter {
+        Some(Turn::Counter)
+    } else {
+        None
+    }
+}
+
+/// A triangle's turn on screen, or none for a sliver (less than
+/// [`LEAST_HEIGHT`] errors high over an edge) or one not a number.
+fn turn_of(corners: [ScreenVertex; 3]) -> Turn {
+    let [a, b, c] = corners.map(|c| c.at);
+    let area = twice_area(a, b, c);
+    let longest_squared = [(a, b), (b, c), (c, a)]
+        .iter()
+        .map(|(p, q)| (q.truncate() - p.truncate()).length_squared())
+        .fold(0.0, f64::max);
+    // Twice the area over the longest edge is the least height; squared,
+    // to spare the roots.
+    let least = LEAST_HEIGHT * 2.0 * slack_of(&corners);
+    let high_enough = area * area >= least * least * longest_squared;
+    if !high_enough || !area.is_finite() || area == 0.0 {
+        Turn::None
+    } else if area > 0.0 {
+        Turn::Counter
+    } else {
+        Turn::Clockwise
+    }
+}
+
+/// Twice the signed area of the screen triangle pqr: its sign is its
+/// turn.
+fn twice_area(p: DVec3, q: DVec3, r: DVec3) -> f64 {
+    (q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x)
+}
+
+/// The triangle's inward edge functions, scaled to distances in pixels
+/// (for a patch triangle: one of finite, non-zero area).
+fn inward_edges(corners: &[ScreenVertex; 3]) -> [[f64; 3]; 3] {
+    let [a, b, c] = corners.map(|c| c.at);
+    let turn = twice_area(a, b, c).signum();
+    [(a, b), (b, c), (c, a)].map(|(p, q)| {
+        let (dx, dy) = (q.x - p.x, q.y - p.y);
+        let s = turn / (dx * dx + dy * dy).sqrt();
+        // inside(x, y) = s · ((q − p) × ((x, y) − p))
+        [-dy * s, dx * s, (dy * p.x - dx * p.y) * s]
+    })
+}
+
+/// What the triangle vouches for at each point within `slack` of where the
+/// GPU may draw it: its plane lowered by its greatest change within the
+/// slack, then moved farther by the depth margins (all affine).
+fn lowered_plane(corners: &[ScreenVertex; 3], slack: f64) -> ScreenPlane {
+    let [a, b, c] = corners.map(|c| c.at);
+    let area = twice_area(a, b, c);
+    let per_x = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / area;
+    let per_y = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
+    let constant = a.z - per_x * a.x - per_y * a.y;
+    let depth_error = corners.iter().map(|c| c.depth_error).fold(0.0, f64::max);
+    let keep = 1.0 - DEPTH_MARGIN - depth_error;
+    ScreenPlane {
+        per_x: per_x * keep,
+        per_y: per_y * keep,
+        constant: (constant - slack * (per_x.abs() + per_y.abs())) * keep - DEPTH_ABSOLUTE,
+    }
+}
+
+/// `range` within `within`.
+fn clamp(range: Range<u32>, within: &Range<u32>) -> Range<u32> {
+    let start = range.start.max(within.start);
+    start..range.end.min(within.end).max(start)
+}
+
+/// Rasterises `meshes` (each one object's screen vertices, all placed,
+/// and three indices per triangle; equal indices are the only shared
+/// positions) into `buffer`, cleared first, in order, on one thread.
+#[cfg(test)]
+pub(super) fn rasterise_meshes(buffer: &mut super::buffer::OcclusionBuffer, meshes: &[(Vec<ScreenVertex>, Vec<u32>)]) {
+    let rows = buffer.cells().height;
+    let Some(mut cells) = buffer.cleared_bands(rows).next() else {
+        return;
+    };
+    let mut rasteriser = Rasteriser::default();
+    for (vertices, indices) in meshes {
+        let placed: Vec<Option<ScreenVertex>> = vertices.iter().map(|&v| Some(v)).collect();
+        let neighbours = super::neighbours::neighbours(indices, |i| [i as f32, 0.0, 0.0]);
+        let mesh = ScreenMesh {
+            vertices: &placed,
+            first: 0,
+            indices,
+            neighbours: &neighbours,
+            closed: false,
+        };
+        rasteriser.rasterise(&mut cells, &mesh);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cull::swr::buffer::OcclusionBuffer;
+    use crate::gpu::Resolution;
+    use crate::rng::Rng;
+
+    fn vertex(x: f64, y: f64, z: f64) -> ScreenVertex {
+        ScreenVertex {
+            at: DVec3::new(x, y, z),
+            slack: VERTEX_ERROR,
+            depth_error: 0.0,
+        }
+    }
+
+    /// A grid of `columns` × `rows` corners `step` pixels apart from
+    /// `origin`, each quad split in two, turning the same way (reversed
+    /// when `mirrored`), at depth `depth(x, y)`.
+    fn grid(
+        origin: DVec2,
+        step: DVec2,
+        [columns, rows]: [u32; 2],
+        mirrored: bool,
+        depth: impl Fn(f64, f64) -> f64,
+    ) -> (Vec<ScreenVertex>, Vec<u32>) {
+        let mut vertices = Vec::new();
+        for j in 0..rows {
+            for i in 0..columns {
+                let p = origin + step * DVec2::new(f64::from(i), f64::from(j));
+                vertices.push(vertex(p.x, p.y, depth(p.x, p.y)));
+            }
+        }
+        let mut indices = Vec::new();
+        for j in 0..rows - 1 {
+            for i in 0..columns - 1 {
+                let at = |di: u32, dj: u32| (j + dj) * columns + i + di;
+                let (a, b, c, d) = (at(0, 0), at(1, 0), at(1, 1), at(0, 1));
+                for t in [[a, b, c], [a, c, d]] {
+                    indices.extend(if mirrored { [t[0], t[2], t[1]] } else { t });
+                }
+            }
+        }
+        (vertices, indices)
+    }
+
+    use glam::DVec2;
+
+    /// Random meshes over a `size` target: grids of triangles from a third
+    /// of a pixel to tens of pixels, curved in depth, some with corners
+    /// moved far enough to fold them over themselves or squashed into
+    /// slivers, and loose triangles.
+    fn random_meshes(rng: &mut Rng, size: Resolution, count: usize) -> Vec<(Vec<ScreenVertex>, Vec<u32>)> {
+        let (w, h) = (f64::from(size.width), f64::from(size.height));
+        (0..count)
+            .map(|k| {
+                let step = DVec2::new(rng.range(0.3, 12.0), rng.range(0.3, 12.0));
+                let origin = DVec2::new(rng.range(-0.3 * w, w), rng.range(-0.3 * h, h));
+                let counts = [rng.range(2.0, 24.0) as u32, rng.range(2.0, 24.0) as u32];
+                let (z0, gx, gy, bend) = (
+                    rng.range(0.2, 0.8),
+                    rng.range(-0.3, 0.3) / w,
+                    rng.range(-0.3, 0.3) / h,
+                    rng.range(0.0, 0.1),
+                );
+                let depth = move |x: f64, y: f64| z0 + gx * x + gy * y + bend * ((x / 7.0).sin() * (y / 5.0).cos());
+                let (mut vertices, mut indices) = grid(origin, step, counts, rng.range(0.0, 1.0) < 0.5, depth);
+                match k % 4 {
+                    // Folds: some corners moved by up to three steps.
+                    0 => {
+                        for v in vertices.iter_mut() {
+                            if rng.range(0.0, 1.0) < 0.1 {
+                                v.at.x += step.x * rng.range(-3.0, 3.0);
+                                v.at.y += step.y * rng.range(-3.0, 3.0);
+                            }
+                        }
+                    }
+                    // Jitter, and now and then a row squashed to slivers.
+                    1 => {
+                        for v in vertices.iter_mut() {
+                            v.at.x += step.x * rng.range(-0.3, 0.3);
+                            v.at.y += if rng.range(0.0, 1.0) < 0.05 { 0.0 } else { step.y * rng.range(-0.3, 0.3) };
+                        }
+                    }
+                    // Loose triangles: every corner its own.
+                    2 => {
+                        let corners: Vec<ScreenVertex> = indices.iter().map(|&i| vertices[i as usize]).collect();
+                        indices = (0..corners.len() as u32).collect();
+                        vertices = corners;
+                    }
+                    _ => {}
+                }
+                (vertices, indices)
+            })
+            .collect()
+    }
+
+    /// The nearest depth the GPU may draw at each pixel centre of `size`
+    /// (0 where it draws nothing), with every corner placed `offset(corner)`
+    /// from where the mesh has it (one offset per corner, for all its
+    /// triangles), depths interpolated exactly.
+    fn drawn(meshes: &[(Vec<ScreenVertex>, Vec<u32>)], size: Resolution, rng: &mut Rng) -> Vec<f64> {
+        let mut nearest = vec![0.0f64; (size.width * size.height) as usize];
+        for (vertices, indices) in meshes {
+            let mut shift = || if rng.range(0.0, 1.0) < 0.5 { -VERTEX_ERROR } else { VERTEX_ERROR };
+            let placed: Vec<DVec3> = vertices
+                .iter()
+                .map(|v| v.at + DVec3::new(shift(), shift(), 0.0))
+                .collect();
+            for t in indices.chunks_exact(3) {
+                let [a, b, c] = [0, 1, 2].map(|k| placed[t[k] as usize]);
+                let area = twice_area(a, b, c);
+                if area == 0.0 {
+                    continue;
+                }
+                let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+                let ys = (lo.y - 0.5).ceil().max(0.0) as u32..((hi.y - 0.5).floor() + 1.0).clamp(0.0, f64::from(size.height)) as u32;
+                let xs = (lo.x - 0.5).ceil().max(0.0) as u32..((hi.x - 0.5).floor() + 1.0).clamp(0.0, f64::from(size.width)) as u32;
+                for py in ys {
+                    for px in xs.clone() {
+                        let p = DVec3::new(f64::from(px) + 0.5, f64::from(py) + 0.5, 0.0);
+                        let (wa, wb, wc) = (twice_area(p, b, c) / area, twice_area(a, p, c) / area, twice_area(a, b, p) / area);
+                        if wa >= 0.0 && wb >= 0.0 && wc >= 0.0 {
+                            let depth = wa * a.z + wb * b.z + wc * c.z;
+                            let at = &mut nearest[(py * size.width + px) as usize];
+                            *at = at.max(depth);
+                        }
+                    }
+                }
+            }
+        }
+        nearest
+    }
+
+    #[test]
+    fn a_cell_vouches_for_no_depth_nearer_than_the_gpu_may_draw_at_any_pixel_centre_it_holds() {
+        let mut rng = Rng::new(32);
+        let size = Resolution { width: 160, height: 120 };
+        let (mut vouched, mut small) = (0u64, 0u64);
+        for cells in [
+            Resolution { width: 53, height: 40 },
+            Resolution { width: 160, height: 120 },
+            Resolution { width: 16, height: 12 },
+        ] {
+            for _ in 0..6 {
+                let meshes = random_meshes(&mut rng, size, 24);
+                let mut buffer = OcclusionBuffer::new(size, cells);
+                rasterise_meshes(&mut buffer, &meshes);
+                for _ in 0..3 {
+                    let nearest = drawn(&meshes, size, &mut rng);
+                    for py in 0..size.height {
+                        for px in 0..size.width {
+                            let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
+                            let holds = buffer.vouched_at(x, y);
+                            let shown = nearest[(py * size.width + px) as usize];
+                            assert!(
+                                holds <= shown,
+                                "{cells:?}: the buffer vouches for {holds} at ({x}, {y}), where the GPU may draw {shown}"
+                            );
+                        }
+                    }
+                }
+                vouched += buffer.depths().iter().filter(|&&d| d > 0.0).count() as u64;
+                small += u64::from(meshes.iter().any(|(v, _)| v.len() > 3 && (v[1].at - v[0].at).length() < 1.0));
+            }
+        }
+        assert!(vouched > 3000, "cells vouched for ({vouched})");
+        assert!(small > 3, "meshes of sub-pixel triangles ({small})");
+    }
+
+    #[test]
+    fn a_mesh_of_triangles_smaller_than_a_cell_fills_the_cells_it_covers() {
+        // 1.5-pixel triangles over a 96 × 72 target in cells of 4 × 4
+        // pixels, at depth 0.5: every cell but those within a border's
+        // margin of the mesh's outline takes the depth, less its margins.
+        let size = Resolution { width: 96, height: 72 };
+        let mut buffer = OcclusionBuffer::new(size, Resolution { width: 24, height: 18 });
+        let mesh = grid(DVec2::new(10.0, 10.0), DVec2::splat(1.5), [53, 37], false, |_, _| 0.5);
+        rasterise_meshes(&mut buffer, &[mesh]);
+        // The mesh spans pixels 10 to 88 across and 10 to 64 down: cells
+        // 3 to 21 and 3 to 15 lie inside by more than the margin.
+        for (i, &depth) in buffer.depths().iter().enumerate() {
+            let (column, row) = (i % 24, i / 24);
+            let inside = (3..=21).contains(&column) && (3..=15).contains(&row);
+            if inside {
+                assert!(depth > 0.499 && depth < 0.5, "cell ({column}, {row}) holds {depth}");
+            } else if !(2..=22).contains(&column) || !(2..=16).contains(&row) {
+                assert_eq!(depth, 0.0, "cell ({column}, {row}) lies outside the mesh");
+            }
+        }
+        // The same triangles taken apart (no edge shared) cover no centre by
+        // their margin together: nothing.
+        let (vertices, indices) = grid(DVec2::new(10.0, 10.0), DVec2::splat(1.5), [53, 37], false, |_, _| 0.5);
+        let loose: Vec<ScreenVertex> = indices.iter().map(|&i| vertices[i as usize]).collect();
+        let count = loose.len() as u32;
+        let mut apart = OcclusionBuffer::new(size, Resolution { width: 24, height: 18 });
+        rasterise_meshes(&mut apart, &[(loose, (0..count).collect())]);
+        assert!(apart.depths().iter().all(|&d| d == 0.0));
+    }
+
+    #[test]
+    fn objects_that_each_cover_part_of_a_cell_fill_it_together_at_the_farther_depth() {
+        // Two walls meeting at x = 30.2 (inside cells of 4 pixels), one at
+        // 0.5, one at 0.4, overlapping by two pixels.
+        let size = Resolution { width: 64, height: 48 };
+        let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
+        let wall = |x0: f64, x1: f64, z: f64| grid(DVec2::new(x0, -5.0), DVec2::new(x1 - x0, 60.0), [2, 2], false, move |_, _| z);
+        rasterise_meshes(&mut buffer, &[wall(-5.0, 31.2, 0.5), wall(29.2, 70.0, 0.4)]);
+        let depths = buffer.depths();
+        let at = |column: usize| depths[5 * 16 + column];
+        assert!(at(2) > 0.499 && at(2) <= 0.5, "{}", at(2));
+        assert!(at(12) > 0.399 && at(12) <= 0.4, "{}", at(12));
+        // The cells over the overlap hold the farther wall's depth.
+        assert!(at(7) > 0.399 && at(7) <= 0.4, "{}", at(7));
+        assert!(depths.iter().all(|&d| d > 0.0), "every cell covered");
+    }
+
+    #[test]
+    fn a_triangle_over_the_whole_screen_fills_every_cell_with_its_farthest_depth() {
+        let size = Resolution { width: 64, height: 48 };
+        let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
+        // A plane leaning in x: depth 0.5 at x = 0, 0.3 at x = 64.
+        let at = |x: f64, y: f64| vertex(x, y, 0.5 - 0.2 * x / 64.0);
+        rasterise_meshes(
+            &mut buffer,
+            &[(vec![at(-100.0, -100.0), at(300.0, -100.0), at(-100.0, 300.0)], vec![0, 1, 2])],
+        );
+        // Column 0 holds pixels 0..=3, centres 0.5 to 3.5: its farthest is
+        // where the GPU may sample beside 3.5.
+        let x = 3.5 + VERTEX_ERROR;
+        let expected = (0.5 - 0.2 * x / 64.0) * (1.0 - DEPTH_MARGIN) - DEPTH_ABSOLUTE;
+        assert!(buffer.depths().iter().all(|&d| d > 0.0));
+        assert_eq!(buffer.depths()[0], super::super::buffer::f32_at_most(expected));
+    }
+}

@@ -1,0 +1,89 @@
+//! Which triangles of a mesh share an edge: what makes a mesh's triangles
+//! one surface to the rasteriser (mesh.rs). Found once per mesh, by
+//! position, since the GPU places equal f32 positions of one object at one
+//! point whatever their index.
+
+use super::mesh::NO_NEIGHBOUR;
+
+/// Per triangle of `indices` (three per triangle), the triangle across
+/// each edge (corner k to k + 1): the one other triangle holding that
+/// edge, in the opposite direction (so both turn the same way when they lie
+/// on either side of it); [`NO_NEIGHBOUR`] where no triangle, or more than
+/// one, shares it, or the two run it the same way.
+pub fn neighbours(indices: &[u32], position: impl Fn(u32) -> [f32; 3]) -> Vec<[u32; 3]> {
+    // One number per position (−0 is 0; NaN positions never share an
+    // edge, their triangles being never drawn).
+    let key = |i: u32| position(i).map(|c| if c == 0.0 { 0 } else { c.to_bits() });
+    let mut by_position: Vec<([u32; 3], u32)> = (0..indices.len() as u32).map(|s| (key(indices[s as usize]), s)).collect();
+    by_position.sort_unstable();
+    let mut point = vec![0u32; indices.len()];
+    let mut next = 0;
+    for (k, &(position, slot)) in by_position.iter().enumerate() {
+        if k > 0 && by_position[k - 1].0 != position {
+            next += 1;
+        }
+        point[slot as usize] = next;
+    }
+    // Each edge as (lower point, higher point), whether it runs upwards,
+    // and where it is (triangle, corner).
+    let mut edges: Vec<(u64, bool, u32, u8)> = Vec::with_capacity(indices.len());
+    for t in 0..indices.len() / 3 {
+        for k in 0..3 {
+            let (u, v) = (point[3 * t + k], point[3 * t + (k + 1) % 3]);
+            if u != v {
+                let key = u64::from(u.min(v)) << 32 | u64::from(u.max(v));
+                edges.push((key, u < v, t as u32, k as u8));
+            }
+        }
+    }
+    edges.sort_unstable();
+    let mut across = vec![[NO_NEIGHBOUR; 3]; indices.len() / 3];
+    let mut start = 0;
+    while start < edges.len() {
+        let end = start + edges[start..].partition_point(|e| e.0 == edges[start].0);
+        if let [(_, up, t, k), (_, other_up, s, j)] = edges[start..end]
+            && up != other_up
+        {
+            across[t as usize][k as usize] = s;
+            across[s as usize][j as usize] = t;
+        }
+        start = end;
+    }
+    across
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangles_sharing_an_edge_by_position_in_opposite_directions_are_neighbours() {
+        // A square of two triangles, the second's corners at copies of the
+        // first's positions (indices 3 and 4), and -0 for 0; then a
+        // triangle on the square's right edge running it the square's way
+        // (a fold: no neighbour), and a lone triangle.
+        let positions = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-0.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [2.0, 0.5, 0.0],
+            [5.0, 5.0, 5.0],
+            [6.0, 5.0, 5.0],
+            [5.0, 6.0, 5.0],
+        ];
+        let position = |i: u32| positions[i as usize];
+        let indices = [0, 1, 2, 3, 4, 5, 1, 2, 6, 7, 8, 9];
+        let n = NO_NEIGHBOUR;
+        assert_eq!(
+            neighbours(&indices, position),
+            [[n, n, 1], [0, n, n], [n, n, n], [n, n, n]],
+            "the diagonal 0-2 joins the square's halves; the fold on edge 1-2 leaves it to none"
+        );
+        // A third triangle on the diagonal makes it shared by three: none.
+        let indices = [0, 1, 2, 3, 4, 5, 2, 0, 6];
+        assert_eq!(neighbours(&indices, position), [[n; 3]; 3]);
+    }
+}
