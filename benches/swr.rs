@@ -9,6 +9,9 @@
 //! per frame, the occluder triangles a frame, and triangles a second over
 //! the whole frame; with `swr.triangles=0` (no occluders, nothing hidden)
 //! the frame is the box tests alone, and boxes a second.
+//!
+//! `cargo bench --bench swr -- swr.KEY=VALUE ...` runs with those
+//! parameters, e.g. `swr.threads=1` or `swr.resolution=128x96`.
 
 mod common;
 
@@ -89,10 +92,12 @@ fn walk(scene: &Scene, hierarchy: &Hierarchy, cameras: &[Camera], params: &[&str
 }
 
 fn main() {
+    let params: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with('-')).collect();
+    let params: Vec<&str> = params.iter().map(String::as_str).collect();
     for spec in SCENES {
         let (scene, hierarchy, cameras) = common::walk(spec);
         println!("{spec}: {} objects, {FRAMES} frames at 800x600", scene.objects.len());
-        let (whole, counts) = walk(&scene, &hierarchy, &cameras, &[]);
+        let (whole, counts) = walk(&scene, &hierarchy, &cameras, &params);
         let ms = whole.as_secs_f64() * 1e3;
         println!(
             "  swr frame                {ms:>7.2} ms   {:>7} occluder triangles   {:>6.2} M triangles/s",

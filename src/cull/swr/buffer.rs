@@ -109,15 +109,15 @@ impl Axis {
     fn pixels_within(&self, lo: f64, hi: f64) -> Range<u32> {
         let n = self.group_of.len() as f64;
         // Nothing between them, or a NaN.
-        if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
+        if lo.is_nan() || hi.is_nan() {
             return 0..0;
         }
         // From pixel ⌈lo − 0.5⌉ to ⌊hi − 0.5⌋, clamped to the side first,
         // so casts round them (a cast truncates; `ceil` and `floor` are
         // calls into libm on a plain x86-64 target).
-        let start = (lo - 0.5).clamp(0.0, n);
+        let start = (lo - 0.5).max(0.0).min(n);
         let first = start as u32 + u32::from(f64::from(start as u32) < start);
-        let end = (hi + 0.5).clamp(0.0, n) as u32;
+        let end = (hi + 0.5).max(0.0).min(n) as u32;
         if first < end { first..end } else { 0..0 }
     }
 
@@ -280,6 +280,24 @@ impl Cells<'_> {
     /// The reference depth of cell (`column`, `row`).
     pub(super) fn reference(&self, column: u32, row: u32) -> f32 {
         self.depth[((row - self.rows.start) * self.grid.cells.width + column) as usize]
+    }
+
+    /// Whether anything at most `nearest` deep over the pixels `first` to
+    /// `last` (x, y, inclusive) lies behind the reference layer of every
+    /// cell holding them in these rows (so it can add nothing to them).
+    pub(super) fn behind(&self, first: [u32; 2], last: [u32; 2], nearest: f64) -> bool {
+        let (cells, target) = (self.grid.cells, self.grid.target);
+        let columns = cell_of(first[0], cells.width, target.width)..cell_of(last[0], cells.width, target.width) + 1;
+        let rows = cell_of(first[1], cells.height, target.height)..cell_of(last[1], cells.height, target.height) + 1;
+        self.cells_behind(columns, rows, nearest)
+    }
+
+    /// Whether anything at most `nearest` deep lies behind the reference
+    /// layer of every cell of `columns` × `rows` in these rows.
+    pub(super) fn cells_behind(&self, columns: Range<u32>, rows: Range<u32>, nearest: f64) -> bool {
+        let rows = rows.start.max(self.rows.start)..rows.end.min(self.rows.end);
+        rows.into_iter()
+            .all(|row| columns.clone().all(|column| nearest < f64::from(self.reference(column, row))))
     }
 
     /// Merges `coverage` into cell (`column`, `row`), as MOC updates a

@@ -42,7 +42,7 @@
 
 use std::ops::Range;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 use super::buffer::{Cells, Coverage, Grid, MASK_SIDE};
 use crate::gpu::ScreenPlane;
@@ -122,35 +122,86 @@ const EMPTY: CellCover = CellCover {
     plane: None,
 };
 
-/// A thread's scratch for rasterising objects, reused so a frame allocates
-/// nothing once warm.
+/// Occluders made ready to rasterise: each object's patches, with their
+/// triangles and border edges. Made by one thread for its share of the
+/// objects; read by every thread rasterising its rows.
 #[derive(Default)]
-pub struct Rasteriser {
-    /// Per triangle of the object, its turn, and its patch as a tree of
-    /// triangles (union-find: the root names the patch).
+pub struct Patches {
+    /// Scratch for one object: per triangle, its turn, and its patch as a
+    /// tree of triangles (union-find: the root names the patch); the
+    /// patches' triangles, patch by patch, as (root, triangle).
     turns: Vec<Turn>,
     parent: Vec<u32>,
-    /// The patches' triangles, patch by patch: (root, triangle).
     by_patch: Vec<(u32, u32)>,
-    /// The cells the current patch may reach, and what it vouches for in
-    /// each.
-    columns: Range<u32>,
-    rows: Range<u32>,
-    cover: Vec<CellCover>,
+    triangles: Vec<Triangle>,
+    borders: Vec<Border>,
+    patches: Vec<Patch>,
 }
 
-impl Rasteriser {
-    /// Rasterises `mesh` into `cells` (only the rows of cells they hold),
-    /// patch by patch.
-    pub fn rasterise(&mut self, cells: &mut Cells, mesh: &ScreenMesh) {
+/// An edge of a patch's border, and how far from it a pixel centre must
+/// lie to count: twice its corners' error.
+struct Border {
+    p: DVec3,
+    q: DVec3,
+    margin: f64,
+}
+
+/// A patch: its triangles and border edges in [`Patches`], the bounds of
+/// its triangles grown by their error (x, y), and its nearest corner's
+/// depth.
+struct Patch {
+    triangles: Range<usize>,
+    borders: Range<usize>,
+    lo: DVec2,
+    hi: DVec2,
+    nearest: f64,
+}
+
+impl Patches {
+    pub fn clear(&mut self) {
+        self.triangles.clear();
+        self.borders.clear();
+        self.patches.clear();
+    }
+
+    /// Adds `mesh`'s patches; returns which they are.
+    pub fn add(&mut self, mesh: &ScreenMesh) -> Range<usize> {
         self.find_patches(mesh);
+        let first = self.patches.len();
         let mut start = 0;
         while start < self.by_patch.len() {
             let root = self.by_patch[start].0;
             let end = start + self.by_patch[start..].partition_point(|&(r, _)| r == root);
-            self.rasterise_patch(cells, mesh, start..end);
+            let (triangles, borders) = (self.triangles.len(), self.borders.len());
+            let (mut lo, mut hi, mut nearest) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
+            for k in start..end {
+                let t = self.by_patch[k].1 as usize;
+                let Some(c) = corners(mesh, t) else { continue };
+                let triangle = Triangle::new(c);
+                nearest = c.iter().fold(nearest, |n, c| n.max(c.at.z));
+                (lo, hi) = (lo.min(triangle.lo - triangle.slack), hi.max(triangle.hi + triangle.slack));
+                self.triangles.push(triangle);
+                for (edge, across) in mesh.neighbours[t].into_iter().enumerate() {
+                    if across == NO_NEIGHBOUR || self.turns[across as usize] != self.turns[t] {
+                        let (p, q) = (c[edge], c[(edge + 1) % 3]);
+                        self.borders.push(Border {
+                            p: p.at,
+                            q: q.at,
+                            margin: 2.0 * p.slack.max(q.slack),
+                        });
+                    }
+                }
+            }
+            self.patches.push(Patch {
+                triangles: triangles..self.triangles.len(),
+                borders: borders..self.borders.len(),
+                lo,
+                hi,
+                nearest,
+            });
             start = end;
         }
+        first..self.patches.len()
     }
 
     /// Sorts the triangles into patches: those turning one way, joined by
@@ -188,39 +239,47 @@ impl Rasteriser {
         }
         t
     }
+}
 
-    /// Rasterises the patch `self.by_patch[patch]`.
-    fn rasterise_patch(&mut self, cells: &mut Cells, mesh: &ScreenMesh, patch: Range<usize>) {
-        let corners_at = |k: usize| corners(mesh, self.by_patch[k].1 as usize);
-        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for c in patch.clone().filter_map(corners_at) {
-            let (l, h) = bounds(&c, slack_of(&c));
-            (lo, hi) = (lo.min(l), hi.max(h));
+/// A thread's scratch for rasterising patches into its rows of cells,
+/// reused so a frame allocates nothing once warm.
+#[derive(Default)]
+pub struct Rasteriser {
+    /// The cells the current patch may reach, and what it vouches for in
+    /// each.
+    columns: Range<u32>,
+    rows: Range<u32>,
+    cover: Vec<CellCover>,
+}
+
+impl Rasteriser {
+    /// Rasterises the patches `which` of `patches` into `cells` (only the
+    /// rows of cells they hold).
+    pub fn rasterise(&mut self, cells: &mut Cells, patches: &Patches, which: Range<usize>) {
+        for patch in &patches.patches[which] {
+            self.rasterise_patch(cells, patches, patch);
         }
+    }
+
+    fn rasterise_patch(&mut self, cells: &mut Cells, patches: &Patches, patch: &Patch) {
         let grid = cells.grid();
-        self.columns = grid.across.cells_reaching(lo.x, hi.x);
-        self.rows = clamp(grid.down.cells_reaching(lo.y, hi.y), &cells.rows());
-        if self.columns.is_empty() || self.rows.is_empty() {
+        self.columns = grid.across.cells_reaching(patch.lo.x, patch.hi.x);
+        self.rows = clamp(grid.down.cells_reaching(patch.lo.y, patch.hi.y), &cells.rows());
+        // Nothing to do where it lies behind every cell it reaches (its
+        // triangles' depths, not their margins, suffice: they are nearer).
+        let behind = || cells.cells_behind(self.columns.clone(), self.rows.clone(), patch.nearest);
+        if self.columns.is_empty() || self.rows.is_empty() || behind() {
             return;
         }
         self.cover.clear();
         self.cover.resize(self.columns.len() * self.rows.len(), EMPTY);
-        for k in patch.clone() {
-            if let Some(c) = corners(mesh, self.by_patch[k].1 as usize) {
-                let triangle = Triangle::new(c);
-                if self.add_depth(cells, &triangle) {
-                    self.mark(grid, &triangle);
-                }
+        for triangle in &patches.triangles[patch.triangles.clone()] {
+            if self.add_depth(cells, triangle) {
+                self.mark(grid, triangle);
             }
         }
-        for k in patch {
-            let t = self.by_patch[k].1 as usize;
-            let Some(c) = corners(mesh, t) else { continue };
-            for (edge, across) in mesh.neighbours[t].into_iter().enumerate() {
-                if across == NO_NEIGHBOUR || self.turns[across as usize] != self.turns[t] {
-                    self.erase(grid, c[edge], c[(edge + 1) % 3]);
-                }
-            }
+        for border in &patches.borders[patch.borders.clone()] {
+            self.erase(grid, border);
         }
         let width = self.columns.len();
         for (i, cover) in self.cover.iter().enumerate() {
@@ -259,15 +318,21 @@ impl Rasteriser {
     fn add_depth(&mut self, cells: &Cells, triangle: &Triangle) -> bool {
         let grid = cells.grid();
         let mut reached = false;
-        let Triangle { slack, plane, edges, .. } = *triangle;
-        let (lo, hi) = bounds(&triangle.corners, slack);
+        let Triangle {
+            slack,
+            plane,
+            edges,
+            reach,
+            ..
+        } = *triangle;
+        let (lo, hi) = (triangle.lo - slack, triangle.hi + slack);
         for row in clamp(grid.down.cells_reaching(lo.y, hi.y), &self.rows) {
             let [y0, y1] = grid.down.cell(row);
             let ys = [y0.max(lo.y), y1.min(hi.y)];
             // Where in x some point of these rows lies within the slack of
             // every edge's half-plane (a distance of s on each axis is at
             // most s · (|ex| + |ey|) across a unit normal).
-            let [from, to] = x_range(&edges, ys, |[ex, ey, _]| slack * (ex.abs() + ey.abs()), f64::min);
+            let [from, to] = x_range(&edges, ys, reach.map(|r| slack * r), f64::min);
             let xs = [from.max(lo.x), to.min(hi.x)];
             for column in clamp(grid.across.cells_reaching(xs[0], xs[1]), &self.columns) {
                 let [x0, x1] = grid.across.cell(column);
@@ -306,17 +371,17 @@ impl Rasteriser {
     }
 
     /// Marks the pixel groups whose centres all lie inside `triangle` or
-    /// within [`VERTEX_ERROR`] of it (less than any border's margin, so a
+    /// within [`VERTEX_ERROR`] of it on each axis (less than any border's margin, so a
     /// centre outside the patch it marks is erased): row of cells by row of
     /// cells, first the cells whose every centre is in, then group row by
     /// group row the cells on either side of them.
     fn mark(&mut self, grid: &Grid, triangle: &Triangle) {
-        let edges = triangle.edges;
-        let (lo, hi) = bounds(&triangle.corners, VERTEX_ERROR);
+        let (edges, margins) = (triangle.edges, triangle.reach.map(|r| VERTEX_ERROR * r));
+        let (lo, hi) = (triangle.lo - VERTEX_ERROR, triangle.hi + VERTEX_ERROR);
         for row in clamp(grid.down.cells_reaching(lo.y, hi.y), &self.rows) {
             // Edges are linear, so the first and last rows of centres at both
             // ends of an x range bound the whole rectangle.
-            let [from, to] = x_range(&edges, grid.down.cell(row), |_| VERTEX_ERROR, f64::max);
+            let [from, to] = x_range(&edges, grid.down.cell(row), margins, f64::max);
             let whole = grid.across.cells_within(from, to, &self.columns);
             for column in whole.clone() {
                 self.cover_at(column, row).mask |= grid.full_mask(column, row);
@@ -324,7 +389,7 @@ impl Rasteriser {
             let inner = grid.across.groups_of(&whole); 
             for g in grid.down.groups_of(&(row..row + 1)) {
                 let (_, k, ys) = grid.down.group(g);
-                let [from, to] = x_range(&edges, ys, |_| VERTEX_ERROR, f64::max);
+                let [from, to] = x_range(&edges, ys, margins, f64::max);
                 let groups = grid.across.groups_within(from, to, &self.columns);
                 let (left, right) = (groups.start..groups.end.min(inner.start), groups.start.max(inner.end)..groups.end);
                 for (column, bits) in grid.across.cells_of(left).chain(grid.across.cells_of(right)) {
@@ -334,12 +399,10 @@ impl Rasteriser {
         }
     }
 
-    /// Clears the mark of every pixel group with a centre nearer than twice
-    /// the error of the border edge `p`–`q`'s corners to it (a square
-    /// round each point of the edge, which holds that disc).
-    fn erase(&mut self, grid: &Grid, p: ScreenVertex, q: ScreenVertex) {
-        let margin = 2.0 * p.slack.max(q.slack);
-        let (p, q) = (p.at, q.at);
+    /// Clears the mark of every pixel group with a centre within the
+    /// border edge's margin of it on each axis.
+    fn erase(&mut self, grid: &Grid, border: &Border) {
+        let Border { p, q, margin } = *border;
         for g in grid.down.groups_reaching(p.y.min(q.y) - margin, p.y.max(q.y) + margin, &self.rows) {
             let (row, k, [y0, y1]) = grid.down.group(g);
             // The edge's part within the margin of the group's rows, and
@@ -360,15 +423,15 @@ impl Rasteriser {
     }
 }
 
-/// The x range in which every edge of `edges` (inward, scaled to
-/// distances) is at least −`margin(edge)` at `ys`' first and last y, for
-/// `pick` = `f64::max` (all of them), or at one of them, for `f64::min`
+/// The x range in which each edge function of `edges` ([`inward_edges`])
+/// is at least minus its margin of `margins` at `ys`' first and last y,
+/// for `pick` = `f64::max` (at both), or at one of them, for `f64::min`
 /// (some point between them, taken edge by edge: a wider range). Empty
 /// (or NaN) when there is none.
-fn x_range(edges: &[[f64; 3]; 3], ys: [f64; 2], margin: impl Fn([f64; 3]) -> f64, pick: fn(f64, f64) -> f64) -> [f64; 2] {
+fn x_range(edges: &[[f64; 3]; 3], ys: [f64; 2], margins: [f64; 3], pick: fn(f64, f64) -> f64) -> [f64; 2] {
     let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
-    for &[ex, ey, ec] in edges {
-        let needed = |y: f64| -margin([ex, ey, ec]) - ey * y - ec;
+    for (&[ex, ey, ec], margin) in edges.iter().zip(margins) {
+        let needed = |y: f64| -margin - ey * y - ec;
         let n = pick(needed(ys[0]), needed(ys[1]));
         if ex > 0.0 {
             from = from.max(n / ex);
@@ -383,21 +446,28 @@ fn x_range(edges: &[[f64; 3]; 3], ys: [f64; 2], margin: impl Fn([f64; 3]) -> f64
 
 /// A patch triangle, with what rasterising it takes.
 struct Triangle {
-    corners: [ScreenVertex; 3],
-    /// Its corners' error ([`slack_of`]), its inward edges and the plane it
-    /// vouches for ([`lowered_plane`]).
+    /// The bounds of its corners (x, y).
+    lo: DVec2,
+    hi: DVec2,
+    /// Its corners' error ([`slack_of`]), its inward edges with each one's
+    /// |ex| + |ey| (what a distance on each axis scales by), and the plane
+    /// it vouches for ([`lowered_plane`]).
     slack: f64,
     edges: [[f64; 3]; 3],
+    reach: [f64; 3],
     plane: ScreenPlane,
 }
 
 impl Triangle {
     fn new(corners: [ScreenVertex; 3]) -> Triangle {
-        let slack = slack_of(&corners);
+        let (slack, edges) = (slack_of(&corners), inward_edges(&corners));
+        let at = corners.map(|c| c.at.truncate());
         Triangle {
-            corners,
+            lo: at[0].min(at[1]).min(at[2]),
+            hi: at[0].max(at[1]).max(at[2]),
             slack,
-            edges: inward_edges(&corners),
+            edges,
+            reach: edges.map(|[ex, ey, _]| ex.abs() + ey.abs()),
             plane: lowered_plane(&corners, slack),
         }
     }
@@ -412,16 +482,6 @@ fn corners(mesh: &ScreenMesh, t: usize) -> Option<[ScreenVertex; 3]> {
 /// The error of a triangle's corners: the largest.
 fn slack_of(corners: &[ScreenVertex; 3]) -> f64 {
     corners.iter().map(|c| c.slack).fold(0.0, f64::max)
-}
-
-/// The bounds of `corners` grown by `by` (x, y; z unused).
-fn bounds(corners: &[ScreenVertex; 3], by: f64) -> (DVec3, DVec3) {
-    let (lo, hi) = corners
-        .iter()
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), c| {
-            (lo.min(c.at), hi.max(c.at))
-        });
-    (lo - DVec3::splat(by), hi + DVec3::splat(by))
 }
 
 /// The turn of a closed solid's triangles that lies behind the other
@@ -479,16 +539,17 @@ fn twice_area(p: DVec3, q: DVec3, r: DVec3) -> f64 {
     (q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x)
 }
 
-/// The triangle's inward edge functions, scaled to distances in pixels
-/// (for a patch triangle: one of finite, non-zero area).
+/// The triangle's inward edge functions (ex, ey, ec): e(x, y) = ex · x +
+/// ey · y + ec is positive inside. A point within d of an edge's line on
+/// each axis has e at least −d · (|ex| + |ey|) (distances on each axis, as
+/// the slacks are, need no square roots).
 fn inward_edges(corners: &[ScreenVertex; 3]) -> [[f64; 3]; 3] {
     let [a, b, c] = corners.map(|c| c.at);
     let turn = twice_area(a, b, c).signum();
     [(a, b), (b, c), (c, a)].map(|(p, q)| {
         let (dx, dy) = (q.x - p.x, q.y - p.y);
-        let s = turn / (dx * dx + dy * dy).sqrt();
-        // inside(x, y) = s · ((q − p) × ((x, y) − p))
-        [-dy * s, dx * s, (dy * p.x - dx * p.y) * s]
+        // inside(x, y) = turn · ((q − p) × ((x, y) − p))
+        [-dy * turn, dx * turn, (dy * p.x - dx * p.y) * turn]
     })
 }
 
@@ -525,7 +586,7 @@ pub(super) fn rasterise_meshes(buffer: &mut super::buffer::OcclusionBuffer, mesh
     let Some(mut cells) = buffer.cleared_bands(rows).next() else {
         return;
     };
-    let mut rasteriser = Rasteriser::default();
+    let (mut patches, mut rasteriser) = (Patches::default(), Rasteriser::default());
     for (vertices, indices) in meshes {
         let placed: Vec<Option<ScreenVertex>> = vertices.iter().map(|&v| Some(v)).collect();
         let neighbours = super::neighbours::neighbours(indices, |i| [i as f32, 0.0, 0.0]);
@@ -536,7 +597,9 @@ pub(super) fn rasterise_meshes(buffer: &mut super::buffer::OcclusionBuffer, mesh
             neighbours: &neighbours,
             closed: false,
         };
-        rasteriser.rasterise(&mut cells, &mesh);
+        patches.clear();
+        let which = patches.add(&mesh);
+        rasteriser.rasterise(&mut cells, &patches, which);
     }
 }
 

@@ -23,6 +23,8 @@
 //! the cells (each of up to 8 × 8 pixel groups), trading the box test's
 //! precision against time.
 
+use std::ops::Range;
+
 mod buffer;
 mod mesh;
 mod neighbours;
@@ -40,7 +42,7 @@ use crate::gpu::{
 };
 use crate::scene::Scene;
 use buffer::{Cells, OcclusionBuffer};
-use mesh::{Rasteriser, ScreenMesh, ScreenVertex, VERTEX_ERROR};
+use mesh::{Patches, Rasteriser, ScreenMesh, ScreenVertex, VERTEX_ERROR};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
@@ -118,9 +120,9 @@ pub struct SoftwareOcclusionCulling {
     params: SwrParams,
     /// Made for the frame's render size, and again when it changes.
     buffer: Option<OcclusionBuffer>,
-    /// What each thread rasterising occluders works with, the frame's own
-    /// first.
-    workers: Vec<Worker>,
+    /// What each thread rasterising occluders works with.
+    preparers: Vec<Preparer>,
+    rasterisers: Vec<Rasteriser>,
     /// Per mesh of the scene (sized in the first frame), its triangles'
     /// neighbours, made the first time one of its objects is an occluder.
     neighbours: Vec<Vec<[u32; 3]>>,
@@ -151,7 +153,8 @@ impl SoftwareOcclusionCulling {
         SoftwareOcclusionCulling {
             params,
             buffer: None,
-            workers: Vec::new(),
+            preparers: Vec::new(),
+            rasterisers: Vec::new(),
             neighbours: Vec::new(),
             made_neighbours: Vec::new(),
             depth_margins: DepthMargins::for_backend(wgpu::Backend::Gl),
@@ -172,7 +175,9 @@ impl SoftwareOcclusionCulling {
 impl SoftwareOcclusionCulling {
     /// Its buffer for render size `size`, and its threads' scratch.
     fn make_buffers(&mut self, size: Resolution) {
-        self.workers = (0..self.params.threads_used()).map(|_| Worker::default()).collect();
+        let threads = self.params.threads_used();
+        self.preparers = (0..threads).map(|_| Preparer::default()).collect();
+        self.rasterisers = (0..threads).map(|_| Rasteriser::default()).collect();
         self.buffer = Some(OcclusionBuffer::new(size, self.params.resolution));
         #[cfg(test)]
         if let Some(buffer) = &mut self.buffer {
@@ -198,10 +203,21 @@ impl SoftwareOcclusionCulling {
 
 /// An object that may be an occluder this frame.
 struct Candidate {
-    /// Pixels its box covers on screen, and the box's nearest depth.
-    area: f64,
-    nearest: f64,
+    /// Its box on screen; `None` when the box reaches the near plane (it
+    /// may cover all of it).
+    on_screen: Option<BoxOnScreen>,
     object: u32,
+}
+
+impl Candidate {
+    /// The pixels its box covers, and the box's nearest depth.
+    fn area(&self) -> f64 {
+        self.on_screen.as_ref().map_or(f64::INFINITY, |b| b.area)
+    }
+
+    fn nearest(&self) -> f64 {
+        self.on_screen.as_ref().map_or(f64::INFINITY, |b| b.nearest)
+    }
 }
 
 /// A camera's projection to framebuffer pixels and reverse-Z depth.
@@ -412,16 +428,18 @@ impl Culler for SoftwareOcclusionCulling {
             if frustum.classify(bounds) == Containment::Outside {
                 continue;
             }
-            let (area, nearest) = match eye_relative_box(camera, &view, margins, bounds) {
-                EyeBox::ReachesNear => (f64::INFINITY, f64::INFINITY),
-                EyeBox::Testable(q) => projector.box_on_screen(&q).map_or((0.0, 0.0), |b| (b.area, b.nearest)),
+            let on_screen = match eye_relative_box(camera, &view, margins, bounds) {
+                EyeBox::ReachesNear => None,
+                EyeBox::Testable(q) => match projector.box_on_screen(&q) {
+                    Some(b) if b.area > 0.0 => Some(b),
+                    Some(_) => continue,
+                    None => None,
+                },
             };
-            if area > 0.0 {
-                self.candidates.push(Candidate { area, nearest, object: o });
-            }
+            self.candidates.push(Candidate { on_screen, object: o });
         }
         self.candidates
-            .sort_unstable_by(|a, b| b.area.total_cmp(&a.area).then(a.object.cmp(&b.object)));
+            .sort_unstable_by(|a, b| b.area().total_cmp(&a.area()).then(a.object.cmp(&b.object)));
         let mut budget = self.params.triangles;
         self.candidates.retain(|c| {
             let triangles = u64::from(scene.objects[c.object as usize].triangles);
@@ -432,7 +450,7 @@ impl Culler for SoftwareOcclusionCulling {
         // Nearest first: a cell an occluder has filled turns away the
         // triangles behind it.
         self.candidates
-            .sort_unstable_by(|a, b| b.nearest.total_cmp(&a.nearest).then(a.object.cmp(&b.object)));
+            .sort_unstable_by(|a, b| b.nearest().total_cmp(&a.nearest()).then(a.object.cmp(&b.object)));
         self.occluders.clear();
         for c in &self.candidates {
             self.occluders.push(c.object);
@@ -447,13 +465,13 @@ impl Culler for SoftwareOcclusionCulling {
             unreachable!("made above")
         };
         let occluders = Occluders {
-            objects: &self.occluders,
+            objects: &self.candidates,
             projector: &projector,
             camera,
             scene,
             neighbours: &self.neighbours,
         };
-        occluders.rasterise(buffer, &mut self.workers);
+        occluders.rasterise(buffer, &mut self.preparers, &mut self.rasterisers);
         buffer.build_pyramid();
 
         // 4. The hierarchy, in the frustum and not hidden.
@@ -527,21 +545,27 @@ impl Culler for SoftwareOcclusionCulling {
     }
 }
 
-/// A thread's scratch: one object's vertices on screen, and what
-/// rasterises them.
+/// What one thread makes of its share of the occluders: each object's
+/// vertices on screen (scratch), and its patches, ready to rasterise.
 #[derive(Default)]
-struct Worker {
+struct Preparer {
     vertices: Vec<Option<ScreenVertex>>,
-    rasteriser: Rasteriser,
+    patches: Patches,
+    /// The objects of its share, each as (index among the occluders, its
+    /// patches in `patches`).
+    objects: Vec<(usize, Range<usize>)>,
 }
 
 /// A frame uses one thread more for each this many occluder triangles (a
 /// thread's start costs tens of microseconds).
 const TRIANGLES_PER_THREAD: u64 = 4096;
 
+/// Bands of rows a frame's rasterisation is cut into, per thread.
+const BANDS_PER_THREAD: u32 = 8;
+
 /// One frame's occluders, and what they are rasterised with.
 struct Occluders<'a> {
-    objects: &'a [u32],
+    objects: &'a [Candidate],
     projector: &'a Projector,
     camera: &'a Camera,
     scene: &'a Scene,
@@ -551,41 +575,100 @@ struct Occluders<'a> {
 }
 
 impl Occluders<'_> {
-    /// Rasterises every occluder into `buffer` (cleared first), with as
-    /// many of `workers` as there are triangles to share (one each per
-    /// [`TRIANGLES_PER_THREAD`]), each on a thread of its own over a band of
-    /// the buffer's rows: every worker takes every occluder, in order, into
-    /// its rows, so the cells are those one thread leaves.
-    fn rasterise(&self, buffer: &mut OcclusionBuffer, workers: &mut [Worker]) {
-        let total: u64 = self.objects.iter().map(|&o| u64::from(self.scene.objects[o as usize].triangles)).sum();
+    /// Rasterises every occluder into `buffer` (cleared first), on as many
+    /// threads as there are triangles to share (one per
+    /// [`TRIANGLES_PER_THREAD`], at most one per preparer and rasteriser),
+    /// in two steps: each thread makes the patches of a share of the
+    /// occluders (in order, shared by triangles); then each rasterises
+    /// every occluder's patches, in order, into a band of the buffer's rows,
+    /// so the cells are those one thread leaves.
+    fn rasterise(&self, buffer: &mut OcclusionBuffer, preparers: &mut [Preparer], rasterisers: &mut [Rasteriser]) {
+        let triangles = |c: &Candidate| u64::from(self.scene.objects[c.object as usize].triangles);
+        let total: u64 = self.objects.iter().map(triangles).sum();
         let rows = buffer.cells().height;
-        let threads = (1 + total / TRIANGLES_PER_THREAD).min(workers.len() as u64).min(u64::from(rows)) as u32;
-        let mut bands = buffer.cleared_bands(rows.div_ceil(threads.max(1))).zip(workers.iter_mut());
-        let Some((mut first_band, first_worker)) = bands.next() else {
-            return;
-        };
-        // A helper's panic ends the scope with it.
-        std::thread::scope(|scope| {
-            for (mut cells, worker) in bands {
-                scope.spawn(move || self.rasterise_band(&mut cells, worker));
+        let threads = (1 + total / TRIANGLES_PER_THREAD)
+            .min(preparers.len().min(rasterisers.len()) as u64)
+            .min(u64::from(rows))
+            .max(1) as usize;
+        // Share k ends where the triangles so far first reach (k + 1) /
+        // threads of them.
+        let mut ends = [0; MAX_THREADS];
+        let (mut so_far, mut k) = (0, 0);
+        for (i, c) in self.objects.iter().enumerate() {
+            so_far += triangles(c);
+            while k + 1 < threads && so_far * threads as u64 >= total * (k as u64 + 1) {
+                ends[k] = i + 1;
+                k += 1;
             }
-            self.rasterise_band(&mut first_band, first_worker);
+        }
+        ends[k..threads].fill(self.objects.len());
+        let shares = preparers[..threads]
+            .iter_mut()
+            .enumerate()
+            .map(|(k, preparer)| (if k == 0 { 0 } else { ends[k - 1] }..ends[k], preparer));
+        on_threads(shares, |(share, preparer)| self.prepare(share, preparer));
+        // Rows hold unlike work (sky above, near objects below): each
+        // thread takes band after band of a few rows until none is left.
+        let preparers = &preparers[..threads];
+        let bands = buffer.cleared_bands(rows.div_ceil(BANDS_PER_THREAD * threads as u32));
+        let bands = std::sync::Mutex::new(bands);
+        on_threads(rasterisers[..threads].iter_mut(), |rasteriser| {
+            // A band is taken under the lock; a thread that panicked holding
+            // it ends the frame's scope anyway.
+            while let Some(mut cells) = bands.lock().ok().and_then(|mut bands| bands.next()) {
+                self.rasterise_band(&mut cells, preparers, rasteriser);
+            }
         });
     }
 
-    fn rasterise_band(&self, cells: &mut Cells, worker: &mut Worker) {
-        for &o in self.objects {
-            rasterise_object(cells, worker, self, o);
+    /// Makes the patches of the occluders `share`.
+    fn prepare(&self, share: Range<usize>, preparer: &mut Preparer) {
+        preparer.patches.clear();
+        preparer.objects.clear();
+        for i in share {
+            let which = prepare_object(preparer, self, self.objects[i].object);
+            preparer.objects.push((i, which));
         }
     }
+
+    fn rasterise_band(&self, cells: &mut Cells, preparers: &[Preparer], rasteriser: &mut Rasteriser) {
+        for preparer in preparers {
+            for (i, which) in &preparer.objects {
+                // Skipped where the buffer so far hides its box: it could add
+                // nothing (rasterising nearest first makes this pay).
+                let hidden = self.objects[*i]
+                    .on_screen
+                    .as_ref()
+                    .is_some_and(|b| cells.behind(b.first, b.last, b.nearest));
+                if !hidden {
+                    rasteriser.rasterise(cells, &preparer.patches, which.clone());
+                }
+            }
+        }
+    }
+}
+
+/// Runs `work` on each of `jobs`, the first on this thread and each other
+/// on a thread of its own, and waits for them all (a helper's panic ends
+/// the scope with it).
+fn on_threads<J: Send>(mut jobs: impl Iterator<Item = J>, work: impl Fn(J) + Sync) {
+    let first = jobs.next();
+    std::thread::scope(|scope| {
+        for job in jobs {
+            scope.spawn(|| work(job));
+        }
+        if let Some(job) = first {
+            work(job);
+        }
+    });
 }
 
 /// The GPU's error in an f32 vertex position, as a fraction of the
 /// object's reach from the eye: 4 steps of 2^-24.
 const F32_POSITION_ERROR: f64 = 4.0 / (1u32 << 24) as f64;
 
-/// Rasterises object `o`'s triangles (placed where the scene has it this
-/// frame) into `cells`.
+/// Makes the patches of object `o`'s triangles (placed where the scene has
+/// it this frame) in `preparer`; returns which they are.
 ///
 /// The GPU transforms the object's f32 vertices by an f32 model-view whose
 /// translation is about as long as the object's reach from the eye, so a
@@ -594,7 +677,7 @@ const F32_POSITION_ERROR: f64 = 4.0 / (1u32 << 24) as f64;
 /// is its part of its [`ScreenVertex`]'s slack and depth error. Vertices
 /// within that error (and 2^-10 of the near distance) of the near plane
 /// are left out, and their triangles with them: the GPU may clip them.
-fn rasterise_object(cells: &mut Cells, worker: &mut Worker, occluders: &Occluders, o: u32) {
+fn prepare_object(preparer: &mut Preparer, occluders: &Occluders, o: u32) -> Range<usize> {
     let (camera, scene, projector) = (occluders.camera, occluders.scene, occluders.projector);
     let object = &scene.objects[o as usize];
     let (min, max) = (object.bounds.min - camera.eye, object.bounds.max - camera.eye);
@@ -607,9 +690,9 @@ fn rasterise_object(cells: &mut Cells, worker: &mut Worker, occluders: &Occluder
     let (first, last) = indices
         .iter()
         .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-    worker.vertices.clear();
+    preparer.vertices.clear();
     if first <= last {
-        worker
+        preparer
             .vertices
             .extend(scene.vertices[first as usize..=last as usize].iter().map(|p| {
                 let local = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
@@ -622,13 +705,13 @@ fn rasterise_object(cells: &mut Cells, worker: &mut Worker, occluders: &Occluder
             }));
     }
     let mesh = ScreenMesh {
-        vertices: &worker.vertices,
+        vertices: &preparer.vertices,
         first,
         indices,
         neighbours: &occluders.neighbours[object.mesh as usize],
         closed: scene.parts[object.part as usize].closed,
     };
-    worker.rasteriser.rasterise(cells, &mesh);
+    preparer.patches.add(&mesh)
 }
 
 #[cfg(test)]
