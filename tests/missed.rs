@@ -210,7 +210,10 @@ fn show_missed_paints_the_dropped_object_magenta_and_nothing_else() {
 #[test]
 fn occluders_lays_swrs_buffer_over_the_quads_it_culled_with_and_dims_the_rest() {
     let quads = two_quads();
-    let scene = boxes(&quads);
+    // And a box behind the first quad, so the buffer hides something (one
+    // that hides nothing rests, and is empty).
+    let hidden = (DVec3::new(-2.5, -0.5, -12.0), DVec3::new(-1.5, 0.5, -11.0));
+    let scene = boxes(&[quads[0], quads[1], hidden]);
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     // Frame 2: the quads drawn in frame 1 are frame 2's occluders.
     let path = held(DVec3::ZERO, DVec3::NEG_Z, 90.0, 3);

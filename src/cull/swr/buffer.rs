@@ -243,11 +243,12 @@ pub struct Cells<'a> {
     /// The rows of cells it holds.
     rows: Range<u32>,
     /// Per cell, row by row from `rows.start`: the reference layer's depth
-    /// and plane, and the working layer's mask and depth.
+    /// and plane, and the working layer's mask, depth and plane.
     depth: &'a mut [f32],
     planes: &'a mut [ScreenPlane],
     masks: &'a mut [u64],
     working: &'a mut [f32],
+    working_planes: &'a mut [ScreenPlane],
     #[cfg(test)]
     careless: bool,
 }
@@ -304,8 +305,8 @@ impl Cells<'_> {
     /// tile (section 3.2), in reverse-Z: a cell the occluder covers whole
     /// takes its depth and plane where they are nearer than its reference
     /// layer; otherwise the occluder joins the working layer, which keeps
-    /// the union of the masks and the least of the depths, and becomes the
-    /// reference (with a plane of that one depth) once its mask is full.
+    /// the union of the masks, the least of the depths and a plane below
+    /// all of theirs, and becomes the reference once its mask is full.
     /// The working layer is dropped first when it has fallen behind the
     /// reference, or when the occluder lies nearer than it by more than it
     /// lies nearer than the reference (merging would pull the new layer
@@ -327,10 +328,16 @@ impl Cells<'_> {
         }
         let working = &mut self.working[index];
         let held = &mut self.masks[index];
+        let plane = &mut self.working_planes[index];
         if *held != 0 && (*working <= reference || depth - *working > *working - reference) {
             *held = 0;
         }
-        *working = if *held == 0 { depth } else { working.min(depth) };
+        (*working, *plane) = if *held == 0 {
+            (depth, coverage.plane)
+        } else {
+            let centres = (self.grid.across.cell(column), self.grid.down.cell(row));
+            (working.min(depth), below_both(*plane, &coverage.plane, centres))
+        };
         *held |= mask;
         #[cfg(test)]
         let careless = self.careless;
@@ -338,13 +345,24 @@ impl Cells<'_> {
         let careless = false;
         if *held == full || careless {
             self.depth[index] = *working;
-            self.planes[index] = ScreenPlane {
-                per_x: 0.0,
-                per_y: 0.0,
-                constant: f64::from(*working),
-            };
+            self.planes[index] = *plane;
             *held = 0;
         }
+    }
+}
+
+/// `held` lowered, where it is not already, to lie below `other` over
+/// the rectangle `xs` × `ys`: a plane below both there (affine, so the
+/// most `held` rises above `other` is at a corner).
+pub(super) fn below_both(held: ScreenPlane, other: &ScreenPlane, (xs, ys): ([f64; 2], [f64; 2])) -> ScreenPlane {
+    let above = held.minus(other).max_over(xs, ys);
+    if above > 0.0 {
+        ScreenPlane {
+            constant: held.constant - above,
+            ..held
+        }
+    } else {
+        held
     }
 }
 
@@ -359,9 +377,10 @@ pub struct OcclusionBuffer {
     /// even where the wall's depth changes across the cell by more than
     /// the gap; meaningless where the cell holds no depth.
     planes: Vec<ScreenPlane>,
-    /// Per cell, its working layer's mask and depth.
+    /// Per cell, its working layer's mask, depth and plane.
     masks: Vec<u64>,
     working: Vec<f32>,
+    working_planes: Vec<ScreenPlane>,
     /// Breaks the conservative rule on purpose, for the test that sees the
     /// error meter catch it: a working layer becomes the reference as soon
     /// as it holds anything, whether or not its mask is full.
@@ -395,6 +414,7 @@ impl OcclusionBuffer {
             planes: vec![ScreenPlane::default(); count],
             masks: vec![0; count],
             working: vec![0.0; count],
+            working_planes: vec![ScreenPlane::default(); count],
             #[cfg(test)]
             careless: false,
         }
@@ -452,8 +472,9 @@ impl OcclusionBuffer {
             .zip(self.planes.chunks_mut(chunk))
             .zip(self.masks.chunks_mut(chunk))
             .zip(self.working.chunks_mut(chunk))
+            .zip(self.working_planes.chunks_mut(chunk))
             .enumerate()
-            .map(move |(k, (((depth, planes), masks), working))| {
+            .map(move |(k, ((((depth, planes), masks), working), working_planes))| {
                 let first = (k * chunk / width) as u32;
                 let mut cells = Cells {
                     grid,
@@ -462,6 +483,7 @@ impl OcclusionBuffer {
                     planes,
                     masks,
                     working,
+                    working_planes,
                     #[cfg(test)]
                     careless,
                 };

@@ -44,7 +44,7 @@ use std::ops::Range;
 
 use glam::{DVec2, DVec3};
 
-use super::buffer::{Cells, Coverage, Grid, MASK_SIDE};
+use super::buffer::{Cells, Coverage, Grid, MASK_SIDE, below_both};
 use crate::gpu::ScreenPlane;
 
 /// Pixels the GPU may place a triangle's corner from where the CPU
@@ -351,20 +351,7 @@ impl Rasteriser {
                 let least = plane.min_over(xs, ys);
                 // A NaN vouches for nothing (and stays one).
                 cover.depth = if least.is_nan() { f64::NAN } else { cover.depth.min(least) };
-                cover.plane = Some(match cover.plane {
-                    None => plane,
-                    Some(held) => {
-                        let above = held.minus(&plane).max_over(xs, ys);
-                        if above > 0.0 {
-                            ScreenPlane {
-                                constant: held.constant - above,
-                                ..held
-                            }
-                        } else {
-                            held
-                        }
-                    }
-                });
+                cover.plane = Some(cover.plane.map_or(plane, |held| below_both(held, &plane, (xs, ys))));
             }
         }
         reached
