@@ -108,7 +108,7 @@ impl Axis {
     /// The pixels whose centres lie in [`lo`, `hi`] (none for NaN).
     fn pixels_within(&self, lo: f64, hi: f64) -> Range<u32> {
         let n = self.group_of.len() as f64;
-        // Nothing between them, or a NaN.
+        // A NaN bounds nothing (and an empty range comes out empty below).
         if lo.is_nan() || hi.is_nan() {
             return 0..0;
         }
@@ -152,8 +152,8 @@ impl Axis {
         self.first_group[cells.start as usize]..self.first_group[cells.end as usize]
     }
 
-    /// The groups holding a pixel centre in [`lo`, `hi`], and the groups
-    /// whose every pixel centre lies there, each limited to `cells`.
+    /// The groups holding a pixel centre in [`lo`, `hi`], limited to
+    /// `cells`.
     pub(super) fn groups_reaching(&self, lo: f64, hi: f64, cells: &Range<u32>) -> Range<u32> {
         let pixels = self.pixels_within(lo, hi);
         if pixels.is_empty() {
@@ -163,6 +163,8 @@ impl Axis {
         self.limited(first..last + 1, cells)
     }
 
+    /// The groups whose every pixel centre lies in [`lo`, `hi`], limited
+    /// to `cells`.
     pub(super) fn groups_within(&self, lo: f64, hi: f64, cells: &Range<u32>) -> Range<u32> {
         let pixels = self.pixels_within(lo, hi);
         if pixels.is_empty() {

@@ -6,23 +6,26 @@
 //! within some error of where the CPU projects it (sub-pixel snapping,
 //! [`VERTEX_ERROR`]; f32 vertices, [`ScreenVertex::slack`]), and places
 //! equal positions of one object at one point, so triangles sharing an
-//! edge stay joined. Take the object's triangles that face one way on
-//! screen and are not slivers (a **patch**; each object has two, front and
-//! back, and the GPU draws both since the scene renders without face
-//! culling); an edge shared by exactly two of them, in opposite directions,
-//! is inner, every other edge of theirs is the patch's **border**. At a
-//! point p, the border winds round p once for each patch triangle that
-//! holds p (they all turn one way). The GPU's placement moves each point of
-//! a border edge by less than twice its corners' error: where p lies
-//! farther than that from every border edge, the placed border winds round
-//! p as often, so the placed triangles, counted with their turn, still hold
-//! p at least once, and one that turns the patch's way holds p (a
-//! rasteriser's fill rule counts a centre on a shared edge as the winding
-//! does). So a pixel centre inside the patch and clear of its border by
-//! that margin is drawn ([`Rasteriser::mark`], [`Rasteriser::erase`]),
-//! whatever the triangles' size: a mesh of triangles far smaller than a
-//! cell covers the cell as one surface does. This is MOC's masked
-//! coverage made exact for a GPU that rasterises the same triangles.
+//! edge stay joined. Call an edge **inner** when exactly two of the
+//! object's triangles share it, in opposite directions, both turning one
+//! way on screen and neither a sliver; a **patch** is such triangles
+//! joined by inner edges (the GPU draws either turn: the scene renders
+//! without face culling), and each edge of its triangles that is not inner
+//! is on its **border**. At a point p, the border winds round p once for
+//! each patch triangle that holds p (they all turn one way). The GPU's
+//! placement moves each point of a border edge by less than twice its
+//! corners' error on each axis: where p lies farther than that from every
+//! border edge, the placed border winds round p as often, so the placed
+//! triangles, counted with their turn, still hold p at least once, and one
+//! that turns the patch's way holds p (a rasteriser's fill rule counts a
+//! centre on a shared edge as the winding does). So a pixel centre inside
+//! the patch and clear of its border by that margin is drawn
+//! ([`Rasteriser::mark`], [`Rasteriser::erase`]), whatever the triangles'
+//! size: a mesh of triangles far smaller than a cell covers the cell as one
+//! surface does. This is MOC's masked coverage made exact for a GPU that
+//! rasterises the same triangles. (Triangles of two objects never join: the
+//! GPU places each object's vertices through its own matrix, so the seam
+//! between two objects is a border of both.)
 //!
 //! Its depth there is that of a point of the triangle drawn, within that
 //! error of p: at least the triangle's plane lowered by its greatest change
@@ -103,14 +106,16 @@ enum Turn {
     Counter,
     Clockwise,
     /// In no patch: clipped, a sliver, or not a number.
-    None,
+    Excluded,
 }
 
 /// What one patch vouches for in one cell while it is rasterised.
 #[derive(Clone, Copy, Debug)]
 struct CellCover {
     mask: u64,
-    /// The least depth of the triangles that may be drawn over the cell,
+    /// The least depth of the triangles that may be drawn over the cell
+    /// (∞ while none reaches it; −∞ once the patch vouches for nothing
+    /// there: a triangle lies behind the cell's reference, or gave a NaN),
     /// and a plane at most each of them where it may be drawn.
     depth: f64,
     plane: Option<ScreenPlane>,
@@ -208,12 +213,12 @@ impl Patches {
     /// inner edges.
     fn find_patches(&mut self, mesh: &ScreenMesh) {
         self.turns.clear();
-        self.turns.extend((0..mesh.neighbours.len()).map(|t| corners(mesh, t).map_or(Turn::None, turn_of)));
+        self.turns.extend((0..mesh.neighbours.len()).map(|t| corners(mesh, t).map_or(Turn::Excluded, turn_of)));
         self.parent.clear();
         self.parent.extend(0..self.turns.len() as u32);
         for t in 0..self.turns.len() {
             for across in mesh.neighbours[t] {
-                if self.turns[t] != Turn::None && across != NO_NEIGHBOUR && self.turns[across as usize] == self.turns[t] {
+                if self.turns[t] != Turn::Excluded && across != NO_NEIGHBOUR && self.turns[across as usize] == self.turns[t] {
                     let (a, b) = (self.root(t as u32), self.root(across));
                     self.parent[a.max(b) as usize] = a.min(b);
                 }
@@ -222,7 +227,7 @@ impl Patches {
         let behind = if mesh.closed { behind_turn(mesh, &self.turns) } else { None };
         self.by_patch.clear();
         for t in 0..self.turns.len() as u32 {
-            if self.turns[t as usize] != Turn::None && Some(self.turns[t as usize]) != behind {
+            if self.turns[t as usize] != Turn::Excluded && Some(self.turns[t as usize]) != behind {
                 let root = self.root(t);
                 self.by_patch.push((root, t));
             }
@@ -285,13 +290,12 @@ impl Rasteriser {
         for (i, cover) in self.cover.iter().enumerate() {
             if let (true, Some(plane)) = (cover.mask != 0, cover.plane) {
                 let (column, row) = (self.columns.start + (i % width) as u32, self.rows.start + (i / width) as u32);
-                let depth = if cover.depth.is_nan() { f64::NEG_INFINITY } else { cover.depth };
                 cells.merge(
                     column,
                     row,
                     &Coverage {
                         mask: cover.mask,
-                        depth,
+                        depth: cover.depth,
                         plane,
                     },
                 );
@@ -330,8 +334,8 @@ impl Rasteriser {
             let [y0, y1] = grid.down.cell(row);
             let ys = [y0.max(lo.y), y1.min(hi.y)];
             // Where in x some point of these rows lies within the slack of
-            // every edge's half-plane (a distance of s on each axis is at
-            // most s · (|ex| + |ey|) across a unit normal).
+            // every edge's half-plane on each axis (there an edge function
+            // is at least −slack · (|ex| + |ey|)).
             let [from, to] = x_range(&edges, ys, reach.map(|r| slack * r), f64::min);
             let xs = [from.max(lo.x), to.min(hi.x)];
             for column in clamp(grid.across.cells_reaching(xs[0], xs[1]), &self.columns) {
@@ -349,8 +353,7 @@ impl Rasteriser {
                 }
                 reached = true;
                 let least = plane.min_over(xs, ys);
-                // A NaN vouches for nothing (and stays one).
-                cover.depth = if least.is_nan() { f64::NAN } else { cover.depth.min(least) };
+                cover.depth = if least.is_nan() { f64::NEG_INFINITY } else { cover.depth.min(least) };
                 cover.plane = Some(cover.plane.map_or(plane, |held| below_both(held, &plane, (xs, ys))));
             }
         }
@@ -358,25 +361,38 @@ impl Rasteriser {
     }
 
     /// Marks the pixel groups whose centres all lie inside `triangle` or
-    /// within [`VERTEX_ERROR`] of it on each axis (less than any border's margin, so a
-    /// centre outside the patch it marks is erased): row of cells by row of
-    /// cells, first the cells whose every centre is in, then group row by
-    /// group row the cells on either side of them.
+    /// within [`VERTEX_ERROR`] of it on each axis (less than any border's
+    /// margin, so a centre outside the patch it marks is erased): row of
+    /// cells by row of cells, first the cells whose every centre is in, then
+    /// group row by group row the cells on either side of them. That region
+    /// is the triangle grown by a square: inside each edge moved out by the
+    /// error and inside its bounds grown by it (without the bounds, the
+    /// moved edges of a sharp corner meet far beyond it).
     fn mark(&mut self, grid: &Grid, triangle: &Triangle) {
         let (edges, margins) = (triangle.edges, triangle.reach.map(|r| VERTEX_ERROR * r));
         let (lo, hi) = (triangle.lo - VERTEX_ERROR, triangle.hi + VERTEX_ERROR);
+        // The x range where every centre of the rows `ys` lies in the
+        // region: edges are linear, so the first and last rows of centres at
+        // both ends of an x range bound the whole rectangle; none for rows
+        // reaching outside the bounds.
+        let within = |ys: [f64; 2]| {
+            let [from, to] = x_range(&edges, ys, margins, f64::max);
+            if lo.y <= ys[0] && ys[1] <= hi.y {
+                [from.max(lo.x), to.min(hi.x)]
+            } else {
+                [f64::INFINITY, f64::NEG_INFINITY]
+            }
+        };
         for row in clamp(grid.down.cells_reaching(lo.y, hi.y), &self.rows) {
-            // Edges are linear, so the first and last rows of centres at both
-            // ends of an x range bound the whole rectangle.
-            let [from, to] = x_range(&edges, grid.down.cell(row), margins, f64::max);
+            let [from, to] = within(grid.down.cell(row));
             let whole = grid.across.cells_within(from, to, &self.columns);
             for column in whole.clone() {
                 self.cover_at(column, row).mask |= grid.full_mask(column, row);
             }
-            let inner = grid.across.groups_of(&whole); 
+            let inner = grid.across.groups_of(&whole);
             for g in grid.down.groups_of(&(row..row + 1)) {
                 let (_, k, ys) = grid.down.group(g);
-                let [from, to] = x_range(&edges, ys, margins, f64::max);
+                let [from, to] = within(ys);
                 let groups = grid.across.groups_within(from, to, &self.columns);
                 let (left, right) = (groups.start..groups.end.min(inner.start), groups.start.max(inner.end)..groups.end);
                 for (column, bits) in grid.across.cells_of(left).chain(grid.across.cells_of(right)) {
@@ -512,7 +528,7 @@ fn turn_of(corners: [ScreenVertex; 3]) -> Turn {
     let least = LEAST_HEIGHT * 2.0 * slack_of(&corners);
     let high_enough = area * area >= least * least * longest_squared;
     if !high_enough || !area.is_finite() || area == 0.0 {
-        Turn::None
+        Turn::Excluded
     } else if area > 0.0 {
         Turn::Counter
     } else {
@@ -635,7 +651,6 @@ mod tests {
         (vertices, indices)
     }
 
-    use glam::DVec2;
 
     /// Random meshes over a `size` target: grids of triangles from a third
     /// of a pixel to tens of pixels, curved in depth, some with corners
@@ -759,6 +774,102 @@ mod tests {
         assert!(small > 3, "meshes of sub-pixel triangles ({small})");
     }
 
+    /// Whether the point (x, y) lies within `m` of triangle `t` on each
+    /// axis: whether the square of half-side `m` round it meets the
+    /// triangle (a corner of either inside the other, or crossing edges).
+    fn within_square(t: [DVec2; 3], x: f64, y: f64, m: f64) -> bool {
+        let (lo, hi) = (DVec2::new(x - m, y - m), DVec2::new(x + m, y + m));
+        let square = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+        let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
+        let inside_triangle = |p: DVec2| {
+            let s = [cross(t[0], t[1], p), cross(t[1], t[2], p), cross(t[2], t[0], p)];
+            s.iter().all(|&v| v >= 0.0) || s.iter().all(|&v| v <= 0.0)
+        };
+        let crosses = |a: DVec2, b: DVec2, c: DVec2, d: DVec2| {
+            cross(a, b, c) * cross(a, b, d) <= 0.0 && cross(c, d, a) * cross(c, d, b) <= 0.0
+        };
+        t.iter().any(|p| p.cmpge(lo).all() && p.cmple(hi).all())
+            || square.iter().any(|&p| inside_triangle(p))
+            || (0..3).any(|i| (0..4).any(|j| crosses(t[i], t[(i + 1) % 3], square[j], square[(j + 1) % 4])))
+    }
+
+    #[test]
+    fn a_triangle_marks_no_pixel_centre_farther_than_the_vertex_error_from_it() {
+        // Random triangles over 64 × 48 pixels in cells of 4 × 4, many of
+        // them long and thin (sharp corners, where the edges moved out by
+        // the error meet far beyond the corner).
+        let mut rng = Rng::new(41);
+        let size = Resolution { width: 64, height: 48 };
+        let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
+        let Some(cells) = buffer.cleared_bands(12).next() else {
+            panic!("one band")
+        };
+        let mut rasteriser = Rasteriser::default();
+        let (mut marked, mut sharp_checked) = (0, 0);
+        for k in 0..600 {
+            let a = DVec2::new(rng.range(-8.0, 72.0), rng.range(-8.0, 56.0));
+            let b = a + DVec2::new(rng.range(-30.0, 30.0), rng.range(-30.0, 30.0));
+            let c = if k % 2 == 0 {
+                // Within a pixel of the line ab, past b: a sharp corner at a.
+                b + (b - a).normalize_or_zero().perp() * rng.range(-1.0, 1.0)
+            } else {
+                DVec2::new(rng.range(-8.0, 72.0), rng.range(-8.0, 56.0))
+            };
+            let corners = [a, b, c].map(|p| vertex(p.x, p.y, 0.5));
+            if twice_area(corners[0].at, corners[1].at, corners[2].at) == 0.0 {
+                continue;
+            }
+            rasteriser.columns = 0..16;
+            rasteriser.rows = 0..12;
+            rasteriser.cover.clear();
+            rasteriser.cover.resize(16 * 12, EMPTY);
+            rasteriser.mark(cells.grid(), &Triangle::new(corners));
+            for (i, cover) in rasteriser.cover.iter().enumerate() {
+                for bit in (0..64).filter(|b| cover.mask >> b & 1 == 1) {
+                    let (x, y) = (4 * (i % 16) + bit % 8, 4 * (i / 16) + bit / 8);
+                    let centre = (x as f64 + 0.5, y as f64 + 0.5);
+                    assert!(
+                        within_square([a, b, c], centre.0, centre.1, VERTEX_ERROR * (1.0 + 1e-9)),
+                        "{:?} marks {centre:?}",
+                        [a, b, c]
+                    );
+                    marked += 1;
+                    sharp_checked += usize::from(k % 2 == 0);
+                }
+            }
+        }
+        assert!(marked > 10_000 && sharp_checked > 1000, "{marked} marks, {sharp_checked} of sharp triangles");
+    }
+
+    #[test]
+    fn a_closed_solids_far_side_is_the_turn_behind_the_other_and_no_larger() {
+        // A box seen face on: its near face (10 × 10 pixels at depth 0.5)
+        // turns one way, its far face (6 × 6 at 0.4) the other.
+        let turns_of = |near: f64, far: f64| {
+            let mut vertices: Vec<Option<ScreenVertex>> = [(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)]
+                .iter()
+                .map(|&(x, y)| Some(vertex(x, y, near)))
+                .collect();
+            vertices.extend([(2.0, 2.0), (8.0, 2.0), (8.0, 8.0), (2.0, 8.0)].iter().map(|&(x, y)| Some(vertex(x, y, far))));
+            let indices = [0, 1, 2, 0, 2, 3, 4, 6, 5, 4, 7, 6];
+            let neighbours = super::super::neighbours::neighbours(&indices, |i| [i as f32, 0.0, 0.0]);
+            let mesh = ScreenMesh {
+                vertices: &vertices,
+                first: 0,
+                indices: &indices,
+                neighbours: &neighbours,
+                closed: true,
+            };
+            let turns: Vec<Turn> = (0..4).map(|t| corners(&mesh, t).map_or(Turn::Excluded, turn_of)).collect();
+            (turns.clone(), behind_turn(&mesh, &turns))
+        };
+        let (turns, behind) = turns_of(0.5, 0.4);
+        assert_eq!(turns, [Turn::Counter, Turn::Counter, Turn::Clockwise, Turn::Clockwise]);
+        assert_eq!(behind, Some(Turn::Clockwise));
+        // The smaller face nearer: neither is left out.
+        assert_eq!(turns_of(0.4, 0.5).1, None);
+    }
+
     #[test]
     fn a_mesh_of_triangles_smaller_than_a_cell_fills_the_cells_it_covers() {
         // 1.5-pixel triangles over a 96 × 72 target in cells of 4 × 4
@@ -779,14 +890,15 @@ mod tests {
                 assert_eq!(depth, 0.0, "cell ({column}, {row}) lies outside the mesh");
             }
         }
-        // The same triangles taken apart (no edge shared) cover no centre by
-        // their margin together: nothing.
+        // The same triangles taken apart (no edge shared) leave the centres
+        // near every edge unmarked: few cells fill.
         let (vertices, indices) = grid(DVec2::new(10.0, 10.0), DVec2::splat(1.5), [53, 37], false, |_, _| 0.5);
         let loose: Vec<ScreenVertex> = indices.iter().map(|&i| vertices[i as usize]).collect();
         let count = loose.len() as u32;
         let mut apart = OcclusionBuffer::new(size, Resolution { width: 24, height: 18 });
         rasterise_meshes(&mut apart, &[(loose, (0..count).collect())]);
-        assert!(apart.depths().iter().all(|&d| d == 0.0));
+        let filled = |b: &OcclusionBuffer| b.depths().iter().filter(|&&d| d > 0.0).count();
+        assert!(filled(&apart) * 10 < filled(&buffer), "{} cells apart, {} joined", filled(&apart), filled(&buffer));
     }
 
     #[test]

@@ -12,10 +12,12 @@
 //! Departures from MOC: its coverage is the pixels whose centres its own
 //! rasteriser puts inside a triangle; here it is the centres the GPU is
 //! sure to draw whatever its sub-pixel placement (mesh.rs), so a pixel
-//! counts only clear of an occluder's outline by about a sixth of a pixel,
-//! which costs the seams between objects. A cell's depth and plane are
-//! the occluder's own where one object covers it whole; MOC keeps one
-//! depth per tile. Occluders are whole visible objects, their triangles
+//! counts only clear of an occluder's outline by an eighth of a pixel or
+//! more, which costs the seams between objects. A cell keeps a depth
+//! plane besides its depth (the occluders' own, lowered below each other's
+//! where several fill it); MOC keeps one depth per tile. A buffer that hid
+//! nothing rests for a few frames (MOC leaves that to its caller).
+//! Occluders are whole visible objects, their triangles
 //! taken in the f64 projection (MOC and Godot take authored occluder
 //! meshes, rasterised in f32 with SIMD: here it is scalar). Like MOC it
 //! shares the work among threads (`swr.threads`), each over a band of the
@@ -76,7 +78,8 @@ const THREADS: ParamInfo = ParamInfo {
     summary: "threads rasterising occluders, each over a band of the buffer's rows (0: one per core; at most 64)",
 };
 
-/// The most threads `swr.threads` may ask for: each holds a buffer.
+/// The most threads `swr.threads` may ask for (or a frame use): each holds
+/// its share of the occluders' patches.
 const MAX_THREADS: usize = 64;
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -104,11 +107,12 @@ impl SwrParams {
         })
     }
 
-    /// The threads a frame may use: `threads`, or one per core for 0, and
-    /// no more than the triangle budget gives work to.
+    /// The threads a frame may use: `threads`, or one per core for 0 (at
+    /// most [`MAX_THREADS`]), and no more than the triangle budget gives work
+    /// to.
     fn threads_used(&self) -> usize {
         let asked = match self.threads {
-            0 => std::thread::available_parallelism().map_or(1, usize::from),
+            0 => std::thread::available_parallelism().map_or(1, usize::from).min(MAX_THREADS),
             n => n,
         };
         let worth = 1 + self.triangles / TRIANGLES_PER_THREAD;
@@ -220,11 +224,14 @@ struct Candidate {
 }
 
 impl Candidate {
-    /// The pixels its box covers, and the box's nearest depth.
+    /// The pixels its box covers (all of them for a box reaching the near
+    /// plane).
     fn area(&self) -> f64 {
         self.on_screen.as_ref().map_or(f64::INFINITY, |b| b.area)
     }
 
+    /// Its box's nearest depth (the nearest possible for one reaching the
+    /// near plane).
     fn nearest(&self) -> f64 {
         self.on_screen.as_ref().map_or(f64::INFINITY, |b| b.nearest)
     }
@@ -391,10 +398,10 @@ impl Culler for SoftwareOcclusionCulling {
     ///    it over, with the GPU's snapping and f32 error as margins from its
     ///    outline, and the least depth it may draw there. A cell merges the
     ///    patches' marks (buffer.rs, MOC's working layer) and takes the
-    ///    farthest of their depths once every pixel is marked; a patch
-    ///    covering a cell whole gives it its depth plane too, so a box can be
-    ///    compared with it centre by centre. Triangles reaching the near plane
-    ///    are left out (fewer occluders is always safe).
+    ///    farthest of their depths once every pixel is marked, with a depth
+    ///    plane below theirs, so a box can be compared with it centre by
+    ///    centre. Triangles reaching the near plane are left out (fewer
+    ///    occluders is always safe).
     /// 3. **Pyramid** of the buffer's farthest depths.
     /// 4. **Test**: the hierarchy is walked as `vfc` walks it; a node in the
     ///    frustum is also tested by its box (grown and raised as every box test

@@ -11,8 +11,9 @@ use super::mesh::NO_NEIGHBOUR;
 /// on either side of it); [`NO_NEIGHBOUR`] where no triangle, or more than
 /// one, shares it, or the two run it the same way.
 pub fn neighbours(indices: &[u32], position: impl Fn(u32) -> [f32; 3]) -> Vec<[u32; 3]> {
-    // One number per position (−0 is 0; NaN positions never share an
-    // edge, their triangles being never drawn).
+    // One number per position (−0 is 0; a NaN position may match another
+    // of the same bits, which is harmless: no patch holds its triangles,
+    // the GPU placing them nowhere).
     let key = |i: u32| position(i).map(|c| if c == 0.0 { 0 } else { c.to_bits() });
     let mut by_position: Vec<([u32; 3], u32)> = (0..indices.len() as u32).map(|s| (key(indices[s as usize]), s)).collect();
     by_position.sort_unstable();
