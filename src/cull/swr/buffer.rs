@@ -231,6 +231,17 @@ impl Grid {
         }
     }
 
+    /// The first and last columns, and rows, of the cells holding the
+    /// pixels `first` to `last` (x, y, inclusive), as
+    /// [`OcclusionBuffer::hides`] maps them.
+    fn cells_holding(&self, first: [u32; 2], last: [u32; 2]) -> [[u32; 2]; 2] {
+        let (cells, target) = (self.cells, self.target);
+        [
+            [first[0], last[0]].map(|x| cell_of(x, cells.width, target.width)),
+            [first[1], last[1]].map(|y| cell_of(y, cells.height, target.height)),
+        ]
+    }
+
     /// The mask of every group of cell (`column`, `row`).
     pub(super) fn full_mask(&self, column: u32, row: u32) -> u64 {
         let across = (1u64 << self.across.groups_in(column)) - 1;
@@ -289,10 +300,8 @@ impl Cells<'_> {
     /// `last` (x, y, inclusive) lies behind the reference layer of every
     /// cell holding them in these rows (so it can add nothing to them).
     pub(super) fn behind(&self, first: [u32; 2], last: [u32; 2], nearest: f64) -> bool {
-        let (cells, target) = (self.grid.cells, self.grid.target);
-        let columns = cell_of(first[0], cells.width, target.width)..cell_of(last[0], cells.width, target.width) + 1;
-        let rows = cell_of(first[1], cells.height, target.height)..cell_of(last[1], cells.height, target.height) + 1;
-        self.cells_behind(columns, rows, nearest)
+        let [columns, rows] = self.grid.cells_holding(first, last);
+        self.cells_behind(columns[0]..columns[1] + 1, rows[0]..rows[1] + 1, nearest)
     }
 
     /// Whether anything at most `nearest` deep lies behind the reference
@@ -525,18 +534,12 @@ impl OcclusionBuffer {
     /// when one of its planes lies behind the cell's plane at each centre.
     pub fn hides(&self, first: [u32; 2], last: [u32; 2], nearest: f64, planes: &BoxPlanes) -> bool {
         debug_assert!(first[0] <= last[0] && first[1] <= last[1], "{first:?} to {last:?}");
-        let cells = self.cells();
+        let [columns, rows] = self.grid.cells_holding(first, last);
         let query = BoxQuery {
             buffer: self,
             pixels: [first, last],
-            columns: [
-                cell_of(first[0], cells.width, self.grid.target.width),
-                cell_of(last[0], cells.width, self.grid.target.width),
-            ],
-            rows: [
-                cell_of(first[1], cells.height, self.grid.target.height),
-                cell_of(last[1], cells.height, self.grid.target.height),
-            ],
+            columns,
+            rows,
             nearest,
             planes,
         };
