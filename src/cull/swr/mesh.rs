@@ -376,8 +376,8 @@ impl Rasteriser {
         // both ends of an x range bound the whole rectangle; none for rows
         // reaching outside the bounds.
         let within = |ys: [f64; 2]| {
-            let [from, to] = x_range(&edges, ys, margins, f64::max);
             if lo.y <= ys[0] && ys[1] <= hi.y {
+                let [from, to] = x_range(&edges, ys, margins, f64::max);
                 [from.max(lo.x), to.min(hi.x)]
             } else {
                 [f64::INFINITY, f64::NEG_INFINITY]
