@@ -490,8 +490,11 @@ impl Culler for SoftwareOcclusionCulling {
             scene,
             neighbours: &self.neighbours,
         };
-        occluders.rasterise(buffer, &mut self.preparers, &mut self.rasterisers);
-        buffer.build_pyramid();
+        // A resting buffer was emptied when it began to rest.
+        if !resting {
+            occluders.rasterise(buffer, &mut self.preparers, &mut self.rasterisers);
+            buffer.build_pyramid();
+        }
 
         // 4. The hierarchy, in the frustum and not hidden.
         let tester = Tester {
