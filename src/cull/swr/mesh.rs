@@ -109,22 +109,29 @@ enum Turn {
     Excluded,
 }
 
-/// What one patch vouches for in one cell while it is rasterised.
+/// What one patch vouches for in one cell while it is rasterised: the
+/// pixel groups it marks, and how near it is drawn there.
 #[derive(Clone, Copy, Debug)]
 struct CellCover {
     mask: u64,
-    /// The least depth of the triangles that may be drawn over the cell
-    /// (∞ while none reaches it; −∞ once the patch vouches for nothing
-    /// there: a triangle lies behind the cell's reference, or gave a NaN),
+    depth: CellDepth,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum CellDepth {
+    /// No triangle of the patch reaches the cell yet.
+    Unreached,
+    /// The least depth of the triangles that may be drawn over the cell,
     /// and a plane at most each of them where it may be drawn.
-    depth: f64,
-    plane: Option<ScreenPlane>,
+    AtLeast { least: f64, plane: ScreenPlane },
+    /// The patch vouches for nothing here: one of its triangles that may
+    /// be drawn here lies behind the cell's reference, or gave a NaN.
+    Nothing,
 }
 
 const EMPTY: CellCover = CellCover {
     mask: 0,
-    depth: f64::INFINITY,
-    plane: None,
+    depth: CellDepth::Unreached,
 };
 
 /// Occluders made ready to rasterise: each object's patches, with their
@@ -288,14 +295,14 @@ impl Rasteriser {
         }
         let width = self.columns.len();
         for (i, cover) in self.cover.iter().enumerate() {
-            if let (true, Some(plane)) = (cover.mask != 0, cover.plane) {
+            if let (true, CellDepth::AtLeast { least, plane }) = (cover.mask != 0, cover.depth) {
                 let (column, row) = (self.columns.start + (i % width) as u32, self.rows.start + (i / width) as u32);
                 cells.merge(
                     column,
                     row,
                     &Coverage {
                         mask: cover.mask,
-                        depth: cover.depth,
+                        depth: least,
                         plane,
                     },
                 );
@@ -342,19 +349,27 @@ impl Rasteriser {
                 let [x0, x1] = grid.across.cell(column);
                 let xs = [x0.max(xs[0]), x1.min(xs[1])];
                 let cover = self.cover_at(column, row);
-                if cover.depth == f64::NEG_INFINITY {
+                if let CellDepth::Nothing = cover.depth {
                     continue;
                 }
                 let nearest = plane.max_over(xs, ys);
+                let least = plane.min_over(xs, ys);
                 // Not nearer (or a NaN).
-                if nearest.partial_cmp(&f64::from(cells.reference(column, row))).is_none_or(|o| o.is_le()) {
-                    cover.depth = f64::NEG_INFINITY;
+                let behind = nearest.partial_cmp(&f64::from(cells.reference(column, row))).is_none_or(|o| o.is_le());
+                if behind || least.is_nan() {
+                    cover.depth = CellDepth::Nothing;
                     continue;
                 }
                 reached = true;
-                let least = plane.min_over(xs, ys);
-                cover.depth = if least.is_nan() { f64::NEG_INFINITY } else { cover.depth.min(least) };
-                cover.plane = Some(cover.plane.map_or(plane, |held| below_both(held, &plane, (xs, ys))));
+                cover.depth = match cover.depth {
+                    CellDepth::AtLeast { least: held, plane: below } => CellDepth::AtLeast {
+                        least: held.min(least),
+                        plane: below_both(below, &plane, (xs, ys)),
+                    },
+                    // Unreached (a cell the patch vouches nothing for was
+                    // passed over above).
+                    _ => CellDepth::AtLeast { least, plane },
+                };
             }
         }
         reached
