@@ -442,7 +442,8 @@ impl Culler for SoftwareOcclusionCulling {
         let resting = self.rest > 0;
         self.rest = self.rest.saturating_sub(1);
         self.candidates.clear();
-        for &o in self.visible.iter().filter(|_| !resting) {
+        let visible: &[u32] = if resting { &[] } else { &self.visible };
+        for &o in visible {
             let bounds = &scene.objects[o as usize].bounds;
             if frustum.classify(bounds) == Containment::Outside {
                 continue;
