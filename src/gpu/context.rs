@@ -268,7 +268,14 @@ impl GpuContext {
             layout: layout.as_ref(),
             module,
             entry_point: Some(entry),
-            compilation_options: Default::default(),
+            // No compute shader of occlu reads workgroup memory it has not
+            // written first (pyramid_test.wgsl's cs_pixels clears its own),
+            // so wgpu's zero fill is only cost: on GL, one invocation of
+            // every workgroup writing each word of it before a barrier.
+            compilation_options: wgpu::PipelineCompilationOptions {
+                zero_initialize_workgroup_memory: false,
+                ..Default::default()
+            },
             cache: None,
         })
     }
