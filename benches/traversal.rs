@@ -5,10 +5,10 @@
 //!   step of every hierarchical mode;
 //! - **front-to-back order**: every node in the frustum through the
 //!   nearest-corner queue (003 §4.2), the order `sq`, `omq` and `chc` visit
-//!   nodes in; an upper bound, since those stop below hidden nodes;
-//! - **box preparation**: the eye-relative f64 boxes `hiz` (one per
-//!   object) stages for the GPU every frame, before its planes (`roc` and
-//!   `ioc` make theirs on the GPU: `benches/culling_cpu.rs`).
+//!   nodes in; an upper bound, since those stop below hidden nodes.
+//!
+//! (`roc`, `ioc` and `hiz` make their boxes on the GPU: their CPU a frame
+//! is in `benches/culling_cpu.rs`.)
 //!
 //! Means per frame over the walk, each the median of several passes.
 
@@ -17,12 +17,9 @@ mod common;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use occlu::bounds::Aabb;
 use occlu::camera::{Camera, Containment};
 use occlu::cull::TraversalStats;
-use occlu::cull::gpu_walk::NodeBoxes;
 use occlu::cull::traversal::{DepthQueue, frustum_cull_subtree, nearest_corner};
-use occlu::gpu::{BoxMargins, DepthMargins, Resolution};
 use occlu::hierarchy::Hierarchy;
 
 use common::{FRAMES, SCENES};
@@ -60,9 +57,6 @@ fn main() {
             popped += front_to_back(&hierarchy, camera, &mut queue)
         });
         report("front-to-back order", order, popped / (PASSES * cameras.len()), "nodes");
-
-        let objects: Vec<Aabb> = scene.objects.iter().map(|o| o.bounds).collect();
-        prepare_boxes("hiz boxes (every object, without planes)", &cameras, &objects);
         println!();
     }
 }
@@ -83,18 +77,6 @@ fn front_to_back(hierarchy: &Hierarchy, camera: &Camera, queue: &mut DepthQueue)
         }
     }
     visited
-}
-
-fn prepare_boxes(what: &str, cameras: &[Camera], bounds: &[Aabb]) {
-    let mut boxes = NodeBoxes::default();
-    let depth = DepthMargins::for_backend(wgpu::Backend::Vulkan);
-    let mut tested = 0;
-    let time = per_frame(cameras, |camera| {
-        let margins = BoxMargins::new(depth, camera, Resolution::DEFAULT);
-        boxes.prepare(camera, margins, bounds.iter().copied());
-        tested += boxes.counts().1;
-    });
-    report(what, time, tested / (PASSES * cameras.len()), "to test");
 }
 
 /// Mean time per camera of `f`, the median over [`PASSES`] passes.

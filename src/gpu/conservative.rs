@@ -326,32 +326,6 @@ impl BoxPlanes {
         planes
     }
 
-    /// The planes as a shader evaluates them in f32 at pixel centres of a
-    /// target of `target` pixels ([`ShaderBoxPlanes`]).
-    pub(crate) fn for_shader(&self, target: Resolution) -> ShaderBoxPlanes {
-        let (width, height) = (f64::from(target.width), f64::from(target.height));
-        // Each coefficient rounded to f32, then three products and two sums
-        // in f32 (or fused), move the value by a few steps of 2^-24 of its
-        // terms' size at any centre on the target: 2^-20 of it bounds them.
-        // `None` for a plane f32 cannot hold (a face within f32's smallest
-        // distances of the eye): that axis then bounds nothing.
-        let moved = |p: &ScreenPlane, sign: f64| {
-            let error = (p.constant.abs() + p.per_x.abs() * width + p.per_y.abs() * height) / f64::from(1u32 << 20);
-            let plane = [p.per_x as f32, p.per_y as f32, (p.constant + sign * error) as f32, 0.0];
-            plane.iter().all(|v| v.abs() < UNBOUNDED / 10.0).then_some(plane)
-        };
-        let mut planes = ShaderBoxPlanes {
-            entries: [[0.0, 0.0, UNBOUNDED, 0.0]; 3],
-            exits: [[0.0, 0.0, -UNBOUNDED, 0.0]; 3],
-        };
-        for k in 0..self.count {
-            if let (Some(entry), Some(exit)) = (moved(&self.entries[k], 1.0), moved(&self.exits[k], -1.0)) {
-                (planes.entries[k], planes.exits[k]) = (entry, exit);
-            }
-        }
-        planes
-    }
-
     /// Planes the depth of any fragment of an object inside the box lies at
     /// or below (see above).
     pub(crate) fn entries(&self) -> &[ScreenPlane] {
@@ -376,21 +350,88 @@ impl BoxPlanes {
     }
 }
 
-/// A box's [`BoxPlanes`] as pyramid_test.wgsl reads them: each plane's
-/// `per_x`, `per_y` and `constant` (w pads) in f32, an entry raised and an
-/// exit lowered by what evaluating it in f32 may move it, so the shader's
-/// value at a pixel centre is still at least the entry plane's (at most the
-/// exit plane's) there. A plane of an axis with no face across it holds
-/// [`UNBOUNDED`] (`-UNBOUNDED` for an exit): no bound, and no miss.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+/// What pyramid_test.wgsl's `box_planes`, which makes a box's [`BoxPlanes`]
+/// in f32 from the tested box and the camera uniform, moves each plane by:
+/// an entry up and an exit down, by this fraction of its terms' size over
+/// the target (|constant| + |per_x| · width + |per_y| · height), so that its
+/// value at any pixel centre still lies at or above the entry plane (at or
+/// below the exit plane) in exact arithmetic. Making a coefficient rounds
+/// the ray and the near distance to f32 (half a step of 2^-23 each),
+/// divides (2.5 steps, as Vulkan and GLSL ES allow) and multiplies (half a
+/// step); the raise, the margin and the evaluation at a pixel add a product
+/// or sum each: about 13 steps of 2^-24 of the terms' size in all, and this
+/// is 64 of them.
+pub(crate) const PLANE_ROUNDING: f64 = 1.0 / (1u32 << 18) as f64;
+
+/// Where a shader's plane stands for no bound (an entry) or no miss (an
+/// exit): far beyond any depth, yet finite after any sum the shader makes.
+/// A plane whose coefficients reach a tenth of it (a face within f32's
+/// smallest distances of the eye) bounds nothing.
+pub(crate) const UNBOUNDED: f32 = 1e30;
+
+/// A box's [`BoxPlanes`] as pyramid_test.wgsl's `box_planes` makes them: per
+/// world axis, the entry and exit plane's `per_x`, `per_y` and `constant`
+/// (w pads) in f32; an axis with no face across it holds [`UNBOUNDED`]
+/// (`-UNBOUNDED` for the exit).
+#[cfg(test)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct ShaderBoxPlanes {
     pub(crate) entries: [[f32; 4]; 3],
     pub(crate) exits: [[f32; 4]; 3],
 }
 
-/// Far beyond any depth, yet finite after any sum the shader makes.
-const UNBOUNDED: f32 = 1e30;
+#[cfg(test)]
+impl ShaderBoxPlanes {
+    /// The CPU twin of `box_planes`, step by step in f32: the planes of the
+    /// tested box `q` for `camera` on a `target` of pixels, from the rays
+    /// and near distance as the camera uniform holds them, each quotient
+    /// moved by `quotient_steps` steps of f32 (a GPU's division may be 2.5
+    /// steps off).
+    pub(crate) fn as_the_shader_makes(
+        camera: &Camera,
+        q: &QueryBox,
+        target: Resolution,
+        quotient_steps: i32,
+    ) -> ShaderBoxPlanes {
+        let [ray_x, ray_y, ray_c] = PixelRays::new(camera, target).uniform();
+        let near = camera.projection().w_axis.z as f32;
+        let size = [target.width as f32, target.height as f32];
+        let moved = |plane: [f32; 3], sign: f32| {
+            let terms = plane[2].abs() + plane[0].abs() * size[0] + plane[1].abs() * size[1];
+            let margin = PLANE_ROUNDING as f32 * terms;
+            let plane = [plane[0], plane[1], plane[2] + sign * margin, 0.0];
+            plane.iter().all(|v| v.abs() < UNBOUNDED / 10.0).then_some(plane)
+        };
+        let mut planes = ShaderBoxPlanes {
+            entries: [[0.0, 0.0, UNBOUNDED, 0.0]; 3],
+            exits: [[0.0, 0.0, -UNBOUNDED, 0.0]; 3],
+        };
+        for (axis, faces) in faces_across(q.min.truncate().as_dvec3(), q.max.truncate().as_dvec3())
+            .into_iter()
+            .enumerate()
+        {
+            let Some((facing, opposite)) = faces else {
+                continue;
+            };
+            let plane = |face: f64| {
+                let scale = f32_steps(near / face as f32, quotient_steps);
+                [scale * ray_x[axis], scale * ray_y[axis], scale * ray_c[axis]]
+            };
+            let mut entry = plane(facing);
+            entry[2] += q.min.w;
+            if let (Some(entry), Some(exit)) = (moved(entry, 1.0), moved(plane(opposite), -1.0)) {
+                (planes.entries[axis], planes.exits[axis]) = (entry, exit);
+            }
+        }
+        planes
+    }
+}
+
+/// `v` moved `steps` representable f32 values up (down where negative).
+#[cfg(test)]
+fn f32_steps(v: f32, steps: i32) -> f32 {
+    (0..steps.unsigned_abs()).fold(v, |v, _| if steps > 0 { v.next_up() } else { v.next_down() })
+}
 
 /// Where an object's fragments may lie (rule 2). For each world axis along
 /// which the eye lies outside the object's box, the face across that axis
@@ -435,7 +476,8 @@ pub(crate) mod tests {
     /// scene.wgsl's depth for "no face across this axis": depth is at most 1.
     const NO_LIMIT: f64 = 2.0;
 
-    fn camera() -> Camera {
+    /// A camera looking down and to the side of the origin.
+    pub(crate) fn camera() -> Camera {
         Camera {
             eye: DVec3::new(3.0, 2.0, 10.0),
             rotation: look_rotation(DVec3::new(-0.3, -0.2, -1.0), DVec3::Y),
@@ -521,7 +563,7 @@ pub(crate) mod tests {
 
     /// Up to 200 boxes of random size and place in front of [`camera`],
     /// each with its test box for a `DEFAULT` target, seeded by `seed`.
-    fn random_boxes_in_view(seed: u64) -> Vec<(Aabb, QueryBox)> {
+    pub(crate) fn random_boxes_in_view(seed: u64) -> Vec<(Aabb, QueryBox)> {
         let cam = camera();
         let margins = BoxMargins::new(DepthMargins::for_backend(wgpu::Backend::Gl), &cam, Resolution::DEFAULT);
         let mut rng = crate::rng::Rng::new(seed);
@@ -581,47 +623,62 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn box_planes_as_the_shader_evaluates_them_in_f32_lie_above_their_entries_and_below_their_exits() {
+    fn box_planes_as_the_shader_makes_them_in_f32_lie_above_their_entries_and_below_their_exits() {
         let cam = camera();
         let r = Resolution::DEFAULT;
         let rays = PixelRays::new(&cam, r);
         let mut compared = 0;
         for (_, q) in random_boxes_in_view(47) {
             let planes = BoxPlanes::new(&cam, &q, &rays, r);
-            let shader = planes.for_shader(r);
-            // The orders a GPU may sum `dot(plane, (x, y, 1))` in, fused or not.
-            let sums = |[a, b, c, _]: [f32; 4], x: f32, y: f32| {
-                [
-                    a * x + b * y + c,
-                    a * x + (b * y + c),
-                    a.mul_add(x, b.mul_add(y, c)),
-                    b.mul_add(y, a * x) + c,
-                ]
-            };
-            for y in (0..r.height).step_by(7) {
-                for x in (0..r.width).step_by(7) {
-                    let (x, y) = (x as f32 + 0.5, y as f32 + 0.5);
-                    let (cx, cy) = (f64::from(x), f64::from(y));
-                    for (k, (entry, exit)) in planes.entries().iter().zip(planes.exits()).enumerate() {
-                        let (above, below) = (entry.at(cx, cy), exit.at(cx, cy));
-                        for value in sums(shader.entries[k], x, y) {
-                            assert!(f64::from(value) >= above, "entry {k} at ({x}, {y}): {value} < {above}");
+            let axes: Vec<usize> = faces_across(q.min.truncate().as_dvec3(), q.max.truncate().as_dvec3())
+                .iter()
+                .enumerate()
+                .filter_map(|(axis, faces)| faces.map(|_| axis))
+                .collect();
+            // A division a GPU may round 2.5 steps either way.
+            for steps in [-3, 0, 3] {
+                let shader = ShaderBoxPlanes::as_the_shader_makes(&cam, &q, r, steps);
+                // The orders a GPU may sum `dot(plane, (x, y, 1))` in, fused or not.
+                let sums = |[a, b, c, _]: [f32; 4], x: f32, y: f32| {
+                    [
+                        a * x + b * y + c,
+                        a * x + (b * y + c),
+                        a.mul_add(x, b.mul_add(y, c)),
+                        b.mul_add(y, a * x) + c,
+                    ]
+                };
+                for y in (0..r.height).step_by(7) {
+                    for x in (0..r.width).step_by(7) {
+                        let (x, y) = (x as f32 + 0.5, y as f32 + 0.5);
+                        let (cx, cy) = (f64::from(x), f64::from(y));
+                        for (k, (entry, exit)) in planes.entries().iter().zip(planes.exits()).enumerate() {
+                            let (above, below) = (entry.at(cx, cy), exit.at(cx, cy));
+                            let axis = axes[k];
+                            for value in sums(shader.entries[axis], x, y) {
+                                assert!(
+                                    f64::from(value) >= above,
+                                    "entry {axis} at ({x}, {y}): {value} < {above}"
+                                );
+                            }
+                            for value in sums(shader.exits[axis], x, y) {
+                                assert!(
+                                    f64::from(value) <= below,
+                                    "exit {axis} at ({x}, {y}): {value} > {below}"
+                                );
+                            }
+                            compared += 1;
                         }
-                        for value in sums(shader.exits[k], x, y) {
-                            assert!(f64::from(value) <= below, "exit {k} at ({x}, {y}): {value} > {below}");
+                        // An axis with no face across it bounds nothing and
+                        // meets every exit.
+                        for axis in (0..3).filter(|a| !axes.contains(a)) {
+                            assert!(sums(shader.entries[axis], x, y).iter().all(|&v| v >= 1e29));
+                            assert!(sums(shader.exits[axis], x, y).iter().all(|&v| v <= -1e29));
                         }
-                        compared += 1;
-                    }
-                    // An axis with no face across it bounds nothing and
-                    // meets every exit.
-                    for k in planes.entries().len()..3 {
-                        assert!(sums(shader.entries[k], x, y).iter().all(|&v| v >= 1e29));
-                        assert!(sums(shader.exits[k], x, y).iter().all(|&v| v <= -1e29));
                     }
                 }
             }
         }
-        assert!(compared > 100_000, "{compared} comparisons");
+        assert!(compared > 300_000, "{compared} comparisons");
     }
 
     #[test]

@@ -15,11 +15,15 @@ mod timing;
 #[cfg(test)]
 pub(crate) mod wgsl;
 
+#[cfg(test)]
+pub(crate) use conservative::ShaderBoxPlanes;
 /// A ray caster's view of pixels and boxes, for tests of box tests.
 #[cfg(test)]
-pub(crate) use conservative::tests::{entry_depth, pixel_ray};
+pub(crate) use conservative::tests::{camera as test_camera, entry_depth, pixel_ray, random_boxes_in_view};
 pub use conservative::{BoxMargins, DepthMargins};
-pub(crate) use conservative::{BoxPlanes, EyeBox, PixelRays, QueryBox, ScreenPlane, ShaderBoxPlanes, eye_relative_box};
+pub(crate) use conservative::{
+    BoxPlanes, EyeBox, PLANE_ROUNDING, PixelRays, QueryBox, ScreenPlane, UNBOUNDED, eye_relative_box,
+};
 pub use context::{AdapterReport, BackendChoice, GpuContext, GpuError};
 pub use frame::{
     Frame, FrameCounters, FrameCtx, FrameOutcome, FrameResources, GpuAudit, GpuFrame, GpuSetup, GpuWork, OpKind, OpSpan,
@@ -35,8 +39,12 @@ pub use queries::{BoxTest, BoxVisibility, QUERIES_PER_SET, QueryPool};
 pub use readback::Readback;
 #[cfg(test)]
 pub(crate) use renderer::CAMERA_WGSL;
+#[cfg(test)]
+pub(crate) use renderer::camera_buffer;
 pub(crate) use renderer::module_with_camera;
 pub use renderer::{DrawRange, Draws, GpuScene, IndirectCount, IndirectDraws, SceneRenderer};
 pub use resolution::Resolution;
 pub use targets::RenderTargets;
+#[cfg(test)]
+pub(crate) use targets::texture_2d;
 pub use timing::{GpuSpan, GpuTimer};

@@ -136,6 +136,25 @@ pub struct SceneRenderer {
     heat: wgpu::RenderPipeline,
 }
 
+impl CameraUniform {
+    /// `camera` for a picture of `resolution`.
+    fn new(camera: &Camera, resolution: Resolution) -> CameraUniform {
+        let projection = camera.projection();
+        CameraUniform {
+            projection: projection.as_mat4(),
+            view_projection: (projection * glam::DMat4::from_mat3(camera.view_rotation())).as_mat4(),
+            rays: PixelRays::new(camera, resolution).uniform(),
+        }
+    }
+}
+
+/// A camera uniform of its own, for tests of a shader that reads it.
+#[cfg(test)]
+pub(crate) fn camera_buffer(gpu: &GpuContext, camera: &Camera, resolution: Resolution) -> wgpu::Buffer {
+    let uniform = CameraUniform::new(camera, resolution);
+    gpu.buffer_with("camera", bytemuck::bytes_of(&uniform), wgpu::BufferUsages::UNIFORM)
+}
+
 impl SceneRenderer {
     pub fn new(gpu: &GpuContext, scene: GpuScene) -> SceneRenderer {
         let device = &gpu.device;
@@ -276,12 +295,7 @@ impl SceneRenderer {
         }));
         gpu.queue
             .write_buffer(&scene.object_data, 0, bytemuck::cast_slice(&scene.staging));
-        let projection = camera.projection();
-        let uniform = CameraUniform {
-            projection: projection.as_mat4(),
-            view_projection: (projection * glam::DMat4::from_mat3(view)).as_mat4(),
-            rays: PixelRays::new(camera, resolution).uniform(),
-        };
+        let uniform = CameraUniform::new(camera, resolution);
         gpu.queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&uniform));
     }
 

@@ -148,8 +148,8 @@ impl Culler for GpuCulling {
 ///    queue's length stays on the GPU: it is the instance count of the next
 ///    level's indirect draw and dispatch. Boxes that reach the near plane
 ///    are marked visible before the walk (by `cs_prepare`, which makes the
-///    boxes, or by the CPU where it makes them), since they cannot be
-///    rasterised, and boxes outside the frustum are never queued.
+///    boxes), since they cannot be rasterised, and boxes outside the
+///    frustum are never queued.
 /// 3. `cs_compact` turns the marks of objects inside the frustum (a
 ///    visible node's subtree may reach out of it) into next frame's visible
 ///    list and the list of objects visible now but not drawn in step 1.
@@ -171,12 +171,12 @@ fn cull_on_gpu(
 ) -> TraversalStats {
     let ctx = frame.on_gpu().expect("the session runs GPU walks on the GPU");
     let (camera, indirect_count) = (input.camera, ctx.gpu().indirect_count);
-    // Preparing the frustum and boxes is culling work on the CPU, outside
-    // `record`.
+    // Staging the frustum and the boxes that changed is culling work on
+    // the CPU, outside `record`.
     walk.prepare_frustum(camera, ctx.margins(), input.scene, input.moved, input.frame);
     ctx.record(&mut |work| walk.drop_what_left_the_frustum(work));
     ctx.draw_indirect(walk.list(DrawList::Visible, indirect_count));
-    walk.prepare_boxes(input, ctx.margins(), bounds);
+    walk.stage_node_boxes(input, bounds);
     ctx.record(&mut |work| walk.begin(work));
     for _ in 0..walk.levels() {
         ctx.record(&mut |work| walk.walk_level(work));

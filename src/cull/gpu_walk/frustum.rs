@@ -3,10 +3,10 @@
 //! left the frustum (drawn early, as occluders, without a test) and the
 //! objects of a visible bottom-depth node that lie outside it (marked with
 //! their node). `cs_early_frustum` takes the first out of the early list,
-//! `cs_compact` the second out of the marks (walk.wgsl). For the walks that
-//! read no pixels (roc, ioc, hiz.pixels=0) the same frame, and boxes of the
-//! same form (the objects', or the tree nodes'), make every tested box on
-//! the GPU (prepare_nodes.wgsl), so their CPU hands over only the camera.
+//! `cs_compact` the second out of the marks (walk.wgsl). The same frame, and
+//! boxes of the same form (the objects', or the tree nodes'), make every
+//! tested box of every walk on the GPU (prepare_nodes.wgsl), so its CPU
+//! hands over only the camera.
 //! object_frustum.wgsl holds what those passes share, bound as group 3.
 //!
 //! Each object's box is uploaded once as its centre in two f32 parts (high

@@ -8,14 +8,17 @@
 //! most `texels`² texels, and a box that survives and covers at most
 //! `pixels` pixels against the depth at each pixel by the planes where the
 //! pixel's ray enters it (pyramid_test.wgsl, gpu/conservative.rs's
-//! `BoxPlanes`); (4) **late**: the newly visible objects are drawn. Every
-//! object found visible is next frame's list; nothing per object reaches
-//! the CPU (on GL, without an indirect count, two lengths do).
+//! `BoxPlanes`, made there from the box); (4) **late**: the newly visible
+//! objects are drawn. Every object found visible is next frame's list;
+//! nothing per object reaches or leaves the CPU (on GL, without an indirect
+//! count, two lengths do).
 //!
 //! Departures: no early cull against last frame's pyramid (step 1 draws
 //! last frame's list untested, as roc and ioc do, so one pyramid a frame
 //! suffices and nothing visible last frame is hidden by stale depth); boxes
-//! grown eye-relative in f64 on the CPU; 4×4 texels read by default, not
+//! grown eye-relative on the GPU from each centre in two f32 parts (the
+//! engines keep one), so a box far from the origin keeps its place; 4×4
+//! texels read by default, not
 //! 2×2 (`texels=2` is the engines'); the pyramid's base a power of two at
 //! most the target over `base`, each target texel read by the base texel
 //! its test maps it to (bevy#14062); and the per-pixel test after the

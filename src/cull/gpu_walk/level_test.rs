@@ -8,8 +8,8 @@
 use super::layout::{DISPATCH_OFFSET, MAX_GROUPS, boxes_module};
 use super::pyramid::DepthPyramid;
 use crate::gpu::{
-    BOX_TEST, GpuContext, GpuError, GpuSetup, GpuTimer, ShaderBoxPlanes, bind_buffers, bind_group_layout,
-    box_index_buffer, box_test_pipeline, check_storage_binding, depth_only_pass, set_box_indices, storage_buffer,
+    BOX_TEST, GpuContext, GpuError, GpuSetup, GpuTimer, PLANE_ROUNDING, UNBOUNDED, bind_buffers, bind_group_layout,
+    box_index_buffer, box_test_pipeline, depth_only_pass, set_box_indices, storage_buffer,
 };
 
 /// How a level finds which of its queued nodes are visible.
@@ -33,9 +33,8 @@ pub enum NodeTest {
 }
 
 impl NodeTest {
-    /// Whether it reads the depth pixel by pixel (and so needs each box's
-    /// planes, [`ShaderBoxPlanes`]).
-    pub(super) fn reads_pixels(&self) -> bool {
+    /// Whether it reads the depth pixel by pixel.
+    fn reads_pixels(&self) -> bool {
         matches!(self, NodeTest::Pyramid { pixels, .. } if *pixels > 0)
     }
 }
@@ -57,20 +56,18 @@ pub(super) enum LevelTest {
 }
 
 /// hiz's pixel by pixel test, what pyramid_test.wgsl binds as group 2:
-/// the tested boxes' planes, the depth, and the boxes the pyramid did not
-/// hide (`PixelWork`); where the test reads no pixels, the same bindings,
-/// one entry long, and no passes.
+/// the depth, and the boxes the pyramid did not hide (`PixelWork`); where
+/// the test reads no pixels, the same bindings, one entry long, and no
+/// passes.
 pub(super) struct PixelTest {
-    /// One [`ShaderBoxPlanes`] per node.
-    planes: wgpu::Buffer,
     /// `PixelWork`: the indirect dispatch of `cs_pixels`, the count queued,
     /// the queue.
     work: wgpu::Buffer,
     /// `work`'s first words as each level starts: no workgroups, none
     /// queued.
     reset: wgpu::Buffer,
-    /// `work` bound to write (binding 2, for `cs_test` and
-    /// `cs_pixel_args`), and to read (binding 3, for `cs_pixels`, whose
+    /// `work` bound to write (binding 1, for `cs_test` and
+    /// `cs_pixel_args`), and to read (binding 2, for `cs_pixels`, whose
     /// dispatch reads it as arguments too: a buffer bound to write may not
     /// be read so in the same dispatch).
     write_group: wgpu::BindGroup,
@@ -84,28 +81,16 @@ const PIXEL_WORK_HEADER: u64 = 16;
 
 impl PixelTest {
     /// The test for a tree of `nodes` nodes, reading `depth`, without its
-    /// passes (none where no pixel is read); an error where the planes
-    /// exceed what the adapter binds as one buffer.
+    /// passes (none where no pixel is read).
     fn new(
         gpu: &GpuContext,
         depth: &wgpu::TextureView,
         nodes: u32,
         reads: bool,
-    ) -> Result<(PixelTest, [wgpu::BindGroupLayout; 2]), GpuError> {
+    ) -> (PixelTest, [wgpu::BindGroupLayout; 2]) {
         use wgpu::ShaderStages as S;
-        // Planes for every node; a queue as long as a dispatch is wide.
-        let (planes, queued) = if reads {
-            (nodes.max(1), nodes.clamp(1, MAX_GROUPS))
-        } else {
-            (1, 1)
-        };
-        let plane_bytes = std::mem::size_of::<ShaderBoxPlanes>() as u64 * u64::from(planes);
-        check_storage_binding(
-            gpu,
-            "storage binding for hiz's box planes (bytes; hiz.pixels=0 needs none)",
-            plane_bytes,
-        )?;
-        let planes = storage_buffer(gpu, "box planes", plane_bytes, wgpu::BufferUsages::COPY_DST);
+        // A queue as long as a dispatch is wide.
+        let queued = if reads { nodes.clamp(1, MAX_GROUPS) } else { 1 };
         let work = storage_buffer(
             gpu,
             "boxes tested pixel by pixel",
@@ -129,7 +114,7 @@ impl PixelTest {
             count: None,
         };
         let depth_entry = wgpu::BindGroupLayoutEntry {
-            binding: 1,
+            binding: 0,
             visibility: S::COMPUTE,
             ty: wgpu::BindingType::Texture {
                 sample_type: wgpu::TextureSampleType::Float { filterable: false },
@@ -138,11 +123,11 @@ impl PixelTest {
             },
             count: None,
         };
-        // Binding `work_binding` is the queue, to write (2) or read (3).
+        // Binding `work_binding` is the queue, to write (1) or read (2).
         let bind = |work_binding: u32| {
             let layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("pixel test"),
-                entries: &[storage(0, true), depth_entry, storage(work_binding, work_binding == 3)],
+                entries: &[depth_entry, storage(work_binding, work_binding == 2)],
             });
             let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("pixel test"),
@@ -150,10 +135,6 @@ impl PixelTest {
                 entries: &[
                     wgpu::BindGroupEntry {
                         binding: 0,
-                        resource: planes.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
                         resource: wgpu::BindingResource::TextureView(depth),
                     },
                     wgpu::BindGroupEntry {
@@ -164,16 +145,15 @@ impl PixelTest {
             });
             (layout, group)
         };
-        let ((write_layout, write_group), (read_layout, read_group)) = (bind(2), bind(3));
+        let ((write_layout, write_group), (read_layout, read_group)) = (bind(1), bind(2));
         let test = PixelTest {
-            planes,
             work,
             reset,
             write_group,
             read_group,
             passes: None,
         };
-        Ok((test, [write_layout, read_layout]))
+        (test, [write_layout, read_layout])
     }
 }
 
@@ -251,7 +231,7 @@ impl LevelTest {
                     bind_buffers(gpu, &test_layout, &buffers)
                 });
                 let (mut pixels, [write_layout, read_layout]) =
-                    PixelTest::new(gpu, setup.depth, nodes, node_test.reads_pixels())?;
+                    PixelTest::new(gpu, setup.depth, nodes, node_test.reads_pixels());
                 let pipeline = |entry, pixels_layout| {
                     let layouts = [Some(box_layout), Some(&test_layout), Some(pixels_layout)];
                     gpu.compute_pipeline(&module, entry, Some(&layouts))
@@ -284,17 +264,6 @@ impl LevelTest {
             if let Some((t, span)) = timer {
                 t.end(encoder, span);
             }
-        }
-    }
-
-    /// Before a walk: stages the tested boxes' `planes` (one per node),
-    /// where the test reads pixels.
-    pub(super) fn stage(&self, gpu: &GpuContext, planes: &[ShaderBoxPlanes]) {
-        if let LevelTest::Pyramid { pixels, .. } = self
-            && pixels.passes.is_some()
-            && !planes.is_empty()
-        {
-            gpu.queue.write_buffer(&pixels.planes, 0, bytemuck::cast_slice(planes));
         }
     }
 
@@ -365,7 +334,8 @@ impl LevelTest {
 /// parameters (the shared ones come from [`boxes_module`]).
 pub(super) fn pyramid_test_source(texels: u32, pixels: u32) -> String {
     format!(
-        "const MAX_TEXELS: u32 = {texels}u;\nconst MAX_PIXELS: u32 = {pixels}u;\n{}",
+        "const MAX_TEXELS: u32 = {texels}u;\nconst MAX_PIXELS: u32 = {pixels}u;\n\
+         const PLANE_ROUNDING: f32 = {PLANE_ROUNDING:e};\nconst UNBOUNDED: f32 = {UNBOUNDED:e};\n{}",
         include_str!("pyramid_test.wgsl")
     )
 }

@@ -40,4 +40,4 @@ pub use culling::{GpuCulling, Walked};
 pub use level_test::NodeTest;
 pub use lists::VisibleLists;
 pub use tree::{CullTree, MAX_LEVELS, TreeNode};
-pub use walk::{DrawList, GpuWalk, NodeBoxes};
+pub use walk::{DrawList, GpuWalk};

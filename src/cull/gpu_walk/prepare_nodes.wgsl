@@ -1,9 +1,8 @@
-// The boxes of a walk that reads no pixels (roc, ioc, hiz.pixels=0) made on
-// the GPU, from each tree node's box in two f32 parts (object_frustum.wgsl's
-// ObjectBox: the objects' own for a flat tree, the hierarchy's nodes for a
-// cut one), so the
-// CPU hands over only the camera: what walk.rs's NodeBoxes::prepare and
-// gpu/conservative.rs's eye_relative_box make on the CPU in f64, with
+// The boxes of every walk (roc, ioc, hiz) made on the GPU, from each tree
+// node's box in two f32 parts (object_frustum.wgsl's ObjectBox: the
+// objects' own for a flat tree, the hierarchy's nodes for a cut one), so
+// the CPU hands over only the camera: what gpu/conservative.rs's
+// eye_relative_box makes on the CPU in f64 (twin.rs's NodeBoxes), with
 // margins for f32 (frustum.rs, BoxMargins::for_shader).
 // cs_prepare, per node: its word of the visibility buffer (OUTSIDE_FRUSTUM,
 // REACHES_NEAR or TO_TEST) and its QueryBox (boxes.wgsl: min with the raise

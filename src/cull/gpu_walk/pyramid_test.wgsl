@@ -11,8 +11,8 @@
 // of those that do not hide it on their own (cs_pixel_args sizes that
 // dispatch).
 // TO_TEST, VISIBLE, GROUP_SIZE and MAX_GROUPS are written before this text
-// from layout.rs's constants, MAX_TEXELS and MAX_PIXELS from hiz's
-// parameters.
+// from layout.rs's constants, PLANE_ROUNDING and UNBOUNDED from
+// gpu/conservative.rs's, MAX_TEXELS and MAX_PIXELS from hiz's parameters.
 //
 // Why this is conservative (gpu/conservative.rs gives the box its margins):
 // every fragment of the object lies within the box's outline on screen and
@@ -26,9 +26,10 @@
 // ray meets the box, a fragment of the object lies no nearer than the least
 // of the box's entry planes there (nor than its nearest corner); where an
 // entry plane lies behind another axis's exit plane, the ray misses the box
-// and the object has no fragment at that pixel. The planes come from the
-// CPU in f64, each entry raised and each exit lowered by what their f32
-// evaluation here may move them.
+// and the object has no fragment at that pixel. box_planes makes the planes
+// here from the tested box and the camera's pixel rays, each entry raised
+// and each exit lowered by PLANE_ROUNDING of its terms' size, more than
+// making and evaluating it in f32 may move it.
 
 // pyramid.rs's ShapeUniform.
 struct Pyramid {
@@ -46,8 +47,10 @@ struct Pyramid {
 @group(1) @binding(3) var<storage, read> pyramid: array<f32>;
 @group(1) @binding(4) var<uniform> shape: Pyramid;
 
-// gpu/conservative.rs's ShaderBoxPlanes: per plane (per_x, per_y, constant).
-struct ShaderBoxPlanes {
+// A box's planes (box_planes), per world axis: the entry and exit planes'
+// per_x, per_y and constant (w pads), at pixel (x, y) worth
+// dot(plane.xyz, vec3(x, y, 1.0)).
+struct BoxPlanes {
     entries: array<vec4<f32>, 3>,
     exits: array<vec4<f32>, 3>,
 }
@@ -61,7 +64,7 @@ struct PixelWork {
     nodes: array<u32>,
 }
 
-// cs_pixels reads the queue (binding 3: the same words) without the
+// cs_pixels reads the queue (binding 2: the same words) without the
 // atomic, since its dispatch reads them as arguments too.
 struct PixelQueue {
     groups: vec3<u32>,
@@ -69,10 +72,9 @@ struct PixelQueue {
     nodes: array<u32>,
 }
 
-@group(2) @binding(0) var<storage, read> box_planes: array<ShaderBoxPlanes>;
-@group(2) @binding(1) var depth: texture_2d<f32>;
-@group(2) @binding(2) var<storage, read_write> pixel_work: PixelWork;
-@group(2) @binding(3) var<storage, read> pixel_queue: PixelQueue;
+@group(2) @binding(0) var depth: texture_2d<f32>;
+@group(2) @binding(1) var<storage, read_write> pixel_work: PixelWork;
+@group(2) @binding(2) var<storage, read> pixel_queue: PixelQueue;
 
 @compute @workgroup_size(GROUP_SIZE)
 fn cs_test(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) grid: vec3<u32>) {
@@ -131,7 +133,7 @@ fn cs_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
     workgroupBarrier();
     let node = pixel_queue.nodes[group.x];
     let on_screen = box_on_screen(boxes[node]);
-    let planes = box_planes[node];
+    let planes = box_planes(boxes[node]);
     // cs_test queued only rectangles the right way round; should this
     // one's rounding differ, the box is marked visible, after the barrier
     // below, which every invocation must reach.
@@ -192,7 +194,7 @@ fn cs_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
 
 // Marks `node` visible, and tells the workgroup so, where a ray through
 // `pixel` meets its box no farther than the depth drawn there.
-fn mark_if_shown(node: u32, planes: ShaderBoxPlanes, pixel: vec2<u32>, nearest: f32) {
+fn mark_if_shown(node: u32, planes: BoxPlanes, pixel: vec2<u32>, nearest: f32) {
     if !span_hides_box(planes, PixelSpan(pixel, pixel), nearest, textureLoad(depth, pixel, 0).r) {
         atomicStore(&shown, 1u);
         node_visible[node] = VISIBLE;
@@ -224,7 +226,7 @@ fn texel_pixels(texel: vec2<u32>, on_screen: OnScreen) -> PixelSpan {
 // span, each plane is taken at its greatest (entries) or least (exits),
 // which lie at corners of it. The planes' f32 margins hold at any pixel
 // centre, so at those corners too.
-fn span_hides_box(planes: ShaderBoxPlanes, span: PixelSpan, nearest: f32, farthest: f32) -> bool {
+fn span_hides_box(planes: BoxPlanes, span: PixelSpan, nearest: f32, farthest: f32) -> bool {
     var entry = vec3<f32>();
     var exit = vec3<f32>();
     for (var a = 0u; a < 3u; a++) {
@@ -233,6 +235,57 @@ fn span_hides_box(planes: ShaderBoxPlanes, span: PixelSpan, nearest: f32, farthe
     }
     let missed = entry.x < exit.y || entry.x < exit.z || entry.y < exit.x || entry.y < exit.z || entry.z < exit.x || entry.z < exit.y;
     return missed || min(nearest, min(entry.x, min(entry.y, entry.z))) < farthest;
+}
+
+// The planes of the tested box `b` (gpu/conservative.rs's BoxPlanes): per
+// world axis across which the eye lies outside the box, the plane of the
+// face facing it, raised by the box's raise, and of the face opposite. The
+// ray through pixel (x, y) meets the plane of the face at eye-relative
+// coordinate `face` across axis a at view depth face / ray[a], so at depth
+// near / that = (near / face) · (x · ray_x + y · ray_y + ray_c)[a].
+// conservative.rs's ShaderBoxPlanes::as_the_shader_makes is this
+// function's CPU twin.
+fn box_planes(b: QueryBox) -> BoxPlanes {
+    var planes = BoxPlanes(
+        array<vec4<f32>, 3>(vec4<f32>(0.0, 0.0, UNBOUNDED, 0.0), vec4<f32>(0.0, 0.0, UNBOUNDED, 0.0), vec4<f32>(0.0, 0.0, UNBOUNDED, 0.0)),
+        array<vec4<f32>, 3>(vec4<f32>(0.0, 0.0, -UNBOUNDED, 0.0), vec4<f32>(0.0, 0.0, -UNBOUNDED, 0.0), vec4<f32>(0.0, 0.0, -UNBOUNDED, 0.0)),
+    );
+    // camera.wgsl's projection puts the near distance at [3].z (reverse-Z).
+    let near = camera.projection[3].z;
+    for (var a = 0u; a < 3u; a++) {
+        var facing = b.min[a];
+        var opposite = b.max[a];
+        if b.max[a] < 0.0 {
+            facing = b.max[a];
+            opposite = b.min[a];
+        } else if b.min[a] <= 0.0 {
+            // The eye lies within the box's extent along this axis.
+            continue;
+        }
+        let ray = vec3<f32>(camera.ray_x[a], camera.ray_y[a], camera.ray_c[a]);
+        let entry = moved_plane((near / facing) * ray + vec3<f32>(0.0, 0.0, b.min.w), 1.0);
+        let exit = moved_plane((near / opposite) * ray, -1.0);
+        if plane_bounds(entry) && plane_bounds(exit) {
+            planes.entries[a] = entry;
+            planes.exits[a] = exit;
+        }
+    }
+    return planes;
+}
+
+// `plane` moved by `sign` times PLANE_ROUNDING of its terms' size over the
+// target.
+fn moved_plane(plane: vec3<f32>, sign: f32) -> vec4<f32> {
+    let size = vec2<f32>(shape.target_size);
+    let terms = abs(plane.z) + abs(plane.x) * size.x + abs(plane.y) * size.y;
+    return vec4<f32>(plane.xy, plane.z + sign * PLANE_ROUNDING * terms, 0.0);
+}
+
+// Whether f32 holds the plane well enough for it to bound anything: not
+// for a face within f32's smallest distances of the eye (a NaN bounds
+// nothing either).
+fn plane_bounds(plane: vec4<f32>) -> bool {
+    return all(abs(plane) < vec4<f32>(UNBOUNDED / 10.0));
 }
 
 // A plane's greatest (or least) over a span's pixel centres.

@@ -7,6 +7,9 @@
 //!   the objects visible in the last frame and those outside the frustum
 //!   (frustum.rs's `gpu_verdict`), what the walk must have counted, marked
 //!   and drawn;
+//! - [`NodeBoxes`], of `cs_prepare` (prepare_nodes.wgsl): each node's
+//!   eye-relative box and word, in f64, as gpu/conservative.rs prepares a
+//!   box for a test;
 //! - [`BoxOnTarget`], of hiz's box test (pyramid_test.wgsl's header): in
 //!   f64, whether a box lies behind the pyramid, and pixel by pixel behind
 //!   the depth where the pyramid does not hide it.
@@ -21,8 +24,46 @@ use glam::{DMat4, DVec2, DVec3, Vec4Swizzles};
 use super::CullTree;
 use super::layout::{OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST};
 use super::pyramid::PyramidLevel;
-use crate::camera::Camera;
-use crate::gpu::{QueryBox, Resolution, ShaderBoxPlanes};
+use crate::bounds::Aabb;
+use crate::camera::{Camera, Containment};
+use crate::gpu::{BoxMargins, EyeBox, QueryBox, Resolution, ShaderBoxPlanes, eye_relative_box};
+
+/// A walk's node boxes for one camera as `cs_prepare` should make them,
+/// prepared in f64.
+#[derive(Default)]
+pub(super) struct NodeBoxes {
+    /// One per node, eye-relative; empty for a node outside the frustum or
+    /// reaching the near plane.
+    pub boxes: Vec<QueryBox>,
+    /// One per node, its state before the walk: [`TO_TEST`],
+    /// [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`].
+    pub states: Vec<u32>,
+}
+
+impl NodeBoxes {
+    /// Prepares `bounds`, one box per node, for `camera` with the frame's
+    /// `margins`.
+    pub fn prepare(&mut self, camera: &Camera, margins: BoxMargins, bounds: impl Iterator<Item = Aabb>) {
+        let view = camera.view_rotation();
+        let frustum = camera.frustum();
+        self.boxes.clear();
+        self.states.clear();
+        for b in bounds {
+            // The frustum test comes first: the near-plane rule must not
+            // take a box beside the camera for one that holds it.
+            let (q, state) = if frustum.classify(&b) == Containment::Outside {
+                (bytemuck::Zeroable::zeroed(), OUTSIDE_FRUSTUM)
+            } else {
+                match eye_relative_box(camera, &view, margins, &b) {
+                    EyeBox::Testable(q) => (q, TO_TEST),
+                    EyeBox::ReachesNear => (bytemuck::Zeroable::zeroed(), REACHES_NEAR),
+                }
+            };
+            self.boxes.push(q);
+            self.states.push(state);
+        }
+    }
+}
 
 /// What one walk did, by the CPU's reckoning.
 #[derive(Debug, Default, PartialEq)]
@@ -223,12 +264,13 @@ impl BoxOnTarget {
     /// The pixels' part (pyramid_test.wgsl's `cs_pixels`, and its
     /// `span_hides_box` over one pixel): each pixel of the rectangle against
     /// `depth` (of a `size` target, row by row) by the box's `planes` as the
-    /// shader holds them. `Hidden` where
-    /// the box lies behind at every pixel whose ray meets it.
+    /// shader makes them (`ShaderBoxPlanes::as_the_shader_makes`). `Hidden`
+    /// where the box lies behind at every pixel whose ray meets it.
     pub(super) fn pixel_verdict(&self, planes: &ShaderBoxPlanes, size: Resolution, depth: &[f32]) -> Verdict {
-        // A plane's value at a centre, and what its f32 evaluation may move
-        // it by: a few steps of 2^-24 of its terms' size, 1e-6 of which is
-        // 16 of them.
+        // A plane's value at a centre, and how far the shader's may lie
+        // from it: its division may be 2 steps of 2^-23 further off than
+        // the twin's, and its evaluation adds a few steps of 2^-24, all of
+        // its terms' size; 1e-6 of that size is 16 steps of 2^-24.
         let (width, height) = (f64::from(size.width), f64::from(size.height));
         let value = |p: &[f32; 4], x: f64, y: f64| {
             let [a, b, c] = [p[0], p[1], p[2]].map(f64::from);
@@ -288,7 +330,6 @@ impl BoxOnTarget {
 mod tests {
     use super::*;
     use crate::auto_or::AutoOr;
-    use crate::bounds::Aabb;
     use crate::camera::generate::default_path;
     use crate::cull::ModeParams;
     use crate::cull::gpu_walk::GpuCulling;
@@ -297,10 +338,13 @@ mod tests {
     use crate::cull::gpu_walk::hiz::{BoxesTested, HizParams, hierarchical_depth_culling};
     use crate::cull::gpu_walk::ioc::iterative_occlusion_culling;
     use crate::cull::gpu_walk::layout::VISIBLE;
+    use crate::cull::gpu_walk::layout::boxes_module;
+    use crate::cull::gpu_walk::level_test::pyramid_test_source;
+    use crate::cull::gpu_walk::pyramid::DepthPyramid;
     use crate::cull::gpu_walk::roc::raster_occlusion_culling;
-    use crate::cull::gpu_walk::{GpuWalk, NodeBoxes};
     use crate::gpu::{
-        BackendChoice, BoxMargins, BoxPlanes, EyeBox, GpuContext, PixelRays, Resolution, eye_relative_box,
+        BackendChoice, BoxPlanes, GpuContext, PixelRays, Readback, camera_buffer, random_boxes_in_view, storage_buffer,
+        test_camera, texture_2d,
     };
     use crate::hierarchy::{Hierarchy, HierarchyParams};
     use crate::scene::{LoadOptions, SceneSpec, load};
@@ -354,20 +398,18 @@ mod tests {
                 })
                 .collect();
             let twin = walk(tree, &states, &visible_last, &outside);
-            if on_gpu.boxes_on_gpu() {
-                let margins = BoxMargins::new(gpu.depth_margins, &camera, RESOLUTION);
-                let mut cpu = NodeBoxes::default();
-                // Each node's box: its object's, or its hierarchy node's.
-                let bounds: Vec<Aabb> = match source {
-                    Some(source) => source
-                        .iter()
-                        .map(|&n| world.hierarchy.nodes[n as usize].bounds)
-                        .collect(),
-                    None => world.scene.objects.iter().map(|o| o.bounds).collect(),
-                };
-                cpu.prepare(&camera, margins, bounds.into_iter());
-                held += hold_boxes_made_on_the_gpu(&cpu, &states, &on_gpu.tested_boxes(gpu), frame);
-            }
+            let margins = BoxMargins::new(gpu.depth_margins, &camera, RESOLUTION);
+            let mut cpu = NodeBoxes::default();
+            // Each node's box: its object's, or its hierarchy node's.
+            let bounds: Vec<Aabb> = match source {
+                Some(source) => source
+                    .iter()
+                    .map(|&n| world.hierarchy.nodes[n as usize].bounds)
+                    .collect(),
+                None => world.scene.objects.iter().map(|o| o.bounds).collect(),
+            };
+            cpu.prepare(&camera, margins, bounds.into_iter());
+            held += hold_boxes_made_on_the_gpu(&cpu, &states, &on_gpu.tested_boxes(gpu), frame);
             let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
             if let Some(params) = hiz {
                 let (levels, texels) = on_gpu.pyramid(gpu).expect("a pyramid test");
@@ -375,8 +417,7 @@ mod tests {
                 // The depth as the frame ended: where objects were drawn
                 // after the test (late), nearer than what the test read.
                 let depth = session.mode_depth(0).expect("the session has an error meter");
-                let (view, rays) = (camera.view_rotation(), PixelRays::new(&camera, RESOLUTION));
-                let margins = BoxMargins::new(gpu.depth_margins, &camera, RESOLUTION);
+                let view = camera.view_rotation();
                 let late: Vec<Option<BoxOnTarget>> = (0..objects)
                     .filter(|&o| twin.marked[o] && !twin.early[o])
                     .map(
@@ -396,7 +437,7 @@ mod tests {
                     let on_target = BoxOnTarget::new(query, &camera, RESOLUTION);
                     let verdict = match on_target.pyramid_verdict(RESOLUTION, &levels, &texels, params.texels) {
                         Verdict::Visible if on_target.pixels() <= u64::from(params.pixels) => {
-                            let planes = BoxPlanes::new(&camera, query, &rays, RESOLUTION).for_shader(RESOLUTION);
+                            let planes = ShaderBoxPlanes::as_the_shader_makes(&camera, query, RESOLUTION, 0);
                             let drawn_after =
                                 |b: &Option<BoxOnTarget>| b.as_ref().is_none_or(|b| on_target.meets(b.first, b.last));
                             match on_target.pixel_verdict(&planes, RESOLUTION, &depth) {
@@ -437,10 +478,7 @@ mod tests {
             too_close * 50 <= tested,
             "{too_close} of {tested} boxes too close to call"
         );
-        assert!(
-            held > 0 || !mode.gpu_walk().is_some_and(GpuWalk::boxes_on_gpu),
-            "boxes made on the GPU held to the CPU's"
-        );
+        assert!(held > 0, "boxes made on the GPU held to the CPU's");
         if let Some(params) = hiz.filter(|p| p.pixels > 0) {
             assert!(by_pixels > 20, "{params:?}: {by_pixels} boxes hidden pixel by pixel");
         }
@@ -594,15 +632,159 @@ mod tests {
                 ..default
             };
             for (params, tree, least) in [
-                (default, &flat, 50),
-                (finest, &flat, 50),
-                (engines, &flat, 50),
-                (over_nodes, &cut, 20),
+                (default, (&flat, None), 50),
+                (finest, (&flat, None), 50),
+                (engines, (&flat, None), 50),
+                (over_nodes, (&cut, Some(&source[..])), 20),
             ] {
                 let mode = hierarchical_depth_culling(params);
-                let hidden = compare(gpu, world(), &path, mode, (tree, None), Some(params));
+                let hidden = compare(gpu, world(), &path, mode, tree, Some(params));
                 assert!(hidden > least, "hiz's walks hide boxes ({params:?}: {hidden})");
             }
+        }
+    }
+
+    /// pyramid_test.wgsl's `box_planes` run on the GPU for each of `boxes`,
+    /// seen by `camera` on a `target`, and its planes read back.
+    fn box_planes_on_the_gpu(
+        gpu: &GpuContext,
+        camera: &Camera,
+        target: Resolution,
+        boxes: &[QueryBox],
+    ) -> Vec<ShaderBoxPlanes> {
+        let probe = "@group(2) @binding(3) var<storage, read_write> probed: array<BoxPlanes>;
+            @compute @workgroup_size(64)
+            fn cs_probe(@builtin(global_invocation_id) id: vec3<u32>) {
+                if id.x < arrayLength(&probed) {
+                    probed[id.x] = box_planes(boxes[id.x]);
+                }
+            }";
+        let source = [pyramid_test_source(4, 1024).as_str(), probe].concat();
+        let module = boxes_module(gpu, "box planes probe", &source);
+        let pipeline = gpu.compute_pipeline(&module, "cs_probe", None);
+        let depth = texture_2d(
+            gpu,
+            "depth",
+            target,
+            wgpu::TextureFormat::Depth32Float,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let pyramid = DepthPyramid::new(gpu, target, 4, &depth.create_view(&Default::default())).unwrap();
+        let storage = wgpu::BufferUsages::STORAGE;
+        let boxes = gpu.buffer_with("boxes", bytemuck::cast_slice(boxes), storage);
+        let bytes = (boxes.size() / 32) * 96;
+        let probed = storage_buffer(gpu, "planes", bytes, wgpu::BufferUsages::COPY_SRC);
+        let camera = camera_buffer(gpu, camera, target);
+        let group = |k: u32, buffers: &[(u32, &wgpu::Buffer)]| {
+            let entries: Vec<wgpu::BindGroupEntry> = buffers
+                .iter()
+                .map(|&(binding, b)| wgpu::BindGroupEntry {
+                    binding,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout: &pipeline.get_bind_group_layout(k),
+                entries: &entries,
+            })
+        };
+        let groups = [
+            group(0, &[(0, &camera), (1, &boxes)]),
+            group(1, &[(4, pyramid.bindings()[1])]),
+            group(2, &[(3, &probed)]),
+        ];
+        let readback = Readback::new(gpu, "planes", bytes);
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&pipeline);
+            for (k, g) in groups.iter().enumerate() {
+                pass.set_bind_group(k as u32, g, &[]);
+            }
+            pass.dispatch_workgroups((bytes / 96).div_ceil(64) as u32, 1, 1);
+        }
+        readback.copy(&mut encoder, &probed, 0, 0, bytes);
+        gpu.queue.submit([encoder.finish()]);
+        let mut words: Vec<f32> = Vec::new();
+        readback.read(gpu, bytes, &mut words);
+        let plane = |w: &[f32]| [w[0], w[1], w[2], w[3]];
+        words
+            .chunks_exact(24)
+            .map(|w| ShaderBoxPlanes {
+                entries: [0, 1, 2].map(|k| plane(&w[4 * k..])),
+                exits: [3, 4, 5].map(|k| plane(&w[4 * k..])),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn box_planes_made_on_the_gpu_are_their_f32_twins_and_bound_every_pixel_centre() {
+        let camera = test_camera();
+        let target = Resolution::DEFAULT;
+        let rays = PixelRays::new(&camera, target);
+        let (size_x, size_y) = (f64::from(target.width), f64::from(target.height));
+        let boxes: Vec<QueryBox> = random_boxes_in_view(53).into_iter().map(|(_, q)| q).collect();
+        for gpu in &gpu_driven_adapters() {
+            let made = box_planes_on_the_gpu(gpu, &camera, target, &boxes);
+            let mut compared = 0;
+            for (q, gpu_planes) in boxes.iter().zip(&made) {
+                let at = format!("{} on {}", q.min, gpu.adapter);
+                // Within its twin's rounding: a division 2.5 steps off, and
+                // the sums' and products' few steps of its terms' size.
+                let twin = ShaderBoxPlanes::as_the_shader_makes(&camera, q, target, 0);
+                let pairs = gpu_planes
+                    .entries
+                    .iter()
+                    .zip(&twin.entries)
+                    .chain(gpu_planes.exits.iter().zip(&twin.exits));
+                for (got, want) in pairs {
+                    let terms = f64::from(want[2].abs())
+                        + f64::from(want[0].abs()) * size_x
+                        + f64::from(want[1].abs()) * size_y;
+                    for k in 0..3 {
+                        let off = f64::from(got[k] - want[k]).abs()
+                            * if k == 0 {
+                                size_x
+                            } else if k == 1 {
+                                size_y
+                            } else {
+                                1.0
+                            };
+                        assert!(off <= 1e-6 * terms, "{at}: {got:?} against its twin {want:?}");
+                    }
+                }
+                // Above each entry plane and below each exit plane, in exact
+                // arithmetic, at every pixel centre, summed as the GPU may.
+                let exact = BoxPlanes::new(&camera, q, &rays, target);
+                let axes: Vec<usize> = (0..3).filter(|&a| gpu_planes.entries[a][2].abs() < 1e29).collect();
+                assert_eq!(
+                    axes.len(),
+                    exact.entries().len(),
+                    "{at}: an axis bounds on the GPU as on the CPU"
+                );
+                for (k, &axis) in axes.iter().enumerate() {
+                    let ([a, b, c, _], [d, e, f, _]) = (gpu_planes.entries[axis], gpu_planes.exits[axis]);
+                    for y in (0..target.height).step_by(5) {
+                        for x in (0..target.width).step_by(5) {
+                            let (x, y) = (x as f32 + 0.5, y as f32 + 0.5);
+                            let (cx, cy) = (f64::from(x), f64::from(y));
+                            let entry = a.mul_add(x, b.mul_add(y, c)).min(a * x + b * y + c);
+                            let exit = d.mul_add(x, e.mul_add(y, f)).max(d * x + e * y + f);
+                            assert!(
+                                f64::from(entry) >= exact.entries()[k].at(cx, cy),
+                                "{at}: entry {axis} at ({x}, {y})"
+                            );
+                            assert!(
+                                f64::from(exit) <= exact.exits()[k].at(cx, cy),
+                                "{at}: exit {axis} at ({x}, {y})"
+                            );
+                            compared += 1;
+                        }
+                    }
+                }
+            }
+            assert!(compared > 500_000, "{compared} comparisons on {}", gpu.adapter);
         }
     }
 

@@ -7,7 +7,7 @@ use std::rc::Rc;
 use super::frustum::{LastFrame, ObjectBox, ObjectFrustum, Since, object_box};
 use super::layout::{
     DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_OUTSIDE,
-    LEVEL_WORDS, MAX_GROUPS, OUTSIDE_FRUSTUM, REACHES_NEAR, TO_TEST, shader_constants,
+    LEVEL_WORDS, MAX_GROUPS, shader_constants,
 };
 use super::level_test::{LevelTest, NodeTest};
 use super::lists::VisibleLists;
@@ -15,12 +15,14 @@ use super::lists::VisibleLists;
 use super::pyramid::PyramidLevel;
 use super::tree::{CullTree, MAX_LEVELS};
 use crate::bounds::Aabb;
-use crate::camera::{Camera, Containment};
+use crate::camera::Camera;
 use crate::cull::culler::FrameInput;
+#[cfg(test)]
+use crate::gpu::QueryBox;
 use crate::gpu::{
-    BOX_INDEX_COUNT, BoxMargins, BoxPlanes, EyeBox, GpuAudit, GpuContext, GpuError, GpuSetup, GpuTimer, GpuWork,
-    IndirectCount, IndirectDraws, PixelRays, QueryBox, Readback, Resolution, ShaderBoxPlanes, bind_buffers,
-    bind_group_layout, box_bind_group_layout, box_buffer, check_storage_binding, eye_relative_box, storage_buffer,
+    BOX_INDEX_COUNT, BoxMargins, GpuAudit, GpuContext, GpuError, GpuSetup, GpuTimer, GpuWork, IndirectCount,
+    IndirectDraws, Readback, bind_buffers, bind_group_layout, box_bind_group_layout, box_buffer, check_storage_binding,
+    storage_buffer,
 };
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
@@ -99,10 +101,8 @@ pub struct GpuWalk {
     expand: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
     early_frustum: wgpu::ComputePipeline,
-    /// Where the boxes are made on the GPU (roc, ioc, and hiz where it
-    /// reads no pixels); else they are prepared on the CPU (`node_boxes`,
-    /// with the planes hiz's pixel test reads).
-    boxes_on_gpu: Option<BoxesOnGpu>,
+    /// Where the boxes are made, on the GPU.
+    boxes_on_gpu: BoxesOnGpu,
     /// `compact`'s and `early_frustum`'s empty group 0.
     no_bindings: wgpu::BindGroup,
     scratch: NodeScratch,
@@ -125,71 +125,8 @@ pub struct GpuWalk {
     /// The objects' boxes and the frame's frustum, for the object-level
     /// frustum test of `early_frustum` and `compact`.
     object_frustum: ObjectFrustum,
-    /// Scratch, reused so a frame allocates nothing once warm.
-    node_boxes: NodeBoxes,
-    seed_queue: Vec<u32>,
+    /// Scratch for the audit, reused so a frame allocates nothing once warm.
     words: Vec<u32>,
-}
-
-/// A walk's node boxes for one camera, prepared on the CPU in f64 (the
-/// eye-relative rounding the 1e7-offset stress cases need) before they go
-/// to the GPU. Reused from frame to frame.
-#[derive(Default)]
-pub struct NodeBoxes {
-    /// One per node, eye-relative; empty (drawing no fragment, never
-    /// tested) for a node outside the frustum or reaching the near plane.
-    pub(super) boxes: Vec<QueryBox>,
-    /// One per node, its state before the walk: [`TO_TEST`],
-    /// [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`].
-    pub(super) states: Vec<u32>,
-    /// For a test that reads pixels (hiz's), the target it reads them on.
-    pub(super) planes_on: Option<Resolution>,
-    /// With `planes_on`, one per node: the tested box's planes on that
-    /// target (none bounding anything for a node not tested); else empty.
-    pub(super) planes: Vec<ShaderBoxPlanes>,
-}
-
-impl NodeBoxes {
-    /// Prepares `bounds`, one box per node, for `camera` with the frame's
-    /// `margins`.
-    pub fn prepare(&mut self, camera: &Camera, margins: BoxMargins, bounds: impl Iterator<Item = Aabb>) {
-        let view = camera.view_rotation();
-        let frustum = camera.frustum();
-        let rays = self.planes_on.map(|target| (PixelRays::new(camera, target), target));
-        self.boxes.clear();
-        self.states.clear();
-        self.planes.clear();
-        for b in bounds {
-            // A box outside the frustum is hidden, and one reaching the near
-            // plane visible, without a test. The first is never queued; the
-            // second is staged empty, so drawing it marks nothing. The
-            // frustum test comes first: the near-plane rule must not take a
-            // box beside the camera for one that holds it.
-            let (q, state) = if frustum.classify(&b) == Containment::Outside {
-                (bytemuck::Zeroable::zeroed(), OUTSIDE_FRUSTUM)
-            } else {
-                match eye_relative_box(camera, &view, margins, &b) {
-                    EyeBox::Testable(q) => (q, TO_TEST),
-                    EyeBox::ReachesNear => (bytemuck::Zeroable::zeroed(), REACHES_NEAR),
-                }
-            };
-            if let Some((rays, target)) = &rays {
-                // An untested node's planes bound nothing.
-                let planes = match state {
-                    TO_TEST => BoxPlanes::new(camera, &q, rays, *target),
-                    _ => BoxPlanes::default(),
-                };
-                self.planes.push(planes.for_shader(*target));
-            }
-            self.boxes.push(q);
-            self.states.push(state);
-        }
-    }
-
-    /// Nodes prepared, and of them those to test on the GPU.
-    pub fn counts(&self) -> (usize, usize) {
-        (self.states.len(), self.states.iter().filter(|&&s| s == TO_TEST).count())
-    }
 }
 
 /// The timer's spans.
@@ -232,34 +169,27 @@ impl GpuWalk {
             &s.node_visible,
             nodes,
         )?;
-        let expand = compute_pipeline(
-            gpu,
-            "expand a level",
+        let expand = gpu.compute_pipeline(
             &cull_module,
             "cs_expand",
-            &[Some(&step_layout), Some(&tree_layout)],
+            Some(&[Some(&step_layout), Some(&tree_layout)]),
         );
         // cs_compact and cs_early_frustum share the module's groups 1 to 3
         // and bind nothing at 0: an empty group there keeps them within 8
         // storage buffers, the minimum an adapter guarantees.
         let no_bindings = bind_group_layout(gpu, "no bindings", &[]);
         let object_frustum = ObjectFrustum::new(gpu, draws.len() as u32)?;
-        let lists_pipeline = |label: &str, entry: &str| {
-            compute_pipeline(
-                gpu,
-                label,
-                &cull_module,
-                entry,
-                &[
-                    Some(&no_bindings),
-                    Some(&tree_layout),
-                    Some(&lists_layout),
-                    Some(&object_frustum.layout),
-                ],
-            )
+        let lists_pipeline = |entry: &str| {
+            let layouts = [
+                Some(&no_bindings),
+                Some(&tree_layout),
+                Some(&lists_layout),
+                Some(&object_frustum.layout),
+            ];
+            gpu.compute_pipeline(&cull_module, entry, Some(&layouts))
         };
-        let compact = lists_pipeline("compact draw lists", "cs_compact");
-        let early_frustum = lists_pipeline("frustum test of the early list", "cs_early_frustum");
+        let compact = lists_pipeline("cs_compact");
+        let early_frustum = lists_pipeline("cs_early_frustum");
         let no_bindings = bind_buffers(gpu, &no_bindings, &[]);
         let objects = draws.len() as u32;
         let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
@@ -269,9 +199,7 @@ impl GpuWalk {
         );
         assert!((1..=MAX_LEVELS).contains(&tree.levels), "1..={MAX_LEVELS} levels");
         let drawn = storage_buffer(gpu, "drawn objects", u64::from(objects.max(1)) * 4, copy);
-        let boxes_on_gpu = (!node_test.reads_pixels())
-            .then(|| BoxesOnGpu::new(gpu, tree, &scratch, &object_frustum))
-            .transpose()?;
+        let boxes_on_gpu = BoxesOnGpu::new(gpu, tree, &scratch, &object_frustum)?;
         let tree = TreeOnGpu::new(gpu, tree, &tree_layout, &lists_layout, lists, &drawn);
         let spans = match node_test {
             NodeTest::Raster => 1,
@@ -282,7 +210,7 @@ impl GpuWalk {
             level_stats: storage_buffer(gpu, "level statistics", AUDIT_DRAWN_OFFSET, copy),
             empty_level: gpu.buffer_with(
                 "empty level",
-                bytemuck::cast_slice(&level_args(0, 0)),
+                bytemuck::cast_slice(&EMPTY_LEVEL),
                 wgpu::BufferUsages::COPY_SRC,
             ),
             timer: GpuTimer::new(gpu, spans),
@@ -293,11 +221,6 @@ impl GpuWalk {
             walk: None,
             tree,
             object_frustum,
-            node_boxes: NodeBoxes {
-                planes_on: node_test.reads_pixels().then_some(setup.resolution),
-                ..NodeBoxes::default()
-            },
-            seed_queue: Vec::new(),
             words: Vec::new(),
             scratch,
             test,
@@ -339,40 +262,30 @@ impl GpuWalk {
         pass.dispatch_workgroups(groups_for(self.objects), 1, 1);
     }
 
-    /// Prepares the tree's node boxes (`bounds`, one per node, in node
-    /// order, as `input`'s frame has them) for its camera with the frame's
-    /// `margins`, on the CPU. Where the GPU makes them, `bounds` are only
-    /// staged where they may have changed: in the first frame, when objects
+    /// Stages the tree's node boxes (`bounds`, one per node, in node order,
+    /// as `input`'s frame has them) for the GPU to make the frame's boxes
+    /// from, where they may have changed: in the first frame, when objects
     /// moved, and after a gap in the frames this walk ran in a scene with
-    /// movers; a flat tree's are the objects' own, staged with the frustum.
-    pub fn prepare_boxes(
-        &mut self,
-        input: &FrameInput,
-        margins: BoxMargins,
-        bounds: impl ExactSizeIterator<Item = Aabb>,
-    ) {
+    /// movers. A flat tree's are the objects' own, staged with the frustum.
+    pub fn stage_node_boxes(&mut self, input: &FrameInput, bounds: impl ExactSizeIterator<Item = Aabb>) {
         assert_eq!(bounds.len(), self.tree.nodes as usize, "one box per tree node");
-        match self.boxes_on_gpu.as_mut().map(|b| &mut b.node_boxes) {
-            None => self.node_boxes.prepare(input.camera, margins, bounds),
-            Some(None) => {}
-            Some(Some(sources)) => {
-                let changed = match sources.frame.advance(input.frame) {
-                    Since::First => true,
-                    Since::Gap => !input.scene.movers.is_empty(),
-                    Since::Next => !input.moved.is_empty(),
-                };
-                sources.staged.clear();
-                if changed {
-                    sources.staged.extend(bounds.map(|b| object_box(&b)));
-                }
+        if let Some(sources) = &mut self.boxes_on_gpu.node_boxes {
+            let changed = match sources.frame.advance(input.frame) {
+                Since::First => true,
+                Since::Gap => !input.scene.movers.is_empty(),
+                Since::Next => !input.moved.is_empty(),
+            };
+            sources.staged.clear();
+            if changed {
+                sources.staged.extend(bounds.map(|b| object_box(&b)));
             }
         }
     }
 
-    /// Starts a walk: stages the boxes prepared on the CPU, or makes them on
-    /// the GPU; either way marks those that reach the near plane visible and
-    /// queues the seed nodes not outside the frustum, counting the others
-    /// in the seed level's arguments (kept for the audit).
+    /// Starts a walk: makes the boxes on the GPU, marks those that reach
+    /// the near plane visible and queues the seed nodes not outside the
+    /// frustum, counting the others in the seed level's arguments (kept
+    /// for the audit).
     pub fn begin(&mut self, work: GpuWork) {
         let GpuWork { gpu, encoder, .. } = work;
         let tree = &self.tree;
@@ -380,48 +293,26 @@ impl GpuWalk {
         if let Some(t) = &self.timer {
             t.begin(encoder, WALK_SPAN);
         }
-        match &self.boxes_on_gpu {
-            Some(on_gpu) => {
-                if let Some(sources) = on_gpu.node_boxes.as_ref().filter(|n| !n.staged.is_empty()) {
-                    gpu.queue
-                        .write_buffer(&sources.buffer, 0, bytemuck::cast_slice(&sources.staged));
-                }
-                gpu.queue
-                    .write_buffer(&s.level_args[0], 0, bytemuck::cast_slice(&level_args(0, 0)));
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("prepare boxes"),
-                    timestamp_writes: None,
-                });
-                pass.set_bind_group(0, &on_gpu.group, &[]);
-                pass.set_bind_group(3, &self.object_frustum.group, &[]);
-                pass.set_pipeline(&on_gpu.prepare);
-                pass.dispatch_workgroups(groups_for(tree.nodes), 1, 1);
-                pass.set_pipeline(&on_gpu.seed);
-                pass.dispatch_workgroups(groups_for(on_gpu.seeds), 1, 1);
-            }
-            None => {
-                let NodeBoxes { boxes, states, .. } = &self.node_boxes;
-                if !boxes.is_empty() {
-                    gpu.queue.write_buffer(&s.boxes, 0, bytemuck::cast_slice(boxes));
-                    gpu.queue.write_buffer(&s.node_visible, 0, bytemuck::cast_slice(states));
-                }
-                // A box outside the frustum cannot be visible: not queueing
-                // it spares its test (cs_expand does the same for children).
-                self.seed_queue.clear();
-                let in_frustum = tree.seed.iter().filter(|&&n| states[n as usize] != OUTSIDE_FRUSTUM);
-                self.seed_queue.extend(in_frustum);
-                if !self.seed_queue.is_empty() {
-                    gpu.queue
-                        .write_buffer(&s.queues[0], 0, bytemuck::cast_slice(&self.seed_queue));
-                }
-                let outside = (tree.seed.len() - self.seed_queue.len()) as u32;
-                let seed_level = level_args(self.seed_queue.len() as u32, outside);
-                gpu.queue
-                    .write_buffer(&s.level_args[0], 0, bytemuck::cast_slice(&seed_level));
-            }
+        let on_gpu = &self.boxes_on_gpu;
+        if let Some(sources) = on_gpu.node_boxes.as_ref().filter(|n| !n.staged.is_empty()) {
+            gpu.queue
+                .write_buffer(&sources.buffer, 0, bytemuck::cast_slice(&sources.staged));
+        }
+        gpu.queue
+            .write_buffer(&s.level_args[0], 0, bytemuck::cast_slice(&EMPTY_LEVEL));
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("prepare boxes"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, &on_gpu.group, &[]);
+            pass.set_bind_group(3, &self.object_frustum.group, &[]);
+            pass.set_pipeline(&on_gpu.prepare);
+            pass.dispatch_workgroups(groups_for(tree.nodes), 1, 1);
+            pass.set_pipeline(&on_gpu.seed);
+            pass.dispatch_workgroups(groups_for(on_gpu.seeds), 1, 1);
         }
         encoder.copy_buffer_to_buffer(&s.level_args[0], 0, &self.level_stats, SEED_LEVEL_OFFSET, LEVEL_BYTES);
-        self.test.stage(gpu, &self.node_boxes.planes);
         self.test.begin(encoder, self.timer.as_ref().map(|t| (t, PYRAMID_SPAN)));
         self.walk = Some(Walk {
             seed_len: tree.seed.len() as u32,
@@ -606,7 +497,7 @@ impl GpuWalk {
     }
 
     /// Every node's word of the visibility buffer as the last walk left it
-    /// (before it: [`TO_TEST`], [`OUTSIDE_FRUSTUM`] or [`REACHES_NEAR`];
+    /// (before it: `TO_TEST`, `OUTSIDE_FRUSTUM` or `REACHES_NEAR`;
     /// the level test turned the boxes it found visible into
     /// [`VISIBLE`](super::layout::VISIBLE)),
     /// for the CPU twin of the walk.
@@ -614,13 +505,7 @@ impl GpuWalk {
         self.read_words(gpu, &self.scratch.node_visible, 1)
     }
 
-    /// Whether the last walk's boxes were made on the GPU.
-    pub(super) fn boxes_on_gpu(&self) -> bool {
-        self.boxes_on_gpu.is_some()
-    }
-
-    /// The boxes the last walk tested, as its test read them (made on the
-    /// GPU, or staged from those prepared on the CPU), one per node.
+    /// The boxes the last walk tested, as the GPU made them, one per node.
     pub(super) fn tested_boxes(&self, gpu: &GpuContext) -> Vec<QueryBox> {
         let words = self.read_words(gpu, &self.scratch.boxes, 8);
         let floats: Vec<f32> = words.into_iter().map(f32::from_bits).collect();
@@ -733,12 +618,10 @@ impl BoxesOnGpu {
             &[write, write, write, write, read, read].map(|t| (wgpu::ShaderStages::COMPUTE, t)),
         );
         let pipeline = |entry: &str| {
-            compute_pipeline(
-                gpu,
-                entry,
+            gpu.compute_pipeline(
                 &module,
                 entry,
-                &[Some(&layout), None, None, Some(&objects.layout)],
+                Some(&[Some(&layout), None, None, Some(&objects.layout)]),
             )
         };
         let bytes = tree.nodes.len().max(1) as u64 * size_of::<ObjectBox>() as u64;
@@ -819,48 +702,10 @@ impl NodeScratch {
     }
 }
 
-/// The compute pipeline of `entry` in `module`, with bind groups of
-/// `layouts`.
-fn compute_pipeline(
-    gpu: &GpuContext,
-    label: &str,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-    layouts: &[Option<&wgpu::BindGroupLayout>],
-) -> wgpu::ComputePipeline {
-    let layout = gpu.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(label),
-        bind_group_layouts: layouts,
-        immediate_size: 0,
-    });
-    gpu.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(label),
-        layout: Some(&layout),
-        module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    })
-}
-
-/// A level's arguments (`Level` in walk.wgsl) for a queue of
-/// `entries` nodes: an indexed indirect draw of one box per entry, an
-/// indirect dispatch over the entries, and no nodes counted yet.
-fn level_args(entries: u32, outside: u32) -> [u32; LEVEL_WORDS] {
-    [
-        BOX_INDEX_COUNT,
-        entries,
-        0,
-        0,
-        0,
-        groups_for(entries),
-        1,
-        1,
-        0,
-        outside,
-        0,
-    ]
-}
+/// An empty level's arguments (`Level` in walk.wgsl): an indexed indirect
+/// draw of one box per entry and an indirect dispatch over the entries,
+/// none yet, and no nodes counted.
+const EMPTY_LEVEL: [u32; LEVEL_WORDS] = [BOX_INDEX_COUNT, 0, 0, 0, 0, 0, 1, 1, 0, 0, 0];
 
 /// Workgroups that cover `n` items, within the grid limit (the shaders
 /// stride over the rest).
