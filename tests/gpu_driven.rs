@@ -149,7 +149,7 @@ impl Culler for Alternating {
         "roc/hiz"
     }
     fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
-        let lists = Rc::new(VisibleLists::new(setup.gpu, setup.draws));
+        let lists = Rc::new(VisibleLists::new(setup.gpu, setup.draws)?);
         for walk in &mut self.walks {
             walk.share_visible_lists(&lists);
             walk.prepare(setup)?;

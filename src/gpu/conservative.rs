@@ -353,14 +353,15 @@ impl BoxPlanes {
 /// What pyramid_test.wgsl's `box_planes`, which makes a box's [`BoxPlanes`]
 /// in f32 from the tested box and the camera uniform, moves each plane by:
 /// an entry up and an exit down, by this fraction of its terms' size over
-/// the target (|constant| + |per_x| · width + |per_y| · height), so that its
-/// value at any pixel centre still lies at or above the entry plane (at or
-/// below the exit plane) in exact arithmetic. Making a coefficient rounds
-/// the ray and the near distance to f32 (half a step of 2^-23 each),
-/// divides (2.5 steps, as Vulkan and GLSL ES allow) and multiplies (half a
-/// step); the raise, the margin and the evaluation at a pixel add a product
-/// or sum each: about 13 steps of 2^-24 of the terms' size in all, and this
-/// is 64 of them.
+/// the target (|constant| + raise + |per_x| · width + |per_y| · height), so
+/// that its value at any pixel centre still lies at or above the entry
+/// plane (at or below the exit plane) in exact arithmetic. Making a
+/// coefficient rounds the ray and the near distance to f32 (one step of
+/// 2^-24 each), divides (5 steps: 2.5 of 2^-23, as Vulkan and GLSL ES allow
+/// for a normal divisor; a subnormal face bounds nothing) and multiplies
+/// (one): 8 steps of each coefficient, so of the terms' size. The raise,
+/// the margin and the evaluation at a pixel (two products, two sums) add a
+/// step of the terms' size each: about 14 in all, and this is 64 of them.
 pub(crate) const PLANE_ROUNDING: f64 = 1.0 / (1u32 << 18) as f64;
 
 /// Where a shader's plane stands for no bound (an entry) or no miss (an
@@ -396,10 +397,10 @@ impl ShaderBoxPlanes {
         let [ray_x, ray_y, ray_c] = PixelRays::new(camera, target).uniform();
         let near = camera.projection().w_axis.z as f32;
         let size = [target.width as f32, target.height as f32];
-        let moved = |plane: [f32; 3], sign: f32| {
-            let terms = plane[2].abs() + plane[0].abs() * size[0] + plane[1].abs() * size[1];
+        let moved = |plane: [f32; 3], raise: f32, sign: f32| {
+            let terms = plane[2].abs() + raise + plane[0].abs() * size[0] + plane[1].abs() * size[1];
             let margin = PLANE_ROUNDING as f32 * terms;
-            let plane = [plane[0], plane[1], plane[2] + sign * margin, 0.0];
+            let plane = [plane[0], plane[1], plane[2] + raise + sign * margin, 0.0];
             plane.iter().all(|v| v.abs() < UNBOUNDED / 10.0).then_some(plane)
         };
         let mut planes = ShaderBoxPlanes {
@@ -410,16 +411,15 @@ impl ShaderBoxPlanes {
             .into_iter()
             .enumerate()
         {
-            let Some((facing, opposite)) = faces else {
+            let Some((facing, opposite)) = faces.filter(|&(facing, _)| (facing as f32).abs() >= f32::MIN_POSITIVE)
+            else {
                 continue;
             };
             let plane = |face: f64| {
                 let scale = f32_steps(near / face as f32, quotient_steps);
                 [scale * ray_x[axis], scale * ray_y[axis], scale * ray_c[axis]]
             };
-            let mut entry = plane(facing);
-            entry[2] += q.min.w;
-            if let (Some(entry), Some(exit)) = (moved(entry, 1.0), moved(plane(opposite), -1.0)) {
+            if let (Some(entry), Some(exit)) = (moved(plane(facing), q.min.w, 1.0), moved(plane(opposite), 0.0, -1.0)) {
                 (planes.entries[axis], planes.exits[axis]) = (entry, exit);
             }
         }

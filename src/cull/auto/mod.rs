@@ -279,7 +279,7 @@ impl Culler for AutoCulling {
             runs_here && info.unsupported_on(gpu).is_none()
         });
         if self.candidates.iter().any(|c| c.carries() == Carries::VisibleOnGpu) {
-            let lists = Rc::new(VisibleLists::new(gpu, setup.draws));
+            let lists = Rc::new(VisibleLists::new(gpu, setup.draws)?);
             for c in &mut self.candidates {
                 c.culler.share_visible_lists(&lists);
             }

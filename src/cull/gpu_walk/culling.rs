@@ -96,7 +96,7 @@ impl Culler for GpuCulling {
         };
         let lists = match &self.shared_lists {
             Some(shared) => shared.clone(),
-            None => Rc::new(VisibleLists::new(setup.gpu, setup.draws)),
+            None => Rc::new(VisibleLists::new(setup.gpu, setup.draws)?),
         };
         self.walk = Some(GpuWalk::new(setup, &tree, self.node_test, lists)?);
         Ok(())

@@ -34,6 +34,9 @@
 
 use glam::DVec3;
 
+use std::cell::Cell;
+use std::rc::Rc;
+
 use crate::bounds::Aabb;
 use crate::camera::{Camera, OUTSIDE_SLACK};
 use crate::gpu::{
@@ -76,16 +79,35 @@ pub(super) struct ShaderFrustum {
     margins: [f32; 4],
 }
 
-/// The objects' boxes on the GPU and the frame's frustum, for one walk.
+/// Every object's box on the GPU, as object_frustum.wgsl's `object_boxes`
+/// reads it, and the frame whose poses it holds. Kept with a walk's
+/// `VisibleLists`, so the walks that share those share one upload.
+pub(super) struct ObjectBoxes {
+    buffer: wgpu::Buffer,
+    made_for: Cell<LastFrame>,
+}
+
+impl ObjectBoxes {
+    /// For `objects` objects, none uploaded yet; fails where the adapter
+    /// cannot bind a box for each.
+    pub(super) fn new(gpu: &GpuContext, objects: u32) -> Result<ObjectBoxes, GpuError> {
+        let bytes = u64::from(objects.max(1)) * size_of::<ObjectBox>() as u64;
+        check_storage_binding(gpu, "storage binding for the objects' boxes (bytes)", bytes)?;
+        Ok(ObjectBoxes {
+            buffer: storage_buffer(gpu, "object boxes", bytes, wgpu::BufferUsages::COPY_DST),
+            made_for: Cell::new(LastFrame::default()),
+        })
+    }
+}
+
+/// The objects' boxes on the GPU (shared with the walks that share them)
+/// and the frame's frustum, for one walk.
 pub(super) struct ObjectFrustum {
-    boxes: wgpu::Buffer,
+    boxes: Rc<ObjectBoxes>,
     frustum: wgpu::Buffer,
     /// Group 3 of the passes that read them, and its layout.
     pub(super) layout: wgpu::BindGroupLayout,
     pub(super) group: wgpu::BindGroup,
-    /// The frame whose poses `boxes` hold; a walk that did not run in the
-    /// frame before (`auto` ran another) uploads every mover's box again.
-    frame: LastFrame,
     /// Staged on the CPU, written in [`ObjectFrustum::write`]: the frustum,
     /// and the objects whose boxes changed, in increasing order, with their
     /// boxes.
@@ -106,6 +128,8 @@ pub(super) enum Since {
     /// Frames were skipped (or the path started again).
     Gap,
     Next,
+    /// The same frame again (another walk of `auto`'s made for it).
+    Same,
 }
 
 impl LastFrame {
@@ -114,6 +138,7 @@ impl LastFrame {
         let since = match self.0 {
             None => Since::First,
             Some(f) if f.checked_add(1) == Some(frame) => Since::Next,
+            Some(f) if f == frame => Since::Same,
             Some(_) => Since::Gap,
         };
         self.0 = Some(frame);
@@ -122,13 +147,9 @@ impl LastFrame {
 }
 
 impl ObjectFrustum {
-    /// For `objects` objects; fails where the adapter cannot bind a box for
-    /// each.
-    pub(super) fn new(gpu: &GpuContext, objects: u32) -> Result<ObjectFrustum, GpuError> {
+    /// Over `boxes`, which it keeps up to date.
+    pub(super) fn new(gpu: &GpuContext, boxes: Rc<ObjectBoxes>) -> ObjectFrustum {
         let copy = wgpu::BufferUsages::COPY_DST;
-        let bytes = u64::from(objects.max(1)) * size_of::<ObjectBox>() as u64;
-        check_storage_binding(gpu, "storage binding for the objects' boxes (bytes)", bytes)?;
-        let boxes = storage_buffer(gpu, "object boxes", bytes, copy);
         let frustum = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("object frustum"),
             size: size_of::<ShaderFrustum>() as u64,
@@ -146,21 +167,21 @@ impl ObjectFrustum {
                 (wgpu::ShaderStages::COMPUTE, wgpu::BufferBindingType::Uniform),
             ],
         );
-        Ok(ObjectFrustum {
-            group: bind_buffers(gpu, &layout, &[&boxes, &frustum]),
+        ObjectFrustum {
+            group: bind_buffers(gpu, &layout, &[&boxes.buffer, &frustum]),
             layout,
             boxes,
             frustum,
-            frame: LastFrame::default(),
             staged_frustum: ShaderFrustum::default(),
             staged_objects: Vec::new(),
             staged_boxes: Vec::new(),
-        })
+        }
     }
 
     /// On the CPU, before frame `frame`: stages `camera`'s frustum and the
     /// frame's box `margins`, and the boxes of the objects `moved` since the
-    /// previous frame (of every mover where this walk did not run in it).
+    /// previous frame (of every mover where no walk sharing the boxes ran in
+    /// it; none where one ran in this frame already).
     pub(super) fn prepare(&mut self, camera: &Camera, margins: BoxMargins, scene: &Scene, moved: &[u32], frame: u32) {
         let (eye, planes) = camera.frustum().planes();
         let (eye_high, eye_low) = split(eye);
@@ -172,15 +193,18 @@ impl ObjectFrustum {
             forward: [forward.x, forward.y, forward.z, camera.near as f32],
             margins: margins.for_shader(camera),
         };
-        // Every box in the first frame; after a gap in the frames this walk
-        // ran, every mover's (the only objects that ever change); else those
-        // that moved since the frame before.
+        // Every box in the first frame; after a gap in the frames the boxes
+        // were made for, every mover's (the only objects that ever change);
+        // else those that moved since the frame before.
         self.staged_objects.clear();
-        match self.frame.advance(frame) {
+        let mut made_for = self.boxes.made_for.get();
+        match made_for.advance(frame) {
             Since::First => self.staged_objects.extend(0..scene.objects.len() as u32),
             Since::Gap => self.staged_objects.extend(scene.movers.iter().map(|m| m.object)),
             Since::Next => self.staged_objects.extend_from_slice(moved),
+            Since::Same => {}
         }
+        self.boxes.made_for.set(made_for);
         self.staged_objects.sort_unstable();
         self.staged_boxes.clear();
         let boxes = self
@@ -192,7 +216,7 @@ impl ObjectFrustum {
 
     /// Every object's box, as object_frustum.wgsl's `object_boxes`.
     pub(super) fn boxes(&self) -> &wgpu::Buffer {
-        &self.boxes
+        &self.boxes.buffer
     }
 
     /// Writes what [`ObjectFrustum::prepare`] staged.
@@ -209,7 +233,8 @@ impl ObjectFrustum {
                 .find(|&k| ids[k] != ids[k - 1] + 1)
                 .unwrap_or(ids.len());
             let boxes = bytemuck::cast_slice(&self.staged_boxes[start..end]);
-            gpu.queue.write_buffer(&self.boxes, u64::from(ids[start]) * size, boxes);
+            gpu.queue
+                .write_buffer(&self.boxes.buffer, u64::from(ids[start]) * size, boxes);
             start = end;
         }
     }
@@ -259,6 +284,49 @@ pub(super) fn gpu_verdict(camera: &Camera, b: &Aabb) -> Option<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cull::gpu_walk::VisibleLists;
+    use crate::gpu::{BackendChoice, DrawRange};
+    use crate::scene::{LoadOptions, SceneSpec, load};
+
+    #[test]
+    fn walks_that_share_lists_stage_each_frames_boxes_once() {
+        let scene = load(
+            &SceneSpec::Builtin("city:blocks=1,movers=4".into()),
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        let gpu = GpuContext::new(BackendChoice::Auto).unwrap();
+        let draw = DrawRange {
+            first_index: 0,
+            index_count: 3,
+        };
+        let lists = VisibleLists::new(&gpu, &vec![draw; scene.objects.len()]).unwrap();
+        let [mut a, mut b] = [0, 1].map(|_| ObjectFrustum::new(&gpu, lists.boxes.clone()));
+        let camera = Camera {
+            eye: DVec3::new(0.0, 50.0, 0.0),
+            rotation: crate::camera::look_rotation(DVec3::NEG_Y, DVec3::Z),
+            fov_y: 1.0,
+            near: 0.1,
+            aspect: 1.0,
+        };
+        let margins = BoxMargins::new(gpu.depth_margins, &camera, crate::gpu::Resolution::DEFAULT);
+        let movers: Vec<u32> = scene.movers.iter().map(|m| m.object).collect();
+        let staged = |walk: &mut ObjectFrustum, frame: u32, moved: &[u32]| {
+            walk.prepare(&camera, margins, &scene, moved, frame);
+            walk.staged_objects.clone()
+        };
+        let every: Vec<u32> = (0..scene.objects.len() as u32).collect();
+        // The first frame's boxes go once, whichever walk makes them; a
+        // walk after another in its frame stages nothing.
+        assert_eq!(staged(&mut a, 0, &[]), every);
+        assert_eq!(staged(&mut b, 0, &[]), Vec::<u32>::new());
+        assert_eq!(staged(&mut a, 1, &movers[..1]), &movers[..1]);
+        // b follows a's frame: only what moved since.
+        assert_eq!(staged(&mut b, 2, &movers[1..2]), &movers[1..2]);
+        // After frames no walk made boxes for, every mover's.
+        assert_eq!(staged(&mut a, 5, &movers[2..3]), movers);
+        assert_eq!(staged(&mut a, 6, &[]), Vec::<u32>::new());
+    }
 
     #[test]
     fn boxes_split_into_parts_that_sum_to_their_centre_and_cover_their_extent() {

@@ -10,21 +10,22 @@
 //! pixel's ray enters it (pyramid_test.wgsl, gpu/conservative.rs's
 //! `BoxPlanes`, made there from the box); (4) **late**: the newly visible
 //! objects are drawn. Every object found visible is next frame's list;
-//! nothing per object reaches or leaves the CPU (on GL, without an indirect
-//! count, two lengths do).
+//! nothing per object passes between the CPU and the GPU in a frame but
+//! the boxes of objects that moved (on GL, without an indirect count, two
+//! lengths are read back too).
 //!
 //! Departures: no early cull against last frame's pyramid (step 1 draws
 //! last frame's list untested, as roc and ioc do, so one pyramid a frame
 //! suffices and nothing visible last frame is hidden by stale depth); boxes
 //! grown eye-relative on the GPU from each centre in two f32 parts (the
 //! engines keep one), so a box far from the origin keeps its place; 4×4
-//! texels read by default, not
-//! 2×2 (`texels=2` is the engines'); the pyramid's base a power of two at
-//! most the target over `base`, each target texel read by the base texel
-//! its test maps it to (bevy#14062); and the per-pixel test after the
-//! pyramid, which engines lack: a box just behind a wall seen at a slant is
-//! not hidden by a farthest depth over texels of several pixels, and this
-//! test hides what roc's fragments hide.
+//! texels read by default, not 2×2 (`texels=2` is the engines'); the
+//! pyramid's base a power of two at most the target over `base`, each
+//! target texel read by the base texel its test maps it to (bevy#14062);
+//! and the per-pixel test after the pyramid, which engines lack: a box just
+//! behind a wall seen at a slant is not hidden by a farthest depth over
+//! texels of several pixels, and this test hides what roc's fragments
+//! hide.
 
 use std::fmt;
 use std::str::FromStr;

@@ -24,8 +24,8 @@ pub(super) const LEVEL_OUTSIDE: usize = HIDDEN + 1;
 /// Where the dispatch arguments start in a level.
 pub(super) const DISPATCH_OFFSET: u64 = LEVEL_GROUPS_X as u64 * 4;
 
-/// What a node's word of the visibility buffer says: set by the CPU before
-/// a walk, and to [`VISIBLE`] by the level's test (raster_mark.wgsl's
+/// What a node's word of the visibility buffer says: set by `cs_prepare`
+/// before a walk, and to [`VISIBLE`] by the level's test (raster_mark.wgsl's
 /// `fs_mark` for a box a fragment of which passed, pyramid_test.wgsl's
 /// `cs_test` for a box not behind the pyramid).
 pub(super) const TO_TEST: u32 = 0;

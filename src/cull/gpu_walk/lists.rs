@@ -1,17 +1,22 @@
-//! The visible set a GPU walk carries from one frame to the next, on the
-//! GPU: a word per object (visible in the last walk), the visible and newly
-//! visible draw lists `cs_compact` builds, and their lengths.
+//! What a GPU walk carries from one frame to the next, on the GPU: the
+//! visible set (a word per object, visible in the last walk; the visible
+//! and newly visible draw lists `cs_compact` builds, and their lengths),
+//! and every object's box as of the last frame (frustum.rs).
 //!
 //! Each mode owns one. `auto` gives one to all the walks it runs
 //! ([`crate::cull::Culler::share_visible_lists`]), so a walk it switches to
-//! starts from the set the last walk found, as if it had run all along;
-//! and it fills them from the CPU ([`VisibleLists::upload`]) after frames
-//! the CPU decided.
+//! starts from the set the last walk found, as if it had run all along,
+//! and the boxes are uploaded once, not once a walk; and it fills the
+//! lists from the CPU ([`VisibleLists::upload`]) after frames the CPU
+//! decided.
 
 use std::cell::Cell;
 
+use std::rc::Rc;
+
+use super::frustum::ObjectBoxes;
 use super::layout::{DRAW_COMMAND_BYTES, VISIBLE_LAST_FRAME};
-use crate::gpu::{DrawRange, GpuContext, storage_buffer};
+use crate::gpu::{DrawRange, GpuContext, GpuError, storage_buffer};
 
 pub struct VisibleLists {
     objects: u32,
@@ -30,11 +35,14 @@ pub struct VisibleLists {
     /// The lengths as last read back or uploaded, where draws cannot take
     /// them from `counts`.
     known_counts: Cell<[u32; 2]>,
+    /// Every object's box as of the last frame.
+    pub(super) boxes: Rc<ObjectBoxes>,
 }
 
 impl VisibleLists {
-    /// Empty lists (nothing visible yet) for objects drawn by `draws`.
-    pub fn new(gpu: &GpuContext, draws: &[DrawRange]) -> VisibleLists {
+    /// Empty lists (nothing visible yet) and no boxes yet for objects drawn
+    /// by `draws`; fails where the adapter cannot bind a box for each.
+    pub fn new(gpu: &GpuContext, draws: &[DrawRange]) -> Result<VisibleLists, GpuError> {
         let draw_commands: Vec<u8> = draws
             .iter()
             .enumerate()
@@ -53,7 +61,7 @@ impl VisibleLists {
         let objects = draws.len() as u32;
         let words = u64::from(objects.max(1)) * 4;
         let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        VisibleLists {
+        Ok(VisibleLists {
             objects,
             all_commands: gpu.buffer_with("all draw commands", &draw_commands, wgpu::BufferUsages::STORAGE),
             draw_commands,
@@ -66,7 +74,8 @@ impl VisibleLists {
             ),
             counts: storage_buffer(gpu, "draw list lengths", 8, wgpu::BufferUsages::INDIRECT | copy),
             known_counts: Cell::new([0; 2]),
-        }
+            boxes: Rc::new(ObjectBoxes::new(gpu, objects)?),
+        })
     }
 
     pub fn objects(&self) -> u32 {

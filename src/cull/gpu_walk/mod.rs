@@ -15,11 +15,10 @@
 //! really drawn. Round trips: none where indirect draws take their count
 //! from a buffer (Vulkan); on GL the list lengths are read back once.
 //!
-//! Departure: the boxes are made on the GPU as engines make them, but from
+//! Departure: the boxes (and hiz's pixel planes, pyramid_test.wgsl's
+//! `box_planes`) are made on the GPU as engines make them, but from
 //! positions in two f32 parts and with margins that hold the box the CPU
-//! makes in f64 (prepare_nodes.wgsl), not from world coordinates in f32;
-//! hiz's with its pixel test, and the planes that test reads, are still
-//! made on the CPU in f64 and uploaded each frame.
+//! makes in f64 (prepare_nodes.wgsl), not from world coordinates in f32.
 
 mod culling;
 pub mod depths;

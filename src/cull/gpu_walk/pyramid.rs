@@ -328,8 +328,19 @@ mod tests {
         assert_eq!(std::mem::size_of::<ShapeUniform>(), size as usize);
         assert_eq!(std::mem::offset_of!(ShapeUniform, levels), 32);
         assert_eq!(std::mem::offset_of!(ShapeUniform, level_count), 16);
-        // The queue's header (level_test.rs's PIXEL_WORK_HEADER).
+        // The queue's header (level_test.rs's PIXEL_WORK_HEADER), and the
+        // planes the probe test in twin.rs reads back, 24 floats a box.
         let module = parse(&test);
+        let (members, size) = struct_layout(&module, "BoxPlanes");
+        assert_eq!(
+            (members, size),
+            (
+                [("entries", 0), ("exits", 48)]
+                    .map(|(n, o)| (n.to_string(), o))
+                    .to_vec(),
+                96
+            )
+        );
         for queue in ["PixelWork", "PixelQueue"] {
             let (members, _) = struct_layout(&module, queue);
             let offsets: Vec<u32> = members.iter().map(|(_, o)| *o).collect();

@@ -81,8 +81,8 @@ fn cs_test(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
     let entries = level_in[1];
     for (var i = id.x; i < entries; i += grid.x * GROUP_SIZE) {
         let node = queue[i];
-        // Nodes reaching the near plane are visible already (the CPU marked
-        // them); every other queued node is TO_TEST.
+        // Nodes reaching the near plane are visible already (cs_prepare
+        // marked them); every other queued node is TO_TEST.
         if node_visible[node] != TO_TEST {
             continue;
         }
@@ -262,9 +262,14 @@ fn box_planes(b: QueryBox) -> BoxPlanes {
             // The eye lies within the box's extent along this axis.
             continue;
         }
+        // A quotient by a subnormal face has no error bound (the division's
+        // holds from f32's least normal number on): no bound from it.
+        if abs(facing) < SMALLEST_NORMAL {
+            continue;
+        }
         let ray = vec3<f32>(camera.ray_x[a], camera.ray_y[a], camera.ray_c[a]);
-        let entry = moved_plane((near / facing) * ray + vec3<f32>(0.0, 0.0, b.min.w), 1.0);
-        let exit = moved_plane((near / opposite) * ray, -1.0);
+        let entry = moved_plane((near / facing) * ray, b.min.w, 1.0);
+        let exit = moved_plane((near / opposite) * ray, 0.0, -1.0);
         if plane_bounds(entry) && plane_bounds(exit) {
             planes.entries[a] = entry;
             planes.exits[a] = exit;
@@ -273,12 +278,16 @@ fn box_planes(b: QueryBox) -> BoxPlanes {
     return planes;
 }
 
-// `plane` moved by `sign` times PLANE_ROUNDING of its terms' size over the
-// target.
-fn moved_plane(plane: vec3<f32>, sign: f32) -> vec4<f32> {
+// f32's least normal number.
+const SMALLEST_NORMAL: f32 = 1.17549435e-38;
+
+// `plane` raised by `raise` and moved by `sign` times PLANE_ROUNDING of its
+// terms' size over the target (the raise counted apart, since it may
+// cancel part of the constant whose rounding the margin covers).
+fn moved_plane(plane: vec3<f32>, raise: f32, sign: f32) -> vec4<f32> {
     let size = vec2<f32>(shape.target_size);
-    let terms = abs(plane.z) + abs(plane.x) * size.x + abs(plane.y) * size.y;
-    return vec4<f32>(plane.xy, plane.z + sign * PLANE_ROUNDING * terms, 0.0);
+    let terms = abs(plane.z) + raise + abs(plane.x) * size.x + abs(plane.y) * size.y;
+    return vec4<f32>(plane.xy, plane.z + raise + sign * PLANE_ROUNDING * terms, 0.0);
 }
 
 // Whether f32 holds the plane well enough for it to bound anything: not

@@ -409,11 +409,11 @@ mod tests {
                 None => world.scene.objects.iter().map(|o| o.bounds).collect(),
             };
             cpu.prepare(&camera, margins, bounds.into_iter());
-            held += hold_boxes_made_on_the_gpu(&cpu, &states, &on_gpu.tested_boxes(gpu), frame);
+            let gpu_boxes = on_gpu.tested_boxes(gpu);
+            held += hold_boxes_made_on_the_gpu(&cpu, &states, &gpu_boxes, frame);
             let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
             if let Some(params) = hiz {
                 let (levels, texels) = on_gpu.pyramid(gpu).expect("a pyramid test");
-                let tested = on_gpu.tested_boxes(gpu);
                 // The depth as the frame ended: where objects were drawn
                 // after the test (late), nearer than what the test read.
                 let depth = session.mode_depth(0).expect("the session has an error meter");
@@ -433,7 +433,7 @@ mod tests {
                         continue;
                     }
                     let marked = states[node] != TO_TEST;
-                    let query = &tested[node];
+                    let query = &gpu_boxes[node];
                     let on_target = BoxOnTarget::new(query, &camera, RESOLUTION);
                     let verdict = match on_target.pyramid_verdict(RESOLUTION, &levels, &texels, params.texels) {
                         Verdict::Visible if on_target.pixels() <= u64::from(params.pixels) => {
@@ -708,6 +708,7 @@ mod tests {
         gpu.queue.submit([encoder.finish()]);
         let mut words: Vec<f32> = Vec::new();
         readback.read(gpu, bytes, &mut words);
+        gpu.check().expect("the probe ran");
         let plane = |w: &[f32]| [w[0], w[1], w[2], w[3]];
         words
             .chunks_exact(24)
@@ -724,7 +725,18 @@ mod tests {
         let target = Resolution::DEFAULT;
         let rays = PixelRays::new(&camera, target);
         let (size_x, size_y) = (f64::from(target.width), f64::from(target.height));
-        let boxes: Vec<QueryBox> = random_boxes_in_view(53).into_iter().map(|(_, q)| q).collect();
+        let mut boxes: Vec<QueryBox> = random_boxes_in_view(53).into_iter().map(|(_, q)| q).collect();
+        // And the edges: a face a hair from the eye's plane (huge
+        // coefficients), a box far off, one beside the eye along an axis.
+        let edges = [
+            ([1e-6, -1.0, -30.0], [2.0, 1.0, -20.0]),
+            ([-500.0, -400.0, -9000.0], [600.0, 300.0, -8000.0]),
+            ([-1.0, -0.5, -12.0], [1.0, 0.5, -11.0]),
+        ];
+        boxes.extend(edges.map(|(min, max)| QueryBox {
+            min: glam::Vec3::from(min).extend(1e-7),
+            max: glam::Vec3::from(max).extend(0.0),
+        }));
         for gpu in &gpu_driven_adapters() {
             let made = box_planes_on_the_gpu(gpu, &camera, target, &boxes);
             let mut compared = 0;
@@ -769,8 +781,17 @@ mod tests {
                         for x in (0..target.width).step_by(5) {
                             let (x, y) = (x as f32 + 0.5, y as f32 + 0.5);
                             let (cx, cy) = (f64::from(x), f64::from(y));
-                            let entry = a.mul_add(x, b.mul_add(y, c)).min(a * x + b * y + c);
-                            let exit = d.mul_add(x, e.mul_add(y, f)).max(d * x + e * y + f);
+                            // The orders a GPU may sum in, fused or not.
+                            let sums = |a: f32, b: f32, c: f32| {
+                                [
+                                    a * x + b * y + c,
+                                    a * x + (b * y + c),
+                                    a.mul_add(x, b.mul_add(y, c)),
+                                    b.mul_add(y, a * x) + c,
+                                ]
+                            };
+                            let entry = sums(a, b, c).into_iter().fold(f32::INFINITY, f32::min);
+                            let exit = sums(d, e, f).into_iter().fold(f32::NEG_INFINITY, f32::max);
                             assert!(
                                 f64::from(entry) >= exact.entries()[k].at(cx, cy),
                                 "{at}: entry {axis} at ({x}, {y})"

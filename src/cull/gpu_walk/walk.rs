@@ -84,7 +84,7 @@ struct NodeScratch {
     boxes: wgpu::Buffer,
     box_group: wgpu::BindGroup,
     /// The visibility buffer: one word per node, set by the level's test
-    /// (and by the CPU for boxes that reach the near plane).
+    /// (and by `cs_prepare` for boxes that reach the near plane).
     node_visible: wgpu::Buffer,
     /// Two queues with their levels' arguments, used in turn: a level reads
     /// one and fills the other.
@@ -178,7 +178,7 @@ impl GpuWalk {
         // and bind nothing at 0: an empty group there keeps them within 8
         // storage buffers, the minimum an adapter guarantees.
         let no_bindings = bind_group_layout(gpu, "no bindings", &[]);
-        let object_frustum = ObjectFrustum::new(gpu, draws.len() as u32)?;
+        let object_frustum = ObjectFrustum::new(gpu, lists.boxes.clone());
         let lists_pipeline = |entry: &str| {
             let layouts = [
                 Some(&no_bindings),
@@ -274,6 +274,7 @@ impl GpuWalk {
                 Since::First => true,
                 Since::Gap => !input.scene.movers.is_empty(),
                 Since::Next => !input.moved.is_empty(),
+                Since::Same => false,
             };
             sources.staged.clear();
             if changed {
@@ -725,7 +726,11 @@ mod tests {
     fn the_shaders_lay_out_what_this_file_writes_and_reads() {
         let module = parse(&[&shader_constants(), OBJECT_FRUSTUM_WGSL, include_str!("walk.wgsl")].concat());
         let (members, size) = layout(&module, "Level");
-        assert_eq!(u64::from(size), LEVEL_BYTES, "level_args writes LEVEL_WORDS words");
+        assert_eq!(
+            u64::from(size),
+            LEVEL_BYTES,
+            "EMPTY_LEVEL and Level are LEVEL_WORDS words"
+        );
         let offset = |name: &str| members.iter().find(|(n, _)| n == name).map(|&(_, o)| u64::from(o));
         assert_eq!(offset("groups_x"), Some(DISPATCH_OFFSET));
         assert_eq!(
