@@ -22,7 +22,7 @@ use glam::DVec3;
 use crate::bounds::Aabb;
 use crate::camera::path::CameraPath;
 use crate::camera::{Camera, Containment, Frustum, look_rotation};
-use crate::cull::{CellDepths, Culler};
+use crate::cull::{Culler, OccluderDepths};
 use crate::gpu::{
     Draws, GpuContext, GpuError, LinePainter, LineVertex, RenderTargets, Resolution, picture_target, read_rgb,
 };
@@ -61,9 +61,10 @@ pub struct Picture {
     pub culled_in_frustum: usize,
     /// With `show_missed`: what it got wrong.
     pub wrong: Option<WrongInFrame>,
-    /// With `occluders`: the cells of the mode's buffer that hold an
-    /// occluder's depth, and all its cells.
-    pub occluder_cells: Option<[usize; 2]>,
+    /// With `occluders`: the pixels the mode's buffer holds an occluder's
+    /// depth for, those occluders cover in part of their cell (its working
+    /// layer), and all of them.
+    pub occluder_pixels: Option<[usize; 3]>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -233,7 +234,7 @@ impl<'g> Painter<'g> {
         };
         let occluders = look.occluders.then(|| culler.occluder_depths()).flatten();
         if let Some(depths) = &occluders {
-            paint_occluder_depths(depths, resolution, &mut rgb);
+            paint_occluder_depths(depths, &mut rgb);
         }
         let wrong = look.show_missed.then(|| {
             let objects: Vec<MissedObject> = session
@@ -251,7 +252,11 @@ impl<'g> Painter<'g> {
             drawn: drawn.len(),
             culled_in_frustum: culled,
             wrong,
-            occluder_cells: occluders.map(|d| [d.depths.iter().filter(|&&c| c > 0.0).count(), d.depths.len()]),
+            occluder_pixels: occluders.map(|d| {
+                let count = |v: &[bool]| v.iter().filter(|&&b| b).count();
+                let written: Vec<bool> = d.depths.iter().map(|&c| c > 0.0).collect();
+                [count(&written), count(&d.partial), d.depths.len()]
+            }),
         }
     }
 
@@ -353,29 +358,36 @@ fn culled_in_frustum<'s>(scene: &'s Scene, drawn: &ObjectSet, frustum: &Frustum)
         .map(|(_, o)| o)
 }
 
-/// Lays `depths` over `rgb` (the pictured frame, `resolution` pixels): a
-/// pixel whose cell holds a depth takes that depth's colour, on a ramp
+/// Lays `depths` over `rgb` (the pictured frame, of the same size): a
+/// pixel the buffer holds a depth for takes that depth's colour, on a ramp
 /// over the logarithm of the depths the buffer holds (reverse-Z depth is
-/// near / distance, so equal steps are equal ratios of distance); the
-/// others are dimmed to a third.
-fn paint_occluder_depths(depths: &CellDepths, resolution: Resolution, rgb: &mut [u8]) {
+/// near / distance, so equal steps are equal ratios of distance); a pixel
+/// occluders cover only in part of its cell (the working layer) is tinted
+/// orange over the frame dimmed to a third; the others are dimmed to a
+/// third.
+fn paint_occluder_depths(depths: &OccluderDepths, rgb: &mut [u8]) {
     let written = || depths.depths.iter().filter(|&&d| d > 0.0).map(|&d| f64::from(d).log2());
     let (farthest, nearest) = written().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
     let span = (nearest - farthest).max(1e-9);
-    let (w, h) = (u64::from(resolution.width), u64::from(resolution.height));
-    for (i, pixel) in rgb.chunks_mut(3).enumerate() {
-        let (x, y) = (i as u64 % w, i as u64 / w);
-        let cell = (y * u64::from(depths.height) / h) * u64::from(depths.width) + x * u64::from(depths.width) / w;
-        let depth = depths.depths[cell as usize];
+    for ((pixel, &depth), &partial) in rgb.chunks_mut(3).zip(&depths.depths).zip(&depths.partial) {
         if depth > 0.0 {
             let t = (f64::from(depth).log2() - farthest) / span;
             let ramp = [0.1 + 0.9 * t, 0.25 + 0.75 * t, 0.6 + 0.4 * t];
             pixel.copy_from_slice(&ramp.map(|c| (c * 255.0).round() as u8));
         } else {
             pixel.iter_mut().for_each(|c| *c /= 3);
+            if partial {
+                let [r, g, _] = PARTIAL_TINT;
+                pixel[0] = pixel[0] / 2 + r;
+                pixel[1] = pixel[1] / 2 + g;
+            }
         }
     }
 }
+
+/// Added to half a dimmed pixel where occluders cover part of its cell: an
+/// orange no dimmed pixel (at most 85 a channel) reaches.
+const PARTIAL_TINT: [u8; 3] = [160, 80, 0];
 
 /// Paints magenta the pixels of `rgb` (the pictured frame) whose depth in
 /// the session's mode `k` differs from the reference's in any bit; returns

@@ -43,8 +43,10 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         args.frame,
         picture.culled_in_frustum
     );
-    if let Some([written, cells]) = picture.occluder_cells {
-        say!("{written} of its {cells} buffer cells hold an occluder's depth (coloured; the rest dimmed)");
+    if let Some([written, partial, pixels]) = picture.occluder_pixels {
+        say!(
+            "its buffer holds an occluder's depth at {written} of the {pixels} pixels (coloured), and {partial} more are covered in only part of their cell, which hides nothing yet (orange); the rest dimmed"
+        );
     }
     if let Some(wrong) = &picture.wrong {
         say!(

@@ -129,14 +129,19 @@ impl TraversalStats {
 }
 
 /// A depth buffer a mode keeps on the CPU (a CPU occlusion buffer), as it
-/// stood when the mode last culled: cells row by row, each a reverse-Z
-/// depth, 0 where no occluder wrote one. Cell (x, y) holds the render
-/// target's pixels p whose `⌊p · cells / pixels⌋` is (x, y) on each side.
+/// stood when the mode last culled, pixel by pixel of the render target,
+/// row by row.
 #[derive(Clone, Debug, PartialEq)]
-pub struct CellDepths {
+pub struct OccluderDepths {
     pub width: u32,
     pub height: u32,
+    /// The reverse-Z depth the buffer vouches for at each pixel (its cell's
+    /// reference depth), 0 where no occluder wrote one.
     pub depths: Vec<f32>,
+    /// Pixels that occluders cover in part of a cell whose reference holds
+    /// no depth yet (MOC's working layer): they hide nothing until the
+    /// cell's mask is full.
+    pub partial: Vec<bool>,
 }
 
 pub trait Culler {
@@ -179,7 +184,7 @@ pub trait Culler {
 
     /// The depth buffer the mode culled its last frame with, for modes that
     /// keep one on the CPU (`occlu render --occluders`).
-    fn occluder_depths(&self) -> Option<CellDepths> {
+    fn occluder_depths(&self) -> Option<OccluderDepths> {
         None
     }
 
@@ -225,7 +230,7 @@ impl<C: Culler + ?Sized> Culler for &mut C {
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         (**self).frame(ctx, input)
     }
-    fn occluder_depths(&self) -> Option<CellDepths> {
+    fn occluder_depths(&self) -> Option<OccluderDepths> {
         (**self).occluder_depths()
     }
     fn seed_visible(&mut self, visible: &[u32]) {
@@ -268,7 +273,7 @@ impl Culler for Labeled {
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         self.inner.frame(ctx, input)
     }
-    fn occluder_depths(&self) -> Option<CellDepths> {
+    fn occluder_depths(&self) -> Option<OccluderDepths> {
         self.inner.occluder_depths()
     }
     fn seed_visible(&mut self, visible: &[u32]) {

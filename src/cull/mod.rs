@@ -68,7 +68,7 @@ pub mod traversal;
 pub use ac::{AcParams, AdaptiveCulling, EyeDistance, Threshold};
 pub use auto::{AutoCulling, AutoParams};
 pub use chc::{ChcParams, CoherentCulling};
-pub use culler::{CellDepths, Culler, FrameInput, Labeled, Pick, PreviousFrame, TraversalStats};
+pub use culler::{Culler, FrameInput, Labeled, OccluderDepths, Pick, PreviousFrame, TraversalStats};
 pub use dr::DirectRendering;
 pub use gpu_walk::depths::{Depth, DepthRange};
 pub use gpu_walk::hiz::{BoxesTested, HizParams, hierarchical_depth_culling};

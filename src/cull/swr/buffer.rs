@@ -28,6 +28,7 @@
 
 use std::ops::Range;
 
+use crate::cull::culler::OccluderDepths;
 use crate::gpu::{BoxPlanes, Resolution, ScreenPlane};
 
 /// Pixel groups of a cell's mask along each side, at most: 8 × 8 bits of a
@@ -448,8 +449,37 @@ impl OcclusionBuffer {
     }
 
     /// Every cell's reference depth, row by row.
+    #[cfg(test)]
     pub fn depths(&self) -> &[f32] {
         &self.levels[0].depth
+    }
+
+    /// Both layers pixel by pixel of the target: the reference depth of
+    /// each pixel's cell, and whether the pixel's group is in its cell's
+    /// working mask where the reference holds no depth.
+    pub fn per_pixel(&self) -> OccluderDepths {
+        let Grid {
+            target, across, down, ..
+        } = &self.grid;
+        let mut picture = OccluderDepths {
+            width: target.width,
+            height: target.height,
+            depths: Vec::with_capacity((target.width * target.height) as usize),
+            partial: Vec::with_capacity((target.width * target.height) as usize),
+        };
+        for &gy in &down.group_of {
+            let (row, k, _) = down.group(gy);
+            for &gx in &across.group_of {
+                let (column, j, _) = across.group(gx);
+                let cell = (row * self.grid.cells.width + column) as usize;
+                let depth = self.levels[0].depth[cell];
+                picture.depths.push(depth);
+                picture
+                    .partial
+                    .push(depth == 0.0 && self.masks[cell] & 1 << (k * MASK_SIDE + j) != 0);
+            }
+        }
+        picture
     }
 
     /// The depth the buffer vouches for at the pixel centre `(x, y)` of

@@ -934,6 +934,29 @@ mod tests {
     }
 
     #[test]
+    fn the_picture_shows_the_pixels_an_occluder_covers_in_part_of_a_cell_as_the_working_layer() {
+        // A wall ending at x = 30.2, inside the cells of pixels 28 to 31:
+        // it covers their first two pixels, which the working layer holds.
+        let size = Resolution { width: 64, height: 48 };
+        let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
+        let wall = grid(DVec2::new(-5.0, -5.0), DVec2::new(35.2, 60.0), [2, 2], false, |_, _| 0.5);
+        rasterise_meshes(&mut buffer, &[wall]);
+        let picture = buffer.per_pixel();
+        assert_eq!((picture.width, picture.height), (64, 48));
+        for y in 0..48 {
+            let at = |x: usize| (picture.depths[y * 64 + x] > 0.0, picture.partial[y * 64 + x]);
+            for x in 0..64 {
+                let expected = match x {
+                    0..28 => (true, false),
+                    28 | 29 => (false, true),
+                    _ => (false, false),
+                };
+                assert_eq!(at(x), expected, "pixel ({x}, {y})");
+            }
+        }
+    }
+
+    #[test]
     fn a_triangle_over_the_whole_screen_fills_every_cell_with_its_farthest_depth() {
         let size = Resolution { width: 64, height: 48 };
         let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });

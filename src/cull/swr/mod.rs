@@ -36,7 +36,7 @@ use serde::Serialize;
 
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
-use crate::cull::culler::{CellDepths, Culler, FrameInput, TraversalStats};
+use crate::cull::culler::{Culler, FrameInput, OccluderDepths, TraversalStats};
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{
     BoxMargins, BoxPlanes, DepthMargins, EyeBox, Frame, GpuError, GpuSetup, PixelRays, QueryBox, Resolution,
@@ -573,12 +573,8 @@ impl Culler for SoftwareOcclusionCulling {
         self.visible.extend_from_slice(visible);
     }
 
-    fn occluder_depths(&self) -> Option<CellDepths> {
-        self.buffer.as_ref().map(|b| CellDepths {
-            width: b.cells().width,
-            height: b.cells().height,
-            depths: b.depths().to_vec(),
-        })
+    fn occluder_depths(&self) -> Option<OccluderDepths> {
+        self.buffer.as_ref().map(OcclusionBuffer::per_pixel)
     }
 }
 
