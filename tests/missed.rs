@@ -249,6 +249,42 @@ fn occluders_lays_swrs_buffer_over_the_quads_it_culled_with_and_dims_the_rest() 
             .count();
         assert_eq!(dimmed, (SIZE.width * SIZE.height) as usize - covered, "{}", gpu.adapter);
 
+        // Cells of 2 × 2 pixels: some of the quads' edges cut through
+        // cells, whose covered pixels the working layer holds. Those are
+        // orange, and only those: every pixel of the quads is coloured or
+        // orange, and no pixel outside them is either. (The box behind the
+        // first quad lies behind whole cells, so the buffer hides it and
+        // does not rest.)
+        let mut world = World::new(scene.clone(), hierarchy.clone());
+        let coarse = ModeParams::parse(&["swr.resolution=50x50".to_string()], &["swr".parse().unwrap()]).unwrap();
+        let swr = create("swr", &scene, &coarse).unwrap();
+        let picture = render(&gpu, &mut world, &path, swr, 2, &look).unwrap();
+        // The depth ramp's blue is at least 0.6 of full, a dimmed pixel's
+        // every channel at most a third, orange's red above that.
+        let kind = |i: usize| match &picture.rgb[3 * i..3 * i + 3] {
+            &[_, _, b] if b >= 153 => "depth",
+            &[r, _, b] if r >= 160 && b <= 85 => "orange",
+            p if p.iter().all(|&c| c <= 85) => "dimmed",
+            _ => "neither",
+        };
+        let (mut orange, mut depth) = (0, 0);
+        for i in 0..(SIZE.width * SIZE.height) as usize {
+            let pixel = ((i as u32) % SIZE.width, (i as u32) / SIZE.width);
+            let on_a_quad = inside.iter().flatten().any(|&p| p == pixel);
+            match (kind(i), on_a_quad) {
+                ("orange", true) => orange += 1,
+                ("depth", true) => depth += 1,
+                ("dimmed", false) => {}
+                (k, _) => panic!("{pixel:?} is {k} on {}", gpu.adapter),
+            }
+        }
+        assert_eq!(orange + depth, covered, "{}", gpu.adapter);
+        assert!(
+            orange > 0 && depth > 0,
+            "{orange} orange, {depth} coloured on {}",
+            gpu.adapter
+        );
+
         let mut world = World::new(scene.clone(), hierarchy.clone());
         let roc = create("roc", &scene, &ModeParams::default()).unwrap();
         match render(&gpu, &mut world, &path, roc, 2, &look) {
