@@ -375,7 +375,8 @@ pub(crate) const UNBOUNDED: f32 = 1e30;
 /// (w pads) in f32; an axis with no face across it holds [`UNBOUNDED`]
 /// (`-UNBOUNDED` for the exit).
 #[cfg(test)]
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct ShaderBoxPlanes {
     pub(crate) entries: [[f32; 4]; 3],
     pub(crate) exits: [[f32; 4]; 3],
@@ -622,60 +623,80 @@ pub(crate) mod tests {
         );
     }
 
+    /// Holds `shader`, the planes a GPU made (or would make) for the
+    /// tested box `q`, to the box's exact planes at every `step`-th pixel
+    /// centre of `target`, summed in every order a GPU may sum
+    /// `dot(plane, (x, y, 1))` in, fused or not: each axis with a face
+    /// across it bounds, its entry at or above the exact entry plane and its
+    /// exit at or below the exact exit plane; any other axis bounds nothing
+    /// and meets every exit. `at` names the box in a failure. Returns the
+    /// comparisons made.
+    pub(crate) fn assert_planes_bound(
+        camera: &Camera,
+        q: &QueryBox,
+        shader: &ShaderBoxPlanes,
+        target: Resolution,
+        step: usize,
+        at: &str,
+    ) -> u64 {
+        let exact = BoxPlanes::new(camera, q, &PixelRays::new(camera, target), target);
+        let axes: Vec<usize> = faces_across(q.min.truncate().as_dvec3(), q.max.truncate().as_dvec3())
+            .iter()
+            .enumerate()
+            .filter_map(|(axis, faces)| faces.map(|_| axis))
+            .collect();
+        for &axis in &axes {
+            assert!(shader.entries[axis][2].abs() < 1e29, "{at}: axis {axis} bounds");
+        }
+        let sums = |[a, b, c, _]: [f32; 4], x: f32, y: f32| {
+            [
+                a * x + b * y + c,
+                a * x + (b * y + c),
+                a.mul_add(x, b.mul_add(y, c)),
+                b.mul_add(y, a * x) + c,
+            ]
+        };
+        let mut compared = 0;
+        for y in (0..target.height).step_by(step) {
+            for x in (0..target.width).step_by(step) {
+                let (x, y) = (x as f32 + 0.5, y as f32 + 0.5);
+                let (cx, cy) = (f64::from(x), f64::from(y));
+                for (k, (entry, exit)) in exact.entries().iter().zip(exact.exits()).enumerate() {
+                    let (above, below) = (entry.at(cx, cy), exit.at(cx, cy));
+                    let axis = axes[k];
+                    for value in sums(shader.entries[axis], x, y) {
+                        assert!(
+                            f64::from(value) >= above,
+                            "{at}: entry {axis} at ({x}, {y}): {value} < {above}"
+                        );
+                    }
+                    for value in sums(shader.exits[axis], x, y) {
+                        assert!(
+                            f64::from(value) <= below,
+                            "{at}: exit {axis} at ({x}, {y}): {value} > {below}"
+                        );
+                    }
+                    compared += 1;
+                }
+                for axis in (0..3).filter(|a| !axes.contains(a)) {
+                    assert!(sums(shader.entries[axis], x, y).iter().all(|&v| v >= 1e29), "{at}");
+                    assert!(sums(shader.exits[axis], x, y).iter().all(|&v| v <= -1e29), "{at}");
+                }
+            }
+        }
+        compared
+    }
+
     #[test]
     fn box_planes_as_the_shader_makes_them_in_f32_lie_above_their_entries_and_below_their_exits() {
         let cam = camera();
         let r = Resolution::DEFAULT;
-        let rays = PixelRays::new(&cam, r);
         let mut compared = 0;
         for (_, q) in random_boxes_in_view(47) {
-            let planes = BoxPlanes::new(&cam, &q, &rays, r);
-            let axes: Vec<usize> = faces_across(q.min.truncate().as_dvec3(), q.max.truncate().as_dvec3())
-                .iter()
-                .enumerate()
-                .filter_map(|(axis, faces)| faces.map(|_| axis))
-                .collect();
             // A division a GPU may round 2.5 steps either way.
             for steps in [-3, 0, 3] {
                 let shader = ShaderBoxPlanes::as_the_shader_makes(&cam, &q, r, steps);
-                // The orders a GPU may sum `dot(plane, (x, y, 1))` in, fused or not.
-                let sums = |[a, b, c, _]: [f32; 4], x: f32, y: f32| {
-                    [
-                        a * x + b * y + c,
-                        a * x + (b * y + c),
-                        a.mul_add(x, b.mul_add(y, c)),
-                        b.mul_add(y, a * x) + c,
-                    ]
-                };
-                for y in (0..r.height).step_by(7) {
-                    for x in (0..r.width).step_by(7) {
-                        let (x, y) = (x as f32 + 0.5, y as f32 + 0.5);
-                        let (cx, cy) = (f64::from(x), f64::from(y));
-                        for (k, (entry, exit)) in planes.entries().iter().zip(planes.exits()).enumerate() {
-                            let (above, below) = (entry.at(cx, cy), exit.at(cx, cy));
-                            let axis = axes[k];
-                            for value in sums(shader.entries[axis], x, y) {
-                                assert!(
-                                    f64::from(value) >= above,
-                                    "entry {axis} at ({x}, {y}): {value} < {above}"
-                                );
-                            }
-                            for value in sums(shader.exits[axis], x, y) {
-                                assert!(
-                                    f64::from(value) <= below,
-                                    "exit {axis} at ({x}, {y}): {value} > {below}"
-                                );
-                            }
-                            compared += 1;
-                        }
-                        // An axis with no face across it bounds nothing and
-                        // meets every exit.
-                        for axis in (0..3).filter(|a| !axes.contains(a)) {
-                            assert!(sums(shader.entries[axis], x, y).iter().all(|&v| v >= 1e29));
-                            assert!(sums(shader.exits[axis], x, y).iter().all(|&v| v <= -1e29));
-                        }
-                    }
-                }
+                compared += assert_planes_bound(&cam, &q, &shader, r, 7, &format!("{q:?}, {steps} steps"));
             }
         }
         assert!(compared > 300_000, "{compared} comparisons");

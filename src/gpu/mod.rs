@@ -19,7 +19,9 @@ pub(crate) mod wgsl;
 pub(crate) use conservative::ShaderBoxPlanes;
 /// A ray caster's view of pixels and boxes, for tests of box tests.
 #[cfg(test)]
-pub(crate) use conservative::tests::{camera as test_camera, entry_depth, pixel_ray, random_boxes_in_view};
+pub(crate) use conservative::tests::{
+    assert_planes_bound, camera as test_camera, entry_depth, pixel_ray, random_boxes_in_view,
+};
 pub use conservative::{BoxMargins, DepthMargins};
 pub(crate) use conservative::{
     BoxPlanes, EyeBox, PLANE_ROUNDING, PixelRays, QueryBox, ScreenPlane, UNBOUNDED, eye_relative_box,

@@ -329,7 +329,7 @@ mod tests {
         assert_eq!(std::mem::offset_of!(ShapeUniform, levels), 32);
         assert_eq!(std::mem::offset_of!(ShapeUniform, level_count), 16);
         // The queue's header (level_test.rs's PIXEL_WORK_HEADER), and the
-        // planes the probe test in twin.rs reads back, 24 floats a box.
+        // planes the probe test in twin.rs reads back as ShaderBoxPlanes.
         let module = parse(&test);
         let (members, size) = struct_layout(&module, "BoxPlanes");
         assert_eq!(
@@ -338,7 +338,7 @@ mod tests {
                 [("entries", 0), ("exits", 48)]
                     .map(|(n, o)| (n.to_string(), o))
                     .to_vec(),
-                96
+                std::mem::size_of::<crate::gpu::ShaderBoxPlanes>() as u32
             )
         );
         for queue in ["PixelWork", "PixelQueue"] {

@@ -30,7 +30,6 @@ use crate::gpu::{BoxMargins, EyeBox, QueryBox, Resolution, ShaderBoxPlanes, eye_
 
 /// A walk's node boxes for one camera as `cs_prepare` should make them,
 /// prepared in f64.
-#[derive(Default)]
 pub(super) struct NodeBoxes {
     /// One per node, eye-relative; empty for a node outside the frustum or
     /// reaching the near plane.
@@ -41,13 +40,12 @@ pub(super) struct NodeBoxes {
 }
 
 impl NodeBoxes {
-    /// Prepares `bounds`, one box per node, for `camera` with the frame's
+    /// `bounds`, one box per node, prepared for `camera` with the frame's
     /// `margins`.
-    pub fn prepare(&mut self, camera: &Camera, margins: BoxMargins, bounds: impl Iterator<Item = Aabb>) {
+    pub fn new(camera: &Camera, margins: BoxMargins, bounds: impl Iterator<Item = Aabb>) -> NodeBoxes {
         let view = camera.view_rotation();
         let frustum = camera.frustum();
-        self.boxes.clear();
-        self.states.clear();
+        let (mut boxes, mut states) = (Vec::new(), Vec::new());
         for b in bounds {
             // The frustum test comes first: the near-plane rule must not
             // take a box beside the camera for one that holds it.
@@ -59,9 +57,10 @@ impl NodeBoxes {
                     EyeBox::ReachesNear => (bytemuck::Zeroable::zeroed(), REACHES_NEAR),
                 }
             };
-            self.boxes.push(q);
-            self.states.push(state);
+            boxes.push(q);
+            states.push(state);
         }
+        NodeBoxes { boxes, states }
     }
 }
 
@@ -343,7 +342,7 @@ mod tests {
     use crate::cull::gpu_walk::pyramid::DepthPyramid;
     use crate::cull::gpu_walk::roc::raster_occlusion_culling;
     use crate::gpu::{
-        BackendChoice, BoxPlanes, GpuContext, PixelRays, Readback, camera_buffer, random_boxes_in_view, storage_buffer,
+        BackendChoice, GpuContext, Readback, assert_planes_bound, camera_buffer, random_boxes_in_view, storage_buffer,
         test_camera, texture_2d,
     };
     use crate::hierarchy::{Hierarchy, HierarchyParams};
@@ -399,7 +398,6 @@ mod tests {
                 .collect();
             let twin = walk(tree, &states, &visible_last, &outside);
             let margins = BoxMargins::new(gpu.depth_margins, &camera, RESOLUTION);
-            let mut cpu = NodeBoxes::default();
             // Each node's box: its object's, or its hierarchy node's.
             let bounds: Vec<Aabb> = match source {
                 Some(source) => source
@@ -408,7 +406,7 @@ mod tests {
                     .collect(),
                 None => world.scene.objects.iter().map(|o| o.bounds).collect(),
             };
-            cpu.prepare(&camera, margins, bounds.into_iter());
+            let cpu = NodeBoxes::new(&camera, margins, bounds.into_iter());
             let gpu_boxes = on_gpu.tested_boxes(gpu);
             held += hold_boxes_made_on_the_gpu(&cpu, &states, &gpu_boxes, frame);
             let at = format!("{} frame {frame} on {}", row.mode, gpu.adapter);
@@ -644,13 +642,13 @@ mod tests {
         }
     }
 
-    /// pyramid_test.wgsl's `box_planes` run on the GPU for each of `boxes`,
+    /// pyramid_test.wgsl's `box_planes` run on the GPU for each of `boxes_in`,
     /// seen by `camera` on a `target`, and its planes read back.
     fn box_planes_on_the_gpu(
         gpu: &GpuContext,
         camera: &Camera,
         target: Resolution,
-        boxes: &[QueryBox],
+        boxes_in: &[QueryBox],
     ) -> Vec<ShaderBoxPlanes> {
         let probe = "@group(2) @binding(3) var<storage, read_write> probed: array<BoxPlanes>;
             @compute @workgroup_size(64)
@@ -671,8 +669,8 @@ mod tests {
         );
         let pyramid = DepthPyramid::new(gpu, target, 4, &depth.create_view(&Default::default())).unwrap();
         let storage = wgpu::BufferUsages::STORAGE;
-        let boxes = gpu.buffer_with("boxes", bytemuck::cast_slice(boxes), storage);
-        let bytes = (boxes.size() / 32) * 96;
+        let boxes = gpu.buffer_with("boxes", bytemuck::cast_slice(boxes_in), storage);
+        let bytes = (boxes_in.len() * size_of::<ShaderBoxPlanes>()) as u64;
         let probed = storage_buffer(gpu, "planes", bytes, wgpu::BufferUsages::COPY_SRC);
         let camera = camera_buffer(gpu, camera, target);
         let group = |k: u32, buffers: &[(u32, &wgpu::Buffer)]| {
@@ -702,28 +700,20 @@ mod tests {
             for (k, g) in groups.iter().enumerate() {
                 pass.set_bind_group(k as u32, g, &[]);
             }
-            pass.dispatch_workgroups((bytes / 96).div_ceil(64) as u32, 1, 1);
+            pass.dispatch_workgroups((boxes_in.len() as u32).div_ceil(64), 1, 1);
         }
         readback.copy(&mut encoder, &probed, 0, 0, bytes);
         gpu.queue.submit([encoder.finish()]);
-        let mut words: Vec<f32> = Vec::new();
-        readback.read(gpu, bytes, &mut words);
+        let mut planes = Vec::new();
+        readback.read(gpu, bytes, &mut planes);
         gpu.check().expect("the probe ran");
-        let plane = |w: &[f32]| [w[0], w[1], w[2], w[3]];
-        words
-            .chunks_exact(24)
-            .map(|w| ShaderBoxPlanes {
-                entries: [0, 1, 2].map(|k| plane(&w[4 * k..])),
-                exits: [3, 4, 5].map(|k| plane(&w[4 * k..])),
-            })
-            .collect()
+        planes
     }
 
     #[test]
     fn box_planes_made_on_the_gpu_are_their_f32_twins_and_bound_every_pixel_centre() {
         let camera = test_camera();
         let target = Resolution::DEFAULT;
-        let rays = PixelRays::new(&camera, target);
         let (size_x, size_y) = (f64::from(target.width), f64::from(target.height));
         let mut boxes: Vec<QueryBox> = random_boxes_in_view(53).into_iter().map(|(_, q)| q).collect();
         // And the edges: a face a hair from the eye's plane (huge
@@ -767,43 +757,8 @@ mod tests {
                     }
                 }
                 // Above each entry plane and below each exit plane, in exact
-                // arithmetic, at every pixel centre, summed as the GPU may.
-                let exact = BoxPlanes::new(&camera, q, &rays, target);
-                let axes: Vec<usize> = (0..3).filter(|&a| gpu_planes.entries[a][2].abs() < 1e29).collect();
-                assert_eq!(
-                    axes.len(),
-                    exact.entries().len(),
-                    "{at}: an axis bounds on the GPU as on the CPU"
-                );
-                for (k, &axis) in axes.iter().enumerate() {
-                    let ([a, b, c, _], [d, e, f, _]) = (gpu_planes.entries[axis], gpu_planes.exits[axis]);
-                    for y in (0..target.height).step_by(5) {
-                        for x in (0..target.width).step_by(5) {
-                            let (x, y) = (x as f32 + 0.5, y as f32 + 0.5);
-                            let (cx, cy) = (f64::from(x), f64::from(y));
-                            // The orders a GPU may sum in, fused or not.
-                            let sums = |a: f32, b: f32, c: f32| {
-                                [
-                                    a * x + b * y + c,
-                                    a * x + (b * y + c),
-                                    a.mul_add(x, b.mul_add(y, c)),
-                                    b.mul_add(y, a * x) + c,
-                                ]
-                            };
-                            let entry = sums(a, b, c).into_iter().fold(f32::INFINITY, f32::min);
-                            let exit = sums(d, e, f).into_iter().fold(f32::NEG_INFINITY, f32::max);
-                            assert!(
-                                f64::from(entry) >= exact.entries()[k].at(cx, cy),
-                                "{at}: entry {axis} at ({x}, {y})"
-                            );
-                            assert!(
-                                f64::from(exit) <= exact.exits()[k].at(cx, cy),
-                                "{at}: exit {axis} at ({x}, {y})"
-                            );
-                            compared += 1;
-                        }
-                    }
-                }
+                // arithmetic, at every 5th pixel centre, summed as the GPU may.
+                compared += assert_planes_bound(&camera, q, gpu_planes, target, 5, &at);
             }
             assert!(compared > 500_000, "{compared} comparisons on {}", gpu.adapter);
         }

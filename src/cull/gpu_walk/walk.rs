@@ -299,8 +299,7 @@ impl GpuWalk {
             gpu.queue
                 .write_buffer(&sources.buffer, 0, bytemuck::cast_slice(&sources.staged));
         }
-        gpu.queue
-            .write_buffer(&s.level_args[0], 0, bytemuck::cast_slice(&EMPTY_LEVEL));
+        encoder.copy_buffer_to_buffer(&self.empty_level, 0, &s.level_args[0], 0, LEVEL_BYTES);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("prepare boxes"),
