@@ -253,9 +253,8 @@ impl<'g> Painter<'g> {
             culled_in_frustum: culled,
             wrong,
             occluder_pixels: occluders.map(|d| {
-                let count = |v: &[bool]| v.iter().filter(|&&b| b).count();
-                let written: Vec<bool> = d.depths.iter().map(|&c| c > 0.0).collect();
-                [count(&written), count(&d.partial), d.depths.len()]
+                let written = d.depths.iter().filter(|&&c| c > 0.0).count();
+                [written, d.partial.iter().filter(|&&p| p).count(), d.depths.len()]
             }),
         }
     }
