@@ -19,6 +19,11 @@
 //!   shared among them, pays for at what a probe of it costs (so the dearer
 //!   a strategy, the rarer its rechecks, and a cheap rival's drift is still
 //!   seen).
+//! - One sample shows a strategy dearer only where a hiccup of the machine
+//!   cannot explain it: far dearer ([`FAR_DEARER`]), or dearer while it
+//!   drew more triangles than the incumbent's frames beside it (a hiccup
+//!   slows a frame; it does not make it draw more). So a rival that hides
+//!   less costs one probe, not two, on a short path.
 //! - Frustum culling is judged before it is run: each measured occlusion
 //!   frame says what share of the frustum's triangles it hid, and frustum
 //!   culling's cost is estimated from it ([`frustum_estimate`]) until
@@ -107,8 +112,27 @@ struct Record {
     family: Family,
     /// Log of its frame time over the incumbent's, newest last.
     samples: VecDeque<f64>,
+    /// Whether its newest sample drew more triangles than the incumbent's
+    /// frames beside it, by more than the hysteresis: then its extra time
+    /// has a cause in the work, which a hiccup of the machine cannot fake.
+    drew_more: bool,
     /// The frame it last ran (this chooser's count).
     last_run: Option<u64>,
+}
+
+/// What a measured frame cost and drew.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Cost {
+    pub frame_ms: f64,
+    pub triangles: u64,
+}
+
+/// A measured frame of the incumbent: when, its log time, and what it drew.
+#[derive(Clone, Copy, Debug)]
+struct Seen {
+    frame: u64,
+    log_ms: f64,
+    triangles: u64,
 }
 
 /// A probe's measured frame, waiting for the incumbent's frame after it.
@@ -116,8 +140,9 @@ struct Record {
 struct Pending {
     strategy: usize,
     log_ms: f64,
-    /// The incumbent's log frame time just before the probe.
-    before: Option<f64>,
+    triangles: u64,
+    /// The incumbent's frame just before the probe.
+    before: Option<Seen>,
 }
 
 /// What an occlusion frame hid, and what share of its time it drew.
@@ -144,8 +169,8 @@ pub(super) struct Chooser {
     incumbent: usize,
     /// Frames planned so far.
     frame: u64,
-    /// The incumbent's last measured frame: when, and its log time.
-    incumbent_ms: Option<(u64, f64)>,
+    /// The incumbent's last measured frame.
+    incumbent_last: Option<Seen>,
     /// |log| steps between consecutive frames of the incumbent.
     steps: VecDeque<f64>,
     pending: Option<Pending>,
@@ -171,12 +196,13 @@ impl Chooser {
                 .map(|&family| Record {
                     family,
                     samples: VecDeque::with_capacity(WINDOW),
+                    drew_more: false,
                     last_run: None,
                 })
                 .collect(),
             incumbent,
             frame: 0,
-            incumbent_ms: None,
+            incumbent_last: None,
             steps: VecDeque::with_capacity(2 * WINDOW),
             pending: None,
             probing: None,
@@ -233,13 +259,13 @@ impl Chooser {
         }
     }
 
-    /// Learns what the frame planned as `turn` cost (`frame_ms`), and for an
+    /// Learns what the frame planned as `turn` cost and drew, and for an
     /// occlusion frame what it hid of `view`'s frustum.
-    pub fn learn(&mut self, turn: Turn, frame_ms: f64, occluded: Option<Occluded>, view: &View) {
-        if !turn.measured || !frame_ms.is_finite() || frame_ms <= 0.0 {
+    pub fn learn(&mut self, turn: Turn, cost: Cost, occluded: Option<Occluded>, view: &View) {
+        if !turn.measured || !cost.frame_ms.is_finite() || cost.frame_ms <= 0.0 {
             return;
         }
-        let log_ms = frame_ms.ln();
+        let log_ms = cost.frame_ms.ln();
         if let (Family::Occlusion, Some(o)) = (self.records[turn.strategy].family, occluded) {
             self.hidden = Some(Hidden {
                 share: o.hidden,
@@ -249,34 +275,38 @@ impl Chooser {
             });
         }
         if turn.probe {
-            let before = self
-                .incumbent_ms
-                .filter(|&(f, _)| self.frame - f <= 3)
-                .map(|(_, ms)| ms);
             self.pending = Some(Pending {
                 strategy: turn.strategy,
                 log_ms,
-                before,
+                triangles: cost.triangles,
+                before: self.incumbent_last.filter(|b| self.frame - b.frame <= 3),
             });
             return;
         }
         if let Some(p) = self.pending.take() {
-            let baseline = p.before.map_or(log_ms, |b| (b + log_ms) / 2.0);
-            let samples = &mut self.records[p.strategy].samples;
-            if samples.len() == WINDOW {
-                samples.pop_front();
+            let (baseline, incumbent_triangles) = p.before.map_or((log_ms, cost.triangles), |b| {
+                ((b.log_ms + log_ms) / 2.0, b.triangles.max(cost.triangles))
+            });
+            let record = &mut self.records[p.strategy];
+            if record.samples.len() == WINDOW {
+                record.samples.pop_front();
             }
-            samples.push_back(p.log_ms - baseline);
+            record.samples.push_back(p.log_ms - baseline);
+            record.drew_more = p.triangles as f64 > HYSTERESIS.exp() * incumbent_triangles as f64;
         }
-        if let Some((f, before)) = self.incumbent_ms
-            && f + 1 == self.frame
+        if let Some(before) = self.incumbent_last
+            && before.frame + 1 == self.frame
         {
             if self.steps.len() == 2 * WINDOW {
                 self.steps.pop_front();
             }
-            self.steps.push_back((log_ms - before).abs());
+            self.steps.push_back((log_ms - before.log_ms).abs());
         }
-        self.incumbent_ms = Some((self.frame, log_ms));
+        self.incumbent_last = Some(Seen {
+            frame: self.frame,
+            log_ms,
+            triangles: cost.triangles,
+        });
     }
 
     /// The incumbent's frame-to-frame noise (log): a robust σ of one frame.
@@ -344,9 +374,10 @@ impl Chooser {
             }
         }
         self.records[self.incumbent].samples = reversed;
+        self.records[self.incumbent].drew_more = false;
         self.records[s].samples.clear();
         self.incumbent = s;
-        self.incumbent_ms = None;
+        self.incumbent_last = None;
     }
 
     /// The due strategy whose probe promises most: frustum culling first
@@ -402,11 +433,13 @@ impl Chooser {
         }
         // May still be cheaper by the hysteresis: explore, until a full
         // window shows it no cheaper than the incumbent in the median. One
-        // sample settles nothing unless it is far dearer (a single frame
-        // may have met a hiccup of the machine).
-        let n = self.records[s].samples.len();
+        // sample settles nothing unless it is far dearer, or drew more than
+        // the incumbent (a single frame may have met a hiccup of the
+        // machine, which slows a frame without making it draw more).
+        let r = &self.records[s];
+        let n = r.samples.len();
         let may_be_cheaper = m - Z * se < -HYSTERESIS && (n < WINDOW || m < 0.0);
-        let one_sample_too_few = n == 1 && m - Z * se < FAR_DEARER;
+        let one_sample_too_few = n == 1 && !r.drew_more && m - Z * se < FAR_DEARER;
         if may_be_cheaper || one_sample_too_few {
             return EXPLORE;
         }
@@ -480,13 +513,14 @@ mod tests {
 
     /// A run of `frames` frames over strategies of `families`, starting with
     /// the first occlusion culler: strategy `s` costs `cost(frame, s)` ms
-    /// with log-normal noise of σ `noise`, and an occlusion frame hides
-    /// `hidden` of the frustum. Returns the turns and their costs.
+    /// with log-normal noise of σ `noise` and draws `drawn[s]` triangles,
+    /// and an occlusion frame hides `hidden` of the frustum. Returns the
+    /// turns and their costs.
     fn simulate(
         families: &[Family],
         frames: u64,
         noise: f64,
-        hidden: f64,
+        (hidden, drawn): (f64, Vec<u64>),
         view: impl Fn(u64) -> View,
         cost: impl Fn(u64, usize) -> f64,
     ) -> (Vec<Turn>, Vec<f64>) {
@@ -504,7 +538,11 @@ mod tests {
             let ms = cost(f, turn.strategy) * (noise * normal).exp();
             // An occlusion frame spends a fifth of its time testing.
             let occluded = (families[turn.strategy] == Occlusion).then_some(Occluded { hidden, drawing: 0.8 });
-            chooser.learn(turn, ms, occluded, &v);
+            let cost = Cost {
+                frame_ms: ms,
+                triangles: drawn[turn.strategy],
+            };
+            chooser.learn(turn, cost, occluded, &v);
             turns.push(turn);
             costs.push(ms);
         }
@@ -541,13 +579,21 @@ mod tests {
     /// culler, as `auto` has them on a GPU-driven adapter.
     const FIVE: [Family; 5] = [Frustum, Occlusion, Occlusion, Occlusion, Occlusion];
 
+    /// Occlusion hides `hidden` of the frustum's 1 000 triangles, and each
+    /// of FIVE's occlusion cullers draws the rest.
+    fn hides(hidden: f64) -> (f64, Vec<u64>) {
+        let rest = (1000.0 * (1.0 - hidden)).round() as u64;
+        let drawn = FIVE.iter().map(|&f| if f == Frustum { 1000 } else { rest }).collect();
+        (hidden, drawn)
+    }
+
     #[test]
     fn on_a_city_the_cheapest_walk_runs_and_dear_rivals_are_dropped_after_a_probe() {
         // The default city on GL: vfc 3.4× roc, ioc = roc, the pyramid
         // test 2×, the CPU culler 1.2×; occlusion hides 94 % of the frustum.
         let relative = [3.4, 1.0, 1.0, 2.0, 1.2];
         for noise in [0.05, 0.15] {
-            let (turns, costs) = simulate(&FIVE, 120, noise, 0.94, still, |f, s| street(f) * relative[s]);
+            let (turns, costs) = simulate(&FIVE, 120, noise, hides(0.94), still, |f, s| street(f) * relative[s]);
             let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
             assert_eq!(runs(&turns, 0), 0, "vfc is judged from what occlusion hid: {s:?}");
             assert!(runs(&turns, 3) <= 2, "the pyramid test: {s:?}");
@@ -558,10 +604,32 @@ mod tests {
     }
 
     #[test]
+    fn a_rival_that_drew_more_and_cost_more_is_dropped_after_one_probe_and_one_that_drew_as_much_is_probed_again() {
+        // A CAD orbit: occlusion hides half the frustum; the CPU culler
+        // (last) costs 1.35× the walks, under 13 % noise.
+        let relative = [1.5, 1.0, 1.0, 1.1, 1.35];
+        let (hidden, mut drawn) = hides(0.5);
+        let cpu_culler_probes = |drawn: &[u64]| {
+            let (turns, _) = simulate(&FIVE, 40, 0.13, (hidden, drawn.to_vec()), still, |f, s| {
+                street(f) * relative[s]
+            });
+            runs(&turns, 4)
+        };
+        // It hid less than the walks: its one probe drew 1.6× their
+        // triangles, so its time is the work's, not a hiccup's.
+        drawn[4] = 800;
+        assert_eq!(cpu_culler_probes(&drawn), 1);
+        // Drawing what the walks draw, the same time may be a hiccup: one
+        // sample is not enough to drop it.
+        drawn[4] = 500;
+        assert!(cpu_culler_probes(&drawn) >= 2);
+    }
+
+    #[test]
     fn a_rival_cheaper_beyond_the_noise_takes_over_and_the_old_incumbent_is_rechecked_rarely() {
         // roc starts; ioc is 25 % cheaper.
         let relative = [3.4, 1.0, 0.75, 2.0, 1.2];
-        let (turns, _) = simulate(&FIVE, 200, 0.1, 0.94, still, |f, s| street(f) * relative[s]);
+        let (turns, _) = simulate(&FIVE, 200, 0.1, hides(0.94), still, |f, s| street(f) * relative[s]);
         let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
         let mostly_ioc_from =
             (0..s.len()).find(|&f| s[f..].iter().filter(|&&x| x == 2).count() * 10 > (s.len() - f) * 9);
@@ -577,7 +645,7 @@ mod tests {
         // roc and ioc 1 % apart under 15 % noise; the pyramid test and the
         // CPU culler dearer.
         let relative = [3.4, 1.0, 0.99, 1.5, 1.3];
-        let (turns, costs) = simulate(&FIVE, 240, 0.15, 0.94, still, |f, s| street(f) * relative[s]);
+        let (turns, costs) = simulate(&FIVE, 240, 0.15, hides(0.94), still, |f, s| street(f) * relative[s]);
         let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
         let incumbents: Vec<usize> = turns.iter().filter(|t| !t.probe).map(|t| t.strategy).collect();
         let switches = incumbents.windows(2).filter(|w| w[0] != w[1]).count();
@@ -589,7 +657,7 @@ mod tests {
         // Nor does a rival 2 % cheaper, within the hysteresis, however
         // quiet the machine.
         let relative = [3.4, 1.0, 0.98, 1.5, 1.3];
-        let (turns, _) = simulate(&FIVE, 240, 0.002, 0.94, still, |f, s| street(f) * relative[s]);
+        let (turns, _) = simulate(&FIVE, 240, 0.002, hides(0.94), still, |f, s| street(f) * relative[s]);
         assert!(turns.iter().all(|t| t.probe || t.strategy == 1), "{turns:?}");
     }
 
@@ -601,7 +669,7 @@ mod tests {
             forward: if f < 60 { DVec3::NEG_Z } else { DVec3::X },
             ..still(f)
         };
-        let (turns, costs) = simulate(&FIVE, 120, 0.1, 0.03, turned, |f, s| street(f) * relative[s]);
+        let (turns, costs) = simulate(&FIVE, 120, 0.1, hides(0.03), turned, |f, s| street(f) * relative[s]);
         let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
         let settled = s.iter().position(|&x| x == 0).expect("vfc runs");
         assert!(settled <= 3, "vfc probed at once: {s:?}");
@@ -632,7 +700,7 @@ mod tests {
                 ..still(f)
             }
         };
-        let (turns, costs) = simulate(&FIVE, 120, 0.05, 0.03, orbit, |f, s| street(f) * relative[s]);
+        let (turns, costs) = simulate(&FIVE, 120, 0.05, hides(0.03), orbit, |f, s| street(f) * relative[s]);
         let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
         let occlusion_from_20 = s[20..].iter().filter(|&&x| x != 0).count();
         assert!(occlusion_from_20 <= 8, "{occlusion_from_20} occlusion frames: {s:?}");
@@ -649,7 +717,7 @@ mod tests {
         // 8 % hidden, yet the walk is 10 % cheaper than vfc (a heavy
         // fragment load behind few objects).
         let relative = [1.1, 1.0, 1.05, 1.3, 1.2];
-        let (turns, _) = simulate(&FIVE, 120, 0.05, 0.08, still, |f, s| street(f) * relative[s]);
+        let (turns, _) = simulate(&FIVE, 120, 0.05, hides(0.08), still, |f, s| street(f) * relative[s]);
         let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
         let incumbents: Vec<usize> = turns.iter().filter(|t| !t.probe).map(|t| t.strategy).collect();
         assert!(
@@ -668,9 +736,13 @@ mod tests {
                 hidden: 0.02,
                 drawing: 0.8,
             };
+            let cost = Cost {
+                frame_ms: if turn.strategy == 0 { 1.0 } else { 2.0 },
+                triangles: 1000,
+            };
             chooser.learn(
                 turn,
-                if turn.strategy == 0 { 1.0 } else { 2.0 },
+                cost,
                 Some(occluded),
                 &still(0),
             );

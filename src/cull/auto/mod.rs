@@ -47,7 +47,7 @@ use crate::cull::traversal::frustum_cull_subtree;
 use crate::gpu::{Frame, GpuAudit, GpuContext, GpuError, GpuSetup};
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
-use choice::{Chooser, Family, Occluded, Turn, View};
+use choice::{Chooser, Cost, Family, Occluded, Turn, View};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
@@ -319,7 +319,11 @@ impl Culler for AutoCulling {
                 }),
             };
             let chooser = self.chooser.as_mut().expect("the session prepared the mode");
-            chooser.learn(ran.turn, previous.frame_ms, occluded, &view);
+            let cost = Cost {
+                frame_ms: previous.frame_ms,
+                triangles: previous.triangles_drawn,
+            };
+            chooser.learn(ran.turn, cost, occluded, &view);
         }
         let view = View {
             eye: input.camera.eye,
