@@ -232,6 +232,55 @@ fn stress_lists_its_cases() {
 }
 
 #[test]
+fn auto_runs_frustum_culling_alone_in_a_scene_of_one_object() {
+    // One object cannot be hidden behind another: no occlusion culler may
+    // pay, so none is a candidate and no frame probes one.
+    let dir = tempfile::tempdir().unwrap();
+    let cube = write(
+        dir.path(),
+        "cube.obj",
+        "o cube\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
+         f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n",
+    );
+    let out = dir.path().join("run");
+    let args = [
+        "bench",
+        cube.to_str().unwrap(),
+        "--modes",
+        "auto",
+        "--frames",
+        "6",
+        "--warmup",
+        "1",
+        "--resolution",
+        "64x48",
+        "--no-error",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let result = occlu(&args);
+    assert!(result.status.success(), "{:?}", own_stderr(&result));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(
+        summary["modes"][0]["parameters"]["candidates"],
+        serde_json::json!(["vfc"])
+    );
+    let frames = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let mut lines = frames.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|&c| c == name).unwrap();
+    let (strategy, probe) = (column("strategy"), column("probe"));
+    let picks: Vec<(String, String)> = lines
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            (cells[strategy].to_string(), cells[probe].to_string())
+        })
+        .collect();
+    assert_eq!(picks, vec![("vfc".to_string(), "false".to_string()); 6]);
+}
+
+#[test]
 fn bench_writes_the_three_result_files_with_the_adapter() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");

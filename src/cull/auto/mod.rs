@@ -11,7 +11,9 @@
 //!   ([`Candidacy`]) and whose needs this adapter meets, each built with the
 //!   run's parameters: `vfc`, the GPU walks and CPU occlusion culling where
 //!   the adapter walks on the GPU; `vfc`, the query-batching modes and CPU
-//!   occlusion culling elsewhere. Which pays is measured, not assumed.
+//!   occlusion culling elsewhere. Which pays is measured, not assumed; but
+//!   in a scene of one object only `vfc` runs, since occlusion culling
+//!   hides an object only behind another one.
 //! - **Choice** (choice.rs): one incumbent runs; the others are probed as
 //!   a bandit does, each probe compared with the incumbent's frames on both
 //!   sides; a rival takes over only when cheaper beyond the noise; rivals
@@ -101,10 +103,14 @@ impl Candidate {
     }
 
     fn family(&self) -> Family {
-        match self.id {
-            ModeId::Vfc => Family::Frustum,
-            _ => Family::Occlusion,
-        }
+        family(self.id)
+    }
+}
+
+fn family(id: ModeId) -> Family {
+    match id {
+        ModeId::Vfc => Family::Frustum,
+        _ => Family::Occlusion,
     }
 }
 
@@ -152,11 +158,15 @@ pub struct AutoCulling {
 }
 
 impl AutoCulling {
-    /// Builds every mode that may be a candidate, with the run's `params`.
+    /// Builds every mode that may be a candidate, with the run's `params`:
+    /// frustum culling alone where the scene holds one object, which
+    /// nothing else can hide.
     pub fn new(scene: &Scene, params: &ModeParams) -> Result<AutoCulling, ModeError> {
+        let something_may_hide = scene.objects.len() >= 2;
         let candidates = ModeId::ALL
             .iter()
             .filter(|id| id.info().auto != Candidacy::Never)
+            .filter(|&&id| something_may_hide || family(id) == Family::Frustum)
             .map(|&id| {
                 Ok(Candidate {
                     id,
