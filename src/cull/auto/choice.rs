@@ -332,16 +332,20 @@ impl Chooser {
     /// Strategy `s`'s cost relative to the incumbent (log) and its standard
     /// error, from its samples; for frustum culling beside an occlusion
     /// incumbent, the estimate from what occlusion hid counts as one more
-    /// sample (a prior: alone it settles nothing, beside a measurement it
-    /// lets frustum culling take over sooner where nothing is hidden);
-    /// `None` when unknown.
+    /// sample until frustum culling is measured, and after that where
+    /// nothing is hidden (a prior: alone it settles nothing, beside a
+    /// measurement it lets frustum culling take over sooner where nothing is
+    /// hidden; where much is hidden, a guess on the cheap side would only
+    /// hold back what measurements show); `None` when unknown.
     fn estimate(&self, s: usize) -> Option<(f64, f64)> {
         // A sample is one probe frame over the mean of two incumbent frames.
         let one = self.noise() * 1.5f64.sqrt();
         let r = &self.records[s];
         let incumbent_occludes = self.records[self.incumbent].family == Family::Occlusion;
         let prior = match (r.family, self.hidden) {
-            (Family::Frustum, Some(h)) if incumbent_occludes => Some(frustum_estimate(h.share, h.drawing)),
+            (Family::Frustum, Some(h)) if incumbent_occludes && (r.samples.is_empty() || h.share < NOTHING_HIDDEN) => {
+                Some(frustum_estimate(h.share, h.drawing))
+            }
             _ => None,
         };
         let samples: Vec<f64> = r.samples.iter().copied().chain(prior).collect();
@@ -649,6 +653,30 @@ mod tests {
         let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
         let incumbents: Vec<usize> = turns.iter().filter(|t| !t.probe).map(|t| t.strategy).collect();
         assert!(incumbents.iter().all(|&x| x == 1), "{s:?}");
+    }
+
+    #[test]
+    fn where_occlusion_hides_much_the_guess_at_frustum_cullings_cost_gives_way_to_its_measurement() {
+        let mut chooser = Chooser::new(&[Frustum, Occlusion], 1, 10.0, 0.015);
+        let hid = |share| Hidden {
+            share,
+            drawing: 0.9,
+            view: still(0),
+            frame: 0,
+        };
+        // Unmeasured, frustum culling is the guess from what occlusion hid.
+        chooser.hidden = Some(hid(0.5));
+        let guess = frustum_estimate(0.5, 0.9);
+        assert_eq!(chooser.estimate(0).map(|e| e.0), Some(guess));
+        // Measured 1.5× dearer where half is hidden: the measurement alone,
+        // not pulled toward the guess (on the cheap side by design).
+        chooser.records[0].samples.push_back(0.4);
+        assert_eq!(chooser.estimate(0).map(|e| e.0), Some(0.4));
+        // Where nothing is hidden the guess still counts beside it, so that
+        // frustum culling takes over sooner.
+        chooser.hidden = Some(hid(0.05));
+        let beside = chooser.estimate(0).map(|e| e.0);
+        assert_eq!(beside, Some((0.4 + frustum_estimate(0.05, 0.9)) / 2.0));
     }
 
     #[test]
