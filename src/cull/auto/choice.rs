@@ -587,6 +587,11 @@ mod tests {
         costs.iter().sum::<f64>() / ideal / (noise * noise / 2.0).exp()
     }
 
+    /// The strategy of each turn.
+    fn strategies<'a>(turns: impl IntoIterator<Item = &'a Turn>) -> Vec<usize> {
+        turns.into_iter().map(|t| t.strategy).collect()
+    }
+
     fn runs(turns: &[Turn], s: usize) -> usize {
         turns.iter().filter(|t| t.strategy == s).count()
     }
@@ -610,7 +615,7 @@ mod tests {
         let relative = [3.4, 1.0, 1.0, 2.0, 1.2];
         for noise in [0.05, 0.15] {
             let (turns, costs) = simulate(&FIVE, 120, noise, hides(0.94), still, |f, s| street(f) * relative[s]);
-            let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
+            let s = strategies(&turns);
             assert_eq!(runs(&turns, 0), 0, "vfc is judged from what occlusion hid: {s:?}");
             assert!(runs(&turns, 3) <= 2, "the pyramid test: {s:?}");
             // 1.2× is plain after a few probes in 5 % noise; in 15 % noise
@@ -650,8 +655,8 @@ mod tests {
         // lucky samples of ioc do not make it look cheaper at confidence.
         let relative = [3.4, 1.0, 1.05, 1.5, 1.3];
         let (turns, _) = simulate(&FIVE, 120, 0.3, hides(0.94), still, |f, s| street(f) * relative[s]);
-        let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
-        let incumbents: Vec<usize> = turns.iter().filter(|t| !t.probe).map(|t| t.strategy).collect();
+        let s = strategies(&turns);
+        let incumbents = strategies(turns.iter().filter(|t| !t.probe));
         assert!(incumbents.iter().all(|&x| x == 1), "{s:?}");
     }
 
@@ -684,7 +689,7 @@ mod tests {
         // roc starts; ioc is 25 % cheaper.
         let relative = [3.4, 1.0, 0.75, 2.0, 1.2];
         let (turns, _) = simulate(&FIVE, 200, 0.1, hides(0.94), still, |f, s| street(f) * relative[s]);
-        let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
+        let s = strategies(&turns);
         let mostly_ioc_from =
             (0..s.len()).find(|&f| s[f..].iter().filter(|&&x| x == 2).count() * 10 > (s.len() - f) * 9);
         assert!(
@@ -700,8 +705,8 @@ mod tests {
         // CPU culler dearer.
         let relative = [3.4, 1.0, 0.99, 1.5, 1.3];
         let (turns, costs) = simulate(&FIVE, 240, 0.15, hides(0.94), still, |f, s| street(f) * relative[s]);
-        let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
-        let incumbents: Vec<usize> = turns.iter().filter(|t| !t.probe).map(|t| t.strategy).collect();
+        let s = strategies(&turns);
+        let incumbents = strategies(turns.iter().filter(|t| !t.probe));
         let switches = incumbents.windows(2).filter(|w| w[0] != w[1]).count();
         assert!(switches <= 2, "{switches} switches: {s:?}");
         let probes = turns.iter().filter(|t| t.probe).count();
@@ -724,7 +729,7 @@ mod tests {
             ..still(f)
         };
         let (turns, costs) = simulate(&FIVE, 120, 0.1, hides(0.03), turned, |f, s| street(f) * relative[s]);
-        let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
+        let s = strategies(&turns);
         let settled = s.iter().position(|&x| x == 0).expect("vfc runs");
         assert!(settled <= 3, "vfc probed at once: {s:?}");
         let vfc_from = (0..60).find(|&f| s[f..60].iter().all(|&x| x == 0));
@@ -755,7 +760,7 @@ mod tests {
             }
         };
         let (turns, costs) = simulate(&FIVE, 120, 0.05, hides(0.03), orbit, |f, s| street(f) * relative[s]);
-        let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
+        let s = strategies(&turns);
         let occlusion_from_20 = s[20..].iter().filter(|&&x| x != 0).count();
         assert!(occlusion_from_20 <= 8, "{occlusion_from_20} occlusion frames: {s:?}");
         assert!(
@@ -772,8 +777,8 @@ mod tests {
         // fragment load behind few objects).
         let relative = [1.1, 1.0, 1.05, 1.3, 1.2];
         let (turns, _) = simulate(&FIVE, 120, 0.05, hides(0.08), still, |f, s| street(f) * relative[s]);
-        let s: Vec<usize> = turns.iter().map(|t| t.strategy).collect();
-        let incumbents: Vec<usize> = turns.iter().filter(|t| !t.probe).map(|t| t.strategy).collect();
+        let s = strategies(&turns);
+        let incumbents = strategies(turns.iter().filter(|t| !t.probe));
         assert!(
             incumbents[20..].iter().all(|&x| x == 1),
             "roc stays once vfc is measured dearer: {s:?}"
