@@ -10,8 +10,10 @@
 //! the whole frame; with `swr.triangles=0` (no occluders, nothing hidden)
 //! the frame is the box tests alone, and boxes a second.
 //!
-//! `cargo bench --bench swr -- swr.KEY=VALUE ...` runs with those
-//! parameters, e.g. `swr.threads=1` or `swr.resolution=128x96`.
+//! `cargo bench --bench swr -- swr.KEY=VALUE ... SCENE ...` runs with those
+//! parameters, e.g. `swr.threads=1` or `swr.resolution=128x96`, on those
+//! scenes (built-in specs or model files, each along its default walk)
+//! instead of the three built-in ones.
 
 mod common;
 
@@ -92,9 +94,10 @@ fn walk(scene: &Scene, hierarchy: &Hierarchy, cameras: &[Camera], params: &[&str
 }
 
 fn main() {
-    let params: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with('-')).collect();
-    let params: Vec<&str> = params.iter().map(String::as_str).collect();
-    for spec in SCENES {
+    let args: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with('-')).collect();
+    let (params, scenes): (Vec<&str>, Vec<&str>) = args.iter().map(String::as_str).partition(|a| a.starts_with("swr."));
+    let scenes = if scenes.is_empty() { SCENES.to_vec() } else { scenes };
+    for spec in scenes {
         let (scene, hierarchy, cameras) = common::walk(spec);
         println!("{spec}: {} objects, {FRAMES} frames at 800x600", scene.objects.len());
         let (whole, counts) = walk(&scene, &hierarchy, &cameras, &params);

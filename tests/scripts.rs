@@ -37,9 +37,10 @@ fn same_counters_passes_equal_counters_whatever_the_times_and_names_the_first_di
             "vfc,1,5.0,11,110,7,2,0,0,0,0,0,0,0,0,0,9",
             "ac,0,3.0,4,40,7,2,3,3,1,0,0,0,0,5,1,9",
             "ac[threshold=50],0,3.0,4,40,7,2,3,3,1,0,0,0,0,5,1,9",
+            "swr,0,3.0,4,40,7,2,3,0,0,0,0,0,0,5,1,9",
         ],
     );
-    // Other times, and ac (which decides by time) drawing otherwise.
+    // Other times, and ac and swr (which decide by time) drawing otherwise.
     let retimed = results(
         dir.path(),
         "retimed",
@@ -48,6 +49,7 @@ fn same_counters_passes_equal_counters_whatever_the_times_and_names_the_first_di
             "vfc,1,1.0,11,110,7,2,0,0,0,0,0,0,0,0,0,9",
             "ac,0,3.0,5,50,7,2,3,3,1,0,0,0,0,5,1,9",
             "ac[threshold=50],0,3.0,5,50,7,2,3,3,1,0,0,4,0,5,1,9",
+            "swr,0,3.0,6,60,7,2,0,0,0,0,0,0,0,5,1,9",
         ],
     );
     let (code, text) = same_counters(&[&before, &before]);
@@ -56,6 +58,7 @@ fn same_counters_passes_equal_counters_whatever_the_times_and_names_the_first_di
     assert_eq!(code, 0, "{text}");
     assert!(text.contains("vfc      2 frames, every counter identical"), "{text}");
     assert!(!text.contains("ac"), "ac and its sweep are left out: {text}");
+    assert!(!text.contains("swr"), "swr is left out: {text}");
     let (code, text) = same_counters_of(&["--modes", "ac"], &[&before, &retimed]);
     assert_eq!(code, 1, "{text}");
     assert!(

@@ -15,10 +15,15 @@ pub const SCENES: [&str; 3] = ["city:blocks=8", "city:blocks=16", "forest"];
 /// Frames of each walk.
 pub const FRAMES: u32 = 120;
 
-/// Built-in scene `spec`, its hierarchy, and the cameras of its default
-/// walk over [`FRAMES`] frames at the default render size's aspect.
+/// Scene `spec` (a model file where one of that name exists, otherwise a
+/// built-in scene), its hierarchy, and the cameras of its default walk
+/// over [`FRAMES`] frames at the default render size's aspect.
 pub fn walk(spec: &str) -> (Scene, Hierarchy, Vec<Camera>) {
-    let scene = load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).expect("built-in scene");
+    let source = match std::path::Path::new(spec).is_file() {
+        true => SceneSpec::File(spec.into()),
+        false => SceneSpec::Builtin(spec.into()),
+    };
+    let scene = load(&source, &LoadOptions::default()).expect("bench scene");
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let path = default_path(&scene)
         .and_then(|(p, _)| p.with_frames(FRAMES))

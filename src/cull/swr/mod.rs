@@ -16,7 +16,8 @@
 //! more, which costs the seams between objects. A cell keeps a depth
 //! plane besides its depth (the occluders' own, lowered below each other's
 //! where several fill it); MOC keeps one depth per tile. A buffer that hid
-//! nothing rests for a few frames (MOC leaves that to its caller).
+//! nothing, or saved less drawing than it cost, rests for a few frames, and
+//! longer each time it fails again (MOC leaves that to its caller).
 //! Occluders are whole visible objects, their triangles
 //! taken in the f64 projection (MOC and Godot take authored occluder
 //! meshes, rasterised in f32 with SIMD: here it is scalar). Like MOC it
@@ -26,6 +27,7 @@
 //! precision against time.
 
 use std::ops::Range;
+use std::time::Instant;
 
 mod buffer;
 mod mesh;
@@ -36,7 +38,7 @@ use serde::Serialize;
 
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
-use crate::cull::culler::{Culler, FrameInput, OccluderDepths, TraversalStats};
+use crate::cull::culler::{Culler, FrameInput, OccluderDepths, PreviousFrame, TraversalStats};
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{
     BoxMargins, BoxPlanes, DepthMargins, EyeBox, Frame, GpuError, GpuSetup, PixelRays, QueryBox, Resolution,
@@ -140,9 +142,9 @@ pub struct SoftwareOcclusionCulling {
     careless: bool,
     /// The objects found visible last frame.
     visible: Vec<u32>,
-    /// Frames left in which no buffer is built, since the last one hid
-    /// nothing ([`REST_FRAMES`]).
-    rest: u32,
+    /// Frames left in which no buffer is built, since the last one did
+    /// not pay ([`Rest`]).
+    rest: Rest,
     /// Scratch, reused so a frame allocates nothing once warm.
     candidates: Vec<Candidate>,
     occluders: Vec<u32>,
@@ -168,7 +170,7 @@ impl SoftwareOcclusionCulling {
             #[cfg(test)]
             careless: false,
             visible: Vec::new(),
-            rest: 0,
+            rest: Rest::default(),
             candidates: Vec::new(),
             occluders: Vec::new(),
             is_occluder: Vec::new(),
@@ -209,11 +211,68 @@ impl SoftwareOcclusionCulling {
     }
 }
 
-/// Frames in which `swr` builds no buffer, and so tests no box (a frustum
-/// traversal only), after a buffer of occluders hid nothing: where nothing
-/// is hidden it costs one frame in eight. Leaving occlusion out is always
-/// safe.
+/// When `swr` builds no buffer, and so tests no box (a frustum traversal
+/// only): after a buffer that did not pay ([`paid`]), for [`REST_FRAMES`]
+/// frames, twice as many and one more each time the next buffer fails
+/// again, up to [`LONGEST_REST`]; a buffer that pays brings the rests back
+/// to the shortest. Where occlusion never pays, it costs one frame in 32.
+/// Leaving occlusion out is always safe.
+#[derive(Clone, Copy, Debug)]
+struct Rest {
+    /// Frames left of the current rest.
+    left: u32,
+    /// How long the next rest is.
+    next: u32,
+}
+
 const REST_FRAMES: u32 = 7;
+const LONGEST_REST: u32 = 31;
+
+impl Default for Rest {
+    fn default() -> Rest {
+        Rest {
+            left: 0,
+            next: REST_FRAMES,
+        }
+    }
+}
+
+impl Rest {
+    /// Whether this frame rests; counts it.
+    fn take(&mut self) -> bool {
+        let resting = self.left > 0;
+        self.left = self.left.saturating_sub(1);
+        resting
+    }
+
+    /// After a frame's buffer: rests from the next frame on unless it
+    /// `paid`.
+    fn after(&mut self, paid: bool) {
+        if paid {
+            self.next = REST_FRAMES;
+        } else {
+            self.left = self.next;
+            self.next = (2 * self.next + 1).min(LONGEST_REST);
+        }
+    }
+}
+
+/// Whether a buffer that hid `hidden` triangles, at a cost of `spent_ms`
+/// of this frame's CPU time, paid for itself: it hid something and, where
+/// the mode's previous frame says what its drawing cost a triangle, the
+/// drawing it spared is worth at least that time. The estimate errs
+/// towards building buffers: a triangle's share of the drawing holds the
+/// frame's fixed costs too, and a hidden node counts all its objects'
+/// triangles, even those beyond the frustum.
+fn paid(hidden: u64, spent_ms: f64, previous: Option<PreviousFrame>) -> bool {
+    match previous {
+        _ if hidden == 0 => false,
+        Some(p) if p.triangles_drawn > 0 && p.render_ms.is_finite() => {
+            hidden as f64 * p.render_ms / p.triangles_drawn as f64 >= spent_ms
+        }
+        _ => true,
+    }
+}
 
 /// An object that may be an occluder this frame.
 struct Candidate {
@@ -439,8 +498,8 @@ impl Culler for SoftwareOcclusionCulling {
         self.is_found.resize(scene.objects.len(), false);
         // 1. Occluders: last frame's visible objects still on screen,
         // largest first; none while the buffer rests.
-        let resting = self.rest > 0;
-        self.rest = self.rest.saturating_sub(1);
+        let started = Instant::now();
+        let resting = self.rest.take();
         self.candidates.clear();
         let visible: &[u32] = if resting { &[] } else { &self.visible };
         for &o in visible {
@@ -507,7 +566,10 @@ impl Culler for SoftwareOcclusionCulling {
             margins,
         };
         let hierarchy = input.hierarchy;
-        let mut hidden_objects = 0;
+        let triangles_of = |objects: &[u32]| -> u64 {
+            objects.iter().map(|&o| u64::from(scene.objects[o as usize].triangles)).sum()
+        };
+        let mut hidden_triangles = 0;
         self.found.clear();
         self.stack.clear();
         self.stack.push(0);
@@ -520,6 +582,7 @@ impl Culler for SoftwareOcclusionCulling {
             }
             if !resting && tester.test(&node.bounds) == Verdict::Hidden {
                 stats.nodes_culled_occlusion += 1;
+                hidden_triangles += triangles_of(hierarchy.subtree_objects(node));
                 continue;
             }
             if !node.is_leaf() {
@@ -534,15 +597,17 @@ impl Culler for SoftwareOcclusionCulling {
                 if resting || tester.test(bounds) == Verdict::Visible {
                     self.found.push(o);
                 } else {
-                    hidden_objects += 1;
+                    hidden_triangles += triangles_of(&[o]);
                 }
             }
         }
-        // A buffer of occluders that hid nothing rests the next frames (and
+        // A buffer of occluders that did not pay rests the next frames (and
         // is emptied, so what it shows is what they use).
-        if !resting && !self.occluders.is_empty() && stats.nodes_culled_occlusion + hidden_objects == 0 {
-            self.rest = REST_FRAMES;
-            if let Some(buffer) = &mut self.buffer {
+        if !resting && !self.occluders.is_empty() {
+            let spent_ms = started.elapsed().as_secs_f64() * 1e3;
+            let paid = paid(hidden_triangles, spent_ms, input.previous);
+            self.rest.after(paid);
+            if let (false, Some(buffer)) = (paid, &mut self.buffer) {
                 buffer.cleared_bands(u32::MAX).for_each(drop);
             }
         }
@@ -795,30 +860,83 @@ mod tests {
         assert_eq!(objects, [0, 2]);
     }
 
+    /// The occluder triangles `swr` rasterised in each of `frames` frames of
+    /// `cubes` seen down −Z, each frame told that its previous one drew
+    /// its triangles at `ms_a_triangle`, and the objects each frame drew.
+    fn rasterised_and_drawn(cubes_at: &[DVec3], frames: u32, ms_a_triangle: f64) -> (Vec<u64>, Vec<Vec<u32>>) {
+        let (scene, hierarchy) = cubes(cubes_at);
+        let camera = camera_down_z();
+        let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
+        let (mut rasterised, mut drawn) = (Vec::new(), Vec::<Vec<u32>>::new());
+        for frame in 0..frames {
+            let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
+            let previous = drawn.last().map(|objects| {
+                let triangles = 12 * objects.len() as u64;
+                PreviousFrame {
+                    frame_ms: triangles as f64 * ms_a_triangle,
+                    render_ms: triangles as f64 * ms_a_triangle,
+                    triangles_drawn: triangles,
+                }
+            });
+            let stats = swr.frame(
+                &mut calls,
+                &FrameInput {
+                    previous,
+                    ..input(frame, &camera, &scene, &hierarchy)
+                },
+            );
+            rasterised.push(stats.occluder_triangles);
+            let mut objects = calls.drawn();
+            objects.sort_unstable();
+            drawn.push(objects);
+        }
+        if rasterised.last() == Some(&0) {
+            assert!(swr.buffer.as_ref().unwrap().depths().iter().all(|&d| d == 0.0), "a resting buffer is empty");
+        }
+        (rasterised, drawn)
+    }
+
     #[test]
-    fn a_buffer_that_hides_nothing_rests_seven_frames_then_is_tried_again() {
+    fn a_buffer_that_hides_nothing_rests_seven_frames_then_fifteen_then_thirty_one() {
         // Three cubes side by side, none behind another.
-        let (scene, hierarchy) = cubes(&[
+        let side_by_side = [
             DVec3::new(-4.0, -0.5, -10.0),
             DVec3::new(-0.5, -0.5, -10.0),
             DVec3::new(3.0, -0.5, -10.0),
-        ]);
-        let camera = camera_down_z();
-        let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
-        let mut rasterised = Vec::new();
-        for frame in 0..11 {
-            let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
-            let stats = swr.frame(&mut calls, &input(frame, &camera, &scene, &hierarchy));
-            let mut drawn = calls.drawn();
-            drawn.sort_unstable();
-            assert_eq!(drawn, [0, 1, 2], "frame {frame}");
-            assert_eq!(stats.nodes_culled_occlusion, 0);
-            rasterised.push(stats.occluder_triangles);
-        }
+        ];
+        let (rasterised, drawn) = rasterised_and_drawn(&side_by_side, 60, 1.0);
+        assert!(drawn.iter().all(|objects| objects == &[0, 1, 2]));
         // Frame 0 knows no occluder; frame 1's hide nothing, so frames 2 to
-        // 8 build no buffer; frame 9 tries again, and 10 rests.
-        assert_eq!(rasterised, [0, 36, 0, 0, 0, 0, 0, 0, 0, 36, 0]);
-        assert!(swr.buffer.as_ref().unwrap().depths().iter().all(|&d| d == 0.0), "a resting buffer is empty");
+        // 8 build no buffer; frame 9 tries again and fails, so 10 to 24
+        // rest; 25 fails, and 26 to 56 rest; 57 tries again.
+        let tried: Vec<usize> = (0..rasterised.len()).filter(|&f| rasterised[f] > 0).collect();
+        assert_eq!(tried, [1, 9, 25, 57]);
+        assert!(tried.iter().all(|&f| rasterised[f] == 36));
+    }
+
+    #[test]
+    fn a_buffer_that_hides_less_drawing_than_it_costs_rests_and_one_that_hides_more_does_not() {
+        // A near cube hides the one behind it; a third stands aside.
+        let one_behind = [
+            DVec3::new(-0.5, -0.5, -3.0),
+            DVec3::new(-0.5, -0.5, -20.0),
+            DVec3::new(8.0, -0.5, -20.0),
+        ];
+        // Drawing a triangle costs next to nothing: hiding 12 of them saves
+        // less than the buffer costs, so it rests after each try (7, then
+        // 15 frames), drawing the hidden cube meanwhile.
+        let (rasterised, drawn) = rasterised_and_drawn(&one_behind, 28, 1e-12);
+        let tried: Vec<usize> = (0..rasterised.len()).filter(|&f| rasterised[f] > 0).collect();
+        assert_eq!(tried, [1, 9, 25]);
+        for (f, objects) in drawn.iter().enumerate() {
+            let hid = tried.contains(&f);
+            assert_eq!(objects, &if hid { vec![0, 2] } else { vec![0, 1, 2] }, "frame {f}");
+        }
+        // Drawing a triangle costs a second: the buffer pays every frame.
+        let (rasterised, drawn) = rasterised_and_drawn(&one_behind, 28, 1e3);
+        assert_eq!(rasterised[..3], [0, 36, 24]);
+        assert!(rasterised[2..].iter().all(|&t| t == 24));
+        assert!(drawn[1..].iter().all(|objects| objects == &[0, 2]));
     }
 
     #[test]
