@@ -210,8 +210,7 @@ fn show_missed_paints_the_dropped_object_magenta_and_nothing_else() {
 #[test]
 fn occluders_lays_swrs_buffer_over_the_quads_it_culled_with_and_dims_the_rest() {
     let quads = two_quads();
-    // And a box behind the first quad, so the buffer hides something (one
-    // that hides nothing rests, and is empty).
+    // And a box behind the first quad, which the buffer hides.
     let hidden = (DVec3::new(-2.5, -0.5, -12.0), DVec3::new(-1.5, 0.5, -11.0));
     let scene = boxes(&[quads[0], quads[1], hidden]);
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
@@ -224,8 +223,13 @@ fn occluders_lays_swrs_buffer_over_the_quads_it_culled_with_and_dims_the_rest() 
         show_missed: false,
         occluders: true,
     };
-    let one_cell_per_pixel =
-        ModeParams::parse(&["swr.resolution=100x100".to_string()], &["swr".parse().unwrap()]).unwrap();
+    // Built every frame, whatever it costs (a buffer that spares less
+    // drawing than it costs rests, and is empty).
+    let building = |resolution: &str| {
+        let params = [format!("swr.resolution={resolution}"), "swr.rests=false".to_string()];
+        ModeParams::parse(&params, &["swr".parse().unwrap()]).unwrap()
+    };
+    let one_cell_per_pixel = building("100x100");
     let inside: Vec<Vec<(u32, u32)>> = quads.iter().map(|&(min, max)| footprint(min, max)).collect();
     for gpu in common::gpus() {
         let mut world = World::new(scene.clone(), hierarchy.clone());
@@ -252,11 +256,9 @@ fn occluders_lays_swrs_buffer_over_the_quads_it_culled_with_and_dims_the_rest() 
         // Cells of 2 × 2 pixels: some of the quads' edges cut through
         // cells, whose covered pixels the working layer holds. Those are
         // orange, and only those: every pixel of the quads is coloured or
-        // orange, and no pixel outside them is either. (The box behind the
-        // first quad lies behind whole cells, so the buffer hides it and
-        // does not rest.)
+        // orange, and no pixel outside them is either.
         let mut world = World::new(scene.clone(), hierarchy.clone());
-        let coarse = ModeParams::parse(&["swr.resolution=50x50".to_string()], &["swr".parse().unwrap()]).unwrap();
+        let coarse = building("50x50");
         let swr = create("swr", &scene, &coarse).unwrap();
         let picture = render(&gpu, &mut world, &path, swr, 2, &look).unwrap();
         // The depth ramp's blue is at least 0.6 of full, a dimmed pixel's

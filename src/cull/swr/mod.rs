@@ -54,7 +54,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     summary: "CPU software occlusion culling: last frame's visible objects rasterised conservatively into a small depth buffer on the CPU, the hierarchy's boxes tested against it (Intel's MOC, Godot, Umbra)",
     chart_colour: [140, 86, 75],
     conservative: true,
-    params: &[RESOLUTION, TRIANGLES, THREADS],
+    params: &[RESOLUTION, TRIANGLES, THREADS, RESTS],
     needs: Needs::Nothing,
     carries: Carries::VisibleOnCpu,
     auto: Candidacy::Always,
@@ -80,6 +80,12 @@ const THREADS: ParamInfo = ParamInfo {
     summary: "threads rasterising occluders, each over a band of the buffer's rows (0: one per core; at most 64)",
 };
 
+const RESTS: ParamInfo = ParamInfo {
+    key: "rests",
+    default: "true",
+    summary: "let a buffer that spared less drawing than it cost rest (7 frames, then 15, then 31 while it keeps failing: a frustum traversal only); false builds one every frame",
+};
+
 /// The most threads `swr.threads` may ask for (or a frame use): each holds
 /// its share of the occluders' patches.
 const MAX_THREADS: usize = 64;
@@ -90,6 +96,8 @@ pub struct SwrParams {
     pub triangles: u64,
     /// 0: one per core.
     pub threads: usize,
+    /// Whether a buffer that did not pay rests ([`Rest`]).
+    pub rests: bool,
 }
 
 impl SwrParams {
@@ -106,6 +114,7 @@ impl SwrParams {
             resolution: params.get(ModeId::Swr, &RESOLUTION)?,
             triangles: params.get(ModeId::Swr, &TRIANGLES)?,
             threads,
+            rests: params.get(ModeId::Swr, &RESTS)?,
         })
     }
 
@@ -605,7 +614,7 @@ impl Culler for SoftwareOcclusionCulling {
         // is emptied, so what it shows is what they use).
         if !resting && !self.occluders.is_empty() {
             let spent_ms = started.elapsed().as_secs_f64() * 1e3;
-            let paid = paid(hidden_triangles, spent_ms, input.previous);
+            let paid = !self.params.rests || paid(hidden_triangles, spent_ms, input.previous);
             self.rest.after(paid);
             if let (false, Some(buffer)) = (paid, &mut self.buffer) {
                 buffer.cleared_bands(u32::MAX).for_each(drop);
