@@ -95,19 +95,25 @@ impl<F: FnMut(&Aabb) -> bool> Frame for Recording<F> {
 /// A scene of unit cubes whose lowest corners are `corners`, one object
 /// each, and a hierarchy over it with one object per leaf.
 pub fn cubes(corners: &[DVec3]) -> (Scene, Hierarchy) {
-    let mut builder = SceneBuilder::new("test cubes".into(), 4096);
-    for (k, &corner) in corners.iter().enumerate() {
+    let boxes: Vec<(DVec3, DVec3)> = corners.iter().map(|&c| (c, c + DVec3::ONE)).collect();
+    cuboids(&boxes)
+}
+
+/// One object per cuboid `(min, max)`, each in a leaf of its own.
+pub fn cuboids(boxes: &[(DVec3, DVec3)]) -> (Scene, Hierarchy) {
+    let mut builder = SceneBuilder::new("test cuboids".into(), 4096);
+    for (k, &(min, max)) in boxes.iter().enumerate() {
         let mut soup = TriangleSoup::default();
-        cuboid(&mut soup, corner, corner + DVec3::ONE);
+        cuboid(&mut soup, min, max);
         let name = format!("cube{k}");
         let group = builder
             .add_mesh(&name, &soup.positions, &soup.indices)
-            .expect("a unit cube is valid geometry");
+            .expect("a cuboid is valid geometry");
         builder
             .add_object(&name, &group, glam::DAffine3::IDENTITY)
-            .expect("test cubes lie within range");
+            .expect("test cuboids lie within range");
     }
-    let scene = builder.finish().expect("at least one cube");
+    let scene = builder.finish().expect("at least one cuboid");
     let params = HierarchyParams {
         max_leaf_objects: 1,
         ..HierarchyParams::default()

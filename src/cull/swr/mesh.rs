@@ -38,6 +38,17 @@
 //! rule 2): a triangle less than [`LEAST_HEIGHT`] errors high over any of
 //! its edges is left out of the patches, and its edges border them.
 //!
+//! Near the eye. A triangle with a corner the GPU may clip (at or behind
+//! the near plane, within its error) is drawn in its part beyond the near
+//! plane. Its part beyond a limit a little farther ([`polygon`], clipped
+//! as Sutherland and Hodgman clip) is a polygon whose corners are placed
+//! vertices or crossings of that limit; the GPU's own clipped polygon
+//! runs on along the same edges to the near plane, so it holds ours. Its
+//! cut sides are borders: the GPU clips each triangle on its own, so two
+//! triangles cut on a shared edge may not meet exactly there, and a
+//! crossing's error is that of the GPU's f32 clipping at the near plane,
+//! larger than a vertex's.
+//!
 //! The GPU must also draw every fragment an occluder vouches for: the
 //! scene's fragment stage discards only fragments nearer than the object's
 //! box (`FragmentLimit`, gpu/conservative.rs), and an occluder's triangles
@@ -88,6 +99,10 @@ pub struct ScreenMesh<'a> {
     /// Its vertices, index `first` first; `None` for one the GPU may clip
     /// (at or behind the near plane) or not place at all.
     pub vertices: &'a [Option<ScreenVertex>],
+    /// Where the part of a triangle the GPU draws in front of the near
+    /// plane ends; `None` leaves out every triangle with a vertex it does
+    /// not place.
+    pub near: Option<NearLimit<'a>>,
     pub first: u32,
     /// Three indices per triangle.
     pub indices: &'a [u32],
@@ -99,13 +114,63 @@ pub struct ScreenMesh<'a> {
     pub closed: bool,
 }
 
+/// Where the GPU clips an occluder's triangles at the near plane.
+pub struct NearLimit<'a> {
+    /// The point on screen where the segment from a placed vertex to one
+    /// that is not (each given by its index, `first` first) crosses the
+    /// limit beyond which vertices are placed, with the error of the GPU's
+    /// own crossing, which lies nearer the eye on the same line; `None`
+    /// where it cannot be placed.
+    pub crossing: &'a dyn Fn(usize, usize) -> Option<ScreenVertex>,
+}
+
+/// The part of a triangle the GPU draws, as a convex polygon on screen:
+/// the triangle itself, or, where the near plane clips it, the part in
+/// front of the near limit. Its sides (corner i to i + 1) are whole edges
+/// of the triangle, or cut: a part of an edge, or the limit's.
+#[derive(Clone, Copy, Debug)]
+struct Polygon {
+    corners: [ScreenVertex; 4],
+    /// Per side, the triangle's edge it is whole (corner k to k + 1), or
+    /// `None` where it is cut.
+    sides: [Option<usize>; 4],
+    count: usize,
+}
+
+impl Polygon {
+    /// Whether the GPU draws the whole triangle.
+    fn whole(&self) -> bool {
+        self.count == 3 && self.sides[..3].iter().all(Option::is_some)
+    }
+
+    /// Its triangles, fanned from its first corner (its diagonal is no
+    /// side).
+    fn triangles(&self) -> impl Iterator<Item = [ScreenVertex; 3]> + '_ {
+        (1..self.count - 1).map(|i| [self.corners[0], self.corners[i], self.corners[i + 1]])
+    }
+
+    /// Its sides, each as its two corners and the edge it is whole.
+    fn sides(&self) -> impl Iterator<Item = (ScreenVertex, ScreenVertex, Option<usize>)> + '_ {
+        (0..self.count).map(|i| (self.corners[i], self.corners[(i + 1) % self.count], self.sides[i]))
+    }
+
+    /// Its turn: that of each of its triangles, or excluded where one is a
+    /// sliver or they differ.
+    fn turn(&self) -> Turn {
+        let mut turns = self.triangles().map(turn_of);
+        let first = turns.next().unwrap_or(Turn::Excluded);
+        if turns.all(|t| t == first) { first } else { Turn::Excluded }
+    }
+}
+
 /// Which way a triangle turns on screen (x right, y down), if it may
 /// belong to a patch.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Turn {
     Counter,
     Clockwise,
-    /// In no patch: clipped, a sliver, or not a number.
+    /// In no patch: nothing of it beyond the near plane, a sliver, or not
+    /// a number.
     Excluded,
 }
 
@@ -188,14 +253,15 @@ impl Patches {
             let (mut lo, mut hi, mut nearest) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
             for k in start..end {
                 let t = self.by_patch[k].1 as usize;
-                let Some(c) = corners(mesh, t) else { continue };
-                let triangle = Triangle::new(c);
-                nearest = c.iter().fold(nearest, |n, c| n.max(c.at.z));
-                (lo, hi) = (lo.min(triangle.lo - triangle.slack), hi.max(triangle.hi + triangle.slack));
-                self.triangles.push(triangle);
-                for (edge, across) in mesh.neighbours[t].into_iter().enumerate() {
-                    if across == NO_NEIGHBOUR || self.turns[across as usize] != self.turns[t] {
-                        let (p, q) = (c[edge], c[(edge + 1) % 3]);
+                let Some(polygon) = polygon(mesh, t) else { continue };
+                for c in polygon.triangles() {
+                    let triangle = Triangle::new(c);
+                    nearest = c.iter().fold(nearest, |n, c| n.max(c.at.z));
+                    (lo, hi) = (lo.min(triangle.lo - triangle.slack), hi.max(triangle.hi + triangle.slack));
+                    self.triangles.push(triangle);
+                }
+                for (p, q, whole) in polygon.sides() {
+                    if whole.is_none_or(|edge| !self.joined(mesh, t, edge)) {
                         self.borders.push(Border {
                             p: p.at,
                             q: q.at,
@@ -216,22 +282,43 @@ impl Patches {
         first..self.patches.len()
     }
 
+    /// Whether edge `edge` of triangle `t` is inner: the GPU draws it
+    /// whole (both its vertices placed, so the triangles either side of it
+    /// share it as placed), and the triangle across it turns the same way.
+    /// A cut edge never is: the GPU clips each triangle on its own.
+    fn joined(&self, mesh: &ScreenMesh, t: usize, edge: usize) -> bool {
+        let across = mesh.neighbours[t][edge];
+        let placed = |k: usize| mesh.vertices[(mesh.indices[3 * t + k % 3] - mesh.first) as usize].is_some();
+        self.turns[t] != Turn::Excluded
+            && across != NO_NEIGHBOUR
+            && self.turns[across as usize] == self.turns[t]
+            && placed(edge)
+            && placed(edge + 1)
+    }
+
     /// Sorts the triangles into patches: those turning one way, joined by
     /// inner edges.
     fn find_patches(&mut self, mesh: &ScreenMesh) {
         self.turns.clear();
-        self.turns.extend((0..mesh.neighbours.len()).map(|t| corners(mesh, t).map_or(Turn::Excluded, turn_of)));
+        let mut clipped = false;
+        for t in 0..mesh.neighbours.len() {
+            let polygon = polygon(mesh, t);
+            clipped |= polygon.is_some_and(|p| !p.whole());
+            self.turns.push(polygon.map_or(Turn::Excluded, |p| p.turn()));
+        }
         self.parent.clear();
         self.parent.extend(0..self.turns.len() as u32);
         for t in 0..self.turns.len() {
-            for across in mesh.neighbours[t] {
-                if self.turns[t] != Turn::Excluded && across != NO_NEIGHBOUR && self.turns[across as usize] == self.turns[t] {
-                    let (a, b) = (self.root(t as u32), self.root(across));
+            for edge in 0..3 {
+                if self.joined(mesh, t, edge) {
+                    let (a, b) = (self.root(t as u32), self.root(mesh.neighbours[t][edge]));
                     self.parent[a.max(b) as usize] = a.min(b);
                 }
             }
         }
-        let behind = if mesh.closed { behind_turn(mesh, &self.turns) } else { None };
+        // Where the near plane clips a closed solid, its near side has a
+        // hole its far side may be seen through.
+        let behind = if mesh.closed && !clipped { behind_turn(mesh, &self.turns) } else { None };
         self.by_patch.clear();
         for t in 0..self.turns.len() as u32 {
             if self.turns[t as usize] != Turn::Excluded && Some(self.turns[t as usize]) != behind {
@@ -497,6 +584,49 @@ fn corners(mesh: &ScreenMesh, t: usize) -> Option<[ScreenVertex; 3]> {
     Some([vertex(0)?, vertex(1)?, vertex(2)?])
 }
 
+/// The part of triangle `t` the GPU draws in front of the near limit
+/// (Sutherland and Hodgman's clipping, edge by edge); `None` where there
+/// is none, or where a crossing cannot be placed. Without `mesh.near`,
+/// only a triangle the GPU places whole.
+fn polygon(mesh: &ScreenMesh, t: usize) -> Option<Polygon> {
+    let index = |k: usize| (mesh.indices[3 * t + k % 3] - mesh.first) as usize;
+    if let Some(corners) = corners(mesh, t) {
+        return Some(Polygon {
+            corners: [corners[0], corners[1], corners[2], corners[0]],
+            sides: [Some(0), Some(1), Some(2), None],
+            count: 3,
+        });
+    }
+    let near = mesh.near.as_ref()?;
+    let mut polygon = Polygon {
+        corners: [ScreenVertex {
+            at: DVec3::ZERO,
+            slack: 0.0,
+            depth_error: 0.0,
+        }; 4],
+        sides: [None; 4],
+        count: 0,
+    };
+    let mut push = |corner: ScreenVertex, side: Option<usize>| {
+        polygon.corners[polygon.count] = corner;
+        polygon.sides[polygon.count] = side;
+        polygon.count += 1;
+    };
+    for edge in 0..3 {
+        let (p, q) = (index(edge), index(edge + 1));
+        match (mesh.vertices[p], mesh.vertices[q]) {
+            (Some(p), Some(_)) => push(p, Some(edge)),
+            (Some(corner), None) => {
+                push(corner, None);
+                push((near.crossing)(p, q)?, None);
+            }
+            (None, Some(_)) => push((near.crossing)(q, p)?, None),
+            (None, None) => {}
+        }
+    }
+    (polygon.count >= 3).then_some(polygon)
+}
+
 /// The error of a triangle's corners: the largest.
 fn slack_of(corners: &[ScreenVertex; 3]) -> f64 {
     corners.iter().map(|c| c.slack).fold(0.0, f64::max)
@@ -614,6 +744,7 @@ pub(super) fn rasterise_meshes(buffer: &mut super::buffer::OcclusionBuffer, mesh
             indices,
             neighbours: &neighbours,
             closed: false,
+            near: None,
         };
         patches.clear();
         let which = patches.add(&mesh);
@@ -874,6 +1005,7 @@ mod tests {
                 indices: &indices,
                 neighbours: &neighbours,
                 closed: true,
+                near: None,
             };
             let turns: Vec<Turn> = (0..4).map(|t| corners(&mesh, t).map_or(Turn::Excluded, turn_of)).collect();
             (turns.clone(), behind_turn(&mesh, &turns))

@@ -46,7 +46,7 @@ use crate::gpu::{
 };
 use crate::scene::Scene;
 use buffer::{Cells, OcclusionBuffer};
-use mesh::{Patches, Rasteriser, ScreenMesh, ScreenVertex, VERTEX_ERROR};
+use mesh::{NearLimit, Patches, Rasteriser, ScreenMesh, ScreenVertex, VERTEX_ERROR};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
@@ -336,6 +336,11 @@ impl Projector {
         Some((on_screen, clip.w))
     }
 
+    /// The view depth of the eye-relative point `p` (its clip w).
+    fn view_depth(&self, p: DVec3) -> f64 {
+        (self.view_projection * p.extend(1.0)).w
+    }
+
     /// A tested box on screen; `None` where a corner does not project to
     /// a finite point (then nothing can be said of it: it is visible).
     fn box_on_screen(&self, q: &QueryBox) -> Option<BoxOnScreen> {
@@ -468,8 +473,9 @@ impl Culler for SoftwareOcclusionCulling {
     ///    patches' marks (buffer.rs, MOC's working layer) and takes the
     ///    farthest of their depths once every pixel is marked, with a depth
     ///    plane below theirs, so a box can be compared with it centre by
-    ///    centre. Triangles reaching the near plane are left out (fewer
-    ///    occluders is always safe).
+    ///    centre. A triangle reaching the near plane keeps its part beyond it
+    ///    (clipped, as MOC clips; its cut sides border its patch), so a floor
+    ///    or a wall that runs past the eye hides what lies behind it.
     /// 3. **Pyramid** of the buffer's farthest depths.
     /// 4. **Test**: the hierarchy is walked as `vfc` walks it; a node in the
     ///    frustum is also tested by its box (grown and raised as every box test
@@ -657,6 +663,8 @@ impl Culler for SoftwareOcclusionCulling {
 #[derive(Default)]
 struct Preparer {
     vertices: Vec<Option<ScreenVertex>>,
+    /// Per vertex, its position relative to the eye.
+    positions: Vec<DVec3>,
     patches: Patches,
     /// The objects of its share, each as (index among the occluders, its
     /// patches in `patches`).
@@ -783,7 +791,13 @@ const F32_POSITION_ERROR: f64 = 4.0 / (1u32 << 24) as f64;
 /// error, over the vertex's view depth, in pixels and in relative depth,
 /// is its part of its [`ScreenVertex`]'s slack and depth error. Vertices
 /// within that error (and 2^-10 of the near distance) of the near plane
-/// are left out, and their triangles with them: the GPU may clip them.
+/// are not placed: the GPU may clip them. A triangle with such a vertex
+/// keeps its part beyond that limit (mesh.rs), so a floor or a wall that
+/// reaches past the eye still hides what lies behind it (MOC clips its
+/// occluders at the near plane too). Where that part ends, the GPU clips
+/// the triangle nearer the eye, at the near plane, with f32 arithmetic on
+/// the same line: its crossing's error is taken as twice a vertex's at the
+/// near plane's depth, an upper bound of it anywhere between.
 fn prepare_object(preparer: &mut Preparer, occluders: &Occluders, o: u32) -> Range<usize> {
     let (camera, scene, projector) = (occluders.camera, occluders.scene, occluders.projector);
     let object = &scene.objects[o as usize];
@@ -798,25 +812,40 @@ fn prepare_object(preparer: &mut Preparer, occluders: &Occluders, o: u32) -> Ran
         .iter()
         .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
     preparer.vertices.clear();
+    preparer.positions.clear();
     if first <= last {
-        preparer
-            .vertices
-            .extend(scene.vertices[first as usize..=last as usize].iter().map(|p| {
-                let local = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
-                let (at, view_depth) = projector.project(object.transform.transform_point3(local) - camera.eye, near)?;
-                Some(ScreenVertex {
-                    at,
-                    slack: VERTEX_ERROR + position_error * pixels_at_unit_depth / view_depth,
-                    depth_error: position_error / view_depth,
-                })
+        for p in &scene.vertices[first as usize..=last as usize] {
+            let local = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+            let position = object.transform.transform_point3(local) - camera.eye;
+            preparer.positions.push(position);
+            preparer.vertices.push(projector.project(position, near).map(|(at, view_depth)| ScreenVertex {
+                at,
+                slack: VERTEX_ERROR + position_error * pixels_at_unit_depth / view_depth,
+                depth_error: position_error / view_depth,
             }));
+        }
     }
+    let positions = &preparer.positions;
+    let crossing = |placed: usize, clipped: usize| {
+        let (p, q) = (positions[placed], positions[clipped]);
+        let (wp, wq) = (projector.view_depth(p), projector.view_depth(q));
+        let at = p + (q - p) * ((wp - near) / (wp - wq));
+        // At the limit, so well beyond the near plane.
+        let (at, _) = projector.project(at, camera.near)?;
+        let error = 2.0 * position_error / camera.near;
+        Some(ScreenVertex {
+            at,
+            slack: VERTEX_ERROR + error * pixels_at_unit_depth,
+            depth_error: error,
+        })
+    };
     let mesh = ScreenMesh {
         vertices: &preparer.vertices,
         first,
         indices,
         neighbours: &occluders.neighbours[object.mesh as usize],
         closed: scene.parts[object.part as usize].closed,
+        near: Some(NearLimit { crossing: &crossing }),
     };
     preparer.patches.add(&mesh)
 }
@@ -824,7 +853,7 @@ fn prepare_object(preparer: &mut Preparer, occluders: &Occluders, o: u32) -> Ran
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cull::recording::{Recording, camera_down_z, cubes, input};
+    use crate::cull::recording::{Recording, camera_down_z, cubes, cuboids, input};
 
     #[test]
     fn an_object_behind_an_occluder_is_drawn_until_the_occluder_is_known_even_as_an_occluder() {
@@ -867,6 +896,52 @@ mod tests {
         let mut objects = frame_calls.drawn();
         objects.sort_unstable();
         assert_eq!(objects, [0, 2]);
+    }
+
+    #[test]
+    fn a_floor_reaching_past_the_eye_hides_what_lies_under_it_and_vouches_for_no_depth_nearer_than_its_own() {
+        use crate::gpu::{entry_depth, pixel_ray};
+        // A floor slab under the eye, reaching 60 m on every side (its
+        // triangles cross the near plane), and a box buried under it ahead.
+        let boxes = [
+            (DVec3::new(-60.0, -1.5, -60.0), DVec3::new(60.0, -1.0, 60.0)),
+            (DVec3::new(-1.0, -4.0, -12.0), DVec3::new(1.0, -2.5, -10.0)),
+        ];
+        let (scene, hierarchy) = cuboids(&boxes);
+        let camera = camera_down_z();
+        let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
+        let mut drawn = Vec::new();
+        for frame in 0..2 {
+            let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
+            swr.frame(&mut calls, &input(frame, &camera, &scene, &hierarchy));
+            let mut objects = calls.drawn();
+            objects.sort_unstable();
+            drawn.push(objects);
+        }
+        // The floor's part in front of the near plane is an occluder: the
+        // buried box is not drawn once the floor is known.
+        assert_eq!(drawn, [vec![0, 1], vec![0]]);
+        // At every pixel centre, what the buffer vouches for is no nearer
+        // than where the pixel's ray first enters a box (the surface drawn
+        // there), and it vouches for the floor's depth nearly everywhere
+        // below the horizon.
+        let buffer = swr.buffer.as_ref().unwrap();
+        let size = Resolution::DEFAULT;
+        let mut floor_pixels = 0;
+        for py in 0..size.height {
+            for px in 0..size.width {
+                let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
+                let ray = pixel_ray(&camera, size, x, y);
+                let drawn = boxes
+                    .iter()
+                    .filter_map(|&(min, max)| entry_depth(&camera, &Aabb::new(min, max), ray))
+                    .fold(0.0, f64::max);
+                let vouched = buffer.vouched_at(x, y);
+                assert!(vouched <= drawn, "({x}, {y}): the buffer vouches for {vouched}, the floor is at {drawn}");
+                floor_pixels += u32::from(vouched > 0.0);
+            }
+        }
+        assert!(floor_pixels > size.width * size.height * 2 / 5, "{floor_pixels} pixels hold the floor");
     }
 
     /// The occluder triangles `swr` rasterised in each of `frames` frames of
