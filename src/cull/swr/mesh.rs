@@ -8,7 +8,8 @@
 //! equal positions of one object at one point, so triangles sharing an
 //! edge stay joined. Call an edge **inner** when exactly two of the
 //! object's triangles share it, in opposite directions, both turning one
-//! way on screen and neither a sliver; a **patch** is such triangles
+//! way on screen and neither a sliver, and the GPU places both its ends
+//! (it clips neither triangle there); a **patch** is such triangles
 //! joined by inner edges (the GPU draws either turn: the scene renders
 //! without face culling), and each edge of its triangles that is not inner
 //! is on its **border**. At a point p, the border winds round p once for

@@ -152,8 +152,10 @@ pub struct SoftwareOcclusionCulling {
     /// The objects found visible last frame.
     visible: Vec<u32>,
     /// Frames left in which no buffer is built, since the last one did
-    /// not pay ([`Rest`]).
+    /// not pay ([`Rest`]), and whether the buffer holds a frame's
+    /// occluders.
     rest: Rest,
+    buffer_holds: bool,
     /// Scratch, reused so a frame allocates nothing once warm.
     candidates: Vec<Candidate>,
     occluders: Vec<u32>,
@@ -180,6 +182,7 @@ impl SoftwareOcclusionCulling {
             careless: false,
             visible: Vec::new(),
             rest: Rest::default(),
+            buffer_holds: false,
             candidates: Vec::new(),
             occluders: Vec::new(),
             is_occluder: Vec::new(),
@@ -221,7 +224,7 @@ impl SoftwareOcclusionCulling {
 }
 
 /// When `swr` builds no buffer, and so tests no box (a frustum traversal
-/// only): after a buffer that did not pay ([`paid`]), for [`REST_FRAMES`]
+/// only): after a buffer that did not pay ([`pays`]), for [`REST_FRAMES`]
 /// frames, twice as many and one more each time the next buffer fails
 /// again, up to [`LONGEST_REST`]; a buffer that pays brings the rests back
 /// to the shortest. Where occlusion never pays, it costs one frame in 32.
@@ -267,16 +270,16 @@ impl Rest {
 }
 
 /// Whether a buffer that hid `hidden` triangles, at a cost of `spent_ms`
-/// of this frame's CPU time, paid for itself: it hid something and, where
+/// of this frame's CPU time, pays for itself: it hid something and, where
 /// the mode's previous frame says what its drawing cost a triangle, the
 /// drawing it spared is worth at least that time. The estimate errs
 /// towards building buffers: a triangle's share of the drawing holds the
 /// frame's fixed costs too, and a hidden node counts all its objects'
 /// triangles, even those beyond the frustum.
-fn paid(hidden: u64, spent_ms: f64, previous: Option<PreviousFrame>) -> bool {
+fn pays(hidden: u64, spent_ms: f64, previous: Option<PreviousFrame>) -> bool {
     match previous {
         _ if hidden == 0 => false,
-        Some(p) if p.triangles_drawn > 0 && p.render_ms.is_finite() => {
+        Some(p) if p.triangles_drawn > 0 && p.render_ms.is_finite() && p.render_ms > 0.0 => {
             hidden as f64 * p.render_ms / p.triangles_drawn as f64 >= spent_ms
         }
         _ => true,
@@ -513,8 +516,13 @@ impl Culler for SoftwareOcclusionCulling {
         self.is_found.resize(scene.objects.len(), false);
         // 1. Occluders: last frame's visible objects still on screen,
         // largest first; none while the buffer rests.
-        let started = Instant::now();
         let resting = self.rest.take();
+        // A resting buffer holds nothing (what it shows is what the frame
+        // used).
+        if let (true, Some(buffer)) = (resting && self.buffer_holds, &mut self.buffer) {
+            buffer.cleared_bands(u32::MAX).for_each(drop);
+            self.buffer_holds = false;
+        }
         self.candidates.clear();
         let visible: &[u32] = if resting { &[] } else { &self.visible };
         for &o in visible {
@@ -553,8 +561,11 @@ impl Culler for SoftwareOcclusionCulling {
 
         stats.occluder_triangles = self.params.triangles - budget;
 
-        // 2-3. Their triangles into the buffer, then the pyramid.
+        // 2-3. Their triangles into the buffer, then the pyramid. What a
+        // buffer costs is timed from here (a mesh's neighbours are made
+        // once).
         self.make_neighbours(scene);
+        let started = Instant::now();
         let Some(buffer) = &mut self.buffer else {
             unreachable!("made above")
         };
@@ -565,10 +576,10 @@ impl Culler for SoftwareOcclusionCulling {
             scene,
             neighbours: &self.neighbours,
         };
-        // A resting buffer was emptied when it began to rest.
         if !resting {
             occluders.rasterise(buffer, &mut self.preparers, &mut self.rasterisers);
             buffer.build_pyramid();
+            self.buffer_holds = true;
         }
 
         // 4. The hierarchy, in the frustum and not hidden.
@@ -616,15 +627,11 @@ impl Culler for SoftwareOcclusionCulling {
                 }
             }
         }
-        // A buffer of occluders that did not pay rests the next frames (and
-        // is emptied, so what it shows is what they use).
-        if !resting && !self.occluders.is_empty() {
+        // A buffer of occluders that did not pay rests the next frames (a
+        // warm-up frame's time, compiling and filling caches, says nothing).
+        if !resting && !self.occluders.is_empty() && self.params.rests && !input.warm_up {
             let spent_ms = started.elapsed().as_secs_f64() * 1e3;
-            let paid = !self.params.rests || paid(hidden_triangles, spent_ms, input.previous);
-            self.rest.after(paid);
-            if let (false, Some(buffer)) = (paid, &mut self.buffer) {
-                buffer.cleared_bands(u32::MAX).for_each(drop);
-            }
+            self.rest.after(pays(hidden_triangles, spent_ms, input.previous));
         }
 
         // 5. The visible objects, occluders first; they are next frame's
@@ -648,9 +655,12 @@ impl Culler for SoftwareOcclusionCulling {
         stats
     }
 
+    /// Also ends a rest: a culler seeded by another (as `auto` seeds the
+    /// one it probes) is measured frame by frame, each with its buffer.
     fn seed_visible(&mut self, visible: &[u32]) {
         self.visible.clear();
         self.visible.extend_from_slice(visible);
+        self.rest = Rest::default();
     }
 
     fn occluder_depths(&self) -> Option<OccluderDepths> {
@@ -797,7 +807,8 @@ const F32_POSITION_ERROR: f64 = 4.0 / (1u32 << 24) as f64;
 /// occluders at the near plane too). Where that part ends, the GPU clips
 /// the triangle nearer the eye, at the near plane, with f32 arithmetic on
 /// the same line: its crossing's error is taken as twice a vertex's at the
-/// near plane's depth, an upper bound of it anywhere between.
+/// near plane's depth (an upper bound of it anywhere between), and its
+/// sides' placement on screen bounded where they are on screen.
 fn prepare_object(preparer: &mut Preparer, occluders: &Occluders, o: u32) -> Range<usize> {
     let (camera, scene, projector) = (occluders.camera, occluders.scene, occluders.projector);
     let object = &scene.objects[o as usize];
@@ -825,6 +836,16 @@ fn prepare_object(preparer: &mut Preparer, occluders: &Occluders, o: u32) -> Ran
             }));
         }
     }
+    // An error d in eye space moves a point at view depth w on screen by up
+    // to f / w · d · (1 + |x| / f) on x (alike on y), x its offset from the
+    // view's axis: without bound for a crossing far off screen. But a side
+    // through it runs on screen from a placed vertex A, and how far the
+    // placed line is from ours changes linearly along it: at a point P on
+    // screen, s = |AP| / |AC| of the way to the crossing C, the crossing's
+    // part is s · f / w · d · (1 + |C| / f), within f / w · d · (1 + 3 r)
+    // as |AP| and |A| are at most the screen's span, r its greatest offset
+    // from the axis over f.
+    let screen_reach = (projector.size.x + projector.size.y) / 2.0 / pixels_at_unit_depth;
     let positions = &preparer.positions;
     let crossing = |placed: usize, clipped: usize| {
         let (p, q) = (positions[placed], positions[clipped]);
@@ -835,7 +856,7 @@ fn prepare_object(preparer: &mut Preparer, occluders: &Occluders, o: u32) -> Ran
         let error = 2.0 * position_error / camera.near;
         Some(ScreenVertex {
             at,
-            slack: VERTEX_ERROR + error * pixels_at_unit_depth,
+            slack: VERTEX_ERROR + error * pixels_at_unit_depth * (1.0 + 3.0 * screen_reach),
             depth_error: error,
         })
     };
@@ -996,6 +1017,33 @@ mod tests {
         let tried: Vec<usize> = (0..rasterised.len()).filter(|&f| rasterised[f] > 0).collect();
         assert_eq!(tried, [1, 9, 25, 57]);
         assert!(tried.iter().all(|&f| rasterised[f] == 36));
+    }
+
+    #[test]
+    fn a_buffer_that_pays_brings_the_rests_back_to_the_shortest() {
+        let mut rest = Rest::default();
+        // Which frames of `frames` rest, each buffer paying as `pays` says.
+        let mut run = |frames: u32, pays: &dyn Fn(u32) -> bool| -> Vec<u32> {
+            (0..frames)
+                .filter(|&f| {
+                    let resting = rest.take();
+                    if !resting {
+                        rest.after(pays(f));
+                    }
+                    resting
+                })
+                .collect()
+        };
+        // Fails at 0 (rests 1-7), at 8 (9-23), pays at 24, fails at 25
+        // (rests 26-32: seven again, not 31).
+        let resting = run(40, &|f| f == 24 || f > 25);
+        let expected: Vec<u32> = (1..8).chain(9..24).chain(26..33).collect();
+        assert_eq!(resting, expected);
+        // Told to start over (a culler seeded by another), it rests no more.
+        let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
+        swr.rest.after(false);
+        swr.seed_visible(&[]);
+        assert!(!swr.rest.take());
     }
 
     #[test]
@@ -1218,7 +1266,11 @@ mod tests {
             .collect();
         assert!(!gpus.is_empty(), "no adapter: install Mesa (scripts/install-deps)");
         for gpu in &gpus {
-            let params = SwrParams::from_params(&ModeParams::default()).unwrap();
+            // Buffers built every frame, whatever they cost.
+            let params = SwrParams {
+                rests: false,
+                ..SwrParams::from_params(&ModeParams::default()).unwrap()
+            };
             let careful = SoftwareOcclusionCulling::new(params);
             let careless = SoftwareOcclusionCulling {
                 careless: true,
