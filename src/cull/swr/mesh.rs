@@ -861,28 +861,34 @@ mod tests {
                 .map(|v| v.at + DVec3::new(shift(), shift(), 0.0))
                 .collect();
             for t in indices.chunks_exact(3) {
-                let [a, b, c] = [0, 1, 2].map(|k| placed[t[k] as usize]);
-                let area = twice_area(a, b, c);
-                if area == 0.0 {
-                    continue;
-                }
-                let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
-                let ys = (lo.y - 0.5).ceil().max(0.0) as u32..((hi.y - 0.5).floor() + 1.0).clamp(0.0, f64::from(size.height)) as u32;
-                let xs = (lo.x - 0.5).ceil().max(0.0) as u32..((hi.x - 0.5).floor() + 1.0).clamp(0.0, f64::from(size.width)) as u32;
-                for py in ys {
-                    for px in xs.clone() {
-                        let p = DVec3::new(f64::from(px) + 0.5, f64::from(py) + 0.5, 0.0);
-                        let (wa, wb, wc) = (twice_area(p, b, c) / area, twice_area(a, p, c) / area, twice_area(a, b, p) / area);
-                        if wa >= 0.0 && wb >= 0.0 && wc >= 0.0 {
-                            let depth = wa * a.z + wb * b.z + wc * c.z;
-                            let at = &mut nearest[(py * size.width + px) as usize];
-                            *at = at.max(depth);
-                        }
-                    }
-                }
+                paint(&mut nearest, size, [0, 1, 2].map(|k| placed[t[k] as usize]));
             }
         }
         nearest
+    }
+
+    /// Raises `nearest` to the depth triangle `[a, b, c]` (pixels and
+    /// depth) is drawn at, at each pixel centre of `size` it holds, depth
+    /// interpolated exactly.
+    fn paint(nearest: &mut [f64], size: Resolution, [a, b, c]: [DVec3; 3]) {
+        let area = twice_area(a, b, c);
+        if area == 0.0 || !area.is_finite() {
+            return;
+        }
+        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+        let ys = (lo.y - 0.5).ceil().max(0.0) as u32..((hi.y - 0.5).floor() + 1.0).clamp(0.0, f64::from(size.height)) as u32;
+        let xs = (lo.x - 0.5).ceil().max(0.0) as u32..((hi.x - 0.5).floor() + 1.0).clamp(0.0, f64::from(size.width)) as u32;
+        for py in ys {
+            for px in xs.clone() {
+                let p = DVec3::new(f64::from(px) + 0.5, f64::from(py) + 0.5, 0.0);
+                let (wa, wb, wc) = (twice_area(p, b, c) / area, twice_area(a, p, c) / area, twice_area(a, b, p) / area);
+                if wa >= 0.0 && wb >= 0.0 && wc >= 0.0 {
+                    let depth = wa * a.z + wb * b.z + wc * c.z;
+                    let at = &mut nearest[(py * size.width + px) as usize];
+                    *at = at.max(depth);
+                }
+            }
+        }
     }
 
     #[test]
@@ -919,6 +925,127 @@ mod tests {
         }
         assert!(vouched > 3000, "cells vouched for ({vouched})");
         assert!(small > 3, "meshes of sub-pixel triangles ({small})");
+    }
+
+    /// A pinhole view of eye-space points (x right, y up, w ahead) on a
+    /// target of 160 × 120 pixels, 100 pixels at unit depth, reverse-Z.
+    const NEAR: f64 = 0.1;
+    fn on_screen(p: DVec3) -> DVec3 {
+        DVec3::new(80.0 + 100.0 * p.x / p.z, 60.0 - 100.0 * p.y / p.z, NEAR / p.z)
+    }
+
+    /// Where segment `p` (at or beyond `limit` ahead) to `q` (nearer)
+    /// crosses `limit`.
+    fn crossing(p: DVec3, q: DVec3, limit: f64) -> DVec3 {
+        p + (q - p) * ((p.z - limit) / (p.z - q.z))
+    }
+
+    /// Grids that run from behind the eye to 4 to 9 ahead (floors, walls
+    /// and slants), jittered, vertices shared.
+    fn grids_past_the_eye(rng: &mut Rng) -> Vec<(Vec<DVec3>, Vec<u32>)> {
+        (0..10)
+            .map(|_| {
+                let ahead = DVec3::new(rng.range(-0.3, 0.3), rng.range(-0.3, 0.3), rng.range(4.0, 9.0));
+                let across = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0).normalize() * rng.range(0.4, 3.0);
+                let start = DVec3::new(rng.range(-1.5, 1.5), rng.range(-1.5, 1.5), rng.range(-1.0, 0.05));
+                let (n, m) = (rng.range(3.0, 16.0) as u32, rng.range(2.0, 8.0) as u32);
+                let mut vertices = Vec::new();
+                for i in 0..=n {
+                    for j in 0..=m {
+                        let jitter = DVec3::new(rng.range(-0.01, 0.01), rng.range(-0.01, 0.01), rng.range(-0.01, 0.01));
+                        vertices.push(start + ahead * (f64::from(i) / f64::from(n)) + across * (f64::from(j) / f64::from(m)) + jitter);
+                    }
+                }
+                let at = |i: u32, j: u32| i * (m + 1) + j;
+                let mut indices = Vec::new();
+                for i in 0..n {
+                    for j in 0..m {
+                        indices.extend([at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+                    }
+                }
+                (vertices, indices)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_mesh_the_near_plane_cuts_on_screen_vouches_for_no_depth_nearer_than_the_gpu_may_draw_its_clipped_part_at() {
+        let mut rng = Rng::new(41);
+        let size = Resolution { width: 160, height: 120 };
+        let limit = NEAR * (1.0 + 1.0 / 1024.0);
+        let placed = |p: DVec3| ScreenVertex {
+            at: on_screen(p),
+            slack: VERTEX_ERROR,
+            depth_error: 0.0,
+        };
+        let mut vouched = 0;
+        for cells in [size, Resolution { width: 53, height: 40 }] {
+            for _ in 0..4 {
+                let meshes = grids_past_the_eye(&mut rng);
+                let mut buffer = OcclusionBuffer::new(size, cells);
+                {
+                    let Some(mut band) = buffer.cleared_bands(u32::MAX).next() else { unreachable!() };
+                    let (mut patches, mut rasteriser) = (Patches::default(), Rasteriser::default());
+                    for (points, indices) in &meshes {
+                        let vertices: Vec<Option<ScreenVertex>> =
+                            points.iter().map(|&p| (p.z >= limit).then(|| placed(p))).collect();
+                        let cross = |p: usize, q: usize| Some(placed(crossing(points[p], points[q], limit)));
+                        let neighbours = super::super::neighbours::neighbours(indices, |i| points[i as usize].as_vec3().to_array());
+                        let mesh = ScreenMesh {
+                            vertices: &vertices,
+                            first: 0,
+                            indices,
+                            neighbours: &neighbours,
+                            closed: false,
+                            near: Some(NearLimit { crossing: &cross }),
+                        };
+                        patches.clear();
+                        let which = patches.add(&mesh);
+                        rasteriser.rasterise(&mut band, &patches, which);
+                    }
+                }
+                // As the GPU may draw them: each triangle clipped on its own
+                // at the near plane, its crossings placed on their own, every
+                // corner up to a vertex's error from where it projects.
+                for _ in 0..3 {
+                    let mut nearest = vec![0.0f64; (size.width * size.height) as usize];
+                    for (points, indices) in &meshes {
+                        let mut shift = || DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0) * VERTEX_ERROR;
+                        let moved: Vec<DVec3> = points.iter().map(|_| shift()).collect();
+                        for t in indices.chunks_exact(3) {
+                            let mut polygon = Vec::new();
+                            for k in 0..3 {
+                                let (i, j) = (t[k] as usize, t[(k + 1) % 3] as usize);
+                                let (p, q) = (points[i], points[j]);
+                                if p.z >= NEAR {
+                                    polygon.push(on_screen(p) + moved[i]);
+                                }
+                                if (p.z >= NEAR) != (q.z >= NEAR) {
+                                    let (inside, outside) = if p.z >= NEAR { (p, q) } else { (q, p) };
+                                    polygon.push(on_screen(crossing(inside, outside, NEAR)) + shift());
+                                }
+                            }
+                            for k in 1..polygon.len().saturating_sub(1) {
+                                paint(&mut nearest, size, [polygon[0], polygon[k], polygon[k + 1]]);
+                            }
+                        }
+                    }
+                    for py in 0..size.height {
+                        for px in 0..size.width {
+                            let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
+                            let holds = buffer.vouched_at(x, y);
+                            let shown = nearest[(py * size.width + px) as usize];
+                            assert!(
+                                holds <= shown,
+                                "{cells:?}: the buffer vouches for {holds} at ({x}, {y}), where the GPU may draw {shown}"
+                            );
+                        }
+                    }
+                }
+                vouched += buffer.depths().iter().filter(|&&d| d > 0.0).count();
+            }
+        }
+        assert!(vouched > 5000, "cells vouched for ({vouched})");
     }
 
     /// Whether the point (x, y) lies within `m` of triangle `t` on each
