@@ -867,6 +867,24 @@ mod tests {
         nearest
     }
 
+    /// Asserts that at no pixel centre of the target `buffer` (of `cells`)
+    /// vouches for a depth nearer than `nearest` (what the GPU may draw
+    /// there, pixel by pixel).
+    fn assert_vouches_no_nearer(buffer: &OcclusionBuffer, nearest: &[f64], cells: Resolution) {
+        let size = buffer.target();
+        for py in 0..size.height {
+            for px in 0..size.width {
+                let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
+                let holds = buffer.vouched_at(x, y);
+                let shown = nearest[(py * size.width + px) as usize];
+                assert!(
+                    holds <= shown,
+                    "{cells:?}: the buffer vouches for {holds} at ({x}, {y}), where the GPU may draw {shown}"
+                );
+            }
+        }
+    }
+
     /// Raises `nearest` to the depth triangle `[a, b, c]` (pixels and
     /// depth) is drawn at, at each pixel centre of `size` it holds, depth
     /// interpolated exactly.
@@ -907,17 +925,7 @@ mod tests {
                 rasterise_meshes(&mut buffer, &meshes);
                 for _ in 0..3 {
                     let nearest = drawn(&meshes, size, &mut rng);
-                    for py in 0..size.height {
-                        for px in 0..size.width {
-                            let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
-                            let holds = buffer.vouched_at(x, y);
-                            let shown = nearest[(py * size.width + px) as usize];
-                            assert!(
-                                holds <= shown,
-                                "{cells:?}: the buffer vouches for {holds} at ({x}, {y}), where the GPU may draw {shown}"
-                            );
-                        }
-                    }
+                    assert_vouches_no_nearer(&buffer, &nearest, cells);
                 }
                 vouched += buffer.depths().iter().filter(|&&d| d > 0.0).count() as u64;
                 small += u64::from(meshes.iter().any(|(v, _)| v.len() > 3 && (v[1].at - v[0].at).length() < 1.0));
@@ -1030,17 +1038,7 @@ mod tests {
                             }
                         }
                     }
-                    for py in 0..size.height {
-                        for px in 0..size.width {
-                            let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
-                            let holds = buffer.vouched_at(x, y);
-                            let shown = nearest[(py * size.width + px) as usize];
-                            assert!(
-                                holds <= shown,
-                                "{cells:?}: the buffer vouches for {holds} at ({x}, {y}), where the GPU may draw {shown}"
-                            );
-                        }
-                    }
+                    assert_vouches_no_nearer(&buffer, &nearest, cells);
                 }
                 vouched += buffer.depths().iter().filter(|&&d| d > 0.0).count();
             }
