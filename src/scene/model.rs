@@ -2,6 +2,7 @@
 //! that place them, the parts they were cut from ([`Scene`]), and the one
 //! builder every loader feeds ([`SceneBuilder`]).
 
+use std::ops::Range;
 use std::path::PathBuf;
 
 use glam::{DAffine3, DVec3};
@@ -17,14 +18,44 @@ use validate::GeometryError;
 /// Default triangle budget of one cluster: meshes above it are split.
 pub const DEFAULT_CLUSTER_TRIANGLES: u32 = 4096;
 
-/// A contiguous range of the shared index buffer; vertex positions are in the
-/// mesh's local frame, centred on the mesh so that f32 keeps full precision.
+/// Clusters of one mesh are stored against one origin (the centre of
+/// their bounds) while those bounds span at most this many times the
+/// longest side of each of them, and they are at most
+/// [`SHARED_ORIGIN_CLUSTERS`]. One origin makes the clusters' shared edges
+/// seamless ([`Mesh::shares_origin_with`]); a far one costs f32 precision.
+/// The GPU's error in a vertex is a few steps of 2^-24 of the sums it
+/// makes, |model-view · local position| + |translation|: with a span s of
+/// at most 16 longest sides, and a cluster reaching at least half its
+/// longest side from any eye, those sums are at most 1.7 · reach + 2 · s ≤
+/// 66 · reach, so 8 steps of 2^-24 of them stay within 3.2e-5 of the
+/// cluster's reach; with the rounding of the stored vertex itself (2^-24
+/// of s), within 3.4e-5, below the 5e-5 by which box tests and the
+/// fragment limit keep clear of its surface (gpu/conservative.rs, half of
+/// `BOX_GROWTH`).
+const SHARED_ORIGIN_SPAN: f64 = 16.0;
+
+/// The most clusters stored against one origin: neighbours across them
+/// are found in one sort (swr), and a run's vertices lie farther from its
+/// origin the larger it is.
+const SHARED_ORIGIN_CLUSTERS: usize = 64;
+
+/// A contiguous range of the shared index buffer, its vertices a
+/// contiguous run of the shared vertex buffer (a cluster's own: a vertex on
+/// a cut between clusters is stored once for each). Vertex positions are
+/// in a local frame whose origin lies near the mesh, so that f32 keeps its
+/// precision ([`SHARED_ORIGIN_SPAN`]).
 #[derive(Clone, Debug)]
 pub struct Mesh {
     pub first_index: u32,
     pub index_count: u32,
     /// Bounds of the local-space vertices.
     pub bounds: Aabb,
+    /// The meshes (its own among them, consecutive) cut from the same
+    /// source mesh and stored against the same origin: placed by one
+    /// transform, a position they share has the same f32 bits in each and
+    /// so lands on the same point on the GPU, and the edges they share
+    /// leave no seam.
+    pub shares_origin_with: Range<u32>,
 }
 
 impl Mesh {
@@ -193,29 +224,34 @@ impl SceneBuilder {
     }
 
     /// Splits a validated mesh into clusters and stores each as a mesh,
-    /// its vertices relative to its centre; returns (mesh id, centre).
+    /// its vertices relative to the origin of its run ([`shared_origins`]);
+    /// returns (mesh id, origin).
     fn store_clusters(&mut self, positions: &[DVec3], indices: &[u32]) -> Vec<(u32, DVec3)> {
-        cluster::split(positions, indices, self.cluster_triangles)
-            .into_iter()
-            .map(|c| {
+        let clusters = cluster::split(positions, indices, self.cluster_triangles);
+        let first_mesh = self.meshes.len() as u32;
+        let mut stored = Vec::with_capacity(clusters.len());
+        for run in shared_origins(&clusters) {
+            let origin = run.bounds.center();
+            let meshes = first_mesh + run.clusters.start as u32..first_mesh + run.clusters.end as u32;
+            for c in &clusters[run.clusters] {
                 let first_index = self.indices.len() as u32;
                 let base = self.vertices.len() as u32;
-                let origin = c.bounds.center();
                 self.vertices.extend(
                     c.vertices
                         .iter()
                         .map(|&v| (positions[v as usize] - origin).as_vec3().to_array()),
                 );
                 self.indices.extend(c.indices.iter().map(|&i| base + i));
-                let local = Aabb::new(c.bounds.min - origin, c.bounds.max - origin);
                 self.meshes.push(Mesh {
                     first_index,
                     index_count: c.indices.len() as u32,
-                    bounds: local,
+                    bounds: Aabb::new(c.bounds.min - origin, c.bounds.max - origin),
+                    shares_origin_with: meshes.clone(),
                 });
-                (self.meshes.len() as u32 - 1, origin)
-            })
-            .collect()
+                stored.push((self.meshes.len() as u32 - 1, origin));
+            }
+        }
+        stored
     }
 
     /// Places every cluster of `group` in the world under `transform`. A
@@ -339,6 +375,45 @@ impl SceneBuilder {
     }
 }
 
+/// Consecutive clusters stored against one origin, and their bounds.
+struct OriginRun {
+    clusters: Range<usize>,
+    bounds: Aabb,
+}
+
+/// `clusters` (in the split's order, so neighbours in space mostly follow
+/// each other) cut into runs, each as long as its bounds span at most
+/// [`SHARED_ORIGIN_SPAN`] times the longest side of each of its clusters
+/// and it holds at most [`SHARED_ORIGIN_CLUSTERS`].
+fn shared_origins(clusters: &[cluster::Cluster]) -> Vec<OriginRun> {
+    let longest_side = |b: &Aabb| b.extent().max_element();
+    let mut runs: Vec<OriginRun> = Vec::new();
+    // The shortest longest side in the current run.
+    let mut shortest = f64::INFINITY;
+    for (k, c) in clusters.iter().enumerate() {
+        let side = longest_side(&c.bounds);
+        let joined = runs.last_mut().filter(|run| {
+            run.clusters.len() < SHARED_ORIGIN_CLUSTERS
+                && longest_side(&run.bounds.union(c.bounds)) <= SHARED_ORIGIN_SPAN * shortest.min(side)
+        });
+        match joined {
+            Some(run) => {
+                run.clusters.end = k + 1;
+                run.bounds = run.bounds.union(c.bounds);
+                shortest = shortest.min(side);
+            }
+            None => {
+                runs.push(OriginRun {
+                    clusters: k..k + 1,
+                    bounds: c.bounds,
+                });
+                shortest = side;
+            }
+        }
+    }
+    runs
+}
+
 /// Triangle soup helper for generated geometry: positions and indices grow
 /// together, indices relative to this soup.
 #[derive(Default, Clone, Debug)]
@@ -357,5 +432,88 @@ impl TriangleSoup {
         let base = self.positions.len() as u32;
         self.positions.extend_from_slice(positions);
         self.indices.extend(indices.into_iter().map(|i| base + i));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A flat grid of `n` × `n` unit squares in the z = 0 plane, from
+    /// `corner`.
+    fn grid(n: u32, corner: DVec3) -> TriangleSoup {
+        let mut soup = TriangleSoup::default();
+        let positions: Vec<DVec3> = (0..=n)
+            .flat_map(|j| (0..=n).map(move |i| corner + DVec3::new(f64::from(i), f64::from(j), 0.0)))
+            .collect();
+        let at = |i: u32, j: u32| j * (n + 1) + i;
+        let squares = (0..n).flat_map(|j| (0..n).map(move |i| (i, j)));
+        soup.append(
+            &positions,
+            squares.flat_map(|(i, j)| {
+                [
+                    at(i, j),
+                    at(i + 1, j),
+                    at(i + 1, j + 1),
+                    at(i, j),
+                    at(i + 1, j + 1),
+                    at(i, j + 1),
+                ]
+            }),
+        );
+        soup
+    }
+
+    #[test]
+    fn clusters_of_one_mesh_store_a_position_they_share_with_the_same_bits_and_are_placed_alike() {
+        // A grid far from the source mesh's origin (so that a cluster's own
+        // centre would round its positions differently), cut into 8
+        // clusters.
+        let soup = grid(16, DVec3::new(1000.3, -2000.7, 5.1));
+        let mut builder = SceneBuilder::new("test grid".into(), 64);
+        let group = builder.add_mesh("grid", &soup.positions, &soup.indices).unwrap();
+        builder
+            .add_object("grid", &group, DAffine3::from_rotation_z(0.3))
+            .unwrap();
+        let scene = builder.finish().unwrap();
+        assert_eq!(scene.objects.len(), 8);
+        for (m, mesh) in scene.meshes.iter().enumerate() {
+            assert_eq!(mesh.shares_origin_with, 0..8, "mesh {m}");
+        }
+        assert!(scene.objects.iter().all(|o| o.transform == scene.objects[0].transform));
+        // Each source position is stored with one f32 value, however many
+        // clusters hold it (the cuts'), and lies where the source has it.
+        let mut stored: Vec<([i32; 3], [u32; 3])> = Vec::new();
+        for object in &scene.objects {
+            let mesh = &scene.meshes[object.mesh as usize];
+            for &i in &scene.indices[mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize] {
+                let local = scene.vertices[i as usize];
+                let world = object.transform.transform_point3(DVec3::from(local.map(f64::from)));
+                let source = DAffine3::from_rotation_z(0.3).inverse().transform_point3(world);
+                stored.push((source.round().as_ivec3().to_array(), local.map(f32::to_bits)));
+            }
+        }
+        stored.sort_unstable();
+        stored.dedup();
+        assert_eq!(stored.len(), 17 * 17, "one stored value per source position");
+    }
+
+    #[test]
+    fn a_run_of_clusters_ends_where_its_bounds_would_span_more_than_its_reach_of_a_clusters_side() {
+        let cluster = |min: DVec3, side: f64| cluster::Cluster {
+            vertices: Vec::new(),
+            indices: Vec::new(),
+            bounds: Aabb::new(min, min + DVec3::splat(side)),
+        };
+        // 20 unit cubes in a row, then 72 cubes a hundredth as large, all
+        // at the row's end: 16 unit cubes span the most a run may; a small
+        // cube's side lets no run of unit cubes hold it; and a run holds
+        // 64 clusters at most.
+        let mut clusters: Vec<_> = (0..20)
+            .map(|k| cluster(DVec3::new(f64::from(k), 0.0, 0.0), 1.0))
+            .collect();
+        clusters.extend((0..72).map(|_| cluster(DVec3::new(20.0, 0.0, 0.0), 0.01)));
+        let runs: Vec<Range<usize>> = shared_origins(&clusters).into_iter().map(|r| r.clusters).collect();
+        assert_eq!(runs, [0..16, 16..20, 20..84, 84..92]);
     }
 }

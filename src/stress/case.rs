@@ -39,8 +39,8 @@ pub struct DepthTolerance {
 
 impl DepthTolerance {
     /// Bit for bit: a translated scene. The eye is subtracted in f64 before
-    /// anything is rounded to f32 (and vertices are stored relative to their
-    /// cluster's centre), so the GPU sees the same numbers.
+    /// anything is rounded to f32 (and vertices are stored relative to an
+    /// origin near them), so the GPU sees the same numbers.
     pub const EXACT: DepthTolerance = DepthTolerance {
         relative: 0.0,
         absolute: 0.0,

@@ -18,8 +18,9 @@
 //! where several fill it); MOC keeps one depth per tile. A buffer that hid
 //! nothing, or saved less drawing than it cost, rests for a few frames, and
 //! longer each time it fails again (MOC leaves that to its caller).
-//! Occluders are whole visible objects, their triangles
-//! taken in the f64 projection (MOC and Godot take authored occluder
+//! Occluders are whole visible objects (the clusters of one mesh taken
+//! together, so that a mesh cut into clusters is one surface), their
+//! triangles taken in the f64 projection (MOC and Godot take authored occluder
 //! meshes, rasterised in f32 with SIMD: here it is scalar). Like MOC it
 //! shares the work among threads (`swr.threads`), each over a band of the
 //! buffer's rows; the box tests run on one thread. `swr.resolution` sets
@@ -33,7 +34,7 @@ mod buffer;
 mod mesh;
 mod neighbours;
 
-use glam::{DMat3, DMat4, DVec2, DVec3, Vec4Swizzles};
+use glam::{DAffine3, DMat3, DMat4, DVec2, DVec3, Vec4Swizzles};
 use serde::Serialize;
 
 use crate::bounds::Aabb;
@@ -46,7 +47,7 @@ use crate::gpu::{
 };
 use crate::scene::Scene;
 use buffer::{Cells, OcclusionBuffer};
-use mesh::{NearLimit, Patches, Rasteriser, ScreenMesh, ScreenVertex, VERTEX_ERROR};
+use mesh::{DrawnPart, NearLimit, Patches, Rasteriser, ScreenMesh, ScreenVertex, VERTEX_ERROR};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
@@ -138,8 +139,9 @@ pub struct SoftwareOcclusionCulling {
     /// What each thread rasterising occluders works with.
     preparers: Vec<Preparer>,
     rasterisers: Vec<Rasteriser>,
-    /// Per mesh of the scene (sized in the first frame), its triangles'
-    /// neighbours, made the first time one of its objects is an occluder.
+    /// Per run of meshes stored against one origin (at its first mesh;
+    /// sized in the first frame), its triangles' neighbours, made the
+    /// first time one of its objects is an occluder.
     neighbours: Vec<Vec<[u32; 3]>>,
     made_neighbours: Vec<bool>,
     /// The backend's depth margins, known once prepared (GL's, the larger,
@@ -158,6 +160,8 @@ pub struct SoftwareOcclusionCulling {
     buffer_holds: bool,
     /// Scratch, reused so a frame allocates nothing once warm.
     candidates: Vec<Candidate>,
+    /// This frame's occluders, each some of `candidates`.
+    units: Vec<OccluderUnit>,
     occluders: Vec<u32>,
     /// Per object of the scene (sized in the first frame), whether it is
     /// one of this frame's occluders, and whether it was found visible.
@@ -184,6 +188,7 @@ impl SoftwareOcclusionCulling {
             rest: Rest::default(),
             buffer_holds: false,
             candidates: Vec::new(),
+            units: Vec::new(),
             occluders: Vec::new(),
             is_occluder: Vec::new(),
             is_found: Vec::new(),
@@ -207,17 +212,45 @@ impl SoftwareOcclusionCulling {
         }
     }
 
-    /// Makes the neighbours of each occluder's mesh that has none yet.
+    /// Takes the candidates that are clusters of one mesh under one
+    /// transform as one occluder each, nearest first (a cell an occluder
+    /// has filled turns away the triangles behind it).
+    fn group_occluders(&mut self, scene: &Scene) {
+        let object = |c: &Candidate| &scene.objects[c.object as usize];
+        let run = |c: &Candidate| scene.meshes[object(c).mesh as usize].shares_origin_with.start;
+        self.candidates
+            .sort_unstable_by_key(|c| (object(c).part, run(c), object(c).mesh, c.object));
+        let together = |a: &Candidate, b: &Candidate| {
+            (object(a).part, run(a)) == (object(b).part, run(b)) && object(a).transform == object(b).transform
+        };
+        self.units.clear();
+        let mut start = 0;
+        for k in 1..=self.candidates.len() {
+            if k == self.candidates.len() || !together(&self.candidates[k - 1], &self.candidates[k]) {
+                let boxes = self.candidates[start..k].iter().map(|c| c.on_screen.clone());
+                self.units.push(OccluderUnit {
+                    candidates: start..k,
+                    on_screen: boxes.reduce(|a, b| a.zip(b).map(|(a, b)| a.union(&b))).flatten(),
+                });
+                start = k;
+            }
+        }
+        let first_object = |u: &OccluderUnit| self.candidates[u.candidates.start].object;
+        self.units
+            .sort_unstable_by(|a, b| b.nearest().total_cmp(&a.nearest()).then(first_object(a).cmp(&first_object(b))));
+    }
+
+    /// Makes the neighbours of each occluder's run of meshes that has none
+    /// yet.
     fn make_neighbours(&mut self, scene: &Scene) {
         self.neighbours.resize(scene.meshes.len(), Vec::new());
         self.made_neighbours.resize(scene.meshes.len(), false);
         for &o in &self.occluders {
-            let m = scene.objects[o as usize].mesh as usize;
-            if !self.made_neighbours[m] {
-                let mesh = &scene.meshes[m];
-                let indices = &scene.indices[mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize];
-                self.neighbours[m] = neighbours::neighbours(indices, |v| scene.vertices[v as usize]);
-                self.made_neighbours[m] = true;
+            let run = &scene.meshes[scene.objects[o as usize].mesh as usize].shares_origin_with;
+            if !self.made_neighbours[run.start as usize] {
+                let indices = run_indices(scene, run);
+                self.neighbours[run.start as usize] = neighbours::neighbours(indices, |v| scene.vertices[v as usize]);
+                self.made_neighbours[run.start as usize] = true;
             }
         }
     }
@@ -300,12 +333,32 @@ impl Candidate {
     fn area(&self) -> f64 {
         self.on_screen.as_ref().map_or(f64::INFINITY, |b| b.area)
     }
+}
 
-    /// Its box's nearest depth (the nearest possible for one reaching the
-    /// near plane).
+/// One occluder as the buffer takes it: the candidates that are clusters
+/// of one mesh placed by one transform, taken together so that the edges
+/// they share join their surfaces (scene/model.rs, `shares_origin_with`).
+struct OccluderUnit {
+    /// Its candidates, among the frame's, in mesh order.
+    candidates: Range<usize>,
+    /// The rectangle on screen holding their boxes, and the nearest depth
+    /// of those; `None` where one box reaches the near plane.
+    on_screen: Option<BoxOnScreen>,
+}
+
+impl OccluderUnit {
+    /// Its nearest depth (the nearest possible for a box reaching the near
+    /// plane).
     fn nearest(&self) -> f64 {
         self.on_screen.as_ref().map_or(f64::INFINITY, |b| b.nearest)
     }
+}
+
+/// The indices of the run of meshes `run` (consecutive in the index buffer,
+/// as they are in the scene's meshes).
+fn run_indices<'a>(scene: &'a Scene, run: &Range<u32>) -> &'a [u32] {
+    let (first, last) = (&scene.meshes[run.start as usize], &scene.meshes[run.end as usize - 1]);
+    &scene.indices[first.first_index as usize..(last.first_index + last.index_count) as usize]
 }
 
 /// A camera's projection to framebuffer pixels and reverse-Z depth.
@@ -382,6 +435,7 @@ impl Projector {
 }
 
 /// A tested box on screen.
+#[derive(Clone)]
 struct BoxOnScreen {
     /// The first and last pixels (x, y) its rectangle touches, clamped to
     /// the target.
@@ -391,6 +445,19 @@ struct BoxOnScreen {
     area: f64,
     /// Its nearest depth, raised.
     nearest: f64,
+}
+
+impl BoxOnScreen {
+    /// The rectangle holding both (its area that rectangle's), and the
+    /// nearer depth.
+    fn union(&self, other: &BoxOnScreen) -> BoxOnScreen {
+        BoxOnScreen {
+            first: [self.first[0].min(other.first[0]), self.first[1].min(other.first[1])],
+            last: [self.last[0].max(other.last[0]), self.last[1].max(other.last[1])],
+            area: f64::from((self.last[0] - self.first[0] + 1) * (self.last[1] - self.first[1] + 1)),
+            nearest: self.nearest.max(other.nearest),
+        }
+    }
 }
 
 /// How a box stands against the buffer.
@@ -465,10 +532,11 @@ impl Culler for SoftwareOcclusionCulling {
     /// One frame, on the CPU:
     ///
     /// 1. **Occluders**: last frame's visible objects, largest on screen first,
-    ///    each whose triangles still fit `swr.triangles`, rasterised nearest
-    ///    first.
+    ///    each whose triangles still fit `swr.triangles`; the clusters of one
+    ///    mesh under one transform are one occluder. They are rasterised
+    ///    nearest first.
     /// 2. **Rasterise** their triangles, projected in f64, into a buffer of
-    ///    `swr.resolution` cells, conservatively. Each object's triangles that
+    ///    `swr.resolution` cells, conservatively. An occluder's triangles that
     ///    turn one way and join along shared edges are one surface (a patch,
     ///    mesh.rs): it marks the pixel groups of a cell the GPU is sure to draw
     ///    it over, with the GPU's snapping and f32 error as margins from its
@@ -496,10 +564,11 @@ impl Culler for SoftwareOcclusionCulling {
     ///    their order, nearest first, for the GPU's early depth test); they are
     ///    next frame's occluder candidates. An occluder found hidden is not
     ///    drawn, and the buffer still holds only depth that is drawn: no
-    ///    occluder a cell took its depth from is found hidden, since at the
-    ///    pixel centres it vouched for there its own box lies nowhere behind
-    ///    its own triangles, and so nowhere behind the cell's depth and plane,
-    ///    so at that cell every test of it, or of a node holding it, fails.
+    ///    occluder a cell took its depth from is found hidden, since at each
+    ///    pixel centre it vouched for there, the box of the object (the
+    ///    cluster) whose triangle holds the centre lies nowhere behind that
+    ///    triangle, and so nowhere behind the cell's depth and plane, so at
+    ///    that cell every test of it, or of a node holding it, fails.
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let (camera, scene, size) = (input.camera, input.scene, input.resolution);
         let mut stats = TraversalStats::default();
@@ -549,14 +618,13 @@ impl Culler for SoftwareOcclusionCulling {
             budget -= if fits { triangles } else { 0 };
             fits
         });
-        // Nearest first: a cell an occluder has filled turns away the
-        // triangles behind it.
-        self.candidates
-            .sort_unstable_by(|a, b| b.nearest().total_cmp(&a.nearest()).then(a.object.cmp(&b.object)));
+        self.group_occluders(scene);
         self.occluders.clear();
-        for c in &self.candidates {
-            self.occluders.push(c.object);
-            self.is_occluder[c.object as usize] = true;
+        for unit in &self.units {
+            for c in &self.candidates[unit.candidates.clone()] {
+                self.occluders.push(c.object);
+                self.is_occluder[c.object as usize] = true;
+            }
         }
 
         stats.occluder_triangles = self.params.triangles - budget;
@@ -570,7 +638,8 @@ impl Culler for SoftwareOcclusionCulling {
             unreachable!("made above")
         };
         let occluders = Occluders {
-            objects: &self.candidates,
+            units: &self.units,
+            candidates: &self.candidates,
             projector: &projector,
             camera,
             scene,
@@ -668,17 +737,19 @@ impl Culler for SoftwareOcclusionCulling {
     }
 }
 
-/// What one thread makes of its share of the occluders: each object's
-/// vertices on screen (scratch), and its patches, ready to rasterise.
+/// What one thread makes of its share of the occluders: each one's
+/// vertices on screen and the parts of its mesh drawn (scratch), and its
+/// patches, ready to rasterise.
 #[derive(Default)]
 struct Preparer {
     vertices: Vec<Option<ScreenVertex>>,
     /// Per vertex, its position relative to the eye.
     positions: Vec<DVec3>,
+    parts: Vec<DrawnPart>,
     patches: Patches,
-    /// The objects of its share, each as (index among the occluders, its
-    /// patches in `patches`).
-    objects: Vec<(usize, Range<usize>)>,
+    /// The occluders of its share, each as (its index, its patches in
+    /// `patches`).
+    occluders: Vec<(usize, Range<usize>)>,
 }
 
 /// A frame uses one thread more for each this many occluder triangles (a
@@ -690,12 +761,13 @@ const BANDS_PER_THREAD: u32 = 8;
 
 /// One frame's occluders, and what they are rasterised with.
 struct Occluders<'a> {
-    objects: &'a [Candidate],
+    units: &'a [OccluderUnit],
+    candidates: &'a [Candidate],
     projector: &'a Projector,
     camera: &'a Camera,
     scene: &'a Scene,
-    /// Per mesh of the scene, its triangles' neighbours (made for every
-    /// occluder's mesh).
+    /// Per run of meshes stored against one origin (at its first mesh),
+    /// its triangles' neighbours (made for every occluder's run).
     neighbours: &'a [Vec<[u32; 3]>],
 }
 
@@ -708,8 +780,13 @@ impl Occluders<'_> {
     /// every occluder's patches, in order, into a band of the buffer's rows,
     /// so the cells are those one thread leaves.
     fn rasterise(&self, buffer: &mut OcclusionBuffer, preparers: &mut [Preparer], rasterisers: &mut [Rasteriser]) {
-        let triangles = |c: &Candidate| u64::from(self.scene.objects[c.object as usize].triangles);
-        let total: u64 = self.objects.iter().map(triangles).sum();
+        let triangles = |unit: &OccluderUnit| -> u64 {
+            self.candidates[unit.candidates.clone()]
+                .iter()
+                .map(|c| u64::from(self.scene.objects[c.object as usize].triangles))
+                .sum()
+        };
+        let total: u64 = self.units.iter().map(triangles).sum();
         let rows = buffer.cells().height;
         let threads = (1 + total / TRIANGLES_PER_THREAD)
             .min(preparers.len().min(rasterisers.len()) as u64)
@@ -719,14 +796,14 @@ impl Occluders<'_> {
         // threads of them.
         let mut ends = [0; MAX_THREADS];
         let (mut so_far, mut k) = (0, 0);
-        for (i, c) in self.objects.iter().enumerate() {
-            so_far += triangles(c);
+        for (i, unit) in self.units.iter().enumerate() {
+            so_far += triangles(unit);
             while k + 1 < threads && so_far * threads as u64 >= total * (k as u64 + 1) {
                 ends[k] = i + 1;
                 k += 1;
             }
         }
-        ends[k..threads].fill(self.objects.len());
+        ends[k..threads].fill(self.units.len());
         let shares = preparers[..threads]
             .iter_mut()
             .enumerate()
@@ -749,19 +826,19 @@ impl Occluders<'_> {
     /// Makes the patches of the occluders `share`.
     fn prepare(&self, share: Range<usize>, preparer: &mut Preparer) {
         preparer.patches.clear();
-        preparer.objects.clear();
+        preparer.occluders.clear();
         for i in share {
-            let which = prepare_object(preparer, self, self.objects[i].object);
-            preparer.objects.push((i, which));
+            let which = prepare_occluder(preparer, self, &self.units[i]);
+            preparer.occluders.push((i, which));
         }
     }
 
     fn rasterise_band(&self, cells: &mut Cells, preparers: &[Preparer], rasteriser: &mut Rasteriser) {
         for preparer in preparers {
-            for (i, which) in &preparer.objects {
-                // Skipped where the buffer so far hides its box: it could add
-                // nothing (rasterising nearest first makes this pay).
-                let hidden = self.objects[*i]
+            for (i, which) in &preparer.occluders {
+                // Skipped where the buffer so far hides its boxes: it could
+                // add nothing (rasterising nearest first makes this pay).
+                let hidden = self.units[*i]
                     .on_screen
                     .as_ref()
                     .is_some_and(|b| cells.behind(b.first, b.last, b.nearest));
@@ -788,51 +865,88 @@ fn on_threads<J: Send>(mut jobs: impl Iterator<Item = J>, work: impl Fn(J) + Syn
     });
 }
 
-/// The GPU's error in an f32 vertex position, as a fraction of the
-/// object's reach from the eye: 4 steps of 2^-24.
-const F32_POSITION_ERROR: f64 = 4.0 / (1u32 << 24) as f64;
+/// The GPU's error in an f32 vertex position, as a fraction of the sizes
+/// of what it sums: 8 steps of 2^-24 (rounding the matrix, 4 products and
+/// 3 sums take 5, the rest is margin).
+const F32_POSITION_ERROR: f64 = 8.0 / (1u32 << 24) as f64;
 
-/// Makes the patches of object `o`'s triangles (placed where the scene has
-/// it this frame) in `preparer`; returns which they are.
+/// How far from ours the GPU may place a vertex of a mesh within `local`
+/// (in its own frame) placed by `transform`, on any view axis. It rounds
+/// the model-view to f32 and sums, per view axis, its products with the
+/// f32 position and its translation: within a few steps of 2^-24 of the
+/// sizes of those terms, at most |model-view| · |local| + |translation|.
+fn position_error(camera: &Camera, transform: &DAffine3, local: &Aabb) -> f64 {
+    let model_view = camera.model_view(transform);
+    let reach = local.min.abs().max(local.max.abs());
+    F32_POSITION_ERROR * (model_view.matrix3.abs() * reach + model_view.translation.abs()).max_element()
+}
+
+/// Makes the patches of `occluder`'s triangles (placed where the scene has
+/// them this frame) in `preparer`; returns which they are.
 ///
-/// The GPU transforms the object's f32 vertices by an f32 model-view whose
-/// translation is about as long as the object's reach from the eye, so a
-/// vertex may land a few steps of 2^-24 of that reach from ours: that
-/// error, over the vertex's view depth, in pixels and in relative depth,
-/// is its part of its [`ScreenVertex`]'s slack and depth error. Vertices
-/// within that error (and 2^-10 of the near distance) of the near plane
-/// are not placed: the GPU may clip them. A triangle with such a vertex
-/// keeps its part beyond that limit (mesh.rs), so a floor or a wall that
-/// reaches past the eye still hides what lies behind it (MOC clips its
-/// occluders at the near plane too). Where that part ends, the GPU clips
-/// the triangle nearer the eye, at the near plane, with f32 arithmetic on
-/// the same line: its crossing's error is taken as twice a vertex's at the
+/// Its vertices may land [`position_error`] from ours: that error d moves
+/// a vertex at view depth w and x pixels off the view's axis by up to
+/// d / w · (f + x) pixels (f the pixels at unit depth), and its depth by
+/// d / w of it: its part of its [`ScreenVertex`]'s slack and depth error. Vertices within that
+/// error (and 2^-10 of the near distance) of the near plane are not
+/// placed: the GPU may clip them. A triangle with such a vertex keeps its
+/// part beyond that limit (mesh.rs), so a floor or a wall that reaches
+/// past the eye still hides what lies behind it (MOC clips its occluders
+/// at the near plane too). Where that part ends, the GPU clips the
+/// triangle nearer the eye, at the near plane, with f32 arithmetic on the
+/// same line: its crossing's error is taken as twice a vertex's at the
 /// near plane's depth (an upper bound of it anywhere between), and its
 /// sides' placement on screen bounded where they are on screen.
-fn prepare_object(preparer: &mut Preparer, occluders: &Occluders, o: u32) -> Range<usize> {
+fn prepare_occluder(preparer: &mut Preparer, occluders: &Occluders, occluder: &OccluderUnit) -> Range<usize> {
     let (camera, scene, projector) = (occluders.camera, occluders.scene, occluders.projector);
-    let object = &scene.objects[o as usize];
-    let (min, max) = (object.bounds.min - camera.eye, object.bounds.max - camera.eye);
-    let position_error = F32_POSITION_ERROR * min.abs().max(max.abs()).max_element();
+    let objects = || {
+        occluders.candidates[occluder.candidates.clone()]
+            .iter()
+            .map(|c| &scene.objects[c.object as usize])
+    };
+    // An occluder holds one candidate at least.
+    let first = &scene.objects[occluders.candidates[occluder.candidates.start].object as usize];
+    let local = objects().fold(Aabb::EMPTY, |b, o| b.union(scene.meshes[o.mesh as usize].bounds));
+    let position_error = position_error(camera, &first.transform, &local);
     let near = camera.near * (1.0 + 1.0 / 1024.0) + position_error;
     let pixels_at_unit_depth = projector.size.y / (2.0 * (camera.fov_y / 2.0).tan());
-    let mesh = &scene.meshes[object.mesh as usize];
-    let indices = &scene.indices[mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize];
-    // A mesh's indices reach a run of vertices; each is projected once.
-    let (first, last) = indices
-        .iter()
-        .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    let run = &scene.meshes[first.mesh as usize].shares_origin_with;
+    let run_first_triangle = scene.meshes[run.start as usize].first_index / 3;
     preparer.vertices.clear();
     preparer.positions.clear();
-    if first <= last {
-        for p in &scene.vertices[first as usize..=last as usize] {
+    preparer.parts.clear();
+    let mut triangle_slot = 0;
+    for object in objects() {
+        let mesh = &scene.meshes[object.mesh as usize];
+        let indices = &scene.indices[mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize];
+        // A cluster's indices reach a run of vertices of its own; each is
+        // projected once.
+        let (first_vertex, last_vertex) = indices
+            .iter()
+            .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        if first_vertex > last_vertex {
+            continue;
+        }
+        let triangles = mesh.first_index / 3 - run_first_triangle;
+        preparer.parts.push(DrawnPart {
+            triangles: triangles..triangles + mesh.triangles(),
+            first_vertex,
+            vertex_slot: preparer.vertices.len() as u32,
+            triangle_slot,
+        });
+        triangle_slot += mesh.triangles();
+        for p in &scene.vertices[first_vertex as usize..=last_vertex as usize] {
             let local = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
             let position = object.transform.transform_point3(local) - camera.eye;
             preparer.positions.push(position);
-            preparer.vertices.push(projector.project(position, near).map(|(at, view_depth)| ScreenVertex {
-                at,
-                slack: VERTEX_ERROR + position_error * pixels_at_unit_depth / view_depth,
-                depth_error: position_error / view_depth,
+            preparer.vertices.push(projector.project(position, near).map(|(at, view_depth)| {
+                // Off the view's axis, an error in view depth moves it too.
+                let off_axis = (at.x - projector.size.x / 2.0).abs().max((at.y - projector.size.y / 2.0).abs());
+                ScreenVertex {
+                    at,
+                    slack: VERTEX_ERROR + position_error * (pixels_at_unit_depth + off_axis) / view_depth,
+                    depth_error: position_error / view_depth,
+                }
             }));
         }
     }
@@ -862,10 +976,10 @@ fn prepare_object(preparer: &mut Preparer, occluders: &Occluders, o: u32) -> Ran
     };
     let mesh = ScreenMesh {
         vertices: &preparer.vertices,
-        first,
-        indices,
-        neighbours: &occluders.neighbours[object.mesh as usize],
-        closed: scene.parts[object.part as usize].closed,
+        parts: &preparer.parts,
+        indices: run_indices(scene, run),
+        neighbours: &occluders.neighbours[run.start as usize],
+        closed: scene.parts[first.part as usize].closed,
         near: Some(NearLimit { crossing: &crossing }),
     };
     preparer.patches.add(&mesh)
@@ -963,6 +1077,80 @@ mod tests {
             }
         }
         assert!(floor_pixels > size.width * size.height * 2 / 5, "{floor_pixels} pixels hold the floor");
+    }
+
+    #[test]
+    fn a_wall_cut_into_clusters_hides_what_lies_behind_it_as_one_surface() {
+        use crate::gpu::{entry_depth, pixel_ray};
+        use crate::hierarchy::{Hierarchy, HierarchyParams};
+        use crate::scene::builtin::shapes::cuboid;
+        use crate::scene::{SceneBuilder, TriangleSoup};
+        // A wall 4 m wide and 3 m high, 5 m ahead, of 96 × 72 squares
+        // (each about 4 pixels across) cut into clusters of 512 triangles,
+        // and a box behind its middle. The first cuts run across the
+        // middle; the wall is moved half a pixel right and down, so that
+        // they run through pixel centres.
+        let (columns, rows) = (96u32, 72u32);
+        let half_a_pixel = 0.5 * 5.0 * (30f64.to_radians().tan() / 300.0);
+        let mut wall = TriangleSoup::default();
+        let corners: Vec<DVec3> = (0..=rows)
+            .flat_map(|j| {
+                (0..=columns).map(move |i| {
+                    let (x, y) = (f64::from(i) / f64::from(columns), f64::from(j) / f64::from(rows));
+                    DVec3::new(-2.0 + 4.0 * x + half_a_pixel, -1.5 + 3.0 * y - half_a_pixel, -5.0)
+                })
+            })
+            .collect();
+        let at = |i: u32, j: u32| j * (columns + 1) + i;
+        let squares = (0..rows).flat_map(|j| (0..columns).map(move |i| (i, j)));
+        let indices = squares.flat_map(|(i, j)| {
+            let [a, b, c, d] = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+            [a, b, c, a, c, d]
+        });
+        wall.append(&corners, indices);
+        let mut behind = TriangleSoup::default();
+        let (box_min, box_max) = (DVec3::new(-0.5, -0.5, -9.0), DVec3::new(0.5, 0.5, -8.0));
+        cuboid(&mut behind, box_min, box_max);
+        let mut builder = SceneBuilder::new("test wall".into(), 512);
+        for (name, soup) in [("wall", &wall), ("box", &behind)] {
+            let group = builder.add_mesh(name, &soup.positions, &soup.indices).unwrap();
+            builder.add_object(name, &group, DAffine3::IDENTITY).unwrap();
+        }
+        let scene = builder.finish().unwrap();
+        let the_box = scene.objects.len() as u32 - 1;
+        assert!(the_box >= 16, "the wall is cut into {the_box} clusters");
+        let params = HierarchyParams {
+            max_leaf_objects: 1,
+            ..HierarchyParams::default()
+        };
+        let hierarchy = Hierarchy::build(&scene.objects, &params);
+        let camera = camera_down_z();
+        let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
+        let mut box_drawn = Vec::new();
+        for frame in 0..2 {
+            let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
+            swr.frame(&mut calls, &input(frame, &camera, &scene, &hierarchy));
+            box_drawn.push(calls.drawn().contains(&the_box));
+        }
+        // Once the wall is known, the box behind it is not drawn: its
+        // clusters' shared edges leave no seam the box could be seen
+        // through.
+        assert_eq!(box_drawn, [true, false]);
+        // And at every pixel centre the buffer vouches for no depth nearer
+        // than where the pixel's ray first meets the wall or the box.
+        let buffer = swr.buffer.as_ref().unwrap();
+        let size = Resolution::DEFAULT;
+        let (wall_min, wall_max) = (corners[0], corners[corners.len() - 1]);
+        let solids = [Aabb::new(wall_min, wall_max), Aabb::new(box_min, box_max)];
+        for py in 0..size.height {
+            for px in 0..size.width {
+                let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
+                let ray = pixel_ray(&camera, size, x, y);
+                let drawn = solids.iter().filter_map(|b| entry_depth(&camera, b, ray)).fold(0.0, f64::max);
+                let vouched = buffer.vouched_at(x, y);
+                assert!(vouched <= drawn, "({x}, {y}): the buffer vouches for {vouched}, the wall is at {drawn}");
+            }
+        }
     }
 
     /// The occluder triangles `swr` rasterised in each of `frames` frames of

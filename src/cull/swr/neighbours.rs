@@ -1,7 +1,8 @@
 //! Which triangles of a mesh share an edge: what makes a mesh's triangles
-//! one surface to the rasteriser (mesh.rs). Found once per mesh, by
-//! position, since the GPU places equal f32 positions of one object at one
-//! point whatever their index.
+//! one surface to the rasteriser (mesh.rs). Found once per run of clusters
+//! stored against one origin, by position, since the GPU places equal f32
+//! positions of the run's objects under one transform at one point
+//! whatever their index.
 
 use super::mesh::NO_NEIGHBOUR;
 
