@@ -149,25 +149,9 @@ mod tests {
 
     /// A flat grid of `n`×`n` quads (2·n² triangles) in the xz plane.
     fn grid(n: u32) -> (Vec<DVec3>, Vec<u32>) {
-        let positions = (0..=n)
-            .flat_map(|z| (0..=n).map(move |x| DVec3::new(x as f64, 0.0, z as f64)))
-            .collect();
-        let v = |x: u32, z: u32| z * (n + 1) + x;
-        let indices = (0..n)
-            .flat_map(|z| {
-                (0..n).flat_map(move |x| {
-                    [
-                        v(x, z),
-                        v(x + 1, z),
-                        v(x + 1, z + 1),
-                        v(x, z),
-                        v(x + 1, z + 1),
-                        v(x, z + 1),
-                    ]
-                })
-            })
-            .collect();
-        (positions, indices)
+        let side = f64::from(n);
+        let soup = crate::scene::TriangleSoup::grid(DVec3::ZERO, DVec3::X * side, DVec3::Z * side, [n, n]);
+        (soup.positions, soup.indices)
     }
 
     /// Each triangle as its three positions, sorted, for set comparison.

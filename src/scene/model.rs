@@ -422,6 +422,30 @@ pub struct TriangleSoup {
     pub indices: Vec<u32>,
 }
 
+#[cfg(test)]
+impl TriangleSoup {
+    /// A flat grid of `columns` × `rows` squares from `corner`, spanning
+    /// `across` and `down`, each square two triangles turning from
+    /// `across` to `down`; corner (i, j) is vertex j · (columns + 1) + i.
+    pub fn grid(corner: DVec3, across: DVec3, down: DVec3, [columns, rows]: [u32; 2]) -> TriangleSoup {
+        let (step_across, step_down) = (across / f64::from(columns), down / f64::from(rows));
+        let positions: Vec<DVec3> = (0..=rows)
+            .flat_map(|j| (0..=columns).map(move |i| corner + step_across * f64::from(i) + step_down * f64::from(j)))
+            .collect();
+        let at = move |i: u32, j: u32| j * (columns + 1) + i;
+        let squares = (0..rows).flat_map(move |j| (0..columns).map(move |i| (i, j)));
+        let mut soup = TriangleSoup::default();
+        soup.append(
+            &positions,
+            squares.flat_map(|(i, j)| {
+                let [a, b, c, d] = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+                [a, b, c, a, c, d]
+            }),
+        );
+        soup
+    }
+}
+
 impl TriangleSoup {
     pub fn triangles(&self) -> usize {
         self.indices.len() / 3
@@ -439,37 +463,17 @@ impl TriangleSoup {
 mod tests {
     use super::*;
 
-    /// A flat grid of `n` × `n` unit squares in the z = 0 plane, from
-    /// `corner`.
-    fn grid(n: u32, corner: DVec3) -> TriangleSoup {
-        let mut soup = TriangleSoup::default();
-        let positions: Vec<DVec3> = (0..=n)
-            .flat_map(|j| (0..=n).map(move |i| corner + DVec3::new(f64::from(i), f64::from(j), 0.0)))
-            .collect();
-        let at = |i: u32, j: u32| j * (n + 1) + i;
-        let squares = (0..n).flat_map(|j| (0..n).map(move |i| (i, j)));
-        soup.append(
-            &positions,
-            squares.flat_map(|(i, j)| {
-                [
-                    at(i, j),
-                    at(i + 1, j),
-                    at(i + 1, j + 1),
-                    at(i, j),
-                    at(i + 1, j + 1),
-                    at(i, j + 1),
-                ]
-            }),
-        );
-        soup
-    }
-
     #[test]
     fn clusters_of_one_mesh_store_a_position_they_share_with_the_same_bits_and_are_placed_alike() {
         // A grid far from the source mesh's origin (so that a cluster's own
         // centre would round its positions differently), cut into 8
         // clusters.
-        let soup = grid(16, DVec3::new(1000.3, -2000.7, 5.1));
+        let soup = TriangleSoup::grid(
+            DVec3::new(1000.3, -2000.7, 5.1),
+            DVec3::X * 16.0,
+            DVec3::Y * 16.0,
+            [16, 16],
+        );
         let mut builder = SceneBuilder::new("test grid".into(), 64);
         let group = builder.add_mesh("grid", &soup.positions, &soup.indices).unwrap();
         builder

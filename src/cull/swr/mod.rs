@@ -1090,24 +1090,9 @@ mod tests {
         // and a box behind its middle. The first cuts run across the
         // middle; the wall is moved half a pixel right and down, so that
         // they run through pixel centres.
-        let (columns, rows) = (96u32, 72u32);
         let half_a_pixel = 0.5 * 5.0 * (30f64.to_radians().tan() / 300.0);
-        let mut wall = TriangleSoup::default();
-        let corners: Vec<DVec3> = (0..=rows)
-            .flat_map(|j| {
-                (0..=columns).map(move |i| {
-                    let (x, y) = (f64::from(i) / f64::from(columns), f64::from(j) / f64::from(rows));
-                    DVec3::new(-2.0 + 4.0 * x + half_a_pixel, -1.5 + 3.0 * y - half_a_pixel, -5.0)
-                })
-            })
-            .collect();
-        let at = |i: u32, j: u32| j * (columns + 1) + i;
-        let squares = (0..rows).flat_map(|j| (0..columns).map(move |i| (i, j)));
-        let indices = squares.flat_map(|(i, j)| {
-            let [a, b, c, d] = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
-            [a, b, c, a, c, d]
-        });
-        wall.append(&corners, indices);
+        let corner = DVec3::new(-2.0 + half_a_pixel, -1.5 - half_a_pixel, -5.0);
+        let wall = TriangleSoup::grid(corner, DVec3::X * 4.0, DVec3::Y * 3.0, [96, 72]);
         let mut behind = TriangleSoup::default();
         let (box_min, box_max) = (DVec3::new(-0.5, -0.5, -9.0), DVec3::new(0.5, 0.5, -8.0));
         cuboid(&mut behind, box_min, box_max);
@@ -1140,8 +1125,7 @@ mod tests {
         // than where the pixel's ray first meets the wall or the box.
         let buffer = swr.buffer.as_ref().unwrap();
         let size = Resolution::DEFAULT;
-        let (wall_min, wall_max) = (corners[0], corners[corners.len() - 1]);
-        let solids = [Aabb::new(wall_min, wall_max), Aabb::new(box_min, box_max)];
+        let solids = [Aabb::new(corner, corner + DVec3::new(4.0, 3.0, 0.0)), Aabb::new(box_min, box_max)];
         for py in 0..size.height {
             for px in 0..size.width {
                 let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
