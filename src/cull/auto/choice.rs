@@ -18,7 +18,8 @@
 //!   again only as often as a budget (`auto.budget`) of the run's time,
 //!   shared among them, pays for at what a probe of it costs (so the dearer
 //!   a strategy, the rarer its rechecks, and a cheap rival's drift is still
-//!   seen).
+//!   seen), and never while what rechecks have cost so far, settling
+//!   frames included, exceeds that share of the frames so far.
 //! - One sample shows a strategy dearer only where a hiccup of the machine
 //!   cannot explain it: far dearer ([`FAR_DEARER`]), or dearer while it
 //!   drew more triangles than the incumbent's frames beside it (a hiccup
@@ -80,6 +81,9 @@ pub(super) struct Turn {
     pub probe: bool,
     /// Its time says what the strategy costs (not a probe's settling frame).
     pub measured: bool,
+    /// A probe of a strategy known not to be cheaper, paid from the
+    /// budget.
+    pub recheck: bool,
 }
 
 /// Where a frame looks from, and how much of the scene it holds.
@@ -145,6 +149,24 @@ struct Pending {
     before: Option<Seen>,
 }
 
+/// Why a probe runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Due {
+    /// The strategy may still be cheaper.
+    Explore,
+    /// It is known not to be; a recheck sees whether that has changed.
+    Recheck,
+}
+
+/// A probe under way: its strategy, the frames left after this one, and
+/// whether it is a recheck.
+#[derive(Clone, Copy, Debug)]
+struct Probing {
+    strategy: usize,
+    left: u32,
+    recheck: bool,
+}
+
 /// What an occlusion frame hid, and what share of its time it drew.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Occluded {
@@ -179,14 +201,16 @@ pub(super) struct Chooser {
     /// noise a sample meets, with the view's steady drift taken out.
     residuals: VecDeque<f64>,
     pending: Option<Pending>,
-    /// A probe under way: its strategy and frames left after this one.
-    probing: Option<(usize, u32)>,
+    probing: Option<Probing>,
     hidden: Option<Hidden>,
     /// A move farther than this changes the view materially.
     reach: f64,
     /// Share of the run's time that rechecks of strategies known not to be
     /// cheaper may cost.
     budget: f64,
+    /// What rechecks have cost so far beyond the incumbent's frames beside
+    /// them, in those frames (settling frames included).
+    recheck_spent: f64,
     last: Option<Turn>,
 }
 
@@ -215,6 +239,7 @@ impl Chooser {
             hidden: None,
             reach,
             budget,
+            recheck_spent: 0.0,
             last: None,
         }
     }
@@ -235,12 +260,16 @@ impl Chooser {
     }
 
     fn next(&mut self, view: &View, settles: &[bool]) -> Turn {
-        if let Some((s, left)) = self.probing {
-            self.probing = (left > 0).then(|| (s, left - 1));
+        if let Some(probing) = self.probing {
+            self.probing = (probing.left > 0).then_some(Probing {
+                left: probing.left - 1,
+                ..probing
+            });
             return Turn {
-                strategy: s,
+                strategy: probing.strategy,
                 probe: true,
-                measured: left == 0,
+                measured: probing.left == 0,
+                recheck: probing.recheck,
             };
         }
         if self.pending.is_none()
@@ -249,29 +278,42 @@ impl Chooser {
             self.switch_to(better);
         }
         let after_probe = self.last.is_some_and(|t| t.probe);
-        if !after_probe && let Some(s) = self.most_promising_due(view, settles) {
+        if !after_probe && let Some((s, due)) = self.most_promising_due(view, settles) {
             let settling = u32::from(settles[s]);
-            self.probing = (settling > 0).then_some((s, settling - 1));
+            let recheck = due == Due::Recheck;
+            self.probing = (settling > 0).then_some(Probing {
+                strategy: s,
+                left: settling - 1,
+                recheck,
+            });
             return Turn {
                 strategy: s,
                 probe: true,
                 measured: settling == 0,
+                recheck,
             };
         }
         Turn {
             strategy: self.incumbent,
             probe: false,
             measured: true,
+            recheck: false,
         }
     }
 
     /// Learns what the frame planned as `turn` cost and drew, and for an
     /// occlusion frame what it hid of `view`'s frustum.
     pub fn learn(&mut self, turn: Turn, cost: Cost, occluded: Option<Occluded>, view: &View) {
-        if !turn.measured || !cost.frame_ms.is_finite() || cost.frame_ms <= 0.0 {
+        if !cost.frame_ms.is_finite() || cost.frame_ms <= 0.0 {
             return;
         }
         let log_ms = cost.frame_ms.ln();
+        if let (true, Some(before)) = (turn.recheck, self.incumbent_last) {
+            self.recheck_spent += ((log_ms - before.log_ms).exp() - 1.0).max(0.0);
+        }
+        if !turn.measured {
+            return;
+        }
         if let (Family::Occlusion, Some(o)) = (self.records[turn.strategy].family, occluded) {
             self.hidden = Some(Hidden {
                 share: o.hidden,
@@ -399,7 +441,7 @@ impl Chooser {
     /// The due strategy whose probe promises most: frustum culling first
     /// where occlusion hid nothing, then the lowest optimistic bound (an
     /// unknown strategy's is lowest), the first of equals.
-    fn most_promising_due(&self, view: &View, settles: &[bool]) -> Option<usize> {
+    fn most_promising_due(&self, view: &View, settles: &[bool]) -> Option<(usize, Due)> {
         let nothing_hidden = self.hidden.is_some_and(|h| h.share < NOTHING_HIDDEN);
         let priority = |s: usize| {
             let frustum_first = nothing_hidden && self.records[s].family == Family::Frustum;
@@ -407,24 +449,34 @@ impl Chooser {
             (!frustum_first, bound)
         };
         (0..self.records.len())
-            .filter(|&s| s != self.incumbent && self.due(s, view, settles[s]))
-            .min_by(|&a, &b| {
+            .filter(|&s| s != self.incumbent)
+            .filter_map(|s| Some((s, self.due(s, view, settles[s])?)))
+            .min_by(|&(a, _), &(b, _)| {
                 let (pa, pb) = (priority(a), priority(b));
                 pa.0.cmp(&pb.0).then(pa.1.total_cmp(&pb.1))
             })
     }
 
-    /// Whether a probe of `s` is due.
-    fn due(&self, s: usize, view: &View, settles: bool) -> bool {
-        if let Some(h) = self.nothing_to_skip(s) {
+    /// Whether a probe of `s` is due, and of which kind. A recheck is due
+    /// only while what rechecks have cost so far fits the budget's share of
+    /// the frames so far: the intervals aim at that share from each
+    /// strategy's estimate, which sees neither settling frames nor a cost
+    /// that one lucky sample understated.
+    fn due(&self, s: usize, view: &View, settles: bool) -> Option<Due> {
+        let (waited, wait, due) = if let Some(h) = self.nothing_to_skip(s) {
             // One occlusion culler, the most promising, looks again once
             // the view has changed since the last look, and no more often
             // than the budget pays for.
-            return view.differs(&h.view, self.reach)
-                && Some(s) == self.most_promising_occlusion()
-                && self.frame - h.frame >= self.recheck(s, settles, 1);
-        }
-        self.frame - self.records[s].last_run.unwrap_or(0) >= self.interval(s, settles)
+            if !view.differs(&h.view, self.reach) || Some(s) != self.most_promising_occlusion() {
+                return None;
+            }
+            (self.frame - h.frame, self.recheck(s, settles, 1), Due::Recheck)
+        } else {
+            let (wait, due) = self.interval(s, settles);
+            (self.frame - self.records[s].last_run.unwrap_or(0), wait, due)
+        };
+        let affordable = due == Due::Explore || self.recheck_spent <= self.budget * self.frame as f64;
+        (waited >= wait && affordable).then_some(due)
     }
 
     /// For an occlusion culler `s`, while frustum culling runs because the
@@ -436,16 +488,16 @@ impl Chooser {
             .filter(|h| h.share < NOTHING_HIDDEN)
     }
 
-    /// Frames between probes of `s`.
-    fn interval(&self, s: usize, settles: bool) -> u64 {
+    /// Frames between probes of `s`, and which kind they are.
+    fn interval(&self, s: usize, settles: bool) -> (u64, Due) {
         let Some((m, se)) = self.estimate(s) else {
-            return EXPLORE;
+            return (EXPLORE, Due::Explore);
         };
         // Nothing hidden: frustum culling is likely the cheapest, and every
         // frame until it is known costs the occlusion culler's tests.
         let nothing_hidden = self.hidden.is_some_and(|h| h.share < NOTHING_HIDDEN);
         if nothing_hidden && self.records[s].family == Family::Frustum && m - Z * se < -HYSTERESIS {
-            return 1;
+            return (1, Due::Explore);
         }
         // May still be cheaper by the hysteresis: explore, until a full
         // window shows it no cheaper than the incumbent in the median. One
@@ -457,9 +509,9 @@ impl Chooser {
         let may_be_cheaper = m - Z * se < -HYSTERESIS && (n < WINDOW || m < 0.0);
         let one_sample_too_few = n == 1 && !r.drew_more && m - Z * se < FAR_DEARER;
         if may_be_cheaper || one_sample_too_few {
-            return EXPLORE;
+            return (EXPLORE, Due::Explore);
         }
-        self.recheck(s, settles, self.records.len() - 1)
+        (self.recheck(s, settles, self.records.len() - 1), Due::Recheck)
     }
 
     /// Frames between rechecks of `s`, known not to be cheaper: as often as
@@ -783,6 +835,41 @@ mod tests {
             incumbents[20..].iter().all(|&x| x == 1),
             "roc stays once vfc is measured dearer: {s:?}"
         );
+    }
+
+    #[test]
+    fn rechecks_cost_no_more_than_the_budget_where_a_probe_settles_dearer_than_it_measures() {
+        // roc runs at 1; hiz measures 1.2 once settled, but its settling
+        // frame (a pyramid built from nothing) costs 3, which its estimate
+        // never sees. What its probes cost beyond roc's frames, its two
+        // first probes (exploring) aside, stays within the budget's share
+        // of the run and one recheck more.
+        let budget = 0.015;
+        let mut chooser = Chooser::new(&[Occlusion, Occlusion], 0, 10.0, budget);
+        let (frames, mut spent, mut probes) = (600, 0.0, 0);
+        for f in 0..frames {
+            let turn = chooser.plan(&still(f), &[false, true]);
+            let ms = match (turn.strategy, turn.measured) {
+                (0, _) => 1.0,
+                (_, true) => 1.2,
+                (_, false) => 3.0,
+            };
+            probes += u32::from(turn.probe && turn.measured);
+            if probes > 2 {
+                spent += ms - 1.0;
+            }
+            let cost = Cost {
+                frame_ms: ms,
+                triangles: 1000,
+            };
+            let occluded = Occluded {
+                hidden: 0.5,
+                drawing: 0.8,
+            };
+            chooser.learn(turn, cost, Some(occluded), &still(f));
+        }
+        assert!(probes > 3, "hiz is rechecked ({probes} probes)");
+        assert!(spent <= budget * frames as f64 + 2.2, "rechecks cost {spent:.1} frames in {frames}");
     }
 
     #[test]
