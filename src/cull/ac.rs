@@ -40,6 +40,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [148, 103, 189],
     conservative: false,
     params: &[THRESHOLD, SAMPLING, F_GRAPHICS, EYE_DISTANCE],
+    exercised_with: &[],
     needs: Needs::PixelCounts,
     carries: Carries::Nothing,
     auto: Candidacy::Never,

@@ -13,6 +13,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [127, 127, 127],
     conservative: true,
     params: &[],
+    exercised_with: &[],
     needs: Needs::Nothing,
     carries: Carries::Nothing,
     auto: Candidacy::Never,

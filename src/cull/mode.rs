@@ -65,6 +65,11 @@ pub struct ModeInfo {
     pub conservative: bool,
     /// Parameters it takes as `--param NAME.KEY=VALUE`.
     pub params: &'static [ParamInfo],
+    /// Values (key, value) of its parameters under which every frame
+    /// exercises its culling, where its defaults let it skip some (`swr`'s
+    /// buffer rests where it does not pay): what `occlu stress` and the
+    /// exactness tests run it with ([`ModeParams::exercising_every_frame`]).
+    pub exercised_with: &'static [(&'static str, &'static str)],
     /// What it needs from the adapter beyond drawing and occlusion queries;
     /// a mode whose needs are not met is skipped, with a message.
     pub needs: Needs,

@@ -48,6 +48,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [44, 160, 44],
     conservative: true,
     params: &[OM, INITIAL_MAX_TESTS, FACTOR],
+    exercised_with: &[],
     needs: Needs::Nothing,
     carries: Carries::Nothing,
     auto: Candidacy::WithoutGpuWalks,

@@ -14,6 +14,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [20, 20, 20],
     conservative: true,
     params: &[],
+    exercised_with: &[],
     needs: Needs::Nothing,
     carries: Carries::Nothing,
     auto: Candidacy::Never,

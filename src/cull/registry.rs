@@ -33,6 +33,16 @@ impl ModeId {
 }
 
 impl ModeParams {
+    /// Every mode's [`ModeInfo::exercised_with`]: the parameters that check
+    /// a mode's exactness on every frame.
+    pub fn exercising_every_frame() -> ModeParams {
+        ModeId::ALL.iter().fold(ModeParams::default(), |params, &id| {
+            id.info().exercised_with.iter().fold(params, |params, (key, value)| {
+                params.with(&format!("{}.{key}", id.name()), value)
+            })
+        })
+    }
+
     pub fn parse(items: &[String], modes: &[ModeId]) -> Result<ModeParams, ModeError> {
         let mut values = BTreeMap::new();
         for item in items {
@@ -107,6 +117,22 @@ pub fn parse_modes(list: &[String]) -> Result<Vec<ModeId>, ModeError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_values_that_exercise_every_frame_are_each_modes_own_parameters_and_parse() {
+        let params = ModeParams::exercising_every_frame();
+        for &id in ModeId::ALL {
+            for (key, _) in id.info().exercised_with {
+                assert!(
+                    id.info().params.iter().any(|p| p.key == *key),
+                    "{id}.{key} is no parameter of {id}"
+                );
+            }
+            assert_eq!((id.info().check)(&params), Ok(()), "{id}'s exercising values");
+        }
+        let swr = crate::cull::swr::SwrParams::from_params(&params).unwrap();
+        assert!(!swr.rests, "swr builds its buffer every frame");
+    }
 
     #[test]
     fn every_entry_is_its_own_and_its_defaults_parse() {

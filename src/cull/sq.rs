@@ -23,6 +23,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [255, 127, 14],
     conservative: true,
     params: &[],
+    exercised_with: &[],
     needs: Needs::Nothing,
     carries: Carries::Nothing,
     auto: Candidacy::Never,

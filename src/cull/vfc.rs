@@ -25,6 +25,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [31, 119, 180],
     conservative: true,
     params: &[],
+    exercised_with: &[],
     needs: Needs::Nothing,
     carries: Carries::Nothing,
     auto: Candidacy::Always,

@@ -287,7 +287,7 @@ pub fn run(
         }
         let mut cullers = modes
             .iter()
-            .map(|m| m.id.create(&case.scene, &ModeParams::default()))
+            .map(|m| m.id.create(&case.scene, &ModeParams::exercising_every_frame()))
             .collect::<Result<Vec<_>, _>>()?;
         let keep_depth = case.baseline.is_some() || is_baseline(case);
         let hierarchy = HierarchyParams::default();

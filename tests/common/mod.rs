@@ -214,13 +214,6 @@ f 9 10 11
 /// Every backend that has an adapter here (Vulkan and GL on the reference
 /// machine). Fails when there is none at all: the tests need a GPU or a
 /// software rasteriser.
-/// Parameters for checking a mode's exactness: the defaults, but for
-/// `swr`'s buffer, built every frame (by default one that does not pay
-/// rests, and the frames it rests in test nothing of it).
-pub fn every_frame_culls() -> occlu::cull::ModeParams {
-    occlu::cull::ModeParams::default().with("swr.rests", "false")
-}
-
 pub fn gpus() -> Vec<GpuContext> {
     let found: Vec<GpuContext> = [BackendChoice::Vulkan, BackendChoice::Gl]
         .into_iter()

@@ -58,6 +58,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [255, 187, 120],
     conservative: true,
     params: &[BUDGET],
+    exercised_with: &[],
     needs: Needs::Nothing,
     carries: Carries::OwnState,
     auto: Candidacy::Never,

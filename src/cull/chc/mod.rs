@@ -58,6 +58,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [214, 39, 40],
     conservative: true,
     params: &[R_SPLIT, O_SPLIT, R_MERGE, O_MERGE, TIGHT_AFTER],
+    exercised_with: &[],
     needs: Needs::PixelCounts,
     carries: Carries::OwnState,
     auto: Candidacy::WithoutGpuWalks,

@@ -44,6 +44,7 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     chart_colour: [227, 119, 194],
     conservative: true,
     params: &[TEXELS, BASE, PIXELS, BOXES, START, BOTTOM],
+    exercised_with: &[],
     needs: Needs::GpuCulling,
     carries: Carries::VisibleOnGpu,
     auto: Candidacy::Always,

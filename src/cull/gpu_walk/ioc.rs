@@ -33,6 +33,7 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     chart_colour: [188, 189, 34],
     conservative: true,
     params: &[START, BOTTOM],
+    exercised_with: &[],
     needs: Needs::GpuCulling,
     carries: Carries::VisibleOnGpu,
     auto: Candidacy::Always,

@@ -14,6 +14,7 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     chart_colour: [23, 190, 207],
     conservative: true,
     params: &[],
+    exercised_with: &[],
     needs: Needs::GpuCulling,
     carries: Carries::VisibleOnGpu,
     auto: Candidacy::Always,

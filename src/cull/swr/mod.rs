@@ -56,6 +56,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [140, 86, 75],
     conservative: true,
     params: &[RESOLUTION, TRIANGLES, THREADS, RESTS],
+    exercised_with: &[("rests", "false")],
     needs: Needs::Nothing,
     carries: Carries::VisibleOnCpu,
     auto: Candidacy::Always,
