@@ -56,14 +56,7 @@ fn run_conservative_modes<'a>(
 ) -> Vec<FrameStats> {
     let mut cullers = extra;
     for mode in modes().filter(|m| m.conservative && m.unsupported_on(gpu).is_none()) {
-        cullers.push(
-            create(
-                mode.id.name(),
-                &case.scene,
-                &occlu::cull::ModeParams::exercising_every_frame(),
-            )
-            .unwrap(),
-        );
+        cullers.push(create(mode.id.name(), &case.scene, &ModeParams::exercising_every_frame()).unwrap());
     }
     let hierarchy = HierarchyParams::default();
     run_case(gpu, case, &hierarchy, &mut cullers, SIZE, false, &mut |_| {})

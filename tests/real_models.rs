@@ -12,7 +12,7 @@ use std::time::Instant;
 use common::{cannot_run, gpus, hierarchy, run_modes, shared_models, shared_models_dir};
 use occlu::camera::generate::default_path;
 use occlu::camera::path::CameraPath;
-use occlu::cull::{Culler, create, modes};
+use occlu::cull::{Culler, ModeParams, create, modes};
 use occlu::gpu::Resolution;
 use occlu::scene::{LoadOptions, SceneSpec, load};
 
@@ -41,7 +41,7 @@ fn every_conservative_mode_is_exact_on_every_shared_model() {
             let started = Instant::now();
             let mut cullers: Vec<Box<dyn Culler>> = modes()
                 .filter(|m| m.conservative && m.unsupported_on(gpu).is_none())
-                .map(|m| create(m.id.name(), &scene, &occlu::cull::ModeParams::exercising_every_frame()).unwrap())
+                .map(|m| create(m.id.name(), &scene, &ModeParams::exercising_every_frame()).unwrap())
                 .collect();
             let out = run_modes(gpu, &scene, &hierarchy, &path, &mut cullers, Resolution::DEFAULT);
             assert_eq!(out.rows.len(), cullers.len() * path.frames as usize);
