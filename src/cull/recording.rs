@@ -113,7 +113,11 @@ pub fn cuboids(boxes: &[(DVec3, DVec3)]) -> (Scene, Hierarchy) {
             .add_object(&name, &group, glam::DAffine3::IDENTITY)
             .expect("test cuboids lie within range");
     }
-    let scene = builder.finish().expect("at least one cuboid");
+    one_object_a_leaf(builder.finish().expect("at least one cuboid"))
+}
+
+/// `scene` and a hierarchy over it with one object per leaf.
+pub fn one_object_a_leaf(scene: Scene) -> (Scene, Hierarchy) {
     let params = HierarchyParams {
         max_leaf_objects: 1,
         ..HierarchyParams::default()

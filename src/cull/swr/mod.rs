@@ -989,7 +989,8 @@ fn prepare_occluder(preparer: &mut Preparer, occluders: &Occluders, occluder: &O
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cull::recording::{Recording, camera_down_z, cubes, cuboids, input};
+    use crate::cull::recording::{Recording, camera_down_z, cubes, cuboids, input, one_object_a_leaf};
+    use crate::hierarchy::Hierarchy;
 
     #[test]
     fn an_object_behind_an_occluder_is_drawn_until_the_occluder_is_known_even_as_an_occluder() {
@@ -1034,9 +1035,44 @@ mod tests {
         assert_eq!(objects, [0, 2]);
     }
 
+    /// The objects `swr` drew (sorted) in each of `frames` frames of `scene`
+    /// seen by `camera`.
+    fn drawn_over(swr: &mut SoftwareOcclusionCulling, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera, frames: u32) -> Vec<Vec<u32>> {
+        (0..frames)
+            .map(|frame| {
+                let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
+                swr.frame(&mut calls, &input(frame, camera, scene, hierarchy));
+                let mut objects = calls.drawn();
+                objects.sort_unstable();
+                objects
+            })
+            .collect()
+    }
+
+    /// Asserts that at every pixel centre `swr`'s buffer vouches for no
+    /// depth nearer than where the pixel's ray first enters one of `solids`
+    /// (the surfaces drawn, by a slab-test ray caster); returns at how many
+    /// it vouches for some depth.
+    fn assert_vouches_no_nearer_than(swr: &SoftwareOcclusionCulling, camera: &Camera, solids: &[Aabb]) -> u32 {
+        use crate::gpu::{entry_depth, pixel_ray};
+        let buffer = swr.buffer.as_ref().unwrap();
+        let size = Resolution::DEFAULT;
+        let mut vouching = 0;
+        for py in 0..size.height {
+            for px in 0..size.width {
+                let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
+                let ray = pixel_ray(camera, size, x, y);
+                let drawn = solids.iter().filter_map(|b| entry_depth(camera, b, ray)).fold(0.0, f64::max);
+                let vouched = buffer.vouched_at(x, y);
+                assert!(vouched <= drawn, "({x}, {y}): the buffer vouches for {vouched}, the surface is at {drawn}");
+                vouching += u32::from(vouched > 0.0);
+            }
+        }
+        vouching
+    }
+
     #[test]
     fn a_floor_reaching_past_the_eye_hides_what_lies_under_it_and_vouches_for_no_depth_nearer_than_its_own() {
-        use crate::gpu::{entry_depth, pixel_ray};
         // A floor slab under the eye, reaching 60 m on every side (its
         // triangles cross the near plane), and a box buried under it ahead.
         let boxes = [
@@ -1046,14 +1082,7 @@ mod tests {
         let (scene, hierarchy) = cuboids(&boxes);
         let camera = camera_down_z();
         let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
-        let mut drawn = Vec::new();
-        for frame in 0..2 {
-            let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
-            swr.frame(&mut calls, &input(frame, &camera, &scene, &hierarchy));
-            let mut objects = calls.drawn();
-            objects.sort_unstable();
-            drawn.push(objects);
-        }
+        let drawn = drawn_over(&mut swr, &scene, &hierarchy, &camera, 2);
         // The floor's part in front of the near plane is an occluder: the
         // buried box is not drawn once the floor is known.
         assert_eq!(drawn, [vec![0, 1], vec![0]]);
@@ -1061,29 +1090,14 @@ mod tests {
         // than where the pixel's ray first enters a box (the surface drawn
         // there), and it vouches for the floor's depth nearly everywhere
         // below the horizon.
-        let buffer = swr.buffer.as_ref().unwrap();
+        let solids = boxes.map(|(min, max)| Aabb::new(min, max));
+        let floor_pixels = assert_vouches_no_nearer_than(&swr, &camera, &solids);
         let size = Resolution::DEFAULT;
-        let mut floor_pixels = 0;
-        for py in 0..size.height {
-            for px in 0..size.width {
-                let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
-                let ray = pixel_ray(&camera, size, x, y);
-                let drawn = boxes
-                    .iter()
-                    .filter_map(|&(min, max)| entry_depth(&camera, &Aabb::new(min, max), ray))
-                    .fold(0.0, f64::max);
-                let vouched = buffer.vouched_at(x, y);
-                assert!(vouched <= drawn, "({x}, {y}): the buffer vouches for {vouched}, the floor is at {drawn}");
-                floor_pixels += u32::from(vouched > 0.0);
-            }
-        }
         assert!(floor_pixels > size.width * size.height * 2 / 5, "{floor_pixels} pixels hold the floor");
     }
 
     #[test]
     fn a_wall_cut_into_clusters_hides_what_lies_behind_it_as_one_surface() {
-        use crate::gpu::{entry_depth, pixel_ray};
-        use crate::hierarchy::{Hierarchy, HierarchyParams};
         use crate::scene::builtin::shapes::cuboid;
         use crate::scene::{SceneBuilder, TriangleSoup};
         // A wall 4 m wide and 3 m high, 5 m ahead, of 96 × 72 squares
@@ -1102,40 +1116,21 @@ mod tests {
             let group = builder.add_mesh(name, &soup.positions, &soup.indices).unwrap();
             builder.add_object(name, &group, DAffine3::IDENTITY).unwrap();
         }
-        let scene = builder.finish().unwrap();
+        let (scene, hierarchy) = one_object_a_leaf(builder.finish().unwrap());
         let the_box = scene.objects.len() as u32 - 1;
         assert!(the_box >= 16, "the wall is cut into {the_box} clusters");
-        let params = HierarchyParams {
-            max_leaf_objects: 1,
-            ..HierarchyParams::default()
-        };
-        let hierarchy = Hierarchy::build(&scene.objects, &params);
         let camera = camera_down_z();
         let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
-        let mut box_drawn = Vec::new();
-        for frame in 0..2 {
-            let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
-            swr.frame(&mut calls, &input(frame, &camera, &scene, &hierarchy));
-            box_drawn.push(calls.drawn().contains(&the_box));
-        }
+        let drawn = drawn_over(&mut swr, &scene, &hierarchy, &camera, 2);
+        let box_drawn: Vec<bool> = drawn.iter().map(|objects| objects.contains(&the_box)).collect();
         // Once the wall is known, the box behind it is not drawn: its
         // clusters' shared edges leave no seam the box could be seen
         // through.
         assert_eq!(box_drawn, [true, false]);
         // And at every pixel centre the buffer vouches for no depth nearer
         // than where the pixel's ray first meets the wall or the box.
-        let buffer = swr.buffer.as_ref().unwrap();
-        let size = Resolution::DEFAULT;
         let solids = [Aabb::new(corner, corner + DVec3::new(4.0, 3.0, 0.0)), Aabb::new(box_min, box_max)];
-        for py in 0..size.height {
-            for px in 0..size.width {
-                let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
-                let ray = pixel_ray(&camera, size, x, y);
-                let drawn = solids.iter().filter_map(|b| entry_depth(&camera, b, ray)).fold(0.0, f64::max);
-                let vouched = buffer.vouched_at(x, y);
-                assert!(vouched <= drawn, "({x}, {y}): the buffer vouches for {vouched}, the wall is at {drawn}");
-            }
-        }
+        assert_vouches_no_nearer_than(&swr, &camera, &solids);
     }
 
     /// The occluder triangles `swr` rasterised in each of `frames` frames of
