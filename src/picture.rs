@@ -360,10 +360,9 @@ fn culled_in_frustum<'s>(scene: &'s Scene, drawn: &ObjectSet, frustum: &Frustum)
 /// Lays `depths` over `rgb` (the pictured frame, of the same size): a
 /// pixel the buffer holds a depth for takes that depth's colour, on a ramp
 /// over the logarithm of the depths the buffer holds (reverse-Z depth is
-/// near / distance, so equal steps are equal ratios of distance); a pixel
-/// occluders cover only in part of its cell (the working layer) is tinted
-/// orange over the frame dimmed to a third; the others are dimmed to a
-/// third.
+/// near / distance, so equal steps are equal ratios of distance), mixed
+/// half and half with orange where that depth is a working layer's (a
+/// cell occluders cover only in part); the others are dimmed to a third.
 fn paint_occluder_depths(depths: &OccluderDepths, rgb: &mut [u8]) {
     let written = || depths.depths.iter().filter(|&&d| d > 0.0).map(|&d| f64::from(d).log2());
     let (farthest, nearest) = written().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
@@ -371,22 +370,20 @@ fn paint_occluder_depths(depths: &OccluderDepths, rgb: &mut [u8]) {
     for ((pixel, &depth), &partial) in rgb.chunks_mut(3).zip(&depths.depths).zip(&depths.partial) {
         if depth > 0.0 {
             let t = (f64::from(depth).log2() - farthest) / span;
-            let ramp = [0.1 + 0.9 * t, 0.25 + 0.75 * t, 0.6 + 0.4 * t];
-            pixel.copy_from_slice(&ramp.map(|c| (c * 255.0).round() as u8));
+            let ramp = [0.1 + 0.9 * t, 0.25 + 0.75 * t, 0.6 + 0.4 * t].map(|c| (c * 255.0).round() as u8);
+            match partial {
+                true => pixel.copy_from_slice(&[0, 1, 2].map(|c| ramp[c] / 2 + PARTIAL_TINT[c] / 2)),
+                false => pixel.copy_from_slice(&ramp),
+            }
         } else {
             pixel.iter_mut().for_each(|c| *c /= 3);
-            if partial {
-                let [r, g, _] = PARTIAL_TINT;
-                pixel[0] = pixel[0] / 2 + r;
-                pixel[1] = pixel[1] / 2 + g;
-            }
         }
     }
 }
 
-/// Added to half a dimmed pixel where occluders cover part of its cell: an
-/// orange no dimmed pixel (at most 85 a channel) reaches.
-const PARTIAL_TINT: [u8; 3] = [160, 80, 0];
+/// Mixed half and half with a working layer's depth colour: an orange
+/// apart from the ramp's blues.
+const PARTIAL_TINT: [u8; 3] = [255, 128, 0];
 
 /// Paints magenta the pixels of `rgb` (the pictured frame) whose depth in
 /// the session's mode `k` differs from the reference's in any bit; returns

@@ -255,9 +255,10 @@ pub struct RenderArgs {
     pub show_missed: bool,
     /// Lay the depth buffer a CPU culling mode culled the frame with
     /// over the picture: cells holding an occluder's depth from white (near)
-    /// to deep blue (far; all of them when they share one depth), pixels
-    /// occluders cover in only part of their cell (which hide nothing until
-    /// the cell is covered whole) orange, the rest of the frame dimmed.
+    /// to deep blue (far; all of them when they share one depth), tinted
+    /// orange at pixels occluders cover in only part of their cell (which
+    /// hide only boxes whose pixels there they all cover), the rest of the
+    /// frame dimmed.
     #[arg(long)]
     pub occluders: bool,
 }

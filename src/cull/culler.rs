@@ -136,11 +136,12 @@ pub struct OccluderDepths {
     pub width: u32,
     pub height: u32,
     /// The reverse-Z depth the buffer vouches for at each pixel (its cell's
-    /// reference depth), 0 where no occluder wrote one.
+    /// reference depth, or its working layer's where that covers the
+    /// pixel and lies nearer), 0 where no occluder wrote one.
     pub depths: Vec<f32>,
-    /// Pixels that occluders cover in part of a cell whose reference holds
-    /// no depth yet (MOC's working layer): they hide nothing until the
-    /// cell's mask is full.
+    /// Pixels whose depth is the working layer's (MOC's): occluders cover
+    /// them in only part of their cell, so they hide only boxes whose
+    /// pixels in that cell they all cover.
     pub partial: Vec<bool>,
 }
 

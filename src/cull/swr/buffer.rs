@@ -13,16 +13,23 @@
 //!
 //! Why it is conservative. A box is hidden when, at every pixel centre its
 //! rectangle covers, it lies behind what the reference layer holds there
-//! (a cell's depth, or its plane; [`OcclusionBuffer::hides`]) or its pixel
-//! ray misses it. That is safe if, at every pixel centre a cell holds, an
-//! occluder drawn this frame (the mode's step 5) is drawn no farther than
-//! the cell's depth and its plane. Each occluder object hands its cells a
+//! (a cell's depth, or its plane; [`OcclusionBuffer::hides`]), or behind
+//! the working layer where the box's centres in the cell all lie in its
+//! mask, or its pixel ray misses it. That is safe if, at every pixel
+//! centre a cell holds (its working layer: in its mask), an occluder drawn
+//! this frame (the mode's step 5) is drawn no farther than the layer's
+//! depth and its plane. Each occluder object hands its cells a
 //! mask of the pixel groups it is sure to draw, with a depth and plane it
 //! is sure to draw them at or nearer (mesh.rs says how, from the GPU's
 //! placement and rounding); a cell's working layer keeps the least of the
 //! depths merged into it, so its mask's every centre is drawn at least that
-//! near, and a full mask vouches for the whole cell. A layer is dropped,
-//! never narrowed, when it stops paying (MOC's heuristic, [`Cells::merge`]):
+//! near, and a full mask vouches for the whole cell. Departure from MOC:
+//! its box test reads the reference layer alone, and it clears the
+//! working layer when that becomes the reference; here a working layer
+//! that a farther occluder completed stays, still vouching for its own
+//! mask, so a box just behind a wall's outline, within the wall's pixels
+//! of a cell, is hidden though the cell's reference is what lies beyond.
+//! A layer is dropped, never narrowed, when it stops paying (MOC's heuristic, [`Cells::merge`]):
 //! dropping what is known is always safe. A pyramid level keeps the least
 //! of the 2×2 texels below it.
 
@@ -219,16 +226,27 @@ pub struct Grid {
     cells: Resolution,
     pub(super) across: Axis,
     pub(super) down: Axis,
+    /// Per column, the bits of one row of its groups; per row, a bit at
+    /// the start of each row of its groups: a cell's full mask is their
+    /// product (a row's bits fit in a byte, so no carries), made once as
+    /// rasterising asks for it at every cell it marks.
+    column_bits: Vec<u64>,
+    row_starts: Vec<u64>,
 }
 
 impl Grid {
     fn new(target: Resolution, cells: Resolution) -> Grid {
         let (width, height) = (cells.width.min(target.width), cells.height.min(target.height));
+        let (across, down) = (Axis::new(width, target.width), Axis::new(height, target.height));
         Grid {
             target,
             cells: Resolution { width, height },
-            across: Axis::new(width, target.width),
-            down: Axis::new(height, target.height),
+            column_bits: (0..width).map(|c| (1u64 << across.groups_in(c)) - 1).collect(),
+            row_starts: (0..height)
+                .map(|r| (0..down.groups_in(r)).fold(0, |starts, k| starts | 1 << (k * MASK_SIDE)))
+                .collect(),
+            across,
+            down,
         }
     }
 
@@ -243,10 +261,22 @@ impl Grid {
         ]
     }
 
+    /// The mask of the groups of cell (`column`, `row`) holding a pixel
+    /// centre in `xs` × `ys`.
+    fn groups_holding(&self, column: u32, row: u32, xs: [f64; 2], ys: [f64; 2]) -> u64 {
+        let across = self.across.groups_reaching(xs[0], xs[1], &(column..column + 1));
+        let down = self.down.groups_reaching(ys[0], ys[1], &(row..row + 1));
+        if across.is_empty() {
+            return 0;
+        }
+        let (first_across, first_down) = (self.across.first_group[column as usize], self.down.first_group[row as usize]);
+        let bits = (1u64 << (across.end - first_across)) - (1u64 << (across.start - first_across));
+        down.map(|g| bits << ((g - first_down) * MASK_SIDE)).fold(0, |mask, row| mask | row)
+    }
+
     /// The mask of every group of cell (`column`, `row`).
     pub(super) fn full_mask(&self, column: u32, row: u32) -> u64 {
-        let across = (1u64 << self.across.groups_in(column)) - 1;
-        (0..self.down.groups_in(row)).fold(0, |mask, k| mask | across << (k * MASK_SIDE))
+        self.column_bits[column as usize] * self.row_starts[row as usize]
     }
 }
 
@@ -338,28 +368,32 @@ impl Cells<'_> {
             self.planes[index] = coverage.plane;
             return;
         }
-        let working = &mut self.working[index];
-        let held = &mut self.masks[index];
-        let plane = &mut self.working_planes[index];
-        if *held != 0 && (*working <= reference || depth - *working > *working - reference) {
-            *held = 0;
-        }
-        (*working, *plane) = if *held == 0 {
-            (depth, coverage.plane)
-        } else {
-            let centres = (self.grid.across.cell(column), self.grid.down.cell(row));
-            (working.min(depth), below_both(*plane, &coverage.plane, centres))
+        let (working, plane, held) = (self.working[index], self.working_planes[index], self.masks[index]);
+        let joins = held != 0 && working > reference && depth - working <= working - reference;
+        let merged = match joins {
+            true => {
+                let centres = (self.grid.across.cell(column), self.grid.down.cell(row));
+                (working.min(depth), below_both(plane, &coverage.plane, centres), held | mask)
+            }
+            false => (depth, coverage.plane, mask),
         };
-        *held |= mask;
         #[cfg(test)]
         let careless = self.careless;
         #[cfg(not(test))]
         let careless = false;
-        if *held == full || careless {
-            self.depth[index] = *working;
-            self.planes[index] = *plane;
-            *held = 0;
-        }
+        let layer = if merged.2 == full || careless {
+            (self.depth[index], self.planes[index]) = (merged.0, merged.1);
+            // The layer it joined still vouches for its own mask, and
+            // nearer than the new reference where the occluder that filled
+            // the cell lies farther: it stays (MOC would clear it).
+            match joins && working > merged.0 {
+                true => (working, plane, held),
+                false => (0.0, plane, 0),
+            }
+        } else {
+            merged
+        };
+        (self.working[index], self.working_planes[index], self.masks[index]) = layer;
     }
 }
 
@@ -454,9 +488,10 @@ impl OcclusionBuffer {
         &self.levels[0].depth
     }
 
-    /// Both layers pixel by pixel of the target: the reference depth of
-    /// each pixel's cell, and whether the pixel's group is in its cell's
-    /// working mask where the reference holds no depth.
+    /// Both layers pixel by pixel of the target: the depth each pixel's
+    /// cell vouches for there (its reference depth, or its working depth
+    /// where the pixel's group is in the working mask and that is nearer),
+    /// and whether it is the working layer's.
     pub fn per_pixel(&self) -> OccluderDepths {
         let Grid {
             target, across, down, ..
@@ -472,30 +507,38 @@ impl OcclusionBuffer {
             for &gx in &across.group_of {
                 let (column, j, _) = across.group(gx);
                 let cell = (row * self.grid.cells.width + column) as usize;
-                let depth = self.levels[0].depth[cell];
-                picture.depths.push(depth);
-                picture
-                    .partial
-                    .push(depth == 0.0 && self.masks[cell] & 1 << (k * MASK_SIDE + j) != 0);
+                let reference = self.levels[0].depth[cell];
+                let working = match self.masks[cell] & 1 << (k * MASK_SIDE + j) {
+                    0 => 0.0,
+                    _ => self.working[cell],
+                };
+                picture.depths.push(reference.max(working));
+                picture.partial.push(working > reference);
             }
         }
         picture
     }
 
     /// The depth the buffer vouches for at the pixel centre `(x, y)` of
-    /// the target: its cell's depth, or its cell's plane there where that
-    /// is nearer; 0 where the cell is empty.
+    /// the target: the nearer of what its cell's two layers vouch for there
+    /// (each its depth, or its plane there where that is nearer), the
+    /// working layer only where the pixel's group is in its mask; 0 where
+    /// neither holds anything.
     #[cfg(test)]
     pub fn vouched_at(&self, x: f64, y: f64) -> f64 {
         let (cells, target) = (self.grid.cells, self.grid.target);
         let cell = |v: f64, cells: u32, pixels: u32| cell_of(v as u32, cells, pixels);
-        let index =
-            (cell(y, cells.height, target.height) * cells.width + cell(x, cells.width, target.width)) as usize;
-        let depth = f64::from(self.levels[0].depth[index]);
-        if depth == 0.0 {
-            0.0
-        } else {
-            depth.max(self.planes[index].at(x, y))
+        let (column, row) = (cell(x, cells.width, target.width), cell(y, cells.height, target.height));
+        let index = (row * cells.width + column) as usize;
+        let layer = |depth: f32, plane: &ScreenPlane| match f64::from(depth) {
+            0.0 => 0.0,
+            depth => depth.max(plane.at(x, y)),
+        };
+        let reference = layer(self.levels[0].depth[index], &self.planes[index]);
+        let in_mask = self.grid.groups_holding(column, row, [x, x], [y, y]) & self.masks[index] != 0;
+        match in_mask {
+            true => reference.max(layer(self.working[index], &self.working_planes[index])),
+            false => reference,
         }
     }
 
@@ -638,13 +681,25 @@ impl BoxQuery<'_> {
         }
         // A cell: behind its plane by one of the box's (the box's depth is
         // at most the least of them), at every centre.
-        let cell = self.buffer.planes[(y * level.width + x) as usize];
-        farthest > 0.0
-            && self
-                .planes
+        let index = (y * level.width + x) as usize;
+        let behind_plane = |plane: &ScreenPlane| {
+            self.planes
                 .entries()
                 .iter()
-                .any(|p| p.minus(&cell).max_over(xs, ys) < 0.0)
+                .any(|p| p.minus(plane).max_over(xs, ys) < 0.0)
+        };
+        if farthest > 0.0 && behind_plane(&self.buffer.planes[index]) {
+            return true;
+        }
+        // Or behind its working layer, where the box's centres in the cell
+        // all lie in pixel groups of the layer's mask: the layer vouches
+        // for its depth and plane there as the reference does everywhere.
+        let (mask, working) = (self.buffer.masks[index], f64::from(self.buffer.working[index]));
+        let groups = self.buffer.grid.groups_holding(x, y, xs, ys);
+        mask != 0
+            && groups != 0
+            && groups & !mask == 0
+            && (self.nearest < working || over < working || behind_plane(&self.buffer.working_planes[index]))
     }
 }
 
@@ -708,6 +763,30 @@ mod tests {
         // Cells of 4 and 3 pixels across, 3 down.
         let edge = OcclusionBuffer::new(Resolution { width: 10, height: 3 }, Resolution { width: 3, height: 1 });
         assert_eq!([0, 2].map(|c| edge.grid.full_mask(c, 0)), [0x0f_0f0f, 0x07_0707]);
+    }
+
+    #[test]
+    fn a_box_whose_pixels_lie_in_the_working_layers_mask_is_hidden_by_it_after_a_farther_occluder_fills_the_cell() {
+        // 20 × 12 pixels in 5 × 3 cells of 4 × 4 pixels: cell (2, 1) holds
+        // pixels 8 to 11 across and 4 to 7 down, its left half 8 and 9.
+        let mut buffer = OcclusionBuffer::new(Resolution { width: 20, height: 12 }, Resolution { width: 5, height: 3 });
+        let (left, right) = (0x0303_0303, 0x0c0c_0c0c);
+        {
+            let mut cells = buffer.cleared_bands(3).next().unwrap();
+            // The left half at 0.5, then the right half far behind it: the
+            // cell's reference is the farther, and the left half keeps its
+            // own depth.
+            cells.merge(2, 1, &flat(0.5, left));
+            cells.merge(2, 1, &flat(0.25, right));
+            assert_eq!(cells.reference(2, 1), 0.25);
+        }
+        buffer.build_pyramid();
+        let hides = |first, last, nearest| buffer.hides(first, last, nearest, &BoxPlanes::default());
+        assert!(hides([8, 4], [9, 7], 0.375), "behind the left half, within it");
+        assert!(!hides([8, 4], [10, 7], 0.375), "reaching into the right half, in front of it");
+        assert!(!hides([8, 4], [9, 7], 0.625), "in front of the left half");
+        assert!(hides([8, 4], [10, 7], 0.125), "behind the whole cell");
+        assert_eq!([9.5, 10.5].map(|x| buffer.vouched_at(x, 5.5)), [0.5, 0.25]);
     }
 
     #[test]

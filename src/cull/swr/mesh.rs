@@ -414,10 +414,15 @@ impl Patches {
 #[derive(Default)]
 pub struct Rasteriser {
     /// The cells the current patch may reach, and what it vouches for in
-    /// each.
+    /// each (row by row over `columns`; [`EMPTY`] between patches, and
+    /// beyond the current patch's cells).
     columns: Range<u32>,
     rows: Range<u32>,
     cover: Vec<CellCover>,
+    /// The entries of `cover` the current patch's triangles reached, so
+    /// that only they are merged and emptied again: a patch reaches far
+    /// fewer cells than its bounds hold.
+    reached: Vec<u32>,
 }
 
 impl Rasteriser {
@@ -439,8 +444,10 @@ impl Rasteriser {
         if self.columns.is_empty() || self.rows.is_empty() || behind() {
             return;
         }
-        self.cover.clear();
-        self.cover.resize(self.columns.len() * self.rows.len(), EMPTY);
+        let cells_held = self.columns.len() * self.rows.len();
+        if self.cover.len() < cells_held {
+            self.cover.resize(cells_held, EMPTY);
+        }
         for triangle in &patches.triangles[patch.triangles.clone()] {
             if self.add_depth(cells, triangle) {
                 self.mark(grid, triangle);
@@ -450,9 +457,10 @@ impl Rasteriser {
             self.erase(grid, border);
         }
         let width = self.columns.len();
-        for (i, cover) in self.cover.iter().enumerate() {
+        for &i in &self.reached {
+            let cover = std::mem::replace(&mut self.cover[i as usize], EMPTY);
             if let (true, CellDepth::AtLeast { least, plane }) = (cover.mask != 0, cover.depth) {
-                let (column, row) = (self.columns.start + (i % width) as u32, self.rows.start + (i / width) as u32);
+                let (column, row) = (self.columns.start + i % width as u32, self.rows.start + i / width as u32);
                 cells.merge(
                     column,
                     row,
@@ -464,13 +472,24 @@ impl Rasteriser {
                 );
             }
         }
+        self.reached.clear();
     }
 
-    /// What the current patch vouches for in cell (`column`, `row`), which
-    /// must lie within its cells.
-    fn cover_at(&mut self, column: u32, row: u32) -> &mut CellCover {
+    /// Where in `cover` cell (`column`, `row`) lies, which must lie within
+    /// the current patch's cells.
+    fn cover_index(&self, column: u32, row: u32) -> usize {
         let width = self.columns.len() as u32;
-        &mut self.cover[((row - self.rows.start) * width + column - self.columns.start) as usize]
+        ((row - self.rows.start) * width + column - self.columns.start) as usize
+    }
+
+    /// Marks the pixel groups `bits` of cell (`column`, `row`), where the
+    /// patch vouches for a depth.
+    fn mark_groups(&mut self, column: u32, row: u32, bits: u64) {
+        let i = self.cover_index(column, row);
+        let cover = &mut self.cover[i];
+        if let CellDepth::AtLeast { .. } = cover.depth {
+            cover.mask |= bits;
+        }
     }
 
     /// Lowers the depth and plane of each cell where the GPU may draw
@@ -504,9 +523,12 @@ impl Rasteriser {
             for column in clamp(grid.across.cells_reaching(xs[0], xs[1]), &self.columns) {
                 let [x0, x1] = grid.across.cell(column);
                 let xs = [x0.max(xs[0]), x1.min(xs[1])];
-                let cover = self.cover_at(column, row);
-                if let CellDepth::Nothing = cover.depth {
-                    continue;
+                let i = self.cover_index(column, row);
+                let cover = &mut self.cover[i];
+                match cover.depth {
+                    CellDepth::Nothing => continue,
+                    CellDepth::Unreached => self.reached.push(i as u32),
+                    CellDepth::AtLeast { .. } => {}
                 }
                 let nearest = plane.max_over(xs, ys);
                 let least = plane.min_over(xs, ys);
@@ -558,7 +580,7 @@ impl Rasteriser {
             let [from, to] = within(grid.down.cell(row));
             let whole = grid.across.cells_within(from, to, &self.columns);
             for column in whole.clone() {
-                self.cover_at(column, row).mask |= grid.full_mask(column, row);
+                self.mark_groups(column, row, grid.full_mask(column, row));
             }
             let inner = grid.across.groups_of(&whole);
             for g in grid.down.groups_of(&(row..row + 1)) {
@@ -567,7 +589,7 @@ impl Rasteriser {
                 let groups = grid.across.groups_within(from, to, &self.columns);
                 let (left, right) = (groups.start..groups.end.min(inner.start), groups.start.max(inner.end)..groups.end);
                 for (column, bits) in grid.across.cells_of(left).chain(grid.across.cells_of(right)) {
-                    self.cover_at(column, row).mask |= bits << (k * MASK_SIDE);
+                    self.mark_groups(column, row, bits << (k * MASK_SIDE));
                 }
             }
         }
@@ -591,7 +613,8 @@ impl Rasteriser {
             let (xa, xb) = (p.x + (q.x - p.x) * from, p.x + (q.x - p.x) * to);
             let groups = grid.across.groups_reaching(xa.min(xb) - margin, xa.max(xb) + margin, &self.columns);
             for (column, bits) in grid.across.cells_of(groups) {
-                self.cover_at(column, row).mask &= !(bits << (k * MASK_SIDE));
+                let i = self.cover_index(column, row);
+                self.cover[i].mask &= !(bits << (k * MASK_SIDE));
             }
         }
     }
@@ -1167,8 +1190,17 @@ mod tests {
             }
             rasteriser.columns = 0..16;
             rasteriser.rows = 0..12;
+            // Every cell where the triangle vouches for a depth (only there
+            // does it mark).
+            let reached = CellCover {
+                mask: 0,
+                depth: CellDepth::AtLeast {
+                    least: 0.5,
+                    plane: ScreenPlane::default(),
+                },
+            };
             rasteriser.cover.clear();
-            rasteriser.cover.resize(16 * 12, EMPTY);
+            rasteriser.cover.resize(16 * 12, reached);
             rasteriser.mark(cells.grid(), &Triangle::new(corners));
             for (i, cover) in rasteriser.cover.iter().enumerate() {
                 for bit in (0..64).filter(|b| cover.mask >> b & 1 == 1) {
@@ -1356,7 +1388,8 @@ mod tests {
     #[test]
     fn the_picture_shows_the_pixels_an_occluder_covers_in_part_of_a_cell_as_the_working_layer() {
         // A wall ending at x = 30.2, inside the cells of pixels 28 to 31:
-        // it covers their first two pixels, which the working layer holds.
+        // it covers their first two pixels, which the working layer holds
+        // at the wall's depth.
         let size = Resolution { width: 64, height: 48 };
         let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
         let wall = grid(DVec2::new(-5.0, -5.0), DVec2::new(35.2, 60.0), [2, 2], false, |_, _| 0.5);
@@ -1368,7 +1401,7 @@ mod tests {
             for x in 0..64 {
                 let expected = match x {
                     0..28 => (true, false),
-                    28 | 29 => (false, true),
+                    28 | 29 => (true, true),
                     _ => (false, false),
                 };
                 assert_eq!(at(x), expected, "pixel ({x}, {y})");
