@@ -76,6 +76,15 @@ fn held_pixels(c: u32, cells: u32, pixels: u32) -> [u32; 2] {
     [first as u32, end as u32 - 1]
 }
 
+/// A mask's bit at the start of each of the rows of groups `rows` (bit k
+/// for the k-th row): times one row's bits, a mask of those rows (a row's
+/// bits fit in its byte, so the product carries nothing between them).
+fn row_starts(rows: u64) -> u64 {
+    (0..MASK_SIDE)
+        .filter(|k| rows >> k & 1 == 1)
+        .fold(0, |starts, k| starts | 1 << (k * MASK_SIDE))
+}
+
 /// `cells` along a side of `pixels`, as `pixel` maps into them.
 fn cell_of(pixel: u32, cells: u32, pixels: u32) -> u32 {
     (u64::from(pixel) * u64::from(cells) / u64::from(pixels)) as u32
@@ -227,9 +236,9 @@ pub struct Grid {
     pub(super) across: Axis,
     pub(super) down: Axis,
     /// Per column, the bits of one row of its groups; per row, a bit at
-    /// the start of each row of its groups: a cell's full mask is their
-    /// product (a row's bits fit in a byte, so no carries), made once as
-    /// rasterising asks for it at every cell it marks.
+    /// the start of each row of its groups ([`row_starts`]): a cell's full
+    /// mask is their product, made once as rasterising asks for it at every
+    /// cell it marks.
     column_bits: Vec<u64>,
     row_starts: Vec<u64>,
 }
@@ -242,9 +251,7 @@ impl Grid {
             target,
             cells: Resolution { width, height },
             column_bits: (0..width).map(|c| (1u64 << across.groups_in(c)) - 1).collect(),
-            row_starts: (0..height)
-                .map(|r| (0..down.groups_in(r)).fold(0, |starts, k| starts | 1 << (k * MASK_SIDE)))
-                .collect(),
+            row_starts: (0..height).map(|r| row_starts((1 << down.groups_in(r)) - 1)).collect(),
             across,
             down,
         }
@@ -262,16 +269,12 @@ impl Grid {
     }
 
     /// The mask of the groups of cell (`column`, `row`) holding a pixel
-    /// centre in `xs` × `ys`.
-    fn groups_holding(&self, column: u32, row: u32, xs: [f64; 2], ys: [f64; 2]) -> u64 {
-        let across = self.across.groups_reaching(xs[0], xs[1], &(column..column + 1));
-        let down = self.down.groups_reaching(ys[0], ys[1], &(row..row + 1));
-        if across.is_empty() {
-            return 0;
-        }
-        let (first_across, first_down) = (self.across.first_group[column as usize], self.down.first_group[row as usize]);
-        let bits = (1u64 << (across.end - first_across)) - (1u64 << (across.start - first_across));
-        down.map(|g| bits << ((g - first_down) * MASK_SIDE)).fold(0, |mask, row| mask | row)
+    /// centre in `xs` × `ys`; none where they hold none.
+    fn groups_holding(&self, column: u32, row: u32, xs: [f64; 2], ys: [f64; 2]) -> Option<u64> {
+        let bits = |axis: &Axis, c: u32, [lo, hi]: [f64; 2]| {
+            axis.cells_of(axis.groups_reaching(lo, hi, &(c..c + 1))).next().map(|(_, bits)| bits)
+        };
+        Some(bits(&self.across, column, xs)? * row_starts(bits(&self.down, row, ys)?))
     }
 
     /// The mask of every group of cell (`column`, `row`).
@@ -352,7 +355,12 @@ impl Cells<'_> {
     /// The working layer is dropped first when it has fallen behind the
     /// reference, or when the occluder lies nearer than it by more than it
     /// lies nearer than the reference (merging would pull the new layer
-    /// back to a depth nearly no better than the reference's).
+    /// back to a depth nearly no better than the reference's). Departure
+    /// from MOC, which clears the working layer once it becomes the
+    /// reference: where the occluder that filled it lies farther than the
+    /// layer it joined, that layer stays as it was, still vouching for its
+    /// own mask and nearer than the new reference (so a box just behind a
+    /// wall's outline, within the wall's pixels of the cell, is hidden).
     pub(super) fn merge(&mut self, column: u32, row: u32, coverage: &Coverage) {
         let full = self.grid.full_mask(column, row);
         let index = ((row - self.rows.start) * self.grid.cells.width + column) as usize;
@@ -368,12 +376,13 @@ impl Cells<'_> {
             self.planes[index] = coverage.plane;
             return;
         }
-        let (working, plane, held) = (self.working[index], self.working_planes[index], self.masks[index]);
+        let (working, held) = (self.working[index], self.masks[index]);
         let joins = held != 0 && working > reference && depth - working <= working - reference;
-        let merged = match joins {
+        let (merged_depth, merged_plane, merged_mask) = match joins {
             true => {
                 let centres = (self.grid.across.cell(column), self.grid.down.cell(row));
-                (working.min(depth), below_both(plane, &coverage.plane, centres), held | mask)
+                let plane = below_both(self.working_planes[index], &coverage.plane, centres);
+                (working.min(depth), plane, held | mask)
             }
             false => (depth, coverage.plane, mask),
         };
@@ -381,19 +390,16 @@ impl Cells<'_> {
         let careless = self.careless;
         #[cfg(not(test))]
         let careless = false;
-        let layer = if merged.2 == full || careless {
-            (self.depth[index], self.planes[index]) = (merged.0, merged.1);
-            // The layer it joined still vouches for its own mask, and
-            // nearer than the new reference where the occluder that filled
-            // the cell lies farther: it stays (MOC would clear it).
-            match joins && working > merged.0 {
-                true => (working, plane, held),
-                false => (0.0, plane, 0),
+        if merged_mask == full || careless {
+            (self.depth[index], self.planes[index]) = (merged_depth, merged_plane);
+            if !(joins && depth < working) {
+                self.masks[index] = 0;
             }
         } else {
-            merged
-        };
-        (self.working[index], self.working_planes[index], self.masks[index]) = layer;
+            self.working[index] = merged_depth;
+            self.working_planes[index] = merged_plane;
+            self.masks[index] = merged_mask;
+        }
     }
 }
 
@@ -535,7 +541,7 @@ impl OcclusionBuffer {
             depth => depth.max(plane.at(x, y)),
         };
         let reference = layer(self.levels[0].depth[index], &self.planes[index]);
-        let in_mask = self.grid.groups_holding(column, row, [x, x], [y, y]) & self.masks[index] != 0;
+        let in_mask = (self.grid.groups_holding(column, row, [x, x], [y, y])).is_some_and(|g| g & self.masks[index] != 0);
         match in_mask {
             true => reference.max(layer(self.working[index], &self.working_planes[index])),
             false => reference,
@@ -604,7 +610,9 @@ impl OcclusionBuffer {
     /// farthest depth (by `nearest`, or else by its planes over the pixel
     /// centres the texel holds), or no ray through those centres meets it,
     /// or else this holds at each of the texel's children; at a cell, also
-    /// when one of its planes lies behind the cell's plane at each centre.
+    /// when one of its planes lies behind the cell's plane at each centre,
+    /// or when its centres in the cell all lie in the working layer's mask
+    /// and it lies behind that layer's depth or plane there.
     pub fn hides(&self, first: [u32; 2], last: [u32; 2], nearest: f64, planes: &BoxPlanes) -> bool {
         debug_assert!(first[0] <= last[0] && first[1] <= last[1], "{first:?} to {last:?}");
         let [columns, rows] = self.grid.cells_holding(first, last);
@@ -695,10 +703,8 @@ impl BoxQuery<'_> {
         // all lie in pixel groups of the layer's mask: the layer vouches
         // for its depth and plane there as the reference does everywhere.
         let (mask, working) = (self.buffer.masks[index], f64::from(self.buffer.working[index]));
-        let groups = self.buffer.grid.groups_holding(x, y, xs, ys);
         mask != 0
-            && groups != 0
-            && groups & !mask == 0
+            && (self.buffer.grid.groups_holding(x, y, xs, ys)).is_some_and(|groups| groups & !mask == 0)
             && (self.nearest < working || over < working || behind_plane(&self.buffer.working_planes[index]))
     }
 }

@@ -422,7 +422,7 @@ pub struct Rasteriser {
     /// The entries of `cover` the current patch's triangles reached, so
     /// that only they are merged and emptied again: a patch reaches far
     /// fewer cells than its bounds hold.
-    reached: Vec<u32>,
+    touched: Vec<u32>,
 }
 
 impl Rasteriser {
@@ -444,6 +444,7 @@ impl Rasteriser {
         if self.columns.is_empty() || self.rows.is_empty() || behind() {
             return;
         }
+        debug_assert!(self.touched.is_empty(), "every entry of the last patch emptied");
         let cells_held = self.columns.len() * self.rows.len();
         if self.cover.len() < cells_held {
             self.cover.resize(cells_held, EMPTY);
@@ -457,7 +458,7 @@ impl Rasteriser {
             self.erase(grid, border);
         }
         let width = self.columns.len();
-        for &i in &self.reached {
+        for &i in &self.touched {
             let cover = std::mem::replace(&mut self.cover[i as usize], EMPTY);
             if let (true, CellDepth::AtLeast { least, plane }) = (cover.mask != 0, cover.depth) {
                 let (column, row) = (self.columns.start + i % width as u32, self.rows.start + i / width as u32);
@@ -472,7 +473,7 @@ impl Rasteriser {
                 );
             }
         }
-        self.reached.clear();
+        self.touched.clear();
     }
 
     /// Where in `cover` cell (`column`, `row`) lies, which must lie within
@@ -527,7 +528,7 @@ impl Rasteriser {
                 let cover = &mut self.cover[i];
                 match cover.depth {
                     CellDepth::Nothing => continue,
-                    CellDepth::Unreached => self.reached.push(i as u32),
+                    CellDepth::Unreached => self.touched.push(i as u32),
                     CellDepth::AtLeast { .. } => {}
                 }
                 let nearest = plane.max_over(xs, ys);
@@ -1383,6 +1384,24 @@ mod tests {
         // The cells over the overlap hold the farther wall's depth.
         assert!(at(7) > 0.399 && at(7) <= 0.4, "{}", at(7));
         assert!(depths.iter().all(|&d| d > 0.0), "every cell covered");
+    }
+
+    #[test]
+    fn a_box_behind_a_walls_outline_within_its_pixels_is_hidden_though_a_farther_wall_fills_the_cell() {
+        // A wall at 0.5 ending at x = 30.2, inside the cells of pixels 28
+        // to 31, rasterised first (nearest first), and a wall at 0.25
+        // behind it from x = 29.8 on: together they fill those cells, whose
+        // reference becomes the far wall's depth, and whose working layer
+        // stays the near wall's pixels 28 and 29.
+        let size = Resolution { width: 64, height: 48 };
+        let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
+        let wall = |x0: f64, x1: f64, z: f64| grid(DVec2::new(x0, -5.0), DVec2::new(x1 - x0, 60.0), [2, 2], false, move |_, _| z);
+        rasterise_meshes(&mut buffer, &[wall(-5.0, 30.2, 0.5), wall(29.8, 70.0, 0.25)]);
+        buffer.build_pyramid();
+        let hides = |first, last, nearest| buffer.hides(first, last, nearest, &crate::gpu::BoxPlanes::default());
+        assert!(hides([26, 20], [29, 27], 0.4), "just behind the near wall, within its pixels");
+        assert!(!hides([26, 20], [30, 27], 0.4), "reaching past its outline, in front of the far wall");
+        assert!(hides([26, 20], [34, 27], 0.2), "behind both");
     }
 
     #[test]

@@ -15,7 +15,10 @@
 //! counts only clear of an occluder's outline by an eighth of a pixel or
 //! more, which costs the seams between objects. A cell keeps a depth
 //! plane besides its depth (the occluders' own, lowered below each other's
-//! where several fill it); MOC keeps one depth per tile. A buffer that hid
+//! where several fill it); MOC keeps one depth per tile. A working layer
+//! that a farther occluder completed stays, and hides the boxes whose
+//! pixels in its cell it all covers; MOC clears it, and tests boxes
+//! against the reference layer alone. A buffer that hid
 //! nothing, or saved less drawing than it cost, rests for a few frames, and
 //! longer each time it fails again (MOC leaves that to its caller).
 //! Occluders are whole visible objects (the clusters of one mesh taken
@@ -558,18 +561,21 @@ impl Culler for SoftwareOcclusionCulling {
     ///    it (`BoxPlanes`: a box seen at a slant is far nearer at one end), or
     ///    no ray through the texel's pixel centres may meet it; a texel that
     ///    fails is tried again by its children, down to the cells, where the box
-    ///    may also lie behind the cell's plane. A hidden node stops its
+    ///    may also lie behind the cell's plane, or behind its working layer
+    ///    where that covers all the box's pixels in the cell. A hidden node stops its
     ///    subtree; a box reaching the near plane is visible. A leaf's objects
     ///    are tested one by one.
     /// 5. **Draw** the visible objects, the occluders among them first (in
     ///    their order, nearest first, for the GPU's early depth test); they are
     ///    next frame's occluder candidates. An occluder found hidden is not
-    ///    drawn, and the buffer still holds only depth that is drawn: no
-    ///    occluder a cell took its depth from is found hidden, since at each
-    ///    pixel centre it vouched for there, the box of the object (the
-    ///    cluster) whose triangle holds the centre lies nowhere behind that
-    ///    triangle, and so nowhere behind the cell's depth and plane, so at
-    ///    that cell every test of it, or of a node holding it, fails.
+    ///    drawn, and what the buffer vouches for is still drawn: where a
+    ///    layer vouches for a depth at a pixel centre, an occluder merged
+    ///    into it draws that centre at least that near. If that occluder is
+    ///    found hidden, its box (which holds what it draws) lies behind some
+    ///    layer at that centre, nearer still, and so another occluder draws
+    ///    the centre nearer than the first; depths that only grow along
+    ///    finitely many occluders end at one that is drawn. (One hidden
+    ///    because no pixel ray meets its box draws no centre at all.)
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let (camera, scene, size) = (input.camera, input.scene, input.resolution);
         let mut stats = TraversalStats::default();
