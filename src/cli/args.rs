@@ -256,9 +256,9 @@ pub struct RenderArgs {
     /// Lay the depth buffer a CPU culling mode culled the frame with
     /// over the picture: cells holding an occluder's depth from white (near)
     /// to deep blue (far; all of them when they share one depth), tinted
-    /// orange at pixels occluders cover in only part of their cell (which
-    /// hide only boxes whose pixels there they all cover), the rest of the
-    /// frame dimmed.
+    /// orange at pixels whose depth is that of occluders covering only part
+    /// of their cell (a box is hidden there only at those pixels), the rest
+    /// of the frame dimmed.
     #[arg(long)]
     pub occluders: bool,
 }

@@ -45,7 +45,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     );
     if let Some([written, partial, pixels]) = picture.occluder_pixels {
         say!(
-            "its buffer holds an occluder's depth at {written} of the {pixels} pixels (coloured), {partial} of them at a nearer depth covered in only part of their cell, which hides only boxes whose pixels there it all covers (tinted orange); the rest dimmed"
+            "its buffer holds an occluder's depth at {written} of the {pixels} pixels (coloured), {partial} of them at a nearer depth that covers only part of their cell (tinted orange); the rest dimmed"
         );
     }
     if let Some(wrong) = &picture.wrong {

@@ -375,6 +375,18 @@ pub(crate) const UNBOUNDED: f32 = 1e30;
 /// (w pads) in f32; an axis with no face across it holds [`UNBOUNDED`]
 /// (`-UNBOUNDED` for the exit).
 #[cfg(test)]
+impl BoxPlanes {
+    /// A box's planes with one entry plane and no exit: its depth is at
+    /// most `entry` at every pixel centre, and no ray is known to miss it.
+    pub(crate) fn entering_at(entry: ScreenPlane) -> BoxPlanes {
+        let mut planes = BoxPlanes::default();
+        planes.entries[0] = entry;
+        planes.count = 1;
+        planes
+    }
+}
+
+#[cfg(test)]
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct ShaderBoxPlanes {

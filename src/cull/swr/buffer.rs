@@ -12,26 +12,29 @@
 //! drawn).
 //!
 //! Why it is conservative. A box is hidden when, at every pixel centre its
-//! rectangle covers, it lies behind what the reference layer holds there
-//! (a cell's depth, or its plane; [`OcclusionBuffer::hides`]), or behind
-//! the working layer where the box's centres in the cell all lie in its
-//! mask, or its pixel ray misses it. That is safe if, at every pixel
-//! centre a cell holds (its working layer: in its mask), an occluder drawn
+//! rectangle covers, it lies behind what one of the cell's layers holds
+//! there (its depth, or its plane; the working layer only at the centres
+//! of its mask; [`OcclusionBuffer::hides`]), or its pixel ray misses it.
+//! That is safe if, at every pixel centre a layer holds, an occluder drawn
 //! this frame (the mode's step 5) is drawn no farther than the layer's
-//! depth and its plane. Each occluder object hands its cells a
-//! mask of the pixel groups it is sure to draw, with a depth and plane it
-//! is sure to draw them at or nearer (mesh.rs says how, from the GPU's
-//! placement and rounding); a cell's working layer keeps the least of the
-//! depths merged into it, so its mask's every centre is drawn at least that
-//! near, and a full mask vouches for the whole cell. Departure from MOC:
-//! its box test reads the reference layer alone, and it clears the
-//! working layer when that becomes the reference; here a working layer
-//! that a farther occluder completed stays, still vouching for its own
-//! mask, so a box just behind a wall's outline, within the wall's pixels
-//! of a cell, is hidden though the cell's reference is what lies beyond.
-//! A layer is dropped, never narrowed, when it stops paying (MOC's heuristic, [`Cells::merge`]):
+//! depth and its plane. Each occluder object hands its cells a mask of the
+//! pixel groups it is sure to draw, with a depth and plane it is sure to
+//! draw them at or nearer (mesh.rs says how, from the GPU's placement and
+//! rounding); a cell's working layer keeps the least of the depths merged
+//! into it, so its mask's every centre is drawn at least that near, and a
+//! full mask vouches for the whole cell. A layer is dropped, never
+//! narrowed, when it stops paying (MOC's heuristic, [`Cells::merge`]):
 //! dropping what is known is always safe. A pyramid level keeps the least
 //! of the 2×2 texels below it.
+//!
+//! Departure from MOC: its box test reads the reference layer alone, and
+//! it clears the working layer when that becomes the reference. Here a
+//! working layer that a farther occluder completed stays, still vouching
+//! for its own mask, and a box test that fails at a cell tries its layers
+//! centre by centre: the box's centres in the working layer's mask behind
+//! either layer, the others behind the reference, each over the rectangle
+//! of their pixel groups. So a box just behind a wall's outline is hidden
+//! though the cell's reference is what lies beyond the wall.
 
 use std::ops::Range;
 
@@ -275,6 +278,21 @@ impl Grid {
             axis.cells_of(axis.groups_reaching(lo, hi, &(c..c + 1))).next().map(|(_, bits)| bits)
         };
         Some(bits(&self.across, column, xs)? * row_starts(bits(&self.down, row, ys)?))
+    }
+
+    /// The pixel centres of the groups `bits` of cell (`column`, `row`)
+    /// (some), within `xs` × `ys`: the rectangle from their first column
+    /// and row of groups to their last.
+    fn centres_of(&self, column: u32, row: u32, bits: u64, xs: [f64; 2], ys: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+        let row_bits = |k: u32| bits >> (k * MASK_SIDE) & 0xff;
+        let columns = (0..MASK_SIDE).fold(0, |columns, k| columns | row_bits(k));
+        let rows = (0..MASK_SIDE).filter(|&k| row_bits(k) != 0).fold(0, |rows, k| rows | 1 << k);
+        let span = |axis: &Axis, c: u32, present: u64, [lo, hi]: [f64; 2]| {
+            let first = axis.first_group[c as usize];
+            let (from, to) = (first + present.trailing_zeros(), first + 63 - present.leading_zeros());
+            [axis.group_centres[from as usize][0].max(lo), axis.group_centres[to as usize][1].min(hi)]
+        };
+        (span(&self.across, column, columns, xs), span(&self.down, row, rows, ys))
     }
 
     /// The mask of every group of cell (`column`, `row`).
@@ -611,8 +629,8 @@ impl OcclusionBuffer {
     /// centres the texel holds), or no ray through those centres meets it,
     /// or else this holds at each of the texel's children; at a cell, also
     /// when one of its planes lies behind the cell's plane at each centre,
-    /// or when its centres in the cell all lie in the working layer's mask
-    /// and it lies behind that layer's depth or plane there.
+    /// or when it lies behind the working layer at its centres in that
+    /// layer's mask and behind one of the layers at the others.
     pub fn hides(&self, first: [u32; 2], last: [u32; 2], nearest: f64, planes: &BoxPlanes) -> bool {
         debug_assert!(first[0] <= last[0] && first[1] <= last[1], "{first:?} to {last:?}");
         let [columns, rows] = self.grid.cells_holding(first, last);
@@ -630,6 +648,13 @@ impl OcclusionBuffer {
             .unwrap_or(self.levels.len() - 1);
         query.hides_texels(k as u32, [x0 >> k, x1 >> k], [y0 >> k, y1 >> k])
     }
+}
+
+/// What one of a cell's layers vouches for at the centres it holds: a
+/// depth, and a plane, each drawn at or nearer (0: nothing).
+struct Layer {
+    depth: f64,
+    plane: ScreenPlane,
 }
 
 /// A box's test against the buffer ([`OcclusionBuffer::hides`]).
@@ -672,16 +697,7 @@ impl BoxQuery<'_> {
             centres(&self.buffer.grid.across.cells, columns, 0),
             centres(&self.buffer.grid.down.cells, rows, 1),
         );
-        // Each entry plane bounds the box's depth on its own, so the least
-        // of them does; a NaN among them is passed over by `min`, and a NaN
-        // result hides nothing (`<`, not `>=`), here and below.
-        let over = self
-            .planes
-            .entries()
-            .iter()
-            .map(|p| p.max_over(xs, ys))
-            .fold(f64::INFINITY, f64::min);
-        if over < farthest || self.planes.missed_over(xs, ys) {
+        if self.over(xs, ys) < farthest || self.planes.missed_over(xs, ys) {
             return true;
         }
         if k > 0 {
@@ -690,22 +706,58 @@ impl BoxQuery<'_> {
         // A cell: behind its plane by one of the box's (the box's depth is
         // at most the least of them), at every centre.
         let index = (y * level.width + x) as usize;
-        let behind_plane = |plane: &ScreenPlane| {
-            self.planes
-                .entries()
-                .iter()
-                .any(|p| p.minus(plane).max_over(xs, ys) < 0.0)
+        let reference = Layer {
+            depth: farthest,
+            plane: self.buffer.planes[index],
         };
-        if farthest > 0.0 && behind_plane(&self.buffer.planes[index]) {
+        if farthest > 0.0 && self.behind_plane(&reference.plane, xs, ys) {
             return true;
         }
-        // Or behind its working layer, where the box's centres in the cell
-        // all lie in pixel groups of the layer's mask: the layer vouches
-        // for its depth and plane there as the reference does everywhere.
-        let (mask, working) = (self.buffer.masks[index], f64::from(self.buffer.working[index]));
-        mask != 0
-            && (self.buffer.grid.groups_holding(x, y, xs, ys)).is_some_and(|groups| groups & !mask == 0)
-            && (self.nearest < working || over < working || behind_plane(&self.buffer.working_planes[index]))
+        // Or, where the cell has a working layer, centre by centre: the
+        // box's centres in its mask behind it or the reference, and the
+        // others behind the reference, each judged over the rectangle of
+        // their pixel groups (the working layer vouches for its depth and
+        // plane at its mask's centres as the reference does everywhere).
+        let mask = self.buffer.masks[index];
+        let grid = &self.buffer.grid;
+        let Some(groups) = grid.groups_holding(x, y, xs, ys).filter(|_| mask != 0) else {
+            return false;
+        };
+        let working = Layer {
+            depth: f64::from(self.buffer.working[index]),
+            plane: self.buffer.working_planes[index],
+        };
+        let behind = |layer: &Layer, bits: u64| {
+            let (xs, ys) = grid.centres_of(x, y, bits, xs, ys);
+            layer.depth > 0.0
+                && (self.nearest < layer.depth
+                    || self.over(xs, ys) < layer.depth
+                    || self.behind_plane(&layer.plane, xs, ys))
+        };
+        let (inside, outside) = (groups & mask, groups & !mask);
+        (inside == 0 || behind(&working, inside) || behind(&reference, inside))
+            && (outside == 0 || behind(&reference, outside))
+    }
+
+    /// The box's greatest depth over the pixel centres `xs` × `ys`, by its
+    /// entry planes: each bounds the box's depth on its own, so the least
+    /// of them does; a NaN among them is passed over by `min`, and a NaN
+    /// result hides nothing (tests take `<`, not `>=`).
+    fn over(&self, xs: [f64; 2], ys: [f64; 2]) -> f64 {
+        self.planes
+            .entries()
+            .iter()
+            .map(|p| p.max_over(xs, ys))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Whether one of the box's entry planes lies behind `plane` at every
+    /// pixel centre of `xs` × `ys`.
+    fn behind_plane(&self, plane: &ScreenPlane, xs: [f64; 2], ys: [f64; 2]) -> bool {
+        self.planes
+            .entries()
+            .iter()
+            .any(|p| p.minus(plane).max_over(xs, ys) < 0.0)
     }
 }
 
@@ -793,6 +845,39 @@ mod tests {
         assert!(!hides([8, 4], [9, 7], 0.625), "in front of the left half");
         assert!(hides([8, 4], [10, 7], 0.125), "behind the whole cell");
         assert_eq!([9.5, 10.5].map(|x| buffer.vouched_at(x, 5.5)), [0.5, 0.25]);
+    }
+
+    #[test]
+    fn a_box_behind_the_working_layer_in_its_mask_and_behind_the_reference_elsewhere_is_hidden() {
+        // Cell (2, 1) of 4 × 4 pixels (8 to 11 across): its reference at
+        // least 0.25 and on a plane rising from 0.25 at x = 8.5 to 0.55 at
+        // x = 11.5; its working layer the left half (pixels 8, 9) at 0.5.
+        let mut buffer = OcclusionBuffer::new(Resolution { width: 20, height: 12 }, Resolution { width: 5, height: 3 });
+        {
+            let mut cells = buffer.cleared_bands(3).next().unwrap();
+            cells.merge(2, 1, &flat(0.5, 0x0303_0303));
+            let rising = ScreenPlane {
+                per_x: 0.1,
+                per_y: 0.0,
+                constant: -0.6,
+            };
+            cells.merge(2, 1, &Coverage { mask: 0x0f0f_0f0f, depth: 0.25, plane: rising });
+        }
+        buffer.build_pyramid();
+        // A box over the whole cell at most `depth` deep everywhere: at
+        // 0.44 it lies behind the working layer over pixels 8 and 9, and
+        // behind the reference's plane over 10 and 11 (0.45 there at the
+        // least), though over the whole cell it lies behind neither.
+        let hides = |depth: f64| {
+            let planes = BoxPlanes::entering_at(ScreenPlane {
+                constant: depth,
+                ..ScreenPlane::default()
+            });
+            buffer.hides([8, 4], [11, 7], depth, &planes)
+        };
+        assert!(hides(0.44));
+        assert!(!hides(0.46), "in front of the reference at pixel 10");
+        assert!(!hides(0.52), "in front of the working layer at pixel 8");
     }
 
     #[test]

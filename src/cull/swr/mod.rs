@@ -16,9 +16,9 @@
 //! more, which costs the seams between objects. A cell keeps a depth
 //! plane besides its depth (the occluders' own, lowered below each other's
 //! where several fill it); MOC keeps one depth per tile. A working layer
-//! that a farther occluder completed stays, and hides the boxes whose
-//! pixels in its cell it all covers; MOC clears it, and tests boxes
-//! against the reference layer alone. A buffer that hid
+//! that a farther occluder completed stays, and a box's test at a cell
+//! takes it at the box's pixels in its mask; MOC clears it, and tests
+//! boxes against the reference layer alone. A buffer that hid
 //! nothing, or saved less drawing than it cost, rests for a few frames, and
 //! longer each time it fails again (MOC leaves that to its caller).
 //! Occluders are whole visible objects (the clusters of one mesh taken
@@ -562,7 +562,8 @@ impl Culler for SoftwareOcclusionCulling {
     ///    no ray through the texel's pixel centres may meet it; a texel that
     ///    fails is tried again by its children, down to the cells, where the box
     ///    may also lie behind the cell's plane, or behind its working layer
-    ///    where that covers all the box's pixels in the cell. A hidden node stops its
+    ///    at its pixels in the layer's mask and behind the reference at the
+    ///    rest. A hidden node stops its
     ///    subtree; a box reaching the near plane is visible. A leaf's objects
     ///    are tested one by one.
     /// 5. **Draw** the visible objects, the occluders among them first (in
