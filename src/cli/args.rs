@@ -257,8 +257,8 @@ pub struct RenderArgs {
     /// over the picture: cells holding an occluder's depth from white (near)
     /// to deep blue (far; all of them when they share one depth), tinted
     /// orange at pixels whose depth is that of occluders covering only part
-    /// of their cell (a box is hidden there only at those pixels), the rest
-    /// of the frame dimmed.
+    /// of their cell (that depth counts only at those pixels), the rest of
+    /// the frame dimmed.
     #[arg(long)]
     pub occluders: bool,
 }

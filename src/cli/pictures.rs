@@ -45,7 +45,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     );
     if let Some([written, partial, pixels]) = picture.occluder_pixels {
         say!(
-            "its buffer holds an occluder's depth at {written} of the {pixels} pixels (coloured), {partial} of them at a nearer depth that covers only part of their cell (tinted orange); the rest dimmed"
+            "its buffer holds an occluder's depth at {written} of the {pixels} pixels (coloured), {partial} of them at the nearer depth of occluders covering only part of their cell (tinted orange); the rest dimmed"
         );
     }
     if let Some(wrong) = &picture.wrong {

@@ -140,8 +140,8 @@ pub struct OccluderDepths {
     /// pixel and lies nearer), 0 where no occluder wrote one.
     pub depths: Vec<f32>,
     /// Pixels whose depth is the working layer's (MOC's): occluders cover
-    /// them in only part of their cell, and hide a box there only at these
-    /// pixels.
+    /// them in only part of their cell, so that depth is vouched for only
+    /// at these pixels; elsewhere in the cell the reference holds.
     pub partial: Vec<bool>,
 }
 

@@ -332,6 +332,16 @@ impl BoxPlanes {
         &self.entries[..self.count]
     }
 
+    /// A box's planes with one entry plane and no exit: its depth is at
+    /// most `entry` at every pixel centre, and no ray is known to miss it.
+    #[cfg(test)]
+    pub(crate) fn entering_at(entry: ScreenPlane) -> BoxPlanes {
+        let mut planes = BoxPlanes::default();
+        planes.entries[0] = entry;
+        planes.count = 1;
+        planes
+    }
+
     /// The planes of the faces opposite the entries, in their order.
     pub(crate) fn exits(&self) -> &[ScreenPlane] {
         &self.exits[..self.count]
@@ -374,18 +384,6 @@ pub(crate) const UNBOUNDED: f32 = 1e30;
 /// world axis, the entry and exit plane's `per_x`, `per_y` and `constant`
 /// (w pads) in f32; an axis with no face across it holds [`UNBOUNDED`]
 /// (`-UNBOUNDED` for the exit).
-#[cfg(test)]
-impl BoxPlanes {
-    /// A box's planes with one entry plane and no exit: its depth is at
-    /// most `entry` at every pixel centre, and no ray is known to miss it.
-    pub(crate) fn entering_at(entry: ScreenPlane) -> BoxPlanes {
-        let mut planes = BoxPlanes::default();
-        planes.entries[0] = entry;
-        planes.count = 1;
-        planes
-    }
-}
-
 #[cfg(test)]
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]

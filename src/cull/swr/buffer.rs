@@ -31,9 +31,9 @@
 //! it clears the working layer when that becomes the reference. Here a
 //! working layer that a farther occluder completed stays, still vouching
 //! for its own mask, and a box test that fails at a cell tries its layers
-//! centre by centre: the box's centres in the working layer's mask behind
-//! either layer, the others behind the reference, each over the rectangle
-//! of their pixel groups. So a box just behind a wall's outline is hidden
+//! part by part: the box's centres in the working layer's mask behind
+//! either layer, the others behind the reference, each part over the
+//! bounding rectangle of its pixel groups. So a box just behind a wall's outline is hidden
 //! though the cell's reference is what lies beyond the wall.
 
 use std::ops::Range;
@@ -218,6 +218,15 @@ impl Axis {
         })
     }
 
+    /// The centres from the first to the last of the groups `bits` (bit k
+    /// for its k-th; not none) of cell `c`, within [`lo`, `hi`]: the
+    /// inverse of [`Self::cells_of`] for one cell.
+    fn centres_of(&self, c: u32, bits: u64, [lo, hi]: [f64; 2]) -> [f64; 2] {
+        let first = self.first_group[c as usize];
+        let (from, to) = (first + bits.trailing_zeros(), first + 63 - bits.leading_zeros());
+        [self.group(from).2[0].max(lo), self.group(to).2[1].min(hi)]
+    }
+
     /// Groups cell `c` holds.
     fn groups_in(&self, c: u32) -> u32 {
         self.first_group[c as usize + 1] - self.first_group[c as usize]
@@ -280,19 +289,16 @@ impl Grid {
         Some(bits(&self.across, column, xs)? * row_starts(bits(&self.down, row, ys)?))
     }
 
-    /// The pixel centres of the groups `bits` of cell (`column`, `row`)
-    /// (some), within `xs` × `ys`: the rectangle from their first column
-    /// and row of groups to their last.
+    /// The rectangle of pixel centres from the first to the last column,
+    /// and row, of the groups `bits` (not none) of cell (`column`, `row`),
+    /// within `xs` × `ys`: it holds their centres, and more where they do
+    /// not make a rectangle.
     fn centres_of(&self, column: u32, row: u32, bits: u64, xs: [f64; 2], ys: [f64; 2]) -> ([f64; 2], [f64; 2]) {
-        let row_bits = |k: u32| bits >> (k * MASK_SIDE) & 0xff;
-        let columns = (0..MASK_SIDE).fold(0, |columns, k| columns | row_bits(k));
-        let rows = (0..MASK_SIDE).filter(|&k| row_bits(k) != 0).fold(0, |rows, k| rows | 1 << k);
-        let span = |axis: &Axis, c: u32, present: u64, [lo, hi]: [f64; 2]| {
-            let first = axis.first_group[c as usize];
-            let (from, to) = (first + present.trailing_zeros(), first + 63 - present.leading_zeros());
-            [axis.group_centres[from as usize][0].max(lo), axis.group_centres[to as usize][1].min(hi)]
-        };
-        (span(&self.across, column, columns, xs), span(&self.down, row, rows, ys))
+        debug_assert!(bits != 0, "a rectangle of no groups");
+        let row_of = |k: u32| bits >> (k * MASK_SIDE) & ((1 << MASK_SIDE) - 1);
+        let columns = (0..MASK_SIDE).fold(0, |columns, k| columns | row_of(k));
+        let rows = (0..MASK_SIDE).filter(|&k| row_of(k) != 0).fold(0, |rows, k| rows | 1 << k);
+        (self.across.centres_of(column, columns, xs), self.down.centres_of(row, rows, ys))
     }
 
     /// The mask of every group of cell (`column`, `row`).
@@ -423,9 +429,16 @@ impl Cells<'_> {
 
 /// `held` lowered, where it is not already, to lie below `other` over
 /// the rectangle `xs` × `ys`: a plane below both there (affine, so the
-/// most `held` rises above `other` is at a corner).
+/// most `held` rises above `other` is at a corner), by more than the
+/// rounding of evaluating either at a point of it or of lowering it (a
+/// few steps of f64 of their terms' sizes), so that evaluated one by one
+/// they keep that order.
 pub(super) fn below_both(held: ScreenPlane, other: &ScreenPlane, (xs, ys): ([f64; 2], [f64; 2])) -> ScreenPlane {
-    let above = held.minus(other).max_over(xs, ys);
+    let size = |p: &ScreenPlane| {
+        p.constant.abs() + p.per_x.abs() * xs[0].abs().max(xs[1].abs()) + p.per_y.abs() * ys[0].abs().max(ys[1].abs())
+    };
+    let rounding = 8.0 * f64::EPSILON * (size(&held) + size(other));
+    let above = held.minus(other).max_over(xs, ys) + rounding;
     if above > 0.0 {
         ScreenPlane {
             constant: held.constant - above,
@@ -545,11 +558,19 @@ impl OcclusionBuffer {
 
     /// The depth the buffer vouches for at the pixel centre `(x, y)` of
     /// the target: the nearer of what its cell's two layers vouch for there
-    /// (each its depth, or its plane there where that is nearer), the
-    /// working layer only where the pixel's group is in its mask; 0 where
-    /// neither holds anything.
+    /// ([`Self::layers_at`]); 0 where neither holds anything.
     #[cfg(test)]
     pub fn vouched_at(&self, x: f64, y: f64) -> f64 {
+        let (reference, working) = self.layers_at(x, y);
+        working.map_or(reference, |working| reference.max(working))
+    }
+
+    /// What each layer of its cell vouches for at the pixel centre `(x, y)`
+    /// of the target: its depth, or its plane there where that is nearer
+    /// (0 where it holds nothing); the working layer only where the pixel's
+    /// group is in its mask.
+    #[cfg(test)]
+    fn layers_at(&self, x: f64, y: f64) -> (f64, Option<f64>) {
         let (cells, target) = (self.grid.cells, self.grid.target);
         let cell = |v: f64, cells: u32, pixels: u32| cell_of(v as u32, cells, pixels);
         let (column, row) = (cell(x, cells.width, target.width), cell(y, cells.height, target.height));
@@ -560,10 +581,8 @@ impl OcclusionBuffer {
         };
         let reference = layer(self.levels[0].depth[index], &self.planes[index]);
         let in_mask = (self.grid.groups_holding(column, row, [x, x], [y, y])).is_some_and(|g| g & self.masks[index] != 0);
-        match in_mask {
-            true => reference.max(layer(self.working[index], &self.working_planes[index])),
-            false => reference,
-        }
+        let working = in_mask.then(|| layer(self.working[index], &self.working_planes[index]));
+        (reference, working)
     }
 
     /// The cells, cleared, in bands of `rows_per_band` rows of cells (the
@@ -629,8 +648,9 @@ impl OcclusionBuffer {
     /// centres the texel holds), or no ray through those centres meets it,
     /// or else this holds at each of the texel's children; at a cell, also
     /// when one of its planes lies behind the cell's plane at each centre,
-    /// or when it lies behind the working layer at its centres in that
-    /// layer's mask and behind one of the layers at the others.
+    /// or when it lies behind the working layer or the reference at its
+    /// centres in the working layer's mask and behind the reference at the
+    /// others, each part judged over the rectangle of its pixel groups.
     pub fn hides(&self, first: [u32; 2], last: [u32; 2], nearest: f64, planes: &BoxPlanes) -> bool {
         debug_assert!(first[0] <= last[0] && first[1] <= last[1], "{first:?} to {last:?}");
         let [columns, rows] = self.grid.cells_holding(first, last);
@@ -697,7 +717,7 @@ impl BoxQuery<'_> {
             centres(&self.buffer.grid.across.cells, columns, 0),
             centres(&self.buffer.grid.down.cells, rows, 1),
         );
-        if self.over(xs, ys) < farthest || self.planes.missed_over(xs, ys) {
+        if self.nearest_over(xs, ys) < farthest || self.planes.missed_over(xs, ys) {
             return true;
         }
         if k > 0 {
@@ -713,37 +733,44 @@ impl BoxQuery<'_> {
         if farthest > 0.0 && self.behind_plane(&reference.plane, xs, ys) {
             return true;
         }
-        // Or, where the cell has a working layer, centre by centre: the
-        // box's centres in its mask behind it or the reference, and the
-        // others behind the reference, each judged over the rectangle of
-        // their pixel groups (the working layer vouches for its depth and
-        // plane at its mask's centres as the reference does everywhere).
+        // Or, where the cell has a working layer, part by part: the box's
+        // centres in its mask behind it or the reference, and the others
+        // behind the reference, each part over the rectangle of its pixel
+        // groups (the working layer vouches for its depth and plane at its
+        // mask's centres as the reference does everywhere).
         let mask = self.buffer.masks[index];
+        if mask == 0 {
+            return false;
+        }
         let grid = &self.buffer.grid;
-        let Some(groups) = grid.groups_holding(x, y, xs, ys).filter(|_| mask != 0) else {
+        let Some(groups) = grid.groups_holding(x, y, xs, ys) else {
             return false;
         };
         let working = Layer {
             depth: f64::from(self.buffer.working[index]),
             plane: self.buffer.working_planes[index],
         };
-        let behind = |layer: &Layer, bits: u64| {
-            let (xs, ys) = grid.centres_of(x, y, bits, xs, ys);
+        let hidden_by = |layer: &Layer, (xs, ys): ([f64; 2], [f64; 2])| {
             layer.depth > 0.0
                 && (self.nearest < layer.depth
-                    || self.over(xs, ys) < layer.depth
+                    || self.nearest_over(xs, ys) < layer.depth
                     || self.behind_plane(&layer.plane, xs, ys))
         };
+        // The part outside first: the reference just failed over the
+        // whole cell, so that is where the test most often ends.
         let (inside, outside) = (groups & mask, groups & !mask);
-        (inside == 0 || behind(&working, inside) || behind(&reference, inside))
-            && (outside == 0 || behind(&reference, outside))
+        (outside == 0 || hidden_by(&reference, grid.centres_of(x, y, outside, xs, ys)))
+            && (inside == 0 || {
+                let part = grid.centres_of(x, y, inside, xs, ys);
+                hidden_by(&working, part) || hidden_by(&reference, part)
+            })
     }
 
-    /// The box's greatest depth over the pixel centres `xs` × `ys`, by its
+    /// The nearest the box may be at the pixel centres `xs` × `ys`, by its
     /// entry planes: each bounds the box's depth on its own, so the least
     /// of them does; a NaN among them is passed over by `min`, and a NaN
     /// result hides nothing (tests take `<`, not `>=`).
-    fn over(&self, xs: [f64; 2], ys: [f64; 2]) -> f64 {
+    fn nearest_over(&self, xs: [f64; 2], ys: [f64; 2]) -> f64 {
         self.planes
             .entries()
             .iter()
@@ -878,6 +905,91 @@ mod tests {
         assert!(hides(0.44));
         assert!(!hides(0.46), "in front of the reference at pixel 10");
         assert!(!hides(0.52), "in front of the working layer at pixel 8");
+    }
+
+    #[test]
+    fn a_box_the_buffer_hides_lies_behind_what_it_vouches_for_at_every_centre_and_that_no_nearer_than_the_occluders_merged() {
+        use crate::rng::Rng;
+        let mut rng = Rng::new(32);
+        let target = Resolution { width: 31, height: 23 };
+        // Cells of 10 or 11 pixels (8 groups of 1 or 2 a side), and of 4
+        // or 5 (as many groups).
+        let (mut hidden, mut by_both_layers) = (0, 0);
+        for cells in [Resolution { width: 3, height: 2 }, Resolution { width: 7, height: 5 }] {
+            let grid = Grid::new(target, cells);
+            for _ in 0..300 {
+                // Coverages: a rectangle of groups, some groups, or all.
+                let coverages: Vec<(u32, u32, Coverage)> = (0..rng.int(1, 16))
+                    .map(|_| {
+                        let (column, row) = (rng.int(0, cells.width - 1), rng.int(0, cells.height - 1));
+                        let full = grid.full_mask(column, row);
+                        let mask = match rng.int(0, 2) {
+                            0 => {
+                                let (a, b) = (rng.int(0, 7), rng.int(0, 7));
+                                let (c, d) = (rng.int(0, 7), rng.int(0, 7));
+                                let bits = (1u64 << (a.max(b) + 1)) - (1 << a.min(b));
+                                (c.min(d)..=c.max(d)).fold(0, |mask, k| mask | bits << (k * MASK_SIDE))
+                            }
+                            1 => rng.next_u64(),
+                            _ => full,
+                        };
+                        let plane = ScreenPlane {
+                            per_x: rng.range(-0.02, 0.02),
+                            per_y: rng.range(-0.02, 0.02),
+                            constant: rng.range(0.0, 0.9),
+                        };
+                        (column, row, Coverage { mask: mask & full, depth: rng.range(0.1, 0.9), plane })
+                    })
+                    .collect();
+                let mut buffer = OcclusionBuffer::new(target, cells);
+                {
+                    let mut band = buffer.cleared_bands(cells.height).next().unwrap();
+                    for (column, row, coverage) in &coverages {
+                        band.merge(*column, *row, coverage);
+                    }
+                }
+                buffer.build_pyramid();
+                let centres = |first: [u32; 2], last: [u32; 2]| {
+                    (first[1]..=last[1]).flat_map(move |y| (first[0]..=last[0]).map(move |x| (f64::from(x) + 0.5, f64::from(y) + 0.5)))
+                };
+                // What the buffer vouches for, no nearer than some coverage
+                // of that centre's group claims there.
+                for (x, y) in centres([0, 0], [30, 22]) {
+                    let claimed = coverages
+                        .iter()
+                        .filter(|(column, row, c)| {
+                            buffer.grid.groups_holding(*column, *row, [x, x], [y, y]).is_some_and(|g| g & c.mask != 0)
+                        })
+                        .map(|(_, _, c)| c.depth.max(c.plane.at(x, y)))
+                        .fold(0.0, f64::max);
+                    assert!(buffer.vouched_at(x, y) <= claimed, "({x}, {y}) {cells:?}");
+                }
+                for _ in 0..40 {
+                    let first = [rng.int(0, 30), rng.int(0, 22)];
+                    let last = [rng.int(first[0], (first[0] + 12).min(30)), rng.int(first[1], (first[1] + 12).min(22))];
+                    let entry = ScreenPlane {
+                        per_x: rng.range(-0.02, 0.02),
+                        per_y: rng.range(-0.02, 0.02),
+                        constant: rng.range(0.0, 0.9),
+                    };
+                    let rectangle = [first, last].map(|p| p.map(|v| f64::from(v) + 0.5));
+                    let nearest = entry.max_over([rectangle[0][0], rectangle[1][0]], [rectangle[0][1], rectangle[1][1]]);
+                    if !buffer.hides(first, last, nearest, &BoxPlanes::entering_at(entry)) {
+                        continue;
+                    }
+                    hidden += 1;
+                    let mut needs = [false; 2];
+                    for (x, y) in centres(first, last) {
+                        let (reference, working) = buffer.layers_at(x, y);
+                        assert!(entry.at(x, y) < buffer.vouched_at(x, y), "({x}, {y}) {cells:?}");
+                        needs[usize::from(working.is_some())] |= entry.at(x, y) >= reference;
+                        needs[0] |= working.is_none();
+                    }
+                    by_both_layers += usize::from(needs == [true, true]);
+                }
+            }
+        }
+        assert!(hidden > 1000 && by_both_layers > 30, "{hidden} hidden, {by_both_layers} by both layers");
     }
 
     #[test]

@@ -562,8 +562,9 @@ impl Culler for SoftwareOcclusionCulling {
     ///    no ray through the texel's pixel centres may meet it; a texel that
     ///    fails is tried again by its children, down to the cells, where the box
     ///    may also lie behind the cell's plane, or behind its working layer
-    ///    at its pixels in the layer's mask and behind the reference at the
-    ///    rest. A hidden node stops its
+    ///    or the reference at its pixels in the layer's mask and behind the
+    ///    reference at the rest, each part over its own rectangle. A hidden
+    ///    node stops its
     ///    subtree; a box reaching the near plane is visible. A leaf's objects
     ///    are tested one by one.
     /// 5. **Draw** the visible objects, the occluders among them first (in
