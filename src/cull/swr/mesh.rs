@@ -1369,14 +1369,24 @@ mod tests {
         assert!(filled > 100, "{filled} cells filled by the outer strips");
     }
 
+    /// A buffer of 16 × 12 cells of 4 × 4 pixels with `walls` rasterised
+    /// into it in their order: each from x = `x0` to `x1` at depth `z`,
+    /// over the target's whole height.
+    fn walls(walls: &[(f64, f64, f64)]) -> OcclusionBuffer {
+        let mut buffer = OcclusionBuffer::new(Resolution { width: 64, height: 48 }, Resolution { width: 16, height: 12 });
+        let meshes: Vec<_> = walls
+            .iter()
+            .map(|&(x0, x1, z)| grid(DVec2::new(x0, -5.0), DVec2::new(x1 - x0, 60.0), [2, 2], false, move |_, _| z))
+            .collect();
+        rasterise_meshes(&mut buffer, &meshes);
+        buffer
+    }
+
     #[test]
     fn objects_that_each_cover_part_of_a_cell_fill_it_together_at_the_farther_depth() {
         // Two walls meeting at x = 30.2 (inside cells of 4 pixels), one at
         // 0.5, one at 0.4, overlapping by two pixels.
-        let size = Resolution { width: 64, height: 48 };
-        let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
-        let wall = |x0: f64, x1: f64, z: f64| grid(DVec2::new(x0, -5.0), DVec2::new(x1 - x0, 60.0), [2, 2], false, move |_, _| z);
-        rasterise_meshes(&mut buffer, &[wall(-5.0, 31.2, 0.5), wall(29.2, 70.0, 0.4)]);
+        let buffer = walls(&[(-5.0, 31.2, 0.5), (29.2, 70.0, 0.4)]);
         let depths = buffer.depths();
         let at = |column: usize| depths[5 * 16 + column];
         assert!(at(2) > 0.499 && at(2) <= 0.5, "{}", at(2));
@@ -1393,10 +1403,7 @@ mod tests {
         // behind it from x = 29.8 on: together they fill those cells, whose
         // reference becomes the far wall's depth, and whose working layer
         // stays the near wall's pixels 28 and 29.
-        let size = Resolution { width: 64, height: 48 };
-        let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
-        let wall = |x0: f64, x1: f64, z: f64| grid(DVec2::new(x0, -5.0), DVec2::new(x1 - x0, 60.0), [2, 2], false, move |_, _| z);
-        rasterise_meshes(&mut buffer, &[wall(-5.0, 30.2, 0.5), wall(29.8, 70.0, 0.25)]);
+        let mut buffer = walls(&[(-5.0, 30.2, 0.5), (29.8, 70.0, 0.25)]);
         buffer.build_pyramid();
         let hides = |first, last, nearest| buffer.hides(first, last, nearest, &crate::gpu::BoxPlanes::default());
         assert!(hides([26, 20], [29, 27], 0.4), "just behind the near wall, within its pixels");
@@ -1409,11 +1416,7 @@ mod tests {
         // A wall ending at x = 30.2, inside the cells of pixels 28 to 31:
         // it covers their first two pixels, which the working layer holds
         // at the wall's depth.
-        let size = Resolution { width: 64, height: 48 };
-        let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
-        let wall = grid(DVec2::new(-5.0, -5.0), DVec2::new(35.2, 60.0), [2, 2], false, |_, _| 0.5);
-        rasterise_meshes(&mut buffer, &[wall]);
-        let picture = buffer.per_pixel();
+        let picture = walls(&[(-5.0, 30.2, 0.5)]).per_pixel();
         assert_eq!((picture.width, picture.height), (64, 48));
         for y in 0..48 {
             let at = |x: usize| (picture.depths[y * 64 + x] > 0.0, picture.partial[y * 64 + x]);
