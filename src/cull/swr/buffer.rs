@@ -33,8 +33,9 @@
 //! for its own mask, and a box test that fails at a cell tries its layers
 //! part by part: the box's centres in the working layer's mask behind
 //! either layer, the others behind the reference, each part over the
-//! bounding rectangle of its pixel groups. So a box just behind a wall's outline is hidden
-//! though the cell's reference is what lies beyond the wall.
+//! bounding rectangle of its pixel groups. So a box just behind a wall's
+//! outline is hidden though the cell's reference is what lies beyond the
+//! wall.
 
 use std::ops::Range;
 

@@ -18,9 +18,9 @@
 //! where several fill it); MOC keeps one depth per tile. A working layer
 //! that a farther occluder completed stays, and a box's test at a cell
 //! takes it at the box's pixels in its mask; MOC clears it, and tests
-//! boxes against the reference layer alone. A buffer that hid
-//! nothing, or saved less drawing than it cost, rests for a few frames, and
-//! longer each time it fails again (MOC leaves that to its caller).
+//! boxes against the reference layer alone. A buffer that hid nothing,
+//! or saved less drawing than it cost, rests for a few frames, and longer
+//! each time it fails again (MOC leaves that to its caller).
 //! Occluders are whole visible objects (the clusters of one mesh taken
 //! together, so that a mesh cut into clusters is one surface), their
 //! triangles taken in the f64 projection (MOC and Godot take authored occluder
