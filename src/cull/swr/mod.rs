@@ -564,9 +564,8 @@ impl Culler for SoftwareOcclusionCulling {
     ///    may also lie behind the cell's plane, or behind its working layer
     ///    or the reference at its pixels in the layer's mask and behind the
     ///    reference at the rest, each part over its own rectangle. A hidden
-    ///    node stops its
-    ///    subtree; a box reaching the near plane is visible. A leaf's objects
-    ///    are tested one by one.
+    ///    node stops its subtree; a box reaching the near plane is visible.
+    ///    A leaf's objects are tested one by one.
     /// 5. **Draw** the visible objects, the occluders among them first (in
     ///    their order, nearest first, for the GPU's early depth test); they are
     ///    next frame's occluder candidates. An occluder found hidden is not
