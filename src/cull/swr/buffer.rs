@@ -126,6 +126,11 @@ impl Axis {
         self.cells[c as usize]
     }
 
+    /// The first and last pixel centre of each of the cells `cells`.
+    pub(super) fn centres(&self, cells: Range<u32>) -> &[[f64; 2]] {
+        &self.cells[cells.start as usize..cells.end as usize]
+    }
+
     /// The pixels whose centres lie in [`lo`, `hi`] (none for NaN).
     fn pixels_within(&self, lo: f64, hi: f64) -> Range<u32> {
         let n = self.group_of.len() as f64;
@@ -304,7 +309,17 @@ impl Grid {
 
     /// The mask of every group of cell (`column`, `row`).
     pub(super) fn full_mask(&self, column: u32, row: u32) -> u64 {
-        self.column_bits[column as usize] * self.row_starts[row as usize]
+        self.column_bits(column) * self.row_starts(row)
+    }
+
+    /// The bits of one row of column `column`'s groups.
+    pub(super) fn column_bits(&self, column: u32) -> u64 {
+        self.column_bits[column as usize]
+    }
+
+    /// A bit at the start of each row of row `row`'s groups.
+    pub(super) fn row_starts(&self, row: u32) -> u64 {
+        self.row_starts[row as usize]
     }
 }
 
@@ -352,7 +367,14 @@ impl Cells<'_> {
 
     /// The reference depth of cell (`column`, `row`).
     pub(super) fn reference(&self, column: u32, row: u32) -> f32 {
-        self.depth[((row - self.rows.start) * self.grid.cells.width + column) as usize]
+        self.reference_row(row)[column as usize]
+    }
+
+    /// The reference depths of row `row`'s cells.
+    pub(super) fn reference_row(&self, row: u32) -> &[f32] {
+        let width = self.grid.cells.width as usize;
+        let start = (row - self.rows.start) as usize * width;
+        &self.depth[start..start + width]
     }
 
     /// Whether anything at most `nearest` deep over the pixels `first` to

@@ -21,9 +21,9 @@
 //! that turns the patch's way holds p (a rasteriser's fill rule counts a
 //! centre on a shared edge as the winding does). So a pixel centre inside
 //! the patch and clear of its border by that margin is drawn
-//! ([`Rasteriser::mark`], [`Rasteriser::erase`]), whatever the triangles'
-//! size: a mesh of triangles far smaller than a cell covers the cell as one
-//! surface does. This is MOC's masked coverage made exact for a GPU that
+//! ([`Rasteriser::add_triangle`], [`Rasteriser::erase`]), whatever the
+//! triangles' size: a mesh of triangles far smaller than a cell covers the
+//! cell as one surface does. This is MOC's masked coverage made exact for a GPU that
 //! rasterises the same triangles. Triangles of two objects join only
 //! where the objects are clusters of one mesh under one transform (a
 //! [`ScreenMesh`] of several [`DrawnPart`]s): the GPU places each object's
@@ -419,10 +419,10 @@ pub struct Rasteriser {
     columns: Range<u32>,
     rows: Range<u32>,
     cover: Vec<CellCover>,
-    /// The entries of `cover` the current patch's triangles reached, so
-    /// that only they are merged and emptied again: a patch reaches far
-    /// fewer cells than its bounds hold.
-    touched: Vec<u32>,
+    /// The entries of `cover` the current patch's triangles reached, with
+    /// their cells (column, row), so that only they are merged and emptied
+    /// again: a patch reaches far fewer cells than its bounds hold.
+    touched: Vec<(u32, [u32; 2])>,
 }
 
 impl Rasteriser {
@@ -450,18 +450,14 @@ impl Rasteriser {
             self.cover.resize(cells_held, EMPTY);
         }
         for triangle in &patches.triangles[patch.triangles.clone()] {
-            if self.add_depth(cells, triangle) {
-                self.mark(grid, triangle);
-            }
+            self.add_triangle(cells, triangle);
         }
         for border in &patches.borders[patch.borders.clone()] {
             self.erase(grid, border);
         }
-        let width = self.columns.len();
-        for &i in &self.touched {
+        for &(i, [column, row]) in &self.touched {
             let cover = std::mem::replace(&mut self.cover[i as usize], EMPTY);
             if let (true, CellDepth::AtLeast { least, plane }) = (cover.mask != 0, cover.depth) {
-                let (column, row) = (self.columns.start + i % width as u32, self.rows.start + i / width as u32);
                 cells.merge(
                     column,
                     row,
@@ -493,105 +489,106 @@ impl Rasteriser {
         }
     }
 
-    /// Lowers the depth and plane of each cell where the GPU may draw
-    /// `corners`' triangle to what it vouches for there: at the pixel
-    /// centres within its error of the triangle (on each axis).
-    /// A cell where the triangle lies nowhere nearer than the cell's
-    /// reference layer is left to the patch no more: whatever the patch
-    /// vouches for there, the least of its triangles' depths, the reference
-    /// holds already (MOC's depth test of occluders against the buffer,
-    /// which front-to-back occluders make pay).
-    /// Returns whether it reached a cell still left to the patch.
-    fn add_depth(&mut self, cells: &Cells, triangle: &Triangle) -> bool {
+    /// Rasterises one triangle of the current patch, row of cells by row
+    /// of cells: first its depth over the cells it may reach
+    /// ([`Self::add_depth`]), then, in a row where it vouches for a depth,
+    /// its mark: every group of the cells whose every centre it marks
+    /// ([`Triangle::marked_x_range`]), then group row by group row the
+    /// groups of the cells on either side of them ([`Self::mark_sides`]).
+    /// The cells it marks lie among those it reaches (a narrower region, at
+    /// both ends of the rows), so a cell it marks has its depth, and only
+    /// such cells are marked.
+    fn add_triangle(&mut self, cells: &Cells, triangle: &Triangle) {
         let grid = cells.grid();
-        let mut reached = false;
-        let Triangle {
-            slack,
-            plane,
-            edges,
-            reach,
-            ..
-        } = *triangle;
-        let (lo, hi) = (triangle.lo - slack, triangle.hi + slack);
+        let (lo, hi) = (triangle.lo - triangle.slack, triangle.hi + triangle.slack);
         for row in clamp(grid.down.cells_reaching(lo.y, hi.y), &self.rows) {
             let [y0, y1] = grid.down.cell(row);
             let ys = [y0.max(lo.y), y1.min(hi.y)];
-            // Where in x some point of these rows lies within the slack of
-            // every edge's half-plane on each axis (there an edge function
-            // is at least −slack · (|ex| + |ey|)).
-            let [from, to] = x_range(&edges, ys, reach.map(|r| slack * r), f64::min);
-            let xs = [from.max(lo.x), to.min(hi.x)];
-            for column in clamp(grid.across.cells_reaching(xs[0], xs[1]), &self.columns) {
-                let [x0, x1] = grid.across.cell(column);
-                let xs = [x0.max(xs[0]), x1.min(xs[1])];
-                let i = self.cover_index(column, row);
-                let cover = &mut self.cover[i];
-                match cover.depth {
-                    CellDepth::Nothing => continue,
-                    CellDepth::Unreached => self.touched.push(i as u32),
-                    CellDepth::AtLeast { .. } => {}
-                }
-                let nearest = plane.max_over(xs, ys);
-                let least = plane.min_over(xs, ys);
-                // Not nearer (or a NaN).
-                let behind = nearest.partial_cmp(&f64::from(cells.reference(column, row))).is_none_or(|o| o.is_le());
-                if behind || least.is_nan() {
-                    cover.depth = CellDepth::Nothing;
-                    continue;
-                }
-                reached = true;
-                cover.depth = match cover.depth {
-                    CellDepth::AtLeast { least: held, plane: below } => CellDepth::AtLeast {
-                        least: held.min(least),
-                        plane: below_both(below, &plane, (xs, ys)),
-                    },
-                    // Unreached (a cell the patch vouches nothing for was
-                    // passed over above).
-                    _ => CellDepth::AtLeast { least, plane },
-                };
+            let xs = triangle.reached_x_range(ys);
+            let reached = clamp(grid.across.cells_reaching(xs[0], xs[1]), &self.columns);
+            if reached.is_empty() {
+                continue;
+            }
+            let [from, to] = triangle.marked_x_range([y0, y1]);
+            let whole = grid.across.cells_within(from, to, &self.columns);
+            debug_assert!(whole.is_empty() || (reached.start <= whole.start && whole.end <= reached.end));
+            if self.add_depth(cells, row, reached, &whole, (xs, ys), &triangle.plane) {
+                self.mark_sides(grid, row, &whole, triangle);
             }
         }
-        reached
     }
 
-    /// Marks the pixel groups whose centres all lie inside `triangle` or
-    /// within [`VERTEX_ERROR`] of it on each axis (less than any border's
-    /// margin, so a centre outside the patch it marks is erased): row of
-    /// cells by row of cells, first the cells whose every centre is in, then
-    /// group row by group row the cells on either side of them. That region
-    /// is the triangle grown by a square: inside each edge moved out by the
-    /// error and inside its bounds grown by it (without the bounds, the
-    /// moved edges of a sharp corner meet far beyond it).
-    fn mark(&mut self, grid: &Grid, triangle: &Triangle) {
-        let (edges, margins) = (triangle.edges, triangle.reach.map(|r| VERTEX_ERROR * r));
-        let (lo, hi) = (triangle.lo - VERTEX_ERROR, triangle.hi + VERTEX_ERROR);
-        // The x range where every centre of the rows `ys` lies in the
-        // region: edges are linear, so the first and last rows of centres at
-        // both ends of an x range bound the whole rectangle; none for rows
-        // reaching outside the bounds.
-        let within = |ys: [f64; 2]| {
-            if lo.y <= ys[0] && ys[1] <= hi.y {
-                let [from, to] = x_range(&edges, ys, margins, f64::max);
-                [from.max(lo.x), to.min(hi.x)]
-            } else {
-                [f64::INFINITY, f64::NEG_INFINITY]
+    /// Lowers the depth and plane of each cell of `reached` in `row`, where
+    /// the GPU may draw the triangle of `plane` within `xs` × `ys`, to what
+    /// it vouches for there: at the pixel centres within its error of the
+    /// triangle (on each axis); and marks every group of the cells `whole`
+    /// where it does. A cell where the triangle lies nowhere nearer than
+    /// the cell's reference layer is left to the patch no more: whatever
+    /// the patch vouches for there, the least of its triangles' depths, the
+    /// reference holds already (MOC's depth test of occluders against the
+    /// buffer, which front-to-back occluders make pay). Returns whether a
+    /// cell of them vouches for a depth.
+    fn add_depth(
+        &mut self,
+        cells: &Cells,
+        row: u32,
+        reached: Range<u32>,
+        whole: &Range<u32>,
+        (xs, ys): ([f64; 2], [f64; 2]),
+        plane: &ScreenPlane,
+    ) -> bool {
+        let grid = cells.grid();
+        let mut vouched = false;
+        let first = self.cover_index(reached.start, row);
+        let covers = &mut self.cover[first..first + reached.len()];
+        let references = &cells.reference_row(row)[reached.start as usize..reached.end as usize];
+        let bounds = grid.across.centres(reached.clone());
+        let row_starts = grid.row_starts(row);
+        let spans = reached.zip(covers).zip(references).zip(bounds);
+        for (index, (((column, cover), &reference), &[x0, x1])) in (first as u32..).zip(spans) {
+            match cover.depth {
+                CellDepth::Nothing => continue,
+                CellDepth::Unreached => self.touched.push((index, [column, row])),
+                CellDepth::AtLeast { .. } => {}
             }
-        };
-        for row in clamp(grid.down.cells_reaching(lo.y, hi.y), &self.rows) {
-            let [from, to] = within(grid.down.cell(row));
-            let whole = grid.across.cells_within(from, to, &self.columns);
-            for column in whole.clone() {
-                self.mark_groups(column, row, grid.full_mask(column, row));
+            let xs = [x0.max(xs[0]), x1.min(xs[1])];
+            let nearest = plane.max_over(xs, ys);
+            let least = plane.min_over(xs, ys);
+            // Not nearer (or a NaN).
+            let behind = nearest.partial_cmp(&f64::from(reference)).is_none_or(|o| o.is_le());
+            if behind || least.is_nan() {
+                cover.depth = CellDepth::Nothing;
+                continue;
             }
-            let inner = grid.across.groups_of(&whole);
-            for g in grid.down.groups_of(&(row..row + 1)) {
-                let (_, k, ys) = grid.down.group(g);
-                let [from, to] = within(ys);
-                let groups = grid.across.groups_within(from, to, &self.columns);
-                let (left, right) = (groups.start..groups.end.min(inner.start), groups.start.max(inner.end)..groups.end);
-                for (column, bits) in grid.across.cells_of(left).chain(grid.across.cells_of(right)) {
-                    self.mark_groups(column, row, bits << (k * MASK_SIDE));
-                }
+            cover.depth = match cover.depth {
+                CellDepth::AtLeast { least: held, plane: below } => CellDepth::AtLeast {
+                    least: held.min(least),
+                    plane: below_both(below, plane, (xs, ys)),
+                },
+                // Unreached (a cell the patch vouches nothing for was
+                // passed over above).
+                _ => CellDepth::AtLeast { least, plane: *plane },
+            };
+            if whole.contains(&column) {
+                cover.mask |= grid.column_bits(column) * row_starts;
+            }
+            vouched = true;
+        }
+        vouched
+    }
+
+    /// Marks, group row by group row of `row`, the groups whose every
+    /// centre `triangle` marks in the cells on either side of the cells
+    /// `whole` (marked whole).
+    fn mark_sides(&mut self, grid: &Grid, row: u32, whole: &Range<u32>, triangle: &Triangle) {
+        let inner = grid.across.groups_of(whole);
+        for g in grid.down.groups_of(&(row..row + 1)) {
+            let (_, k, ys) = grid.down.group(g);
+            let [from, to] = triangle.marked_x_range(ys);
+            let groups = grid.across.groups_within(from, to, &self.columns);
+            let (left, right) = (groups.start..groups.end.min(inner.start), groups.start.max(inner.end)..groups.end);
+            for (column, bits) in grid.across.cells_of(left).chain(grid.across.cells_of(right)) {
+                self.mark_groups(column, row, bits << (k * MASK_SIDE));
             }
         }
     }
@@ -621,22 +618,69 @@ impl Rasteriser {
     }
 }
 
-/// The x range in which each edge function of `edges` ([`inward_edges`])
-/// is at least minus its margin of `margins` at `ys`' first and last y,
-/// for `pick` = `f64::max` (at both), or at one of them, for `f64::min`
-/// (some point between them, taken edge by edge: a wider range). Empty
-/// (or NaN) when there is none.
-fn x_range(edges: &[[f64; 3]; 3], ys: [f64; 2], margins: [f64; 3], pick: fn(f64, f64) -> f64) -> [f64; 2] {
-    let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
-    for (&[ex, ey, ec], margin) in edges.iter().zip(margins) {
-        let needed = |y: f64| -margin - ey * y - ec;
-        let n = pick(needed(ys[0]), needed(ys[1]));
+/// One edge of a triangle as a limit on x along rows of pixel centres:
+/// where its inward edge function e(x, y) = ex · x + ey · y + ec
+/// ([`inward_edges`]) is at least minus a margin, the margin being its
+/// |ex| + |ey| times the triangle's slack ([`REACHED`]) or times
+/// [`VERTEX_ERROR`] ([`MARKED`]). Solved for x once per triangle, so a row
+/// takes a product and a sum per edge.
+#[derive(Clone, Copy, Debug)]
+enum Limit {
+    /// x at least (`From`, ex > 0) or at most (`To`, ex < 0)
+    /// `slope · y + offsets[margin]`.
+    From { slope: f64, offsets: [f64; 2] },
+    To { slope: f64, offsets: [f64; 2] },
+    /// A horizontal edge (ex = 0): e(x, y) = ey · y + ec, whatever x,
+    /// against `margins`.
+    Level { ey: f64, ec: f64, margins: [f64; 2] },
+}
+
+/// The margins of a [`Limit`]: the triangle's slack, where it may reach a
+/// centre; the vertex error, where it marks one.
+const REACHED: usize = 0;
+const MARKED: usize = 1;
+
+impl Limit {
+    fn new([ex, ey, ec]: [f64; 3], margins: [f64; 2]) -> Limit {
+        let offsets = margins.map(|m| -(m + ec) / ex);
+        let slope = -ey / ex;
         if ex > 0.0 {
-            from = from.max(n / ex);
+            Limit::From { slope, offsets }
         } else if ex < 0.0 {
-            to = to.min(n / ex);
-        } else if n.partial_cmp(&0.0).is_none_or(|o| o.is_gt()) {
-            to = f64::NEG_INFINITY;
+            Limit::To { slope, offsets }
+        } else {
+            Limit::Level { ey, ec, margins }
+        }
+    }
+}
+
+/// The x range in which each edge of `limits` is within its margin
+/// `margin` at some point of the rows `ys` (`[low, high]`), for `every` =
+/// false, or at every point of them, for `every` = true (edges are
+/// linear, so at both ends). Empty (or NaN) when there is none.
+fn x_range(limits: &[Limit; 3], ys: [f64; 2], margin: usize, every: bool) -> [f64; 2] {
+    let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
+    // The end of `ys` where a line of `slope` is least.
+    let lower = |slope: f64| if slope > 0.0 { ys[0] } else { ys[1] };
+    let upper = |slope: f64| if slope > 0.0 { ys[1] } else { ys[0] };
+    for limit in limits {
+        match *limit {
+            Limit::From { slope, offsets } => {
+                let y = if every { upper(slope) } else { lower(slope) };
+                from = from.max(slope * y + offsets[margin]);
+            }
+            Limit::To { slope, offsets } => {
+                let y = if every { lower(slope) } else { upper(slope) };
+                to = to.min(slope * y + offsets[margin]);
+            }
+            Limit::Level { ey, ec, margins } => {
+                let at = |y: f64| ey * y + ec + margins[margin];
+                let (first, last) = (at(ys[0]), at(ys[1]));
+                let within = if every { first.min(last) } else { first.max(last) };
+                if within.partial_cmp(&0.0).is_none_or(|o| o.is_lt()) {
+                    to = f64::NEG_INFINITY;
+                }
+            }
         }
     }
     [from, to]
@@ -647,12 +691,12 @@ struct Triangle {
     /// The bounds of its corners (x, y).
     lo: DVec2,
     hi: DVec2,
-    /// Its corners' error ([`slack_of`]), its inward edges with each one's
-    /// |ex| + |ey| (what a distance on each axis scales by), and the plane
-    /// it vouches for ([`lowered_plane`]).
+    /// Its corners' error ([`slack_of`]), its edges as limits on x
+    /// (margins scaled by each edge's |ex| + |ey|: what a distance on each
+    /// axis scales it by), and the plane it vouches for
+    /// ([`lowered_plane`]).
     slack: f64,
-    edges: [[f64; 3]; 3],
-    reach: [f64; 3],
+    limits: [Limit; 3],
     plane: ScreenPlane,
 }
 
@@ -664,9 +708,37 @@ impl Triangle {
             lo: at[0].min(at[1]).min(at[2]),
             hi: at[0].max(at[1]).max(at[2]),
             slack,
-            edges,
-            reach: edges.map(|[ex, ey, _]| ex.abs() + ey.abs()),
+            limits: edges.map(|edge| {
+                let reach = edge[0].abs() + edge[1].abs();
+                Limit::new(edge, [slack * reach, VERTEX_ERROR * reach])
+            }),
             plane: lowered_plane(&corners, slack),
+        }
+    }
+
+    /// Where in x some point of the rows `ys` lies within the slack of the
+    /// triangle on each axis: within its corners' bounds grown by the
+    /// slack, and within the slack of every edge's half-plane (there an
+    /// edge function is at least −slack · (|ex| + |ey|)).
+    fn reached_x_range(&self, ys: [f64; 2]) -> [f64; 2] {
+        let [from, to] = x_range(&self.limits, ys, REACHED, false);
+        [from.max(self.lo.x - self.slack), to.min(self.hi.x + self.slack)]
+    }
+
+    /// Where in x every centre of the rows `ys` lies inside the triangle
+    /// or within [`VERTEX_ERROR`] of it on each axis (less than any
+    /// border's margin, so a centre outside the patch it marks is
+    /// erased). That region is the triangle grown by a square: inside each
+    /// edge moved out by the error and inside its bounds grown by it
+    /// (without the bounds, the moved edges of a sharp corner meet far
+    /// beyond it). None for rows reaching outside the bounds.
+    fn marked_x_range(&self, ys: [f64; 2]) -> [f64; 2] {
+        let (lo, hi) = (self.lo - VERTEX_ERROR, self.hi + VERTEX_ERROR);
+        if lo.y <= ys[0] && ys[1] <= hi.y {
+            let [from, to] = x_range(&self.limits, ys, MARKED, true);
+            [from.max(lo.x), to.min(hi.x)]
+        } else {
+            [f64::INFINITY, f64::NEG_INFINITY]
         }
     }
 }
@@ -1179,11 +1251,12 @@ mod tests {
         for k in 0..600 {
             let a = DVec2::new(rng.range(-8.0, 72.0), rng.range(-8.0, 56.0));
             let b = a + DVec2::new(rng.range(-30.0, 30.0), rng.range(-30.0, 30.0));
-            let c = if k % 2 == 0 {
+            let c = match k % 4 {
                 // Within a pixel of the line ab, past b: a sharp corner at a.
-                b + (b - a).normalize_or_zero().perp() * rng.range(-1.0, 1.0)
-            } else {
-                DVec2::new(rng.range(-8.0, 72.0), rng.range(-8.0, 56.0))
+                0 | 2 => b + (b - a).normalize_or_zero().perp() * rng.range(-1.0, 1.0),
+                // Level with a: a horizontal edge.
+                1 => DVec2::new(rng.range(-8.0, 72.0), a.y),
+                _ => DVec2::new(rng.range(-8.0, 72.0), rng.range(-8.0, 56.0)),
             };
             let corners = [a, b, c].map(|p| vertex(p.x, p.y, 0.5));
             if twice_area(corners[0].at, corners[1].at, corners[2].at) == 0.0 {
@@ -1191,8 +1264,8 @@ mod tests {
             }
             rasteriser.columns = 0..16;
             rasteriser.rows = 0..12;
-            // Every cell where the triangle vouches for a depth (only there
-            // does it mark).
+            // Every cell vouching for a depth already (the triangle marks
+            // only such cells; it lies nearer than the cleared cells).
             let reached = CellCover {
                 mask: 0,
                 depth: CellDepth::AtLeast {
@@ -1202,7 +1275,7 @@ mod tests {
             };
             rasteriser.cover.clear();
             rasteriser.cover.resize(16 * 12, reached);
-            rasteriser.mark(cells.grid(), &Triangle::new(corners));
+            rasteriser.add_triangle(&cells, &Triangle::new(corners));
             for (i, cover) in rasteriser.cover.iter().enumerate() {
                 for bit in (0..64).filter(|b| cover.mask >> b & 1 == 1) {
                     let (x, y) = (4 * (i % 16) + bit % 8, 4 * (i / 16) + bit / 8);
