@@ -269,12 +269,16 @@ const EMPTY: CellCover = CellCover {
 #[derive(Default)]
 pub struct Patches {
     /// Scratch for one object: per triangle, its turn, and its patch as a
-    /// tree of triangles (union-find: the root names the patch); the
-    /// patches' triangles, patch by patch, as (root, triangle).
+    /// tree of triangles (union-find: the root names the patch), then its
+    /// root (none where it is left out); per root, where its
+    /// patch starts among the patches' triangles, which are listed patch
+    /// by patch as (root, triangle).
     turns: Vec<Turn>,
     corners: Vec<[u32; 3]>,
     across: Vec<[u32; 3]>,
     parent: Vec<u32>,
+    roots: Vec<Option<u32>>,
+    first_of_root: Vec<u32>,
     by_patch: Vec<(u32, u32)>,
     triangles: Vec<Triangle>,
     borders: Vec<Border>,
@@ -388,14 +392,30 @@ impl Patches {
         // Where the near plane clips a closed solid, its near side has a
         // hole its far side may be seen through.
         let behind = if mesh.closed && !clipped { behind_turn(mesh, &self.corners, &self.turns) } else { None };
-        self.by_patch.clear();
-        for t in 0..self.turns.len() as u32 {
-            if self.turns[t as usize] != Turn::Excluded && Some(self.turns[t as usize]) != behind {
-                let root = self.root(t);
-                self.by_patch.push((root, t));
+        // Patch by patch, each patch's triangles in order: sorted by root
+        // (a triangle) by counting, in time linear in the triangles.
+        let count = self.turns.len();
+        self.roots.clear();
+        self.first_of_root.clear();
+        self.first_of_root.resize(count + 1, 0);
+        for t in 0..count as u32 {
+            let kept = self.turns[t as usize] != Turn::Excluded && Some(self.turns[t as usize]) != behind;
+            let root = kept.then(|| self.root(t));
+            if let Some(root) = root {
+                self.first_of_root[root as usize + 1] += 1;
             }
+            self.roots.push(root);
         }
-        self.by_patch.sort_unstable();
+        for r in 0..count {
+            self.first_of_root[r + 1] += self.first_of_root[r];
+        }
+        self.by_patch.clear();
+        self.by_patch.resize(self.first_of_root[count] as usize, (0, 0));
+        for (t, root) in self.roots.iter().enumerate().filter_map(|(t, root)| Some((t, (*root)?))) {
+            let slot = &mut self.first_of_root[root as usize];
+            self.by_patch[*slot as usize] = (root, t as u32);
+            *slot += 1;
+        }
     }
 
     /// The root of triangle `t`'s patch (halving the path on the way).
