@@ -647,15 +647,15 @@ impl OcclusionBuffer {
         for k in 1..self.levels.len() {
             let (below, above) = self.levels.split_at_mut(k);
             let (below, level) = (&below[k - 1], &mut above[0]);
-            for y in 0..level.height {
-                for x in 0..level.width {
-                    let mut farthest = f32::INFINITY;
-                    for by in 2 * y..(2 * y + 2).min(below.height) {
-                        for bx in 2 * x..(2 * x + 2).min(below.width) {
-                            farthest = farthest.min(below.depth[(by * below.width + bx) as usize]);
-                        }
-                    }
-                    level.depth[(y * level.width + x) as usize] = farthest;
+            // A texel's children: its 2 × 2 texels below, the last row or
+            // column of an odd side counted twice.
+            let width = below.width as usize;
+            let row_below = |y: u32| &below.depth[(y.min(below.height - 1) as usize) * width..][..width];
+            for (y, texels) in (0..level.height).zip(level.depth.chunks_exact_mut(level.width as usize)) {
+                let (top, bottom) = (row_below(2 * y), row_below(2 * y + 1));
+                for (x, texel) in texels.iter_mut().enumerate() {
+                    let (left, right) = (2 * x, (2 * x + 1).min(width - 1));
+                    *texel = top[left].min(top[right]).min(bottom[left]).min(bottom[right]);
                 }
             }
         }
