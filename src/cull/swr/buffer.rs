@@ -1025,6 +1025,32 @@ mod tests {
     }
 
     #[test]
+    fn each_pyramid_texel_holds_the_farthest_depth_of_the_texels_below_it() {
+        // Odd sides at every level (7 × 5 → 4 × 3 → 2 × 2 → 1 × 1) and one
+        // side of one texel (9 × 1 → … → 1 × 1).
+        let mut rng = crate::rng::Rng::new(17);
+        for cells in [Resolution { width: 7, height: 5 }, Resolution { width: 9, height: 1 }] {
+            let mut buffer = OcclusionBuffer::new(Resolution { width: 28, height: 20 }, cells);
+            for depth in &mut buffer.levels[0].depth {
+                *depth = rng.range(0.0, 1.0) as f32;
+            }
+            buffer.build_pyramid();
+            assert!(buffer.levels.last().is_some_and(|l| l.width == 1 && l.height == 1));
+            for k in 1..buffer.levels.len() {
+                let (below, level) = (&buffer.levels[k - 1], &buffer.levels[k]);
+                for (y, x) in (0..level.height).flat_map(|y| (0..level.width).map(move |x| (y, x))) {
+                    let children = (2 * y..(2 * y + 2).min(below.height))
+                        .flat_map(|by| (2 * x..(2 * x + 2).min(below.width)).map(move |bx| (by, bx)));
+                    let farthest = children
+                        .map(|(by, bx)| below.depth[(by * below.width + bx) as usize])
+                        .fold(f32::INFINITY, f32::min);
+                    assert_eq!(level.depth[(y * level.width + x) as usize], farthest, "level {k} texel ({x}, {y})");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn groups_split_a_cells_pixels_and_ranges_find_them_by_their_centres() {
         // 10 pixels in 3 cells: 4, 3 and 3 pixels (⌊p · 3 / 10⌋).
         let axis = Axis::new(3, 10);

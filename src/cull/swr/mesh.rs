@@ -23,8 +23,8 @@
 //! the patch and clear of its border by that margin is drawn
 //! ([`Rasteriser::add_triangle`], [`Rasteriser::erase`]), whatever the
 //! triangles' size: a mesh of triangles far smaller than a cell covers the
-//! cell as one surface does. This is MOC's masked coverage made exact for a GPU that
-//! rasterises the same triangles. Triangles of two objects join only
+//! cell as one surface does. This is MOC's masked coverage made exact for a
+//! GPU that rasterises the same triangles. Triangles of two objects join only
 //! where the objects are clusters of one mesh under one transform (a
 //! [`ScreenMesh`] of several [`DrawnPart`]s): the GPU places each object's
 //! vertices through its own matrix, equal for those, and their vertices
@@ -270,15 +270,15 @@ const EMPTY: CellCover = CellCover {
 pub struct Patches {
     /// Scratch for one object: per triangle, its turn, and its patch as a
     /// tree of triangles (union-find: the root names the patch), then its
-    /// root (none where it is left out); per root, where its
-    /// patch starts among the patches' triangles, which are listed patch
-    /// by patch as (root, triangle).
+    /// root (none where it is left out); the patches' triangles, patch by
+    /// patch, as (root, triangle), and per root where its patch ends among
+    /// them.
     turns: Vec<Turn>,
     corners: Vec<[u32; 3]>,
     across: Vec<[u32; 3]>,
     parent: Vec<u32>,
     roots: Vec<Option<u32>>,
-    first_of_root: Vec<u32>,
+    patch_ends: Vec<u32>,
     by_patch: Vec<(u32, u32)>,
     triangles: Vec<Triangle>,
     borders: Vec<Border>,
@@ -318,7 +318,7 @@ impl Patches {
         let mut start = 0;
         while start < self.by_patch.len() {
             let root = self.by_patch[start].0;
-            let end = start + self.by_patch[start..].partition_point(|&(r, _)| r == root);
+            let end = self.patch_ends[root as usize] as usize;
             let (triangles, borders) = (self.triangles.len(), self.borders.len());
             let (mut lo, mut hi, mut nearest) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
             for k in start..end {
@@ -393,26 +393,28 @@ impl Patches {
         // hole its far side may be seen through.
         let behind = if mesh.closed && !clipped { behind_turn(mesh, &self.corners, &self.turns) } else { None };
         // Patch by patch, each patch's triangles in order: sorted by root
-        // (a triangle) by counting, in time linear in the triangles.
+        // (a triangle) by counting, in time linear in the triangles. Each
+        // root's entry counts its patch's triangles, then holds where the
+        // patch starts, and, once they are placed, where it ends.
         let count = self.turns.len();
         self.roots.clear();
-        self.first_of_root.clear();
-        self.first_of_root.resize(count + 1, 0);
+        self.patch_ends.clear();
+        self.patch_ends.resize(count + 1, 0);
         for t in 0..count as u32 {
             let kept = self.turns[t as usize] != Turn::Excluded && Some(self.turns[t as usize]) != behind;
             let root = kept.then(|| self.root(t));
             if let Some(root) = root {
-                self.first_of_root[root as usize + 1] += 1;
+                self.patch_ends[root as usize + 1] += 1;
             }
             self.roots.push(root);
         }
         for r in 0..count {
-            self.first_of_root[r + 1] += self.first_of_root[r];
+            self.patch_ends[r + 1] += self.patch_ends[r];
         }
         self.by_patch.clear();
-        self.by_patch.resize(self.first_of_root[count] as usize, (0, 0));
+        self.by_patch.resize(self.patch_ends[count] as usize, (0, 0));
         for (t, root) in self.roots.iter().enumerate().filter_map(|(t, root)| Some((t, (*root)?))) {
-            let slot = &mut self.first_of_root[root as usize];
+            let slot = &mut self.patch_ends[root as usize];
             self.by_patch[*slot as usize] = (root, t as u32);
             *slot += 1;
         }
@@ -562,10 +564,10 @@ impl Rasteriser {
         let first = self.cover_index(reached.start, row);
         let covers = &mut self.cover[first..first + reached.len()];
         let references = &cells.reference_row(row)[reached.start as usize..reached.end as usize];
-        let bounds = grid.across.centres(reached.clone());
+        let centres = grid.across.centres(reached.clone());
         let row_starts = grid.row_starts(row);
-        let spans = reached.zip(covers).zip(references).zip(bounds);
-        for (index, (((column, cover), &reference), &[x0, x1])) in (first as u32..).zip(spans) {
+        let row_cells = reached.zip(covers).zip(references).zip(centres);
+        for (index, (((column, cover), &reference), &[x0, x1])) in (first as u32..).zip(row_cells) {
             match cover.depth {
                 CellDepth::Nothing => continue,
                 CellDepth::Unreached => self.touched.push((index, [column, row])),
@@ -646,9 +648,9 @@ impl Rasteriser {
 /// takes a product and a sum per edge.
 #[derive(Clone, Copy, Debug)]
 enum Limit {
-    /// x at least (`From`, ex > 0) or at most (`To`, ex < 0)
-    /// `slope · y + offsets[margin]`.
+    /// x at least `slope · y + offsets[margin]` (ex > 0).
     From { slope: f64, offsets: [f64; 2] },
+    /// x at most `slope · y + offsets[margin]` (ex < 0).
     To { slope: f64, offsets: [f64; 2] },
     /// A horizontal edge (ex = 0): e(x, y) = ey · y + ec, whatever x,
     /// against `margins`.
@@ -679,8 +681,9 @@ impl Limit {
 /// false, or at every point of them, for `every` = true (edges are
 /// linear, so at both ends). Empty (or NaN) when there is none.
 fn x_range(limits: &[Limit; 3], ys: [f64; 2], margin: usize, every: bool) -> [f64; 2] {
+    debug_assert!(ys[0].partial_cmp(&ys[1]).is_none_or(|o| o.is_le()), "rows {ys:?} out of order");
     let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
-    // The end of `ys` where a line of `slope` is least.
+    // The ends of `ys` where a line of `slope` is least, and greatest.
     let lower = |slope: f64| if slope > 0.0 { ys[0] } else { ys[1] };
     let upper = |slope: f64| if slope > 0.0 { ys[1] } else { ys[0] };
     for limit in limits {
@@ -723,6 +726,11 @@ struct Triangle {
 impl Triangle {
     fn new(corners: [ScreenVertex; 3]) -> Triangle {
         let (slack, edges) = (slack_of(&corners), inward_edges(&corners));
+        // What it reaches holds what it marks (add_triangle).
+        debug_assert!(
+            slack.partial_cmp(&VERTEX_ERROR).is_none_or(|o| o.is_ge()),
+            "slack {slack} below the vertex error"
+        );
         let at = corners.map(|c| c.at.truncate());
         Triangle {
             lo: at[0].min(at[1]).min(at[2]),
