@@ -393,9 +393,10 @@ impl Patches {
         // hole its far side may be seen through.
         let behind = if mesh.closed && !clipped { behind_turn(mesh, &self.corners, &self.turns) } else { None };
         // Patch by patch, each patch's triangles in order: sorted by root
-        // (a triangle) by counting, in time linear in the triangles. Each
-        // root's entry counts its patch's triangles, then holds where the
-        // patch starts, and, once they are placed, where it ends.
+        // (a triangle) by counting, in time linear in the triangles. The
+        // entry after a root's counts its patch's triangles; summed, a
+        // root's entry holds where its patch starts, and, once the
+        // triangles are placed, where it ends.
         let count = self.turns.len();
         self.roots.clear();
         self.patch_ends.clear();
