@@ -309,17 +309,7 @@ impl Grid {
 
     /// The mask of every group of cell (`column`, `row`).
     pub(super) fn full_mask(&self, column: u32, row: u32) -> u64 {
-        self.column_bits(column) * self.row_starts(row)
-    }
-
-    /// The bits of one row of column `column`'s groups.
-    pub(super) fn column_bits(&self, column: u32) -> u64 {
-        self.column_bits[column as usize]
-    }
-
-    /// A bit at the start of each row of row `row`'s groups.
-    pub(super) fn row_starts(&self, row: u32) -> u64 {
-        self.row_starts[row as usize]
+        self.column_bits[column as usize] * self.row_starts[row as usize]
     }
 }
 
@@ -372,9 +362,14 @@ impl Cells<'_> {
 
     /// The reference depths of row `row`'s cells.
     pub(super) fn reference_row(&self, row: u32) -> &[f32] {
-        let width = self.grid.cells.width as usize;
-        let start = (row - self.rows.start) as usize * width;
-        &self.depth[start..start + width]
+        let start = self.index(0, row);
+        &self.depth[start..start + self.grid.cells.width as usize]
+    }
+
+    /// Where cell (`column`, `row`) lies in the layers' rows, which start
+    /// at `rows.start`.
+    fn index(&self, column: u32, row: u32) -> usize {
+        ((row - self.rows.start) * self.grid.cells.width + column) as usize
     }
 
     /// Whether anything at most `nearest` deep over the pixels `first` to
@@ -410,7 +405,7 @@ impl Cells<'_> {
     /// wall's outline, within the wall's pixels of the cell, is hidden).
     pub(super) fn merge(&mut self, column: u32, row: u32, coverage: &Coverage) {
         let full = self.grid.full_mask(column, row);
-        let index = ((row - self.rows.start) * self.grid.cells.width + column) as usize;
+        let index = self.index(column, row);
         let mask = coverage.mask & full;
         // Stored rounded farther; a NaN or nothing in front vouches for nothing.
         let depth = f32_at_most(coverage.depth);

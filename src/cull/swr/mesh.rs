@@ -566,7 +566,6 @@ impl Rasteriser {
         let covers = &mut self.cover[first..first + reached.len()];
         let references = &cells.reference_row(row)[reached.start as usize..reached.end as usize];
         let centres = grid.across.centres(reached.clone());
-        let row_starts = grid.row_starts(row);
         let row_cells = reached.zip(covers).zip(references).zip(centres);
         for (index, (((column, cover), &reference), &[x0, x1])) in (first as u32..).zip(row_cells) {
             match cover.depth {
@@ -593,7 +592,7 @@ impl Rasteriser {
                 _ => CellDepth::AtLeast { least, plane: *plane },
             };
             if whole.contains(&column) {
-                cover.mask |= grid.column_bits(column) * row_starts;
+                cover.mask |= grid.full_mask(column, row);
             }
             vouched = true;
         }
