@@ -242,16 +242,6 @@ impl ScreenPlane {
             constant: self.constant - other.constant,
         }
     }
-
-    /// Its least value over the rectangle `x` × `y`.
-    pub(crate) fn min_over(&self, x: [f64; 2], y: [f64; 2]) -> f64 {
-        -ScreenPlane {
-            per_x: -self.per_x,
-            per_y: -self.per_y,
-            constant: -self.constant,
-        }
-        .max_over(x, y)
-    }
 }
 
 /// Where pixel rays meet an eye-relative box, for tests finer than its

@@ -173,9 +173,9 @@ impl Axis {
         first..end.max(first)
     }
 
-    /// The groups of `cells`.
-    pub(super) fn groups_of(&self, cells: &Range<u32>) -> Range<u32> {
-        self.first_group[cells.start as usize]..self.first_group[cells.end as usize]
+    /// The first and last pixel centre of each group of cell `c`.
+    pub(super) fn group_centres(&self, c: u32) -> &[[f64; 2]] {
+        &self.group_centres[self.first_group[c as usize] as usize..self.first_group[c as usize + 1] as usize]
     }
 
     /// The groups holding a pixel centre in [`lo`, `hi`], limited to

@@ -442,10 +442,11 @@ pub struct Rasteriser {
     columns: Range<u32>,
     rows: Range<u32>,
     cover: Vec<CellCover>,
-    /// The entries of `cover` the current patch's triangles reached, with
-    /// their cells (column, row), so that only they are merged and emptied
-    /// again: a patch reaches far fewer cells than its bounds hold.
-    touched: Vec<(u32, [u32; 2])>,
+    /// Per row of the current patch's cells, the columns from the first to
+    /// the last its triangles reached there (empty where none), so that
+    /// only they are merged and emptied again: a patch reaches far fewer
+    /// cells than its bounds hold.
+    spans: Vec<Range<u32>>,
 }
 
 impl Rasteriser {
@@ -459,40 +460,51 @@ impl Rasteriser {
 
     fn rasterise_patch(&mut self, cells: &mut Cells, patches: &Patches, patch: &Patch) {
         let grid = cells.grid();
-        self.columns = grid.across.cells_reaching(patch.lo.x, patch.hi.x);
-        self.rows = clamp(grid.down.cells_reaching(patch.lo.y, patch.hi.y), &cells.rows());
+        let columns = grid.across.cells_reaching(patch.lo.x, patch.hi.x);
+        let rows = clamp(grid.down.cells_reaching(patch.lo.y, patch.hi.y), &cells.rows());
         // Nothing to do where it lies behind every cell it reaches (its
         // triangles' depths, not their margins, suffice: they are nearer).
-        let behind = || cells.cells_behind(self.columns.clone(), self.rows.clone(), patch.nearest);
-        if self.columns.is_empty() || self.rows.is_empty() || behind() {
+        if columns.is_empty() || rows.is_empty() || cells.cells_behind(columns.clone(), rows.clone(), patch.nearest) {
             return;
         }
-        debug_assert!(self.touched.is_empty(), "every entry of the last patch emptied");
-        let cells_held = self.columns.len() * self.rows.len();
-        if self.cover.len() < cells_held {
-            self.cover.resize(cells_held, EMPTY);
-        }
+        self.begin_patch(columns, rows);
         for triangle in &patches.triangles[patch.triangles.clone()] {
             self.add_triangle(cells, triangle);
         }
         for border in &patches.borders[patch.borders.clone()] {
             self.erase(grid, border);
         }
-        for &(i, [column, row]) in &self.touched {
-            let cover = std::mem::replace(&mut self.cover[i as usize], EMPTY);
-            if let (true, CellDepth::AtLeast { least, plane }) = (cover.mask != 0, cover.depth) {
-                cells.merge(
-                    column,
-                    row,
-                    &Coverage {
-                        mask: cover.mask,
-                        depth: least,
-                        plane,
-                    },
-                );
+        for (row, span) in self.rows.clone().zip(&self.spans) {
+            if span.is_empty() {
+                continue;
+            }
+            let first = self.cover_index(span.start, row);
+            for (column, cover) in span.clone().zip(&mut self.cover[first..first + span.len()]) {
+                let cover = std::mem::replace(cover, EMPTY);
+                if let (true, CellDepth::AtLeast { least, plane }) = (cover.mask != 0, cover.depth) {
+                    cells.merge(
+                        column,
+                        row,
+                        &Coverage {
+                            mask: cover.mask,
+                            depth: least,
+                            plane,
+                        },
+                    );
+                }
             }
         }
-        self.touched.clear();
+    }
+
+    /// Makes ready for a patch over the cells `columns` × `rows`.
+    fn begin_patch(&mut self, columns: Range<u32>, rows: Range<u32>) {
+        let cells_held = columns.len() * rows.len();
+        if self.cover.len() < cells_held {
+            self.cover.resize(cells_held, EMPTY);
+        }
+        self.spans.clear();
+        self.spans.resize(rows.len(), 0..0);
+        (self.columns, self.rows) = (columns, rows);
     }
 
     /// Where in `cover` cell (`column`, `row`) lies, which must lie within
@@ -502,28 +514,21 @@ impl Rasteriser {
         ((row - self.rows.start) * width + column - self.columns.start) as usize
     }
 
-    /// Marks the pixel groups `bits` of cell (`column`, `row`), where the
-    /// patch vouches for a depth.
-    fn mark_groups(&mut self, column: u32, row: u32, bits: u64) {
-        let i = self.cover_index(column, row);
-        let cover = &mut self.cover[i];
-        if let CellDepth::AtLeast { .. } = cover.depth {
-            cover.mask |= bits;
-        }
-    }
-
     /// Rasterises one triangle of the current patch, row of cells by row
     /// of cells: first its depth over the cells it may reach
     /// ([`Self::add_depth`]), then, in a row where it vouches for a depth,
-    /// its mark: every group of the cells whose every centre it marks
-    /// ([`Triangle::marked_x_range`]), then group row by group row the
-    /// groups of the cells on either side of them ([`Self::mark_sides`]).
-    /// The cells it marks lie among those it reaches (a narrower region, at
-    /// both ends of the rows), so a cell it marks has its depth, and only
-    /// such cells are marked.
+    /// its mark: every group of the cells whose every centre it marks,
+    /// and the groups it marks in the cells on either side of them
+    /// ([`Self::mark_sides`]), each from the x range it marks in each row
+    /// of the row's groups ([`Triangle::marked_x_range`]; the cells it
+    /// marks whole are those within all of them). The cells it marks lie
+    /// among those it reaches (a narrower region, at both ends of the
+    /// rows), so a cell it marks has its depth, and only such cells are
+    /// marked.
     fn add_triangle(&mut self, cells: &Cells, triangle: &Triangle) {
         let grid = cells.grid();
         let (lo, hi) = (triangle.lo - triangle.slack, triangle.hi + triangle.slack);
+        let mut marked = [[0.0; 2]; MASK_SIDE as usize];
         for row in clamp(grid.down.cells_reaching(lo.y, hi.y), &self.rows) {
             let [y0, y1] = grid.down.cell(row);
             let ys = [y0.max(lo.y), y1.min(hi.y)];
@@ -532,11 +537,26 @@ impl Rasteriser {
             if reached.is_empty() {
                 continue;
             }
-            let [from, to] = triangle.marked_x_range([y0, y1]);
+            // Each group row's x range, and their intersection, which is
+            // the range over the whole row: a limit is linear in y, so its
+            // bound over the row is at an end of the row, an end of a
+            // group row too (a NaN in any range makes it a NaN).
+            let group_rows = grid.down.group_centres(row);
+            let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
+            for (range, &ys) in marked.iter_mut().zip(group_rows) {
+                *range = triangle.marked_x_range(ys);
+                from = if range[0] > from || range[0].is_nan() { range[0] } else { from };
+                to = if range[1] < to || range[1].is_nan() { range[1] } else { to };
+            }
             let whole = grid.across.cells_within(from, to, &self.columns);
             debug_assert!(whole.is_empty() || (reached.start <= whole.start && whole.end <= reached.end));
-            if self.add_depth(cells, row, reached, &whole, (xs, ys), &triangle.plane) {
-                self.mark_sides(grid, row, &whole, triangle);
+            let span = &mut self.spans[(row - self.rows.start) as usize];
+            *span = match Range::is_empty(span) {
+                true => reached.clone(),
+                false => span.start.min(reached.start)..span.end.max(reached.end),
+            };
+            if self.add_depth(cells, row, reached.clone(), &whole, (xs, ys), &triangle.plane) {
+                self.mark_sides(grid, row, &reached, &whole, &marked[..group_rows.len()]);
             }
         }
     }
@@ -561,31 +581,39 @@ impl Rasteriser {
         plane: &ScreenPlane,
     ) -> bool {
         let grid = cells.grid();
-        let mut vouched = false;
         let first = self.cover_index(reached.start, row);
         let covers = &mut self.cover[first..first + reached.len()];
         let references = &cells.reference_row(row)[reached.start as usize..reached.end as usize];
         let centres = grid.across.centres(reached.clone());
-        let row_cells = reached.zip(covers).zip(references).zip(centres);
-        for (index, (((column, cover), &reference), &[x0, x1])) in (first as u32..).zip(row_cells) {
-            match cover.depth {
-                CellDepth::Nothing => continue,
-                CellDepth::Unreached => self.touched.push((index, [column, row])),
-                CellDepth::AtLeast { .. } => {}
+        // The plane's greatest and least over a cell's rectangle, each at
+        // the corner it rises or falls towards, as `ScreenPlane::max_over`
+        // takes it (the same products and sums), with what stays the same
+        // along the row taken once.
+        let rising = plane.per_x > 0.0;
+        let (y_high, y_low) = if plane.per_y > 0.0 { (ys[1], ys[0]) } else { (ys[0], ys[1]) };
+        let (high_by_y, low_by_y) = (plane.per_y * y_high, plane.per_y * y_low);
+        let mut vouched = false;
+        for (k, ((cover, &reference), &[x0, x1])) in covers.iter_mut().zip(references).zip(centres).enumerate() {
+            let column = reached.start + k as u32;
+            if let CellDepth::Nothing = cover.depth {
+                continue;
             }
-            let xs = [x0.max(xs[0]), x1.min(xs[1])];
-            let nearest = plane.max_over(xs, ys);
-            let least = plane.min_over(xs, ys);
+            // The cell's centres within the row's reach (`xs` bounds
+            // cells that reach it, so neither is a NaN).
+            let (x0, x1) = (if x0 > xs[0] { x0 } else { xs[0] }, if x1 < xs[1] { x1 } else { xs[1] });
+            let (x_high, x_low) = if rising { (x1, x0) } else { (x0, x1) };
+            let nearest = plane.per_x * x_high + high_by_y + plane.constant;
             // Not nearer (or a NaN).
             let behind = nearest.partial_cmp(&f64::from(reference)).is_none_or(|o| o.is_le());
+            let least = plane.per_x * x_low + low_by_y + plane.constant;
             if behind || least.is_nan() {
                 cover.depth = CellDepth::Nothing;
                 continue;
             }
             cover.depth = match cover.depth {
                 CellDepth::AtLeast { least: held, plane: below } => CellDepth::AtLeast {
-                    least: held.min(least),
-                    plane: below_both(below, plane, (xs, ys)),
+                    least: if least < held { least } else { held },
+                    plane: below_both(below, plane, ([x0, x1], ys)),
                 },
                 // Unreached (a cell the patch vouches nothing for was
                 // passed over above).
@@ -599,18 +627,25 @@ impl Rasteriser {
         vouched
     }
 
-    /// Marks, group row by group row of `row`, the groups whose every
-    /// centre `triangle` marks in the cells on either side of the cells
-    /// `whole` (marked whole).
-    fn mark_sides(&mut self, grid: &Grid, row: u32, whole: &Range<u32>, triangle: &Triangle) {
-        let inner = grid.across.groups_of(whole);
-        for g in grid.down.groups_of(&(row..row + 1)) {
-            let (_, k, ys) = grid.down.group(g);
-            let [from, to] = triangle.marked_x_range(ys);
-            let groups = grid.across.groups_within(from, to, &self.columns);
-            let (left, right) = (groups.start..groups.end.min(inner.start), groups.start.max(inner.end)..groups.end);
-            for (column, bits) in grid.across.cells_of(left).chain(grid.across.cells_of(right)) {
-                self.mark_groups(column, row, bits << (k * MASK_SIDE));
+    /// Marks, in the cells of `reached` on either side of the cells
+    /// `whole` (marked whole) that vouch for a depth, each group whose
+    /// every centre lies within its group row's x range of `marked` (one
+    /// per row of `row`'s groups).
+    fn mark_sides(&mut self, grid: &Grid, row: u32, reached: &Range<u32>, whole: &Range<u32>, marked: &[[f64; 2]]) {
+        let sides = match whole.is_empty() {
+            true => [reached.clone(), 0..0],
+            false => [reached.start..whole.start, whole.end..reached.end],
+        };
+        for column in sides.into_iter().flatten() {
+            let i = self.cover_index(column, row);
+            let cover = &mut self.cover[i];
+            if let CellDepth::AtLeast { .. } = cover.depth {
+                let groups = grid.across.group_centres(column);
+                for (k, &[from, to]) in marked.iter().enumerate() {
+                    let within = |&[g0, g1]: &[f64; 2]| from <= g0 && g1 <= to;
+                    let bits = groups.iter().rev().fold(0u64, |bits, g| bits << 1 | u64::from(within(g)));
+                    cover.mask |= bits << (k as u32 * MASK_SIDE);
+                }
             }
         }
     }
@@ -1290,8 +1325,7 @@ mod tests {
             if twice_area(corners[0].at, corners[1].at, corners[2].at) == 0.0 {
                 continue;
             }
-            rasteriser.columns = 0..16;
-            rasteriser.rows = 0..12;
+            rasteriser.begin_patch(0..16, 0..12);
             // Every cell vouching for a depth already (the triangle marks
             // only such cells; it lies nearer than the cleared cells).
             let reached = CellCover {
