@@ -42,6 +42,21 @@ pub fn map<P: Send, R: Send>(parts: Vec<P>, work: impl Fn(P) -> R + Sync) -> Vec
     })
 }
 
+/// `work` run on each of `jobs`, the first on the calling thread and each
+/// other on a thread of its own, waiting for them all; allocates nothing
+/// (a culler's frame calls it). A panic in any job ends the scope with it.
+pub fn each<J: Send>(mut jobs: impl Iterator<Item = J>, work: impl Fn(J) + Sync) {
+    let first = jobs.next();
+    std::thread::scope(|scope| {
+        for job in jobs {
+            scope.spawn(|| work(job));
+        }
+        if let Some(job) = first {
+            work(job);
+        }
+    });
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -403,6 +403,7 @@ impl Cells<'_> {
     /// layer it joined, that layer stays as it was, still vouching for its
     /// own mask and nearer than the new reference (so a box just behind a
     /// wall's outline, within the wall's pixels of the cell, is hidden).
+    #[inline]
     pub(super) fn merge(&mut self, column: u32, row: u32, coverage: &Coverage) {
         let full = self.grid.full_mask(column, row);
         let index = self.index(column, row);

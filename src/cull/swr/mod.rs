@@ -36,6 +36,7 @@ use std::time::Instant;
 mod buffer;
 mod mesh;
 mod neighbours;
+mod walk;
 
 use glam::{DAffine3, DMat3, DMat4, DVec2, DVec3, Vec4Swizzles};
 use serde::Serialize;
@@ -48,9 +49,11 @@ use crate::gpu::{
     BoxMargins, BoxPlanes, DepthMargins, EyeBox, Frame, GpuError, GpuSetup, PixelRays, QueryBox, Resolution,
     eye_relative_box,
 };
+use crate::parallel;
 use crate::scene::Scene;
 use buffer::{Cells, OcclusionBuffer};
 use mesh::{DrawnPart, NearLimit, Patches, Rasteriser, ScreenMesh, ScreenVertex, VERTEX_ERROR};
+use walk::{Walk, Walkers};
 
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
@@ -173,7 +176,8 @@ pub struct SoftwareOcclusionCulling {
     is_found: Vec<bool>,
     found: Vec<u32>,
     to_draw: Vec<u32>,
-    stack: Vec<u32>,
+    /// Step 4's threads' scratch.
+    walkers: Walkers,
 }
 
 impl SoftwareOcclusionCulling {
@@ -198,7 +202,7 @@ impl SoftwareOcclusionCulling {
             is_found: Vec::new(),
             found: Vec::new(),
             to_draw: Vec::new(),
-            stack: Vec::new(),
+            walkers: Walkers::default(),
         }
     }
 }
@@ -209,6 +213,7 @@ impl SoftwareOcclusionCulling {
         let threads = self.params.threads_used();
         self.preparers = (0..threads).map(|_| Preparer::default()).collect();
         self.rasterisers = (0..threads).map(|_| Rasteriser::default()).collect();
+        self.walkers = Walkers::new(threads);
         self.buffer = Some(OcclusionBuffer::new(size, self.params.resolution));
         #[cfg(test)]
         if let Some(buffer) = &mut self.buffer {
@@ -659,7 +664,8 @@ impl Culler for SoftwareOcclusionCulling {
             self.buffer_holds = true;
         }
 
-        // 4. The hierarchy, in the frustum and not hidden.
+        // 4. The hierarchy, in the frustum and not hidden (walk.rs: its
+        // subtrees shared over the threads).
         let tester = Tester {
             buffer,
             projector: &projector,
@@ -668,42 +674,18 @@ impl Culler for SoftwareOcclusionCulling {
             view: &view,
             margins,
         };
-        let hierarchy = input.hierarchy;
-        let triangles_of = |objects: &[u32]| -> u64 {
-            objects.iter().map(|&o| u64::from(scene.objects[o as usize].triangles)).sum()
+        let hides = |bounds: &Aabb| tester.test(bounds) == Verdict::Hidden;
+        let walk = Walk {
+            frustum: &frustum,
+            scene,
+            hierarchy: input.hierarchy,
+            hides: (!resting).then_some(&hides),
         };
-        let mut hidden_triangles = 0;
-        self.found.clear();
-        self.stack.clear();
-        self.stack.push(0);
-        while let Some(index) = self.stack.pop() {
-            let node = &hierarchy.nodes[index as usize];
-            stats.nodes_visited += 1;
-            if frustum.classify(&node.bounds) == Containment::Outside {
-                stats.nodes_culled_frustum += 1;
-                continue;
-            }
-            if !resting && tester.test(&node.bounds) == Verdict::Hidden {
-                stats.nodes_culled_occlusion += 1;
-                hidden_triangles += triangles_of(hierarchy.subtree_objects(node));
-                continue;
-            }
-            if !node.is_leaf() {
-                self.stack.extend(node.children().map(|c| c as u32));
-                continue;
-            }
-            for &o in hierarchy.subtree_objects(node) {
-                let bounds = &scene.objects[o as usize].bounds;
-                if frustum.classify(bounds) == Containment::Outside {
-                    continue;
-                }
-                if resting || tester.test(bounds) == Verdict::Visible {
-                    self.found.push(o);
-                } else {
-                    hidden_triangles += triangles_of(&[o]);
-                }
-            }
-        }
+        let walked = self.walkers.walk(&walk, &mut self.found);
+        let hidden_triangles = walked.hidden_triangles;
+        stats.nodes_visited = walked.stats.nodes_visited;
+        stats.nodes_culled_frustum = walked.stats.nodes_culled_frustum;
+        stats.nodes_culled_occlusion = walked.stats.nodes_culled_occlusion;
         // A buffer of occluders that did not pay rests the next frames (a
         // warm-up frame's time, compiling and filling caches, says nothing).
         if !resting && !self.occluders.is_empty() && self.params.rests && !input.warm_up {
@@ -816,13 +798,13 @@ impl Occluders<'_> {
             .iter_mut()
             .enumerate()
             .map(|(k, preparer)| (if k == 0 { 0 } else { ends[k - 1] }..ends[k], preparer));
-        on_threads(shares, |(share, preparer)| self.prepare(share, preparer));
+        parallel::each(shares, |(share, preparer)| self.prepare(share, preparer));
         // Rows hold unlike work (sky above, near objects below): each
         // thread takes band after band of a few rows until none is left.
         let preparers = &preparers[..threads];
         let bands = buffer.cleared_bands(rows.div_ceil(BANDS_PER_THREAD * threads as u32));
         let bands = std::sync::Mutex::new(bands);
-        on_threads(rasterisers[..threads].iter_mut(), |rasteriser| {
+        parallel::each(rasterisers[..threads].iter_mut(), |rasteriser| {
             // A band is taken under the lock; a thread that panicked holding
             // it ends the frame's scope anyway.
             while let Some(mut cells) = bands.lock().ok().and_then(|mut bands| bands.next()) {
@@ -856,21 +838,6 @@ impl Occluders<'_> {
             }
         }
     }
-}
-
-/// Runs `work` on each of `jobs`, the first on this thread and each other
-/// on a thread of its own, and waits for them all (a helper's panic ends
-/// the scope with it).
-fn on_threads<J: Send>(mut jobs: impl Iterator<Item = J>, work: impl Fn(J) + Sync) {
-    let first = jobs.next();
-    std::thread::scope(|scope| {
-        for job in jobs {
-            scope.spawn(|| work(job));
-        }
-        if let Some(job) = first {
-            work(job);
-        }
-    });
 }
 
 /// The GPU's error in an f32 vertex position, as a fraction of the sizes
