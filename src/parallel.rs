@@ -1,6 +1,7 @@
 //! Work shared over the cores with scoped threads: loading cuts one large
 //! job into parts (ranges of vertices, halves of a mesh) that need no
-//! coordination, so a thread per part is all it takes.
+//! coordination, so a thread per part is all it takes; a culler's frame
+//! runs one job per thread, each taking its share of the work as it goes.
 
 use std::num::NonZero;
 use std::sync::OnceLock;
@@ -43,8 +44,9 @@ pub fn map<P: Send, R: Send>(parts: Vec<P>, work: impl Fn(P) -> R + Sync) -> Vec
 }
 
 /// `work` run on each of `jobs`, the first on the calling thread and each
-/// other on a thread of its own, waiting for them all; allocates nothing
-/// (a culler's frame calls it). A panic in any job ends the scope with it.
+/// other on a thread of its own, waiting for them all; it collects no
+/// results (a culler's frame calls it, its jobs writing into scratch they
+/// own). A panic in any job ends the scope with it.
 pub fn each<J: Send>(mut jobs: impl Iterator<Item = J>, work: impl Fn(J) + Sync) {
     let first = jobs.next();
     std::thread::scope(|scope| {

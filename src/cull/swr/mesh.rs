@@ -498,6 +498,10 @@ impl Rasteriser {
 
     /// Makes ready for a patch over the cells `columns` × `rows`.
     fn begin_patch(&mut self, columns: Range<u32>, rows: Range<u32>) {
+        debug_assert!(
+            self.cover.iter().all(|c| c.mask == 0 && matches!(c.depth, CellDepth::Unreached)),
+            "every entry of the last patch emptied"
+        );
         let cells_held = columns.len() * rows.len();
         if self.cover.len() < cells_held {
             self.cover.resize(cells_held, EMPTY);
@@ -528,7 +532,7 @@ impl Rasteriser {
     fn add_triangle(&mut self, cells: &Cells, triangle: &Triangle) {
         let grid = cells.grid();
         let (lo, hi) = (triangle.lo - triangle.slack, triangle.hi + triangle.slack);
-        let mut marked = [[0.0; 2]; MASK_SIDE as usize];
+        let mut group_row_ranges = [[0.0; 2]; MASK_SIDE as usize];
         for row in clamp(grid.down.cells_reaching(lo.y, hi.y), &self.rows) {
             let [y0, y1] = grid.down.cell(row);
             let ys = [y0.max(lo.y), y1.min(hi.y)];
@@ -540,23 +544,22 @@ impl Rasteriser {
             // Each group row's x range, and their intersection, which is
             // the range over the whole row: a limit is linear in y, so its
             // bound over the row is at an end of the row, an end of a
-            // group row too (a NaN in any range makes it a NaN).
+            // group row too.
             let group_rows = grid.down.group_centres(row);
             let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
-            for (range, &ys) in marked.iter_mut().zip(group_rows) {
+            for (range, &ys) in group_row_ranges.iter_mut().zip(group_rows) {
                 *range = triangle.marked_x_range(ys);
-                from = if range[0] > from || range[0].is_nan() { range[0] } else { from };
-                to = if range[1] < to || range[1].is_nan() { range[1] } else { to };
+                (from, to) = (from.max(range[0]), to.min(range[1]));
             }
             let whole = grid.across.cells_within(from, to, &self.columns);
             debug_assert!(whole.is_empty() || (reached.start <= whole.start && whole.end <= reached.end));
-            let span = &mut self.spans[(row - self.rows.start) as usize];
-            *span = match Range::is_empty(span) {
+            let span = &self.spans[(row - self.rows.start) as usize];
+            self.spans[(row - self.rows.start) as usize] = match span.is_empty() {
                 true => reached.clone(),
                 false => span.start.min(reached.start)..span.end.max(reached.end),
             };
             if self.add_depth(cells, row, reached.clone(), &whole, (xs, ys), &triangle.plane) {
-                self.mark_sides(grid, row, &reached, &whole, &marked[..group_rows.len()]);
+                self.mark_sides(grid, row, &reached, &whole, &group_row_ranges[..group_rows.len()]);
             }
         }
     }
@@ -714,23 +717,22 @@ impl Limit {
 /// The x range in which each edge of `limits` is within its margin
 /// `margin` at some point of the rows `ys` (`[low, high]`), for `every` =
 /// false, or at every point of them, for `every` = true (edges are
-/// linear, so at both ends). Empty (or NaN) when there is none.
+/// linear, so at both ends). Empty when there is none.
+///
+/// An edge so near level that solving it for x overflows (ex below about
+/// 1e-308) gives no number at some rows: the reach passes it over there
+/// (it may only grow), and the mark holds nothing (it may only shrink).
 fn x_range(limits: &[Limit; 3], ys: [f64; 2], margin: usize, every: bool) -> [f64; 2] {
     debug_assert!(ys[0].partial_cmp(&ys[1]).is_none_or(|o| o.is_le()), "rows {ys:?} out of order");
+    const NONE: [f64; 2] = [f64::INFINITY, f64::NEG_INFINITY];
     let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
     // The ends of `ys` where a line of `slope` is least, and greatest.
     let lower = |slope: f64| if slope > 0.0 { ys[0] } else { ys[1] };
     let upper = |slope: f64| if slope > 0.0 { ys[1] } else { ys[0] };
     for limit in limits {
-        match *limit {
-            Limit::From { slope, offsets } => {
-                let y = if every { upper(slope) } else { lower(slope) };
-                from = from.max(slope * y + offsets[margin]);
-            }
-            Limit::To { slope, offsets } => {
-                let y = if every { lower(slope) } else { upper(slope) };
-                to = to.min(slope * y + offsets[margin]);
-            }
+        let (slope, offsets, bounds_from) = match *limit {
+            Limit::From { slope, offsets } => (slope, offsets, true),
+            Limit::To { slope, offsets } => (slope, offsets, false),
             Limit::Level { ey, ec, margins } => {
                 let at = |y: f64| ey * y + ec + margins[margin];
                 let (first, last) = (at(ys[0]), at(ys[1]));
@@ -738,7 +740,21 @@ fn x_range(limits: &[Limit; 3], ys: [f64; 2], margin: usize, every: bool) -> [f6
                 if within.partial_cmp(&0.0).is_none_or(|o| o.is_lt()) {
                     to = f64::NEG_INFINITY;
                 }
+                continue;
             }
+        };
+        // For every point of the rows, x at least a line takes the line's
+        // rightmost end (x at most one, its leftmost); for some point, the
+        // other end.
+        let y = if every == bounds_from { upper(slope) } else { lower(slope) };
+        let x = slope * y + offsets[margin];
+        if every && x.is_nan() {
+            return NONE;
+        }
+        if bounds_from {
+            from = from.max(x);
+        } else {
+            to = to.min(x);
         }
     }
     [from, to]
@@ -1310,7 +1326,7 @@ mod tests {
             panic!("one band")
         };
         let mut rasteriser = Rasteriser::default();
-        let (mut marked, mut sharp_checked) = (0, 0);
+        let (mut marked, mut sharp_checked, mut inside_checked) = (0, 0, 0);
         for k in 0..600 {
             let a = DVec2::new(rng.range(-8.0, 72.0), rng.range(-8.0, 56.0));
             let b = a + DVec2::new(rng.range(-30.0, 30.0), rng.range(-30.0, 30.0));
@@ -1338,6 +1354,19 @@ mod tests {
             rasteriser.cover.clear();
             rasteriser.cover.resize(16 * 12, reached);
             rasteriser.add_triangle(&cells, &Triangle::new(corners));
+            // Every pixel centre inside the triangle is marked (each cell's
+            // groups here are single pixels).
+            for (x, y) in (0..64).flat_map(|x| (0..48).map(move |y| (x, y))) {
+                let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                let inside = (0..3).all(|i| {
+                    let (p, q, r) = ([a, b, c][i], [a, b, c][(i + 1) % 3], [a, b, c][(i + 2) % 3]);
+                    let side = |z: DVec2| (q - p).perp_dot(z - p);
+                    side(centre) * side(r).signum() > 1e-9 * (q - p).length()
+                });
+                let cover = &rasteriser.cover[x / 4 + 16 * (y / 4)];
+                assert!(!inside || cover.mask >> (x % 4 + 8 * (y % 4)) & 1 == 1, "{:?} leaves {centre} unmarked", [a, b, c]);
+                inside_checked += usize::from(inside);
+            }
             for (i, cover) in rasteriser.cover.iter().enumerate() {
                 for bit in (0..64).filter(|b| cover.mask >> b & 1 == 1) {
                     let (x, y) = (4 * (i % 16) + bit % 8, 4 * (i / 16) + bit / 8);
@@ -1351,8 +1380,25 @@ mod tests {
                     sharp_checked += usize::from(k % 2 == 0);
                 }
             }
+            rasteriser.cover.fill(EMPTY);
         }
         assert!(marked > 10_000 && sharp_checked > 1000, "{marked} marks, {sharp_checked} of sharp triangles");
+        assert!(inside_checked > 10_000, "{inside_checked} centres inside");
+    }
+
+    #[test]
+    fn an_edge_too_near_level_to_solve_for_x_marks_nothing_and_limits_no_reach() {
+        // e(x, y) = 5e-324 · x + y − 10: level to within the least f64, so
+        // its slope and offsets overflow, and at a row below y = 10 they
+        // give no number.
+        let level = Limit::new([5e-324, 1.0, -10.0], [0.25, 0.0625]);
+        let within = Limit::new([1.0, 0.0, 0.0], [0.25, 0.0625]);
+        let limits = [level, within, within];
+        let ys = [4.5, 5.5];
+        let [from, to] = x_range(&limits, ys, MARKED, true);
+        assert!(from.partial_cmp(&to).is_none_or(|o| o.is_gt()), "marks [{from}, {to}] below the edge");
+        let [from, to] = x_range(&limits, ys, REACHED, false);
+        assert!(from <= 0.0 && to == f64::INFINITY, "reaches only [{from}, {to}]");
     }
 
     #[test]

@@ -26,7 +26,8 @@
 //! triangles taken in the f64 projection (MOC and Godot take authored occluder
 //! meshes, rasterised in f32 with SIMD: here it is scalar). Like MOC it
 //! shares the work among threads (`swr.threads`), each over a band of the
-//! buffer's rows; the box tests run on one thread. `swr.resolution` sets
+//! buffer's rows, and so are the box tests, each thread walking subtrees
+//! of the hierarchy (walk.rs). `swr.resolution` sets
 //! the cells (each of up to 8 × 8 pixel groups), trading the box test's
 //! precision against time.
 
@@ -85,7 +86,7 @@ const TRIANGLES: ParamInfo = ParamInfo {
 const THREADS: ParamInfo = ParamInfo {
     key: "threads",
     default: "0",
-    summary: "threads rasterising occluders, each over a band of the buffer's rows (0: one per core; at most 64)",
+    summary: "threads rasterising occluders, each over a band of the buffer's rows, then walking the hierarchy, each over its subtrees (0: one per core; at most 64)",
 };
 
 const RESTS: ParamInfo = ParamInfo {
@@ -126,16 +127,21 @@ impl SwrParams {
         })
     }
 
-    /// The threads a frame may use: `threads`, or one per core for 0 (at
-    /// most [`MAX_THREADS`]), and no more than the triangle budget gives work
-    /// to.
-    fn threads_used(&self) -> usize {
-        let asked = match self.threads {
+    /// The threads asked for: `threads`, or one per core for 0 (at most
+    /// [`MAX_THREADS`]). The walk takes as many as the hierarchy gives work
+    /// to (walk.rs).
+    fn threads_asked(&self) -> usize {
+        match self.threads {
             0 => std::thread::available_parallelism().map_or(1, usize::from).min(MAX_THREADS),
             n => n,
-        };
+        }
+    }
+
+    /// The threads a frame may rasterise on: those asked for, and no more
+    /// than the triangle budget gives work to.
+    fn threads_used(&self) -> usize {
         let worth = 1 + self.triangles / TRIANGLES_PER_THREAD;
-        asked.min(usize::try_from(worth).unwrap_or(usize::MAX))
+        self.threads_asked().min(usize::try_from(worth).unwrap_or(usize::MAX))
     }
 }
 
@@ -213,7 +219,7 @@ impl SoftwareOcclusionCulling {
         let threads = self.params.threads_used();
         self.preparers = (0..threads).map(|_| Preparer::default()).collect();
         self.rasterisers = (0..threads).map(|_| Rasteriser::default()).collect();
-        self.walkers = Walkers::new(threads);
+        self.walkers = Walkers::new(self.params.threads_asked());
         self.buffer = Some(OcclusionBuffer::new(size, self.params.resolution));
         #[cfg(test)]
         if let Some(buffer) = &mut self.buffer {
@@ -557,7 +563,8 @@ impl Culler for SoftwareOcclusionCulling {
     ///    (clipped, as MOC clips; its cut sides border its patch), so a floor
     ///    or a wall that runs past the eye hides what lies behind it.
     /// 3. **Pyramid** of the buffer's farthest depths.
-    /// 4. **Test**: the hierarchy is walked as `vfc` walks it; a node in the
+    /// 4. **Test**: the hierarchy is walked as `vfc` walks it (its subtrees
+    ///    shared among the threads, walk.rs); a node in the
     ///    frustum is also tested by its box (grown and raised as every box test
     ///    here, gpu/conservative.rs). Its screen rectangle's pixels, rounded
     ///    outward, are read at the pyramid level where they span at most 8
@@ -683,9 +690,8 @@ impl Culler for SoftwareOcclusionCulling {
         };
         let walked = self.walkers.walk(&walk, &mut self.found);
         let hidden_triangles = walked.hidden_triangles;
-        stats.nodes_visited = walked.stats.nodes_visited;
-        stats.nodes_culled_frustum = walked.stats.nodes_culled_frustum;
-        stats.nodes_culled_occlusion = walked.stats.nodes_culled_occlusion;
+        (stats.nodes_visited, stats.nodes_culled_frustum, stats.nodes_culled_occlusion) =
+            (walked.nodes_visited, walked.nodes_culled_frustum, walked.nodes_culled_occlusion);
         // A buffer of occluders that did not pay rests the next frames (a
         // warm-up frame's time, compiling and filling caches, says nothing).
         if !resting && !self.occluders.is_empty() && self.params.rests && !input.warm_up {

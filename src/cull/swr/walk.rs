@@ -12,7 +12,6 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::bounds::Aabb;
 use crate::camera::{Containment, Frustum};
-use crate::cull::culler::TraversalStats;
 use crate::hierarchy::Hierarchy;
 use crate::parallel;
 use crate::scene::Scene;
@@ -50,31 +49,41 @@ struct Walker {
     /// Per subtree it walked: its place among the subtrees, and where its
     /// objects lie in `found`.
     walked: Vec<(usize, Range<usize>)>,
-    hidden_triangles: u64,
-    stats: TraversalStats,
+    tally: Walked,
 }
 
 impl Walker {
     fn clear(&mut self) {
         self.found.clear();
         self.walked.clear();
-        self.hidden_triangles = 0;
-        self.stats = TraversalStats::default();
+        self.tally = Walked::default();
     }
 }
 
 /// What a walk found besides the objects: the triangles of those it hid,
-/// and its counts.
+/// and its counts of nodes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Walked {
     pub hidden_triangles: u64,
-    pub stats: TraversalStats,
+    pub nodes_visited: u64,
+    pub nodes_culled_frustum: u64,
+    pub nodes_culled_occlusion: u64,
+}
+
+impl Walked {
+    fn add(&mut self, other: &Walked) {
+        self.hidden_triangles += other.hidden_triangles;
+        self.nodes_visited += other.nodes_visited;
+        self.nodes_culled_frustum += other.nodes_culled_frustum;
+        self.nodes_culled_occlusion += other.nodes_culled_occlusion;
+    }
 }
 
 impl Walkers {
-    /// Scratch for up to `threads` threads (at least one).
+    /// Scratch for up to `threads` threads (one where that is none).
     pub fn new(threads: usize) -> Walkers {
         Walkers {
-            walkers: (0..threads.max(1)).map(|_| Walker::default()).collect(),
+            walkers: (0..threads).map(|_| Walker::default()).collect(),
             ..Walkers::default()
         }
     }
@@ -82,6 +91,7 @@ impl Walkers {
     /// Walks the hierarchy as `walk` says, and puts the objects found
     /// visible in `found`.
     pub fn walk(&mut self, walk: &Walk, found: &mut Vec<u32>) -> Walked {
+        // One walker at least (`Walkers::default()` has none).
         if self.walkers.is_empty() {
             self.walkers.push(Walker::default());
         }
@@ -125,16 +135,8 @@ impl Walkers {
         for (_, w, range) in &self.walked {
             found.extend_from_slice(&walkers[*w].found[range.clone()]);
         }
-        let mut totals = Walked {
-            hidden_triangles: 0,
-            stats: TraversalStats::default(),
-        };
-        for walker in walkers {
-            totals.hidden_triangles += walker.hidden_triangles;
-            totals.stats.nodes_visited += walker.stats.nodes_visited;
-            totals.stats.nodes_culled_frustum += walker.stats.nodes_culled_frustum;
-            totals.stats.nodes_culled_occlusion += walker.stats.nodes_culled_occlusion;
-        }
+        let mut totals = Walked::default();
+        walkers.iter().for_each(|walker| totals.add(&walker.tally));
         totals
     }
 }
@@ -165,16 +167,16 @@ impl Walk<'_> {
     /// objects found or hidden (a leaf), or its children put on `next`.
     fn visit(&self, index: u32, walker: &mut Walker, next: &mut Vec<u32>) {
         let node = &self.hierarchy.nodes[index as usize];
-        walker.stats.nodes_visited += 1;
+        walker.tally.nodes_visited += 1;
         if self.frustum.classify(&node.bounds) == Containment::Outside {
-            walker.stats.nodes_culled_frustum += 1;
+            walker.tally.nodes_culled_frustum += 1;
             return;
         }
         let hidden = |bounds: &Aabb| self.hides.is_some_and(|hides| hides(bounds));
         let triangles = |o: u32| u64::from(self.scene.objects[o as usize].triangles);
         if hidden(&node.bounds) {
-            walker.stats.nodes_culled_occlusion += 1;
-            walker.hidden_triangles += self.hierarchy.subtree_objects(node).iter().map(|&o| triangles(o)).sum::<u64>();
+            walker.tally.nodes_culled_occlusion += 1;
+            walker.tally.hidden_triangles += self.hierarchy.subtree_objects(node).iter().map(|&o| triangles(o)).sum::<u64>();
             return;
         }
         if !node.is_leaf() {
@@ -187,7 +189,7 @@ impl Walk<'_> {
                 continue;
             }
             if hidden(bounds) {
-                walker.hidden_triangles += triangles(o);
+                walker.tally.hidden_triangles += triangles(o);
             } else {
                 walker.found.push(o);
             }
@@ -262,8 +264,7 @@ mod tests {
                 for walkers in &mut walkers {
                     let mut found = Vec::new();
                     let walked = walkers.walk(&walk, &mut found);
-                    let stats = &walked.stats;
-                    let got = [stats.nodes_visited, stats.nodes_culled_frustum, stats.nodes_culled_occlusion];
+                    let got = [walked.nodes_visited, walked.nodes_culled_frustum, walked.nodes_culled_occlusion];
                     assert_eq!((got, walked.hidden_triangles), (counts, hidden_triangles), "frame {frame}");
                     orders.push(found.clone());
                     found.sort_unstable();
