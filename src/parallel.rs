@@ -72,4 +72,18 @@ mod tests {
         assert_eq!(squares, [0, 1, 4, 9, 16, 25, 36, 49, 64]);
         assert!(map(Vec::<u8>::new(), |k| k).is_empty());
     }
+
+    #[test]
+    fn each_runs_every_job_once_the_first_on_the_calling_thread() {
+        let caller = std::thread::current().id();
+        let mut slots = [(0u32, None); 5];
+        each(slots.iter_mut().enumerate(), |(k, slot)| {
+            *slot = (slot.0 + 1, Some(std::thread::current().id() == caller));
+            assert!(k < 5);
+        });
+        assert!(slots.iter().all(|(runs, _)| *runs == 1), "{slots:?}");
+        let on_caller: Vec<_> = slots.iter().map(|(_, here)| *here == Some(true)).collect();
+        assert_eq!(on_caller, [true, false, false, false, false]);
+        each(std::iter::empty::<u8>(), |_| unreachable!("no job"));
+    }
 }

@@ -554,7 +554,7 @@ impl Rasteriser {
             }
             let whole = grid.across.cells_within(from, to, &self.columns);
             debug_assert!(whole.is_empty() || (reached.start <= whole.start && whole.end <= reached.end));
-            let span = &self.spans[(row - self.rows.start) as usize];
+            let span = self.spans[(row - self.rows.start) as usize].clone();
             self.spans[(row - self.rows.start) as usize] = match span.is_empty() {
                 true => reached.clone(),
                 false => span.start.min(reached.start)..span.end.max(reached.end),
@@ -633,9 +633,9 @@ impl Rasteriser {
 
     /// Marks, in the cells of `reached` on either side of the cells
     /// `whole` (marked whole) that vouch for a depth, each group whose
-    /// every centre lies within its group row's x range of `marked` (one
-    /// per row of `row`'s groups).
-    fn mark_sides(&mut self, grid: &Grid, row: u32, reached: &Range<u32>, whole: &Range<u32>, marked: &[[f64; 2]]) {
+    /// every centre lies within its group row's x range (one per row of
+    /// `row`'s groups, in `group_row_ranges`).
+    fn mark_sides(&mut self, grid: &Grid, row: u32, reached: &Range<u32>, whole: &Range<u32>, group_row_ranges: &[[f64; 2]]) {
         let sides = match whole.is_empty() {
             true => [reached.clone(), 0..0],
             false => [reached.start..whole.start, whole.end..reached.end],
@@ -645,7 +645,7 @@ impl Rasteriser {
             let cover = &mut self.cover[i];
             if let CellDepth::AtLeast { .. } = cover.depth {
                 let groups = grid.across.group_centres(column);
-                for (k, &[from, to]) in marked.iter().enumerate() {
+                for (k, &[from, to]) in group_row_ranges.iter().enumerate() {
                     let within = |&[g0, g1]: &[f64; 2]| from <= g0 && g1 <= to;
                     let bits = groups.iter().rev().fold(0u64, |bits, g| bits << 1 | u64::from(within(g)));
                     cover.mask |= bits << (k as u32 * MASK_SIDE);

@@ -228,7 +228,9 @@ mod tests {
                 for o in walk.hierarchy.subtree_objects(node) {
                     let bounds = &walk.scene.objects[*o as usize].bounds;
                     if walk.frustum.classify(bounds) == Containment::Outside {
-                    } else if hides(bounds) {
+                        continue;
+                    }
+                    if hides(bounds) {
                         hidden_triangles += triangles(o);
                     } else {
                         found.push(*o);
