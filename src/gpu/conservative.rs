@@ -87,6 +87,51 @@ impl BoxMargins {
 /// smaller: a hundred times f32's rounding.
 const SHADER_SAFETY: f64 = 1e-5;
 
+/// How finely the adapter snaps a vertex on screen before it rasterises:
+/// the bits of sub-pixel precision its API reports (Vulkan's
+/// `subPixelPrecisionBits`, GL's `GL_SUBPIXEL_BITS`; gpu/context.rs asks).
+/// A snap moves a vertex by less than one step of that grid whichever way
+/// it rounds. swr places its occluders' outlines within this error of the
+/// GPU's (cull/swr/mesh.rs): at 8 bits, the figure llvmpipe, lavapipe and
+/// desktop GPUs report, a step is 1/256 pixel, sixteen times finer than the
+/// 4 bits Vulkan allows at least, so far fewer pixel centres along an
+/// occluder's outline are left in doubt.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SubpixelPrecision {
+    bits: u32,
+}
+
+impl SubpixelPrecision {
+    /// The least Vulkan allows (4 bits, a step of 1/16 pixel): taken where
+    /// the API reports nothing (Metal, Direct3D 12), or the report cannot
+    /// be read.
+    pub const COARSEST: SubpixelPrecision = SubpixelPrecision { bits: 4 };
+
+    /// A report of finer precision is taken as this: no rasteriser known
+    /// snaps finer, and a step of 1/256 pixel is already small beside the
+    /// f32 terms of a vertex's error.
+    const FINEST_TAKEN: u32 = 8;
+
+    pub fn reported(bits: u32) -> SubpixelPrecision {
+        SubpixelPrecision {
+            bits: bits.min(Self::FINEST_TAKEN),
+        }
+    }
+
+    pub fn bits(self) -> u32 {
+        self.bits
+    }
+
+    /// Pixels the GPU may place a vertex from where its f32 clip position
+    /// projects, on each axis, on a target of `resolution`: one step of the
+    /// sub-pixel grid, and the f32 rounding of the perspective division and
+    /// the viewport transform (a few steps of 2^-24 of the target's size).
+    pub fn vertex_error(self, resolution: Resolution) -> f64 {
+        let step = 1.0 / f64::from(1u32 << self.bits);
+        step + f64::from(resolution.width.max(resolution.height)) / f64::from(1u32 << 21)
+    }
+}
+
 /// The depth margins of one backend (rule 1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DepthMargins {

@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex};
 
 use serde::Serialize;
 
-use super::conservative::DepthMargins;
+use super::conservative::{DepthMargins, SubpixelPrecision};
 
 /// Which graphics API to use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize, clap::ValueEnum)]
@@ -76,6 +76,17 @@ pub struct AdapterReport {
     /// (no read-back before drawing a list the GPU built).
     #[serde(default)]
     pub indirect_count: bool,
+    /// The bits of sub-pixel precision the adapter reports, as swr takes
+    /// them ([`SubpixelPrecision`]; 4, Vulkan's least, where it reports
+    /// none).
+    #[serde(default = "coarsest_subpixel_bits")]
+    pub subpixel_bits: u32,
+}
+
+/// What a result file written before adapters recorded their precision
+/// held swr to.
+fn coarsest_subpixel_bits() -> u32 {
+    SubpixelPrecision::COARSEST.bits()
 }
 
 impl fmt::Display for AdapterReport {
@@ -129,6 +140,37 @@ fn narrowed_by_env(choice: BackendChoice) -> String {
     }
 }
 
+/// The sub-pixel precision `adapter` reports through its API: Vulkan's
+/// `subPixelPrecisionBits`, GL's `GL_SUBPIXEL_BITS` (where wgpu builds
+/// those backends by default, as Cargo.toml's `glow` says). Metal and
+/// Direct3D 12 report none, so they get [`SubpixelPrecision::COARSEST`], as
+/// does a report that cannot be read.
+fn subpixel_precision(adapter: &wgpu::Adapter) -> SubpixelPrecision {
+    reported_subpixel_bits(adapter).map_or(SubpixelPrecision::COARSEST, SubpixelPrecision::reported)
+}
+
+#[cfg(any(windows, target_os = "linux", target_os = "android", target_os = "freebsd"))]
+fn reported_subpixel_bits(adapter: &wgpu::Adapter) -> Option<u32> {
+    use glow::HasContext;
+    // SAFETY: the adapter's own handles are only read (a property, a
+    // parameter of its context), and none outlives this function.
+    unsafe {
+        if let Some(vulkan) = adapter.as_hal::<wgpu::hal::api::Vulkan>() {
+            let properties = vulkan.physical_device_capabilities().properties();
+            Some(properties.limits.sub_pixel_precision_bits)
+        } else if let Some(gl) = adapter.as_hal::<wgpu::hal::api::Gles>() {
+            u32::try_from(gl.adapter_context().lock().get_parameter_i32(glow::SUBPIXEL_BITS)).ok()
+        } else {
+            None
+        }
+    }
+}
+
+#[cfg(not(any(windows, target_os = "linux", target_os = "android", target_os = "freebsd")))]
+fn reported_subpixel_bits(_: &wgpu::Adapter) -> Option<u32> {
+    None
+}
+
 /// The device and queue of the chosen adapter.
 pub struct GpuContext {
     pub device: wgpu::Device,
@@ -144,6 +186,8 @@ pub struct GpuContext {
     pub indirect_count: bool,
     /// How far box tests stay clear of rounding on this backend.
     pub depth_margins: DepthMargins,
+    /// How finely the adapter snaps vertices on screen.
+    pub subpixel: SubpixelPrecision,
     /// The first error the device reported outside any error scope, or its
     /// loss; [`GpuContext::check`] turns it into a [`GpuError`].
     failure: Arc<Mutex<Option<String>>>,
@@ -186,6 +230,7 @@ impl GpuContext {
             && downlevel.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS | wgpu::DownlevelFlags::INDIRECT_EXECUTION)
             && adapter.limits().max_storage_buffers_per_shader_stage >= 8;
         let indirect_count = features.contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT);
+        let subpixel = subpixel_precision(&adapter);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("occlu"),
             required_features: features,
@@ -220,12 +265,14 @@ impl GpuContext {
                 pixel_counts,
                 gpu_driven,
                 indirect_count,
+                subpixel_bits: subpixel.bits(),
             },
             timestamps,
             pixel_counts,
             gpu_driven,
             indirect_count,
             depth_margins: DepthMargins::for_backend(info.backend),
+            subpixel,
             failure,
         })
     }

@@ -22,7 +22,7 @@ pub(crate) use conservative::ShaderBoxPlanes;
 pub(crate) use conservative::tests::{
     assert_planes_bound, camera as test_camera, entry_depth, pixel_ray, random_boxes_in_view,
 };
-pub use conservative::{BoxMargins, DepthMargins};
+pub use conservative::{BoxMargins, DepthMargins, SubpixelPrecision};
 pub(crate) use conservative::{
     BoxPlanes, EyeBox, PLANE_ROUNDING, PixelRays, QueryBox, ScreenPlane, UNBOUNDED, eye_relative_box,
 };

@@ -3,8 +3,9 @@
 //! draws them at or nearer (buffer.rs merges them, MOC's way).
 //!
 //! Why a pixel centre is drawn. The GPU places each corner of a triangle
-//! within some error of where the CPU projects it (sub-pixel snapping,
-//! [`VERTEX_ERROR`]; f32 vertices, [`ScreenVertex::slack`]), and places
+//! within some error of where the CPU projects it (sub-pixel snapping, at
+//! the adapter's precision, [`ScreenMesh::snap`]; f32 vertices,
+//! [`ScreenVertex::slack`]), and places
 //! equal positions of one mesh at one point, so triangles sharing an
 //! edge stay joined. Call an edge **inner** when exactly two of the
 //! mesh's drawn triangles share it, in opposite directions, both turning one
@@ -66,10 +67,11 @@ use glam::{DVec2, DVec3};
 use super::buffer::{Cells, Coverage, Grid, MASK_SIDE, below_both};
 use crate::gpu::ScreenPlane;
 
-/// Pixels the GPU may place a triangle's corner from where the CPU
-/// projects it, on each axis, besides a vertex's own f32 error: twice the
-/// largest sub-pixel snap Vulkan allows (1/32).
-pub(super) const VERTEX_ERROR: f64 = 1.0 / 16.0;
+/// The snap slivers are judged by ([`LEAST_HEIGHT`]): a step of the
+/// coarsest sub-pixel grid Vulkan allows, whatever the adapter's own, since
+/// what the least height guards, the GPU's f32 interpolation across a thin
+/// triangle, does not shrink with its snap.
+const SLIVER_SNAP: f64 = 1.0 / 16.0;
 
 /// A cell's depth is moved farther by this fraction, and by
 /// [`DEPTH_ABSOLUTE`], than the triangle's exact depth: the GPU
@@ -79,7 +81,8 @@ const DEPTH_MARGIN: f64 = 1.0 / (1u32 << 18) as f64;
 const DEPTH_ABSOLUTE: f64 = 1.0 / (1u32 << 21) as f64;
 
 /// How high a patch triangle must stand over each of its edges, in
-/// multiples of twice its corners' error (0.375 pixel at least): so a
+/// multiples of twice its corners' error taken at [`SLIVER_SNAP`] (0.375
+/// pixel at least): so a
 /// corner's placement tilts its depth plane by at most a twelfth of its
 /// rise across it, and its f32 interpolation stays within the margins.
 const LEAST_HEIGHT: f64 = 3.0;
@@ -119,6 +122,10 @@ pub struct ScreenMesh<'a> {
     /// Whether it is part of a closed solid: its far side lies behind its
     /// near side wherever it is drawn.
     pub closed: bool,
+    /// Pixels the GPU's sub-pixel snap (and its viewport rounding) may
+    /// move a vertex on each axis (`SubpixelPrecision::vertex_error`): the
+    /// part of every vertex's slack that is not its f32 error.
+    pub snap: f64,
 }
 
 /// A part of a mesh the GPU draws: a run of its triangles, whose indices
@@ -219,9 +226,9 @@ impl Polygon {
     }
 
     /// Its turn: that of each of its triangles, or excluded where one is a
-    /// sliver or they differ.
-    fn turn(&self) -> Turn {
-        let mut turns = self.triangles().map(turn_of);
+    /// sliver or they differ (`snap` as [`ScreenMesh::snap`]).
+    fn turn(&self, snap: f64) -> Turn {
+        let mut turns = self.triangles().map(|t| turn_of(t, snap));
         let first = turns.next().unwrap_or(Turn::Excluded);
         if turns.all(|t| t == first) { first } else { Turn::Excluded }
     }
@@ -325,7 +332,7 @@ impl Patches {
                 let t = self.by_patch[k].1 as usize;
                 let Some(polygon) = polygon(mesh, self.corners[t]) else { continue };
                 for c in polygon.triangles() {
-                    let triangle = Triangle::new(c);
+                    let triangle = Triangle::new(c, mesh.snap);
                     nearest = c.iter().fold(nearest, |n, c| n.max(c.at.z));
                     (lo, hi) = (lo.min(triangle.lo - triangle.slack), hi.max(triangle.hi + triangle.slack));
                     self.triangles.push(triangle);
@@ -377,7 +384,7 @@ impl Patches {
         for &corners in &self.corners {
             let polygon = polygon(mesh, corners);
             clipped |= polygon.is_some_and(|p| !p.whole());
-            self.turns.push(polygon.map_or(Turn::Excluded, |p| p.turn()));
+            self.turns.push(polygon.map_or(Turn::Excluded, |p| p.turn(mesh.snap)));
         }
         self.parent.clear();
         self.parent.extend(0..self.turns.len() as u32);
@@ -682,8 +689,8 @@ impl Rasteriser {
 /// One edge of a triangle as a limit on x along rows of pixel centres:
 /// where its inward edge function e(x, y) = ex · x + ey · y + ec
 /// ([`inward_edges`]) is at least minus a margin, the margin being its
-/// |ex| + |ey| times the triangle's slack ([`REACHED`]) or times
-/// [`VERTEX_ERROR`] ([`MARKED`]). Solved for x once per triangle, so a row
+/// |ex| + |ey| times the triangle's slack ([`REACHED`]) or times its
+/// snap ([`MARKED`]). Solved for x once per triangle, so a row
 /// takes a product and a sum per edge.
 #[derive(Clone, Copy, Debug)]
 enum Limit {
@@ -697,7 +704,7 @@ enum Limit {
 }
 
 /// The margins of a [`Limit`]: the triangle's slack, where it may reach a
-/// centre; the vertex error, where it marks one.
+/// centre; its snap, where it marks one.
 const REACHED: usize = 0;
 const MARKED: usize = 1;
 
@@ -768,31 +775,33 @@ struct Triangle {
     /// The bounds of its corners (x, y).
     lo: DVec2,
     hi: DVec2,
-    /// Its corners' error ([`slack_of`]), its edges as limits on x
-    /// (margins scaled by each edge's |ex| + |ey|: what a distance on each
-    /// axis scales it by), and the plane it vouches for
-    /// ([`lowered_plane`]).
+    /// Its corners' error ([`slack_of`]), the part of it the GPU's snap
+    /// makes ([`ScreenMesh::snap`]), its edges as limits on x (margins
+    /// scaled by each edge's |ex| + |ey|: what a distance on each axis
+    /// scales it by), and the plane it vouches for ([`lowered_plane`]).
     slack: f64,
+    snap: f64,
     limits: [Limit; 3],
     plane: ScreenPlane,
 }
 
 impl Triangle {
-    fn new(corners: [ScreenVertex; 3]) -> Triangle {
+    fn new(corners: [ScreenVertex; 3], snap: f64) -> Triangle {
         let (slack, edges) = (slack_of(&corners), inward_edges(&corners));
         // What it reaches holds what it marks (add_triangle).
         debug_assert!(
-            slack.partial_cmp(&VERTEX_ERROR).is_none_or(|o| o.is_ge()),
-            "slack {slack} below the vertex error"
+            slack.partial_cmp(&snap).is_none_or(|o| o.is_ge()),
+            "slack {slack} below the snap {snap}"
         );
         let at = corners.map(|c| c.at.truncate());
         Triangle {
             lo: at[0].min(at[1]).min(at[2]),
             hi: at[0].max(at[1]).max(at[2]),
             slack,
+            snap,
             limits: edges.map(|edge| {
                 let reach = edge[0].abs() + edge[1].abs();
-                Limit::new(edge, [slack * reach, VERTEX_ERROR * reach])
+                Limit::new(edge, [slack * reach, snap * reach])
             }),
             plane: lowered_plane(&corners, slack),
         }
@@ -808,14 +817,14 @@ impl Triangle {
     }
 
     /// Where in x every centre of the rows `ys` lies inside the triangle
-    /// or within [`VERTEX_ERROR`] of it on each axis (less than any
-    /// border's margin, so a centre outside the patch it marks is
-    /// erased). That region is the triangle grown by a square: inside each
-    /// edge moved out by the error and inside its bounds grown by it
-    /// (without the bounds, the moved edges of a sharp corner meet far
-    /// beyond it). None for rows reaching outside the bounds.
+    /// or within its snap of it on each axis (less than any border's
+    /// margin, so a centre outside the patch it marks is erased). That
+    /// region is the triangle grown by a square: inside each edge moved
+    /// out by the snap and inside its bounds grown by it (without the
+    /// bounds, the moved edges of a sharp corner meet far beyond it). None
+    /// for rows reaching outside the bounds.
     fn marked_x_range(&self, ys: [f64; 2]) -> [f64; 2] {
-        let (lo, hi) = (self.lo - VERTEX_ERROR, self.hi + VERTEX_ERROR);
+        let (lo, hi) = (self.lo - self.snap, self.hi + self.snap);
         if lo.y <= ys[0] && ys[1] <= hi.y {
             let [from, to] = x_range(&self.limits, ys, MARKED, true);
             [from.max(lo.x), to.min(hi.x)]
@@ -909,8 +918,9 @@ fn behind_turn(mesh: &ScreenMesh, corners: &[[u32; 3]], turns: &[Turn]) -> Optio
 }
 
 /// A triangle's turn on screen, or none for a sliver (less than
-/// [`LEAST_HEIGHT`] errors high over an edge) or one not a number.
-fn turn_of(corners: [ScreenVertex; 3]) -> Turn {
+/// [`LEAST_HEIGHT`] errors high over an edge, the snap's part of its
+/// corners' error taken as [`SLIVER_SNAP`]) or one not a number.
+fn turn_of(corners: [ScreenVertex; 3], snap: f64) -> Turn {
     let [a, b, c] = corners.map(|c| c.at);
     let area = twice_area(a, b, c);
     let longest_squared = [(a, b), (b, c), (c, a)]
@@ -919,7 +929,7 @@ fn turn_of(corners: [ScreenVertex; 3]) -> Turn {
         .fold(0.0, f64::max);
     // Twice the area over the longest edge is the least height; squared,
     // to spare the roots.
-    let least = LEAST_HEIGHT * 2.0 * slack_of(&corners);
+    let least = LEAST_HEIGHT * 2.0 * (slack_of(&corners) - snap + SLIVER_SNAP);
     let high_enough = area * area >= least * least * longest_squared;
     if !high_enough || !area.is_finite() || area == 0.0 {
         Turn::Excluded
@@ -976,7 +986,8 @@ fn clamp(range: Range<u32>, within: &Range<u32>) -> Range<u32> {
 
 /// Rasterises `meshes` (each one object's screen vertices, all placed,
 /// and three indices per triangle; equal indices are the only shared
-/// positions) into `buffer`, cleared first, in order, on one thread.
+/// positions) into `buffer`, cleared first, in order, on one thread. A
+/// mesh's snap is its vertices' least slack: they have no f32 error.
 #[cfg(test)]
 pub(super) fn rasterise_meshes(buffer: &mut super::buffer::OcclusionBuffer, meshes: &[(Vec<ScreenVertex>, Vec<u32>)]) {
     let rows = buffer.cells().height;
@@ -994,6 +1005,7 @@ pub(super) fn rasterise_meshes(buffer: &mut super::buffer::OcclusionBuffer, mesh
             neighbours: &neighbours,
             closed: false,
             near: None,
+            snap: vertices.iter().map(|v| v.slack).fold(f64::INFINITY, f64::min),
         };
         patches.clear();
         let which = patches.add(&mesh);
@@ -1008,10 +1020,15 @@ mod tests {
     use crate::gpu::Resolution;
     use crate::rng::Rng;
 
+    /// The snap of Vulkan's coarsest sub-pixel grid, which most tests take,
+    /// and that of the 8 bits adapters report here.
+    const COARSE_SNAP: f64 = SLIVER_SNAP;
+    const FINE_SNAP: f64 = 1.0 / 256.0;
+
     fn vertex(x: f64, y: f64, z: f64) -> ScreenVertex {
         ScreenVertex {
             at: DVec3::new(x, y, z),
-            slack: VERTEX_ERROR,
+            slack: COARSE_SNAP,
             depth_error: 0.0,
         }
     }
@@ -1101,16 +1118,17 @@ mod tests {
     }
 
     /// The nearest depth the GPU may draw at each pixel centre of `size`
-    /// (0 where it draws nothing), with every corner placed `offset(corner)`
-    /// from where the mesh has it (one offset per corner, for all its
-    /// triangles), depths interpolated exactly.
+    /// (0 where it draws nothing), with every corner placed its slack from
+    /// where the mesh has it on each axis, either way at random (one
+    /// placement per corner, for all its triangles), depths interpolated
+    /// exactly.
     fn drawn(meshes: &[(Vec<ScreenVertex>, Vec<u32>)], size: Resolution, rng: &mut Rng) -> Vec<f64> {
         let mut nearest = vec![0.0f64; (size.width * size.height) as usize];
         for (vertices, indices) in meshes {
-            let mut shift = || if rng.range(0.0, 1.0) < 0.5 { -VERTEX_ERROR } else { VERTEX_ERROR };
+            let mut shift = |slack: f64| if rng.range(0.0, 1.0) < 0.5 { -slack } else { slack };
             let placed: Vec<DVec3> = vertices
                 .iter()
-                .map(|v| v.at + DVec3::new(shift(), shift(), 0.0))
+                .map(|v| v.at + DVec3::new(shift(v.slack), shift(v.slack), 0.0))
                 .collect();
             for t in indices.chunks_exact(3) {
                 paint(&mut nearest, size, [0, 1, 2].map(|k| placed[t[k] as usize]));
@@ -1163,6 +1181,14 @@ mod tests {
 
     #[test]
     fn a_cell_vouches_for_no_depth_nearer_than_the_gpu_may_draw_at_any_pixel_centre_it_holds() {
+        for snap in [COARSE_SNAP, FINE_SNAP] {
+            assert_vouches_no_nearer_on_random_meshes(snap);
+        }
+    }
+
+    /// Random meshes whose corners the GPU places within `snap`: what the
+    /// buffer vouches for held against what it may draw, pixel by pixel.
+    fn assert_vouches_no_nearer_on_random_meshes(snap: f64) {
         let mut rng = Rng::new(32);
         let size = Resolution { width: 160, height: 120 };
         let (mut vouched, mut small) = (0u64, 0u64);
@@ -1172,7 +1198,10 @@ mod tests {
             Resolution { width: 16, height: 12 },
         ] {
             for _ in 0..6 {
-                let meshes = random_meshes(&mut rng, size, 24);
+                let mut meshes = random_meshes(&mut rng, size, 24);
+                for vertex in meshes.iter_mut().flat_map(|(vertices, _)| vertices) {
+                    vertex.slack = snap;
+                }
                 let mut buffer = OcclusionBuffer::new(size, cells);
                 rasterise_meshes(&mut buffer, &meshes);
                 for _ in 0..3 {
@@ -1235,7 +1264,7 @@ mod tests {
         let limit = NEAR * (1.0 + 1.0 / 1024.0);
         let placed = |p: DVec3| ScreenVertex {
             at: on_screen(p),
-            slack: VERTEX_ERROR,
+            slack: COARSE_SNAP,
             depth_error: 0.0,
         };
         let mut vouched = 0;
@@ -1258,6 +1287,7 @@ mod tests {
                             neighbours: &neighbours,
                             closed: false,
                             near: Some(NearLimit { crossing: &cross }),
+                            snap: COARSE_SNAP,
                         };
                         patches.clear();
                         let which = patches.add(&mesh);
@@ -1270,7 +1300,7 @@ mod tests {
                 for _ in 0..3 {
                     let mut nearest = vec![0.0f64; (size.width * size.height) as usize];
                     for (points, indices) in &meshes {
-                        let mut shift = || DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0) * VERTEX_ERROR;
+                        let mut shift = || DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0) * COARSE_SNAP;
                         let moved: Vec<DVec3> = points.iter().map(|_| shift()).collect();
                         for t in indices.chunks_exact(3) {
                             let mut polygon = Vec::new();
@@ -1318,10 +1348,16 @@ mod tests {
     }
 
     #[test]
-    fn a_triangle_marks_no_pixel_centre_farther_than_the_vertex_error_from_it() {
+    fn a_triangle_marks_no_pixel_centre_farther_than_its_snap_from_it() {
+        for snap in [COARSE_SNAP, FINE_SNAP] {
+            assert_marks_within(snap);
+        }
+    }
+
+    fn assert_marks_within(snap: f64) {
         // Random triangles over 64 × 48 pixels in cells of 4 × 4, many of
         // them long and thin (sharp corners, where the edges moved out by
-        // the error meet far beyond the corner).
+        // the snap meet far beyond the corner).
         let mut rng = Rng::new(41);
         let size = Resolution { width: 64, height: 48 };
         let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
@@ -1340,7 +1376,10 @@ mod tests {
                 1 => DVec2::new(rng.range(-8.0, 72.0), a.y),
                 _ => DVec2::new(rng.range(-8.0, 72.0), rng.range(-8.0, 56.0)),
             };
-            let corners = [a, b, c].map(|p| vertex(p.x, p.y, 0.5));
+            let corners = [a, b, c].map(|p| ScreenVertex {
+                slack: snap,
+                ..vertex(p.x, p.y, 0.5)
+            });
             if twice_area(corners[0].at, corners[1].at, corners[2].at) == 0.0 {
                 continue;
             }
@@ -1356,7 +1395,7 @@ mod tests {
             };
             rasteriser.cover.clear();
             rasteriser.cover.resize(16 * 12, reached);
-            rasteriser.add_triangle(&cells, &Triangle::new(corners));
+            rasteriser.add_triangle(&cells, &Triangle::new(corners, snap));
             // Every pixel centre inside the triangle is marked (each cell's
             // groups here are single pixels).
             for (x, y) in (0..64).flat_map(|x| (0..48).map(move |y| (x, y))) {
@@ -1375,7 +1414,7 @@ mod tests {
                     let (x, y) = (4 * (i % 16) + bit % 8, 4 * (i / 16) + bit / 8);
                     let centre = (x as f64 + 0.5, y as f64 + 0.5);
                     assert!(
-                        within_square([a, b, c], centre.0, centre.1, VERTEX_ERROR * (1.0 + 1e-9)),
+                        within_square([a, b, c], centre.0, centre.1, snap * (1.0 + 1e-9)),
                         "{:?} marks {centre:?}",
                         [a, b, c]
                     );
@@ -1385,7 +1424,7 @@ mod tests {
             }
             rasteriser.cover.fill(EMPTY);
         }
-        assert!(marked > 10_000 && sharp_checked > 1000, "{marked} marks, {sharp_checked} of sharp triangles");
+        assert!(marked > 10_000 && sharp_checked > 900, "{marked} marks, {sharp_checked} of sharp triangles");
         assert!(inside_checked > 10_000, "{inside_checked} centres inside");
     }
 
@@ -1423,11 +1462,12 @@ mod tests {
                 neighbours: &neighbours,
                 closed: true,
                 near: None,
+                snap: COARSE_SNAP,
             };
             let corners: Vec<[u32; 3]> = indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
             let turns: Vec<Turn> = corners
                 .iter()
-                .map(|&c| placed_corners(&mesh, c).map_or(Turn::Excluded, turn_of))
+                .map(|&c| placed_corners(&mesh, c).map_or(Turn::Excluded, |c| turn_of(c, COARSE_SNAP)))
                 .collect();
             (turns.clone(), behind_turn(&mesh, &corners, &turns))
         };
@@ -1521,6 +1561,7 @@ mod tests {
             neighbours: &neighbours,
             closed: false,
             near: None,
+            snap: COARSE_SNAP,
         };
         let mut buffer = OcclusionBuffer::new(size, Resolution { width: 24, height: 18 });
         {
@@ -1556,14 +1597,36 @@ mod tests {
     /// A buffer of 16 × 12 cells of 4 × 4 pixels with `walls` rasterised
     /// into it in their order: each from x = `x0` to `x1` at depth `z`,
     /// over the target's whole height.
-    fn walls(walls: &[(f64, f64, f64)]) -> OcclusionBuffer {
+    /// Walls from x0 to x1 at depth z over the whole height of a 64 × 48
+    /// target (cells of 4 × 4 pixels), each an object of its own, whose
+    /// corners the GPU places within `snap`.
+    fn walls_at_snap(walls: &[(f64, f64, f64)], snap: f64) -> OcclusionBuffer {
         let mut buffer = OcclusionBuffer::new(Resolution { width: 64, height: 48 }, Resolution { width: 16, height: 12 });
-        let meshes: Vec<_> = walls
+        let mut meshes: Vec<_> = walls
             .iter()
             .map(|&(x0, x1, z)| grid(DVec2::new(x0, -5.0), DVec2::new(x1 - x0, 60.0), [2, 2], false, move |_, _| z))
             .collect();
+        for vertex in meshes.iter_mut().flat_map(|(vertices, _)| vertices) {
+            vertex.slack = snap;
+        }
         rasterise_meshes(&mut buffer, &meshes);
         buffer
+    }
+
+    fn walls(walls: &[(f64, f64, f64)]) -> OcclusionBuffer {
+        walls_at_snap(walls, COARSE_SNAP)
+    }
+
+    #[test]
+    fn objects_meeting_at_a_seam_fill_the_cells_along_it_where_the_adapters_snap_is_fine_enough() {
+        // Two walls at 0.5 meeting at x = 30.45, 0.05 pixel from the
+        // centres at x = 30.5: within twice Vulkan's coarsest snap of the
+        // seam, where the GPU may leave them undrawn, and clear of twice a
+        // snap of 1/256 pixel. Cell column 7 holds pixels 28 to 31.
+        let seam_cell = |snap| walls_at_snap(&[(-5.0, 30.45, 0.5), (30.45, 70.0, 0.5)], snap).depths()[5 * 16 + 7];
+        assert_eq!(seam_cell(COARSE_SNAP), 0.0, "a coarse snap leaves the seam's centres in doubt");
+        let fine = seam_cell(FINE_SNAP);
+        assert!(fine > 0.499 && fine <= 0.5, "a fine snap fills the cell across the seam: {fine}");
     }
 
     #[test]
@@ -1627,7 +1690,7 @@ mod tests {
         );
         // Column 0 holds pixels 0..=3, centres 0.5 to 3.5: its farthest is
         // where the GPU may sample beside 3.5.
-        let x = 3.5 + VERTEX_ERROR;
+        let x = 3.5 + COARSE_SNAP;
         let expected = (0.5 - 0.2 * x / 64.0) * (1.0 - DEPTH_MARGIN) - DEPTH_ABSOLUTE;
         assert!(buffer.depths().iter().all(|&d| d > 0.0));
         assert_eq!(buffer.depths()[0], super::super::buffer::f32_at_most(expected));

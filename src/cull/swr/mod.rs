@@ -12,8 +12,10 @@
 //! Departures from MOC: its coverage is the pixels whose centres its own
 //! rasteriser puts inside a triangle; here it is the centres the GPU is
 //! sure to draw whatever its sub-pixel placement (mesh.rs), so a pixel
-//! counts only clear of an occluder's outline by an eighth of a pixel or
-//! more, which costs the seams between objects. A cell keeps a depth
+//! counts only clear of an occluder's outline by twice the adapter's snap
+//! (1/128 pixel at the 8 sub-pixel bits Vulkan and GL adapters report
+//! here, 1/8 at the 4 that Metal and Direct3D 12 are held to, since they
+//! report none), which costs the seams between objects. A cell keeps a depth
 //! plane besides its depth (the occluders' own, lowered below each other's
 //! where several fill it); MOC keeps one depth per tile. A working layer
 //! that a farther occluder completed stays, and a box's test at a cell
@@ -48,12 +50,12 @@ use crate::cull::culler::{Culler, FrameInput, OccluderDepths, PreviousFrame, Tra
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{
     BoxMargins, BoxPlanes, DepthMargins, EyeBox, Frame, GpuError, GpuSetup, PixelRays, QueryBox, Resolution,
-    eye_relative_box,
+    SubpixelPrecision, eye_relative_box,
 };
 use crate::parallel;
 use crate::scene::Scene;
 use buffer::{Cells, OcclusionBuffer};
-use mesh::{DrawnPart, NearLimit, Patches, Rasteriser, ScreenMesh, ScreenVertex, VERTEX_ERROR};
+use mesh::{DrawnPart, NearLimit, Patches, Rasteriser, ScreenMesh, ScreenVertex};
 use walk::{Walk, Walkers};
 
 /// This mode's entry in the registry.
@@ -157,9 +159,11 @@ pub struct SoftwareOcclusionCulling {
     /// first time one of its objects is an occluder.
     neighbours: Vec<Vec<[u32; 3]>>,
     made_neighbours: Vec<bool>,
-    /// The backend's depth margins, known once prepared (GL's, the larger,
-    /// until then).
+    /// The backend's depth margins and the adapter's sub-pixel precision,
+    /// known once prepared (GL's margins, the larger, and the coarsest
+    /// precision until then).
     depth_margins: DepthMargins,
+    subpixel: SubpixelPrecision,
     /// Whether its buffers break the conservative rule on purpose
     /// ([`OcclusionBuffer::careless`]).
     #[cfg(test)]
@@ -196,6 +200,7 @@ impl SoftwareOcclusionCulling {
             neighbours: Vec::new(),
             made_neighbours: Vec::new(),
             depth_margins: DepthMargins::for_backend(wgpu::Backend::Gl),
+            subpixel: SubpixelPrecision::COARSEST,
             #[cfg(test)]
             careless: false,
             visible: Vec::new(),
@@ -540,6 +545,7 @@ impl Culler for SoftwareOcclusionCulling {
 
     fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
         self.depth_margins = setup.gpu.depth_margins;
+        self.subpixel = setup.gpu.subpixel;
         self.make_buffers(setup.resolution);
         Ok(())
     }
@@ -661,6 +667,7 @@ impl Culler for SoftwareOcclusionCulling {
             units: &self.units,
             candidates: &self.candidates,
             projector: &projector,
+            snap: self.subpixel.vertex_error(size),
             camera,
             scene,
             neighbours: &self.neighbours,
@@ -760,6 +767,9 @@ struct Occluders<'a> {
     units: &'a [OccluderUnit],
     candidates: &'a [Candidate],
     projector: &'a Projector,
+    /// How far the GPU's sub-pixel snap may move a vertex
+    /// ([`ScreenMesh::snap`]).
+    snap: f64,
     camera: &'a Camera,
     scene: &'a Scene,
     /// Per run of meshes stored against one origin (at its first mesh),
@@ -925,7 +935,7 @@ fn prepare_occluder(preparer: &mut Preparer, occluders: &Occluders, occluder: &O
                 let off_axis = (at.x - projector.size.x / 2.0).abs().max((at.y - projector.size.y / 2.0).abs());
                 ScreenVertex {
                     at,
-                    slack: VERTEX_ERROR + position_error * (pixels_at_unit_depth + off_axis) / view_depth,
+                    slack: occluders.snap + position_error * (pixels_at_unit_depth + off_axis) / view_depth,
                     depth_error: position_error / view_depth,
                 }
             }));
@@ -951,7 +961,7 @@ fn prepare_occluder(preparer: &mut Preparer, occluders: &Occluders, occluder: &O
         let error = 2.0 * position_error / camera.near;
         Some(ScreenVertex {
             at,
-            slack: VERTEX_ERROR + error * pixels_at_unit_depth * (1.0 + 3.0 * screen_reach),
+            slack: occluders.snap + error * pixels_at_unit_depth * (1.0 + 3.0 * screen_reach),
             depth_error: error,
         })
     };
@@ -962,6 +972,7 @@ fn prepare_occluder(preparer: &mut Preparer, occluders: &Occluders, occluder: &O
         neighbours: &occluders.neighbours[run.start as usize],
         closed: scene.parts[first.part as usize].closed,
         near: Some(NearLimit { crossing: &crossing }),
+        snap: occluders.snap,
     };
     preparer.patches.add(&mesh)
 }
@@ -1269,7 +1280,7 @@ mod tests {
                     };
                     let corners = [a, b, c, d].map(|at| ScreenVertex {
                         at,
-                        slack: VERTEX_ERROR,
+                        slack: SubpixelPrecision::COARSEST.vertex_error(size),
                         depth_error: 0.0,
                     });
                     Some((corners.to_vec(), vec![0, 1, 2, 0, 2, 3]))
