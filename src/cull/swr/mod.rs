@@ -81,7 +81,7 @@ const RESOLUTION: ParamInfo = ParamInfo {
 
 const TRIANGLES: ParamInfo = ParamInfo {
     key: "triangles",
-    default: "32768",
+    default: "65536",
     summary: "occluder triangles rasterised a frame at most: last frame's visible objects, largest on screen first",
 };
 
@@ -1398,8 +1398,8 @@ mod tests {
         assert!(error.contains("at most 64"), "{error}");
         assert_eq!(
             params(&["swr.threads=64"]).unwrap().threads_used(),
-            9,
-            "32768 triangles: 9 threads' work"
+            17,
+            "65536 triangles: 17 threads' work"
         );
         assert_eq!(
             params(&["swr.threads=64", "swr.triangles=100"]).unwrap().threads_used(),
