@@ -639,6 +639,13 @@ impl OcclusionBuffer {
     }
 
     /// Builds the pyramid over the cells written since [`Self::clear`].
+    /// The share of its cells that hold a depth (those left at 0 hold
+    /// none).
+    pub fn held(&self) -> f64 {
+        let cells = &self.levels[0].depth;
+        cells.iter().filter(|&&depth| depth > 0.0).count() as f64 / cells.len() as f64
+    }
+
     pub fn build_pyramid(&mut self) {
         for k in 1..self.levels.len() {
             let (below, above) = self.levels.split_at_mut(k);

@@ -31,7 +31,8 @@
 //! buffer's rows, and so are the box tests, each thread walking subtrees
 //! of the hierarchy (walk.rs). `swr.resolution` sets
 //! the cells (each of up to 8 × 8 pixel groups), trading the box test's
-//! precision against time.
+//! precision against time; `auto` takes finer cells where the occluders
+//! cover little of the screen, so they cost no more.
 
 use std::ops::Range;
 use std::time::Instant;
@@ -45,6 +46,7 @@ use glam::{DAffine3, DMat3, DMat4, DVec2, DVec3, Vec4Swizzles};
 use serde::Serialize;
 
 use crate::bounds::Aabb;
+use crate::auto_or::AutoOr;
 use crate::camera::{Camera, Containment};
 use crate::cull::culler::{Culler, FrameInput, OccluderDepths, PreviousFrame, TraversalStats};
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
@@ -75,9 +77,21 @@ pub(super) const MODE: ModeInfo = ModeInfo {
 
 const RESOLUTION: ParamInfo = ParamInfo {
     key: "resolution",
-    default: "400x300",
-    summary: "cells of the CPU depth buffer, WxH (at most the render size on each side)",
+    default: "auto",
+    summary: "cells of the CPU depth buffer, WxH (at most the render size on each side); auto: 400x300, or 800x600 where the last buffer held a depth over at most a quarter of the screen (the finer buffer then has no more cells to fill)",
 };
+
+/// `swr.resolution=auto`'s cells: [`COARSE_CELLS`], or twice as many on
+/// each side where the last buffer built held a depth over at most
+/// [`FINE_WHERE_HELD`] of the screen, so that the finer buffer has no more
+/// cells to fill than the coarser one has in all (each at most the render
+/// size). Occluders small on screen (a model seen whole from afar) then
+/// get a cell a pixel at 800x600, where two occluders meeting inside a cell
+/// of 2 x 2 pixels left it at the farther one's depth, for little more
+/// time; occluders over most of the screen keep the coarser buffer.
+const COARSE_CELLS: Resolution = Resolution { width: 400, height: 300 };
+const FINE_CELLS: Resolution = Resolution { width: 800, height: 600 };
+const FINE_WHERE_HELD: f64 = 0.25;
 
 const TRIANGLES: ParamInfo = ParamInfo {
     key: "triangles",
@@ -103,7 +117,7 @@ const MAX_THREADS: usize = 64;
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SwrParams {
-    pub resolution: Resolution,
+    pub resolution: AutoOr<Resolution>,
     pub triangles: u64,
     /// 0: one per core.
     pub threads: usize,
@@ -149,8 +163,14 @@ impl SwrParams {
 
 pub struct SoftwareOcclusionCulling {
     params: SwrParams,
-    /// Made for the frame's render size, and again when it changes.
+    /// Made for the frame's render size and cells, and again when they
+    /// change; `spare` keeps the one `swr.resolution=auto` left, so that
+    /// switching back allocates nothing.
     buffer: Option<OcclusionBuffer>,
+    spare: Option<OcclusionBuffer>,
+    /// The share of the screen where the last buffer built held a depth
+    /// (all of it before the first), by which `auto` chooses the cells.
+    held: f64,
     /// What each thread rasterising occluders works with.
     preparers: Vec<Preparer>,
     rasterisers: Vec<Rasteriser>,
@@ -195,6 +215,8 @@ impl SoftwareOcclusionCulling {
         SoftwareOcclusionCulling {
             params,
             buffer: None,
+            spare: None,
+            held: 1.0,
             preparers: Vec::new(),
             rasterisers: Vec::new(),
             neighbours: Vec::new(),
@@ -219,13 +241,40 @@ impl SoftwareOcclusionCulling {
 }
 
 impl SoftwareOcclusionCulling {
-    /// Its buffer for render size `size`, and its threads' scratch.
-    fn make_buffers(&mut self, size: Resolution) {
+    /// Its threads' scratch.
+    fn make_scratch(&mut self) {
         let threads = self.params.threads_used();
         self.preparers = (0..threads).map(|_| Preparer::default()).collect();
         self.rasterisers = (0..threads).map(|_| Rasteriser::default()).collect();
         self.walkers = Walkers::new(self.params.threads_asked());
-        self.buffer = Some(OcclusionBuffer::new(size, self.params.resolution));
+    }
+
+    /// The cells a buffer for render size `size` has: those asked for, or
+    /// `auto`'s choice ([`FINE_WHERE_HELD`]), at most `size` on each side.
+    fn cells_for(&self, size: Resolution) -> Resolution {
+        let asked = match self.params.resolution {
+            AutoOr::Given(cells) => cells,
+            AutoOr::Auto if self.held <= FINE_WHERE_HELD => FINE_CELLS,
+            AutoOr::Auto => COARSE_CELLS,
+        };
+        Resolution {
+            width: asked.width.min(size.width),
+            height: asked.height.min(size.height),
+        }
+    }
+
+    /// Makes `buffer` one for render size `size` with `cells`: as it is,
+    /// the spare, or a new one (the one it replaces becomes the spare).
+    fn use_buffer(&mut self, size: Resolution, cells: Resolution) {
+        let fits = |b: &Option<OcclusionBuffer>| b.as_ref().is_some_and(|b| b.target() == size && b.cells() == cells);
+        if fits(&self.buffer) {
+            return;
+        }
+        let next = match fits(&self.spare) {
+            true => self.spare.take(),
+            false => Some(OcclusionBuffer::new(size, cells)),
+        };
+        self.spare = std::mem::replace(&mut self.buffer, next);
         #[cfg(test)]
         if let Some(buffer) = &mut self.buffer {
             buffer.careless = self.careless;
@@ -526,14 +575,15 @@ impl Culler for SoftwareOcclusionCulling {
     /// Its parameters as given (`threads` 0 stays 0: the count it comes to
     /// is the machine's, and `occlu merge` holds one run's parameters equal
     /// on every machine).
-    /// As given, but for `resolution`: the cells its buffer had, which are
-    /// at most the render size on each side.
+    /// As given, but for a `resolution` given: the cells its buffer had,
+    /// which are at most the render size on each side (`auto` stays
+    /// `auto`: its cells change with the frames).
     fn parameters(&self) -> serde_json::Value {
         let used = SwrParams {
-            resolution: self
-                .buffer
-                .as_ref()
-                .map_or(self.params.resolution, OcclusionBuffer::cells),
+            resolution: match (self.params.resolution, &self.buffer) {
+                (AutoOr::Given(_), Some(buffer)) => AutoOr::Given(buffer.cells()),
+                (asked, _) => asked,
+            },
             ..self.params
         };
         serde_json::json!(used)
@@ -546,7 +596,8 @@ impl Culler for SoftwareOcclusionCulling {
     fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
         self.depth_margins = setup.gpu.depth_margins;
         self.subpixel = setup.gpu.subpixel;
-        self.make_buffers(setup.resolution);
+        self.make_scratch();
+        self.use_buffer(setup.resolution, self.cells_for(setup.resolution));
         Ok(())
     }
 
@@ -598,8 +649,8 @@ impl Culler for SoftwareOcclusionCulling {
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let (camera, scene, size) = (input.camera, input.scene, input.resolution);
         let mut stats = TraversalStats::default();
-        if self.buffer.as_ref().is_none_or(|b| b.target() != size) {
-            self.make_buffers(size);
+        if self.preparers.is_empty() {
+            self.make_scratch();
         }
         let projector = Projector::new(camera, size);
         let margins = BoxMargins::new(self.depth_margins, camera, size);
@@ -610,8 +661,12 @@ impl Culler for SoftwareOcclusionCulling {
         self.is_occluder.resize(scene.objects.len(), false);
         self.is_found.resize(scene.objects.len(), false);
         // 1. Occluders: last frame's visible objects still on screen,
-        // largest first; none while the buffer rests.
+        // largest first; none while the buffer rests (which keeps its
+        // cells: a resting buffer holds nothing to choose them by).
         let resting = self.rest.take();
+        if !resting || self.buffer.as_ref().is_none_or(|b| b.target() != size) {
+            self.use_buffer(size, self.cells_for(size));
+        }
         // A resting buffer holds nothing (what it shows is what the frame
         // used).
         if let (true, Some(buffer)) = (resting && self.buffer_holds, &mut self.buffer) {
@@ -676,6 +731,9 @@ impl Culler for SoftwareOcclusionCulling {
             occluders.rasterise(buffer, &mut self.preparers, &mut self.rasterisers);
             buffer.build_pyramid();
             self.buffer_holds = true;
+            if !self.occluders.is_empty() {
+                self.held = buffer.held();
+            }
         }
 
         // 4. The hierarchy, in the frustum and not hidden (walk.rs: its
@@ -1085,6 +1143,39 @@ mod tests {
         let floor_pixels = assert_vouches_no_nearer_than(&swr, &camera, &solids);
         let size = Resolution::DEFAULT;
         assert!(floor_pixels > size.width * size.height * 2 / 5, "{floor_pixels} pixels hold the floor");
+    }
+
+    #[test]
+    fn auto_cells_are_a_pixel_each_after_a_buffer_that_held_little_of_the_screen() {
+        // A floor under the eye holds most of the screen below the horizon;
+        // a box 30 m ahead a few hundred pixels. Frame 0 knows no occluder,
+        // frame 1 builds a buffer of 400x300 cells, and frame 2's cells
+        // follow what it held.
+        let floor = (DVec3::new(-60.0, -1.5, -60.0), DVec3::new(60.0, -1.0, 60.0));
+        let far_box = (DVec3::new(-1.0, -1.0, -31.0), DVec3::new(1.0, 1.0, -29.0));
+        let camera = camera_down_z();
+        let cells_in_frames = |boxes: &[(DVec3, DVec3)]| {
+            let (scene, hierarchy) = cuboids(boxes);
+            // Built every frame (a buffer that hid nothing would rest).
+            let params = SwrParams {
+                rests: false,
+                ..SwrParams::from_params(&ModeParams::default()).unwrap()
+            };
+            let mut swr = SoftwareOcclusionCulling::new(params);
+            (0..3)
+                .map(|frame| {
+                    drawn_over(&mut swr, &scene, &hierarchy, &camera, 1);
+                    (frame, swr.buffer.as_ref().unwrap().cells(), swr.held)
+                })
+                .collect::<Vec<_>>()
+        };
+        let coarse = Resolution { width: 400, height: 300 };
+        let far = cells_in_frames(&[far_box]);
+        assert_eq!(far.iter().map(|f| f.1).collect::<Vec<_>>(), [coarse, coarse, Resolution::DEFAULT], "{far:?}");
+        assert!(far[1].2 > 0.0 && far[1].2 < 0.01, "{far:?}");
+        let near = cells_in_frames(&[floor]);
+        assert_eq!(near.iter().map(|f| f.1).collect::<Vec<_>>(), [coarse; 3], "{near:?}");
+        assert!(near[1].2 > FINE_WHERE_HELD, "{near:?}");
     }
 
     #[test]
