@@ -8,7 +8,8 @@
 //! visible set as occluders, as in a run. Reported: the median pass's mean
 //! per frame, the occluder triangles a frame, and triangles a second over
 //! the whole frame; with `swr.triangles=0` (no occluders, nothing hidden)
-//! the frame is the box tests alone, and boxes a second.
+//! the frame is the box tests alone, and boxes a second. The adapter is
+//! taken to snap to 8 sub-pixel bits, as lavapipe and llvmpipe report.
 //!
 //! `cargo bench --bench swr -- swr.KEY=VALUE ... SCENE ...` runs with those
 //! parameters, e.g. `swr.threads=1` or `swr.resolution=128x96`, on those
@@ -23,7 +24,7 @@ use std::time::{Duration, Instant};
 use occlu::bounds::Aabb;
 use occlu::camera::Camera;
 use occlu::cull::{Culler, FrameInput, ModeId, ModeParams, SoftwareOcclusionCulling, SwrParams, TraversalStats};
-use occlu::gpu::{BoxTest, BoxVisibility, Frame, GpuFrame, Resolution};
+use occlu::gpu::{BoxTest, BoxVisibility, Frame, GpuFrame, Resolution, SubpixelPrecision};
 use occlu::hierarchy::Hierarchy;
 use occlu::scene::Scene;
 
@@ -55,6 +56,7 @@ fn walk(scene: &Scene, hierarchy: &Hierarchy, cameras: &[Camera], params: &[&str
     let items: Vec<String> = params.iter().map(|p| p.to_string()).collect();
     let params = ModeParams::parse(&items, &[ModeId::Swr]).expect("bench parameters");
     let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&params).expect("bench parameters"));
+    swr.assume_subpixel_precision(SubpixelPrecision::reported(8));
     let mut totals = TraversalStats::default();
     let mut run = |count: bool, totals: &mut TraversalStats| {
         for (frame, camera) in cameras.iter().enumerate() {

@@ -7,7 +7,7 @@
 //!
 //! 1. **Rounding** of surfaces that coincide with a box face: boxes are
 //!    grown ([`BOX_GROWTH`], and enough to cover sub-pixel snapping,
-//!    [`SNAP_MARGIN`]) and raised in depth by the backend's rounding error,
+//!    [`SubpixelPrecision`]) and raised in depth by the backend's rounding error,
 //!    relative and, on GL's clip range, absolute ([`BoxMargins`]).
 //! 2. **Depth extrapolated on triangles seen edge-on**, which may land
 //!    outside the object's box: the scene's fragment stage discards every
@@ -26,10 +26,6 @@ use crate::camera::{Camera, nearest_view_depth};
 /// Boxes are grown by at least this fraction of their reach from the eye
 /// before they are tested (rule 1, relative to the depth at the pixel).
 pub(crate) const BOX_GROWTH: f64 = 1e-4;
-
-/// Pixels by which a tested box's outline must reach beyond the object's:
-/// twice the largest sub-pixel snap Vulkan allows (4 sub-pixel bits).
-const SNAP_MARGIN: f64 = 1.0 / 16.0;
 
 /// Raise of a tested box per unit of its nearest corner's depth (rule 1,
 /// relative to the largest depth of a triangle): 4 steps of 2^-24.
@@ -54,13 +50,21 @@ pub struct BoxMargins {
 }
 
 impl BoxMargins {
-    pub fn new(depth: DepthMargins, camera: &Camera, resolution: Resolution) -> BoxMargins {
+    pub fn new(
+        depth: DepthMargins,
+        subpixel: SubpixelPrecision,
+        camera: &Camera,
+        resolution: Resolution,
+    ) -> BoxMargins {
         // A box grown by g holds the ball of radius g round each of its
         // points, whose outline is at least g · f / d pixels wide at
-        // distance d ≤ √3 · reach, with f = height / (2 tan(fov / 2)).
+        // distance d ≤ √3 · reach, with f = height / (2 tan(fov / 2)). It
+        // must reach beyond the object's outline by the snap of the
+        // object's vertices and of its own: twice a vertex's error.
         let pixel = 2.0 * (camera.fov_y / 2.0).tan() / f64::from(resolution.height);
+        let snap_margin = 2.0 * subpixel.vertex_error(resolution);
         BoxMargins {
-            growth: BOX_GROWTH.max(3f64.sqrt() * SNAP_MARGIN * pixel),
+            growth: BOX_GROWTH.max(3f64.sqrt() * snap_margin * pixel),
             depth,
         }
     }
@@ -108,13 +112,16 @@ impl SubpixelPrecision {
     pub const COARSEST: SubpixelPrecision = SubpixelPrecision { bits: 4 };
 
     /// A report of finer precision is taken as this: no rasteriser known
-    /// snaps finer, and a step of 1/256 pixel is already small beside the
-    /// f32 terms of a vertex's error.
+    /// snaps finer (Direct3D's 16.8 fixed point, and Vulkan's and GL's
+    /// drivers here), and a report that overstates can then claim no more.
     const FINEST_TAKEN: u32 = 8;
 
+    /// What an adapter reports, taken at [`Self::COARSEST`] below Vulkan's
+    /// and GL's least (no conformant adapter reports less; a failed GL
+    /// query reads 0) and at most [`Self::FINEST_TAKEN`].
     pub fn reported(bits: u32) -> SubpixelPrecision {
         SubpixelPrecision {
-            bits: bits.min(Self::FINEST_TAKEN),
+            bits: bits.clamp(Self::COARSEST.bits, Self::FINEST_TAKEN),
         }
     }
 
@@ -586,7 +593,12 @@ pub(crate) mod tests {
         let r = Resolution::DEFAULT;
         let view = cam.view_rotation();
         let b = Aabb::new(DVec3::new(-2.0, -1.0, -6.0), DVec3::new(1.0, 3.0, -2.0));
-        let margins = BoxMargins::new(DepthMargins::for_backend(wgpu::Backend::Gl), &cam, r);
+        let margins = BoxMargins::new(
+            DepthMargins::for_backend(wgpu::Backend::Gl),
+            SubpixelPrecision::COARSEST,
+            &cam,
+            r,
+        );
         let limit = FragmentLimit::new(&cam, &view, margins, &b);
         let (min, max) = grown_eye_relative(&cam, &b, margins.growth / 2.0);
         let grown = Aabb::new(min + cam.eye, max + cam.eye);
@@ -611,7 +623,12 @@ pub(crate) mod tests {
     /// each with its test box for a `DEFAULT` target, seeded by `seed`.
     pub(crate) fn random_boxes_in_view(seed: u64) -> Vec<(Aabb, QueryBox)> {
         let cam = camera();
-        let margins = BoxMargins::new(DepthMargins::for_backend(wgpu::Backend::Gl), &cam, Resolution::DEFAULT);
+        let margins = BoxMargins::new(
+            DepthMargins::for_backend(wgpu::Backend::Gl),
+            SubpixelPrecision::COARSEST,
+            &cam,
+            Resolution::DEFAULT,
+        );
         let mut rng = crate::rng::Rng::new(seed);
         (0..200)
             .filter_map(|_| {
@@ -632,7 +649,12 @@ pub(crate) mod tests {
         let cam = camera();
         let r = Resolution::DEFAULT;
         let view = cam.view_rotation();
-        let margins = BoxMargins::new(DepthMargins::for_backend(wgpu::Backend::Gl), &cam, r);
+        let margins = BoxMargins::new(
+            DepthMargins::for_backend(wgpu::Backend::Gl),
+            SubpixelPrecision::COARSEST,
+            &cam,
+            r,
+        );
         let rays = PixelRays::new(&cam, r);
         // The rays as the scene's fragment stage computes them, in f32.
         let [per_x, per_y, constant] = rays.uniform();
@@ -752,7 +774,7 @@ pub(crate) mod tests {
         let cam = camera();
         let around = Aabb::new(cam.eye - DVec3::ONE, cam.eye + DVec3::ONE);
         let depth = DepthMargins::for_backend(wgpu::Backend::Vulkan);
-        let margins = BoxMargins::new(depth, &cam, Resolution::DEFAULT);
+        let margins = BoxMargins::new(depth, SubpixelPrecision::COARSEST, &cam, Resolution::DEFAULT);
         let limit = FragmentLimit::new(&cam, &cam.view_rotation(), margins, &around);
         assert!(limit.at(pixel_ray(&cam, Resolution::DEFAULT, 400.5, 300.5).as_vec3()) >= NO_LIMIT);
     }
@@ -762,7 +784,15 @@ pub(crate) mod tests {
         let cam = camera();
         let view = cam.view_rotation();
         let b = Aabb::new(DVec3::new(-2.0, -1.0, -60.0), DVec3::new(1.0, 3.0, -20.0));
-        let margins = |backend| BoxMargins::new(DepthMargins::for_backend(backend), &cam, Resolution::DEFAULT);
+        // At 8 sub-pixel bits the box grows by the least fraction only.
+        let margins = |backend| {
+            BoxMargins::new(
+                DepthMargins::for_backend(backend),
+                SubpixelPrecision::reported(8),
+                &cam,
+                Resolution::DEFAULT,
+            )
+        };
         let raise = |backend| match eye_relative_box(&cam, &view, margins(backend), &b) {
             EyeBox::Testable(q) => f64::from(q.min.w),
             EyeBox::ReachesNear => panic!("the box lies far beyond the near plane"),
@@ -777,24 +807,65 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn boxes_grow_by_a_sixteenth_of_a_pixel_at_least() {
+    fn boxes_grow_by_twice_a_vertexs_snap_at_least() {
         let cam = camera();
         let depth = DepthMargins::for_backend(wgpu::Backend::Vulkan);
-        let growth = |height| {
+        let growth = |subpixel, height| {
             let r = Resolution {
                 width: height * 4 / 3,
                 height,
             };
-            BoxMargins::new(depth, &cam, r).growth
+            BoxMargins::new(depth, subpixel, &cam, r).growth
         };
-        assert_eq!(growth(8192), BOX_GROWTH, "fine pictures keep the relative growth");
+        let coarsest = SubpixelPrecision::COARSEST;
+        assert_eq!(
+            growth(coarsest, 8192),
+            BOX_GROWTH,
+            "fine pictures keep the relative growth"
+        );
         // 160×120 at 60°: a pixel spans 2 tan 30° / 120 = 9.6e-3 at depth 1.
+        let r = Resolution {
+            width: 160,
+            height: 120,
+        };
         let pixel = 2.0 * 30f64.to_radians().tan() / 120.0;
-        let coarse = growth(120);
-        assert!((coarse / (3f64.sqrt() / 16.0 * pixel) - 1.0).abs() < 1e-12);
-        // Its outline moves out by a sixteenth of a pixel or more: a box
-        // corner at reach 10 grown by growth × 10, seen from 10 · √3 away.
-        let shift_px = coarse * 10.0 / (10.0 * 3f64.sqrt()) / pixel;
-        assert!(shift_px >= SNAP_MARGIN * (1.0 - 1e-12), "{shift_px}");
+        for subpixel in [coarsest, SubpixelPrecision::reported(8)] {
+            let snap = subpixel.vertex_error(r);
+            let grown = growth(subpixel, 120);
+            assert!((grown / (3f64.sqrt() * 2.0 * snap * pixel) - 1.0).abs() < 1e-12 || grown == BOX_GROWTH);
+            // Its outline moves out by twice a vertex's snap or more: a box
+            // corner at reach 10 grown by growth × 10, seen from 10 · √3 away.
+            let shift_px = grown * 10.0 / (10.0 * 3f64.sqrt()) / pixel;
+            assert!(shift_px >= 2.0 * snap * (1.0 - 1e-12), "{shift_px}");
+        }
+        assert!(
+            growth(coarsest, 120) > BOX_GROWTH,
+            "the coarsest snap sets the growth at 160×120"
+        );
+    }
+
+    #[test]
+    fn an_adapters_report_is_taken_between_vulkans_least_and_eight_bits() {
+        assert_eq!(
+            SubpixelPrecision::reported(0),
+            SubpixelPrecision::COARSEST,
+            "a failed GL query"
+        );
+        assert_eq!(SubpixelPrecision::reported(3).bits(), 4);
+        assert_eq!(SubpixelPrecision::reported(6).bits(), 6);
+        assert_eq!(SubpixelPrecision::reported(12).bits(), 8);
+        let r = Resolution {
+            width: 800,
+            height: 600,
+        };
+        // One step of the grid, and f32's rounding of the viewport.
+        assert_eq!(
+            SubpixelPrecision::reported(8).vertex_error(r),
+            1.0 / 256.0 + 800.0 / f64::from(1u32 << 21)
+        );
+        assert_eq!(
+            SubpixelPrecision::COARSEST.vertex_error(r),
+            1.0 / 16.0 + 800.0 / f64::from(1u32 << 21)
+        );
     }
 }

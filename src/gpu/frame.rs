@@ -267,7 +267,7 @@ impl<'a> FrameCtx<'a> {
             targets,
             queries,
             camera,
-            margins: BoxMargins::new(gpu.depth_margins, camera, targets.resolution),
+            margins: BoxMargins::new(gpu.depth_margins, gpu.subpixel, camera, targets.resolution),
             depth,
             timer: timer.map(|t| (t, slot)),
             encoder,

@@ -287,7 +287,7 @@ impl SceneRenderer {
     pub fn set_camera(&mut self, gpu: &GpuContext, camera: &Camera, resolution: Resolution, objects: &[Object]) {
         let scene = &mut self.scene;
         let view = camera.view_rotation();
-        let margins = BoxMargins::new(gpu.depth_margins, camera, resolution);
+        let margins = BoxMargins::new(gpu.depth_margins, gpu.subpixel, camera, resolution);
         scene.staging.clear();
         scene.staging.extend(objects.iter().map(|o| ObjectData {
             model_view: glam::DMat4::from(camera.model_view(&o.transform)).as_mat4(),

@@ -309,7 +309,12 @@ mod tests {
             near: 0.1,
             aspect: 1.0,
         };
-        let margins = BoxMargins::new(gpu.depth_margins, &camera, crate::gpu::Resolution::DEFAULT);
+        let margins = BoxMargins::new(
+            gpu.depth_margins,
+            gpu.subpixel,
+            &camera,
+            crate::gpu::Resolution::DEFAULT,
+        );
         let movers: Vec<u32> = scene.movers.iter().map(|m| m.object).collect();
         let staged = |walk: &mut ObjectFrustum, frame: u32, moved: &[u32]| {
             walk.prepare(&camera, margins, &scene, moved, frame);

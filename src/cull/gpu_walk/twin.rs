@@ -397,7 +397,7 @@ mod tests {
                 })
                 .collect();
             let twin = walk(tree, &states, &visible_last, &outside);
-            let margins = BoxMargins::new(gpu.depth_margins, &camera, RESOLUTION);
+            let margins = BoxMargins::new(gpu.depth_margins, gpu.subpixel, &camera, RESOLUTION);
             // Each node's box: its object's, or its hierarchy node's.
             let bounds: Vec<Aabb> = match source {
                 Some(source) => source

@@ -124,7 +124,8 @@ pub struct ScreenMesh<'a> {
     pub closed: bool,
     /// Pixels the GPU's sub-pixel snap (and its viewport rounding) may
     /// move a vertex on each axis (`SubpixelPrecision::vertex_error`): the
-    /// part of every vertex's slack that is not its f32 error.
+    /// part of every vertex's slack that its own f32 position's error does
+    /// not make.
     pub snap: f64,
 }
 
@@ -1259,12 +1260,21 @@ mod tests {
 
     #[test]
     fn a_mesh_the_near_plane_cuts_on_screen_vouches_for_no_depth_nearer_than_the_gpu_may_draw_its_clipped_part_at() {
+        for snap in [COARSE_SNAP, FINE_SNAP] {
+            assert_vouches_no_nearer_past_the_eye(snap);
+        }
+    }
+
+    /// Grids the near plane cuts, their vertices and crossings placed by
+    /// the GPU within `snap`: what the buffer vouches for held against what
+    /// it may draw, pixel by pixel.
+    fn assert_vouches_no_nearer_past_the_eye(snap: f64) {
         let mut rng = Rng::new(41);
         let size = Resolution { width: 160, height: 120 };
         let limit = NEAR * (1.0 + 1.0 / 1024.0);
         let placed = |p: DVec3| ScreenVertex {
             at: on_screen(p),
-            slack: COARSE_SNAP,
+            slack: snap,
             depth_error: 0.0,
         };
         let mut vouched = 0;
@@ -1287,7 +1297,7 @@ mod tests {
                             neighbours: &neighbours,
                             closed: false,
                             near: Some(NearLimit { crossing: &cross }),
-                            snap: COARSE_SNAP,
+                            snap,
                         };
                         patches.clear();
                         let which = patches.add(&mesh);
@@ -1300,7 +1310,7 @@ mod tests {
                 for _ in 0..3 {
                     let mut nearest = vec![0.0f64; (size.width * size.height) as usize];
                     for (points, indices) in &meshes {
-                        let mut shift = || DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0) * COARSE_SNAP;
+                        let mut shift = || DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0) * snap;
                         let moved: Vec<DVec3> = points.iter().map(|_| shift()).collect();
                         for t in indices.chunks_exact(3) {
                             let mut polygon = Vec::new();

@@ -238,6 +238,12 @@ impl SoftwareOcclusionCulling {
             walkers: Walkers::default(),
         }
     }
+
+    /// Takes `subpixel` as the adapter's, as `prepare` does (for a frame
+    /// run without a GPU: benches/swr.rs).
+    pub fn assume_subpixel_precision(&mut self, subpixel: SubpixelPrecision) {
+        self.subpixel = subpixel;
+    }
 }
 
 impl SoftwareOcclusionCulling {
@@ -653,7 +659,7 @@ impl Culler for SoftwareOcclusionCulling {
             self.make_scratch();
         }
         let projector = Projector::new(camera, size);
-        let margins = BoxMargins::new(self.depth_margins, camera, size);
+        let margins = BoxMargins::new(self.depth_margins, self.subpixel, camera, size);
         let view = camera.view_rotation();
 
         let frustum = camera.frustum();
@@ -1385,7 +1391,12 @@ mod tests {
                 rays: PixelRays::new(&camera, size),
                 camera: &camera,
                 view: &view,
-                margins: BoxMargins::new(DepthMargins::for_backend(wgpu::Backend::Vulkan), &camera, size),
+                margins: BoxMargins::new(
+                    DepthMargins::for_backend(wgpu::Backend::Vulkan),
+                    SubpixelPrecision::COARSEST,
+                    &camera,
+                    size,
+                ),
             };
             for k in 0..1500 {
                 // Sides from 1 cm (flat boxes) to 30 m; every other box just
