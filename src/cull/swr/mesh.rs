@@ -282,6 +282,8 @@ pub struct Patches {
     /// patch, as (root, triangle), and per root where its patch ends among
     /// them.
     turns: Vec<Turn>,
+    /// Per triangle, bit k set where its edge k is inner ([`Self::joined`]).
+    inner_edges: Vec<u8>,
     corners: Vec<[u32; 3]>,
     across: Vec<[u32; 3]>,
     parent: Vec<u32>,
@@ -339,7 +341,7 @@ impl Patches {
                     self.triangles.push(triangle);
                 }
                 for (p, q, whole) in polygon.sides() {
-                    if whole.is_none_or(|edge| self.joined(mesh, t, edge).is_none()) {
+                    if whole.is_none_or(|edge| self.inner_edges[t] >> edge & 1 == 0) {
                         self.borders.push(Border {
                             p: p.at,
                             q: q.at,
@@ -389,13 +391,17 @@ impl Patches {
         }
         self.parent.clear();
         self.parent.extend(0..self.turns.len() as u32);
+        self.inner_edges.clear();
         for t in 0..self.turns.len() {
+            let mut inner = 0;
             for edge in 0..3 {
                 if let Some(across) = self.joined(mesh, t, edge) {
                     let (a, b) = (self.root(t as u32), self.root(across as u32));
                     self.parent[a.max(b) as usize] = a.min(b);
+                    inner |= 1 << edge;
                 }
             }
+            self.inner_edges.push(inner);
         }
         // Where the near plane clips a closed solid, its near side has a
         // hole its far side may be seen through.
