@@ -76,9 +76,9 @@ pub struct AdapterReport {
     /// (no read-back before drawing a list the GPU built).
     #[serde(default)]
     pub indirect_count: bool,
-    /// The bits of sub-pixel precision the adapter reports, as swr takes
-    /// them ([`SubpixelPrecision`]; 4, Vulkan's least, where it reports
-    /// none).
+    /// The bits of sub-pixel precision the adapter reports, as box tests
+    /// and swr's occluders take them ([`SubpixelPrecision`]; 4, Vulkan's
+    /// least, where it reports none or less).
     #[serde(default = "coarsest_subpixel_bits")]
     pub subpixel_bits: u32,
 }

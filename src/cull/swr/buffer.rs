@@ -638,7 +638,6 @@ impl OcclusionBuffer {
             })
     }
 
-    /// Builds the pyramid over the cells written since [`Self::clear`].
     /// The share of its cells that hold a depth (those left at 0 hold
     /// none).
     pub fn held(&self) -> f64 {
@@ -646,6 +645,7 @@ impl OcclusionBuffer {
         cells.iter().filter(|&&depth| depth > 0.0).count() as f64 / cells.len() as f64
     }
 
+    /// Builds the pyramid over the cells written since [`Self::clear`].
     pub fn build_pyramid(&mut self) {
         for k in 1..self.levels.len() {
             let (below, above) = self.levels.split_at_mut(k);
@@ -824,6 +824,14 @@ pub(super) fn f32_at_most(v: f64) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn held_is_the_share_of_cells_holding_a_depth() {
+        let mut buffer = OcclusionBuffer::new(Resolution { width: 64, height: 48 }, Resolution { width: 16, height: 12 });
+        assert_eq!(buffer.held(), 0.0);
+        buffer.levels[0].depth[..48].fill(0.5);
+        assert_eq!(buffer.held(), 0.25);
+    }
 
     /// A coverage of one depth everywhere.
     fn flat(depth: f64, mask: u64) -> Coverage {

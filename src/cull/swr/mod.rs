@@ -13,9 +13,9 @@
 //! rasteriser puts inside a triangle; here it is the centres the GPU is
 //! sure to draw whatever its sub-pixel placement (mesh.rs), so a pixel
 //! counts only clear of an occluder's outline by twice the adapter's snap
-//! (1/128 pixel at the 8 sub-pixel bits Vulkan and GL adapters report
-//! here, 1/8 at the 4 that Metal and Direct3D 12 are held to, since they
-//! report none), which costs the seams between objects. A cell keeps a depth
+//! (about 1/120 pixel at 800x600 at the 8 sub-pixel bits Vulkan and GL
+//! adapters report here, 1/8 at the 4 that Metal and Direct3D 12 are held
+//! to, since they report none), which costs the seams between objects. A cell keeps a depth
 //! plane besides its depth (the occluders' own, lowered below each other's
 //! where several fill it); MOC keeps one depth per tile. A working layer
 //! that a farther occluder completed stays, and a box's test at a cell
@@ -88,10 +88,14 @@ const RESOLUTION: ParamInfo = ParamInfo {
 /// size). Occluders small on screen (a model seen whole from afar) then
 /// get a cell a pixel at 800x600, where two occluders meeting inside a cell
 /// of 2 x 2 pixels left it at the farther one's depth, for little more
-/// time; occluders over most of the screen keep the coarser buffer.
+/// time; occluders over most of the screen keep the coarser buffer. A
+/// coarse buffer holds no depth in the cells its occluders' outlines cross
+/// (a finer one holds most of their pixels), so it turns finer only at
+/// [`FINE_FROM_COARSE`], lest the two take turns frame by frame.
 const COARSE_CELLS: Resolution = Resolution { width: 400, height: 300 };
 const FINE_CELLS: Resolution = Resolution { width: 800, height: 600 };
 const FINE_WHERE_HELD: f64 = 0.25;
+const FINE_FROM_COARSE: f64 = 0.2;
 
 const TRIANGLES: ParamInfo = ParamInfo {
     key: "triangles",
@@ -258,19 +262,26 @@ impl SoftwareOcclusionCulling {
     /// The cells a buffer for render size `size` has: those asked for, or
     /// `auto`'s choice ([`FINE_WHERE_HELD`]), at most `size` on each side.
     fn cells_for(&self, size: Resolution) -> Resolution {
-        let asked = match self.params.resolution {
-            AutoOr::Given(cells) => cells,
-            AutoOr::Auto if self.held <= FINE_WHERE_HELD => FINE_CELLS,
-            AutoOr::Auto => COARSE_CELLS,
+        let within = |cells: Resolution| Resolution {
+            width: cells.width.min(size.width),
+            height: cells.height.min(size.height),
         };
-        Resolution {
-            width: asked.width.min(size.width),
-            height: asked.height.min(size.height),
+        let fine = within(FINE_CELLS);
+        let at_most = match self.buffer.as_ref().is_some_and(|b| b.cells() == fine) {
+            true => FINE_WHERE_HELD,
+            false => FINE_FROM_COARSE,
+        };
+        match self.params.resolution {
+            AutoOr::Given(cells) => within(cells),
+            AutoOr::Auto if self.held <= at_most => fine,
+            AutoOr::Auto => within(COARSE_CELLS),
         }
     }
 
     /// Makes `buffer` one for render size `size` with `cells`: as it is,
-    /// the spare, or a new one (the one it replaces becomes the spare).
+    /// the spare, or a new one (the one it replaces becomes the spare). A
+    /// spare taken back may hold another frame's occluders
+    /// (`buffer_holds`).
     fn use_buffer(&mut self, size: Resolution, cells: Resolution) {
         let fits = |b: &Option<OcclusionBuffer>| b.as_ref().is_some_and(|b| b.target() == size && b.cells() == cells);
         if fits(&self.buffer) {
@@ -281,6 +292,7 @@ impl SoftwareOcclusionCulling {
             false => Some(OcclusionBuffer::new(size, cells)),
         };
         self.spare = std::mem::replace(&mut self.buffer, next);
+        self.buffer_holds = true;
         #[cfg(test)]
         if let Some(buffer) = &mut self.buffer {
             buffer.careless = self.careless;
@@ -737,7 +749,7 @@ impl Culler for SoftwareOcclusionCulling {
             occluders.rasterise(buffer, &mut self.preparers, &mut self.rasterisers);
             buffer.build_pyramid();
             self.buffer_holds = true;
-            if !self.occluders.is_empty() {
+            if self.params.resolution == AutoOr::Auto && !self.occluders.is_empty() {
                 self.held = buffer.held();
             }
         }
@@ -1152,36 +1164,45 @@ mod tests {
     }
 
     #[test]
-    fn auto_cells_are_a_pixel_each_after_a_buffer_that_held_little_of_the_screen() {
-        // A floor under the eye holds most of the screen below the horizon;
-        // a box 30 m ahead a few hundred pixels. Frame 0 knows no occluder,
-        // frame 1 builds a buffer of 400x300 cells, and frame 2's cells
-        // follow what it held.
-        let floor = (DVec3::new(-60.0, -1.5, -60.0), DVec3::new(60.0, -1.0, 60.0));
-        let far_box = (DVec3::new(-1.0, -1.0, -31.0), DVec3::new(1.0, 1.0, -29.0));
-        let camera = camera_down_z();
-        let cells_in_frames = |boxes: &[(DVec3, DVec3)]| {
-            let (scene, hierarchy) = cuboids(boxes);
-            // Built every frame (a buffer that hid nothing would rest).
-            let params = SwrParams {
-                rests: false,
-                ..SwrParams::from_params(&ModeParams::default()).unwrap()
-            };
-            let mut swr = SoftwareOcclusionCulling::new(params);
-            (0..3)
-                .map(|frame| {
-                    drawn_over(&mut swr, &scene, &hierarchy, &camera, 1);
-                    (frame, swr.buffer.as_ref().unwrap().cells(), swr.held)
-                })
-                .collect::<Vec<_>>()
+    fn auto_cells_are_a_pixel_each_after_a_buffer_that_held_little_of_the_screen_and_coarse_again_after_one_that_held_much() {
+        // A floor under the eye and a box 30 m ahead, 12 m up. Looking up
+        // at the box, the buffer holds its pixels and a strip of the far
+        // floor; looking ahead, the floor holds most of the screen below
+        // the horizon. Frame 0 knows no occluder, and each frame's cells
+        // follow what the last buffer held.
+        let (scene, hierarchy) = cuboids(&[
+            (DVec3::new(-60.0, -1.5, -60.0), DVec3::new(60.0, -1.0, 60.0)),
+            (DVec3::new(-1.0, 11.0, -31.0), DVec3::new(1.0, 13.0, -29.0)),
+        ]);
+        let ahead = camera_down_z();
+        let up = Camera {
+            rotation: glam::DQuat::from_rotation_x(25f64.to_radians()),
+            ..ahead
         };
-        let coarse = Resolution { width: 400, height: 300 };
-        let far = cells_in_frames(&[far_box]);
-        assert_eq!(far.iter().map(|f| f.1).collect::<Vec<_>>(), [coarse, coarse, Resolution::DEFAULT], "{far:?}");
-        assert!(far[1].2 > 0.0 && far[1].2 < 0.01, "{far:?}");
-        let near = cells_in_frames(&[floor]);
-        assert_eq!(near.iter().map(|f| f.1).collect::<Vec<_>>(), [coarse; 3], "{near:?}");
-        assert!(near[1].2 > FINE_WHERE_HELD, "{near:?}");
+        // Built every frame (a buffer that hid nothing would rest).
+        let params = SwrParams {
+            rests: false,
+            ..SwrParams::from_params(&ModeParams::default()).unwrap()
+        };
+        let mut swr = SoftwareOcclusionCulling::new(params);
+        let frames: Vec<(Resolution, f64)> = [&up, &up, &up, &ahead, &ahead, &ahead]
+            .into_iter()
+            .map(|camera| {
+                drawn_over(&mut swr, &scene, &hierarchy, camera, 1);
+                (swr.buffer.as_ref().unwrap().cells(), swr.held)
+            })
+            .collect();
+        let (coarse, fine) = (COARSE_CELLS, FINE_CELLS);
+        assert_eq!(
+            frames.iter().map(|f| f.0).collect::<Vec<_>>(),
+            [coarse, coarse, fine, fine, coarse, coarse],
+            "{frames:?}"
+        );
+        assert!(frames[1].1 > 0.0 && frames[1].1 <= FINE_FROM_COARSE, "{frames:?}");
+        assert!(frames[3].1 > FINE_WHERE_HELD, "{frames:?}");
+        // The coarse buffer came back from the spare, and the fine one
+        // waits there.
+        assert_eq!(swr.spare.as_ref().map(OcclusionBuffer::cells), Some(fine));
     }
 
     #[test]
