@@ -15,12 +15,12 @@
 //! counts only clear of an occluder's outline by twice the adapter's snap
 //! (about 1/120 pixel at 800x600 at the 8 sub-pixel bits Vulkan and GL
 //! adapters report here, 1/8 at the 4 that Metal and Direct3D 12 are held
-//! to, since they report none), which costs the seams between objects. A cell keeps a depth
-//! plane besides its depth (the occluders' own, lowered below each other's
-//! where several fill it); MOC keeps one depth per tile. A working layer
-//! that a farther occluder completed stays, and a box's test at a cell
-//! takes it at the box's pixels in its mask; MOC clears it, and tests
-//! boxes against the reference layer alone. A buffer that hid nothing,
+//! to, since they report none), which costs the seams between objects. A
+//! cell keeps a depth plane besides its depth (the occluders' own, lowered
+//! below each other's where several fill it); MOC keeps one depth per
+//! tile. A working layer that a farther occluder completed stays, and a
+//! box's test at a cell takes it at the box's pixels in its mask; MOC
+//! clears it, and tests boxes against the reference layer alone. A buffer that hid nothing,
 //! or saved less drawing than it cost, rests for a few frames, and longer
 //! each time it fails again (MOC leaves that to its caller).
 //! Occluders are whole visible objects (the clusters of one mesh taken
@@ -45,8 +45,8 @@ mod walk;
 use glam::{DAffine3, DMat3, DMat4, DVec2, DVec3, Vec4Swizzles};
 use serde::Serialize;
 
-use crate::bounds::Aabb;
 use crate::auto_or::AutoOr;
+use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
 use crate::cull::culler::{Culler, FrameInput, OccluderDepths, PreviousFrame, TraversalStats};
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
