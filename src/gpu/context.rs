@@ -84,7 +84,7 @@ pub struct AdapterReport {
 }
 
 /// What a result file written before adapters recorded their precision
-/// held swr to.
+/// is read as: the coarsest, which occlu then assumed everywhere.
 fn coarsest_subpixel_bits() -> u32 {
     SubpixelPrecision::COARSEST.bits()
 }

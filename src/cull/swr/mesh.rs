@@ -568,8 +568,9 @@ impl Rasteriser {
             }
             let whole = grid.across.cells_within(from, to, &self.columns);
             debug_assert!(whole.is_empty() || (reached.start <= whole.start && whole.end <= reached.end));
-            let span = self.spans[(row - self.rows.start) as usize].clone();
-            self.spans[(row - self.rows.start) as usize] = match span.is_empty() {
+            let in_patch = (row - self.rows.start) as usize;
+            let span = self.spans[in_patch].clone();
+            self.spans[in_patch] = match span.is_empty() {
                 true => reached.clone(),
                 false => span.start.min(reached.start)..span.end.max(reached.end),
             };
@@ -1365,12 +1366,15 @@ mod tests {
 
     #[test]
     fn a_triangle_marks_no_pixel_centre_farther_than_its_snap_from_it() {
-        for snap in [COARSE_SNAP, FINE_SNAP] {
-            assert_marks_within(snap);
+        // A finer snap marks fewer centres beside sharp corners.
+        for (snap, least_sharp) in [(COARSE_SNAP, 1000), (FINE_SNAP, 900)] {
+            assert_marks_within(snap, least_sharp);
         }
     }
 
-    fn assert_marks_within(snap: f64) {
+    /// `least_sharp`: the fewest marks of sharp triangles the random
+    /// triangles must make, so that they are tested.
+    fn assert_marks_within(snap: f64, least_sharp: usize) {
         // Random triangles over 64 × 48 pixels in cells of 4 × 4, many of
         // them long and thin (sharp corners, where the edges moved out by
         // the snap meet far beyond the corner).
@@ -1440,7 +1444,7 @@ mod tests {
             }
             rasteriser.cover.fill(EMPTY);
         }
-        assert!(marked > 10_000 && sharp_checked > 900, "{marked} marks, {sharp_checked} of sharp triangles");
+        assert!(marked > 10_000 && sharp_checked > least_sharp, "{marked} marks, {sharp_checked} of sharp triangles");
         assert!(inside_checked > 10_000, "{inside_checked} centres inside");
     }
 

@@ -20,19 +20,19 @@
 //! below each other's where several fill it); MOC keeps one depth per
 //! tile. A working layer that a farther occluder completed stays, and a
 //! box's test at a cell takes it at the box's pixels in its mask; MOC
-//! clears it, and tests boxes against the reference layer alone. A buffer that hid nothing,
-//! or saved less drawing than it cost, rests for a few frames, and longer
-//! each time it fails again (MOC leaves that to its caller).
-//! Occluders are whole visible objects (the clusters of one mesh taken
-//! together, so that a mesh cut into clusters is one surface), their
-//! triangles taken in the f64 projection (MOC and Godot take authored occluder
-//! meshes, rasterised in f32 with SIMD: here it is scalar). Like MOC it
+//! clears it, and tests boxes against the reference layer alone. A buffer
+//! that hid nothing, or saved less drawing than it cost, rests for a few
+//! frames, and longer each time it fails again (MOC leaves that to its
+//! caller). Occluders are whole visible objects (the clusters of one mesh
+//! taken together, so that a mesh cut into clusters is one surface), their
+//! triangles taken in the f64 projection (MOC and Godot take authored
+//! occluder meshes, rasterised in f32 with SIMD: here it is scalar). Like MOC it
 //! shares the work among threads (`swr.threads`), each over a band of the
 //! buffer's rows, and so are the box tests, each thread walking subtrees
-//! of the hierarchy (walk.rs). `swr.resolution` sets
-//! the cells (each of up to 8 × 8 pixel groups), trading the box test's
-//! precision against time; `auto` takes finer cells where the occluders
-//! cover little of the screen, so they cost no more.
+//! of the hierarchy (walk.rs). `swr.resolution` sets the cells (each of
+//! up to 8 × 8 pixel groups), trading the box test's precision against
+//! time; `auto` takes finer cells where the occluders cover little of the
+//! screen, so they cost no more.
 
 use std::ops::Range;
 use std::time::Instant;
@@ -172,8 +172,9 @@ pub struct SoftwareOcclusionCulling {
     /// switching back allocates nothing.
     buffer: Option<OcclusionBuffer>,
     spare: Option<OcclusionBuffer>,
-    /// The share of the screen where the last buffer built held a depth
-    /// (all of it before the first), by which `auto` chooses the cells.
+    /// The share of the screen where the last buffer built with occluders
+    /// held a depth (all of it before the first), by which `auto` chooses
+    /// the cells.
     held: f64,
     /// What each thread rasterising occluders works with.
     preparers: Vec<Preparer>,
