@@ -6,9 +6,11 @@
 //! rendered (all untimed); then
 //! every mode renders that frame (timed: from the start of its frame on the
 //! CPU until the GPU finished it); then one pass measures every mode's error
-//! (untimed). The order of the modes rotates from frame to frame, so no mode
-//! always runs right after the reference (whose work warms caches). Warm-up
-//! frames run the path's first frames and are not recorded.
+//! (untimed). The order of the modes changes from frame to frame, balanced
+//! so that each mode runs first (right after the reference) and right after
+//! each other mode equally often: what ran before a mode changes what its
+//! frame costs. Warm-up frames run the path's first frames and are not
+//! recorded.
 
 use std::ops::ControlFlow;
 use std::time::Instant;
@@ -77,8 +79,6 @@ pub fn run(
         };
         let camera = path.camera(frame, options.resolution.aspect());
         world.advance(frame);
-        // Rotating the order from frame to frame: no mode always runs right
-        // after the reference.
         if recording {
             let these = session.frame(frame, &camera, world, cullers, step as usize)?;
             if let Some(film) = &mut film {
