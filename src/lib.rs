@@ -14,6 +14,7 @@
 
 pub mod animation;
 pub mod auto_or;
+pub mod balanced_order;
 pub mod bench;
 pub mod bounds;
 pub mod camera;

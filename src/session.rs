@@ -5,6 +5,7 @@
 use std::collections::BTreeSet;
 use std::time::{Duration, Instant};
 
+use crate::balanced_order::balanced_order;
 use crate::camera::Camera;
 use crate::cull::{Culler, FrameInput, PreviousFrame};
 use crate::gpu::{
@@ -398,32 +399,6 @@ impl<'a> Session<'a> {
     }
 }
 
-/// The order in which `n` modes run in the frame numbered `order`: row
-/// `order` of a Williams design, cycled, so that over every `n` frames (`2n`
-/// for odd `n`) each mode runs in each place equally often and right after
-/// each other mode equally often.
-///
-/// A mode's frame costs more or less by what ran just before it: the
-/// reference before the first mode, or, on a software rasteriser, a mode
-/// whose CPU work evicts the caches that the next mode's drawing needs
-/// (measured on the teapot, lavapipe: `auto`'s `vfc` frames cost 4 % more
-/// than `vfc`'s own when it ran after `swr` and `vfc` after `oracle`, and
-/// 1.5 % less with the two swapped). A fixed cycle, merely rotated, keeps
-/// every mode behind the same one all run long, a bias no number of
-/// frames averages away; this order makes it noise.
-fn balanced_order(order: usize, n: usize) -> impl Iterator<Item = usize> {
-    let rows = if n.is_multiple_of(2) { n } else { 2 * n };
-    let row = order % rows.max(1);
-    // The first row runs 0, 1, n-1, 2, n-2, …; row r adds r, and for odd n
-    // the second n rows are the first n reversed.
-    let (shift, reversed) = (row % n.max(1), row >= n);
-    (0..n).map(move |place| {
-        let j = if reversed { n - 1 - place } else { place };
-        let first_row = if j % 2 == 1 { j.div_ceil(2) } else { (n - j / 2) % n };
-        (first_row + shift) % n
-    })
-}
-
 /// Which frame a mode runs: its number, camera, and whether it is a
 /// warm-up frame.
 #[derive(Clone, Copy)]
@@ -463,47 +438,4 @@ impl ModeClocks {
 /// Milliseconds, rounded to 0.1 µs (finer than any timer here resolves).
 pub(crate) fn ms(d: Duration) -> f64 {
     (d.as_secs_f64() * 1e7).round() / 1e4
-}
-
-#[cfg(test)]
-mod tests {
-    use super::balanced_order;
-
-    /// Each mode runs in each place equally often, and right after each
-    /// other mode equally often, over one cycle of orders.
-    #[test]
-    fn over_a_cycle_every_mode_runs_in_every_place_and_after_every_other_mode_equally_often() {
-        for n in 1..=9usize {
-            let rows = if n.is_multiple_of(2) { n } else { 2 * n };
-            let mut places = vec![vec![0; n]; n];
-            let mut after = vec![vec![0; n]; n];
-            for order in 0..rows {
-                let row: Vec<usize> = balanced_order(order, n).collect();
-                let mut sorted = row.clone();
-                sorted.sort_unstable();
-                assert_eq!(sorted, (0..n).collect::<Vec<_>>(), "n = {n}, order {order}: {row:?}");
-                for (place, &mode) in row.iter().enumerate() {
-                    places[mode][place] += 1;
-                }
-                for pair in row.windows(2) {
-                    after[pair[0]][pair[1]] += 1;
-                }
-            }
-            let after_each = if n % 2 == 0 { 1 } else { 2 };
-            for a in 0..n {
-                assert!(
-                    places[a].iter().all(|&c| c == rows / n),
-                    "n = {n}: places of {a}: {:?}",
-                    places[a]
-                );
-                for b in (0..n).filter(|&b| b != a) {
-                    assert_eq!(after[a][b], after_each, "n = {n}: {b} right after {a}");
-                }
-            }
-            assert!(
-                balanced_order(rows, n).eq(balanced_order(0, n)),
-                "n = {n}: the orders cycle"
-            );
-        }
-    }
 }

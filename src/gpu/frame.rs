@@ -197,6 +197,15 @@ pub trait GpuFrame {
     /// Draws, shaded, the commands the GPU built. What they drew is counted
     /// after the frame, from the mode's audit.
     fn draw_indirect(&mut self, draws: IndirectDraws);
+
+    /// Submits everything recorded so far and waits until the GPU has
+    /// finished it: the time to here is then what the frame so far cost.
+    fn wait_for_gpu(&mut self);
+
+    /// Clears colour and depth, as at the start of the frame, so that
+    /// another strategy can render the frame from nothing (what was drawn
+    /// stays counted).
+    fn clear(&mut self);
 }
 
 pub struct FrameCtx<'a> {
@@ -338,16 +347,22 @@ impl<'a> FrameCtx<'a> {
         if let Some((t, slot)) = self.timer {
             t.end(&mut self.encoder, slot);
         }
-        self.gpu.queue.submit([self.encoder.finish()]);
-        let submitted = Instant::now();
-        self.gpu.wait_idle();
-        log(self.ops, OpKind::Commands, start, submitted);
-        log(self.ops, OpKind::WaitForGpu, submitted, Instant::now());
+        submit_and_wait(self.gpu, self.ops, self.encoder, start);
         FrameOutcome {
             counters: self.counters,
             gpu_ops: self.gpu_ops,
         }
     }
+}
+
+/// Submits `encoder` (whose last commands were encoded from `start`) and
+/// waits until the GPU has finished it, logging both in `ops`.
+fn submit_and_wait(gpu: &GpuContext, ops: &mut Vec<OpSpan>, encoder: wgpu::CommandEncoder, start: Instant) {
+    gpu.queue.submit([encoder.finish()]);
+    let submitted = Instant::now();
+    gpu.wait_idle();
+    log(ops, OpKind::Commands, start, submitted);
+    log(ops, OpKind::WaitForGpu, submitted, Instant::now());
 }
 
 impl Frame for FrameCtx<'_> {
@@ -433,6 +448,23 @@ impl GpuFrame for FrameCtx<'_> {
         let end = Instant::now();
         self.gpu_ops += end - start;
         log(self.ops, OpKind::Commands, start, end);
+    }
+
+    fn wait_for_gpu(&mut self) {
+        let start = Instant::now();
+        self.encode_queued_draws();
+        let fresh = self.gpu.device.create_command_encoder(&Default::default());
+        let encoder = std::mem::replace(&mut self.encoder, fresh);
+        submit_and_wait(self.gpu, self.ops, encoder, start);
+    }
+
+    fn clear(&mut self) {
+        let start = Instant::now();
+        self.encode_queued_draws();
+        let cleared = Draws::Objects(&[]);
+        self.renderer
+            .encode_shaded(&mut self.encoder, self.targets, self.depth, true, cleared);
+        log(self.ops, OpKind::Commands, start, Instant::now());
     }
 }
 

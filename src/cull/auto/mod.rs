@@ -27,21 +27,34 @@
 //!   culler drew it (from their own lists, gone stale, after `vfc`), and
 //!   their first frame then only settles them and is not measured. A culler
 //!   that keeps its visible set on the CPU is handed the objects drawn last.
-//! - **Warm-up**: in a warm-up frame every candidate runs, so none pays
-//!   its first frame (pipelines compiled on first use) in a recorded one.
+//! - **Warm-up**: in a warm-up frame every candidate renders the frame in
+//!   turn, from a cleared target, so none pays its first frame (pipelines
+//!   compiled on first use) in a recorded one. From the second warm-up
+//!   frame on, each is timed from its start to the GPU's end of its work,
+//!   and the chooser is calibrated with these paired times of one view:
+//!   the cheapest runs from the first recorded frame, and a rival shown
+//!   far dearer costs no probe there.
 //!
 //! Every candidate is conservative, so `auto` is too.
 //!
 //! Departures: what a GPU walk drew (handed to the CPU cullers, and counted
 //! for the hidden share that judges `vfc` before it runs) is taken from its
 //! untimed audit; an engine reads it back a frame late, without waiting.
+//! The calibration uses the bench's warm-up frames, which no mode's figures
+//! include, as an engine would calibrate in its loading frames; in them the
+//! GPU walks after the first read the visible lists another walk wrote for
+//! the same view, not last frame's, a start slightly kinder than a recorded
+//! frame gives them. With fewer than two warm-up frames `auto` learns by
+//! probing alone.
 
 mod choice;
 
 use std::rc::Rc;
+use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::balanced_order::balanced_order;
 use crate::cull::culler::{Culler, FrameInput, Pick, TraversalStats};
 use crate::cull::gpu_walk::VisibleLists;
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
@@ -138,6 +151,8 @@ pub struct AutoCulling {
     lists: Option<Rc<VisibleLists>>,
     /// Frames run, warm-up included.
     frames: u64,
+    /// Warm-up frames run.
+    warm_ups: usize,
     /// The frame a GPU walk last ran, which left the lists as it found them.
     lists_written: Option<u64>,
     /// The last recorded frame; `None` after a warm-up frame.
@@ -181,6 +196,7 @@ impl AutoCulling {
             chooser: None,
             lists: None,
             frames: 0,
+            warm_ups: 0,
             lists_written: None,
             ran: None,
             running: Vec::new(),
@@ -247,17 +263,36 @@ impl AutoCulling {
             .sum()
     }
 
-    /// A warm-up frame: every candidate runs once, the incumbent last.
+    /// A warm-up frame: every candidate renders the frame from nothing, in
+    /// turn, in an order balanced over the warm-up frames. From the second
+    /// warm-up frame on (the first compiles pipelines), each one's time,
+    /// from its start to the GPU's end of its work, calibrates the chooser.
     fn warm_up(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
-        let incumbent = self.chooser.as_ref().map_or(0, Chooser::incumbent);
-        self.running = (0..self.candidates.len()).filter(|&k| k != incumbent).collect();
-        self.running.push(incumbent);
+        let warm_ups = self.warm_ups;
+        self.warm_ups += 1;
+        self.running.clear();
+        self.running.extend(balanced_order(warm_ups, self.candidates.len()));
+        let mut log_ms = vec![f64::NAN; self.candidates.len()];
         let mut stats = TraversalStats::default();
-        for &k in &self.running {
+        for (place, &k) in self.running.iter().enumerate() {
+            if let (true, Some(gpu)) = (place > 0, ctx.on_gpu()) {
+                gpu.clear();
+            }
+            let start = Instant::now();
             stats = self.candidates[k].culler.frame(ctx, input);
+            if let Some(gpu) = ctx.on_gpu() {
+                gpu.wait_for_gpu();
+                log_ms[k] = (start.elapsed().as_secs_f64() * 1e3).ln();
+            }
             if self.candidates[k].carries() == Carries::VisibleOnGpu {
                 self.lists_written = Some(self.frames);
             }
+        }
+        if warm_ups > 0 && log_ms.iter().all(|t| t.is_finite()) {
+            self.chooser
+                .as_mut()
+                .expect("the session prepared the mode")
+                .calibrate(&log_ms);
         }
         self.ran = None;
         stats
