@@ -268,7 +268,7 @@ impl<'a> FrameCtx<'a> {
         if let Some(t) = timer {
             t.begin(&mut encoder, slot);
         }
-        renderer.encode_shaded(&mut encoder, targets, depth, true, Draws::Objects(&[]));
+        encode_clear(renderer, &mut encoder, targets, depth);
         log(ops, OpKind::Commands, start, Instant::now());
         FrameCtx {
             gpu,
@@ -290,11 +290,7 @@ impl<'a> FrameCtx<'a> {
 
     fn test(&mut self, boxes: &[Aabb], kind: BoxTest, out: &mut Vec<BoxVisibility>, totals: Option<&mut Vec<u64>>) {
         let start = Instant::now();
-        self.encode_queued_draws();
-        let encoder = std::mem::replace(
-            &mut self.encoder,
-            self.gpu.device.create_command_encoder(&Default::default()),
-        );
+        let encoder = self.take_recorded();
         let target = TestTarget {
             depth: self.depth,
             camera: self.camera,
@@ -340,6 +336,14 @@ impl<'a> FrameCtx<'a> {
         }
     }
 
+    /// Encodes the queued draws and takes the encoder holding everything
+    /// recorded so far, leaving a fresh one.
+    fn take_recorded(&mut self) -> wgpu::CommandEncoder {
+        self.encode_queued_draws();
+        let fresh = self.gpu.device.create_command_encoder(&Default::default());
+        std::mem::replace(&mut self.encoder, fresh)
+    }
+
     /// Submits the rest of the frame and waits until the GPU has finished it.
     pub(crate) fn finish(mut self) -> FrameOutcome {
         let start = Instant::now();
@@ -353,6 +357,16 @@ impl<'a> FrameCtx<'a> {
             gpu_ops: self.gpu_ops,
         }
     }
+}
+
+/// Records a clear of the colour target and `depth`: a frame's start.
+fn encode_clear(
+    renderer: &SceneRenderer,
+    encoder: &mut wgpu::CommandEncoder,
+    targets: &RenderTargets,
+    depth: &wgpu::TextureView,
+) {
+    renderer.encode_shaded(encoder, targets, depth, true, Draws::Objects(&[]));
 }
 
 /// Submits `encoder` (whose last commands were encoded from `start`) and
@@ -420,11 +434,7 @@ impl GpuFrame for FrameCtx<'_> {
 
     fn round_trip(&mut self, read: &mut dyn FnMut(&GpuContext, wgpu::CommandEncoder)) {
         let start = Instant::now();
-        self.encode_queued_draws();
-        let encoder = std::mem::replace(
-            &mut self.encoder,
-            self.gpu.device.create_command_encoder(&Default::default()),
-        );
+        let encoder = self.take_recorded();
         let submitted = Instant::now();
         read(self.gpu, encoder);
         let end = Instant::now();
@@ -452,19 +462,18 @@ impl GpuFrame for FrameCtx<'_> {
 
     fn wait_for_gpu(&mut self) {
         let start = Instant::now();
-        self.encode_queued_draws();
-        let fresh = self.gpu.device.create_command_encoder(&Default::default());
-        let encoder = std::mem::replace(&mut self.encoder, fresh);
+        let encoder = self.take_recorded();
         submit_and_wait(self.gpu, self.ops, encoder, start);
+        self.gpu_ops += start.elapsed();
     }
 
     fn clear(&mut self) {
         let start = Instant::now();
         self.encode_queued_draws();
-        let cleared = Draws::Objects(&[]);
-        self.renderer
-            .encode_shaded(&mut self.encoder, self.targets, self.depth, true, cleared);
-        log(self.ops, OpKind::Commands, start, Instant::now());
+        encode_clear(self.renderer, &mut self.encoder, self.targets, self.depth);
+        let end = Instant::now();
+        self.gpu_ops += end - start;
+        log(self.ops, OpKind::Commands, start, end);
     }
 }
 

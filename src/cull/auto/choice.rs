@@ -17,13 +17,13 @@
 //! - Successive elimination with hysteresis: the incumbent is replaced only
 //!   by a strategy cheaper at confidence (its upper bound below the
 //!   incumbent) whose estimate is cheaper by more than [`HYSTERESIS`]. A
-//!   strategy that may still be cheaper by that
-//!   much is probed every [`EXPLORE`] frames; one known not to be is probed
-//!   again only as often as a budget (`auto.budget`) of the run's time,
-//!   shared among them, pays for at what a probe of it costs (so the dearer
-//!   a strategy, the rarer its rechecks, and a cheap rival's drift is still
-//!   seen), and never while what rechecks have cost so far, settling
-//!   frames included, exceeds that share of the frames so far.
+//!   strategy that may still be cheaper by that much is probed every
+//!   [`EXPLORE`] frames; one known not to be is probed again only as often
+//!   as a budget (`auto.budget`) of the run's time, shared among them, pays
+//!   for at what a probe of it costs (so the dearer a strategy, the rarer
+//!   its rechecks, and a cheap rival's drift is still seen), and never
+//!   while what rechecks have cost so far, settling frames included,
+//!   exceeds that share of the frames so far.
 //! - One sample shows a strategy dearer only where a hiccup of the machine
 //!   cannot explain it: far dearer ([`FAR_DEARER`]), or dearer while it
 //!   drew more triangles than the incumbent's frames beside it (a hiccup
@@ -312,11 +312,18 @@ impl Chooser {
     /// the incumbent, and each other strategy's samples are its times over
     /// the incumbent's in the same frames. Such a sample pairs two frames
     /// of one view, as a probe's does, without a recorded frame paying for
-    /// it; the rivals they show far dearer need no probe.
+    /// it; the rivals they show far dearer need no exploring. A frame that
+    /// did not time every strategy is ignored. Calibration precedes the
+    /// recorded frames: what the incumbent's frames and probes showed so
+    /// far is dropped with the old incumbent.
     pub fn calibrate(&mut self, log_ms: &[f64]) {
         if log_ms.len() != self.records.len() || log_ms.iter().any(|t| !t.is_finite()) {
             return;
         }
+        self.incumbent_last = None;
+        self.incumbent_earlier = None;
+        self.pending = None;
+        self.probing = None;
         if self.calibration.len() == WINDOW {
             self.calibration.pop_front();
         }
@@ -736,7 +743,23 @@ mod tests {
     }
 
     #[test]
-    fn calibrated_in_warm_up_the_cheapest_runs_from_the_first_frame_and_far_dearer_rivals_are_not_probed() {
+    fn calibration_starts_the_cheapest_and_gives_each_rival_its_paired_times_and_a_frame_missing_a_time_is_ignored() {
+        let mut chooser = Chooser::new(&FIVE, 1, 10.0, 0.015);
+        let logs = |ms: [f64; 5]| ms.map(f64::ln);
+        chooser.calibrate(&logs([30.0, 20.0, 19.0, 23.0, 50.0]));
+        chooser.calibrate(&logs([31.0, 21.0, 20.0, 22.0, 52.0]));
+        chooser.calibrate(&logs([1.0, 1.0, f64::NAN, 1.0, 1.0]));
+        chooser.calibrate(&[0.0; 4]);
+        assert_eq!(chooser.incumbent, 2);
+        assert!(chooser.records[2].samples.is_empty());
+        let roc: Vec<f64> = chooser.records[1].samples.iter().copied().collect();
+        let paired = [(20.0f64 / 19.0).ln(), (21.0f64 / 20.0).ln()];
+        assert!(roc.iter().zip(paired).all(|(a, b)| (a - b).abs() < 1e-12), "{roc:?}");
+        assert_eq!(chooser.records[4].samples.len(), 2);
+    }
+
+    #[test]
+    fn calibrated_in_warm_up_the_cheapest_runs_from_the_first_frame_and_far_dearer_rivals_are_not_explored() {
         // The CAD orbit on Vulkan: vfc 1.4× roc, ioc = roc, the pyramid
         // test 1.15×, the CPU culler 1.5×; occlusion hides half the frustum.
         // A 40-frame path, 10 % noise.
@@ -758,7 +781,7 @@ mod tests {
     }
 
     #[test]
-    fn calibrated_where_nothing_is_hidden_frustum_culling_runs_and_the_walks_far_dearer_are_not_probed() {
+    fn calibrated_where_nothing_is_hidden_frustum_culling_runs_and_the_walks_far_dearer_are_not_explored() {
         // The teapot: every occlusion culler costs 1.4–1.8× vfc.
         let relative = [1.0, 1.4, 1.4, 1.8, 1.1];
         let (turns, costs) = simulate_after_calibrating(2, &FIVE, 120, 0.1, hides(0.0), still, |f, s| {

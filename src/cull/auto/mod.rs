@@ -33,7 +33,8 @@
 //!   frame on, each is timed from its start to the GPU's end of its work,
 //!   and the chooser is calibrated with these paired times of one view:
 //!   the cheapest runs from the first recorded frame, and a rival shown
-//!   far dearer costs no probe there.
+//!   far dearer is not explored in recorded frames (only rechecked within
+//!   the budget).
 //!
 //! Every candidate is conservative, so `auto` is too.
 //!
@@ -41,10 +42,16 @@
 //! for the hidden share that judges `vfc` before it runs) is taken from its
 //! untimed audit; an engine reads it back a frame late, without waiting.
 //! The calibration uses the bench's warm-up frames, which no mode's figures
-//! include, as an engine would calibrate in its loading frames; in them the
-//! GPU walks after the first read the visible lists another walk wrote for
-//! the same view, not last frame's, a start slightly kinder than a recorded
-//! frame gives them. With fewer than two warm-up frames `auto` learns by
+//! include, as an engine would calibrate in its loading frames. It times
+//! each candidate's own work, without the refit of the hierarchy around
+//! movers that every candidate would share, so with movers its ratios come
+//! out a little wider than probes measure. The GPU walks after the first in
+//! a warm-up frame read the visible lists another walk wrote for the same
+//! view, not last frame's, a start slightly kinder than a recorded frame
+//! gives them; over the default two calibrating frames the order is not yet
+//! balanced, so which walks get that start is uneven. Samples from the
+//! calibration and from probes share a window, each read as having a
+//! probe's spread. With fewer than two warm-up frames `auto` learns by
 //! probing alone.
 
 mod choice;
@@ -263,10 +270,12 @@ impl AutoCulling {
             .sum()
     }
 
-    /// A warm-up frame: every candidate renders the frame from nothing, in
-    /// turn, in an order balanced over the warm-up frames. From the second
-    /// warm-up frame on (the first compiles pipelines), each one's time,
-    /// from its start to the GPU's end of its work, calibrates the chooser.
+    /// A warm-up frame: every candidate renders the frame from a cleared
+    /// target, in turn, in an order that changes from one warm-up frame to
+    /// the next ([`balanced_order`]). From the second warm-up frame on (the
+    /// first compiles pipelines), each one's time, from its start to the
+    /// GPU's end of its work, calibrates the chooser; without a GPU (a test
+    /// double) nothing is timed.
     fn warm_up(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let warm_ups = self.warm_ups;
         self.warm_ups += 1;
@@ -288,7 +297,7 @@ impl AutoCulling {
                 self.lists_written = Some(self.frames);
             }
         }
-        if warm_ups > 0 && log_ms.iter().all(|t| t.is_finite()) {
+        if warm_ups > 0 {
             self.chooser
                 .as_mut()
                 .expect("the session prepared the mode")
