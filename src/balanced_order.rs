@@ -52,7 +52,7 @@ mod tests {
                     after[pair[0]][pair[1]] += 1;
                 }
             }
-            let after_each = if n % 2 == 0 { 1 } else { 2 };
+            let after_each = if n.is_multiple_of(2) { 1 } else { 2 };
             for a in 0..n {
                 assert!(
                     places[a].iter().all(|&c| c == rows / n),

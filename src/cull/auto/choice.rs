@@ -315,8 +315,8 @@ impl Chooser {
     /// of one view, as a probe's does, without a recorded frame paying for
     /// it; the rivals they show far dearer need no exploring. A frame that
     /// did not time every strategy is ignored. Calibration precedes the
-    /// recorded frames: what the incumbent's frames and probes showed so
-    /// far is dropped with the old incumbent.
+    /// recorded frames: the incumbent's last frames and any probe under way
+    /// are dropped with the old incumbent.
     pub fn calibrate(&mut self, log_ms: &[f64]) {
         if log_ms.len() != self.records.len() || log_ms.iter().any(|t| !t.is_finite()) {
             return;
@@ -450,9 +450,10 @@ impl Chooser {
     /// The strategy cheaper than the incumbent at confidence and by more
     /// than the hysteresis in its estimate, the cheapest if several: on two
     /// samples at least, never on an estimate alone. (Asking the gain
-    /// itself at confidence would ask a window of samples to settle a 7 %
-    /// gain in 10 % noise: an incumbent that warm-up's few frames chose
-    /// among near equals would then stay while a rival is 9 % cheaper.)
+    /// itself beyond the hysteresis at confidence would, in 10 % noise,
+    /// take a gain of about 10 % to switch on a window of samples: an
+    /// incumbent that warm-up's few frames chose among near equals would
+    /// then stay while a rival is 9 % cheaper.)
     fn cheaper_than_incumbent(&self) -> Option<usize> {
         let measured = |s: usize| {
             let n = self.records[s].samples.len();
