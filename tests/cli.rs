@@ -922,6 +922,46 @@ fn compare_fails_on_what_the_new_run_leaves_out_and_refuses_other_adapters() {
         2,
         &["nothing would be judged"],
     );
+
+    // The same software adapter rasterising on other threads: its times
+    // do not compare either.
+    let threads = dir.path().join("threads");
+    tampered_copy(std::path::Path::new(&base), &threads, &|_| {});
+    let summary = std::fs::read_to_string(threads.join("summary.json")).unwrap();
+    let mut summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    let adapter = summary["adapter"].as_object_mut().unwrap();
+    if adapter.remove("lp_num_threads").is_none() {
+        adapter.insert("lp_num_threads".into(), "0".into());
+    }
+    std::fs::write(threads.join("summary.json"), summary.to_string()).unwrap();
+    fails_with(
+        &["compare", &base, threads.to_str().unwrap()],
+        2,
+        &["different adapters", "LP_NUM_THREADS"],
+    );
+}
+
+#[test]
+fn mesas_software_adapters_record_the_threads_they_rasterise_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let result = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .args(bench_args(&["--modes", "vfc"], out.to_str().unwrap()))
+        .env("LP_NUM_THREADS", "1")
+        .output()
+        .unwrap();
+    assert!(result.status.success(), "{:?}", own_stderr(&result));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let adapter = &summary["adapter"];
+    // Only Mesa's software adapters read the variable (lavapipe names its
+    // device after llvmpipe): elsewhere none is recorded.
+    let expected = if adapter["name"].as_str().unwrap().contains("llvmpipe") {
+        serde_json::json!("1")
+    } else {
+        serde_json::Value::Null
+    };
+    assert_eq!(adapter["lp_num_threads"], expected, "{adapter}");
 }
 
 #[test]

@@ -81,6 +81,24 @@ pub struct AdapterReport {
     /// least, where it reports none or less).
     #[serde(default = "coarsest_subpixel_bits")]
     pub subpixel_bits: u32,
+    /// On Mesa's software adapters (llvmpipe, and lavapipe, which names its
+    /// device after it), `LP_NUM_THREADS` as the run saw it: they rasterise
+    /// on that many threads of their own (0: on the thread that submits;
+    /// unset, `None`: one per core), on the cores the culling runs on. It
+    /// changes every mode's frame time, and how the modes compare, so
+    /// `compare` takes runs that differ in it for runs on different
+    /// adapters (a merge, which keys its columns by name and backend,
+    /// refuses two such results of one run as two results on one adapter).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lp_num_threads: Option<String>,
+}
+
+impl AdapterReport {
+    /// Whether frame times of runs on `self` and `other` compare: the same
+    /// adapter, backend and software threads.
+    pub fn times_compare_with(&self, other: &AdapterReport) -> bool {
+        (&self.name, &self.backend, &self.lp_num_threads) == (&other.name, &other.backend, &other.lp_num_threads)
+    }
 }
 
 /// What a result file written before adapters recorded their precision
@@ -94,6 +112,9 @@ impl fmt::Display for AdapterReport {
         write!(f, "{} ({}, {}", self.name, self.backend, self.device_type)?;
         if !self.driver_info.is_empty() {
             write!(f, ", {}", self.driver_info)?;
+        }
+        if let Some(threads) = &self.lp_num_threads {
+            write!(f, ", LP_NUM_THREADS={threads}")?;
         }
         f.write_str(")")
     }
@@ -252,6 +273,12 @@ impl GpuContext {
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| on_error(e.to_string())));
         let on_loss = record(&failure);
         device.set_device_lost_callback(move |reason, message| on_loss(format!("device lost ({reason:?}): {message}")));
+        // Lavapipe names its device after llvmpipe, whose threads it uses.
+        let lp_num_threads = info
+            .name
+            .contains("llvmpipe")
+            .then(|| std::env::var("LP_NUM_THREADS").ok())
+            .flatten();
         Ok(GpuContext {
             device,
             queue,
@@ -266,6 +293,7 @@ impl GpuContext {
                 gpu_driven,
                 indirect_count,
                 subpixel_bits: subpixel.bits(),
+                lp_num_threads,
             },
             timestamps,
             pixel_counts,

@@ -217,7 +217,7 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
     }
     let mut notes = Vec::new();
     let (adapter_a, adapter_b) = (&base_summary.adapter, &new_summary.adapter);
-    let same_adapter = (&adapter_a.name, &adapter_a.backend) == (&adapter_b.name, &adapter_b.backend);
+    let same_adapter = adapter_a.times_compare_with(adapter_b);
     if !same_adapter {
         let (base, new) = (adapter_a.to_string(), adapter_b.to_string());
         if !options.cross_adapter {
