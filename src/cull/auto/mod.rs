@@ -298,10 +298,15 @@ impl AutoCulling {
             }
         }
         if warm_ups > 0 {
+            let view = View {
+                eye: input.camera.eye,
+                forward: input.camera.forward(),
+                frustum_triangles: self.count_frustum_triangles(input),
+            };
             self.chooser
                 .as_mut()
                 .expect("the session prepared the mode")
-                .calibrate(&log_ms);
+                .calibrate(&log_ms, &view);
         }
         self.ran = None;
         stats
