@@ -39,9 +39,8 @@
 //!   materially since ([`View::differs`]), by one probe of the most
 //!   promising occlusion culler, within the budget. Frustum culling's
 //!   ratio to an occlusion culler turns on what occlusion hides: their
-//!   samples taken where it hid something count only where it still does,
-//!   and those taken where it hid next to nothing only where it still
-//!   does that ([`Chooser::samples`]).
+//!   samples taken where it hid much do not count where it hides next to
+//!   nothing, nor the reverse ([`apart`], [`Chooser::samples`]).
 
 use std::collections::VecDeque;
 
@@ -121,13 +120,27 @@ impl View {
 }
 
 /// One paired sample of a strategy: the log of its frame time over the
-/// incumbent's, and whether occlusion hid next to nothing
-/// ([`NOTHING_HIDDEN`]) where it was taken (`None`: not known, as of a
-/// calibration whose view no occlusion frame measured).
+/// incumbent's, and the share of the frustum occlusion hid where it was
+/// taken (`None`: not known, as of a calibration whose view no occlusion
+/// frame measured).
 #[derive(Clone, Copy, Debug)]
 struct Sample {
     log_ratio: f64,
-    nothing_hidden: Option<bool>,
+    hidden: Option<f64>,
+}
+
+/// Whether views where occlusion hid `a` and `b` of the frustum lie on
+/// either side of [`NOTHING_HIDDEN`] by a margin: one under half of it,
+/// the other over one and a half times it. Frustum culling's ratio to an
+/// occlusion culler measured in one says nothing of the other; between,
+/// where the share of a view such as a dense scan's wavers frame by frame
+/// about a tenth, a view could be either, and a ratio measured there holds.
+/// A share not known is apart from every known one.
+fn apart(a: Option<f64>, b: Option<f64>) -> bool {
+    match (a, b) {
+        (Some(a), Some(b)) => a.min(b) < 0.5 * NOTHING_HIDDEN && a.max(b) > 1.5 * NOTHING_HIDDEN,
+        (a, b) => a.is_some() != b.is_some(),
+    }
 }
 
 /// What one strategy has shown.
@@ -354,14 +367,14 @@ impl Chooser {
             .min_by(|&a, &b| total(a).total_cmp(&total(b)))
             .unwrap_or(self.incumbent);
         self.incumbent = cheapest;
-        let nothing_hidden = self.nothing_hidden();
+        let hidden = self.hidden.map(|h| h.share);
         for (s, record) in self.records.iter_mut().enumerate() {
             record.samples.clear();
             record.drew_more = false;
             if s != cheapest {
                 let samples = self.calibration.iter().map(|row| Sample {
                     log_ratio: row[s] - row[cheapest],
-                    nothing_hidden,
+                    hidden,
                 });
                 record.samples.extend(samples);
             }
@@ -394,9 +407,8 @@ impl Chooser {
             // where they were taken; else that stays unknown.
             let calibrated_here = self.calibrated_view.is_some_and(|c| !view.differs(&c, self.reach));
             if first && calibrated_here {
-                let now = self.nothing_hidden();
                 for sample in self.records.iter_mut().flat_map(|r| r.samples.iter_mut()) {
-                    sample.nothing_hidden = sample.nothing_hidden.or(now);
+                    sample.hidden = sample.hidden.or(Some(o.hidden));
                 }
             }
         }
@@ -413,16 +425,16 @@ impl Chooser {
             let (baseline, incumbent_triangles) = p.before.map_or((log_ms, cost.triangles), |b| {
                 ((b.log_ms + log_ms) / 2.0, b.triangles.max(cost.triangles))
             });
-            let nothing_hidden = self.nothing_hidden();
+            let hidden = self.hidden.map(|h| h.share);
             let record = &mut self.records[p.strategy];
             if record.samples.len() == WINDOW {
-                // Samples of what no longer holds go first.
-                let stale = record.samples.iter().position(|x| x.nothing_hidden != nothing_hidden);
+                // Samples of a view apart from this one go first.
+                let stale = record.samples.iter().position(|x| apart(x.hidden, hidden));
                 record.samples.remove(stale.unwrap_or(0));
             }
             record.samples.push_back(Sample {
                 log_ratio: p.log_ms - baseline,
-                nothing_hidden,
+                hidden,
             });
             record.drew_more = p.triangles as f64 > HYSTERESIS.exp() * incumbent_triangles as f64;
         }
@@ -464,17 +476,17 @@ impl Chooser {
     /// The samples of `s` that describe this view: where `s` and the
     /// incumbent are of one family, or nothing is known yet of what
     /// occlusion hides, all of them; else (frustum culling against an
-    /// occlusion culler, whose ratio turns on what occlusion hides) only
-    /// those taken where occlusion hid next to nothing if it does now, and
-    /// the reverse. Frustum culling measured dearer where the walks hid a
-    /// quarter of the view says nothing of a view where they hide nothing.
+    /// occlusion culler, whose ratio turns on what occlusion hides) those
+    /// of views not [`apart`] from this one. Frustum culling measured
+    /// dearer where the walks hid a quarter of the view says nothing of a
+    /// view where they hide nothing.
     fn samples(&self, s: usize) -> Vec<f64> {
-        let regime = self.nothing_hidden();
+        let now = self.hidden.map(|h| h.share);
         let of_one_family = self.records[s].family == self.records[self.incumbent].family;
         self.records[s]
             .samples
             .iter()
-            .filter(|x| of_one_family || regime.is_none() || x.nothing_hidden == regime)
+            .filter(|x| of_one_family || now.is_none() || !apart(x.hidden, now))
             .map(|x| x.log_ratio)
             .collect()
     }
@@ -535,21 +547,20 @@ impl Chooser {
 
     /// Makes `s` the incumbent: every estimate is re-expressed relative to
     /// it, and the old incumbent's samples are `s`'s, reversed. Between
-    /// families, each sample is re-expressed by `s`'s ratio where it was
-    /// taken (whether occlusion hid next to nothing), and dropped where `s`
-    /// has none.
+    /// families, each sample is re-expressed by `s`'s ratio in views not
+    /// [`apart`] from the one it was taken in, and dropped where `s` has
+    /// none.
     fn switch_to(&mut self, s: usize) {
         let across = self.records[s].family != self.records[self.incumbent].family;
-        let shift = [None, Some(false), Some(true)].map(|regime| {
-            let of: Vec<f64> = self.records[s]
-                .samples
+        let of_s = self.records[s].samples.clone();
+        let shift_where = |hidden: Option<f64>| {
+            let near: Vec<f64> = of_s
                 .iter()
-                .filter(|x| !across || x.nothing_hidden == regime)
-                .map(|x| x.log_ratio)
+                .filter(|y| !across || !apart(y.hidden, hidden))
+                .map(|y| y.log_ratio)
                 .collect();
-            (regime, (!of.is_empty()).then(|| central(&of)))
-        });
-        let shift_where = |regime: Option<bool>| shift.iter().find(|(r, _)| *r == regime).and_then(|(_, d)| *d);
+            (!near.is_empty()).then(|| central(&near))
+        };
         let reversed: VecDeque<Sample> = self.records[s]
             .samples
             .iter()
@@ -561,7 +572,7 @@ impl Chooser {
         for (k, r) in self.records.iter_mut().enumerate() {
             if k != s && k != self.incumbent {
                 r.samples.retain_mut(|x| {
-                    let by = shift_where(x.nothing_hidden);
+                    let by = shift_where(x.hidden);
                     x.log_ratio -= by.unwrap_or(0.0);
                     by.is_some()
                 });
@@ -950,6 +961,32 @@ mod tests {
     }
 
     #[test]
+    fn where_occlusion_hides_about_a_tenth_frustum_culling_measured_dearer_stays_a_rival() {
+        // The bunny's orbit, 3° a frame, in 10 % noise: the walks hide 6 %
+        // of the frustum for three frames, then 14 % for three, and vfc
+        // costs 6 % more than they do throughout. (Split at 10 % hidden
+        // without a margin, the window's samples of vfc took turns to count,
+        // and vfc took over on the guess.)
+        let relative = [1.06, 1.0, 1.0, 1.15, 1.15];
+        let hidden = |f: u64| hides(if (f / 3).is_multiple_of(2) { 0.06 } else { 0.14 });
+        let orbit = |f: u64| {
+            let a = (3.0 * f as f64).to_radians();
+            View {
+                forward: DVec3::new(a.sin(), 0.0, -a.cos()),
+                ..still(f)
+            }
+        };
+        let (turns, costs) = simulate_after_calibrating(2, &FIVE, 120, 0.1, hidden, orbit, |f, s| {
+            street(f) * relative[s]
+        });
+        let s = strategies(&turns);
+        let vfc_runs = strategies(turns.iter().filter(|t| !t.probe)).iter().filter(|&&x| x == 0).count();
+        assert!(vfc_runs <= 3, "vfc runs as the incumbent {vfc_runs} frames: {s:?}");
+        let mean = over_best(&costs, 1.0, 0.1);
+        assert!(mean < 1.05, "{mean:.3}× the best: {s:?}");
+    }
+
+    #[test]
     fn switching_between_families_re_expresses_each_sample_by_the_ratio_where_it_was_taken() {
         // vfc, ioc (the incumbent) and roc. vfc costs 0.9 of ioc where
         // occlusion hides nothing and 1.35 of it where it hides much; roc
@@ -961,12 +998,12 @@ mod tests {
             view: still(0),
             frame: 0,
         };
-        let sample = |ratio: f64, nothing_hidden| Sample {
+        let sample = |ratio: f64, hidden| Sample {
             log_ratio: ratio.ln(),
-            nothing_hidden: Some(nothing_hidden),
+            hidden: Some(hidden),
         };
-        chooser.records[0].samples.extend([sample(0.9, true), sample(1.35, false)]);
-        chooser.records[2].samples.extend([sample(1.05, true), sample(1.05, false)]);
+        chooser.records[0].samples.extend([sample(0.9, 0.01), sample(1.35, 0.5)]);
+        chooser.records[2].samples.extend([sample(1.05, 0.02), sample(1.05, 0.45)]);
         chooser.hidden = Some(hid(0.01));
         chooser.switch_to(0);
         let close = |got: Vec<f64>, ratio: f64| got.len() == 1 && (got[0] - ratio.ln()).abs() < 1e-12;
@@ -993,21 +1030,24 @@ mod tests {
         assert_eq!(chooser.estimate(0).map(|e| e.0), Some(guess));
         // Measured 1.5× dearer where half is hidden: the measurement alone,
         // not pulled toward the guess (on the cheap side by design).
-        let measured = |nothing_hidden| Sample {
+        let measured = |hidden| Sample {
             log_ratio: 0.4,
-            nothing_hidden: Some(nothing_hidden),
+            hidden: Some(hidden),
         };
-        chooser.records[0].samples.push_back(measured(false));
+        chooser.records[0].samples.push_back(measured(0.5));
         assert_eq!(chooser.estimate(0).map(|e| e.0), Some(0.4));
         // Where nothing is hidden, that measurement says nothing: the guess.
-        chooser.hidden = Some(hid(0.05));
-        let guess = frustum_estimate(0.05, 0.9);
+        chooser.hidden = Some(hid(0.02));
+        let guess = frustum_estimate(0.02, 0.9);
         assert_eq!(chooser.estimate(0).map(|e| e.0), Some(guess));
         // Measured there too, the guess still counts beside it, so that
         // frustum culling takes over sooner.
-        chooser.records[0].samples.push_back(measured(true));
+        chooser.records[0].samples.push_back(measured(0.02));
         let beside = chooser.estimate(0).map(|e| e.0);
-        assert_eq!(beside, Some((0.4 + frustum_estimate(0.05, 0.9)) / 2.0));
+        assert_eq!(beside, Some((0.4 + guess) / 2.0));
+        // Where a tenth is hidden, a view could be either: both count.
+        chooser.hidden = Some(hid(0.08));
+        assert_eq!(chooser.samples(0).len(), 2);
     }
 
     #[test]
