@@ -493,13 +493,13 @@ impl Chooser {
 
     /// Strategy `s`'s cost relative to the incumbent (log) and its standard
     /// error, from its samples of this view ([`Chooser::samples`]); for
-    /// frustum culling beside an occlusion
-    /// incumbent, the estimate from what occlusion hid counts as one more
-    /// sample until frustum culling is measured, and after that where
-    /// nothing is hidden (a prior: alone it settles nothing, beside a
-    /// measurement it lets frustum culling take over sooner where nothing is
-    /// hidden; where much is hidden, a guess on the cheap side would only
-    /// hold back what measurements show); `None` when unknown.
+    /// frustum culling beside an occlusion incumbent, the estimate from
+    /// what occlusion hid counts as one more sample until frustum culling
+    /// is measured here, and after that where nothing is hidden (a prior:
+    /// alone it settles nothing, beside a measurement it lets frustum
+    /// culling take over sooner where nothing is hidden; where much is
+    /// hidden, a guess on the cheap side would only hold back what
+    /// measurements show); `None` when unknown.
     fn estimate(&self, s: usize) -> Option<(f64, f64)> {
         // A sample is one probe frame over the mean of two incumbent frames.
         let one = self.noise() * 1.5f64.sqrt();
