@@ -947,7 +947,9 @@ fn mesas_software_adapters_record_the_threads_they_rasterise_on() {
     let out = dir.path().join("run");
     let result = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
         .args(bench_args(&["--modes", "vfc"], out.to_str().unwrap()))
-        .env("LP_NUM_THREADS", "1")
+        // Mesa reads the number and ignores the rest; the report shows it
+        // all, on its line.
+        .env("LP_NUM_THREADS", "1\n# Injected heading")
         .output()
         .unwrap();
     assert!(result.status.success(), "{:?}", own_stderr(&result));
@@ -957,11 +959,13 @@ fn mesas_software_adapters_record_the_threads_they_rasterise_on() {
     // Only Mesa's software adapters read the variable (lavapipe names its
     // device after llvmpipe): elsewhere none is recorded.
     let expected = if adapter["name"].as_str().unwrap().contains("llvmpipe") {
-        serde_json::json!("1")
+        serde_json::json!("1\\n# Injected heading")
     } else {
         serde_json::Value::Null
     };
     assert_eq!(adapter["lp_num_threads"], expected, "{adapter}");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(!report.lines().any(|l| l.starts_with("# Injected")), "{report}");
 }
 
 #[test]

@@ -82,7 +82,8 @@ pub struct AdapterReport {
     #[serde(default = "coarsest_subpixel_bits")]
     pub subpixel_bits: u32,
     /// On Mesa's software adapters (llvmpipe, and lavapipe, which names its
-    /// device after it), `LP_NUM_THREADS` as the run saw it: they rasterise
+    /// device after it), `LP_NUM_THREADS` as the run saw it (escaped to one
+    /// line, [`crate::text::one_line`]): they rasterise
     /// on that many threads of their own (0: on the thread that submits;
     /// unset, `None`: one per core), on the cores the culling runs on. It
     /// changes every mode's frame time, and how the modes compare, so
@@ -274,11 +275,13 @@ impl GpuContext {
         let on_loss = record(&failure);
         device.set_device_lost_callback(move |reason, message| on_loss(format!("device lost ({reason:?}): {message}")));
         // Lavapipe names its device after llvmpipe, whose threads it uses.
+        // The value is the user's, and is shown in reports: one line.
         let lp_num_threads = info
             .name
             .contains("llvmpipe")
-            .then(|| std::env::var("LP_NUM_THREADS").ok())
-            .flatten();
+            .then(|| std::env::var_os("LP_NUM_THREADS"))
+            .flatten()
+            .map(|value| crate::text::one_line(&value.to_string_lossy()));
         Ok(GpuContext {
             device,
             queue,
