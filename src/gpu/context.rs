@@ -82,14 +82,15 @@ pub struct AdapterReport {
     #[serde(default = "coarsest_subpixel_bits")]
     pub subpixel_bits: u32,
     /// On Mesa's software adapters (llvmpipe, and lavapipe, which names its
-    /// device after it), `LP_NUM_THREADS` as the run saw it (escaped to one
-    /// line, [`crate::text::one_line`]): they rasterise
-    /// on that many threads of their own (0: on the thread that submits;
-    /// unset, `None`: one per core), on the cores the culling runs on. It
-    /// changes every mode's frame time, and how the modes compare, so
-    /// `compare` takes runs that differ in it for runs on different
-    /// adapters (a merge, which keys its columns by name and backend,
-    /// refuses two such results of one run as two results on one adapter).
+    /// device after it), `LP_NUM_THREADS` as the run saw it, escaped to one
+    /// line ([`crate::text::one_line`]): they rasterise on that many
+    /// threads of their own (0: on the thread that submits; unset, `None`:
+    /// one per core), on the cores the culling runs on. It changes every
+    /// mode's frame time, and how the modes compare, so `compare` takes
+    /// runs that differ in it for runs on different adapters (a merge,
+    /// which keys its columns by name and backend, refuses two such results
+    /// of one run as two results on one adapter). Files written before it
+    /// was recorded read as unset.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lp_num_threads: Option<String>,
 }

@@ -480,15 +480,14 @@ impl Chooser {
     /// of views not [`apart`] from this one. Frustum culling measured
     /// dearer where the walks hid a quarter of the view says nothing of a
     /// view where they hide nothing.
-    fn samples(&self, s: usize) -> Vec<f64> {
+    fn samples(&self, s: usize) -> impl Iterator<Item = f64> + '_ {
         let now = self.hidden.map(|h| h.share);
         let of_one_family = self.records[s].family == self.records[self.incumbent].family;
         self.records[s]
             .samples
             .iter()
-            .filter(|x| of_one_family || now.is_none() || !apart(x.hidden, now))
+            .filter(move |x| of_one_family || now.is_none() || !apart(x.hidden, now))
             .map(|x| x.log_ratio)
-            .collect()
     }
 
     /// Strategy `s`'s cost relative to the incumbent (log) and its standard
@@ -503,7 +502,7 @@ impl Chooser {
     fn estimate(&self, s: usize) -> Option<(f64, f64)> {
         // A sample is one probe frame over the mean of two incumbent frames.
         let one = self.noise() * 1.5f64.sqrt();
-        let measured = self.samples(s);
+        let measured: Vec<f64> = self.samples(s).collect();
         let incumbent_occludes = self.records[self.incumbent].family == Family::Occlusion;
         let prior = match (self.records[s].family, self.hidden) {
             (Family::Frustum, Some(h)) if incumbent_occludes && (measured.is_empty() || h.share < NOTHING_HIDDEN) => {
@@ -534,7 +533,7 @@ impl Chooser {
     /// then stay while a rival is 9 % cheaper.)
     fn cheaper_than_incumbent(&self) -> Option<usize> {
         let measured = |s: usize| {
-            let n = self.samples(s).len();
+            let n = self.samples(s).count();
             n >= 2 || (n == 1 && self.records[s].family == Family::Frustum && self.hidden.is_some())
         };
         (0..self.records.len())
@@ -561,8 +560,7 @@ impl Chooser {
                 .collect();
             (!near.is_empty()).then(|| central(&near))
         };
-        let reversed: VecDeque<Sample> = self.records[s]
-            .samples
+        let reversed: VecDeque<Sample> = of_s
             .iter()
             .map(|x| Sample {
                 log_ratio: -x.log_ratio,
@@ -655,7 +653,7 @@ impl Chooser {
         // the incumbent (a single frame may have met a hiccup of the
         // machine, which slows a frame without making it draw more).
         let r = &self.records[s];
-        let n = self.samples(s).len();
+        let n = self.samples(s).count();
         let may_be_cheaper = m - Z * se < -HYSTERESIS && (n < WINDOW || m < 0.0);
         let one_sample_too_few = n == 1 && !r.drew_more && m - Z * se < FAR_DEARER;
         if may_be_cheaper || one_sample_too_few {
@@ -1006,13 +1004,16 @@ mod tests {
         chooser.records[2].samples.extend([sample(1.05, 0.02), sample(1.05, 0.45)]);
         chooser.hidden = Some(hid(0.01));
         chooser.switch_to(0);
-        let close = |got: Vec<f64>, ratio: f64| got.len() == 1 && (got[0] - ratio.ln()).abs() < 1e-12;
-        assert!(close(chooser.samples(2), 1.05 / 0.9), "{:?}", chooser.samples(2));
-        assert!(close(chooser.samples(1), 1.0 / 0.9), "{:?}", chooser.samples(1));
+        let close = |chooser: &Chooser, s: usize, ratio: f64| {
+            let got: Vec<f64> = chooser.samples(s).collect();
+            assert!(got.len() == 1 && (got[0] - ratio.ln()).abs() < 1e-12, "{s}: {got:?}");
+        };
+        close(&chooser, 2, 1.05 / 0.9);
+        close(&chooser, 1, 1.0 / 0.9);
         // Where occlusion hides much, each against vfc's ratio there.
         chooser.hidden = Some(hid(0.5));
-        assert!(close(chooser.samples(2), 1.05 / 1.35), "{:?}", chooser.samples(2));
-        assert!(close(chooser.samples(1), 1.0 / 1.35), "{:?}", chooser.samples(1));
+        close(&chooser, 2, 1.05 / 1.35);
+        close(&chooser, 1, 1.0 / 1.35);
     }
 
     #[test]
@@ -1047,7 +1048,7 @@ mod tests {
         assert_eq!(beside, Some((0.4 + guess) / 2.0));
         // Where a tenth is hidden, a view could be either: both count.
         chooser.hidden = Some(hid(0.08));
-        assert_eq!(chooser.samples(0).len(), 2);
+        assert_eq!(chooser.samples(0).count(), 2);
     }
 
     #[test]
