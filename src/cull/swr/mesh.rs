@@ -24,7 +24,12 @@
 //! the patch and clear of its border by that margin is drawn
 //! ([`Rasteriser::add_triangle`], [`Rasteriser::erase`]), whatever the
 //! triangles' size: a mesh of triangles far smaller than a cell covers the
-//! cell as one surface does. This is MOC's masked coverage made exact for a
+//! cell as one surface does. A triangle is a patch of its own too, whose
+//! border is its three edges: so a centre within a border's margin is
+//! still drawn where one of the patch's triangles holds it clear of its
+//! own edges by that margin ([`Rasteriser::hold_alone`]), as where a
+//! patch folds over itself and its near layer's outline crosses the far
+//! layer. This is MOC's masked coverage made exact for a
 //! GPU that rasterises the same triangles. Triangles of two objects join only
 //! where the objects are clusters of one mesh under one transform (a
 //! [`ScreenMesh`] of several [`DrawnPart`]s): the GPU places each object's
@@ -67,10 +72,12 @@ use glam::{DVec2, DVec3};
 use super::buffer::{Cells, Coverage, Grid, MASK_SIDE, below_both};
 use crate::gpu::ScreenPlane;
 
-/// The snap slivers are judged by ([`LEAST_HEIGHT`]): a step of the
-/// coarsest sub-pixel grid Vulkan allows, whatever the adapter's own, since
-/// what the least height guards, the GPU's f32 interpolation across a thin
-/// triangle, does not shrink with its snap.
+/// A triangle at least [`LEAST_HEIGHT`] errors high over each edge at
+/// this snap, the coarsest Vulkan allows (0.375 pixel at least), belongs
+/// to a patch whatever its shape: the rule every earlier release held on
+/// every model, measured exact. A thinner one must also keep the GPU's
+/// f32 interpolation of its depth within the margins
+/// ([`interpolation_bounded`]).
 const SLIVER_SNAP: f64 = 1.0 / 16.0;
 
 /// A cell's depth is moved farther by this fraction, and by
@@ -81,11 +88,22 @@ const DEPTH_MARGIN: f64 = 1.0 / (1u32 << 18) as f64;
 const DEPTH_ABSOLUTE: f64 = 1.0 / (1u32 << 21) as f64;
 
 /// How high a patch triangle must stand over each of its edges, in
-/// multiples of twice its corners' error taken at [`SLIVER_SNAP`] (0.375
-/// pixel at least): so a
-/// corner's placement tilts its depth plane by at most a twelfth of its
-/// rise across it, and its f32 interpolation stays within the margins.
+/// multiples of twice its corners' error (the adapter's snap and the f32
+/// placement): so that placing its corners neither turns it over nor
+/// thins it below half its height, and so tilts its depth plane by at
+/// most a twelfth of its rise across it.
 const LEAST_HEIGHT: f64 = 3.0;
+
+/// One rounding step of f32 (2^-24 of the value rounded).
+const F32_STEP: f64 = 1.0 / (1u32 << 24) as f64;
+
+/// Steps of [`F32_STEP`] the GPU's depth plane of a thin triangle may err
+/// by, in the terms [`interpolation_bounded`] scales them by: its
+/// gradient comes from products of corner differences (two roundings, and
+/// the difference of the products one more) over the triangle's area (one
+/// more), and the placed triangle is at least half as high as ours
+/// ([`LEAST_HEIGHT`]): 4 steps, doubled.
+const INTERPOLATION_STEPS: f64 = 8.0;
 
 /// No triangle across this edge of a mesh triangle ([`super::neighbours`]).
 pub(super) const NO_NEIGHBOUR: u32 = u32::MAX;
@@ -251,6 +269,8 @@ enum Turn {
 #[derive(Clone, Copy, Debug)]
 struct CellCover {
     mask: u64,
+    /// The groups the patch's border erased from the mask.
+    erased: u64,
     depth: CellDepth,
 }
 
@@ -268,6 +288,7 @@ enum CellDepth {
 
 const EMPTY: CellCover = CellCover {
     mask: 0,
+    erased: 0,
     depth: CellDepth::Unreached,
 };
 
@@ -461,6 +482,9 @@ pub struct Rasteriser {
     /// only they are merged and emptied again: a patch reaches far fewer
     /// cells than its bounds hold.
     spans: Vec<Range<u32>>,
+    /// Per row of the current patch's cells, the columns from the first to
+    /// the last where its border erased a mark (empty where none).
+    erased: Vec<Range<u32>>,
 }
 
 impl Rasteriser {
@@ -487,6 +511,11 @@ impl Rasteriser {
         }
         for border in &patches.borders[patch.borders.clone()] {
             self.erase(grid, border);
+        }
+        if self.erased.iter().any(|columns| !columns.is_empty()) {
+            for triangle in &patches.triangles[patch.triangles.clone()] {
+                self.hold_alone(grid, triangle);
+            }
         }
         for (row, span) in self.rows.clone().zip(&self.spans) {
             if span.is_empty() {
@@ -522,6 +551,8 @@ impl Rasteriser {
         }
         self.spans.clear();
         self.spans.resize(rows.len(), 0..0);
+        self.erased.clear();
+        self.erased.resize(rows.len(), 0..0);
         (self.columns, self.rows) = (columns, rows);
     }
 
@@ -655,15 +686,53 @@ impl Rasteriser {
             true => [reached.clone(), 0..0],
             false => [reached.start..whole.start, whole.end..reached.end],
         };
-        for column in sides.into_iter().flatten() {
+        self.mark_groups(grid, row, sides.into_iter().flatten(), group_row_ranges);
+    }
+
+    /// Marks, in the cells `columns` of `row` that vouch for a depth, each
+    /// group whose every centre lies within its group row's x range (as
+    /// [`Self::mark_sides`]).
+    fn mark_groups(&mut self, grid: &Grid, row: u32, columns: impl Iterator<Item = u32>, group_row_ranges: &[[f64; 2]]) {
+        for column in columns {
             let i = self.cover_index(column, row);
             let cover = &mut self.cover[i];
             if let CellDepth::AtLeast { .. } = cover.depth {
                 let groups = grid.across.group_centres(column);
-                for (k, &[from, to]) in group_row_ranges.iter().enumerate() {
-                    let within = |&[g0, g1]: &[f64; 2]| from <= g0 && g1 <= to;
-                    let bits = groups.iter().rev().fold(0u64, |bits, g| bits << 1 | u64::from(within(g)));
-                    cover.mask |= bits << (k as u32 * MASK_SIDE);
+                for (k, &range) in group_row_ranges.iter().enumerate() {
+                    cover.mask |= groups_within(groups, range) << (k as u32 * MASK_SIDE);
+                }
+            }
+        }
+    }
+
+    /// Marks again, in the cells where the patch's border erased marks,
+    /// the groups this triangle holds alone: those whose every centre lies
+    /// inside it by a border's margin ([`Triangle::held_x_range`]). The
+    /// triangle is a patch of its own whose border is its edges, so the
+    /// GPU draws those centres whatever it does with the rest of the
+    /// patch's border. Its x ranges are solved only in rows where it
+    /// reaches such a cell.
+    fn hold_alone(&mut self, grid: &Grid, triangle: &Triangle) {
+        let mut group_row_ranges = [[0.0; 2]; MASK_SIDE as usize];
+        for row in clamp(grid.down.cells_reaching(triangle.lo.y, triangle.hi.y), &self.rows) {
+            let erased = &self.erased[(row - self.rows.start) as usize];
+            let group_rows = grid.down.group_centres(row);
+            let mut solved = false;
+            for column in clamp(grid.across.cells_reaching(triangle.lo.x, triangle.hi.x), erased) {
+                let i = self.cover_index(column, row);
+                if self.cover[i].erased == 0 || !matches!(self.cover[i].depth, CellDepth::AtLeast { .. }) {
+                    continue;
+                }
+                if !solved {
+                    for (range, &ys) in group_row_ranges.iter_mut().zip(group_rows) {
+                        *range = triangle.held_x_range(ys);
+                    }
+                    solved = true;
+                }
+                let groups = grid.across.group_centres(column);
+                let cover = &mut self.cover[i];
+                for (k, &range) in group_row_ranges[..group_rows.len()].iter().enumerate() {
+                    cover.mask |= groups_within(groups, range) << (k as u32 * MASK_SIDE);
                 }
             }
         }
@@ -688,36 +757,55 @@ impl Rasteriser {
             let groups = grid.across.groups_reaching(xa.min(xb) - margin, xa.max(xb) + margin, &self.columns);
             for (column, bits) in grid.across.cells_of(groups) {
                 let i = self.cover_index(column, row);
-                self.cover[i].mask &= !(bits << (k * MASK_SIDE));
+                let bits = bits << (k * MASK_SIDE);
+                if self.cover[i].mask & bits != 0 {
+                    self.cover[i].erased |= self.cover[i].mask & bits;
+                    self.cover[i].mask &= !bits;
+                    let in_patch = (row - self.rows.start) as usize;
+                    let erased = self.erased[in_patch].clone();
+                    self.erased[in_patch] = match erased.is_empty() {
+                        true => column..column + 1,
+                        false => erased.start.min(column)..erased.end.max(column + 1),
+                    };
+                }
             }
         }
     }
 }
 
+/// The bits of one row of a cell's groups (`groups`, each its first and
+/// last centre) whose every centre lies within `[from, to]`.
+fn groups_within(groups: &[[f64; 2]], [from, to]: [f64; 2]) -> u64 {
+    groups.iter().rev().fold(0, |bits, &[g0, g1]| bits << 1 | u64::from(from <= g0 && g1 <= to))
+}
+
 /// One edge of a triangle as a limit on x along rows of pixel centres:
 /// where its inward edge function e(x, y) = ex · x + ey · y + ec
 /// ([`inward_edges`]) is at least minus a margin, the margin being its
-/// |ex| + |ey| times the triangle's slack ([`REACHED`]) or times its
-/// snap ([`MARKED`]). Solved for x once per triangle, so a row
+/// |ex| + |ey| times the triangle's slack ([`REACHED`]), its snap
+/// ([`MARKED`]) or minus a border's margin ([`HELD`]). Solved for x once
+/// per triangle, so a row
 /// takes a product and a sum per edge.
 #[derive(Clone, Copy, Debug)]
 enum Limit {
     /// x at least `slope · y + offsets[margin]` (ex > 0).
-    From { slope: f64, offsets: [f64; 2] },
+    From { slope: f64, offsets: [f64; 3] },
     /// x at most `slope · y + offsets[margin]` (ex < 0).
-    To { slope: f64, offsets: [f64; 2] },
+    To { slope: f64, offsets: [f64; 3] },
     /// A horizontal edge (ex = 0): e(x, y) = ey · y + ec, whatever x,
     /// against `margins`.
-    Level { ey: f64, ec: f64, margins: [f64; 2] },
+    Level { ey: f64, ec: f64, margins: [f64; 3] },
 }
 
 /// The margins of a [`Limit`]: the triangle's slack, where it may reach a
-/// centre; its snap, where it marks one.
+/// centre; its snap, where it marks one; inside by twice its slack, where
+/// it holds one alone.
 const REACHED: usize = 0;
 const MARKED: usize = 1;
+const HELD: usize = 2;
 
 impl Limit {
-    fn new([ex, ey, ec]: [f64; 3], margins: [f64; 2]) -> Limit {
+    fn new([ex, ey, ec]: [f64; 3], margins: [f64; 3]) -> Limit {
         let offsets = margins.map(|m| -(m + ec) / ex);
         let slope = -ey / ex;
         if ex > 0.0 {
@@ -809,7 +897,7 @@ impl Triangle {
             snap,
             limits: edges.map(|edge| {
                 let reach = edge[0].abs() + edge[1].abs();
-                Limit::new(edge, [slack * reach, snap * reach])
+                Limit::new(edge, [slack * reach, snap * reach, -2.0 * slack * reach])
             }),
             plane: lowered_plane(&corners, slack),
         }
@@ -839,6 +927,13 @@ impl Triangle {
         } else {
             [f64::INFINITY, f64::NEG_INFINITY]
         }
+    }
+
+    /// Where in x every centre of the rows `ys` lies inside the triangle
+    /// by twice its slack on each axis, a border's margin ([`Border`]):
+    /// wherever the GPU places its corners, it holds those centres.
+    fn held_x_range(&self, ys: [f64; 2]) -> [f64; 2] {
+        x_range(&self.limits, ys, HELD, true)
     }
 }
 
@@ -926,8 +1021,9 @@ fn behind_turn(mesh: &ScreenMesh, corners: &[[u32; 3]], turns: &[Turn]) -> Optio
 }
 
 /// A triangle's turn on screen, or none for a sliver (less than
-/// [`LEAST_HEIGHT`] errors high over an edge, the snap's part of its
-/// corners' error taken as [`SLIVER_SNAP`]) or one not a number.
+/// [`LEAST_HEIGHT`] errors high over an edge, or less than that at
+/// [`SLIVER_SNAP`] where its interpolation is not bounded) or one not a
+/// number.
 fn turn_of(corners: [ScreenVertex; 3], snap: f64) -> Turn {
     let [a, b, c] = corners.map(|c| c.at);
     let area = twice_area(a, b, c);
@@ -937,15 +1033,46 @@ fn turn_of(corners: [ScreenVertex; 3], snap: f64) -> Turn {
         .fold(0.0, f64::max);
     // Twice the area over the longest edge is the least height; squared,
     // to spare the roots.
-    let least = LEAST_HEIGHT * 2.0 * (slack_of(&corners) - snap + SLIVER_SNAP);
-    let high_enough = area * area >= least * least * longest_squared;
-    if !high_enough || !area.is_finite() || area == 0.0 {
+    let high = |least: f64| area * area >= least * least * longest_squared;
+    let slack = slack_of(&corners);
+    let stands = high(LEAST_HEIGHT * 2.0 * slack)
+        && (high(LEAST_HEIGHT * 2.0 * (slack - snap + SLIVER_SNAP))
+            || interpolation_bounded(&corners, area.abs(), longest_squared.sqrt(), slack));
+    if !stands || !area.is_finite() || area == 0.0 {
         Turn::Excluded
     } else if area > 0.0 {
         Turn::Counter
     } else {
         Turn::Clockwise
     }
+}
+
+/// Whether the GPU's f32 interpolation of depth across a triangle
+/// (`twice_area` and `longest` edge on screen, corners within `slack` of
+/// where the GPU places them) stays within what [`lowered_plane`] allows
+/// for, however thin it is. A rasteriser evaluates the triangle's depth
+/// plane, whose gradient it divides by the placed triangle's area: where
+/// that is small against the longest edge squared (its height h against
+/// its length L), the gradient's rounding, of [`INTERPOLATION_STEPS`]
+/// steps of either the products of corner differences (at most Δz · L
+/// for a depth range Δz) or the area's own cancellation (L², of the
+/// gradient), is magnified by L / h, and carried over the triangle, up to
+/// L from the corner the plane is anchored at. So at a pixel the depth may
+/// err by s · (Δz · L / h + |∇z| · L² / h), s those steps: the first part
+/// must fit within half of [`DEPTH_MARGIN`] of the triangle's farthest
+/// depth, and the second within the plane's lowering by the slack,
+/// |∇z| · slack. (Anchored at the screen's origin instead, the plane's
+/// rounding grows with the pixel's coordinate X, by a few steps of
+/// |∇z| · X: the slack's f32 part, 2^-21 of the target's size, holds that.)
+fn interpolation_bounded(corners: &[ScreenVertex; 3], twice_area: f64, longest: f64, slack: f64) -> bool {
+    let depths = corners.map(|c| c.at.z);
+    let farthest = depths.iter().copied().fold(f64::INFINITY, f64::min);
+    let range = depths.iter().copied().fold(f64::NEG_INFINITY, f64::max) - farthest;
+    // h = twice_area / longest: s · Δz · L / h ≤ M / 2 · far, and
+    // s · L² / h ≤ slack, each times h (false for NaN).
+    let steps = INTERPOLATION_STEPS * F32_STEP;
+    let height = twice_area / longest;
+    steps * range * longest <= DEPTH_MARGIN / 2.0 * farthest * height && steps * longest * longest <= slack * height
 }
 
 /// Twice the signed area of the screen triangle pqr: its sign is its
@@ -1407,11 +1534,11 @@ mod tests {
             // Every cell vouching for a depth already (the triangle marks
             // only such cells; it lies nearer than the cleared cells).
             let reached = CellCover {
-                mask: 0,
                 depth: CellDepth::AtLeast {
                     least: 0.5,
                     plane: ScreenPlane::default(),
                 },
+                ..EMPTY
             };
             rasteriser.cover.clear();
             rasteriser.cover.resize(16 * 12, reached);
@@ -1453,12 +1580,14 @@ mod tests {
         // e(x, y) = 5e-324 · x + y − 10: level to within the least f64, so
         // its slope and offsets overflow, and at a row below y = 10 they
         // give no number.
-        let level = Limit::new([5e-324, 1.0, -10.0], [0.25, 0.0625]);
-        let within = Limit::new([1.0, 0.0, 0.0], [0.25, 0.0625]);
+        let level = Limit::new([5e-324, 1.0, -10.0], [0.25, 0.0625, -0.5]);
+        let within = Limit::new([1.0, 0.0, 0.0], [0.25, 0.0625, -0.5]);
         let limits = [level, within, within];
         let ys = [4.5, 5.5];
-        let [from, to] = x_range(&limits, ys, MARKED, true);
-        assert!(from.partial_cmp(&to).is_none_or(|o| o.is_gt()), "marks [{from}, {to}] below the edge");
+        for margin in [MARKED, HELD] {
+            let [from, to] = x_range(&limits, ys, margin, true);
+            assert!(from.partial_cmp(&to).is_none_or(|o| o.is_gt()), "marks [{from}, {to}] below the edge");
+        }
         let [from, to] = x_range(&limits, ys, REACHED, false);
         assert!(from <= 0.0 && to == f64::INFINITY, "reaches only [{from}, {to}]");
     }
@@ -1714,5 +1843,80 @@ mod tests {
         let expected = (0.5 - 0.2 * x / 64.0) * (1.0 - DEPTH_MARGIN) - DEPTH_ABSOLUTE;
         assert!(buffer.depths().iter().all(|&d| d > 0.0));
         assert_eq!(buffer.depths()[0], super::super::buffer::f32_at_most(expected));
+    }
+
+    /// A grid of slivers 0.1 pixel high (squares of 4 × 0.1 pixels cut
+    /// in two) over x 10 to 54 and y 10 to 30 of a 64 × 48 target in cells
+    /// of 4 × 4 pixels, at depth `depth(x, y)`, whose corners the GPU
+    /// places within `snap`; with the meshes.
+    fn slivers(snap: f64, depth: impl Fn(f64, f64) -> f64) -> (OcclusionBuffer, Meshes) {
+        let size = Resolution { width: 64, height: 48 };
+        let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
+        let mut mesh = grid(DVec2::new(10.0, 10.0), DVec2::new(4.0, 0.1), [12, 201], false, depth);
+        for vertex in mesh.0.iter_mut() {
+            vertex.slack = snap;
+        }
+        let meshes = vec![mesh];
+        rasterise_meshes(&mut buffer, &meshes);
+        (buffer, meshes)
+    }
+
+    #[test]
+    fn slivers_thinner_than_the_coarsest_snap_allows_fill_the_cells_they_cover_where_their_interpolation_is_bounded() {
+        // Cells 3 to 12 across and 3 to 6 down lie inside the grid.
+        let inside = |i: usize| (3..=12).contains(&(i % 16)) && (3..=6).contains(&(i / 16));
+        let held_inside = |buffer: &OcclusionBuffer| {
+            let depths = buffer.depths();
+            (0..depths.len()).filter(|&i| inside(i) && depths[i] > 0.0).count()
+        };
+        // Flat at 0.5, at the 1/256 pixel the adapters here report: every
+        // cell inside holds the depth, and none nearer than the GPU may draw.
+        let (flat, meshes) = slivers(FINE_SNAP, |_, _| 0.5);
+        for (i, &depth) in flat.depths().iter().enumerate() {
+            assert!(!inside(i) || (depth > 0.499 && depth <= 0.5), "cell {i} holds {depth}");
+        }
+        let mut rng = Rng::new(7);
+        for _ in 0..4 {
+            let nearest = drawn(&meshes, flat.target(), &mut rng);
+            assert_vouches_no_nearer(&flat, &nearest, flat.cells());
+        }
+        // At Vulkan's coarsest snap, placing a corner may fold a sliver
+        // over: none is in a patch.
+        assert_eq!(held_inside(&slivers(COARSE_SNAP, |_, _| 0.5).0), 0);
+        // Steep in depth (rising fourfold across the first squares), the
+        // rounding of the GPU's gradient, magnified by the slivers'
+        // length over their height, outgrows the depth margin: only the
+        // squares far along, where the depth rises by a tenth or less
+        // across one, stay in the patch.
+        let steep = held_inside(&slivers(FINE_SNAP, |x, _| 0.0002 * (x - 9.5)).0);
+        assert!(steep <= 8, "{steep} of 40 cells held where the depth rises steeply");
+    }
+
+    #[test]
+    fn a_patch_folded_over_itself_keeps_the_centres_its_near_layers_outline_crosses() {
+        // Four triangles fanned round (32.5, 24.5), each turning 100
+        // degrees the same way: the fourth (300 to 400 degrees) lies over
+        // the first (0 to 100) from 0 to 40 degrees, so the first's free
+        // edge, along the row of centres y = 24.5 from x = 32.5 to 52.5,
+        // crosses the fourth's inside, which holds those centres up to
+        // about 13 pixels from the fan's centre by more than a border's
+        // margin. Cells of a pixel each.
+        let size = Resolution { width: 64, height: 48 };
+        let centre = DVec2::new(32.5, 24.5);
+        let corner = |degrees: f64| centre + 20.0 * DVec2::from_angle(degrees.to_radians());
+        let mut vertices = vec![vertex(centre.x, centre.y, 0.5)];
+        vertices.extend([0.0, 100.0, 200.0, 300.0, 400.0].map(|d| vertex(corner(d).x, corner(d).y, 0.5)));
+        let meshes = vec![(vertices, vec![0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5])];
+        let mut buffer = OcclusionBuffer::new(size, size);
+        rasterise_meshes(&mut buffer, &meshes);
+        let depths = buffer.depths();
+        for x in 34..45 {
+            let depth = depths[24 * 64 + x];
+            assert!(depth > 0.499 && depth <= 0.5, "pixel ({x}, 24) holds {depth}");
+        }
+        let mut rng = Rng::new(7);
+        for _ in 0..8 {
+            assert_vouches_no_nearer(&buffer, &drawn(&meshes, size, &mut rng), size);
+        }
     }
 }
