@@ -485,6 +485,9 @@ pub struct Rasteriser {
     /// Per row of the current patch's cells, the columns from the first to
     /// the last where its border erased a mark (empty where none).
     erased: Vec<Range<u32>>,
+    /// Per triangle of the current patch, the rows and columns of the
+    /// cells it reached.
+    reached: Vec<[Range<u32>; 2]>,
 }
 
 impl Rasteriser {
@@ -513,8 +516,9 @@ impl Rasteriser {
             self.erase(grid, border);
         }
         if self.erased.iter().any(|columns| !columns.is_empty()) {
-            for triangle in &patches.triangles[patch.triangles.clone()] {
-                self.hold_alone(grid, triangle);
+            for (k, triangle) in patches.triangles[patch.triangles.clone()].iter().enumerate() {
+                let [rows, columns] = self.reached[k].clone();
+                self.hold_alone(grid, triangle, rows, columns);
             }
         }
         for (row, span) in self.rows.clone().zip(&self.spans) {
@@ -553,6 +557,7 @@ impl Rasteriser {
         self.spans.resize(rows.len(), 0..0);
         self.erased.clear();
         self.erased.resize(rows.len(), 0..0);
+        self.reached.clear();
         (self.columns, self.rows) = (columns, rows);
     }
 
@@ -578,7 +583,9 @@ impl Rasteriser {
         let grid = cells.grid();
         let (lo, hi) = (triangle.lo - triangle.slack, triangle.hi + triangle.slack);
         let mut group_row_ranges = [[0.0; 2]; MASK_SIDE as usize];
-        for row in clamp(grid.down.cells_reaching(lo.y, hi.y), &self.rows) {
+        let rows = clamp(grid.down.cells_reaching(lo.y, hi.y), &self.rows);
+        let mut columns = 0..0;
+        for row in rows.clone() {
             let [y0, y1] = grid.down.cell(row);
             let ys = [y0.max(lo.y), y1.min(hi.y)];
             let xs = triangle.reached_x_range(ys);
@@ -586,6 +593,10 @@ impl Rasteriser {
             if reached.is_empty() {
                 continue;
             }
+            columns = match columns.is_empty() {
+                true => reached.clone(),
+                false => columns.start.min(reached.start)..columns.end.max(reached.end),
+            };
             // Each group row's x range, and their intersection, which is
             // the range over the whole row: a limit is linear in y, so its
             // bound over the row is at an end of the row, an end of a
@@ -609,6 +620,7 @@ impl Rasteriser {
                 self.mark_sides(grid, row, &reached, &whole, &group_row_ranges[..group_rows.len()]);
             }
         }
+        self.reached.push([rows, columns]);
     }
 
     /// Lowers the depth and plane of each cell of `reached` in `row`, where
@@ -710,15 +722,16 @@ impl Rasteriser {
     /// inside it by a border's margin ([`Triangle::held_x_range`]). The
     /// triangle is a patch of its own whose border is its edges, so the
     /// GPU draws those centres whatever it does with the rest of the
-    /// patch's border. Its x ranges are solved only in rows where it
-    /// reaches such a cell.
-    fn hold_alone(&mut self, grid: &Grid, triangle: &Triangle) {
+    /// patch's border. Only the cells `rows` × `columns` that it reached
+    /// ([`Self::add_triangle`]) are looked at, and its x ranges are solved
+    /// only in rows where it reaches such a cell.
+    fn hold_alone(&mut self, grid: &Grid, triangle: &Triangle, rows: Range<u32>, columns: Range<u32>) {
         let mut group_row_ranges = [[0.0; 2]; MASK_SIDE as usize];
-        for row in clamp(grid.down.cells_reaching(triangle.lo.y, triangle.hi.y), &self.rows) {
+        for row in rows {
             let erased = &self.erased[(row - self.rows.start) as usize];
             let group_rows = grid.down.group_centres(row);
             let mut solved = false;
-            for column in clamp(grid.across.cells_reaching(triangle.lo.x, triangle.hi.x), erased) {
+            for column in clamp(columns.clone(), erased) {
                 let i = self.cover_index(column, row);
                 if self.cover[i].erased == 0 || !matches!(self.cover[i].depth, CellDepth::AtLeast { .. }) {
                     continue;
