@@ -25,7 +25,10 @@
 //! ([`Rasteriser::add_triangle`], [`Rasteriser::erase`]), whatever the
 //! triangles' size: a mesh of triangles far smaller than a cell covers the
 //! cell as one surface does. A triangle is a patch of its own too, whose
-//! border is its three edges: so a centre within a border's margin is
+//! border is its three edges (a fan triangle of a polygon clipped at the
+//! near plane as well: the GPU's clipped polygon is convex and holds the
+//! points within the slack of its corners, so it holds the placed fan
+//! triangle): so a centre within a border's margin is
 //! still drawn where one of the patch's triangles holds it clear of its
 //! own edges by that margin ([`Rasteriser::hold_alone`]), as where a
 //! patch folds over itself and its near layer's outline crosses the far
@@ -45,9 +48,11 @@
 //! the error, hold p. So each cell keeps the least of those planes over the
 //! part of it each such triangle can reach ([`Rasteriser::add_depth`]),
 //! and one plane below all of them there. The margins bound f32
-//! interpolation over triangles, not over slivers (gpu/conservative.rs,
-//! rule 2): a triangle less than [`LEAST_HEIGHT`] errors high over any of
-//! its edges is left out of the patches, and its edges border them.
+//! interpolation over triangles that stand high over their edges; a
+//! thinner one (a sliver, gpu/conservative.rs, rule 2) joins a patch only
+//! where its interpolation is bounded too, its plane taken farther for it
+//! ([`depth_slack`]); otherwise it is left out of the patches, and its
+//! edges border them.
 //!
 //! Near the eye. A triangle with a corner the GPU may clip (at or behind
 //! the near plane, within its error) is drawn in its part beyond the near
@@ -75,9 +80,9 @@ use crate::gpu::ScreenPlane;
 /// A triangle at least [`LEAST_HEIGHT`] errors high over each edge at
 /// this snap, the coarsest Vulkan allows (0.375 pixel at least), belongs
 /// to a patch whatever its shape: the rule every earlier release held on
-/// every model, measured exact. A thinner one must also keep the GPU's
-/// f32 interpolation of its depth within the margins
-/// ([`interpolation_bounded`]).
+/// every model, measured exact. A thinner one joins only where the GPU's
+/// f32 interpolation of its depth across it is bounded, its plane taken
+/// farther for it ([`interpolation_slack`]).
 const SLIVER_SNAP: f64 = 1.0 / 16.0;
 
 /// A cell's depth is moved farther by this fraction, and by
@@ -98,7 +103,7 @@ const LEAST_HEIGHT: f64 = 3.0;
 const F32_STEP: f64 = 1.0 / (1u32 << 24) as f64;
 
 /// Steps of [`F32_STEP`] the GPU's depth plane of a thin triangle may err
-/// by, in the terms [`interpolation_bounded`] scales them by: its
+/// by, in the terms [`interpolation_slack`] scales them by: its
 /// gradient comes from products of corner differences (two roundings, and
 /// the difference of the products one more) over the triangle's area (one
 /// more), and the placed triangle is at least half as high as ours
@@ -356,7 +361,11 @@ impl Patches {
                 let t = self.by_patch[k].1 as usize;
                 let Some(polygon) = polygon(mesh, self.corners[t]) else { continue };
                 for c in polygon.triangles() {
-                    let triangle = Triangle::new(c, mesh.snap);
+                    // A patch's triangles each have a depth slack (their
+                    // turn was found with it); were one to lack it, its
+                    // plane would lie infinitely far, vouching for nothing.
+                    let depth = depth_slack(&c, mesh.snap).unwrap_or(f64::INFINITY);
+                    let triangle = Triangle::new(c, mesh.snap, depth);
                     nearest = c.iter().fold(nearest, |n, c| n.max(c.at.z));
                     (lo, hi) = (lo.min(triangle.lo - triangle.slack), hi.max(triangle.hi + triangle.slack));
                     self.triangles.push(triangle);
@@ -546,7 +555,7 @@ impl Rasteriser {
     /// Makes ready for a patch over the cells `columns` × `rows`.
     fn begin_patch(&mut self, columns: Range<u32>, rows: Range<u32>) {
         debug_assert!(
-            self.cover.iter().all(|c| c.mask == 0 && matches!(c.depth, CellDepth::Unreached)),
+            self.cover.iter().all(|c| c.mask == 0 && c.erased == 0 && matches!(c.depth, CellDepth::Unreached)),
             "every entry of the last patch emptied"
         );
         let cells_held = columns.len() * rows.len();
@@ -593,10 +602,7 @@ impl Rasteriser {
             if reached.is_empty() {
                 continue;
             }
-            columns = match columns.is_empty() {
-                true => reached.clone(),
-                false => columns.start.min(reached.start)..columns.end.max(reached.end),
-            };
+            columns = widened(&columns, &reached);
             // Each group row's x range, and their intersection, which is
             // the range over the whole row: a limit is linear in y, so its
             // bound over the row is at an end of the row, an end of a
@@ -611,11 +617,7 @@ impl Rasteriser {
             let whole = grid.across.cells_within(from, to, &self.columns);
             debug_assert!(whole.is_empty() || (reached.start <= whole.start && whole.end <= reached.end));
             let in_patch = (row - self.rows.start) as usize;
-            let span = self.spans[in_patch].clone();
-            self.spans[in_patch] = match span.is_empty() {
-                true => reached.clone(),
-                false => span.start.min(reached.start)..span.end.max(reached.end),
-            };
+            self.spans[in_patch] = widened(&self.spans[in_patch], &reached);
             if self.add_depth(cells, row, reached.clone(), &whole, (xs, ys), &triangle.plane) {
                 self.mark_sides(grid, row, &reached, &whole, &group_row_ranges[..group_rows.len()]);
             }
@@ -732,8 +734,7 @@ impl Rasteriser {
             let group_rows = grid.down.group_centres(row);
             let mut solved = false;
             for column in clamp(columns.clone(), erased) {
-                let i = self.cover_index(column, row);
-                if self.cover[i].erased == 0 || !matches!(self.cover[i].depth, CellDepth::AtLeast { .. }) {
+                if self.cover[self.cover_index(column, row)].erased == 0 {
                     continue;
                 }
                 if !solved {
@@ -742,11 +743,7 @@ impl Rasteriser {
                     }
                     solved = true;
                 }
-                let groups = grid.across.group_centres(column);
-                let cover = &mut self.cover[i];
-                for (k, &range) in group_row_ranges[..group_rows.len()].iter().enumerate() {
-                    cover.mask |= groups_within(groups, range) << (k as u32 * MASK_SIDE);
-                }
+                self.mark_groups(grid, row, std::iter::once(column), &group_row_ranges[..group_rows.len()]);
             }
         }
     }
@@ -775,14 +772,19 @@ impl Rasteriser {
                     self.cover[i].erased |= self.cover[i].mask & bits;
                     self.cover[i].mask &= !bits;
                     let in_patch = (row - self.rows.start) as usize;
-                    let erased = self.erased[in_patch].clone();
-                    self.erased[in_patch] = match erased.is_empty() {
-                        true => column..column + 1,
-                        false => erased.start.min(column)..erased.end.max(column + 1),
-                    };
+                    self.erased[in_patch] = widened(&self.erased[in_patch], &(column..column + 1));
                 }
             }
         }
+    }
+}
+
+/// `span` grown to hold `by` too (either may be empty).
+fn widened(span: &Range<u32>, by: &Range<u32>) -> Range<u32> {
+    match (span.is_empty(), by.is_empty()) {
+        (true, _) => by.clone(),
+        (_, true) => span.clone(),
+        _ => span.start.min(by.start)..span.end.max(by.end),
     }
 }
 
@@ -797,8 +799,7 @@ fn groups_within(groups: &[[f64; 2]], [from, to]: [f64; 2]) -> u64 {
 /// ([`inward_edges`]) is at least minus a margin, the margin being its
 /// |ex| + |ey| times the triangle's slack ([`REACHED`]), its snap
 /// ([`MARKED`]) or minus a border's margin ([`HELD`]). Solved for x once
-/// per triangle, so a row
-/// takes a product and a sum per edge.
+/// per triangle, so a row takes a product and a sum per edge.
 #[derive(Clone, Copy, Debug)]
 enum Limit {
     /// x at least `slope · y + offsets[margin]` (ex > 0).
@@ -895,7 +896,9 @@ struct Triangle {
 }
 
 impl Triangle {
-    fn new(corners: [ScreenVertex; 3], snap: f64) -> Triangle {
+    /// The triangle of `corners` (`snap` as [`ScreenMesh::snap`]), its
+    /// plane taken `depth_slack` from each point ([`depth_slack`]).
+    fn new(corners: [ScreenVertex; 3], snap: f64, depth_slack: f64) -> Triangle {
         let (slack, edges) = (slack_of(&corners), inward_edges(&corners));
         // What it reaches holds what it marks (add_triangle).
         debug_assert!(
@@ -912,7 +915,7 @@ impl Triangle {
                 let reach = edge[0].abs() + edge[1].abs();
                 Limit::new(edge, [slack * reach, snap * reach, -2.0 * slack * reach])
             }),
-            plane: lowered_plane(&corners, slack),
+            plane: lowered_plane(&corners, depth_slack),
         }
     }
 
@@ -1033,25 +1036,12 @@ fn behind_turn(mesh: &ScreenMesh, corners: &[[u32; 3]], turns: &[Turn]) -> Optio
     }
 }
 
-/// A triangle's turn on screen, or none for a sliver (less than
-/// [`LEAST_HEIGHT`] errors high over an edge, or less than that at
-/// [`SLIVER_SNAP`] where its interpolation is not bounded) or one not a
-/// number.
+/// A triangle's turn on screen, or none for a sliver or one not a number
+/// ([`depth_slack`]).
 fn turn_of(corners: [ScreenVertex; 3], snap: f64) -> Turn {
     let [a, b, c] = corners.map(|c| c.at);
     let area = twice_area(a, b, c);
-    let longest_squared = [(a, b), (b, c), (c, a)]
-        .iter()
-        .map(|(p, q)| (q.truncate() - p.truncate()).length_squared())
-        .fold(0.0, f64::max);
-    // Twice the area over the longest edge is the least height; squared,
-    // to spare the roots.
-    let high = |least: f64| area * area >= least * least * longest_squared;
-    let slack = slack_of(&corners);
-    let stands = high(LEAST_HEIGHT * 2.0 * slack)
-        && (high(LEAST_HEIGHT * 2.0 * (slack - snap + SLIVER_SNAP))
-            || interpolation_bounded(&corners, area.abs(), longest_squared.sqrt(), slack));
-    if !stands || !area.is_finite() || area == 0.0 {
+    if depth_slack(&corners, snap).is_none() || !area.is_finite() || area == 0.0 {
         Turn::Excluded
     } else if area > 0.0 {
         Turn::Counter
@@ -1060,32 +1050,72 @@ fn turn_of(corners: [ScreenVertex; 3], snap: f64) -> Turn {
     }
 }
 
-/// Whether the GPU's f32 interpolation of depth across a triangle
+/// How far from a point the triangle's plane is taken, at least, to bound
+/// the depth the GPU draws it at there ([`lowered_plane`]): its corners'
+/// error (`snap` as [`ScreenMesh::snap`]), and more for one thinner than
+/// [`LEAST_HEIGHT`] errors at [`SLIVER_SNAP`] ([`interpolation_slack`]).
+/// None for a sliver, in no patch: less than [`LEAST_HEIGHT`] errors high
+/// over an edge at its own snap, thinner than that at [`SLIVER_SNAP`]
+/// where its interpolation is not bounded, or not a number.
+fn depth_slack(corners: &[ScreenVertex; 3], snap: f64) -> Option<f64> {
+    let [a, b, c] = corners.map(|c| c.at);
+    let twice_area = twice_area(a, b, c).abs();
+    let longest_squared = [(a, b), (b, c), (c, a)]
+        .iter()
+        .map(|(p, q)| (q.truncate() - p.truncate()).length_squared())
+        .fold(0.0, f64::max);
+    // Twice the area over the longest edge is the least height; squared,
+    // to spare the roots (false for a NaN).
+    let high = |least: f64| twice_area * twice_area >= least * least * longest_squared;
+    let slack = slack_of(corners);
+    if !high(LEAST_HEIGHT * 2.0 * slack) {
+        None
+    } else if high(LEAST_HEIGHT * 2.0 * (slack - snap + SLIVER_SNAP)) {
+        Some(slack)
+    } else {
+        interpolation_slack(corners, twice_area, longest_squared.sqrt(), slack, snap)
+    }
+}
+
+/// Where the GPU's f32 interpolation of depth across a thin triangle
 /// (`twice_area` and `longest` edge on screen, corners within `slack` of
-/// where the GPU places them) stays within what [`lowered_plane`] allows
-/// for, however thin it is. A rasteriser evaluates the triangle's depth
-/// plane, whose gradient it divides by the placed triangle's area: where
-/// that is small against the longest edge squared (its height h against
-/// its length L), the gradient's rounding, of [`INTERPOLATION_STEPS`]
-/// steps of either the products of corner differences (at most Δz · L
-/// for a depth range Δz) or the area's own cancellation (L², of the
-/// gradient), is magnified by L / h, and carried over the triangle, up to
-/// L from the corner the plane is anchored at. So at a pixel the depth may
-/// err by s · (Δz · L / h + |∇z| · L² / h), s those steps: the first part
-/// must fit within half of [`DEPTH_MARGIN`] of the triangle's farthest
-/// depth, and the second within the plane's lowering by the slack,
-/// |∇z| · slack. (Anchored at the screen's origin instead, the plane's
-/// rounding grows with the pixel's coordinate X, by a few steps of
-/// |∇z| · X: the slack's f32 part, 2^-21 of the target's size, holds that.)
-fn interpolation_bounded(corners: &[ScreenVertex; 3], twice_area: f64, longest: f64, slack: f64) -> bool {
+/// where the GPU places them, `snap` of it the sub-pixel grid's) is
+/// bounded, how far from a point its plane must be taken ([`depth_slack`]).
+/// A rasteriser evaluates the placed triangle's depth plane, whose
+/// gradient it divides by the triangle's area; where that is small
+/// against the longest edge squared (its height h against its length L),
+/// roundings are magnified by L / h. Each source of error gets its own
+/// allowance, s being [`INTERPOLATION_STEPS`] steps of f32:
+/// - placing the corners moves the point the plane is taken at by at most
+///   the slack, as for every triangle;
+/// - the area's rounding (its cancellation: of L², relatively) scales the
+///   gradient by s · L / h relatively, which moves the point by
+///   s · L² / h from the corner the plane is anchored at: allowed up to
+///   the slack, and added to it;
+/// - the rounding of the products of corner differences (of Δz · L for a
+///   depth range Δz), s · Δz / h in the gradient and s · Δz · L / h in
+///   depth over the triangle: allowed up to half of [`DEPTH_MARGIN`] of
+///   the triangle's farthest depth (the other half holds the rounding of
+///   an ordinary triangle's interpolation);
+/// - a plane anchored at the screen's origin rounds by a few steps of
+///   |∇z| · X more, X up to the target's size: the slack's part beyond the
+///   snap (2^-21 of the target's size, eight steps) is added for it.
+fn interpolation_slack(
+    corners: &[ScreenVertex; 3],
+    twice_area: f64,
+    longest: f64,
+    slack: f64,
+    snap: f64,
+) -> Option<f64> {
     let depths = corners.map(|c| c.at.z);
     let farthest = depths.iter().copied().fold(f64::INFINITY, f64::min);
     let range = depths.iter().copied().fold(f64::NEG_INFINITY, f64::max) - farthest;
-    // h = twice_area / longest: s · Δz · L / h ≤ M / 2 · far, and
-    // s · L² / h ≤ slack, each times h (false for NaN).
     let steps = INTERPOLATION_STEPS * F32_STEP;
     let height = twice_area / longest;
-    steps * range * longest <= DEPTH_MARGIN / 2.0 * farthest * height && steps * longest * longest <= slack * height
+    let moved = steps * longest * longest / height;
+    // False for a NaN.
+    let bounded = steps * range * longest <= DEPTH_MARGIN / 2.0 * farthest * height && moved <= slack;
+    bounded.then_some(slack + moved + (slack - snap))
 }
 
 /// Twice the signed area of the screen triangle pqr: its sign is its
@@ -1555,7 +1585,7 @@ mod tests {
             };
             rasteriser.cover.clear();
             rasteriser.cover.resize(16 * 12, reached);
-            rasteriser.add_triangle(&cells, &Triangle::new(corners, snap));
+            rasteriser.add_triangle(&cells, &Triangle::new(corners, snap, snap));
             // Every pixel centre inside the triangle is marked (each cell's
             // groups here are single pixels).
             for (x, y) in (0..64).flat_map(|x| (0..48).map(move |y| (x, y))) {
@@ -1861,7 +1891,9 @@ mod tests {
     /// A grid of slivers 0.1 pixel high (squares of 4 × 0.1 pixels cut
     /// in two) over x 10 to 54 and y 10 to 30 of a 64 × 48 target in cells
     /// of 4 × 4 pixels, at depth `depth(x, y)`, whose corners the GPU
-    /// places within `snap`; with the meshes.
+    /// places within `snap`; with the meshes. (What the GPU draws is
+    /// interpolated exactly here ([`drawn`]): the f32 bound itself is held
+    /// against the adapters by tests/real_models.rs and the stress cases.)
     fn slivers(snap: f64, depth: impl Fn(f64, f64) -> f64) -> (OcclusionBuffer, Meshes) {
         let size = Resolution { width: 64, height: 48 };
         let mut buffer = OcclusionBuffer::new(size, Resolution { width: 16, height: 12 });
@@ -1896,13 +1928,24 @@ mod tests {
         // At Vulkan's coarsest snap, placing a corner may fold a sliver
         // over: none is in a patch.
         assert_eq!(held_inside(&slivers(COARSE_SNAP, |_, _| 0.5).0), 0);
-        // Steep in depth (rising fourfold across the first squares), the
-        // rounding of the GPU's gradient, magnified by the slivers'
-        // length over their height, outgrows the depth margin: only the
-        // squares far along, where the depth rises by a tenth or less
-        // across one, stay in the patch.
-        let steep = held_inside(&slivers(FINE_SNAP, |x, _| 0.0002 * (x - 9.5)).0);
-        assert!(steep <= 8, "{steep} of 40 cells held where the depth rises steeply");
+        // Steep in depth (ninefold across the first square of slivers,
+        // from 1e-4 to 9e-4), the rounding of the GPU's gradient, magnified
+        // by the slivers' length over their height (40), outgrows half the
+        // depth margin wherever the depth rises by more than a tenth across
+        // a square: only the last square's slivers (x 50 to 54) stay in the
+        // patch, and their pixels alone hold a depth.
+        let (steep, meshes) = slivers(FINE_SNAP, |x, _| 0.0002 * (x - 9.5));
+        let picture = steep.per_pixel();
+        for y in 10..30 {
+            for x in 10..54 {
+                let held = picture.depths[y * 64 + x] > 0.0;
+                assert_eq!(held, x >= 50, "pixel ({x}, {y})");
+            }
+        }
+        for _ in 0..4 {
+            let nearest = drawn(&meshes, steep.target(), &mut rng);
+            assert_vouches_no_nearer(&steep, &nearest, steep.cells());
+        }
     }
 
     #[test]
@@ -1913,19 +1956,29 @@ mod tests {
         // edge, along the row of centres y = 24.5 from x = 32.5 to 52.5,
         // crosses the fourth's inside, which holds those centres up to
         // about 13 pixels from the fan's centre by more than a border's
-        // margin. Cells of a pixel each.
+        // margin. The fourth triangle lies farther (its outer corners at
+        // 0.3, the rest at 0.5): where the GPU leaves the first's edge
+        // undrawn, it draws the fourth there. Cells of a pixel each.
         let size = Resolution { width: 64, height: 48 };
         let centre = DVec2::new(32.5, 24.5);
         let corner = |degrees: f64| centre + 20.0 * DVec2::from_angle(degrees.to_radians());
         let mut vertices = vec![vertex(centre.x, centre.y, 0.5)];
-        vertices.extend([0.0, 100.0, 200.0, 300.0, 400.0].map(|d| vertex(corner(d).x, corner(d).y, 0.5)));
+        vertices.extend([0.0, 100.0, 200.0, 300.0, 400.0].map(|d| {
+            let far = d >= 300.0;
+            vertex(corner(d).x, corner(d).y, if far { 0.3 } else { 0.5 })
+        }));
         let meshes = vec![(vertices, vec![0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5])];
         let mut buffer = OcclusionBuffer::new(size, size);
         rasterise_meshes(&mut buffer, &meshes);
         let depths = buffer.depths();
+        // The fourth triangle's depth along the row, where the GPU may draw
+        // it alone: 0.5 at the fan's centre, falling towards its far side,
+        // 20 · cos 50° from the centre at 350 degrees, 10 off the row.
         for x in 34..45 {
-            let depth = depths[24 * 64 + x];
-            assert!(depth > 0.499 && depth <= 0.5, "pixel ({x}, 24) holds {depth}");
+            let depth = f64::from(depths[24 * 64 + x]);
+            let along = (x as f64 + 0.5 - 32.5) * 10f64.to_radians().cos();
+            let fourth = 0.5 - 0.2 * along / (20.0 * 50f64.to_radians().cos());
+            assert!(depth > 0.3 && depth < fourth, "pixel ({x}, 24) holds {depth}, the fourth triangle {fourth}");
         }
         let mut rng = Rng::new(7);
         for _ in 0..8 {
