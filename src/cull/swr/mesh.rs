@@ -69,6 +69,12 @@
 //! scene's fragment stage discards only fragments nearer than the object's
 //! box (`FragmentLimit`, gpu/conservative.rs), and an occluder's triangles
 //! lie within its box (the box is its mesh's bounds, placed).
+//! Not quite always: on a triangle seen edge-on, the depth the GPU
+//! interpolates from its snapped corners may land in front of the box,
+//! and the fragment is discarded. That was measured once, on Vulkan
+//! (den-haag.obj, frame 3 of its orbit), where the surface seen instead lay
+//! three steps of 2^-24 farther, within [`DEPTH_ABSOLUTE`];
+//! tests/occluder_depth.rs holds the buffer against the GPU's depth there.
 
 use std::ops::Range;
 
@@ -89,6 +95,9 @@ const SLIVER_SNAP: f64 = 1.0 / 16.0;
 /// [`DEPTH_ABSOLUTE`], than the triangle's exact depth: the GPU
 /// interpolates depth in f32, and GL keeps only absolute precision of it
 /// (gpu/conservative.rs, rule 1); both apply on every backend.
+/// Without the absolute margin, tests/occluder_depth.rs fails: on GL by
+/// rounding (under half a step of 2^-24), on Vulkan at the one pixel where
+/// the fragment limit discarded an occluder's fragment (module doc).
 const DEPTH_MARGIN: f64 = 1.0 / (1u32 << 18) as f64;
 const DEPTH_ABSOLUTE: f64 = 1.0 / (1u32 << 21) as f64;
 
