@@ -69,12 +69,15 @@
 //! scene's fragment stage discards only fragments nearer than the object's
 //! box (`FragmentLimit`, gpu/conservative.rs), and an occluder's triangles
 //! lie within its box (the box is its mesh's bounds, placed).
-//! Not quite always: on a triangle seen edge-on, the depth the GPU
-//! interpolates from its snapped corners may land in front of the box,
-//! and the fragment is discarded. That was measured once, on Vulkan
-//! (den-haag.obj, frame 3 of its orbit), where the surface seen instead lay
-//! three steps of 2^-24 farther, within [`DEPTH_ABSOLUTE`];
-//! tests/occluder_depth.rs holds the buffer against the GPU's depth there.
+//! Not quite always: at a pixel by a corner of the object's box, where the
+//! limit lies only half the box's growth in front of the surface, the depth
+//! the GPU gives a fragment from its snapped corners may land in front of
+//! it (most likely on a triangle seen edge-on there, whose depth changes
+//! fast across the pixel), and the fragment is discarded. That was
+//! measured once, on Vulkan (den-haag.obj, frame 3 of its orbit, a
+//! building's corner), where the surface seen instead lay three steps of
+//! 2^-24 farther, within [`DEPTH_ABSOLUTE`]; tests/occluder_depth.rs holds
+//! the buffer against the GPU's depth there.
 
 use std::ops::Range;
 
