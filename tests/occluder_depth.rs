@@ -1,8 +1,8 @@
 //! `swr`'s buffer vouches, at every pixel it holds, for no depth nearer
 //! than the GPU draws there: its depths held against the reference depth,
 //! pixel by pixel, on each backend present. The scene is den-haag.obj on
-//! its orbit (../shared/models): buildings about 500 m away with the near
-//! plane at 0.08, so reverse-Z depths near 1e-4, where GL keeps only the
+//! its orbit (../shared/models): buildings about 1 km away with the near
+//! plane at 0.1, so reverse-Z depths near 1e-4, where GL keeps only the
 //! absolute precision of numbers near 1 (docs/box-tests.md, rule 1): the
 //! margins of an occluder's depth (swr/mesh.rs, `DEPTH_MARGIN` and
 //! `DEPTH_ABSOLUTE`) are what keep the buffer behind what the GPU draws.
