@@ -4,8 +4,11 @@
 //! its orbit (../shared/models): buildings about 1 km away with the near
 //! plane at 0.1, so reverse-Z depths near 1e-4, where GL keeps only the
 //! absolute precision of numbers near 1 (docs/box-tests.md, rule 1): the
-//! margins of an occluder's depth (swr/mesh.rs, `DEPTH_MARGIN` and
-//! `DEPTH_ABSOLUTE`) are what keep the buffer behind what the GPU draws.
+//! margins of an occluder's depth (swr/mesh.rs, `DEPTH_MARGIN` and the
+//! backend's `DepthMargins`) are what keep the buffer behind what the GPU
+//! draws. So is leaving out of the patches a triangle the fragment stage
+//! may discard (mesh.rs, `kept`): without it, one pixel of frame 3 fails
+//! on Vulkan.
 //! The whole orbit is checked, each frame after the one before, as a run
 //! takes them (`swr`'s occluders are last frame's visible objects).
 

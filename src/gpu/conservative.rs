@@ -159,6 +159,14 @@ impl DepthMargins {
     fn raise(self, nearest_depth: f64) -> f64 {
         self.absolute + RAISE_PER_DEPTH * nearest_depth
     }
+
+    /// How far from a surface's depth the GPU may draw it, where none of it
+    /// lies nearer than `nearest_depth`: half the raise of a box there (the
+    /// other half separates the box from the surface's own rounding, and
+    /// the [`FragmentLimit`] keeps this half).
+    pub(crate) fn fragment_error(self, nearest_depth: f64) -> f64 {
+        self.raise(nearest_depth) / 2.0
+    }
 }
 
 /// Eye-relative corners of a box grown for testing, as boxes.wgsl reads
@@ -417,6 +425,15 @@ impl BoxPlanes {
 /// step of the terms' size each: about 14 in all, and this is 64 of them.
 pub(crate) const PLANE_ROUNDING: f64 = 1.0 / (1u32 << 18) as f64;
 
+/// How far scene.wgsl's fragment limit may lie below its exact value, as
+/// a fraction of its terms' size over the target (|scale| · (|ray_c| +
+/// |ray_x| · width + |ray_y| · height) + raise), its inputs being the f32
+/// values the uniforms hold: two products and two sums make the ray, a
+/// product and a sum the limit, each within a step of 2^-24 of the terms'
+/// size (a GPU's add and multiply may round either way, or fuse): six
+/// steps, and this is eight.
+const LIMIT_ROUNDING: f64 = 1.0 / (1u32 << 21) as f64;
+
 /// Where a shader's plane stands for no bound (an entry) or no miss (an
 /// exit): far beyond any depth, yet finite after any sum the shader makes.
 /// A plane whose coefficients reach a tenth of it (a face within f32's
@@ -517,9 +534,70 @@ impl FragmentLimit {
         let nearest = nearest_view_depth(view, min, max).max(camera.near);
         FragmentLimit {
             scale: scale.map(|s| s as f32),
-            raise: (margins.depth.raise(camera.near / nearest) / 2.0) as f32,
+            raise: margins.depth.fragment_error(camera.near / nearest) as f32,
         }
     }
+
+    /// The faces of the object's box `bounds` (this limit's) that face the
+    /// eye, on a target of `target` pixels whose rays are `rays`, each with
+    /// where scene.wgsl keeps the object's fragments ([`FacingFace`]).
+    pub(crate) fn facing_faces(
+        &self,
+        camera: &Camera,
+        bounds: &Aabb,
+        rays: &PixelRays,
+        target: Resolution,
+    ) -> [Option<FacingFace>; 3] {
+        let faces = faces_across(bounds.min - camera.eye, bounds.max - camera.eye);
+        let [per_x, per_y, constant] = rays.uniform().map(|v| v.as_dvec4());
+        let (width, height) = (f64::from(target.width), f64::from(target.height));
+        let raise = f64::from(self.raise);
+        [0, 1, 2].map(|axis| {
+            // The limit's face lies beyond the box's own: the eye lies
+            // outside the box along any axis it lies outside the grown one.
+            let (scale, (facing, _)) = (f64::from(self.scale[axis]), faces[axis]?);
+            (scale != 0.0).then(|| {
+                let kept_below = ScreenPlane {
+                    per_x: scale * per_x[axis],
+                    per_y: scale * per_y[axis],
+                    constant: scale * constant[axis] + raise,
+                };
+                let terms = (scale * constant[axis]).abs()
+                    + raise.abs()
+                    + kept_below.per_x.abs() * width
+                    + kept_below.per_y.abs() * height;
+                let face = camera.near / facing;
+                FacingFace {
+                    face: ScreenPlane {
+                        per_x: face * rays.per_x[axis],
+                        per_y: face * rays.per_y[axis],
+                        constant: face * rays.constant[axis],
+                    },
+                    kept_below: ScreenPlane {
+                        constant: kept_below.constant - LIMIT_ROUNDING * terms,
+                        ..kept_below
+                    },
+                }
+            })
+        })
+    }
+}
+
+/// A face of an object's box that faces the eye, on screen, as the scene's
+/// fragment stage bounds the object's fragments by it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct FacingFace {
+    /// The depth where each pixel's ray meets the face's plane: no point of
+    /// the box lies nearer.
+    pub(crate) face: ScreenPlane,
+    /// scene.wgsl keeps every fragment of the object whose depth lies at or
+    /// below this plane at its pixel centre, and below each such plane of
+    /// its box: the face grown by half its box test's growth, raised by
+    /// the fragment's own error ([`DepthMargins::fragment_error`]). The
+    /// shader computes it from the f32 values the uniforms hold, which this
+    /// takes, and rounds in evaluating it: it is lowered by
+    /// [`LIMIT_ROUNDING`] of its terms' size over the target.
+    pub(crate) kept_below: ScreenPlane,
 }
 
 #[cfg(test)]
@@ -618,6 +696,64 @@ pub(crate) mod tests {
             }
         }
         assert!(hits > 200, "the box must cover a good part of the view: {hits}");
+    }
+
+    #[test]
+    fn facing_faces_are_where_rays_enter_the_box_and_keep_fragments_at_or_below_the_shaders_limit_and_close_to_it() {
+        let cam = camera();
+        let r = Resolution::DEFAULT;
+        let view = cam.view_rotation();
+        let margins = BoxMargins::new(
+            DepthMargins::for_backend(wgpu::Backend::Gl),
+            SubpixelPrecision::COARSEST,
+            &cam,
+            r,
+        );
+        let rays = PixelRays::new(&cam, r);
+        let [per_x, per_y, constant] = rays.uniform();
+        let (mut bounded, mut below) = (0, Vec::new());
+        for (b, _) in random_boxes_in_view(57) {
+            let limit = FragmentLimit::new(&cam, &view, margins, &b);
+            let faces = limit.facing_faces(&cam, &b, &rays, r);
+            let least = |plane: fn(&FacingFace) -> ScreenPlane, x: f64, y: f64| {
+                faces
+                    .iter()
+                    .flatten()
+                    .map(|f| plane(f).at(x, y))
+                    .fold(NO_LIMIT, f64::min)
+            };
+            for y in (0..r.height).step_by(11) {
+                for x in (0..r.width).step_by(11) {
+                    let (x, y) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+                    let kept = least(|f| f.kept_below, x, y);
+                    let shader = limit.at((per_x * x as f32 + per_y * y as f32 + constant).truncate());
+                    if shader >= NO_LIMIT {
+                        continue;
+                    }
+                    bounded += 1;
+                    assert!(kept <= shader, "{b:?} at ({x}, {y}): {kept} above {shader}");
+                    // Close to it where the object may have fragments; and
+                    // there the ray enters the box by the nearest face.
+                    if let Some(entry) = entry_depth(&cam, &b, pixel_ray(&cam, r, x, y)) {
+                        below.push((shader - kept) / shader);
+                        let face = least(|f| f.face, x, y);
+                        assert!(
+                            (face - entry).abs() <= 1e-9 * entry,
+                            "{b:?} at ({x}, {y}): face {face}, enters at {entry}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(bounded > 10_000, "only {bounded} pixel centres bounded");
+        // Rays nearly along a face round its depth over the terms' size,
+        // far larger than the depth: some are kept well below it.
+        below.sort_by(f64::total_cmp);
+        let (median, farthest) = (below[below.len() / 2], below[below.len() - 1]);
+        assert!(
+            median < 2e-6 && farthest < 1e-3,
+            "kept below the limit by {median} of it (median), {farthest} at most"
+        );
     }
 
     /// Up to 200 boxes of random size and place in front of [`camera`],

@@ -44,7 +44,9 @@
 //! Its depth there is that of a point of the triangle drawn, within that
 //! error of p: at least the triangle's plane lowered by its greatest change
 //! within the error, then moved farther by the GPU's depth rounding
-//! ([`DEPTH_MARGIN`]); the triangle is one whose corners' bounds, grown by
+//! ([`DEPTH_MARGIN`], and a fragment's error for the triangle's nearest
+//! depth, [`DepthMargins::fragment_error`]: rule 1 of
+//! gpu/conservative.rs); the triangle is one whose corners' bounds, grown by
 //! the error, hold p. So each cell keeps the least of those planes over the
 //! part of it each such triangle can reach ([`Rasteriser::add_depth`]),
 //! and one plane below all of them there. The margins bound f32
@@ -65,26 +67,25 @@
 //! crossing's error is that of the GPU's f32 clipping at the near plane,
 //! larger than a vertex's.
 //!
-//! The GPU must also draw every fragment an occluder vouches for: the
-//! scene's fragment stage discards only fragments nearer than the object's
-//! box (`FragmentLimit`, gpu/conservative.rs), and an occluder's triangles
-//! lie within its box (the box is its mesh's bounds, placed).
-//! Not quite always: at a pixel by a corner of the object's box, where the
-//! limit lies only half the box's growth in front of the surface, the depth
-//! the GPU gives a fragment from its snapped corners may land in front of
-//! it (most likely on a triangle seen edge-on there, whose depth changes
-//! fast across the pixel), and the fragment is discarded. That was
-//! measured once, on Vulkan (den-haag.obj, frame 3 of its orbit, a
-//! building's corner), where the surface seen instead lay three steps of
-//! 2^-24 farther, within [`DEPTH_ABSOLUTE`]; tests/occluder_depth.rs holds
-//! the buffer against the GPU's depth there.
+//! The GPU must also keep every fragment an occluder vouches for: the
+//! scene's fragment stage discards fragments nearer than where the pixel's
+//! ray enters the object's box (`FragmentLimit`, gpu/conservative.rs).
+//! An occluder's triangles lie within its box (its mesh's bounds, placed),
+//! but by a face of the box, where the limit lies only half the box's
+//! growth in front of the surface, the depth the GPU draws a triangle at
+//! may reach past it: one seen edge-on changes depth fast across the
+//! error of its corners. That was measured on Vulkan (den-haag.obj, frame
+//! 3 of its orbit, a building's corner: the surface seen instead lay three
+//! steps of 2^-24 farther; tests/occluder_depth.rs). So a triangle the
+//! GPU may draw past the limit anywhere within its error is in no patch
+//! ([`kept`]).
 
 use std::ops::Range;
 
 use glam::{DVec2, DVec3};
 
 use super::buffer::{Cells, Coverage, Grid, MASK_SIDE, below_both};
-use crate::gpu::ScreenPlane;
+use crate::gpu::{DepthMargins, FacingFace, ScreenPlane};
 
 /// A triangle at least [`LEAST_HEIGHT`] errors high over each edge at
 /// this snap, the coarsest Vulkan allows (0.375 pixel at least), belongs
@@ -94,15 +95,12 @@ use crate::gpu::ScreenPlane;
 /// farther for it ([`interpolation_slack`]).
 const SLIVER_SNAP: f64 = 1.0 / 16.0;
 
-/// A cell's depth is moved farther by this fraction, and by
-/// [`DEPTH_ABSOLUTE`], than the triangle's exact depth: the GPU
-/// interpolates depth in f32, and GL keeps only absolute precision of it
-/// (gpu/conservative.rs, rule 1); both apply on every backend.
-/// Without the absolute margin, tests/occluder_depth.rs fails: on GL by
-/// rounding (under half a step of 2^-24), on Vulkan at the one pixel where
-/// the fragment limit discarded an occluder's fragment (module doc).
+/// A cell's depth is moved farther by this fraction of the triangle's
+/// exact depth there, and by a fragment's error for the triangle's
+/// nearest depth ([`DepthMargins::fragment_error`]: its interpolation
+/// across the screen, and on GL the absolute precision its clip range
+/// keeps): the GPU interpolates depth in f32.
 const DEPTH_MARGIN: f64 = 1.0 / (1u32 << 18) as f64;
-const DEPTH_ABSOLUTE: f64 = 1.0 / (1u32 << 21) as f64;
 
 /// How high a patch triangle must stand over each of its edges, in
 /// multiples of twice its corners' error (the adapter's snap and the f32
@@ -162,6 +160,8 @@ pub struct ScreenMesh<'a> {
     /// part of every vertex's slack that its own f32 position's error does
     /// not make.
     pub snap: f64,
+    /// The backend's depth margins (GL's keep an absolute part).
+    pub depth: DepthMargins,
 }
 
 /// A part of a mesh the GPU draws: a run of its triangles, whose indices
@@ -176,6 +176,10 @@ pub struct DrawnPart {
     /// triangles are numbered part after part).
     pub vertex_slot: u32,
     pub triangle_slot: u32,
+    /// The faces of its object's box that face the eye, with where the
+    /// scene's fragment stage keeps the object's fragments
+    /// (`FragmentLimit::facing_faces`).
+    pub facing: [Option<FacingFace>; 3],
 }
 
 #[cfg(test)]
@@ -187,6 +191,7 @@ impl DrawnPart {
             first_vertex: 0,
             vertex_slot: 0,
             triangle_slot: 0,
+            facing: [None; 3],
         }
     }
 }
@@ -261,12 +266,27 @@ impl Polygon {
         (0..self.count).map(|i| (self.corners[i], self.corners[(i + 1) % self.count], self.sides[i]))
     }
 
-    /// Its turn: that of each of its triangles, or excluded where one is a
-    /// sliver or they differ (`snap` as [`ScreenMesh::snap`]).
-    fn turn(&self, snap: f64) -> Turn {
-        let mut turns = self.triangles().map(|t| turn_of(t, snap));
+    /// Its turn as a part of `mesh` drawn as `part`: that of each of its
+    /// triangles, or excluded where one is a sliver, may be drawn where
+    /// the fragment stage discards it ([`kept`]), or they differ.
+    fn turn(&self, mesh: &ScreenMesh, part: &DrawnPart) -> Turn {
+        let error = mesh.depth.fragment_error(self.nearest_depth());
+        let mut turns = self.triangles().map(|t| match depth_slack(&t, mesh.snap) {
+            Some(slack) if kept(&t, slack, error, &part.facing) => turn_of(t, mesh.snap),
+            _ => Turn::Excluded,
+        });
         let first = turns.next().unwrap_or(Turn::Excluded);
         if turns.all(|t| t == first) { first } else { Turn::Excluded }
+    }
+
+    /// The nearest depth of what the GPU draws: its nearest corner's, or
+    /// the near plane's (depth 1) where the GPU clips it there.
+    fn nearest_depth(&self) -> f64 {
+        if self.whole() {
+            self.corners[..3].iter().map(|c| c.at.z).fold(f64::NEG_INFINITY, f64::max)
+        } else {
+            1.0
+        }
     }
 }
 
@@ -372,12 +392,13 @@ impl Patches {
             for k in start..end {
                 let t = self.by_patch[k].1 as usize;
                 let Some(polygon) = polygon(mesh, self.corners[t]) else { continue };
+                let error = mesh.depth.fragment_error(polygon.nearest_depth());
                 for c in polygon.triangles() {
                     // A patch's triangles each have a depth slack (their
                     // turn was found with it); were one to lack it, its
                     // plane would lie infinitely far, vouching for nothing.
                     let depth = depth_slack(&c, mesh.snap).unwrap_or(f64::INFINITY);
-                    let triangle = Triangle::new(c, mesh.snap, depth);
+                    let triangle = Triangle::new(c, mesh.snap, depth, error);
                     nearest = c.iter().fold(nearest, |n, c| n.max(c.at.z));
                     (lo, hi) = (lo.min(triangle.lo - triangle.slack), hi.max(triangle.hi + triangle.slack));
                     self.triangles.push(triangle);
@@ -426,10 +447,15 @@ impl Patches {
         mesh.drawn_triangles(&mut self.corners, &mut self.across);
         self.turns.clear();
         let mut clipped = false;
-        for &corners in &self.corners {
+        // The drawn triangles are numbered part after part.
+        let parts = mesh
+            .parts
+            .iter()
+            .flat_map(|part| std::iter::repeat_n(part, part.triangles.len()));
+        for (&corners, part) in self.corners.iter().zip(parts) {
             let polygon = polygon(mesh, corners);
             clipped |= polygon.is_some_and(|p| !p.whole());
-            self.turns.push(polygon.map_or(Turn::Excluded, |p| p.turn(mesh.snap)));
+            self.turns.push(polygon.map_or(Turn::Excluded, |p| p.turn(mesh, part)));
         }
         self.parent.clear();
         self.parent.extend(0..self.turns.len() as u32);
@@ -900,7 +926,7 @@ struct Triangle {
     /// Its corners' error ([`slack_of`]), the part of it the GPU's snap
     /// makes ([`ScreenMesh::snap`]), its edges as limits on x (margins
     /// scaled by each edge's |ex| + |ey|: what a distance on each axis
-    /// scales it by), and the plane it vouches for ([`lowered_plane`]).
+    /// scales it by), and the plane it vouches for ([`bounding`]).
     slack: f64,
     snap: f64,
     limits: [Limit; 3],
@@ -909,8 +935,9 @@ struct Triangle {
 
 impl Triangle {
     /// The triangle of `corners` (`snap` as [`ScreenMesh::snap`]), its
-    /// plane taken `depth_slack` from each point ([`depth_slack`]).
-    fn new(corners: [ScreenVertex; 3], snap: f64, depth_slack: f64) -> Triangle {
+    /// plane taken `depth_slack` from each point ([`depth_slack`]) and
+    /// `error` farther ([`DepthMargins::fragment_error`]).
+    fn new(corners: [ScreenVertex; 3], snap: f64, depth_slack: f64, error: f64) -> Triangle {
         let (slack, edges) = (slack_of(&corners), inward_edges(&corners));
         // What it reaches holds what it marks (add_triangle).
         debug_assert!(
@@ -927,7 +954,7 @@ impl Triangle {
                 let reach = edge[0].abs() + edge[1].abs();
                 Limit::new(edge, [slack * reach, snap * reach, -2.0 * slack * reach])
             }),
-            plane: lowered_plane(&corners, depth_slack),
+            plane: bounding(plane_of(&corners), &corners, depth_slack, error, Bound::Farther),
         }
     }
 
@@ -1063,7 +1090,7 @@ fn turn_of(corners: [ScreenVertex; 3], snap: f64) -> Turn {
 }
 
 /// How far from a point the triangle's plane is taken, at least, to bound
-/// the depth the GPU draws it at there ([`lowered_plane`]): its corners'
+/// the depth the GPU draws it at there ([`bounding`]): its corners'
 /// error (`snap` as [`ScreenMesh::snap`]), and more for one thinner than
 /// [`LEAST_HEIGHT`] errors at [`SLIVER_SNAP`] ([`interpolation_slack`]).
 /// None for a sliver, in no patch: less than [`LEAST_HEIGHT`] errors high
@@ -1150,22 +1177,75 @@ fn inward_edges(corners: &[ScreenVertex; 3]) -> [[f64; 3]; 3] {
     })
 }
 
-/// What the triangle vouches for at each point within `slack` of where the
-/// GPU may draw it: its plane lowered by its greatest change within the
-/// slack, then moved farther by the depth margins (all affine).
-fn lowered_plane(corners: &[ScreenVertex; 3], slack: f64) -> ScreenPlane {
+/// Which way [`bounding`] moves a depth plane.
+#[derive(Clone, Copy, PartialEq)]
+enum Bound {
+    /// At most every depth the GPU may draw it at: what it vouches for.
+    Farther,
+    /// At least every such depth: where the fragment stage must keep it.
+    Nearer,
+}
+
+/// The plane of the triangle's depth on screen.
+fn plane_of(corners: &[ScreenVertex; 3]) -> ScreenPlane {
     let [a, b, c] = corners.map(|c| c.at);
     let area = twice_area(a, b, c);
     let per_x = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / area;
     let per_y = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
-    let constant = a.z - per_x * a.x - per_y * a.y;
-    let depth_error = corners.iter().map(|c| c.depth_error).fold(0.0, f64::max);
-    let keep = 1.0 - DEPTH_MARGIN - depth_error;
     ScreenPlane {
-        per_x: per_x * keep,
-        per_y: per_y * keep,
-        constant: (constant - slack * (per_x.abs() + per_y.abs())) * keep - DEPTH_ABSOLUTE,
+        per_x,
+        per_y,
+        constant: a.z - per_x * a.x - per_y * a.y,
     }
+}
+
+/// `plane`, a depth the GPU draws the triangle of `corners` at from a point
+/// within `slack` of each pixel centre it draws, moved to bound what it
+/// draws there: by the plane's greatest change within the slack, then by
+/// the depth margins ([`DEPTH_MARGIN`], the corners' depth error, and the
+/// GPU's `error`), all affine.
+fn bounding(plane: ScreenPlane, corners: &[ScreenVertex; 3], slack: f64, error: f64, bound: Bound) -> ScreenPlane {
+    let depth_error = corners.iter().map(|c| c.depth_error).fold(0.0, f64::max);
+    let toward = if bound == Bound::Nearer { 1.0 } else { -1.0 };
+    let scale = 1.0 + toward * (DEPTH_MARGIN + depth_error);
+    let change = slack * (plane.per_x.abs() + plane.per_y.abs());
+    ScreenPlane {
+        per_x: plane.per_x * scale,
+        per_y: plane.per_y * scale,
+        constant: (plane.constant + toward * change) * scale + toward * error,
+    }
+}
+
+/// Whether the scene's fragment stage keeps every fragment the GPU may
+/// draw of the triangle (its plane taken `slack` from each point, its
+/// depth drawn within `error`), which lies in its object's box: below each
+/// face of the box that faces the eye, the nearest depth it may draw it at
+/// lies at or below what the face keeps ([`FacingFace`]), at every point
+/// within the slack of it (false for a NaN). At a pixel centre p the GPU
+/// draws the depth of a point q of our triangle within the slack of p
+/// (p's weights in the placed triangle, taken in ours), and no point of
+/// the box lies nearer than the face: so both the triangle's plane and
+/// the face's, each moved as far as q may lie ([`bounding`]), bound it,
+/// and either will do. Each gap is affine: its greatest value over the
+/// triangle grown by the slack is at a corner, plus the slack times its
+/// change per pixel on each axis. A sliver's own interpolation may take q
+/// off the triangle (`interpolation_slack`), and out of the box: for a
+/// sliver only its own plane bounds.
+fn kept(corners: &[ScreenVertex; 3], slack: f64, error: f64, facing: &[Option<FacingFace>; 3]) -> bool {
+    if facing.iter().all(Option::is_none) {
+        return true;
+    }
+    let within = |nearest: ScreenPlane, kept_below: &ScreenPlane| {
+        let gap = nearest.minus(kept_below);
+        let reach = slack * (gap.per_x.abs() + gap.per_y.abs());
+        corners.iter().all(|c| gap.at(c.at.x, c.at.y) + reach <= 0.0)
+    };
+    let own = bounding(plane_of(corners), corners, slack, error, Bound::Nearer);
+    let sliver = slack != slack_of(corners);
+    facing.iter().flatten().all(|f| {
+        within(own, &f.kept_below)
+            || (!sliver && within(bounding(f.face, corners, slack, error, Bound::Nearer), &f.kept_below))
+    })
 }
 
 /// `range` within `within`.
@@ -1178,6 +1258,7 @@ fn clamp(range: Range<u32>, within: &Range<u32>) -> Range<u32> {
 /// and three indices per triangle; equal indices are the only shared
 /// positions) into `buffer`, cleared first, in order, on one thread. A
 /// mesh's snap is its vertices' least slack: they have no f32 error.
+/// Depth margins are GL's ([`larger_margins`]).
 #[cfg(test)]
 pub(super) fn rasterise_meshes(buffer: &mut super::buffer::OcclusionBuffer, meshes: &[(Vec<ScreenVertex>, Vec<u32>)]) {
     let rows = buffer.cells().height;
@@ -1196,11 +1277,18 @@ pub(super) fn rasterise_meshes(buffer: &mut super::buffer::OcclusionBuffer, mesh
             closed: false,
             near: None,
             snap: vertices.iter().map(|v| v.slack).fold(f64::INFINITY, f64::min),
+            depth: larger_margins(),
         };
         patches.clear();
         let which = patches.add(&mesh);
         rasteriser.rasterise(&mut cells, &patches, which);
     }
+}
+
+/// The depth margins the tests take: GL's, the larger.
+#[cfg(test)]
+fn larger_margins() -> DepthMargins {
+    DepthMargins::for_backend(wgpu::Backend::Gl)
 }
 
 #[cfg(test)]
@@ -1487,6 +1575,7 @@ mod tests {
                             closed: false,
                             near: Some(NearLimit { crossing: &cross }),
                             snap,
+                            depth: larger_margins(),
                         };
                         patches.clear();
                         let which = patches.add(&mesh);
@@ -1597,7 +1686,7 @@ mod tests {
             };
             rasteriser.cover.clear();
             rasteriser.cover.resize(16 * 12, reached);
-            rasteriser.add_triangle(&cells, &Triangle::new(corners, snap, snap));
+            rasteriser.add_triangle(&cells, &Triangle::new(corners, snap, snap, 0.0));
             // Every pixel centre inside the triangle is marked (each cell's
             // groups here are single pixels).
             for (x, y) in (0..64).flat_map(|x| (0..48).map(move |y| (x, y))) {
@@ -1667,6 +1756,7 @@ mod tests {
                 closed: true,
                 near: None,
                 snap: COARSE_SNAP,
+                depth: larger_margins(),
             };
             let corners: Vec<[u32; 3]> = indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
             let turns: Vec<Turn> = corners
@@ -1751,6 +1841,7 @@ mod tests {
                 first_vertex: vertex_run.start,
                 vertex_slot: on_screen.len() as u32,
                 triangle_slot: parts.iter().map(|p: &DrawnPart| p.triangles.len() as u32).sum(),
+                facing: [None; 3],
             });
             let strip_vertices = &stored[vertex_run.start as usize..vertex_run.end as usize];
             on_screen.extend(strip_vertices.iter().map(|&v| Some(v)));
@@ -1766,6 +1857,7 @@ mod tests {
             closed: false,
             near: None,
             snap: COARSE_SNAP,
+            depth: larger_margins(),
         };
         let mut buffer = OcclusionBuffer::new(size, Resolution { width: 24, height: 18 });
         {
@@ -1895,7 +1987,9 @@ mod tests {
         // Column 0 holds pixels 0..=3, centres 0.5 to 3.5: its farthest is
         // where the GPU may sample beside 3.5.
         let x = 3.5 + COARSE_SNAP;
-        let expected = (0.5 - 0.2 * x / 64.0) * (1.0 - DEPTH_MARGIN) - DEPTH_ABSOLUTE;
+        // Raised for its nearest corner, at x = -100.
+        let error = larger_margins().fragment_error(0.5 + 0.2 * 100.0 / 64.0);
+        let expected = (0.5 - 0.2 * x / 64.0) * (1.0 - DEPTH_MARGIN) - error;
         assert!(buffer.depths().iter().all(|&d| d > 0.0));
         assert_eq!(buffer.depths()[0], super::super::buffer::f32_at_most(expected));
     }

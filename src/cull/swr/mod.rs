@@ -51,11 +51,11 @@ use crate::camera::{Camera, Containment};
 use crate::cull::culler::{Culler, FrameInput, OccluderDepths, PreviousFrame, TraversalStats};
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{
-    BoxMargins, BoxPlanes, DepthMargins, EyeBox, Frame, GpuError, GpuSetup, PixelRays, QueryBox, Resolution,
-    SubpixelPrecision, eye_relative_box,
+    BoxMargins, BoxPlanes, DepthMargins, EyeBox, FacingFace, FragmentLimit, Frame, GpuError, GpuSetup, PixelRays, QueryBox,
+    Resolution, SubpixelPrecision, eye_relative_box,
 };
 use crate::parallel;
-use crate::scene::Scene;
+use crate::scene::{Object, Scene};
 use buffer::{Cells, OcclusionBuffer};
 use mesh::{DrawnPart, NearLimit, Patches, Rasteriser, ScreenMesh, ScreenVertex};
 use walk::{Walk, Walkers};
@@ -737,11 +737,19 @@ impl Culler for SoftwareOcclusionCulling {
         let Some(buffer) = &mut self.buffer else {
             unreachable!("made above")
         };
+        let rays = PixelRays::new(camera, size);
         let occluders = Occluders {
             units: &self.units,
             candidates: &self.candidates,
             projector: &projector,
             snap: self.subpixel.vertex_error(size),
+            depth: self.depth_margins,
+            fragments: FragmentRule {
+                margins,
+                view: &view,
+                rays: &rays,
+                target: size,
+            },
             camera,
             scene,
             neighbours: &self.neighbours,
@@ -760,7 +768,7 @@ impl Culler for SoftwareOcclusionCulling {
         let tester = Tester {
             buffer,
             projector: &projector,
-            rays: PixelRays::new(camera, size),
+            rays,
             camera,
             view: &view,
             margins,
@@ -847,11 +855,35 @@ struct Occluders<'a> {
     /// How far the GPU's sub-pixel snap may move a vertex
     /// ([`ScreenMesh::snap`]).
     snap: f64,
+    /// The backend's depth margins ([`ScreenMesh::depth`]).
+    depth: DepthMargins,
+    fragments: FragmentRule<'a>,
     camera: &'a Camera,
     scene: &'a Scene,
     /// Per run of meshes stored against one origin (at its first mesh),
     /// its triangles' neighbours (made for every occluder's run).
     neighbours: &'a [Vec<[u32; 3]>],
+}
+
+/// What the scene's fragment stage keeps of each object this frame
+/// (`FragmentLimit`, as the renderer makes it).
+struct FragmentRule<'a> {
+    margins: BoxMargins,
+    view: &'a DMat3,
+    rays: &'a PixelRays,
+    target: Resolution,
+}
+
+impl FragmentRule<'_> {
+    /// [`DrawnPart::facing`] for `object`.
+    fn facing(&self, camera: &Camera, object: &Object) -> [Option<FacingFace>; 3] {
+        FragmentLimit::new(camera, self.view, self.margins, &object.bounds).facing_faces(
+            camera,
+            &object.bounds,
+            self.rays,
+            self.target,
+        )
+    }
 }
 
 impl Occluders<'_> {
@@ -1001,6 +1033,7 @@ fn prepare_occluder(preparer: &mut Preparer, occluders: &Occluders, occluder: &O
             first_vertex,
             vertex_slot: preparer.vertices.len() as u32,
             triangle_slot,
+            facing: occluders.fragments.facing(camera, object),
         });
         triangle_slot += mesh.triangles();
         for p in &scene.vertices[first_vertex as usize..=last_vertex as usize] {
@@ -1050,6 +1083,7 @@ fn prepare_occluder(preparer: &mut Preparer, occluders: &Occluders, occluder: &O
         closed: scene.parts[first.part as usize].closed,
         near: Some(NearLimit { crossing: &crossing }),
         snap: occluders.snap,
+        depth: occluders.depth,
     };
     preparer.patches.add(&mesh)
 }
