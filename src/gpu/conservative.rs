@@ -69,6 +69,23 @@ impl BoxMargins {
         }
     }
 
+    /// The margins of a box test made exactly, on the CPU in f64: the whole
+    /// growth, so its outline holds every pixel a fragment of the object
+    /// may land on (within a vertex's error on each axis, √2 of it across,
+    /// where the growth moves the outline twice that error out), but only
+    /// the raise the [`FragmentLimit`] keeps, a fragment's own error: the
+    /// other half of the raise allows for the rounding of a box the GPU
+    /// draws.
+    pub(crate) fn for_exact_tests(self) -> BoxMargins {
+        BoxMargins {
+            growth: self.growth,
+            depth: DepthMargins {
+                absolute: self.depth.absolute / 2.0,
+                per_depth: self.depth.per_depth / 2.0,
+            },
+        }
+    }
+
     /// These margins as a shader that makes boxes from f32 parts reads
     /// them (gpu_walk's prepare_nodes.wgsl): the growth per unit of reach,
     /// the raise's absolute part and its part per unit of depth, and the
@@ -81,7 +98,7 @@ impl BoxMargins {
         [
             self.growth as f32,
             (self.depth.absolute * safe) as f32,
-            (RAISE_PER_DEPTH * safe) as f32,
+            (self.depth.per_depth * safe) as f32,
             (camera.near / (1.0 - MAX_RAISE) * safe) as f32,
         ]
     }
@@ -145,25 +162,29 @@ impl SubpixelPrecision {
 pub struct DepthMargins {
     /// Added to every raise: the backend's absolute depth error.
     absolute: f64,
+    /// The raise per unit of the box's nearest depth.
+    per_depth: f64,
 }
 
 impl DepthMargins {
     pub fn for_backend(backend: wgpu::Backend) -> DepthMargins {
         DepthMargins {
             absolute: if backend == wgpu::Backend::Gl { GL_RAISE } else { 0.0 },
+            per_depth: RAISE_PER_DEPTH,
         }
     }
 
     /// How much a box whose nearest corner lies at `nearest_depth` is raised
     /// when it is tested.
     fn raise(self, nearest_depth: f64) -> f64 {
-        self.absolute + RAISE_PER_DEPTH * nearest_depth
+        self.absolute + self.per_depth * nearest_depth
     }
 
     /// How far from a surface's depth the GPU may draw it, where none of it
     /// lies nearer than `nearest_depth`: half the raise of a box there (the
     /// other half separates the box from the surface's own rounding, and
-    /// the [`FragmentLimit`] keeps this half).
+    /// the [`FragmentLimit`] keeps this half,
+    /// [`BoxMargins::for_exact_tests`]).
     pub(crate) fn fragment_error(self, nearest_depth: f64) -> f64 {
         self.raise(nearest_depth) / 2.0
     }

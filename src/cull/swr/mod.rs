@@ -562,6 +562,8 @@ struct Tester<'a> {
     rays: PixelRays,
     camera: &'a Camera,
     view: &'a DMat3,
+    /// Those of an exact test ([`BoxMargins::for_exact_tests`]): it is
+    /// made in f64.
     margins: BoxMargins,
 }
 
@@ -641,8 +643,9 @@ impl Culler for SoftwareOcclusionCulling {
     /// 3. **Pyramid** of the buffer's farthest depths.
     /// 4. **Test**: the hierarchy is walked as `vfc` walks it (its subtrees
     ///    shared among the threads, walk.rs); a node in the
-    ///    frustum is also tested by its box (grown and raised as every box test
-    ///    here, gpu/conservative.rs). Its screen rectangle's pixels, rounded
+    ///    frustum is also tested by its box (grown as every box test, and
+    ///    raised by a fragment's error: the test is made in f64,
+    ///    `BoxMargins::for_exact_tests`, gpu/conservative.rs). Its screen rectangle's pixels, rounded
     ///    outward, are read at the pyramid level where they span at most 8
     ///    texels; at each texel the box must lie behind the texel's farthest
     ///    depth, by its nearest corner or by the planes where pixel rays enter
@@ -673,6 +676,7 @@ impl Culler for SoftwareOcclusionCulling {
         }
         let projector = Projector::new(camera, size);
         let margins = BoxMargins::new(self.depth_margins, self.subpixel, camera, size);
+        let exact = margins.for_exact_tests();
         let view = camera.view_rotation();
 
         let frustum = camera.frustum();
@@ -699,7 +703,7 @@ impl Culler for SoftwareOcclusionCulling {
             if frustum.classify(bounds) == Containment::Outside {
                 continue;
             }
-            let on_screen = match eye_relative_box(camera, &view, margins, bounds) {
+            let on_screen = match eye_relative_box(camera, &view, exact, bounds) {
                 EyeBox::ReachesNear => None,
                 EyeBox::Testable(q) => match projector.box_on_screen(&q) {
                     Some(b) if b.area > 0.0 => Some(b),
@@ -771,7 +775,7 @@ impl Culler for SoftwareOcclusionCulling {
             rays,
             camera,
             view: &view,
-            margins,
+            margins: exact,
         };
         let hides = |bounds: &Aabb| tester.test(bounds) == Verdict::Hidden;
         let walk = Walk {
@@ -1137,6 +1141,31 @@ mod tests {
         assert_eq!(objects, [0, 2]);
     }
 
+    #[test]
+    fn a_box_behind_a_distant_wall_by_more_than_both_fragments_errors_is_hidden_on_gl() {
+        // On GL (the margins swr takes until it is prepared) depth keeps
+        // only absolute precision: 2 steps of 2^-24 of a fragment's error
+        // each for the wall and the cube (`DepthMargins::fragment_error`),
+        // with the box's growth (1e-4 of its reach: 0.17 step here) 4.2
+        // steps. A cube 5 steps behind a wall 1 km ahead (depth near /
+        // distance = 1e-4, so a step is near / distance² of depth per metre
+        // of distance: 0.6 m) is hidden: a GPU box test would need its
+        // full raise, 4 steps, and so 6.2, but swr's test is exact.
+        let (distance, near) = (1000.0, camera_down_z().near);
+        let gap = 5.0 / f64::from(1u32 << 24) * distance * distance / near;
+        let (scene, hierarchy) = cuboids(&[
+            (DVec3::new(-200.0, -200.0, -distance - 1.0), DVec3::new(200.0, 200.0, -distance)),
+            (
+                DVec3::new(-5.0, -5.0, -distance - gap - 10.0),
+                DVec3::new(5.0, 5.0, -distance - gap),
+            ),
+        ]);
+        let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
+        assert_eq!(swr.depth_margins, DepthMargins::for_backend(wgpu::Backend::Gl));
+        let drawn = drawn_over(&mut swr, &scene, &hierarchy, &camera_down_z(), 3);
+        assert_eq!(drawn, [vec![0, 1], vec![0], vec![0]]);
+    }
+
     /// The objects `swr` drew (sorted) in each of `frames` frames of `scene`
     /// seen by `camera`.
     fn drawn_over(swr: &mut SoftwareOcclusionCulling, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera, frames: u32) -> Vec<Vec<u32>> {
@@ -1452,7 +1481,8 @@ mod tests {
                     SubpixelPrecision::COARSEST,
                     &camera,
                     size,
-                ),
+                )
+                .for_exact_tests(),
             };
             for k in 0..1500 {
                 // Sides from 1 cm (flat boxes) to 30 m; every other box just
