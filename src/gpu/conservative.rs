@@ -693,12 +693,7 @@ pub(crate) mod tests {
         let r = Resolution::DEFAULT;
         let view = cam.view_rotation();
         let b = Aabb::new(DVec3::new(-2.0, -1.0, -6.0), DVec3::new(1.0, 3.0, -2.0));
-        let margins = BoxMargins::new(
-            DepthMargins::for_backend(wgpu::Backend::Gl),
-            SubpixelPrecision::COARSEST,
-            &cam,
-            r,
-        );
+        let margins = largest_margins(&cam);
         let limit = FragmentLimit::new(&cam, &view, margins, &b);
         let (min, max) = grown_eye_relative(&cam, &b, margins.growth / 2.0);
         let grown = Aabb::new(min + cam.eye, max + cam.eye);
@@ -724,12 +719,7 @@ pub(crate) mod tests {
         let cam = camera();
         let r = Resolution::DEFAULT;
         let view = cam.view_rotation();
-        let margins = BoxMargins::new(
-            DepthMargins::for_backend(wgpu::Backend::Gl),
-            SubpixelPrecision::COARSEST,
-            &cam,
-            r,
-        );
+        let margins = largest_margins(&cam);
         let rays = PixelRays::new(&cam, r);
         let [per_x, per_y, constant] = rays.uniform();
         let (mut bounded, mut below) = (0, Vec::new());
@@ -777,16 +767,22 @@ pub(crate) mod tests {
         );
     }
 
+    /// GL's margins at the coarsest snap, the largest, for `cam` on a
+    /// `DEFAULT` target.
+    fn largest_margins(cam: &Camera) -> BoxMargins {
+        BoxMargins::new(
+            DepthMargins::for_backend(wgpu::Backend::Gl),
+            SubpixelPrecision::COARSEST,
+            cam,
+            Resolution::DEFAULT,
+        )
+    }
+
     /// Up to 200 boxes of random size and place in front of [`camera`],
     /// each with its test box for a `DEFAULT` target, seeded by `seed`.
     pub(crate) fn random_boxes_in_view(seed: u64) -> Vec<(Aabb, QueryBox)> {
         let cam = camera();
-        let margins = BoxMargins::new(
-            DepthMargins::for_backend(wgpu::Backend::Gl),
-            SubpixelPrecision::COARSEST,
-            &cam,
-            Resolution::DEFAULT,
-        );
+        let margins = largest_margins(&cam);
         let mut rng = crate::rng::Rng::new(seed);
         (0..200)
             .filter_map(|_| {
@@ -807,12 +803,7 @@ pub(crate) mod tests {
         let cam = camera();
         let r = Resolution::DEFAULT;
         let view = cam.view_rotation();
-        let margins = BoxMargins::new(
-            DepthMargins::for_backend(wgpu::Backend::Gl),
-            SubpixelPrecision::COARSEST,
-            &cam,
-            r,
-        );
+        let margins = largest_margins(&cam);
         let rays = PixelRays::new(&cam, r);
         // The rays as the scene's fragment stage computes them, in f32.
         let [per_x, per_y, constant] = rays.uniform();

@@ -1241,6 +1241,7 @@ fn kept(corners: &[ScreenVertex; 3], slack: f64, error: f64, facing: &[Option<Fa
         corners.iter().all(|c| gap.at(c.at.x, c.at.y) + reach <= 0.0)
     };
     let own = bounding(plane_of(corners), corners, slack, error, Bound::Nearer);
+    // `depth_slack` adds to the corners' error only for a sliver.
     let sliver = slack != slack_of(corners);
     facing.iter().flatten().all(|f| {
         within(own, &f.kept_below)
@@ -1987,7 +1988,8 @@ mod tests {
         // Column 0 holds pixels 0..=3, centres 0.5 to 3.5: its farthest is
         // where the GPU may sample beside 3.5.
         let x = 3.5 + COARSE_SNAP;
-        // Raised for its nearest corner, at x = -100.
+        // Moved farther by a fragment's error at its nearest corner, at
+        // x = -100.
         let error = larger_margins().fragment_error(0.5 + 0.2 * 100.0 / 64.0);
         let expected = (0.5 - 0.2 * x / 64.0) * (1.0 - DEPTH_MARGIN) - error;
         assert!(buffer.depths().iter().all(|&d| d > 0.0));
