@@ -69,6 +69,11 @@ impl BoxMargins {
         }
     }
 
+    /// The backend's depth margins they hold.
+    pub(crate) fn depth(self) -> DepthMargins {
+        self.depth
+    }
+
     /// The margins of a box test made exactly, on the CPU in f64: the whole
     /// growth, so its outline holds every pixel a fragment of the object
     /// may land on (within a vertex's error on each axis, √2 of it across,
@@ -558,50 +563,6 @@ impl FragmentLimit {
             raise: margins.depth.fragment_error(camera.near / nearest) as f32,
         }
     }
-
-    /// The faces of the object's box `bounds` (this limit's) that face the
-    /// eye, on a target of `target` pixels whose rays are `rays`, each with
-    /// where scene.wgsl keeps the object's fragments ([`FacingFace`]).
-    pub(crate) fn facing_faces(
-        &self,
-        camera: &Camera,
-        bounds: &Aabb,
-        rays: &PixelRays,
-        target: Resolution,
-    ) -> [Option<FacingFace>; 3] {
-        let faces = faces_across(bounds.min - camera.eye, bounds.max - camera.eye);
-        let [per_x, per_y, constant] = rays.uniform().map(|v| v.as_dvec4());
-        let (width, height) = (f64::from(target.width), f64::from(target.height));
-        let raise = f64::from(self.raise);
-        [0, 1, 2].map(|axis| {
-            // The limit's face lies beyond the box's own: the eye lies
-            // outside the box along any axis it lies outside the grown one.
-            let (scale, (facing, _)) = (f64::from(self.scale[axis]), faces[axis]?);
-            (scale != 0.0).then(|| {
-                let kept_below = ScreenPlane {
-                    per_x: scale * per_x[axis],
-                    per_y: scale * per_y[axis],
-                    constant: scale * constant[axis] + raise,
-                };
-                let terms = (scale * constant[axis]).abs()
-                    + raise.abs()
-                    + kept_below.per_x.abs() * width
-                    + kept_below.per_y.abs() * height;
-                let face = camera.near / facing;
-                FacingFace {
-                    face: ScreenPlane {
-                        per_x: face * rays.per_x[axis],
-                        per_y: face * rays.per_y[axis],
-                        constant: face * rays.constant[axis],
-                    },
-                    kept_below: ScreenPlane {
-                        constant: kept_below.constant - LIMIT_ROUNDING * terms,
-                        ..kept_below
-                    },
-                }
-            })
-        })
-    }
 }
 
 /// A face of an object's box that faces the eye, on screen, as the scene's
@@ -619,6 +580,55 @@ pub(crate) struct FacingFace {
     /// takes, and rounds in evaluating it: it is lowered by
     /// [`LIMIT_ROUNDING`] of its terms' size over the target.
     pub(crate) kept_below: ScreenPlane,
+}
+
+impl FacingFace {
+    /// The faces of the object's box `bounds` that face the eye, for
+    /// `camera` (whose `view_rotation()` is `view`) on a target of `target`
+    /// pixels whose rays are `rays`, with the [`FragmentLimit`] the
+    /// renderer gives the object for box tests that keep `margins`.
+    pub(crate) fn of_object(
+        camera: &Camera,
+        view: &DMat3,
+        margins: BoxMargins,
+        bounds: &Aabb,
+        rays: &PixelRays,
+        target: Resolution,
+    ) -> [Option<FacingFace>; 3] {
+        let limit = FragmentLimit::new(camera, view, margins, bounds);
+        let faces = faces_across(bounds.min - camera.eye, bounds.max - camera.eye);
+        let [per_x, per_y, constant] = rays.uniform().map(|v| v.as_dvec4());
+        let (width, height) = (f64::from(target.width), f64::from(target.height));
+        let raise = f64::from(limit.raise);
+        [0, 1, 2].map(|axis| {
+            // The limit's face lies beyond the box's own: the eye lies
+            // outside the box along any axis it lies outside the grown one.
+            let (scale, (facing, _)) = (f64::from(limit.scale[axis]), faces[axis]?);
+            (scale != 0.0).then(|| {
+                let shader = ScreenPlane {
+                    per_x: scale * per_x[axis],
+                    per_y: scale * per_y[axis],
+                    constant: scale * constant[axis] + raise,
+                };
+                let terms = (scale * constant[axis]).abs()
+                    + raise.abs()
+                    + shader.per_x.abs() * width
+                    + shader.per_y.abs() * height;
+                let face = camera.near / facing;
+                FacingFace {
+                    face: ScreenPlane {
+                        per_x: face * rays.per_x[axis],
+                        per_y: face * rays.per_y[axis],
+                        constant: face * rays.constant[axis],
+                    },
+                    kept_below: ScreenPlane {
+                        constant: shader.constant - LIMIT_ROUNDING * terms,
+                        ..shader
+                    },
+                }
+            })
+        })
+    }
 }
 
 #[cfg(test)]
@@ -725,7 +735,7 @@ pub(crate) mod tests {
         let (mut bounded, mut below) = (0, Vec::new());
         for (b, _) in random_boxes_in_view(57) {
             let limit = FragmentLimit::new(&cam, &view, margins, &b);
-            let faces = limit.facing_faces(&cam, &b, &rays, r);
+            let faces = FacingFace::of_object(&cam, &view, margins, &b, &rays, r);
             let least = |plane: fn(&FacingFace) -> ScreenPlane, x: f64, y: f64| {
                 faces
                     .iter()

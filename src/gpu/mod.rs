@@ -24,8 +24,7 @@ pub(crate) use conservative::tests::{
 };
 pub use conservative::{BoxMargins, DepthMargins, SubpixelPrecision};
 pub(crate) use conservative::{
-    BoxPlanes, EyeBox, FacingFace, FragmentLimit, PLANE_ROUNDING, PixelRays, QueryBox, ScreenPlane, UNBOUNDED,
-    eye_relative_box,
+    BoxPlanes, EyeBox, FacingFace, PLANE_ROUNDING, PixelRays, QueryBox, ScreenPlane, UNBOUNDED, eye_relative_box,
 };
 pub use context::{AdapterReport, BackendChoice, GpuContext, GpuError};
 pub use frame::{

@@ -178,7 +178,7 @@ pub struct DrawnPart {
     pub triangle_slot: u32,
     /// The faces of its object's box that face the eye, with where the
     /// scene's fragment stage keeps the object's fragments
-    /// (`FragmentLimit::facing_faces`).
+    /// (`FacingFace::of_object`).
     pub facing: [Option<FacingFace>; 3],
 }
 
@@ -272,7 +272,7 @@ impl Polygon {
     fn turn(&self, mesh: &ScreenMesh, part: &DrawnPart) -> Turn {
         let error = mesh.depth.fragment_error(self.nearest_depth());
         let mut turns = self.triangles().map(|t| match depth_slack(&t, mesh.snap) {
-            Some(slack) if kept(&t, slack, error, &part.facing) => turn_of(t, mesh.snap),
+            Some(slack) if kept(&t, slack, error, &part.facing) => area_turn(&t),
             _ => Turn::Excluded,
         });
         let first = turns.next().unwrap_or(Turn::Excluded);
@@ -1075,12 +1075,12 @@ fn behind_turn(mesh: &ScreenMesh, corners: &[[u32; 3]], turns: &[Turn]) -> Optio
     }
 }
 
-/// A triangle's turn on screen, or none for a sliver or one not a number
-/// ([`depth_slack`]).
-fn turn_of(corners: [ScreenVertex; 3], snap: f64) -> Turn {
+/// The way a triangle turns on screen by its signed area, or none where
+/// that is 0 or not a number.
+fn area_turn(corners: &[ScreenVertex; 3]) -> Turn {
     let [a, b, c] = corners.map(|c| c.at);
     let area = twice_area(a, b, c);
-    if depth_slack(&corners, snap).is_none() || !area.is_finite() || area == 0.0 {
+    if !area.is_finite() || area == 0.0 {
         Turn::Excluded
     } else if area > 0.0 {
         Turn::Counter
@@ -1762,7 +1762,11 @@ mod tests {
             let corners: Vec<[u32; 3]> = indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
             let turns: Vec<Turn> = corners
                 .iter()
-                .map(|&c| placed_corners(&mesh, c).map_or(Turn::Excluded, |c| turn_of(c, COARSE_SNAP)))
+                .map(|&c| {
+                    placed_corners(&mesh, c)
+                        .filter(|c| depth_slack(c, COARSE_SNAP).is_some())
+                        .map_or(Turn::Excluded, |c| area_turn(&c))
+                })
                 .collect();
             (turns.clone(), behind_turn(&mesh, &corners, &turns))
         };

@@ -51,7 +51,7 @@ use crate::camera::{Camera, Containment};
 use crate::cull::culler::{Culler, FrameInput, OccluderDepths, PreviousFrame, TraversalStats};
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{
-    BoxMargins, BoxPlanes, DepthMargins, EyeBox, FacingFace, FragmentLimit, Frame, GpuError, GpuSetup, PixelRays, QueryBox,
+    BoxMargins, BoxPlanes, DepthMargins, EyeBox, FacingFace, Frame, GpuError, GpuSetup, PixelRays, QueryBox,
     Resolution, SubpixelPrecision, eye_relative_box,
 };
 use crate::parallel;
@@ -645,7 +645,8 @@ impl Culler for SoftwareOcclusionCulling {
     ///    shared among the threads, walk.rs); a node in the
     ///    frustum is also tested by its box (grown as every box test, and
     ///    raised by a fragment's error: the test is made in f64,
-    ///    `BoxMargins::for_exact_tests`, gpu/conservative.rs). Its screen rectangle's pixels, rounded
+    ///    `BoxMargins::for_exact_tests`, gpu/conservative.rs). Its screen
+    ///    rectangle's pixels, rounded
     ///    outward, are read at the pyramid level where they span at most 8
     ///    texels; at each texel the box must lie behind the texel's farthest
     ///    depth, by its nearest corner or by the planes where pixel rays enter
@@ -747,7 +748,6 @@ impl Culler for SoftwareOcclusionCulling {
             candidates: &self.candidates,
             projector: &projector,
             snap: self.subpixel.vertex_error(size),
-            depth: self.depth_margins,
             fragments: FragmentRule {
                 margins,
                 view: &view,
@@ -859,8 +859,6 @@ struct Occluders<'a> {
     /// How far the GPU's sub-pixel snap may move a vertex
     /// ([`ScreenMesh::snap`]).
     snap: f64,
-    /// The backend's depth margins ([`ScreenMesh::depth`]).
-    depth: DepthMargins,
     fragments: FragmentRule<'a>,
     camera: &'a Camera,
     scene: &'a Scene,
@@ -881,12 +879,7 @@ struct FragmentRule<'a> {
 impl FragmentRule<'_> {
     /// [`DrawnPart::facing`] for `object`.
     fn facing(&self, camera: &Camera, object: &Object) -> [Option<FacingFace>; 3] {
-        FragmentLimit::new(camera, self.view, self.margins, &object.bounds).facing_faces(
-            camera,
-            &object.bounds,
-            self.rays,
-            self.target,
-        )
+        FacingFace::of_object(camera, self.view, self.margins, &object.bounds, self.rays, self.target)
     }
 }
 
@@ -1087,7 +1080,7 @@ fn prepare_occluder(preparer: &mut Preparer, occluders: &Occluders, occluder: &O
         closed: scene.parts[first.part as usize].closed,
         near: Some(NearLimit { crossing: &crossing }),
         snap: occluders.snap,
-        depth: occluders.depth,
+        depth: occluders.fragments.margins.depth(),
     };
     preparer.patches.add(&mesh)
 }
@@ -1148,8 +1141,8 @@ mod tests {
         // each for the wall and the cube (`DepthMargins::fragment_error`),
         // with the box's growth (1e-4 of its reach: 0.17 step here) 4.2
         // steps. A cube 5 steps behind a wall 1 km ahead (depth near /
-        // distance = 1e-4, so a step is near / distance² of depth per metre
-        // of distance: 0.6 m) is hidden: a GPU box test would need its
+        // distance = 1e-4; a step of depth is 2^-24 · distance² / near,
+        // 0.6 m, of distance there) is hidden: a GPU box test would need its
         // full raise, 4 steps, and so 6.2, but swr's test is exact.
         let (distance, near) = (1000.0, camera_down_z().near);
         let gap = 5.0 / f64::from(1u32 << 24) * distance * distance / near;
