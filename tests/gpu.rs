@@ -600,10 +600,10 @@ fn every_adapter_draws_each_pixel_centre_clear_of_a_triangles_edges_by_its_repor
 fn swr_hides_a_box_behind_two_walls_whose_seam_passes_a_twentieth_of_a_pixel_from_pixel_centres() {
     // Two walls 10 m ahead, each a box of its own, meeting at the x whose
     // pixel column lies at 80.45 on a 160 × 120 target: the seam passes
-    // 0.05 pixel from the centres at x = 80.5, within twice Vulkan's
-    // coarsest snap (1/8 pixel), where a GPU snapping that coarsely may
-    // leave them undrawn, and clear of twice the 1/256 pixel of the 8
-    // sub-pixel bits the adapters here report. A box 30 m ahead straddles
+    // 0.05 pixel from the centres at x = 80.5, within Vulkan's coarsest
+    // snap (1/16 pixel), where a GPU snapping that coarsely may leave them
+    // undrawn, and clear of the 1/256 pixel of the 8 sub-pixel bits the
+    // adapters here report. A box 30 m ahead straddles
     // the seam on screen: swr hides it where the adapter's snap leaves the
     // seam's centres clear, and must draw it where it does not.
     let size = Resolution {
@@ -630,7 +630,7 @@ fn swr_hides_a_box_behind_two_walls_whose_seam_passes_a_twentieth_of_a_pixel_fro
     )
     .unwrap();
     for gpu in common::gpus() {
-        let clear = 2.0 * gpu.subpixel.vertex_error(size) < 0.04;
+        let clear = gpu.subpixel.vertex_error(size) < 0.04;
         let mut cullers = vec![create("swr", &scene, &params).unwrap()];
         let out = run_modes(&gpu, &scene, &hierarchy, &path, &mut cullers, size);
         let last = out.rows.last().unwrap();

@@ -15,8 +15,9 @@
 //! without face culling), and each edge of its triangles that is not inner
 //! is on its **border**. At a point p, the border winds round p once for
 //! each patch triangle that holds p (they all turn one way). The GPU's
-//! placement moves each point of a border edge by less than twice its
-//! corners' error on each axis: where p lies farther than that from every
+//! placement moves each point of a border edge by at most its corners'
+//! error on each axis (the point is a weighted mean of the edge's ends,
+//! each placed within its error): where p lies farther than that from every
 //! border edge, the placed border winds round p as often, so the placed
 //! triangles, counted with their turn, still hold p at least once, and one
 //! that turns the patch's way holds p (a rasteriser's fill rule counts a
@@ -354,7 +355,7 @@ pub struct Patches {
 }
 
 /// An edge of a patch's border, and how far from it a pixel centre must
-/// lie to count: twice its corners' error.
+/// lie to count: its corners' error.
 struct Border {
     p: DVec3,
     q: DVec3,
@@ -408,7 +409,7 @@ impl Patches {
                         self.borders.push(Border {
                             p: p.at,
                             q: q.at,
-                            margin: 2.0 * p.slack.max(q.slack),
+                            margin: p.slack.max(q.slack),
                         });
                     }
                 }
@@ -850,7 +851,7 @@ enum Limit {
 }
 
 /// The margins of a [`Limit`]: the triangle's slack, where it may reach a
-/// centre; its snap, where it marks one; inside by twice its slack, where
+/// centre; its snap, where it marks one; inside by its slack, where
 /// it holds one alone.
 const REACHED: usize = 0;
 const MARKED: usize = 1;
@@ -952,7 +953,7 @@ impl Triangle {
             snap,
             limits: edges.map(|edge| {
                 let reach = edge[0].abs() + edge[1].abs();
-                Limit::new(edge, [slack * reach, snap * reach, -2.0 * slack * reach])
+                Limit::new(edge, [slack * reach, snap * reach, -slack * reach])
             }),
             plane: bounding(plane_of(&corners), &corners, depth_slack, error, Bound::Farther),
         }
@@ -985,7 +986,7 @@ impl Triangle {
     }
 
     /// Where in x every centre of the rows `ys` lies inside the triangle
-    /// by twice its slack on each axis, a border's margin ([`Border`]):
+    /// by its slack on each axis, a border's margin ([`Border`]):
     /// wherever the GPU places its corners, it holds those centres.
     fn held_x_range(&self, ys: [f64; 2]) -> [f64; 2] {
         x_range(&self.limits, ys, HELD, true)
@@ -1921,13 +1922,28 @@ mod tests {
     #[test]
     fn objects_meeting_at_a_seam_fill_the_cells_along_it_where_the_adapters_snap_is_fine_enough() {
         // Two walls at 0.5 meeting at x = 30.45, 0.05 pixel from the
-        // centres at x = 30.5: within twice Vulkan's coarsest snap of the
-        // seam, where the GPU may leave them undrawn, and clear of twice a
-        // snap of 1/256 pixel. Cell column 7 holds pixels 28 to 31.
+        // centres at x = 30.5: within Vulkan's coarsest snap of the seam,
+        // where the GPU may leave them undrawn, and clear of a snap of
+        // 1/256 pixel. Cell column 7 holds pixels 28 to 31.
         let seam_cell = |snap| walls_at_snap(&[(-5.0, 30.45, 0.5), (30.45, 70.0, 0.5)], snap).depths()[5 * 16 + 7];
         assert_eq!(seam_cell(COARSE_SNAP), 0.0, "a coarse snap leaves the seam's centres in doubt");
         let fine = seam_cell(FINE_SNAP);
         assert!(fine > 0.499 && fine <= 0.5, "a fine snap fills the cell across the seam: {fine}");
+    }
+
+    #[test]
+    fn a_seam_leaves_in_doubt_only_the_centres_within_its_corners_error_of_it() {
+        // Placing the corners moves each point of the seam by at most their
+        // error on each axis (a point of an edge is a weighted mean of its
+        // ends): centres farther from it are drawn by one wall or the other.
+        // Cell column 7 holds the centres at x = 30.5.
+        let seam_cell = |off: f64| {
+            let seam = 30.5 - off * COARSE_SNAP;
+            walls(&[(-5.0, seam, 0.5), (seam, 70.0, 0.5)]).depths()[5 * 16 + 7]
+        };
+        let clear = seam_cell(1.5);
+        assert!(clear > 0.499 && clear <= 0.5, "1.5 errors from the seam: {clear}");
+        assert_eq!(seam_cell(0.9), 0.0, "0.9 errors from the seam");
     }
 
     #[test]

@@ -12,9 +12,9 @@
 //! Departures from MOC: its coverage is the pixels whose centres its own
 //! rasteriser puts inside a triangle; here it is the centres the GPU is
 //! sure to draw whatever its sub-pixel placement (mesh.rs), so a pixel
-//! counts only clear of an occluder's outline by twice the adapter's snap
-//! (about 1/120 pixel at 800x600 at the 8 sub-pixel bits Vulkan and GL
-//! adapters report here, 1/8 at the 4 that Metal and Direct3D 12 are held
+//! counts only clear of an occluder's outline by the adapter's snap
+//! (about 1/230 pixel at 800x600 at the 8 sub-pixel bits Vulkan and GL
+//! adapters report here, 1/16 at the 4 that Metal and Direct3D 12 are held
 //! to, since they report none), which costs the seams between objects. A
 //! cell keeps a depth plane besides its depth (the occluders' own, lowered
 //! below each other's where several fill it); MOC keeps one depth per
