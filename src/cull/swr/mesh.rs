@@ -969,8 +969,10 @@ impl Triangle {
     }
 
     /// Where in x every centre of the rows `ys` lies inside the triangle
-    /// or within its snap of it on each axis (less than any border's
-    /// margin, so a centre outside the patch it marks is erased). That
+    /// or within its snap of it on each axis (at most any border's
+    /// margin, a corner's error, which holds the snap; a border erases
+    /// the centres at its margin too, so a centre outside the patch it
+    /// marks is erased). That
     /// region is the triangle grown by a square: inside each edge moved
     /// out by the snap and inside its bounds grown by it (without the
     /// bounds, the moved edges of a sharp corner meet far beyond it). None
