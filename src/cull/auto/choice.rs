@@ -308,10 +308,7 @@ impl Chooser {
 
     fn next(&mut self, view: &View, settles: &[bool]) -> Turn {
         if let Some(probing) = self.probing {
-            self.probing = (probing.left > 0).then_some(Probing {
-                left: probing.left - 1,
-                ..probing
-            });
+            self.probing = probing.left.checked_sub(1).map(|left| Probing { left, ..probing });
             return Turn {
                 strategy: probing.strategy,
                 probe: true,
@@ -328,9 +325,9 @@ impl Chooser {
         if !after_probe && let Some((s, due)) = self.most_promising_due(view, settles) {
             let settling = u32::from(settles[s]);
             let recheck = due == Due::Recheck;
-            self.probing = (settling > 0).then_some(Probing {
+            self.probing = settling.checked_sub(1).map(|left| Probing {
                 strategy: s,
-                left: settling - 1,
+                left,
                 recheck,
             });
             return Turn {
