@@ -124,11 +124,11 @@ pub enum Candidacy {
     /// waits for every query that omq batches), or it is no culler (the
     /// oracle, auto).
     Never,
-    /// Only where the adapter cannot walk on the GPU: it waits for each
-    /// batch of query results, where a GPU walk tests the same boxes
-    /// without waiting.
-    WithoutGpuWalks,
-    /// On every adapter that meets its needs.
+    /// On every adapter that meets its needs: which candidate is cheapest
+    /// there is measured, not assumed (a GPU walk tests without waiting
+    /// for results, yet on a dense scan in 16 clusters, where omq's
+    /// Occupancy Map tests a third of the boxes, each GPU walk took 1.08 to
+    /// 1.31 times omq's frame on lavapipe and llvmpipe, in two runs on each).
     Always,
 }
 

@@ -51,7 +51,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     exercised_with: &[],
     needs: Needs::Nothing,
     carries: Carries::Nothing,
-    auto: Candidacy::WithoutGpuWalks,
+    auto: Candidacy::Always,
     check: |params| OmqParams::from_params(params).map(drop),
     build: |_, params| Ok(Box::new(OccupancyMapQueries::new(OmqParams::from_params(params)?))),
 };

@@ -859,7 +859,7 @@ mod tests {
     }
 
     /// vfc, three GPU walks (roc, ioc and the pyramid test) and the CPU
-    /// culler, as `auto` has them on a GPU-driven adapter.
+    /// culler: five of `auto`'s candidates on a GPU-driven adapter.
     const FIVE: [Family; 5] = [Frustum, Occlusion, Occlusion, Occlusion, Occlusion];
 
     /// Occlusion hides `hidden` of the frustum's 1 000 triangles, and each

@@ -331,12 +331,7 @@ impl Culler for AutoCulling {
         let gpu = setup.gpu;
         self.candidates.retain(|c| {
             let info = c.id.info();
-            let runs_here = match info.auto {
-                Candidacy::Always => true,
-                Candidacy::WithoutGpuWalks => !gpu.gpu_driven,
-                Candidacy::Never => false,
-            };
-            runs_here && info.unsupported_on(gpu).is_none()
+            info.auto == Candidacy::Always && info.unsupported_on(gpu).is_none()
         });
         if self.candidates.iter().any(|c| c.carries() == Carries::VisibleOnGpu) {
             let lists = Rc::new(VisibleLists::new(gpu, setup.draws)?);

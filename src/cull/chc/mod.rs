@@ -61,7 +61,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     exercised_with: &[],
     needs: Needs::PixelCounts,
     carries: Carries::OwnState,
-    auto: Candidacy::WithoutGpuWalks,
+    auto: Candidacy::Always,
     check: |params| ChcParams::from_params(params).map(drop),
     build: |scene, params| Ok(Box::new(CoherentCulling::new(scene, ChcParams::from_params(params)?))),
 };
