@@ -9,9 +9,10 @@
 //!
 //! - **Candidates** are the registry's modes whose entry allows it
 //!   ([`Candidacy`]) and whose needs this adapter meets, each built with the
-//!   run's parameters: `vfc`, the GPU walks and CPU occlusion culling where
-//!   the adapter walks on the GPU; `vfc`, the query-batching modes and CPU
-//!   occlusion culling elsewhere. Which pays is measured, not assumed; but
+//!   run's parameters: `vfc`, the query-batching modes (`omq`, and `chc`
+//!   where the adapter counts pixels), CPU occlusion culling, and the GPU
+//!   walks where the adapter walks on the GPU. Which pays is measured, not
+//!   assumed (the warm-up calibration drops those far dearer); but
 //!   in a scene of one object only `vfc` runs, since occlusion culling
 //!   hides an object only behind another one.
 //! - **Choice** (choice.rs): one incumbent runs; the others are probed as
@@ -74,7 +75,7 @@ use choice::{Chooser, Cost, Family, Occluded, Turn, View};
 /// This mode's entry in the registry.
 pub(super) const MODE: ModeInfo = ModeInfo {
     id: ModeId::Auto,
-    summary: "per frame, the conservative mode measured cheapest here (vfc, the GPU walks and CPU culling; the query-batching modes without GPU culling): rivals probed as a bandit does and switched to only when cheaper beyond the noise; vfc where occlusion hides nothing",
+    summary: "per frame, the conservative mode measured cheapest here (vfc, the query-batching modes, CPU culling and, where the adapter culls on the GPU, the GPU walks): rivals probed as a bandit does and switched to only when cheaper beyond the noise; vfc where occlusion hides nothing",
     chart_colour: [255, 187, 120],
     conservative: true,
     params: &[BUDGET],
