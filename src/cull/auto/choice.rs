@@ -40,10 +40,10 @@
 //!   nothing to skip: once frustum culling is the incumbent, occlusion is
 //!   checked again only when the view has changed materially since
 //!   ([`View::differs`]), by one probe of the most promising occlusion
-//!   culler, within the budget. Where it hid clearly
-//!   next to nothing (under half of it), frustum culling takes over once
-//!   two measured samples show it cheaper at all: the occlusion culler
-//!   then draws as much and tests besides, so the burden of proof is its.
+//!   culler, within the budget. Where it hid clearly next to nothing
+//!   (under half of it), frustum culling takes over once two measured
+//!   samples show it cheaper at all: the occlusion culler then draws as
+//!   much and tests besides, so the burden of proof is its.
 //!   Frustum culling's ratio to an occlusion culler turns on what
 //!   occlusion hides: their samples taken where it hid much do not count
 //!   where it hides next to nothing, nor the reverse ([`apart`],
@@ -551,7 +551,9 @@ impl Chooser {
     /// noise would keep the occlusion culler running, and frustum culling
     /// probed, for the rest of the path.
     fn cheaper_than_incumbent(&self) -> Option<usize> {
-        let nothing_to_skip = |s: usize| {
+        // Not `Self::nothing_to_skip`, which asks the reverse: whether an
+        // occlusion culler may look again while frustum culling runs.
+        let burden_on_incumbent = |s: usize| {
             self.records[s].family == Family::Frustum
                 && self.records[self.incumbent].family == Family::Occlusion
                 && self.hidden.is_some_and(|h| clearly_nothing_hidden(h.share))
@@ -567,7 +569,7 @@ impl Chooser {
         (0..self.records.len())
             .filter(|&s| s != self.incumbent && measured(s))
             .filter_map(|s| self.estimate(s).map(|(m, se)| (s, m, se)))
-            .filter(|&(s, m, se)| (m < -HYSTERESIS && m + Z * se < 0.0) || (nothing_to_skip(s) && shown_cheaper(s)))
+            .filter(|&(s, m, se)| (m < -HYSTERESIS && m + Z * se < 0.0) || (burden_on_incumbent(s) && shown_cheaper(s)))
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .map(|(s, ..)| s)
     }
