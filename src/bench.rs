@@ -471,7 +471,7 @@ fn mode_summaries(
         .collect();
     let modes = summarize(rows, &descriptions, plan.resolution.pixels());
     let ids: Vec<ModeId> = runs.iter().map(|run| run.mode).collect();
-    let verdict = Verdict::of(&modes, &ids);
+    let verdict = Verdict::of(&modes, &ids, rows);
     (modes, verdict)
 }
 

@@ -60,6 +60,50 @@ impl Distribution {
     }
 }
 
+/// Two-sided 95 % normal quantile.
+const Z_95: f64 = 1.96;
+
+/// The ratio of the mean of the first values of `pairs` to the mean of the
+/// second, with its 95 % interval.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PairedRatio {
+    pub ratio: f64,
+    pub interval: [f64; 2],
+}
+
+impl PairedRatio {
+    /// Over `pairs` (a mode's frame time and another's at the same place
+    /// on the path), by the delta method: R = ā / b̄ has the standard error
+    /// sd(aᵢ − R·bᵢ) / (√n · b̄). What a pair shares, the cost of its view,
+    /// which along a path varies far more than either mode's noise,
+    /// cancels in aᵢ − R·bᵢ; compared as two unpaired means, it would
+    /// widen the interval until no two modes differed. Frames are taken as
+    /// independent. `None` under two pairs, or where the second mean is
+    /// not positive.
+    pub fn of(pairs: &[(f64, f64)]) -> Option<PairedRatio> {
+        let n = pairs.len() as f64;
+        let mean = |side: fn(&(f64, f64)) -> f64| pairs.iter().map(side).sum::<f64>() / n;
+        let (a, b) = (mean(|p| p.0), mean(|p| p.1));
+        if pairs.len() < 2 || b.is_nan() || b <= 0.0 {
+            return None;
+        }
+        let ratio = a / b;
+        let residual = |&(x, y): &(f64, f64)| x - ratio * y;
+        let variance = pairs.iter().map(|p| residual(p).powi(2)).sum::<f64>() / (n - 1.0);
+        let half = Z_95 * variance.sqrt() / (n.sqrt() * b);
+        Some(PairedRatio {
+            ratio,
+            interval: [ratio - half, ratio + half],
+        })
+    }
+
+    /// Whether the interval holds `x`: the run does not tell the ratio
+    /// from it.
+    pub fn holds(&self, x: f64) -> bool {
+        self.interval[0] <= x && x <= self.interval[1]
+    }
+}
+
 fn percentile(sorted: &[f64], q: f64) -> f64 {
     let h = (sorted.len() - 1) as f64 * q;
     let (lo, hi) = (h.floor() as usize, h.ceil() as usize);
@@ -236,6 +280,40 @@ mod tests {
         );
         assert_eq!(Distribution::of(&[]), None);
         assert_eq!(Distribution::of(&[7.0]).unwrap().stddev, 0.0);
+    }
+
+    #[test]
+    fn a_paired_ratio_matches_the_delta_method_worked_by_hand() {
+        // ā = 4, b̄ = 2.1, R = 40/21; residuals 2/21, 4/21, −6/21;
+        // variance (4 + 16 + 36) / 441 / 2; half width 1.96 · sd / (√3 · 2.1).
+        let r = PairedRatio::of(&[(2.0, 1.0), (4.0, 2.0), (6.0, 3.3)]).unwrap();
+        let half = 1.96 * (56.0f64 / 441.0 / 2.0).sqrt() / (3f64.sqrt() * 2.1);
+        assert!((r.ratio - 40.0 / 21.0).abs() < 1e-12);
+        assert!((r.interval[0] - (40.0 / 21.0 - half)).abs() < 1e-12, "{r:?}");
+        assert!((r.interval[1] - (40.0 / 21.0 + half)).abs() < 1e-12, "{r:?}");
+        assert_eq!(PairedRatio::of(&[(2.0, 1.0)]), None);
+        assert_eq!(PairedRatio::of(&[(2.0, 0.0), (1.0, 0.0)]), None);
+    }
+
+    #[test]
+    fn pairing_frames_tells_apart_modes_whose_difference_the_path_would_hide() {
+        // Along a path the view's cost varies by ±40 %, and one mode costs
+        // 5 % more than the other in 3 % noise.
+        let mut rng = crate::rng::Rng::new(3);
+        let pairs: Vec<(f64, f64)> = (0..120)
+            .map(|i| {
+                let view = 20.0 * (1.0 + 0.4 * (f64::from(i) / 9.0).sin());
+                (1.05 * view * rng.range(0.97, 1.03), view * rng.range(0.97, 1.03))
+            })
+            .collect();
+        let paired = PairedRatio::of(&pairs).unwrap();
+        assert!(paired.interval[0] > 1.0 && paired.holds(paired.ratio), "{paired:?}");
+        assert!(paired.holds(1.05), "{paired:?}");
+        // The same frames as two unpaired means do not tell them apart.
+        let [a, b] = [|p: &(f64, f64)| p.0, |p: &(f64, f64)| p.1]
+            .map(|side| Distribution::of(&pairs.iter().map(side).collect::<Vec<_>>()).unwrap());
+        let unpaired = 1.96 * (a.stddev.powi(2) + b.stddev.powi(2)).sqrt() / (120f64.sqrt() * b.mean);
+        assert!(paired.ratio - unpaired < 1.0, "{unpaired}");
     }
 
     fn row(mode: &str, frame_ms: f64, error: Option<u64>) -> FrameStats {

@@ -24,7 +24,7 @@ pub fn render(s: &Summary) -> String {
     );
     let _ = writeln!(w, "Adapter: {}.\n", s.adapter);
     if let Some(v) = &s.verdict {
-        let _ = writeln!(w, "{}\n", verdict(v));
+        let _ = writeln!(w, "{}\n", verdict_line(v));
     }
     let _ = writeln!(
         w,
@@ -96,7 +96,7 @@ pub fn render(s: &Summary) -> String {
 }
 
 /// The run's answer in one line.
-fn verdict(v: &Verdict) -> String {
+pub(super) fn verdict_line(v: &Verdict) -> String {
     let mut line = format!(
         "**Fastest conservative mode: {}**, {:.2} ms a frame",
         v.fastest, v.frame_ms
@@ -107,10 +107,35 @@ fn verdict(v: &Verdict) -> String {
     if let Some(x) = v.ratio_to_oracle {
         let _ = write!(line, ", {x:.2}× the oracle's time");
     }
+    if let Some(next) = &v.runner_up {
+        let told = if next.ratio.holds(1.0) {
+            "not told apart in this run"
+        } else {
+            "slower"
+        };
+        let _ = write!(
+            line,
+            "; {} takes {:.2}× its time ({}, {told})",
+            markdown(&next.name),
+            next.ratio.ratio,
+            interval(next.ratio.interval)
+        );
+    }
     if let (Some(mean), Some(p95)) = (v.auto_ratio, v.auto_p95_ratio) {
-        let _ = write!(line, "; auto takes {mean:.2}× its time (p95 {p95:.2}×)");
+        let _ = write!(line, "; auto takes {mean:.2}× its time (");
+        if let Some(i) = v.auto_interval {
+            let _ = write!(line, "{}, ", interval(i));
+        }
+        let _ = write!(line, "p95 {p95:.2}×)");
+    }
+    if v.runner_up.is_some() || v.auto_interval.is_some() {
+        line += ". The intervals pair the frames by their place on the path";
     }
     line + "."
+}
+
+fn interval([low, high]: [f64; 2]) -> String {
+    format!("95 % interval {low:.2}–{high:.2}")
 }
 
 /// For each mode that runs others (`auto`), the frames each of them drew

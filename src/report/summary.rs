@@ -1,13 +1,15 @@
 //! What summary.json holds ([`Summary`]): the run's adapter, scene, path and
 //! every mode's statistics, versioned by [`SCHEMA_VERSION`].
 
+use std::collections::HashMap;
+
 use serde::{Deserialize, Serialize};
 
 use crate::camera::path::CameraPath;
 use crate::cull::ModeId;
 use crate::gpu::{AdapterReport, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams, HierarchyStats};
-use crate::measure::{MissedObject, ModeSummary};
+use crate::measure::{Distribution, FrameStats, MissedObject, ModeSummary, PairedRatio};
 use crate::scene::up::Up;
 use crate::scene::{LoadPhases, Scene};
 
@@ -61,7 +63,8 @@ pub struct Summary {
 }
 
 /// The run's answer in one line: the fastest conservative mode, against
-/// `vfc` and the oracle, and how far `auto` is from it.
+/// `vfc` and the oracle, how far the next fastest and `auto` are from it,
+/// and whether the run tells them apart.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Verdict {
     pub fastest: String,
@@ -69,38 +72,83 @@ pub struct Verdict {
     pub frame_ms: f64,
     pub speedup_vs_vfc: Option<f64>,
     pub ratio_to_oracle: Option<f64>,
+    /// The next fastest conservative mode, where another ran, and its mean
+    /// frame time over the fastest's (absent in older files).
+    #[serde(default)]
+    pub runner_up: Option<RunnerUp>,
     /// `auto`'s mean and p95 frame times over the fastest's, where it ran.
     pub auto_ratio: Option<f64>,
     pub auto_p95_ratio: Option<f64>,
+    /// The 95 % interval of `auto_ratio`, from the frames paired by their
+    /// place on the path ([`PairedRatio`]; absent in older files).
+    #[serde(default)]
+    pub auto_interval: Option<[f64; 2]>,
+}
+
+/// The next fastest conservative mode, and its mean frame time over the
+/// fastest's, with the 95 % interval of that ratio from the frames paired
+/// by their place on the path: where it holds 1, the run does not tell the
+/// two apart.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct RunnerUp {
+    pub name: String,
+    pub ratio: PairedRatio,
 }
 
 impl Verdict {
-    /// From `modes`, each run as the mode of `ids` beside it: the fastest
-    /// by mean frame time of the conservative ones, leaving out the oracle
-    /// (it knows the answer) and `auto` (it runs the others).
-    pub fn of(modes: &[ModeSummary], ids: &[ModeId]) -> Option<Verdict> {
+    /// From `modes`, each run as the mode of `ids` beside it, over the
+    /// frames `rows`: the fastest by mean frame time of the conservative
+    /// ones, leaving out the oracle (it knows the answer) and `auto` (it
+    /// runs the others). The fastest of several modes is picked by the same
+    /// frames that measure it, so the intervals against it lean a little
+    /// its way (by about a standard error where modes are near equals).
+    pub fn of(modes: &[ModeSummary], ids: &[ModeId], rows: &[FrameStats]) -> Option<Verdict> {
         let frame = |m: &ModeSummary| m.stats.get("frame_ms").copied();
-        let fastest = modes
+        let mut ranked: Vec<(&ModeSummary, Distribution)> = modes
             .iter()
             .zip(ids)
             .filter(|(m, id)| m.conservative && !matches!(id, ModeId::Oracle | ModeId::Auto))
             .filter_map(|(m, _)| frame(m).map(|f| (m, f)))
-            .min_by(|a, b| a.1.mean.total_cmp(&b.1.mean))?;
+            .collect();
+        ranked.sort_by(|a, b| a.1.mean.total_cmp(&b.1.mean));
+        let &(m, f) = ranked.first()?;
         let auto = modes
             .iter()
             .zip(ids)
             .find(|(_, id)| **id == ModeId::Auto)
-            .and_then(|(m, _)| frame(m));
-        let (m, f) = fastest;
+            .map(|(a, _)| a);
+        let against_fastest = |other: &ModeSummary| PairedRatio::of(&paired_frame_ms(rows, &other.name, &m.name));
+        let auto_frame = auto.and_then(frame);
         Some(Verdict {
             fastest: m.name.clone(),
             frame_ms: f.mean,
             speedup_vs_vfc: m.speedup_vs_vfc,
             ratio_to_oracle: m.ratio_to_oracle,
-            auto_ratio: auto.map(|a| a.mean / f.mean),
-            auto_p95_ratio: auto.map(|a| a.p95 / f.p95),
+            runner_up: ranked.get(1).and_then(|(next, _)| {
+                against_fastest(next).map(|ratio| RunnerUp {
+                    name: next.name.clone(),
+                    ratio,
+                })
+            }),
+            auto_ratio: auto_frame.map(|a| a.mean / f.mean),
+            auto_p95_ratio: auto_frame.map(|a| a.p95 / f.p95),
+            auto_interval: auto.and_then(against_fastest).map(|r| r.interval),
         })
     }
+}
+
+/// The frame times of modes `a` and `b` in the frames both ran, paired by
+/// frame.
+fn paired_frame_ms(rows: &[FrameStats], a: &str, b: &str) -> Vec<(f64, f64)> {
+    let of_b: HashMap<u32, f64> = rows
+        .iter()
+        .filter(|r| r.mode == b)
+        .map(|r| (r.frame, r.frame_ms))
+        .collect();
+    rows.iter()
+        .filter(|r| r.mode == a)
+        .filter_map(|r| of_b.get(&r.frame).map(|&y| (r.frame_ms, y)))
+        .collect()
 }
 
 /// The head of missed.csv, for report.md and machines.
@@ -516,5 +564,51 @@ mod tests {
             .filter(|&x| serde_json::from_str::<f64>(&serde_json::to_string(&x).unwrap()).unwrap() != x)
             .count();
         assert_eq!(drifted, 0);
+    }
+
+    #[test]
+    fn the_verdict_names_the_next_fastest_and_whether_the_run_tells_it_and_auto_from_the_fastest() {
+        // Along a path whose views vary by ±40 %: roc, ioc as dear, and
+        // auto 10 % dearer, each in ±4 % noise; vfc twice roc.
+        let mut rng = crate::rng::Rng::new(5);
+        let modes = [("vfc", 2.0), ("roc", 1.0), ("ioc", 1.0), ("auto", 1.1)];
+        let rows: Vec<FrameStats> = (0..120u32)
+            .flat_map(|frame| {
+                let view = 20.0 * (1.0 + 0.4 * (f64::from(frame) / 9.0).sin());
+                modes
+                    .map(|(mode, cost)| FrameStats {
+                        frame,
+                        frame_ms: cost * view * rng.range(0.96, 1.04),
+                        ..FrameStats::blank(mode)
+                    })
+                    .to_vec()
+            })
+            .collect();
+        let descriptions: Vec<crate::measure::ModeDescription> = modes
+            .iter()
+            .map(|(name, _)| crate::measure::ModeDescription {
+                name: (*name).into(),
+                conservative: true,
+                parameters: serde_json::json!({}),
+            })
+            .collect();
+        let summaries = crate::measure::summarize(&rows, &descriptions, 100);
+        let ids = [ModeId::Vfc, ModeId::Roc, ModeId::Ioc, ModeId::Auto];
+        let v = Verdict::of(&summaries, &ids, &rows).unwrap();
+        let mean = |k: usize| summaries[k].stats["frame_ms"].mean;
+        assert_eq!(v.fastest, "roc");
+        let next = v.runner_up.as_ref().unwrap();
+        assert_eq!(next.name, "ioc");
+        assert!((next.ratio.ratio - mean(2) / mean(1)).abs() < 1e-12, "{next:?}");
+        assert!(next.ratio.holds(1.0), "{next:?}");
+        let [low, high] = v.auto_interval.unwrap();
+        assert!(1.0 < low && low < 1.1 && 1.1 < high, "{low}–{high}");
+        let line = crate::report::markdown::verdict_line(&v);
+        assert!(line.contains("ioc takes 1.00× its time (95 % interval"), "{line}");
+        assert!(line.contains("not told apart in this run"), "{line}");
+        assert!(
+            line.contains(&format!("auto takes 1.10× its time (95 % interval {low:.2}–{high:.2}")),
+            "{line}"
+        );
     }
 }
