@@ -400,14 +400,10 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
     assert_eq!(verdict["fastest"], fastest["name"]);
     let auto_ratio = mean(auto) / mean(fastest);
     assert_eq!(verdict["auto_ratio"].as_f64(), Some(auto_ratio));
-    // Its interval, from the frames paired, holds it.
-    let interval: Vec<f64> = verdict["auto_interval"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect();
-    assert!(interval[0] <= auto_ratio && auto_ratio <= interval[1], "{interval:?}");
+    // Two frames are too few for an interval: none is given, for auto or
+    // for the next fastest mode.
+    assert!(verdict["auto_interval"].is_null(), "{verdict}");
+    assert!(verdict["runner_up"].is_null(), "{verdict}");
     let first = format!("**Fastest conservative mode: {}**", fastest["name"].as_str().unwrap());
     assert!(report.lines().take(8).any(|l| l.starts_with(&first)), "{report}");
     // The cost split, where the adapter has timestamps: hiz's pyramid is

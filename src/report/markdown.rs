@@ -108,7 +108,8 @@ pub(super) fn verdict_line(v: &Verdict) -> String {
         let _ = write!(line, ", {x:.2}× the oracle's time");
     }
     if let Some(next) = &v.runner_up {
-        let told = if next.ratio.holds(1.0) {
+        let [low, high] = next.interval;
+        let told = if low <= 1.0 && 1.0 <= high {
             "not told apart in this run"
         } else {
             "slower"
@@ -117,8 +118,8 @@ pub(super) fn verdict_line(v: &Verdict) -> String {
             line,
             "; {} takes {:.2}× its time ({}, {told})",
             markdown(&next.name),
-            next.ratio.ratio,
-            interval(next.ratio.interval)
+            next.ratio,
+            interval(next.interval)
         );
     }
     if let (Some(mean), Some(p95)) = (v.auto_ratio, v.auto_p95_ratio) {
