@@ -38,8 +38,8 @@
 //!   culling is probed every other frame until a window of samples of the
 //!   view has measured it, and then as any rival is. Where occlusion hides
 //!   less than [`NOTHING_HIDDEN`] of the frustum, there is nothing to
-//!   skip: once frustum culling is the incumbent, occlusion is
-//!   checked again only when the view has changed materially since
+//!   skip: once frustum culling is the incumbent, occlusion is checked
+//!   again only when the view has changed materially since
 //!   ([`View::differs`]), by one probe of the most promising occlusion
 //!   culler, within the budget. Where it hid clearly next to nothing
 //!   (under half of it), frustum culling takes over once two measured
@@ -233,15 +233,15 @@ const SHARES: usize = 5;
 ///
 /// Taken over the last [`SHARES`] measured occlusion frames, by their
 /// medians; they are forgotten when one looks from a view that differs
-/// materially from the last one's ([`View::differs`]). One frame's share wavers where the view's
-/// does not: a dense scan in 16 clusters hides none of them in one frame
-/// and three in the next, 0 to 19 % of the frustum about a tenth. Taken
-/// frame by frame, it said "clearly nothing hidden" a frame in seven
-/// there, and frustum culling took over on such a frame (a test below).
-/// What it does not mend: the median follows a real change of what is
-/// hidden three measured frames late, and where occlusion looks again
-/// after frustum culling has run while the view changed, its first frame
-/// alone is the view's share.
+/// materially from the last one's ([`View::differs`]). One frame's share
+/// wavers where the view's does not: a dense scan in 16 clusters hides
+/// none of them in one frame and three in the next, 0 to 19 % of the
+/// frustum about a tenth. Taken frame by frame, it said "clearly nothing
+/// hidden" a frame in seven there, and frustum culling took over on such
+/// a frame (a test below). What it does not mend: the median follows a
+/// real change of what is hidden three measured frames late, and where
+/// occlusion looks again after frustum culling has run while the view
+/// changed, its first frame alone is the view's share.
 #[derive(Clone, Copy, Debug)]
 struct Hidden {
     /// Share of the frustum's triangles not drawn.
