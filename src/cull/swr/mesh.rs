@@ -59,9 +59,9 @@
 //!
 //! Near the eye. A triangle with a corner the GPU may clip (at or behind
 //! the near plane, within its error) is drawn in its part beyond the near
-//! plane. Its part beyond a limit a little farther ([`polygon`], clipped
-//! as Sutherland and Hodgman clip) is a polygon whose corners are placed
-//! vertices or crossings of that limit; the GPU's own clipped polygon
+//! plane. Its part beyond a limit a little farther ([`Polygon::clip`],
+//! clipped as Sutherland and Hodgman clip) is a polygon whose corners are
+//! placed vertices or crossings of that limit; the GPU's own clipped polygon
 //! runs on along the same edges to the near plane, so it holds ours. Its
 //! cut sides are borders: the GPU clips each triangle on its own, so two
 //! triangles cut on a shared edge may not meet exactly there, and a
@@ -125,7 +125,7 @@ const INTERPOLATION_STEPS: f64 = 8.0;
 pub(super) const NO_NEIGHBOUR: u32 = u32::MAX;
 
 /// A vertex on screen.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ScreenVertex {
     /// Pixel position (x, y) and depth (z).
     pub at: DVec3,
@@ -241,7 +241,7 @@ pub struct NearLimit<'a> {
 /// the triangle itself, or, where the near plane clips it, the part in
 /// front of the near limit. Its sides (corner i to i + 1) are whole edges
 /// of the triangle, or cut: a part of an edge, or the limit's.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 struct Polygon {
     corners: [ScreenVertex; 4],
     /// Per side, the triangle's edge it is whole (corner k to k + 1), or
@@ -251,6 +251,48 @@ struct Polygon {
 }
 
 impl Polygon {
+    /// Becomes the part of a drawn triangle (its corners among the mesh's
+    /// vertices) the GPU draws in front of the near limit (Sutherland and
+    /// Hodgman's clipping, edge by edge); false where there is none, or
+    /// where a crossing cannot be placed. Without `mesh.near`, only a
+    /// triangle the GPU places whole. Filled in place, not returned: it is
+    /// made twice for every occluder triangle a frame, and returning its
+    /// 232 bytes cost 4–5 % of a buffer's time (the city, the bunny).
+    fn clip(&mut self, mesh: &ScreenMesh, corners: [u32; 3]) -> bool {
+        if let Some(placed) = placed_corners(mesh, corners) {
+            self.corners[..3].copy_from_slice(&placed);
+            self.sides[..3].copy_from_slice(&[Some(0), Some(1), Some(2)]);
+            self.count = 3;
+            return true;
+        }
+        self.count = 0;
+        let Some(near) = mesh.near.as_ref() else { return false };
+        let index = |k: usize| corners[k % 3] as usize;
+        for edge in 0..3 {
+            let (p, q) = (index(edge), index(edge + 1));
+            let (first, crossing) = match (mesh.vertices[p], mesh.vertices[q]) {
+                (Some(p), Some(_)) => (Some((p, Some(edge))), None),
+                (Some(corner), None) => (Some((corner, None)), Some((p, q))),
+                (None, Some(_)) => (None, Some((q, p))),
+                (None, None) => (None, None),
+            };
+            if let Some((corner, side)) = first {
+                self.push(corner, side);
+            }
+            if let Some((placed, not)) = crossing {
+                let Some(corner) = (near.crossing)(placed, not) else { return false };
+                self.push(corner, None);
+            }
+        }
+        self.count >= 3
+    }
+
+    fn push(&mut self, corner: ScreenVertex, side: Option<usize>) {
+        self.corners[self.count] = corner;
+        self.sides[self.count] = side;
+        self.count += 1;
+    }
+
     /// Whether the GPU draws the whole triangle.
     fn whole(&self) -> bool {
         self.count == 3 && self.sides[..3].iter().all(Option::is_some)
@@ -384,6 +426,7 @@ impl Patches {
     pub fn add(&mut self, mesh: &ScreenMesh) -> Range<usize> {
         self.find_patches(mesh);
         let first = self.patches.len();
+        let mut polygon = Polygon::default();
         let mut start = 0;
         while start < self.by_patch.len() {
             let root = self.by_patch[start].0;
@@ -392,7 +435,9 @@ impl Patches {
             let (mut lo, mut hi, mut nearest) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
             for k in start..end {
                 let t = self.by_patch[k].1 as usize;
-                let Some(polygon) = polygon(mesh, self.corners[t]) else { continue };
+                if !polygon.clip(mesh, self.corners[t]) {
+                    continue;
+                }
                 let error = mesh.depth.fragment_error(polygon.nearest_depth());
                 for c in polygon.triangles() {
                     // A patch's triangles each have a depth slack (their
@@ -453,10 +498,15 @@ impl Patches {
             .parts
             .iter()
             .flat_map(|part| std::iter::repeat_n(part, part.triangles.len()));
+        let mut polygon = Polygon::default();
         for (&corners, part) in self.corners.iter().zip(parts) {
-            let polygon = polygon(mesh, corners);
-            clipped |= polygon.is_some_and(|p| !p.whole());
-            self.turns.push(polygon.map_or(Turn::Excluded, |p| p.turn(mesh, part)));
+            let turn = if polygon.clip(mesh, corners) {
+                clipped |= !polygon.whole();
+                polygon.turn(mesh, part)
+            } else {
+                Turn::Excluded
+            };
+            self.turns.push(turn);
         }
         self.parent.clear();
         self.parent.extend(0..self.turns.len() as u32);
@@ -1002,49 +1052,6 @@ fn placed_corners(mesh: &ScreenMesh, corners: [u32; 3]) -> Option<[ScreenVertex;
     Some([vertex(0)?, vertex(1)?, vertex(2)?])
 }
 
-/// The part of a drawn triangle (its corners among the mesh's vertices) the
-/// GPU draws in front of the near limit
-/// (Sutherland and Hodgman's clipping, edge by edge); `None` where there
-/// is none, or where a crossing cannot be placed. Without `mesh.near`,
-/// only a triangle the GPU places whole.
-fn polygon(mesh: &ScreenMesh, corners: [u32; 3]) -> Option<Polygon> {
-    let index = |k: usize| corners[k % 3] as usize;
-    if let Some(corners) = placed_corners(mesh, corners) {
-        return Some(Polygon {
-            corners: [corners[0], corners[1], corners[2], corners[0]],
-            sides: [Some(0), Some(1), Some(2), None],
-            count: 3,
-        });
-    }
-    let near = mesh.near.as_ref()?;
-    let mut polygon = Polygon {
-        corners: [ScreenVertex {
-            at: DVec3::ZERO,
-            slack: 0.0,
-            depth_error: 0.0,
-        }; 4],
-        sides: [None; 4],
-        count: 0,
-    };
-    let mut push = |corner: ScreenVertex, side: Option<usize>| {
-        polygon.corners[polygon.count] = corner;
-        polygon.sides[polygon.count] = side;
-        polygon.count += 1;
-    };
-    for edge in 0..3 {
-        let (p, q) = (index(edge), index(edge + 1));
-        match (mesh.vertices[p], mesh.vertices[q]) {
-            (Some(p), Some(_)) => push(p, Some(edge)),
-            (Some(corner), None) => {
-                push(corner, None);
-                push((near.crossing)(p, q)?, None);
-            }
-            (None, Some(_)) => push((near.crossing)(q, p)?, None),
-            (None, None) => {}
-        }
-    }
-    (polygon.count >= 3).then_some(polygon)
-}
 
 /// The error of a triangle's corners: the largest.
 fn slack_of(corners: &[ScreenVertex; 3]) -> f64 {
