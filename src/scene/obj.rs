@@ -33,10 +33,12 @@ use super::source::{LoadOptions, SceneError};
 /// Loads an OBJ model. The options on reading further files do not apply:
 /// an OBJ file's geometry is all in it, and its material files are not read.
 pub fn load(path: &Path, bytes: &[u8], _: &LoadOptions, builder: &mut SceneBuilder) -> Result<(), SceneError> {
-    let obj = parse(bytes).map_err(|message| SceneError::Parse {
+    let invalid = |message| SceneError::Parse {
         path: path.into(),
         message: format!("invalid OBJ: {message}"),
-    })?;
+    };
+    let obj = parse(bytes).map_err(invalid)?;
+    let warnings = judge(&obj).map_err(invalid)?;
     for object in &obj.objects {
         let geometry = |error| SceneError::Geometry {
             path: path.into(),
@@ -49,11 +51,8 @@ pub fn load(path: &Path, bytes: &[u8], _: &LoadOptions, builder: &mut SceneBuild
             .add_object(&object.name, &group, DAffine3::IDENTITY)
             .map_err(geometry)?;
     }
-    if obj.skipped > 0 {
-        builder.warn(format!(
-            "ignored {} line/point elements ('l'/'p'): only faces are rendered",
-            obj.skipped
-        ));
+    for warning in warnings {
+        builder.warn(warning);
     }
     Ok(())
 }
@@ -63,6 +62,85 @@ struct Obj {
     objects: Vec<Object>,
     /// `l` and `p` elements.
     skipped: usize,
+    /// Faces of one or two corners, which draw nothing.
+    short_faces: usize,
+    unknown: Unknown,
+}
+
+/// Lines whose statement OBJ does not define (a typo such as `F` or `vv`,
+/// or a file that is not OBJ at all): how many, and the first.
+#[derive(Default)]
+struct Unknown {
+    lines: usize,
+    first: Option<(usize, String)>,
+}
+
+/// Every statement of the OBJ format (Wavefront's specification, version
+/// 3.0) that occlu reads nothing from: free-form geometry, grouping,
+/// display and rendering attributes. A line that starts with none of
+/// these, nor one read, is unknown.
+const IGNORED_STATEMENTS: &[&str] = &[
+    "vp",
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "s",
+    "mg",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "lod",
+    "usemtl",
+    "mtllib",
+    "usemap",
+    "maplib",
+    "shadow_obj",
+    "trace_obj",
+    "ctech",
+    "stech",
+    "call",
+    "csh",
+];
+
+/// What the file's statements say of it beyond its geometry: the warnings
+/// of what it drew nothing from, or an error where nothing in it is OBJ.
+fn judge(obj: &Obj) -> Result<Vec<String>, String> {
+    let mut warnings = Vec::new();
+    if obj.skipped > 0 {
+        warnings.push(format!(
+            "ignored {} line/point elements ('l'/'p'): only faces are rendered",
+            obj.skipped
+        ));
+    }
+    if obj.short_faces > 0 {
+        warnings.push(format!(
+            "ignored {} faces of one or two corners: they enclose nothing to draw",
+            obj.short_faces
+        ));
+    }
+    if let Some((line, statement)) = &obj.unknown.first {
+        let shown: String = statement.chars().take(40).collect();
+        let what = format!(
+            "{} lines whose statement OBJ does not define (the first, line {line}: '{}')",
+            obj.unknown.lines, shown
+        );
+        if obj.objects.iter().all(|o| o.indices.is_empty()) {
+            return Err(format!("no faces, and {what}: is it an OBJ file?"));
+        }
+        warnings.push(format!("ignored {what}"));
+    }
+    Ok(warnings)
 }
 
 struct Object {
@@ -92,6 +170,10 @@ type Written = [isize; 3];
 
 fn parse(bytes: &[u8]) -> Result<Obj, String> {
     let text = std::str::from_utf8(bytes).map_err(|e| format!("not UTF-8 text (byte {})", e.valid_up_to()))?;
+    // A byte-order mark (Windows editors write one) is no part of the first
+    // line: read as one, it hid that line's statement, and a first vertex
+    // lost shifted every face's indices.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut reader = Reader {
         name: "unnamed_object".into(),
         ..Reader::default()
@@ -110,6 +192,8 @@ fn parse(bytes: &[u8]) -> Result<Obj, String> {
     Ok(Obj {
         objects: reader.objects,
         skipped: reader.skipped,
+        short_faces: reader.short_faces,
+        unknown: reader.unknown,
     })
 }
 
@@ -143,6 +227,8 @@ struct Reader {
     vertex_of: Vec<u32>,
     objects: Vec<Object>,
     skipped: usize,
+    short_faces: usize,
+    unknown: Unknown,
 }
 
 impl Reader {
@@ -182,6 +268,10 @@ impl Reader {
             }
             Some("usemtl") if line.split_once(' ').is_none_or(|(_, name)| name.trim().is_empty()) => {
                 return Err(self.fail("usemtl names no material"));
+            }
+            Some(statement) if !statement.starts_with('#') && !IGNORED_STATEMENTS.contains(&statement) => {
+                self.unknown.lines += 1;
+                self.unknown.first.get_or_insert_with(|| (self.line, statement.into()));
             }
             _ => {}
         }
@@ -223,7 +313,7 @@ impl Reader {
         match self.face.as_slice() {
             [] => return Err(self.fail("a face without corners")),
             // A point or a line: nothing to draw.
-            [_] | [_, _] => {}
+            [_] | [_, _] => self.short_faces += 1,
             [first, rest @ ..] => {
                 for pair in rest.windows(2) {
                     self.corners.extend([*first, pair[0], pair[1]]);
@@ -435,5 +525,41 @@ mod tests {
         assert_eq!(error("v 0 0 0 0\n"), "line 1: a vertex's w is 0");
         assert_eq!(error("usemtl\n"), "line 1: usemtl names no material");
         assert_eq!(parse(b"v 0 0 \xff\n").err().unwrap(), "not UTF-8 text (byte 6)");
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_no_part_of_the_first_line() {
+        let text = "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 0 0 10\nf 1 2 3\nf 2 3 4\n";
+        let with_mark = format!("\u{feff}{text}");
+        let (plain, marked) = (parse(text.as_bytes()).unwrap(), parse(with_mark.as_bytes()).unwrap());
+        assert_eq!(marked.objects[0].positions, plain.objects[0].positions);
+        assert_eq!(marked.objects[0].indices, plain.objects[0].indices);
+        assert_eq!(marked.unknown.lines, 0);
+    }
+
+    #[test]
+    fn statements_obj_does_not_have_and_faces_that_draw_nothing_are_warned_of() {
+        let text =
+            "# a comment\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvv 5 5 5\ns off\nf 1 2 3\nF 2 3 4\nfo 1 2 4\nf 1 2\n";
+        let obj = parse(text.as_bytes()).unwrap();
+        assert_eq!(obj.objects[0].indices, [0, 1, 2]);
+        assert_eq!(
+            judge(&obj).unwrap(),
+            [
+                "ignored 1 faces of one or two corners: they enclose nothing to draw",
+                "ignored 3 lines whose statement OBJ does not define (the first, line 6: 'vv')",
+            ]
+        );
+        let clean = parse(b"mtllib a.mtl\nusemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\ng x\nf 1 2 3\n").unwrap();
+        assert!(judge(&clean).unwrap().is_empty());
+    }
+
+    #[test]
+    fn a_file_with_no_faces_and_statements_obj_does_not_have_is_not_taken_for_an_empty_model() {
+        let gltf = parse(b"{\n  \"asset\": {\"version\": \"2.0\"}\n}\n").unwrap();
+        assert_eq!(
+            judge(&gltf).unwrap_err(),
+            "no faces, and 3 lines whose statement OBJ does not define (the first, line 1: '{'): is it an OBJ file?"
+        );
     }
 }
