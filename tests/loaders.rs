@@ -301,6 +301,34 @@ fn edited_glb(edit: impl FnOnce(&mut GltfWriter)) -> Result<occlu::scene::Scene,
 }
 
 #[test]
+fn a_node_rotation_off_unit_length_is_normalised_as_its_cameras_are_and_the_zero_quaternion_refused() {
+    let rotated = |rotation: [f32; 4]| edited_glb(|w| w.nodes[0]["rotation"] = json!(rotation));
+    // A half turn about z, written unit and written 3 times too long: the
+    // same cube, [-1, 0] × [-1, 0] × [0, 1], and only the long one warned of.
+    let unit = rotated([0.0, 0.0, 1.0, 0.0]).unwrap();
+    let long = rotated([0.0, 0.0, 3.0, 0.0]).unwrap();
+    assert_eq!(long.bounds.min, unit.bounds.min);
+    assert_eq!(long.bounds.max, unit.bounds.max);
+    assert!(
+        (unit.bounds.min - DVec3::new(-1.0, -1.0, 0.0)).abs().max_element() < 1e-6,
+        "{:?}",
+        unit.bounds
+    );
+    assert!(unit.warnings.is_empty(), "{:?}", unit.warnings);
+    assert_eq!(
+        long.warnings,
+        ["normalised the rotations of 1 nodes: glTF requires unit quaternions, and theirs were not"]
+    );
+    let zero = rotated([0.0; 4])
+        .expect_err("the zero quaternion rotates nothing")
+        .to_string();
+    assert!(
+        zero.contains("node 0: rotation [0.0, 0.0, 0.0, 0.0] is not a rotation"),
+        "{zero}"
+    );
+}
+
+#[test]
 fn bad_gltf_input_is_a_clear_error() {
     let msg = |r: Result<occlu::scene::Scene, occlu::scene::SceneError>| r.expect_err("must fail").to_string();
     let lines = msg(edited_glb(|w| w.meshes[0]["primitives"][0]["mode"] = json!(1)));

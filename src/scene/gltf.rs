@@ -123,6 +123,7 @@ fn add_node_trees(
     // scene or never end, so it is an error.
     let mut reached = vec![false; gltf.nodes().len()];
     let mut stack: Vec<(gltf::Node, DMat4)> = roots.into_iter().map(|n| (n, DMat4::IDENTITY)).collect();
+    let mut not_unit = 0;
     while let Some((node, parent)) = stack.pop() {
         let index = node.index();
         if std::mem::replace(&mut reached[index], true) {
@@ -130,7 +131,9 @@ fn add_node_trees(
                 "node {index} is reached twice: glTF node hierarchies must be trees"
             )));
         }
-        let world = parent * local_transform(&node).map_err(parse_error)?;
+        let (local, normalised) = local_transform(&node).map_err(parse_error)?;
+        not_unit += usize::from(normalised);
+        let world = parent * local;
         if let Some(mesh) = node.mesh() {
             if let std::collections::hash_map::Entry::Vacant(slot) = mesh_groups.entry(mesh.index()) {
                 slot.insert(load_mesh(path, &mesh, buffers, builder)?);
@@ -157,6 +160,11 @@ fn add_node_trees(
         }
         stack.extend(node.children().map(|c| (c, world)));
     }
+    if not_unit > 0 {
+        builder.warn(format!(
+            "normalised the rotations of {not_unit} nodes: glTF requires unit quaternions, and theirs were not"
+        ));
+    }
     if scene.is_none()
         && let Some(lost) = gltf.nodes().find(|n| n.mesh().is_some() && !reached[n.index()])
     {
@@ -168,18 +176,40 @@ fn add_node_trees(
     Ok(reached)
 }
 
-/// A node's transform relative to its parent, in f64; refused when it is
-/// not finite in f32 or not affine.
-fn local_transform(node: &gltf::Node) -> Result<DMat4, String> {
+/// How far from unit length a node's rotation may be and be used as
+/// written: well beyond the rounding of a unit quaternion written in f32.
+const UNIT_ROTATION_TOLERANCE: f64 = 1e-5;
+
+/// A node's transform relative to its parent, in f64, and whether its
+/// rotation was normalised; refused when it is not finite in f32, not
+/// affine, or holds a rotation that is none (the zero quaternion). glTF
+/// requires unit quaternions; one off unit length (a hand-edited file)
+/// would scale and shear the mesh, composed as written, where the cameras
+/// take it normalised (cameras.rs), so it is normalised here too.
+fn local_transform(node: &gltf::Node) -> Result<(DMat4, bool), String> {
     let index = node.index();
-    let matrix = node.transform().matrix();
+    let mut transform = node.transform();
+    let mut normalised = false;
+    if let gltf::scene::Transform::Decomposed { rotation, .. } = &mut transform {
+        let length = rotation.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>().sqrt();
+        if !(length.is_finite() && length > 0.0) {
+            return Err(format!(
+                "node {index}: rotation {rotation:?} is not a rotation: glTF requires a unit quaternion"
+            ));
+        }
+        if (length - 1.0).abs() > UNIT_ROTATION_TOLERANCE {
+            *rotation = rotation.map(|v| (f64::from(v) / length) as f32);
+            normalised = true;
+        }
+    }
+    let matrix = transform.matrix();
     if matrix.iter().flatten().any(|v| !v.is_finite()) {
         return Err(format!("node {index}: transform is not finite in f32"));
     }
     if matrix.iter().map(|column| column[3]).ne([0.0, 0.0, 0.0, 1.0]) {
         return Err(format!("node {index}: matrix is not affine"));
     }
-    Ok(DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from))))
+    Ok((DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from))), normalised))
 }
 
 /// The file's cameras and camera animations (of the nodes `reached`), with
