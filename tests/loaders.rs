@@ -329,6 +329,22 @@ fn a_node_rotation_off_unit_length_is_normalised_as_its_cameras_are_and_the_zero
 }
 
 #[test]
+fn extras_of_any_json_type_load() {
+    for extras in [json!([1, 2]), json!("note"), json!(3), json!(null), json!({"k": true})] {
+        let loaded = edited_glb(|w| {
+            w.nodes[0]["extras"] = extras.clone();
+            w.meshes[0]["extras"] = extras.clone();
+            w.extra.insert("extras".into(), extras.clone());
+        });
+        assert_eq!(
+            loaded.map(|s| s.triangles()).map_err(|e| e.to_string()),
+            Ok(12),
+            "extras {extras}"
+        );
+    }
+}
+
+#[test]
 fn bad_gltf_input_is_a_clear_error() {
     let msg = |r: Result<occlu::scene::Scene, occlu::scene::SceneError>| r.expect_err("must fail").to_string();
     let lines = msg(edited_glb(|w| w.meshes[0]["primitives"][0]["mode"] = json!(1)));
