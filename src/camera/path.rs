@@ -67,6 +67,22 @@ pub struct KeyframeFile {
     pub fov_y_deg: Option<f64>,
 }
 
+/// That a path file and each of its keyframes are JSON objects. serde
+/// also takes a struct written as an array of its fields in order, which
+/// no one writes on purpose and which its errors describe in its own
+/// terms ("expected struct PathFile with 7 elements").
+fn written_as_objects(value: &serde_json::Value) -> Result<(), String> {
+    const FORM: &str = r#"{"keyframes": [{"time": 0, "position": [x, y, z], "target": [x, y, z]}, ...]}"#;
+    let Some(file) = value.as_object() else {
+        return Err(format!("a camera path is a JSON object, {FORM}"));
+    };
+    let keyframes = file.get("keyframes").and_then(serde_json::Value::as_array);
+    match keyframes.and_then(|keys| keys.iter().position(|key| !key.is_object())) {
+        Some(k) => Err(format!("keyframe {k} is not a JSON object: a camera path is {FORM}")),
+        None => Ok(()),
+    }
+}
+
 pub const DEFAULT_NEAR: f64 = 0.1;
 pub const DEFAULT_FOV_Y_DEG: f64 = 60.0;
 /// At 30 fps, nearly an hour of flythrough.
@@ -129,10 +145,13 @@ impl CameraPath {
 
     /// Parses and validates path JSON; `source` names it in errors.
     pub fn parse(text: &str, source: &str) -> Result<CameraPath, PathError> {
-        let file: PathFile = serde_json::from_str(text).map_err(|e| PathError::Json {
+        let json = |message: String| PathError::Json {
             path: source.to_string(),
-            message: e.to_string(),
-        })?;
+            message,
+        };
+        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| json(e.to_string()))?;
+        written_as_objects(&value).map_err(json)?;
+        let file: PathFile = serde_json::from_str(text).map_err(|e| json(e.to_string()))?;
         CameraPath::from_file(&file, source)
     }
 
@@ -383,6 +402,35 @@ mod tests {
 
     fn parse(json: &str) -> Result<CameraPath, PathError> {
         CameraPath::parse(json, "t")
+    }
+
+    #[test]
+    fn a_path_and_its_keyframes_are_objects_not_arrays_of_their_fields() {
+        let error = |json: &str| parse(json).unwrap_err().to_string();
+        let positional = r#"[2, null, 0.1, 60, null, "linear", [[0, [0, 1, -20], [0, 1, 0], null, null, null, null],
+            [1, [5, 1, -20], [0, 1, 0], null, null, null, null]]]"#;
+        assert!(
+            error(positional).contains(": a camera path is a JSON object, {\"keyframes\""),
+            "{}",
+            error(positional)
+        );
+        assert!(
+            error("[]").contains(": a camera path is a JSON object"),
+            "{}",
+            error("[]")
+        );
+        let key = r#"{"frames": 2, "keyframes": [{"time": 0, "position": [0, 0, 0], "target": [0, 0, -1]},
+            [1, [1, 0, 0], [1, 0, -1], null, null, null, null]]}"#;
+        assert!(
+            error(key).contains(": keyframe 1 is not a JSON object"),
+            "{}",
+            error(key)
+        );
+        assert!(
+            error("{").contains("EOF while parsing"),
+            "syntax errors say where: {}",
+            error("{")
+        );
     }
 
     #[test]
