@@ -1205,3 +1205,24 @@ fn a_flythrough_smaller_than_its_scale_shrinks_each_panel_to_a_pixel() {
     let reader = decoder.read_info().unwrap();
     assert_eq!(reader.info().animation_control().map(|a| a.num_frames), Some(2));
 }
+
+#[test]
+fn a_model_too_large_or_too_small_for_a_generated_path_is_named_so() {
+    let dir = tempfile::tempdir().unwrap();
+    for (size, across) in [("large", 1e13), ("small", 1e-14)] {
+        let obj = write(
+            dir.path(),
+            &format!("{size}.obj"),
+            format!("v 0 0 0\nv {across:e} 0 0\nv 0 {across:e} 0\nf 1 2 3\n"),
+        );
+        let written = dir.path().join(format!("{size}.json"));
+        refused(
+            &["path", "gen", s(&obj), "-o", s(&written)],
+            &[
+                &format!("units across, too {size} to make a path from"),
+                "write the path by hand",
+            ],
+        );
+        assert!(!written.exists(), "no path written for the {size} model");
+    }
+}

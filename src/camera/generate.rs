@@ -178,7 +178,7 @@ pub fn plan_heard(
     };
     let shape_frames = frames.unwrap_or(DEFAULT_FRAMES);
     if kind.shape().is_some() {
-        too_small(scene, &focus)?;
+        sized_for_a_path(scene, &focus)?;
     }
     let (file, note) = match (kind, kind.shape()) {
         (_, Some(shape)) => generate_with(shape, scene, &focus, shape_frames, || match planned {
@@ -298,19 +298,24 @@ const LONG_WALK: f64 = walk::LONG_ROUTE as f64;
 /// scene's diagonal.
 const NEAR_SHARE: f64 = 1e-4;
 
-/// Refuses a scene too small for a path made from its shape: its near
-/// plane (a share of its focus) would be below the least a path may have,
+/// Refuses a scene whose size would give a path made from its shape a
+/// near plane (a share of its focus) outside the range a path may have,
 /// naming the model (not the path, which is not at fault).
-fn too_small(scene: &Scene, focus: &Focus) -> Result<(), PathError> {
+fn sized_for_a_path(scene: &Scene, focus: &Focus) -> Result<(), PathError> {
     let diagonal = focus.bounds.extent().length();
-    let least = *NEAR_RANGE.start();
-    if diagonal * NEAR_SHARE >= least {
+    let near = diagonal * NEAR_SHARE;
+    let (least, most) = (*NEAR_RANGE.start(), *NEAR_RANGE.end());
+    let (size, bound, remedy) = if near < least {
+        ("small", format!("below the {least:e}"), "scale the model up")
+    } else if near > most {
+        ("large", format!("above the {most:e}"), "scale the model down")
+    } else {
         return Ok(());
-    }
+    };
     Err(PathError::Invalid {
         path: scene.source.clone(),
         message: format!(
-            "the model is {diagonal:.2e} units across, too small to make a path from: its near plane ({NEAR_SHARE:e} of that) would be below the {least:e} a camera path may have; scale the model up, or write the path by hand"
+            "the model is {diagonal:.2e} units across, too {size} to make a path from: its near plane ({NEAR_SHARE:e} of that) would be {bound} a camera path may have; {remedy}, or write the path by hand"
         ),
     })
 }
