@@ -32,9 +32,15 @@ fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {
-            // --help and --version.
-            let _ = e.print();
-            return ExitCode::SUCCESS;
+            // --help and --version, written as `cli::output::emit` writes:
+            // a closed pipe ends them quietly, a full disk is a failure.
+            return match e.print() {
+                Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {
+                    say!("occlu: error: cannot write to standard output: {error}");
+                    ExitCode::from(1)
+                }
+                _ => ExitCode::SUCCESS,
+            };
         }
         Err(e) => {
             // The message with the lines that complete it (the values a

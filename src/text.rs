@@ -23,6 +23,25 @@ pub fn one_line(text: &str) -> String {
     out
 }
 
+/// Characters a message line keeps at most ([`shortened`]).
+pub const MESSAGE_CHARACTERS: usize = 2000;
+
+/// `line` with its middle left out where it holds more than `most`
+/// characters, saying how many: a name or a parser's quote from a hostile
+/// file (a mesh named with a megabyte) must not make a message that
+/// floods a terminal or a CI log. Its start and end stay, which say what
+/// failed and why.
+pub fn shortened(line: &str, most: usize) -> std::borrow::Cow<'_, str> {
+    let count = line.chars().count();
+    if count <= most {
+        return line.into();
+    }
+    let kept = most / 2;
+    let head: String = line.chars().take(kept).collect();
+    let tail: String = line.chars().skip(count - kept).collect();
+    format!("{head} … ({} characters left out) … {tail}", count - 2 * kept).into()
+}
+
 /// Whether `c` acts on text instead of showing: a control character; a
 /// line or paragraph separator (U+2028, U+2029: a line break to many
 /// terminals and editors); or a default-ignorable code point, which
@@ -211,5 +230,27 @@ mod tests {
         assert_eq!(slug("..."), "x");
         assert_eq!(slug("ünïcode"), "n-code");
         assert_eq!(slug(&"a".repeat(100)).len(), SLUG_LENGTH);
+    }
+
+    #[test]
+    fn a_long_line_keeps_its_start_and_end_and_says_how_much_it_left_out() {
+        assert_eq!(shortened("short", 5), "short");
+        assert_eq!(shortened("abcdefghij", 4), "ab … (6 characters left out) … ij");
+        let name = "é".repeat(10_000);
+        let line = format!("mesh '{name}' is broken");
+        let said = shortened(&line, MESSAGE_CHARACTERS);
+        assert!(
+            said.starts_with("mesh 'éé") && said.ends_with("éé' is broken"),
+            "{said}"
+        );
+        assert!(
+            said.chars().count() < MESSAGE_CHARACTERS + 50,
+            "{}",
+            said.chars().count()
+        );
+        assert!(said.contains(&format!(
+            "({} characters left out)",
+            line.chars().count() - MESSAGE_CHARACTERS
+        )));
     }
 }

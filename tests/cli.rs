@@ -707,13 +707,24 @@ fn a_reader_that_goes_away_ends_the_output_quietly() {
 fn a_full_stdout_is_one_line_and_exit_1() {
     let dir = tempfile::tempdir().unwrap();
     let model = write(dir.path(), "m.obj", THREE_OBJECTS_OBJ);
-    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
-        .args(["info", model.to_str().unwrap()])
-        .stdout(full)
-        .output()
-        .unwrap();
-    said_one_line(&out, 1, &["cannot write to standard output"], "info > /dev/full");
+    for args in [
+        vec!["info", model.to_str().unwrap()],
+        vec!["--help"],
+        vec!["bench", "--help"],
+    ] {
+        let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+            .args(&args)
+            .stdout(full)
+            .output()
+            .unwrap();
+        said_one_line(
+            &out,
+            1,
+            &["cannot write to standard output"],
+            &format!("{args:?} > /dev/full"),
+        );
+    }
 }
 
 #[test]
@@ -1209,4 +1220,28 @@ fn an_interrupted_run_leaves_the_earlier_results_intact() {
     // Its claim on the folder went with it.
     let next = tiny_run(&out);
     assert!(next.status.success(), "{:?}", own_stderr(&next));
+}
+
+#[test]
+fn a_message_naming_a_huge_name_leaves_out_its_middle() {
+    let dir = tempfile::tempdir().unwrap();
+    // Two indices: the mesh's error names it.
+    let gltf = serde_json::json!({
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"name": "n".repeat(1_000_000), "primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"byteLength": 44, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA="}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 4}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5123, "count": 2, "type": "SCALAR"}
+        ]
+    });
+    let model = write(dir.path(), "m.gltf", gltf.to_string());
+    let out = occlu(&["info", model.to_str().unwrap()]);
+    said_one_line(&out, 2, &["mesh 'nnn", "characters left out"], "a huge mesh name");
+    assert!(
+        common::stderr(&out).len() < 2500,
+        "{} bytes",
+        common::stderr(&out).len()
+    );
 }

@@ -3,14 +3,16 @@
 //! output (what a command is asked for, ending quietly on a closed pipe).
 
 /// Writes a line to standard error, its control and reordering characters
-/// escaped ([`occlu::text::one_line`]): file, object and parser names reach
-/// it from anyone's files, and must neither drive the terminal nor break
-/// the line. A closed or full standard error is no reason to fail a run
+/// escaped ([`occlu::text::one_line`]) and its middle left out past
+/// [`occlu::text::MESSAGE_CHARACTERS`] ([`occlu::text::shortened`]): file,
+/// object and parser names reach it from anyone's files, and must neither
+/// drive the terminal nor break or flood the line. A closed or full standard error is no reason to fail a run
 /// (and must not panic, as `eprintln!` does): the line is dropped.
 macro_rules! say {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
         let line = occlu::text::one_line(&format!($($arg)*));
+        let line = occlu::text::shortened(&line, occlu::text::MESSAGE_CHARACTERS);
         let _ = writeln!(std::io::stderr().lock(), "{line}");
     }};
 }
