@@ -21,7 +21,7 @@ use occlu::scene::SceneError;
 use occlu::stress::StressError;
 
 use cli::args::{Cli, Command, PathCommand};
-use cli::output::say;
+use cli::output::{StdoutError, say};
 use cli::runtime_folder::give_wayland_a_runtime_folder;
 use cli::signals::{Interrupted, end_by_sigint, listen_for_ctrl_c};
 use cli::{bench, pictures, results, scene, signals, stress};
@@ -34,9 +34,10 @@ fn main() -> ExitCode {
         Err(e) if !e.use_stderr() => {
             // --help and --version, written as `cli::output::emit` writes:
             // a closed pipe ends them quietly, a full disk is a failure.
-            return match e.print() {
+            use std::io::Write as _;
+            return match e.print().and_then(|()| std::io::stdout().flush()) {
                 Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {
-                    say!("occlu: error: cannot write to standard output: {error}");
+                    say!("occlu: error: {}", StdoutError(error));
                     ExitCode::from(1)
                 }
                 _ => ExitCode::SUCCESS,

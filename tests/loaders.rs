@@ -317,13 +317,13 @@ fn a_node_rotation_off_unit_length_is_normalised_as_its_cameras_are_and_the_zero
     assert!(unit.warnings.is_empty(), "{:?}", unit.warnings);
     assert_eq!(
         long.warnings,
-        ["normalised the rotations of 1 nodes: glTF requires unit quaternions, and theirs were not"]
+        ["normalised the rotations of 1 node: glTF requires unit quaternions, and theirs were not"]
     );
     let zero = rotated([0.0; 4])
         .expect_err("the zero quaternion rotates nothing")
         .to_string();
     assert!(
-        zero.contains("node 0: rotation [0.0, 0.0, 0.0, 0.0] is not a rotation"),
+        zero.contains("node 0: rotation [0, 0, 0, 0] is not a rotation"),
         "{zero}"
     );
 }

@@ -36,6 +36,7 @@ pub struct PathFile {
     pub up: Option<[f64; 3]>,
     #[serde(default)]
     pub interpolation: Interpolation,
+    #[serde(deserialize_with = "keyframe_objects")]
     pub keyframes: Vec<KeyframeFile>,
 }
 
@@ -67,20 +68,57 @@ pub struct KeyframeFile {
     pub fov_y_deg: Option<f64>,
 }
 
-/// That a path file and each of its keyframes are JSON objects. serde
-/// also takes a struct written as an array of its fields in order, which
-/// no one writes on purpose and which its errors describe in its own
-/// terms ("expected struct PathFile with 7 elements").
-fn written_as_objects(value: &serde_json::Value) -> Result<(), String> {
-    const FORM: &str = r#"{"keyframes": [{"time": 0, "position": [x, y, z], "target": [x, y, z]}, ...]}"#;
-    let Some(file) = value.as_object() else {
-        return Err(format!("a camera path is a JSON object, {FORM}"));
-    };
-    let keyframes = file.get("keyframes").and_then(serde_json::Value::as_array);
-    match keyframes.and_then(|keys| keys.iter().position(|key| !key.is_object())) {
-        Some(k) => Err(format!("keyframe {k} is not a JSON object: a camera path is {FORM}")),
-        None => Ok(()),
+/// What a camera path is, for messages about one written otherwise.
+const PATH_FORM: &str = r#"a camera path, a JSON object: {"frames": 120, "keyframes": [{"time": 0, "position": [x, y, z], "target": [x, y, z]}, ...]}"#;
+
+/// `T` read from a JSON object only, `what` saying what was expected. serde's
+/// derive also takes a struct written as an array of its fields in order,
+/// which no one writes on purpose and which its errors describe in its own
+/// terms ("expected struct PathFile with 7 elements"). Read in one pass,
+/// so a hostile shape fails where it starts, as the fields' own types
+/// make it.
+fn from_object<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(
+    deserializer: D,
+    what: &'static str,
+) -> Result<T, D::Error> {
+    struct Object<T>(&'static str, std::marker::PhantomData<T>);
+    impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for Object<T> {
+        type Value = T;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str(self.0)
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<T, A::Error> {
+            T::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+        }
     }
+    deserializer.deserialize_map(Object(what, std::marker::PhantomData))
+}
+
+/// A path file read from a JSON object only ([`from_object`]).
+struct PathObject(PathFile);
+
+impl<'de> Deserialize<'de> for PathObject {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        from_object(deserializer, PATH_FORM).map(PathObject)
+    }
+}
+
+/// Keyframes, each read from a JSON object only ([`from_object`]).
+fn keyframe_objects<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<Vec<KeyframeFile>, D::Error> {
+    struct Keyframe(KeyframeFile);
+    impl<'de> Deserialize<'de> for Keyframe {
+        fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+            from_object(
+                deserializer,
+                "a keyframe: a JSON object of time, position and target, direction or orientation",
+            )
+            .map(Keyframe)
+        }
+    }
+    Ok(Vec::<Keyframe>::deserialize(deserializer)?
+        .into_iter()
+        .map(|k| k.0)
+        .collect())
 }
 
 pub const DEFAULT_NEAR: f64 = 0.1;
@@ -149,9 +187,7 @@ impl CameraPath {
             path: source.to_string(),
             message,
         };
-        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| json(e.to_string()))?;
-        written_as_objects(&value).map_err(json)?;
-        let file: PathFile = serde_json::from_str(text).map_err(|e| json(e.to_string()))?;
+        let PathObject(file) = serde_json::from_str(text).map_err(|e| json(e.to_string()))?;
         CameraPath::from_file(&file, source)
     }
 
@@ -409,28 +445,27 @@ mod tests {
         let error = |json: &str| parse(json).unwrap_err().to_string();
         let positional = r#"[2, null, 0.1, 60, null, "linear", [[0, [0, 1, -20], [0, 1, 0], null, null, null, null],
             [1, [5, 1, -20], [0, 1, 0], null, null, null, null]]]"#;
-        assert!(
-            error(positional).contains(": a camera path is a JSON object, {\"keyframes\""),
-            "{}",
-            error(positional)
-        );
-        assert!(
-            error("[]").contains(": a camera path is a JSON object"),
-            "{}",
-            error("[]")
-        );
+        for file in [positional, "[]"] {
+            let said = error(file);
+            assert!(
+                said.contains("invalid type: sequence, expected a camera path, a JSON object: {\"frames\""),
+                "{said}"
+            );
+        }
         let key = r#"{"frames": 2, "keyframes": [{"time": 0, "position": [0, 0, 0], "target": [0, 0, -1]},
             [1, [1, 0, 0], [1, 0, -1], null, null, null, null]]}"#;
+        let said = error(key);
         assert!(
-            error(key).contains(": keyframe 1 is not a JSON object"),
-            "{}",
-            error(key)
+            said.contains("invalid type: sequence, expected a keyframe: a JSON object") && said.contains("line 2"),
+            "{said}"
         );
         assert!(
             error("{").contains("EOF while parsing"),
             "syntax errors say where: {}",
             error("{")
         );
+        // Objects read as before.
+        assert_eq!(parse(TWO_KEYS).unwrap().keyframes.len(), 2);
     }
 
     #[test]

@@ -3,11 +3,13 @@
 //! output (what a command is asked for, ending quietly on a closed pipe).
 
 /// Writes a line to standard error, its control and reordering characters
-/// escaped ([`occlu::text::one_line`]) and its middle left out past
-/// [`occlu::text::MESSAGE_CHARACTERS`] ([`occlu::text::shortened`]): file,
-/// object and parser names reach it from anyone's files, and must neither
-/// drive the terminal nor break or flood the line. A closed or full standard error is no reason to fail a run
-/// (and must not panic, as `eprintln!` does): the line is dropped.
+/// escaped ([`occlu::text::one_line`]) and then its middle left out past
+/// [`occlu::text::MESSAGE_CHARACTERS`] ([`occlu::text::shortened`], which
+/// may cut an escape in two: the bound is on what reaches the terminal):
+/// file, object and parser names reach it from anyone's files, and must
+/// neither drive the terminal nor break or flood the line. A closed or
+/// full standard error is no reason to fail a run (and must not panic, as
+/// `eprintln!` does): the line is dropped.
 macro_rules! say {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
@@ -21,7 +23,7 @@ pub(crate) use say;
 /// Standard output could not take what a command printed (a full disk).
 #[derive(Debug, thiserror::Error)]
 #[error("cannot write to standard output: {0}")]
-struct StdoutError(std::io::Error);
+pub struct StdoutError(pub std::io::Error);
 
 /// Writes `text` to standard output. A reader that went away (a closed
 /// pipe, as in `occlu stress --list | head -1`) is not an error: the rest

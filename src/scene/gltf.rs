@@ -162,7 +162,8 @@ fn add_node_trees(
     }
     if not_unit > 0 {
         builder.warn(format!(
-            "normalised the rotations of {not_unit} nodes: glTF requires unit quaternions, and theirs were not"
+            "normalised the rotations of {}: glTF requires unit quaternions, and theirs were not",
+            crate::text::count(not_unit, "node")
         ));
     }
     if scene.is_none()
@@ -192,9 +193,9 @@ fn local_transform(node: &gltf::Node) -> Result<(DMat4, bool), String> {
     let mut normalised = false;
     if let gltf::scene::Transform::Decomposed { rotation, .. } = &mut transform {
         let length = rotation.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>().sqrt();
-        if !(length.is_finite() && length > 0.0) {
+        if length == 0.0 {
             return Err(format!(
-                "node {index}: rotation {rotation:?} is not a rotation: glTF requires a unit quaternion"
+                "node {index}: rotation [0, 0, 0, 0] is not a rotation: glTF requires a unit quaternion"
             ));
         }
         if (length - 1.0).abs() > UNIT_ROTATION_TOLERANCE {

@@ -1,8 +1,11 @@
 //! Wavefront OBJ: each `o`/`g` starts an object, faces become triangle
 //! fans; positions are read (a fourth number `w` divides them, a colour is
 //! skipped), texture coordinates and normals are only counted (faces name
-//! them), materials are never read, and `l`/`p` elements are skipped and
-//! counted for a warning.
+//! them), materials are never read, and `l`/`p` elements, faces of one or
+//! two corners and lines whose statement OBJ does not define are skipped
+//! and counted for a warning (a file of no faces and such lines is no OBJ
+//! file, and refused). A UTF-8 byte-order mark before the first line is
+//! no part of it.
 //!
 //! Read here rather than by tobj, as it was until issue 38: tobj makes a
 //! String of every line and a Vec of every face and looks every corner up
@@ -10,9 +13,10 @@
 //! scans of benches/load_build.rs, read in turn on the project's 2-core
 //! machine, tobj took 0.37–0.49 s for 1 M triangles and 3.3–3.6 s for
 //! 8 M, this reader 0.17 s and 1.35–1.5 s. It gives every file the meshes
-//! tobj gave (tests/fuzz.rs holds the two against each other) but one: an
+//! tobj gave (tests/fuzz.rs holds the two against each other) but two: an
 //! `l` polyline of three or more points was a filled triangle fan there,
-//! and is skipped here. So, as in tobj:
+//! and is skipped here; and tobj took a byte-order mark as part of the
+//! first line, which lost that line's statement. So, as in tobj:
 //! - an object's vertices are the distinct (position, texture coordinate,
 //!   normal) index triples of its corners, in first-use order;
 //! - indices count from 1, negative ones back from the elements read so
@@ -29,6 +33,7 @@ use glam::{DAffine3, DVec3};
 
 use super::model::SceneBuilder;
 use super::source::{LoadOptions, SceneError};
+use crate::text::count;
 
 /// Loads an OBJ model. The options on reading further files do not apply:
 /// an OBJ file's geometry is all in it, and its material files are not read.
@@ -68,7 +73,8 @@ struct Obj {
 }
 
 /// Lines whose statement OBJ does not define (a typo such as `F` or `vv`,
-/// or a file that is not OBJ at all): how many, and the first.
+/// a legacy one such as `fo`, or a file that is not OBJ at all): how many,
+/// and the first.
 #[derive(Default)]
 struct Unknown {
     lines: usize,
@@ -76,9 +82,10 @@ struct Unknown {
 }
 
 /// Every statement of the OBJ format (Wavefront's specification, version
-/// 3.0) that occlu reads nothing from: free-form geometry, grouping,
-/// display and rendering attributes. A line that starts with none of
-/// these, nor one read, is unknown.
+/// 3.0, with the superseded ones its appendix still lists) that occlu
+/// reads nothing from: free-form geometry, grouping, display and rendering
+/// attributes. A line that starts with none of these, nor one read, is
+/// unknown.
 const IGNORED_STATEMENTS: &[&str] = &[
     "vp",
     "cstype",
@@ -111,10 +118,19 @@ const IGNORED_STATEMENTS: &[&str] = &[
     "stech",
     "call",
     "csh",
+    "bsp",
+    "bzp",
+    "cdc",
+    "cdp",
+    "res",
 ];
 
+/// Characters of an unknown statement a warning quotes.
+const STATEMENT_SHOWN: usize = 40;
+
 /// What the file's statements say of it beyond its geometry: the warnings
-/// of what it drew nothing from, or an error where nothing in it is OBJ.
+/// of what it drew nothing from, or an error where it has no faces and
+/// lines whose statement OBJ does not define.
 fn judge(obj: &Obj) -> Result<Vec<String>, String> {
     let mut warnings = Vec::new();
     if obj.skipped > 0 {
@@ -125,15 +141,18 @@ fn judge(obj: &Obj) -> Result<Vec<String>, String> {
     }
     if obj.short_faces > 0 {
         warnings.push(format!(
-            "ignored {} faces of one or two corners: they enclose nothing to draw",
-            obj.short_faces
+            "ignored {} of one or two corners: they enclose nothing to draw",
+            count(obj.short_faces, "face")
         ));
     }
     if let Some((line, statement)) = &obj.unknown.first {
-        let shown: String = statement.chars().take(40).collect();
+        let mut shown: String = statement.chars().take(STATEMENT_SHOWN).collect();
+        if shown.len() < statement.len() {
+            shown.push('…');
+        }
         let what = format!(
-            "{} lines whose statement OBJ does not define (the first, line {line}: '{}')",
-            obj.unknown.lines, shown
+            "{} whose statement OBJ does not define (the first, line {line}: '{shown}')",
+            count(obj.unknown.lines, "line")
         );
         if obj.objects.iter().all(|o| o.indices.is_empty()) {
             return Err(format!("no faces, and {what}: is it an OBJ file?"));
@@ -178,8 +197,12 @@ fn parse(bytes: &[u8]) -> Result<Obj, String> {
         name: "unnamed_object".into(),
         ..Reader::default()
     };
+    let mut continued = false;
     for (number, line) in text.lines().enumerate() {
         reader.line = number + 1;
+        // A line after one ending in a backslash continues its statement
+        // (the specification's line continuation); it starts none.
+        reader.continues = std::mem::replace(&mut continued, line.trim_end().ends_with('\\'));
         // Words as `split_whitespace` finds them, byte by byte where the
         // line is ASCII (almost every line of almost every file).
         if line.is_ascii() {
@@ -229,6 +252,8 @@ struct Reader {
     skipped: usize,
     short_faces: usize,
     unknown: Unknown,
+    /// Whether the line being read continues the one before.
+    continues: bool,
 }
 
 impl Reader {
@@ -269,7 +294,9 @@ impl Reader {
             Some("usemtl") if line.split_once(' ').is_none_or(|(_, name)| name.trim().is_empty()) => {
                 return Err(self.fail("usemtl names no material"));
             }
-            Some(statement) if !statement.starts_with('#') && !IGNORED_STATEMENTS.contains(&statement) => {
+            Some(statement)
+                if !self.continues && !statement.starts_with('#') && !IGNORED_STATEMENTS.contains(&statement) =>
+            {
                 self.unknown.lines += 1;
                 self.unknown.first.get_or_insert_with(|| (self.line, statement.into()));
             }
@@ -546,11 +573,13 @@ mod tests {
         assert_eq!(
             judge(&obj).unwrap(),
             [
-                "ignored 1 faces of one or two corners: they enclose nothing to draw",
+                "ignored 1 face of one or two corners: they enclose nothing to draw",
                 "ignored 3 lines whose statement OBJ does not define (the first, line 6: 'vv')",
             ]
         );
-        let clean = parse(b"mtllib a.mtl\nusemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\ng x\nf 1 2 3\n").unwrap();
+        // A line continued by a backslash starts no statement of its own.
+        let clean =
+            parse(b"mtllib a.mtl\nusemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\ng x\nf 1 2 3\nparm u 0 \\\n 0.5 1\n").unwrap();
         assert!(judge(&clean).unwrap().is_empty());
     }
 

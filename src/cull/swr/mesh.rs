@@ -125,7 +125,7 @@ const INTERPOLATION_STEPS: f64 = 8.0;
 pub(super) const NO_NEIGHBOUR: u32 = u32::MAX;
 
 /// A vertex on screen.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScreenVertex {
     /// Pixel position (x, y) and depth (z).
     pub at: DVec3,
@@ -241,7 +241,7 @@ pub struct NearLimit<'a> {
 /// the triangle itself, or, where the near plane clips it, the part in
 /// front of the near limit. Its sides (corner i to i + 1) are whole edges
 /// of the triangle, or cut: a part of an edge, or the limit's.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 struct Polygon {
     corners: [ScreenVertex; 4],
     /// Per side, the triangle's edge it is whole (corner k to k + 1), or
@@ -251,13 +251,25 @@ struct Polygon {
 }
 
 impl Polygon {
+    /// No polygon yet, for [`Polygon::clip`] to fill.
+    const EMPTY: Polygon = Polygon {
+        corners: [ScreenVertex {
+            at: DVec3::ZERO,
+            slack: 0.0,
+            depth_error: 0.0,
+        }; 4],
+        sides: [None; 4],
+        count: 0,
+    };
+
     /// Becomes the part of a drawn triangle (its corners among the mesh's
     /// vertices) the GPU draws in front of the near limit (Sutherland and
     /// Hodgman's clipping, edge by edge); false where there is none, or
     /// where a crossing cannot be placed. Without `mesh.near`, only a
-    /// triangle the GPU places whole. Filled in place, not returned: it is
-    /// made twice for every occluder triangle a frame, and returning its
-    /// 232 bytes cost 4–5 % of a buffer's time (the city, the bunny).
+    /// triangle the GPU places whole. After false, what it holds means
+    /// nothing. Filled in place, not returned: it is made twice for every
+    /// occluder triangle a frame, and returning its 232 bytes cost 4–5 % of
+    /// a buffer's time (the city, the bunny).
     fn clip(&mut self, mesh: &ScreenMesh, corners: [u32; 3]) -> bool {
         if let Some(placed) = placed_corners(mesh, corners) {
             self.corners[..3].copy_from_slice(&placed);
@@ -426,7 +438,7 @@ impl Patches {
     pub fn add(&mut self, mesh: &ScreenMesh) -> Range<usize> {
         self.find_patches(mesh);
         let first = self.patches.len();
-        let mut polygon = Polygon::default();
+        let mut polygon = Polygon::EMPTY;
         let mut start = 0;
         while start < self.by_patch.len() {
             let root = self.by_patch[start].0;
@@ -498,7 +510,7 @@ impl Patches {
             .parts
             .iter()
             .flat_map(|part| std::iter::repeat_n(part, part.triangles.len()));
-        let mut polygon = Polygon::default();
+        let mut polygon = Polygon::EMPTY;
         for (&corners, part) in self.corners.iter().zip(parts) {
             let turn = if polygon.clip(mesh, corners) {
                 clipped |= !polygon.whole();
@@ -1051,7 +1063,6 @@ fn placed_corners(mesh: &ScreenMesh, corners: [u32; 3]) -> Option<[ScreenVertex;
     let vertex = |k: usize| mesh.vertices[corners[k] as usize];
     Some([vertex(0)?, vertex(1)?, vertex(2)?])
 }
-
 
 /// The error of a triangle's corners: the largest.
 fn slack_of(corners: &[ScreenVertex; 3]) -> f64 {
