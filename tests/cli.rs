@@ -1245,3 +1245,17 @@ fn a_message_naming_a_huge_name_leaves_out_its_middle() {
         common::stderr(&out).len()
     );
 }
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_backend_this_system_never_has_is_a_bad_flag() {
+    let out = tempfile::tempdir().unwrap();
+    let out = out.path().to_str().unwrap();
+    for (backend, system) in [("metal", "macOS and iOS"), ("dx12", "Windows")] {
+        fails_with(
+            &bench_args(&["--backend", backend], out),
+            2,
+            &[&format!("the {backend} backend exists only on {system}")],
+        );
+    }
+}

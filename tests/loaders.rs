@@ -360,13 +360,34 @@ fn bad_gltf_input_is_a_clear_error() {
         required.contains("EXT_unheard_of") && required.contains("Unsupported extension"),
         "{required}"
     );
-    // A required material extension does not affect visibility: it loads.
-    edited_glb(|w| {
-        w.extra.insert("extensionsUsed".into(), json!(["KHR_materials_unlit"]));
-        w.extra
-            .insert("extensionsRequired".into(), json!(["KHR_materials_unlit"]));
-    })
-    .expect("material extensions are accepted");
+    // A required extension of materials, textures, lights or metadata does
+    // not affect visibility: it loads, known to gltf-json or not; one that
+    // may change geometry is refused.
+    let requiring = |extension: &str| {
+        edited_glb(|w| {
+            w.extra.insert("extensionsUsed".into(), json!([extension]));
+            w.extra.insert("extensionsRequired".into(), json!([extension]));
+        })
+    };
+    for extension in [
+        "KHR_materials_unlit",
+        "KHR_materials_variants",
+        "EXT_texture_avif",
+        "KHR_xmp_json_ld",
+    ] {
+        assert!(
+            requiring(extension).is_ok(),
+            "{extension}: {:?}",
+            requiring(extension).err()
+        );
+    }
+    for extension in ["EXT_mesh_gpu_instancing", "MSFT_lod"] {
+        let refused = msg(requiring(extension));
+        assert!(
+            refused.contains(extension) && refused.contains("Unsupported extension"),
+            "{refused}"
+        );
+    }
     let range = msg(edited_glb(|w| {
         let (p, _) = cube();
         let bad = [0u32, 1, 99];

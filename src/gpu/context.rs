@@ -40,6 +40,12 @@ impl BackendChoice {
                 }
                 wgpu::Backends::all().with_env()
             }
+            // An API this system never has is a bad flag, not a machine
+            // without a driver.
+            BackendChoice::Metal if !cfg!(target_vendor = "apple") => {
+                return Err(GpuError::NotOnThisSystem(self, "macOS and iOS"));
+            }
+            BackendChoice::Dx12 if !cfg!(windows) => return Err(GpuError::NotOnThisSystem(self, "Windows")),
             BackendChoice::Vulkan => wgpu::Backends::VULKAN,
             BackendChoice::Gl => wgpu::Backends::GL,
             BackendChoice::Metal => wgpu::Backends::METAL,
@@ -133,6 +139,8 @@ pub enum GpuError {
         "WGPU_BACKEND names '{0}', which is no backend wgpu knows (vulkan, gl, metal, dx12, comma-separated): correct or unset it, or give --backend"
     )]
     UnknownBackend(String),
+    #[error("the {0} backend exists only on {1}: give another --backend (auto takes the best here)")]
+    NotOnThisSystem(BackendChoice, &'static str),
     #[error("the adapter {adapter} refused a device: {message}")]
     Device { adapter: String, message: String },
     #[error("the run needs a {what} of {need}, but the adapter allows {limit}")]
@@ -145,10 +153,13 @@ pub enum GpuError {
 
 impl GpuError {
     /// Whether the user's input was at fault: a size the adapter cannot
-    /// hold (a smaller --resolution or model fits), as opposed to the GPU
-    /// or its driver failing.
+    /// hold (a smaller --resolution or model fits), or a backend no
+    /// adapter here can have, as opposed to the GPU or its driver failing.
     pub fn is_input_error(&self) -> bool {
-        matches!(self, GpuError::TooLarge { .. } | GpuError::UnknownBackend(_))
+        matches!(
+            self,
+            GpuError::TooLarge { .. } | GpuError::UnknownBackend(_) | GpuError::NotOnThisSystem(..)
+        )
     }
 }
 

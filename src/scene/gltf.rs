@@ -72,7 +72,8 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
     // Draco named as used only: the file may carry plain data as well, and
     // loads if it does; if it does not, Draco is the reason.
     let draco_used = json.extensions_used.iter().any(|e| e == DRACO);
-    json.extensions_required.retain(|e| !DECODED.contains(&e.as_str()));
+    json.extensions_required
+        .retain(|e| !DECODED.contains(&e.as_str()) && !NO_GEOMETRY.iter().any(|kind| e.starts_with(kind)));
     let document = gltf::Document::from_json(json).map_err(|e| if draco_used { draco() } else { invalid(e) })?;
     Ok(gltf::Gltf {
         document,
@@ -248,6 +249,22 @@ const DRACO: &str = "KHR_draco_mesh_compression";
 
 /// Extensions the loader reads itself, which gltf-json does not know.
 const DECODED: [&str; 2] = ["KHR_mesh_quantization", "EXT_meshopt_compression"];
+
+/// Kinds of extension that change no geometry, by the prefix of their
+/// names: materials, textures, lights and metadata, which a visibility
+/// benchmark never reads. A file that requires one loads whether or not
+/// gltf-json knows it (it knows `EXT_texture_webp` but not
+/// `EXT_texture_avif`); any other it does not know stays refused, since it
+/// may move, add or hide geometry (`EXT_mesh_gpu_instancing`, `MSFT_lod`).
+const NO_GEOMETRY: [&str; 7] = [
+    "KHR_materials_",
+    "KHR_texture_",
+    "EXT_texture_",
+    "MSFT_texture_",
+    "KHR_lights_",
+    "EXT_lights_",
+    "KHR_xmp",
+];
 
 /// A validation error in one line: each kind of problem once, with how often
 /// it occurs and where first ("195 × Missing data (first at
