@@ -1258,4 +1258,18 @@ fn a_backend_this_system_never_has_is_a_bad_flag() {
             &[&format!("the {backend} backend exists only on {system}")],
         );
     }
+    // auto, narrowed by WGPU_BACKEND to an API with no adapter here: a
+    // machine without the driver, exit 1.
+    let narrowed = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .args(bench_args(&[], out))
+        .env("WGPU_BACKEND", "metal")
+        .output()
+        .unwrap();
+    let said = own_stderr(&narrowed);
+    assert_eq!(narrowed.status.code(), Some(1), "{said:?}");
+    let last = said.last().map_or("", String::as_str);
+    assert!(
+        last.starts_with("occlu: error: no graphics adapter found for backend 'auto'"),
+        "{said:?}"
+    );
 }

@@ -228,15 +228,21 @@ fn exact_modes_show_no_error_and_a_wrong_culler_is_caught() {
 }
 
 #[test]
-fn missing_backend_is_a_clear_error() {
-    // No Metal adapter exists on Linux; on macOS there is no DX12.
+fn a_backend_this_system_never_has_is_a_clear_input_error() {
+    // Metal exists only on Apple systems; on macOS there is no DX12.
     let absent = if cfg!(target_os = "macos") {
         BackendChoice::Dx12
     } else {
         BackendChoice::Metal
     };
     match GpuContext::new(absent) {
-        Err(e @ GpuError::NoAdapter(_)) => assert!(e.to_string().contains("no graphics adapter")),
+        Err(e @ GpuError::NotOnThisSystem(..)) => {
+            assert!(e.is_input_error());
+            assert!(
+                e.to_string().contains(&format!("the {absent} backend exists only on")),
+                "{e}"
+            );
+        }
         Err(e) => panic!("unexpected error {e}"),
         Ok(_) => panic!("{absent} should not exist here"),
     }
