@@ -77,9 +77,14 @@ pub enum ConfigError {
     ModelAndScene,
     #[error("--movers animates built-in scenes; a model file has no movers")]
     MoversOnModel,
-    #[error("--frames must be in 1..={}", crate::camera::path::MAX_FRAMES)]
+    // Flags and a --config file's fields are merged before they are
+    // checked, so these name both.
+    #[error(
+        "frames (--frames, or \"frames\" in a --config file) must be in 1..={}",
+        crate::camera::path::MAX_FRAMES
+    )]
     Frames,
-    #[error("--warmup must be at most {MAX_WARMUP}")]
+    #[error("warmup (--warmup, or \"warmup\" in a --config file) must be at most {MAX_WARMUP}")]
     Warmup,
     #[error(transparent)]
     Mode(#[from] ModeError),

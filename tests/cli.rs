@@ -1273,3 +1273,36 @@ fn a_backend_this_system_never_has_is_a_bad_flag() {
         "{said:?}"
     );
 }
+
+#[test]
+fn a_bad_frame_count_names_the_flag_and_the_config_field_it_may_come_from() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    for (fields, said) in [
+        (
+            r#""frames": 0"#,
+            "frames (--frames, or \"frames\" in a --config file) must be in 1..=",
+        ),
+        (
+            r#""warmup": 100000"#,
+            "warmup (--warmup, or \"warmup\" in a --config file) must be at most",
+        ),
+    ] {
+        let config = write(
+            dir.path(),
+            "c.json",
+            format!(r#"{{"scene": "city:blocks=1", {fields}}}"#),
+        );
+        fails_with(
+            &[
+                "bench",
+                "--config",
+                config.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            2,
+            &[said],
+        );
+    }
+}
