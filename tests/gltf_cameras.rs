@@ -248,6 +248,8 @@ fn a_camera_or_animation_occlu_cannot_use_is_left_out_with_a_warning() {
     let lost = w.node(json!({"name": "lost", "camera": 0}));
     let flat = w.node(json!({"name": "flat", "children": [lost], "scale": [0.0, 0.0, 0.0]}));
     let kept = w.node(json!({"name": "kept", "camera": 0, "translation": [0.0, 0.0, 5.0]}));
+    let blind = w.node(json!({"name": "blind", "camera": 1}));
+    let flat_view = w.node(json!({"name": "flat view", "camera": 2}));
     // Keys out of order, and keys at -0 and +0 in two channels.
     let backwards = w.floats(&[0.0, 2.0, 1.0], "SCALAR");
     let moves = w.floats(&[0.0; 9], "VEC3");
@@ -257,7 +259,11 @@ fn a_camera_or_animation_occlu_cannot_use_is_left_out_with_a_warning() {
     let scales = w.floats(&[1.0, 1.0, 1.0, 1.0, 1.0, 1.0], "VEC3");
     w.extra.insert(
         "cameras".into(),
-        json!([{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.05}}]),
+        json!([
+            {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.05}},
+            {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.0}},
+            {"type": "perspective", "perspective": {"yfov": 0.0, "znear": 0.05}}
+        ]),
     );
     w.extra.insert(
         "animations".into(),
@@ -270,12 +276,20 @@ fn a_camera_or_animation_occlu_cannot_use_is_left_out_with_a_warning() {
         ]),
     );
     let dir = tempfile::tempdir().unwrap();
-    let model = write(dir.path(), "odd.glb", w.glb(&[cube_node, flat, kept]));
+    let model = write(dir.path(), "odd.glb", w.glb(&[cube_node, flat, kept, blind, flat_view]));
     let scene = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();
     let names: Vec<&str> = scene.cameras.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(names, ["kept"]);
     let said = scene.warnings.join(" | ");
     assert!(said.contains("camera 'lost' is left out"), "{said}");
+    assert!(
+        said.contains("camera 'blind' is left out: its znear is 0: a view needs a near plane beyond the eye"),
+        "{said}"
+    );
+    assert!(
+        said.contains("camera 'flat view' is left out: its yfov is 0 radians"),
+        "{said}"
+    );
     assert!(
         said.contains("animation 'backwards' is not replayed") && said.contains("increasing"),
         "{said}"

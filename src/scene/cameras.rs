@@ -17,6 +17,8 @@ use glam::{DMat4, DQuat, DVec3};
 use gltf::animation::util::ReadOutputs;
 use gltf::animation::{Interpolation, Property};
 
+use crate::text::number;
+
 /// A camera pose: the eye and the camera-to-world rotation (looking down its
 /// −Z with +Y up, as glTF cameras do), and its perspective, if any.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -206,6 +208,10 @@ pub fn read(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], check: &Ch
     for node in gltf.nodes().filter(|n| reached[n.index()]) {
         let Some(camera) = node.camera() else { continue };
         let name = node.name().map_or_else(|| name_of_camera(&camera), str::to_string);
+        if let Some(fault) = projection_fault(&camera) {
+            warnings.push(format!("camera '{name}' is left out: {fault}"));
+            continue;
+        }
         let chain = nodes.chain(node.index());
         match pose_of(&camera, Nodes::world(&chain, &rest)) {
             Some(pose) => {
@@ -344,6 +350,31 @@ fn replay(
         name: file_camera.name.clone(),
         poses,
     }))
+}
+
+/// Why `camera`'s projection gives no view, if it does not: a view needs
+/// a near plane beyond the eye, and a perspective one a field of view
+/// (glTF requires both of a perspective camera; it lets an orthographic
+/// one's znear be 0, which occlu's perspective views cannot take).
+fn projection_fault(camera: &gltf::Camera) -> Option<String> {
+    let (znear, yfov) = match camera.projection() {
+        gltf::camera::Projection::Perspective(p) => (p.znear(), Some(p.yfov())),
+        gltf::camera::Projection::Orthographic(o) => (o.znear(), None),
+    };
+    // JSON holds no NaN: the numbers compare.
+    if znear <= 0.0 {
+        return Some(format!(
+            "its znear is {}: a view needs a near plane beyond the eye",
+            number(f64::from(znear))
+        ));
+    }
+    match yfov {
+        Some(yfov) if yfov <= 0.0 || f64::from(yfov) >= std::f64::consts::PI => Some(format!(
+            "its yfov is {} radians: a view needs a field of view between 0 and pi",
+            number(f64::from(yfov))
+        )),
+        _ => None,
+    }
 }
 
 /// A camera's pose under `world`, or `None` when the transform cannot place
