@@ -392,11 +392,7 @@ fn generated_obj_and_path_inputs_load_or_fail_naming_the_input() {
 fn scene_through_tobj(path: &Path, bytes: &[u8]) -> Result<Scene, String> {
     // A byte-order mark is no part of the first line (occlu's reader).
     let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
-    let is_l = |line: &[u8]| std::str::from_utf8(line).is_ok_and(|l| l.split_whitespace().next() == Some("l"));
-    let lines: Vec<&[u8]> = bytes
-        .split(|&b| b == b'\n')
-        .map(|l| if is_l(l) { b"f 1 2" } else { l })
-        .collect();
+    let lines: Vec<Vec<u8>> = bytes.split(|&b| b == b'\n' || b == b'\r').map(as_tobj_reads).collect();
     let bytes = lines.join(&b'\n');
     let options = tobj::LoadOptions {
         single_index: true,
@@ -438,6 +434,23 @@ fn scene_through_tobj(path: &Path, bytes: &[u8]) -> Result<Scene, String> {
             .map_err(|e| e.to_string())?;
     }
     builder.finish().ok_or_else(|| "no triangles".to_string())
+}
+
+/// `line` written so that tobj reads it as occlu's reader does, where the
+/// specification allows what tobj refused or misread: a lone carriage
+/// return ends a line (the caller splits there), a statement may be
+/// indented, a tab may follow `usemtl`, and `vt` may give u alone.
+fn as_tobj_reads(line: &[u8]) -> Vec<u8> {
+    let Ok(text) = std::str::from_utf8(line) else {
+        return line.to_vec();
+    };
+    let words: Vec<&str> = text.split_whitespace().collect();
+    match words.as_slice() {
+        ["l", ..] => b"f 1 2".to_vec(),
+        ["vt", u] => format!("vt {u} 0").into_bytes(),
+        ["usemtl", names @ ..] if !names.is_empty() => format!("usemtl {}", names.join(" ")).into_bytes(),
+        _ => text.trim_start().as_bytes().to_vec(),
+    }
 }
 
 /// What two loaders must agree on: every object, part and vertex, and the

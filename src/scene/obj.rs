@@ -198,7 +198,9 @@ fn parse(bytes: &[u8]) -> Result<Obj, String> {
         ..Reader::default()
     };
     let mut continued = false;
-    for (number, line) in text.lines().enumerate() {
+    // A lone carriage return ends a line too (classic Mac OS files): read as
+    // one line, such a file lost every statement after its first.
+    for (number, line) in text.lines().flat_map(|line| line.split('\r')).enumerate() {
         reader.line = number + 1;
         // A line after one ending in a backslash continues its statement
         // (the specification's line continuation); it starts none.
@@ -266,8 +268,12 @@ impl Reader {
     fn read<'a>(&mut self, line: &str, mut words: impl Iterator<Item = &'a str>) -> Result<(), String> {
         match words.next() {
             Some("v") => self.vertex(words)?,
+            // u, then v where given (the specification's default is 0).
             Some("vt") => {
-                numbers::<2>(&mut words).ok_or_else(|| self.fail("a texture coordinate needs two numbers"))?;
+                let (u, v) = (words.next().map(str::parse::<f64>), words.next().map(str::parse::<f64>));
+                if !matches!(u, Some(Ok(_))) || matches!(v, Some(Err(_))) {
+                    return Err(self.fail("a texture coordinate needs a number u, and v a number where given"));
+                }
                 self.texcoords += 1;
             }
             Some("vn") => {
@@ -284,16 +290,14 @@ impl Reader {
                 if self.has_faces {
                     self.end_object()?;
                 }
-                // The line after its first character, as tobj reads it.
-                let first = line.chars().next().map_or(0, char::len_utf8);
-                self.name = match line[first..].trim() {
+                // The rest of the line after the statement, spaces and all.
+                let statement = line.trim_start();
+                self.name = match statement[1..].trim() {
                     "" => "unnamed_object".into(),
                     name => name.into(),
                 };
             }
-            Some("usemtl") if line.split_once(' ').is_none_or(|(_, name)| name.trim().is_empty()) => {
-                return Err(self.fail("usemtl names no material"));
-            }
+            Some("usemtl") if words.next().is_none() => return Err(self.fail("usemtl names no material")),
             Some(statement)
                 if !self.continues && !statement.starts_with('#') && !IGNORED_STATEMENTS.contains(&statement) =>
             {
@@ -581,6 +585,29 @@ mod tests {
         let clean =
             parse(b"mtllib a.mtl\nusemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\ng x\nf 1 2 3\nparm u 0 \\\n 0.5 1\n").unwrap();
         assert!(judge(&clean).unwrap().is_empty());
+    }
+
+    #[test]
+    fn what_the_specification_allows_and_tobj_refused_loads() {
+        let unix = "o plate\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5\nusemtl red\nf 1/1 2/1 3/1\n";
+        let expected = parse(unix.replace("vt 0.5", "vt 0.5 0").as_bytes()).unwrap();
+        for (what, text) in [
+            ("old Mac OS line endings", unix.replace('\n', "\r")),
+            ("a tab before the material", unix.replace("usemtl ", "usemtl\t")),
+            ("an indented statement", unix.replace("o plate", "  o plate")),
+            ("Windows line endings", unix.replace('\n', "\r\n")),
+        ] {
+            let obj = parse(text.as_bytes()).unwrap_or_else(|e| panic!("{what}: {e}"));
+            assert_eq!(obj.objects.len(), 1, "{what}");
+            assert_eq!(obj.objects[0].name, "plate", "{what}");
+            assert_eq!(obj.objects[0].positions, expected.objects[0].positions, "{what}");
+            assert_eq!(obj.objects[0].indices, expected.objects[0].indices, "{what}");
+        }
+        let error = |text: &str| parse(text.as_bytes()).err().unwrap();
+        let needs = "a texture coordinate needs a number u, and v a number where given";
+        assert_eq!(error("vt\n"), format!("line 1: {needs}"));
+        assert_eq!(error("vt 0 x\n"), format!("line 1: {needs}"));
+        assert_eq!(error("v 0 0 0\rv 1 0\r"), "line 2: a vertex needs three numbers");
     }
 
     #[test]
