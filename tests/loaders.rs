@@ -536,3 +536,73 @@ fn obj_objects_with_the_same_name_in_different_places_stay_apart() {
     let far = load_file(&write(dir.path(), "far.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n"));
     assert!(far.unwrap_err().to_string().contains("lies beyond ±1e18"));
 }
+
+#[test]
+fn a_glb_header_at_odds_with_its_file_or_another_gltf_version_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut w, roots) = instanced_scene();
+    let glb = w.glb(&roots);
+    let n = glb.len();
+    let read = |name: &str, bytes: &[u8]| {
+        load(
+            &SceneSpec::File(write(dir.path(), name, bytes)),
+            &LoadOptions::default(),
+        )
+    };
+    let error = |name: &str, bytes: &[u8]| read(name, bytes).err().map(|e| e.to_string()).unwrap_or_default();
+    let edited = |at: usize, value: u32| {
+        let mut bytes = glb.clone();
+        bytes[at..at + 4].copy_from_slice(&value.to_le_bytes());
+        bytes
+    };
+    // Bytes past the length the header gives: the chunks are whole.
+    let long = [glb.as_slice(), &[0; 16]].concat();
+    let scene = read("long.glb", &long).unwrap();
+    assert_eq!(scene.triangles(), 41);
+    assert_eq!(
+        scene.warnings,
+        [format!(
+            "the GLB header gives a length of {n} bytes, but the file has {}: its chunks were read by their own lengths",
+            n + 16
+        )]
+    );
+    let over = error("over.glb", &edited(8, n as u32 + 8));
+    let expected = format!(
+        "invalid GLB: its header gives a length of {} bytes, but the file has {n}: is it cut short?",
+        n + 8
+    );
+    assert!(over.ends_with(&expected), "{over}");
+    let convert = "gltf-pipeline -i IN -o OUT converts glTF 1.0 to 2.0";
+    let binary_1 = error("v1.glb", &edited(4, 1));
+    assert!(
+        binary_1.ends_with(&format!(
+            "a GLB of container version 1, and occlu reads version 2 (glTF 2.0; {convert})"
+        )),
+        "{binary_1}"
+    );
+    let named = |version: &str| format!("written for glTF {version}, and occlu reads glTF 2.0 ({convert})");
+    for (asset, expected) in [
+        (json!({"version": "3.0"}), Some(named("3.0"))),
+        (json!({"version": "1.0"}), Some(named("1.0"))),
+        (json!({"version": "2.1"}), None),
+        (json!({"version": "2.0", "minVersion": "2.0"}), None),
+        (
+            json!({"version": "2.0", "minVersion": "2.1"}),
+            Some("needs glTF 2.1 at least, and occlu reads glTF 2.0".into()),
+        ),
+    ] {
+        w.extra.insert("asset".into(), asset.clone());
+        match (read("version.glb", &w.glb(&roots)), expected) {
+            (Ok(scene), None) => assert_eq!(scene.triangles(), 41),
+            (Err(e), Some(expected)) => assert!(e.to_string().ends_with(&expected), "{asset}: {e}"),
+            (result, expected) => panic!("{asset}: {:?}, expected {expected:?}", result.map(|s| s.triangles())),
+        }
+    }
+    // A glTF 1.0 file (its meshes an object, not an array) is named as one,
+    // not as JSON of the wrong shape.
+    let old = error(
+        "old.gltf",
+        br#"{"asset": {"version": "1.0"}, "meshes": {"m": {"primitives": []}}}"#,
+    );
+    assert!(old.ends_with(&named("1.0")), "{old}");
+}

@@ -23,6 +23,14 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
     // is dropped before the JSON is read, here and for the buffers.
     let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     let gltf = parse(path, bytes)?;
+    if let Some((_, length)) = glb_header(bytes)
+        && length < bytes.len()
+    {
+        builder.warn(format!(
+            "the GLB header gives a length of {length} bytes, but the file has {}: its chunks were read by their own lengths",
+            bytes.len()
+        ));
+    }
     warn_of_what_is_ignored(&gltf, builder);
     let buffers = load_buffers(path, bytes, &gltf, options, builder)?;
     let reached = add_node_trees(path, &gltf, &buffers, builder)?;
@@ -55,10 +63,32 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
                 .into(),
         ));
     }
+    if let Some((version, length)) = glb_header(bytes) {
+        if version != 2 {
+            return Err(parse_error(format!(
+                "a GLB of container version {version}, and occlu reads version 2 (glTF 2.0; {CONVERT})"
+            )));
+        }
+        if length > bytes.len() {
+            return Err(parse_error(format!(
+                "invalid GLB: its header gives a length of {length} bytes, but the file has {}: is it cut short?",
+                bytes.len()
+            )));
+        }
+    }
     // gltf-json's validator indexes primitive accessors without a bounds
     // check, so those are checked first; validation then also refuses files
-    // that require an extension occlu does not read.
-    let unvalidated = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
+    // that require an extension occlu does not read. A file of another glTF
+    // version is named so, whether or not it reads as glTF 2.0.
+    let unvalidated = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| {
+        let asset = raw_json(bytes).map(|json| json["asset"].clone()).unwrap_or_default();
+        let version = asset["version"].as_str().unwrap_or("2.0");
+        unreadable_version(version, asset["minVersion"].as_str()).map_or_else(|| invalid(e), parse_error)
+    })?;
+    let asset = &unvalidated.document.as_json().asset;
+    if let Some(message) = unreadable_version(&asset.version, asset.min_version.as_deref()) {
+        return Err(parse_error(message));
+    }
     check_primitive_accessors(unvalidated.document.as_json()).map_err(parse_error)?;
     let mut json = unvalidated.document.into_json();
     let draco = || {
@@ -79,6 +109,36 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
         document,
         blob: unvalidated.blob,
     })
+}
+
+/// A GLB's header: its container version, and the length it gives for
+/// the whole file. None for glTF JSON, or a file too short to hold one.
+fn glb_header(bytes: &[u8]) -> Option<(u32, usize)> {
+    let [v0, v1, v2, v3, l0, l1, l2, l3] = *bytes.strip_prefix(b"glTF")?.first_chunk::<8>()?;
+    let length = u32::from_le_bytes([l0, l1, l2, l3]);
+    Some((u32::from_le_bytes([v0, v1, v2, v3]), length as usize))
+}
+
+/// How to make a glTF 1.0 file one occlu reads.
+const CONVERT: &str = "gltf-pipeline -i IN -o OUT converts glTF 1.0 to 2.0";
+
+/// Why occlu cannot read a file written for glTF `version` that needs
+/// `min_version` at least: the specification's check (section 3.2) that a
+/// reader supports the file's major version, and its minimum one. None for
+/// glTF 2.0, and for a version not written as MAJOR.MINOR (nothing then
+/// says it is not 2.0).
+fn unreadable_version(version: &str, min_version: Option<&str>) -> Option<String> {
+    let number = |v: &str| -> Option<(u32, u32)> {
+        let (major, minor) = v.split_once('.')?;
+        Some((major.parse().ok()?, minor.parse().ok()?))
+    };
+    if number(version).is_some_and(|(major, _)| major != 2) {
+        return Some(format!(
+            "written for glTF {version}, and occlu reads glTF 2.0 ({CONVERT})"
+        ));
+    }
+    let least = min_version.filter(|least| number(least).is_some_and(|least| least > (2, 0)))?;
+    Some(format!("needs glTF {least} at least, and occlu reads glTF 2.0"))
 }
 
 /// Warns of what the file holds and occlu does not draw as the file means
