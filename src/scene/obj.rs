@@ -198,9 +198,7 @@ fn parse(bytes: &[u8]) -> Result<Obj, String> {
         ..Reader::default()
     };
     let mut continued = false;
-    // A lone carriage return ends a line too (classic Mac OS files): read as
-    // one line, such a file lost every statement after its first.
-    for (number, line) in text.lines().flat_map(|line| line.split('\r')).enumerate() {
+    for (number, line) in lines(text).enumerate() {
         reader.line = number + 1;
         // A line after one ending in a backslash continues its statement
         // (the specification's line continuation); it starts none.
@@ -475,6 +473,28 @@ impl Reader {
         }
         Ok(())
     }
+}
+
+/// The lines of `text`, each ended by `\n`, `\r\n` or a lone `\r`
+/// (classic Mac OS files: read as one line, such a file lost every
+/// statement after its first).
+fn lines(text: &str) -> impl Iterator<Item = &str> {
+    let mut rest = text;
+    std::iter::from_fn(move || {
+        if rest.is_empty() {
+            return None;
+        }
+        let bytes = rest.as_bytes();
+        let (line, next) = match memchr::memchr2(b'\n', b'\r', bytes) {
+            Some(end) => {
+                let crlf = bytes[end] == b'\r' && bytes.get(end + 1) == Some(&b'\n');
+                (&rest[..end], &rest[end + 1 + usize::from(crlf)..])
+            }
+            None => (rest, ""),
+        };
+        rest = next;
+        Some(line)
+    })
 }
 
 /// The words of an ASCII `line`: what `split_whitespace` gives, found
