@@ -410,7 +410,11 @@ fn bad_gltf_input_is_a_clear_error() {
     assert!(empty.contains("no triangles"), "{empty}");
 
     let dir = tempfile::tempdir().unwrap();
+    // Its length field reads "garb": far more than the file holds.
     let junk = write(dir.path(), "junk.glb", b"glTF\x02\0\0\0garbage");
+    let junk = load_file(&junk).unwrap_err().to_string();
+    assert!(junk.ends_with("but the file has 15: is it cut short?"), "{junk}");
+    let junk = write(dir.path(), "junk.glb", b"glTF\x02\0\0\0\x0f\0\0\0bage");
     assert!(load_file(&junk).unwrap_err().to_string().contains("invalid glTF"));
     let text = write(
         dir.path(),
