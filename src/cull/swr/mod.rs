@@ -22,8 +22,9 @@
 //! box's test at a cell takes it at the box's pixels in its mask; MOC
 //! clears it, and tests boxes against the reference layer alone. A buffer
 //! that hid nothing, or saved less drawing than it cost, rests for a few
-//! frames, and longer each time it fails again (MOC leaves that to its
-//! caller). Occluders are whole visible objects (the clusters of one mesh
+//! frames, and longer each time it fails again, or as long as 1.5 % of
+//! the frames' time pays for where it costs much of a frame (MOC leaves
+//! that to its caller). Occluders are whole visible objects (the clusters of one mesh
 //! taken together, so that a mesh cut into clusters is one surface), their
 //! triangles taken in the f64 projection (MOC and Godot take authored
 //! occluder meshes, rasterised in f32 with SIMD: here it is scalar). Like MOC it
@@ -112,7 +113,7 @@ const THREADS: ParamInfo = ParamInfo {
 const RESTS: ParamInfo = ParamInfo {
     key: "rests",
     default: "true",
-    summary: "let a buffer that spared less drawing than it cost rest (7 frames, then 15, then 31 while it keeps failing: a frustum traversal only); false builds one every frame",
+    summary: "let a buffer that spared less drawing than it cost rest (7 frames, then 15, then 31 while it keeps failing, or as many as 1.5 % of the frames' time pays for its cost, up to 127: a frustum traversal only); false builds one every frame",
 };
 
 /// The most threads `swr.threads` may ask for (or a frame use): each holds
@@ -349,7 +350,12 @@ impl SoftwareOcclusionCulling {
 /// frames, twice as many and one more each time the next buffer fails
 /// again, up to [`LONGEST_REST`]; a buffer that pays brings the rests back
 /// to the shortest. Where occlusion never pays, it costs one frame in 32.
-/// Leaving occlusion out is always safe.
+/// A buffer that costs much of a frame rests longer: as many frames as
+/// [`TRY_BUDGET`] of their time pays for it, up to [`LONGEST_DEAR_REST`]
+/// (as `auto` bounds its rechecks of rivals known to be dearer), so that
+/// where a buffer costs a frame and more (a dense model's, on a light
+/// frame) its tries cost not 5 % of the run but under 2 %. Leaving
+/// occlusion out is always safe.
 #[derive(Clone, Copy, Debug)]
 struct Rest {
     /// Frames left of the current rest.
@@ -360,6 +366,11 @@ struct Rest {
 
 const REST_FRAMES: u32 = 7;
 const LONGEST_REST: u32 = 31;
+/// Share of the frames' time that tries of a buffer which keeps failing
+/// may cost: `auto.budget`'s default.
+const TRY_BUDGET: f64 = 0.015;
+/// The longest rest of a dear buffer: the rests' doubling two steps on.
+const LONGEST_DEAR_REST: u32 = 127;
 
 impl Default for Rest {
     fn default() -> Rest {
@@ -378,13 +389,16 @@ impl Rest {
         resting
     }
 
-    /// After a frame's buffer: rests from the next frame on unless it
+    /// After a frame's buffer that cost `cost` frames (its time over the
+    /// frame's; 0 where not known): rests from the next frame on unless it
     /// `paid`.
-    fn after(&mut self, paid: bool) {
+    fn after(&mut self, paid: bool, cost: f64) {
         if paid {
             self.next = REST_FRAMES;
         } else {
-            self.left = self.next;
+            // A NaN stays one through the clamp, and is 0 frames.
+            let paid_for = (cost / TRY_BUDGET).ceil().clamp(0.0, f64::from(LONGEST_DEAR_REST)) as u32;
+            self.left = self.next.max(paid_for);
             self.next = (2 * self.next + 1).min(LONGEST_REST);
         }
     }
@@ -792,7 +806,8 @@ impl Culler for SoftwareOcclusionCulling {
         // warm-up frame's time, compiling and filling caches, says nothing).
         if !resting && !self.occluders.is_empty() && self.params.rests && !input.warm_up {
             let spent_ms = started.elapsed().as_secs_f64() * 1e3;
-            self.rest.after(pays(hidden_triangles, spent_ms, input.previous));
+            let cost = input.previous.map_or(0.0, |p| spent_ms / p.frame_ms);
+            self.rest.after(pays(hidden_triangles, spent_ms, input.previous), cost);
         }
 
         // 5. The visible objects, occluders first; they are next frame's
@@ -1302,7 +1317,21 @@ mod tests {
     /// The occluder triangles `swr` rasterised in each of `frames` frames of
     /// `cubes` seen down −Z, each frame told that its previous one drew
     /// its triangles at `ms_a_triangle`, and the objects each frame drew.
-    fn rasterised_and_drawn(cubes_at: &[DVec3], frames: u32, ms_a_triangle: f64) -> (Vec<u64>, Vec<Vec<u32>>) {
+    /// Three cubes side by side, none behind another.
+    const SIDE_BY_SIDE: [DVec3; 3] = [
+        DVec3::new(-4.0, -0.5, -10.0),
+        DVec3::new(-0.5, -0.5, -10.0),
+        DVec3::new(3.0, -0.5, -10.0),
+    ];
+
+    /// Each frame's occluder triangles and drawn objects, where every frame
+    /// takes `frame_ms` and drawing a triangle `ms_a_triangle` of it.
+    fn rasterised_and_drawn(
+        cubes_at: &[DVec3],
+        frames: u32,
+        frame_ms: f64,
+        ms_a_triangle: f64,
+    ) -> (Vec<u64>, Vec<Vec<u32>>) {
         let (scene, hierarchy) = cubes(cubes_at);
         let camera = camera_down_z();
         let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
@@ -1312,7 +1341,7 @@ mod tests {
             let previous = drawn.last().map(|objects| {
                 let triangles = 12 * objects.len() as u64;
                 PreviousFrame {
-                    frame_ms: triangles as f64 * ms_a_triangle,
+                    frame_ms,
                     render_ms: triangles as f64 * ms_a_triangle,
                     triangles_drawn: triangles,
                 }
@@ -1337,13 +1366,7 @@ mod tests {
 
     #[test]
     fn a_buffer_that_hides_nothing_rests_seven_frames_then_fifteen_then_thirty_one() {
-        // Three cubes side by side, none behind another.
-        let side_by_side = [
-            DVec3::new(-4.0, -0.5, -10.0),
-            DVec3::new(-0.5, -0.5, -10.0),
-            DVec3::new(3.0, -0.5, -10.0),
-        ];
-        let (rasterised, drawn) = rasterised_and_drawn(&side_by_side, 60, 1.0);
+        let (rasterised, drawn) = rasterised_and_drawn(&SIDE_BY_SIDE, 60, 1e3, 1.0);
         assert!(drawn.iter().all(|objects| objects == &[0, 1, 2]));
         // Frame 0 knows no occluder; frame 1's hide nothing, so frames 2 to
         // 8 build no buffer; frame 9 tries again and fails, so 10 to 24
@@ -1362,7 +1385,7 @@ mod tests {
                 .filter(|&f| {
                     let resting = rest.take();
                     if !resting {
-                        rest.after(pays(f));
+                        rest.after(pays(f), 0.0);
                     }
                     resting
                 })
@@ -1375,9 +1398,25 @@ mod tests {
         assert_eq!(resting, expected);
         // Told to start over (a culler seeded by another), it rests no more.
         let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
-        swr.rest.after(false);
+        swr.rest.after(false, 0.0);
         swr.seed_visible(&[]);
         assert!(!swr.rest.take());
+    }
+
+    #[test]
+    fn a_buffer_that_costs_much_of_a_frame_rests_as_long_as_its_share_of_the_time_pays_for() {
+        // Half a frame: 34 frames' 1.5 % pay for it; a hundredth of one, the
+        // schedule's 7; a NaN, the schedule too.
+        for (cost, rest) in [(0.5, 34), (0.01, 7), (f64::NAN, 7)] {
+            let mut rests = Rest::default();
+            rests.after(false, cost);
+            assert_eq!(rests.left, rest, "{cost}");
+        }
+        // The cubes side by side hide nothing, on frames so light that a
+        // buffer costs many of them: it rests the longest, 127 frames.
+        let (rasterised, _) = rasterised_and_drawn(&SIDE_BY_SIDE, 140, 1e-9, 1e-12);
+        let tried: Vec<usize> = (0..rasterised.len()).filter(|&f| rasterised[f] > 0).collect();
+        assert_eq!(tried, [1, 129]);
     }
 
     #[test]
@@ -1390,8 +1429,9 @@ mod tests {
         ];
         // Drawing a triangle costs next to nothing: hiding 12 of them saves
         // less than the buffer costs, so it rests after each try (7, then
-        // 15 frames), drawing the hidden cube meanwhile.
-        let (rasterised, drawn) = rasterised_and_drawn(&one_behind, 28, 1e-12);
+        // 15 frames: the buffer costs little of the frame's second),
+        // drawing the hidden cube meanwhile.
+        let (rasterised, drawn) = rasterised_and_drawn(&one_behind, 28, 1e3, 1e-12);
         let tried: Vec<usize> = (0..rasterised.len()).filter(|&f| rasterised[f] > 0).collect();
         assert_eq!(tried, [1, 9, 25]);
         for (f, objects) in drawn.iter().enumerate() {
@@ -1399,7 +1439,7 @@ mod tests {
             assert_eq!(objects, &if hid { vec![0, 2] } else { vec![0, 1, 2] }, "frame {f}");
         }
         // Drawing a triangle costs a second: the buffer pays every frame.
-        let (rasterised, drawn) = rasterised_and_drawn(&one_behind, 28, 1e3);
+        let (rasterised, drawn) = rasterised_and_drawn(&one_behind, 28, 1e5, 1e3);
         assert_eq!(rasterised[..3], [0, 36, 24]);
         assert!(rasterised[2..].iter().all(|&t| t == 24));
         assert!(drawn[1..].iter().all(|objects| objects == &[0, 2]));
