@@ -62,7 +62,8 @@ pub enum MatrixError {
     #[error("run {run}: {error}")]
     Path { run: String, error: PathError },
     #[error(
-        "{path}: the matrix lists {runs} runs, more than the {MAX_RUNS} one matrix may: split it into several files"
+        "{path}: the matrix lists {runs} runs, more than the {max} one matrix may: split it into several files",
+        max = MatrixIdentity::MAX_RUNS
     )]
     TooManyRuns { path: String, runs: usize },
     #[error("run {run}: {error}")]
@@ -74,10 +75,6 @@ pub enum MatrixError {
         error: std::io::Error,
     },
 }
-
-/// The most runs one matrix may list: past it, two long lists multiplied
-/// by mistake are likelier than a plan, and checking them would take long.
-pub const MAX_RUNS: usize = 10_000;
 
 /// The keys of a configuration file that list runs rather than set one.
 const LISTS: [&str; 4] = ["runs", "models", "scenes", "paths"];
@@ -121,7 +118,7 @@ impl Matrix {
             } else {
                 0
             };
-        if listed_runs > MAX_RUNS {
+        if listed_runs > MatrixIdentity::MAX_RUNS {
             return Err(MatrixError::TooManyRuns {
                 path: file.display().to_string(),
                 runs: listed_runs,
@@ -231,7 +228,7 @@ impl Matrix {
             .clone()
             .or(self.defaults.out.clone())
             .unwrap_or_else(|| DEFAULT_OUT.into());
-        let width = configs.len().to_string().len().max(2);
+        let width = MatrixIdentity::place_width(configs.len());
         let names: Vec<String> = configs
             .iter()
             .enumerate()
@@ -537,15 +534,18 @@ mod tests {
     fn a_matrix_of_exactly_the_most_runs_is_taken_and_one_more_refused() {
         let dir = tempfile::tempdir().unwrap();
         let runs = |n: usize| format!(r#"{{"runs": [{}]}}"#, vec!["{}"; n].join(","));
-        let m = matrix(dir.path(), &runs(MAX_RUNS)).unwrap();
-        assert_eq!(m.entries.len(), MAX_RUNS);
-        let e = matrix(dir.path(), &runs(MAX_RUNS + 1)).unwrap_err();
+        let m = matrix(dir.path(), &runs(MatrixIdentity::MAX_RUNS)).unwrap();
+        assert_eq!(m.entries.len(), MatrixIdentity::MAX_RUNS);
+        let e = matrix(dir.path(), &runs(MatrixIdentity::MAX_RUNS + 1)).unwrap_err();
         assert!(e.to_string().contains("lists 10001 runs"), "{e}");
         let listed = format!(
             r#"{{"runs": [{}], "scenes": ["city", "forest"]}}"#,
-            vec!["{}"; MAX_RUNS - 2].join(",")
+            vec!["{}"; MatrixIdentity::MAX_RUNS - 2].join(",")
         );
-        assert_eq!(matrix(dir.path(), &listed).unwrap().entries.len(), MAX_RUNS);
+        assert_eq!(
+            matrix(dir.path(), &listed).unwrap().entries.len(),
+            MatrixIdentity::MAX_RUNS
+        );
     }
 
     #[test]

@@ -362,6 +362,25 @@ fn merge_names_the_runs_a_matrix_lacks_and_refuses_them_unless_allowed() {
     assert!(report.contains("run 02"), "{report}");
     let help = stdout(&occlu(&["merge", "--help"]));
     assert!(help.contains("--allow-partial"));
+    // A summary.json whose matrix lists more runs than a matrix may is
+    // refused: merge counted through every place it lacked, without end.
+    let run = std::fs::read_dir(&shard)
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .find(|path| path.join("summary.json").exists())
+        .unwrap();
+    let mut summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+    summary["matrix"]["runs"] = u64::MAX.into();
+    std::fs::write(run.join("summary.json"), summary.to_string()).unwrap();
+    let lying = dir.path().join("lying");
+    refused(
+        &["merge", s(&shard), "--out", s(&lying), "--allow-partial"],
+        &[
+            "summary.json",
+            "its matrix lists 18446744073709551615 runs, not 1 to the 10000 a matrix may",
+        ],
+    );
 }
 
 /// A one-keyframe path over the one-block city with `extra` fields at the

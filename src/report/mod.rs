@@ -77,6 +77,17 @@ pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportErro
             summary.schema_version
         ))));
     }
+    // A matrix's run count bounds what merge counts through for its
+    // missing runs.
+    if let Some(matrix) = summary.matrix
+        && !(1..=MatrixIdentity::MAX_RUNS).contains(&matrix.runs)
+    {
+        return Err(io(&json_path)(std::io::Error::other(format!(
+            "its matrix lists {} runs, not 1 to the {} a matrix may",
+            matrix.runs,
+            MatrixIdentity::MAX_RUNS
+        ))));
+    }
     let csv_path = dir.join("frames.csv");
     let bytes = crate::input::read_file(&csv_path, crate::input::MODEL_LIMIT).map_err(io(&csv_path))?;
     if let Some(expected) = summary.frames_csv

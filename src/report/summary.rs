@@ -349,6 +349,17 @@ pub struct MatrixIdentity {
 }
 
 impl MatrixIdentity {
+    /// The most runs one matrix may list: past it, two long lists
+    /// multiplied by mistake are likelier than a plan, and checking them
+    /// would take long.
+    pub const MAX_RUNS: usize = 10_000;
+
+    /// The digits of a run's place in its folder's name (`02`): as many as
+    /// a matrix of `runs` runs needs, and at least two.
+    pub fn place_width(runs: usize) -> usize {
+        runs.to_string().len().max(2)
+    }
+
     pub fn of<'a>(names: impl IntoIterator<Item = &'a str>) -> MatrixIdentity {
         let mut h = Fnv1a::new();
         let mut runs = 0;

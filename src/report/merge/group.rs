@@ -192,7 +192,7 @@ pub(super) fn missing_runs(runs: &[(String, Vec<RunFolder>)]) -> Vec<MissingRuns
     matrices
         .into_iter()
         .filter_map(|(matrix, present)| {
-            let width = matrix.runs.to_string().len().max(2);
+            let width = MatrixIdentity::place_width(matrix.runs);
             let absent: Vec<String> = (1..=matrix.runs)
                 .filter(|p| !present.contains(p))
                 .map(|p| format!("{p:0width$}"))
