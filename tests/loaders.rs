@@ -345,13 +345,58 @@ fn extras_of_any_json_type_load() {
 }
 
 #[test]
+fn sparse_indices_must_rise_strictly_within_the_count_and_points_and_lines_are_skipped() {
+    // The cube's eight corners, two of them replaced through a sparse
+    // accessor whose indices are `indices`.
+    let sparse = |indices: [u32; 2]| {
+        edited_glb(|w| {
+            let indices: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+            let values: Vec<u8> = [5.0f32, 0.0, 0.0, 0.0, 5.0, 0.0]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect();
+            let (indices, values) = (w.view(&indices, 0), w.view(&values, 0));
+            w.accessors[0]["sparse"] = json!({
+                "count": 2,
+                "indices": {"bufferView": indices, "componentType": 5125},
+                "values": {"bufferView": values},
+            });
+        })
+        .map(|scene| scene.triangles())
+        .map_err(|e| e.to_string())
+    };
+    assert_eq!(sparse([1, 2]), Ok(12));
+    for (indices, fault) in [
+        ([2, 1], "do not rise strictly (1 after 2)"),
+        ([1, 1], "do not rise strictly (1 after 1)"),
+        ([1, 9], "name element 9 of 8"),
+    ] {
+        let error = sparse(indices).unwrap_err();
+        assert!(
+            error.ends_with(&format!("POSITION: sparse indices {fault}")),
+            "{indices:?}: {error}"
+        );
+    }
+    // A line primitive beside the triangles: skipped, and warned of.
+    let scene = edited_glb(|w| {
+        let (p, i) = cube();
+        w.mesh("wire", &[(&p, Some(&i), 1)]);
+        w.node(json!({"mesh": 1}));
+    });
+    let scene = scene.unwrap();
+    assert_eq!(scene.triangles(), 12);
+    assert_eq!(
+        scene.warnings,
+        ["ignored 1 point or line primitive: they draw no depth"]
+    );
+}
+
+#[test]
 fn bad_gltf_input_is_a_clear_error() {
     let msg = |r: Result<occlu::scene::Scene, occlu::scene::SceneError>| r.expect_err("must fail").to_string();
+    // A model of lines alone draws nothing.
     let lines = msg(edited_glb(|w| w.meshes[0]["primitives"][0]["mode"] = json!(1)));
-    assert!(
-        lines.contains("mesh 'cube' primitive 0: primitive mode Lines is not supported"),
-        "{lines}"
-    );
+    assert!(lines.contains("the model has no triangles to render"), "{lines}");
     let required = msg(edited_glb(|w| {
         w.extra.insert("extensionsUsed".into(), json!(["EXT_unheard_of"]));
         w.extra.insert("extensionsRequired".into(), json!(["EXT_unheard_of"]));
@@ -570,6 +615,11 @@ fn a_glb_header_at_odds_with_its_file_or_another_gltf_version_is_named() {
             n + 16
         )]
     );
+    let under = error("under.glb", &edited(8, 11));
+    assert!(
+        under.ends_with("invalid GLB: its header gives a length of 11 bytes, less than its own 12"),
+        "{under}"
+    );
     let over = error("over.glb", &edited(8, n as u32 + 8));
     let expected = format!(
         "invalid GLB: its header gives a length of {} bytes, but the file has {n}: is it cut short?",
@@ -584,15 +634,22 @@ fn a_glb_header_at_odds_with_its_file_or_another_gltf_version_is_named() {
         )),
         "{binary_1}"
     );
-    let named = |version: &str| format!("written for glTF {version}, and occlu reads glTF 2.0 ({convert})");
+    let named = |version: &str| format!("written for glTF '{version}', and occlu reads glTF 2.0 ({convert})");
+    let needs = |least: &str| Some(format!("needs glTF '{least}' at least, and occlu reads glTF 2.0"));
     for (asset, expected) in [
         (json!({"version": "3.0"}), Some(named("3.0"))),
         (json!({"version": "1.0"}), Some(named("1.0"))),
         (json!({"version": "2.1"}), None),
         (json!({"version": "2.0", "minVersion": "2.0"}), None),
+        (json!({"version": "2.0", "minVersion": "2.1"}), needs("2.1")),
+        // Not MAJOR.MINOR, or a major past what 32 bits hold: only 2 is read.
+        (json!({"version": "3"}), Some(named("3"))),
+        (json!({"version": "1.0.3"}), Some(named("1.0.3"))),
+        (json!({"version": "99999999999.0"}), Some(named("99999999999.0"))),
+        (json!({"version": " 2.0"}), Some(named(" 2.0"))),
         (
-            json!({"version": "2.0", "minVersion": "2.1"}),
-            Some("needs glTF 2.1 at least, and occlu reads glTF 2.0".into()),
+            json!({"version": "2.0", "minVersion": "2.99999999999"}),
+            needs("2.99999999999"),
         ),
     ] {
         w.extra.insert("asset".into(), asset.clone());

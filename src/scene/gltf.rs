@@ -14,6 +14,7 @@ use super::model::{MeshGroup, SceneBuilder};
 use super::source::{LoadOptions, SceneError, read_model_file};
 use super::{cameras, meshopt};
 use crate::input::folder_of;
+use crate::text;
 
 /// Reads `bytes`, the glTF or GLB file `path`, into `builder`: its buffers,
 /// an object for each mesh group of each node of its scene, its cameras
@@ -67,6 +68,11 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
         if version != 2 {
             return Err(parse_error(format!(
                 "a GLB of container version {version}, and occlu reads version 2 (glTF 2.0; {CONVERT})"
+            )));
+        }
+        if length < 12 {
+            return Err(parse_error(format!(
+                "invalid GLB: its header gives a length of {length} bytes, less than its own 12"
             )));
         }
         if length > bytes.len() {
@@ -124,21 +130,22 @@ const CONVERT: &str = "gltf-pipeline -i IN -o OUT converts glTF 1.0 to 2.0";
 
 /// Why occlu cannot read a file written for glTF `version` that needs
 /// `min_version` at least: the specification's check (section 3.2) that a
-/// reader supports the file's major version, and its minimum one. None for
-/// glTF 2.0, and for a version not written as MAJOR.MINOR (nothing then
-/// says it is not 2.0).
+/// reader supports the file's major version, and its minimum one. occlu
+/// reads 2.0: a version whose major (what comes before its first dot) is
+/// not written `2`, or a minimum version other than 2.0, is refused. None
+/// for glTF 2.0 and its minor versions.
 fn unreadable_version(version: &str, min_version: Option<&str>) -> Option<String> {
-    let number = |v: &str| -> Option<(u32, u32)> {
-        let (major, minor) = v.split_once('.')?;
-        Some((major.parse().ok()?, minor.parse().ok()?))
-    };
-    if number(version).is_some_and(|(major, _)| major != 2) {
+    let major = |v: &str| v.split('.').next().unwrap_or_default().to_string();
+    if major(version) != "2" {
         return Some(format!(
-            "written for glTF {version}, and occlu reads glTF 2.0 ({CONVERT})"
+            "written for glTF '{version}', and occlu reads glTF 2.0 ({CONVERT})"
         ));
     }
-    let least = min_version.filter(|least| number(least).is_some_and(|least| least > (2, 0)))?;
-    Some(format!("needs glTF {least} at least, and occlu reads glTF 2.0"))
+    let least = min_version.filter(|least| {
+        let minor = least.split_once('.').map_or("", |(_, minor)| minor);
+        major(least) != "2" || minor.is_empty() || minor.bytes().any(|b| b != b'0')
+    })?;
+    Some(format!("needs glTF '{least}' at least, and occlu reads glTF 2.0"))
 }
 
 /// Warns of what the file holds and occlu does not draw as the file means
@@ -155,6 +162,22 @@ fn warn_of_what_is_ignored(gltf: &gltf::Gltf, builder: &mut SceneBuilder) {
     {
         builder.warn("skins and morph targets are ignored: meshes are drawn in their rest pose".into());
     }
+    let points_and_lines = gltf
+        .meshes()
+        .flat_map(|m| m.primitives())
+        .filter(|p| !draws_triangles(p.mode()))
+        .count();
+    if points_and_lines > 0 {
+        builder.warn(format!(
+            "ignored {}: they draw no depth",
+            text::count(points_and_lines, "point or line primitive")
+        ));
+    }
+}
+
+/// Whether a primitive of `mode` draws triangles, not points or lines.
+fn draws_triangles(mode: Mode) -> bool {
+    matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan)
 }
 
 /// Adds an object for each mesh group of each node that has a mesh,
@@ -277,9 +300,8 @@ fn local_transform(node: &gltf::Node) -> Result<(DMat4, bool), String> {
 /// The file's cameras and camera animations (of the nodes `reached`), with
 /// a warning for each animation that moves no camera.
 fn add_cameras(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], builder: &mut SceneBuilder) {
-    let buffer_bytes = buffers.iter().map(Vec::len).sum();
     let check = |accessor: &gltf::Accessor, what: &str, types: &[gltf::accessor::DataType], dims| {
-        check_accessor(accessor, what, types, dims, buffer_bytes)
+        check_accessor(accessor, what, types, dims, buffers)
     };
     let cameras::Found {
         cameras,
@@ -507,7 +529,7 @@ fn check_accessor(
     what: &str,
     types: &[gltf::accessor::DataType],
     dimensions: gltf::accessor::Dimensions,
-    buffer_bytes: usize,
+    buffers: &[Vec<u8>],
 ) -> Result<(), String> {
     let (data_type, dims, count) = (accessor.data_type(), accessor.dimensions(), accessor.count());
     if !types.contains(&data_type) || dims != dimensions {
@@ -532,7 +554,7 @@ fn check_accessor(
         }
         // A sparse accessor without data of its own: its count still cannot
         // sensibly exceed the bytes the file carries.
-        None => count > buffer_bytes,
+        None => count > buffers.iter().map(Vec::len).sum(),
     };
     if too_many {
         return Err(format!("{what}: {count} elements do not fit the data the file holds"));
@@ -543,6 +565,48 @@ fn check_accessor(
             || sparse.values().view().stride().is_some())
     {
         return Err(format!("{what}: malformed sparse storage"));
+    }
+    if let Some(sparse) = accessor.sparse() {
+        check_sparse_indices(&sparse, count, buffers).map_err(|fault| format!("{what}: sparse indices {fault}"))?;
+    }
+    Ok(())
+}
+
+/// Whether a sparse accessor's indices are as the specification requires:
+/// strictly increasing, each below the accessor's `count`. The gltf crate's
+/// reader applies a value only when its walk through the elements reaches
+/// its index, so one out of order, repeated or past the end was left out
+/// without a word, and the mesh loaded wrong.
+fn check_sparse_indices(
+    sparse: &gltf::accessor::sparse::Sparse,
+    count: usize,
+    buffers: &[Vec<u8>],
+) -> Result<(), String> {
+    use gltf::accessor::sparse::IndexType;
+    let indices = sparse.indices();
+    let size = match indices.index_type() {
+        IndexType::U8 => 1,
+        IndexType::U16 => 2,
+        IndexType::U32 => 4,
+    };
+    let view = indices.view();
+    let start = view.offset() + indices.offset();
+    let bytes = sparse
+        .count()
+        .checked_mul(size)
+        .filter(|&length| indices.offset() + length <= view.length())
+        .and_then(|length| buffers.get(view.buffer().index())?.get(start..start + length))
+        .ok_or("lie outside their buffer view")?;
+    let mut last: Option<u32> = None;
+    for word in bytes.chunks_exact(size) {
+        let index = word.iter().rev().fold(0, |value, &byte| value << 8 | u32::from(byte));
+        if index as usize >= count {
+            return Err(format!("name element {index} of {count}"));
+        }
+        if let Some(last) = last.filter(|&last| index <= last) {
+            return Err(format!("do not rise strictly ({index} after {last})"));
+        }
+        last = Some(index);
     }
     Ok(())
 }
@@ -558,7 +622,6 @@ fn load_mesh(
     let mesh_name = mesh
         .name()
         .map_or_else(|| format!("mesh{}", mesh.index()), str::to_string);
-    let buffer_bytes = buffers.iter().map(Vec::len).sum();
     let mut groups = Vec::new();
     for primitive in mesh.primitives() {
         let element = format!("mesh '{mesh_name}' primitive {}", primitive.index());
@@ -566,21 +629,20 @@ fn load_mesh(
             path: path.into(),
             message: format!("{element}: {what}"),
         };
+        // Points and lines draw no depth (warned of, with their count).
         let mode = primitive.mode();
-        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
-            return Err(error(format!(
-                "primitive mode {mode:?} is not supported (occlu renders triangles; points and lines draw no depth)"
-            )));
+        if !draws_triangles(mode) {
+            continue;
         }
         let accessor = primitive
             .get(&gltf::Semantic::Positions)
             .ok_or_else(|| error("has no POSITION attribute".into()))?;
         // Integer types: KHR_mesh_quantization.
         let types = [DataType::F32, DataType::I8, DataType::U8, DataType::I16, DataType::U16];
-        check_accessor(&accessor, "POSITION", &types, Dimensions::Vec3, buffer_bytes).map_err(error)?;
+        check_accessor(&accessor, "POSITION", &types, Dimensions::Vec3, buffers).map_err(error)?;
         if let Some(indices) = primitive.indices() {
             let types = [DataType::U8, DataType::U16, DataType::U32];
-            check_accessor(&indices, "indices", &types, Dimensions::Scalar, buffer_bytes).map_err(error)?;
+            check_accessor(&indices, "indices", &types, Dimensions::Scalar, buffers).map_err(error)?;
         }
         let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let positions =

@@ -19,13 +19,16 @@ pub struct GltfWriter {
 }
 
 impl GltfWriter {
-    fn view(&mut self, bytes: &[u8], target: u32) -> usize {
+    /// A buffer view of `bytes` (`target` 0 for none), 4-byte aligned.
+    pub fn view(&mut self, bytes: &[u8], target: u32) -> usize {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
-        self.buffer_views.push(json!({
-            "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len(), "target": target
-        }));
+        let mut view = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
+        if target != 0 {
+            view["target"] = json!(target);
+        }
+        self.buffer_views.push(view);
         self.bin.extend_from_slice(bytes);
         self.buffer_views.len() - 1
     }
