@@ -392,7 +392,20 @@ fn generated_obj_and_path_inputs_load_or_fail_naming_the_input() {
 fn scene_through_tobj(path: &Path, bytes: &[u8]) -> Result<Scene, String> {
     // A byte-order mark is no part of the first line (occlu's reader).
     let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
-    let lines: Vec<Vec<u8>> = bytes.split(|&b| b == b'\n' || b == b'\r').map(as_tobj_reads).collect();
+    // Lines end at "\r\n", "\n" or a lone "\r" (occlu's reader).
+    let unix: Vec<u8> = String::from_utf8_lossy(bytes)
+        .replace("\r\n", "\n")
+        .replace('\r', "\n")
+        .into_bytes();
+    let unix = if std::str::from_utf8(bytes).is_ok() {
+        unix
+    } else {
+        bytes.to_vec()
+    };
+    let lines: Vec<Vec<u8>> = joined(unix.split(|&b| b == b'\n'))
+        .iter()
+        .map(|line| as_tobj_reads(line))
+        .collect();
     let bytes = lines.join(&b'\n');
     let options = tobj::LoadOptions {
         single_index: true,
@@ -436,10 +449,35 @@ fn scene_through_tobj(path: &Path, bytes: &[u8]) -> Result<Scene, String> {
     builder.finish().ok_or_else(|| "no triangles".to_string())
 }
 
+/// `lines` with each that ends in a backslash (a comment's aside) joined
+/// to the next, as occlu's reader continues a statement; tobj reads each
+/// line alone.
+fn joined<'a>(lines: impl Iterator<Item = &'a [u8]>) -> Vec<Vec<u8>> {
+    let mut joined: Vec<Vec<u8>> = Vec::new();
+    let mut open = false;
+    for line in lines {
+        let end = line.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(0, |k| k + 1);
+        let comment = line.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'#');
+        let continues = !comment && line[..end].ends_with(b"\\");
+        let body = if continues { &line[..end - 1] } else { line };
+        match joined.last_mut().filter(|_| open) {
+            Some(statement) => {
+                statement.push(b' ');
+                statement.extend_from_slice(body);
+            }
+            None => joined.push(body.to_vec()),
+        }
+        open = continues;
+    }
+    joined
+}
+
 /// `line` written so that tobj reads it as occlu's reader does, where the
 /// specification allows what tobj refused or misread: a lone carriage
 /// return ends a line (the caller splits there), a statement may be
-/// indented, a tab may follow `usemtl`, and `vt` may give u alone.
+/// indented, a tab may follow `usemtl` and nothing need, and `vt` may give
+/// u alone; and where occlu refuses what tobj read: a w that is not
+/// finite.
 fn as_tobj_reads(line: &[u8]) -> Vec<u8> {
     let Ok(text) = std::str::from_utf8(line) else {
         return line.to_vec();
@@ -448,7 +486,11 @@ fn as_tobj_reads(line: &[u8]) -> Vec<u8> {
     match words.as_slice() {
         ["l", ..] => b"f 1 2".to_vec(),
         ["vt", u] => format!("vt {u} 0").into_bytes(),
-        ["usemtl", names @ ..] if !names.is_empty() => format!("usemtl {}", names.join(" ")).into_bytes(),
+        ["usemtl"] => Vec::new(),
+        // occlu refuses a w that is not finite (it would move the vertex
+        // to the origin); tobj refuses a vertex it cannot read.
+        ["v", _, _, _, w] if w.parse::<f64>().is_ok_and(|w| !w.is_finite()) => b"v unreadable".to_vec(),
+        ["usemtl", names @ ..] => format!("usemtl {}", names.join(" ")).into_bytes(),
         _ => text.trim_start().as_bytes().to_vec(),
     }
 }
@@ -466,6 +508,7 @@ fn contents(scene: &Scene) -> String {
     let parts: Vec<String> = scene.parts.iter().map(|p| format!("{} {}", p.name, p.closed)).collect();
     let ours_alone = [
         "line/point elements",
+        "free-form curve",
         "of one or two corners",
         "whose statement OBJ does not define",
     ];

@@ -67,6 +67,8 @@ struct Obj {
     objects: Vec<Object>,
     /// `l` and `p` elements.
     skipped: usize,
+    /// Free-form curves and surfaces (`curv`, `curv2`, `surf`).
+    free_form: usize,
     /// Faces of one or two corners, which draw nothing.
     short_faces: usize,
     unknown: Unknown,
@@ -83,8 +85,9 @@ struct Unknown {
 
 /// Every statement of the OBJ format (Wavefront's specification, version
 /// 3.0, with the superseded ones its appendix still lists) that occlu
-/// reads nothing from: free-form geometry, grouping, display and rendering
-/// attributes. A line that starts with none of these, nor one read, is
+/// reads nothing from: free-form geometry's attributes and body (its
+/// elements, `curv`, `curv2` and `surf`, are counted), grouping, display
+/// and rendering attributes. A line that starts with none of these, nor one read, is
 /// unknown.
 const IGNORED_STATEMENTS: &[&str] = &[
     "vp",
@@ -92,9 +95,6 @@ const IGNORED_STATEMENTS: &[&str] = &[
     "deg",
     "bmat",
     "step",
-    "curv",
-    "curv2",
-    "surf",
     "parm",
     "trim",
     "hole",
@@ -137,6 +137,12 @@ fn judge(obj: &Obj) -> Result<Vec<String>, String> {
         warnings.push(format!(
             "ignored {} line/point elements ('l'/'p'): only faces are rendered",
             obj.skipped
+        ));
+    }
+    if obj.free_form > 0 {
+        warnings.push(format!(
+            "ignored {} ('curv', 'curv2', 'surf'): only faces are rendered",
+            count(obj.free_form, "free-form curve or surface")
         ));
     }
     if obj.short_faces > 0 {
@@ -188,6 +194,9 @@ const NONE: usize = usize::MAX;
 type Written = [isize; 3];
 
 fn parse(bytes: &[u8]) -> Result<Obj, String> {
+    if bytes.starts_with(b"glTF") {
+        return Err("a GLB file (it starts with the bytes 'glTF'), not OBJ: name it .glb".into());
+    }
     let text = std::str::from_utf8(bytes).map_err(|e| format!("not UTF-8 text (byte {})", e.valid_up_to()))?;
     // A byte-order mark (Windows editors write one) is no part of the first
     // line: read as one, it hid that line's statement, and a first vertex
@@ -197,24 +206,43 @@ fn parse(bytes: &[u8]) -> Result<Obj, String> {
         name: "unnamed_object".into(),
         ..Reader::default()
     };
-    let mut continued = false;
+    // A line ending in a backslash continues on the next (the
+    // specification's line continuation): the statement is read whole, as
+    // of its first line. A comment continues nothing.
+    let mut statement = String::new();
+    let mut continued_from = None;
     for (number, line) in lines(text).enumerate() {
-        reader.line = number + 1;
-        // A line after one ending in a backslash continues its statement
-        // (the specification's line continuation); it starts none.
-        reader.continues = std::mem::replace(&mut continued, line.trim_end().ends_with('\\'));
-        // Words as `split_whitespace` finds them, byte by byte where the
-        // line is ASCII (almost every line of almost every file).
-        if line.is_ascii() {
-            reader.read(line, ascii_words(line))?;
-        } else {
-            reader.read(line, line.split_whitespace())?;
+        let body = line
+            .trim_end()
+            .strip_suffix('\\')
+            .filter(|_| !line.trim_start().starts_with('#'));
+        match (continued_from, body) {
+            (None, None) => {
+                reader.line = number + 1;
+                reader.read_line(line)?;
+            }
+            (_, Some(body)) => {
+                continued_from.get_or_insert(number + 1);
+                statement.push_str(body);
+                statement.push(' ');
+            }
+            (Some(first), None) => {
+                statement.push_str(line);
+                reader.line = first;
+                reader.read_line(&statement)?;
+                (statement, continued_from) = (String::new(), None);
+            }
         }
+    }
+    if let Some(first) = continued_from {
+        reader.line = first;
+        reader.read_line(&statement)?;
     }
     reader.end_object()?;
     Ok(Obj {
         objects: reader.objects,
         skipped: reader.skipped,
+        free_form: reader.free_form,
         short_faces: reader.short_faces,
         unknown: reader.unknown,
     })
@@ -250,10 +278,9 @@ struct Reader {
     vertex_of: Vec<u32>,
     objects: Vec<Object>,
     skipped: usize,
+    free_form: usize,
     short_faces: usize,
     unknown: Unknown,
-    /// Whether the line being read continues the one before.
-    continues: bool,
 }
 
 impl Reader {
@@ -262,15 +289,27 @@ impl Reader {
         format!("line {}: {message}", self.line)
     }
 
+    /// Reads `line`: its words as `split_whitespace` finds them, byte by
+    /// byte where the line is ASCII (almost every line of almost every
+    /// file).
+    fn read_line(&mut self, line: &str) -> Result<(), String> {
+        if line.is_ascii() {
+            self.read(line, ascii_words(line))
+        } else {
+            self.read(line, line.split_whitespace())
+        }
+    }
+
     /// Reads `line`, split into `words`.
     fn read<'a>(&mut self, line: &str, mut words: impl Iterator<Item = &'a str>) -> Result<(), String> {
         match words.next() {
             Some("v") => self.vertex(words)?,
-            // u, then v where given (the specification's default is 0).
+            // u, then v and w where given (the specification's defaults
+            // are 0).
             Some("vt") => {
-                let (u, v) = (words.next().map(str::parse::<f64>), words.next().map(str::parse::<f64>));
-                if !matches!(u, Some(Ok(_))) || matches!(v, Some(Err(_))) {
-                    return Err(self.fail("a texture coordinate needs a number u, and v a number where given"));
+                let mut given = words.take(3).map(str::parse::<f64>);
+                if !matches!(given.next(), Some(Ok(_))) || given.any(|c| c.is_err()) {
+                    return Err(self.fail("a texture coordinate needs a number u, and v and w numbers where given"));
                 }
                 self.texcoords += 1;
             }
@@ -284,6 +323,7 @@ impl Reader {
                 self.has_faces = true;
             }
             Some("p") => self.skipped += 1,
+            Some("curv" | "curv2" | "surf") => self.free_form += 1,
             Some("o" | "g") => {
                 if self.has_faces {
                     self.end_object()?;
@@ -295,10 +335,7 @@ impl Reader {
                     name => name.into(),
                 };
             }
-            Some("usemtl") if words.next().is_none() => return Err(self.fail("usemtl names no material")),
-            Some(statement)
-                if !self.continues && !statement.starts_with('#') && !IGNORED_STATEMENTS.contains(&statement) =>
-            {
+            Some(statement) if !statement.starts_with('#') && !IGNORED_STATEMENTS.contains(&statement) => {
                 self.unknown.lines += 1;
                 self.unknown.first.get_or_insert_with(|| (self.line, statement.into()));
             }
@@ -314,6 +351,7 @@ impl Reader {
             (None, ..) => {}
             (Some(w), None, ..) => match w.parse::<f64>() {
                 Ok(0.0) => return Err(self.fail("a vertex's w is 0")),
+                Ok(w) if !w.is_finite() => return Err(self.fail(format_args!("a vertex's w '{w}' is not finite"))),
                 Ok(w) => position /= w,
                 Err(_) => return Err(self.fail(format_args!("a vertex's w '{w}' is not a number"))),
             },
@@ -574,7 +612,6 @@ mod tests {
             "line 4: a face names vertex 0 of 3"
         );
         assert_eq!(error("v 0 0 0 0\n"), "line 1: a vertex's w is 0");
-        assert_eq!(error("usemtl\n"), "line 1: usemtl names no material");
         assert_eq!(parse(b"v 0 0 \xff\n").err().unwrap(), "not UTF-8 text (byte 6)");
     }
 
@@ -624,10 +661,41 @@ mod tests {
             assert_eq!(obj.objects[0].indices, expected.objects[0].indices, "{what}");
         }
         let error = |text: &str| parse(text.as_bytes()).err().unwrap();
-        let needs = "a texture coordinate needs a number u, and v a number where given";
+        let needs = "a texture coordinate needs a number u, and v and w numbers where given";
         assert_eq!(error("vt\n"), format!("line 1: {needs}"));
         assert_eq!(error("vt 0 x\n"), format!("line 1: {needs}"));
+        assert_eq!(error("vt 0 0 x\n"), format!("line 1: {needs}"));
+        assert_eq!(error("v 0 0 1 inf\n"), "line 1: a vertex's w 'inf' is not finite");
+        assert_eq!(
+            error("glTF\u{2}\0\0\0"),
+            "a GLB file (it starts with the bytes 'glTF'), not OBJ: name it .glb"
+        );
         assert_eq!(error("v 0 0 0\rv 1 0\r"), "line 2: a vertex needs three numbers");
+    }
+
+    #[test]
+    fn continued_lines_are_one_statement_and_free_form_geometry_is_warned_of() {
+        let plain = parse(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        for text in [
+            // A face continued, a statement OBJ has continued over a
+            // vertex-like line, and a continuation at the end of the file.
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \\\n3\n",
+            "parm u 0 \\\nv 9 9 9\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nparm u 0 \\",
+            // A comment continues nothing; an empty usemtl names nothing.
+            "# note \\\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl\nf 1 2 3\n",
+        ] {
+            let obj = parse(text.as_bytes()).unwrap_or_else(|e| panic!("{text:?}: {e}"));
+            assert_eq!(obj.objects[0].positions, plain.objects[0].positions, "{text:?}");
+            assert_eq!(obj.objects[0].indices, plain.objects[0].indices, "{text:?}");
+            assert_eq!(obj.unknown.lines, 0, "{text:?}");
+        }
+        let surface =
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 1\nparm u 0 1\nend\n";
+        assert_eq!(
+            judge(&parse(surface.as_bytes()).unwrap()).unwrap(),
+            ["ignored 1 free-form curve or surface ('curv', 'curv2', 'surf'): only faces are rendered"]
+        );
     }
 
     #[test]
