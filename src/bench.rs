@@ -363,7 +363,7 @@ fn camera_path(
         near: path.near,
         generated,
         frames_with_geometry_within_near: within_near,
-        cameras: Some(Fingerprint::of_path(&path)),
+        cameras: Some(Fingerprint::of_path(&path, scene.up.axis)),
     };
     Ok((path, summary))
 }

@@ -623,6 +623,23 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
     );
     assert!(stdout(&fewer).contains("better"));
 
+    // The same model name, other geometry (a changed file): compared, with
+    // a note that says so.
+    let changed = dir.path().join("changed");
+    tampered_copy(&steady, &changed, &|_| {});
+    let summary_path = changed.join("summary.json");
+    let mut summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&summary_path).unwrap()).unwrap();
+    summary["scene"]["geometry"]["fnv1a"] = "0123456789abcdef".into();
+    std::fs::write(&summary_path, summary.to_string()).unwrap();
+    let noted = occlu(&["compare", b, changed.to_str().unwrap()]);
+    assert_eq!(noted.status.code(), Some(0), "{:?}", own_stderr(&noted));
+    assert!(
+        stdout(&noted).contains("the scene's geometry differ (#") && stdout(&noted).contains("#0123456789abcdef)"),
+        "{}",
+        stdout(&noted)
+    );
+
     fails_with(
         &["compare", b, dir.path().join("absent").to_str().unwrap()],
         2,

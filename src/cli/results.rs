@@ -4,7 +4,8 @@
 
 use std::process::ExitCode;
 
-use occlu::report::compare::{CompareOptions, Metric};
+use occlu::report::compare::{CompareOptions, Metric, Verdict};
+use occlu::text;
 
 use super::args::{CompareArgs, MergeArgs, PlotArgs};
 use super::output::{emit, say};
@@ -76,6 +77,7 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
     let regressions: Vec<String> = comparison
         .regressions()
         .map(|c| match (c.base, c.new) {
+            _ if c.verdict == Verdict::Missing => format!("{} {} missing", c.mode, c.metric),
             (Some(b), Some(n)) if b != 0.0 => format!("{} {} {:+.1}%", c.mode, c.metric, (n - b) / b * 100.0),
             _ => format!("{} {}", c.mode, c.metric),
         })
@@ -84,7 +86,11 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
         say!("no regression");
         Ok(ExitCode::SUCCESS)
     } else {
-        say!("occlu: {} regressions: {}", regressions.len(), regressions.join(", "));
+        say!(
+            "occlu: {} regressed or missing: {}",
+            text::count(regressions.len(), "measure"),
+            regressions.join(", ")
+        );
         Ok(ExitCode::from(1))
     }
 }

@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use super::merge::{Merged, read_merged};
+use super::summary::same_count;
 use super::{ReportError, Summary, read_results};
 use crate::measure::{Distribution, ModeSummary};
 
@@ -173,8 +174,12 @@ pub enum CompareError {
         run: String,
         adapter: String,
     },
-    #[error("{}: {error}", run.display())]
-    InRun { run: PathBuf, error: Box<CompareError> },
+    #[error("{} against {}: {error}", base.display(), new.display())]
+    InRun {
+        base: PathBuf,
+        new: PathBuf,
+        error: Box<CompareError>,
+    },
 }
 
 pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comparison, CompareError> {
@@ -216,6 +221,28 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
         )));
     }
     let mut notes = Vec::new();
+    // The same names, other contents: a changed model or path file, or a
+    // change in how occlu loads or generates them. Counters then change
+    // for that reason too, which the user may want to compare all the
+    // same, so it is said rather than refused.
+    let fingerprints = [
+        (
+            "scene's geometry",
+            base_summary.scene.facts.geometry,
+            new_summary.scene.facts.geometry,
+        ),
+        ("path's cameras", base_summary.path.cameras, new_summary.path.cameras),
+    ];
+    for (what, base, new) in fingerprints {
+        if let (Some(base), Some(new)) = (base, new)
+            && base != new
+        {
+            notes.push(format!(
+                "the {what} differ (#{:016x} vs #{:016x}): a changed file, or a change in how occlu reads it; counters may differ for that reason",
+                base.fnv1a, new.fnv1a
+            ));
+        }
+    }
     let (adapter_a, adapter_b) = (&base_summary.adapter, &new_summary.adapter);
     let same_adapter = adapter_a.times_compare_with(adapter_b);
     if !same_adapter {
@@ -306,7 +333,8 @@ fn compare_merged(
             continue;
         };
         let pair = compare_runs(base_folder, new_folder, options).map_err(|error| CompareError::InRun {
-            run: new_folder.clone(),
+            base: base_folder.clone(),
+            new: new_folder.clone(),
             error: Box::new(error),
         })?;
         changes.extend(pair.changes.into_iter().map(|c| Change {
@@ -372,13 +400,8 @@ fn label(folder: &Path) -> String {
         .map_or(String::new(), |n| n.to_string_lossy().into_owned())
 }
 
-/// Relative tolerance for "unchanged" on means of deterministic counters
-/// (they are sums of integers divided by the same frame count).
-const SAME: f64 = 1e-9;
-
 fn verdict(metric: Metric, base: f64, new: f64, b: &ModeSummary, n: &ModeSummary, pct: f64) -> Verdict {
-    let tolerance = SAME * base.abs().max(1.0);
-    if (new - base).abs() <= tolerance {
+    if same_count(base, new) {
         return Verdict::Same;
     }
     if new < base {

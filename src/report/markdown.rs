@@ -99,7 +99,8 @@ pub fn render(s: &Summary) -> String {
 pub(super) fn verdict_line(v: &Verdict) -> String {
     let mut line = format!(
         "**Fastest conservative mode: {}**, {:.2} ms a frame",
-        v.fastest, v.frame_ms
+        markdown(&v.fastest),
+        v.frame_ms
     );
     if let Some(x) = v.speedup_vs_vfc {
         let _ = write!(line, ", {x:.2}× as fast as vfc");
@@ -198,7 +199,7 @@ fn cost_split(w: &mut String, modes: &[ModeSummary]) {
         let _ = writeln!(
             w,
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-            m.name,
+            markdown(&m.name),
             ms(mean("frame_ms")),
             ms(mean("cpu_ms")),
             ms(per_frame("query_gpu_ms")),
@@ -248,7 +249,7 @@ fn row(m: &ModeSummary) -> String {
     let opt = |v: Option<String>| v.unwrap_or_else(|| "–".into());
     format!(
         "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-        m.name,
+        markdown(&m.name),
         opt(frame.map(|d| format!("{} ± {}", ms(d.mean), ms(d.stddev)))),
         opt(frame.map(|d| ms(d.median))),
         opt(frame.map(|d| ms(d.p95))),

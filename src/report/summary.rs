@@ -10,7 +10,7 @@ use crate::cull::ModeId;
 use crate::gpu::{AdapterReport, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams, HierarchyStats};
 use crate::measure::{Distribution, FrameStats, MissedObject, ModeSummary, PairedRatio};
-use crate::scene::up::Up;
+use crate::scene::up::{Up, UpAxis};
 use crate::scene::{LoadPhases, Scene};
 
 /// Bumped whenever a field of summary.json changes meaning or disappears
@@ -453,11 +453,14 @@ impl Fingerprint {
     /// (`generated:KIND`) is made with sin/cos from its scene: for it, its
     /// kind, its keyframe count and occlu's version stand in for the
     /// keyframes' and near plane's floats (its scene is compared on its
-    /// own, and generation is the same arithmetic everywhere).
-    pub fn of_path(path: &CameraPath) -> Fingerprint {
+    /// own, and generation is the same arithmetic everywhere), with the
+    /// scene's `up`, which generation follows and the scene's fingerprint
+    /// does not hold.
+    pub fn of_path(path: &CameraPath, up: UpAxis) -> Fingerprint {
         let mut h = Fnv1a::new();
         if path.source.starts_with("generated:") {
             h.write(path.source.as_bytes());
+            h.write(up.to_string().as_bytes());
             h.write(env!("CARGO_PKG_VERSION").as_bytes());
             h.write(&(path.keyframes.len() as u64).to_le_bytes());
         } else {
@@ -476,6 +479,13 @@ impl Fingerprint {
         h.write(&path.frames.to_le_bytes());
         h.finish()
     }
+}
+
+/// Whether `other` is `base` where both are means of a deterministic
+/// counter (sums of integers over the same frame count): equal but for the
+/// rounding of the division, relative to `base` (or to 1, below it).
+pub(super) fn same_count(base: f64, other: f64) -> bool {
+    (other - base).abs() <= 1e-9 * base.abs().max(1.0)
 }
 
 /// FNV-1a (64 bits), fed piece by piece, counting the bytes it was fed.
@@ -556,18 +566,21 @@ mod tests {
         let mut moved = generated.clone();
         moved.keyframes[0].position.x = moved.keyframes[0].position.x.next_up();
         moved.near = moved.near.next_up();
-        assert_eq!(Fingerprint::of_path(&moved), Fingerprint::of_path(&generated));
-        assert_ne!(
-            Fingerprint::of_path(&generated.clone().with_frames(7).unwrap()),
-            Fingerprint::of_path(&generated)
-        );
+        let of_path = |path: &CameraPath| Fingerprint::of_path(path, UpAxis::Y);
+        assert_eq!(of_path(&moved), of_path(&generated));
+        assert_ne!(of_path(&generated.clone().with_frames(7).unwrap()), of_path(&generated));
+        // Generated for a scene Z up (`--up z`), the same kind of path is
+        // another path.
+        assert_ne!(Fingerprint::of_path(&generated, UpAxis::Z), of_path(&generated));
         let file = CameraPath {
             source: "fly.json".into(),
             ..generated.clone()
         };
         let mut moved_file = file.clone();
         moved_file.keyframes[0].position.x = moved_file.keyframes[0].position.x.next_up();
-        assert_ne!(Fingerprint::of_path(&moved_file), Fingerprint::of_path(&file));
+        assert_ne!(of_path(&moved_file), of_path(&file));
+        // A file keeps its own up, which its keyframes' rotations hold.
+        assert_eq!(Fingerprint::of_path(&file, UpAxis::Z), of_path(&file));
     }
 
     /// summary.json's numbers read back as written: merge and compare

@@ -11,7 +11,7 @@ use super::merged::{
     AdapterColumn, Disagreement, MergedRun, MissingRuns, ModeResult, ModeRow, adapter_label, column_folder, unique,
 };
 use super::read::RunFolder;
-use crate::report::summary::{Fingerprint, MatrixIdentity, Summary};
+use crate::report::summary::{Fingerprint, MatrixIdentity, Summary, same_count};
 
 impl RunFolder {
     /// Which run it is: its matrix run's name, or its scene's and path's.
@@ -266,10 +266,6 @@ const SAME_ON_EVERY_ADAPTER: [(&str, Counter); 4] = [
     ("error_pixels", |r| r.error_pixels.map(|v| v as f64)),
 ];
 
-/// Relative tolerance for "equal" means of deterministic counters (sums of
-/// integers over the same frame count).
-const SAME: f64 = 1e-9;
-
 /// The counters of [`SAME_ON_EVERY_ADAPTER`] that differ between adapters
 /// of one backend.
 fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreement> {
@@ -284,9 +280,7 @@ fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreemen
                     .filter(|(a, _)| a.backend == backend)
                     .filter_map(|(a, r)| Some((a.name.clone(), value(r.as_ref()?)?)))
                     .collect();
-                let differ = values
-                    .iter()
-                    .any(|(_, v)| (v - values[0].1).abs() > SAME * values[0].1.abs().max(1.0));
+                let differ = values.iter().any(|(_, v)| !same_count(values[0].1, *v));
                 if differ {
                     found.push(Disagreement {
                         mode: row.mode.clone(),
