@@ -509,13 +509,14 @@ fn contents(scene: &Scene) -> String {
     let ours_alone = [
         "line/point elements",
         "free-form curve",
+        "concave where they are cut",
         "of one or two corners",
         "whose statement OBJ does not define",
     ];
     let warnings: Vec<&String> = scene
         .warnings
         .iter()
-        .filter(|w| !(w.starts_with("ignored ") && ours_alone.iter().any(|o| w.contains(o))))
+        .filter(|w| !ours_alone.iter().any(|o| w.contains(o)))
         .collect();
     format!("{objects:?} {parts:?} {warnings:?} {:?}", Fingerprint::of_scene(scene))
 }

@@ -382,12 +382,26 @@ fn sparse_indices_must_rise_strictly_within_the_count_and_points_and_lines_are_s
         let (p, i) = cube();
         w.mesh("wire", &[(&p, Some(&i), 1)]);
         w.node(json!({"mesh": 1}));
+        w.nodes[0]["children"] = json!([1]);
     });
     let scene = scene.unwrap();
     assert_eq!(scene.triangles(), 12);
     assert_eq!(
         scene.warnings,
         ["ignored 1 point or line primitive: they draw no depth"]
+    );
+}
+
+#[test]
+fn a_node_with_a_mesh_outside_the_scene_drawn_is_warned_of() {
+    let scene = edited_glb(|w| {
+        w.node(json!({"mesh": 0, "translation": [5, 0, 0]}));
+    })
+    .unwrap();
+    assert_eq!(scene.triangles(), 12);
+    assert_eq!(
+        scene.warnings,
+        ["ignored 1 node with a mesh outside the scene drawn (glTF draws its default scene)"]
     );
 }
 

@@ -35,6 +35,16 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
     warn_of_what_is_ignored(&gltf, builder);
     let buffers = load_buffers(path, bytes, &gltf, options, builder)?;
     let reached = add_node_trees(path, &gltf, &buffers, builder)?;
+    let outside = gltf
+        .nodes()
+        .filter(|n| n.mesh().is_some() && !reached[n.index()])
+        .count();
+    if outside > 0 {
+        builder.warn(format!(
+            "ignored {} with a mesh outside the scene drawn (glTF draws its default scene)",
+            text::count(outside, "node")
+        ));
+    }
     add_cameras(&gltf, &buffers, &reached, builder);
     Ok(())
 }

@@ -345,13 +345,14 @@ impl SceneBuilder {
                 .take(3)
                 .map(|(name, n)| format!("'{name}': {n}"))
                 .collect();
-            let more = if self.degenerate.len() > 3 {
-                format!(", and {} more meshes", self.degenerate.len() - 3)
-            } else {
-                String::new()
+            let more = match self.degenerate.len().saturating_sub(3) {
+                0 => String::new(),
+                1 => ", and 1 more mesh".into(),
+                n => format!(", and {n} more meshes"),
             };
             warnings.push(format!(
-                "dropped {dropped} degenerate triangles ({}{more})",
+                "dropped {} ({}{more})",
+                crate::text::count(dropped, "degenerate triangle"),
                 worst.join(", ")
             ));
         }

@@ -71,6 +71,8 @@ struct Obj {
     free_form: usize,
     /// Faces of one or two corners, which draw nothing.
     short_faces: usize,
+    /// Faces whose fan covers what they do not ([`Reader::fanned_outside`]).
+    fanned_outside: usize,
     unknown: Unknown,
 }
 
@@ -149,6 +151,12 @@ fn judge(obj: &Obj) -> Result<Vec<String>, String> {
         warnings.push(format!(
             "ignored {} of one or two corners: they enclose nothing to draw",
             count(obj.short_faces, "face")
+        ));
+    }
+    if obj.fanned_outside > 0 {
+        warnings.push(format!(
+            "{} concave where they are cut: fanned from the first corner, as tobj cut them, their triangles cover more than the face",
+            count(obj.fanned_outside, "face")
         ));
     }
     if let Some((line, statement)) = &obj.unknown.first {
@@ -244,6 +252,7 @@ fn parse(bytes: &[u8]) -> Result<Obj, String> {
         skipped: reader.skipped,
         free_form: reader.free_form,
         short_faces: reader.short_faces,
+        fanned_outside: reader.fanned_outside,
         unknown: reader.unknown,
     })
 }
@@ -280,6 +289,7 @@ struct Reader {
     skipped: usize,
     free_form: usize,
     short_faces: usize,
+    fanned_outside: usize,
     unknown: Unknown,
 }
 
@@ -385,6 +395,9 @@ impl Reader {
                 for pair in rest.windows(2) {
                     self.corners.extend([*first, pair[0], pair[1]]);
                 }
+                if self.fanned_outside() {
+                    self.fanned_outside += 1;
+                }
                 // Whether an index names none (0 as written: an index that
                 // counts back one too far resolves to NONE too) or one read.
                 let named = |index: usize, written: isize, count: usize| written == 0 || index < count;
@@ -399,6 +412,37 @@ impl Reader {
             }
         }
         Ok(())
+    }
+
+    /// Whether the fan from the face's first corner, which cuts it into
+    /// triangles as tobj and most readers cut a face, covers what the face
+    /// does not: a fan triangle turns against the face (its Newell normal),
+    /// by more than a millionth of the face's area, as where a concave
+    /// face is cut from a corner that does not see all of it. A face
+    /// naming a position not read yet is not judged.
+    fn fanned_outside(&self) -> bool {
+        let n = self.face.len();
+        let at = |k: usize| self.positions.get(self.face[k % n].v).copied();
+        let turns_against = || -> Option<bool> {
+            let mut normal = DVec3::ZERO;
+            for k in 0..n {
+                let (p, q) = (at(k)?, at(k + 1)?);
+                normal += DVec3::new(
+                    (p.y - q.y) * (p.z + q.z),
+                    (p.z - q.z) * (p.x + q.x),
+                    (p.x - q.x) * (p.y + q.y),
+                );
+            }
+            let first = at(0)?;
+            let least = -1e-6 * normal.length_squared();
+            for k in 1..n - 1 {
+                if (at(k)? - first).cross(at(k + 1)? - first).dot(normal) < least {
+                    return Some(true);
+                }
+            }
+            Some(false)
+        };
+        n > 3 && turns_against() == Some(true)
     }
 
     /// A corner `v`, `v/vt`, `v//vn` or `v/vt/vn`, its indices resolved
@@ -695,6 +739,30 @@ mod tests {
         assert_eq!(
             judge(&parse(surface.as_bytes()).unwrap()).unwrap(),
             ["ignored 1 free-form curve or surface ('curv', 'curv2', 'surf'): only faces are rendered"]
+        );
+    }
+
+    #[test]
+    fn a_concave_face_cut_from_a_corner_that_does_not_see_it_all_is_warned_of() {
+        // An L of six corners in the plane z = 0.
+        let l_shape = "v 1 1 0\nv 1 2 0\nv 0 2 0\nv 0 0 0\nv 2 0 0\nv 2 1 0\n";
+        let fanned = |face: &str| judge(&parse(format!("{l_shape}{face}\n").as_bytes()).unwrap()).unwrap();
+        // From a corner beside the notch, the last triangle spans it.
+        assert_eq!(
+            fanned("f 2 3 4 5 6 1"),
+            [
+                "1 face concave where they are cut: fanned from the first corner, as tobj cut them, their triangles cover more than the face"
+            ]
+        );
+        // From its reflex corner, which sees all of it, every fan triangle
+        // lies inside.
+        assert!(fanned("f 1 2 3 4 5 6").is_empty());
+        // A square, and a square with a corner on an edge, are convex.
+        assert!(fanned("f 4 5 6 3").is_empty());
+        assert!(
+            judge(&parse(b"v 0 0 0\nv 1 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nf 1 2 3 4 5\n").unwrap())
+                .unwrap()
+                .is_empty()
         );
     }
 
