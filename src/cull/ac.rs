@@ -39,6 +39,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     summary: "V+O with adaptive culling (Eq. 1) and a cost-adaptive budget (Eq. 2) by visible-pixel counts (002 §4.2-4.4)",
     chart_colour: [148, 103, 189],
     conservative: false,
+    draws_by_time: true,
     params: &[THRESHOLD, SAMPLING, F_GRAPHICS, EYE_DISTANCE],
     exercised_with: &[],
     needs: Needs::PixelCounts,

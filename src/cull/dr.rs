@@ -12,6 +12,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     summary: "direct rendering: every object, no culling (002 §5)",
     chart_colour: [127, 127, 127],
     conservative: true,
+    draws_by_time: false,
     params: &[],
     exercised_with: &[],
     needs: Needs::Nothing,

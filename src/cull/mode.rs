@@ -43,6 +43,14 @@ impl Display for ModeId {
     }
 }
 
+impl ModeId {
+    /// The mode a summary's name is of: a mode's name, or a sweep's label
+    /// of one (`ac[f_graphics=0.5]`).
+    pub fn of_label(label: &str) -> Option<ModeId> {
+        label.split('[').next()?.parse().ok()
+    }
+}
+
 impl FromStr for ModeId {
     type Err = ModeError;
 
@@ -63,6 +71,13 @@ pub struct ModeInfo {
     pub chart_colour: [u8; 3],
     /// Whether the mode may never change a pixel (0 error required).
     pub conservative: bool,
+    /// Whether what it draws and tests follows times it measures (a
+    /// budget of the previous frame's drawing, a strategy chosen by frame
+    /// times, a buffer that rests where it did not pay), so that its
+    /// counters vary from run to run as the machine's times do: `compare`
+    /// judges its triangles and round trips as it judges frame times, and
+    /// `merge` does not cross-check them between adapters.
+    pub draws_by_time: bool,
     /// Parameters it takes as `--param NAME.KEY=VALUE`.
     pub params: &'static [ParamInfo],
     /// Values (key, value) of its parameters under which every frame

@@ -47,6 +47,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     summary: "Occupancy Map + multiple occlusion queries in three stages (003 §3-4)",
     chart_colour: [44, 160, 44],
     conservative: true,
+    draws_by_time: false,
     params: &[OM, INITIAL_MAX_TESTS, FACTOR],
     exercised_with: &[],
     needs: Needs::Nothing,

@@ -13,6 +13,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     summary: "draws exactly the objects visible in the reference frame: the floor for object-level culling",
     chart_colour: [20, 20, 20],
     conservative: true,
+    draws_by_time: false,
     params: &[],
     exercised_with: &[],
     needs: Needs::Nothing,

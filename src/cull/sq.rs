@@ -22,6 +22,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     summary: "front-to-back traversal, one occlusion query per node, each awaited (003 §5 b)",
     chart_colour: [255, 127, 14],
     conservative: true,
+    draws_by_time: false,
     params: &[],
     exercised_with: &[],
     needs: Needs::Nothing,

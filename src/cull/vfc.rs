@@ -24,6 +24,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     summary: "hierarchical view-frustum culling with the fully-inside shortcut (002 §4.1)",
     chart_colour: [31, 119, 180],
     conservative: true,
+    draws_by_time: false,
     params: &[],
     exercised_with: &[],
     needs: Needs::Nothing,

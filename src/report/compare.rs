@@ -25,6 +25,7 @@ use serde::Serialize;
 use super::merge::{Merged, read_merged};
 use super::summary::same_count;
 use super::{ReportError, Summary, read_results};
+use crate::cull::ModeId;
 use crate::measure::{Distribution, ModeSummary};
 
 /// A metric compare can gate on.
@@ -407,10 +408,15 @@ fn verdict(metric: Metric, base: f64, new: f64, b: &ModeSummary, n: &ModeSummary
     if new < base {
         return Verdict::Better;
     }
-    if metric != Metric::FrameMs {
+    // Frame times vary with the machine, and so does the work of a mode
+    // whose work follows them; any other count, and every error count,
+    // is the same in every run of one code.
+    let follows_time = matches!(metric, Metric::TrianglesDrawn | Metric::Queries | Metric::QueryBatches)
+        && ModeId::of_label(&b.name).is_some_and(|m| m.info().draws_by_time);
+    if metric != Metric::FrameMs && !follows_time {
         return Verdict::Regression;
     }
-    let spread = |m: &ModeSummary| m.stats.get("frame_ms").copied();
+    let spread = |m: &ModeSummary| m.stats.get(metric.name()).copied();
     let beyond_spread = match (spread(b), spread(n)) {
         (
             Some(Distribution {

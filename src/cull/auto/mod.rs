@@ -78,6 +78,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     summary: "per frame, the conservative mode measured cheapest here (vfc, the query-batching modes, CPU culling and, where the adapter culls on the GPU, the GPU walks): rivals probed as a bandit does and switched to only when cheaper beyond the noise; vfc where occlusion hides nothing",
     chart_colour: [255, 187, 120],
     conservative: true,
+    draws_by_time: true,
     params: &[BUDGET],
     exercised_with: &[],
     needs: Needs::Nothing,

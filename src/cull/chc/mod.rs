@@ -57,6 +57,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     summary: "coherent culling on a ternary tree: last frame's visible nodes unwaited, TightBoxes, split/merge, colliding queries wait (001)",
     chart_colour: [214, 39, 40],
     conservative: true,
+    draws_by_time: false,
     params: &[R_SPLIT, O_SPLIT, R_MERGE, O_MERGE, TIGHT_AFTER],
     exercised_with: &[],
     needs: Needs::PixelCounts,

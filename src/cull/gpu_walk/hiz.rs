@@ -43,6 +43,7 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     summary: "two-phase hierarchical-depth culling: last frame's visible objects drawn, a depth pyramid built from them, every box tested against it in a compute pass (small ones pixel by pixel where it cannot hide them), the newly visible drawn (Unreal's HZB, Bevy, niagara)",
     chart_colour: [227, 119, 194],
     conservative: true,
+    draws_by_time: false,
     params: &[TEXELS, BASE, PIXELS, BOXES, START, BOTTOM],
     exercised_with: &[],
     needs: Needs::GpuCulling,

@@ -32,6 +32,7 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     summary: "iterative hierarchical raster occlusion culling: roc over the hierarchy, level by level from a start to a bottom depth (004 §2)",
     chart_colour: [188, 189, 34],
     conservative: true,
+    draws_by_time: false,
     params: &[START, BOTTOM],
     exercised_with: &[],
     needs: Needs::GpuCulling,

@@ -13,6 +13,7 @@ pub(in crate::cull) const MODE: ModeInfo = ModeInfo {
     summary: "raster occlusion culling on the GPU: every object's box marks a visibility buffer, indirect multi-draw (004's ROC)",
     chart_colour: [23, 190, 207],
     conservative: true,
+    draws_by_time: false,
     params: &[],
     exercised_with: &[],
     needs: Needs::GpuCulling,

@@ -67,6 +67,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     summary: "CPU software occlusion culling: last frame's visible objects rasterised conservatively into a small depth buffer on the CPU, the hierarchy's boxes tested against it (Intel's MOC, Godot, Umbra)",
     chart_colour: [140, 86, 75],
     conservative: true,
+    draws_by_time: true,
     params: &[RESOLUTION, TRIANGLES, THREADS, RESTS],
     exercised_with: &[("rests", "false")],
     needs: Needs::Nothing,
