@@ -444,13 +444,25 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
         lines.contains(&[31, 119, 180]) && lines.contains(&[20, 20, 20]),
         "mode lines missing"
     );
-    // `occlu plot` draws them again from the files alone.
+    // `occlu plot` draws them again from the files alone, and its verdict
+    // from frames.csv, not from summary.json's copy.
     for chart in occlu::report::charts::CHARTS {
         std::fs::remove_file(out.join(chart)).unwrap();
     }
+    let summary_path = out.join("summary.json");
+    let mut summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&summary_path).unwrap()).unwrap();
+    let fastest = summary["verdict"]["fastest"].as_str().unwrap().to_string();
+    summary["verdict"]["fastest"] = "tampered".into();
+    std::fs::write(&summary_path, summary.to_string()).unwrap();
     let plot = occlu(&["plot", out_s]);
     assert!(plot.status.success(), "{:?}", own_stderr(&plot));
     assert!(occlu::report::charts::CHARTS.iter().all(|c| out.join(c).exists()));
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        report.contains(&format!("**Fastest conservative mode: {fastest}**")),
+        "{report}"
+    );
 }
 
 #[test]

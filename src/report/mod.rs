@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use crate::cull::ModeId;
 use crate::measure::{FrameStats, MissedObject, ModeDescription, RowLimits, summarize};
 use crate::text;
 
@@ -112,8 +113,11 @@ pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportErro
             parameters: m.parameters.clone(),
         })
         .collect();
+    let modes = summarize(&rows, &modes, summary.resolution.pixels());
+    let ids: Option<Vec<ModeId>> = modes.iter().map(|m| ModeId::of_label(&m.name)).collect();
     let summary = Summary {
-        modes: summarize(&rows, &modes, summary.resolution.pixels()),
+        verdict: ids.and_then(|ids| Verdict::of(&modes, &ids, &rows)),
+        modes,
         ..summary
     };
     Ok((summary, rows))
