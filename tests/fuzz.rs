@@ -509,7 +509,7 @@ fn contents(scene: &Scene) -> String {
     let ours_alone = [
         "line/point elements",
         "free-form curve",
-        "concave where they are cut",
+        "from a first corner that does not see all of the face",
         "of one or two corners",
         "whose statement OBJ does not define",
     ];

@@ -155,8 +155,8 @@ fn judge(obj: &Obj) -> Result<Vec<String>, String> {
     }
     if obj.fanned_outside > 0 {
         warnings.push(format!(
-            "{} concave where they are cut: fanned from the first corner, as tobj cut them, their triangles cover more than the face",
-            count(obj.fanned_outside, "face")
+            "fanned {} from a first corner that does not see all of the face, as tobj did: the triangles cover more than the face",
+            count(obj.fanned_outside, "concave face")
         ));
     }
     if let Some((line, statement)) = &obj.unknown.first {
@@ -751,7 +751,7 @@ mod tests {
         assert_eq!(
             fanned("f 2 3 4 5 6 1"),
             [
-                "1 face concave where they are cut: fanned from the first corner, as tobj cut them, their triangles cover more than the face"
+                "fanned 1 concave face from a first corner that does not see all of the face, as tobj did: the triangles cover more than the face"
             ]
         );
         // From its reflex corner, which sees all of it, every fan triangle
