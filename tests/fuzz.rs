@@ -392,20 +392,18 @@ fn generated_obj_and_path_inputs_load_or_fail_naming_the_input() {
 fn scene_through_tobj(path: &Path, bytes: &[u8]) -> Result<Scene, String> {
     // A byte-order mark is no part of the first line (occlu's reader).
     let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
-    // Lines end at "\r\n", "\n" or a lone "\r" (occlu's reader).
-    let unix: Vec<u8> = String::from_utf8_lossy(bytes)
-        .replace("\r\n", "\n")
-        .replace('\r', "\n")
-        .into_bytes();
-    let unix = if std::str::from_utf8(bytes).is_ok() {
-        unix
-    } else {
-        bytes.to_vec()
+    // Lines end at "\r\n", "\n" or a lone "\r" (occlu's reader). A file
+    // that is not UTF-8 occlu refuses whole: it goes to tobj as it is.
+    let lines: Vec<Vec<u8>> = match std::str::from_utf8(bytes) {
+        Ok(text) => {
+            let unix = text.replace("\r\n", "\n").replace('\r', "\n");
+            joined(unix.split('\n'))
+                .iter()
+                .map(|line| as_tobj_reads(line.as_bytes()))
+                .collect()
+        }
+        Err(_) => vec![bytes.to_vec()],
     };
-    let lines: Vec<Vec<u8>> = joined(unix.split(|&b| b == b'\n'))
-        .iter()
-        .map(|line| as_tobj_reads(line))
-        .collect();
     let bytes = lines.join(&b'\n');
     let options = tobj::LoadOptions {
         single_index: true,
@@ -449,25 +447,25 @@ fn scene_through_tobj(path: &Path, bytes: &[u8]) -> Result<Scene, String> {
     builder.finish().ok_or_else(|| "no triangles".to_string())
 }
 
-/// `lines` with each that ends in a backslash (a comment's aside) joined
-/// to the next, as occlu's reader continues a statement; tobj reads each
-/// line alone.
-fn joined<'a>(lines: impl Iterator<Item = &'a [u8]>) -> Vec<Vec<u8>> {
-    let mut joined: Vec<Vec<u8>> = Vec::new();
+/// `lines` with each that ends in a backslash joined to the next, as
+/// occlu's reader continues a statement (by the same tests: `str`'s
+/// trimming, and a comment continuing nothing); tobj reads each line alone.
+fn joined<'a>(lines: impl Iterator<Item = &'a str>) -> Vec<String> {
+    let mut joined: Vec<String> = Vec::new();
     let mut open = false;
     for line in lines {
-        let end = line.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(0, |k| k + 1);
-        let comment = line.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'#');
-        let continues = !comment && line[..end].ends_with(b"\\");
-        let body = if continues { &line[..end - 1] } else { line };
+        let body = line
+            .trim_end()
+            .strip_suffix('\\')
+            .filter(|_| !line.trim_start().starts_with('#'));
         match joined.last_mut().filter(|_| open) {
             Some(statement) => {
-                statement.push(b' ');
-                statement.extend_from_slice(body);
+                statement.push(' ');
+                statement.push_str(body.unwrap_or(line));
             }
-            None => joined.push(body.to_vec()),
+            None => joined.push(body.unwrap_or(line).to_string()),
         }
-        open = continues;
+        open = body.is_some();
     }
     joined
 }

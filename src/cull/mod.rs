@@ -75,7 +75,7 @@ pub use gpu_walk::hiz::{BoxesTested, HizParams, hierarchical_depth_culling};
 pub use gpu_walk::ioc::iterative_occlusion_culling;
 pub use gpu_walk::roc::raster_occlusion_culling;
 pub use gpu_walk::{GpuCulling, VisibleLists, Walked};
-pub use mode::{BuildCuller, Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
+pub use mode::{BuildCuller, Candidacy, Carries, CountKind, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 pub use omq::{OccupancyMapQueries, OmqParams};
 pub use oracle::Oracle;
 pub use registry::{create, modes, parse_modes};

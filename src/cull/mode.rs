@@ -49,7 +49,28 @@ impl ModeId {
     pub fn of_label(label: &str) -> Option<ModeId> {
         label.split('[').next()?.parse().ok()
     }
+
+    /// Whether a summary's count `what` of the mode labelled `label`
+    /// follows the times it measured ([`ModeInfo::draws_by_time`]): the
+    /// work it did (triangles, round trips), and, for a mode that is not
+    /// conservative, its error too (where its budget ran out decides what
+    /// it drew wrong).
+    pub fn counts_follow_time(label: &str, what: CountKind) -> bool {
+        ModeId::of_label(label).is_some_and(|m| {
+            let info = m.info();
+            info.draws_by_time && (what == CountKind::Work || !info.conservative)
+        })
+    }
 }
+
+/// What a summary's count measures: the work a mode did, or its error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CountKind {
+    Work,
+    Error,
+}
+
+impl ModeId {}
 
 impl FromStr for ModeId {
     type Err = ModeError;

@@ -25,7 +25,7 @@ use serde::Serialize;
 use super::merge::{Merged, read_merged};
 use super::summary::same_count;
 use super::{ReportError, Summary, read_results};
-use crate::cull::ModeId;
+use crate::cull::{CountKind, ModeId};
 use crate::measure::{Distribution, ModeSummary};
 
 /// A metric compare can gate on.
@@ -60,6 +60,18 @@ impl Metric {
             Metric::ErrorPixels => "error_pixels",
             Metric::MissedObjects => "missed_objects",
         }
+    }
+
+    /// Whether this count of the mode labelled `label` follows the times
+    /// the mode measured ([`ModeId::counts_follow_time`]): it varies from
+    /// run to run as they do.
+    fn follows_time(self, label: &str) -> bool {
+        let kind = match self {
+            Metric::FrameMs => return false,
+            Metric::TrianglesDrawn | Metric::Queries | Metric::QueryBatches => CountKind::Work,
+            Metric::ErrorPixels | Metric::MissedObjects => CountKind::Error,
+        };
+        ModeId::counts_follow_time(label, kind)
     }
 
     /// What is compared: the mean per frame, or the total over the run for
@@ -279,8 +291,13 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
         for &metric in &options.metrics {
             let (base_value, new_value) = (metric.value(b), n.and_then(|n| metric.value(n)));
             let verdict = match (base_value, new_value, n) {
-                // Times on two adapters measure the adapters, not a change.
-                (Some(_), Some(_), Some(_)) if metric == Metric::FrameMs && !same_adapter => Verdict::NotJudged,
+                // Times on two adapters measure the adapters, not a change,
+                // and so do the counts that follow them.
+                (Some(_), Some(_), Some(_))
+                    if !same_adapter && (metric == Metric::FrameMs || metric.follows_time(&b.name)) =>
+                {
+                    Verdict::NotJudged
+                }
                 (Some(x), Some(y), Some(n)) => verdict(metric, x, y, b, n, max_regression_pct),
                 (Some(_), None, _) => missing.clone(),
                 _ => Verdict::Unmeasured,
@@ -411,9 +428,7 @@ fn verdict(metric: Metric, base: f64, new: f64, b: &ModeSummary, n: &ModeSummary
     // Frame times vary with the machine, and so does the work of a mode
     // whose work follows them; any other count, and every error count,
     // is the same in every run of one code.
-    let follows_time = matches!(metric, Metric::TrianglesDrawn | Metric::Queries | Metric::QueryBatches)
-        && ModeId::of_label(&b.name).is_some_and(|m| m.info().draws_by_time);
-    if metric != Metric::FrameMs && !follows_time {
+    if metric != Metric::FrameMs && !metric.follows_time(&b.name) {
         return Verdict::Regression;
     }
     let spread = |m: &ModeSummary| m.stats.get(metric.name()).copied();

@@ -116,7 +116,12 @@ pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportErro
     let modes = summarize(&rows, &modes, summary.resolution.pixels());
     let ids: Option<Vec<ModeId>> = modes.iter().map(|m| ModeId::of_label(&m.name)).collect();
     let summary = Summary {
-        verdict: ids.and_then(|ids| Verdict::of(&modes, &ids, &rows)),
+        // A summary naming a mode this occlu does not know (an older
+        // one's) keeps its own verdict.
+        verdict: match ids {
+            Some(ids) => Verdict::of(&modes, &ids, &rows),
+            None => summary.verdict.clone(),
+        },
         modes,
         ..summary
     };

@@ -41,7 +41,7 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
         .count();
     if outside > 0 {
         builder.warn(format!(
-            "ignored {} with a mesh outside the scene drawn (glTF draws its default scene)",
+            "ignored {} with a mesh outside the scene drawn (the default scene, or else the first)",
             text::count(outside, "node")
         ));
     }
@@ -151,11 +151,15 @@ fn unreadable_version(version: &str, min_version: Option<&str>) -> Option<String
             "written for glTF '{version}', and occlu reads glTF 2.0 ({CONVERT})"
         ));
     }
-    let least = min_version.filter(|least| {
-        let minor = least.split_once('.').map_or("", |(_, minor)| minor);
-        major(least) != "2" || minor.is_empty() || minor.bytes().any(|b| b != b'0')
-    })?;
-    Some(format!("needs glTF '{least}' at least, and occlu reads glTF 2.0"))
+    let least = min_version?;
+    let digits = |part: &str| !part.is_empty() && part.bytes().all(|b| b.is_ascii_digit());
+    match least.split_once('.') {
+        Some(("2", minor)) if digits(minor) && minor.bytes().all(|b| b == b'0') => None,
+        Some((major, minor)) if digits(major) && digits(minor) => {
+            Some(format!("needs glTF '{least}' at least, and occlu reads glTF 2.0"))
+        }
+        _ => Some(format!("its minVersion '{least}' is not a glTF version such as 2.0")),
+    }
 }
 
 /// Warns of what the file holds and occlu does not draw as the file means
@@ -599,13 +603,23 @@ fn check_sparse_indices(
         IndexType::U16 => 2,
         IndexType::U32 => 4,
     };
+    // The specification asks at least one (the gltf crate's reader counts
+    // one less).
+    if sparse.count() == 0 {
+        return Err("are none: a sparse accessor names at least one element".into());
+    }
     let view = indices.view();
-    let start = view.offset() + indices.offset();
     let bytes = sparse
         .count()
         .checked_mul(size)
-        .filter(|&length| indices.offset() + length <= view.length())
-        .and_then(|length| buffers.get(view.buffer().index())?.get(start..start + length))
+        .and_then(|length| Some((indices.offset().checked_add(length)?, length)))
+        .filter(|&(end, _)| end <= view.length())
+        .and_then(|(_, length)| {
+            let start = view.offset().checked_add(indices.offset())?;
+            buffers
+                .get(view.buffer().index())?
+                .get(start..start.checked_add(length)?)
+        })
         .ok_or("lie outside their buffer view")?;
     let mut last: Option<u32> = None;
     for word in bytes.chunks_exact(size) {

@@ -1,11 +1,14 @@
-//! Wavefront OBJ: each `o`/`g` starts an object, faces become triangle
-//! fans; positions are read (a fourth number `w` divides them, a colour is
-//! skipped), texture coordinates and normals are only counted (faces name
-//! them), materials are never read, and `l`/`p` elements, faces of one or
-//! two corners and lines whose statement OBJ does not define are skipped
-//! and counted for a warning (a file of no faces and such lines is no OBJ
-//! file, and refused). A UTF-8 byte-order mark before the first line is
-//! no part of it.
+//! Wavefront OBJ: each `o`/`g` starts an object (consecutive ones of one
+//! name are one), faces become triangle fans (a concave face its fan cuts
+//! wrongly is counted for a warning); positions are read (a fourth number
+//! `w`, finite and not 0, divides them, a colour is skipped), texture
+//! coordinates and normals are only counted (faces name them), materials
+//! are never read, and `l`/`p` elements, free-form curves and surfaces,
+//! faces of one or two corners and lines whose statement OBJ does not
+//! define are skipped and counted for a warning (a file of no faces and
+//! such lines is no OBJ file, and refused). A UTF-8 byte-order mark before
+//! the first line is no part of it; a line ends at `\n`, `\r\n` or a lone
+//! `\r`, and one ending in a backslash continues on the next.
 //!
 //! Read here rather than by tobj, as it was until issue 38: tobj makes a
 //! String of every line and a Vec of every face and looks every corner up
@@ -13,10 +16,15 @@
 //! scans of benches/load_build.rs, read in turn on the project's 2-core
 //! machine, tobj took 0.37–0.49 s for 1 M triangles and 3.3–3.6 s for
 //! 8 M, this reader 0.17 s and 1.35–1.5 s. It gives every file the meshes
-//! tobj gave (tests/fuzz.rs holds the two against each other) but two: an
-//! `l` polyline of three or more points was a filled triangle fan there,
-//! and is skipped here; and tobj took a byte-order mark as part of the
-//! first line, which lost that line's statement. So, as in tobj:
+//! tobj gave (tests/fuzz.rs holds the two against each other) but where
+//! tobj misread what the specification allows or read what it should
+//! refuse (`as_tobj_reads` and `joined` there list each case): an `l`
+//! polyline of three or more points was a filled triangle fan there, and
+//! is skipped here; tobj took a byte-order mark as part of the first line,
+//! read a classic Mac OS file as one line, read each continued line alone,
+//! named an indented `o` with its statement, refused `vt` with u alone and
+//! a `usemtl` naming nothing, and took a w that is not finite. So, as in
+//! tobj:
 //! - an object's vertices are the distinct (position, texture coordinate,
 //!   normal) index triples of its corners, in first-use order;
 //! - indices count from 1, negative ones back from the elements read so
@@ -71,7 +79,7 @@ struct Obj {
     free_form: usize,
     /// Faces of one or two corners, which draw nothing.
     short_faces: usize,
-    /// Faces whose fan covers what they do not ([`Reader::fanned_outside`]).
+    /// Faces whose fan covers what they do not ([`Reader::fan_covers_outside`]).
     fanned_outside: usize,
     unknown: Unknown,
 }
@@ -314,12 +322,12 @@ impl Reader {
     fn read<'a>(&mut self, line: &str, mut words: impl Iterator<Item = &'a str>) -> Result<(), String> {
         match words.next() {
             Some("v") => self.vertex(words)?,
-            // u, then v and w where given (the specification's defaults
-            // are 0).
+            // u, then v where given (the specification's default is 0);
+            // what follows is not read, as after a normal's three numbers.
             Some("vt") => {
-                let mut given = words.take(3).map(str::parse::<f64>);
-                if !matches!(given.next(), Some(Ok(_))) || given.any(|c| c.is_err()) {
-                    return Err(self.fail("a texture coordinate needs a number u, and v and w numbers where given"));
+                let (u, v) = (words.next().map(str::parse::<f64>), words.next().map(str::parse::<f64>));
+                if !matches!(u, Some(Ok(_))) || matches!(v, Some(Err(_))) {
+                    return Err(self.fail("a texture coordinate needs a number u, and v a number where given"));
                 }
                 self.texcoords += 1;
             }
@@ -395,7 +403,7 @@ impl Reader {
                 for pair in rest.windows(2) {
                     self.corners.extend([*first, pair[0], pair[1]]);
                 }
-                if self.fanned_outside() {
+                if self.fan_covers_outside() {
                     self.fanned_outside += 1;
                 }
                 // Whether an index names none (0 as written: an index that
@@ -420,7 +428,7 @@ impl Reader {
     /// by more than a millionth of the face's area, as where a concave
     /// face is cut from a corner that does not see all of it. A face
     /// naming a position not read yet is not judged.
-    fn fanned_outside(&self) -> bool {
+    fn fan_covers_outside(&self) -> bool {
         let n = self.face.len();
         let at = |k: usize| self.positions.get(self.face[k % n].v).copied();
         let turns_against = || -> Option<bool> {
@@ -705,10 +713,10 @@ mod tests {
             assert_eq!(obj.objects[0].indices, expected.objects[0].indices, "{what}");
         }
         let error = |text: &str| parse(text.as_bytes()).err().unwrap();
-        let needs = "a texture coordinate needs a number u, and v and w numbers where given";
+        let needs = "a texture coordinate needs a number u, and v a number where given";
         assert_eq!(error("vt\n"), format!("line 1: {needs}"));
         assert_eq!(error("vt 0 x\n"), format!("line 1: {needs}"));
-        assert_eq!(error("vt 0 0 x\n"), format!("line 1: {needs}"));
+        assert!(parse(b"vt 0 0 x\n").is_ok(), "w is not read");
         assert_eq!(error("v 0 0 1 inf\n"), "line 1: a vertex's w 'inf' is not finite");
         assert_eq!(
             error("glTF\u{2}\0\0\0"),

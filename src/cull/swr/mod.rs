@@ -351,11 +351,13 @@ impl SoftwareOcclusionCulling {
 /// frames, twice as many and one more each time the next buffer fails
 /// again, up to [`LONGEST_REST`]; a buffer that pays brings the rests back
 /// to the shortest. Where occlusion never pays, it costs one frame in 32.
-/// A buffer that costs much of a frame rests longer: as many frames as
-/// [`TRY_BUDGET`] of their time pays for it, up to [`LONGEST_DEAR_REST`]
-/// (as `auto` bounds its rechecks of rivals known to be dearer), so that
-/// where a buffer costs a frame and more (a dense model's, on a light
-/// frame) its tries cost not 5 % of the run but under 2 %. Leaving
+/// A buffer that costs much of a frame (with the box tests through it)
+/// rests longer: as many frames as [`TRY_BUDGET`] of their time pays for
+/// it, up to [`LONGEST_DEAR_REST`] (as `auto` bounds its rechecks of
+/// rivals known to be dearer), so that where a buffer costs about a frame
+/// (a dense model's, on a light frame) its tries cost not 5 % of the run
+/// but 1.5 % (more for one dearer than about 2.6 frames, which the
+/// longest rest caps). Leaving
 /// occlusion out is always safe.
 #[derive(Clone, Copy, Debug)]
 struct Rest {
@@ -390,9 +392,9 @@ impl Rest {
         resting
     }
 
-    /// After a frame's buffer that cost `cost` frames (its time over the
-    /// frame's; 0 where not known): rests from the next frame on unless it
-    /// `paid`.
+    /// After a frame's buffer that cost `cost` frames (its time, with the
+    /// box tests through it, over the previous frame's; 0 where not
+    /// known): rests from the next frame on unless it `paid`.
     fn after(&mut self, paid: bool, cost: f64) {
         if paid {
             self.next = REST_FRAMES;

@@ -11,7 +11,7 @@ use super::merged::{
     AdapterColumn, Disagreement, MergedRun, MissingRuns, ModeResult, ModeRow, adapter_label, column_folder, unique,
 };
 use super::read::RunFolder;
-use crate::cull::ModeId;
+use crate::cull::{CountKind, ModeId};
 use crate::report::summary::{Fingerprint, MatrixIdentity, Summary, same_count};
 
 impl RunFolder {
@@ -274,11 +274,15 @@ fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreemen
     let mut found = Vec::new();
     for row in modes {
         for &backend in &backends {
-            // The work of a mode that follows measured times differs
-            // between adapters as their times do; its wrong pixels do not.
-            let follows_time = ModeId::of_label(&row.mode).is_some_and(|m| m.info().draws_by_time);
+            // What follows a mode's measured times differs between adapters
+            // as their times do.
             for (counter, value) in SAME_ON_EVERY_ADAPTER {
-                if follows_time && counter != "error_pixels" {
+                let kind = if counter == "error_pixels" {
+                    CountKind::Error
+                } else {
+                    CountKind::Work
+                };
+                if ModeId::counts_follow_time(&row.mode, kind) {
                     continue;
                 }
                 let values: Vec<(String, f64)> = adapters
