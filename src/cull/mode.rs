@@ -70,8 +70,6 @@ pub enum CountKind {
     Error,
 }
 
-impl ModeId {}
-
 impl FromStr for ModeId {
     type Err = ModeError;
 
@@ -95,9 +93,10 @@ pub struct ModeInfo {
     /// Whether what it draws and tests follows times it measures (a
     /// budget of the previous frame's drawing, a strategy chosen by frame
     /// times, a buffer that rests where it did not pay), so that its
-    /// counters vary from run to run as the machine's times do: `compare`
-    /// judges its triangles and round trips as it judges frame times, and
-    /// `merge` does not cross-check them between adapters.
+    /// counters vary from run to run as the machine's times do
+    /// ([`ModeId::counts_follow_time`]): `compare` judges them as it judges
+    /// frame times, and `merge` does not cross-check them between
+    /// adapters.
     pub draws_by_time: bool,
     /// Parameters it takes as `--param NAME.KEY=VALUE`.
     pub params: &'static [ParamInfo],

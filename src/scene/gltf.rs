@@ -145,8 +145,7 @@ const CONVERT: &str = "gltf-pipeline -i IN -o OUT converts glTF 1.0 to 2.0";
 /// not written `2`, or a minimum version other than 2.0, is refused. None
 /// for glTF 2.0 and its minor versions.
 fn unreadable_version(version: &str, min_version: Option<&str>) -> Option<String> {
-    let major = |v: &str| v.split('.').next().unwrap_or_default().to_string();
-    if major(version) != "2" {
+    if version.split('.').next() != Some("2") {
         return Some(format!(
             "written for glTF '{version}', and occlu reads glTF 2.0 ({CONVERT})"
         ));
@@ -261,7 +260,7 @@ fn add_node_trees(
     if not_unit > 0 {
         builder.warn(format!(
             "normalised the rotations of {}: glTF requires unit quaternions, and theirs were not",
-            crate::text::count(not_unit, "node")
+            text::count(not_unit, "node")
         ));
     }
     if scene.is_none()

@@ -97,8 +97,8 @@ struct Unknown {
 /// 3.0, with the superseded ones its appendix still lists) that occlu
 /// reads nothing from: free-form geometry's attributes and body (its
 /// elements, `curv`, `curv2` and `surf`, are counted), grouping, display
-/// and rendering attributes. A line that starts with none of these, nor one read, is
-/// unknown.
+/// and rendering attributes. A line that starts with none of these, nor
+/// one read, is unknown.
 const IGNORED_STATEMENTS: &[&str] = &[
     "vp",
     "cstype",
@@ -246,7 +246,8 @@ fn parse(bytes: &[u8]) -> Result<Obj, String> {
                 statement.push_str(line);
                 reader.line = first;
                 reader.read_line(&statement)?;
-                (statement, continued_from) = (String::new(), None);
+                statement.clear();
+                continued_from = None;
             }
         }
     }
