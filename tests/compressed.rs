@@ -1,8 +1,9 @@
 //! Compressed glTF, as gltfpack writes it: quantized positions
 //! (KHR_mesh_quantization) and meshopt-compressed buffers
 //! (EXT_meshopt_compression, its octahedral filter on normals and its
-//! exponential filter on positions) load as the model they were made from;
-//! Draco is refused in one line.
+//! exponential filter on positions) and Draco-compressed primitives
+//! (KHR_draco_mesh_compression, both of its mesh codings, float and
+//! integer positions) load as the model they were made from.
 //!
 //! The files in `tests/fixtures/compressed/` were made from the model
 //! [`source`] builds, by `scripts/make-compressed-fixtures` (gltfpack and
@@ -109,7 +110,7 @@ fn depth(scene: &Scene) -> Vec<f32> {
 }
 
 #[test]
-fn quantized_and_meshopt_files_load_as_their_source() {
+fn compressed_files_load_as_their_source() {
     let source = load_fixture("source.glb").unwrap();
     let source_depth = depth(&source);
     let covered = source_depth.iter().filter(|&&d| d > 0.0).count();
@@ -122,6 +123,8 @@ fn quantized_and_meshopt_files_load_as_their_source() {
         "quantized.glb",
         "meshopt-quantized.glb",
         "meshopt-exponential.glb",
+        "draco.glb",
+        "draco-sequential.glb",
     ] {
         let scene = load_fixture(file).unwrap_or_else(|e| panic!("{file}: {e}"));
         assert_eq!(scene.triangles(), source.triangles(), "{file}");
@@ -133,9 +136,10 @@ fn quantized_and_meshopt_files_load_as_their_source() {
             assert!(a.abs() <= step && b.abs() <= step, "{file}: bounds {a} {b}");
         }
         // gltfpack bakes node transforms into vertices and quantizes
-        // positions to 14 bits of the model's extent (37 units: 2.3e-3), so
-        // surfaces move by up to that: in depth well under 1e-5 here, with
-        // some edge pixels changing owner.
+        // positions to 14 bits of the model's extent (37 units: 2.3e-3),
+        // glTF-Transform's Draco to 14 bits of each mesh's, so surfaces move
+        // by up to that: in depth well under 1e-5 here, with some edge
+        // pixels changing owner.
         let d = depth(&scene);
         let moved = d
             .iter()
@@ -193,13 +197,87 @@ fn triangles(scene: &Scene) -> Vec<[[u64; 3]; 3]> {
 }
 
 #[test]
-fn draco_is_refused_in_one_line_that_names_it_and_a_way_out() {
-    let e = load_fixture("draco.glb").unwrap_err();
-    assert!(
-        e.contains("KHR_draco_mesh_compression") && e.contains("gltf-transform meshopt") && !e.contains('\n'),
-        "{e}"
+fn draco_codes_integer_positions_losslessly() {
+    let source = load_fixture("source.glb").unwrap();
+    // Integer positions (KHR_mesh_quantization) are coded losslessly: the
+    // Draco file holds exactly the triangles of the file it was made from,
+    // dequantized as its accessors say.
+    let (plain, draco) = (
+        load_fixture("transform-quantized.glb").unwrap(),
+        load_fixture("draco-quantized.glb").unwrap(),
     );
-    assert!(e.len() < 300, "one short line: {e}");
+    assert!(
+        triangles(&plain) == triangles(&draco),
+        "draco-quantized.glb holds other triangles"
+    );
+    assert!(
+        triangles(&plain) != triangles(&source),
+        "the comparison sees quantization"
+    );
+}
+
+#[test]
+fn malformed_draco_data_is_an_error_not_a_crash() {
+    let (json, bin) = unpack(&std::fs::read(fixtures().join("draco.glb")).unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let try_load = |json: &serde_json::Value, bin: &[u8]| {
+        let model = common::write(dir.path(), "m.glb", occlu::export::pack(json, bin.to_vec()).unwrap());
+        load(&SceneSpec::File(model), &LoadOptions::default()).map_err(|e| e.to_string())
+    };
+    assert!(try_load(&json, &bin).is_ok(), "the unchanged file loads");
+    let edited = |edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut json = json.clone();
+        edit(&mut json);
+        json
+    };
+    fn draco(json: &mut serde_json::Value) -> &mut serde_json::Value {
+        &mut json["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"]
+    }
+    let refused = [
+        (
+            edited(&|j| draco(j)["attributes"]["POSITION"] = 7.into()),
+            "holds no attribute of id 7",
+        ),
+        (
+            edited(&|j| draco(j)["attributes"]["POSITION"] = "0".into()),
+            "names no POSITION attribute id",
+        ),
+        (
+            edited(&|j| draco(j)["bufferView"] = 99.into()),
+            "names no bufferView of the file",
+        ),
+        (
+            edited(&|j| j["bufferViews"][0]["byteLength"] = 20.into()),
+            "data does not decode",
+        ),
+        (
+            edited(&|j| j["bufferViews"][0]["byteOffset"] = 1_000_000.into()),
+            "bufferView",
+        ),
+        (
+            edited(&|j| j["accessors"][2]["componentType"] = 5123.into()),
+            "but its accessor describes 3 × U16",
+        ),
+        (
+            edited(&|j| j["meshes"][0]["primitives"][0]["mode"] = 6.into()),
+            "not TRIANGLE_FAN",
+        ),
+    ];
+    for (json, why) in refused {
+        let e = try_load(&json, &bin).unwrap_err();
+        assert!(e.contains(why) && !e.contains('\n'), "{why}: {e}");
+    }
+    // Every byte of the streams overwritten, and each one flipped in turn:
+    // refused or decoded into some geometry, never a panic.
+    for fill in [0x00, 0xff, 0xa0] {
+        let _ = try_load(&json, &vec![fill; bin.len()]);
+    }
+    let first_view = json["bufferViews"][0]["byteLength"].as_u64().unwrap() as usize;
+    for at in 0..first_view {
+        let mut flipped = bin.clone();
+        flipped[at] ^= 0x5a;
+        let _ = try_load(&json, &flipped);
+    }
 }
 
 #[test]

@@ -3,13 +3,14 @@
 //! (a mesh used by several nodes is validated and clustered once) and every
 //! triangle primitive. Images are never decoded: visibility needs positions.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Component, Path};
 
 use base64::Engine as _;
 use glam::{DAffine3, DMat4, DVec3};
 use gltf::mesh::Mode;
 
+use super::draco::{self, DRACO, DracoStreams};
 use super::model::{MeshGroup, SceneBuilder};
 use super::source::{LoadOptions, SceneError, read_model_file};
 use super::{cameras, meshopt};
@@ -34,7 +35,8 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
     }
     warn_of_what_is_ignored(&gltf, builder);
     let buffers = load_buffers(path, bytes, &gltf, options, builder)?;
-    let reached = add_node_trees(path, &gltf, &buffers, builder)?;
+    let mut draco = draco_streams(bytes, &gltf, options).map_err(parse_error(path))?;
+    let reached = add_node_trees(path, &gltf, &buffers, &mut draco, builder)?;
     let outside = gltf
         .nodes()
         .filter(|n| n.mesh().is_some() && !reached[n.index()])
@@ -58,8 +60,8 @@ fn parse_error(path: &Path) -> impl Fn(String) -> SceneError + Copy + '_ {
 }
 
 /// The document, validated, with the extensions occlu decodes itself
-/// taken off its required list; refused when it is not glTF, is invalid,
-/// or requires Draco.
+/// taken off its required list; refused when it is not glTF or is
+/// invalid.
 fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
     let parse_error = parse_error(path);
     let invalid = |e: gltf::Error| parse_error(format!("invalid glTF: {}", summarise(&e)));
@@ -106,25 +108,40 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
         return Err(parse_error(message));
     }
     check_primitive_accessors(unvalidated.document.as_json()).map_err(parse_error)?;
-    let mut json = unvalidated.document.into_json();
-    let draco = || {
-        parse_error(format!(
-            "requires {DRACO} (Draco geometry), which occlu does not decode; re-encode it with meshopt, which it does: gltf-transform meshopt IN OUT"
-        ))
+    let draco_decoded = match unvalidated.extensions_used().any(|e| e == DRACO) {
+        true => draco::decoded_accessors(&raw_json(bytes).map_err(parse_error)?),
+        false => HashSet::new(),
     };
-    if json.extensions_required.iter().any(|e| e == DRACO) {
-        return Err(draco());
-    }
-    // Draco named as used only: the file may carry plain data as well, and
-    // loads if it does; if it does not, Draco is the reason.
-    let draco_used = json.extensions_used.iter().any(|e| e == DRACO);
+    let mut json = unvalidated.document.into_json();
     json.extensions_required
         .retain(|e| !DECODED.contains(&e.as_str()) && !NO_GEOMETRY.iter().any(|kind| e.starts_with(kind)));
-    let document = gltf::Document::from_json(json).map_err(|e| if draco_used { draco() } else { invalid(e) })?;
+    let document = validated(json, &draco_decoded).map_err(invalid)?;
     Ok(gltf::Gltf {
         document,
         blob: unvalidated.blob,
     })
+}
+
+/// The document `json`, validated as the gltf crate validates it, except
+/// that the accessors `draco_decoded` (by index), whose data Draco streams
+/// hold, need no buffer view.
+fn validated(json: gltf::json::Root, draco_decoded: &HashSet<u64>) -> Result<gltf::Document, gltf::Error> {
+    use gltf::json::validation::{Error, Validate};
+    let mut problems = Vec::new();
+    json.validate(&json, gltf::json::Path::new, &mut |path, problem| {
+        problems.push((path(), problem))
+    });
+    let decoded = |path: &gltf::json::Path| {
+        path.as_str()
+            .strip_prefix("accessors[")
+            .and_then(|rest| rest.strip_suffix("].bufferView")?.parse().ok())
+            .is_some_and(|a| draco_decoded.contains(&a))
+    };
+    problems.retain(|(path, problem)| !(matches!(problem, Error::Missing) && decoded(path)));
+    match problems.is_empty() {
+        true => Ok(gltf::Document::from_json_without_validation(json)),
+        false => Err(gltf::Error::Validation(problems)),
+    }
 }
 
 /// A GLB's header: its container version, and the length it gives for
@@ -201,6 +218,7 @@ fn add_node_trees(
     path: &Path,
     gltf: &gltf::Gltf,
     buffers: &[Vec<u8>],
+    draco: &mut DracoStreams,
     builder: &mut SceneBuilder,
 ) -> Result<Vec<bool>, SceneError> {
     let parse_error = parse_error(path);
@@ -233,7 +251,7 @@ fn add_node_trees(
         let world = parent * local;
         if let Some(mesh) = node.mesh() {
             if let std::collections::hash_map::Entry::Vacant(slot) = mesh_groups.entry(mesh.index()) {
-                slot.insert(load_mesh(path, &mesh, buffers, builder)?);
+                slot.insert(load_mesh(path, &mesh, buffers, draco, builder)?);
             }
             let node_name = node
                 .name()
@@ -339,11 +357,8 @@ fn add_cameras(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], builder
     builder.set_cameras(cameras, animations);
 }
 
-/// Draco geometry compression, which no well-kept Rust crate decodes.
-const DRACO: &str = "KHR_draco_mesh_compression";
-
 /// Extensions the loader reads itself, which gltf-json does not know.
-const DECODED: [&str; 2] = ["KHR_mesh_quantization", "EXT_meshopt_compression"];
+const DECODED: [&str; 3] = ["KHR_mesh_quantization", "EXT_meshopt_compression", DRACO];
 
 /// Kinds of extension that change no geometry, by the prefix of their
 /// names: materials, textures, lights and metadata, which a visibility
@@ -534,6 +549,23 @@ fn check_primitive_accessors(json: &gltf::json::Root) -> Result<(), String> {
     Ok(())
 }
 
+/// Checks that an accessor holds elements of `dimensions` components of
+/// one of `types`.
+fn check_kind(
+    accessor: &gltf::Accessor,
+    what: &str,
+    types: &[gltf::accessor::DataType],
+    dimensions: gltf::accessor::Dimensions,
+) -> Result<(), String> {
+    let (data_type, dims) = (accessor.data_type(), accessor.dimensions());
+    if !types.contains(&data_type) || dims != dimensions {
+        return Err(format!(
+            "{what} must be a {dimensions:?} accessor of {types:?} (found {data_type:?} {dims:?})"
+        ));
+    }
+    Ok(())
+}
+
 /// Checks an accessor before the gltf reader touches it: the reader trusts
 /// strides, component types and counts, and would panic, or allocate for the
 /// declared count, on bad ones.
@@ -544,12 +576,8 @@ fn check_accessor(
     dimensions: gltf::accessor::Dimensions,
     buffers: &[Vec<u8>],
 ) -> Result<(), String> {
-    let (data_type, dims, count) = (accessor.data_type(), accessor.dimensions(), accessor.count());
-    if !types.contains(&data_type) || dims != dimensions {
-        return Err(format!(
-            "{what} must be a {dimensions:?} accessor of {types:?} (found {data_type:?} {dims:?})"
-        ));
-    }
+    check_kind(accessor, what, types, dimensions)?;
+    let count = accessor.count();
     if count == 0 {
         return Err(format!("{what} accessor is empty"));
     }
@@ -639,6 +667,7 @@ fn load_mesh(
     path: &Path,
     mesh: &gltf::Mesh,
     buffers: &[Vec<u8>],
+    draco: &mut DracoStreams,
     builder: &mut SceneBuilder,
 ) -> Result<Vec<MeshGroup>, SceneError> {
     use gltf::accessor::{DataType, Dimensions};
@@ -662,26 +691,48 @@ fn load_mesh(
             .ok_or_else(|| error("has no POSITION attribute".into()))?;
         // Integer types: KHR_mesh_quantization.
         let types = [DataType::F32, DataType::I8, DataType::U8, DataType::I16, DataType::U16];
-        check_accessor(&accessor, "POSITION", &types, Dimensions::Vec3, buffers).map_err(error)?;
-        if let Some(indices) = primitive.indices() {
-            let types = [DataType::U8, DataType::U16, DataType::U32];
-            check_accessor(&indices, "indices", &types, Dimensions::Scalar, buffers).map_err(error)?;
-        }
-        let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-        let positions =
-            read_positions(&accessor, buffers).ok_or_else(|| error("POSITION data lies outside its buffer".into()))?;
-        let stream: Vec<u32> = match reader.read_indices() {
-            Some(indices) => indices.into_u32().collect(),
-            None if primitive.indices().is_some() => {
-                return Err(error("index data lies outside its buffer".into()));
+        check_kind(&accessor, "POSITION", &types, Dimensions::Vec3).map_err(error)?;
+        let coordinate = coordinate(&accessor);
+        let (positions, triangles) = match draco.decode(mesh.index(), primitive.index(), buffers, accessor.data_type())
+        {
+            Some(decoded) => {
+                if mode == Mode::TriangleFan {
+                    return Err(error(format!(
+                        "{DRACO} allows TRIANGLES and TRIANGLE_STRIP, not TRIANGLE_FAN"
+                    )));
+                }
+                let decoded = decoded.map_err(error)?;
+                let positions = decoded
+                    .positions
+                    .iter()
+                    .map(|p| DVec3::from(p.map(&coordinate)))
+                    .collect();
+                (positions, decoded.triangles)
             }
-            None => (0..positions.len() as u32).collect(),
+            None => {
+                check_accessor(&accessor, "POSITION", &types, Dimensions::Vec3, buffers).map_err(error)?;
+                if let Some(indices) = primitive.indices() {
+                    let types = [DataType::U8, DataType::U16, DataType::U32];
+                    check_accessor(&indices, "indices", &types, Dimensions::Scalar, buffers).map_err(error)?;
+                }
+                let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+                let positions = read_positions(&accessor, buffers, &coordinate)
+                    .ok_or_else(|| error("POSITION data lies outside its buffer".into()))?;
+                let stream: Vec<u32> = match reader.read_indices() {
+                    Some(indices) => indices.into_u32().collect(),
+                    None if primitive.indices().is_some() => {
+                        return Err(error("index data lies outside its buffer".into()));
+                    }
+                    None => (0..positions.len() as u32).collect(),
+                };
+                let declared = primitive.indices().map_or(positions.len(), |i| i.count());
+                if positions.len() != accessor.count() || stream.len() != declared {
+                    return Err(error("accessor data is shorter than its declared count".into()));
+                }
+                let triangles = triangle_list(mode, &stream);
+                (positions, triangles)
+            }
         };
-        let declared = primitive.indices().map_or(positions.len(), |i| i.count());
-        if positions.len() != accessor.count() || stream.len() != declared {
-            return Err(error("accessor data is shorter than its declared count".into()));
-        }
-        let triangles = triangle_list(mode, &stream);
         let name = if mesh.primitives().len() > 1 {
             format!("{mesh_name}/{}", primitive.index())
         } else {
@@ -698,22 +749,54 @@ fn load_mesh(
     Ok(groups)
 }
 
-/// The positions of a POSITION accessor: floats, or integers as
-/// KHR_mesh_quantization stores them, normalized or not. Normalized values
-/// map to [0, 1] (unsigned) or [−1, 1] (signed) as glTF 2.0 defines
-/// normalized integers: c / (2^b − 1) and max(c / (2^(b−1) − 1), −1). The
-/// node transforms, which quantizing exporters set to undo the scaling,
-/// apply afterwards as for any mesh.
-fn read_positions(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Option<Vec<DVec3>> {
+/// The file's Draco streams, with a bound on what decoding them may
+/// allocate: as for meshopt's, a multiple of the largest file allowed.
+fn draco_streams(bytes: &[u8], gltf: &gltf::Gltf, options: &LoadOptions) -> Result<DracoStreams, String> {
+    let views = gltf
+        .views()
+        .map(|v| [v.buffer().index(), v.offset(), v.length()])
+        .collect();
+    let budget = DECODED_PER_FILE_BYTE.saturating_mul(options.max_file_size);
+    let raw = match gltf.extensions_used().any(|e| e == DRACO) {
+        true => raw_json(bytes)?,
+        false => serde_json::Value::Null,
+    };
+    DracoStreams::new(&raw, views, budget)
+}
+
+/// How a POSITION accessor's stored component becomes a coordinate: as it
+/// is, or, for normalized integers (KHR_mesh_quantization), mapped to
+/// [0, 1] (unsigned) or [−1, 1] (signed) as glTF 2.0 defines them:
+/// c / (2^b − 1) and max(c / (2^(b−1) − 1), −1). The node transforms,
+/// which quantizing exporters set to undo the scaling, apply afterwards as
+/// for any mesh.
+fn coordinate(accessor: &gltf::Accessor) -> impl Fn(f64) -> f64 + use<> {
     use gltf::accessor::DataType;
-    let normalized = accessor.normalized();
-    let scaled = |c: f64, max: f64| if normalized { (c / max).max(-1.0) } else { c };
+    let most = match accessor.data_type() {
+        _ if !accessor.normalized() => None,
+        DataType::I8 => Some(127.0),
+        DataType::U8 => Some(255.0),
+        DataType::I16 => Some(32767.0),
+        DataType::U16 => Some(65535.0),
+        DataType::U32 | DataType::F32 => None,
+    };
+    move |c| most.map_or(c, |most| (c / most).max(-1.0))
+}
+
+/// The positions of a POSITION accessor, floats or integers
+/// (KHR_mesh_quantization), each component mapped by `coordinate`.
+fn read_positions(
+    accessor: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+    coordinate: impl Fn(f64) -> f64,
+) -> Option<Vec<DVec3>> {
+    use gltf::accessor::DataType;
     match accessor.data_type() {
-        DataType::F32 => read_vec3(accessor, buffers, |c: f32| f64::from(c)),
-        DataType::I8 => read_vec3(accessor, buffers, |c: i8| scaled(f64::from(c), 127.0)),
-        DataType::U8 => read_vec3(accessor, buffers, |c: u8| scaled(f64::from(c), 255.0)),
-        DataType::I16 => read_vec3(accessor, buffers, |c: i16| scaled(f64::from(c), 32767.0)),
-        DataType::U16 => read_vec3(accessor, buffers, |c: u16| scaled(f64::from(c), 65535.0)),
+        DataType::F32 => read_vec3(accessor, buffers, |c: f32| coordinate(f64::from(c))),
+        DataType::I8 => read_vec3(accessor, buffers, |c: i8| coordinate(f64::from(c))),
+        DataType::U8 => read_vec3(accessor, buffers, |c: u8| coordinate(f64::from(c))),
+        DataType::I16 => read_vec3(accessor, buffers, |c: i16| coordinate(f64::from(c))),
+        DataType::U16 => read_vec3(accessor, buffers, |c: u16| coordinate(f64::from(c))),
         DataType::U32 => None,
     }
 }

@@ -11,6 +11,7 @@ pub mod builtin;
 pub mod cameras;
 mod closed;
 mod cluster;
+mod draco;
 mod focus;
 mod gltf;
 mod load;
