@@ -10,10 +10,12 @@ use base64::Engine as _;
 use glam::{DAffine3, DMat4, DVec3};
 use gltf::mesh::Mode;
 
+use super::cameras;
 use super::draco::{self, DRACO, DracoStreams};
+use super::instancing::{self, INSTANCING};
+use super::meshopt::{self, MESHOPT};
 use super::model::{MeshGroup, SceneBuilder};
 use super::source::{LoadOptions, SceneError, read_model_file};
-use super::{cameras, meshopt};
 use crate::input::folder_of;
 use crate::text;
 
@@ -24,7 +26,7 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
     // glTF JSON may start with the byte order mark some editors write: it
     // is dropped before the JSON is read, here and for the buffers.
     let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
-    let gltf = parse(path, bytes)?;
+    let (gltf, raw) = parse(path, bytes)?;
     if let Some((_, length)) = glb_header(bytes)
         && length < bytes.len()
     {
@@ -34,9 +36,9 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
         ));
     }
     warn_of_what_is_ignored(&gltf, builder);
-    let buffers = load_buffers(path, bytes, &gltf, options, builder)?;
-    let mut draco = draco_streams(bytes, &gltf, options).map_err(parse_error(path))?;
-    let reached = add_node_trees(path, &gltf, &buffers, &mut draco, builder)?;
+    let buffers = load_buffers(path, &gltf, &raw, options, builder)?;
+    let mut draco = draco_streams(&raw, &gltf, options).map_err(parse_error(path))?;
+    let reached = add_node_trees(path, &gltf, &raw, &buffers, &mut draco, builder)?;
     let outside = gltf
         .nodes()
         .filter(|n| n.mesh().is_some() && !reached[n.index()])
@@ -60,9 +62,10 @@ fn parse_error(path: &Path) -> impl Fn(String) -> SceneError + Copy + '_ {
 }
 
 /// The document, validated, with the extensions occlu decodes itself
-/// taken off its required list; refused when it is not glTF or is
-/// invalid.
-fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
+/// taken off its required list, and its JSON as written where one of them
+/// is used (they are read from it; null otherwise); refused when it is not
+/// glTF or is invalid.
+fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), SceneError> {
     let parse_error = parse_error(path);
     let invalid = |e: gltf::Error| parse_error(format!("invalid glTF: {}", summarise(&e)));
     // glTF is a GLB (binary, starting with its magic) or JSON (an object,
@@ -108,18 +111,20 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
         return Err(parse_error(message));
     }
     check_primitive_accessors(unvalidated.document.as_json()).map_err(parse_error)?;
-    let draco_decoded = match unvalidated.extensions_used().any(|e| e == DRACO) {
-        true => draco::decoded_accessors(&raw_json(bytes).map_err(parse_error)?),
-        false => HashSet::new(),
+    let raw = match unvalidated.extensions_used().any(|e| READ_FROM_JSON.contains(&e)) {
+        true => raw_json(bytes).map_err(parse_error)?,
+        false => serde_json::Value::Null,
     };
+    let draco_decoded = draco::decoded_accessors(&raw);
     let mut json = unvalidated.document.into_json();
     json.extensions_required
         .retain(|e| !DECODED.contains(&e.as_str()) && !NO_GEOMETRY.iter().any(|kind| e.starts_with(kind)));
     let document = validated(json, &draco_decoded).map_err(invalid)?;
-    Ok(gltf::Gltf {
+    let gltf = gltf::Gltf {
         document,
         blob: unvalidated.blob,
-    })
+    };
+    Ok((gltf, raw))
 }
 
 /// The document `json`, validated as the gltf crate validates it, except
@@ -179,11 +184,8 @@ fn unreadable_version(version: &str, min_version: Option<&str>) -> Option<String
 }
 
 /// Warns of what the file holds and occlu does not draw as the file means
-/// it: instancing, skins and morph targets.
+/// it: skins and morph targets, points and lines.
 fn warn_of_what_is_ignored(gltf: &gltf::Gltf, builder: &mut SceneBuilder) {
-    if gltf.extensions_used().any(|e| e == "EXT_mesh_gpu_instancing") {
-        builder.warn("EXT_mesh_gpu_instancing is not supported: each node is drawn once".into());
-    }
     if gltf.skins().next().is_some()
         || gltf
             .meshes()
@@ -217,18 +219,27 @@ fn draws_triangles(mode: Mode) -> bool {
 fn add_node_trees(
     path: &Path,
     gltf: &gltf::Gltf,
+    raw: &serde_json::Value,
     buffers: &[Vec<u8>],
     draco: &mut DracoStreams,
     builder: &mut SceneBuilder,
 ) -> Result<Vec<bool>, SceneError> {
     let parse_error = parse_error(path);
+    let read = |index: usize, what: &str, types: &[gltf::accessor::DataType], dimensions| {
+        let accessor = gltf
+            .accessors()
+            .nth(index)
+            .ok_or_else(|| format!("{what}: accessor {index} does not exist"))?;
+        check_accessor(&accessor, what, types, dimensions, buffers)?;
+        read_vectors::<4>(&accessor, buffers).ok_or_else(|| format!("{what}: data lies outside its buffer"))
+    };
+    let (instances, not_unit_instances) = instancing::read(raw, &read).map_err(parse_error)?;
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
     let roots: Vec<gltf::Node> = match &scene {
         Some(scene) => scene.nodes().collect(),
         // No scene: every node that is nobody's child is a root.
         None => {
-            let children: std::collections::HashSet<usize> =
-                gltf.nodes().flat_map(|n| n.children().map(|c| c.index())).collect();
+            let children: HashSet<usize> = gltf.nodes().flat_map(|n| n.children().map(|c| c.index())).collect();
             gltf.nodes().filter(|n| !children.contains(&n.index())).collect()
         }
     };
@@ -259,18 +270,29 @@ fn add_node_trees(
                 .unwrap_or_else(|| format!("node{index}"));
             let groups = &mesh_groups[&mesh.index()];
             let transform = DAffine3::from_mat4(world);
-            for (k, group) in groups.iter().enumerate() {
-                let name = if groups.len() > 1 {
-                    format!("{node_name}/{k}")
-                } else {
-                    node_name.clone()
-                };
-                builder
-                    .add_object(&name, group, transform)
-                    .map_err(|error| SceneError::Geometry {
-                        path: path.into(),
-                        error,
-                    })?;
+            // An instanced node draws its instances, and not itself.
+            let placed: Vec<(String, DAffine3)> = match instances.get(&index) {
+                Some(list) => list
+                    .iter()
+                    .enumerate()
+                    .map(|(i, instance)| (format!("{node_name}[{i}]"), transform * *instance))
+                    .collect(),
+                None => vec![(node_name, transform)],
+            };
+            for (node_name, transform) in placed {
+                for (k, group) in groups.iter().enumerate() {
+                    let name = if groups.len() > 1 {
+                        format!("{node_name}/{k}")
+                    } else {
+                        node_name.clone()
+                    };
+                    builder
+                        .add_object(&name, group, transform)
+                        .map_err(|error| SceneError::Geometry {
+                            path: path.into(),
+                            error,
+                        })?;
+                }
             }
         }
         stack.extend(node.children().map(|c| (c, world)));
@@ -279,6 +301,12 @@ fn add_node_trees(
         builder.warn(format!(
             "normalised the rotations of {}: glTF requires unit quaternions, and theirs were not",
             text::count(not_unit, "node")
+        ));
+    }
+    if not_unit_instances > 0 {
+        builder.warn(format!(
+            "normalised the rotations of {}: {INSTANCING} requires unit quaternions, and theirs were not",
+            text::count(not_unit_instances, "instance")
         ));
     }
     if scene.is_none()
@@ -358,14 +386,17 @@ fn add_cameras(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], builder
 }
 
 /// Extensions the loader reads itself, which gltf-json does not know.
-const DECODED: [&str; 3] = ["KHR_mesh_quantization", "EXT_meshopt_compression", DRACO];
+const DECODED: [&str; 4] = ["KHR_mesh_quantization", MESHOPT, DRACO, INSTANCING];
+
+/// Those of them read from the document's JSON as written.
+const READ_FROM_JSON: [&str; 3] = [MESHOPT, DRACO, INSTANCING];
 
 /// Kinds of extension that change no geometry, by the prefix of their
 /// names: materials, textures, lights and metadata, which a visibility
 /// benchmark never reads. A file that requires one loads whether or not
 /// gltf-json knows it (it knows `EXT_texture_webp` but not
 /// `EXT_texture_avif`); any other it does not know stays refused, since it
-/// may move, add or hide geometry (`EXT_mesh_gpu_instancing`, `MSFT_lod`).
+/// may move, add or hide geometry (`MSFT_lod`).
 const NO_GEOMETRY: [&str; 7] = [
     "KHR_materials_",
     "KHR_texture_",
@@ -405,18 +436,15 @@ fn summarise(e: &gltf::Error) -> String {
 /// their placeholder buffers; each file read is noted in `builder`.
 fn load_buffers(
     path: &Path,
-    bytes: &[u8],
     gltf: &gltf::Gltf,
+    raw: &serde_json::Value,
     options: &LoadOptions,
     builder: &mut SceneBuilder,
 ) -> Result<Vec<Vec<u8>>, SceneError> {
     let parse_error = parse_error(path);
-    let compressed = if gltf.extensions_used().any(|e| e == "EXT_meshopt_compression") {
-        let raw = raw_json(bytes).map_err(parse_error)?;
-        let views = meshopt::compressed_views(&raw).map_err(parse_error)?;
-        Some((raw, views))
-    } else {
-        None
+    let compressed = match gltf.extensions_used().any(|e| e == MESHOPT) {
+        true => Some(meshopt::compressed_views(raw).map_err(parse_error)?),
+        false => None,
     };
     // Decoded data may be several times the file's size; past a bound on
     // that, the file is refused before anything is allocated for it.
@@ -426,7 +454,7 @@ fn load_buffers(
             "{what} decompressed bytes, beyond the {most} that --max-file-size allows ({DECODED_PER_FILE_BYTE} per byte)"
         ))
     };
-    if let Some((_, views)) = &compressed {
+    if let Some(views) = &compressed {
         let total = views
             .iter()
             .map(|v| v.decoded_length() as u64)
@@ -435,11 +463,7 @@ fn load_buffers(
             return Err(too_much(format!("its compressed buffer views declare {total}")));
         }
     }
-    let placeholder = |index| {
-        compressed
-            .as_ref()
-            .is_some_and(|(raw, _)| meshopt::is_placeholder(raw, index))
-    };
+    let placeholder = |index| compressed.is_some() && meshopt::is_placeholder(raw, index);
     // The buffers with data of their own first, placeholders empty.
     let mut buffers = Vec::new();
     for buffer in gltf.buffers() {
@@ -449,7 +473,7 @@ fn load_buffers(
             buffer_data(path, gltf, &buffer, options, builder)?
         });
     }
-    let Some((_, views)) = &compressed else {
+    let Some(views) = &compressed else {
         return Ok(buffers);
     };
     // Every view's stream lies in data the file holds, and claims no more
@@ -692,7 +716,6 @@ fn load_mesh(
         // Integer types: KHR_mesh_quantization.
         let types = [DataType::F32, DataType::I8, DataType::U8, DataType::I16, DataType::U16];
         check_kind(&accessor, "POSITION", &types, Dimensions::Vec3).map_err(error)?;
-        let coordinate = coordinate(&accessor);
         let (positions, triangles) = match draco.decode(mesh.index(), primitive.index(), buffers, accessor.data_type())
         {
             Some(decoded) => {
@@ -702,6 +725,7 @@ fn load_mesh(
                     )));
                 }
                 let decoded = decoded.map_err(error)?;
+                let coordinate = coordinate(&accessor);
                 let positions = decoded
                     .positions
                     .iter()
@@ -716,8 +740,11 @@ fn load_mesh(
                     check_accessor(&indices, "indices", &types, Dimensions::Scalar, buffers).map_err(error)?;
                 }
                 let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-                let positions = read_positions(&accessor, buffers, &coordinate)
-                    .ok_or_else(|| error("POSITION data lies outside its buffer".into()))?;
+                let positions: Vec<DVec3> = read_vectors::<3>(&accessor, buffers)
+                    .ok_or_else(|| error("POSITION data lies outside its buffer".into()))?
+                    .into_iter()
+                    .map(DVec3::from)
+                    .collect();
                 let stream: Vec<u32> = match reader.read_indices() {
                     Some(indices) => indices.into_u32().collect(),
                     None if primitive.indices().is_some() => {
@@ -751,17 +778,13 @@ fn load_mesh(
 
 /// The file's Draco streams, with a bound on what decoding them may
 /// allocate: as for meshopt's, a multiple of the largest file allowed.
-fn draco_streams(bytes: &[u8], gltf: &gltf::Gltf, options: &LoadOptions) -> Result<DracoStreams, String> {
+fn draco_streams(raw: &serde_json::Value, gltf: &gltf::Gltf, options: &LoadOptions) -> Result<DracoStreams, String> {
     let views = gltf
         .views()
         .map(|v| [v.buffer().index(), v.offset(), v.length()])
         .collect();
     let budget = DECODED_PER_FILE_BYTE.saturating_mul(options.max_file_size);
-    let raw = match gltf.extensions_used().any(|e| e == DRACO) {
-        true => raw_json(bytes)?,
-        false => serde_json::Value::Null,
-    };
-    DracoStreams::new(&raw, views, budget)
+    DracoStreams::new(raw, views, budget)
 }
 
 /// How a POSITION accessor's stored component becomes a coordinate: as it
@@ -783,34 +806,59 @@ fn coordinate(accessor: &gltf::Accessor) -> impl Fn(f64) -> f64 + use<> {
     move |c| most.map_or(c, |most| (c / most).max(-1.0))
 }
 
-/// The positions of a POSITION accessor, floats or integers
-/// (KHR_mesh_quantization), each component mapped by `coordinate`.
-fn read_positions(
-    accessor: &gltf::Accessor,
-    buffers: &[Vec<u8>],
-    coordinate: impl Fn(f64) -> f64,
-) -> Option<Vec<DVec3>> {
+/// The elements of a 3- or 4-vector accessor of floats or integers
+/// (KHR_mesh_quantization), each component mapped by [`coordinate`], as
+/// `N` components (those it lacks 0, those beyond dropped); `None` for
+/// other accessors, or where its data lies outside its buffer.
+fn read_vectors<const N: usize>(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Option<Vec<[f64; N]>> {
     use gltf::accessor::DataType;
     match accessor.data_type() {
-        DataType::F32 => read_vec3(accessor, buffers, |c: f32| coordinate(f64::from(c))),
-        DataType::I8 => read_vec3(accessor, buffers, |c: i8| coordinate(f64::from(c))),
-        DataType::U8 => read_vec3(accessor, buffers, |c: u8| coordinate(f64::from(c))),
-        DataType::I16 => read_vec3(accessor, buffers, |c: i16| coordinate(f64::from(c))),
-        DataType::U16 => read_vec3(accessor, buffers, |c: u16| coordinate(f64::from(c))),
+        DataType::F32 => read_of::<f32, N>(accessor, buffers),
+        DataType::I8 => read_of::<i8, N>(accessor, buffers),
+        DataType::U8 => read_of::<u8, N>(accessor, buffers),
+        DataType::I16 => read_of::<i16, N>(accessor, buffers),
+        DataType::U16 => read_of::<u16, N>(accessor, buffers),
         DataType::U32 => None,
     }
 }
 
-/// The 3-vectors of components `T` of an accessor, each component mapped by
-/// `value`; `None` when its data lies outside its buffer.
-fn read_vec3<'a, T: gltf::accessor::Item + Copy>(
+/// [`read_vectors`] of an accessor of components `T`.
+fn read_of<T, const N: usize>(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Option<Vec<[f64; N]>>
+where
+    T: Copy + Into<f64>,
+    [T; 3]: gltf::accessor::Item,
+    [T; 4]: gltf::accessor::Item,
+{
+    match accessor.dimensions() {
+        gltf::accessor::Dimensions::Vec3 => read_items::<T, 3, N>(accessor, buffers),
+        gltf::accessor::Dimensions::Vec4 => read_items::<T, 4, N>(accessor, buffers),
+        _ => None,
+    }
+}
+
+/// [`read_vectors`] of an accessor of `K` components `T`.
+fn read_items<'a, T, const K: usize, const N: usize>(
     accessor: &gltf::Accessor<'a>,
     buffers: &[Vec<u8>],
-    value: impl Fn(T) -> f64,
-) -> Option<Vec<DVec3>> {
+) -> Option<Vec<[f64; N]>>
+where
+    T: Copy + Into<f64>,
+    [T; K]: gltf::accessor::Item,
+{
+    let coordinate = coordinate(accessor);
     let data = |b: gltf::Buffer<'a>| buffers.get(b.index()).map(Vec::as_slice);
-    let items = gltf::accessor::Iter::<[T; 3]>::new(accessor.clone(), data)?;
-    Some(items.map(|p| DVec3::from(p.map(&value))).collect())
+    let items = gltf::accessor::Iter::<[T; K]>::new(accessor.clone(), data)?;
+    Some(
+        items
+            .map(|item| {
+                let mut vector = [0.0; N];
+                for (to, from) in vector.iter_mut().zip(item) {
+                    *to = coordinate(from.into());
+                }
+                vector
+            })
+            .collect(),
+    )
 }
 
 /// Expands strips and fans into a triangle list (winding is irrelevant: the

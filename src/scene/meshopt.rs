@@ -14,6 +14,9 @@ use meshoptimizer_rs::codec::{Filter, Mode, decode_buffer_view_into};
 use meshoptimizer_rs::{Limits, Workspace};
 use serde_json::Value;
 
+/// The extension's name, as files list it.
+pub const MESHOPT: &str = "EXT_meshopt_compression";
+
 /// One compressed buffer view, as its extension object describes it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CompressedView {
@@ -90,7 +93,7 @@ pub fn compressed_views(document: &Value) -> Result<Vec<CompressedView>, String>
     let views = document["bufferViews"].as_array().map_or(&[][..], Vec::as_slice);
     let mut out = Vec::new();
     for (k, view) in views.iter().enumerate() {
-        let ext = &view["extensions"]["EXT_meshopt_compression"];
+        let ext = &view["extensions"][MESHOPT];
         if ext.is_null() {
             continue;
         }
@@ -157,7 +160,7 @@ pub fn compressed_views(document: &Value) -> Result<Vec<CompressedView>, String>
 /// extension says `"fallback": true` and it names no file.
 pub fn is_placeholder(document: &Value, index: usize) -> bool {
     let buffer = &document["buffers"][index];
-    buffer["extensions"]["EXT_meshopt_compression"]["fallback"] == Value::Bool(true) && buffer.get("uri").is_none()
+    buffer["extensions"][MESHOPT]["fallback"] == Value::Bool(true) && buffer.get("uri").is_none()
 }
 
 /// Decodes every view of `views` into its place in `buffers`, using at most
