@@ -1,6 +1,7 @@
 //! Compressed glTF, as gltfpack writes it: quantized positions
 //! (KHR_mesh_quantization) and meshopt-compressed buffers
-//! (EXT_meshopt_compression, its octahedral filter on normals and its
+//! (EXT_meshopt_compression, and KHR_meshopt_compression with version 1
+//! of its attribute codec; the octahedral filter on normals and the
 //! exponential filter on positions) and Draco-compressed primitives
 //! (KHR_draco_mesh_compression, both of its mesh codings, float and
 //! integer positions) load as the model they were made from; so do meshes
@@ -129,6 +130,9 @@ fn compressed_files_load_as_their_source() {
         "draco-sequential.glb",
         "instanced.glb",
         "instanced-quantized.glb",
+        "khr-meshopt.glb",
+        "khr-meshopt-octahedral.glb",
+        "khr-meshopt-exponential.glb",
     ] {
         let scene = load_fixture(file).unwrap_or_else(|e| panic!("{file}: {e}"));
         assert_eq!(scene.triangles(), source.triangles(), "{file}");
@@ -162,6 +166,7 @@ fn compressed_files_load_as_their_source() {
     for (plain, compressed) in [
         ("float.glb", "meshopt-float.glb"),
         ("quantized.glb", "meshopt-quantized.glb"),
+        ("quantized-1.3.glb", "khr-meshopt.glb"),
     ] {
         let (a, b) = (load_fixture(plain).unwrap(), load_fixture(compressed).unwrap());
         assert!(

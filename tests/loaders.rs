@@ -443,7 +443,7 @@ fn bad_gltf_input_is_a_clear_error() {
             requiring(extension).err()
         );
     }
-    for extension in ["MSFT_lod", "KHR_meshopt_compression"] {
+    for extension in ["MSFT_lod", "KHR_gaussian_splatting"] {
         let refused = msg(requiring(extension));
         assert!(
             refused.contains(extension) && refused.contains("Unsupported extension"),

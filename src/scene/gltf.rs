@@ -13,7 +13,7 @@ use gltf::mesh::Mode;
 use super::cameras;
 use super::draco::{self, DRACO, DracoStreams};
 use super::instancing::{self, INSTANCING};
-use super::meshopt::{self, MESHOPT};
+use super::meshopt::{self, KHR_MESHOPT, MESHOPT};
 use super::model::{MeshGroup, SceneBuilder};
 use super::source::{LoadOptions, SceneError, read_model_file};
 use crate::input::folder_of;
@@ -386,10 +386,10 @@ fn add_cameras(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], builder
 }
 
 /// Extensions the loader reads itself, which gltf-json does not know.
-const DECODED: [&str; 4] = ["KHR_mesh_quantization", MESHOPT, DRACO, INSTANCING];
+const DECODED: [&str; 5] = ["KHR_mesh_quantization", MESHOPT, KHR_MESHOPT, DRACO, INSTANCING];
 
 /// Those of them read from the document's JSON as written.
-const READ_FROM_JSON: [&str; 3] = [MESHOPT, DRACO, INSTANCING];
+const READ_FROM_JSON: [&str; 4] = [MESHOPT, KHR_MESHOPT, DRACO, INSTANCING];
 
 /// Kinds of extension that change no geometry, by the prefix of their
 /// names: materials, textures, lights and metadata, which a visibility
@@ -432,7 +432,7 @@ fn summarise(e: &gltf::Error) -> String {
     parts.join("; ")
 }
 
-/// Every buffer's bytes, with `EXT_meshopt_compression` views decoded into
+/// Every buffer's bytes, with meshopt-compressed views (EXT or KHR) decoded into
 /// their placeholder buffers; each file read is noted in `builder`.
 fn load_buffers(
     path: &Path,
@@ -442,7 +442,7 @@ fn load_buffers(
     builder: &mut SceneBuilder,
 ) -> Result<Vec<Vec<u8>>, SceneError> {
     let parse_error = parse_error(path);
-    let compressed = match gltf.extensions_used().any(|e| e == MESHOPT) {
+    let compressed = match gltf.extensions_used().any(|e| e == MESHOPT || e == KHR_MESHOPT) {
         true => Some(meshopt::compressed_views(raw).map_err(parse_error)?),
         false => None,
     };
@@ -500,9 +500,10 @@ fn load_buffers(
         let room = decoded.saturating_add(VIEW_PADDING * into.len());
         if length > room {
             return Err(parse_error(format!(
-                "buffer {}: its EXT_meshopt_compression views decode to {decoded} bytes but reach byte \
-                 {length}: more than padding between them",
-                buffer.index()
+                "buffer {}: its {} views decode to {decoded} bytes but reach byte {length}: more than \
+                 padding between them",
+                buffer.index(),
+                into.first().map_or(MESHOPT, |v| v.extension)
             )));
         }
         if length > buffer.length() {
