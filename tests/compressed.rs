@@ -253,7 +253,7 @@ fn malformed_draco_data_is_an_error_not_a_crash() {
         ),
         (
             edited(&|j| draco(j)["bufferView"] = 99.into()),
-            "names no bufferView of the file",
+            "names bufferView 99, and the file has 10",
         ),
         (
             edited(&|j| j["bufferViews"][0]["byteLength"] = 20.into()),
@@ -268,8 +268,19 @@ fn malformed_draco_data_is_an_error_not_a_crash() {
             "but its accessor describes 3 × U16",
         ),
         (
-            edited(&|j| j["meshes"][0]["primitives"][0]["mode"] = 6.into()),
-            "not TRIANGLE_FAN",
+            edited(&|j| draco(j)["attributes"]["POSITION"] = 0.into()),
+            "holds Normal there",
+        ),
+        (
+            edited(&|j| draco(j)["attributes"] = 1.into()),
+            "names no POSITION attribute id",
+        ),
+        (
+            edited(&|j| {
+                j["extensionsUsed"] = serde_json::json!([]);
+                j["extensionsRequired"] = serde_json::json!([]);
+            }),
+            "its extensionsUsed does not list KHR_draco_mesh_compression",
         ),
     ];
     for (json, why) in refused {

@@ -11,16 +11,17 @@
 //! stream with an error, and takes a ceiling on what one decode may
 //! allocate.
 //!
-//! Departures from the extension's conformance section: a Draco stream is
-//! decoded into a triangle list whatever the primitive's mode (it allows
-//! TRIANGLES and TRIANGLE_STRIP, and a Draco mesh is always faces); and
-//! the accessors' counts are not held against the decoded data, which is
-//! what the file's geometry is (readers such as three.js and Babylon.js
-//! draw it the same way).
+//! Departures from the extension's conformance section: the decoded faces
+//! are an index stream read by the primitive's mode, as three.js reads
+//! them (the extension allows TRIANGLES and TRIANGLE_STRIP and says the
+//! data is "decoded accordingly"; a fan is read as one too); the
+//! accessors' counts are not held against the decoded data, which is what
+//! the file's geometry is; and points no face uses are left out (a stream
+//! may hold millions of them in a few bytes).
 
 use std::collections::{HashMap, HashSet};
 
-use draco_core::{DataType, DecodeLimits, DecoderBuffer, Mesh, MeshDecoder, PointIndex};
+use draco_core::{DataType, DecodeLimits, DecoderBuffer, ErrorKind, GeometryAttributeType, Mesh, MeshDecoder};
 use gltf::accessor::DataType as GltfType;
 use serde_json::Value;
 
@@ -53,18 +54,15 @@ impl DracoStreams {
     pub fn new(raw: &Value, views: Vec<[usize; 3]>, budget: u64) -> Result<DracoStreams, String> {
         let mut primitives = HashMap::new();
         for ((m, p), primitive) in with_draco(raw) {
-            let extension = &primitive["extensions"][DRACO];
-            let fail = |what: &str| format!("mesh {m} primitive {p}: {DRACO} {what}");
-            let view = extension["bufferView"]
-                .as_u64()
-                .and_then(|v| usize::try_from(v).ok())
-                .filter(|&v| v < views.len())
-                .ok_or_else(|| fail("names no bufferView of the file"))?;
-            let position = extension["attributes"]["POSITION"]
-                .as_u64()
-                .and_then(|id| u32::try_from(id).ok())
-                .ok_or_else(|| fail("names no POSITION attribute id"))?;
-            primitives.insert((m, p), DracoPrimitive { view, position });
+            let draco = extension_of(primitive).map_err(|what| format!("mesh {m} primitive {p}: {DRACO} {what}"))?;
+            if draco.view >= views.len() {
+                return Err(format!(
+                    "mesh {m} primitive {p}: {DRACO} names bufferView {}, and the file has {}",
+                    draco.view,
+                    views.len()
+                ));
+            }
+            primitives.insert((m, p), draco);
         }
         Ok(DracoStreams {
             primitives,
@@ -102,6 +100,25 @@ impl DracoStreams {
     }
 }
 
+/// A primitive's Draco extension object, read; what is wrong with it.
+fn extension_of(primitive: &Value) -> Result<DracoPrimitive, &'static str> {
+    let extension = &primitive["extensions"][DRACO];
+    let view = extension["bufferView"]
+        .as_u64()
+        .and_then(|v| usize::try_from(v).ok())
+        .ok_or("names no bufferView index")?;
+    let position = extension["attributes"]["POSITION"]
+        .as_u64()
+        .and_then(|id| u32::try_from(id).ok())
+        .ok_or("names no POSITION attribute id")?;
+    Ok(DracoPrimitive { view, position })
+}
+
+/// A JSON array's items; none where it is not one.
+fn list(value: &Value) -> &[Value] {
+    value.as_array().map_or(&[], Vec::as_slice)
+}
+
 /// The primitives of the document `raw` (its JSON) that carry a Draco
 /// stream, with their mesh's index and their own.
 fn with_draco(raw: &Value) -> impl Iterator<Item = ((usize, usize), &Value)> {
@@ -114,34 +131,36 @@ fn with_draco(raw: &Value) -> impl Iterator<Item = ((usize, usize), &Value)> {
     })
 }
 
-/// A JSON array's items; none where it is not one.
-fn list(value: &Value) -> &[Value] {
-    value.as_array().map_or(&[], Vec::as_slice)
+/// Whether any primitive of the document `raw` carries a Draco stream.
+pub fn carried(raw: &Value) -> bool {
+    with_draco(raw).next().is_some()
 }
 
 /// The accessors whose data Draco streams hold (of the document `raw`):
 /// the indices and the attributes the extension names of each primitive
 /// that carries one. They have no buffer view, which glTF's validation
-/// would otherwise refuse.
-pub fn decoded_accessors(raw: &Value) -> HashSet<u64> {
-    with_draco(raw)
-        .flat_map(|(_, primitive)| {
-            let named = primitive["extensions"][DRACO]["attributes"]
-                .as_object()
-                .into_iter()
-                .flat_map(|attributes| attributes.keys())
-                .map(|name| &primitive["attributes"][name]);
-            named.chain([&primitive["indices"]]).filter_map(Value::as_u64)
-        })
-        .collect()
+/// would otherwise refuse. A malformed extension object is named here,
+/// before that validation would call its accessors empty.
+pub fn decoded_accessors(raw: &Value) -> Result<HashSet<u64>, String> {
+    let mut decoded = HashSet::new();
+    for ((m, p), primitive) in with_draco(raw) {
+        extension_of(primitive).map_err(|what| format!("mesh {m} primitive {p}: {DRACO} {what}"))?;
+        let named = primitive["extensions"][DRACO]["attributes"]
+            .as_object()
+            .into_iter()
+            .flat_map(|attributes| attributes.keys())
+            .map(|name| &primitive["attributes"][name]);
+        decoded.extend(named.chain([&primitive["indices"]]).filter_map(Value::as_u64));
+    }
+    Ok(decoded)
 }
 
-/// The geometry of one Draco stream: its points' positions (the stored
-/// components, as the accessor's type describes them) and its triangles
-/// as a list of point indices.
+/// The geometry of one Draco stream: the positions of the points its faces
+/// use (the stored components, as the accessor's type describes them) and
+/// its faces as a stream of indices into them.
 pub struct Decoded {
     pub positions: Vec<[f64; 3]>,
-    pub triangles: Vec<u32>,
+    pub stream: Vec<u32>,
     /// Bytes the decoder allocated for the stream's attributes and faces.
     pub bytes: u64,
 }
@@ -150,24 +169,44 @@ pub struct Decoded {
 const FACE_BYTES: u64 = 12;
 
 /// Decodes `stream`, the Draco data of `primitive`, allocating at most
-/// `budget` bytes for its attributes and as many for its faces; its
-/// POSITION attribute must hold three components of glTF's type
-/// `component` per point.
+/// `budget` bytes for its attributes and as many for its faces, and no
+/// more than draco-core's own ceilings for one stream; its POSITION
+/// attribute must hold three components of glTF's type `component` per
+/// point.
 fn decode(stream: &[u8], primitive: DracoPrimitive, component: GltfType, budget: u64) -> Result<Decoded, String> {
-    let limits = DecodeLimits::default()
-        .with_max_decoded_bytes(budget)
-        .with_max_faces(budget / FACE_BYTES);
+    // The header: "DRACO", its version, then what it encodes (0: points).
+    if stream.starts_with(b"DRACO") && stream.get(7) == Some(&0) {
+        return Err(format!("{DRACO} data is a point cloud, with no faces to draw"));
+    }
+    let ceilings = DecodeLimits::default();
+    let limits = ceilings
+        .with_max_decoded_bytes(budget.min(ceilings.max_decoded_bytes))
+        .with_max_faces((budget / FACE_BYTES).min(ceilings.max_faces));
     let mut buffer = DecoderBuffer::new(stream).with_limits(limits);
     let mut mesh = Mesh::new();
     MeshDecoder::new()
         .decode(&mut buffer, &mut mesh)
-        .map_err(|e| format!("{DRACO} data does not decode: {e}"))?;
-    let attribute = mesh.attribute_by_unique_id(primitive.position).ok_or_else(|| {
-        format!(
-            "{DRACO} data holds no attribute of id {} (POSITION)",
-            primitive.position
-        )
-    })?;
+        .map_err(|e| match e.kind() {
+            ErrorKind::LimitExceeded => format!(
+                "{DRACO} data decodes to more than occlu allows: {budget} bytes are left of what --max-file-size \
+             allows a file's decoded data, and one stream may take {} ({e})",
+                ceilings.max_decoded_bytes
+            ),
+            _ => format!("{DRACO} data does not decode: {e}"),
+        })?;
+    let id = primitive.position;
+    let attribute = mesh
+        .attribute_by_unique_id(id)
+        .ok_or_else(|| format!("{DRACO} data holds no attribute of id {id} (POSITION)"))?;
+    if !matches!(
+        attribute.attribute_type(),
+        GeometryAttributeType::Position | GeometryAttributeType::Generic
+    ) {
+        return Err(format!(
+            "{DRACO} names attribute {id} as POSITION, but the stream holds {:?} there",
+            attribute.attribute_type()
+        ));
+    }
     let stored = match attribute.data_type() {
         DataType::Float32 => Some(GltfType::F32),
         DataType::Int8 => Some(GltfType::I8),
@@ -183,40 +222,57 @@ fn decode(stream: &[u8], primitive: DracoPrimitive, component: GltfType, budget:
             attribute.data_type()
         ));
     }
+    // The points the faces use, each numbered once in the order first used.
     let points = mesh.num_points();
-    // Every point must have a value: draco-core reads a missing one as zero,
-    // which would put a vertex at the origin without a word.
-    if let Some(point) =
-        (0..points).find(|&p| attribute.mapped_index(PointIndex(p as u32)).0 as usize >= attribute.size())
-    {
-        return Err(format!("{DRACO} data gives point {point} no POSITION value"));
-    }
-    // Values of at most 16 bits and f32 are exact as f32.
-    let values = attribute.read_f32s(points, 3);
-    let positions = values
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]].map(f64::from))
-        .collect();
-    let mut triangles = Vec::with_capacity(mesh.num_faces() * 3);
-    for face in mesh.faces() {
-        for corner in face {
-            if corner.0 as usize >= points {
-                return Err(format!(
-                    "{DRACO} data has a face corner at point {} of {points}",
-                    corner.0
-                ));
-            }
-            triangles.push(corner.0);
+    let mut number = vec![u32::MAX; points];
+    let mut used = Vec::new();
+    let mut indices = Vec::with_capacity(mesh.num_faces() * 3);
+    for corner in mesh.faces().iter().flatten() {
+        let point = corner.0 as usize;
+        let slot = number
+            .get_mut(point)
+            .ok_or_else(|| format!("{DRACO} data has a face corner at point {point} of {points}"))?;
+        if *slot == u32::MAX {
+            *slot = used.len() as u32;
+            used.push(*corner);
         }
+        indices.push(*slot);
+    }
+    // Every point used must have a value: draco-core reads a missing one as
+    // zero, which would put a vertex at the origin without a word.
+    let values = attribute.buffer().data();
+    let (stride, width) = (attribute.byte_stride() as usize, attribute.data_type().byte_length());
+    let mut positions = Vec::with_capacity(used.len());
+    for point in used {
+        let value = attribute.mapped_index(point).0 as usize;
+        let bytes = (value < attribute.size())
+            .then(|| values.get(value.checked_mul(stride)?..)?.get(..3 * width))
+            .flatten()
+            .ok_or_else(|| format!("{DRACO} data gives point {} no POSITION value", point.0))?;
+        positions.push(std::array::from_fn(|k| {
+            component_value(attribute.data_type(), &bytes[k * width..])
+        }));
     }
     let bytes = (0..mesh.num_attributes())
         .map(|a| mesh.attribute(a).buffer().data().len() as u64)
         .fold(mesh.num_faces() as u64 * FACE_BYTES, u64::saturating_add);
     Ok(Decoded {
         positions,
-        triangles,
+        stream: indices,
         bytes,
     })
+}
+
+/// The little-endian value of `data_type` (one of glTF's component types)
+/// at the start of `bytes`, which holds one, as f64: exact for these types.
+fn component_value(data_type: DataType, bytes: &[u8]) -> f64 {
+    match data_type {
+        DataType::Int8 => f64::from(bytes[0] as i8),
+        DataType::Uint8 => f64::from(bytes[0]),
+        DataType::Int16 => f64::from(i16::from_le_bytes([bytes[0], bytes[1]])),
+        DataType::Uint16 => f64::from(u16::from_le_bytes([bytes[0], bytes[1]])),
+        _ => f64::from(f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
+    }
 }
 
 #[cfg(test)]
@@ -248,7 +304,7 @@ mod tests {
         let mut streams = DracoStreams::new(&raw, views.clone(), one).unwrap();
         let first = streams.decode(0, 0, &buffers, GltfType::F32).unwrap().unwrap();
         assert_eq!(
-            (first.positions.len(), first.triangles.len(), first.bytes),
+            (first.positions.len(), first.stream.len(), first.bytes),
             (8, 36, one)
         );
         let second = streams.decode(1, 0, &buffers, GltfType::F32).unwrap();

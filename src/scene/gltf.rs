@@ -115,11 +115,21 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
         true => raw_json(bytes).map_err(parse_error)?,
         false => serde_json::Value::Null,
     };
-    let draco_decoded = draco::decoded_accessors(&raw);
+    let draco_decoded = draco::decoded_accessors(&raw).map_err(parse_error)?;
     let mut json = unvalidated.document.into_json();
     json.extensions_required
         .retain(|e| !DECODED.contains(&e.as_str()) && !NO_GEOMETRY.iter().any(|kind| e.starts_with(kind)));
-    let document = validated(json, &draco_decoded).map_err(invalid)?;
+    let document = validated(json, &draco_decoded).map_err(|e| {
+        // Draco's accessors hold no data of their own: where the file does
+        // not declare the extension, that is why validation fails.
+        let undeclared = raw.is_null() && raw_json(bytes).is_ok_and(|raw| draco::carried(&raw));
+        match undeclared {
+            true => parse_error(format!(
+                "its primitives carry {DRACO} data, but its extensionsUsed does not list {DRACO}, as glTF requires"
+            )),
+            false => invalid(e),
+        }
+    })?;
     let gltf = gltf::Gltf {
         document,
         blob: unvalidated.blob,
@@ -618,6 +628,14 @@ fn check_accessor(
                 .checked_mul(accessor.size())
                 .is_none_or(|bytes| bytes > view.length())
         }
+        // Validation lets only the accessors a Draco stream fills lack both:
+        // one read here is a plain primitive's.
+        None if accessor.sparse().is_none() => {
+            return Err(format!(
+                "{what}: accessor {} holds no data of its own (a Draco stream fills it for another primitive)",
+                accessor.index()
+            ));
+        }
         // A sparse accessor without data of its own: its count still cannot
         // sensibly exceed the bytes the file carries.
         None => count > buffers.iter().map(Vec::len).sum(),
@@ -720,9 +738,9 @@ fn load_mesh(
         let (positions, triangles) = match draco.decode(mesh.index(), primitive.index(), buffers, accessor.data_type())
         {
             Some(decoded) => {
-                if mode == Mode::TriangleFan {
+                if accessor.sparse().is_some() {
                     return Err(error(format!(
-                        "{DRACO} allows TRIANGLES and TRIANGLE_STRIP, not TRIANGLE_FAN"
+                        "POSITION has sparse storage, which {DRACO} forbids an accessor it fills"
                     )));
                 }
                 let decoded = decoded.map_err(error)?;
@@ -732,7 +750,7 @@ fn load_mesh(
                     .iter()
                     .map(|p| DVec3::from(p.map(&coordinate)))
                     .collect();
-                (positions, decoded.triangles)
+                (positions, triangle_list(mode, &decoded.stream))
             }
             None => {
                 check_accessor(&accessor, "POSITION", &types, Dimensions::Vec3, buffers).map_err(error)?;
