@@ -29,7 +29,10 @@
 //!   cannot explain it: far dearer ([`FAR_DEARER`]), or dearer while it
 //!   drew more triangles than the incumbent's frames beside it (a hiccup
 //!   slows a frame; it does not make it draw more). So a rival that hides
-//!   less costs one probe, not two, on a short path.
+//!   less costs one probe, not two, on a short path. Likewise one sample
+//!   shows a rival cheaper enough to take over where it is far cheaper
+//!   while it drew fewer triangles (a rival that hides much, probed as
+//!   the view fills: an incumbent's hiccup cannot make a rival draw less).
 //! - Frustum culling is judged before it is run: each measured occlusion
 //!   frame says what share of the frustum's triangles it hid, the median
 //!   of the last few of a view is what the view hides ([`Hidden::share`]),
@@ -41,10 +44,12 @@
 //!   skip: once frustum culling is the incumbent, occlusion is checked
 //!   again only when the view has changed materially since
 //!   ([`View::differs`]), by one probe of the most promising occlusion
-//!   culler, within the budget. Where it hid clearly next to nothing
-//!   (under half of it), frustum culling takes over once two measured
-//!   samples show it cheaper at all: the occlusion culler then draws as
-//!   much and tests besides, so the burden of proof is its.
+//!   culler, within the budget; at once, whatever the budget, where the
+//!   frustum has come to hold several times the triangles it held when
+//!   occlusion last looked ([`View::outgrew`]). Where it hid clearly next
+//!   to nothing (under half of it), frustum culling takes over once two
+//!   measured samples show it cheaper at all: the occlusion culler then
+//!   draws as much and tests besides, so the burden of proof is its.
 //!   Frustum culling's ratio to an occlusion culler turns on what
 //!   occlusion hides: their samples taken where it hid much do not count
 //!   where it hides next to nothing, nor the reverse ([`apart`],
@@ -72,6 +77,9 @@ const RECHECK: u64 = 12;
 /// Share of the frustum's triangles below which occlusion culling has
 /// nothing to skip.
 const NOTHING_HIDDEN: f64 = 0.1;
+/// How many times the frustum's triangles of a view where nothing was
+/// hidden another must hold to be looked at again at once ([`View::outgrew`]).
+const OUTGROWN: f64 = 4.0;
 /// Frame-to-frame noise (log) assumed before the incumbent has shown its
 /// own.
 const DEFAULT_NOISE: f64 = 0.1;
@@ -125,6 +133,13 @@ impl View {
             || self.eye.distance(other.eye) > reach
             || a.max(b) > 1.5 * a.min(b)
     }
+
+    /// Holding more than [`OUTGROWN`] times the triangles of `other`: what
+    /// culling `other` cost or spared says nothing of this view (a camera
+    /// that looked out over an empty edge turning back into the city).
+    pub fn outgrew(&self, other: &View) -> bool {
+        self.frustum_triangles as f64 > OUTGROWN * other.frustum_triangles.max(1) as f64
+    }
 }
 
 /// One paired sample of a strategy: the log of its frame time over the
@@ -164,10 +179,8 @@ struct Record {
     family: Family,
     /// Its samples, newest last.
     samples: VecDeque<Sample>,
-    /// Whether its newest sample drew more triangles than the incumbent's
-    /// frames beside it, by more than the hysteresis: then its extra time
-    /// has a cause in the work, which a hiccup of the machine cannot fake.
-    drew_more: bool,
+    /// What its newest sample drew beside the incumbent's frames.
+    drew: Drew,
     /// The frame it last ran (this chooser's count).
     last_run: Option<u64>,
 }
@@ -179,12 +192,14 @@ pub(super) struct Cost {
     pub triangles: u64,
 }
 
-/// A measured frame of the incumbent: when, its log time, and what it drew.
+/// A measured frame of the incumbent: when, its log time, what it drew, and
+/// from where.
 #[derive(Clone, Copy, Debug)]
 struct Seen {
     frame: u64,
     log_ms: f64,
     triangles: u64,
+    view: View,
 }
 
 /// A probe's measured frame, waiting for the incumbent's frame after it.
@@ -193,8 +208,34 @@ struct Pending {
     strategy: usize,
     log_ms: f64,
     triangles: u64,
-    /// The incumbent's frame just before the probe.
+    /// The incumbent's frame just before the probe, where it saw the
+    /// probe's view.
     before: Option<Seen>,
+    view: View,
+}
+
+/// Whether a probe drew more or fewer triangles than the incumbent's frames
+/// beside it, by more than the hysteresis: then a difference in its time
+/// has a cause in the work, which a hiccup of the machine cannot fake (a
+/// hiccup slows a frame; it does not change what the frame draws).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Drew {
+    Fewer,
+    Alike,
+    More,
+}
+
+impl Drew {
+    fn of(triangles: u64, incumbent: u64) -> Drew {
+        let (probe, incumbent) = (triangles as f64, incumbent as f64);
+        if probe > HYSTERESIS.exp() * incumbent {
+            Drew::More
+        } else if probe * HYSTERESIS.exp() < incumbent {
+            Drew::Fewer
+        } else {
+            Drew::Alike
+        }
+    }
 }
 
 /// Why a probe runs.
@@ -298,7 +339,7 @@ impl Chooser {
                 .map(|&family| Record {
                     family,
                     samples: VecDeque::with_capacity(WINDOW),
-                    drew_more: false,
+                    drew: Drew::Alike,
                     last_run: None,
                 })
                 .collect(),
@@ -403,7 +444,7 @@ impl Chooser {
         let hidden = self.hidden.map(|h| h.share);
         for (s, record) in self.records.iter_mut().enumerate() {
             record.samples.clear();
-            record.drew_more = false;
+            record.drew = Drew::Alike;
             if s != cheapest {
                 let samples = self.calibration.iter().map(|row| Sample {
                     log_ratio: row[s] - row[cheapest],
@@ -458,14 +499,33 @@ impl Chooser {
                 strategy: turn.strategy,
                 log_ms,
                 triangles: cost.triangles,
-                before: self.incumbent_last.filter(|b| self.frame - b.frame <= 3),
+                // The incumbent's frame before pairs with the probe only
+                // where it saw this view: across a material change of view
+                // the two frames measured different work.
+                before: self
+                    .incumbent_last
+                    .filter(|b| self.frame - b.frame <= 3 && !view.differs(&b.view, self.reach)),
+                view: *view,
             });
             return;
         }
-        if let Some(p) = self.pending.take() {
-            let (baseline, incumbent_triangles) = p.before.map_or((log_ms, cost.triangles), |b| {
-                ((b.log_ms + log_ms) / 2.0, b.triangles.max(cost.triangles))
-            });
+        // The incumbent's frames beside the probe that saw its view: a
+        // sample needs one.
+        let after = Seen {
+            frame: self.frame,
+            log_ms,
+            triangles: cost.triangles,
+            view: *view,
+        };
+        let beside = |p: &Pending| {
+            let after = (!view.differs(&p.view, self.reach)).then_some(after);
+            match (p.before, after) {
+                (Some(b), Some(a)) => Some(((b.log_ms + a.log_ms) / 2.0, b.triangles.max(a.triangles))),
+                (Some(only), None) | (None, Some(only)) => Some((only.log_ms, only.triangles)),
+                (None, None) => None,
+            }
+        };
+        if let Some((p, (baseline, incumbent_triangles))) = self.pending.take().and_then(|p| Some((p, beside(&p)?))) {
             let hidden = self.hidden.map(|h| h.share);
             let record = &mut self.records[p.strategy];
             if record.samples.len() == WINDOW {
@@ -477,7 +537,7 @@ impl Chooser {
                 log_ratio: p.log_ms - baseline,
                 hidden,
             });
-            record.drew_more = p.triangles as f64 > HYSTERESIS.exp() * incumbent_triangles as f64;
+            record.drew = Drew::of(p.triangles, incumbent_triangles);
         }
         if let (Some(a), Some(b)) = (self.incumbent_earlier, self.incumbent_last)
             && self.frame - a.frame <= 4
@@ -492,11 +552,7 @@ impl Chooser {
             self.residuals.push_back(residual / (1.0 + wa * wa + wc * wc).sqrt());
         }
         self.incumbent_earlier = self.incumbent_last;
-        self.incumbent_last = Some(Seen {
-            frame: self.frame,
-            log_ms,
-            triangles: cost.triangles,
-        });
+        self.incumbent_last = Some(after);
     }
 
     /// The incumbent's frame-to-frame noise (log): a robust σ of one frame.
@@ -568,8 +624,10 @@ impl Chooser {
 
     /// The strategy cheaper than the incumbent at confidence and by more
     /// than the hysteresis in its estimate, the cheapest if several: on two
-    /// samples at least, never on an estimate alone. (Asking the gain
-    /// itself beyond the hysteresis at confidence would, in 10 % noise,
+    /// samples at least, never on an estimate alone, or on one far cheaper
+    /// ([`FAR_DEARER`]) that drew fewer triangles than the incumbent beside
+    /// it, which a hiccup of the incumbent's frames cannot explain. (Asking
+    /// the gain itself beyond the hysteresis at confidence would, in 10 % noise,
     /// take a gain of about 10 % to switch on a window of samples: an
     /// incumbent that warm-up's few frames chose among near equals would
     /// then stay while a rival is 9 % cheaper.) Where occlusion hides
@@ -589,17 +647,20 @@ impl Chooser {
                 && self.records[self.incumbent].family == Family::Occlusion
                 && self.hidden.is_some_and(|h| clearly_nothing_hidden(h.share))
         };
-        let measured = |s: usize| {
-            let n = self.samples(s).count();
-            n >= 2 || (n == 1 && self.records[s].family == Family::Frustum && self.hidden.is_some())
+        let measured = |s: usize, m: f64| {
+            let (n, r) = (self.samples(s).count(), &self.records[s]);
+            n >= 2
+                || (n == 1 && r.family == Family::Frustum && self.hidden.is_some())
+                || (n == 1 && r.drew == Drew::Fewer && m < -FAR_DEARER)
         };
         let shown_cheaper = |s: usize| {
             let measured: Vec<f64> = self.samples(s).collect();
             measured.len() >= 2 && central(&measured) < 0.0
         };
         (0..self.records.len())
-            .filter(|&s| s != self.incumbent && measured(s))
+            .filter(|&s| s != self.incumbent)
             .filter_map(|s| self.estimate(s).map(|(m, se)| (s, m, se)))
+            .filter(|&(s, m, _)| measured(s, m))
             .filter(|&(s, m, se)| (m < -HYSTERESIS && m + Z * se < 0.0) || (burden_on_incumbent(s) && shown_cheaper(s)))
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .map(|(s, ..)| s)
@@ -638,7 +699,7 @@ impl Chooser {
             }
         }
         self.records[self.incumbent].samples = reversed;
-        self.records[self.incumbent].drew_more = false;
+        self.records[self.incumbent].drew = Drew::Alike;
         self.records[s].samples.clear();
         self.incumbent = s;
         self.incumbent_last = None;
@@ -674,9 +735,13 @@ impl Chooser {
         let (waited, wait, due) = if let Some(h) = self.nothing_to_skip(s) {
             // One occlusion culler, the most promising, looks again once
             // the view has changed since the last look, and no more often
-            // than the budget pays for.
+            // than the budget pays for; at once where the view outgrew the
+            // one that hid nothing, which says nothing of it.
             if !view.differs(&h.view, self.reach) || Some(s) != self.most_promising_occlusion() {
                 return None;
+            }
+            if view.outgrew(&h.view) {
+                return Some(Due::Recheck);
             }
             (self.frame - h.frame, self.recheck(s, settles, 1), Due::Recheck)
         } else {
@@ -721,7 +786,7 @@ impl Chooser {
         // machine, which slows a frame without making it draw more).
         let r = &self.records[s];
         let may_be_cheaper = m - Z * se < -HYSTERESIS && (n < WINDOW || m < 0.0);
-        let one_sample_too_few = n == 1 && !r.drew_more && m - Z * se < FAR_DEARER;
+        let one_sample_too_few = n == 1 && r.drew != Drew::More && m - Z * se < FAR_DEARER;
         if may_be_cheaper || one_sample_too_few {
             return (EXPLORE, Due::Explore);
         }
@@ -1178,6 +1243,36 @@ mod tests {
         );
         let mean = over_best(&costs, 1.0, 0.1);
         assert!(mean < 1.03, "{mean:.3}× vfc: {s:?}");
+    }
+
+    #[test]
+    fn a_view_that_outgrew_the_one_where_nothing_was_hidden_is_looked_at_again_at_once() {
+        // A city walk that looks out over its empty edge for a few frames
+        // (20 triangles in the frustum, nothing hidden, vfc cheapest) and
+        // turns back into the streets (10 000 triangles, the walks three
+        // times cheaper than vfc). Before, the walk waited out the twelve
+        // frames since its last look, at three times the cost.
+        let edge = 40..52;
+        let view = |f: u64| View {
+            forward: if edge.contains(&f) { DVec3::X } else { DVec3::NEG_Z },
+            frustum_triangles: if edge.contains(&f) { 20 } else { 10_000 },
+            ..still(f)
+        };
+        let hidden = |f: u64| hides(if edge.contains(&f) { 0.0 } else { 0.7 });
+        let cost = |f: u64, s: usize| match (edge.contains(&f), s) {
+            (true, 0) => 0.1,
+            (true, _) => 0.12,
+            (false, 0) => 3.0,
+            (false, _) => 1.0,
+        };
+        let (turns, costs) = simulate_after_calibrating(0, &FIVE, 80, (0.05, 0.8), hidden, view, cost);
+        let s = strategies(&turns);
+        assert_eq!(s[edge.end as usize - 1], 0, "vfc runs at the edge: {s:?}");
+        let back = edge.end as usize;
+        let vfc_after = s[back..].iter().filter(|&&x| x == 0).count();
+        assert!(vfc_after <= 1, "{vfc_after} frames of vfc back in the streets: {s:?}");
+        let mean = costs[back..].iter().sum::<f64>() / costs[back..].len() as f64;
+        assert!(mean < 1.1, "{mean:.3} back in the streets, where a walk costs 1: {s:?}");
     }
 
     #[test]
