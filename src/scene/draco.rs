@@ -303,10 +303,7 @@ mod tests {
         let one = 8 * 2 * 12 + 12 * FACE_BYTES;
         let mut streams = DracoStreams::new(&raw, views.clone(), one).unwrap();
         let first = streams.decode(0, 0, &buffers, GltfType::F32).unwrap().unwrap();
-        assert_eq!(
-            (first.positions.len(), first.stream.len(), first.bytes),
-            (8, 36, one)
-        );
+        assert_eq!((first.positions.len(), first.stream.len(), first.bytes), (8, 36, one));
         let second = streams.decode(1, 0, &buffers, GltfType::F32).unwrap();
         assert!(second.is_err_and(|e| e.contains("ceiling")), "the budget is spent");
         assert!(

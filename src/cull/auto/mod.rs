@@ -144,6 +144,11 @@ struct Ran {
     view: View,
     /// Whether the frustum's triangles were counted in it.
     counted: bool,
+    /// Whether it started from a visible set of this view. One that did
+    /// not (a walk's lists from another view, or everything in the frustum
+    /// after `vfc`) draws more than occlusion needs here, so what it drew
+    /// says nothing of what occlusion hides.
+    fresh: bool,
 }
 
 /// Frames between counts of the frustum's triangles while an occlusion
@@ -162,8 +167,12 @@ pub struct AutoCulling {
     frames: u64,
     /// Warm-up frames run.
     warm_ups: usize,
-    /// The frame a GPU walk last ran, which left the lists as it found them.
-    lists_written: Option<u64>,
+    /// The frame a GPU walk last ran, which left the lists as it found them,
+    /// and where that frame looked from.
+    lists_written: Option<(u64, View)>,
+    /// How far the eye moves before a view differs materially (a tenth of
+    /// the scene), set in `prepare`.
+    reach: f64,
     /// The last recorded frame; `None` after a warm-up frame.
     ran: Option<Ran>,
     /// The candidates that ran in the current frame (all of them in a
@@ -207,6 +216,7 @@ impl AutoCulling {
             frames: 0,
             warm_ups: 0,
             lists_written: None,
+            reach: 0.0,
             ran: None,
             running: Vec::new(),
             last_drawn: Vec::new(),
@@ -218,38 +228,55 @@ impl AutoCulling {
         })
     }
 
-    /// Whether candidate `k` must first settle: a walk whose lists no walk
-    /// wrote in the last two frames, or a culler whose own state went stale.
-    fn settles(&self, k: usize) -> bool {
+    /// Whether the walks' lists are stale in `view`: no walk wrote them in
+    /// the last two frames, or the last one that did looked from a view
+    /// that differs materially.
+    fn lists_stale(&self, view: &View) -> bool {
+        self.lists_written
+            .is_none_or(|(f, written)| self.frames - f > 2 || view.differs(&written, self.reach))
+    }
+
+    /// Whether candidate `k` must first settle in `view`: a walk whose lists
+    /// are stale, or a culler whose own state went stale.
+    fn settles(&self, k: usize, view: &View) -> bool {
         let ran_last = self.ran.is_some_and(|r| r.turn.strategy == k);
         match self.candidates[k].carries() {
-            Carries::VisibleOnGpu => self.lists_written.is_none_or(|f| self.frames - f > 2),
+            Carries::VisibleOnGpu => self.lists_stale(view),
             Carries::OwnState => !ran_last,
             Carries::Nothing | Carries::VisibleOnCpu => false,
         }
     }
 
-    /// Before candidate `k` runs: hands it what the last frame drew, where
-    /// it did not run then.
-    fn hand_over(&mut self, k: usize, ctx: &mut dyn Frame) {
-        if self.ran.is_some_and(|r| r.turn.strategy == k) {
-            return;
-        }
-        let Some(drawn_by) = self.last_drawn_by else {
-            return;
+    /// Before candidate `k` runs in `view`: hands it what the last frame
+    /// drew, where it did not run then. Whether it then starts from a
+    /// visible set of this view ([`Ran::fresh`]).
+    fn hand_over(&mut self, k: usize, ctx: &mut dyn Frame, view: &View) -> bool {
+        let carries = self.candidates[k].carries();
+        let stale_lists = carries == Carries::VisibleOnGpu && self.lists_stale(view);
+        let (Some(drawn_by), false) = (self.last_drawn_by, self.ran.is_some_and(|r| r.turn.strategy == k)) else {
+            // Its own last frame's set, of this view unless the view jumped.
+            return !stale_lists;
         };
-        match self.candidates[k].carries() {
-            // Stale lists take what an occlusion culler decided on the CPU
-            // (after `vfc`, all in the frustum, they are better kept).
+        match carries {
+            // Stale lists take what an occlusion culler decided on the CPU.
+            // After `vfc` (all in the frustum) they are better kept, unless
+            // they were written where the view differed materially: a walk
+            // that starts from everything in the frustum tests against its
+            // depth and knows what is visible after one frame, one that
+            // starts from another view's lists needs two.
             Carries::VisibleOnGpu => {
-                if let (true, Family::Occlusion, Some(lists), Some(gpu)) =
-                    (self.settles(k), drawn_by, &self.lists, ctx.on_gpu())
-                {
+                let written_elsewhere = self.lists_written.is_some_and(|(_, v)| view.differs(&v, self.reach));
+                let upload = stale_lists && (drawn_by == Family::Occlusion || written_elsewhere);
+                if let (true, Some(lists), Some(gpu)) = (upload, &self.lists, ctx.on_gpu()) {
                     lists.upload(gpu.gpu(), &self.last_drawn);
                 }
+                !stale_lists || drawn_by == Family::Occlusion
             }
-            Carries::VisibleOnCpu => self.candidates[k].culler.seed_visible(&self.last_drawn),
-            Carries::Nothing | Carries::OwnState => {}
+            Carries::VisibleOnCpu => {
+                self.candidates[k].culler.seed_visible(&self.last_drawn);
+                drawn_by == Family::Occlusion
+            }
+            Carries::Nothing | Carries::OwnState => true,
         }
     }
 
@@ -281,6 +308,12 @@ impl AutoCulling {
     fn warm_up(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let warm_ups = self.warm_ups;
         self.warm_ups += 1;
+        let view = View {
+            eye: input.camera.eye,
+            forward: input.camera.forward(),
+            frustum_triangles: self.count_frustum_triangles(input),
+        };
+        self.frustum_triangles = view.frustum_triangles;
         self.running.clear();
         self.running.extend(balanced_order(warm_ups, self.candidates.len()));
         let mut log_ms = vec![f64::NAN; self.candidates.len()];
@@ -296,15 +329,10 @@ impl AutoCulling {
                 log_ms[k] = (start.elapsed().as_secs_f64() * 1e3).ln();
             }
             if self.candidates[k].carries() == Carries::VisibleOnGpu {
-                self.lists_written = Some(self.frames);
+                self.lists_written = Some((self.frames, view));
             }
         }
         if warm_ups > 0 {
-            let view = View {
-                eye: input.camera.eye,
-                forward: input.camera.forward(),
-                frustum_triangles: self.count_frustum_triangles(input),
-            };
             self.chooser
                 .as_mut()
                 .expect("the session prepared the mode")
@@ -350,8 +378,8 @@ impl Culler for AutoCulling {
         // and its first frame tells how much.
         let incumbent = families.iter().position(|&f| f == Family::Occlusion).unwrap_or(0);
         let root = setup.hierarchy.root().bounds;
-        let reach = 0.1 * (root.max - root.min).length();
-        self.chooser = Some(Chooser::new(&families, incumbent, reach, self.params.budget / 100.0));
+        self.reach = 0.1 * (root.max - root.min).length();
+        self.chooser = Some(Chooser::new(&families, incumbent, self.reach, self.params.budget / 100.0));
         Ok(())
     }
 
@@ -370,7 +398,7 @@ impl Culler for AutoCulling {
                     self.frustum_triangles = previous.triangles_drawn;
                     None
                 }
-                Family::Occlusion => (ran.counted && view.frustum_triangles > 0).then(|| Occluded {
+                Family::Occlusion => (ran.counted && ran.fresh && view.frustum_triangles > 0).then(|| Occluded {
                     hidden: (1.0 - previous.triangles_drawn as f64 / view.frustum_triangles as f64).max(0.0),
                     drawing: previous.render_ms / previous.frame_ms,
                 }),
@@ -389,12 +417,12 @@ impl Culler for AutoCulling {
         };
         let mut settles = std::mem::take(&mut self.settles);
         settles.clear();
-        settles.extend((0..self.candidates.len()).map(|k| self.settles(k)));
+        settles.extend((0..self.candidates.len()).map(|k| self.settles(k, &view)));
         let chooser = self.chooser.as_mut().expect("the session prepared the mode");
         let turn = chooser.plan(&view, &settles);
         self.settles = settles;
         let k = turn.strategy;
-        self.hand_over(k, ctx);
+        let fresh = self.hand_over(k, ctx, &view);
         let stats = self.candidates[k].culler.frame(ctx, input);
         let mut view = view;
         // What occlusion hides changes with the view, slowly: counted on a
@@ -408,11 +436,16 @@ impl Culler for AutoCulling {
             view.frustum_triangles = self.frustum_triangles;
         }
         if self.candidates[k].carries() == Carries::VisibleOnGpu {
-            self.lists_written = Some(self.frames);
+            self.lists_written = Some((self.frames, view));
         }
         self.running.clear();
         self.running.push(k);
-        self.ran = Some(Ran { turn, view, counted });
+        self.ran = Some(Ran {
+            turn,
+            view,
+            counted,
+            fresh,
+        });
         stats
     }
 
