@@ -261,7 +261,7 @@ fn malformed_draco_data_is_an_error_not_a_crash() {
         ),
         (
             edited(&|j| j["bufferViews"][0]["byteOffset"] = 1_000_000.into()),
-            "bufferView",
+            "bufferView 0 lies outside its buffer",
         ),
         (
             edited(&|j| j["accessors"][2]["componentType"] = 5123.into()),
@@ -298,6 +298,42 @@ fn malformed_draco_data_is_an_error_not_a_crash() {
         flipped[at] ^= 0x5a;
         let _ = try_load(&json, &flipped);
     }
+}
+
+#[test]
+fn instances_shared_by_many_nodes_are_bounded_by_the_file() {
+    let (json, bin) = unpack(&std::fs::read(fixtures().join("instanced.glb")).unwrap());
+    let instanced = json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| !n["extensions"]["EXT_mesh_gpu_instancing"].is_null())
+        .unwrap()
+        .clone();
+    let dir = tempfile::tempdir().unwrap();
+    let try_with = |copies: usize| {
+        let mut json = json.clone();
+        let first = json["nodes"].as_array().unwrap().len();
+        for _ in 0..copies {
+            json["nodes"].as_array_mut().unwrap().push(instanced.clone());
+        }
+        let scene = json["scene"].as_u64().unwrap_or(0) as usize;
+        for k in first..first + copies {
+            json["scenes"][scene]["nodes"].as_array_mut().unwrap().push(k.into());
+        }
+        let model = common::write(dir.path(), "m.glb", occlu::export::pack(&json, bin.clone()).unwrap());
+        load(&SceneSpec::File(model), &LoadOptions::default()).map_err(|e| e.to_string())
+    };
+    // Three instances a node: 30 more nodes place 90 more objects; 2 000
+    // would place 6 000 from a file whose buffers hold a few kilobytes.
+    assert_eq!(try_with(30).unwrap().objects.len(), 4 + 90);
+    let Err(e) = try_with(2000) else {
+        panic!("2 000 nodes of three instances each load")
+    };
+    assert!(
+        e.contains("its nodes place more than") && e.contains("EXT_mesh_gpu_instancing"),
+        "{e}"
+    );
 }
 
 #[test]

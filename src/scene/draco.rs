@@ -21,7 +21,9 @@
 
 use std::collections::{HashMap, HashSet};
 
-use draco_core::{DataType, DecodeLimits, DecoderBuffer, ErrorKind, GeometryAttributeType, Mesh, MeshDecoder};
+use draco_core::{
+    DataType, DecodeLimits, DecoderBuffer, ErrorKind, GeometryAttributeType, Mesh, MeshDecoder, PointIndex,
+};
 use gltf::accessor::DataType as GltfType;
 use serde_json::Value;
 
@@ -222,33 +224,29 @@ fn decode(stream: &[u8], primitive: DracoPrimitive, component: GltfType, budget:
             attribute.data_type()
         ));
     }
-    // The points the faces use, each numbered once in the order first used.
+    // The points the faces use, in order, each numbered by its place there
+    // (sized by the faces, not by the points the stream declares).
     let points = mesh.num_points();
-    let mut number = vec![u32::MAX; points];
-    let mut used = Vec::new();
-    let mut indices = Vec::with_capacity(mesh.num_faces() * 3);
-    for corner in mesh.faces().iter().flatten() {
-        let point = corner.0 as usize;
-        let slot = number
-            .get_mut(point)
-            .ok_or_else(|| format!("{DRACO} data has a face corner at point {point} of {points}"))?;
-        if *slot == u32::MAX {
-            *slot = used.len() as u32;
-            used.push(*corner);
-        }
-        indices.push(*slot);
+    let corners = || mesh.faces().iter().flatten().map(|corner| corner.0);
+    let mut used: Vec<u32> = corners().collect();
+    used.sort_unstable();
+    used.dedup();
+    if let Some(&beyond) = used.last().filter(|&&p| p as usize >= points) {
+        return Err(format!("{DRACO} data has a face corner at point {beyond} of {points}"));
     }
+    let place = |point: u32| used.partition_point(|&p| p < point) as u32;
+    let indices: Vec<u32> = corners().map(place).collect();
     // Every point used must have a value: draco-core reads a missing one as
     // zero, which would put a vertex at the origin without a word.
     let values = attribute.buffer().data();
     let (stride, width) = (attribute.byte_stride() as usize, attribute.data_type().byte_length());
     let mut positions = Vec::with_capacity(used.len());
-    for point in used {
-        let value = attribute.mapped_index(point).0 as usize;
+    for &point in &used {
+        let value = attribute.mapped_index(PointIndex(point)).0 as usize;
         let bytes = (value < attribute.size())
             .then(|| values.get(value.checked_mul(stride)?..)?.get(..3 * width))
             .flatten()
-            .ok_or_else(|| format!("{DRACO} data gives point {} no POSITION value", point.0))?;
+            .ok_or_else(|| format!("{DRACO} data gives point {point} no POSITION value"))?;
         positions.push(std::array::from_fn(|k| {
             component_value(attribute.data_type(), &bytes[k * width..])
         }));

@@ -13,7 +13,7 @@ use gltf::mesh::Mode;
 use super::cameras;
 use super::draco::{self, DRACO, DracoStreams};
 use super::instancing::{self, INSTANCING};
-use super::meshopt::{self, KHR_MESHOPT, MESHOPT};
+use super::meshopt::{self, EXT_MESHOPT, KHR_MESHOPT};
 use super::model::{MeshGroup, SceneBuilder};
 use super::source::{LoadOptions, SceneError, read_model_file};
 use crate::input::folder_of;
@@ -243,7 +243,13 @@ fn add_node_trees(
         check_accessor(&accessor, what, types, dimensions, buffers)?;
         read_vectors::<4>(&accessor, buffers).ok_or_else(|| format!("{what}: data lies outside its buffer"))
     };
-    let (instances, not_unit_instances) = instancing::read(raw, &read).map_err(parse_error)?;
+    // Instances share accessors freely, so a few bytes could place millions
+    // of objects: a file's instances together may be no more than its
+    // buffers could hold as plain translations, DECODED_PER_FILE_BYTE times
+    // over.
+    let buffer_bytes = buffers.iter().map(|b| b.len() as u64).sum::<u64>();
+    let most_instances = DECODED_PER_FILE_BYTE.saturating_mul(buffer_bytes) / 12;
+    let (mut instances_placed, mut not_unit_instances) = (0u64, 0);
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
     let roots: Vec<gltf::Node> = match &scene {
         Some(scene) => scene.nodes().collect(),
@@ -281,12 +287,22 @@ fn add_node_trees(
             let groups = &mesh_groups[&mesh.index()];
             let transform = DAffine3::from_mat4(world);
             // An instanced node draws its instances, and not itself.
-            let placed: Vec<(String, DAffine3)> = match instances.get(&index) {
-                Some(list) => list
-                    .iter()
-                    .enumerate()
-                    .map(|(i, instance)| (format!("{node_name}[{i}]"), transform * *instance))
-                    .collect(),
+            let placed: Vec<(String, DAffine3)> = match instancing::of_node(raw, index, &read).map_err(parse_error)? {
+                Some((list, normalised)) => {
+                    not_unit_instances += normalised;
+                    instances_placed += list.len() as u64;
+                    if instances_placed > most_instances {
+                        return Err(parse_error(format!(
+                            "its nodes place more than {most_instances} instances ({INSTANCING}): \
+                             {DECODED_PER_FILE_BYTE} times what its {buffer_bytes} bytes of buffers hold \
+                             as translations"
+                        )));
+                    }
+                    list.iter()
+                        .enumerate()
+                        .map(|(i, instance)| (format!("{node_name}[{i}]"), transform * *instance))
+                        .collect()
+                }
                 None => vec![(node_name, transform)],
             };
             for (node_name, transform) in placed {
@@ -396,10 +412,10 @@ fn add_cameras(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], builder
 }
 
 /// Extensions the loader reads itself, which gltf-json does not know.
-const DECODED: [&str; 5] = ["KHR_mesh_quantization", MESHOPT, KHR_MESHOPT, DRACO, INSTANCING];
+const DECODED: [&str; 5] = ["KHR_mesh_quantization", EXT_MESHOPT, KHR_MESHOPT, DRACO, INSTANCING];
 
 /// Those of them read from the document's JSON as written.
-const READ_FROM_JSON: [&str; 4] = [MESHOPT, KHR_MESHOPT, DRACO, INSTANCING];
+const READ_FROM_JSON: [&str; 4] = [EXT_MESHOPT, KHR_MESHOPT, DRACO, INSTANCING];
 
 /// Kinds of extension that change no geometry, by the prefix of their
 /// names: materials, textures, lights and metadata, which a visibility
@@ -452,7 +468,7 @@ fn load_buffers(
     builder: &mut SceneBuilder,
 ) -> Result<Vec<Vec<u8>>, SceneError> {
     let parse_error = parse_error(path);
-    let compressed = match gltf.extensions_used().any(|e| e == MESHOPT || e == KHR_MESHOPT) {
+    let compressed = match gltf.extensions_used().any(|e| e == EXT_MESHOPT || e == KHR_MESHOPT) {
         true => Some(meshopt::compressed_views(raw).map_err(parse_error)?),
         false => None,
     };
@@ -513,7 +529,7 @@ fn load_buffers(
                 "buffer {}: its {} views decode to {decoded} bytes but reach byte {length}: more than \
                  padding between them",
                 buffer.index(),
-                into.first().map_or(MESHOPT, |v| v.extension)
+                into.first().map_or(EXT_MESHOPT, |v| v.extension)
             )));
         }
         if length > buffer.length() {
@@ -629,10 +645,10 @@ fn check_accessor(
                 .is_none_or(|bytes| bytes > view.length())
         }
         // Validation lets only the accessors a Draco stream fills lack both:
-        // one read here is a plain primitive's.
+        // such an accessor cannot be read as anything else.
         None if accessor.sparse().is_none() => {
             return Err(format!(
-                "{what}: accessor {} holds no data of its own (a Draco stream fills it for another primitive)",
+                "{what}: accessor {} holds no data of its own (a Draco stream fills it), so it cannot be read here",
                 accessor.index()
             ));
         }

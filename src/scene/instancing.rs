@@ -11,8 +11,6 @@
 //! normalised, with one warning, as node rotations are (gltf.rs); custom
 //! attributes (`_ID`, `_COLOR`) are not read.
 
-use std::collections::HashMap;
-
 use glam::{DAffine3, DQuat, DVec3};
 use gltf::accessor::{DataType, Dimensions};
 use serde_json::Value;
@@ -30,79 +28,73 @@ pub type ReadAccessor<'a> = dyn Fn(usize, &str, &[DataType], Dimensions) -> Resu
 /// normalized 8-bit integers (4 components each within 1/254).
 const UNIT_ROTATION_TOLERANCE: f64 = 0.01;
 
-/// The instances of the document `raw` (its JSON): per node that has a
-/// mesh and the extension, each instance's transform relative to the
-/// node; and how many rotations were normalised.
-pub fn read(raw: &Value, read: &ReadAccessor) -> Result<(HashMap<usize, Vec<DAffine3>>, usize), String> {
-    let mut instanced = HashMap::new();
-    let mut normalised = 0;
-    let nodes = raw["nodes"].as_array().map_or(&[][..], Vec::as_slice);
+/// The instances of node `n` of the document `raw` (its JSON), where it has
+/// a mesh and the extension: each instance's transform relative to the
+/// node, and how many of their rotations were normalised from off unit
+/// length.
+pub fn of_node(raw: &Value, n: usize, read_accessor: &ReadAccessor) -> Result<Option<(Vec<DAffine3>, usize)>, String> {
+    let node = &raw["nodes"][n];
     // No behaviour is defined for the extension on a node without a mesh.
-    for (n, node) in nodes.iter().enumerate().filter(|(_, node)| !node["mesh"].is_null()) {
-        let Some(extension) = node["extensions"].get(INSTANCING) else {
-            continue;
-        };
-        let fail = |what: String| format!("node {n}: {INSTANCING} {what}");
-        let attribute = |name: &str, types: &[DataType], dimensions| match &extension["attributes"][name] {
-            Value::Null => Ok(None),
-            index => {
-                let index = index
-                    .as_u64()
-                    .and_then(|i| usize::try_from(i).ok())
-                    .ok_or_else(|| fail(format!("{name} is not an accessor index")))?;
-                read(index, name, types, dimensions).map(Some).map_err(&fail)
-            }
-        };
-        let float = [DataType::F32];
-        let translations = attribute("TRANSLATION", &float, Dimensions::Vec3)?;
-        let rotations = attribute(
-            "ROTATION",
-            &[DataType::F32, DataType::I8, DataType::I16],
-            Dimensions::Vec4,
-        )?;
-        let scales = attribute("SCALE", &float, Dimensions::Vec3)?;
-        let present = [&translations, &rotations, &scales].map(|a| a.as_ref().map(Vec::len));
-        let mut counts = present.iter().flatten();
-        let Some(&count) = counts.next() else {
-            return Err(fail("names none of TRANSLATION, ROTATION and SCALE".into()));
-        };
-        if counts.any(|&c| c != count) {
-            let [t, r, s] = present.map(|c| c.map_or("none".into(), |c| c.to_string()));
-            return Err(fail(format!(
-                "attributes differ in count (TRANSLATION {t}, ROTATION {r}, SCALE {s}); they must agree"
-            )));
+    let Some(extension) = node["extensions"].get(INSTANCING).filter(|_| !node["mesh"].is_null()) else {
+        return Ok(None);
+    };
+    let fail = |what: String| format!("node {n}: {INSTANCING} {what}");
+    let attribute = |name: &str, types: &[DataType], dimensions| match &extension["attributes"][name] {
+        Value::Null => Ok(None),
+        index => {
+            let index = index
+                .as_u64()
+                .and_then(|i| usize::try_from(i).ok())
+                .ok_or_else(|| fail(format!("{name} is not an accessor index")))?;
+            read_accessor(index, name, types, dimensions).map(Some).map_err(&fail)
         }
-        let mut transforms = Vec::with_capacity(count);
-        for k in 0..count {
-            let vector = |values: &Option<Vec<[f64; 4]>>, default: DVec3| {
-                values
-                    .as_ref()
-                    .map_or(default, |v| DVec3::new(v[k][0], v[k][1], v[k][2]))
-            };
-            let translation = vector(&translations, DVec3::ZERO);
-            let scale = vector(&scales, DVec3::ONE);
-            let [x, y, z, w] = rotations.as_ref().map_or([0.0, 0.0, 0.0, 1.0], |r| r[k]);
-            let rotation = DQuat::from_xyzw(x, y, z, w);
-            let finite = translation.is_finite() && scale.is_finite() && rotation.is_finite();
-            if !finite {
-                return Err(fail(format!("instance {k}: its transform is not finite")));
-            }
-            let length = rotation.length();
-            if length == 0.0 {
-                return Err(fail(format!("instance {k}: rotation [0, 0, 0, 0] is not a rotation")));
-            }
-            if (length - 1.0).abs() > UNIT_ROTATION_TOLERANCE {
-                normalised += 1;
-            }
-            transforms.push(DAffine3::from_scale_rotation_translation(
-                scale,
-                rotation / length,
-                translation,
-            ));
-        }
-        instanced.insert(n, transforms);
+    };
+    let float = [DataType::F32];
+    let translations = attribute("TRANSLATION", &float, Dimensions::Vec3)?;
+    let rotations = attribute(
+        "ROTATION",
+        &[DataType::F32, DataType::I8, DataType::I16],
+        Dimensions::Vec4,
+    )?;
+    let scales = attribute("SCALE", &float, Dimensions::Vec3)?;
+    let present = [&translations, &rotations, &scales].map(|a| a.as_ref().map(Vec::len));
+    let mut counts = present.iter().flatten();
+    let Some(&count) = counts.next() else {
+        return Err(fail("names none of TRANSLATION, ROTATION and SCALE".into()));
+    };
+    if counts.any(|&c| c != count) {
+        let [t, r, s] = present.map(|c| c.map_or("none".into(), |c| c.to_string()));
+        return Err(fail(format!(
+            "attributes differ in count (TRANSLATION {t}, ROTATION {r}, SCALE {s}); they must agree"
+        )));
     }
-    Ok((instanced, normalised))
+    let mut normalised = 0;
+    let mut transforms = Vec::with_capacity(count);
+    for k in 0..count {
+        let vector = |values: &Option<Vec<[f64; 4]>>, default: DVec3| {
+            values
+                .as_ref()
+                .map_or(default, |v| DVec3::new(v[k][0], v[k][1], v[k][2]))
+        };
+        let translation = vector(&translations, DVec3::ZERO);
+        let scale = vector(&scales, DVec3::ONE);
+        let [x, y, z, w] = rotations.as_ref().map_or([0.0, 0.0, 0.0, 1.0], |r| r[k]);
+        let rotation = DQuat::from_xyzw(x, y, z, w);
+        if !(translation.is_finite() && scale.is_finite() && rotation.is_finite()) {
+            return Err(fail(format!("instance {k}: its transform is not finite")));
+        }
+        let length = rotation.length();
+        if length == 0.0 {
+            return Err(fail(format!("instance {k}: rotation [0, 0, 0, 0] is not a rotation")));
+        }
+        normalised += usize::from((length - 1.0).abs() > UNIT_ROTATION_TOLERANCE);
+        transforms.push(DAffine3::from_scale_rotation_translation(
+            scale,
+            rotation / length,
+            translation,
+        ));
+    }
+    Ok(Some((transforms, normalised)))
 }
 
 #[cfg(test)]
@@ -137,11 +129,10 @@ mod tests {
             vec![[2.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 0.0]],
         ]);
         let raw = node(json!({"TRANSLATION": 0, "ROTATION": 1, "SCALE": 2}));
-        let (instances, normalised) = super::read(&raw, &read).unwrap();
-        assert_eq!((instances.len(), normalised), (1, 0), "only node 0 is instanced");
-        let [a, b] = instances[&0][..] else {
-            panic!("two instances")
-        };
+        assert!(of_node(&raw, 1, &read).unwrap().is_none(), "node 1 is not instanced");
+        let (instances, normalised) = of_node(&raw, 0, &read).unwrap().unwrap();
+        assert_eq!(normalised, 0);
+        let [a, b] = instances[..] else { panic!("two instances") };
         // (1, 0, 0) scaled to (2, 0, 0), turned a quarter about y to
         // (0, 0, -2), moved by (10, 0, 0).
         assert!(
@@ -157,9 +148,9 @@ mod tests {
     #[test]
     fn rotations_are_normalised_and_counted() {
         let read = reading(vec![vec![[0.0, 0.0, 0.0, 2.0], [0.0, 0.0, 0.0, 1.003]]]);
-        let (instances, normalised) = super::read(&node(json!({"ROTATION": 0})), &read).unwrap();
+        let (instances, normalised) = of_node(&node(json!({"ROTATION": 0})), 0, &read).unwrap().unwrap();
         assert_eq!(normalised, 1, "only the rotation far off unit length is counted");
-        for instance in &instances[&0] {
+        for instance in &instances {
             assert!(
                 instance.transform_point3(DVec3::X).abs_diff_eq(DVec3::X, 1e-12),
                 "{instance}"
@@ -195,7 +186,7 @@ mod tests {
             (json!({"SCALE": 3}), vec![one], "accessor 3 does not exist"),
         ];
         for (attributes, accessors, why) in refused {
-            let e = super::read(&node(attributes), &reading(accessors)).unwrap_err();
+            let e = of_node(&node(attributes), 0, &reading(accessors)).unwrap_err();
             assert!(
                 e.starts_with("node 0: EXT_mesh_gpu_instancing") && e.contains(why),
                 "{why}: {e}"

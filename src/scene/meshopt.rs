@@ -23,7 +23,7 @@ use meshoptimizer_rs::{Limits, Workspace};
 use serde_json::Value;
 
 /// The extensions' names, as files list them.
-pub const MESHOPT: &str = "EXT_meshopt_compression";
+pub const EXT_MESHOPT: &str = "EXT_meshopt_compression";
 pub const KHR_MESHOPT: &str = "KHR_meshopt_compression";
 
 /// A view's post-decompression filter: the codec's, and COLOR, which only
@@ -103,7 +103,7 @@ fn shortest_stream(mode: Mode, count: usize, stride: usize, version: u8) -> Opti
         // vertex and a byte per 4 of its bytes, padded to 24 bytes.
         Mode::Attributes => {
             let block = ((8192 / stride) & !15).min(256);
-            let body = count.div_ceil(block) * (stride / 4);
+            let body = count.div_ceil(block).checked_mul(stride / 4)?;
             body.checked_add((stride + stride / 4).max(24))?.checked_add(1)
         }
         // A header byte, a code byte per triangle (three indices, at most
@@ -121,13 +121,13 @@ pub fn compressed_views(document: &Value) -> Result<Vec<CompressedView>, String>
     let views = document["bufferViews"].as_array().map_or(&[][..], Vec::as_slice);
     let mut out = Vec::new();
     for (k, view) in views.iter().enumerate() {
-        let extension = match [MESHOPT, KHR_MESHOPT].map(|name| !view["extensions"][name].is_null()) {
+        let extension = match [EXT_MESHOPT, KHR_MESHOPT].map(|name| !view["extensions"][name].is_null()) {
             [false, false] => continue,
-            [true, false] => MESHOPT,
+            [true, false] => EXT_MESHOPT,
             [false, true] => KHR_MESHOPT,
             [true, true] => {
                 return Err(format!(
-                    "bufferView {k} uses both {MESHOPT} and {KHR_MESHOPT}, which the latter forbids"
+                    "bufferView {k} uses both {EXT_MESHOPT} and {KHR_MESHOPT}, which the latter forbids"
                 ));
             }
         };
@@ -156,11 +156,11 @@ pub fn compressed_views(document: &Value) -> Result<Vec<CompressedView>, String>
             Some(_) => return Err(fail("has an unknown 'filter'")),
         };
         if mode != Mode::Attributes && filter != ViewFilter::Codec(Filter::None) {
-            return Err(fail("filters indices, which only ATTRIBUTES may be"));
+            return Err(fail("has a filter, which only ATTRIBUTES views may have"));
         }
         let count = number(ext, "count", None)?;
         let stride = number(ext, "byteStride", None)?;
-        if number(view, "byteLength", None)? != count.saturating_mul(stride) {
+        if count.checked_mul(stride) != Some(number(view, "byteLength", None)?) {
             return Err(fail("decodes to a length other than its view's byteLength"));
         }
         let stride_fits = match mode {
@@ -205,7 +205,7 @@ pub fn compressed_views(document: &Value) -> Result<Vec<CompressedView>, String>
 pub fn is_placeholder(document: &Value, index: usize) -> bool {
     let buffer = &document["buffers"][index];
     let fallback = |extension: &str| buffer["extensions"][extension]["fallback"] == Value::Bool(true);
-    (fallback(MESHOPT) || fallback(KHR_MESHOPT)) && buffer.get("uri").is_none()
+    (fallback(EXT_MESHOPT) || fallback(KHR_MESHOPT)) && buffer.get("uri").is_none()
 }
 
 /// Decodes every view of `views` into its place in `buffers`, using at most
@@ -236,6 +236,8 @@ pub fn decode(buffers: &mut [Vec<u8>], views: &[CompressedView], limit: u64) -> 
             (_, mode, ViewFilter::Codec(filter)) => {
                 decode_buffer_view_into(target, mode, filter, count, stride, &source, ws)
             }
+            // Refused as the views were read (`compressed_views`); a view
+            // made otherwise is refused here too.
             (_, _, ViewFilter::Color) => {
                 return Err(fail(
                     "has the COLOR filter, which only ATTRIBUTES of KHR_meshopt_compression may".into(),
@@ -377,15 +379,15 @@ mod tests {
         }
         // The EXT extension has neither the filter nor version 1, and a view
         // may not use both extensions.
-        let e = compressed_views(&one_view(&[MESHOPT], extension.clone(), 64, 4)).unwrap_err();
+        let e = compressed_views(&one_view(&[EXT_MESHOPT], extension.clone(), 64, 4)).unwrap_err();
         assert!(e.contains("EXT_meshopt_compression has an unknown 'filter'"), "{e}");
         let plain = serde_json::json!({
             "buffer": 0, "byteLength": stream.len(), "mode": "ATTRIBUTES", "count": 64, "byteStride": 4
         });
-        let views = compressed_views(&one_view(&[MESHOPT], plain, 64, 4)).unwrap();
+        let views = compressed_views(&one_view(&[EXT_MESHOPT], plain, 64, 4)).unwrap();
         let e = decode(&mut buffers, &views, 1 << 20).unwrap_err();
         assert!(e.contains("EXT_meshopt_compression does not decode"), "{e}");
-        let e = compressed_views(&one_view(&[MESHOPT, KHR_MESHOPT], extension, 64, 4)).unwrap_err();
+        let e = compressed_views(&one_view(&[EXT_MESHOPT, KHR_MESHOPT], extension, 64, 4)).unwrap_err();
         assert!(e.contains("uses both"), "{e}");
     }
 }

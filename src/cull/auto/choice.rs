@@ -245,6 +245,10 @@ enum Due {
     Explore,
     /// It is known not to be; a recheck sees whether that has changed.
     Recheck,
+    /// A recheck where the view outgrew the one in which occlusion last
+    /// found nothing hidden: at once and whatever the budget, once per such
+    /// finding.
+    Outgrown,
 }
 
 /// A probe under way: its strategy, the frames left after this one, and
@@ -320,6 +324,9 @@ pub(super) struct Chooser {
     /// What rechecks have cost so far beyond the incumbent's frames beside
     /// them, in those frames (settling frames included).
     recheck_spent: f64,
+    /// The frame of the finding of nothing hidden after which the view last
+    /// outgrew it and occlusion looked ([`Due::Outgrown`]).
+    looked_outgrown: Option<u64>,
     /// The log times of every strategy in each calibrating warm-up frame
     /// ([`Chooser::calibrate`]), the last [`WINDOW`].
     calibration: VecDeque<Vec<f64>>,
@@ -355,6 +362,7 @@ impl Chooser {
             reach,
             budget,
             recheck_spent: 0.0,
+            looked_outgrown: None,
             calibration: VecDeque::new(),
             calibrated_view: None,
             last: None,
@@ -390,7 +398,10 @@ impl Chooser {
         let after_probe = self.last.is_some_and(|t| t.probe);
         if !after_probe && let Some((s, due)) = self.most_promising_due(view, settles) {
             let settling = u32::from(settles[s]);
-            let recheck = due == Due::Recheck;
+            let recheck = due != Due::Explore;
+            if due == Due::Outgrown {
+                self.looked_outgrown = self.hidden.map(|h| h.frame);
+            }
             self.probing = settling.checked_sub(1).map(|left| Probing {
                 strategy: s,
                 left,
@@ -740,8 +751,8 @@ impl Chooser {
             if !view.differs(&h.view, self.reach) || Some(s) != self.most_promising_occlusion() {
                 return None;
             }
-            if view.outgrew(&h.view) {
-                return Some(Due::Recheck);
+            if view.outgrew(&h.view) && self.looked_outgrown != Some(h.frame) {
+                return Some(Due::Outgrown);
             }
             (self.frame - h.frame, self.recheck(s, settles, 1), Due::Recheck)
         } else {

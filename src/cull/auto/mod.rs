@@ -25,9 +25,14 @@
 //!   walks share one set of visible lists, so a walk takes over the visible
 //!   set the last one found, as if it had run all along; after a frame the
 //!   CPU decided, the walks start from what it drew when an occlusion
-//!   culler drew it (from their own lists, gone stale, after `vfc`), and
-//!   their first frame then only settles them and is not measured. A culler
-//!   that keeps its visible set on the CPU is handed the objects drawn last.
+//!   culler drew it (after `vfc`, from their own lists gone stale, unless
+//!   those were written where the view differed materially: then from
+//!   everything in the frustum, which their test against its depth sorts
+//!   out in one frame), and their first frame then only settles them and is
+//!   not measured. A culler that keeps its visible set on the CPU is handed
+//!   the objects drawn last. A walk's frame that started from stale lists,
+//!   or from everything in the frustum, drew that set untested: it does not
+//!   count towards what occlusion hides.
 //! - **Warm-up**: in a warm-up frame every candidate renders the frame in
 //!   turn, from a cleared target, so none pays its first frame (pipelines
 //!   compiled on first use) in a recorded one. From the second warm-up
@@ -144,10 +149,11 @@ struct Ran {
     view: View,
     /// Whether the frustum's triangles were counted in it.
     counted: bool,
-    /// Whether it started from a visible set of this view. One that did
-    /// not (a walk's lists from another view, or everything in the frustum
-    /// after `vfc`) draws more than occlusion needs here, so what it drew
-    /// says nothing of what occlusion hides.
+    /// Whether it started from a visible set of this view. A GPU walk that
+    /// did not (its lists from another view, or everything in the frustum
+    /// after `vfc`) draws that set before it tests anything, more than
+    /// occlusion needs here, so what it drew says nothing of what
+    /// occlusion hides.
     fresh: bool,
 }
 
@@ -272,9 +278,12 @@ impl AutoCulling {
                 }
                 !stale_lists || drawn_by == Family::Occlusion
             }
+            // The CPU culler draws only what its own test passes: a seed of
+            // everything in the frustum gives it more occluders, not more to
+            // draw.
             Carries::VisibleOnCpu => {
                 self.candidates[k].culler.seed_visible(&self.last_drawn);
-                drawn_by == Family::Occlusion
+                true
             }
             Carries::Nothing | Carries::OwnState => true,
         }
@@ -428,9 +437,14 @@ impl Culler for AutoCulling {
         // What occlusion hides changes with the view, slowly: counted on a
         // probe and every COUNT_EVERY frames, so the count (a frustum
         // traversal) costs little on a GPU whose frames are short.
+        // The first recorded frame (after warm-up, which counts them too) is
+        // counted, so what occlusion hides is known from it.
         let counted = turn.measured
             && self.candidates[k].family() == Family::Occlusion
-            && (turn.probe || self.frames.is_multiple_of(COUNT_EVERY) || self.frustum_triangles == 0);
+            && (turn.probe
+                || self.frames.is_multiple_of(COUNT_EVERY)
+                || self.ran.is_none()
+                || self.frustum_triangles == 0);
         if counted {
             self.frustum_triangles = self.count_frustum_triangles(input);
             view.frustum_triangles = self.frustum_triangles;
