@@ -227,13 +227,10 @@ fn draco_codes_integer_positions_losslessly() {
 
 #[test]
 fn malformed_draco_data_is_an_error_not_a_crash() {
-    let (json, bin) = unpack(&std::fs::read(fixtures().join("draco.glb")).unwrap());
-    let dir = tempfile::tempdir().unwrap();
-    let try_load = |json: &serde_json::Value, bin: &[u8]| {
-        let model = common::write(dir.path(), "m.glb", occlu::export::pack(json, bin.to_vec()).unwrap());
-        load(&SceneSpec::File(model), &LoadOptions::default()).map_err(|e| e.to_string())
-    };
-    assert!(try_load(&json, &bin).is_ok(), "the unchanged file loads");
+    let file = Unpacked::fixture("draco.glb");
+    let (json, bin) = (&file.json, &file.bin);
+    let try_load = |json: &serde_json::Value, bin: &[u8]| file.load(json, bin);
+    assert!(try_load(json, bin).is_ok(), "the unchanged file loads");
     let edited = |edit: &dyn Fn(&mut serde_json::Value)| {
         let mut json = json.clone();
         edit(&mut json);
@@ -284,25 +281,26 @@ fn malformed_draco_data_is_an_error_not_a_crash() {
         ),
     ];
     for (json, why) in refused {
-        let e = try_load(&json, &bin).unwrap_err();
+        let e = try_load(&json, bin).unwrap_err();
         assert!(e.contains(why) && !e.contains('\n'), "{why}: {e}");
     }
     // Every byte of the streams overwritten, and each one flipped in turn:
     // refused or decoded into some geometry, never a panic.
     for fill in [0x00, 0xff, 0xa0] {
-        let _ = try_load(&json, &vec![fill; bin.len()]);
+        let _ = try_load(json, &vec![fill; bin.len()]);
     }
     let first_view = json["bufferViews"][0]["byteLength"].as_u64().unwrap() as usize;
     for at in 0..first_view {
         let mut flipped = bin.clone();
         flipped[at] ^= 0x5a;
-        let _ = try_load(&json, &flipped);
+        let _ = try_load(json, &flipped);
     }
 }
 
 #[test]
 fn instances_shared_by_many_nodes_are_bounded_by_the_file() {
-    let (json, bin) = unpack(&std::fs::read(fixtures().join("instanced.glb")).unwrap());
+    let file = Unpacked::fixture("instanced.glb");
+    let json = &file.json;
     let instanced = json["nodes"]
         .as_array()
         .unwrap()
@@ -310,7 +308,6 @@ fn instances_shared_by_many_nodes_are_bounded_by_the_file() {
         .find(|n| !n["extensions"]["EXT_mesh_gpu_instancing"].is_null())
         .unwrap()
         .clone();
-    let dir = tempfile::tempdir().unwrap();
     let try_with = |copies: usize| {
         let mut json = json.clone();
         let first = json["nodes"].as_array().unwrap().len();
@@ -321,8 +318,7 @@ fn instances_shared_by_many_nodes_are_bounded_by_the_file() {
         for k in first..first + copies {
             json["scenes"][scene]["nodes"].as_array_mut().unwrap().push(k.into());
         }
-        let model = common::write(dir.path(), "m.glb", occlu::export::pack(&json, bin.clone()).unwrap());
-        load(&SceneSpec::File(model), &LoadOptions::default()).map_err(|e| e.to_string())
+        file.load(&json, &file.bin)
     };
     // Three instances a node: 30 more nodes place 90 more objects; 2 000
     // would place 6 000 from a file whose buffers hold a few kilobytes.
@@ -356,24 +352,44 @@ fn repeated_validation_errors_are_summarised() {
     assert!(e.len() < 300, "{e}");
 }
 
-/// A GLB's JSON and binary chunks.
-fn unpack(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
-    let word = |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
-    let json_length = word(12);
-    let json = serde_json::from_slice(&glb[20..20 + json_length]).unwrap();
-    let bin_at = 20 + json_length;
-    (json, glb[bin_at + 8..bin_at + 8 + word(bin_at)].to_vec())
+/// A fixture GLB's JSON and binary chunks, to be edited, and a folder to
+/// load the edited files from.
+struct Unpacked {
+    json: serde_json::Value,
+    bin: Vec<u8>,
+    dir: tempfile::TempDir,
+}
+
+impl Unpacked {
+    fn fixture(name: &str) -> Unpacked {
+        let glb = std::fs::read(fixtures().join(name)).unwrap();
+        let word = |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
+        let json_length = word(12);
+        let bin_at = 20 + json_length;
+        Unpacked {
+            json: serde_json::from_slice(&glb[20..20 + json_length]).unwrap(),
+            bin: glb[bin_at + 8..bin_at + 8 + word(bin_at)].to_vec(),
+            dir: tempfile::tempdir().unwrap(),
+        }
+    }
+
+    /// Loads the GLB of `json` and `bin`.
+    fn load(&self, json: &serde_json::Value, bin: &[u8]) -> Result<Scene, String> {
+        let model = common::write(
+            self.dir.path(),
+            "m.glb",
+            occlu::export::pack(json, bin.to_vec()).unwrap(),
+        );
+        load(&SceneSpec::File(model), &LoadOptions::default()).map_err(|e| e.to_string())
+    }
 }
 
 #[test]
 fn malformed_meshopt_data_is_an_error_not_a_crash() {
-    let (json, bin) = unpack(&std::fs::read(fixtures().join("meshopt-quantized.glb")).unwrap());
-    let dir = tempfile::tempdir().unwrap();
-    let try_load = |json: &serde_json::Value, bin: &[u8]| {
-        let model = common::write(dir.path(), "m.glb", occlu::export::pack(json, bin.to_vec()).unwrap());
-        load(&SceneSpec::File(model), &LoadOptions::default()).map_err(|e| e.to_string())
-    };
-    assert!(try_load(&json, &bin).is_ok(), "the unchanged file loads");
+    let file = Unpacked::fixture("meshopt-quantized.glb");
+    let (json, bin) = (&file.json, &file.bin);
+    let try_load = |json: &serde_json::Value, bin: &[u8]| file.load(json, bin);
+    assert!(try_load(json, bin).is_ok(), "the unchanged file loads");
     // The file with its first compressed view's extension object edited.
     let edited = |edit: &dyn Fn(&mut serde_json::Value)| {
         let mut json = json.clone();
@@ -415,14 +431,14 @@ fn malformed_meshopt_data_is_an_error_not_a_crash() {
         ),
     ];
     for (json, why) in refused {
-        let e = try_load(&json, &bin).unwrap_err();
+        let e = try_load(&json, bin).unwrap_err();
         assert!(e.contains(why) && e.contains("EXT_meshopt_compression"), "{why}: {e}");
     }
     // Every byte of the compressed streams overwritten: refused or decoded
     // into some geometry, never a panic.
     for fill in [0x00, 0xff, 0xa0] {
         let garbage = vec![fill; bin.len()];
-        let _ = try_load(&json, &garbage);
+        let _ = try_load(json, &garbage);
     }
 }
 

@@ -26,7 +26,7 @@
 //!   set the last one found, as if it had run all along; after a frame the
 //!   CPU decided, the walks start from what it drew when an occlusion
 //!   culler drew it (after `vfc`, from their own lists gone stale, unless
-//!   those were written where the view differed materially: then from
+//!   those were written in a frustum the view has outgrown: then from
 //!   everything in the frustum, which their test against its depth sorts
 //!   out in one frame), and their first frame then only settles them and is
 //!   not measured. A culler that keeps its visible set on the CPU is handed
@@ -176,9 +176,6 @@ pub struct AutoCulling {
     /// The frame a GPU walk last ran, which left the lists as it found them,
     /// and where that frame looked from.
     lists_written: Option<(u64, View)>,
-    /// How far the eye moves before a view differs materially (a tenth of
-    /// the scene), set in `prepare`.
-    reach: f64,
     /// The last recorded frame; `None` after a warm-up frame.
     ran: Option<Ran>,
     /// The candidates that ran in the current frame (all of them in a
@@ -222,7 +219,6 @@ impl AutoCulling {
             frames: 0,
             warm_ups: 0,
             lists_written: None,
-            reach: 0.0,
             ran: None,
             running: Vec::new(),
             last_drawn: Vec::new(),
@@ -235,11 +231,13 @@ impl AutoCulling {
     }
 
     /// Whether the walks' lists are stale in `view`: no walk wrote them in
-    /// the last two frames, or the last one that did looked from a view
-    /// that differs materially.
+    /// the last two frames, or the last one that did looked at a frustum
+    /// that `view` outgrew (a camera turning from an empty edge into the
+    /// city; an orbit's or a walk's lists from two frames ago still hold
+    /// most of what is visible).
     fn lists_stale(&self, view: &View) -> bool {
         self.lists_written
-            .is_none_or(|(f, written)| self.frames - f > 2 || view.differs(&written, self.reach))
+            .is_none_or(|(f, written)| self.frames - f > 2 || view.outgrew(&written))
     }
 
     /// Whether candidate `k` must first settle in `view`: a walk whose lists
@@ -266,12 +264,12 @@ impl AutoCulling {
         match carries {
             // Stale lists take what an occlusion culler decided on the CPU.
             // After `vfc` (all in the frustum) they are better kept, unless
-            // they were written where the view differed materially: a walk
+            // they were written in a frustum this view outgrew: a walk
             // that starts from everything in the frustum tests against its
             // depth and knows what is visible after one frame, one that
             // starts from another view's lists needs two.
             Carries::VisibleOnGpu => {
-                let written_elsewhere = self.lists_written.is_some_and(|(_, v)| view.differs(&v, self.reach));
+                let written_elsewhere = self.lists_written.is_some_and(|(_, v)| view.outgrew(&v));
                 let upload = stale_lists && (drawn_by == Family::Occlusion || written_elsewhere);
                 if let (true, Some(lists), Some(gpu)) = (upload, &self.lists, ctx.on_gpu()) {
                     lists.upload(gpu.gpu(), &self.last_drawn);
@@ -387,8 +385,8 @@ impl Culler for AutoCulling {
         // and its first frame tells how much.
         let incumbent = families.iter().position(|&f| f == Family::Occlusion).unwrap_or(0);
         let root = setup.hierarchy.root().bounds;
-        self.reach = 0.1 * (root.max - root.min).length();
-        self.chooser = Some(Chooser::new(&families, incumbent, self.reach, self.params.budget / 100.0));
+        let reach = 0.1 * (root.max - root.min).length();
+        self.chooser = Some(Chooser::new(&families, incumbent, reach, self.params.budget / 100.0));
         Ok(())
     }
 
