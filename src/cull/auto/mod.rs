@@ -157,6 +157,45 @@ struct Ran {
     fresh: bool,
 }
 
+/// How a GPU walk starts a frame in `view` (frame number `frame`), its
+/// shared lists last written in the frame and view `written`, handed the
+/// last frame's drawn set by a culler of family `handed_by` (none where it
+/// ran last itself).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct WalkStart {
+    /// No walk wrote the lists in the last two frames, or the last one
+    /// that did looked at a frustum `view` outgrew (a camera turning from
+    /// an empty edge into the city; an orbit's or a walk's lists from two
+    /// frames ago still hold most of what is visible).
+    stale: bool,
+    /// The drawn set replaces stale lists: where an occlusion culler drew
+    /// it, and after `vfc` (all in the frustum) only where the lists were
+    /// written in a frustum `view` outgrew. A walk that starts from
+    /// everything in the frustum tests against its depth and knows what is
+    /// visible after one frame; one that starts from another view's lists
+    /// needs two.
+    upload: bool,
+    /// It starts from a visible set of this view ([`Ran::fresh`]).
+    fresh: bool,
+}
+
+fn walk_start(written: Option<(u64, View)>, frame: u64, view: &View, handed_by: Option<Family>) -> WalkStart {
+    let outgrown = written.is_some_and(|(_, w)| view.outgrew(&w));
+    let stale = outgrown || written.is_none_or(|(f, _)| frame - f > 2);
+    match handed_by {
+        None => WalkStart {
+            stale,
+            upload: false,
+            fresh: !stale,
+        },
+        Some(family) => WalkStart {
+            stale,
+            upload: stale && (family == Family::Occlusion || outgrown),
+            fresh: !stale || family == Family::Occlusion,
+        },
+    }
+}
+
 /// Frames between counts of the frustum's triangles while an occlusion
 /// culler runs.
 const COUNT_EVERY: u64 = 8;
@@ -230,14 +269,9 @@ impl AutoCulling {
         })
     }
 
-    /// Whether the walks' lists are stale in `view`: no walk wrote them in
-    /// the last two frames, or the last one that did looked at a frustum
-    /// that `view` outgrew (a camera turning from an empty edge into the
-    /// city; an orbit's or a walk's lists from two frames ago still hold
-    /// most of what is visible).
+    /// Whether the walks' lists are stale in `view` ([`walk_start`]).
     fn lists_stale(&self, view: &View) -> bool {
-        self.lists_written
-            .is_none_or(|(f, written)| self.frames - f > 2 || view.outgrew(&written))
+        walk_start(self.lists_written, self.frames, view, None).stale
     }
 
     /// Whether candidate `k` must first settle in `view`: a walk whose lists
@@ -262,19 +296,12 @@ impl AutoCulling {
             return !stale_lists;
         };
         match carries {
-            // Stale lists take what an occlusion culler decided on the CPU.
-            // After `vfc` (all in the frustum) they are better kept, unless
-            // they were written in a frustum this view outgrew: a walk
-            // that starts from everything in the frustum tests against its
-            // depth and knows what is visible after one frame, one that
-            // starts from another view's lists needs two.
             Carries::VisibleOnGpu => {
-                let written_elsewhere = self.lists_written.is_some_and(|(_, v)| view.outgrew(&v));
-                let upload = stale_lists && (drawn_by == Family::Occlusion || written_elsewhere);
-                if let (true, Some(lists), Some(gpu)) = (upload, &self.lists, ctx.on_gpu()) {
+                let start = walk_start(self.lists_written, self.frames, view, Some(drawn_by));
+                if let (true, Some(lists), Some(gpu)) = (start.upload, &self.lists, ctx.on_gpu()) {
                     lists.upload(gpu.gpu(), &self.last_drawn);
                 }
-                !stale_lists || drawn_by == Family::Occlusion
+                start.fresh
             }
             // The CPU culler draws only what its own test passes: a seed of
             // everything in the frustum gives it more occluders, not more to
@@ -481,5 +508,43 @@ impl Culler for AutoCulling {
             strategy: self.candidates[ran.turn.strategy].id.name(),
             probe: ran.turn.probe,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+
+    /// A view from `eye` looking along `forward` at `triangles` triangles.
+    fn view(eye: f64, forward: DVec3, triangles: u64) -> View {
+        View {
+            eye: DVec3::new(eye, 0.0, 0.0),
+            forward,
+            frustum_triangles: triangles,
+        }
+    }
+
+    #[test]
+    fn a_walk_s_lists_go_stale_with_time_or_where_the_view_outgrew_them_not_where_it_moved() {
+        let streets = view(0.0, DVec3::NEG_Z, 10_000);
+        let start = |written: (u64, View), handed_by| walk_start(Some(written), 10, &streets, handed_by);
+        let walk = |stale, upload, fresh| WalkStart { stale, upload, fresh };
+        // An orbit: written two frames ago, far away and turned 45°, over as
+        // many triangles. The lists are kept after vfc, and what the walk
+        // draws from them counts.
+        let orbit = view(500.0, DVec3::new(1.0, 0.0, -1.0).normalize(), 9_000);
+        assert_eq!(start((8, orbit), Some(Family::Frustum)), walk(false, false, true));
+        // A turn from an empty edge into the streets: replaced even after
+        // vfc, and the walk's first frame there does not count.
+        let edge = view(0.0, DVec3::X, 20);
+        assert_eq!(start((8, edge), Some(Family::Frustum)), walk(true, true, false));
+        assert_eq!(start((9, edge), None), walk(true, false, false));
+        // Old lists of this view: replaced by what an occlusion culler drew
+        // (which counts), kept after vfc (which does not).
+        assert_eq!(start((5, streets), Some(Family::Occlusion)), walk(true, true, true));
+        assert_eq!(start((5, streets), Some(Family::Frustum)), walk(true, false, false));
+        assert_eq!(walk_start(None, 10, &streets, None), walk(true, false, false));
     }
 }
