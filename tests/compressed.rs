@@ -333,6 +333,62 @@ fn instances_shared_by_many_nodes_are_bounded_by_the_file() {
 }
 
 #[test]
+fn instances_decoded_from_a_few_compressed_bytes_are_bounded_by_the_bytes_the_file_holds() {
+    use meshoptimizer_rs::codec::{VertexEncoding, encode_vertex_buffer};
+    use meshoptimizer_rs::{Limits, Workspace};
+    // 200 000 translations, all zero, as version 1 of the attribute codec
+    // writes them: 2 400 000 bytes from about 2 400.
+    let (count, stride) = (200_000usize, 12usize);
+    let stream = encode_vertex_buffer(
+        &vec![0; count * stride],
+        count,
+        stride,
+        VertexEncoding::new(1, 2).unwrap(),
+        &mut Workspace::new(Limits::default()),
+    )
+    .unwrap();
+    let file = Unpacked::fixture("instanced.glb");
+    let (mut json, mut bin) = (file.json.clone(), file.bin.clone());
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let offset = bin.len();
+    bin.extend(&stream);
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    json["buffers"][0]["byteLength"] = bin.len().into();
+    json["buffers"].as_array_mut().unwrap().push(serde_json::json!({
+        "byteLength": count * stride, "extensions": {"KHR_meshopt_compression": {"fallback": true}}
+    }));
+    let views = json["bufferViews"].as_array_mut().unwrap();
+    views.push(serde_json::json!({
+        "buffer": 1, "byteLength": count * stride,
+        "extensions": {"KHR_meshopt_compression": {
+            "buffer": 0, "byteOffset": offset, "byteLength": stream.len(), "byteStride": stride,
+            "mode": "ATTRIBUTES", "count": count
+        }}
+    }));
+    let view = views.len() - 1;
+    let accessors = json["accessors"].as_array_mut().unwrap();
+    accessors.push(serde_json::json!({"bufferView": view, "componentType": 5126, "count": count, "type": "VEC3"}));
+    let accessor = accessors.len() - 1;
+    for extensions in ["extensionsUsed", "extensionsRequired"] {
+        json[extensions]
+            .as_array_mut()
+            .unwrap()
+            .push("KHR_meshopt_compression".into());
+    }
+    let node = json["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|n| !n["extensions"]["EXT_mesh_gpu_instancing"].is_null())
+        .unwrap();
+    node["extensions"]["EXT_mesh_gpu_instancing"]["attributes"] = serde_json::json!({"TRANSLATION": accessor});
+    let Err(e) = file.load(&json, &bin) else {
+        panic!("200 000 instances from a file of a few kilobytes load")
+    };
+    assert!(e.contains("its nodes place more than"), "{e}");
+}
+
+#[test]
 fn repeated_validation_errors_are_summarised() {
     // 40 accessors that all lack their data.
     let mut w = GltfWriter::default();

@@ -36,9 +36,9 @@ pub fn load(path: &Path, bytes: &[u8], options: &LoadOptions, builder: &mut Scen
         ));
     }
     warn_of_what_is_ignored(&gltf, builder);
-    let buffers = load_buffers(path, &gltf, &raw, options, builder)?;
+    let (buffers, held_bytes) = load_buffers(path, &gltf, &raw, options, builder)?;
     let mut draco = draco_streams(&raw, &gltf, options).map_err(parse_error(path))?;
-    let reached = add_node_trees(path, &gltf, &raw, &buffers, &mut draco, builder)?;
+    let reached = add_node_trees(path, &gltf, &raw, &buffers, held_bytes, &mut draco, builder)?;
     let outside = gltf
         .nodes()
         .filter(|n| n.mesh().is_some() && !reached[n.index()])
@@ -231,6 +231,7 @@ fn add_node_trees(
     gltf: &gltf::Gltf,
     raw: &serde_json::Value,
     buffers: &[Vec<u8>],
+    held_bytes: u64,
     draco: &mut DracoStreams,
     builder: &mut SceneBuilder,
 ) -> Result<Vec<bool>, SceneError> {
@@ -243,12 +244,12 @@ fn add_node_trees(
         check_accessor(&accessor, what, types, dimensions, buffers)?;
         read_vectors::<4>(&accessor, buffers).ok_or_else(|| format!("{what}: data lies outside its buffer"))
     };
-    // Instances share accessors freely, so a few bytes could place millions
-    // of objects: a file's instances together may be no more than its
-    // buffers could hold as plain translations, DECODED_PER_FILE_BYTE times
-    // over.
-    let buffer_bytes = buffers.iter().map(|b| b.len() as u64).sum::<u64>();
-    let most_instances = DECODED_PER_FILE_BYTE.saturating_mul(buffer_bytes) / 12;
+    // Instances share accessors freely, and a compressed view of them may
+    // decode a thousand times its bytes, so a few bytes could place
+    // millions of objects: a file's instances together may be no more than
+    // the buffer bytes it holds could as plain translations,
+    // DECODED_PER_FILE_BYTE times over.
+    let most_instances = DECODED_PER_FILE_BYTE.saturating_mul(held_bytes) / 12;
     let (mut instances_placed, mut not_unit_instances) = (0u64, 0);
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
     let roots: Vec<gltf::Node> = match &scene {
@@ -294,7 +295,7 @@ fn add_node_trees(
                     if instances_placed > most_instances {
                         return Err(parse_error(format!(
                             "its nodes place more than {most_instances} instances ({INSTANCING}): \
-                             {DECODED_PER_FILE_BYTE} times what its {buffer_bytes} bytes of buffers hold \
+                             {DECODED_PER_FILE_BYTE} times what its {held_bytes} bytes of buffers hold \
                              as translations"
                         )));
                     }
@@ -459,14 +460,15 @@ fn summarise(e: &gltf::Error) -> String {
 }
 
 /// Every buffer's bytes, with meshopt-compressed views (EXT or KHR) decoded into
-/// their placeholder buffers; each file read is noted in `builder`.
+/// their placeholder buffers, and how many of those bytes the file holds
+/// (before decoding); each file read is noted in `builder`.
 fn load_buffers(
     path: &Path,
     gltf: &gltf::Gltf,
     raw: &serde_json::Value,
     options: &LoadOptions,
     builder: &mut SceneBuilder,
-) -> Result<Vec<Vec<u8>>, SceneError> {
+) -> Result<(Vec<Vec<u8>>, u64), SceneError> {
     let parse_error = parse_error(path);
     let compressed = match gltf.extensions_used().any(|e| e == EXT_MESHOPT || e == KHR_MESHOPT) {
         true => Some(meshopt::compressed_views(raw).map_err(parse_error)?),
@@ -499,8 +501,9 @@ fn load_buffers(
             buffer_data(path, gltf, &buffer, options, builder)?
         });
     }
+    let held = buffers.iter().map(|b| b.len() as u64).sum();
     let Some(views) = &compressed else {
-        return Ok(buffers);
+        return Ok((buffers, held));
     };
     // Every view's stream lies in data the file holds, and claims no more
     // than its length can hold (`meshopt::compressed_views`), before any
@@ -549,7 +552,7 @@ fn load_buffers(
         zeros.resize(length, 0);
     }
     meshopt::decode(&mut buffers, views, options.max_file_size).map_err(parse_error)?;
-    Ok(buffers)
+    Ok((buffers, held))
 }
 
 /// Bytes of padding a decoded buffer may hold per view beside the views'
