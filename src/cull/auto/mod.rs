@@ -160,7 +160,7 @@ struct Ran {
 /// How a GPU walk starts a frame in `view` (frame number `frame`), its
 /// shared lists last written in the frame and view `written`, handed the
 /// last frame's drawn set by a culler of family `handed_by` (none where it
-/// ran last itself).
+/// ran last itself, or nothing was drawn yet).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct WalkStart {
     /// No walk wrote the lists in the last two frames, or the last one
@@ -289,15 +289,12 @@ impl AutoCulling {
     /// drew, where it did not run then. Whether it then starts from a
     /// visible set of this view ([`Ran::fresh`]).
     fn hand_over(&mut self, k: usize, ctx: &mut dyn Frame, view: &View) -> bool {
-        let carries = self.candidates[k].carries();
-        let stale_lists = carries == Carries::VisibleOnGpu && self.lists_stale(view);
-        let (Some(drawn_by), false) = (self.last_drawn_by, self.ran.is_some_and(|r| r.turn.strategy == k)) else {
-            // Its own last frame's set, of this view unless the view jumped.
-            return !stale_lists;
-        };
-        match carries {
+        let handed_by = self
+            .last_drawn_by
+            .filter(|_| self.ran.is_none_or(|r| r.turn.strategy != k));
+        match self.candidates[k].carries() {
             Carries::VisibleOnGpu => {
-                let start = walk_start(self.lists_written, self.frames, view, Some(drawn_by));
+                let start = walk_start(self.lists_written, self.frames, view, handed_by);
                 if let (true, Some(lists), Some(gpu)) = (start.upload, &self.lists, ctx.on_gpu()) {
                     lists.upload(gpu.gpu(), &self.last_drawn);
                 }
@@ -307,7 +304,9 @@ impl AutoCulling {
             // everything in the frustum gives it more occluders, not more to
             // draw.
             Carries::VisibleOnCpu => {
-                self.candidates[k].culler.seed_visible(&self.last_drawn);
+                if handed_by.is_some() {
+                    self.candidates[k].culler.seed_visible(&self.last_drawn);
+                }
                 true
             }
             Carries::Nothing | Carries::OwnState => true,
