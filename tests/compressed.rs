@@ -272,13 +272,6 @@ fn malformed_draco_data_is_an_error_not_a_crash() {
             edited(&|j| draco(j)["attributes"] = 1.into()),
             "names no POSITION attribute id",
         ),
-        (
-            edited(&|j| {
-                j["extensionsUsed"] = serde_json::json!([]);
-                j["extensionsRequired"] = serde_json::json!([]);
-            }),
-            "its extensionsUsed does not list KHR_draco_mesh_compression",
-        ),
     ];
     for (json, why) in refused {
         let e = try_load(&json, bin).unwrap_err();
@@ -294,6 +287,31 @@ fn malformed_draco_data_is_an_error_not_a_crash() {
         let mut flipped = bin.clone();
         flipped[at] ^= 0x5a;
         let _ = try_load(json, &flipped);
+    }
+}
+
+#[test]
+fn an_extension_a_file_uses_without_listing_it_is_named() {
+    // Read without its extension, the instanced node would be drawn once,
+    // and the compressed files would fail on data they lack.
+    for (fixture, extension, site) in [
+        ("draco.glb", "KHR_draco_mesh_compression", "mesh 0 primitive 0"),
+        ("instanced.glb", "EXT_mesh_gpu_instancing", "node 1"),
+        ("meshopt-quantized.glb", "EXT_meshopt_compression", "bufferView 0"),
+        ("khr-meshopt.glb", "KHR_meshopt_compression", "bufferView 0"),
+    ] {
+        let file = Unpacked::fixture(fixture);
+        let mut json = file.json.clone();
+        for list in ["extensionsUsed", "extensionsRequired"] {
+            if let Some(names) = json[list].as_array_mut() {
+                names.retain(|name| name != extension);
+            }
+        }
+        let Err(e) = file.load(&json, &file.bin) else {
+            panic!("{fixture} loads without {extension} listed")
+        };
+        let expected = format!("{site} uses {extension}, but extensionsUsed does not list {extension}");
+        assert!(e.contains(&expected) && !e.contains('\n'), "{fixture}: {e}");
     }
 }
 

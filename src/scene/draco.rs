@@ -133,11 +133,6 @@ fn with_draco(raw: &Value) -> impl Iterator<Item = ((usize, usize), &Value)> {
     })
 }
 
-/// Whether any primitive of the document `raw` carries a Draco stream.
-pub fn carried(raw: &Value) -> bool {
-    with_draco(raw).next().is_some()
-}
-
 /// The accessors whose data Draco streams hold (of the document `raw`):
 /// the indices and the attributes the extension names of each primitive
 /// that carries one. They have no buffer view, which glTF's validation

@@ -111,6 +111,11 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
         return Err(parse_error(message));
     }
     check_primitive_accessors(unvalidated.document.as_json()).map_err(parse_error)?;
+    if let Some((site, extension)) = undeclared_use(&unvalidated) {
+        return Err(parse_error(format!(
+            "{site} uses {extension}, but extensionsUsed does not list {extension}, as glTF requires"
+        )));
+    }
     let raw = match unvalidated.extensions_used().any(|e| READ_FROM_JSON.contains(&e)) {
         true => raw_json(bytes).map_err(parse_error)?,
         false => serde_json::Value::Null,
@@ -119,22 +124,57 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
     let mut json = unvalidated.document.into_json();
     json.extensions_required
         .retain(|e| !DECODED.contains(&e.as_str()) && !NO_GEOMETRY.iter().any(|kind| e.starts_with(kind)));
-    let document = validated(json, &draco_decoded).map_err(|e| {
-        // Draco's accessors hold no data of their own: where the file does
-        // not declare the extension, that is why validation fails.
-        let undeclared = raw.is_null() && raw_json(bytes).is_ok_and(|raw| draco::carried(&raw));
-        match undeclared {
-            true => parse_error(format!(
-                "its primitives carry {DRACO} data, but its extensionsUsed does not list {DRACO}, as glTF requires"
-            )),
-            false => invalid(e),
-        }
-    })?;
+    let document = validated(json, &draco_decoded).map_err(invalid)?;
     let gltf = gltf::Gltf {
         document,
         blob: unvalidated.blob,
     };
     Ok((gltf, raw))
+}
+
+/// The first part of `gltf` that carries an extension occlu reads from the
+/// JSON ([`READ_FROM_JSON`]) which its `extensionsUsed` does not list, and
+/// that extension. Such a file is refused by name: read without its
+/// extension, an instanced node would be drawn once, and a compressed
+/// primitive or buffer view would fail on the data it lacks, or draw the
+/// fallback in its place.
+fn undeclared_use(gltf: &gltf::Gltf) -> Option<(String, &'static str)> {
+    let json = gltf.document.as_json();
+    let listed = |extension: &str| json.extensions_used.iter().any(|e| e == extension);
+    let carried = |others: Option<&serde_json::Map<String, serde_json::Value>>, extension: &str| {
+        !listed(extension) && others.is_some_and(|others| others.contains_key(extension))
+    };
+    let primitives = json.meshes.iter().enumerate().flat_map(|(m, mesh)| {
+        let primitives = mesh.primitives.iter().enumerate();
+        primitives.map(move |(p, primitive)| {
+            (
+                format!("mesh {m} primitive {p}"),
+                primitive.extensions.as_ref().map(|e| &e.others),
+                &[DRACO][..],
+            )
+        })
+    });
+    let nodes = json.nodes.iter().enumerate().map(|(n, node)| {
+        (
+            format!("node {n}"),
+            node.extensions.as_ref().map(|e| &e.others),
+            &[INSTANCING][..],
+        )
+    });
+    let views = json.buffer_views.iter().enumerate().map(|(k, view)| {
+        (
+            format!("bufferView {k}"),
+            view.extensions.as_ref().map(|e| &e.others),
+            &[EXT_MESHOPT, KHR_MESHOPT][..],
+        )
+    });
+    primitives
+        .chain(nodes)
+        .chain(views)
+        .find_map(|(site, others, extensions)| {
+            let extension = extensions.iter().find(|extension| carried(others, extension))?;
+            Some((site, *extension))
+        })
 }
 
 /// The document `json`, validated as the gltf crate validates it, except
