@@ -190,9 +190,10 @@ pub trait Culler {
     }
 
     /// Before a frame: the objects (ids of the frame's scene) another culler
-    /// drew last frame, for a mode that takes its occluders from last
-    /// frame's visible objects and did not run then (`auto` hands them to
-    /// the culler it probes). Modes that keep no such list ignore them.
+    /// drew last frame, for a mode that starts from last frame's visible
+    /// objects (as occluders, or drawn first) and did not run then (`auto`
+    /// hands them to the culler it probes). Modes that keep no such list
+    /// ignore them.
     fn seed_visible(&mut self, _visible: &[u32]) {}
 
     /// Before `prepare`: keep the visible set between frames in `lists`,

@@ -140,8 +140,14 @@ pub enum Needs {
 pub enum Carries {
     /// Nothing: every frame decides afresh.
     Nothing,
-    /// Last frame's visible objects, on the CPU; another culler's can be
-    /// handed to it ([`Culler::seed_visible`]).
+    /// Last frame's visible objects, on the CPU, as occluders: another
+    /// culler's can be handed to it ([`Culler::seed_visible`]), and it
+    /// draws only what its own test passes, so a larger set gives it more
+    /// occluders, not more to draw.
+    OccludersOnCpu,
+    /// Last frame's visible objects, on the CPU, drawn before anything is
+    /// tested: another culler's can be handed to it
+    /// ([`Culler::seed_visible`]), and it draws all it is handed.
     VisibleOnCpu,
     /// Last frame's visible objects, on the GPU, in lists that other GPU
     /// walks can share ([`Culler::share_visible_lists`]).

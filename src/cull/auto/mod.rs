@@ -30,9 +30,11 @@
 //!   everything in the frustum, which their test against its depth sorts
 //!   out in one frame), and their first frame then only settles them and is
 //!   not measured. A culler that keeps its visible set on the CPU is handed
-//!   the objects drawn last. A walk's frame that started from stale lists,
-//!   or from everything in the frustum, drew that set untested: it does not
-//!   count towards what occlusion hides.
+//!   the objects drawn last: `swr` takes them as occluders, `chc` as what
+//!   it found visible (after `vfc`, everything in the frustum, which it
+//!   draws once; that frame settles it and is not measured). A frame that
+//!   started from stale lists, or from everything in the frustum, drew that
+//!   set untested: it does not count towards what occlusion hides.
 //! - **Warm-up**: in a warm-up frame every candidate renders the frame in
 //!   turn, from a cleared target, so none pays its first frame (pipelines
 //!   compiled on first use) in a recorded one. From the second warm-up
@@ -280,8 +282,10 @@ impl AutoCulling {
         let ran_last = self.ran.is_some_and(|r| r.turn.strategy == k);
         match self.candidates[k].carries() {
             Carries::VisibleOnGpu => self.lists_stale(view),
+            // Handed everything in the frustum, it draws it all once.
+            Carries::VisibleOnCpu => !ran_last && self.last_drawn_by == Some(Family::Frustum),
             Carries::OwnState => !ran_last,
-            Carries::Nothing | Carries::VisibleOnCpu => false,
+            Carries::Nothing | Carries::OccludersOnCpu => false,
         }
     }
 
@@ -300,14 +304,13 @@ impl AutoCulling {
                 }
                 start.fresh
             }
-            // The CPU culler draws only what its own test passes: a seed of
-            // everything in the frustum gives it more occluders, not more to
-            // draw.
-            Carries::VisibleOnCpu => {
+            Carries::OccludersOnCpu | Carries::VisibleOnCpu => {
                 if handed_by.is_some() {
                     self.candidates[k].culler.seed_visible(&self.last_drawn);
                 }
-                true
+                // A culler that draws what it is handed draws everything in
+                // the frustum after `vfc`.
+                self.candidates[k].carries() == Carries::OccludersOnCpu || handed_by != Some(Family::Frustum)
             }
             Carries::Nothing | Carries::OwnState => true,
         }

@@ -225,6 +225,22 @@ impl TernaryTree {
         }
     }
 
+    /// Takes `visible` (objects) as what a traversal in `frame` found: every
+    /// node visited then, and visible where an object below it was, as
+    /// CHC's pull-up leaves them. Ids the tree does not hold are passed
+    /// over.
+    pub fn assume_visited(&mut self, visible: &[u32], frame: u32) {
+        for n in &mut self.nodes {
+            n.visible = false;
+            n.last_visited = Some(frame);
+        }
+        for &object in visible {
+            if let Some(&home) = self.home.get(object as usize).filter(|&&home| home != NO_NODE) {
+                self.pull_up_visibility(home);
+            }
+        }
+    }
+
     /// The box a query of `id` tests in `frame` (see the module comment).
     pub fn query_box(&mut self, id: u32, frame: u32) -> Aabb {
         let n = &self.nodes[id as usize];

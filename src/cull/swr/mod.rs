@@ -71,7 +71,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     params: &[RESOLUTION, TRIANGLES, THREADS, RESTS],
     exercised_with: &[("rests", "false")],
     needs: Needs::Nothing,
-    carries: Carries::VisibleOnCpu,
+    carries: Carries::OccludersOnCpu,
     auto: Candidacy::Always,
     check: |params| SwrParams::from_params(params).map(drop),
     build: |_, params| Ok(Box::new(SoftwareOcclusionCulling::new(SwrParams::from_params(params)?))),
