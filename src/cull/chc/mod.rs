@@ -22,7 +22,14 @@
 //!    visible node marks its ancestors visible (CHC's pull-up); a visible
 //!    leaf is drawn, a visible inner node opened.
 //! 4. **End of frame**: the leaves drawn without waiting are queried in one
-//!    batch for the next frame. Every query also counts the box's total
+//!    batch for the next frame, each only once in `chc.visible_for` frames
+//!    (001 §3: "a node visible in a few recent frames will probably be
+//!    visible again in this frame. Hence we can skip the occlusion query";
+//!    CHC++, Mattausch, Bittner and Wimmer, Eurographics 2008, likewise
+//!    queries a visible node only once in a number of frames, the frame
+//!    drawn at random per node so the queries spread); the others stay
+//!    visible.
+//!    Every query also counts the box's total
 //!    pixels (001 §3.3), and leaves are split or merged by their ratios
 //!    (001 §3.4), split across the axis that faces the camera.
 //!
@@ -32,8 +39,9 @@
 //!
 //! Departures: queries count pixels in one instanced draw per batch (the
 //! portable path of `gpu::queries`), so a batch is one round trip rather
-//! than asynchronous per-query results; the paper's "few recent frames" of
-//! visibility is one frame, as in CHC. Where `auto` runs it after another
+//! than asynchronous per-query results. A visible leaf's queries are spread
+//! by its id over the frames, where CHC++ draws a random first frame. Where
+//! `auto` runs it after another
 //! culler, it is handed the objects that culler drew
 //! ([`Culler::seed_visible`]) and starts as if it had found them visible
 //! itself: its own visibility is from the last frame it ran, too old to
@@ -63,8 +71,8 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [214, 39, 40],
     conservative: true,
     draws_by_time: false,
-    params: &[R_SPLIT, O_SPLIT, R_MERGE, O_MERGE, TIGHT_AFTER],
-    exercised_with: &[],
+    params: &[R_SPLIT, O_SPLIT, R_MERGE, O_MERGE, TIGHT_AFTER, VISIBLE_FOR],
+    exercised_with: &[("visible_for", "1")],
     needs: Needs::PixelCounts,
     carries: Carries::VisibleOnCpu,
     auto: Candidacy::Always,
@@ -102,10 +110,20 @@ const TIGHT_AFTER: ParamInfo = ParamInfo {
     summary: "frames without change before a node's TightBox replaces its cell",
 };
 
+const VISIBLE_FOR: ParamInfo = ParamInfo {
+    key: "visible_for",
+    default: "8",
+    summary: "frames a leaf found visible is drawn before it is queried again, each leaf in its own frame of them (1: every frame, as CHC)",
+};
+
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ChcParams {
     #[serde(flatten)]
     pub tree: TreeParams,
+    /// Frames a visible leaf is drawn before it is queried again (001 §3:
+    /// "a node visible in a few recent frames will probably be visible
+    /// again in this frame"); at least 1.
+    pub visible_for: u32,
 }
 
 impl ChcParams {
@@ -126,6 +144,10 @@ impl ChcParams {
                 r_merge: ratio(&R_MERGE)?,
                 o_merge: params.get(ModeId::Chc, &O_MERGE)?,
                 tight_after: params.get(ModeId::Chc, &TIGHT_AFTER)?,
+            },
+            visible_for: match params.get(ModeId::Chc, &VISIBLE_FOR)? {
+                0 => return Err(ModeError::bad(ModeId::Chc, &VISIBLE_FOR, "0: at least 1 (every frame)".into())),
+                frames => frames,
             },
         })
     }
@@ -202,8 +224,10 @@ pub struct CoherentCulling {
     tree: TernaryTree,
     queue: DepthQueue,
     batch: QueryBatch,
-    /// Leaves drawn without waiting, queried after the frame.
+    /// Leaves drawn without waiting, and those of them queried after the
+    /// frame.
     drawn_unqueried: QueryList,
+    checked: QueryList,
     answers: Answers,
     objects: Vec<u32>,
     /// What another culler drew last frame, taken as this mode's visible
@@ -221,6 +245,7 @@ impl CoherentCulling {
             queue: DepthQueue::default(),
             batch: QueryBatch::default(),
             drawn_unqueried: QueryList::default(),
+            checked: QueryList::default(),
             answers: Answers::default(),
             objects: Vec::new(),
             handed: None,
@@ -359,10 +384,23 @@ impl Culler for CoherentCulling {
             self.flush(ctx, &view, &mut stats);
         }
 
-        // 4. The leaves drawn without waiting are checked for the next frame.
-        if !self.drawn_unqueried.nodes.is_empty() {
-            self.answers.query(ctx, &mut self.tree, &self.drawn_unqueried, frame);
-            for (k, &node) in self.drawn_unqueried.nodes.iter().enumerate() {
+        // 4. The leaves drawn without waiting are checked for the next
+        // frame, each in one frame of `visible_for` (by its id, so that the
+        // checks spread over the frames); the others stay visible.
+        let visible_for = u64::from(self.params.visible_for);
+        let (checked, unchecked) = (&mut self.checked, &self.drawn_unqueried);
+        checked.clear();
+        for (&node, bounds) in unchecked.nodes.iter().zip(&unchecked.boxes) {
+            if (u64::from(frame) + u64::from(node)).is_multiple_of(visible_for) {
+                checked.nodes.push(node);
+                checked.boxes.push(*bounds);
+            } else {
+                self.tree.pull_up_visibility(node);
+            }
+        }
+        if !checked.nodes.is_empty() {
+            self.answers.query(ctx, &mut self.tree, checked, frame);
+            for (k, &node) in checked.nodes.iter().enumerate() {
                 if self.answers.visibility[k].is_visible() {
                     self.tree.pull_up_visibility(node);
                 }
@@ -401,6 +439,7 @@ mod tests {
                 o_split: u32::MAX,
                 ..TreeParams::default()
             },
+            visible_for: 1,
         };
         let mut chc = CoherentCulling::new(&scene, params);
         // A box shows when it holds part of the near or the side cube: the
@@ -434,6 +473,49 @@ mod tests {
     }
 
     #[test]
+    fn a_leaf_found_visible_is_queried_once_in_visible_for_frames_and_dropped_within_them_once_hidden() {
+        // Down −Z: two cubes side by side, both in view, leaves of their own.
+        let corners = [DVec3::new(-1.5, -0.5, -6.0), DVec3::new(0.5, -0.5, -6.0)];
+        let (scene, hierarchy) = cubes(&corners);
+        let camera = camera_down_z();
+        let first = scene.objects[0].bounds;
+        let runs = |visible_for: u32| {
+            let params = ChcParams {
+                tree: TreeParams {
+                    o_merge: 0,
+                    o_split: u32::MAX,
+                    ..TreeParams::default()
+                },
+                visible_for,
+            };
+            let mut chc = CoherentCulling::new(&scene, params);
+            // The first cube is hidden from frame 9 on.
+            let hidden = std::cell::Cell::new(false);
+            let mut double = Recording::new(|b: &Aabb| !(hidden.get() && *b == first));
+            let mut tests_and_last_drawn = (0, 0);
+            for frame in 0..20 {
+                hidden.set(frame >= 9);
+                double.calls.clear();
+                chc.frame(&mut double, &input(frame, &camera, &scene, &hierarchy));
+                if (1..9).contains(&frame) {
+                    tests_and_last_drawn.0 += double.batches().iter().map(|b| b.len()).sum::<usize>();
+                }
+                if double.drawn().contains(&0) {
+                    tests_and_last_drawn.1 = frame;
+                }
+            }
+            tests_and_last_drawn
+        };
+        // Frames 1 to 8 find both leaves visible and draw them unwaited:
+        // each queried every frame, or in two frames of the eight.
+        assert_eq!(runs(1), (16, 9));
+        let (tests, last_drawn) = runs(4);
+        assert_eq!(tests, 4);
+        // Hidden from frame 9: drawn until its next query, at most 4 on.
+        assert!((9..13).contains(&last_drawn), "{last_drawn}");
+    }
+
+    #[test]
     fn a_visible_set_handed_over_is_drawn_unwaited_and_the_rest_queried_without_descending_from_the_root() {
         // Down −Z: a row of 8 near cubes, and 8 far ones in their shadow.
         let corners: Vec<DVec3> = [-4.0, -12.0]
@@ -448,6 +530,7 @@ mod tests {
                 o_split: u32::MAX,
                 ..TreeParams::default()
             },
+            visible_for: 1,
         };
         let near: Vec<Aabb> = scene.objects[..8].iter().map(|o| o.bounds).collect();
         let overlaps = |a: &Aabb, b: &Aabb| a.min.cmple(b.max).all() && b.min.cmple(a.max).all();
