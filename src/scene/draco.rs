@@ -21,6 +21,7 @@
 
 use std::collections::{HashMap, HashSet};
 
+use super::gltf_json::list;
 use draco_core::{
     DataType, DecodeLimits, DecoderBuffer, ErrorKind, GeometryAttributeType, Mesh, MeshDecoder, PointIndex,
 };
@@ -114,11 +115,6 @@ fn extension_of(primitive: &Value) -> Result<DracoPrimitive, &'static str> {
         .and_then(|id| u32::try_from(id).ok())
         .ok_or("names no POSITION attribute id")?;
     Ok(DracoPrimitive { view, position })
-}
-
-/// A JSON array's items; none where it is not one.
-fn list(value: &Value) -> &[Value] {
-    value.as_array().map_or(&[], Vec::as_slice)
 }
 
 /// The primitives of the document `raw` (its JSON) that carry a Draco

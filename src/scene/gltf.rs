@@ -12,6 +12,7 @@ use gltf::mesh::Mode;
 
 use super::cameras;
 use super::draco::{self, DRACO, DracoStreams};
+use super::gltf_json::{self, list};
 use super::instancing::{self, INSTANCING};
 use super::meshopt::{self, EXT_MESHOPT, KHR_MESHOPT};
 use super::model::{MeshGroup, SceneBuilder};
@@ -102,7 +103,9 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
     // that require an extension occlu does not read. A file of another glTF
     // version is named so, whether or not it reads as glTF 2.0.
     let unvalidated = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| {
-        let asset = raw_json(bytes).map(|json| json["asset"].clone()).unwrap_or_default();
+        let asset = gltf_json::document(bytes)
+            .map(|json| json["asset"].clone())
+            .unwrap_or_default();
         let version = asset["version"].as_str().unwrap_or("2.0");
         unreadable_version(version, asset["minVersion"].as_str()).map_or_else(|| invalid(e), parse_error)
     })?;
@@ -111,15 +114,23 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
         return Err(parse_error(message));
     }
     check_primitive_accessors(unvalidated.document.as_json()).map_err(parse_error)?;
-    if let Some((site, extension)) = undeclared_use(&unvalidated) {
+    // The JSON is read as written where the file uses an extension read
+    // from it, or names one without declaring it (a scan of its text for
+    // the names: most files do neither).
+    let listed = |extension: &str| unvalidated.extensions_used().any(|e| e == extension);
+    let text = gltf_json::text(bytes).map_err(parse_error)?;
+    let unlisted_named = READ_FROM_JSON
+        .iter()
+        .any(|e| !listed(e) && memchr::memmem::find(&text, e.as_bytes()).is_some());
+    let raw = match READ_FROM_JSON.iter().any(|e| listed(e)) || unlisted_named {
+        true => gltf_json::document(bytes).map_err(parse_error)?,
+        false => serde_json::Value::Null,
+    };
+    if let Some((site, extension)) = undeclared_use(&raw, listed) {
         return Err(parse_error(format!(
             "{site} uses {extension}, but extensionsUsed does not list {extension}, as glTF requires"
         )));
     }
-    let raw = match unvalidated.extensions_used().any(|e| READ_FROM_JSON.contains(&e)) {
-        true => raw_json(bytes).map_err(parse_error)?,
-        false => serde_json::Value::Null,
-    };
     let draco_decoded = draco::decoded_accessors(&raw).map_err(parse_error)?;
     let mut json = unvalidated.document.into_json();
     json.extensions_required
@@ -132,49 +143,34 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
     Ok((gltf, raw))
 }
 
-/// The first part of `gltf` that carries an extension occlu reads from the
-/// JSON ([`READ_FROM_JSON`]) which its `extensionsUsed` does not list, and
+/// The first part of the document `raw` (its JSON) that carries an
+/// extension occlu reads from the JSON ([`READ_FROM_JSON`]) which
+/// `listed` says its `extensionsUsed` does not list, as a JSON path, and
 /// that extension. Such a file is refused by name: read without its
 /// extension, an instanced node would be drawn once, and a compressed
-/// primitive or buffer view would fail on the data it lacks, or draw the
-/// fallback in its place.
-fn undeclared_use(gltf: &gltf::Gltf) -> Option<(String, &'static str)> {
-    let json = gltf.document.as_json();
-    let listed = |extension: &str| json.extensions_used.iter().any(|e| e == extension);
-    let carried = |others: Option<&serde_json::Map<String, serde_json::Value>>, extension: &str| {
-        !listed(extension) && others.is_some_and(|others| others.contains_key(extension))
+/// primitive, buffer view or buffer would fail on the data it lacks, or
+/// draw the fallback in its place.
+fn undeclared_use(raw: &serde_json::Value, listed: impl Fn(&str) -> bool) -> Option<(String, &'static str)> {
+    const MESHOPT: [&str; 2] = [EXT_MESHOPT, KHR_MESHOPT];
+    let carried = |object: &serde_json::Value, extensions: &[&'static str]| {
+        extensions
+            .iter()
+            .copied()
+            .find(|&e| !listed(e) && object["extensions"].get(e).is_some())
     };
-    let primitives = json.meshes.iter().enumerate().flat_map(|(m, mesh)| {
-        let primitives = mesh.primitives.iter().enumerate();
-        primitives.map(move |(p, primitive)| {
-            (
-                format!("mesh {m} primitive {p}"),
-                primitive.extensions.as_ref().map(|e| &e.others),
-                &[DRACO][..],
-            )
-        })
-    });
-    let nodes = json.nodes.iter().enumerate().map(|(n, node)| {
-        (
-            format!("node {n}"),
-            node.extensions.as_ref().map(|e| &e.others),
-            &[INSTANCING][..],
-        )
-    });
-    let views = json.buffer_views.iter().enumerate().map(|(k, view)| {
-        (
-            format!("bufferView {k}"),
-            view.extensions.as_ref().map(|e| &e.others),
-            &[EXT_MESHOPT, KHR_MESHOPT][..],
-        )
+    let in_list = |key: &str, extensions: &[&'static str]| {
+        let mut objects = list(&raw[key]).iter().enumerate();
+        objects.find_map(|(k, object)| Some((format!("{key}[{k}]"), carried(object, extensions)?)))
+    };
+    let primitives = list(&raw["meshes"]).iter().enumerate().find_map(|(m, mesh)| {
+        let mut primitives = list(&mesh["primitives"]).iter().enumerate();
+        primitives
+            .find_map(|(p, primitive)| Some((format!("meshes[{m}].primitives[{p}]"), carried(primitive, &[DRACO])?)))
     });
     primitives
-        .chain(nodes)
-        .chain(views)
-        .find_map(|(site, others, extensions)| {
-            let extension = extensions.iter().find(|extension| carried(others, extension))?;
-            Some((site, *extension))
-        })
+        .or_else(|| in_list("nodes", &[INSTANCING]))
+        .or_else(|| in_list("bufferViews", &MESHOPT))
+        .or_else(|| in_list("buffers", &MESHOPT))
 }
 
 /// The document `json`, validated as the gltf crate validates it, except
@@ -602,20 +598,6 @@ const VIEW_PADDING: usize = 16;
 /// Decompressed bytes allowed per byte --max-file-size allows: meshopt
 /// rarely shrinks real geometry more than 4:1.
 const DECODED_PER_FILE_BYTE: u64 = 8;
-
-/// The document's JSON as it is written: the JSON chunk of a GLB, or the
-/// whole .gltf file.
-fn raw_json(bytes: &[u8]) -> Result<serde_json::Value, String> {
-    let text = if bytes.starts_with(b"glTF") {
-        gltf::Glb::from_slice(bytes)
-            .map_err(|e| format!("invalid GLB: {e}"))?
-            .json
-            .into_owned()
-    } else {
-        bytes.to_vec()
-    };
-    serde_json::from_slice(&text).map_err(|e| format!("invalid glTF JSON: {e}"))
-}
 
 /// Accessor indices of every primitive must exist.
 fn check_primitive_accessors(json: &gltf::json::Root) -> Result<(), String> {

@@ -15,6 +15,7 @@
 //! applied after. Each decodes a malformed stream into an error, not a
 //! crash.
 
+use super::gltf_json::list;
 use meshoptimizer_rs::codec::{
     Filter, Mode, decode_buffer_view_into, decode_filter_color, decode_filter_exp, decode_filter_oct,
     decode_filter_quat, decode_vertex_buffer_into,
@@ -118,7 +119,7 @@ fn shortest_stream(mode: Mode, count: usize, stride: usize, version: u8) -> Opti
 /// The compressed views of a glTF document (its raw JSON, since the gltf
 /// crate drops extensions it does not know).
 pub fn compressed_views(document: &Value) -> Result<Vec<CompressedView>, String> {
-    let views = document["bufferViews"].as_array().map_or(&[][..], Vec::as_slice);
+    let views = list(&document["bufferViews"]);
     let mut out = Vec::new();
     for (k, view) in views.iter().enumerate() {
         let extension = match [EXT_MESHOPT, KHR_MESHOPT].map(|name| !view["extensions"][name].is_null()) {

@@ -14,6 +14,7 @@ mod cluster;
 mod draco;
 mod focus;
 mod gltf;
+mod gltf_json;
 mod instancing;
 mod load;
 mod meshopt;
