@@ -198,6 +198,32 @@ fn walk_start(written: Option<(u64, View)>, frame: u64, view: &View, handed_by: 
     }
 }
 
+/// How a culler that keeps its visible set on the CPU (`carries`, one of
+/// [`Carries::OccludersOnCpu`] and [`Carries::VisibleOnCpu`]) starts a
+/// frame, handed the last frame's drawn set by a culler of family
+/// `handed_by` (none where it ran that frame itself, or every candidate
+/// did, in a warm-up frame).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct CpuStart {
+    /// It is handed the drawn set ([`Culler::seed_visible`]).
+    seed: bool,
+    /// Its first frame only settles it: one that draws what it is handed,
+    /// handed everything in the frustum by `vfc`, draws it all once.
+    settles: bool,
+    /// It starts from a visible set of this view ([`Ran::fresh`]): a seed
+    /// of occluders, which the culler's own test sorts, always does.
+    fresh: bool,
+}
+
+fn cpu_start(carries: Carries, handed_by: Option<Family>) -> CpuStart {
+    let everything = carries == Carries::VisibleOnCpu && handed_by == Some(Family::Frustum);
+    CpuStart {
+        seed: handed_by.is_some(),
+        settles: everything,
+        fresh: !everything,
+    }
+}
+
 /// Frames between counts of the frustum's triangles while an occlusion
 /// culler runs.
 const COUNT_EVERY: u64 = 8;
@@ -223,7 +249,8 @@ pub struct AutoCulling {
     /// warm-up frame).
     running: Vec<usize>,
     /// The objects the last frame drew, and the family of the culler that
-    /// drew them (`None` before the first frame).
+    /// drew them (`None` before the first recorded frame: in a warm-up
+    /// frame every candidate ran).
     last_drawn: Vec<u32>,
     last_drawn_by: Option<Family>,
     /// Triangles in the frustum as last counted.
@@ -276,16 +303,24 @@ impl AutoCulling {
         walk_start(self.lists_written, self.frames, view, None).stale
     }
 
+    /// The family of the culler that drew the last frame, where candidate
+    /// `k` did not run it: what `k` is handed ([`Self::hand_over`]).
+    fn handed_to(&self, k: usize) -> Option<Family> {
+        self.last_drawn_by.filter(|_| self.ran.is_none_or(|r| r.turn.strategy != k))
+    }
+
     /// Whether candidate `k` must first settle in `view`: a walk whose lists
-    /// are stale, or a culler whose own state went stale.
+    /// are stale, a culler that draws the set it is handed when that is
+    /// everything in the frustum, or a culler whose own state went stale.
     fn settles(&self, k: usize, view: &View) -> bool {
         let ran_last = self.ran.is_some_and(|r| r.turn.strategy == k);
         match self.candidates[k].carries() {
             Carries::VisibleOnGpu => self.lists_stale(view),
-            // Handed everything in the frustum, it draws it all once.
-            Carries::VisibleOnCpu => !ran_last && self.last_drawn_by == Some(Family::Frustum),
+            carries @ (Carries::OccludersOnCpu | Carries::VisibleOnCpu) => {
+                cpu_start(carries, self.handed_to(k)).settles
+            }
             Carries::OwnState => !ran_last,
-            Carries::Nothing | Carries::OccludersOnCpu => false,
+            Carries::Nothing => false,
         }
     }
 
@@ -293,9 +328,7 @@ impl AutoCulling {
     /// drew, where it did not run then. Whether it then starts from a
     /// visible set of this view ([`Ran::fresh`]).
     fn hand_over(&mut self, k: usize, ctx: &mut dyn Frame, view: &View) -> bool {
-        let handed_by = self
-            .last_drawn_by
-            .filter(|_| self.ran.is_none_or(|r| r.turn.strategy != k));
+        let handed_by = self.handed_to(k);
         match self.candidates[k].carries() {
             Carries::VisibleOnGpu => {
                 let start = walk_start(self.lists_written, self.frames, view, handed_by);
@@ -304,13 +337,12 @@ impl AutoCulling {
                 }
                 start.fresh
             }
-            Carries::OccludersOnCpu | Carries::VisibleOnCpu => {
-                if handed_by.is_some() {
+            carries @ (Carries::OccludersOnCpu | Carries::VisibleOnCpu) => {
+                let start = cpu_start(carries, handed_by);
+                if start.seed {
                     self.candidates[k].culler.seed_visible(&self.last_drawn);
                 }
-                // A culler that draws what it is handed draws everything in
-                // the frustum after `vfc`.
-                self.candidates[k].carries() == Carries::OccludersOnCpu || handed_by != Some(Family::Frustum)
+                start.fresh
             }
             Carries::Nothing | Carries::OwnState => true,
         }
@@ -500,7 +532,12 @@ impl Culler for AutoCulling {
         }
         self.last_drawn.clear();
         self.last_drawn.extend(drawn.iter());
-        self.last_drawn_by = self.running.last().map(|&k| self.candidates[k].family());
+        // After a warm-up frame, which every candidate ran from its own
+        // state, none is handed what they drew together.
+        self.last_drawn_by = match self.ran {
+            Some(_) => self.running.last().map(|&k| self.candidates[k].family()),
+            None => None,
+        };
         audit
     }
 
@@ -525,6 +562,22 @@ mod tests {
             eye: DVec3::new(eye, 0.0, 0.0),
             forward,
             frustum_triangles: triangles,
+        }
+    }
+
+    #[test]
+    fn a_culler_that_draws_what_it_is_handed_settles_on_vfc_s_set_and_one_that_tests_it_does_not() {
+        let start = |seed, settles, fresh| CpuStart { seed, settles, fresh };
+        let (occluders, visible) = (Carries::OccludersOnCpu, Carries::VisibleOnCpu);
+        // swr takes any set as occluders, and draws only what passes.
+        assert_eq!(cpu_start(occluders, Some(Family::Frustum)), start(true, false, true));
+        assert_eq!(cpu_start(occluders, Some(Family::Occlusion)), start(true, false, true));
+        // chc draws what it is handed: all of the frustum after vfc.
+        assert_eq!(cpu_start(visible, Some(Family::Frustum)), start(true, true, false));
+        assert_eq!(cpu_start(visible, Some(Family::Occlusion)), start(true, false, true));
+        // It ran the last frame itself (or every candidate did).
+        for carries in [occluders, visible] {
+            assert_eq!(cpu_start(carries, None), start(false, false, true));
         }
     }
 

@@ -23,6 +23,7 @@
 //!    leaf is drawn, a visible inner node opened.
 //! 4. **End of frame**: the leaves drawn without waiting are queried in one
 //!    batch for the next frame, each only once in `chc.visible_for` frames
+//!    (siblings in the same frame, so that they can merge)
 //!    (001 §3: "a node visible in a few recent frames will probably be
 //!    visible again in this frame. Hence we can skip the occlusion query";
 //!    CHC++, Mattausch, Bittner and Wimmer, Eurographics 2008, likewise
@@ -40,7 +41,9 @@
 //! Departures: queries count pixels in one instanced draw per batch (the
 //! portable path of `gpu::queries`), so a batch is one round trip rather
 //! than asynchronous per-query results. A visible leaf's queries are spread
-//! by its id over the frames, where CHC++ draws a random first frame. Where
+//! over the frames by its parent's id, where CHC++ draws a random first
+//! frame. The coherence state's clock is the mode's own traversals, not
+//! the frames it is run in, which may skip or start again. Where
 //! `auto` runs it after another
 //! culler, it is handed the objects that culler drew
 //! ([`Culler::seed_visible`]) and starts as if it had found them visible
@@ -58,7 +61,7 @@ use super::occupancy::ScreenRect;
 use super::traversal::{DepthQueue, nearest_corner};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
-use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::culler::{Culler, FrameInput, LastFrame, Since, TraversalStats};
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{BoxVisibility, Frame, Resolution};
 use crate::scene::Scene;
@@ -113,7 +116,7 @@ const TIGHT_AFTER: ParamInfo = ParamInfo {
 const VISIBLE_FOR: ParamInfo = ParamInfo {
     key: "visible_for",
     default: "8",
-    summary: "frames a leaf found visible is drawn before it is queried again, each leaf in its own frame of them (1: every frame, as CHC)",
+    summary: "frames a leaf found visible is drawn before it is queried again, siblings at frames of their own so the queries spread (1: every frame, as CHC)",
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -146,7 +149,10 @@ impl ChcParams {
                 tight_after: params.get(ModeId::Chc, &TIGHT_AFTER)?,
             },
             visible_for: match params.get(ModeId::Chc, &VISIBLE_FOR)? {
-                0 => return Err(ModeError::bad(ModeId::Chc, &VISIBLE_FOR, "0: at least 1 (every frame)".into())),
+                0 => {
+                    let reason = "must be at least 1 (1 queries every visible leaf every frame), got 0".into();
+                    return Err(ModeError::bad(ModeId::Chc, &VISIBLE_FOR, reason));
+                }
                 frames => frames,
             },
         })
@@ -224,15 +230,22 @@ pub struct CoherentCulling {
     tree: TernaryTree,
     queue: DepthQueue,
     batch: QueryBatch,
-    /// Leaves drawn without waiting, and those of them queried after the
-    /// frame.
+    /// Leaves drawn without waiting.
     drawn_unqueried: QueryList,
+    /// Those of them queried after the frame.
     checked: QueryList,
     answers: Answers,
     objects: Vec<u32>,
     /// What another culler drew last frame, taken as this mode's visible
     /// set at the start of the next ([`Culler::seed_visible`]).
     handed: Option<Vec<u32>>,
+    /// Traversals run, the clock of the tree's coherence state (a node
+    /// visible in the traversal before this one is not waited for): the
+    /// frames it runs in need not follow each other, under `auto` or where
+    /// a bench's recording starts its frames again after the warm-up.
+    traversals: u32,
+    /// The frame it last ran in, to tell which movers to move in the tree.
+    last_frame: LastFrame,
 }
 
 impl CoherentCulling {
@@ -249,6 +262,8 @@ impl CoherentCulling {
             answers: Answers::default(),
             objects: Vec::new(),
             handed: None,
+            traversals: 0,
+            last_frame: LastFrame::default(),
         }
     }
 
@@ -315,23 +330,29 @@ impl Culler for CoherentCulling {
 
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let mut stats = TraversalStats::default();
+        // The tree's clock: traversal 0 is the tree as built.
+        self.traversals += 1;
         let view = View {
             scene: input.scene,
             camera: input.camera,
             frustum: input.camera.frustum(),
             resolution: input.resolution,
-            frame: input.frame,
+            frame: self.traversals,
         };
         let frame = view.frame;
 
-        // 1. Maintenance: moved objects find their nodes.
+        // 1. Maintenance: moved objects find their nodes; after frames it
+        // did not run in, every mover.
         let start = Instant::now();
-        for &o in input.moved {
-            self.tree.update(o, input.scene.objects[o as usize].bounds, frame);
+        let scene = input.scene;
+        let every_mover = matches!(self.last_frame.advance(input.frame), Since::First | Since::Gap);
+        let movers = scene.movers.iter().map(|m| m.object).filter(|_| every_mover);
+        for o in movers.chain(input.moved.iter().copied().filter(|_| !every_mover)) {
+            self.tree.update(o, scene.objects[o as usize].bounds, frame);
         }
         stats.maintenance += start.elapsed();
-        if let (Some(handed), Some(previous)) = (self.handed.take(), frame.checked_sub(1)) {
-            self.tree.assume_visited(&handed, previous);
+        if let Some(handed) = self.handed.take() {
+            self.tree.assume_visited(&handed, frame - 1);
         }
 
         // 2-3. Front to back; queries in batches of non-overlapping rectangles.
@@ -385,16 +406,24 @@ impl Culler for CoherentCulling {
         }
 
         // 4. The leaves drawn without waiting are checked for the next
-        // frame, each in one frame of `visible_for` (by its id, so that the
-        // checks spread over the frames); the others stay visible.
-        let visible_for = u64::from(self.params.visible_for);
-        let (checked, unchecked) = (&mut self.checked, &self.drawn_unqueried);
+        // frame where their last query is `visible_for` traversals old (or
+        // they have none: handed over, or made by a split), and in one
+        // traversal of `visible_for` by their parent's id, so that the
+        // checks spread over the traversals and siblings, which merge only
+        // when measured together, are checked together; the others stay
+        // visible.
+        let visible_for = self.params.visible_for;
+        let (checked, drawn) = (&mut self.checked, &self.drawn_unqueried);
         checked.clear();
-        for (&node, bounds) in unchecked.nodes.iter().zip(&unchecked.boxes) {
-            if (u64::from(frame) + u64::from(node)).is_multiple_of(visible_for) {
+        for (&node, bounds) in drawn.nodes.iter().zip(&drawn.boxes) {
+            let n = self.tree.node(node);
+            let due = n.pixels.is_none_or(|p| frame.saturating_sub(p.frame) >= visible_for)
+                || (u64::from(frame) + u64::from(n.parent)).is_multiple_of(u64::from(visible_for));
+            if due {
                 checked.nodes.push(node);
                 checked.boxes.push(*bounds);
             } else {
+                stats.queries_skipped += 1;
                 self.tree.pull_up_visibility(node);
             }
         }
@@ -419,7 +448,7 @@ mod tests {
     use glam::DVec3;
 
     use super::*;
-    use crate::cull::recording::{Call, Recording, camera_down_z, cubes, input};
+    use crate::cull::recording::{Call, Recording, camera_down_z, cubes, cuboids, input};
 
     #[test]
     fn a_query_overlapping_a_nearer_one_in_flight_waits_until_the_nearer_is_drawn() {
@@ -515,6 +544,66 @@ mod tests {
         assert!((9..13).contains(&last_drawn), "{last_drawn}");
     }
 
+    /// Leaves of one object each, and no split or merge in the way.
+    fn one_object_a_leaf() -> ChcParams {
+        ChcParams {
+            tree: TreeParams {
+                o_merge: 0,
+                o_split: u32::MAX,
+                ..TreeParams::default()
+            },
+            visible_for: 1,
+        }
+    }
+
+    #[test]
+    fn frames_that_start_again_after_the_warm_up_keep_last_traversal_s_visibility() {
+        let (scene, hierarchy) = cubes(&[DVec3::new(-1.5, -0.5, -6.0), DVec3::new(0.5, -0.5, -6.0)]);
+        let camera = camera_down_z();
+        let mut chc = CoherentCulling::new(&scene, one_object_a_leaf());
+        let mut double = Recording::new(|_: &Aabb| true);
+        // Warm-up frames 0 to 2, then the recording's frame 0.
+        for frame in [0, 1, 2, 0] {
+            double.calls.clear();
+            chc.frame(&mut double, &input(frame, &camera, &scene, &hierarchy));
+        }
+        // Both cubes drawn at once, then queried for the next frame: no
+        // descent from the root.
+        assert!(matches!(double.calls[0], Call::Draw(_)), "{:?}", double.calls);
+        assert_eq!(double.batches().len(), 1, "{:?}", double.calls);
+    }
+
+    #[test]
+    fn a_mover_that_moved_in_frames_it_did_not_run_in_is_found_where_it_is() {
+        // Down −Z: a wide wall, a car behind it, then the car drives out to
+        // the side while chc does not run (auto runs another mode).
+        let (mut scene, hierarchy) = cuboids(&[
+            (DVec3::new(-3.0, -1.0, -5.0), DVec3::new(3.0, 1.0, -4.0)),
+            (DVec3::new(-0.5, -0.5, -9.0), DVec3::new(0.5, 0.5, -8.0)),
+        ]);
+        let route = crate::scene::motion::Route::closed(vec![DVec3::ZERO, DVec3::X]).expect("a route");
+        scene.movers.push(crate::scene::motion::Mover::new(1, route, 0.0, 0.0, glam::DAffine3::IDENTITY));
+        let camera = camera_down_z();
+        let wall = scene.objects[0].bounds;
+        let mut chc = CoherentCulling::new(&scene, one_object_a_leaf());
+        let car = std::cell::Cell::new(scene.objects[1].bounds);
+        let overlaps = |a: &Aabb, b: &Aabb| a.min.cmple(b.max).all() && b.min.cmple(a.max).all();
+        // What shows: the wall, and the car once it is out beside it.
+        let mut double = Recording::new(|b: &Aabb| overlaps(b, &wall) || (car.get().min.x > 3.0 && overlaps(b, &car.get())));
+        chc.frame(&mut double, &input(0, &camera, &scene, &hierarchy));
+        assert_eq!(double.drawn(), [0], "the car hidden behind the wall");
+        let out = Aabb {
+            min: DVec3::new(4.0, -0.5, -9.0),
+            max: DVec3::new(5.0, 0.5, -8.0),
+        };
+        scene.objects[1].bounds = out;
+        car.set(out);
+        // Frame 5, in which nothing moved: the car moved in frames 1 to 4.
+        double.calls.clear();
+        chc.frame(&mut double, &input(5, &camera, &scene, &hierarchy));
+        assert!(double.drawn().contains(&1), "{:?}", double.calls);
+    }
+
     #[test]
     fn a_visible_set_handed_over_is_drawn_unwaited_and_the_rest_queried_without_descending_from_the_root() {
         // Down −Z: a row of 8 near cubes, and 8 far ones in their shadow.
@@ -528,6 +617,7 @@ mod tests {
             tree: TreeParams {
                 o_merge: 0,
                 o_split: u32::MAX,
+                tight_after: 0,
                 ..TreeParams::default()
             },
             visible_for: 1,

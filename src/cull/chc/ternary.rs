@@ -291,9 +291,12 @@ impl TernaryTree {
     }
 
     /// Moves `object` to `bounds`: it stays in its node if the node would
-    /// still take it, else it goes where it now belongs. Returns whether it
-    /// changed node.
+    /// still take it, else it goes where it now belongs; nothing changes
+    /// where it is already there. Returns whether it changed node.
     pub fn update(&mut self, object: u32, bounds: Aabb, frame: u32) -> bool {
+        if self.bounds[object as usize] == bounds {
+            return false;
+        }
         let home = self.home[object as usize];
         self.bounds[object as usize] = bounds;
         self.grow_root(&bounds);

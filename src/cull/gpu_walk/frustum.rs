@@ -39,6 +39,7 @@ use std::rc::Rc;
 
 use crate::bounds::Aabb;
 use crate::camera::{Camera, OUTSIDE_SLACK};
+use crate::cull::culler::{LastFrame, Since};
 use crate::gpu::{
     BoxMargins, GpuContext, GpuError, bind_buffers, bind_group_layout, check_storage_binding, storage_buffer,
 };
@@ -114,36 +115,6 @@ pub(super) struct ObjectFrustum {
     staged_frustum: ShaderFrustum,
     staged_objects: Vec<u32>,
     staged_boxes: Vec<ObjectBox>,
-}
-
-/// The last frame something was made for, to tell what may have changed
-/// since.
-#[derive(Clone, Copy, Debug, Default)]
-pub(super) struct LastFrame(Option<u32>);
-
-/// How a frame follows the last one made for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Since {
-    First,
-    /// Frames were skipped (or the path started again).
-    Gap,
-    Next,
-    /// The same frame again (another walk of `auto`'s made for it).
-    Same,
-}
-
-impl LastFrame {
-    /// How `frame` follows the last; it becomes the last.
-    pub(super) fn advance(&mut self, frame: u32) -> Since {
-        let since = match self.0 {
-            None => Since::First,
-            Some(f) if f.checked_add(1) == Some(frame) => Since::Next,
-            Some(f) if f == frame => Since::Same,
-            Some(_) => Since::Gap,
-        };
-        self.0 = Some(frame);
-        since
-    }
 }
 
 impl ObjectFrustum {

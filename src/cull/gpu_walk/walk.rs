@@ -4,7 +4,7 @@
 
 use std::rc::Rc;
 
-use super::frustum::{LastFrame, ObjectBox, ObjectFrustum, Since, object_box};
+use super::frustum::{ObjectBox, ObjectFrustum, object_box};
 use super::layout::{
     DISPATCH_OFFSET, DRAW_COMMAND_BYTES, DRAWN_EARLY, DRAWN_LATE, GROUP_SIZE, HIDDEN, LEVEL_BYTES, LEVEL_OUTSIDE,
     LEVEL_WORDS, MAX_GROUPS, shader_constants,
@@ -16,7 +16,7 @@ use super::pyramid::PyramidLevel;
 use super::tree::{CullTree, MAX_LEVELS};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
-use crate::cull::culler::FrameInput;
+use crate::cull::culler::{FrameInput, LastFrame, Since};
 #[cfg(test)]
 use crate::gpu::QueryBox;
 use crate::gpu::{
