@@ -58,6 +58,7 @@ mode_table!(declare_mode_modules);
 
 mod culler;
 pub mod gpu_walk;
+mod last_frame;
 mod mode;
 pub mod occupancy;
 #[cfg(test)]

@@ -61,7 +61,8 @@ use super::occupancy::ScreenRect;
 use super::traversal::{DepthQueue, nearest_corner};
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment, Frustum};
-use crate::cull::culler::{Culler, FrameInput, LastFrame, Since, TraversalStats};
+use crate::cull::culler::{Culler, FrameInput, TraversalStats};
+use crate::cull::last_frame::{LastFrame, Since};
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{BoxVisibility, Frame, Resolution};
 use crate::scene::Scene;
@@ -461,16 +462,7 @@ mod tests {
         ];
         let (scene, hierarchy) = cubes(&corners);
         let camera = camera_down_z();
-        // Leaves of one object each, and no split or merge in the way.
-        let params = ChcParams {
-            tree: TreeParams {
-                o_merge: 0,
-                o_split: u32::MAX,
-                ..TreeParams::default()
-            },
-            visible_for: 1,
-        };
-        let mut chc = CoherentCulling::new(&scene, params);
+        let mut chc = CoherentCulling::new(&scene, one_object_a_leaf());
         // A box shows when it holds part of the near or the side cube: the
         // far one lies in the near one's shadow.
         let seen = [scene.objects[0].bounds, scene.objects[2].bounds];
@@ -510,12 +502,8 @@ mod tests {
         let first = scene.objects[0].bounds;
         let runs = |visible_for: u32| {
             let params = ChcParams {
-                tree: TreeParams {
-                    o_merge: 0,
-                    o_split: u32::MAX,
-                    ..TreeParams::default()
-                },
                 visible_for,
+                ..one_object_a_leaf()
             };
             let mut chc = CoherentCulling::new(&scene, params);
             // The first cube is hidden from frame 9 on.
@@ -613,15 +601,10 @@ mod tests {
             .collect();
         let (scene, hierarchy) = cubes(&corners);
         let camera = camera_down_z();
-        let params = ChcParams {
-            tree: TreeParams {
-                o_merge: 0,
-                o_split: u32::MAX,
-                tight_after: 0,
-                ..TreeParams::default()
-            },
-            visible_for: 1,
-        };
+        // Boxes tight from the first traversal, so the far row's two
+        // halves do not overlap on screen.
+        let mut params = one_object_a_leaf();
+        params.tree.tight_after = 0;
         let near: Vec<Aabb> = scene.objects[..8].iter().map(|o| o.bounds).collect();
         let overlaps = |a: &Aabb, b: &Aabb| a.min.cmple(b.max).all() && b.min.cmple(a.max).all();
         let answers = |b: &Aabb| near.iter().any(|s| overlaps(b, s));

@@ -39,7 +39,7 @@ use std::rc::Rc;
 
 use crate::bounds::Aabb;
 use crate::camera::{Camera, OUTSIDE_SLACK};
-use crate::cull::culler::{LastFrame, Since};
+use crate::cull::last_frame::{LastFrame, Since};
 use crate::gpu::{
     BoxMargins, GpuContext, GpuError, bind_buffers, bind_group_layout, check_storage_binding, storage_buffer,
 };

@@ -16,7 +16,8 @@ use super::pyramid::PyramidLevel;
 use super::tree::{CullTree, MAX_LEVELS};
 use crate::bounds::Aabb;
 use crate::camera::Camera;
-use crate::cull::culler::{FrameInput, LastFrame, Since};
+use crate::cull::culler::FrameInput;
+use crate::cull::last_frame::{LastFrame, Since};
 #[cfg(test)]
 use crate::gpu::QueryBox;
 use crate::gpu::{
