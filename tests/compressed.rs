@@ -326,6 +326,44 @@ fn an_extension_a_file_uses_without_listing_it_is_named() {
 }
 
 #[test]
+fn an_extension_name_written_with_escapes_is_the_same_name() {
+    let file = Unpacked::fixture("instanced.glb");
+    let mut json = file.json.clone();
+    for list in ["extensionsUsed", "extensionsRequired"] {
+        json[list]
+            .as_array_mut()
+            .unwrap()
+            .retain(|name| name != "EXT_mesh_gpu_instancing");
+    }
+    let text = json
+        .to_string()
+        .replace("\"EXT_mesh_gpu_instancing\":", "\"EXT_mesh_gpu_instanc\\u0069ng\":");
+    assert!(text.contains("instanc\\u0069ng"), "the node's extension escaped");
+    let Err(e) = file.load_text(&text) else {
+        panic!("loads with the instanced node drawn once")
+    };
+    assert!(e.contains("nodes[1] uses EXT_mesh_gpu_instancing"), "{e}");
+}
+
+#[test]
+fn a_file_that_only_mentions_an_extension_loads_whatever_else_its_json_holds() {
+    // Named in a node's name, beside extras the gltf crate skips unread:
+    // arrays nested 200 deep, a number beyond f64.
+    let file = Unpacked::fixture("float.glb");
+    let mut json = file.json.clone();
+    json["nodes"][0]["name"] = "EXT_mesh_gpu_instancing".into();
+    let deep = format!("{}{}", "[".repeat(200), "]".repeat(200));
+    let text = json
+        .to_string()
+        .replacen('{', &format!("{{\"extras\":{{\"deep\":{deep},\"big\":1e400}},"), 1);
+    let scene = file.load_text(&text).unwrap();
+    assert_eq!(
+        scene.objects.len(),
+        file.load(&file.json, &file.bin).unwrap().objects.len()
+    );
+}
+
+#[test]
 fn instances_shared_by_many_nodes_are_bounded_by_the_file() {
     let file = Unpacked::fixture("instanced.glb");
     let json = &file.json;
@@ -455,6 +493,15 @@ impl Unpacked {
             bin: glb[bin_at + 8..bin_at + 8 + word(bin_at)].to_vec(),
             dir: tempfile::tempdir().unwrap(),
         }
+    }
+
+    /// Loads the glTF file of JSON text `text`, its first buffer the
+    /// fixture's binary chunk in a file beside it.
+    fn load_text(&self, text: &str) -> Result<Scene, String> {
+        common::write(self.dir.path(), "m.bin", self.bin.clone());
+        let text = text.replacen("\"buffers\":[{", "\"buffers\":[{\"uri\":\"m.bin\",", 1);
+        let model = common::write(self.dir.path(), "m.gltf", text.into_bytes());
+        load(&SceneSpec::File(model), &LoadOptions::default()).map_err(|e| e.to_string())
     }
 
     /// Loads the GLB of `json` and `bin`.

@@ -12,7 +12,7 @@ use gltf::mesh::Mode;
 
 use super::cameras;
 use super::draco::{self, DRACO, DracoStreams};
-use super::gltf_json::{self, list};
+use super::gltf_json;
 use super::instancing::{self, INSTANCING};
 use super::meshopt::{self, EXT_MESHOPT, KHR_MESHOPT};
 use super::model::{MeshGroup, SceneBuilder};
@@ -114,23 +114,19 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
         return Err(parse_error(message));
     }
     check_primitive_accessors(unvalidated.document.as_json()).map_err(parse_error)?;
-    // The JSON is read as written where the file uses an extension read
-    // from it, or names one without declaring it (a scan of its text for
-    // the names: most files do neither).
     let listed = |extension: &str| unvalidated.extensions_used().any(|e| e == extension);
-    let text = gltf_json::text(bytes).map_err(parse_error)?;
-    let unlisted_named = READ_FROM_JSON
-        .iter()
-        .any(|e| !listed(e) && memchr::memmem::find(&text, e.as_bytes()).is_some());
-    let raw = match READ_FROM_JSON.iter().any(|e| listed(e)) || unlisted_named {
-        true => gltf_json::document(bytes).map_err(parse_error)?,
-        false => serde_json::Value::Null,
-    };
-    if let Some((site, extension)) = undeclared_use(&raw, listed) {
+    let sites = gltf_json::ExtensionSites::of(bytes).map_err(parse_error)?;
+    if let Some((site, extension)) = undeclared_use(&sites, listed) {
         return Err(parse_error(format!(
             "{site} uses {extension}, but extensionsUsed does not list {extension}, as glTF requires"
         )));
     }
+    // The JSON is read as written where the file uses an extension read
+    // from it.
+    let raw = match READ_FROM_JSON.iter().any(|e| listed(e)) {
+        true => gltf_json::document(bytes).map_err(parse_error)?,
+        false => serde_json::Value::Null,
+    };
     let draco_decoded = draco::decoded_accessors(&raw).map_err(parse_error)?;
     let mut json = unvalidated.document.into_json();
     json.extensions_required
@@ -143,34 +139,35 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
     Ok((gltf, raw))
 }
 
-/// The first part of the document `raw` (its JSON) that carries an
-/// extension occlu reads from the JSON ([`READ_FROM_JSON`]) which
-/// `listed` says its `extensionsUsed` does not list, as a JSON path, and
-/// that extension. Such a file is refused by name: read without its
-/// extension, an instanced node would be drawn once, and a compressed
-/// primitive, buffer view or buffer would fail on the data it lacks, or
-/// draw the fallback in its place.
-fn undeclared_use(raw: &serde_json::Value, listed: impl Fn(&str) -> bool) -> Option<(String, &'static str)> {
+/// The first part of a document (of its `sites`) that carries an extension
+/// occlu reads from the JSON ([`READ_FROM_JSON`]) which `listed` says its
+/// `extensionsUsed` does not list, as a JSON path, and that extension.
+/// Such a file is refused by name: read without its extension, an instanced
+/// node would be drawn once, and a compressed primitive, buffer view or
+/// buffer would fail on the data it lacks, or draw the fallback in its
+/// place.
+fn undeclared_use(sites: &gltf_json::ExtensionSites, listed: impl Fn(&str) -> bool) -> Option<(String, &'static str)> {
     const MESHOPT: [&str; 2] = [EXT_MESHOPT, KHR_MESHOPT];
-    let carried = |object: &serde_json::Value, extensions: &[&'static str]| {
+    let carried = |site: &gltf_json::Site, extensions: &[&'static str]| {
+        let names = &site.extensions.0;
         extensions
             .iter()
             .copied()
-            .find(|&e| !listed(e) && object["extensions"].get(e).is_some())
+            .find(|&e| !listed(e) && names.iter().any(|n| n == e))
     };
-    let in_list = |key: &str, extensions: &[&'static str]| {
-        let mut objects = list(&raw[key]).iter().enumerate();
-        objects.find_map(|(k, object)| Some((format!("{key}[{k}]"), carried(object, extensions)?)))
+    let in_list = |key: &str, sites: &[gltf_json::Site], extensions: &[&'static str]| {
+        let mut sites = sites.iter().enumerate();
+        sites.find_map(|(k, site)| Some((format!("{key}[{k}]"), carried(site, extensions)?)))
     };
-    let primitives = list(&raw["meshes"]).iter().enumerate().find_map(|(m, mesh)| {
-        let mut primitives = list(&mesh["primitives"]).iter().enumerate();
-        primitives
-            .find_map(|(p, primitive)| Some((format!("meshes[{m}].primitives[{p}]"), carried(primitive, &[DRACO])?)))
-    });
+    let primitives = sites
+        .meshes
+        .iter()
+        .enumerate()
+        .find_map(|(m, mesh)| in_list(&format!("meshes[{m}].primitives"), &mesh.primitives, &[DRACO]));
     primitives
-        .or_else(|| in_list("nodes", &[INSTANCING]))
-        .or_else(|| in_list("bufferViews", &MESHOPT))
-        .or_else(|| in_list("buffers", &MESHOPT))
+        .or_else(|| in_list("nodes", &sites.nodes, &[INSTANCING]))
+        .or_else(|| in_list("bufferViews", &sites.buffer_views, &MESHOPT))
+        .or_else(|| in_list("buffers", &sites.buffers, &MESHOPT))
 }
 
 /// The document `json`, validated as the gltf crate validates it, except
