@@ -183,6 +183,9 @@ struct Record {
     drew: Drew,
     /// The frame it last ran (this chooser's count).
     last_run: Option<u64>,
+    /// The share of the frustum's triangles an occlusion culler last hid,
+    /// in calibration or a measured frame; `None` before it is known.
+    hid: Option<f64>,
 }
 
 /// What a measured frame cost and drew.
@@ -348,6 +351,7 @@ impl Chooser {
                     samples: VecDeque::with_capacity(WINDOW),
                     drew: Drew::Alike,
                     last_run: None,
+                    hid: None,
                 })
                 .collect(),
             incumbent,
@@ -422,6 +426,15 @@ impl Chooser {
         }
     }
 
+    /// Learns that occlusion culler `s` hid `share` of the frustum's
+    /// triangles where the calibration's frames look from (what it drew in
+    /// a warm-up frame).
+    pub fn calibrate_hidden(&mut self, s: usize, share: f64) {
+        if self.records[s].family == Family::Occlusion && share.is_finite() {
+            self.records[s].hid = Some(share.clamp(0.0, 1.0));
+        }
+    }
+
     /// Learns from a warm-up frame in which every strategy rendered the
     /// same view in turn, strategy `s` taking `log_ms[s]` (log of its
     /// milliseconds): the cheapest over the warm-up frames so far becomes
@@ -480,6 +493,7 @@ impl Chooser {
             return;
         }
         if let (Family::Occlusion, Some(o)) = (self.records[turn.strategy].family, occluded) {
+            self.records[turn.strategy].hid = Some(o.hidden);
             let first = self.hidden.is_none();
             if self.hidden.is_some_and(|h| view.differs(&h.view, self.reach)) {
                 self.shares.clear();
@@ -825,10 +839,18 @@ impl Chooser {
     /// is. It looks again where occlusion hid next to nothing when last
     /// measured: any occlusion culler tells whether that has changed, and
     /// the cheapest known one at the least cost (exploring the others
-    /// there would pay their first frames for nothing).
+    /// there would pay their first frames for nothing). Any but one that
+    /// last hid clearly next to nothing ([`clearly_nothing_hidden`]) where
+    /// another hid at least [`NOTHING_HIDDEN`]: a coarse culler may hide
+    /// nothing where a finer one hides a seventh (`chc`, whose leaves hold
+    /// several of a scan's clusters, against `omq` on the bunny), and,
+    /// were it the cheapest, would say so at every look.
     fn most_promising_occlusion(&self) -> Option<usize> {
-        (0..self.records.len())
-            .filter(|&s| self.records[s].family == Family::Occlusion)
+        let occlusion = || (0..self.records.len()).filter(|&s| self.records[s].family == Family::Occlusion);
+        let most = occlusion().filter_map(|s| self.records[s].hid).fold(0.0, f64::max);
+        let tells = |s: usize| most < NOTHING_HIDDEN || self.records[s].hid.is_none_or(|h| !clearly_nothing_hidden(h));
+        occlusion()
+            .filter(|&s| tells(s))
             .min_by(|&a, &b| {
                 let m = |s: usize| {
                     let anywhere = || {
@@ -980,6 +1002,35 @@ mod tests {
         let rest = (1000.0 * (1.0 - hidden)).round() as u64;
         let drawn = FIVE.iter().map(|&f| if f == Frustum { 1000 } else { rest }).collect();
         (hidden, drawn)
+    }
+
+    #[test]
+    fn an_occlusion_culler_that_hid_nothing_where_another_hid_a_seventh_does_not_look_again() {
+        // vfc, a cheap culler and a dearer one, as calibrated.
+        let mut chooser = Chooser::new(&[Frustum, Occlusion, Occlusion], 1, 10.0, 0.015);
+        chooser.calibrate(&[1.0f64.ln(), 1.1f64.ln(), 1.2f64.ln()], &still(0));
+        assert_eq!(chooser.most_promising_occlusion(), Some(1), "the cheaper, nothing known");
+        // Neither hides anything: the cheaper.
+        chooser.calibrate_hidden(1, 0.0);
+        chooser.calibrate_hidden(2, 0.03);
+        assert_eq!(chooser.most_promising_occlusion(), Some(1));
+        // The dearer one hides a seventh (as omq hides the bunny's clusters,
+        // where chc, whose leaves hold several, hides none).
+        chooser.calibrate_hidden(2, 0.14);
+        assert_eq!(chooser.most_promising_occlusion(), Some(2));
+        // A measured frame of the cheaper one that hid a seventh too.
+        let turn = Turn {
+            strategy: 1,
+            probe: false,
+            measured: true,
+            recheck: false,
+        };
+        let cost = Cost {
+            frame_ms: 1.0,
+            triangles: 860,
+        };
+        chooser.learn(turn, cost, Some(Occluded { hidden: 0.14, drawing: 0.9 }), &still(0));
+        assert_eq!(chooser.most_promising_occlusion(), Some(1));
     }
 
     #[test]

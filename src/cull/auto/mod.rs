@@ -42,7 +42,10 @@
 //!   and the chooser is calibrated with these paired times of one view:
 //!   the cheapest runs from the first recorded frame, and a rival shown
 //!   far dearer is not explored in recorded frames (only rechecked within
-//!   the budget).
+//!   the budget). What each occlusion culler that draws on the CPU drew
+//!   there says what it hides, so that where nothing seems hidden the
+//!   culler that looks again is not one that hides nothing where another
+//!   hides something.
 //!
 //! Every candidate is conservative, so `auto` is too.
 //!
@@ -74,7 +77,8 @@ use crate::cull::culler::{Culler, FrameInput, Pick, TraversalStats};
 use crate::cull::gpu_walk::VisibleLists;
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::cull::traversal::frustum_cull_subtree;
-use crate::gpu::{Frame, GpuAudit, GpuContext, GpuError, GpuSetup};
+use crate::bounds::Aabb;
+use crate::gpu::{BoxTest, BoxVisibility, Frame, GpuAudit, GpuContext, GpuError, GpuFrame, GpuSetup};
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
 use choice::{Chooser, Cost, Family, Occluded, Turn, View};
@@ -221,6 +225,32 @@ fn cpu_start(carries: Carries, handed_by: Option<Family>) -> CpuStart {
         seed: handed_by.is_some(),
         settles: everything,
         fresh: !everything,
+    }
+}
+
+/// A frame that counts the triangles of the objects drawn through it, as
+/// a culler drawing on the CPU draws them: in a warm-up frame, what each
+/// candidate hid.
+struct Counting<'a> {
+    frame: &'a mut dyn Frame,
+    scene: &'a Scene,
+    triangles: u64,
+}
+
+impl Frame for Counting<'_> {
+    fn draw(&mut self, objects: &[u32]) {
+        let triangles = objects.iter().map(|&o| u64::from(self.scene.objects[o as usize].triangles));
+        self.triangles += triangles.sum::<u64>();
+        self.frame.draw(objects);
+    }
+    fn test_boxes(&mut self, boxes: &[Aabb], kind: BoxTest, out: &mut Vec<BoxVisibility>) {
+        self.frame.test_boxes(boxes, kind, out);
+    }
+    fn test_boxes_with_totals(&mut self, boxes: &[Aabb], sampling: u32, out: &mut Vec<BoxVisibility>, totals: &mut Vec<u64>) {
+        self.frame.test_boxes_with_totals(boxes, sampling, out, totals);
+    }
+    fn on_gpu(&mut self) -> Option<&mut dyn GpuFrame> {
+        self.frame.on_gpu()
     }
 }
 
@@ -385,26 +415,45 @@ impl AutoCulling {
         self.running.clear();
         self.running.extend(balanced_order(warm_ups, self.candidates.len()));
         let mut log_ms = vec![f64::NAN; self.candidates.len()];
+        let mut hidden = vec![None; self.candidates.len()];
         let mut stats = TraversalStats::default();
         for (place, &k) in self.running.iter().enumerate() {
             if let (true, Some(gpu)) = (place > 0, ctx.on_gpu()) {
                 gpu.clear();
             }
             let start = Instant::now();
-            stats = self.candidates[k].culler.frame(ctx, input);
+            let mut counting = Counting {
+                frame: &mut *ctx,
+                scene: input.scene,
+                triangles: 0,
+            };
+            stats = self.candidates[k].culler.frame(&mut counting, input);
+            let drawn = counting.triangles;
             if let Some(gpu) = ctx.on_gpu() {
                 gpu.wait_for_gpu();
                 log_ms[k] = (start.elapsed().as_secs_f64() * 1e3).ln();
             }
-            if self.candidates[k].carries() == Carries::VisibleOnGpu {
+            // What an occlusion culler that draws on the CPU hid (a walk's
+            // indirect draws are not counted here).
+            let candidate = &self.candidates[k];
+            if candidate.family() == Family::Occlusion
+                && candidate.carries() != Carries::VisibleOnGpu
+                && view.frustum_triangles > 0
+            {
+                hidden[k] = Some(1.0 - drawn as f64 / view.frustum_triangles as f64);
+            }
+            if candidate.carries() == Carries::VisibleOnGpu {
                 self.lists_written = Some((self.frames, view));
             }
         }
         if warm_ups > 0 {
-            self.chooser
-                .as_mut()
-                .expect("the session prepared the mode")
-                .calibrate(&log_ms, &view);
+            let chooser = self.chooser.as_mut().expect("the session prepared the mode");
+            chooser.calibrate(&log_ms, &view);
+            for (k, share) in hidden.into_iter().enumerate() {
+                if let Some(share) = share {
+                    chooser.calibrate_hidden(k, share);
+                }
+            }
         }
         self.ran = None;
         stats
