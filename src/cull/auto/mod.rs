@@ -615,6 +615,26 @@ mod tests {
     }
 
     #[test]
+    fn a_counting_frame_counts_the_triangles_drawn_through_it_and_passes_everything_on() {
+        use crate::cull::recording::{Call, Recording, cubes};
+        let (scene, _) = cubes(&[DVec3::ZERO, DVec3::X * 3.0, DVec3::X * 6.0]);
+        let mut double = Recording::new(|_: &Aabb| true);
+        let mut counting = Counting {
+            frame: &mut double,
+            scene: &scene,
+            triangles: 0,
+        };
+        counting.draw(&[0, 2]);
+        let mut out = Vec::new();
+        counting.test_boxes(&[scene.objects[1].bounds], BoxTest::Occlusion, &mut out);
+        counting.draw(&[1]);
+        assert_eq!(counting.triangles, 3 * u64::from(scene.objects[0].triangles));
+        assert_eq!(double.calls.len(), 3);
+        assert_eq!(double.calls[0], Call::Draw(vec![0, 2]));
+        assert_eq!(out.len(), 1);
+    }
+
+    #[test]
     fn a_culler_that_draws_what_it_is_handed_settles_on_vfc_s_set_and_one_that_tests_it_does_not() {
         let start = |seed, settles, fresh| CpuStart { seed, settles, fresh };
         let (occluders, visible) = (Carries::OccludersOnCpu, Carries::VisibleOnCpu);
