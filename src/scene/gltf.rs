@@ -103,9 +103,8 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
     // that require an extension occlu does not read. A file of another glTF
     // version is named so, whether or not it reads as glTF 2.0.
     let unvalidated = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| {
-        let asset = gltf_json::document(bytes)
-            .map(|json| json["asset"].clone())
-            .unwrap_or_default();
+        let document = gltf_json::text(bytes).and_then(|text| gltf_json::parsed::<serde_json::Value>(&text));
+        let asset = document.map(|json| json["asset"].clone()).unwrap_or_default();
         let version = asset["version"].as_str().unwrap_or("2.0");
         unreadable_version(version, asset["minVersion"].as_str()).map_or_else(|| invalid(e), parse_error)
     })?;
@@ -115,7 +114,8 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
     }
     check_primitive_accessors(unvalidated.document.as_json()).map_err(parse_error)?;
     let listed = |extension: &str| unvalidated.extensions_used().any(|e| e == extension);
-    let sites = gltf_json::ExtensionSites::of(bytes).map_err(parse_error)?;
+    let text = gltf_json::text(bytes).map_err(parse_error)?;
+    let sites = gltf_json::parsed(&text).map_err(parse_error)?;
     if let Some((site, extension)) = undeclared_use(&sites, listed) {
         return Err(parse_error(format!(
             "{site} uses {extension}, but extensionsUsed does not list {extension}, as glTF requires"
@@ -124,7 +124,7 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
     // The JSON is read as written where the file uses an extension read
     // from it.
     let raw = match READ_FROM_JSON.iter().any(|e| listed(e)) {
-        true => gltf_json::document(bytes).map_err(parse_error)?,
+        true => gltf_json::parsed(&text).map_err(parse_error)?,
         false => serde_json::Value::Null,
     };
     let draco_decoded = draco::decoded_accessors(&raw).map_err(parse_error)?;

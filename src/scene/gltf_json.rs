@@ -7,7 +7,7 @@
 use std::borrow::Cow;
 
 use serde::Deserialize;
-use serde::de::{Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
+use serde::de::{DeserializeOwned, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde_json::Value;
 
 /// The JSON text of a glTF file: a GLB's JSON chunk, or the whole file.
@@ -20,9 +20,10 @@ pub fn text(bytes: &[u8]) -> Result<Cow<'_, [u8]>, String> {
     }
 }
 
-/// The document of a glTF file, as written.
-pub fn document(bytes: &[u8]) -> Result<Value, String> {
-    serde_json::from_slice(&text(bytes)?).map_err(|e| format!("invalid glTF JSON: {e}"))
+/// A glTF file's JSON text ([`text`]) read as `T`: the whole document as
+/// written (a [`Value`]), or its [`ExtensionSites`].
+pub fn parsed<T: DeserializeOwned>(text: &[u8]) -> Result<T, String> {
+    serde_json::from_slice(text).map_err(|e| format!("invalid glTF JSON: {e}"))
 }
 
 /// A JSON array's items; none where it is not one.
@@ -101,12 +102,5 @@ impl<'de> Deserialize<'de> for ExtensionNames {
             }
         }
         deserializer.deserialize_any(Names)
-    }
-}
-
-impl ExtensionSites {
-    /// Those of a glTF file.
-    pub fn of(bytes: &[u8]) -> Result<ExtensionSites, String> {
-        serde_json::from_slice(&text(bytes)?).map_err(|e| format!("invalid glTF JSON: {e}"))
     }
 }
