@@ -426,9 +426,9 @@ impl Chooser {
         }
     }
 
-    /// Learns that occlusion culler `s` hid `share` of the frustum's
-    /// triangles where the calibration's frames look from (what it drew in
-    /// a warm-up frame).
+    /// Learns that strategy `s` hid `share` of the frustum's triangles where
+    /// the calibration's frames look from (what it drew in a warm-up
+    /// frame); kept for occlusion cullers only.
     pub fn calibrate_hidden(&mut self, s: usize, share: f64) {
         if self.records[s].family == Family::Occlusion && share.is_finite() {
             self.records[s].hid = Some(share.clamp(0.0, 1.0));

@@ -415,7 +415,6 @@ impl AutoCulling {
         self.running.clear();
         self.running.extend(balanced_order(warm_ups, self.candidates.len()));
         let mut log_ms = vec![f64::NAN; self.candidates.len()];
-        let mut hidden = vec![None; self.candidates.len()];
         let mut stats = TraversalStats::default();
         for (place, &k) in self.running.iter().enumerate() {
             if let (true, Some(gpu)) = (place > 0, ctx.on_gpu()) {
@@ -433,27 +432,20 @@ impl AutoCulling {
                 gpu.wait_for_gpu();
                 log_ms[k] = (start.elapsed().as_secs_f64() * 1e3).ln();
             }
-            // What an occlusion culler that draws on the CPU hid (a walk's
-            // indirect draws are not counted here).
-            let candidate = &self.candidates[k];
-            if candidate.family() == Family::Occlusion
-                && candidate.carries() != Carries::VisibleOnGpu
-                && view.frustum_triangles > 0
-            {
-                hidden[k] = Some(1.0 - drawn as f64 / view.frustum_triangles as f64);
-            }
-            if candidate.carries() == Carries::VisibleOnGpu {
+            let chooser = self.chooser.as_mut().expect("the session prepared the mode");
+            // What a culler that draws on the CPU hid (a walk's indirect
+            // draws are not counted here).
+            if self.candidates[k].carries() == Carries::VisibleOnGpu {
                 self.lists_written = Some((self.frames, view));
+            } else if view.frustum_triangles > 0 {
+                chooser.calibrate_hidden(k, 1.0 - drawn as f64 / view.frustum_triangles as f64);
             }
         }
         if warm_ups > 0 {
-            let chooser = self.chooser.as_mut().expect("the session prepared the mode");
-            chooser.calibrate(&log_ms, &view);
-            for (k, share) in hidden.into_iter().enumerate() {
-                if let Some(share) = share {
-                    chooser.calibrate_hidden(k, share);
-                }
-            }
+            self.chooser
+                .as_mut()
+                .expect("the session prepared the mode")
+                .calibrate(&log_ms, &view);
         }
         self.ran = None;
         stats
