@@ -404,6 +404,10 @@ pub struct Patches {
     patch_ends: Vec<u32>,
     by_patch: Vec<(u32, u32)>,
     triangles: Vec<Triangle>,
+    /// Per triangle of `triangles`, the y range it may reach (its corners'
+    /// bounds grown by its slack): a band of rows passes over the
+    /// triangles outside it reading these alone, not the triangles.
+    reach_y: Vec<[f64; 2]>,
     borders: Vec<Border>,
     patches: Vec<Patch>,
 }
@@ -430,6 +434,7 @@ struct Patch {
 impl Patches {
     pub fn clear(&mut self) {
         self.triangles.clear();
+        self.reach_y.clear();
         self.borders.clear();
         self.patches.clear();
     }
@@ -458,7 +463,9 @@ impl Patches {
                     let depth = depth_slack(&c, mesh.snap).unwrap_or(f64::INFINITY);
                     let triangle = Triangle::new(c, mesh.snap, depth, error);
                     nearest = c.iter().fold(nearest, |n, c| n.max(c.at.z));
-                    (lo, hi) = (lo.min(triangle.lo - triangle.slack), hi.max(triangle.hi + triangle.slack));
+                    let reach = (triangle.lo - triangle.slack, triangle.hi + triangle.slack);
+                    (lo, hi) = (lo.min(reach.0), hi.max(reach.1));
+                    self.reach_y.push([reach.0.y, reach.1.y]);
                     self.triangles.push(triangle);
                 }
                 for (p, q, whole) in polygon.sides() {
@@ -595,9 +602,9 @@ pub struct Rasteriser {
     /// Per row of the current patch's cells, the columns from the first to
     /// the last where its border erased a mark (empty where none).
     erased: Vec<Range<u32>>,
-    /// Per triangle of the current patch, the rows and columns of the
-    /// cells it reached.
-    reached: Vec<[Range<u32>; 2]>,
+    /// The triangles of the current patch that reach these rows of cells,
+    /// each with the rows and columns of the cells it reached.
+    reached: Vec<(usize, [Range<u32>; 2])>,
 }
 
 impl Rasteriser {
@@ -619,16 +626,23 @@ impl Rasteriser {
             return;
         }
         self.begin_patch(columns, rows);
-        for triangle in &patches.triangles[patch.triangles.clone()] {
-            self.add_triangle(cells, triangle);
+        // A patch of many triangles spans many bands of rows: each band
+        // takes those whose y range meets its pixel centres' (a NaN meets
+        // none; neither reaches a cell there).
+        let [first, last] = [grid.down.cell(self.rows.start)[0], grid.down.cell(self.rows.end - 1)[1]];
+        for t in patch.triangles.clone() {
+            let [lo, hi] = patches.reach_y[t];
+            if lo <= last && hi >= first {
+                self.add_triangle(cells, t, &patches.triangles[t]);
+            }
         }
         for border in &patches.borders[patch.borders.clone()] {
             self.erase(grid, border);
         }
         if self.erased.iter().any(|columns| !columns.is_empty()) {
-            for (k, triangle) in patches.triangles[patch.triangles.clone()].iter().enumerate() {
-                let [rows, columns] = self.reached[k].clone();
-                self.hold_alone(grid, triangle, rows, columns);
+            for k in 0..self.reached.len() {
+                let (t, [rows, columns]) = self.reached[k].clone();
+                self.hold_alone(grid, &patches.triangles[t], rows, columns);
             }
         }
         for (row, span) in self.rows.clone().zip(&self.spans) {
@@ -678,8 +692,8 @@ impl Rasteriser {
         ((row - self.rows.start) * width + column - self.columns.start) as usize
     }
 
-    /// Rasterises one triangle of the current patch, row of cells by row
-    /// of cells: first its depth over the cells it may reach
+    /// Rasterises triangle `t` of the patches (`triangle`) of the current
+    /// patch, row of cells by row of cells: first its depth over the cells it may reach
     /// ([`Self::add_depth`]), then, in a row where it vouches for a depth,
     /// its mark: every group of the cells whose every centre it marks,
     /// and the groups it marks in the cells on either side of them
@@ -689,7 +703,7 @@ impl Rasteriser {
     /// among those it reaches (a narrower region, at both ends of the
     /// rows), so a cell it marks has its depth, and only such cells are
     /// marked.
-    fn add_triangle(&mut self, cells: &Cells, triangle: &Triangle) {
+    fn add_triangle(&mut self, cells: &Cells, t: usize, triangle: &Triangle) {
         let grid = cells.grid();
         let (lo, hi) = (triangle.lo - triangle.slack, triangle.hi + triangle.slack);
         let mut group_row_ranges = [[0.0; 2]; MASK_SIDE as usize];
@@ -723,7 +737,7 @@ impl Rasteriser {
                 self.mark_sides(grid, row, &reached, &whole, &group_row_ranges[..group_rows.len()]);
             }
         }
-        self.reached.push([rows, columns]);
+        self.reached.push((t, [rows, columns]));
     }
 
     /// Lowers the depth and plane of each cell of `reached` in `row`, where
@@ -1708,7 +1722,7 @@ mod tests {
             };
             rasteriser.cover.clear();
             rasteriser.cover.resize(16 * 12, reached);
-            rasteriser.add_triangle(&cells, &Triangle::new(corners, snap, snap, 0.0));
+            rasteriser.add_triangle(&cells, 0, &Triangle::new(corners, snap, snap, 0.0));
             // Every pixel centre inside the triangle is marked (each cell's
             // groups here are single pixels).
             for (x, y) in (0..64).flat_map(|x| (0..48).map(move |y| (x, y))) {
