@@ -68,7 +68,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [140, 86, 75],
     conservative: true,
     draws_by_time: true,
-    params: &[RESOLUTION, TRIANGLES, THREADS, RESTS],
+    params: &[RESOLUTION, TRIANGLES, PIXELS_PER_TRIANGLE, THREADS, RESTS],
     exercised_with: &[("rests", "false")],
     needs: Needs::Nothing,
     carries: Carries::OccludersOnCpu,
@@ -105,6 +105,22 @@ const TRIANGLES: ParamInfo = ParamInfo {
     summary: "occluder triangles rasterised a frame at most: last frame's visible objects, largest on screen first",
 };
 
+/// An occluder costs its triangles (each projected, joined into patches
+/// and rasterised) and can hide at most what lies behind its box on
+/// screen: one whose box covers fewer pixels than it has triangles (a car
+/// or a chair full of detail, seen through a window) costs more than it
+/// can hide. Measured with `--sweep swr.pixels_per_triangle=0,1,3`
+/// (Vulkan, lavapipe, buffers built every frame): on the default city, 1
+/// keeps the culled share (0.972 of what `roc` culls; 0.970 with every
+/// visible object) for 13 % less CPU a frame, and on den-haag.obj 15 %
+/// less (it hides more than `roc` either way: its box test is finer);
+/// 3 culls a tenth less on the bunny and a third less on den-haag.
+const PIXELS_PER_TRIANGLE: ParamInfo = ParamInfo {
+    key: "pixels_per_triangle",
+    default: "1",
+    summary: "the least pixels an occluder's box covers on screen per triangle of it: objects of more, smaller triangles cost more than they can hide (0: every visible object, up to the budget)",
+};
+
 const THREADS: ParamInfo = ParamInfo {
     key: "threads",
     default: "0",
@@ -125,6 +141,8 @@ const MAX_THREADS: usize = 64;
 pub struct SwrParams {
     pub resolution: AutoOr<Resolution>,
     pub triangles: u64,
+    /// The least pixels an occluder's box covers per triangle of it.
+    pub pixels_per_triangle: f64,
     /// 0: one per core.
     pub threads: usize,
     /// Whether a buffer that did not pay rests ([`Rest`]).
@@ -141,9 +159,15 @@ impl SwrParams {
                 format!("{threads}: at most {MAX_THREADS} (0: one per core)"),
             ));
         }
+        let pixels_per_triangle: f64 = params.get(ModeId::Swr, &PIXELS_PER_TRIANGLE)?;
+        if !(pixels_per_triangle >= 0.0 && pixels_per_triangle.is_finite()) {
+            let reason = format!("must be a number at least 0, got {pixels_per_triangle}");
+            return Err(ModeError::bad(ModeId::Swr, &PIXELS_PER_TRIANGLE, reason));
+        }
         Ok(SwrParams {
             resolution: params.get(ModeId::Swr, &RESOLUTION)?,
             triangles: params.get(ModeId::Swr, &TRIANGLES)?,
+            pixels_per_triangle,
             threads,
             rests: params.get(ModeId::Swr, &RESTS)?,
         })
@@ -642,7 +666,8 @@ impl Culler for SoftwareOcclusionCulling {
     /// One frame, on the CPU:
     ///
     /// 1. **Occluders**: last frame's visible objects, largest on screen first,
-    ///    each whose triangles still fit `swr.triangles`; the clusters of one
+    ///    each whose triangles still fit `swr.triangles` and whose box covers
+    ///    `swr.pixels_per_triangle` pixels per triangle; the clusters of one
     ///    mesh under one transform are one occluder. They are rasterised
     ///    nearest first.
     /// 2. **Rasterise** their triangles, projected in f64, into a buffer of
@@ -734,9 +759,10 @@ impl Culler for SoftwareOcclusionCulling {
         self.candidates
             .sort_unstable_by(|a, b| b.area().total_cmp(&a.area()).then(a.object.cmp(&b.object)));
         let mut budget = self.params.triangles;
+        let pixels_per_triangle = self.params.pixels_per_triangle;
         self.candidates.retain(|c| {
             let triangles = u64::from(scene.objects[c.object as usize].triangles);
-            let fits = triangles <= budget;
+            let fits = triangles <= budget && c.area() >= pixels_per_triangle * triangles as f64;
             budget -= if fits { triangles } else { 0 };
             fits
         });
@@ -1108,6 +1134,29 @@ mod tests {
     use super::*;
     use crate::cull::recording::{Recording, camera_down_z, cubes, cuboids, input, one_object_a_leaf};
     use crate::hierarchy::Hierarchy;
+
+    #[test]
+    fn an_object_covering_fewer_pixels_than_it_has_triangles_is_no_occluder() {
+        // A cube 3 m ahead covers thousands of pixels; one 1 km off covers
+        // a pixel or two for its 12 triangles, far aside.
+        let (scene, hierarchy) = cubes(&[DVec3::new(-0.5, -0.5, -4.0), DVec3::new(-500.0, -0.5, -1000.0)]);
+        let camera = camera_down_z();
+        let occluder_triangles = |pixels_per_triangle: &str| {
+            let given = ModeParams::parse(&[format!("swr.pixels_per_triangle={pixels_per_triangle}")], &[ModeId::Swr]);
+            let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&given.unwrap()).unwrap());
+            let mut frame_calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
+            let stats: Vec<TraversalStats> = (0..2)
+                .map(|frame| swr.frame(&mut frame_calls, &input(frame, &camera, &scene, &hierarchy)))
+                .collect();
+            assert_eq!(frame_calls.drawn().len(), 4, "both cubes drawn in both frames");
+            stats[1].occluder_triangles
+        };
+        assert_eq!(occluder_triangles("1"), 12, "the near cube alone");
+        assert_eq!(occluder_triangles("0"), 24, "both cubes");
+        for bad in ["-1", "nan", "inf"] {
+            assert!(ModeParams::parse(&[format!("swr.pixels_per_triangle={bad}")], &[ModeId::Swr]).is_err());
+        }
+    }
 
     #[test]
     fn an_object_behind_an_occluder_is_drawn_until_the_occluder_is_known_even_as_an_occluder() {
