@@ -8,8 +8,10 @@
 //!   strategy's first samples.
 //! - A probe runs another strategy for one frame, or two where it must
 //!   first settle (its first frame is paid for, not measured). Its sample
-//!   is the log of its frame time over the incumbent's on both sides of it,
-//!   so a probe is never followed by another.
+//!   is the log of its frame time over the incumbent's on both sides of it
+//!   that do the same work (turned less than 30° and holding about as many
+//!   triangles, however far the eye moved: [`View::works_otherwise`]), so
+//!   a probe is never followed by another.
 //! - Each strategy keeps its last [`WINDOW`] samples: the mean of their
 //!   middle half is its cost relative to the incumbent, their spread (the
 //!   MAD, and never less than the incumbent's own frame-to-frame noise) its
@@ -122,16 +124,25 @@ pub(super) struct View {
 }
 
 impl View {
-    /// Turned by more than 30°, moved by more than `reach`, or holding more
-    /// than 1.5 times the triangles or less than 1/1.5 of them.
+    /// Turned by more than 30°, moved by more than `reach`, or doing other
+    /// work ([`View::works_otherwise`]).
     pub fn differs(&self, other: &View, reach: f64) -> bool {
+        self.eye.distance(other.eye) > reach || self.works_otherwise(other)
+    }
+
+    /// Turned by more than 30°, or holding more than 1.5 times the
+    /// triangles or less than 1/1.5 of them: what a frame of it costs is
+    /// not what a frame of `other` costs. Frames a few apart on a path are
+    /// paired by this alone, however far the eye moves between them: an
+    /// orbit of 40 frames moves it a sixth of the orbit's radius a frame,
+    /// more than any fixed reach, while each frame sees much what the last
+    /// saw.
+    pub fn works_otherwise(&self, other: &View) -> bool {
         let (a, b) = (
             self.frustum_triangles.max(1) as f64,
             other.frustum_triangles.max(1) as f64,
         );
-        self.forward.dot(other.forward) < 30f64.to_radians().cos()
-            || self.eye.distance(other.eye) > reach
-            || a.max(b) > 1.5 * a.min(b)
+        self.forward.dot(other.forward) < 30f64.to_radians().cos() || a.max(b) > 1.5 * a.min(b)
     }
 
     /// Holding more than [`OUTGROWN`] times the triangles of `other`: what
@@ -529,7 +540,7 @@ impl Chooser {
                 // the two frames measured different work.
                 before: self
                     .incumbent_last
-                    .filter(|b| self.frame - b.frame <= 3 && !view.differs(&b.view, self.reach)),
+                    .filter(|b| self.frame - b.frame <= 3 && !view.works_otherwise(&b.view)),
                 view: *view,
             });
             return;
@@ -543,7 +554,7 @@ impl Chooser {
             view: *view,
         };
         let beside = |p: &Pending| {
-            let after = (!view.differs(&p.view, self.reach)).then_some(after);
+            let after = (!view.works_otherwise(&p.view)).then_some(after);
             match (p.before, after) {
                 (Some(b), Some(a)) => Some(((b.log_ms + a.log_ms) / 2.0, b.triangles.max(a.triangles))),
                 (Some(only), None) | (None, Some(only)) => Some((only.log_ms, only.triangles)),
@@ -1113,6 +1124,26 @@ mod tests {
         // itself at confidence would take more samples than a window holds.
         let (turns, _) = simulate(&[Occlusion, Occlusion], 120, 0.1, (0.9, vec![100, 100]), still, |f, s| {
             street(f) * [1.0, 1.0 / 1.09][s]
+        });
+        let incumbents = strategies(turns.iter().filter(|t| !t.probe));
+        assert!(incumbents[incumbents.len() / 2..].iter().all(|&s| s == 1), "{incumbents:?}");
+    }
+
+    #[test]
+    fn on_an_orbit_that_moves_the_eye_beyond_the_reach_each_frame_probes_still_pair_and_a_cheaper_rival_takes_over() {
+        // An orbit of 40 frames, 100 from its centre: the eye moves 15.7 a
+        // frame, beyond the chooser's reach of 10, and turns 9°.
+        let orbit = |frame: u64| {
+            let angle = (frame as f64 * 9.0).to_radians();
+            let eye = 100.0 * DVec3::new(angle.cos(), 0.0, angle.sin());
+            View {
+                eye,
+                forward: -eye / 100.0,
+                frustum_triangles: 1000,
+            }
+        };
+        let (turns, _) = simulate(&[Occlusion, Occlusion], 40, 0.05, (0.5, vec![500, 500]), orbit, |_, s| {
+            [1.0, 0.8][s]
         });
         let incumbents = strategies(turns.iter().filter(|t| !t.probe));
         assert!(incumbents[incumbents.len() / 2..].iter().all(|&s| s == 1), "{incumbents:?}");
