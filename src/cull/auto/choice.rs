@@ -9,9 +9,9 @@
 //! - A probe runs another strategy for one frame, or two where it must
 //!   first settle (its first frame is paid for, not measured). Its sample
 //!   is the log of its frame time over the incumbent's on both sides of it
-//!   that do the same work (turned less than 30° and holding about as many
-//!   triangles, however far the eye moved: [`View::works_otherwise`]), so
-//!   a probe is never followed by another.
+//!   that saw its view (turned less than 30°, holding about as many
+//!   triangles, and the eye moved as the path has been moving, however
+//!   far: [`Chooser::one_view`]), so a probe is never followed by another.
 //! - Each strategy keeps its last [`WINDOW`] samples: the mean of their
 //!   middle half is its cost relative to the incumbent, their spread (the
 //!   MAD, and never less than the incumbent's own frame-to-frame noise) its
@@ -74,6 +74,8 @@ const EXPLORE: u64 = 3;
 /// Lower bound (log) above which one sample shows a strategy dearer
 /// (about 1.5×).
 const FAR_DEARER: f64 = 0.4;
+/// Frames whose eye steps tell how fast the path moves ([`Chooser::one_view`]).
+const STEPS: usize = 5;
 /// Fewest frames between rechecks of a strategy known not to be cheaper.
 const RECHECK: u64 = 12;
 /// Share of the frustum's triangles below which occlusion culling has
@@ -124,19 +126,15 @@ pub(super) struct View {
 }
 
 impl View {
-    /// Turned by more than 30°, moved by more than `reach`, or doing other
-    /// work ([`View::works_otherwise`]).
+    /// Moved by more than `reach`, or doing other work
+    /// ([`View::works_otherwise`]).
     pub fn differs(&self, other: &View, reach: f64) -> bool {
         self.eye.distance(other.eye) > reach || self.works_otherwise(other)
     }
 
     /// Turned by more than 30°, or holding more than 1.5 times the
     /// triangles or less than 1/1.5 of them: what a frame of it costs is
-    /// not what a frame of `other` costs. Frames a few apart on a path are
-    /// paired by this alone, however far the eye moves between them: an
-    /// orbit of 40 frames moves it a sixth of the orbit's radius a frame,
-    /// more than any fixed reach, while each frame sees much what the last
-    /// saw.
+    /// not what a frame of `other` costs.
     pub fn works_otherwise(&self, other: &View) -> bool {
         let (a, b) = (
             self.frustum_triangles.max(1) as f64,
@@ -226,6 +224,7 @@ struct Pending {
     /// probe's view.
     before: Option<Seen>,
     view: View,
+    frame: u64,
 }
 
 /// Whether a probe drew more or fewer triangles than the incumbent's frames
@@ -332,6 +331,10 @@ pub(super) struct Chooser {
     shares: VecDeque<Occluded>,
     /// A move farther than this changes the view materially.
     reach: f64,
+    /// How far the eye moved in each of the last [`STEPS`] frames, and
+    /// where it last was.
+    eye_steps: VecDeque<f64>,
+    last_eye: Option<DVec3>,
     /// Share of the run's time that rechecks of strategies known not to be
     /// cheaper may cost.
     budget: f64,
@@ -375,6 +378,8 @@ impl Chooser {
             hidden: None,
             shares: VecDeque::with_capacity(SHARES),
             reach,
+            eye_steps: VecDeque::with_capacity(STEPS),
+            last_eye: None,
             budget,
             recheck_spent: 0.0,
             looked_outgrown: None,
@@ -493,6 +498,12 @@ impl Chooser {
     /// Learns what the frame planned as `turn` cost and drew, and for an
     /// occlusion frame what it hid of `view`'s frustum.
     pub fn learn(&mut self, turn: Turn, cost: Cost, occluded: Option<Occluded>, view: &View) {
+        if let Some(last) = self.last_eye.replace(view.eye) {
+            if self.eye_steps.len() == STEPS {
+                self.eye_steps.pop_front();
+            }
+            self.eye_steps.push_back(last.distance(view.eye));
+        }
         if !cost.frame_ms.is_finite() || cost.frame_ms <= 0.0 {
             return;
         }
@@ -540,8 +551,9 @@ impl Chooser {
                 // the two frames measured different work.
                 before: self
                     .incumbent_last
-                    .filter(|b| self.frame - b.frame <= 3 && !view.works_otherwise(&b.view)),
+                    .filter(|b| self.frame - b.frame <= 3 && self.one_view(view, &b.view, self.frame - b.frame)),
                 view: *view,
+                frame: self.frame,
             });
             return;
         }
@@ -553,15 +565,16 @@ impl Chooser {
             triangles: cost.triangles,
             view: *view,
         };
+        let pending = self.pending.take();
         let beside = |p: &Pending| {
-            let after = (!view.works_otherwise(&p.view)).then_some(after);
+            let after = self.one_view(view, &p.view, self.frame - p.frame).then_some(after);
             match (p.before, after) {
                 (Some(b), Some(a)) => Some(((b.log_ms + a.log_ms) / 2.0, b.triangles.max(a.triangles))),
                 (Some(only), None) | (None, Some(only)) => Some((only.log_ms, only.triangles)),
                 (None, None) => None,
             }
         };
-        if let Some((p, (baseline, incumbent_triangles))) = self.pending.take().and_then(|p| Some((p, beside(&p)?))) {
+        if let Some((p, (baseline, incumbent_triangles))) = pending.and_then(|p| Some((p, beside(&p)?))) {
             let hidden = self.hidden.map(|h| h.share);
             let record = &mut self.records[p.strategy];
             if record.samples.len() == WINDOW {
@@ -589,6 +602,20 @@ impl Chooser {
         }
         self.incumbent_earlier = self.incumbent_last;
         self.incumbent_last = Some(after);
+    }
+
+    /// Whether frames `apart` frames apart that looked from `a` and `b` saw
+    /// one view, so that their times pair: they do the same work
+    /// ([`View::works_otherwise`]) from eyes no farther apart than the
+    /// reach, or than twice the median of the path's last steps a frame.
+    /// An orbit of 40 frames moves the eye a sixth of its radius a frame,
+    /// beyond any fixed reach, while each frame sees much what the last
+    /// saw; a cut (one glTF camera after another, a stepped animation)
+    /// moves it far beyond its steps, and the two frames beside it measure
+    /// two places.
+    fn one_view(&self, a: &View, b: &View, apart: u64) -> bool {
+        let step = median(self.eye_steps.iter().copied());
+        !a.works_otherwise(b) && a.eye.distance(b.eye) <= self.reach.max(2.0 * step * apart as f64)
     }
 
     /// The incumbent's frame-to-frame noise (log): a robust σ of one frame.
@@ -1147,6 +1174,27 @@ mod tests {
         });
         let incumbents = strategies(turns.iter().filter(|t| !t.probe));
         assert!(incumbents[incumbents.len() / 2..].iter().all(|&s| s == 1), "{incumbents:?}");
+    }
+
+    #[test]
+    fn a_probe_just_past_a_cut_does_not_pair_with_the_frame_before_it() {
+        // A path of glTF cameras, one per frame, cutting every 5 frames
+        // between two places seen the same way with as many triangles: at
+        // the first 4 times dearer to draw. The rival hides a little more
+        // and costs 1.2 times the incumbent everywhere; paired across a cut
+        // from the dear place, one probe would look half as dear and, as it
+        // drew fewer triangles, take over at once.
+        let place = |frame: u64| frame / 5 % 2;
+        let cuts = |frame: u64| View {
+            eye: DVec3::new(1000.0 * place(frame) as f64, 0.0, 0.0),
+            forward: DVec3::NEG_Z,
+            frustum_triangles: 1000,
+        };
+        let (turns, _) = simulate(&[Occlusion, Occlusion], 120, 0.02, (0.5, vec![500, 400]), cuts, |f, s| {
+            [4.0, 1.0][place(f) as usize] * [1.0, 1.2][s]
+        });
+        let incumbents = strategies(turns.iter().filter(|t| !t.probe));
+        assert!(incumbents.iter().all(|&s| s == 0), "{incumbents:?}");
     }
 
     #[test]

@@ -602,8 +602,8 @@ pub struct Rasteriser {
     /// Per row of the current patch's cells, the columns from the first to
     /// the last where its border erased a mark (empty where none).
     erased: Vec<Range<u32>>,
-    /// The triangles of the current patch that reach these rows of cells,
-    /// each with the rows and columns of the cells it reached.
+    /// The triangles of the current patch rasterised in these rows of
+    /// cells, each with the rows and columns of the cells it reached.
     reached: Vec<(usize, [Range<u32>; 2])>,
 }
 
@@ -627,12 +627,12 @@ impl Rasteriser {
         }
         self.begin_patch(columns, rows);
         // A patch of many triangles spans many bands of rows: each band
-        // takes those whose y range meets its pixel centres' (a NaN meets
-        // none; neither reaches a cell there).
-        let [first, last] = [grid.down.cell(self.rows.start)[0], grid.down.cell(self.rows.end - 1)[1]];
+        // takes those whose y range meets its pixel centres' (a NaN range
+        // meets none: such a triangle reaches no cell).
+        let [top, bottom] = [grid.down.cell(self.rows.start)[0], grid.down.cell(self.rows.end - 1)[1]];
         for t in patch.triangles.clone() {
             let [lo, hi] = patches.reach_y[t];
-            if lo <= last && hi >= first {
+            if lo <= bottom && hi >= top {
                 self.add_triangle(cells, t, &patches.triangles[t]);
             }
         }
@@ -692,9 +692,9 @@ impl Rasteriser {
         ((row - self.rows.start) * width + column - self.columns.start) as usize
     }
 
-    /// Rasterises triangle `t` of the patches (`triangle`) of the current
-    /// patch, row of cells by row of cells: first its depth over the cells it may reach
-    /// ([`Self::add_depth`]), then, in a row where it vouches for a depth,
+    /// Rasterises `triangle` (triangle `t` of the patches) into the current
+    /// patch's cells, row of cells by row of cells: first its depth over
+    /// the cells it may reach ([`Self::add_depth`]), then, in a row where it vouches for a depth,
     /// its mark: every group of the cells whose every centre it marks,
     /// and the groups it marks in the cells on either side of them
     /// ([`Self::mark_sides`]), each from the x range it marks in each row

@@ -109,12 +109,14 @@ const TRIANGLES: ParamInfo = ParamInfo {
 /// and rasterised) and can hide at most what lies behind its box on
 /// screen: one whose box covers fewer pixels than it has triangles (a car
 /// or a chair full of detail, seen through a window) costs more than it
-/// can hide. Measured with `--sweep swr.pixels_per_triangle=0,1,3`
-/// (Vulkan, lavapipe, buffers built every frame): on the default city, 1
-/// keeps the culled share (0.972 of what `roc` culls; 0.970 with every
-/// visible object) for 13 % less CPU a frame, and on den-haag.obj 15 %
-/// less (it hides more than `roc` either way: its box test is finer);
-/// 3 culls a tenth less on the bunny and a third less on den-haag.
+/// can hide. Measured with `--sweep swr.pixels_per_triangle=0,1,3` on the
+/// default city and on the models of `../shared/models` along their
+/// README's paths (Vulkan, lavapipe, buffers built every frame): on the
+/// city, 1 keeps the culled share (0.972 of what `roc` culls; 0.970 with
+/// every visible object) for 13 % less CPU a frame, and on den-haag.obj
+/// 15 % less (it hides more than `roc` either way: its box test is
+/// finer); the engine, the bunny and the teapot keep theirs. 3 culls a
+/// tenth less on the bunny and a third less on den-haag.
 const PIXELS_PER_TRIANGLE: ParamInfo = ParamInfo {
     key: "pixels_per_triangle",
     default: "1",
@@ -1137,8 +1139,9 @@ mod tests {
 
     #[test]
     fn an_object_covering_fewer_pixels_than_it_has_triangles_is_no_occluder() {
-        // A cube 3 m ahead covers thousands of pixels; one 1 km off covers
-        // a pixel or two for its 12 triangles, far aside.
+        // A cube 3 m ahead covers thousands of pixels; one 1 km off, far
+        // aside, covers a few for its 12 triangles (its box on screen, its
+        // pixels rounded outward).
         let (scene, hierarchy) = cubes(&[DVec3::new(-0.5, -0.5, -4.0), DVec3::new(-500.0, -0.5, -1000.0)]);
         let camera = camera_down_z();
         let occluder_triangles = |pixels_per_triangle: &str| {
