@@ -617,6 +617,7 @@ impl Chooser {
     /// the newest (the one judged; at least three of them, else the reach
     /// alone, so that a cut early in a path or one cut after another does
     /// not set the pace it is judged by).
+    ///
     /// An orbit of 40 frames moves the eye a sixth of its radius a frame,
     /// beyond any fixed reach, while each frame sees much what the last
     /// saw; a cut (one glTF camera after another, a stepped animation)
