@@ -438,7 +438,7 @@ impl AutoCulling {
             if self.candidates[k].carries() == Carries::VisibleOnGpu {
                 self.lists_written = Some((self.frames, view));
             } else if view.frustum_triangles > 0 {
-                chooser.calibrate_hidden(k, 1.0 - drawn as f64 / view.frustum_triangles as f64);
+                chooser.calibrate_hidden(k, 1.0 - drawn as f64 / view.frustum_triangles as f64, &view);
             }
         }
         if warm_ups > 0 {
