@@ -87,3 +87,55 @@ fn same_counters_passes_equal_counters_whatever_the_times_and_names_the_first_di
     assert_eq!(code, 2, "{text}");
     assert!(text.contains("absent/frames.csv: no such file"), "{text}");
 }
+
+fn auto_trace(folder: &Path) -> (i32, String, String) {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/auto-trace");
+    let out = Command::new(script).arg(folder).arg("a test run").output().unwrap();
+    let text = |bytes: &[u8]| String::from_utf8_lossy(bytes).to_string();
+    (out.status.code().unwrap(), text(&out.stdout), text(&out.stderr))
+}
+
+#[test]
+fn auto_trace_keeps_the_replayed_candidates_frame_by_frame_and_refuses_a_run_it_cannot_trace() {
+    let dir = tempfile::tempdir().unwrap();
+    // Interleaved as a bench writes them; swr, auto and a sweep left out.
+    let run = results(
+        dir.path(),
+        "run",
+        &[
+            "roc,0,4.25,3,30,7,2,0,0,0,0,0,0,0,0,0,9",
+            "vfc,0,5.0,10,100,7,2,0,0,0,0,0,0,0,0,0,9",
+            "swr,0,3.0,4,40,7,2,3,0,0,0,0,0,0,0,0,9",
+            "auto,0,4.5,3,30,7,2,0,0,0,0,0,0,0,0,0,9",
+            "vfc,1,6.0,11,110,7,2,0,0,0,0,0,0,0,0,0,9",
+            "roc[start=2],1,4.0,3,30,7,2,0,0,0,0,0,0,0,0,0,9",
+            "roc,1,4.125,4,41,7,2,0,0,0,0,0,0,0,0,0,9",
+        ],
+    );
+    let (code, out, err) = auto_trace(&run);
+    assert_eq!(code, 0, "{err}");
+    let expected =
+        "# a test run\nframe,vfc_ms,vfc_triangles,roc_ms,roc_triangles\n0,5.000,100,4.250,30\n1,6.000,110,4.125,41\n";
+    assert_eq!(out, expected);
+    // No vfc, against which the replay measures what occlusion hid.
+    let without_vfc = results(dir.path(), "no-vfc", &["roc,0,4.25,3,30,7,2,0,0,0,0,0,0,0,0,0,9"]);
+    let (code, out, err) = auto_trace(&without_vfc);
+    assert_eq!((code, out.as_str()), (2, ""), "{err}");
+    assert!(err.contains("no vfc"), "{err}");
+    // A frame one candidate lacks.
+    let gap = results(
+        dir.path(),
+        "gap",
+        &[
+            "vfc,0,5.0,10,100,7,2,0,0,0,0,0,0,0,0,0,9",
+            "vfc,1,5.0,10,100,7,2,0,0,0,0,0,0,0,0,0,9",
+            "roc,1,4.0,3,30,7,2,0,0,0,0,0,0,0,0,0,9",
+        ],
+    );
+    let (code, out, err) = auto_trace(&gap);
+    assert_eq!((code, out.as_str()), (2, ""), "nothing written: {err}");
+    assert!(err.contains("no frame 0 of roc"), "{err}");
+    let (code, _, err) = auto_trace(&dir.path().join("absent"));
+    assert_eq!(code, 2);
+    assert!(err.contains("no such file"), "{err}");
+}
