@@ -1,5 +1,6 @@
 //! The repository's scripts, run as a user runs them.
 
+use std::ffi::OsStr;
 use std::path::Path;
 use std::process::Command;
 
@@ -20,10 +21,22 @@ fn same_counters(folders: &[&Path]) -> (i32, String) {
 }
 
 fn same_counters_of(flags: &[&str], folders: &[&Path]) -> (i32, String) {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/same-counters");
-    let out = Command::new(script).args(flags).args(folders).output().unwrap();
-    let text = String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
-    (out.status.code().unwrap(), text)
+    let args: Vec<&OsStr> = flags
+        .iter()
+        .map(OsStr::new)
+        .chain(folders.iter().map(|f| f.as_os_str()))
+        .collect();
+    let (code, out, err) = script("same-counters", &args);
+    (code, out + &err)
+}
+
+/// Runs `scripts/NAME` with `args`: its exit status, standard output and
+/// standard error.
+fn script(name: &str, args: &[&OsStr]) -> (i32, String, String) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts").join(name);
+    let out = Command::new(path).args(args).output().unwrap();
+    let text = |bytes: &[u8]| String::from_utf8_lossy(bytes).to_string();
+    (out.status.code().unwrap(), text(&out.stdout), text(&out.stderr))
 }
 
 #[test]
@@ -89,10 +102,7 @@ fn same_counters_passes_equal_counters_whatever_the_times_and_names_the_first_di
 }
 
 fn auto_trace(folder: &Path) -> (i32, String, String) {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/auto-trace");
-    let out = Command::new(script).arg(folder).arg("a test run").output().unwrap();
-    let text = |bytes: &[u8]| String::from_utf8_lossy(bytes).to_string();
-    (out.status.code().unwrap(), text(&out.stdout), text(&out.stderr))
+    script("auto-trace", &[folder.as_os_str(), OsStr::new("a test run")])
 }
 
 #[test]
