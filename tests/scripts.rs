@@ -101,13 +101,21 @@ fn same_counters_passes_equal_counters_whatever_the_times_and_names_the_first_di
     assert!(text.contains("absent/frames.csv: no such file"), "{text}");
 }
 
-fn auto_trace(folder: &Path) -> (i32, String, String) {
-    script("auto-trace", &[folder.as_os_str(), OsStr::new("a test run")])
+/// `scripts/auto-trace` of `folder` into `trace`: its exit status and
+/// standard error.
+fn auto_trace(folder: &Path, trace: &Path) -> (i32, String) {
+    let (code, out, err) = script(
+        "auto-trace",
+        &[folder.as_os_str(), OsStr::new("a test run"), trace.as_os_str()],
+    );
+    assert_eq!(out, "", "it writes the trace, not standard output");
+    (code, err)
 }
 
 #[test]
 fn auto_trace_keeps_the_replayed_candidates_frame_by_frame_and_refuses_a_run_it_cannot_trace() {
     let dir = tempfile::tempdir().unwrap();
+    let trace = dir.path().join("trace.csv");
     // Interleaved as a bench writes them; swr, auto and a sweep left out.
     let run = results(
         dir.path(),
@@ -118,34 +126,62 @@ fn auto_trace_keeps_the_replayed_candidates_frame_by_frame_and_refuses_a_run_it_
             "swr,0,3.0,4,40,7,2,3,0,0,0,0,0,0,0,0,9",
             "auto,0,4.5,3,30,7,2,0,0,0,0,0,0,0,0,0,9",
             "vfc,1,6.0,11,110,7,2,0,0,0,0,0,0,0,0,0,9",
-            "roc[start=2],1,4.0,3,30,7,2,0,0,0,0,0,0,0,0,0,9",
             "roc,1,4.125,4,41,7,2,0,0,0,0,0,0,0,0,0,9",
+            "roc[start=2],1,4.0,3,30,7,2,0,0,0,0,0,0,0,0,0,9",
         ],
     );
-    let (code, out, err) = auto_trace(&run);
+    let (code, err) = auto_trace(&run, &trace);
     assert_eq!(code, 0, "{err}");
     let expected =
         "# a test run\nframe,vfc_ms,vfc_triangles,roc_ms,roc_triangles\n0,5.000,100,4.250,30\n1,6.000,110,4.125,41\n";
-    assert_eq!(out, expected);
-    // No vfc, against which the replay measures what occlusion hid.
-    let without_vfc = results(dir.path(), "no-vfc", &["roc,0,4.25,3,30,7,2,0,0,0,0,0,0,0,0,0,9"]);
-    let (code, out, err) = auto_trace(&without_vfc);
-    assert_eq!((code, out.as_str()), (2, ""), "{err}");
-    assert!(err.contains("no vfc"), "{err}");
-    // A frame one candidate lacks.
-    let gap = results(
-        dir.path(),
-        "gap",
-        &[
-            "vfc,0,5.0,10,100,7,2,0,0,0,0,0,0,0,0,0,9",
-            "vfc,1,5.0,10,100,7,2,0,0,0,0,0,0,0,0,0,9",
-            "roc,1,4.0,3,30,7,2,0,0,0,0,0,0,0,0,0,9",
-        ],
-    );
-    let (code, out, err) = auto_trace(&gap);
-    assert_eq!((code, out.as_str()), (2, ""), "nothing written: {err}");
-    assert!(err.contains("no frame 0 of roc"), "{err}");
-    let (code, _, err) = auto_trace(&dir.path().join("absent"));
+    assert_eq!(std::fs::read_to_string(&trace).unwrap(), expected);
+    // Runs it cannot trace leave the trace as it was.
+    let vfc = |frame: u32| format!("vfc,{frame},5.0,10,100,7,2,0,0,0,0,0,0,0,0,0,9");
+    let refused = [
+        (
+            "no-vfc",
+            vec!["roc,0,4.25,3,30,7,2,0,0,0,0,0,0,0,0,0,9".to_string()],
+            "no vfc",
+        ),
+        (
+            "gap",
+            vec![vfc(0), vfc(1), "roc,1,4.0,3,30,7,2,0,0,0,0,0,0,0,0,0,9".into()],
+            "no frame 0 of roc",
+        ),
+        ("twice", vec![vfc(0), vfc(0)], "frame 0 of vfc twice"),
+        (
+            "zero",
+            vec![vfc(0), "roc,0,0,3,30,7,2,0,0,0,0,0,0,0,0,0,9".into()],
+            "frame_ms above 0",
+        ),
+        ("short", vec![vfc(0), "roc,1,4.0,3".into()], "has 4 fields"),
+    ];
+    for (name, rows, why) in refused {
+        let rows: Vec<&str> = rows.iter().map(String::as_str).collect();
+        let (code, err) = auto_trace(&results(dir.path(), name, &rows), &trace);
+        assert_eq!(code, 2, "{name}: {err}");
+        assert!(err.contains(why), "{name}: {err}");
+        assert_eq!(std::fs::read_to_string(&trace).unwrap(), expected, "{name}");
+    }
+    let other = dir.path().join("other");
+    std::fs::create_dir(&other).unwrap();
+    common::write(&other, "frames.csv", "a,b\n1,2\n");
+    let (code, err) = auto_trace(&other, &trace);
+    assert_eq!(code, 2);
+    assert!(err.contains("not a frames.csv"), "{err}");
+    let (code, err) = auto_trace(&dir.path().join("absent"), &trace);
     assert_eq!(code, 2);
     assert!(err.contains("no such file"), "{err}");
+    let (code, _, err) = script("auto-trace", &[run.as_os_str()]);
+    assert_eq!(code, 2);
+    assert!(err.contains("usage"), "{err}");
+    assert_eq!(std::fs::read_to_string(&trace).unwrap(), expected);
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert!(
+        !left.iter().any(|n| n.to_string_lossy().starts_with("trace.csv.")),
+        "no temporary file left: {left:?}"
+    );
 }

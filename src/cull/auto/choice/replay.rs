@@ -9,15 +9,17 @@
 //! What a replay leaves out, so that it judges the bandit's statistics on
 //! real costs rather than the view rules: the camera (a trace holds none:
 //! the eye walks a tenth of the reach a frame, looking one way, holding
-//! the triangles `vfc` drew), hand-over (a probe costs what its mode cost
-//! in its own run, where it had run the frame before; a walk's settling
-//! frame after a frame drawn on the CPU costs the same), and warm-up (the
-//! path's first two frames calibrate, as two warm-up frames of its first
-//! view would).
+//! the triangles `vfc` drew; so no view outgrows another), hand-over (a
+//! probe costs what its mode cost in its own run, where it had run the
+//! frame before; a walk's settling frame costs the same; and a walk that
+//! starts from lists gone stale after `vfc` still tells what it hid,
+//! which the mode does not count), and warm-up (the path's first two
+//! frames calibrate, as two warm-up frames of its first view would).
 
 use glam::DVec3;
 
 use super::{Chooser, Cost, Family, Occluded, View};
+use crate::config::DEFAULT_WARMUP;
 use crate::cull::auto::COUNT_EVERY;
 
 /// The traces: the default city, `--movers 200`, `--scene forest` and the
@@ -89,8 +91,8 @@ impl Trace {
         self.ms[0].len()
     }
 
-    /// Whether candidate `k` is a GPU walk, whose visible lists go stale
-    /// while a culler drawing on the CPU runs.
+    /// Whether candidate `k` is a GPU walk, whose shared visible lists go
+    /// stale two frames after the last walk wrote them.
     fn walks(&self, k: usize) -> bool {
         ["roc", "ioc", "hiz"].contains(&self.names[k].as_str())
     }
@@ -110,13 +112,14 @@ impl Trace {
 }
 
 /// `auto`'s mean frame time over the fastest candidate's, replayed on
-/// `trace` as the mode runs (mod.rs): what a culler drawing on the CPU hid
-/// in warm-up calibrates with the first two frames' times; a walk settles
-/// where no walk ran in the last two frames, `chc` after `vfc`; an
-/// occlusion frame tells what it hid on a probe, every [`COUNT_EVERY`]
-/// frames and the first, with a share of its frame drawing of 0.8 (the
-/// mode takes it from the frame's render time, which a trace does not
-/// hold).
+/// `trace` as the mode runs (mod.rs), its frames numbered as the mode's
+/// after [`DEFAULT_WARMUP`] warm-up frames: what a culler drawing on the
+/// CPU hid in warm-up calibrates with the first two frames' times; a walk
+/// settles where no walk wrote the lists (warm-up's last frame did) in the
+/// last two frames, `chc` after `vfc`; an occlusion frame tells what it hid
+/// on a probe, every [`COUNT_EVERY`] frames and the first, with a share of
+/// its frame drawing of 0.8 (the mode takes it from the frame's render
+/// time, which a trace does not hold).
 fn replay(trace: &Trace) -> f64 {
     let families: Vec<Family> = (0..trace.names.len())
         .map(|k| if k == 0 { Family::Frustum } else { Family::Occlusion })
@@ -137,11 +140,15 @@ fn replay(trace: &Trace) -> f64 {
         let log_ms: Vec<f64> = trace.ms.iter().map(|ms| ms[frame].ln()).collect();
         chooser.calibrate(&log_ms, &view(0));
     }
-    let (mut total, mut last, mut walked): (f64, Option<usize>, Option<usize>) = (0.0, None, None);
+    // The mode's count of frames, warm-up's first; the last warm-up frame
+    // wrote the walks' lists.
+    let warm_ups = u64::from(DEFAULT_WARMUP);
+    let mode_frame = |frame: usize| warm_ups + 1 + frame as u64;
+    let (mut total, mut last, mut walked) = (0.0, None, warm_ups);
     for frame in 0..trace.frames() {
         let settles: Vec<bool> = (0..families.len())
             .map(|k| match trace.names[k].as_str() {
-                _ if trace.walks(k) => walked.is_none_or(|w| frame - w > 2),
+                _ if trace.walks(k) => mode_frame(frame) - walked > 2,
                 "chc" => last == Some(0),
                 _ => false,
             })
@@ -152,7 +159,7 @@ fn replay(trace: &Trace) -> f64 {
             frame_ms: trace.ms[k][frame],
             triangles: trace.triangles[k][frame] as u64,
         };
-        let counted = turn.probe || (frame as u64).is_multiple_of(COUNT_EVERY) || last.is_none();
+        let counted = turn.probe || mode_frame(frame).is_multiple_of(COUNT_EVERY) || last.is_none();
         let occluded = match (k, trace.hidden(k, frame)) {
             (1.., Some(hidden)) if turn.measured && counted => Some(Occluded { hidden, drawing: 0.8 }),
             _ => None,
@@ -161,7 +168,7 @@ fn replay(trace: &Trace) -> f64 {
         total += cost.frame_ms;
         last = Some(k);
         if trace.walks(k) {
-            walked = Some(frame);
+            walked = mode_frame(frame);
         }
     }
     total / trace.frames() as f64 / trace.fastest_mean()
@@ -170,11 +177,12 @@ fn replay(trace: &Trace) -> f64 {
 /// A guard against a chooser gone wrong, not a measure of small changes:
 /// between versions that differ by a rule, the runs' own noise moves the
 /// geometric mean by about half a percent either way. The chooser of this
-/// test's commit replays at 1.027 here (worst 1.082), and at 1.023 on 70
-/// runs of five checks (worst 1.082, one run over 1.08); without its two
-/// rules ([`super::WANDER`], [`Chooser::coarser_than_another`]) at 1.021
-/// (worst 1.057) and 1.023 (worst 1.112, three over 1.08). One that never
-/// replaces the incumbent warm-up chose replays at 1.048 (worst 1.153).
+/// test's commit replays at 1.026 here (worst 1.082), and at 1.024 on 70
+/// runs of five checks (worst 1.082; one run over 1.08, six over 1.05);
+/// without its two rules ([`super::WANDER`],
+/// [`Chooser::coarser_than_another`]) at 1.022 (worst 1.071) and 1.023
+/// (worst 1.112; three over 1.08, eight over 1.05). One that never
+/// replaces the incumbent warm-up chose replays at 1.047 (worst 1.153).
 #[test]
 fn on_recorded_costs_of_twenty_eight_runs_auto_keeps_within_a_few_percent_of_the_fastest_mode() {
     let replayed: Vec<(&str, f64)> = TRACES.iter().map(|(name, text)| (*name, replay(&Trace::parse(text)))).collect();
