@@ -50,6 +50,7 @@ use crate::auto_or::AutoOr;
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
 use crate::cull::culler::{Culler, FrameInput, OccluderDepths, PreviousFrame, TraversalStats};
+use crate::cull::traversal::frustum_cull_subtree;
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::gpu::{
     BoxMargins, BoxPlanes, DepthMargins, EyeBox, FacingFace, Frame, GpuError, GpuSetup, PixelRays, QueryBox,
@@ -241,6 +242,8 @@ pub struct SoftwareOcclusionCulling {
     to_draw: Vec<u32>,
     /// Step 4's threads' scratch.
     walkers: Walkers,
+    /// Frustum culling's, while the buffer rests.
+    stack: Vec<u32>,
 }
 
 impl SoftwareOcclusionCulling {
@@ -269,6 +272,7 @@ impl SoftwareOcclusionCulling {
             found: Vec::new(),
             to_draw: Vec::new(),
             walkers: Walkers::default(),
+            stack: Vec::new(),
         }
     }
 
@@ -741,9 +745,21 @@ impl Culler for SoftwareOcclusionCulling {
             buffer.cleared_bands(u32::MAX).for_each(drop);
             self.buffer_holds = false;
         }
+        // A resting buffer tests nothing: the frame is frustum culling's,
+        // its fully-inside shortcut and its order of drawing included, so
+        // that it costs what `vfc` costs. (Walked node by node, den-haag's
+        // orbit took 0.4–0.5 ms of CPU and 0.3–1.1 ms more of GPU a frame
+        // than `vfc`, whose frame there is 10–14 ms.)
+        if resting {
+            self.found.clear();
+            let hierarchy = input.hierarchy;
+            frustum_cull_subtree(scene, hierarchy, 0, &frustum, &mut self.stack, &mut self.found, &mut stats);
+            ctx.draw(&self.found);
+            std::mem::swap(&mut self.visible, &mut self.found);
+            return stats;
+        }
         self.candidates.clear();
-        let visible: &[u32] = if resting { &[] } else { &self.visible };
-        for &o in visible {
+        for &o in &self.visible {
             let bounds = &scene.objects[o as usize].bounds;
             if frustum.classify(bounds) == Containment::Outside {
                 continue;
@@ -803,13 +819,11 @@ impl Culler for SoftwareOcclusionCulling {
             scene,
             neighbours: &self.neighbours,
         };
-        if !resting {
-            occluders.rasterise(buffer, &mut self.preparers, &mut self.rasterisers);
-            buffer.build_pyramid();
-            self.buffer_holds = true;
-            if self.params.resolution == AutoOr::Auto && !self.occluders.is_empty() {
-                self.held = buffer.held();
-            }
+        occluders.rasterise(buffer, &mut self.preparers, &mut self.rasterisers);
+        buffer.build_pyramid();
+        self.buffer_holds = true;
+        if self.params.resolution == AutoOr::Auto && !self.occluders.is_empty() {
+            self.held = buffer.held();
         }
 
         // 4. The hierarchy, in the frustum and not hidden (walk.rs: its
@@ -827,7 +841,7 @@ impl Culler for SoftwareOcclusionCulling {
             frustum: &frustum,
             scene,
             hierarchy: input.hierarchy,
-            hides: (!resting).then_some(&hides),
+            hides: &hides,
         };
         let walked = self.walkers.walk(&walk, &mut self.found);
         let hidden_triangles = walked.hidden_triangles;
@@ -835,7 +849,7 @@ impl Culler for SoftwareOcclusionCulling {
             (walked.nodes_visited, walked.nodes_culled_frustum, walked.nodes_culled_occlusion);
         // A buffer of occluders that did not pay rests the next frames (a
         // warm-up frame's time, compiling and filling caches, says nothing).
-        if !resting && !self.occluders.is_empty() && self.params.rests && !input.warm_up {
+        if !self.occluders.is_empty() && self.params.rests && !input.warm_up {
             let spent_ms = started.elapsed().as_secs_f64() * 1e3;
             let cost = input.previous.map_or(0.0, |p| spent_ms / p.frame_ms);
             self.rest.after(pays(hidden_triangles, spent_ms, input.previous), cost);
@@ -1417,6 +1431,36 @@ mod tests {
             assert!(swr.buffer.as_ref().unwrap().depths().iter().all(|&d| d == 0.0), "a resting buffer is empty");
         }
         (rasterised, drawn)
+    }
+
+    #[test]
+    fn a_resting_buffers_frame_is_frustum_cullings_own_in_what_it_visits_and_the_order_it_draws() {
+        // Side by side, nothing hidden: from frame 2 the buffer rests (as
+        // below), and the frame is vfc's, fully-inside shortcut included.
+        let (scene, hierarchy) = cubes(&SIDE_BY_SIDE);
+        let camera = camera_down_z();
+        let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
+        let mut vfc = crate::cull::FrustumCulling::new(&scene);
+        let recording = || Recording::new(|_: &Aabb| -> bool { panic!("neither asks the GPU anything") });
+        for frame in 0..8 {
+            let (mut calls, mut vfc_calls) = (recording(), recording());
+            let previous = PreviousFrame {
+                frame_ms: 1e3,
+                render_ms: 36.0,
+                triangles_drawn: 36,
+            };
+            let frame_input = || FrameInput {
+                previous: Some(previous),
+                ..input(frame, &camera, &scene, &hierarchy)
+            };
+            let stats = swr.frame(&mut calls, &frame_input());
+            let vfc_stats = vfc.frame(&mut vfc_calls, &frame_input());
+            if frame >= 2 {
+                assert_eq!(stats.occluder_triangles, 0, "frame {frame} rests");
+                assert_eq!(calls.drawn(), vfc_calls.drawn(), "frame {frame}");
+                assert_eq!(stats.nodes_visited, vfc_stats.nodes_visited, "frame {frame}");
+            }
+        }
     }
 
     #[test]

@@ -146,9 +146,8 @@ pub struct Walk<'a> {
     pub frustum: &'a Frustum,
     pub scene: &'a Scene,
     pub hierarchy: &'a Hierarchy,
-    /// Whether the buffer hides a box (in the frustum); none while the
-    /// buffer rests (then nothing is hidden).
-    pub hides: Option<&'a (dyn Fn(&Aabb) -> bool + Sync)>,
+    /// Whether the buffer hides a box (in the frustum).
+    pub hides: &'a (dyn Fn(&Aabb) -> bool + Sync),
 }
 
 impl Walk<'_> {
@@ -172,7 +171,7 @@ impl Walk<'_> {
             walker.tally.nodes_culled_frustum += 1;
             return;
         }
-        let hidden = |bounds: &Aabb| self.hides.is_some_and(|hides| hides(bounds));
+        let hidden = self.hides;
         let triangles = |o: u32| u64::from(self.scene.objects[o as usize].triangles);
         if hidden(&node.bounds) {
             walker.tally.nodes_culled_occlusion += 1;
@@ -211,7 +210,7 @@ mod tests {
     /// hidden.
     fn walked_one_by_one(walk: &Walk) -> (Vec<u32>, u64, [u64; 3]) {
         let (mut found, mut hidden_triangles, mut counts) = (Vec::new(), 0, [0; 3]);
-        let hides = |bounds: &Aabb| walk.hides.is_some_and(|hides| hides(bounds));
+        let hides = walk.hides;
         let triangles = |o: &u32| u64::from(walk.scene.objects[*o as usize].triangles);
         let mut stack = vec![0];
         while let Some(index) = stack.pop() {
@@ -250,11 +249,12 @@ mod tests {
         let path = default_path(&scene).and_then(|(p, _)| p.with_frames(6)).unwrap();
         // Boxes hidden by a rule of their own, at every level of the tree.
         let hides = |bounds: &Aabb| (bounds.min.x * 0.37 + bounds.min.z * 0.21 + bounds.max.y).sin() > 0.2;
+        let nothing = |_: &Aabb| false;
         let mut walkers = [1, 2, 5].map(Walkers::new);
         let mut threads_found_hidden = 0;
         for frame in 0..6 {
             let frustum = path.camera(frame, Resolution::DEFAULT.aspect()).frustum();
-            for hides in [None, Some(&hides as &(dyn Fn(&Aabb) -> bool + Sync))] {
+            for (hiding, hides) in [(false, &nothing as &(dyn Fn(&Aabb) -> bool + Sync)), (true, &hides)] {
                 let walk = Walk {
                     frustum: &frustum,
                     scene: &scene,
@@ -273,7 +273,7 @@ mod tests {
                     assert_eq!(found, expected, "frame {frame}: each object found once");
                 }
                 assert!(orders.iter().all(|o| *o == orders[0]), "frame {frame}: one order");
-                threads_found_hidden += usize::from(hides.is_some() && hidden_triangles > 0 && !expected.is_empty());
+                threads_found_hidden += usize::from(hiding && hidden_triangles > 0 && !expected.is_empty());
             }
         }
         assert!(threads_found_hidden >= 3, "{threads_found_hidden} frames both hid and found objects");
