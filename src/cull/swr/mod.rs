@@ -6,8 +6,9 @@
 //! back. A frame (`frame` below, step by step) takes last frame's visible
 //! objects as occluders, rasterises them conservatively into the buffer's
 //! masked cells (mesh.rs, buffer.rs), builds a pyramid of its farthest
-//! depths, walks the hierarchy as `vfc` does testing each box in the
-//! frustum against it, and draws what is visible, occluders first.
+//! depths, walks the hierarchy node by node testing each box in the
+//! frustum against it, and draws what is visible, occluders first; a
+//! frame whose buffer rests is `vfc`'s own.
 //!
 //! Departures from MOC: its coverage is the pixels whose centres its own
 //! rasteriser puts inside a triangle; here it is the centres the GPU is
@@ -689,7 +690,7 @@ impl Culler for SoftwareOcclusionCulling {
     ///    (clipped, as MOC clips; its cut sides border its patch), so a floor
     ///    or a wall that runs past the eye hides what lies behind it.
     /// 3. **Pyramid** of the buffer's farthest depths.
-    /// 4. **Test**: the hierarchy is walked as `vfc` walks it (its subtrees
+    /// 4. **Test**: the hierarchy is walked node by node (its subtrees
     ///    shared among the threads, walk.rs); a node in the
     ///    frustum is also tested by its box (grown as every box test, and
     ///    raised by a fragment's error: the test is made in f64,
@@ -1435,14 +1436,17 @@ mod tests {
 
     #[test]
     fn a_resting_buffers_frame_is_frustum_cullings_own_in_what_it_visits_and_the_order_it_draws() {
-        // Side by side, nothing hidden: from frame 2 the buffer rests (as
-        // below), and the frame is vfc's, fully-inside shortcut included.
-        let (scene, hierarchy) = cubes(&SIDE_BY_SIDE);
+        // Side by side, nothing hidden, and a cube behind the eye (so the
+        // traversal meets nodes partly in the frustum and one outside):
+        // frames 2 to 8 rest (as below) and are vfc's, fully-inside
+        // shortcut included; frame 9 builds a buffer again from them.
+        let behind = DVec3::new(-0.5, -0.5, 10.0);
+        let (scene, hierarchy) = cubes(&[SIDE_BY_SIDE[0], SIDE_BY_SIDE[1], SIDE_BY_SIDE[2], behind]);
         let camera = camera_down_z();
         let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
         let mut vfc = crate::cull::FrustumCulling::new(&scene);
         let recording = || Recording::new(|_: &Aabb| -> bool { panic!("neither asks the GPU anything") });
-        for frame in 0..8 {
+        for frame in 0..10 {
             let (mut calls, mut vfc_calls) = (recording(), recording());
             let previous = PreviousFrame {
                 frame_ms: 1e3,
@@ -1455,12 +1459,16 @@ mod tests {
             };
             let stats = swr.frame(&mut calls, &frame_input());
             let vfc_stats = vfc.frame(&mut vfc_calls, &frame_input());
-            if frame >= 2 {
+            let counts = |s: &TraversalStats| (s.nodes_visited, s.nodes_culled_frustum, s.nodes_culled_occlusion);
+            if (2..9).contains(&frame) {
                 assert_eq!(stats.occluder_triangles, 0, "frame {frame} rests");
                 assert_eq!(calls.drawn(), vfc_calls.drawn(), "frame {frame}");
-                assert_eq!(stats.nodes_visited, vfc_stats.nodes_visited, "frame {frame}");
+                assert_eq!(counts(&stats), counts(&vfc_stats), "frame {frame}");
             }
         }
+        // Frame 9 built a buffer again, of the three cubes frame 8 drew.
+        assert_eq!(swr.occluders.len(), 3);
+        assert!(swr.buffer.as_ref().unwrap().depths().iter().any(|&d| d > 0.0));
     }
 
     #[test]
