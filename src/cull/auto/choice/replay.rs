@@ -19,7 +19,6 @@
 use glam::DVec3;
 
 use super::{Chooser, Cost, Family, Occluded, View};
-use crate::config::DEFAULT_WARMUP;
 use crate::cull::auto::COUNT_EVERY;
 
 /// The traces: the default city, `--movers 200`, `--scene forest` and the
@@ -55,6 +54,10 @@ const TRACES: [(&str, &str); 28] = [
     ("teapot-gl-1", include_str!("traces/teapot-gl-1.csv")),
     ("teapot-gl-2", include_str!("traces/teapot-gl-2.csv")),
 ];
+
+/// Warm-up frames of the runs the traces come from: the bench's default
+/// (`--warmup`).
+const WARM_UPS: u64 = 3;
 
 /// One recorded run: per candidate, its name and, frame by frame, its
 /// frame time (ms) and the triangles it drew. `vfc` first.
@@ -113,7 +116,7 @@ impl Trace {
 
 /// `auto`'s mean frame time over the fastest candidate's, replayed on
 /// `trace` as the mode runs (mod.rs), its frames numbered as the mode's
-/// after [`DEFAULT_WARMUP`] warm-up frames: what a culler drawing on the
+/// after the [`WARM_UPS`] warm-up frames the traces were recorded with: what a culler drawing on the
 /// CPU hid in warm-up calibrates with the first two frames' times; a walk
 /// settles where no walk wrote the lists (warm-up's last frame did) in the
 /// last two frames, `chc` after `vfc`; an occlusion frame tells what it hid
@@ -142,7 +145,7 @@ fn replay(trace: &Trace) -> f64 {
     }
     // The mode's count of frames, warm-up's first; the last warm-up frame
     // wrote the walks' lists.
-    let warm_ups = u64::from(DEFAULT_WARMUP);
+    let warm_ups = WARM_UPS;
     let mode_frame = |frame: usize| warm_ups + 1 + frame as u64;
     let (mut total, mut last, mut walked) = (0.0, None, warm_ups);
     for frame in 0..trace.frames() {
