@@ -718,17 +718,15 @@ impl Culler for SoftwareOcclusionCulling {
     ///    the centre nearer than the first; depths that only grow along
     ///    finitely many occluders end at one that is drawn. (One hidden
     ///    because no pixel ray meets its box draws no centre at all.)
+    ///
+    /// A frame whose buffer rests ([`Rest`]) skips steps 1 to 4: it is
+    /// `vfc`'s frame, and what it draws is next frame's candidates.
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let (camera, scene, size) = (input.camera, input.scene, input.resolution);
         let mut stats = TraversalStats::default();
         if self.preparers.is_empty() {
             self.make_scratch();
         }
-        let projector = Projector::new(camera, size);
-        let margins = BoxMargins::new(self.depth_margins, self.subpixel, camera, size);
-        let exact = margins.for_exact_tests();
-        let view = camera.view_rotation();
-
         let frustum = camera.frustum();
 
         self.is_occluder.resize(scene.objects.len(), false);
@@ -753,12 +751,15 @@ impl Culler for SoftwareOcclusionCulling {
         // than `vfc`, whose frame there is 10–14 ms.)
         if resting {
             self.found.clear();
-            let hierarchy = input.hierarchy;
-            frustum_cull_subtree(scene, hierarchy, 0, &frustum, &mut self.stack, &mut self.found, &mut stats);
+            frustum_cull_subtree(scene, input.hierarchy, 0, &frustum, &mut self.stack, &mut self.found, &mut stats);
             ctx.draw(&self.found);
             std::mem::swap(&mut self.visible, &mut self.found);
             return stats;
         }
+        let projector = Projector::new(camera, size);
+        let margins = BoxMargins::new(self.depth_margins, self.subpixel, camera, size);
+        let exact = margins.for_exact_tests();
+        let view = camera.view_rotation();
         self.candidates.clear();
         for &o in &self.visible {
             let bounds = &scene.objects[o as usize].bounds;
