@@ -116,8 +116,9 @@ impl Trace {
 
 /// `auto`'s mean frame time over the fastest candidate's, replayed on
 /// `trace` as the mode runs (mod.rs), its frames numbered as the mode's
-/// after the [`WARM_UPS`] warm-up frames the traces were recorded with: what a culler drawing on the
-/// CPU hid in warm-up calibrates with the first two frames' times; a walk
+/// after the [`WARM_UPS`] warm-up frames the traces were recorded with:
+/// what a culler drawing on the CPU hid in warm-up calibrates with the
+/// first two frames' times; a walk
 /// settles where no walk wrote the lists (warm-up's last frame did) in the
 /// last two frames, `chc` after `vfc`; an occlusion frame tells what it hid
 /// on a probe, every [`COUNT_EVERY`] frames and the first, with a share of
@@ -145,9 +146,8 @@ fn replay(trace: &Trace) -> f64 {
     }
     // The mode's count of frames, warm-up's first; the last warm-up frame
     // wrote the walks' lists.
-    let warm_ups = WARM_UPS;
-    let mode_frame = |frame: usize| warm_ups + 1 + frame as u64;
-    let (mut total, mut last, mut walked) = (0.0, None, warm_ups);
+    let mode_frame = |frame: usize| WARM_UPS + 1 + frame as u64;
+    let (mut total, mut last, mut walked) = (0.0, None, WARM_UPS);
     for frame in 0..trace.frames() {
         let settles: Vec<bool> = (0..families.len())
             .map(|k| match trace.names[k].as_str() {
