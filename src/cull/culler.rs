@@ -206,6 +206,13 @@ pub trait Culler {
     fn pick(&self) -> Option<Pick> {
         None
     }
+    /// After a frame: whether it was frustum culling's own, everything in
+    /// the frustum drawn and nothing tested for occlusion (`swr` while its
+    /// buffer rests). `auto` takes such a frame as `vfc`'s: it says nothing
+    /// of what occlusion hides, and what it drew is the whole frustum.
+    fn frustum_only(&self) -> bool {
+        false
+    }
 }
 
 /// A borrowed culler runs as the culler it borrows (so a test can keep the
@@ -243,6 +250,9 @@ impl<C: Culler + ?Sized> Culler for &mut C {
     }
     fn pick(&self) -> Option<Pick> {
         (**self).pick()
+    }
+    fn frustum_only(&self) -> bool {
+        (**self).frustum_only()
     }
 }
 
@@ -286,5 +296,8 @@ impl Culler for Labeled {
     }
     fn pick(&self) -> Option<Pick> {
         self.inner.pick()
+    }
+    fn frustum_only(&self) -> bool {
+        self.inner.frustum_only()
     }
 }

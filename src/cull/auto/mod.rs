@@ -34,7 +34,11 @@
 //!   it found visible (after `vfc`, everything in the frustum, which it
 //!   draws once; that frame settles it and is not measured). A frame that
 //!   started from stale lists, or from everything in the frustum, drew that
-//!   set untested: it does not count towards what occlusion hides.
+//!   set untested: it does not count towards what occlusion hides. A frame
+//!   an occlusion culler ran as frustum culling's own (`swr` while its
+//!   buffer rests: [`Culler::frustum_only`]) is handed over and read as
+//!   `vfc`'s: it drew the whole frustum and says nothing of what occlusion
+//!   hides.
 //! - **Warm-up**: in a warm-up frame every candidate renders the frame in
 //!   turn, from a cleared target, so none pays its first frame (pipelines
 //!   compiled on first use) in a recorded one. From the second warm-up
@@ -153,6 +157,9 @@ fn family(id: ModeId) -> Family {
 struct Ran {
     turn: Turn,
     view: View,
+    /// The family it ran as: its strategy's, or frustum culling's where
+    /// the strategy's frame was ([`Culler::frustum_only`]: `swr` resting).
+    family: Family,
     /// Whether the frustum's triangles were counted in it.
     counted: bool,
     /// Whether it started from a visible set of this view. A GPU walk that
@@ -378,6 +385,15 @@ impl AutoCulling {
         }
     }
 
+    /// Remembers what the frame drew, `drawn`, and the family that drew it,
+    /// for the next hand-over. After a warm-up frame, which every candidate
+    /// ran from its own state, none is handed what they drew together.
+    fn remember_drawn(&mut self, drawn: &ObjectSet) {
+        self.last_drawn.clear();
+        self.last_drawn.extend(drawn.iter());
+        self.last_drawn_by = self.ran.map(|r| r.family);
+    }
+
     /// Triangles of the objects in the frustum.
     fn count_frustum_triangles(&mut self, input: &FrameInput) -> u64 {
         self.in_frustum.clear();
@@ -501,7 +517,7 @@ impl Culler for AutoCulling {
         }
         if let (Some(ran), Some(previous)) = (self.ran, input.previous) {
             let mut view = ran.view;
-            let occluded = match self.candidates[ran.turn.strategy].family() {
+            let occluded = match ran.family {
                 Family::Frustum => {
                     view.frustum_triangles = previous.triangles_drawn;
                     self.frustum_triangles = previous.triangles_drawn;
@@ -533,6 +549,10 @@ impl Culler for AutoCulling {
         let k = turn.strategy;
         let fresh = self.hand_over(k, ctx, &view);
         let stats = self.candidates[k].culler.frame(ctx, input);
+        let family = match self.candidates[k].culler.frustum_only() {
+            true => Family::Frustum,
+            false => self.candidates[k].family(),
+        };
         let mut view = view;
         // What occlusion hides changes with the view, slowly: counted on a
         // probe and every COUNT_EVERY frames, so the count (a frustum
@@ -540,7 +560,7 @@ impl Culler for AutoCulling {
         // The first recorded frame (after warm-up, which counts them too) is
         // counted, so what occlusion hides is known from it.
         let counted = turn.measured
-            && self.candidates[k].family() == Family::Occlusion
+            && family == Family::Occlusion
             && (turn.probe
                 || self.frames.is_multiple_of(COUNT_EVERY)
                 || self.ran.is_none()
@@ -557,6 +577,7 @@ impl Culler for AutoCulling {
         self.ran = Some(Ran {
             turn,
             view,
+            family,
             counted,
             fresh,
         });
@@ -571,14 +592,7 @@ impl Culler for AutoCulling {
         for &k in &self.running {
             audit = self.candidates[k].culler.audit(gpu, drawn).or(audit);
         }
-        self.last_drawn.clear();
-        self.last_drawn.extend(drawn.iter());
-        // After a warm-up frame, which every candidate ran from its own
-        // state, none is handed what they drew together.
-        self.last_drawn_by = match self.ran {
-            Some(_) => self.running.last().map(|&k| self.candidates[k].family()),
-            None => None,
-        };
+        self.remember_drawn(drawn);
         audit
     }
 
@@ -640,6 +654,81 @@ mod tests {
         for carries in [occluders, visible] {
             assert_eq!(cpu_start(carries, None), start(false, false, true));
         }
+    }
+
+    /// `vfc` under another name that says each of its frames was frustum
+    /// culling's own, as `swr` says of a frame its buffer rests in.
+    struct Resting(crate::cull::FrustumCulling);
+
+    impl Culler for Resting {
+        fn name(&self) -> &str {
+            "resting"
+        }
+        fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
+            self.0.frame(ctx, input)
+        }
+        fn frustum_only(&self) -> bool {
+            true
+        }
+    }
+
+    #[test]
+    fn a_frame_its_occlusion_culler_ran_as_frustum_culling_is_handed_over_and_counted_as_vfc_s() {
+        use crate::cull::recording::{Recording, camera_down_z, cubes, input};
+        use crate::cull::{FrustumCulling, PreviousFrame};
+        // Nothing hidden: three cubes side by side, all in view.
+        let corners = [-2.5, -0.5, 1.5].map(|x| DVec3::new(x, -0.5, -10.0));
+        let (scene, hierarchy) = cubes(&corners);
+        let camera = camera_down_z();
+        let params = ModeParams::default();
+        let mut auto = AutoCulling::new(&scene, &params).unwrap();
+        // The occlusion culler (in swr's place) is the incumbent.
+        auto.candidates = vec![
+            Candidate {
+                id: ModeId::Vfc,
+                culler: Box::new(FrustumCulling::new(&scene)),
+            },
+            Candidate {
+                id: ModeId::Swr,
+                culler: Box::new(Resting(FrustumCulling::new(&scene))),
+            },
+            Candidate {
+                id: ModeId::Chc,
+                culler: ModeId::Chc.create(&scene, &params).unwrap(),
+            },
+        ];
+        let families: Vec<Family> = auto.candidates.iter().map(Candidate::family).collect();
+        auto.chooser = Some(Chooser::new(&families, 1, 1.0, 0.015));
+        let all_in_frustum = 3 * u64::from(scene.objects[0].triangles);
+        let mut rested = 0;
+        for frame in 0..12 {
+            let mut calls = Recording::new(|_: &Aabb| true);
+            let previous = (frame > 0).then_some(PreviousFrame {
+                frame_ms: 10.0,
+                render_ms: 9.0,
+                triangles_drawn: all_in_frustum,
+            });
+            let frame_input = FrameInput {
+                previous,
+                ..input(frame, &camera, &scene, &hierarchy)
+            };
+            auto.frame(&mut calls, &frame_input);
+            let mut drawn = ObjectSet::new(scene.objects.len());
+            calls.drawn().into_iter().for_each(|o| drawn.insert(o));
+            auto.remember_drawn(&drawn);
+            if auto.ran.unwrap().turn.strategy != 1 {
+                continue;
+            }
+            rested += 1;
+            // Not counted as an occlusion frame (it drew the frustum, and
+            // hid nothing because it tested nothing), and `chc`, handed
+            // everything in the frustum, first settles, as after `vfc`.
+            let ran = auto.ran.unwrap();
+            assert!(!ran.counted, "frame {frame}");
+            assert_eq!(auto.last_drawn_by, Some(Family::Frustum), "frame {frame}");
+            assert!(auto.settles(2, &ran.view), "frame {frame}");
+        }
+        assert!(rested >= 6, "the incumbent ran {rested} of 12 frames");
     }
 
     #[test]

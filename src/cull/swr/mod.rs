@@ -226,9 +226,10 @@ pub struct SoftwareOcclusionCulling {
     /// The objects found visible last frame.
     visible: Vec<u32>,
     /// Frames left in which no buffer is built, since the last one did
-    /// not pay ([`Rest`]), and whether the buffer holds a frame's
-    /// occluders.
+    /// not pay ([`Rest`]), whether the last frame rested, and whether the
+    /// buffer holds a frame's occluders.
     rest: Rest,
+    rested: bool,
     buffer_holds: bool,
     /// Scratch, reused so a frame allocates nothing once warm.
     candidates: Vec<Candidate>,
@@ -264,6 +265,7 @@ impl SoftwareOcclusionCulling {
             careless: false,
             visible: Vec::new(),
             rest: Rest::default(),
+            rested: false,
             buffer_holds: false,
             candidates: Vec::new(),
             units: Vec::new(),
@@ -735,6 +737,7 @@ impl Culler for SoftwareOcclusionCulling {
         // largest first; none while the buffer rests (which keeps its
         // cells: a resting buffer holds nothing to choose them by).
         let resting = self.rest.take();
+        self.rested = resting;
         if !resting || self.buffer.as_ref().is_none_or(|b| b.target() != size) {
             self.use_buffer(size, self.cells_for(size));
         }
@@ -888,6 +891,10 @@ impl Culler for SoftwareOcclusionCulling {
 
     fn occluder_depths(&self) -> Option<OccluderDepths> {
         self.buffer.as_ref().map(OcclusionBuffer::per_pixel)
+    }
+
+    fn frustum_only(&self) -> bool {
+        self.rested
     }
 }
 
@@ -1461,6 +1468,8 @@ mod tests {
             let stats = swr.frame(&mut calls, &frame_input());
             let vfc_stats = vfc.frame(&mut vfc_calls, &frame_input());
             let counts = |s: &TraversalStats| (s.nodes_visited, s.nodes_culled_frustum, s.nodes_culled_occlusion);
+            // It says so (`auto` then takes it as `vfc`'s).
+            assert_eq!(swr.frustum_only(), (2..9).contains(&frame), "frame {frame}");
             if (2..9).contains(&frame) {
                 assert_eq!(stats.occluder_triangles, 0, "frame {frame} rests");
                 assert_eq!(calls.drawn(), vfc_calls.drawn(), "frame {frame}");
