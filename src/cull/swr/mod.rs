@@ -28,7 +28,10 @@
 //! that to its caller). Occluders are whole visible objects (the clusters of one mesh
 //! taken together, so that a mesh cut into clusters is one surface), their
 //! triangles taken in the f64 projection (MOC and Godot take authored
-//! occluder meshes, rasterised in f32 with SIMD: here it is scalar). Like MOC it
+//! occluder meshes, rasterised in f32 with SIMD: here it is scalar); which
+//! of a mesh's triangles share an edge is found for every mesh when the
+//! mode is prepared, untimed, as an engine finds it when it loads an
+//! occluder mesh, not in a frame. Like MOC it
 //! shares the work among threads (`swr.threads`), each over a band of the
 //! buffer's rows, and so are the box tests, each thread walking subtrees
 //! of the hierarchy (walk.rs). `swr.resolution` sets the cells (each of
@@ -61,6 +64,7 @@ use crate::parallel;
 use crate::scene::{Object, Scene};
 use buffer::{Cells, OcclusionBuffer};
 use mesh::{DrawnPart, NearLimit, Patches, Rasteriser, ScreenMesh, ScreenVertex};
+use neighbours::{RunNeighbours, run_indices};
 use walk::{Walk, Walkers};
 
 /// This mode's entry in the registry.
@@ -209,11 +213,12 @@ pub struct SoftwareOcclusionCulling {
     /// What each thread rasterising occluders works with.
     preparers: Vec<Preparer>,
     rasterisers: Vec<Rasteriser>,
-    /// Per run of meshes stored against one origin (at its first mesh;
-    /// sized in the first frame), its triangles' neighbours, made the
-    /// first time one of its objects is an occluder.
-    neighbours: Vec<Vec<[u32; 3]>>,
-    made_neighbours: Vec<bool>,
+    /// Per run of meshes stored against one origin (at its first mesh),
+    /// its triangles' neighbours: made for every run when the mode is
+    /// prepared, as an engine makes an occluder mesh's adjacency when it
+    /// loads the mesh, not in a frame (without `prepare`, as in a unit
+    /// test, the first time one of its objects is an occluder).
+    neighbours: RunNeighbours,
     /// The backend's depth margins and the adapter's sub-pixel precision,
     /// known once prepared (GL's margins, the larger, and the coarsest
     /// precision until then).
@@ -257,8 +262,7 @@ impl SoftwareOcclusionCulling {
             held: 1.0,
             preparers: Vec::new(),
             rasterisers: Vec::new(),
-            neighbours: Vec::new(),
-            made_neighbours: Vec::new(),
+            neighbours: RunNeighbours::default(),
             depth_margins: DepthMargins::for_backend(wgpu::Backend::Gl),
             subpixel: SubpixelPrecision::COARSEST,
             #[cfg(test)]
@@ -361,21 +365,6 @@ impl SoftwareOcclusionCulling {
         let first_object = |u: &OccluderUnit| self.candidates[u.candidates.start].object;
         self.units
             .sort_unstable_by(|a, b| b.nearest().total_cmp(&a.nearest()).then(first_object(a).cmp(&first_object(b))));
-    }
-
-    /// Makes the neighbours of each occluder's run of meshes that has none
-    /// yet.
-    fn make_neighbours(&mut self, scene: &Scene) {
-        self.neighbours.resize(scene.meshes.len(), Vec::new());
-        self.made_neighbours.resize(scene.meshes.len(), false);
-        for &o in &self.occluders {
-            let run = &scene.meshes[scene.objects[o as usize].mesh as usize].shares_origin_with;
-            if !self.made_neighbours[run.start as usize] {
-                let indices = run_indices(scene, run);
-                self.neighbours[run.start as usize] = neighbours::neighbours(indices, |v| scene.vertices[v as usize]);
-                self.made_neighbours[run.start as usize] = true;
-            }
-        }
     }
 }
 
@@ -490,13 +479,6 @@ impl OccluderUnit {
     fn nearest(&self) -> f64 {
         self.on_screen.as_ref().map_or(f64::INFINITY, |b| b.nearest)
     }
-}
-
-/// The indices of the run of meshes `run` (consecutive in the index buffer,
-/// as they are in the scene's meshes).
-fn run_indices<'a>(scene: &'a Scene, run: &Range<u32>) -> &'a [u32] {
-    let (first, last) = (&scene.meshes[run.start as usize], &scene.meshes[run.end as usize - 1]);
-    &scene.indices[first.first_index as usize..(last.first_index + last.index_count) as usize]
 }
 
 /// A camera's projection to framebuffer pixels and reverse-Z depth.
@@ -669,6 +651,8 @@ impl Culler for SoftwareOcclusionCulling {
         self.subpixel = setup.gpu.subpixel;
         self.make_scratch();
         self.use_buffer(setup.resolution, self.cells_for(setup.resolution));
+        let scene = setup.scene;
+        self.neighbours.make(scene, 0..scene.objects.len() as u32);
         Ok(())
     }
 
@@ -801,9 +785,9 @@ impl Culler for SoftwareOcclusionCulling {
         stats.occluder_triangles = self.params.triangles - budget;
 
         // 2-3. Their triangles into the buffer, then the pyramid. What a
-        // buffer costs is timed from here (a mesh's neighbours are made
-        // once).
-        self.make_neighbours(scene);
+        // buffer costs is timed from here (none of the occluders' meshes
+        // lacks its neighbours once the mode is prepared).
+        self.neighbours.make(scene, self.occluders.iter().copied());
         let started = Instant::now();
         let Some(buffer) = &mut self.buffer else {
             unreachable!("made above")
@@ -933,7 +917,7 @@ struct Occluders<'a> {
     scene: &'a Scene,
     /// Per run of meshes stored against one origin (at its first mesh),
     /// its triangles' neighbours (made for every occluder's run).
-    neighbours: &'a [Vec<[u32; 3]>],
+    neighbours: &'a RunNeighbours,
 }
 
 /// What the scene's fragment stage keeps of each object this frame
@@ -1145,7 +1129,7 @@ fn prepare_occluder(preparer: &mut Preparer, occluders: &Occluders, occluder: &O
         vertices: &preparer.vertices,
         parts: &preparer.parts,
         indices: run_indices(scene, run),
-        neighbours: &occluders.neighbours[run.start as usize],
+        neighbours: occluders.neighbours.of(run),
         closed: scene.parts[first.part as usize].closed,
         near: Some(NearLimit { crossing: &crossing }),
         snap: occluders.snap,

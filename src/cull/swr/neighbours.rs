@@ -4,7 +4,46 @@
 //! positions of the run's objects under one transform at one point
 //! whatever their index.
 
+use std::ops::Range;
+
 use super::mesh::NO_NEIGHBOUR;
+use crate::scene::Scene;
+
+/// Per run of meshes stored against one origin (at its first mesh), its
+/// triangles' [`neighbours`], made once.
+#[derive(Default)]
+pub struct RunNeighbours {
+    per_run: Vec<Vec<[u32; 3]>>,
+    made: Vec<bool>,
+}
+
+impl RunNeighbours {
+    /// Makes the neighbours of the runs of meshes of `scene`'s `objects`
+    /// that have none yet.
+    pub fn make(&mut self, scene: &Scene, objects: impl Iterator<Item = u32>) {
+        self.per_run.resize(scene.meshes.len(), Vec::new());
+        self.made.resize(scene.meshes.len(), false);
+        for o in objects {
+            let run = &scene.meshes[scene.objects[o as usize].mesh as usize].shares_origin_with;
+            if !self.made[run.start as usize] {
+                self.per_run[run.start as usize] = neighbours(run_indices(scene, run), |v| scene.vertices[v as usize]);
+                self.made[run.start as usize] = true;
+            }
+        }
+    }
+
+    /// The neighbours of the run of meshes `run` (made).
+    pub fn of(&self, run: &Range<u32>) -> &[[u32; 3]] {
+        &self.per_run[run.start as usize]
+    }
+}
+
+/// The indices of the run of meshes `run` (consecutive in the index buffer,
+/// as they are in the scene's meshes).
+pub fn run_indices<'a>(scene: &'a Scene, run: &Range<u32>) -> &'a [u32] {
+    let (first, last) = (&scene.meshes[run.start as usize], &scene.meshes[run.end as usize - 1]);
+    &scene.indices[first.first_index as usize..(last.first_index + last.index_count) as usize]
+}
 
 /// Per triangle of `indices` (three per triangle), the triangle across
 /// each edge (corner k to k + 1): the one other triangle holding that
