@@ -206,10 +206,11 @@ pub trait Culler {
     fn pick(&self) -> Option<Pick> {
         None
     }
-    /// After a frame: whether it was frustum culling's own, everything in
-    /// the frustum drawn and nothing tested for occlusion (`swr` while its
-    /// buffer rests). `auto` takes such a frame as `vfc`'s: it says nothing
-    /// of what occlusion hides, and what it drew is the whole frustum.
+    /// After a frame of an occlusion culler: whether it was frustum
+    /// culling's own, everything in the frustum drawn and nothing tested
+    /// for occlusion (`swr` while its buffer rests). `auto` takes such a
+    /// frame as `vfc`'s: it says nothing of what occlusion hides, and what
+    /// it drew is the whole frustum.
     fn frustum_only(&self) -> bool {
         false
     }

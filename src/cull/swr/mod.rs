@@ -29,8 +29,8 @@
 //! taken together, so that a mesh cut into clusters is one surface), their
 //! triangles taken in the f64 projection (MOC and Godot take authored
 //! occluder meshes, rasterised in f32 with SIMD: here it is scalar); which
-//! of a mesh's triangles share an edge is found for every mesh when the
-//! mode is prepared, untimed, as an engine finds it when it loads an
+//! of a mesh's triangles share an edge is found for every mesh that may
+//! be an occluder when the mode is prepared, untimed, as an engine finds it when it loads an
 //! occluder mesh, not in a frame. Like MOC it
 //! shares the work among threads (`swr.threads`), each over a band of the
 //! buffer's rows, and so are the box tests, each thread walking subtrees
@@ -214,10 +214,11 @@ pub struct SoftwareOcclusionCulling {
     preparers: Vec<Preparer>,
     rasterisers: Vec<Rasteriser>,
     /// Per run of meshes stored against one origin (at its first mesh),
-    /// its triangles' neighbours: made for every run when the mode is
-    /// prepared, as an engine makes an occluder mesh's adjacency when it
-    /// loads the mesh, not in a frame (without `prepare`, as in a unit
-    /// test, the first time one of its objects is an occluder).
+    /// its triangles' neighbours: made when the mode is prepared for every
+    /// run holding an object that may be an occluder, as an engine makes
+    /// an occluder mesh's adjacency when it loads the mesh, not in a frame
+    /// (without `prepare`, as in a unit test, the first time one of its
+    /// objects is an occluder).
     neighbours: RunNeighbours,
     /// The backend's depth margins and the adapter's sub-pixel precision,
     /// known once prepared (GL's margins, the larger, and the coarsest
@@ -231,10 +232,11 @@ pub struct SoftwareOcclusionCulling {
     /// The objects found visible last frame.
     visible: Vec<u32>,
     /// Frames left in which no buffer is built, since the last one did
-    /// not pay ([`Rest`]), whether the last frame rested, and whether the
-    /// buffer holds a frame's occluders.
+    /// not pay ([`Rest`]).
     rest: Rest,
+    /// Whether the last frame rested (it was `vfc`'s own).
     rested: bool,
+    /// Whether the buffer holds a frame's occluders.
     buffer_holds: bool,
     /// Scratch, reused so a frame allocates nothing once warm.
     candidates: Vec<Candidate>,
@@ -651,8 +653,12 @@ impl Culler for SoftwareOcclusionCulling {
         self.subpixel = setup.gpu.subpixel;
         self.make_scratch();
         self.use_buffer(setup.resolution, self.cells_for(setup.resolution));
+        // Every object that may be an occluder: one of more triangles than
+        // the budget never is.
         let scene = setup.scene;
-        self.neighbours.make(scene, 0..scene.objects.len() as u32);
+        let budget = self.params.triangles;
+        let may_occlude = (0..scene.objects.len() as u32).filter(|&o| u64::from(scene.objects[o as usize].triangles) <= budget);
+        self.neighbours.make(scene, may_occlude);
         Ok(())
     }
 
@@ -784,9 +790,10 @@ impl Culler for SoftwareOcclusionCulling {
 
         stats.occluder_triangles = self.params.triangles - budget;
 
-        // 2-3. Their triangles into the buffer, then the pyramid. What a
-        // buffer costs is timed from here (none of the occluders' meshes
-        // lacks its neighbours once the mode is prepared).
+        // 2-3. Their triangles into the buffer, then the pyramid. Their
+        // meshes' neighbours were made when the mode was prepared (here
+        // only in a frame run unprepared, as in a unit test). What a buffer
+        // costs, against what it spares, is timed from here.
         self.neighbours.make(scene, self.occluders.iter().copied());
         let started = Instant::now();
         let Some(buffer) = &mut self.buffer else {

@@ -13,28 +13,30 @@ use crate::scene::Scene;
 /// triangles' [`neighbours`], made once.
 #[derive(Default)]
 pub struct RunNeighbours {
-    per_run: Vec<Vec<[u32; 3]>>,
-    made: Vec<bool>,
+    per_run: Vec<Option<Vec<[u32; 3]>>>,
 }
 
 impl RunNeighbours {
     /// Makes the neighbours of the runs of meshes of `scene`'s `objects`
     /// that have none yet.
     pub fn make(&mut self, scene: &Scene, objects: impl Iterator<Item = u32>) {
-        self.per_run.resize(scene.meshes.len(), Vec::new());
-        self.made.resize(scene.meshes.len(), false);
+        self.per_run.resize(scene.meshes.len(), None);
         for o in objects {
             let run = &scene.meshes[scene.objects[o as usize].mesh as usize].shares_origin_with;
-            if !self.made[run.start as usize] {
-                self.per_run[run.start as usize] = neighbours(run_indices(scene, run), |v| scene.vertices[v as usize]);
-                self.made[run.start as usize] = true;
-            }
+            self.per_run[run.start as usize]
+                .get_or_insert_with(|| neighbours(run_indices(scene, run), |v| scene.vertices[v as usize]));
         }
     }
 
-    /// The neighbours of the run of meshes `run` (made).
+    /// The neighbours of the run of meshes `run`.
+    ///
+    /// # Panics
+    /// Where they were not made: [`Self::make`] for an object of the run
+    /// first.
     pub fn of(&self, run: &Range<u32>) -> &[[u32; 3]] {
-        &self.per_run[run.start as usize]
+        self.per_run[run.start as usize]
+            .as_deref()
+            .expect("made for an object of the run first")
     }
 }
 
