@@ -251,6 +251,7 @@ impl<'a> Session<'a> {
             ops: self.ops.clone(),
             audit,
         };
+        let (eye, forward) = (input.camera.eye, input.camera.forward());
         let row = FrameStats {
             mode: culler.name().to_string(),
             frame: input.frame,
@@ -272,6 +273,12 @@ impl<'a> Session<'a> {
             visible_objects: visible.map(|v| v.len() as u64),
             strategy: culler.pick().map(|p| p.strategy.to_string()),
             probe: culler.pick().map(|p| p.probe),
+            eye_x: Some(eye.x),
+            eye_y: Some(eye.y),
+            eye_z: Some(eye.z),
+            forward_x: Some(forward.x),
+            forward_y: Some(forward.y),
+            forward_z: Some(forward.z),
         };
         (row, clocks)
     }

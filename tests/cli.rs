@@ -281,6 +281,56 @@ fn auto_runs_frustum_culling_alone_in_a_scene_of_one_object() {
 }
 
 #[test]
+fn frames_csv_says_where_each_frames_camera_stood_and_looked() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "two.json",
+        r#"{"frames": 2, "keyframes": [
+            {"time": 0, "position": [0, 0, 5], "target": [0, 0, 0]},
+            {"time": 1, "position": [4, 3, 0], "target": [0, 0, 0]}]}"#,
+    );
+    let out = dir.path().join("run");
+    let mut args = bench_args(
+        &["--path", path.to_str().unwrap(), "--modes", "vfc,dr", "--no-error"],
+        out.to_str().unwrap(),
+    );
+    args.retain(|&a| a != "--frames" && a != "2");
+    let result = occlu(&args);
+    assert!(result.status.success(), "{:?}", own_stderr(&result));
+    let frames = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let mut lines = frames.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let columns: Vec<usize> = [
+        "frame",
+        "eye_x",
+        "eye_y",
+        "eye_z",
+        "forward_x",
+        "forward_y",
+        "forward_z",
+    ]
+    .iter()
+    .map(|name| header.iter().position(|c| c == name).unwrap())
+    .collect();
+    let mut rows = 0;
+    for line in lines {
+        let all: Vec<&str> = line.split(',').collect();
+        let cells: Vec<f64> = columns.iter().map(|&k| all[k].parse().unwrap()).collect();
+        // The keyframes' positions, looking at the origin.
+        let expected = match cells[0] as u32 {
+            0 => [0.0, 0.0, 0.0, 5.0, 0.0, 0.0, -1.0],
+            _ => [1.0, 4.0, 3.0, 0.0, -0.8, -0.6, 0.0],
+        };
+        for (got, want) in cells.iter().zip(expected) {
+            assert!((got - want).abs() < 1e-9, "{line}: {cells:?}, not {expected:?}");
+        }
+        rows += 1;
+    }
+    assert_eq!(rows, 4, "two frames of two modes");
+}
+
+#[test]
 fn bench_writes_the_three_result_files_with_the_adapter() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");

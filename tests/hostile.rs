@@ -1075,8 +1075,13 @@ fn compare_merge_and_plot_refuse_impossible_times_and_counts() {
     let base = dir.path().join("base");
     tiny_run(&base, &[]);
     type Edit = dyn Fn(&mut occlu::measure::FrameStats);
-    let cases: [(&str, &Edit, &[&str]); 4] = [
+    let cases: [(&str, &Edit, &[&str]); 5] = [
         ("time", &|r| r.frame_ms = 1e308, &["frame_ms is 1e308"]),
+        (
+            "camera",
+            &|r| r.eye_x = Some(f64::INFINITY),
+            &["eye_x is", "not a finite number"],
+        ),
         (
             "triangles",
             &|r| r.triangles_drawn = 100_000_000_000,

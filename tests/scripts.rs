@@ -112,63 +112,113 @@ fn auto_trace(folder: &Path, trace: &Path) -> (i32, String) {
     (code, err)
 }
 
+/// A result folder as a bench writes it for auto-trace: a summary.json
+/// holding `summary`, and a frames.csv of `rows` (mode, frame, frame_ms,
+/// triangles_drawn, then where the camera stood and looked).
+fn traced_run(dir: &Path, name: &str, summary: &str, rows: &[&str]) -> std::path::PathBuf {
+    let folder = dir.join(name);
+    std::fs::create_dir(&folder).unwrap();
+    let header = "mode,frame,frame_ms,triangles_drawn,eye_x,eye_y,eye_z,forward_x,forward_y,forward_z";
+    common::write(&folder, "frames.csv", format!("{header}\n{}\n", rows.join("\n")));
+    common::write(&folder, "summary.json", summary);
+    folder
+}
+
+/// A summary.json's scene, as a bench writes it (pretty, each number on a
+/// line of its own): bounds 3 × 4 × 12, a diagonal of 13.
+const SUMMARY: &str = "{\n  \"scene\": {\n    \"bounds_min\": [\n      -1,\n      0.5,\n      -12\n    ],\n    \"bounds_max\": [\n      2,\n      4.5,\n      0\n    ]\n  }\n}\n";
+
 #[test]
-fn auto_trace_keeps_the_replayed_candidates_frame_by_frame_and_refuses_a_run_it_cannot_trace() {
+fn auto_trace_keeps_the_replayed_candidates_and_the_camera_frame_by_frame_and_refuses_a_run_it_cannot_trace() {
     let dir = tempfile::tempdir().unwrap();
     let trace = dir.path().join("trace.csv");
     // Interleaved as a bench writes them; swr, auto and a sweep left out.
-    let run = results(
+    let run = traced_run(
         dir.path(),
         "run",
+        SUMMARY,
         &[
-            "roc,0,4.25,3,30,7,2,0,0,0,0,0,0,0,0,0,9",
-            "vfc,0,5.0,10,100,7,2,0,0,0,0,0,0,0,0,0,9",
-            "swr,0,3.0,4,40,7,2,3,0,0,0,0,0,0,0,0,9",
-            "auto,0,4.5,3,30,7,2,0,0,0,0,0,0,0,0,0,9",
-            "vfc,1,6.0,11,110,7,2,0,0,0,0,0,0,0,0,0,9",
-            "roc,1,4.125,4,41,7,2,0,0,0,0,0,0,0,0,0,9",
-            "roc[start=2],1,4.0,3,30,7,2,0,0,0,0,0,0,0,0,0,9",
+            "roc,0,4.25,30,1,2,3,0,0,-1",
+            "vfc,0,5.0,100,1,2,3,0,0,-1",
+            "swr,0,3.0,40,1,2,3,0,0,-1",
+            "auto,0,4.5,30,1,2,3,0,0,-1",
+            "vfc,1,6.0,110,1.5,2,3,0.6,0,-0.8",
+            "roc,1,4.125,41,1.5,2,3,0.6,0,-0.8",
+            "roc[start=2],1,4.0,30,1.5,2,3,0.6,0,-0.8",
         ],
     );
     let (code, err) = auto_trace(&run, &trace);
     assert_eq!(code, 0, "{err}");
-    let expected =
-        "# a test run\nframe,vfc_ms,vfc_triangles,roc_ms,roc_triangles\n0,5.000,100,4.250,30\n1,6.000,110,4.125,41\n";
+    let expected = "# a test run\n# diagonal 13\nframe,eye_x,eye_y,eye_z,forward_x,forward_y,forward_z,vfc_ms,vfc_triangles,roc_ms,roc_triangles\n0,1,2,3,0,0,-1,5.000,100,4.250,30\n1,1.5,2,3,0.6,0,-0.8,6.000,110,4.125,41\n";
     assert_eq!(std::fs::read_to_string(&trace).unwrap(), expected);
     // Runs it cannot trace leave the trace as it was.
-    let vfc = |frame: u32| format!("vfc,{frame},5.0,10,100,7,2,0,0,0,0,0,0,0,0,0,9");
+    let vfc = |frame: u32| format!("vfc,{frame},5.0,100,1,2,3,0,0,-1");
     let refused = [
         (
             "no-vfc",
-            vec!["roc,0,4.25,3,30,7,2,0,0,0,0,0,0,0,0,0,9".to_string()],
+            SUMMARY,
+            vec!["roc,0,4.25,30,1,2,3,0,0,-1".to_string()],
             "no vfc",
         ),
         (
             "gap",
-            vec![vfc(0), vfc(1), "roc,1,4.0,3,30,7,2,0,0,0,0,0,0,0,0,0,9".into()],
+            SUMMARY,
+            vec![vfc(0), vfc(1), "roc,1,4.0,30,1,2,3,0,0,-1".into()],
             "no frame 0 of roc",
         ),
-        ("twice", vec![vfc(0), vfc(0)], "frame 0 of vfc twice"),
+        ("twice", SUMMARY, vec![vfc(0), vfc(0)], "frame 0 of vfc twice"),
         (
             "zero",
-            vec![vfc(0), "roc,0,0,3,30,7,2,0,0,0,0,0,0,0,0,0,9".into()],
+            SUMMARY,
+            vec![vfc(0), "roc,0,0,30,1,2,3,0,0,-1".into()],
             "frame_ms above 0",
         ),
-        ("short", vec![vfc(0), "roc,1,4.0,3".into()], "has 4 fields"),
+        ("short", SUMMARY, vec![vfc(0), "roc,1,4.0,3".into()], "has 4 fields"),
+        (
+            "camera",
+            SUMMARY,
+            vec!["vfc,0,5.0,100,1,2,NaN,0,0,-1".into()],
+            "eye_z must be a number",
+        ),
+        (
+            "bounds",
+            "{\"scene\": {}}",
+            vec![vfc(0)],
+            "summary.json: no scene bounds_min",
+        ),
+        (
+            "flat",
+            "{\"bounds_min\": [0, 0], \"bounds_max\": [1, 1, 1]}",
+            vec![vfc(0)],
+            "scene bounds_min is not three numbers",
+        ),
     ];
-    for (name, rows, why) in refused {
+    for (name, summary, rows, why) in refused {
         let rows: Vec<&str> = rows.iter().map(String::as_str).collect();
-        let (code, err) = auto_trace(&results(dir.path(), name, &rows), &trace);
+        let (code, err) = auto_trace(&traced_run(dir.path(), name, summary, &rows), &trace);
         assert_eq!(code, 2, "{name}: {err}");
         assert!(err.contains(why), "{name}: {err}");
         assert_eq!(std::fs::read_to_string(&trace).unwrap(), expected, "{name}");
     }
+    // A run of an occlu that wrote no camera, and folders that are no run.
+    let old = results(dir.path(), "old", &["vfc,0,5.0,10,100,7,2,0,0,0,0,0,0,0,0,0,9"]);
+    common::write(&old, "summary.json", SUMMARY);
+    let (code, err) = auto_trace(&old, &trace);
+    assert_eq!(code, 2);
+    assert!(err.contains("no eye_x column"), "{err}");
     let other = dir.path().join("other");
     std::fs::create_dir(&other).unwrap();
     common::write(&other, "frames.csv", "a,b\n1,2\n");
+    common::write(&other, "summary.json", SUMMARY);
     let (code, err) = auto_trace(&other, &trace);
     assert_eq!(code, 2);
     assert!(err.contains("not a frames.csv"), "{err}");
+    let unsummed = dir.path().join("unsummed");
+    std::fs::create_dir(&unsummed).unwrap();
+    common::write(&unsummed, "frames.csv", "a,b\n1,2\n");
+    let (code, err) = auto_trace(&unsummed, &trace);
+    assert_eq!(code, 2);
+    assert!(err.contains("summary.json: no such file"), "{err}");
     let (code, err) = auto_trace(&dir.path().join("absent"), &trace);
     assert_eq!(code, 2);
     assert!(err.contains("no such file"), "{err}");

@@ -68,13 +68,30 @@ pub struct FrameStats {
     /// as the cheapest.
     #[serde(default)]
     pub probe: Option<bool>,
+    /// Where the camera stood (world units, the scene's axes as loaded)
+    /// and the unit direction it looked along, so that a frame's figures
+    /// can be put on the path (`scripts/auto-trace` reads them for
+    /// `auto`'s replay); empty in files written before the columns
+    /// existed.
+    #[serde(default)]
+    pub eye_x: Option<f64>,
+    #[serde(default)]
+    pub eye_y: Option<f64>,
+    #[serde(default)]
+    pub eye_z: Option<f64>,
+    #[serde(default)]
+    pub forward_x: Option<f64>,
+    #[serde(default)]
+    pub forward_y: Option<f64>,
+    #[serde(default)]
+    pub forward_z: Option<f64>,
 }
 
 /// Flat, a column per field and per counter: CSV has no nesting (and the
 /// csv crate cannot write serde's `flatten`).
 impl Serialize for FrameStats {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        let mut row = serializer.serialize_struct("FrameStats", 19 + TraversalStats::COUNTERS.len())?;
+        let mut row = serializer.serialize_struct("FrameStats", 25 + TraversalStats::COUNTERS.len())?;
         row.serialize_field("mode", &self.mode)?;
         row.serialize_field("frame", &self.frame)?;
         row.serialize_field("frame_ms", &self.frame_ms)?;
@@ -97,6 +114,12 @@ impl Serialize for FrameStats {
         row.serialize_field("visible_objects", &self.visible_objects)?;
         row.serialize_field("strategy", &self.strategy)?;
         row.serialize_field("probe", &self.probe)?;
+        row.serialize_field("eye_x", &self.eye_x)?;
+        row.serialize_field("eye_y", &self.eye_y)?;
+        row.serialize_field("eye_z", &self.eye_z)?;
+        row.serialize_field("forward_x", &self.forward_x)?;
+        row.serialize_field("forward_y", &self.forward_y)?;
+        row.serialize_field("forward_z", &self.forward_z)?;
         row.end()
     }
 }
@@ -165,6 +188,22 @@ impl FrameStats {
             })
         };
         if let Some(fault) = measures.into_iter().find_map(outside) {
+            return Some(fault);
+        }
+        let camera = [
+            ("eye_x", self.eye_x),
+            ("eye_y", self.eye_y),
+            ("eye_z", self.eye_z),
+            ("forward_x", self.forward_x),
+            ("forward_y", self.forward_y),
+            ("forward_z", self.forward_z),
+        ];
+        let not_finite = |(column, value): (&str, Option<f64>)| {
+            value
+                .filter(|v| !v.is_finite())
+                .map(|v| format!("{column} is {}, not a finite number", crate::text::number(v)))
+        };
+        if let Some(fault) = camera.into_iter().find_map(not_finite) {
             return Some(fault);
         }
         let counts = [
@@ -243,6 +282,12 @@ impl FrameStats {
             visible_objects: None,
             strategy: None,
             probe: None,
+            eye_x: None,
+            eye_y: None,
+            eye_z: None,
+            forward_x: None,
+            forward_y: None,
+            forward_z: None,
         }
     }
 }

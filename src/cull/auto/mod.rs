@@ -266,6 +266,10 @@ impl Frame for Counting<'_> {
 /// culler runs.
 const COUNT_EVERY: u64 = 8;
 
+/// How far a view's eye may move before it is another view, as a share of
+/// the diagonal of the scene's bounds ([`View::differs`]).
+const REACH: f64 = 0.1;
+
 pub struct AutoCulling {
     params: AutoParams,
     /// Every candidate built; `prepare` keeps those this adapter runs.
@@ -504,7 +508,7 @@ impl Culler for AutoCulling {
         // and its first frame tells how much.
         let incumbent = families.iter().position(|&f| f == Family::Occlusion).unwrap_or(0);
         let root = setup.hierarchy.root().bounds;
-        let reach = 0.1 * (root.max - root.min).length();
+        let reach = REACH * (root.max - root.min).length();
         self.chooser = Some(Chooser::new(&families, incumbent, reach, self.params.budget / 100.0));
         Ok(())
     }

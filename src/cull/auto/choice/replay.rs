@@ -6,20 +6,22 @@
 //! without the noise between runs on a shared machine, which moves one
 //! run's ratio of `auto` to the fastest mode by ±5 %.
 //!
-//! What a replay leaves out, so that it judges the bandit's statistics on
-//! real costs rather than the view rules: the camera (a trace holds none:
-//! the eye walks a tenth of the reach a frame, looking one way, holding
-//! the triangles `vfc` drew; so no view outgrows another), hand-over (a
-//! probe costs what its mode cost in its own run, where it had run the
-//! frame before; a walk's settling frame costs the same; and a walk that
-//! starts from lists gone stale after `vfc` still tells what it hid,
-//! which the mode does not count), and warm-up (the path's first two
-//! frames calibrate, as two warm-up frames of its first view would).
+//! Each frame's view is the run's: where its camera stood and looked
+//! (frames.csv's `eye_*` and `forward_*`), the triangles `vfc` drew there
+//! (the mode counts them every few frames), and the reach a tenth of the
+//! scene's diagonal, as the mode takes it; so the view rules (which
+//! samples pair, when the view changed materially or outgrew another)
+//! are judged too. What a replay leaves out: hand-over (a probe costs
+//! what its mode cost in its own run, where it had run the frame before;
+//! a walk's settling frame costs the same; and a walk that starts from
+//! lists gone stale after `vfc` still tells what it hid, which the mode
+//! does not count), and warm-up (the path's first two frames calibrate,
+//! as two warm-up frames of its first view would).
 
 use glam::DVec3;
 
 use super::{Chooser, Cost, Family, Occluded, View};
-use crate::cull::auto::COUNT_EVERY;
+use crate::cull::auto::{COUNT_EVERY, REACH};
 
 /// The traces: the default city, `--movers 200`, `--scene forest` and the
 /// models of `../shared/models` along their README's paths, each on
@@ -59,30 +61,55 @@ const TRACES: [(&str, &str); 28] = [
 /// (`--warmup`).
 const WARM_UPS: u64 = 3;
 
-/// One recorded run: per candidate, its name and, frame by frame, its
-/// frame time (ms) and the triangles it drew. `vfc` first.
+/// One recorded run: the diagonal of its scene's bounds, frame by frame
+/// where its camera stood and looked, and per candidate its name and,
+/// frame by frame, its frame time (ms) and the triangles it drew. `vfc`
+/// first.
 struct Trace {
+    diagonal: f64,
+    eyes: Vec<DVec3>,
+    forwards: Vec<DVec3>,
     names: Vec<String>,
     ms: Vec<Vec<f64>>,
     triangles: Vec<Vec<f64>>,
 }
 
+/// The columns before the candidates': the frame, the eye and the forward.
+const CAMERA_COLUMNS: usize = 7;
+
 impl Trace {
-    /// A trace's text: a `#` line saying which run, a header of
-    /// `frame,NAME_ms,NAME_triangles,...`, then a line per frame.
+    /// A trace's text (`scripts/auto-trace`): a `#` line saying which run,
+    /// a `# diagonal D` line, a header of `frame,eye_x,eye_y,eye_z,
+    /// forward_x,forward_y,forward_z,NAME_ms,NAME_triangles,...`, then a
+    /// line per frame.
     fn parse(text: &str) -> Trace {
+        let diagonal = text
+            .lines()
+            .find_map(|l| l.strip_prefix("# diagonal "))
+            .expect("a diagonal")
+            .parse()
+            .expect("a number");
         let mut lines = text.lines().filter(|l| !l.starts_with('#'));
         let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
-        let names: Vec<String> = header[1..].chunks(2).map(|c| c[0].trim_end_matches("_ms").to_string()).collect();
+        let names: Vec<String> = header[CAMERA_COLUMNS..]
+            .chunks(2)
+            .map(|c| c[0].trim_end_matches("_ms").to_string())
+            .collect();
         assert_eq!(names[0], "vfc", "vfc first");
         let mut trace = Trace {
+            diagonal,
+            eyes: Vec::new(),
+            forwards: Vec::new(),
             ms: vec![Vec::new(); names.len()],
             triangles: vec![Vec::new(); names.len()],
             names,
         };
         for line in lines {
             let values: Vec<f64> = line.split(',').skip(1).map(|v| v.parse().expect("a number")).collect();
-            for (k, pair) in values.chunks(2).enumerate() {
+            let (camera, costs) = values.split_at(CAMERA_COLUMNS - 1);
+            trace.eyes.push(DVec3::from_slice(&camera[..3]));
+            trace.forwards.push(DVec3::from_slice(&camera[3..]));
+            for (k, pair) in costs.chunks(2).enumerate() {
                 trace.ms[k].push(pair[0]);
                 trace.triangles[k].push(pair[1]);
             }
@@ -121,17 +148,17 @@ impl Trace {
 /// first two frames' times; a walk
 /// settles where no walk wrote the lists (warm-up's last frame did) in the
 /// last two frames, `chc` after `vfc`; an occlusion frame tells what it hid
-/// on a probe, every [`COUNT_EVERY`] frames and the first, with a share of
+/// on a probe, after a frame of `vfc`, every [`COUNT_EVERY`] frames and the first, with a share of
 /// its frame drawing of 0.8 (the mode takes it from the frame's render
 /// time, which a trace does not hold).
 fn replay(trace: &Trace) -> f64 {
     let families: Vec<Family> = (0..trace.names.len())
         .map(|k| if k == 0 { Family::Frustum } else { Family::Occlusion })
         .collect();
-    let reach = 10.0;
+    let reach = REACH * trace.diagonal;
     let view = |frame: usize| View {
-        eye: DVec3::new(reach / 10.0 * frame as f64, 0.0, 0.0),
-        forward: DVec3::NEG_Z,
+        eye: trace.eyes[frame],
+        forward: trace.forwards[frame],
         frustum_triangles: trace.triangles[0][frame] as u64,
     };
     let mut chooser = Chooser::new(&families, 1, reach, 0.015);
@@ -162,7 +189,7 @@ fn replay(trace: &Trace) -> f64 {
             frame_ms: trace.ms[k][frame],
             triangles: trace.triangles[k][frame] as u64,
         };
-        let counted = turn.probe || mode_frame(frame).is_multiple_of(COUNT_EVERY) || last.is_none();
+        let counted = turn.probe || last == Some(0) || mode_frame(frame).is_multiple_of(COUNT_EVERY) || last.is_none();
         let occluded = match (k, trace.hidden(k, frame)) {
             (1.., Some(hidden)) if turn.measured && counted => Some(Occluded { hidden, drawing: 0.8 }),
             _ => None,
@@ -180,17 +207,14 @@ fn replay(trace: &Trace) -> f64 {
 /// A guard against a chooser gone wrong, not a measure of small changes:
 /// between versions that differ by a rule, the runs' own noise moves the
 /// geometric mean by about half a percent either way. The chooser of this
-/// test's commit replays at 1.026 here (worst 1.082), and at 1.024 on 70
-/// runs of five checks (worst 1.082; one run over 1.08, six over 1.05);
-/// without its two rules ([`super::WANDER`],
-/// [`Chooser::coarser_than_another`]) at 1.022 (worst 1.071) and 1.023
-/// (worst 1.112; three over 1.08, eight over 1.05). One that never
-/// replaces the incumbent warm-up chose replays at 1.047 (worst 1.153).
+/// test's commit replays at 1.025 here (worst 1.080: the teapot on
+/// Vulkan, where `omq` and `vfc` are 4 % apart); one that never replaces
+/// the incumbent warm-up chose replays at 1.037 (worst 1.135).
 #[test]
 fn on_recorded_costs_of_twenty_eight_runs_auto_keeps_within_a_few_percent_of_the_fastest_mode() {
     let replayed: Vec<(&str, f64)> = TRACES.iter().map(|(name, text)| (*name, replay(&Trace::parse(text)))).collect();
     let geomean = (replayed.iter().map(|(_, r)| r.ln()).sum::<f64>() / replayed.len() as f64).exp();
-    assert!(geomean < 1.04, "geometric mean {geomean:.4}: {replayed:.3?}");
+    assert!(geomean < 1.035, "geometric mean {geomean:.4}: {replayed:.3?}");
     let worst = replayed.iter().map(|&(_, r)| r).fold(0.0, f64::max);
     assert!(worst < 1.10, "{replayed:.3?}");
 }
