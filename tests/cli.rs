@@ -291,11 +291,22 @@ fn frames_csv_says_where_each_frames_camera_stood_and_looked() {
             {"time": 1, "position": [4, 3, 0], "target": [0, 0, 0]}]}"#,
     );
     let out = dir.path().join("run");
-    let mut args = bench_args(
-        &["--path", path.to_str().unwrap(), "--modes", "vfc,dr", "--no-error"],
+    let args = [
+        "bench",
+        "--scene",
+        "city:blocks=1",
+        "--path",
+        path.to_str().unwrap(),
+        "--modes",
+        "vfc,dr",
+        "--warmup",
+        "0",
+        "--resolution",
+        "64x48",
+        "--no-error",
+        "--out",
         out.to_str().unwrap(),
-    );
-    args.retain(|&a| a != "--frames" && a != "2");
+    ];
     let result = occlu(&args);
     assert!(result.status.success(), "{:?}", own_stderr(&result));
     let frames = std::fs::read_to_string(out.join("frames.csv")).unwrap();

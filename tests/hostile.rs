@@ -1070,7 +1070,7 @@ fn after_planning_a_signal_ends_render_export_and_path_gen_at_once() {
 // Review finding 6: values no run can have measured, though each is a
 // number of 0 or more.
 #[test]
-fn compare_merge_and_plot_refuse_impossible_times_and_counts() {
+fn compare_merge_and_plot_refuse_impossible_times_counts_and_cameras() {
     let dir = tempfile::tempdir().unwrap();
     let base = dir.path().join("base");
     tiny_run(&base, &[]);

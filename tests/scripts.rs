@@ -125,8 +125,9 @@ fn traced_run(dir: &Path, name: &str, summary: &str, rows: &[&str]) -> std::path
 }
 
 /// A summary.json's scene, as a bench writes it (pretty, each number on a
-/// line of its own): bounds 3 × 4 × 12, a diagonal of 13.
-const SUMMARY: &str = "{\n  \"scene\": {\n    \"bounds_min\": [\n      -1,\n      0.5,\n      -12\n    ],\n    \"bounds_max\": [\n      2,\n      4.5,\n      0\n    ]\n  }\n}\n";
+/// line of its own, as serde_json prints them): bounds 3 × 4 × 12, a
+/// diagonal of 13.
+const SUMMARY: &str = "{\n  \"scene\": {\n    \"bounds_min\": [\n      -1,\n      0.5,\n      -1.2e1\n    ],\n    \"bounds_max\": [\n      2,\n      4.5,\n      0\n    ]\n  }\n}\n";
 
 #[test]
 fn auto_trace_keeps_the_replayed_candidates_and_the_camera_frame_by_frame_and_refuses_a_run_it_cannot_trace() {
@@ -138,8 +139,8 @@ fn auto_trace_keeps_the_replayed_candidates_and_the_camera_frame_by_frame_and_re
         "run",
         SUMMARY,
         &[
-            "roc,0,4.25,30,1,2,3,0,0,-1",
-            "vfc,0,5.0,100,1,2,3,0,0,-1",
+            "roc,0,4.25,30,1,2,3,6.9e-18,-0.0,-1",
+            "vfc,0,5.0,100,1,2,3,6.9e-18,-0.0,-1",
             "swr,0,3.0,40,1,2,3,0,0,-1",
             "auto,0,4.5,30,1,2,3,0,0,-1",
             "vfc,1,6.0,110,1.5,2,3,0.6,0,-0.8",
@@ -149,7 +150,7 @@ fn auto_trace_keeps_the_replayed_candidates_and_the_camera_frame_by_frame_and_re
     );
     let (code, err) = auto_trace(&run, &trace);
     assert_eq!(code, 0, "{err}");
-    let expected = "# a test run\n# diagonal 13\nframe,eye_x,eye_y,eye_z,forward_x,forward_y,forward_z,vfc_ms,vfc_triangles,roc_ms,roc_triangles\n0,1,2,3,0,0,-1,5.000,100,4.250,30\n1,1.5,2,3,0.6,0,-0.8,6.000,110,4.125,41\n";
+    let expected = "# a test run\n# diagonal 13\nframe,eye_x,eye_y,eye_z,forward_x,forward_y,forward_z,vfc_ms,vfc_triangles,roc_ms,roc_triangles\n0,1,2,3,6.9e-18,-0.0,-1,5.000,100,4.250,30\n1,1.5,2,3,0.6,0,-0.8,6.000,110,4.125,41\n";
     assert_eq!(std::fs::read_to_string(&trace).unwrap(), expected);
     // Runs it cannot trace leave the trace as it was.
     let vfc = |frame: u32| format!("vfc,{frame},5.0,100,1,2,3,0,0,-1");

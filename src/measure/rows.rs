@@ -164,9 +164,10 @@ impl FrameStats {
     /// is not a number from 0 to a day (NaN, infinite, negative, 1e308),
     /// a depth error outside depth's 0 to 1, more wrong pixels than the
     /// frame has, more objects or triangles than the scene has, more
-    /// objects missed than the frame shows. frames.csv is read back by
-    /// `compare` and `merge`, and a value like these would pass their
-    /// verdicts as "better" or "within noise".
+    /// objects missed than the frame shows, a camera that is not finite
+    /// (no path has one). frames.csv is read back by `compare` and
+    /// `merge`, and a value like these would pass their verdicts as
+    /// "better" or "within noise", or put a frame nowhere on the path.
     pub fn implausible(&self, limits: RowLimits) -> Option<String> {
         let measures = [
             ("frame_ms", Some(self.frame_ms), LONGEST_MS),

@@ -7,16 +7,16 @@
 //! run's ratio of `auto` to the fastest mode by ±5 %.
 //!
 //! Each frame's view is the run's: where its camera stood and looked
-//! (frames.csv's `eye_*` and `forward_*`), the triangles `vfc` drew there
-//! (the mode counts them every few frames), and the reach a tenth of the
-//! scene's diagonal, as the mode takes it; so the view rules (which
-//! samples pair, when the view changed materially or outgrew another)
-//! are judged too. What a replay leaves out: hand-over (a probe costs
-//! what its mode cost in its own run, where it had run the frame before;
-//! a walk's settling frame costs the same; and a walk that starts from
-//! lists gone stale after `vfc` still tells what it hid, which the mode
-//! does not count), and warm-up (the path's first two frames calibrate,
-//! as two warm-up frames of its first view would).
+//! (frames.csv's `eye_*` and `forward_*`), the frustum's triangles as the
+//! mode last counted them (what `vfc` drew at that frame: [`replay`]),
+//! and the reach a tenth of the scene's diagonal, as the mode takes it; so
+//! the view rules (which samples pair, when the view changed materially
+//! or outgrew another) are judged too. What a replay leaves out:
+//! hand-over (a probe costs what its mode cost in its own run, where it
+//! had run the frame before; a walk's settling frame costs the same; and
+//! a walk that starts from lists gone stale after `vfc` still tells what
+//! it hid, which the mode does not count), and warm-up (the path's first
+//! two frames calibrate, as two warm-up frames of its first view would).
 
 use glam::DVec3;
 
@@ -74,8 +74,9 @@ struct Trace {
     triangles: Vec<Vec<f64>>,
 }
 
-/// The columns before the candidates': the frame, the eye and the forward.
-const CAMERA_COLUMNS: usize = 7;
+/// The columns before the candidates': the frame, then where its camera
+/// stood and looked.
+const LEADING_COLUMNS: [&str; 7] = ["frame", "eye_x", "eye_y", "eye_z", "forward_x", "forward_y", "forward_z"];
 
 impl Trace {
     /// A trace's text (`scripts/auto-trace`): a `#` line saying which run,
@@ -83,15 +84,16 @@ impl Trace {
     /// forward_x,forward_y,forward_z,NAME_ms,NAME_triangles,...`, then a
     /// line per frame.
     fn parse(text: &str) -> Trace {
-        let diagonal = text
-            .lines()
-            .find_map(|l| l.strip_prefix("# diagonal "))
-            .expect("a diagonal")
+        let mut lines = text.lines();
+        let diagonal = lines
+            .nth(1)
+            .and_then(|l| l.strip_prefix("# diagonal "))
+            .expect("a diagonal on the second line")
             .parse()
             .expect("a number");
-        let mut lines = text.lines().filter(|l| !l.starts_with('#'));
         let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
-        let names: Vec<String> = header[CAMERA_COLUMNS..]
+        assert_eq!(header[..LEADING_COLUMNS.len()], LEADING_COLUMNS, "the frame and its camera first");
+        let names: Vec<String> = header[LEADING_COLUMNS.len()..]
             .chunks(2)
             .map(|c| c[0].trim_end_matches("_ms").to_string())
             .collect();
@@ -106,7 +108,7 @@ impl Trace {
         };
         for line in lines {
             let values: Vec<f64> = line.split(',').skip(1).map(|v| v.parse().expect("a number")).collect();
-            let (camera, costs) = values.split_at(CAMERA_COLUMNS - 1);
+            let (camera, costs) = values.split_at(LEADING_COLUMNS.len() - 1);
             trace.eyes.push(DVec3::from_slice(&camera[..3]));
             trace.forwards.push(DVec3::from_slice(&camera[3..]));
             for (k, pair) in costs.chunks(2).enumerate() {
@@ -127,10 +129,9 @@ impl Trace {
         ["roc", "ioc", "hiz"].contains(&self.names[k].as_str())
     }
 
-    /// The share of `vfc`'s triangles candidate `k` did not draw at
-    /// `frame`; `None` where `vfc` drew none.
-    fn hidden(&self, k: usize, frame: usize) -> Option<f64> {
-        let frustum = self.triangles[0][frame];
+    /// The share of `frustum` triangles candidate `k` did not draw at
+    /// `frame`; `None` where there are none.
+    fn hidden(&self, k: usize, frame: usize, frustum: f64) -> Option<f64> {
         (frustum > 0.0).then(|| (1.0 - self.triangles[k][frame] / frustum).max(0.0))
     }
 
@@ -145,31 +146,36 @@ impl Trace {
 /// `trace` as the mode runs (mod.rs), its frames numbered as the mode's
 /// after the [`WARM_UPS`] warm-up frames the traces were recorded with:
 /// what a culler drawing on the CPU hid in warm-up calibrates with the
-/// first two frames' times; a walk
-/// settles where no walk wrote the lists (warm-up's last frame did) in the
-/// last two frames, `chc` after `vfc`; an occlusion frame tells what it hid
-/// on a probe, after a frame of `vfc`, every [`COUNT_EVERY`] frames and the first, with a share of
-/// its frame drawing of 0.8 (the mode takes it from the frame's render
-/// time, which a trace does not hold).
+/// first two frames' times; a walk settles where no walk wrote the lists
+/// (warm-up's last frame did) in the last two frames, `chc` after `vfc`;
+/// the frustum's triangles are those last counted (warm-up counts the
+/// first view's; an occlusion frame counts them on a probe, every
+/// [`COUNT_EVERY`] frames and the first; a frame of `vfc` draws them, and
+/// the occlusion frame after it takes that count); a counted occlusion
+/// frame tells what it hid of them, with a share of its frame drawing of
+/// 0.8 (the mode takes it from the frame's render time, which a trace does
+/// not hold).
 fn replay(trace: &Trace) -> f64 {
     let families: Vec<Family> = (0..trace.names.len())
         .map(|k| if k == 0 { Family::Frustum } else { Family::Occlusion })
         .collect();
     let reach = REACH * trace.diagonal;
-    let view = |frame: usize| View {
+    // A frame's view, holding `frustum` triangles.
+    let view = |frame: usize, frustum: f64| View {
         eye: trace.eyes[frame],
         forward: trace.forwards[frame],
-        frustum_triangles: trace.triangles[0][frame] as u64,
+        frustum_triangles: frustum as u64,
     };
+    let mut frustum = trace.triangles[0][0];
     let mut chooser = Chooser::new(&families, 1, reach, 0.015);
     for k in (1..families.len()).filter(|&k| !trace.walks(k)) {
-        if let Some(hidden) = trace.hidden(k, 0) {
-            chooser.calibrate_hidden(k, hidden, &view(0));
+        if let Some(hidden) = trace.hidden(k, 0, frustum) {
+            chooser.calibrate_hidden(k, hidden, &view(0, frustum));
         }
     }
     for frame in 0..2 {
         let log_ms: Vec<f64> = trace.ms.iter().map(|ms| ms[frame].ln()).collect();
-        chooser.calibrate(&log_ms, &view(0));
+        chooser.calibrate(&log_ms, &view(0, frustum));
     }
     // The mode's count of frames, warm-up's first; the last warm-up frame
     // wrote the walks' lists.
@@ -183,18 +189,24 @@ fn replay(trace: &Trace) -> f64 {
                 _ => false,
             })
             .collect();
-        let turn = chooser.plan(&view(frame), &settles);
+        let turn = chooser.plan(&view(frame, frustum), &settles);
         let k = turn.strategy;
         let cost = Cost {
             frame_ms: trace.ms[k][frame],
             triangles: trace.triangles[k][frame] as u64,
         };
-        let counted = turn.probe || last == Some(0) || mode_frame(frame).is_multiple_of(COUNT_EVERY) || last.is_none();
-        let occluded = match (k, trace.hidden(k, frame)) {
-            (1.., Some(hidden)) if turn.measured && counted => Some(Occluded { hidden, drawing: 0.8 }),
+        let after_vfc = last == Some(0);
+        let counted = k > 0
+            && turn.measured
+            && (turn.probe || after_vfc || mode_frame(frame).is_multiple_of(COUNT_EVERY) || last.is_none());
+        if k == 0 || (counted && !after_vfc) {
+            frustum = trace.triangles[0][frame];
+        }
+        let occluded = match trace.hidden(k, frame, frustum) {
+            Some(hidden) if counted => Some(Occluded { hidden, drawing: 0.8 }),
             _ => None,
         };
-        chooser.learn(turn, cost, occluded, &view(frame));
+        chooser.learn(turn, cost, occluded, &view(frame, frustum));
         total += cost.frame_ms;
         last = Some(k);
         if trace.walks(k) {
