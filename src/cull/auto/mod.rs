@@ -213,8 +213,8 @@ fn walk_start(written: Option<(u64, View)>, frame: u64, view: &View, handed_by: 
 /// How a culler that keeps its visible set on the CPU (`carries`, one of
 /// [`Carries::OccludersOnCpu`] and [`Carries::VisibleOnCpu`]) starts a
 /// frame, handed the last frame's drawn set by a frame of family
-/// `handed_by` ([`Ran::family`]; none where it ran that frame itself, or every candidate
-/// did, in a warm-up frame).
+/// `handed_by` ([`Ran::family`]; none where it ran that frame itself, or
+/// every candidate did, in a warm-up frame).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct CpuStart {
     /// It is handed the drawn set ([`Culler::seed_visible`]).
