@@ -266,18 +266,25 @@ fn auto_runs_frustum_culling_alone_in_a_scene_of_one_object() {
         summary["modes"][0]["parameters"]["candidates"],
         serde_json::json!(["vfc"])
     );
-    let frames = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let picks = frames_columns(&out, &["strategy", "probe"]);
+    assert_eq!(picks, vec![vec!["vfc".to_string(), "false".to_string()]; 6]);
+}
+
+/// Per row of the frames.csv in `run`, its cells of `columns` (by name).
+fn frames_columns(run: &std::path::Path, columns: &[&str]) -> Vec<Vec<String>> {
+    let frames = std::fs::read_to_string(run.join("frames.csv")).unwrap();
     let mut lines = frames.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let column = |name: &str| header.iter().position(|&c| c == name).unwrap();
-    let (strategy, probe) = (column("strategy"), column("probe"));
-    let picks: Vec<(String, String)> = lines
-        .map(|l| {
-            let cells: Vec<&str> = l.split(',').collect();
-            (cells[strategy].to_string(), cells[probe].to_string())
-        })
+    let at: Vec<usize> = columns
+        .iter()
+        .map(|name| header.iter().position(|c| c == name).unwrap())
         .collect();
-    assert_eq!(picks, vec![("vfc".to_string(), "false".to_string()); 6]);
+    lines
+        .map(|line| {
+            let cells: Vec<&str> = line.split(',').collect();
+            at.iter().map(|&k| cells[k].to_string()).collect()
+        })
+        .collect()
 }
 
 #[test]
@@ -309,10 +316,7 @@ fn frames_csv_says_where_each_frames_camera_stood_and_looked() {
     ];
     let result = occlu(&args);
     assert!(result.status.success(), "{:?}", own_stderr(&result));
-    let frames = std::fs::read_to_string(out.join("frames.csv")).unwrap();
-    let mut lines = frames.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let columns: Vec<usize> = [
+    let columns = [
         "frame",
         "eye_x",
         "eye_y",
@@ -320,25 +324,20 @@ fn frames_csv_says_where_each_frames_camera_stood_and_looked() {
         "forward_x",
         "forward_y",
         "forward_z",
-    ]
-    .iter()
-    .map(|name| header.iter().position(|c| c == name).unwrap())
-    .collect();
-    let mut rows = 0;
-    for line in lines {
-        let all: Vec<&str> = line.split(',').collect();
-        let cells: Vec<f64> = columns.iter().map(|&k| all[k].parse().unwrap()).collect();
+    ];
+    let rows = frames_columns(&out, &columns);
+    for row in &rows {
+        let cells: Vec<f64> = row.iter().map(|c| c.parse().unwrap()).collect();
         // The keyframes' positions, looking at the origin.
         let expected = match cells[0] as u32 {
             0 => [0.0, 0.0, 0.0, 5.0, 0.0, 0.0, -1.0],
             _ => [1.0, 4.0, 3.0, 0.0, -0.8, -0.6, 0.0],
         };
         for (got, want) in cells.iter().zip(expected) {
-            assert!((got - want).abs() < 1e-9, "{line}: {cells:?}, not {expected:?}");
+            assert!((got - want).abs() < 1e-9, "{cells:?}, not {expected:?}");
         }
-        rows += 1;
     }
-    assert_eq!(rows, 4, "two frames of two modes");
+    assert_eq!(rows.len(), 4, "two frames of two modes");
 }
 
 #[test]

@@ -10,10 +10,8 @@ const HEADER: &str = "mode,frame,frame_ms,objects_drawn,triangles_drawn,nodes_vi
 
 /// A result folder whose frames.csv holds `rows` after the header.
 fn results(dir: &Path, name: &str, rows: &[&str]) -> std::path::PathBuf {
-    let folder = dir.join(name);
-    std::fs::create_dir(&folder).unwrap();
-    common::write(&folder, "frames.csv", format!("{HEADER}\n{}\n", rows.join("\n")));
-    folder
+    let frames = format!("{HEADER}\n{}\n", rows.join("\n"));
+    folder_of(dir, name, &[("frames.csv", &frames)])
 }
 
 fn same_counters(folders: &[&Path]) -> (i32, String) {
@@ -112,16 +110,23 @@ fn auto_trace(folder: &Path, trace: &Path) -> (i32, String) {
     (code, err)
 }
 
+/// A folder `name` in `dir` holding `files` (name, contents).
+fn folder_of(dir: &Path, name: &str, files: &[(&str, &str)]) -> std::path::PathBuf {
+    let folder = dir.join(name);
+    std::fs::create_dir(&folder).unwrap();
+    for (file, contents) in files {
+        common::write(&folder, file, contents);
+    }
+    folder
+}
+
 /// A result folder as a bench writes it for auto-trace: a summary.json
 /// holding `summary`, and a frames.csv of `rows` (mode, frame, frame_ms,
 /// triangles_drawn, then where the camera stood and looked).
 fn traced_run(dir: &Path, name: &str, summary: &str, rows: &[&str]) -> std::path::PathBuf {
-    let folder = dir.join(name);
-    std::fs::create_dir(&folder).unwrap();
     let header = "mode,frame,frame_ms,triangles_drawn,eye_x,eye_y,eye_z,forward_x,forward_y,forward_z";
-    common::write(&folder, "frames.csv", format!("{header}\n{}\n", rows.join("\n")));
-    common::write(&folder, "summary.json", summary);
-    folder
+    let frames = format!("{header}\n{}\n", rows.join("\n"));
+    folder_of(dir, name, &[("frames.csv", &frames), ("summary.json", summary)])
 }
 
 /// A summary.json's scene, as a bench writes it (pretty, each number on a
@@ -202,27 +207,35 @@ fn auto_trace_keeps_the_replayed_candidates_and_the_camera_frame_by_frame_and_re
         assert_eq!(std::fs::read_to_string(&trace).unwrap(), expected, "{name}");
     }
     // A run of an occlu that wrote no camera, and folders that are no run.
-    let old = results(dir.path(), "old", &["vfc,0,5.0,10,100,7,2,0,0,0,0,0,0,0,0,0,9"]);
-    common::write(&old, "summary.json", SUMMARY);
-    let (code, err) = auto_trace(&old, &trace);
-    assert_eq!(code, 2);
-    assert!(err.contains("no eye_x column"), "{err}");
-    let other = dir.path().join("other");
-    std::fs::create_dir(&other).unwrap();
-    common::write(&other, "frames.csv", "a,b\n1,2\n");
-    common::write(&other, "summary.json", SUMMARY);
-    let (code, err) = auto_trace(&other, &trace);
-    assert_eq!(code, 2);
-    assert!(err.contains("not a frames.csv"), "{err}");
-    let unsummed = dir.path().join("unsummed");
-    std::fs::create_dir(&unsummed).unwrap();
-    common::write(&unsummed, "frames.csv", "a,b\n1,2\n");
-    let (code, err) = auto_trace(&unsummed, &trace);
-    assert_eq!(code, 2);
-    assert!(err.contains("summary.json: no such file"), "{err}");
-    let (code, err) = auto_trace(&dir.path().join("absent"), &trace);
-    assert_eq!(code, 2);
-    assert!(err.contains("no such file"), "{err}");
+    let old = format!("{HEADER}\nvfc,0,5.0,10,100,7,2,0,0,0,0,0,0,0,0,0,9\n");
+    let not_runs = [
+        (
+            "old",
+            vec![("frames.csv", old.as_str()), ("summary.json", SUMMARY)],
+            "no eye_x column",
+        ),
+        (
+            "other",
+            vec![("frames.csv", "a,b\n1,2\n"), ("summary.json", SUMMARY)],
+            "not a frames.csv",
+        ),
+        (
+            "unsummed",
+            vec![("frames.csv", "a,b\n1,2\n")],
+            "summary.json: no such file",
+        ),
+        ("absent", vec![], "absent/frames.csv: no such file"),
+    ];
+    for (name, files, why) in not_runs {
+        let folder = match files.is_empty() {
+            true => dir.path().join(name),
+            false => folder_of(dir.path(), name, &files),
+        };
+        let (code, err) = auto_trace(&folder, &trace);
+        assert_eq!(code, 2, "{name}: {err}");
+        assert!(err.contains(why), "{name}: {err}");
+        assert_eq!(std::fs::read_to_string(&trace).unwrap(), expected, "{name}");
+    }
     let (code, _, err) = script("auto-trace", &[run.as_os_str()]);
     assert_eq!(code, 2);
     assert!(err.contains("usage"), "{err}");
