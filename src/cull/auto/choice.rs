@@ -41,7 +41,8 @@
 //!   of the last few of a view is what the view hides ([`Hidden::share`];
 //!   a culler that hid clearly nothing where another hid at least
 //!   [`NOTHING_HIDDEN`] speaks of itself, not of the view:
-//!   [`Chooser::coarser_than_another`]),
+//!   [`Chooser::coarser_than_another`]; and so in every view after, until
+//!   it hides that much itself: [`Record::coarse`]),
 //!   and frustum culling's cost is estimated from it ([`frustum_estimate`])
 //!   until measured; where that share is under [`NOTHING_HIDDEN`], frustum
 //!   culling is probed every other frame until a window of samples of the
@@ -234,6 +235,11 @@ struct Record {
     /// What an occlusion culler last hid, in calibration or a measured
     /// frame; `None` before it is known.
     hid: Option<Hid>,
+    /// An occlusion culler shown coarser than another
+    /// ([`Chooser::coarser_than_another`]) that has not hid
+    /// [`NOTHING_HIDDEN`] itself since: its "nothing" is its own wherever
+    /// it looks.
+    coarse: bool,
 }
 
 /// What an occlusion culler hid when last measured.
@@ -417,6 +423,7 @@ impl Chooser {
                     drew: Drew::Alike,
                     last_run: None,
                     hid: None,
+                    coarse: false,
                 })
                 .collect(),
             incumbent,
@@ -505,6 +512,7 @@ impl Chooser {
     /// Notes that occlusion culler `s` hid `share` of `view`'s frustum now.
     fn note_hid(&mut self, s: usize, share: f64, view: &View) {
         let before = self.records[s].hid.and_then(|h| h.hid_much_at);
+        self.records[s].coarse &= share < NOTHING_HIDDEN;
         self.records[s].hid = Some(Hid {
             share,
             view: *view,
@@ -530,6 +538,13 @@ impl Chooser {
             return;
         }
         self.calibrated_view = Some(*view);
+        // The cullers that hid clearly nothing of this frame's view where
+        // another hid much are coarse ([`Record::coarse`]).
+        for s in 0..self.records.len() {
+            if let Some(h) = self.records[s].hid.filter(|h| h.frame == self.frame) {
+                self.records[s].coarse |= self.coarser_than_another(s, h.share, view);
+            }
+        }
         self.incumbent_last = None;
         self.incumbent_earlier = None;
         self.pending = None;
@@ -578,8 +593,14 @@ impl Chooser {
             return;
         }
         if let (Family::Occlusion, Some(o)) = (self.records[turn.strategy].family, occluded) {
-            // A coarse culler's "nothing" tells of itself, not of the view.
-            let coarse = self.coarser_than_another(turn.strategy, o.hidden, view);
+            // A coarse culler's "nothing" tells of itself, not of the view:
+            // once shown beside a finer culler in one view, in every view
+            // (an orbit of the bunny leaves a view within two frames, while
+            // `chc`, whose leaves hold several of its clusters, hid nothing
+            // all along where `omq` hid a seventh).
+            let shown = self.coarser_than_another(turn.strategy, o.hidden, view);
+            let coarse = clearly_nothing_hidden(o.hidden) && (shown || self.records[turn.strategy].coarse);
+            self.records[turn.strategy].coarse |= shown;
             self.note_hid(turn.strategy, o.hidden, view);
             if !coarse {
                 self.learn_hidden(o, view);
@@ -1250,6 +1271,52 @@ mod tests {
         assert_eq!(newest(&chooser), Some(0.14));
         // ...but once chc too has hid an eighth since, its "nothing" says
         // the view changed.
+        frame(&mut chooser, 2, 0.12);
+        frame(&mut chooser, 2, 0.0);
+        assert_eq!(newest(&chooser), Some(0.0));
+    }
+
+    #[test]
+    fn a_culler_shown_coarse_in_one_view_says_nothing_of_the_views_after_it_until_it_hides_much_itself() {
+        // The bunny on an orbit that leaves each view within a frame (the
+        // reach is 10): in warm-up omq hid a seventh of the first view,
+        // chc none.
+        let mut chooser = Chooser::new(&[Frustum, Occlusion, Occlusion], 0, 10.0, 0.015);
+        chooser.calibrate_hidden(1, 0.14, &still(0));
+        chooser.calibrate_hidden(2, 0.0, &still(0));
+        chooser.calibrate(&[1.0f64.ln(), 1.02f64.ln(), 1.1f64.ln()], &still(0));
+        let orbit = |frame: u64| View {
+            eye: DVec3::new(20.0 * frame as f64, 0.0, 0.0),
+            ..still(frame)
+        };
+        let frame = |chooser: &mut Chooser, strategy: usize, hidden: f64| {
+            chooser.frame += 1;
+            let turn = Turn {
+                strategy,
+                probe: strategy != 0,
+                measured: true,
+                recheck: false,
+            };
+            let occluded = (strategy != 0).then_some(Occluded { hidden, drawing: 0.9 });
+            let cost = Cost {
+                frame_ms: 1.0,
+                triangles: 1000,
+            };
+            let view = orbit(chooser.frame);
+            chooser.learn(turn, cost, occluded, &view);
+        };
+        // chc's "nothing", far from where omq looked, is still chc's.
+        frame(&mut chooser, 2, 0.0);
+        frame(&mut chooser, 0, 0.0);
+        assert_eq!(chooser.nothing_hidden(), None, "{:?}", chooser.hidden);
+        let newest = |chooser: &Chooser| chooser.shares.back().map(|o| o.hidden);
+        frame(&mut chooser, 1, 0.14);
+        for _ in 0..3 {
+            frame(&mut chooser, 0, 0.0);
+            frame(&mut chooser, 2, 0.0);
+            assert_eq!(newest(&chooser), Some(0.14));
+        }
+        // Once chc has hid an eighth itself, its "nothing" is the view's.
         frame(&mut chooser, 2, 0.12);
         frame(&mut chooser, 2, 0.0);
         assert_eq!(newest(&chooser), Some(0.0));
