@@ -230,7 +230,7 @@ impl<'a> Session<'a> {
         let mut outcome = ctx.finish();
         let frame_time = frame_start.elapsed();
         // Untimed: what the mode's own GPU work drew and tested.
-        let audit = culler.audit(gpu, &mut self.drawn[k]);
+        let audit = culler.audit(gpu, &input, &mut self.drawn[k]);
         if let Some(audit) = &audit {
             outcome.add_gpu_audit(audit);
             traversal.add_gpu_audit(audit);

@@ -165,8 +165,8 @@ impl Culler for Alternating {
         self.ran = input.frame as usize % 2;
         self.walks[self.ran].frame(ctx, input)
     }
-    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
-        self.walks[self.ran].audit(gpu, drawn)
+    fn audit(&mut self, gpu: &GpuContext, input: &FrameInput, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        self.walks[self.ran].audit(gpu, input, drawn)
     }
 }
 

@@ -173,10 +173,10 @@ pub trait Culler {
         Ok(())
     }
 
-    /// After each frame, untimed: what the mode's own GPU work drew and
-    /// tested, read back from the GPU, with what it drew added to `drawn`
-    /// (`None` when it did none this frame).
-    fn audit(&mut self, _gpu: &GpuContext, _drawn: &mut ObjectSet) -> Option<GpuAudit> {
+    /// After each frame (`input`), untimed: what the mode's own GPU work
+    /// drew and tested, read back from the GPU, with what it drew added to
+    /// `drawn` (`None` when it did none this frame).
+    fn audit(&mut self, _gpu: &GpuContext, _input: &FrameInput, _drawn: &mut ObjectSet) -> Option<GpuAudit> {
         None
     }
 
@@ -234,8 +234,8 @@ impl<C: Culler + ?Sized> Culler for &mut C {
     fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
         (**self).prepare(setup)
     }
-    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
-        (**self).audit(gpu, drawn)
+    fn audit(&mut self, gpu: &GpuContext, input: &FrameInput, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        (**self).audit(gpu, input, drawn)
     }
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         (**self).frame(ctx, input)
@@ -280,8 +280,8 @@ impl Culler for Labeled {
     fn prepare(&mut self, setup: &GpuSetup) -> Result<(), GpuError> {
         self.inner.prepare(setup)
     }
-    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
-        self.inner.audit(gpu, drawn)
+    fn audit(&mut self, gpu: &GpuContext, input: &FrameInput, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+        self.inner.audit(gpu, input, drawn)
     }
     fn frame(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         self.inner.frame(ctx, input)

@@ -12,7 +12,8 @@
 //!   run's parameters: `vfc`, the query-batching modes (`omq`, and `chc`
 //!   where the adapter counts pixels), CPU occlusion culling, and the GPU
 //!   walks where the adapter walks on the GPU. Which pays is measured, not
-//!   assumed (the warm-up calibration drops those far dearer); but
+//!   assumed (those the warm-up calibration shows far dearer are not
+//!   explored, only rechecked); but
 //!   in a scene of one object only `vfc` runs, since occlusion culling
 //!   hides an object only behind another one.
 //! - **Choice** (choice.rs): one incumbent runs; the others are probed as
@@ -23,18 +24,21 @@
 //!   when the view has changed materially.
 //! - **Hand-over** ([`Carries`]): no strategy starts from nothing. The GPU
 //!   walks share one set of visible lists, so a walk takes over the visible
-//!   set the last one found, as if it had run all along; after a frame the
-//!   CPU decided, the walks start from what it drew when an occlusion
-//!   culler drew it, where that holds no more triangles than their own
-//!   lists drew (a coarse culler's set holds more) or those have gone
-//!   stale (after `vfc`, from their own lists gone stale, unless
-//!   those were written in a frustum the view has outgrown: then from
-//!   everything in the frustum, which their test against its depth sorts
-//!   out in one frame), and their first frame then only settles them and is
-//!   not measured. A culler that keeps its visible set on the CPU is handed
-//!   the objects drawn last: `swr` takes them as occluders, `chc` as what
-//!   it found visible (after `vfc`, everything in the frustum, which it
-//!   draws once; that frame settles it and is not measured). A frame that
+//!   set the last one found, as if it had run all along; after a frame an
+//!   occlusion culler drew on the CPU, the lists take what it drew, after
+//!   the frame and untimed (not where the culler is coarse:
+//!   [`lists_take_drawn`]); after `vfc` (everything in the frustum), the
+//!   walks start from their own lists, and where those have gone stale,
+//!   from what an occlusion culler drew last, or from everything in the
+//!   frustum where the view has outgrown them (which their test against
+//!   its depth sorts out in one frame); a walk's first frame from stale
+//!   lists only settles it and is not measured. A culler that keeps its
+//!   visible set on the CPU is handed the objects drawn last, unless it
+//!   ran the frame before the last itself (its own state is then as
+//!   fresh, and it keeps what it learned: `swr` its buffer's rest):
+//!   `swr` takes them as occluders, `chc` as what it found visible (after
+//!   `vfc`, everything in the frustum, which it draws once; that frame
+//!   settles it and is not measured). A frame that
 //!   started from stale lists, or from everything in the frustum, drew that
 //!   set untested: it does not count towards what occlusion hides. A frame
 //!   an occlusion culler ran as frustum culling's own (`swr` while its
@@ -58,6 +62,10 @@
 //! Departures: what a GPU walk drew (handed to the CPU cullers, and counted
 //! for the hidden share that judges `vfc` before it runs) is taken from its
 //! untimed audit; an engine reads it back a frame late, without waiting.
+//! The frustum's triangles (what judges what occlusion hid) are counted
+//! after the frame, untimed, and a CPU culler's drawn set goes into the
+//! walks' lists there too: an engine takes the count from its culling's
+//! frustum test, and uploads the set with the frame's other data.
 //! The calibration uses the bench's warm-up frames, which no mode's figures
 //! include, as an engine would calibrate in its loading frames. It times
 //! each candidate's own work, without the refit of the hierarchy around
@@ -135,6 +143,8 @@ impl AutoParams {
 struct Candidate {
     id: ModeId,
     culler: Box<dyn Culler>,
+    /// The frame it last ran (warm-up's included).
+    last_ran: Option<u64>,
 }
 
 impl Candidate {
@@ -163,8 +173,13 @@ struct Ran {
     /// the frame was frustum culling's own ([`Culler::frustum_only`]:
     /// `swr` while its buffer rests).
     family: Family,
-    /// Whether the frustum's triangles were counted in it.
+    /// Whether the frustum's triangles were counted for it: after it,
+    /// untimed, where `recount` (a count is a frustum traversal, which
+    /// a probe would pay and the running mode's frames mostly not), or
+    /// in a frame drawn as frustum culling's just before, whose drawn
+    /// triangles are that count.
     counted: bool,
+    recount: bool,
     /// Whether it started from a visible set of this view. A GPU walk that
     /// did not (its lists from another view, or everything in the frustum
     /// after `vfc`) draws that set before it tests anything, more than
@@ -173,28 +188,19 @@ struct Ran {
     fresh: bool,
 }
 
-/// The visible lists the GPU walks share, as the last walk to run left
-/// them: its frame and view, and the triangles it drew (`None` until
-/// known: a frame's count comes with the next frame's input, and a walk's
-/// indirect draws in warm-up are not counted).
+/// The frame that last wrote the visible lists the GPU walks share (a
+/// walk's, or one whose drawn set they took: [`lists_take_drawn`]), and
+/// where it looked.
 #[derive(Clone, Copy, Debug)]
 struct Lists {
     frame: u64,
     view: View,
-    drew: Option<u64>,
-}
-
-/// The last frame's drawn set as a walk is handed it: the family of the
-/// frame that drew it ([`Ran::family`]) and the triangles it holds.
-#[derive(Clone, Copy, Debug)]
-struct Handed {
-    by: Family,
-    drew: u64,
 }
 
 /// How a GPU walk starts a frame in `view` (frame number `frame`), its
-/// shared lists as last `written`, `handed` the last frame's drawn set
-/// (none where the walk ran last itself, or nothing was drawn yet).
+/// shared lists as last `written`, handed the last frame's drawn set by a
+/// frame of family `handed_by` ([`Ran::family`]; none where the walk ran
+/// last itself, or nothing was drawn yet).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct WalkStart {
     /// No walk wrote the lists in the last two frames, or the last one
@@ -202,53 +208,57 @@ struct WalkStart {
     /// an empty edge into the city; an orbit's or a walk's lists from two
     /// frames ago still hold most of what is visible).
     stale: bool,
-    /// The drawn set replaces the lists: where an occlusion culler drew it
-    /// and the lists are stale or drew more (it is the fresher of the two:
-    /// on the two-cylinder engine's orbit, a walk started from its own
-    /// lists of two frames before, after an `omq` probe, drew 2.3 % more on
-    /// average and up to 28 % more than where it had run the frame before
-    /// itself, objects the orbit had turned from; a coarse culler's set,
-    /// such as `chc`'s on a scan whose clusters its leaves join, holds more
-    /// than the lists), and after `vfc` (all in the frustum) only where the
-    /// lists were written in a frustum `view` outgrew. A walk that starts
-    /// from everything in the frustum tests against its depth and knows
-    /// what is visible after one frame; one that starts from another
-    /// view's lists needs two.
+    /// The drawn set replaces stale lists: where an occlusion culler drew
+    /// it, and after `vfc` (all in the frustum) only where the lists were
+    /// written in a frustum `view` outgrew. A walk that starts from
+    /// everything in the frustum tests against its depth and knows what is
+    /// visible after one frame; one that starts from another view's lists
+    /// needs two. (After a frame of a culler that draws on the CPU and is
+    /// not coarse, the lists took its drawn set already, untimed.)
     upload: bool,
     /// It starts from a visible set of this view ([`Ran::fresh`]).
     fresh: bool,
 }
 
-fn walk_start(written: Option<Lists>, frame: u64, view: &View, handed: Option<Handed>) -> WalkStart {
+fn walk_start(written: Option<Lists>, frame: u64, view: &View, handed_by: Option<Family>) -> WalkStart {
     let outgrown = written.is_some_and(|w| view.outgrew(&w.view));
     let stale = outgrown || written.is_none_or(|w| frame - w.frame > 2);
-    match handed {
+    match handed_by {
         None => WalkStart {
             stale,
             upload: false,
             fresh: !stale,
         },
-        Some(Handed { by, drew }) => WalkStart {
+        Some(family) => WalkStart {
             stale,
-            upload: match by {
-                // Lists written last frame are its drawn set's own, as the
-                // walk that drew it left them (it drew more: what it drew
-                // first and then found hidden).
-                Family::Occlusion => {
-                    stale || written.is_some_and(|w| w.frame + 1 < frame && w.drew.is_none_or(|lists| drew <= lists))
-                }
-                Family::Frustum => outgrown,
-            },
-            fresh: !stale || by == Family::Occlusion,
+            upload: stale && (family == Family::Occlusion || outgrown),
+            fresh: !stale || family == Family::Occlusion,
         },
     }
+}
+
+/// Whether the walks' lists take the drawn set of a recorded frame that
+/// ran a culler `carrying` its visible set as it does, as family `ran_as`
+/// ([`Ran::family`]), `coarse` or not ([`Chooser::coarse`]), after the
+/// frame and untimed: where an occlusion culler that draws on the CPU drew
+/// it, and is not coarse, the set is of this view, and a walk that starts
+/// from it in the next frame draws no more than it needs (on the
+/// two-cylinder engine's orbit, a walk started from its own lists of two
+/// frames before, after an `omq` probe, drew 2.3 % more triangles on
+/// average and up to 28 % more than where it had run the frame before
+/// itself). A walk writes them itself; `vfc`'s set is the whole frustum,
+/// and so is a coarse culler's (`chc`'s on a scan whose clusters its
+/// leaves join), which the lists of two frames before beat.
+fn lists_take_drawn(carrying: Carries, ran_as: Family, coarse: bool) -> bool {
+    carrying != Carries::VisibleOnGpu && ran_as == Family::Occlusion && !coarse
 }
 
 /// How a culler that keeps its visible set on the CPU (`carries`, one of
 /// [`Carries::OccludersOnCpu`] and [`Carries::VisibleOnCpu`]) starts a
 /// frame, handed the last frame's drawn set by a frame of family
-/// `handed_by` ([`Ran::family`]; none where it ran that frame itself, or
-/// every candidate did, in a warm-up frame).
+/// `handed_by` ([`Ran::family`]; none where it ran that frame or the one
+/// before itself, [`AutoCulling::cpu_handed_to`], or every candidate did,
+/// in a warm-up frame).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct CpuStart {
     /// It is handed the drawn set ([`Culler::seed_visible`]).
@@ -316,7 +326,7 @@ pub struct AutoCulling {
     frames: u64,
     /// Warm-up frames run.
     warm_ups: usize,
-    /// The lists as the last GPU walk to run left them.
+    /// The frame that last wrote the walks' lists.
     lists_written: Option<Lists>,
     /// The last recorded frame; `None` after a warm-up frame.
     ran: Option<Ran>,
@@ -328,8 +338,6 @@ pub struct AutoCulling {
     /// warm-up frame every candidate ran).
     last_drawn: Vec<u32>,
     last_drawn_by: Option<Family>,
-    /// The triangles the last recorded frame drew.
-    last_drawn_triangles: u64,
     /// Triangles in the frustum as last counted.
     frustum_triangles: u64,
     /// Scratch: the frustum's objects, a traversal stack, and whether each
@@ -353,6 +361,7 @@ impl AutoCulling {
                 Ok(Candidate {
                     id,
                     culler: id.create(scene, params)?,
+                    last_ran: None,
                 })
             })
             .collect::<Result<_, ModeError>>()?;
@@ -368,7 +377,6 @@ impl AutoCulling {
             running: Vec::new(),
             last_drawn: Vec::new(),
             last_drawn_by: None,
-            last_drawn_triangles: 0,
             frustum_triangles: 0,
             in_frustum: Vec::new(),
             stack: Vec::new(),
@@ -387,6 +395,16 @@ impl AutoCulling {
         self.last_drawn_by.filter(|_| self.ran.is_none_or(|r| r.turn.strategy != k))
     }
 
+    /// What CPU culler `k` is handed ([`Self::handed_to`]) where it did not
+    /// run the frame before the last either: one that did starts from its
+    /// own state, as fresh, and keeps what it learned (`swr` a rest of its
+    /// buffer, `chc` what it found visible, not everything in the frustum
+    /// after a `vfc` probe).
+    fn cpu_handed_to(&self, k: usize) -> Option<Family> {
+        let ran_lately = self.candidates[k].last_ran.is_some_and(|f| self.frames - f <= 2);
+        self.handed_to(k).filter(|_| !ran_lately)
+    }
+
     /// Whether candidate `k` must first settle in `view`: a walk whose lists
     /// are stale, a culler that draws the set it is handed when that is
     /// everything in the frustum, or a culler whose own state went stale.
@@ -395,7 +413,7 @@ impl AutoCulling {
         match self.candidates[k].carries() {
             Carries::VisibleOnGpu => self.lists_stale(view),
             carries @ (Carries::OccludersOnCpu | Carries::VisibleOnCpu) => {
-                cpu_start(carries, self.handed_to(k)).settles
+                cpu_start(carries, self.cpu_handed_to(k)).settles
             }
             Carries::OwnState => !ran_last,
             Carries::Nothing => false,
@@ -406,21 +424,16 @@ impl AutoCulling {
     /// drew, where it did not run then. Whether it then starts from a
     /// visible set of this view ([`Ran::fresh`]).
     fn hand_over(&mut self, k: usize, ctx: &mut dyn Frame, view: &View) -> bool {
-        let handed_by = self.handed_to(k);
         match self.candidates[k].carries() {
             Carries::VisibleOnGpu => {
-                let handed = handed_by.map(|by| Handed {
-                    by,
-                    drew: self.last_drawn_triangles,
-                });
-                let start = walk_start(self.lists_written, self.frames, view, handed);
+                let start = walk_start(self.lists_written, self.frames, view, self.handed_to(k));
                 if let (true, Some(lists), Some(gpu)) = (start.upload, &self.lists, ctx.on_gpu()) {
                     lists.upload(gpu.gpu(), &self.last_drawn);
                 }
                 start.fresh
             }
             carries @ (Carries::OccludersOnCpu | Carries::VisibleOnCpu) => {
-                let start = cpu_start(carries, handed_by);
+                let start = cpu_start(carries, self.cpu_handed_to(k));
                 if start.seed {
                     self.candidates[k].culler.seed_visible(&self.last_drawn);
                 }
@@ -430,13 +443,37 @@ impl AutoCulling {
         }
     }
 
-    /// Remembers what the frame drew, `drawn`, and the family that drew it,
-    /// for the next hand-over. After a warm-up frame, which every candidate
-    /// ran from its own state, none is handed what they drew together.
-    fn remember_drawn(&mut self, drawn: &ObjectSet) {
+    /// After a frame (`input`), untimed: remembers what it drew, `drawn`,
+    /// and the family that drew it, for the next hand-over; counts the
+    /// frustum's triangles where a recorded frame was to be counted
+    /// ([`Ran::recount`]); and notes the frame that wrote the walks'
+    /// lists. Whether the lists take its drawn set ([`lists_take_drawn`]).
+    /// After a warm-up frame, which every candidate ran from its own state,
+    /// none is handed what they drew together.
+    fn after_frame(&mut self, input: &FrameInput, drawn: &ObjectSet) -> bool {
         self.last_drawn.clear();
         self.last_drawn.extend(drawn.iter());
         self.last_drawn_by = self.ran.map(|r| r.family);
+        let Some(mut ran) = self.ran else {
+            return false;
+        };
+        if ran.recount {
+            self.frustum_triangles = self.count_frustum_triangles(input);
+            ran.view.frustum_triangles = self.frustum_triangles;
+            ran.recount = false;
+            self.ran = Some(ran);
+        }
+        let k = ran.turn.strategy;
+        let carries = self.candidates[k].carries();
+        let coarse = self.chooser.as_ref().is_some_and(|c| c.coarse(k));
+        let take = self.lists.is_some() && lists_take_drawn(carries, ran.family, coarse);
+        if carries == Carries::VisibleOnGpu || take {
+            self.lists_written = Some(Lists {
+                frame: self.frames,
+                view: ran.view,
+            });
+        }
+        take
     }
 
     /// Triangles of the objects in the frustum.
@@ -494,13 +531,13 @@ impl AutoCulling {
                 log_ms[k] = (start.elapsed().as_secs_f64() * 1e3).ln();
             }
             let chooser = self.chooser.as_mut().expect("the session prepared the mode");
+            self.candidates[k].last_ran = Some(self.frames);
             // What a culler that draws on the CPU hid (a walk's indirect
             // draws are not counted here).
             if self.candidates[k].carries() == Carries::VisibleOnGpu {
                 self.lists_written = Some(Lists {
                     frame: self.frames,
                     view,
-                    drew: None,
                 });
             } else if view.frustum_triangles > 0 {
                 chooser.calibrate_hidden(k, 1.0 - drawn as f64 / view.frustum_triangles as f64, &view);
@@ -565,10 +602,6 @@ impl Culler for AutoCulling {
             return self.warm_up(ctx, input);
         }
         if let (Some(ran), Some(previous)) = (self.ran, input.previous) {
-            self.last_drawn_triangles = previous.triangles_drawn;
-            if let Some(lists) = self.lists_written.as_mut().filter(|l| l.frame + 1 == self.frames) {
-                lists.drew = Some(previous.triangles_drawn);
-            }
             let mut view = ran.view;
             let occluded = match ran.family {
                 Family::Frustum => {
@@ -606,11 +639,14 @@ impl Culler for AutoCulling {
             true => Family::Frustum,
             false => self.candidates[k].family(),
         };
-        let mut view = view;
+        self.candidates[k].last_ran = Some(self.frames);
         // What occlusion hides changes with the view, slowly: counted on a
-        // probe and every COUNT_EVERY frames, so the count (a frustum
-        // traversal) costs little on a GPU whose frames are short.
-        // The first recorded frame (after warm-up, which counts them too) is
+        // probe and every COUNT_EVERY frames, after the frame, untimed (a
+        // frustum traversal in a timed frame would weigh on a probe's time
+        // and on the running mode's only one frame in COUNT_EVERY, 4–8 %
+        // of a frame of 1–2 ms on a fast GPU: 0.05–0.08 ms on the default
+        // city here; an engine takes the count from its culling's frustum
+        // test). The first recorded frame (after warm-up, which counts them too) is
         // counted, so what occlusion hides is known from it; and so is the
         // first after a frame drawn as frustum culling's, whose triangles
         // are the frustum's count already (a `swr` buffer tried again after
@@ -625,17 +661,6 @@ impl Culler for AutoCulling {
                 || self.frames.is_multiple_of(COUNT_EVERY)
                 || self.ran.is_none()
                 || self.frustum_triangles == 0);
-        if counted && !after_frustum {
-            self.frustum_triangles = self.count_frustum_triangles(input);
-            view.frustum_triangles = self.frustum_triangles;
-        }
-        if self.candidates[k].carries() == Carries::VisibleOnGpu {
-            self.lists_written = Some(Lists {
-                frame: self.frames,
-                view,
-                drew: None,
-            });
-        }
         self.running.clear();
         self.running.push(k);
         self.ran = Some(Ran {
@@ -643,20 +668,24 @@ impl Culler for AutoCulling {
             view,
             family,
             counted,
+            recount: counted && !after_frustum,
             fresh,
         });
         stats
     }
 
-    /// Audits what ran this frame, and remembers what it drew for the next
-    /// hand-over: a walk's drawn set as its audit reads it back after the
-    /// frame (an engine reads it back a frame late, without waiting).
-    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+    /// Audits what ran this frame, then what follows it untimed
+    /// ([`Self::after_frame`]): a walk's drawn set is as its audit reads it
+    /// back after the frame (an engine reads it back a frame late, without
+    /// waiting), and the walks' lists take a CPU culler's drawn set here.
+    fn audit(&mut self, gpu: &GpuContext, input: &FrameInput, drawn: &mut ObjectSet) -> Option<GpuAudit> {
         let mut audit = None;
         for &k in &self.running {
-            audit = self.candidates[k].culler.audit(gpu, drawn).or(audit);
+            audit = self.candidates[k].culler.audit(gpu, input, drawn).or(audit);
         }
-        self.remember_drawn(drawn);
+        if let (true, Some(lists)) = (self.after_frame(input, drawn), &self.lists) {
+            lists.upload(gpu, &self.last_drawn);
+        }
         audit
     }
 
@@ -757,6 +786,7 @@ mod tests {
             Candidate {
                 id: ModeId::Vfc,
                 culler: Box::new(FrustumCulling::new(&scene)),
+                last_ran: None,
             },
             Candidate {
                 id: ModeId::Swr,
@@ -764,10 +794,12 @@ mod tests {
                     vfc: FrustumCulling::new(&scene),
                     rested: false,
                 }),
+                last_ran: None,
             },
             Candidate {
                 id: ModeId::Chc,
                 culler: ModeId::Chc.create(&scene, &params).unwrap(),
+                last_ran: None,
             },
         ];
         let families: Vec<Family> = auto.candidates.iter().map(Candidate::family).collect();
@@ -789,7 +821,7 @@ mod tests {
             auto.frame(&mut calls, &frame_input);
             let mut drawn = ObjectSet::new(scene.objects.len());
             calls.drawn().into_iter().for_each(|o| drawn.insert(o));
-            auto.remember_drawn(&drawn);
+            auto.after_frame(&frame_input, &drawn);
             let ran = auto.ran.unwrap();
             if ran.turn.strategy != 1 {
                 continue;
@@ -799,10 +831,12 @@ mod tests {
                 // Not counted as an occlusion frame (it drew the frustum,
                 // and hid nothing because it tested nothing), and `chc`,
                 // handed everything in the frustum, first settles, as
-                // after `vfc`.
+                // after `vfc` (where it did not run lately: then it keeps
+                // its own state).
                 assert!(!ran.counted, "frame {frame}");
                 assert_eq!(auto.last_drawn_by, Some(Family::Frustum), "frame {frame}");
-                assert!(auto.settles(2, &ran.view), "frame {frame}");
+                let chc_lately = auto.candidates[2].last_ran.is_some_and(|f| auto.frames - f <= 2);
+                assert_eq!(auto.settles(2, &ran.view), !chc_lately, "frame {frame}");
             } else if before.is_some_and(|b| b.family == Family::Frustum) {
                 // A try after a rest (none of them on a frame COUNT_EVERY
                 // counts) tells what occlusion hides.
@@ -815,37 +849,69 @@ mod tests {
     }
 
     #[test]
-    fn a_walk_s_lists_go_stale_with_time_or_where_the_view_outgrew_them_and_give_way_to_a_fresher_set_no_larger() {
+    fn a_walk_s_lists_go_stale_with_time_or_where_the_view_outgrew_them_not_where_it_moved() {
         let streets = view(0.0, DVec3::NEG_Z, 10_000);
-        let lists = |frame, view, drew| Some(Lists { frame, view, drew });
-        let by = |by, drew| Some(Handed { by, drew });
-        let start = |written, handed| walk_start(written, 10, &streets, handed);
+        let start = |frame, view, handed_by| walk_start(Some(Lists { frame, view }), 10, &streets, handed_by);
         let walk = |stale, upload, fresh| WalkStart { stale, upload, fresh };
         // An orbit: written two frames ago, far away and turned 45°, over as
-        // many triangles, where the walk drew 4 000. The lists are kept
-        // after vfc, and what the walk draws from them counts.
+        // many triangles. The lists are kept after vfc, and what the walk
+        // draws from them counts.
         let orbit = view(500.0, DVec3::new(1.0, 0.0, -1.0).normalize(), 9_000);
-        assert_eq!(start(lists(8, orbit, Some(4_000)), by(Family::Frustum, 9_000)), walk(false, false, true));
-        // What an occlusion culler drew last replaces them where it holds
-        // no more (it is of this view), not where it holds more (a coarse
-        // culler's), nor where a walk wrote them in the last frame (the
-        // one that drew it, or this walk itself); lists whose triangles
-        // are not known (warm-up's) give way.
-        assert_eq!(start(lists(8, orbit, Some(4_000)), by(Family::Occlusion, 3_600)), walk(false, true, true));
-        assert_eq!(start(lists(8, orbit, Some(4_000)), by(Family::Occlusion, 4_000)), walk(false, true, true));
-        assert_eq!(start(lists(8, orbit, Some(4_000)), by(Family::Occlusion, 8_000)), walk(false, false, true));
-        assert_eq!(start(lists(9, orbit, Some(4_000)), None), walk(false, false, true));
-        assert_eq!(start(lists(9, orbit, Some(4_000)), by(Family::Occlusion, 4_000)), walk(false, false, true));
-        assert_eq!(start(lists(8, orbit, None), by(Family::Occlusion, 8_000)), walk(false, true, true));
+        assert_eq!(start(8, orbit, Some(Family::Frustum)), walk(false, false, true));
         // A turn from an empty edge into the streets: replaced even after
         // vfc, and the walk's first frame there does not count.
         let edge = view(0.0, DVec3::X, 20);
-        assert_eq!(start(lists(8, edge, Some(20)), by(Family::Frustum, 10_000)), walk(true, true, false));
-        assert_eq!(start(lists(9, edge, Some(20)), None), walk(true, false, false));
+        assert_eq!(start(8, edge, Some(Family::Frustum)), walk(true, true, false));
+        assert_eq!(start(9, edge, None), walk(true, false, false));
         // Old lists of this view: replaced by what an occlusion culler drew
-        // (which counts), however much, kept after vfc (which does not).
-        assert_eq!(start(lists(5, streets, Some(4_000)), by(Family::Occlusion, 8_000)), walk(true, true, true));
-        assert_eq!(start(lists(5, streets, Some(4_000)), by(Family::Frustum, 10_000)), walk(true, false, false));
-        assert_eq!(start(None, None), walk(true, false, false));
+        // (which counts), kept after vfc (which does not).
+        assert_eq!(start(5, streets, Some(Family::Occlusion)), walk(true, true, true));
+        assert_eq!(start(5, streets, Some(Family::Frustum)), walk(true, false, false));
+        assert_eq!(walk_start(None, 10, &streets, None), walk(true, false, false));
+    }
+
+    #[test]
+    fn a_cpu_culler_that_ran_the_frame_before_the_last_keeps_its_own_state_after_a_probe() {
+        use crate::cull::recording::cubes;
+        let (scene, _) = cubes(&[DVec3::ZERO, DVec3::X * 3.0]);
+        let mut auto = AutoCulling::new(&scene, &ModeParams::default()).unwrap();
+        let at = |auto: &AutoCulling, id| auto.candidates.iter().position(|c| c.id == id).unwrap();
+        let (chc, swr) = (at(&auto, ModeId::Chc), at(&auto, ModeId::Swr));
+        // Frame 11 is planned; a vfc probe drew frame 10.
+        auto.frames = 11;
+        auto.last_drawn_by = Some(Family::Frustum);
+        let still = view(0.0, DVec3::NEG_Z, 1_000);
+        // Running in frame 9, chc and swr keep what they learned: chc what
+        // it found visible (not everything in the frustum, which it would
+        // draw), swr its occluders and its buffer's rest.
+        auto.candidates[chc].last_ran = Some(9);
+        auto.candidates[swr].last_ran = Some(9);
+        assert_eq!(auto.cpu_handed_to(chc), None);
+        assert_eq!(auto.cpu_handed_to(swr), None);
+        assert!(!auto.settles(chc, &still));
+        // Probed after longer, each is handed the drawn set (chc settles
+        // on everything in the frustum).
+        auto.candidates[chc].last_ran = Some(8);
+        auto.candidates[swr].last_ran = None;
+        assert_eq!(auto.cpu_handed_to(chc), Some(Family::Frustum));
+        assert_eq!(auto.cpu_handed_to(swr), Some(Family::Frustum));
+        assert!(auto.settles(chc, &still));
+    }
+
+    #[test]
+    fn the_walks_lists_take_what_a_cpu_culler_drew_unless_it_drew_the_whole_frustum_or_is_coarse() {
+        use Carries::*;
+        use Family::*;
+        // omq decides afresh, chc carries what it found visible, swr its
+        // occluders: each drew a visible set of this view.
+        for carrying in [Nothing, VisibleOnCpu, OccludersOnCpu] {
+            assert!(lists_take_drawn(carrying, Occlusion, false), "{carrying:?}");
+            // Not a coarse culler's, nor a frame drawn as vfc's (swr
+            // resting), nor vfc's own.
+            assert!(!lists_take_drawn(carrying, Occlusion, true), "{carrying:?}");
+            assert!(!lists_take_drawn(carrying, Frustum, false), "{carrying:?}");
+        }
+        // A walk's frame wrote the lists itself.
+        assert!(!lists_take_drawn(VisibleOnGpu, Occlusion, false));
     }
 }

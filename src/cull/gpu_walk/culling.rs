@@ -126,7 +126,7 @@ impl Culler for GpuCulling {
         }
     }
 
-    fn audit(&mut self, gpu: &GpuContext, drawn: &mut ObjectSet) -> Option<GpuAudit> {
+    fn audit(&mut self, gpu: &GpuContext, _input: &FrameInput, drawn: &mut ObjectSet) -> Option<GpuAudit> {
         self.walk.as_mut()?.audit(gpu, drawn)
     }
 }
