@@ -7,7 +7,7 @@ use common::gltf_writer::{GltfWriter, cube, instanced_scene};
 use common::{THREE_OBJECTS_OBJ, occlu, stdout, write};
 use glam::DVec3;
 use occlu::scene::{LoadOptions, SceneSpec, load};
-use serde_json::json;
+use serde_json::{Value, json};
 
 fn load_file(path: &std::path::Path) -> Result<occlu::scene::Scene, occlu::scene::SceneError> {
     load(&SceneSpec::File(path.into()), &LoadOptions::default())
@@ -583,6 +583,46 @@ fn malformed_gltf_accessors_and_node_graphs_are_errors_not_panics() {
     assert!(projective.contains("matrix is not affine"), "{projective}");
     let scaled = msg(edited_glb(|w| w.nodes[0]["scale"] = json!([1e30, 1e30, 1e30])));
     assert!(scaled.contains("beyond ±1e18"), "{scaled}");
+    // A camera whose type names a projection it does not carry, and
+    // animation channels aimed at a node that does not exist or at no
+    // property glTF defines (the gltf crate's readers would panic).
+    let perspective = json!({"yfov": 1.0, "znear": 0.1});
+    let camera = |w: &mut GltfWriter, camera: Value| {
+        w.extra.insert("cameras".into(), json!([camera]));
+        w.nodes[0]["camera"] = json!(0);
+    };
+    let mismatch = msg(edited_glb(|w| {
+        camera(w, json!({"type": "orthographic", "perspective": perspective}))
+    }));
+    assert!(
+        mismatch.contains("camera 0: its type is \"orthographic\" but it has no \"orthographic\" object"),
+        "{mismatch}"
+    );
+    let unknown = msg(edited_glb(|w| {
+        camera(w, json!({"type": "fisheye", "perspective": perspective}))
+    }));
+    assert!(unknown.contains("camera 0: its type is neither"), "{unknown}");
+    let channel = |w: &mut GltfWriter, target: Value| {
+        let times = w.floats(&[0.0, 1.0], "SCALAR");
+        let moves = w.floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0], "VEC3");
+        w.extra.insert(
+            "animations".into(),
+            json!([{"samplers": [{"input": times, "output": moves}], "channels": [{"sampler": 0, "target": target}]}]),
+        );
+    };
+    let absent = msg(edited_glb(|w| channel(w, json!({"node": 7, "path": "translation"}))));
+    assert!(
+        absent.contains("animation 0 channel 0: target node 7 does not exist (1 nodes)"),
+        "{absent}"
+    );
+    let bogus = msg(edited_glb(|w| {
+        camera(w, json!({"type": "perspective", "perspective": perspective}));
+        channel(w, json!({"node": 0, "path": "bogus"}));
+    }));
+    assert!(
+        bogus.contains("animation 0 channel 0: its target path is none of"),
+        "{bogus}"
+    );
 }
 
 #[test]

@@ -113,6 +113,7 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
         return Err(parse_error(message));
     }
     check_primitive_accessors(unvalidated.document.as_json()).map_err(parse_error)?;
+    check_cameras_and_channels(unvalidated.document.as_json()).map_err(parse_error)?;
     let listed = |extension: &str| unvalidated.extensions_used().any(|e| e == extension);
     let text = gltf_json::text(bytes).map_err(parse_error)?;
     let sites = gltf_json::parsed(&text).map_err(parse_error)?;
@@ -615,6 +616,53 @@ fn check_primitive_accessors(json: &gltf::json::Root) -> Result<(), String> {
                 return Err(format!(
                     "mesh {m} primitive {p}: accessor {} does not exist ({count} accessors)",
                     bad.value()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// What gltf-json's validator lets through and the gltf crate's readers
+/// then unwrap: a camera whose `type` names a projection it does not
+/// carry (or none glTF defines), and an animation channel whose target
+/// node does not exist or whose path is none glTF defines.
+fn check_cameras_and_channels(json: &gltf::json::Root) -> Result<(), String> {
+    use gltf::json::camera::Type;
+    use gltf::json::validation::Checked;
+    for (c, camera) in json.cameras.iter().enumerate() {
+        let carried = match camera.type_ {
+            Checked::Valid(Type::Perspective) => camera.perspective.is_some(),
+            Checked::Valid(Type::Orthographic) => camera.orthographic.is_some(),
+            Checked::Invalid => {
+                return Err(format!(
+                    "camera {c}: its type is neither \"perspective\" nor \"orthographic\""
+                ));
+            }
+        };
+        if !carried {
+            let kind = match camera.type_ {
+                Checked::Valid(Type::Perspective) => "perspective",
+                _ => "orthographic",
+            };
+            return Err(format!(
+                "camera {c}: its type is \"{kind}\" but it has no \"{kind}\" object"
+            ));
+        }
+    }
+    let nodes = json.nodes.len();
+    for (a, animation) in json.animations.iter().enumerate() {
+        for (k, channel) in animation.channels.iter().enumerate() {
+            let target = &channel.target;
+            if target.node.value() >= nodes {
+                return Err(format!(
+                    "animation {a} channel {k}: target node {} does not exist ({nodes} nodes)",
+                    target.node.value()
+                ));
+            }
+            if let Checked::Invalid = target.path {
+                return Err(format!(
+                    "animation {a} channel {k}: its target path is none of translation, rotation, scale and weights"
                 ));
             }
         }
