@@ -263,9 +263,11 @@ pub fn execute(
         frames_csv: None,
         animation: None,
     };
+    // The extras first: a run that cannot write one (a full disk) fails
+    // with the results folder as it was.
+    write_extras(plan, &summary, &output)?;
     let png = animation.as_ref().map(|a| a.png.as_slice());
     let files = write_results(&plan.out, &mut summary, &output.rows, &output.missed, png)?;
-    write_extras(plan, &summary, &output)?;
     Ok(BenchOutcome { summary, files })
 }
 

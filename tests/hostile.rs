@@ -808,6 +808,30 @@ fn a_merge_that_fails_on_a_full_disk_leaves_no_folder() {
     assert!(gone, "the folder it made is gone");
 }
 
+// A hostile-input review's finding: an extra output that cannot be
+// written (a full disk) fails the run, and the results folder stays as it
+// was: the earlier run's results, or no folder where the run made it.
+#[test]
+fn a_run_whose_trace_or_export_cannot_be_written_leaves_the_results_folder_as_it_was() {
+    let dir = tempfile::tempdir().unwrap();
+    let earlier = dir.path().join("earlier");
+    tiny_run(&earlier, &["--modes", "swr"]);
+    let summary = || std::fs::read_to_string(earlier.join("summary.json")).unwrap();
+    let before = summary();
+    for flag in ["--export-github-benchmark", "--trace"] {
+        let over = occlu(&tiny_bench(&earlier, &[flag, "/dev/full"]));
+        assert_eq!(over.status.code(), Some(1), "{flag}: {:?}", own_stderr(&over));
+        assert!(
+            summary() == before,
+            "{flag}: the earlier run's summary.json was replaced"
+        );
+        let fresh = dir.path().join(format!("fresh{flag}"));
+        let new = occlu(&tiny_bench(&fresh, &[flag, "/dev/full"]));
+        assert_eq!(new.status.code(), Some(1), "{flag}: {:?}", own_stderr(&new));
+        assert!(!fresh.exists(), "{flag}: the folder it made is gone");
+    }
+}
+
 // Item 11.
 #[test]
 fn duplicate_keys_are_refused_in_configs_and_paths() {
