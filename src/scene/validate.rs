@@ -72,6 +72,16 @@ pub enum GeometryError {
     },
     #[error("mesh '{mesh}': {len} indices do not form whole triangles")]
     PartialTriangle { mesh: String, len: usize },
+    #[error(
+        "mesh '{mesh}' brings the model to {triangles} triangles, more than the {most} {}",
+        memory_gib.map_or("that 32-bit indices reach".to_string(), |gib| format!("that the {gib:.1} GiB of memory available holds"))
+    )]
+    TooManyTriangles {
+        mesh: String,
+        triangles: u64,
+        most: u64,
+        memory_gib: Option<f64>,
+    },
 }
 
 /// The triangles of a mesh that survived validation.
