@@ -205,6 +205,7 @@ pub fn read(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], check: &Ch
     // The nodes whose motion moves a camera: cameras and their ancestors.
     let mut moves_a_camera = vec![false; nodes.parent.len()];
     let mut chains = Vec::new();
+    let mut budget = Budget::default();
     for node in gltf.nodes().filter(|n| reached[n.index()]) {
         let Some(camera) = node.camera() else { continue };
         let name = node.name().map_or_else(|| name_of_camera(&camera), str::to_string);
@@ -213,6 +214,15 @@ pub fn read(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], check: &Ch
             continue;
         }
         let chain = nodes.chain(node.index());
+        // Placing a camera evaluates its chain: nested cameras cost the
+        // square of their depth.
+        budget.work += chain.len();
+        if budget.work > MAX_WORK {
+            warnings.push(format!(
+                "camera '{name}' and those after it are left out: placing them passes the {MAX_WORK} node transforms occlu evaluates per file"
+            ));
+            break;
+        }
         match pose_of(&camera, Nodes::world(&chain, &rest)) {
             Some(pose) => {
                 for &n in &chain {
@@ -235,7 +245,6 @@ pub fn read(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], check: &Ch
         }
     }
     let mut animations = Vec::new();
-    let mut budget = Budget::default();
     for animation in gltf.animations() {
         let name = animation
             .name()
