@@ -295,12 +295,16 @@ impl BenchConfig {
             export_github_benchmark: self.export_github_benchmark.or(fallback.export_github_benchmark),
             trace: self.trace.or(fallback.trace),
             animate: self.animate.or(fallback.animate),
-            // Per key, a flag wins over the file: later entries override.
             sweep: self.sweep.or(fallback.sweep),
+            // Per key, a flag wins over the file; a key given twice in one
+            // of them is refused when the parameters are parsed.
             params: match (fallback.params, self.params) {
-                (Some(mut file), Some(flags)) => {
-                    file.extend(flags);
-                    Some(file)
+                (Some(file), Some(flags)) => {
+                    let key = |item: &String| item.split_once('=').map(|(k, _)| k.trim().to_string());
+                    let set: Vec<Option<String>> = flags.iter().map(key).collect();
+                    let mut kept: Vec<String> = file.into_iter().filter(|item| !set.contains(&key(item))).collect();
+                    kept.extend(flags);
+                    Some(kept)
                 }
                 (file, flags) => flags.or(file),
             },
@@ -501,6 +505,14 @@ mod tests {
             Ok("32x24".into()),
             "the file still counts"
         );
+        // A key given twice in one source is refused (the review of hostile
+        // input found the last one silently kept).
+        let twice = BenchConfig {
+            params: Some(vec!["omq.factor=0.5".into(), "omq.factor=0.6".into()]),
+            ..Default::default()
+        };
+        let error = twice.plan().unwrap_err().to_string();
+        assert!(error.contains("parameter 'omq.factor' is given twice"), "{error}");
     }
 
     #[test]

@@ -1409,3 +1409,21 @@ fn a_bad_frame_count_names_the_flag_and_the_config_field_it_may_come_from() {
         );
     }
 }
+
+/// A hostile-input review's finding: `--external-buffers` before the model
+/// took the model's path as its value (and refused it as no boolean).
+#[test]
+fn external_buffers_before_the_model_leaves_the_model_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(dir.path(), "m.obj", THREE_OBJECTS_OBJ);
+    let model = obj.to_str().unwrap();
+    for flag in [
+        "--external-buffers",
+        "--external-buffers=false",
+        "--external-buffers=true",
+    ] {
+        let info = occlu(&["info", flag, model]);
+        assert!(info.status.success(), "{flag}: {:?}", own_stderr(&info));
+        assert!(stdout(&info).contains("m.obj"), "{flag}: {}", stdout(&info));
+    }
+}

@@ -125,8 +125,9 @@ pub struct SceneArgs {
     pub max_file_size: Option<ByteSize>,
     /// Let a glTF file's buffers lie outside its folder (absolute paths,
     /// "..", file: URIs). Off by default, so a model from elsewhere cannot
-    /// make occlu read other files (=false overrides a config file).
-    #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
+    /// make occlu read other files (=false overrides a config file; the
+    /// value needs its `=`, so `--external-buffers MODEL` reads MODEL).
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, require_equals = true, default_missing_value = "true")]
     pub external_buffers: Option<bool>,
     /// The scene's up axis, for generated paths and the overview: x, y, z,
     /// -x, -y, -z, or auto (+Y for glTF and built-in scenes; for OBJ, +Z
@@ -227,7 +228,8 @@ pub struct BenchArgs {
     /// Print no progress and no notes on stderr, only errors.
     #[arg(long, short)]
     pub quiet: bool,
-    /// A mode parameter, MODE.KEY=VALUE (repeatable), e.g. omq.om=80x60.
+    /// A mode parameter, MODE.KEY=VALUE (repeatable, each key once), e.g.
+    /// omq.om=80x60.
     #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
     pub params: Vec<String>,
     /// Run one mode at several values of a parameter in the same run, e.g.
@@ -266,7 +268,7 @@ pub struct RenderArgs {
 /// How `render` and `flythrough` picture a mode's frame, and where to.
 #[derive(Args)]
 pub struct PictureArgs {
-    /// A mode parameter, MODE.KEY=VALUE (repeatable).
+    /// A mode parameter, MODE.KEY=VALUE (repeatable, each key once).
     #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
     pub params: Vec<String>,
     /// Output PNG (animated, for flythrough).

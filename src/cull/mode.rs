@@ -209,6 +209,8 @@ pub enum ModeError {
     NotOne(String),
     #[error("parameter '{0}' is not MODE.KEY=VALUE")]
     MalformedParam(String),
+    #[error("parameter '{0}' is given twice")]
+    RepeatedParam(String),
     #[error("unknown parameter '{key}' ({known})")]
     UnknownParam { key: String, known: String },
     #[error("parameter '{key}': {reason}")]

@@ -70,7 +70,9 @@ impl ModeParams {
                     known,
                 });
             }
-            values.insert(key.to_string(), value.trim().to_string());
+            if values.insert(key.to_string(), value.trim().to_string()).is_some() {
+                return Err(ModeError::RepeatedParam(key.to_string()));
+            }
         }
         let params = ModeParams { values };
         // Parse every typed value now, so a bad one is reported before a
