@@ -219,7 +219,8 @@ pub fn read(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], check: &Ch
         budget.work += chain.len();
         if budget.work > MAX_WORK {
             warnings.push(format!(
-                "camera '{name}' and those after it are left out: placing them passes the {MAX_WORK} node transforms occlu evaluates per file"
+                "camera '{name}' (node {}) and those after it are left out: placing them passes the {MAX_WORK} node transforms occlu evaluates per file",
+                node.index()
             ));
             break;
         }
