@@ -297,12 +297,16 @@ impl BenchConfig {
             animate: self.animate.or(fallback.animate),
             sweep: self.sweep.or(fallback.sweep),
             // Per key, a flag wins over the file; a key given twice in one
-            // of them is refused when the parameters are parsed.
+            // of them is refused when the parameters are parsed (so the
+            // file's entries of a key it repeats are kept).
             params: match (fallback.params, self.params) {
                 (Some(file), Some(flags)) => {
                     let key = |item: &String| item.split_once('=').map(|(k, _)| k.trim().to_string());
                     let set: Vec<Option<String>> = flags.iter().map(key).collect();
-                    let mut kept: Vec<String> = file.into_iter().filter(|item| !set.contains(&key(item))).collect();
+                    let in_file: Vec<Option<String>> = file.iter().map(key).collect();
+                    let overridden =
+                        |k: &Option<String>| set.contains(k) && in_file.iter().filter(|f| *f == k).count() == 1;
+                    let mut kept: Vec<String> = file.into_iter().filter(|item| !overridden(&key(item))).collect();
                     kept.extend(flags);
                     Some(kept)
                 }
@@ -511,7 +515,14 @@ mod tests {
             params: Some(vec!["omq.factor=0.5".into(), "omq.factor=0.6".into()]),
             ..Default::default()
         };
-        let error = twice.plan().unwrap_err().to_string();
+        let error = twice.clone().plan().unwrap_err().to_string();
+        assert!(error.contains("parameter 'omq.factor' is given twice"), "{error}");
+        // Also where a flag sets the key the file repeats.
+        let flag = BenchConfig {
+            params: Some(vec!["omq.factor=0.7".into()]),
+            ..Default::default()
+        };
+        let error = flag.or(twice).plan().unwrap_err().to_string();
         assert!(error.contains("parameter 'omq.factor' is given twice"), "{error}");
     }
 

@@ -19,41 +19,44 @@ use validate::GeometryError;
 pub const DEFAULT_CLUSTER_TRIANGLES: u32 = 4096;
 
 /// What a stored triangle costs a run, all told (its vertices and indices,
-/// their copies on the GPU, the hierarchy, `swr`'s adjacency), with room
-/// to spare: on `--scene city:blocks=32`, 24 M triangles took 1.46 GB, 61
-/// bytes each, and 1.76 GB, 73 bytes each, with `swr`'s adjacency.
-const BYTES_PER_TRIANGLE: u64 = 80;
+/// their copies on the GPU, the hierarchy, `swr`'s adjacency): on
+/// `--scene city:blocks=32`, 24 M triangles took 1.46 GB, 61 bytes each,
+/// and 1.76 GB, 73 bytes each, with `swr`'s adjacency.
+const BYTES_PER_TRIANGLE: u64 = 64;
 
 /// The most triangles a scene may store: what the memory available to
 /// this process holds at [`BYTES_PER_TRIANGLE`], and never more than its
-/// u32 indices can address. A small file can describe far more (a
-/// thousand primitives reusing one accessor): refused by name, not by an
-/// allocation failing.
+/// u32 indices can address; with the memory where that is the bound. A
+/// small file can describe far more (a thousand primitives reusing one
+/// accessor): refused by name, not by an allocation failing.
 fn triangles_memory_allows() -> (u64, Option<u64>) {
     let address = u64::from(u32::MAX) / 3;
     match available_memory() {
-        Some(bytes) => ((bytes / BYTES_PER_TRIANGLE).min(address), Some(bytes)),
-        None => (address, None),
+        Some(bytes) if bytes / BYTES_PER_TRIANGLE < address => (bytes / BYTES_PER_TRIANGLE, Some(bytes)),
+        _ => (address, None),
     }
 }
 
-/// Bytes of memory this process may still take, where the system says:
-/// Linux's estimate of what it can give without swapping, or its control
-/// group's limit where that is lower (a container's).
+/// Bytes of memory this process may still take, where the system says
+/// (Linux): what it can give, its estimate of memory available without
+/// swapping and the free swap, or less where the process's control group
+/// has less left under its limit (a container's; cgroup v2 or v1).
 fn available_memory() -> Option<u64> {
     let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let kib: u64 = meminfo
-        .lines()
-        .find_map(|line| line.strip_prefix("MemAvailable:"))?
-        .trim()
-        .trim_end_matches("kB")
-        .trim()
-        .parse()
-        .ok()?;
-    let limit = std::fs::read_to_string("/sys/fs/cgroup/memory.max")
-        .ok()
-        .and_then(|max| max.trim().parse::<u64>().ok());
-    Some(limit.map_or(kib * 1024, |limit| limit.min(kib * 1024)))
+    let kib = |field: &str| -> Option<u64> {
+        let line = meminfo.lines().find_map(|line| line.strip_prefix(field))?;
+        line.trim().trim_end_matches("kB").trim().parse().ok()
+    };
+    let system = (kib("MemAvailable:")? + kib("SwapFree:").unwrap_or(0)) * 1024;
+    let read = |path: &str| std::fs::read_to_string(path).ok()?.trim().parse::<u64>().ok();
+    let left = |limit: &str, usage: &str| Some(read(limit)?.saturating_sub(read(usage)?));
+    let group = left("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current").or_else(|| {
+        left(
+            "/sys/fs/cgroup/memory/memory.limit_in_bytes",
+            "/sys/fs/cgroup/memory/memory.usage_in_bytes",
+        )
+    });
+    Some(group.map_or(system, |left| left.min(system)))
 }
 
 /// Clusters of one mesh are stored against one origin (the centre of

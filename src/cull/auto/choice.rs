@@ -1232,29 +1232,40 @@ mod tests {
         assert_eq!(chooser.most_promising_occlusion(), Some(1));
     }
 
-    #[test]
-    fn a_coarse_culler_that_hid_nothing_where_a_finer_one_hid_a_seventh_does_not_say_the_view_hides_nothing() {
-        // The bunny: vfc runs as calibrated; omq's warm-up frame hid a
-        // seventh, chc's (whose leaves hold several clusters) none.
+    /// The bunny as warm-up found it, in [`still`]'s view: `vfc` (0) runs
+    /// as calibrated; `omq`'s (1) warm-up frame hid a seventh, `chc`'s (2,
+    /// whose leaves hold several of its clusters) none.
+    fn bunny_calibrated() -> Chooser {
         let mut chooser = Chooser::new(&[Frustum, Occlusion, Occlusion], 0, 10.0, 0.015);
         chooser.calibrate_hidden(1, 0.14, &still(0));
         chooser.calibrate_hidden(2, 0.0, &still(0));
         chooser.calibrate(&[1.0f64.ln(), 1.02f64.ln(), 1.1f64.ln()], &still(0));
-        let frame = |chooser: &mut Chooser, strategy: usize, hidden: f64| {
-            let turn = Turn {
-                strategy,
-                probe: strategy != 0,
-                measured: true,
-                recheck: false,
-            };
-            chooser.frame += 1;
-            let occluded = (strategy != 0).then_some(Occluded { hidden, drawing: 0.9 });
-            let cost = Cost {
-                frame_ms: 1.0,
-                triangles: 1000,
-            };
-            chooser.learn(turn, cost, occluded, &still(0));
+        chooser
+    }
+
+    /// A measured frame of `strategy` (a probe unless it is the incumbent,
+    /// 0) in the view `view` gives the frame, an occlusion frame hiding
+    /// `hidden` of it.
+    fn measured(chooser: &mut Chooser, strategy: usize, hidden: f64, view: impl Fn(u64) -> View) {
+        chooser.frame += 1;
+        let turn = Turn {
+            strategy,
+            probe: strategy != 0,
+            measured: true,
+            recheck: false,
         };
+        let occluded = (strategy != 0).then_some(Occluded { hidden, drawing: 0.9 });
+        let cost = Cost {
+            frame_ms: 1.0,
+            triangles: 1000,
+        };
+        chooser.learn(turn, cost, occluded, &view(chooser.frame));
+    }
+
+    #[test]
+    fn a_coarse_culler_that_hid_nothing_where_a_finer_one_hid_a_seventh_does_not_say_the_view_hides_nothing() {
+        let mut chooser = bunny_calibrated();
+        let frame = |chooser: &mut Chooser, strategy: usize, hidden: f64| measured(chooser, strategy, hidden, still);
         // chc's probe hid nothing: that is chc's, not the view's.
         frame(&mut chooser, 2, 0.0);
         frame(&mut chooser, 0, 0.0);
@@ -1284,32 +1295,13 @@ mod tests {
     #[test]
     fn a_culler_shown_coarse_in_one_view_says_nothing_of_the_views_after_it_until_it_hides_much_itself() {
         // The bunny on an orbit that leaves each view within a frame (the
-        // reach is 10): in warm-up omq hid a seventh of the first view,
-        // chc none.
-        let mut chooser = Chooser::new(&[Frustum, Occlusion, Occlusion], 0, 10.0, 0.015);
-        chooser.calibrate_hidden(1, 0.14, &still(0));
-        chooser.calibrate_hidden(2, 0.0, &still(0));
-        chooser.calibrate(&[1.0f64.ln(), 1.02f64.ln(), 1.1f64.ln()], &still(0));
+        // reach is 10).
+        let mut chooser = bunny_calibrated();
         let orbit = |frame: u64| View {
             eye: DVec3::new(20.0 * frame as f64, 0.0, 0.0),
             ..still(frame)
         };
-        let frame = |chooser: &mut Chooser, strategy: usize, hidden: f64| {
-            chooser.frame += 1;
-            let turn = Turn {
-                strategy,
-                probe: strategy != 0,
-                measured: true,
-                recheck: false,
-            };
-            let occluded = (strategy != 0).then_some(Occluded { hidden, drawing: 0.9 });
-            let cost = Cost {
-                frame_ms: 1.0,
-                triangles: 1000,
-            };
-            let view = orbit(chooser.frame);
-            chooser.learn(turn, cost, occluded, &view);
-        };
+        let frame = |chooser: &mut Chooser, strategy: usize, hidden: f64| measured(chooser, strategy, hidden, orbit);
         // chc's "nothing", far from where omq looked, is still chc's.
         frame(&mut chooser, 2, 0.0);
         frame(&mut chooser, 0, 0.0);
