@@ -250,6 +250,9 @@ fn a_camera_or_animation_occlu_cannot_use_is_left_out_with_a_warning() {
     let kept = w.node(json!({"name": "kept", "camera": 0, "translation": [0.0, 0.0, 5.0]}));
     let blind = w.node(json!({"name": "blind", "camera": 1}));
     let flat_view = w.node(json!({"name": "flat view", "camera": 2}));
+    // Valid glTF, but wider than a view takes (179.989°), or nearer.
+    let wide = w.node(json!({"name": "wide", "camera": 3}));
+    let near = w.node(json!({"name": "near", "camera": 4}));
     // Keys out of order, and keys at -0 and +0 in two channels.
     let backwards = w.floats(&[0.0, 2.0, 1.0], "SCALAR");
     let moves = w.floats(&[0.0; 9], "VEC3");
@@ -262,7 +265,9 @@ fn a_camera_or_animation_occlu_cannot_use_is_left_out_with_a_warning() {
         json!([
             {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.05}},
             {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.0}},
-            {"type": "perspective", "perspective": {"yfov": 0.0, "znear": 0.05}}
+            {"type": "perspective", "perspective": {"yfov": 0.0, "znear": 0.05}},
+            {"type": "perspective", "perspective": {"yfov": 3.1414, "znear": 0.05}},
+            {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 1e-12}}
         ]),
     );
     w.extra.insert(
@@ -276,18 +281,32 @@ fn a_camera_or_animation_occlu_cannot_use_is_left_out_with_a_warning() {
         ]),
     );
     let dir = tempfile::tempdir().unwrap();
-    let model = write(dir.path(), "odd.glb", w.glb(&[cube_node, flat, kept, blind, flat_view]));
+    let model = write(
+        dir.path(),
+        "odd.glb",
+        w.glb(&[cube_node, flat, kept, blind, flat_view, wide, near]),
+    );
     let scene = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();
     let names: Vec<&str> = scene.cameras.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(names, ["kept"]);
     let said = scene.warnings.join(" | ");
     assert!(said.contains("camera 'lost' is left out"), "{said}");
     assert!(
-        said.contains("camera 'blind' is left out: its znear is 0: a view needs a near plane beyond the eye"),
+        said.contains("camera 'blind' is left out: its znear is 0: occlu's views take near planes from 1e-9 to 1e9"),
         "{said}"
     );
     assert!(
-        said.contains("camera 'flat view' is left out: its yfov is 0 radians"),
+        said.contains(
+            "camera 'flat view' is left out: its yfov is 0°: occlu's views take fields of view from 0.001° to 179.9°"
+        ),
+        "{said}"
+    );
+    assert!(
+        said.contains("camera 'wide' is left out: its yfov is 179.989°"),
+        "{said}"
+    );
+    assert!(
+        said.contains("camera 'near' is left out: its znear is 0.000000000001:"),
         "{said}"
     );
     assert!(

@@ -12,6 +12,7 @@ use glam::{DQuat, DVec3, DVec4};
 use serde::{Deserialize, Serialize};
 
 use super::{Camera, look_rotation, up_along_view};
+pub use crate::scene::cameras::{FOV_RANGE, NEAR_RANGE};
 use crate::scene::{MAX_COORDINATE, within_range};
 use crate::text::{number, vector};
 
@@ -125,13 +126,6 @@ pub const DEFAULT_NEAR: f64 = 0.1;
 pub const DEFAULT_FOV_Y_DEG: f64 = 60.0;
 /// At 30 fps, nearly an hour of flythrough.
 pub const MAX_FRAMES: u32 = 100_000;
-/// Near planes outside this range make reverse-Z depth of the farthest
-/// renderable geometry (`MAX_COORDINATE`) leave f32's normal range, or cull
-/// everything.
-pub const NEAR_RANGE: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
-/// Fields of view, degrees: narrower or wider would make the projection
-/// degenerate in f32.
-const FOV_RANGE: std::ops::RangeInclusive<f64> = 1e-3..=179.9;
 
 #[derive(Debug, thiserror::Error)]
 pub enum PathError {

@@ -362,26 +362,38 @@ fn replay(
     }))
 }
 
-/// Why `camera`'s projection gives no view, if it does not: a view needs
-/// a near plane beyond the eye, and a perspective one a field of view
-/// (glTF requires both of a perspective camera; it lets an orthographic
-/// one's znear be 0, which occlu's perspective views cannot take).
+/// The near planes a view takes: outside it reverse-Z depth of the
+/// farthest renderable geometry (`MAX_COORDINATE`) leaves f32's normal
+/// range, or culls everything.
+pub const NEAR_RANGE: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
+/// The vertical fields of view a view takes, degrees: narrower or wider
+/// would make the projection degenerate in f32.
+pub const FOV_RANGE: std::ops::RangeInclusive<f64> = 1e-3..=179.9;
+
+/// Why `camera`'s projection gives no view occlu can take, if it does not:
+/// a near plane in [`NEAR_RANGE`] (glTF lets an orthographic one's znear
+/// be 0) and, for a perspective one, a field of view in [`FOV_RANGE`]
+/// (glTF allows any below pi: a camera of yfov 3.1415, 179.995°, made a
+/// path from it fail).
 fn projection_fault(camera: &gltf::Camera) -> Option<String> {
     let (znear, yfov) = match camera.projection() {
         gltf::camera::Projection::Perspective(p) => (p.znear(), Some(p.yfov())),
         gltf::camera::Projection::Orthographic(o) => (o.znear(), None),
     };
     // JSON holds no NaN: the numbers compare.
-    if znear <= 0.0 {
+    if !NEAR_RANGE.contains(&f64::from(znear)) {
         return Some(format!(
-            "its znear is {}: a view needs a near plane beyond the eye",
-            number(f64::from(znear))
+            "its znear is {znear}: occlu's views take near planes from {:e} to {:e}",
+            NEAR_RANGE.start(),
+            NEAR_RANGE.end()
         ));
     }
-    match yfov {
-        Some(yfov) if yfov <= 0.0 || f64::from(yfov) >= std::f64::consts::PI => Some(format!(
-            "its yfov is {} radians: a view needs a field of view between 0 and pi",
-            number(f64::from(yfov))
+    match yfov.map(|yfov| f64::from(yfov).to_degrees()) {
+        Some(degrees) if !FOV_RANGE.contains(&degrees) => Some(format!(
+            "its yfov is {}°: occlu's views take fields of view from {}° to {}°",
+            number((degrees * 1e3).round() / 1e3),
+            FOV_RANGE.start(),
+            FOV_RANGE.end()
         )),
         _ => None,
     }
