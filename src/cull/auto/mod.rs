@@ -31,13 +31,13 @@
 //!   walks start from their own lists, even stale ones, but from
 //!   everything in the frustum where the view has outgrown them (which
 //!   their test against its depth sorts out in one frame); a walk's first
-//!   frame from stale lists only settles it and is not measured. A culler that keeps its
-//!   visible set on the CPU is handed the objects drawn last, unless it
-//!   ran the frame before the last itself (its own state is then as
-//!   fresh, and it keeps what it learned: `swr` its buffer's rest):
-//!   `swr` takes them as occluders, `chc` as what it found visible (after
-//!   `vfc`, everything in the frustum, which it draws once; that frame
-//!   settles it and is not measured). A frame that
+//!   frame from stale lists only settles it and is not measured. A culler
+//!   that keeps its visible set on the CPU is handed the objects drawn
+//!   last, unless it ran the frame before the last itself (its own state
+//!   is then as fresh, and it keeps what it learned: `swr` its buffer's
+//!   rest): `swr` takes them as occluders, `chc` as what it found visible
+//!   (after `vfc`, everything in the frustum, which it draws once; that
+//!   frame settles it and is not measured). A frame that
 //!   started from stale lists, or from everything in the frustum, drew that
 //!   set untested: it does not count towards what occlusion hides. A frame
 //!   an occlusion culler ran as frustum culling's own (`swr` while its
@@ -176,9 +176,10 @@ struct Ran {
     /// untimed ([`Ran::recount`]), or in a frame drawn as frustum
     /// culling's just before, whose drawn triangles are that count.
     counted: bool,
-    /// Whether they are still to be counted after it ([`AutoCulling::after_frame`]):
-    /// a count is a frustum traversal, which in the timed frame a probe
-    /// would pay and the running mode's frames mostly not.
+    /// Whether they are still to be counted after it
+    /// ([`AutoCulling::after_frame`]): a count is a frustum traversal,
+    /// which in the timed frame a probe would pay and the running mode's
+    /// frames mostly not.
     recount: bool,
     /// Whether it started from a visible set of this view. A GPU walk that
     /// did not (its lists from another view, or everything in the frustum
