@@ -631,9 +631,9 @@ fn check_cameras_and_channels(json: &gltf::json::Root) -> Result<(), String> {
     use gltf::json::camera::Type;
     use gltf::json::validation::Checked;
     for (c, camera) in json.cameras.iter().enumerate() {
-        let carried = match camera.type_ {
-            Checked::Valid(Type::Perspective) => camera.perspective.is_some(),
-            Checked::Valid(Type::Orthographic) => camera.orthographic.is_some(),
+        let (kind, carried) = match camera.type_ {
+            Checked::Valid(Type::Perspective) => ("perspective", camera.perspective.is_some()),
+            Checked::Valid(Type::Orthographic) => ("orthographic", camera.orthographic.is_some()),
             Checked::Invalid => {
                 return Err(format!(
                     "camera {c}: its type is neither \"perspective\" nor \"orthographic\""
@@ -641,10 +641,6 @@ fn check_cameras_and_channels(json: &gltf::json::Root) -> Result<(), String> {
             }
         };
         if !carried {
-            let kind = match camera.type_ {
-                Checked::Valid(Type::Perspective) => "perspective",
-                _ => "orthographic",
-            };
             return Err(format!(
                 "camera {c}: its type is \"{kind}\" but it has no \"{kind}\" object"
             ));
