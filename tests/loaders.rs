@@ -577,6 +577,10 @@ fn malformed_gltf_accessors_and_node_graphs_are_errors_not_panics() {
         w.node(json!({"mesh": 0}));
     }));
     assert!(dag.contains("node 1 is reached twice"), "{dag}");
+    // An index past u32, which gltf-json would keep as its low 32 bits
+    // (mesh 0, the file's only mesh, drawn without a word).
+    let wrapped = msg(edited_glb(|w| w.nodes[0]["mesh"] = json!(1u64 << 32)));
+    assert!(wrapped.contains("`mesh` holds the index 4294967296"), "{wrapped}");
     let projective = msg(edited_glb(|w| {
         w.nodes[0]["matrix"] = json!([1, 0, 0, 0.5, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
     }));

@@ -14,6 +14,7 @@ use super::cameras;
 use super::draco::{self, DRACO, DracoStreams};
 use super::gltf_json;
 use super::instancing::{self, INSTANCING};
+use super::memory;
 use super::meshopt::{self, EXT_MESHOPT, KHR_MESHOPT};
 use super::model::{MeshGroup, SceneBuilder};
 use super::source::{LoadOptions, SceneError, read_model_file};
@@ -97,6 +98,12 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
                 bytes.len()
             )));
         }
+    }
+    // Text the crate would read wrong, or at a cost out of proportion to
+    // it, is refused first (a GLB whose JSON cannot be found is left to
+    // the crate, which names what is wrong).
+    if let Ok(text) = gltf_json::text(bytes) {
+        gltf_json::check_reading_cost(&text, memory::available()).map_err(parse_error)?;
     }
     // gltf-json's validator indexes primitive accessors without a bounds
     // check, so those are checked first; validation then also refuses files

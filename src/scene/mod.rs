@@ -17,6 +17,7 @@ mod gltf;
 mod gltf_json;
 mod instancing;
 mod load;
+mod memory;
 mod meshopt;
 mod model;
 pub mod motion;

@@ -11,7 +11,7 @@ use super::cameras::{FileAnimation, FileCamera};
 use super::motion::{Mover, Route};
 use super::phases::{LoadPhases, timed};
 use super::up::Up;
-use super::{closed, cluster, validate};
+use super::{closed, cluster, memory, validate};
 use crate::bounds::Aabb;
 use validate::GeometryError;
 
@@ -31,32 +31,10 @@ const BYTES_PER_TRIANGLE: u64 = 64;
 /// accessor): refused by name, not by an allocation failing.
 fn triangles_memory_allows() -> (u64, Option<u64>) {
     let address = u64::from(u32::MAX) / 3;
-    match available_memory() {
+    match memory::available() {
         Some(bytes) if bytes / BYTES_PER_TRIANGLE < address => (bytes / BYTES_PER_TRIANGLE, Some(bytes)),
         _ => (address, None),
     }
-}
-
-/// Bytes of memory this process may still take, where the system says
-/// (Linux): what it can give, its estimate of memory available without
-/// swapping and the free swap, or less where the process's control group
-/// has less left under its limit (a container's; cgroup v2 or v1).
-fn available_memory() -> Option<u64> {
-    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let kib = |field: &str| -> Option<u64> {
-        let line = meminfo.lines().find_map(|line| line.strip_prefix(field))?;
-        line.trim().trim_end_matches("kB").trim().parse().ok()
-    };
-    let system = (kib("MemAvailable:")? + kib("SwapFree:").unwrap_or(0)) * 1024;
-    let read = |path: &str| std::fs::read_to_string(path).ok()?.trim().parse::<u64>().ok();
-    let left = |limit: &str, usage: &str| Some(read(limit)?.saturating_sub(read(usage)?));
-    let group = left("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current").or_else(|| {
-        left(
-            "/sys/fs/cgroup/memory/memory.limit_in_bytes",
-            "/sys/fs/cgroup/memory/memory.usage_in_bytes",
-        )
-    });
-    Some(group.map_or(system, |left| left.min(system)))
 }
 
 /// Clusters of one mesh are stored against one origin (the centre of
