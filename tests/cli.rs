@@ -784,6 +784,13 @@ fn render_draws_a_frame_its_overview_and_its_depth_complexity() {
     };
     bad(&["--frame", "500", "--mode", "vfc"], "beyond the path's 120 frames");
     bad(&["--frame", "0", "--mode", "warp"], "unknown mode 'warp'");
+    let jpeg = out("frame.JPG");
+    fails_with(
+        &["render", "--mode", "vfc", "-o", &jpeg],
+        2,
+        &["occlu writes PNG only, and"],
+    );
+    assert!(!std::path::Path::new(&jpeg).exists());
     bad(&["--frame", "0", "--mode", "vfc,omq"], "render draws one");
     bad(
         &["--frame", "0", "--mode", "all"],

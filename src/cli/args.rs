@@ -104,6 +104,19 @@ fn frame_count() -> clap::builder::RangedI64ValueParser<u32> {
     clap::value_parser!(u32).range(1..=i64::from(occlu::camera::path::MAX_FRAMES))
 }
 
+/// A picture's file, as `--output` takes it: PNG is all occlu writes, so a
+/// name that says another kind of image (`frame.jpg`) is refused rather
+/// than given PNG bytes; a name with no extension, or `.apng`, is taken.
+fn png_file(name: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(name);
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase) {
+        Some(kind) if kind != "png" && kind != "apng" => Err(format!(
+            "occlu writes PNG only, and '{name}' names a .{kind} file: name it .png"
+        )),
+        _ => Ok(path),
+    }
+}
+
 /// Where the scene comes from: a file, or a built-in scene (the city by default).
 #[derive(Args)]
 pub struct SceneArgs {
@@ -272,7 +285,7 @@ pub struct PictureArgs {
     #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
     pub params: Vec<String>,
     /// Output PNG (animated, for flythrough).
-    #[arg(long, short, value_name = "FILE")]
+    #[arg(long, short, value_name = "FILE", value_parser = png_file)]
     pub output: PathBuf,
     /// Add a bird's-eye view beside each mode's frame: the frustum in red,
     /// culled objects' boxes in yellow.
