@@ -260,9 +260,15 @@ impl BenchConfig {
     /// the configuration file `file`.
     pub fn relative_to(mut self, file: &Path) -> BenchConfig {
         let base = file.parent().unwrap_or(Path::new(""));
-        for p in [&mut self.model, &mut self.path, &mut self.out, &mut self.trace]
-            .into_iter()
-            .flatten()
+        for p in [
+            &mut self.model,
+            &mut self.path,
+            &mut self.out,
+            &mut self.trace,
+            &mut self.export_github_benchmark,
+        ]
+        .into_iter()
+        .flatten()
         {
             if p.is_relative() {
                 *p = base.join(&*p);

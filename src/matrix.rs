@@ -570,11 +570,13 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let m = matrix(
             dir.path(),
-            r#"{"path": "walk.json", "resolution": "320x240", "modes": ["vfc"]}"#,
+            r#"{"path": "walk.json", "resolution": "320x240", "modes": ["vfc"], "trace": "t.json", "export_github_benchmark": "g.json"}"#,
         )
         .unwrap();
         let plan = m.single_run(&BenchConfig::default()).unwrap();
         assert_eq!(plan.path, Some(dir.path().join("walk.json")));
+        assert_eq!(plan.trace, Some(dir.path().join("t.json")));
+        assert_eq!(plan.export_github_benchmark, Some(dir.path().join("g.json")));
         assert_eq!(plan.resolution, "320x240".parse().unwrap());
         let error = |json: &str| matrix(dir.path(), json).unwrap_err().to_string();
         assert!(error(r#"{"resolutoin": "320x240"}"#).contains("unknown field `resolutoin`"));
