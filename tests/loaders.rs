@@ -300,6 +300,22 @@ fn edited_glb(edit: impl FnOnce(&mut GltfWriter)) -> Result<occlu::scene::Scene,
     load_file(&write(dir.path(), "e.glb", w.glb(&[0])))
 }
 
+/// A hostile-input review's finding: a node whose matrix flattened its
+/// mesh to a line loaded without a word, and drew nothing.
+#[test]
+fn objects_a_transform_flattens_are_kept_and_warned_of() {
+    let scaled = |scale: [f32; 3]| edited_glb(|w| w.nodes[0]["scale"] = json!(scale)).unwrap();
+    assert!(scaled([1.0, 1e-3, 1.0]).warnings.is_empty());
+    let flat = scaled([1.0, 0.0, 1.0]);
+    assert_eq!(flat.objects.len(), 1);
+    assert_eq!(
+        flat.warnings,
+        [
+            "'node0' is placed by a transform that flattens it (a scale of 0, or a matrix of rank below 3): it draws nothing"
+        ]
+    );
+}
+
 #[test]
 fn a_node_rotation_off_unit_length_is_normalised_as_its_cameras_are_and_the_zero_quaternion_refused() {
     let rotated = |rotation: [f32; 4]| edited_glb(|w| w.nodes[0]["rotation"] = json!(rotation));

@@ -188,6 +188,8 @@ pub struct SceneBuilder {
     objects: Vec<Object>,
     parts: Vec<Part>,
     degenerate: Vec<(String, usize)>,
+    /// Objects placed by a transform that flattens them (they draw nothing).
+    flattened: Vec<String>,
     warnings: Vec<String>,
     walk_hint: Option<Vec<DVec3>>,
     cameras: Vec<FileCamera>,
@@ -211,6 +213,7 @@ impl SceneBuilder {
             objects: Vec::new(),
             parts: Vec::new(),
             degenerate: Vec::new(),
+            flattened: Vec::new(),
             warnings: Vec::new(),
             walk_hint: None,
             cameras: Vec::new(),
@@ -326,6 +329,9 @@ impl SceneBuilder {
         transform: DAffine3,
     ) -> Result<std::ops::Range<usize>, GeometryError> {
         let first = self.objects.len();
+        if transform.matrix3.determinant() == 0.0 {
+            self.flattened.push(name.to_string());
+        }
         let split = group.clusters.len() > 1;
         let part = self.parts.len() as u32;
         for (i, &(mesh, origin)) in group.clusters.iter().enumerate() {
@@ -393,6 +399,20 @@ impl SceneBuilder {
                 crate::text::count(dropped, "degenerate triangle"),
                 worst.join(", ")
             ));
+        }
+        const FLATTENING: &str = "a scale of 0, or a matrix of rank below 3";
+        // A model of no size at all is warned of as such (above).
+        let sized = bounds.extent().max_element() > 0.0;
+        match &self.flattened[..] {
+            _ if !sized => {}
+            [] => {}
+            [only] => warnings.push(format!(
+                "'{only}' is placed by a transform that flattens it ({FLATTENING}): it draws nothing"
+            )),
+            [first, ..] => warnings.push(format!(
+                "{} objects are placed by a transform that flattens them ({FLATTENING}; '{first}' the first): they draw nothing",
+                self.flattened.len()
+            )),
         }
         Some(Scene {
             source: self.source,
