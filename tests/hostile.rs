@@ -558,28 +558,32 @@ fn no_output_may_be_an_input_or_one_of_the_runs_own_files() {
         r#"{"frames": 2, "keyframes": [{"time": 0, "position": [2, 2, 9], "target": [2, 0, 0]}]}"#,
     );
     let config = write(dir.path(), "config.json", r#"{"frames": 2}"#);
-    // A picture's output is refused by its kind first (PNG only), so a path
-    // file named without an extension is what reaches the check for inputs.
-    let walk = write(dir.path(), "walk", std::fs::read_to_string(&path).unwrap());
-    let picture = |command: &'static str, modes: &'static str, out: &'static str| {
-        let at_frame_0 = ["--frame", "0"].into_iter().filter(|_| command == "render");
-        let out = dir.path().join(out);
-        let mut args = vec![command.to_string(), s(&model).into(), "--path".into(), s(&walk).into()];
-        args.extend(at_frame_0.map(String::from));
-        args.extend([modes.into(), "vfc".into(), "-o".into(), s(&out).into()]);
-        args
-    };
-    for (command, modes) in [("render", "--mode"), ("flythrough", "--modes")] {
-        for (out, needles) in [
-            ("model.obj", &["occlu writes PNG only"][..]),
-            ("walk", &["walk", "is an input"]),
-        ] {
-            let args = picture(command, modes, out);
-            refused(&args.iter().map(String::as_str).collect::<Vec<_>>(), needles);
-        }
-    }
     for args in [
+        vec!["render", s(&model), "--frame", "0", "--mode", "vfc", "-o", s(&model)],
+        vec![
+            "render",
+            s(&model),
+            "--path",
+            s(&path),
+            "--frame",
+            "0",
+            "--mode",
+            "vfc",
+            "-o",
+            s(&path),
+        ],
         vec!["export", s(&model), "-o", s(&model)],
+        vec!["flythrough", s(&model), "--modes", "vfc", "-o", s(&model)],
+        vec![
+            "flythrough",
+            s(&model),
+            "--path",
+            s(&path),
+            "--modes",
+            "vfc",
+            "-o",
+            s(&path),
+        ],
         vec!["path", "gen", s(&model), "-o", s(&model)],
         vec![
             "bench",
@@ -1010,10 +1014,8 @@ fn no_output_may_be_a_gltf_buffer_file() {
     let (p, i) = common::gltf_writer::cube();
     let m = w.mesh("cube", &[(&p, Some(&i), 4)]);
     let n = w.node(serde_json::json!({"mesh": m}));
-    // Named without an extension, so that render's check of a picture's
-    // kind (PNG only) lets it reach the check for inputs.
-    let bin = write(dir.path(), "cube-buffer", w.bin());
-    let model = write(dir.path(), "cube.gltf", w.gltf_external(&[n], "cube-buffer"));
+    let bin = write(dir.path(), "cube.bin", w.bin());
+    let model = write(dir.path(), "cube.gltf", w.gltf_external(&[n], "cube.bin"));
     let out = dir.path().join("run");
     for args in [
         vec!["render", s(&model), "--frame", "0", "--mode", "vfc", "-o", s(&bin)],
@@ -1021,7 +1023,7 @@ fn no_output_may_be_a_gltf_buffer_file() {
         vec!["path", "gen", s(&model), "-o", s(&bin)],
         bench_of(&[s(&model)], &out, &["--export-github-benchmark", s(&bin)]),
     ] {
-        refused(&args, &["cube-buffer", "is an input"]);
+        refused(&args, &["cube.bin", "is an input"]);
     }
     assert_eq!(std::fs::read(&bin).unwrap(), w.bin());
     assert!(!out.exists(), "the refused bench's folder is gone");

@@ -301,17 +301,32 @@ fn edited_glb(edit: impl FnOnce(&mut GltfWriter)) -> Result<occlu::scene::Scene,
 }
 
 /// A hostile-input review's finding: a node whose matrix flattened its
-/// mesh to a line loaded without a word, and drew nothing.
+/// mesh to a line loaded without a word, and drew nothing. Flattened to a
+/// plane, its faces are still drawn, and nothing is said.
 #[test]
-fn objects_a_transform_flattens_are_kept_and_warned_of() {
+fn objects_a_transform_flattens_to_a_line_are_kept_and_warned_of() {
     let scaled = |scale: [f32; 3]| edited_glb(|w| w.nodes[0]["scale"] = json!(scale)).unwrap();
     assert!(scaled([1.0, 1e-3, 1.0]).warnings.is_empty());
-    let flat = scaled([1.0, 0.0, 1.0]);
-    assert_eq!(flat.objects.len(), 1);
+    assert!(scaled([1.0, 0.0, 1.0]).warnings.is_empty());
+    for line in [[1.0, 0.0, 0.0], [1.0, 1e-13, 1e-13]] {
+        let flat = scaled(line);
+        assert_eq!(flat.objects.len(), 1);
+        assert_eq!(
+            flat.warnings,
+            ["'node0' is placed by a transform that flattens it to a line or a point: it draws nothing"]
+        );
+    }
+    let two = edited_glb(|w| {
+        w.nodes[0] = json!({"children": [1, 2, 3]});
+        w.node(json!({"mesh": 0, "scale": [0.0, 0.0, 1.0]}));
+        w.node(json!({"mesh": 0, "scale": [0.0, 2.0, 0.0], "translation": [5.0, 0.0, 0.0]}));
+        w.node(json!({"mesh": 0}));
+    })
+    .unwrap();
     assert_eq!(
-        flat.warnings,
+        two.warnings,
         [
-            "'node0' is placed by a transform that flattens it (a scale of 0, or a matrix of rank below 3): it draws nothing"
+            "2 meshes are placed by a transform that flattens them to a line or a point ('node2' the first): they draw nothing"
         ]
     );
 }

@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use clap::builder::TypedValueParser;
 use clap::{Args, Parser, Subcommand};
 use occlu::animation::{FrameRange, MAX_SCALE};
 use occlu::camera::generate::PathRequest;
@@ -104,17 +105,26 @@ fn frame_count() -> clap::builder::RangedI64ValueParser<u32> {
     clap::value_parser!(u32).range(1..=i64::from(occlu::camera::path::MAX_FRAMES))
 }
 
+/// Extensions of image formats other than PNG, as a picture's file may
+/// be misnamed with one.
+const OTHER_IMAGE_KINDS: [&str; 14] = [
+    "jpg", "jpeg", "gif", "webp", "bmp", "tif", "tiff", "tga", "exr", "hdr", "avif", "heic", "ppm", "qoi",
+];
+
 /// A picture's file, as `--output` takes it: PNG is all occlu writes, so a
-/// name that says another kind of image (`frame.jpg`) is refused rather
-/// than given PNG bytes; a name with no extension, or `.apng`, is taken.
-fn png_file(name: &str) -> Result<PathBuf, String> {
-    let path = PathBuf::from(name);
-    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase) {
-        Some(kind) if kind != "png" && kind != "apng" => Err(format!(
-            "occlu writes PNG only, and '{name}' names a .{kind} file: name it .png"
-        )),
-        _ => Ok(path),
-    }
+/// name that says another image format (`frame.jpg`) is refused rather
+/// than given PNG bytes; any other name is taken.
+fn png_file() -> impl TypedValueParser<Value = PathBuf> {
+    clap::builder::PathBufValueParser::new().try_map(|path: PathBuf| {
+        let kind = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match kind.filter(|kind| OTHER_IMAGE_KINDS.contains(&kind.as_str())) {
+            Some(kind) => Err(format!(
+                "occlu writes PNG only, and '{}' names a .{kind} file: name it .png",
+                path.display()
+            )),
+            None => Ok(path),
+        }
+    })
 }
 
 /// Where the scene comes from: a file, or a built-in scene (the city by default).
@@ -285,7 +295,7 @@ pub struct PictureArgs {
     #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
     pub params: Vec<String>,
     /// Output PNG (animated, for flythrough).
-    #[arg(long, short, value_name = "FILE", value_parser = png_file)]
+    #[arg(long, short, value_name = "FILE", value_parser = png_file())]
     pub output: PathBuf,
     /// Add a bird's-eye view beside each mode's frame: the frustum in red,
     /// culled objects' boxes in yellow.

@@ -2,7 +2,8 @@
 //! does not keep: the extensions it decodes itself (Draco, meshopt,
 //! instancing), whether a file uses one without declaring it
 //! ([`ExtensionSites`]), and the asset version of a file the crate cannot
-//! parse.
+//! parse; and, before the crate reads it, what the crate would read wrong
+//! or at a cost out of proportion to the text ([`census`]).
 
 use std::borrow::Cow;
 
@@ -135,51 +136,93 @@ const INDEX_KEYS: [&str; 20] = [
 /// primitive's, a morph target's or an extension's vertex attributes.
 const ATTRIBUTE_KEYS: [&str; 2] = ["attributes", "targets"];
 
-/// What one of gltf-json's structs takes per JSON object it is read from,
-/// at most, the growth of the vector holding it included: three million
-/// empty materials (`{}`, 3 bytes each) took 2.15 GB at the peak, 716
-/// bytes each, the most of the kinds measured (three million empty nodes
-/// 318 bytes each).
-const BYTES_PER_OBJECT: u64 = 720;
+/// Extensions whose members are scanned for indices, by the prefix of
+/// their names: Khronos' and the multi-vendor ones, which the crate or
+/// occlu read with their indices. Another vendor's extension is kept by
+/// the crate as JSON, where a number under a key such as `index` may be
+/// anything, so it is skipped.
+const SCANNED_EXTENSIONS: [&str; 2] = ["KHR_", "EXT_"];
 
-/// Refuses, before the gltf crate reads it, a document's JSON `text` that
-/// the crate would read wrong, or at a cost out of all proportion to the
-/// text, in one pass with everything else skipped (`extras` too, which the
-/// crate keeps as text):
-/// - an index past u32: gltf-json keeps only its low 32 bits
-///   (`"mesh": 4294967296` would draw mesh 0), so it is named with its
-///   line and column;
-/// - more JSON objects than `memory` (the bytes this process may still
-///   take, where known) holds at [`BYTES_PER_OBJECT`]: each becomes a
-///   struct of hundreds of bytes, where the text may spend two on it.
-///
-/// Text that is not JSON passes: the crate says what is wrong with it.
-pub fn check_reading_cost(text: &[u8], memory: Option<u64>) -> Result<(), String> {
+/// What one of gltf-json's structs takes per element of the document's
+/// top-level arrays (a node, a material), at most, the growth of the
+/// vector holding it included: three million empty materials (`{}`, 3
+/// bytes each) took 2.15 GB at the peak, 716 bytes each, the most of the
+/// kinds measured (empty nodes 318–417 bytes).
+const BYTES_PER_ITEM: u64 = 720;
+
+/// What the crate takes per object nested in an element, at most: a
+/// million materials each with a texture (`pbrMetallicRoughness` and
+/// `baseColorTexture` nested) took 105 bytes per nested object beyond
+/// the empty material's, meshes of one primitive with its attributes 57.
+const BYTES_PER_NESTED: u64 = 128;
+
+/// What an object takes read as a [`Value`] (a map holding a few members
+/// allocates a node of room for eleven), at most: a million nodes each
+/// with a name took 720 bytes more read as one too.
+const BYTES_PER_VALUE_OBJECT: u64 = 720;
+
+/// The JSON objects of a glTF document, counted where their memory is
+/// decided: elements of its top-level arrays, and objects nested in them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JsonObjects {
+    items: u64,
+    nested: u64,
+}
+
+impl JsonObjects {
+    /// Refused when reading the document as the gltf crate's structs would
+    /// take more than `memory`, the bytes this process may still take
+    /// (where known): each object becomes a struct of hundreds of bytes,
+    /// where the text may spend two on it.
+    pub fn check_as_structs(&self, memory: Option<u64>) -> Result<(), String> {
+        let bytes = self.items.saturating_mul(BYTES_PER_ITEM) + self.nested.saturating_mul(BYTES_PER_NESTED);
+        self.check(bytes, memory, "")
+    }
+
+    /// Refused when reading the document as a [`Value`] too (done where
+    /// it uses an extension occlu reads from its JSON) would take more
+    /// than `memory`.
+    pub fn check_as_value(&self, memory: Option<u64>) -> Result<(), String> {
+        let bytes = (self.items + self.nested).saturating_mul(BYTES_PER_VALUE_OBJECT);
+        self.check(bytes, memory, " as written (for the extensions read from it)")
+    }
+
+    fn check(&self, bytes: u64, memory: Option<u64>, reading: &str) -> Result<(), String> {
+        match memory {
+            Some(memory) if bytes > memory => Err(format!(
+                "its JSON holds {} objects, which would take up to {} MB to read{reading}, and this process may take {} MB more",
+                self.items + self.nested,
+                bytes >> 20,
+                memory >> 20
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// A document's JSON `text` read before the gltf crate reads it, in one
+/// pass with everything but what it looks for skipped (`extras` too,
+/// which the crate keeps as text): its objects counted, and an index past
+/// u32 refused, named with its line and column: gltf-json keeps only its
+/// low 32 bits (`"mesh": 4294967296` would draw mesh 0). Text that is not
+/// JSON passes: the crate says what is wrong with it.
+pub fn census(text: &[u8]) -> Result<JsonObjects, String> {
     let mut census = Census::default();
     let scanned = Scan {
         key: Key::Other,
+        depth: 0,
         census: &mut census,
     }
     .deserialize(&mut serde_json::Deserializer::from_slice(text));
     match (scanned, census.wrapped_index) {
-        (Err(e), true) => return Err(format!("invalid glTF: {e}")),
-        (Err(_), false) | (Ok(()), _) => {}
-    }
-    let needed = census.objects.saturating_mul(BYTES_PER_OBJECT);
-    match memory {
-        Some(memory) if needed > memory => Err(format!(
-            "its JSON holds {} objects, which would take about {} MB to read, and this process may take {} MB more",
-            census.objects,
-            needed >> 20,
-            memory >> 20
-        )),
-        _ => Ok(()),
+        (Err(e), true) => Err(format!("invalid glTF: {e}")),
+        (Err(_), false) | (Ok(()), _) => Ok(census.objects),
     }
 }
 
 #[derive(Default)]
 struct Census {
-    objects: u64,
+    objects: JsonObjects,
     /// Whether the scan stopped at an index past u32.
     wrapped_index: bool,
 }
@@ -190,27 +233,18 @@ enum Key {
     Index(&'static str),
     /// Its object's members are indices.
     Attributes(&'static str),
-    /// Kept by the crate as text, and skipped.
-    Extras,
+    /// Its object's members are extensions.
+    Extensions,
+    /// Kept by the crate as text or as JSON, and skipped.
+    Skipped,
     Other,
 }
 
-impl Key {
-    fn named(name: &str) -> Key {
-        let known = |keys: &[&'static str]| keys.iter().copied().find(|&k| k == name);
-        match name {
-            "extras" => Key::Extras,
-            _ => known(&INDEX_KEYS)
-                .map(Key::Index)
-                .or_else(|| known(&ATTRIBUTE_KEYS).map(Key::Attributes))
-                .unwrap_or(Key::Other),
-        }
-    }
-}
-
-/// One JSON value of the document, under `key`.
+/// One JSON value of the document, under `key`, inside `depth` arrays and
+/// objects.
 struct Scan<'c> {
     key: Key,
+    depth: u32,
     census: &'c mut Census,
 }
 
@@ -218,14 +252,17 @@ impl<'de> DeserializeSeed<'de> for Scan<'_> {
     type Value = ();
     fn deserialize<D: Deserializer<'de>>(self, deserializer: D) -> Result<(), D::Error> {
         match self.key {
-            Key::Extras => IgnoredAny::deserialize(deserializer).map(drop),
+            Key::Skipped => IgnoredAny::deserialize(deserializer).map(drop),
             _ => deserializer.deserialize_any(self),
         }
     }
 }
 
-/// A member's key, as what it says of its value's numbers.
-struct KeySeed;
+/// The key of a member of an object under `parent`, as what it says of
+/// its value's numbers.
+struct KeySeed {
+    parent: Key,
+}
 
 impl<'de> DeserializeSeed<'de> for KeySeed {
     type Value = Key;
@@ -240,7 +277,18 @@ impl<'de> Visitor<'de> for KeySeed {
         f.write_str("a key")
     }
     fn visit_str<E>(self, name: &str) -> Result<Key, E> {
-        Ok(Key::named(name))
+        let known = |keys: &[&'static str]| keys.iter().copied().find(|&k| k == name);
+        Ok(match self.parent {
+            Key::Attributes(attributes) => Key::Index(attributes),
+            Key::Extensions if SCANNED_EXTENSIONS.iter().any(|p| name.starts_with(p)) => Key::Other,
+            Key::Extensions => Key::Skipped,
+            _ if name == "extras" => Key::Skipped,
+            _ if name == "extensions" => Key::Extensions,
+            _ => known(&INDEX_KEYS)
+                .map(Key::Index)
+                .or_else(|| known(&ATTRIBUTE_KEYS).map(Key::Attributes))
+                .unwrap_or(Key::Other),
+        })
     }
 }
 
@@ -250,14 +298,15 @@ impl<'de> Visitor<'de> for Scan<'_> {
         f.write_str("any JSON value")
     }
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
-        self.census.objects += 1;
-        while let Some(key) = map.next_key_seed(KeySeed)? {
-            let key = match self.key {
-                Key::Attributes(name) => Key::Index(name),
-                _ => key,
-            };
+        // The document, its members and their arrays' elements are items.
+        match self.depth {
+            0..=2 => self.census.objects.items += 1,
+            _ => self.census.objects.nested += 1,
+        }
+        while let Some(key) = map.next_key_seed(KeySeed { parent: self.key })? {
             map.next_value_seed(Scan {
                 key,
+                depth: self.depth + 1,
                 census: &mut *self.census,
             })?;
         }
@@ -267,6 +316,7 @@ impl<'de> Visitor<'de> for Scan<'_> {
         while seq
             .next_element_seed(Scan {
                 key: self.key,
+                depth: self.depth + 1,
                 census: &mut *self.census,
             })?
             .is_some()
@@ -278,7 +328,7 @@ impl<'de> Visitor<'de> for Scan<'_> {
             Key::Index(name) if value > u64::from(u32::MAX) => {
                 self.census.wrapped_index = true;
                 Err(E::custom(format_args!(
-                    "`{name}` holds the index {value}, past the largest a glTF reader keeps ({})",
+                    "`{name}` holds the index {value}, past the largest a glTF reader keeps ({}), in its JSON",
                     u32::MAX
                 )))
             }
@@ -312,36 +362,62 @@ mod tests {
         CUBE_NODE.replace("MESH", mesh).replace("POSITION", position)
     }
 
+    fn refused(text: &str) -> String {
+        census(text.as_bytes()).expect_err("an index past u32")
+    }
+
     #[test]
-    fn an_index_past_u32_is_refused_by_its_key_and_place_and_extras_are_left_alone() {
-        assert_eq!(check_reading_cost(document("0", "1").as_bytes(), None), Ok(()));
-        assert_eq!(check_reading_cost(document("4294967295", "1").as_bytes(), None), Ok(()));
-        let wrapped = check_reading_cost(document("4294967296", "1").as_bytes(), None).unwrap_err();
+    fn an_index_past_u32_is_refused_by_its_key_and_place_and_what_the_crate_keeps_as_json_is_left_alone() {
+        assert!(census(document("0", "1").as_bytes()).is_ok());
+        assert!(census(document("4294967295", "1").as_bytes()).is_ok());
+        let wrapped = refused(&document("4294967296", "1"));
         assert!(
-            wrapped.contains("`mesh` holds the index 4294967296") && wrapped.contains("line 1 column"),
+            wrapped.contains("`mesh` holds the index 4294967296") && wrapped.contains("in its JSON at line 1 column"),
             "{wrapped}"
         );
-        let attribute = check_reading_cost(document("0", "8589934592").as_bytes(), None).unwrap_err();
-        assert!(
-            attribute.contains("`attributes` holds the index 8589934592"),
-            "{attribute}"
-        );
-        // Not an index, and not JSON: left to the crate.
-        let count = r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 8589934592}]}"#;
-        assert_eq!(check_reading_cost(count.as_bytes(), None), Ok(()));
-        assert_eq!(check_reading_cost(b"{\"nodes\": [", None), Ok(()));
+        assert!(refused(&document("0", "8589934592")).contains("`attributes` holds the index 8589934592"));
+        // Escaped keys, morph targets, arrays of indices, and extensions
+        // the crate or occlu read.
+        let escaped = document("0", "1").replace(r#""mesh": 0"#, r#""\u006desh": 4294967296"#);
+        assert!(refused(&escaped).contains("`mesh` holds"), "{escaped}");
+        let targets = r#"{"meshes": [{"primitives": [{"targets": [{"NORMAL": 4294967300}]}]}]}"#;
+        assert!(refused(targets).contains("`targets` holds"));
+        assert!(refused(r#"{"nodes": [{"children": [1, 4294967296]}]}"#).contains("`children` holds"));
+        let light = r#"{"nodes": [{"extensions": {"KHR_lights_punctual": {"light": 4294967296}}}]}"#;
+        assert!(refused(light).contains("`light` holds"));
+        // Not indices: a count, extras, a vendor's extension, and text that
+        // is not JSON (left to the crate).
+        for kept in [
+            r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 8589934592}]}"#,
+            r#"{"nodes": [{"extensions": {"ACME_ids": {"index": 8589934592}}}]}"#,
+            "{\"nodes\": [",
+        ] {
+            assert!(census(kept.as_bytes()).is_ok(), "{kept}");
+        }
     }
 
     #[test]
     fn a_document_of_more_objects_than_memory_holds_is_refused_by_their_count() {
         let nodes = format!(
             r#"{{"asset": {{"version": "2.0"}}, "nodes": [{}]}}"#,
-            vec!["{}"; 999].join(",")
+            vec![r#"{"extensions": {"EXT_x": {}}}"#; 999].join(",")
         );
-        // The document, the asset and 999 nodes.
-        let needed = 1001 * BYTES_PER_OBJECT;
-        assert_eq!(check_reading_cost(nodes.as_bytes(), Some(needed)), Ok(()));
-        let refused = check_reading_cost(nodes.as_bytes(), Some(needed - 1)).unwrap_err();
-        assert!(refused.starts_with("its JSON holds 1001 objects"), "{refused}");
+        let objects = census(nodes.as_bytes()).unwrap();
+        // The document, the asset and 999 nodes; two objects nested in each.
+        assert_eq!(
+            objects,
+            JsonObjects {
+                items: 1001,
+                nested: 1998
+            }
+        );
+        let as_structs = 1001 * BYTES_PER_ITEM + 1998 * BYTES_PER_NESTED;
+        assert!(objects.check_as_structs(Some(as_structs)).is_ok());
+        let refused = objects.check_as_structs(Some(as_structs - 1)).unwrap_err();
+        assert!(refused.starts_with("its JSON holds 2999 objects"), "{refused}");
+        let as_value = 2999 * BYTES_PER_VALUE_OBJECT;
+        assert!(objects.check_as_value(Some(as_value)).is_ok());
+        assert!(objects.check_as_value(Some(as_value - 1)).is_err());
+        assert!(objects.check_as_structs(None).is_ok());
     }
 }

@@ -6,17 +6,28 @@
 /// (Linux): the least of what the system can give (its estimate of memory
 /// available without swapping, and the free swap), what the process's
 /// control group has left under its limit (a container's; cgroup v2 or
-/// v1), and what its address-space limit (`ulimit -v`) leaves beside the
-/// address space it already holds.
+/// v1; its reclaimable page cache counted as left), and what its
+/// address-space limit (`ulimit -v`) leaves beside the address space it
+/// already holds.
 pub fn available() -> Option<u64> {
     let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
     let system = (field(&meminfo, "MemAvailable:", "kB")? + field(&meminfo, "SwapFree:", "kB").unwrap_or(0)) * 1024;
     let read = |path: &str| std::fs::read_to_string(path).ok()?.trim().parse::<u64>().ok();
-    let left = |limit: &str, usage: &str| Some(read(limit)?.saturating_sub(read(usage)?));
-    let group = left("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current").or_else(|| {
+    // The group's usage counts the page cache it holds, which the kernel
+    // takes back before it refuses memory: its inactive files (the model
+    // just read among them) are left out, as container runtimes count it.
+    let left = |folder: &str, limit: &str, usage: &str, inactive: &str| {
+        let stat = std::fs::read_to_string(format!("{folder}/memory.stat")).unwrap_or_default();
+        let reclaimable = field(&stat, inactive, "").unwrap_or(0);
+        let used = read(&format!("{folder}/{usage}"))?.saturating_sub(reclaimable);
+        Some(read(&format!("{folder}/{limit}"))?.saturating_sub(used))
+    };
+    let group = left("/sys/fs/cgroup", "memory.max", "memory.current", "inactive_file ").or_else(|| {
         left(
-            "/sys/fs/cgroup/memory/memory.limit_in_bytes",
-            "/sys/fs/cgroup/memory/memory.usage_in_bytes",
+            "/sys/fs/cgroup/memory",
+            "memory.limit_in_bytes",
+            "memory.usage_in_bytes",
+            "total_inactive_file ",
         )
     });
     let address_space = || {
@@ -56,6 +67,14 @@ mod tests {
         let unlimited = "Max address space         unlimited            unlimited            bytes\n";
         assert_eq!(field(unlimited, "Max address space", ""), None);
         assert_eq!(field("VmSize:\t    3892 MB\n", "VmSize:", "kB"), None);
+        let stat = "inactive_anon 4096\ninactive_file 81920\n";
+        assert_eq!(field(stat, "inactive_file ", ""), Some(81920));
+        assert_eq!(field(stat, "total_inactive_file ", ""), None);
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn linux_says_how_much_memory_is_left() {
         assert!(available().is_some_and(|bytes| bytes > 0));
     }
 }

@@ -188,8 +188,9 @@ pub struct SceneBuilder {
     objects: Vec<Object>,
     parts: Vec<Part>,
     degenerate: Vec<(String, usize)>,
-    /// Objects placed by a transform that flattens them (they draw nothing).
-    flattened: Vec<String>,
+    /// How many meshes were placed by a transform that flattens them to a
+    /// line or a point (they draw nothing), and the first one's name.
+    flattened: (usize, Option<String>),
     warnings: Vec<String>,
     walk_hint: Option<Vec<DVec3>>,
     cameras: Vec<FileCamera>,
@@ -213,7 +214,7 @@ impl SceneBuilder {
             objects: Vec::new(),
             parts: Vec::new(),
             degenerate: Vec::new(),
-            flattened: Vec::new(),
+            flattened: (0, None),
             warnings: Vec::new(),
             walk_hint: None,
             cameras: Vec::new(),
@@ -329,8 +330,9 @@ impl SceneBuilder {
         transform: DAffine3,
     ) -> Result<std::ops::Range<usize>, GeometryError> {
         let first = self.objects.len();
-        if transform.matrix3.determinant() == 0.0 {
-            self.flattened.push(name.to_string());
+        if flattens_to_a_line(&transform.matrix3) {
+            self.flattened.0 += 1;
+            self.flattened.1.get_or_insert_with(|| name.to_string());
         }
         let split = group.clusters.len() > 1;
         let part = self.parts.len() as u32;
@@ -400,19 +402,16 @@ impl SceneBuilder {
                 worst.join(", ")
             ));
         }
-        const FLATTENING: &str = "a scale of 0, or a matrix of rank below 3";
         // A model of no size at all is warned of as such (above).
         let sized = bounds.extent().max_element() > 0.0;
-        match &self.flattened[..] {
-            _ if !sized => {}
-            [] => {}
-            [only] => warnings.push(format!(
-                "'{only}' is placed by a transform that flattens it ({FLATTENING}): it draws nothing"
+        match self.flattened {
+            (1, Some(only)) if sized => warnings.push(format!(
+                "'{only}' is placed by a transform that flattens it to a line or a point: it draws nothing"
             )),
-            [first, ..] => warnings.push(format!(
-                "{} objects are placed by a transform that flattens them ({FLATTENING}; '{first}' the first): they draw nothing",
-                self.flattened.len()
+            (placed, Some(first)) if sized => warnings.push(format!(
+                "{placed} meshes are placed by a transform that flattens them to a line or a point ('{first}' the first): they draw nothing"
             )),
+            _ => {}
         }
         Some(Scene {
             source: self.source,
@@ -432,6 +431,18 @@ impl SceneBuilder {
             files: self.files,
         })
     }
+}
+
+/// Whether `linear` maps space onto a line or a point (a scale of 0 on two
+/// axes, a matrix of rank below 2, or as good as one: the area it gives
+/// any square, relative to its longest column squared, under 1e-12), so
+/// that every triangle it places has no area. One of rank 2 flattens a
+/// mesh to a plane, whose faces the GPU still draws.
+fn flattens_to_a_line(linear: &glam::DMat3) -> bool {
+    let [x, y, z] = [linear.x_axis, linear.y_axis, linear.z_axis];
+    let longest = x.length_squared().max(y.length_squared()).max(z.length_squared());
+    let area = x.cross(y).length().max(y.cross(z).length()).max(z.cross(x).length());
+    area <= 1e-12 * longest
 }
 
 /// Consecutive clusters stored against one origin, and their bounds.
