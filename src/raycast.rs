@@ -30,8 +30,10 @@ use crate::scene::Scene;
 pub struct RayCaster<'a> {
     scene: &'a Scene,
     hierarchy: Hierarchy,
-    /// Each object's world-to-local transform.
-    to_local: Vec<DAffine3>,
+    /// Each object's world-to-local transform; none where its transform
+    /// has none (it flattens the mesh: a floor made of a box scaled to no
+    /// height), whose triangles are met in the world.
+    to_local: Vec<Option<DAffine3>>,
     /// Each mesh's tree over its triangles (indices into the mesh's
     /// triangle list), built on first use.
     mesh_trees: Vec<OnceLock<Hierarchy>>,
@@ -198,7 +200,11 @@ impl<'a> RayCaster<'a> {
     pub fn with_budget(scene: &'a Scene, budget: Budget<'a>) -> RayCaster<'a> {
         RayCaster {
             hierarchy: Hierarchy::build(&scene.objects, &HierarchyParams::default()),
-            to_local: scene.objects.iter().map(|o| o.transform.inverse()).collect(),
+            to_local: scene
+                .objects
+                .iter()
+                .map(|o| Some(o.transform.inverse()).filter(DAffine3::is_finite))
+                .collect(),
             mesh_trees: scene.meshes.iter().map(|_| OnceLock::new()).collect(),
             scene,
             work: Work::new(budget),
@@ -243,26 +249,34 @@ impl<'a> RayCaster<'a> {
         let reach = Cell::new(max_t);
         let inverse = direction.recip();
         self.visit_objects(&|bounds| slab(bounds, origin, inverse, reach.get()), &mut |object| {
-            // An affine map keeps a line's parameter: t is the same in the
-            // mesh's local frame.
-            let local = self.to_local[object as usize];
-            let (lo, ld) = (local.transform_point3(origin), local.transform_vector3(direction));
-            let local_inverse = ld.recip();
+            let mut meet = |[a, b, c]: [DVec3; 3], (origin, direction): (DVec3, DVec3)| {
+                if let Some(t) = intersect(origin, direction, a, b, c)
+                    && t > 0.0
+                    && t <= reach.get()
+                {
+                    let mut shortened = reach.get();
+                    found(Hit { t, object }, &mut shortened);
+                    reach.set(shortened);
+                }
+            };
             let mesh = self.scene.objects[object as usize].mesh;
-            self.visit_triangles(
-                mesh,
-                &|bounds| slab(bounds, lo, local_inverse, reach.get()),
-                &mut |[a, b, c]| {
-                    if let Some(t) = intersect(lo, ld, a, b, c)
-                        && t > 0.0
-                        && t <= reach.get()
-                    {
-                        let mut shortened = reach.get();
-                        found(Hit { t, object }, &mut shortened);
-                        reach.set(shortened);
-                    }
-                },
-            );
+            match self.to_local[object as usize] {
+                // An affine map keeps a line's parameter: t is the same in
+                // the mesh's local frame.
+                Some(local) => {
+                    let ray = (local.transform_point3(origin), local.transform_vector3(direction));
+                    let local_inverse = ray.1.recip();
+                    let near_enough = |bounds: &Aabb| slab(bounds, ray.0, local_inverse, reach.get());
+                    self.visit_triangles(mesh, &near_enough, &mut |corners| meet(corners, ray));
+                }
+                None => {
+                    let world = self.scene.objects[object as usize].transform;
+                    let near_enough = |bounds: &Aabb| slab(&bounds.transformed(&world), origin, inverse, reach.get());
+                    self.visit_triangles(mesh, &near_enough, &mut |corners| {
+                        meet(corners.map(|v| world.transform_point3(v)), (origin, direction))
+                    });
+                }
+            }
         });
     }
 
@@ -465,6 +479,25 @@ mod tests {
             })
             .collect();
         (positions, indices)
+    }
+
+    /// A review's finding: an object whose transform has no inverse (a box
+    /// scaled to no height, which the GPU draws as a square) was never hit.
+    #[test]
+    fn an_object_whose_transform_flattens_it_is_met_where_the_gpu_draws_it() {
+        let mut soup = crate::scene::TriangleSoup::default();
+        crate::scene::builtin::shapes::cuboid(&mut soup, DVec3::ZERO, DVec3::ONE);
+        let mut builder = crate::scene::SceneBuilder::new("test".into(), 1 << 20);
+        let group = builder.add_mesh("box", &soup.positions, &soup.indices).unwrap();
+        let floor =
+            DAffine3::from_translation(DVec3::new(0.0, 2.0, 0.0)) * DAffine3::from_scale(DVec3::new(4.0, 0.0, 4.0));
+        builder.add_object("floor", &group, floor).unwrap();
+        let scene = builder.finish().unwrap();
+        let caster = RayCaster::new(&scene);
+        let hit = caster.first_hit(DVec3::new(1.0, 7.0, 3.0), DVec3::NEG_Y, 10.0);
+        assert_eq!(hit.map(|h| h.t), Some(5.0));
+        assert_eq!(caster.first_hit(DVec3::new(5.0, 7.0, 3.0), DVec3::NEG_Y, 10.0), None);
+        assert_eq!(caster.nearest_distance(DVec3::new(1.0, 3.0, 1.0), 10.0), Some(1.0));
     }
 
     #[test]
