@@ -786,7 +786,19 @@ fn render_draws_a_frame_its_overview_and_its_depth_complexity() {
     bad(&["--frame", "0", "--mode", "warp"], "unknown mode 'warp'");
     let jpeg = out("frame.JPG");
     fails_with(
-        &["render", "--mode", "vfc", "-o", &jpeg],
+        &[
+            "render",
+            "--scene",
+            "city:blocks=1",
+            "--resolution",
+            "64x48",
+            "--frame",
+            "0",
+            "--mode",
+            "vfc",
+            "-o",
+            &jpeg,
+        ],
         2,
         &["occlu writes PNG only, and"],
     );

@@ -228,7 +228,7 @@ impl SceneBuilder {
 
     /// Stores at most `triangles` triangles (tests of the limit).
     #[cfg(test)]
-    fn store_at_most(&mut self, triangles: u64) {
+    pub(crate) fn store_at_most(&mut self, triangles: u64) {
         self.most_triangles = (triangles, Some(triangles * BYTES_PER_TRIANGLE));
     }
 

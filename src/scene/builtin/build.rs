@@ -3,12 +3,13 @@
 
 use glam::DAffine3;
 
-use crate::scene::{MeshGroup, SceneBuilder, TriangleSoup};
+use crate::scene::{GeometryError, MeshGroup, SceneBuilder, TriangleSoup};
 
 /// Adds `soup` as a mesh and one object of it, untransformed.
-pub(super) fn add(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) {
-    let group = mesh(builder, name, soup);
+pub(super) fn add(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) -> Result<(), GeometryError> {
+    let group = mesh(builder, name, soup)?;
     place(builder, name, &group, DAffine3::IDENTITY);
+    Ok(())
 }
 
 pub(super) fn place(builder: &mut SceneBuilder, name: &str, group: &MeshGroup, transform: DAffine3) {
@@ -17,10 +18,11 @@ pub(super) fn place(builder: &mut SceneBuilder, name: &str, group: &MeshGroup, t
         .expect("built-in scenes lie well within the renderable range");
 }
 
-pub(super) fn mesh(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) -> MeshGroup {
-    builder
-        .add_mesh(name, &soup.positions, &soup.indices)
-        .expect("procedural geometry is finite and indexed in range")
+/// Adds `soup` as a mesh: procedural geometry is finite and indexed in
+/// range, so it fails only where the scene asked for passes what the
+/// memory available holds.
+pub(super) fn mesh(builder: &mut SceneBuilder, name: &str, soup: &TriangleSoup) -> Result<MeshGroup, GeometryError> {
+    builder.add_mesh(name, &soup.positions, &soup.indices)
 }
 
 pub(super) type Params<'a> = Vec<(&'a str, &'a str)>;

@@ -20,7 +20,7 @@ use super::build::{Params, add, mesh, place, read_params};
 use super::shapes::{cuboid, cylinder};
 use crate::rng::Rng;
 use crate::scene::motion::Route;
-use crate::scene::{MeshGroup, SceneBuilder, TriangleSoup};
+use crate::scene::{GeometryError, MeshGroup, SceneBuilder, TriangleSoup};
 
 /// Movers beyond this are surely a mistake.
 const MAX_MOVERS: u64 = 100_000;
@@ -107,10 +107,10 @@ fn street(k: u32) -> f64 {
     f64::from(k) * PITCH - STREET / 2.0
 }
 
-pub fn generate(p: &CityParams, builder: &mut SceneBuilder) {
+pub fn generate(p: &CityParams, builder: &mut SceneBuilder) -> Result<(), GeometryError> {
     let mut rng = Rng::new(p.seed);
     let n = p.blocks;
-    ground(n, builder);
+    ground(n, builder)?;
     for bi in 0..n {
         for bj in 0..n {
             for lot in 0..4 {
@@ -119,15 +119,15 @@ pub fn generate(p: &CityParams, builder: &mut SceneBuilder) {
                     0.0,
                     f64::from(bj) * PITCH + f64::from(lot / 2) * LOT,
                 );
-                building(&format!("b{bi}_{bj}_{lot}"), origin, &mut rng, builder);
+                building(&format!("b{bi}_{bj}_{lot}"), origin, &mut rng, builder)?;
             }
         }
     }
-    let models = car_models(builder);
+    let models = car_models(builder)?;
     parked_cars(n, &models, &mut rng, builder);
     // Their own generator: adding movers leaves the static city as it was.
     moving_cars(n, p.movers, &models, &mut Rng::new(p.seed ^ 0x6d6f_7665), builder);
-    props(n, p.props, &mut Rng::new(p.seed ^ 0x7072_6f70), builder);
+    props(n, p.props, &mut Rng::new(p.seed ^ 0x7072_6f70), builder)?;
     let (m, mx) = (n / 2, (n / 2).max(1));
     let at = |x: f64, z: f64| DVec3::new(x, EYE_HEIGHT, z);
     builder.set_walk_hint(vec![
@@ -135,10 +135,11 @@ pub fn generate(p: &CityParams, builder: &mut SceneBuilder) {
         at(street(mx), street(m)),
         at(street(mx), street(n)),
     ]);
+    Ok(())
 }
 
 /// Asphalt tiles (one per block and its streets) and raised sidewalks.
-fn ground(n: u32, builder: &mut SceneBuilder) {
+fn ground(n: u32, builder: &mut SceneBuilder) -> Result<(), GeometryError> {
     for i in 0..=n {
         for j in 0..=n {
             let lo = |k: u32| f64::from(k) * PITCH - STREET;
@@ -155,13 +156,14 @@ fn ground(n: u32, builder: &mut SceneBuilder) {
                 let o = DVec3::new(f64::from(i) * PITCH, 0.0, f64::from(j) * PITCH);
                 cuboid(&mut soup, o, o + DVec3::new(BLOCK, 0.15, BLOCK));
             }
-            add(builder, &format!("ground{i}_{j}"), &soup);
+            add(builder, &format!("ground{i}_{j}"), &soup)?;
         }
     }
+    Ok(())
 }
 
 /// A closed shell and one furniture object per floor.
-fn building(name: &str, lot: DVec3, rng: &mut Rng, builder: &mut SceneBuilder) {
+fn building(name: &str, lot: DVec3, rng: &mut Rng, builder: &mut SceneBuilder) -> Result<(), GeometryError> {
     let min = lot + DVec3::new(rng.range(2.0, 4.0), 0.0, rng.range(2.0, 4.0));
     let max = lot + DVec3::new(LOT - rng.range(2.0, 4.0), 0.0, LOT - rng.range(2.0, 4.0));
     let floors = rng.int(2, 14);
@@ -192,7 +194,7 @@ fn building(name: &str, lot: DVec3, rng: &mut Rng, builder: &mut SceneBuilder) {
             c + DVec3::new(rng.range(1.0, 2.5), rng.range(0.8, 2.0), rng.range(1.0, 2.5)),
         );
     }
-    add(builder, &format!("{name}/shell"), &shell);
+    add(builder, &format!("{name}/shell"), &shell)?;
 
     for f in 0..floors {
         let y = f64::from(f) * FLOOR_HEIGHT;
@@ -210,8 +212,9 @@ fn building(name: &str, lot: DVec3, rng: &mut Rng, builder: &mut SceneBuilder) {
             );
             workplace(&mut room, at, rng);
         }
-        add(builder, &format!("{name}/floor{f}"), &room);
+        add(builder, &format!("{name}/floor{f}"), &room)?;
     }
+    Ok(())
 }
 
 /// Vertical pilasters every ~4 m along each facade.
@@ -262,7 +265,7 @@ fn table(room: &mut TriangleSoup, at: DVec3, w: f64, d: f64, h: f64) {
 }
 
 /// Three car models.
-fn car_models(builder: &mut SceneBuilder) -> Vec<MeshGroup> {
+fn car_models(builder: &mut SceneBuilder) -> Result<Vec<MeshGroup>, GeometryError> {
     [(4.4, 1.8, 1.5), (3.6, 1.6, 1.45), (5.2, 2.0, 2.2)]
         .iter()
         .enumerate()
@@ -311,9 +314,9 @@ fn parked_cars(n: u32, models: &[MeshGroup], rng: &mut Rng, builder: &mut SceneB
 /// 0.4–1 m inside its kerb, where no building stands (a shell's pilasters
 /// keep 1.7 m from a lot's edge) and no car drives or parks. Three shared meshes,
 /// so the scene grows in objects, not in meshes.
-fn props(n: u32, count: u32, rng: &mut Rng, builder: &mut SceneBuilder) {
+fn props(n: u32, count: u32, rng: &mut Rng, builder: &mut SceneBuilder) -> Result<(), GeometryError> {
     if count == 0 {
-        return;
+        return Ok(());
     }
     let models: Vec<MeshGroup> = [("bollard", 0.25, 1.0), ("bin", 0.6, 0.9), ("lamp", 0.2, 4.5)]
         .iter()
@@ -326,7 +329,7 @@ fn props(n: u32, count: u32, rng: &mut Rng, builder: &mut SceneBuilder) {
             );
             mesh(builder, name, &soup)
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     for k in 0..count {
         let block = DVec3::new(
             f64::from(rng.int(0, n - 1)) * PITCH,
@@ -349,6 +352,7 @@ fn props(n: u32, count: u32, rng: &mut Rng, builder: &mut SceneBuilder) {
             DAffine3::from_translation(block + at),
         );
     }
+    Ok(())
 }
 
 /// `count` cars driving round blocks at 0.3–0.6 m a frame (9–18 m/s at 30

@@ -17,7 +17,7 @@ use super::build::{Params, add, read_params};
 use super::city::EYE_HEIGHT;
 use super::shapes::{cuboid, cylinder};
 use crate::rng::Rng;
-use crate::scene::{SceneBuilder, TriangleSoup};
+use crate::scene::{GeometryError, SceneBuilder, TriangleSoup};
 
 /// Ground per tree: one tree per 8 m × 8 m on average.
 const AREA_PER_TREE: f64 = 64.0;
@@ -65,7 +65,7 @@ impl ForestParams {
     }
 }
 
-pub fn generate(p: &ForestParams, builder: &mut SceneBuilder) {
+pub fn generate(p: &ForestParams, builder: &mut SceneBuilder) -> Result<(), GeometryError> {
     let mut rng = Rng::new(p.seed);
     let side = p.side();
     let tile = side / f64::from(TILES);
@@ -74,7 +74,7 @@ pub fn generate(p: &ForestParams, builder: &mut SceneBuilder) {
             let mut soup = TriangleSoup::default();
             let lo = DVec3::new(f64::from(i) * tile, -0.5, f64::from(j) * tile);
             cuboid(&mut soup, lo, lo + DVec3::new(tile, 0.5, tile));
-            add(builder, &format!("ground{i}_{j}"), &soup);
+            add(builder, &format!("ground{i}_{j}"), &soup)?;
         }
     }
     let middle = side / 2.0;
@@ -86,10 +86,11 @@ pub fn generate(p: &ForestParams, builder: &mut SceneBuilder) {
                 break DVec3::new(x, 0.0, z);
             }
         };
-        add(builder, &format!("tree{t}"), &tree(at, &mut rng));
+        add(builder, &format!("tree{t}"), &tree(at, &mut rng))?;
     }
     let at = |x: f64| DVec3::new(x, EYE_HEIGHT, middle);
     builder.set_walk_hint(vec![at(0.0), at(side)]);
+    Ok(())
 }
 
 /// A trunk and 3-6 separate crown blobs around and above it.

@@ -46,14 +46,16 @@ pub fn build(spec: &str, options: &LoadOptions) -> Result<Scene, SceneError> {
         Builtin::Forest(p) => p.spec(),
     };
     let mut builder = SceneBuilder::new(format!("builtin:{name}"), options.cluster_triangles);
+    let error = |message: String| SceneError::Builtin {
+        spec: spec.to_string(),
+        message,
+    };
     match &builtin {
         Builtin::City(p) => city::generate(p, &mut builder),
         Builtin::Forest(p) => forest::generate(p, &mut builder),
     }
-    builder.finish().ok_or_else(|| SceneError::Builtin {
-        spec: spec.to_string(),
-        message: "generated no geometry".into(),
-    })
+    .map_err(|e| error(e.to_string()))?;
+    builder.finish().ok_or_else(|| error("generated no geometry".into()))
 }
 
 fn parse(spec: &str) -> Result<Builtin, SceneError> {
@@ -96,6 +98,20 @@ fn parse_spec(spec: &str) -> Result<(&str, Params<'_>), SceneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A hostile-input review's finding: a scene past what the memory
+    /// available holds panicked (`city:blocks=64` under `ulimit -v 3000000`).
+    #[test]
+    fn a_built_in_scene_past_the_memory_available_is_an_error_naming_the_mesh() {
+        let mut builder = SceneBuilder::new("builtin:city".into(), 4096);
+        builder.store_at_most(1000);
+        let city = city::CityParams {
+            blocks: 1,
+            ..Default::default()
+        };
+        let error = city::generate(&city, &mut builder).unwrap_err().to_string();
+        assert!(error.contains("more than the 1000 that"), "{error}");
+    }
 
     #[test]
     fn unknown_scene_and_bad_params_are_clear_errors() {
