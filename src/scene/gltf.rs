@@ -104,7 +104,7 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
     // the crate, which names what is wrong).
     let objects = match gltf_json::text(bytes) {
         Ok(text) => gltf_json::census(&text).map_err(parse_error)?,
-        Err(_) => gltf_json::JsonObjects::default(),
+        Err(_) => gltf_json::JsonCounts::default(),
     };
     objects.check_as_structs(memory::available()).map_err(parse_error)?;
     // gltf-json's validator indexes primitive accessors without a bounds

@@ -161,21 +161,33 @@ const BYTES_PER_NESTED: u64 = 128;
 /// with a name took 720 bytes more read as one too.
 const BYTES_PER_VALUE_OBJECT: u64 = 720;
 
-/// The JSON objects of a glTF document, counted where their memory is
-/// decided: elements of its top-level arrays, and objects nested in them.
+/// What a number or string in an array takes, at most, where the crate
+/// keeps it as a [`Value`] (an accessor's `min` and `max`, members it does
+/// not know) and in the document read as one: 32 bytes, in a vector
+/// growing to twice its length while its old buffer is still held (40
+/// million zeros in one `min`, 80 MB of text, asked for a 2 GB buffer
+/// beside the 1 GB one).
+const BYTES_PER_ARRAY_VALUE: u64 = 96;
+
+/// The JSON values of a glTF document whose memory, read, out of
+/// proportion to their text: objects, counted as elements of its
+/// top-level arrays or nested in them, and numbers and strings in arrays.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct JsonObjects {
+pub struct JsonCounts {
     items: u64,
     nested: u64,
+    array_values: u64,
 }
 
-impl JsonObjects {
+impl JsonCounts {
     /// Refused when reading the document as the gltf crate's structs would
     /// take more than `memory`, the bytes this process may still take
     /// (where known): each object becomes a struct of hundreds of bytes,
     /// where the text may spend two on it.
     pub fn check_as_structs(&self, memory: Option<u64>) -> Result<(), String> {
-        let bytes = self.items.saturating_mul(BYTES_PER_ITEM) + self.nested.saturating_mul(BYTES_PER_NESTED);
+        let bytes = self.items.saturating_mul(BYTES_PER_ITEM)
+            + self.nested.saturating_mul(BYTES_PER_NESTED)
+            + self.array_values.saturating_mul(BYTES_PER_ARRAY_VALUE);
         self.check(bytes, memory, "")
     }
 
@@ -183,15 +195,17 @@ impl JsonObjects {
     /// it uses an extension occlu reads from its JSON) would take more
     /// than `memory`.
     pub fn check_as_value(&self, memory: Option<u64>) -> Result<(), String> {
-        let bytes = (self.items + self.nested).saturating_mul(BYTES_PER_VALUE_OBJECT);
+        let bytes = (self.items + self.nested).saturating_mul(BYTES_PER_VALUE_OBJECT)
+            + self.array_values.saturating_mul(BYTES_PER_ARRAY_VALUE);
         self.check(bytes, memory, " as written (for the extensions read from it)")
     }
 
     fn check(&self, bytes: u64, memory: Option<u64>, reading: &str) -> Result<(), String> {
         match memory {
             Some(memory) if bytes > memory => Err(format!(
-                "its JSON holds {} objects, which would take up to {} MB to read{reading}, and this process may take {} MB more",
+                "its JSON holds {} objects and {} values in arrays, which would take up to {} MB to read{reading}, and this process may take {} MB more",
                 self.items + self.nested,
+                self.array_values,
                 bytes >> 20,
                 memory >> 20
             )),
@@ -201,30 +215,24 @@ impl JsonObjects {
 }
 
 /// A document's JSON `text` read before the gltf crate reads it, in one
-/// pass with everything but what it looks for skipped (`extras` too,
-/// which the crate keeps as text): its objects counted, and an index past
-/// u32 refused, named with its line and column: gltf-json keeps only its
-/// low 32 bits (`"mesh": 4294967296` would draw mesh 0). Text that is not
-/// JSON passes: the crate says what is wrong with it.
-pub fn census(text: &[u8]) -> Result<JsonObjects, String> {
-    let mut census = Census::default();
-    let scanned = Scan {
+/// pass with `extras` and vendors' extensions skipped (the crate keeps
+/// them as text or JSON): what costs memory counted, and an index past u32
+/// refused, named with its line and column: gltf-json keeps only its low
+/// 32 bits (`"mesh": 4294967296` would draw mesh 0). Text this pass cannot
+/// read is refused too, as the crate would refuse most of it: a number
+/// beyond f64 or a lone surrogate where the crate skips a member it does
+/// not know would otherwise end the pass before an index it must see.
+pub fn census(text: &[u8]) -> Result<JsonCounts, String> {
+    let mut counts = JsonCounts::default();
+    Scan {
         key: Key::Other,
         depth: 0,
-        census: &mut census,
+        in_array: false,
+        counts: &mut counts,
     }
-    .deserialize(&mut serde_json::Deserializer::from_slice(text));
-    match (scanned, census.wrapped_index) {
-        (Err(e), true) => Err(format!("invalid glTF: {e}")),
-        (Err(_), false) | (Ok(()), _) => Ok(census.objects),
-    }
-}
-
-#[derive(Default)]
-struct Census {
-    objects: JsonObjects,
-    /// Whether the scan stopped at an index past u32.
-    wrapped_index: bool,
+    .deserialize(&mut serde_json::Deserializer::from_slice(text))
+    .map_err(|e| format!("invalid glTF: {e}"))?;
+    Ok(counts)
 }
 
 /// What a value's key says of the numbers in it.
@@ -241,11 +249,20 @@ enum Key {
 }
 
 /// One JSON value of the document, under `key`, inside `depth` arrays and
-/// objects.
+/// objects, the innermost an array or not.
 struct Scan<'c> {
     key: Key,
     depth: u32,
-    census: &'c mut Census,
+    in_array: bool,
+    counts: &'c mut JsonCounts,
+}
+
+impl Scan<'_> {
+    /// A number or string: counted where it lies in an array.
+    fn scalar<E>(self) -> Result<(), E> {
+        self.counts.array_values += u64::from(self.in_array);
+        Ok(())
+    }
 }
 
 impl<'de> DeserializeSeed<'de> for Scan<'_> {
@@ -300,14 +317,15 @@ impl<'de> Visitor<'de> for Scan<'_> {
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         // The document, its members and their arrays' elements are items.
         match self.depth {
-            0..=2 => self.census.objects.items += 1,
-            _ => self.census.objects.nested += 1,
+            0..=2 => self.counts.items += 1,
+            _ => self.counts.nested += 1,
         }
         while let Some(key) = map.next_key_seed(KeySeed { parent: self.key })? {
             map.next_value_seed(Scan {
                 key,
                 depth: self.depth + 1,
-                census: &mut *self.census,
+                in_array: false,
+                counts: &mut *self.counts,
             })?;
         }
         Ok(())
@@ -317,7 +335,8 @@ impl<'de> Visitor<'de> for Scan<'_> {
             .next_element_seed(Scan {
                 key: self.key,
                 depth: self.depth + 1,
-                census: &mut *self.census,
+                in_array: true,
+                counts: &mut *self.counts,
             })?
             .is_some()
         {}
@@ -325,30 +344,27 @@ impl<'de> Visitor<'de> for Scan<'_> {
     }
     fn visit_u64<E: serde::de::Error>(self, value: u64) -> Result<(), E> {
         match self.key {
-            Key::Index(name) if value > u64::from(u32::MAX) => {
-                self.census.wrapped_index = true;
-                Err(E::custom(format_args!(
-                    "`{name}` holds the index {value}, past the largest a glTF reader keeps ({}), in its JSON",
-                    u32::MAX
-                )))
-            }
-            _ => Ok(()),
+            Key::Index(name) if value > u64::from(u32::MAX) => Err(E::custom(format_args!(
+                "`{name}` holds the index {value}, past the largest a glTF reader keeps ({}), in its JSON",
+                u32::MAX
+            ))),
+            _ => self.scalar(),
         }
     }
     fn visit_bool<E>(self, _: bool) -> Result<(), E> {
-        Ok(())
+        self.scalar()
     }
     fn visit_i64<E>(self, _: i64) -> Result<(), E> {
-        Ok(())
+        self.scalar()
     }
     fn visit_f64<E>(self, _: f64) -> Result<(), E> {
-        Ok(())
+        self.scalar()
     }
     fn visit_str<E>(self, _: &str) -> Result<(), E> {
-        Ok(())
+        self.scalar()
     }
     fn visit_unit<E>(self) -> Result<(), E> {
-        Ok(())
+        self.scalar()
     }
 }
 
@@ -385,39 +401,54 @@ mod tests {
         assert!(refused(r#"{"nodes": [{"children": [1, 4294967296]}]}"#).contains("`children` holds"));
         let light = r#"{"nodes": [{"extensions": {"KHR_lights_punctual": {"light": 4294967296}}}]}"#;
         assert!(refused(light).contains("`light` holds"));
-        // Not indices: a count, extras, a vendor's extension, and text that
-        // is not JSON (left to the crate).
+        // Not indices: a count, extras (where anything goes), a vendor's
+        // extension.
         for kept in [
             r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 8589934592}]}"#,
-            r#"{"nodes": [{"extensions": {"ACME_ids": {"index": 8589934592}}}]}"#,
-            "{\"nodes\": [",
+            r#"{"nodes": [{"extras": {"big": 1e400}, "extensions": {"ACME_ids": {"index": 8589934592, "at": 1e400}}}]}"#,
         ] {
             assert!(census(kept.as_bytes()).is_ok(), "{kept}");
+        }
+        // What the pass cannot read ahead of an index is refused (it would
+        // end the pass before the index), and so is text that is not JSON.
+        for unreadable in [
+            r#"{"zzz": 1e400, "nodes": [{"mesh": 4294967296}]}"#,
+            r#"{"zzz": "\ud800", "nodes": [{"mesh": 4294967296}]}"#,
+            "{\"nodes\": [",
+        ] {
+            assert!(
+                census(unreadable.as_bytes()).unwrap_err().starts_with("invalid glTF: "),
+                "{unreadable}"
+            );
         }
     }
 
     #[test]
-    fn a_document_of_more_objects_than_memory_holds_is_refused_by_their_count() {
+    fn a_document_of_more_objects_and_array_values_than_memory_holds_is_refused_by_their_count() {
         let nodes = format!(
-            r#"{{"asset": {{"version": "2.0"}}, "nodes": [{}]}}"#,
-            vec![r#"{"extensions": {"EXT_x": {}}}"#; 999].join(",")
+            r#"{{"asset": {{"version": "2.0"}}, "nodes": [{}], "accessors": [{{"min": [0, 0, 0]}}]}}"#,
+            vec![r#"{"extensions": {"EXT_x": {}}, "children": [1, 2]}"#; 999].join(",")
         );
-        let objects = census(nodes.as_bytes()).unwrap();
-        // The document, the asset and 999 nodes; two objects nested in each.
-        assert_eq!(
-            objects,
-            JsonObjects {
-                items: 1001,
-                nested: 1998
-            }
+        let counts = census(nodes.as_bytes()).unwrap();
+        // The document, the asset, 999 nodes and an accessor, two objects
+        // nested in each node, and two children a node and the accessor's
+        // three minimums in arrays.
+        let expected = JsonCounts {
+            items: 1002,
+            nested: 1998,
+            array_values: 2001,
+        };
+        assert_eq!(counts, expected);
+        let as_structs = 1002 * BYTES_PER_ITEM + 1998 * BYTES_PER_NESTED + 2001 * BYTES_PER_ARRAY_VALUE;
+        assert!(counts.check_as_structs(Some(as_structs)).is_ok());
+        let refused = counts.check_as_structs(Some(as_structs - 1)).unwrap_err();
+        assert!(
+            refused.starts_with("its JSON holds 3000 objects and 2001 values in arrays"),
+            "{refused}"
         );
-        let as_structs = 1001 * BYTES_PER_ITEM + 1998 * BYTES_PER_NESTED;
-        assert!(objects.check_as_structs(Some(as_structs)).is_ok());
-        let refused = objects.check_as_structs(Some(as_structs - 1)).unwrap_err();
-        assert!(refused.starts_with("its JSON holds 2999 objects"), "{refused}");
-        let as_value = 2999 * BYTES_PER_VALUE_OBJECT;
-        assert!(objects.check_as_value(Some(as_value)).is_ok());
-        assert!(objects.check_as_value(Some(as_value - 1)).is_err());
-        assert!(objects.check_as_structs(None).is_ok());
+        let as_value = 3000 * BYTES_PER_VALUE_OBJECT + 2001 * BYTES_PER_ARRAY_VALUE;
+        assert!(counts.check_as_value(Some(as_value)).is_ok());
+        assert!(counts.check_as_value(Some(as_value - 1)).is_err());
+        assert!(counts.check_as_structs(None).is_ok());
     }
 }
