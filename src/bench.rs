@@ -28,9 +28,9 @@ use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::report::{
     Fingerprint, MissedSummary, OutputLock, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts,
     SceneSummary, SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output,
-    refuse_input_as_output, refuse_result_file, trace_json, write_results, write_whole,
+    refuse_input_among_results, refuse_input_as_output, refuse_result_file, trace_json, write_results, write_whole,
 };
-use crate::scene::{Scene, SceneError};
+use crate::scene::{Scene, SceneError, SceneSpec};
 use crate::session::{RunOptions, Session, ms};
 use crate::world::World;
 
@@ -282,6 +282,13 @@ fn claim_outputs(plan: &BenchPlan) -> Result<OutputLock, BenchError> {
             "--out holds a merged result: a run there would replace its report.md; choose another --out",
         );
         return Err(ReportError::at(&merged)(error).into());
+    }
+    let model = match &plan.scene {
+        SceneSpec::File(model) => Some(model),
+        SceneSpec::Builtin(_) => None,
+    };
+    for input in [model, plan.path.as_ref()].into_iter().flatten() {
+        refuse_input_among_results(input, &plan.out)?;
     }
     let claim = prepare_output(&plan.out)?;
     for path in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {

@@ -2,7 +2,7 @@
 //! files ([`ReportError`]: the path and what went wrong).
 
 use std::io::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
 #[error("{}: {error}", path.display())]
@@ -82,7 +82,9 @@ pub fn refuse_input_as_output<P: AsRef<Path>>(output: &Path, inputs: &[P]) -> Re
     {
         use std::os::unix::fs::MetadataExt as _;
         let identity = |p: &Path| std::fs::metadata(p).ok().map(|m| (m.dev(), m.ino()));
-        let Some(written) = identity(output) else {
+        // Where it would be written: through folders the run has yet to
+        // make too (`--trace OUT/../path.json` before OUT exists).
+        let Some(written) = where_written(output).and_then(|p| identity(&p)) else {
             return Ok(());
         };
         if let Some(input) = inputs.iter().find(|i| identity(i.as_ref()) == Some(written)) {
@@ -95,19 +97,16 @@ pub fn refuse_input_as_output<P: AsRef<Path>>(output: &Path, inputs: &[P]) -> Re
     Ok(())
 }
 
-/// Refuses an `output` that is, or would be, one of `names` in the folder
-/// `dir` (a run's own files, which the run writes itself).
-pub fn refuse_own_file(output: &Path, dir: &Path, names: &[&str]) -> Result<(), ReportError> {
-    let own = where_written(output).is_some_and(|t| {
-        t.parent() == std::fs::canonicalize(dir).ok().as_deref()
-            && t.file_name().is_some_and(|n| names.iter().any(|own| n == *own))
+/// Refuses a `file` that is, or would be, one of `names` in the folder
+/// `dir` (a run's own files, which the run writes itself), saying `why`.
+pub fn refuse_own_file(file: &Path, dir: &Path, names: &[&str], why: &str) -> Result<(), ReportError> {
+    let own = where_written(file).is_some_and(|t| {
+        t.parent() == where_written(dir).as_deref() && t.file_name().is_some_and(|n| names.iter().any(|own| n == *own))
     });
-    if own {
-        return Err(ReportError::at(output)(std::io::Error::other(
-            "is one of the run's own files in --out: writing it there would replace what the run wrote; choose another file",
-        )));
+    match own {
+        true => Err(ReportError::at(file)(std::io::Error::other(why.to_string()))),
+        false => Ok(()),
     }
-    Ok(())
 }
 
 /// Refuses two outputs of one command that are, or would be, one file:
@@ -122,11 +121,33 @@ pub fn refuse_one_file_twice(first: &Path, second: &Path) -> Result<(), ReportEr
     }
 }
 
-/// Where `output` is or would be written: a link leads to what
-/// [`write_whole`] writes.
+/// Where `output` is or would be written: its path resolved as far as it
+/// exists (a link leads to what [`write_whole`] writes), and the rest, which
+/// a run may yet make (its --out), taken as written, `..` undoing the
+/// folder before it.
 fn where_written(output: &Path) -> Option<PathBuf> {
-    let resolved = |p: &Path| std::fs::canonicalize(p).ok();
-    resolved(output).or_else(|| Some(resolved(crate::input::folder_of(output))?.join(output.file_name()?)))
+    let absolute = std::path::absolute(output).ok()?;
+    let mut existing = absolute.as_path();
+    let mut rest = Vec::new();
+    let mut resolved = loop {
+        match std::fs::canonicalize(existing) {
+            Ok(resolved) => break resolved,
+            Err(_) => {
+                rest.push(existing.components().next_back()?);
+                existing = existing.parent()?;
+            }
+        }
+    };
+    for part in rest.into_iter().rev() {
+        match part {
+            Component::ParentDir => {
+                resolved.pop();
+            }
+            Component::Normal(name) => resolved.push(name),
+            Component::CurDir | Component::RootDir | Component::Prefix(_) => {}
+        }
+    }
+    Some(resolved)
 }
 
 /// Creates the temporary twin `temporary` anew: whatever has its name (a
@@ -173,4 +194,35 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(),
         .and_then(|mut writer| writer.write_image_data(rgb).and_then(|()| writer.finish()))
         .map_err(|e| ReportError::at(path)(std::io::Error::other(format!("encoding the picture failed: {e}"))))?;
     write_whole(path, &png)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hostile-input review's finding: through a folder the run had yet
+    /// to make (`--trace OUT/../path.json`), an output named an input, or
+    /// another output, without being seen as one.
+    #[test]
+    fn outputs_through_folders_yet_to_be_made_are_seen_for_the_files_they_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("path.json");
+        std::fs::write(&path, "{}").unwrap();
+        let out = dir.path().join("out");
+        let through = out.join("..").join("path.json");
+        let real = std::fs::canonicalize(&path).unwrap();
+        assert_eq!(where_written(&through), Some(real.clone()));
+        assert_eq!(
+            where_written(&out.join("x").join(".").join("y.json")),
+            Some(real.with_file_name("out/x/y.json"))
+        );
+        let error = refuse_input_as_output(&through, &[&path]).unwrap_err().to_string();
+        assert!(error.contains("is an input of this command"), "{error}");
+        let twice = refuse_one_file_twice(&out.join("x.json"), &out.join("x.json")).unwrap_err();
+        assert!(twice.to_string().contains("another output of this command"), "{twice}");
+        assert!(refuse_one_file_twice(&out.join("x.json"), &out.join("y.json")).is_ok());
+        let own = refuse_own_file(&out.join("sub/../summary.json"), &out, &["summary.json"], "own");
+        assert_eq!(own.unwrap_err().error.to_string(), "own");
+        assert!(!out.exists(), "nothing made");
+    }
 }

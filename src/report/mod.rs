@@ -181,12 +181,25 @@ fn check_rows(summary: &Summary, rows: &[FrameStats]) -> Result<(), String> {
 /// besides), in the order merge copies them.
 pub const RESULT_FILES: [&str; 5] = ["summary.json", "frames.csv", "missed.csv", "report.md", ANIMATION];
 
+/// The files a run writes into its folder, all told: its results, its
+/// charts and its lock.
+fn run_files() -> Vec<&'static str> {
+    RESULT_FILES.into_iter().chain(charts::CHARTS).chain([LOCK]).collect()
+}
+
 /// Refuses an `output` that is one of the files a run writes into `out`
 /// (`--export-github-benchmark OUT/summary.json` would replace the run's
 /// own), its lock included.
 pub fn refuse_result_file(output: &Path, out: &Path) -> Result<(), ReportError> {
-    let names: Vec<&str> = RESULT_FILES.into_iter().chain(charts::CHARTS).chain([LOCK]).collect();
-    files::refuse_own_file(output, out, &names)
+    let why = "is one of the run's own files in --out: writing it there would replace what the run wrote; choose another file";
+    files::refuse_own_file(output, out, &run_files(), why)
+}
+
+/// Refuses an `input` of a run that is one of the files the run writes
+/// into `out` (`--path OUT/summary.json`): the run would replace it.
+pub fn refuse_input_among_results(input: &Path, out: &Path) -> Result<(), ReportError> {
+    let why = "is an input of this command and one of the files the run writes into --out: the run would replace it; choose another --out";
+    files::refuse_own_file(input, out, &run_files(), why)
 }
 
 /// Creates `out`, claims it (a second run into the same folder is refused
@@ -362,6 +375,21 @@ fn escape_formulas(missed: &[MissedObject]) -> Vec<MissedObject> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A hostile-input review's finding: a run's path file inside its --out,
+    /// named as one of the files the run writes, was replaced by the run.
+    #[test]
+    fn an_input_named_as_one_of_the_runs_files_in_its_out_is_refused() {
+        let out = tempfile::tempdir().unwrap();
+        let path = out.path().join("summary.json");
+        std::fs::write(&path, "{}").unwrap();
+        let refused = refuse_input_among_results(&path, out.path()).unwrap_err().to_string();
+        assert!(
+            refused.contains("one of the files the run writes into --out"),
+            "{refused}"
+        );
+        assert!(refuse_input_among_results(&out.path().join("walk.json"), out.path()).is_ok());
+    }
 
     #[test]
     fn missed_csv_names_run_no_formula_and_hide_nothing() {
