@@ -39,6 +39,7 @@ use std::path::Path;
 
 use glam::{DAffine3, DVec3};
 
+use super::memory;
 use super::model::SceneBuilder;
 use super::source::{LoadOptions, SceneError};
 use crate::text::count;
@@ -50,7 +51,10 @@ pub fn load(path: &Path, bytes: &[u8], _: &LoadOptions, builder: &mut SceneBuild
         path: path.into(),
         message: format!("invalid OBJ: {message}"),
     };
-    let obj = parse(bytes).map_err(invalid)?;
+    // Read only as far as the memory available holds: the model would be
+    // refused for its triangles after it is read anyway.
+    let most_triangles = memory::available().map_or(u64::MAX, |bytes| bytes / READ_BYTES_PER_TRIANGLE);
+    let obj = parse(bytes, most_triangles).map_err(invalid)?;
     let warnings = judge(&obj).map_err(invalid)?;
     for object in &obj.objects {
         let geometry = |error| SceneError::Geometry {
@@ -69,6 +73,15 @@ pub fn load(path: &Path, bytes: &[u8], _: &LoadOptions, builder: &mut SceneBuild
     }
     Ok(())
 }
+
+/// What reading an OBJ file takes per triangle of its faces, at most: its
+/// corners, the face they come from and the objects made of them (a 2 M
+/// triangle grid, 57 MB of text, took 284 MB at the peak of `occlu info`,
+/// 142 bytes a triangle with the text; a face of 3 M corners, 133 bytes a
+/// corner), and the room its vectors reserve as they grow, which an
+/// address-space limit counts (under `ulimit -v 250000` that grid aborted
+/// at 160 bytes a triangle).
+const READ_BYTES_PER_TRIANGLE: u64 = 256;
 
 /// What an OBJ file holds for occlu.
 struct Obj {
@@ -209,7 +222,7 @@ const NONE: usize = usize::MAX;
 /// far back no longer says what was written.
 type Written = [isize; 3];
 
-fn parse(bytes: &[u8]) -> Result<Obj, String> {
+fn parse(bytes: &[u8], most_triangles: u64) -> Result<Obj, String> {
     if bytes.starts_with(b"glTF") {
         return Err("a GLB file (it starts with the bytes 'glTF'), not OBJ: name it .glb".into());
     }
@@ -220,6 +233,7 @@ fn parse(bytes: &[u8]) -> Result<Obj, String> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut reader = Reader {
         name: "unnamed_object".into(),
+        most_triangles,
         ..Reader::default()
     };
     // A line ending in a backslash continues on the next (the
@@ -270,6 +284,11 @@ fn parse(bytes: &[u8]) -> Result<Obj, String> {
 struct Reader {
     /// The line being read, from 1.
     line: usize,
+    /// The most triangles it may hold ([`READ_BYTES_PER_TRIANGLE`]), and
+    /// those its faces have made so far (a face being read counted for
+    /// those its corners so far make).
+    most_triangles: u64,
+    triangles: u64,
     /// Every `v` so far.
     positions: Vec<DVec3>,
     /// Colour components given with positions (a face's vertex must have
@@ -356,7 +375,10 @@ impl Reader {
             }
             Some(statement) if !statement.starts_with('#') && !IGNORED_STATEMENTS.contains(&statement) => {
                 self.unknown.lines += 1;
-                self.unknown.first.get_or_insert_with(|| (self.line, statement.into()));
+                // Kept as far as it is shown (a file of one 2 GB line is
+                // one statement).
+                let kept = || (self.line, statement.chars().take(STATEMENT_SHOWN + 1).collect());
+                self.unknown.first.get_or_insert_with(kept);
             }
             _ => {}
         }
@@ -394,6 +416,12 @@ impl Reader {
                 .ok_or_else(|| self.fail(format_args!("face corner '{word}' is not v, v/vt, v//vn or v/vt/vn")))?;
             self.face.push(corner);
             self.face_written.push(written);
+            if self.triangles + (self.face.len() as u64).saturating_sub(2) > self.most_triangles {
+                return Err(self.fail(format_args!(
+                    "its faces pass {} triangles, more than the memory available holds while they are read",
+                    self.most_triangles
+                )));
+            }
         }
         self.has_faces = true;
         match self.face.as_slice() {
@@ -401,6 +429,7 @@ impl Reader {
             // A point or a line: nothing to draw.
             [_] | [_, _] => self.short_faces += 1,
             [first, rest @ ..] => {
+                self.triangles += rest.len() as u64 - 1;
                 for pair in rest.windows(2) {
                     self.corners.extend([*first, pair[0], pair[1]]);
                 }
@@ -632,7 +661,7 @@ mod tests {
 
     #[test]
     fn errors_name_the_line_and_what_is_wrong() {
-        let error = |text: &str| parse(text.as_bytes()).err().unwrap();
+        let error = |text: &str| parse(text.as_bytes(), u64::MAX).err().unwrap();
         assert_eq!(error("v 0 0 0\nv 1 0\n"), "line 2: a vertex needs three numbers");
         assert_eq!(
             error("v 0 0 0\n\nf 1 2 x\n"),
@@ -644,7 +673,7 @@ mod tests {
             "line 1: a face names vertex 3 of 2"
         );
         assert!(
-            parse(b"f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n").is_ok(),
+            parse(b"f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n", u64::MAX).is_ok(),
             "named before given"
         );
         assert_eq!(
@@ -665,14 +694,40 @@ mod tests {
             "line 4: a face names vertex 0 of 3"
         );
         assert_eq!(error("v 0 0 0 0\n"), "line 1: a vertex's w is 0");
-        assert_eq!(parse(b"v 0 0 \xff\n").err().unwrap(), "not UTF-8 text (byte 6)");
+        assert_eq!(
+            parse(b"v 0 0 \xff\n", u64::MAX).err().unwrap(),
+            "not UTF-8 text (byte 6)"
+        );
+    }
+
+    /// A hostile-input review's finding: a face of 99 M corners (198 MB of
+    /// text) aborted for memory while it was read.
+    #[test]
+    fn faces_past_the_triangles_memory_holds_are_refused_while_they_are_read() {
+        let text = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 1 2 4 3\n";
+        assert_eq!(parse(text, 3).map(|obj| obj.objects[0].indices.len()), Ok(9));
+        let refused = parse(text, 2).err().unwrap();
+        assert_eq!(
+            refused,
+            "line 6: its faces pass 2 triangles, more than the memory available holds while they are read"
+        );
+        let unknown = format!("{}\n", "x".repeat(1 << 20));
+        let (_, kept) = parse(unknown.as_bytes(), u64::MAX).unwrap().unknown.first.unwrap();
+        assert_eq!(
+            kept.len(),
+            STATEMENT_SHOWN + 1,
+            "an unknown statement is kept as far as it is shown"
+        );
     }
 
     #[test]
     fn a_byte_order_mark_is_no_part_of_the_first_line() {
         let text = "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 0 0 10\nf 1 2 3\nf 2 3 4\n";
         let with_mark = format!("\u{feff}{text}");
-        let (plain, marked) = (parse(text.as_bytes()).unwrap(), parse(with_mark.as_bytes()).unwrap());
+        let (plain, marked) = (
+            parse(text.as_bytes(), u64::MAX).unwrap(),
+            parse(with_mark.as_bytes(), u64::MAX).unwrap(),
+        );
         assert_eq!(marked.objects[0].positions, plain.objects[0].positions);
         assert_eq!(marked.objects[0].indices, plain.objects[0].indices);
         assert_eq!(marked.unknown.lines, 0);
@@ -682,7 +737,7 @@ mod tests {
     fn statements_obj_does_not_have_and_faces_that_draw_nothing_are_warned_of() {
         let text =
             "# a comment\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvv 5 5 5\ns off\nf 1 2 3\nF 2 3 4\nfo 1 2 4\nf 1 2\n";
-        let obj = parse(text.as_bytes()).unwrap();
+        let obj = parse(text.as_bytes(), u64::MAX).unwrap();
         assert_eq!(obj.objects[0].indices, [0, 1, 2]);
         assert_eq!(
             judge(&obj).unwrap(),
@@ -692,32 +747,35 @@ mod tests {
             ]
         );
         // A line continued by a backslash starts no statement of its own.
-        let clean =
-            parse(b"mtllib a.mtl\nusemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\ng x\nf 1 2 3\nparm u 0 \\\n 0.5 1\n").unwrap();
+        let clean = parse(
+            b"mtllib a.mtl\nusemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\ng x\nf 1 2 3\nparm u 0 \\\n 0.5 1\n",
+            u64::MAX,
+        )
+        .unwrap();
         assert!(judge(&clean).unwrap().is_empty());
     }
 
     #[test]
     fn what_the_specification_allows_and_tobj_refused_loads() {
         let unix = "o plate\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5\nusemtl red\nf 1/1 2/1 3/1\n";
-        let expected = parse(unix.replace("vt 0.5", "vt 0.5 0").as_bytes()).unwrap();
+        let expected = parse(unix.replace("vt 0.5", "vt 0.5 0").as_bytes(), u64::MAX).unwrap();
         for (what, text) in [
             ("old Mac OS line endings", unix.replace('\n', "\r")),
             ("a tab before the material", unix.replace("usemtl ", "usemtl\t")),
             ("an indented statement", unix.replace("o plate", "  o plate")),
             ("Windows line endings", unix.replace('\n', "\r\n")),
         ] {
-            let obj = parse(text.as_bytes()).unwrap_or_else(|e| panic!("{what}: {e}"));
+            let obj = parse(text.as_bytes(), u64::MAX).unwrap_or_else(|e| panic!("{what}: {e}"));
             assert_eq!(obj.objects.len(), 1, "{what}");
             assert_eq!(obj.objects[0].name, "plate", "{what}");
             assert_eq!(obj.objects[0].positions, expected.objects[0].positions, "{what}");
             assert_eq!(obj.objects[0].indices, expected.objects[0].indices, "{what}");
         }
-        let error = |text: &str| parse(text.as_bytes()).err().unwrap();
+        let error = |text: &str| parse(text.as_bytes(), u64::MAX).err().unwrap();
         let needs = "a texture coordinate needs a number u, and v a number where given";
         assert_eq!(error("vt\n"), format!("line 1: {needs}"));
         assert_eq!(error("vt 0 x\n"), format!("line 1: {needs}"));
-        assert!(parse(b"vt 0 0 x\n").is_ok(), "w is not read");
+        assert!(parse(b"vt 0 0 x\n", u64::MAX).is_ok(), "w is not read");
         assert_eq!(error("v 0 0 1 inf\n"), "line 1: a vertex's w 'inf' is not finite");
         assert_eq!(
             error("glTF\u{2}\0\0\0"),
@@ -728,7 +786,7 @@ mod tests {
 
     #[test]
     fn continued_lines_are_one_statement_and_free_form_geometry_is_warned_of() {
-        let plain = parse(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        let plain = parse(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", u64::MAX).unwrap();
         for text in [
             // A face continued, a statement OBJ has continued over a
             // vertex-like line, and a continuation at the end of the file.
@@ -738,7 +796,7 @@ mod tests {
             // A comment continues nothing; an empty usemtl names nothing.
             "# note \\\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl\nf 1 2 3\n",
         ] {
-            let obj = parse(text.as_bytes()).unwrap_or_else(|e| panic!("{text:?}: {e}"));
+            let obj = parse(text.as_bytes(), u64::MAX).unwrap_or_else(|e| panic!("{text:?}: {e}"));
             assert_eq!(obj.objects[0].positions, plain.objects[0].positions, "{text:?}");
             assert_eq!(obj.objects[0].indices, plain.objects[0].indices, "{text:?}");
             assert_eq!(obj.unknown.lines, 0, "{text:?}");
@@ -746,7 +804,7 @@ mod tests {
         let surface =
             "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 1\nparm u 0 1\nend\n";
         assert_eq!(
-            judge(&parse(surface.as_bytes()).unwrap()).unwrap(),
+            judge(&parse(surface.as_bytes(), u64::MAX).unwrap()).unwrap(),
             ["ignored 1 free-form curve or surface ('curv', 'curv2', 'surf'): only faces are rendered"]
         );
     }
@@ -755,7 +813,7 @@ mod tests {
     fn a_concave_face_cut_from_a_corner_that_does_not_see_it_all_is_warned_of() {
         // An L of six corners in the plane z = 0.
         let l_shape = "v 1 1 0\nv 1 2 0\nv 0 2 0\nv 0 0 0\nv 2 0 0\nv 2 1 0\n";
-        let fanned = |face: &str| judge(&parse(format!("{l_shape}{face}\n").as_bytes()).unwrap()).unwrap();
+        let fanned = |face: &str| judge(&parse(format!("{l_shape}{face}\n").as_bytes(), u64::MAX).unwrap()).unwrap();
         // From a corner beside the notch, the last triangle spans it.
         assert_eq!(
             fanned("f 2 3 4 5 6 1"),
@@ -769,7 +827,7 @@ mod tests {
         // A square, and a square with a corner on an edge, are convex.
         assert!(fanned("f 4 5 6 3").is_empty());
         assert!(
-            judge(&parse(b"v 0 0 0\nv 1 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nf 1 2 3 4 5\n").unwrap())
+            judge(&parse(b"v 0 0 0\nv 1 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nf 1 2 3 4 5\n", u64::MAX).unwrap())
                 .unwrap()
                 .is_empty()
         );
@@ -777,7 +835,7 @@ mod tests {
 
     #[test]
     fn a_file_with_no_faces_and_statements_obj_does_not_have_is_not_taken_for_an_empty_model() {
-        let gltf = parse(b"{\n  \"asset\": {\"version\": \"2.0\"}\n}\n").unwrap();
+        let gltf = parse(b"{\n  \"asset\": {\"version\": \"2.0\"}\n}\n", u64::MAX).unwrap();
         assert_eq!(
             judge(&gltf).unwrap_err(),
             "no faces, and 3 lines whose statement OBJ does not define (the first, line 1: '{'): is it an OBJ file?"
