@@ -94,6 +94,8 @@ pub enum ConfigError {
     SweptAndSet(String),
     #[error("--sweep names {key}={value} twice: each value runs once")]
     SweptTwice { key: String, value: String },
+    #[error("--sweep gives {0} values, and at most {MAX_SWEEP_VALUES} run in one interleaved run: split it into runs")]
+    SweepTooLong(usize),
 }
 
 /// A configuration file's JSON, read within [`crate::input::TEXT_LIMIT`];
@@ -353,7 +355,7 @@ impl BenchConfig {
                 // (ioc's start depth must lie above its bottom depth).
                 let with: Vec<String> = items.iter().cloned().chain([format!("{key}={value}")]).collect();
                 ModeParams::parse(&with, &modes)?;
-                if s.values[..i].contains(value) {
+                if s.values[..i].iter().any(|earlier| same_value(earlier, value)) {
                     return Err(ConfigError::SweptTwice {
                         key,
                         value: value.clone(),
@@ -405,6 +407,17 @@ pub fn load_options(
     }
 }
 
+/// Whether two values of a parameter are one: written alike, or numbers
+/// alike (`0` and `0.0`, `1` and `01`).
+fn same_value(a: &str, b: &str) -> bool {
+    a == b || matches!((a.parse::<f64>(), b.parse::<f64>()), (Ok(x), Ok(y)) if x == y)
+}
+
+/// The most values a sweep may run, in one interleaved run: each is a
+/// culler of its own, measured every frame (a GPU's timestamp queries for
+/// 2 048 of them passed what wgpu allows in one set).
+const MAX_SWEEP_VALUES: usize = 256;
+
 /// One mode run at several values of one of its parameters, in the same
 /// interleaved run.
 #[derive(Clone, Debug, PartialEq)]
@@ -427,6 +440,9 @@ impl Sweep {
         let values: Vec<String> = values.split(',').map(|v| v.trim().to_string()).collect();
         if values.iter().any(String::is_empty) {
             return Err(malformed());
+        }
+        if values.len() > MAX_SWEEP_VALUES {
+            return Err(ConfigError::SweepTooLong(values.len()));
         }
         Ok(Sweep {
             mode,
@@ -564,6 +580,16 @@ mod tests {
         assert!(matches!(
             plan("omq.factor=0.5,0.7,0.5", &[]),
             Err(ConfigError::SweptTwice { value, .. }) if value == "0.5"
+        ));
+        // Numbers alike are one value however written.
+        assert!(matches!(
+            plan("omq.factor=0.5,0.50", &[]),
+            Err(ConfigError::SweptTwice { value, .. }) if value == "0.50"
+        ));
+        let many: Vec<String> = (1..=257).map(|k| format!("{}", f64::from(k) / 1000.0)).collect();
+        assert!(matches!(
+            plan(&format!("omq.factor={}", many.join(",")), &[]),
+            Err(ConfigError::SweepTooLong(257))
         ));
         assert!(plan("omq.factor=0.5,0.7", &["omq.om=32x24"]).is_ok());
         // Each value is checked with the other parameters.

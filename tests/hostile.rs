@@ -572,7 +572,7 @@ fn no_output_may_be_an_input_or_one_of_the_runs_own_files() {
             "-o",
             s(&path),
         ],
-        vec!["export", s(&model), "-o", s(&model)],
+        vec!["export", s(&model), "--path", s(&path), "-o", s(&path)],
         vec!["flythrough", s(&model), "--modes", "vfc", "-o", s(&model)],
         vec![
             "flythrough",
@@ -618,6 +618,9 @@ fn no_output_may_be_an_input_or_one_of_the_runs_own_files() {
     );
     assert_eq!(std::fs::read_to_string(&model).unwrap(), common::THREE_OBJECTS_OBJ);
     assert_eq!(std::fs::read_to_string(&config).unwrap(), r#"{"frames": 2}"#);
+    // An export is GLB, so named: as .obj, occlu would refuse to read it.
+    refused(&["export", s(&model), "-o", s(&model)], &["occlu writes GLB only"]);
+    assert_eq!(std::fs::read_to_string(&model).unwrap(), common::THREE_OBJECTS_OBJ);
 }
 
 // Item 7, for issue 37's outputs: one that cannot be written is refused

@@ -107,20 +107,29 @@ fn frame_count() -> clap::builder::RangedI64ValueParser<u32> {
 
 /// Extensions of image formats other than PNG, as a picture's file may
 /// be misnamed with one.
-const OTHER_IMAGE_KINDS: [&str; 14] = [
+const OTHER_IMAGE_KINDS: &[&str] = &[
     "jpg", "jpeg", "gif", "webp", "bmp", "tif", "tiff", "tga", "exr", "hdr", "avif", "heic", "ppm", "qoi",
 ];
 
-/// A picture's file, as `--output` takes it: PNG is all occlu writes, so a
-/// name that says another image format (`frame.jpg`) is refused rather
-/// than given PNG bytes; any other name is taken.
-fn png_file() -> impl TypedValueParser<Value = PathBuf> {
-    clap::builder::PathBufValueParser::new().try_map(|path: PathBuf| {
-        let kind = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-        match kind.filter(|kind| OTHER_IMAGE_KINDS.contains(&kind.as_str())) {
-            Some(kind) => Err(format!(
-                "occlu writes PNG only, and '{}' names a .{kind} file: name it .png",
-                path.display()
+/// Extensions of model formats other than GLB, as an exported scene's
+/// file may be misnamed with one (occlu reads .obj and .gltf by their
+/// extension, so it would refuse its own export so named).
+const OTHER_MODEL_KINDS: &[&str] = &[
+    "obj", "gltf", "fbx", "stl", "ply", "dae", "3ds", "usd", "usda", "usdc", "usdz",
+];
+
+/// An output file as `--output` takes it, for a command that writes only
+/// `kind` files: a name that says another format of its family (`others`:
+/// `frame.jpg` for a picture) is refused, rather than given bytes of
+/// another kind; any other name is taken.
+fn output_of(kind: &'static str, others: &'static [&'static str]) -> impl TypedValueParser<Value = PathBuf> {
+    clap::builder::PathBufValueParser::new().try_map(move |path: PathBuf| {
+        let named = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match named.filter(|named| others.contains(&named.as_str())) {
+            Some(named) => Err(format!(
+                "occlu writes {kind} only, and '{}' names a .{named} file: name it .{}",
+                path.display(),
+                kind.to_ascii_lowercase()
             )),
             None => Ok(path),
         }
@@ -295,7 +304,7 @@ pub struct PictureArgs {
     #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
     pub params: Vec<String>,
     /// Output PNG (animated, for flythrough).
-    #[arg(long, short, value_name = "FILE", value_parser = png_file())]
+    #[arg(long, short, value_name = "FILE", value_parser = output_of("PNG", OTHER_IMAGE_KINDS))]
     pub output: PathBuf,
     /// Add a bird's-eye view beside each mode's frame: the frustum in red,
     /// culled objects' boxes in yellow.
@@ -414,7 +423,7 @@ pub struct ExportArgs {
     #[command(flatten)]
     pub scene: SceneAndPath,
     /// Output .glb file.
-    #[arg(long, short, value_name = "FILE")]
+    #[arg(long, short, value_name = "FILE", value_parser = output_of("GLB", OTHER_MODEL_KINDS))]
     pub output: PathBuf,
 }
 
