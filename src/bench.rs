@@ -305,10 +305,13 @@ fn load_world(plan: &BenchPlan, params: &HierarchyParams) -> Result<(World, f64,
     let start = Instant::now();
     let scene = crate::scene::load(&plan.scene, &plan.load)?;
     let load_ms = ms(start.elapsed());
+    // The model and path are checked before: a glTF file's buffer files
+    // are known now.
     for path in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
-        // The model and path are checked before: a glTF file's buffer
-        // files are known now.
         refuse_input_as_output(path, &scene.files)?;
+    }
+    for file in &scene.files {
+        refuse_input_among_results(file, &plan.out)?;
     }
     let start = Instant::now();
     let hierarchy = Hierarchy::build(&scene.objects, params);

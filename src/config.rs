@@ -408,9 +408,13 @@ pub fn load_options(
 }
 
 /// Whether two values of a parameter are one: written alike, or numbers
-/// alike (`0` and `0.0`, `1` and `01`).
+/// alike (`0` and `0.0`, `1` and `01`), whole ones compared whole (beyond
+/// 2^53, f64 would take two for one).
 fn same_value(a: &str, b: &str) -> bool {
-    a == b || matches!((a.parse::<f64>(), b.parse::<f64>()), (Ok(x), Ok(y)) if x == y)
+    match (a.parse::<i128>(), b.parse::<i128>()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b || matches!((a.parse::<f64>(), b.parse::<f64>()), (Ok(x), Ok(y)) if x == y),
+    }
 }
 
 /// The most values a sweep may run, in one interleaved run: each is a
@@ -586,6 +590,11 @@ mod tests {
             plan("omq.factor=0.5,0.50", &[]),
             Err(ConfigError::SweptTwice { value, .. }) if value == "0.50"
         ));
+        assert!(same_value("1", "01") && same_value("1e3", "1000") && !same_value("400x300", "400x301"));
+        assert!(
+            !same_value("9007199254740993", "9007199254740992"),
+            "whole numbers compared whole"
+        );
         let many: Vec<String> = (1..=257).map(|k| format!("{}", f64::from(k) / 1000.0)).collect();
         assert!(matches!(
             plan(&format!("omq.factor={}", many.join(",")), &[]),

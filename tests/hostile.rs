@@ -620,6 +620,10 @@ fn no_output_may_be_an_input_or_one_of_the_runs_own_files() {
     assert_eq!(std::fs::read_to_string(&config).unwrap(), r#"{"frames": 2}"#);
     // An export is GLB, so named: as .obj, occlu would refuse to read it.
     refused(&["export", s(&model), "-o", s(&model)], &["occlu writes GLB only"]);
+    refused(
+        &["export", s(&model), "-o", "x.GLTF"],
+        &["occlu writes GLB only", ".gltf file"],
+    );
     assert_eq!(std::fs::read_to_string(&model).unwrap(), common::THREE_OBJECTS_OBJ);
 }
 

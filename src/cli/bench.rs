@@ -77,6 +77,9 @@ fn bench_single(
     for output in [&plan.export_github_benchmark, &plan.trace].into_iter().flatten() {
         occlu::report::refuse_input_as_output(output, &inputs)?;
     }
+    if let Some(config) = config {
+        occlu::report::refuse_input_among_results(config, &plan.out)?;
+    }
     if let (Some(export), Some(trace)) = (&plan.export_github_benchmark, &plan.trace) {
         occlu::report::refuse_one_file_twice(export, trace)?;
     }

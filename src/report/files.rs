@@ -121,30 +121,25 @@ pub fn refuse_one_file_twice(first: &Path, second: &Path) -> Result<(), ReportEr
     }
 }
 
-/// Where `output` is or would be written: its path resolved as far as it
-/// exists (a link leads to what [`write_whole`] writes), and the rest, which
-/// a run may yet make (its --out), taken as written, `..` undoing the
-/// folder before it.
+/// Where `output` is or would be written, as the system will resolve it
+/// when the run writes it: component by component, each that exists taken
+/// where it leads (a link to what it names), each that does not, which a
+/// run may yet make (its --out), taken as written, `..` going back a
+/// folder from where the path has led.
 fn where_written(output: &Path) -> Option<PathBuf> {
-    let absolute = std::path::absolute(output).ok()?;
-    let mut existing = absolute.as_path();
-    let mut rest = Vec::new();
-    let mut resolved = loop {
-        match std::fs::canonicalize(existing) {
-            Ok(resolved) => break resolved,
-            Err(_) => {
-                rest.push(existing.components().next_back()?);
-                existing = existing.parent()?;
-            }
-        }
-    };
-    for part in rest.into_iter().rev() {
+    let mut resolved = PathBuf::new();
+    for part in std::path::absolute(output).ok()?.components() {
         match part {
             Component::ParentDir => {
                 resolved.pop();
             }
-            Component::Normal(name) => resolved.push(name),
-            Component::CurDir | Component::RootDir | Component::Prefix(_) => {}
+            Component::CurDir => {}
+            part => {
+                resolved.push(part);
+                if let Ok(real) = std::fs::canonicalize(&resolved) {
+                    resolved = real;
+                }
+            }
         }
     }
     Some(resolved)
@@ -224,5 +219,14 @@ mod tests {
         let own = refuse_own_file(&out.join("sub/../summary.json"), &out, &["summary.json"], "own");
         assert_eq!(own.unwrap_err().error.to_string(), "own");
         assert!(!out.exists(), "nothing made");
+        // `..` after a link goes back from where the link leads, as the
+        // system takes it.
+        #[cfg(unix)]
+        {
+            std::fs::create_dir_all(dir.path().join("real/sub")).unwrap();
+            std::os::unix::fs::symlink(dir.path().join("real/sub"), dir.path().join("link")).unwrap();
+            let through_link = out.join("../link/../x.json");
+            assert_eq!(where_written(&through_link), Some(real.with_file_name("real/x.json")));
+        }
     }
 }

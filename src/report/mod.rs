@@ -196,7 +196,8 @@ pub fn refuse_result_file(output: &Path, out: &Path) -> Result<(), ReportError> 
 }
 
 /// Refuses an `input` of a run that is one of the files the run writes
-/// into `out` (`--path OUT/summary.json`): the run would replace it.
+/// into `out` (`--path OUT/summary.json`, a configuration or a glTF
+/// buffer so named): the run would replace it.
 pub fn refuse_input_among_results(input: &Path, out: &Path) -> Result<(), ReportError> {
     let why = "is an input of this command and one of the files the run writes into --out: the run would replace it; choose another --out";
     files::refuse_own_file(input, out, &run_files(), why)

@@ -10,6 +10,7 @@ use std::borrow::Cow;
 use serde::Deserialize;
 use serde::de::{DeserializeOwned, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde_json::Value;
+use serde_json::value::RawValue;
 
 /// The JSON text of a glTF file: a GLB's JSON chunk, or the whole file.
 pub fn text(bytes: &[u8]) -> Result<Cow<'_, [u8]>, String> {
@@ -162,21 +163,35 @@ const BYTES_PER_NESTED: u64 = 128;
 const BYTES_PER_VALUE_OBJECT: u64 = 720;
 
 /// What a number or string in an array takes, at most, where the crate
-/// keeps it as a [`Value`] (an accessor's `min` and `max`, members it does
-/// not know) and in the document read as one: 32 bytes, in a vector
-/// growing to twice its length while its old buffer is still held (40
-/// million zeros in one `min`, 80 MB of text, asked for a 2 GB buffer
-/// beside the 1 GB one).
+/// keeps it as a [`Value`] (an accessor's `min` and `max`) and in the
+/// document read as one: 32 bytes, in a vector growing to twice its length
+/// while its old buffer is still held (40 million zeros in one `min`, 80 MB
+/// of text, asked for a 2 GB buffer beside the 1 GB one).
 const BYTES_PER_ARRAY_VALUE: u64 = 96;
 
-/// The JSON values of a glTF document whose memory, read, out of
-/// proportion to their text: objects, counted as elements of its
-/// top-level arrays or nested in them, and numbers and strings in arrays.
+/// What one takes in the crate's typed arrays, at most: an index of
+/// `children` or `joints` (4 bytes, in a vector growing as above), a
+/// number of a fixed array inside its struct (none beyond the struct).
+const BYTES_PER_TYPED_VALUE: u64 = 12;
+
+/// What the document read as a [`Value`] takes per byte of the text the
+/// crate keeps as text or skips (`extras`, vendors' extensions), at most:
+/// a number of one digit and its comma become a 32-byte value, in a vector
+/// growing as above.
+const VALUE_BYTES_PER_SKIPPED_BYTE: u64 = 48;
+
+/// The JSON of a glTF document, counted for its memory read, which is out
+/// of proportion to its text: objects, as elements of its top-level arrays
+/// or nested in them; numbers and strings in arrays, where the crate keeps
+/// them as JSON (`min` and `max`) or not; the bytes it keeps as text or
+/// skips.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct JsonCounts {
     items: u64,
     nested: u64,
-    array_values: u64,
+    values_kept_as_json: u64,
+    typed_values: u64,
+    skipped_bytes: u64,
 }
 
 impl JsonCounts {
@@ -187,7 +202,8 @@ impl JsonCounts {
     pub fn check_as_structs(&self, memory: Option<u64>) -> Result<(), String> {
         let bytes = self.items.saturating_mul(BYTES_PER_ITEM)
             + self.nested.saturating_mul(BYTES_PER_NESTED)
-            + self.array_values.saturating_mul(BYTES_PER_ARRAY_VALUE);
+            + self.values_kept_as_json.saturating_mul(BYTES_PER_ARRAY_VALUE)
+            + self.typed_values.saturating_mul(BYTES_PER_TYPED_VALUE);
         self.check(bytes, memory, "")
     }
 
@@ -196,7 +212,8 @@ impl JsonCounts {
     /// than `memory`.
     pub fn check_as_value(&self, memory: Option<u64>) -> Result<(), String> {
         let bytes = (self.items + self.nested).saturating_mul(BYTES_PER_VALUE_OBJECT)
-            + self.array_values.saturating_mul(BYTES_PER_ARRAY_VALUE);
+            + (self.values_kept_as_json + self.typed_values).saturating_mul(BYTES_PER_ARRAY_VALUE)
+            + self.skipped_bytes.saturating_mul(VALUE_BYTES_PER_SKIPPED_BYTE);
         self.check(bytes, memory, " as written (for the extensions read from it)")
     }
 
@@ -205,7 +222,7 @@ impl JsonCounts {
             Some(memory) if bytes > memory => Err(format!(
                 "its JSON holds {} objects and {} values in arrays, which would take up to {} MB to read{reading}, and this process may take {} MB more",
                 self.items + self.nested,
-                self.array_values,
+                self.values_kept_as_json + self.typed_values,
                 bytes >> 20,
                 memory >> 20
             )),
@@ -219,9 +236,11 @@ impl JsonCounts {
 /// them as text or JSON): what costs memory counted, and an index past u32
 /// refused, named with its line and column: gltf-json keeps only its low
 /// 32 bits (`"mesh": 4294967296` would draw mesh 0). Text this pass cannot
-/// read is refused too, as the crate would refuse most of it: a number
-/// beyond f64 or a lone surrogate where the crate skips a member it does
-/// not know would otherwise end the pass before an index it must see.
+/// read is refused too: a number beyond f64, a lone surrogate, bytes that
+/// are not UTF-8 or arrays nested deeper than 128, outside `extras` and
+/// vendors' extensions. The crate skips them in a member it does not know
+/// (and refuses them elsewhere); read here, they would end the pass before
+/// an index it must see.
 pub fn census(text: &[u8]) -> Result<JsonCounts, String> {
     let mut counts = JsonCounts::default();
     Scan {
@@ -239,6 +258,8 @@ pub fn census(text: &[u8]) -> Result<JsonCounts, String> {
 #[derive(Clone, Copy)]
 enum Key {
     Index(&'static str),
+    /// Its numbers are kept by the crate as JSON (`min`, `max`).
+    KeptAsJson,
     /// Its object's members are indices.
     Attributes(&'static str),
     /// Its object's members are extensions.
@@ -260,7 +281,11 @@ struct Scan<'c> {
 impl Scan<'_> {
     /// A number or string: counted where it lies in an array.
     fn scalar<E>(self) -> Result<(), E> {
-        self.counts.array_values += u64::from(self.in_array);
+        let count = u64::from(self.in_array);
+        match self.key {
+            Key::KeptAsJson => self.counts.values_kept_as_json += count,
+            _ => self.counts.typed_values += count,
+        }
         Ok(())
     }
 }
@@ -269,7 +294,11 @@ impl<'de> DeserializeSeed<'de> for Scan<'_> {
     type Value = ();
     fn deserialize<D: Deserializer<'de>>(self, deserializer: D) -> Result<(), D::Error> {
         match self.key {
-            Key::Skipped => IgnoredAny::deserialize(deserializer).map(drop),
+            Key::Skipped => {
+                let skipped = <&RawValue>::deserialize(deserializer)?;
+                self.counts.skipped_bytes += skipped.get().len() as u64;
+                Ok(())
+            }
             _ => deserializer.deserialize_any(self),
         }
     }
@@ -301,6 +330,7 @@ impl<'de> Visitor<'de> for KeySeed {
             Key::Extensions => Key::Skipped,
             _ if name == "extras" => Key::Skipped,
             _ if name == "extensions" => Key::Extensions,
+            _ if name == "min" || name == "max" => Key::KeptAsJson,
             _ => known(&INDEX_KEYS)
                 .map(Key::Index)
                 .or_else(|| known(&ATTRIBUTE_KEYS).map(Key::Attributes))
@@ -426,27 +456,30 @@ mod tests {
     #[test]
     fn a_document_of_more_objects_and_array_values_than_memory_holds_is_refused_by_their_count() {
         let nodes = format!(
-            r#"{{"asset": {{"version": "2.0"}}, "nodes": [{}], "accessors": [{{"min": [0, 0, 0]}}]}}"#,
+            r#"{{"asset": {{"version": "2.0"}}, "nodes": [{}], "accessors": [{{"min": [0, 0, 0], "extras": [1, 2]}}]}}"#,
             vec![r#"{"extensions": {"EXT_x": {}}, "children": [1, 2]}"#; 999].join(",")
         );
         let counts = census(nodes.as_bytes()).unwrap();
         // The document, the asset, 999 nodes and an accessor, two objects
-        // nested in each node, and two children a node and the accessor's
-        // three minimums in arrays.
+        // nested in each node; two children a node, three minimums kept
+        // as JSON, and the six bytes of `[1, 2]` skipped.
         let expected = JsonCounts {
             items: 1002,
             nested: 1998,
-            array_values: 2001,
+            values_kept_as_json: 3,
+            typed_values: 1998,
+            skipped_bytes: 6,
         };
         assert_eq!(counts, expected);
-        let as_structs = 1002 * BYTES_PER_ITEM + 1998 * BYTES_PER_NESTED + 2001 * BYTES_PER_ARRAY_VALUE;
+        let as_structs =
+            1002 * BYTES_PER_ITEM + 1998 * BYTES_PER_NESTED + 3 * BYTES_PER_ARRAY_VALUE + 1998 * BYTES_PER_TYPED_VALUE;
         assert!(counts.check_as_structs(Some(as_structs)).is_ok());
         let refused = counts.check_as_structs(Some(as_structs - 1)).unwrap_err();
         assert!(
             refused.starts_with("its JSON holds 3000 objects and 2001 values in arrays"),
             "{refused}"
         );
-        let as_value = 3000 * BYTES_PER_VALUE_OBJECT + 2001 * BYTES_PER_ARRAY_VALUE;
+        let as_value = 3000 * BYTES_PER_VALUE_OBJECT + 2001 * BYTES_PER_ARRAY_VALUE + 6 * VALUE_BYTES_PER_SKIPPED_BYTE;
         assert!(counts.check_as_value(Some(as_value)).is_ok());
         assert!(counts.check_as_value(Some(as_value - 1)).is_err());
         assert!(counts.check_as_structs(None).is_ok());

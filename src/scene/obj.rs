@@ -51,8 +51,8 @@ pub fn load(path: &Path, bytes: &[u8], _: &LoadOptions, builder: &mut SceneBuild
         path: path.into(),
         message: format!("invalid OBJ: {message}"),
     };
-    // Read only as far as the memory available holds: the model would be
-    // refused for its triangles after it is read anyway.
+    // Read only as far as the memory available holds while it is read,
+    // which takes more per triangle than the model built from it keeps.
     let most_triangles = memory::available().map_or(u64::MAX, |bytes| bytes / READ_BYTES_PER_TRIANGLE);
     let obj = parse(bytes, most_triangles).map_err(invalid)?;
     let warnings = judge(&obj).map_err(invalid)?;

@@ -110,7 +110,10 @@ mod tests {
             ..Default::default()
         };
         let error = city::generate(&city, &mut builder).unwrap_err().to_string();
-        assert!(error.contains("more than the 1000 that"), "{error}");
+        assert!(
+            error.contains("mesh '") && error.contains("more than the 1000 that"),
+            "{error}"
+        );
     }
 
     #[test]
