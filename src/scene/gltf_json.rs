@@ -108,9 +108,8 @@ impl<'de> Deserialize<'de> for ExtensionNames {
 }
 
 /// Keys whose numbers (directly, or in an array) are indices into one of
-/// the document's arrays: glTF 2.0's `glTFid` properties, and those of the
-/// extensions occlu reads or the crate knows.
-const INDEX_KEYS: [&str; 20] = [
+/// the document's arrays: glTF 2.0's `glTFid` properties.
+const INDEX_KEYS: [&str; 19] = [
     "scene",
     "nodes",
     "children",
@@ -130,19 +129,11 @@ const INDEX_KEYS: [&str; 20] = [
     "node",
     "input",
     "output",
-    "light",
 ];
 
 /// Keys whose object's every member is an index, whatever its name: a
-/// primitive's, a morph target's or an extension's vertex attributes.
+/// primitive's or a morph target's vertex attributes.
 const ATTRIBUTE_KEYS: [&str; 2] = ["attributes", "targets"];
-
-/// Extensions whose members are scanned for indices, by the prefix of
-/// their names: Khronos' and the multi-vendor ones, which the crate or
-/// occlu read with their indices. Another vendor's extension is kept by
-/// the crate as JSON, where a number under a key such as `index` may be
-/// anything, so it is skipped.
-const SCANNED_EXTENSIONS: [&str; 2] = ["KHR_", "EXT_"];
 
 /// What one of gltf-json's structs takes per element of the document's
 /// top-level arrays (a node, a material), at most, the growth of the
@@ -175,7 +166,7 @@ const BYTES_PER_ARRAY_VALUE: u64 = 96;
 const BYTES_PER_TYPED_VALUE: u64 = 12;
 
 /// What the document read as a [`Value`] takes per byte of the text the
-/// crate keeps as text or skips (`extras`, vendors' extensions), at most:
+/// crate keeps as text or skips (`extras`, `extensions`), at most:
 /// a number of one digit and its comma become a 32-byte value, in a vector
 /// growing as above.
 const VALUE_BYTES_PER_SKIPPED_BYTE: u64 = 48;
@@ -232,13 +223,14 @@ impl JsonCounts {
 }
 
 /// A document's JSON `text` read before the gltf crate reads it, in one
-/// pass with `extras` and vendors' extensions skipped (the crate keeps
-/// them as text or JSON): what costs memory counted, and an index past u32
+/// pass with `extras` and `extensions` skipped (the crate keeps them as
+/// text or JSON, or occlu reads their indices whole): what costs memory
+/// counted, and an index past u32
 /// refused, named with its line and column: gltf-json keeps only its low
 /// 32 bits (`"mesh": 4294967296` would draw mesh 0). Text this pass cannot
 /// read is refused too: a number beyond f64, a lone surrogate, bytes that
 /// are not UTF-8 or arrays nested deeper than 128, outside `extras` and
-/// vendors' extensions. The crate skips them in a member it does not know
+/// `extensions`. The crate skips them in a member it does not know
 /// (and refuses them elsewhere); read here, they would end the pass before
 /// an index it must see.
 pub fn census(text: &[u8]) -> Result<JsonCounts, String> {
@@ -262,9 +254,9 @@ enum Key {
     KeptAsJson,
     /// Its object's members are indices.
     Attributes(&'static str),
-    /// Its object's members are extensions.
-    Extensions,
-    /// Kept by the crate as text or as JSON, and skipped.
+    /// Kept by the crate as text or as JSON, or read by occlu from the
+    /// JSON with its indices checked whole (Draco, meshopt, instancing),
+    /// or bearing on no geometry (lights): skipped.
     Skipped,
     Other,
 }
@@ -326,10 +318,7 @@ impl<'de> Visitor<'de> for KeySeed {
         let known = |keys: &[&'static str]| keys.iter().copied().find(|&k| k == name);
         Ok(match self.parent {
             Key::Attributes(attributes) => Key::Index(attributes),
-            Key::Extensions if SCANNED_EXTENSIONS.iter().any(|p| name.starts_with(p)) => Key::Other,
-            Key::Extensions => Key::Skipped,
-            _ if name == "extras" => Key::Skipped,
-            _ if name == "extensions" => Key::Extensions,
+            _ if name == "extras" || name == "extensions" => Key::Skipped,
             _ if name == "min" || name == "max" => Key::KeptAsJson,
             _ => known(&INDEX_KEYS)
                 .map(Key::Index)
@@ -422,20 +411,19 @@ mod tests {
             "{wrapped}"
         );
         assert!(refused(&document("0", "8589934592")).contains("`attributes` holds the index 8589934592"));
-        // Escaped keys, morph targets, arrays of indices, and extensions
-        // the crate or occlu read.
+        // Escaped keys, morph targets and arrays of indices.
         let escaped = document("0", "1").replace(r#""mesh": 0"#, r#""\u006desh": 4294967296"#);
         assert!(refused(&escaped).contains("`mesh` holds"), "{escaped}");
         let targets = r#"{"meshes": [{"primitives": [{"targets": [{"NORMAL": 4294967300}]}]}]}"#;
         assert!(refused(targets).contains("`targets` holds"));
         assert!(refused(r#"{"nodes": [{"children": [1, 4294967296]}]}"#).contains("`children` holds"));
+        // Not indices: a count; extras and extensions (where anything goes,
+        // or occlu reads the indices whole).
         let light = r#"{"nodes": [{"extensions": {"KHR_lights_punctual": {"light": 4294967296}}}]}"#;
-        assert!(refused(light).contains("`light` holds"));
-        // Not indices: a count, extras (where anything goes), a vendor's
-        // extension.
         for kept in [
             r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 8589934592}]}"#,
             r#"{"nodes": [{"extras": {"big": 1e400}, "extensions": {"ACME_ids": {"index": 8589934592, "at": 1e400}}}]}"#,
+            light,
         ] {
             assert!(census(kept.as_bytes()).is_ok(), "{kept}");
         }
@@ -457,7 +445,7 @@ mod tests {
     fn a_document_of_more_objects_and_array_values_than_memory_holds_is_refused_by_their_count() {
         let nodes = format!(
             r#"{{"asset": {{"version": "2.0"}}, "nodes": [{}], "accessors": [{{"min": [0, 0, 0], "extras": [1, 2]}}]}}"#,
-            vec![r#"{"extensions": {"EXT_x": {}}, "children": [1, 2]}"#; 999].join(",")
+            vec![r#"{"x": {"y": {}}, "children": [1, 2]}"#; 999].join(",")
         );
         let counts = census(nodes.as_bytes()).unwrap();
         // The document, the asset, 999 nodes and an accessor, two objects
