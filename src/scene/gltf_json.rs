@@ -211,9 +211,9 @@ impl JsonCounts {
     fn check(&self, bytes: u64, memory: Option<u64>, reading: &str) -> Result<(), String> {
         match memory {
             Some(memory) if bytes > memory => Err(format!(
-                "its JSON holds {} objects and {} values in arrays, which would take up to {} MB to read{reading}, and this process may take {} MB more",
-                self.items + self.nested,
-                self.values_kept_as_json + self.typed_values,
+                "its JSON holds {} and {} in arrays, which would take up to {} MB to read{reading}, and this process may take {} MB more",
+                crate::text::count((self.items + self.nested) as usize, "object"),
+                crate::text::count((self.values_kept_as_json + self.typed_values) as usize, "value"),
                 bytes >> 20,
                 memory >> 20
             )),
