@@ -102,11 +102,11 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
     // Text the crate would read wrong, or at a cost out of proportion to
     // it, is refused first (a GLB whose JSON cannot be found is left to
     // the crate, which names what is wrong).
-    let objects = match gltf_json::text(bytes) {
+    let counts = match gltf_json::text(bytes) {
         Ok(text) => gltf_json::census(&text).map_err(parse_error)?,
         Err(_) => gltf_json::JsonCounts::default(),
     };
-    objects.check_as_structs(memory::available()).map_err(parse_error)?;
+    counts.check_as_structs(memory::available()).map_err(parse_error)?;
     // gltf-json's validator indexes primitive accessors without a bounds
     // check, so those are checked first; validation then also refuses files
     // that require an extension occlu does not read. A file of another glTF
@@ -135,7 +135,7 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Gltf, serde_json::Value), S
     // from it.
     let raw = match READ_FROM_JSON.iter().any(|e| listed(e)) {
         true => {
-            objects.check_as_value(memory::available()).map_err(parse_error)?;
+            counts.check_as_value(memory::available()).map_err(parse_error)?;
             gltf_json::parsed(&text).map_err(parse_error)?
         }
         false => serde_json::Value::Null,

@@ -225,14 +225,13 @@ impl JsonCounts {
 /// A document's JSON `text` read before the gltf crate reads it, in one
 /// pass with `extras` and `extensions` skipped (the crate keeps them as
 /// text or JSON, or occlu reads their indices whole): what costs memory
-/// counted, and an index past u32
-/// refused, named with its line and column: gltf-json keeps only its low
-/// 32 bits (`"mesh": 4294967296` would draw mesh 0). Text this pass cannot
-/// read is refused too: a number beyond f64, a lone surrogate, bytes that
-/// are not UTF-8 or arrays nested deeper than 128, outside `extras` and
-/// `extensions`. The crate skips them in a member it does not know
-/// (and refuses them elsewhere); read here, they would end the pass before
-/// an index it must see.
+/// counted, and an index past u32 refused, named with its line and column:
+/// gltf-json keeps only its low 32 bits (`"mesh": 4294967296` would draw
+/// mesh 0). Text this pass cannot read is refused too: a number beyond
+/// f64, a lone surrogate, bytes that are not UTF-8 or arrays nested deeper
+/// than 128, outside `extras` and `extensions`. The crate skips them in a
+/// member it does not know (and refuses them elsewhere); read here, they
+/// would end the pass before an index it must see.
 pub fn census(text: &[u8]) -> Result<JsonCounts, String> {
     let mut counts = JsonCounts::default();
     Scan {
