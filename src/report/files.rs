@@ -38,7 +38,7 @@ impl ReportError {
 /// (`/dev/stdout`, a pipe) is written in place.
 pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     let fail = ReportError::at(path);
-    let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    let target = landing(path).map_err(&fail)?;
     let existing = std::fs::metadata(&target).ok();
     if existing.as_ref().is_some_and(|m| !m.is_file()) {
         return std::fs::write(&target, bytes).map_err(fail);
@@ -57,11 +57,28 @@ pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     written.map_err(fail)
 }
 
+/// Where writing `path` lands: where it leads, if it exists (through
+/// links); itself, if it does not. A link that leads nowhere (its target
+/// missing, or a loop) is refused: the file written would replace the
+/// link, where a link to a file is written through.
+fn landing(path: &Path) -> std::io::Result<PathBuf> {
+    match std::fs::canonicalize(path) {
+        Ok(target) => Ok(target),
+        Err(e) if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) => {
+            Err(std::io::Error::new(
+                e.kind(),
+                format!("is a link that leads nowhere ({e}): give the file it should lead to, or another name"),
+            ))
+        }
+        Err(_) => Ok(path.to_path_buf()),
+    }
+}
+
 /// Checks that [`write_whole`] could write `path`, so that a bad output
 /// file is refused before a long run rather than after it.
 pub fn check_writable(path: &Path) -> Result<(), ReportError> {
     let fail = ReportError::at(path);
-    let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    let target = landing(path).map_err(&fail)?;
     match std::fs::metadata(&target) {
         Ok(m) if m.is_dir() => Err(fail(std::io::Error::other("is a directory: a file name is needed"))),
         // Written in place later; opening it now could end a pipe's stream.
@@ -228,5 +245,31 @@ mod tests {
             let through_link = out.join("../link/../x.json");
             assert_eq!(where_written(&through_link), Some(real.with_file_name("real/x.json")));
         }
+    }
+
+    /// A hostile-input review's finding: an output that is a link to
+    /// nothing was replaced by a file, where a link to a file is written
+    /// through.
+    #[cfg(unix)]
+    #[test]
+    fn a_link_that_leads_nowhere_is_refused_as_an_output_and_left_as_it_was() {
+        let dir = tempfile::tempdir().unwrap();
+        let dangling = dir.path().join("dangling.png");
+        std::os::unix::fs::symlink(dir.path().join("nowhere/x.png"), &dangling).unwrap();
+        for refused in [check_writable(&dangling), write_whole(&dangling, b"png")] {
+            assert!(
+                refused
+                    .unwrap_err()
+                    .to_string()
+                    .contains("is a link that leads nowhere")
+            );
+        }
+        assert!(std::fs::symlink_metadata(&dangling).unwrap().file_type().is_symlink());
+        let file = dir.path().join("x.png");
+        std::fs::write(&file, "old").unwrap();
+        let link = dir.path().join("link.png");
+        std::os::unix::fs::symlink(&file, &link).unwrap();
+        write_whole(&link, b"new").unwrap();
+        assert_eq!(std::fs::read(&file).unwrap(), b"new");
     }
 }
