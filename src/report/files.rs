@@ -33,8 +33,8 @@ impl ReportError {
 
 /// Writes `bytes` to `path` whole or not at all: into a temporary file
 /// beside it, then renamed over it. A link is followed (the file it names
-/// is replaced, with its permissions; the link stays; a link naming
-/// nothing is replaced by the file), and a path that is not a regular file
+/// is replaced, with its permissions; the link stays; a link leading
+/// nowhere is refused, [`landing`]), and a path that is not a regular file
 /// (`/dev/stdout`, a pipe) is written in place.
 pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     let fail = ReportError::at(path);

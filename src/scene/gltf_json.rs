@@ -160,15 +160,16 @@ const BYTES_PER_VALUE_OBJECT: u64 = 720;
 /// of text, asked for a 2 GB buffer beside the 1 GB one).
 const BYTES_PER_ARRAY_VALUE: u64 = 96;
 
-/// What one takes in the crate's typed arrays, at most: an index of
-/// `children` or `joints` (4 bytes, in a vector growing as above), a
-/// number of a fixed array inside its struct (none beyond the struct).
+/// What one takes in the crate's typed arrays, at most, worked out (not
+/// measured): an index of `children` or `joints` (4 bytes, in a vector
+/// growing as above), a number of a fixed array inside its struct (none
+/// beyond the struct).
 const BYTES_PER_TYPED_VALUE: u64 = 12;
 
 /// What the document read as a [`Value`] takes per byte of the text the
-/// crate keeps as text or skips (`extras`, `extensions`), at most:
-/// a number of one digit and its comma become a 32-byte value, in a vector
-/// growing as above.
+/// crate keeps as text or skips (`extras`, `extensions`), at most, worked
+/// out (not measured): a number of one digit and its comma become a
+/// 32-byte value, in a vector growing as above.
 const VALUE_BYTES_PER_SKIPPED_BYTE: u64 = 48;
 
 /// The JSON of a glTF document, counted for its memory read, which is out
