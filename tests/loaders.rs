@@ -300,6 +300,42 @@ fn edited_glb(edit: impl FnOnce(&mut GltfWriter)) -> Result<occlu::scene::Scene,
     load_file(&write(dir.path(), "e.glb", w.glb(&[0])))
 }
 
+/// glTF requires a POSITION accessor's `min` and `max` to be its values'
+/// extremes, and engines bound meshes by them: a file whose bounds leave
+/// out vertices is told of (occlu bounds meshes by their vertices, so it
+/// draws and culls them right), where they do by more than rounding and
+/// lossy compression explain.
+#[test]
+fn vertices_beyond_the_bounds_a_gltf_declares_are_told_of() {
+    let declared = |min: [f32; 3], max: [f32; 3]| {
+        edited_glb(|w| {
+            w.accessors[0]["min"] = json!(min);
+            w.accessors[0]["max"] = json!(max);
+        })
+        .unwrap()
+    };
+    // The unit cube's own bounds, and bounds off by less than a
+    // hundredth of its size (as compression leaves them), or wider.
+    assert!(declared([0.0; 3], [1.0; 3]).warnings.is_empty());
+    assert!(declared([0.005, 0.0, -0.005], [1.0, 0.995, 1.0]).warnings.is_empty());
+    assert!(declared([-1.0; 3], [2.0; 3]).warnings.is_empty());
+    let short = declared([0.0; 3], [1.0, 0.5, 1.0]);
+    assert_eq!(short.objects.len(), 1);
+    assert_eq!(short.bounds.max, DVec3::ONE, "bounded by its vertices");
+    assert_eq!(
+        short.warnings,
+        [
+            "a mesh has vertices beyond the bounds the file declares for them ('cube': y reaches 1, its POSITION max 0.5): occlu bounds meshes by their vertices, but an engine that takes the file's bounds culls it while it is in view"
+        ]
+    );
+    let below = declared([0.0, 0.0, 0.25], [1.0; 3]);
+    assert!(
+        below.warnings[0].contains("'cube': z reaches 0, its POSITION min 0.25"),
+        "{:?}",
+        below.warnings
+    );
+}
+
 /// A hostile-input review's finding: a node whose matrix flattened its
 /// mesh to a line loaded without a word, and drew nothing. Flattened to a
 /// plane, its faces are still drawn, and nothing is said.

@@ -313,6 +313,7 @@ fn add_node_trees(
     let mut reached = vec![false; gltf.nodes().len()];
     let mut stack: Vec<(gltf::Node, DMat4)> = roots.into_iter().map(|n| (n, DMat4::IDENTITY)).collect();
     let mut not_unit = 0;
+    let mut loose = LooseBounds::default();
     while let Some((node, parent)) = stack.pop() {
         let index = node.index();
         if std::mem::replace(&mut reached[index], true) {
@@ -325,7 +326,7 @@ fn add_node_trees(
         let world = parent * local;
         if let Some(mesh) = node.mesh() {
             if let std::collections::hash_map::Entry::Vacant(slot) = mesh_groups.entry(mesh.index()) {
-                slot.insert(load_mesh(path, &mesh, buffers, draco, builder)?);
+                slot.insert(load_mesh(path, &mesh, buffers, draco, &mut loose, builder)?);
             }
             let node_name = node
                 .name()
@@ -376,6 +377,7 @@ fn add_node_trees(
             text::count(not_unit, "node")
         ));
     }
+    loose.warn(builder);
     if not_unit_instances > 0 {
         builder.warn(format!(
             "normalised the rotations of {}: {INSTANCING} requires unit quaternions, and theirs were not",
@@ -799,12 +801,14 @@ fn check_sparse_indices(
     Ok(())
 }
 
-/// One mesh group per triangle primitive of the mesh.
+/// One mesh group per triangle primitive of the mesh; those whose
+/// vertices reach beyond their declared bounds counted in `loose`.
 fn load_mesh(
     path: &Path,
     mesh: &gltf::Mesh,
     buffers: &[Vec<u8>],
     draco: &mut DracoStreams,
+    loose: &mut LooseBounds,
     builder: &mut SceneBuilder,
 ) -> Result<Vec<MeshGroup>, SceneError> {
     use gltf::accessor::{DataType, Dimensions};
@@ -878,6 +882,7 @@ fn load_mesh(
         } else {
             mesh_name.clone()
         };
+        loose.check(&name, &accessor, &positions);
         let group = builder
             .add_mesh(&name, &positions, &triangles)
             .map_err(|error| SceneError::Geometry {
@@ -887,6 +892,100 @@ fn load_mesh(
         groups.push(group);
     }
     Ok(groups)
+}
+
+/// Primitives whose vertices reach beyond the bounds their POSITION
+/// accessor declares. glTF requires `min` and `max` there, equal to the
+/// stored values' extremes (after Draco's decoding and any sparse
+/// substitution; `normalized` does not apply to them), and engines take
+/// them for a mesh's bounds: where a vertex lies beyond them, such an
+/// engine culls the mesh while part of it is in view. occlu bounds meshes
+/// by their vertices; it says so, naming the first such primitive.
+#[derive(Default)]
+struct LooseBounds {
+    count: usize,
+    first: Option<String>,
+}
+
+/// How far beyond a declared bound a vertex may lie and be taken as on it:
+/// this share of the bounds' size, as a bound written from the f64
+/// positions an exporter rounded to f32 differs from the stored extreme by
+/// about 6e-8 of it...
+const BOUNDS_ROUNDING: f64 = 1e-6;
+/// ...and this share of the vertices' largest extent, as lossy compression
+/// moves vertices off bounds written from the positions before it, by up
+/// to half a quantization step: 2.4e-4 of the extent at Draco's default of
+/// 11 bits (this repository's compressed fixtures, Draco and meshopt's
+/// exponential filter, lie 7e-6 and 3e-5 beyond bounds of 0.83). An
+/// exporter's error worth telling of is far larger.
+const BOUNDS_SLACK: f64 = 0.01;
+
+impl LooseBounds {
+    /// Counts primitive `name` if a vertex of `positions` (read through
+    /// `accessor`) lies beyond the bounds it declares, by more than
+    /// [`BOUNDS_ROUNDING`] and [`BOUNDS_SLACK`] allow; bounds the file does
+    /// not give (or not as three numbers each) say nothing.
+    fn check(&mut self, name: &str, accessor: &gltf::Accessor, positions: &[DVec3]) {
+        let declared = |bound: Option<serde_json::Value>| -> Option<DVec3> {
+            let values = bound?
+                .as_array()?
+                .iter()
+                .map(serde_json::Value::as_f64)
+                .collect::<Option<Vec<f64>>>()?;
+            let coordinate = coordinate(accessor);
+            <[f64; 3]>::try_from(values)
+                .ok()
+                .map(|v| DVec3::from(v.map(coordinate)))
+        };
+        let (Some(min), Some(max)) = (declared(accessor.min()), declared(accessor.max())) else {
+            return;
+        };
+        if positions.is_empty() {
+            return;
+        }
+        let (low, high) = positions
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            });
+        let tolerance =
+            min.abs().max(max.abs()).max_element() * BOUNDS_ROUNDING + (high - low).max_element() * BOUNDS_SLACK;
+        // Per axis, how far the vertices reach below `min` and above `max`.
+        let below = (min - low) - tolerance;
+        let above = (high - max) - tolerance;
+        let worst = (0..3)
+            .flat_map(|axis| {
+                [
+                    (below[axis], axis, "min", low[axis], min[axis]),
+                    (above[axis], axis, "max", high[axis], max[axis]),
+                ]
+            })
+            .filter(|&(beyond, ..)| beyond > 0.0)
+            .max_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((_, axis, which, reach, bound)) = worst {
+            self.count += 1;
+            self.first.get_or_insert_with(|| {
+                format!(
+                    "'{name}': {} reaches {}, its POSITION {which} {}",
+                    ["x", "y", "z"][axis],
+                    text::number(reach),
+                    text::number(bound)
+                )
+            });
+        }
+    }
+
+    fn warn(self, builder: &mut SceneBuilder) {
+        match (self.count, self.first) {
+            (1, Some(first)) => builder.warn(format!(
+                "a mesh has vertices beyond the bounds the file declares for them ({first}): occlu bounds meshes by their vertices, but an engine that takes the file's bounds culls it while it is in view"
+            )),
+            (count, Some(first)) => builder.warn(format!(
+                "{count} meshes have vertices beyond the bounds the file declares for them ({first} the first): occlu bounds meshes by their vertices, but an engine that takes the file's bounds culls them while they are in view"
+            )),
+            _ => {}
+        }
+    }
 }
 
 /// The file's Draco streams, with a bound on what decoding them may
