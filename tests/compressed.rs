@@ -136,6 +136,13 @@ fn compressed_files_load_as_their_source() {
     ] {
         let scene = load_fixture(file).unwrap_or_else(|e| panic!("{file}: {e}"));
         assert_eq!(scene.triangles(), source.triangles(), "{file}");
+        // The tools' bounds agree with what they stored (or describe values
+        // before a rounding they applied, which is not checked).
+        assert!(
+            !scene.warnings.iter().any(|w| w.contains("beyond the bounds")),
+            "{file}: {:?}",
+            scene.warnings
+        );
         for k in 0..3 {
             let (a, b) = (
                 scene.bounds.min[k] - source.bounds.min[k],
@@ -515,6 +522,31 @@ impl Unpacked {
     }
 }
 
+/// A mesh's bounds are checked against its vertices where the file stores
+/// them as written (meshopt without a filter), not where an encoder
+/// rounded them (Draco's quantization, meshopt's exponential filter),
+/// whose bounds describe the values before it.
+#[test]
+fn declared_bounds_are_checked_only_against_values_no_encoder_rounded() {
+    for (file, checked) in [
+        ("meshopt-float.glb", true),
+        ("draco.glb", false),
+        ("meshopt-exponential.glb", false),
+        ("khr-meshopt-exponential.glb", false),
+    ] {
+        let unpacked = Unpacked::fixture(file);
+        let mut json = unpacked.json.clone();
+        let position = json["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .unwrap() as usize;
+        let max = &mut json["accessors"][position]["max"];
+        max[1] = (max[1].as_f64().unwrap() - 1.0).into();
+        let scene = unpacked.load(&json, &unpacked.bin).unwrap();
+        let warned = scene.warnings.iter().any(|w| w.contains("beyond the bounds"));
+        assert_eq!(warned, checked, "{file}: {:?}", scene.warnings);
+    }
+}
+
 #[test]
 fn malformed_meshopt_data_is_an_error_not_a_crash() {
     let file = Unpacked::fixture("meshopt-quantized.glb");
@@ -600,7 +632,17 @@ fn quantized_positions_dequantize_as_gltf_defines_them() {
         ),
     ];
     let dir = tempfile::tempdir().unwrap();
+    // A stored component as a number, as glTF's min and max write it.
+    let stored = |component: u32, bytes: &[u8]| -> f64 {
+        match component {
+            5120 => f64::from(bytes[0] as i8),
+            5121 => f64::from(bytes[0]),
+            5122 => f64::from(i16::from_le_bytes([bytes[0], bytes[1]])),
+            _ => f64::from(u16::from_le_bytes([bytes[0], bytes[1]])),
+        }
+    };
     for (component, normalized, low, high, lo, hi) in encodings {
+        let (stored_low, stored_high) = (stored(component, &low), stored(component, &high));
         let mut w = GltfWriter::default();
         let mut bytes = Vec::new();
         for corner in 0..8 {
@@ -614,7 +656,7 @@ fn quantized_positions_dequantize_as_gltf_defines_them() {
         let position = w.raw(
             &bytes,
             json!({"componentType": component, "normalized": normalized, "count": 8, "type": "VEC3",
-                   "min": [0, 0, 0], "max": [0, 0, 0]}),
+                   "min": [stored_low, stored_low, stored_low], "max": [stored_high, stored_high, stored_high]}),
         );
         w.buffer_views[position]["byteStride"] = json!(stride.max(4));
         let indices = w.indices(&cube_indices());
@@ -628,6 +670,27 @@ fn quantized_positions_dequantize_as_gltf_defines_them() {
         let model = common::write(dir.path(), "q.glb", w.glb(&[node]));
         let scene =
             load(&SceneSpec::File(model), &LoadOptions::default()).unwrap_or_else(|e| panic!("{component}: {e}"));
+        // Bounds of the stored values agree with them; the meanings written
+        // instead (an exporter's slip where they differ) leave them out.
+        assert!(scene.warnings.is_empty(), "{component}: {:?}", scene.warnings);
+        if normalized {
+            w.accessors[position]["min"] = json!([lo, lo, lo]);
+            w.accessors[position]["max"] = json!([hi, hi, hi]);
+            let model = common::write(dir.path(), "meant.glb", w.glb(&[node]));
+            let scene = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();
+            // The vertices lie beyond both written bounds where the type
+            // is signed, by as much (up to rounding) on either side.
+            let beyond = |side: &str, value: f64, bound: f64| {
+                format!("'q': x reaches {value} where its POSITION {side} says {bound:.1}")
+            };
+            assert!(
+                scene.warnings.len() == 1
+                    && (scene.warnings[0].contains(&beyond("max", stored_high, hi))
+                        || lo < 0.0 && scene.warnings[0].contains(&beyond("min", -stored_high, lo))),
+                "{component}: {:?}",
+                scene.warnings
+            );
+        }
         let expected_min = DVec3::new(10.0 + 3.0 * lo, 3.0 * lo, 3.0 * lo);
         let expected_max = DVec3::new(10.0 + 3.0 * hi, 3.0 * hi, 3.0 * hi);
         assert!(

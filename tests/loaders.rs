@@ -303,8 +303,8 @@ fn edited_glb(edit: impl FnOnce(&mut GltfWriter)) -> Result<occlu::scene::Scene,
 /// glTF requires a POSITION accessor's `min` and `max` to be its values'
 /// extremes, and engines bound meshes by them: a file whose bounds leave
 /// out vertices is told of (occlu bounds meshes by their vertices, so it
-/// draws and culls them right), where they do by more than rounding and
-/// lossy compression explain.
+/// draws and culls them right), where they do by more than rounding
+/// explains; each mesh once, however many nodes place it.
 #[test]
 fn vertices_beyond_the_bounds_a_gltf_declares_are_told_of() {
     let declared = |min: [f32; 3], max: [f32; 3]| {
@@ -314,8 +314,8 @@ fn vertices_beyond_the_bounds_a_gltf_declares_are_told_of() {
         })
         .unwrap()
     };
-    // The unit cube's own bounds, and bounds off by less than a
-    // hundredth of its size (as compression leaves them), or wider.
+    // The unit cube's own bounds, bounds off by less than a hundredth of
+    // its size, and wider ones.
     assert!(declared([0.0; 3], [1.0; 3]).warnings.is_empty());
     assert!(declared([0.005, 0.0, -0.005], [1.0, 0.995, 1.0]).warnings.is_empty());
     assert!(declared([-1.0; 3], [2.0; 3]).warnings.is_empty());
@@ -325,14 +325,37 @@ fn vertices_beyond_the_bounds_a_gltf_declares_are_told_of() {
     assert_eq!(
         short.warnings,
         [
-            "a mesh has vertices beyond the bounds the file declares for them ('cube': y reaches 1, its POSITION max 0.5): occlu bounds meshes by their vertices, but an engine that takes the file's bounds culls it while it is in view"
+            "a mesh has vertices beyond the bounds its glTF accessor declares ('cube': y reaches 1 where its POSITION max says 0.5): occlu bounds meshes by their vertices, but an engine that takes the file's bounds may cull it while in view"
         ]
     );
     let below = declared([0.0, 0.0, 0.25], [1.0; 3]);
     assert!(
-        below.warnings[0].contains("'cube': z reaches 0, its POSITION min 0.25"),
+        below.warnings[0].contains("'cube': z reaches 0 where its POSITION min says 0.25"),
         "{:?}",
         below.warnings
+    );
+    // A second mesh with bounds too small, placed by two nodes: two
+    // meshes, one named.
+    let two = edited_glb(|w| {
+        w.accessors[0]["max"] = json!([1.0, 1.0, 0.5]);
+        let (p, i) = cube();
+        let other = w.mesh("other", &[(&p, Some(&i), 4)]);
+        let positions = w.meshes[other]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .unwrap() as usize;
+        w.accessors[positions]["min"] = json!([0.5, 0.0, 0.0]);
+        let placed = [3.0, 6.0].map(|x| w.node(json!({"mesh": other, "translation": [x, 0.0, 0.0]})));
+        w.nodes[0]["children"] = json!(placed);
+    })
+    .unwrap();
+    assert_eq!(two.objects.len(), 3);
+    assert_eq!(two.warnings.len(), 1, "{:?}", two.warnings);
+    assert!(
+        two.warnings[0].starts_with(
+            "2 meshes have vertices beyond the bounds their glTF accessors declare (one of them, 'cube': z reaches 1 where its POSITION max says 0.5)"
+        ),
+        "{:?}",
+        two.warnings
     );
 }
 

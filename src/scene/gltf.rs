@@ -313,7 +313,7 @@ fn add_node_trees(
     let mut reached = vec![false; gltf.nodes().len()];
     let mut stack: Vec<(gltf::Node, DMat4)> = roots.into_iter().map(|n| (n, DMat4::IDENTITY)).collect();
     let mut not_unit = 0;
-    let mut loose = LooseBounds::default();
+    let mut loose = LooseBounds::new(raw);
     while let Some((node, parent)) = stack.pop() {
         let index = node.index();
         if std::mem::replace(&mut reached[index], true) {
@@ -377,13 +377,13 @@ fn add_node_trees(
             text::count(not_unit, "node")
         ));
     }
-    loose.warn(builder);
     if not_unit_instances > 0 {
         builder.warn(format!(
             "normalised the rotations of {}: {INSTANCING} requires unit quaternions, and theirs were not",
             text::count(not_unit_instances, "instance")
         ));
     }
+    loose.warn(builder);
     if scene.is_none()
         && let Some(lost) = gltf.nodes().find(|n| n.mesh().is_some() && !reached[n.index()])
     {
@@ -801,14 +801,15 @@ fn check_sparse_indices(
     Ok(())
 }
 
-/// One mesh group per triangle primitive of the mesh; those whose
-/// vertices reach beyond their declared bounds counted in `loose`.
+/// One mesh group per triangle primitive of the mesh; those stored as
+/// written whose vertices reach beyond their declared bounds counted in
+/// `loose`.
 fn load_mesh(
     path: &Path,
     mesh: &gltf::Mesh,
     buffers: &[Vec<u8>],
     draco: &mut DracoStreams,
-    loose: &mut LooseBounds,
+    loose: &mut LooseBounds<'_>,
     builder: &mut SceneBuilder,
 ) -> Result<Vec<MeshGroup>, SceneError> {
     use gltf::accessor::{DataType, Dimensions};
@@ -833,56 +834,60 @@ fn load_mesh(
         // Integer types: KHR_mesh_quantization.
         let types = [DataType::F32, DataType::I8, DataType::U8, DataType::I16, DataType::U16];
         check_kind(&accessor, "POSITION", &types, Dimensions::Vec3).map_err(error)?;
-        let (positions, triangles) = match draco.decode(mesh.index(), primitive.index(), buffers, accessor.data_type())
-        {
-            Some(decoded) => {
-                if accessor.sparse().is_some() {
-                    return Err(error(format!(
-                        "POSITION has sparse storage, which {DRACO} forbids an accessor it fills"
-                    )));
-                }
-                let decoded = decoded.map_err(error)?;
-                let coordinate = coordinate(&accessor);
-                let positions = decoded
-                    .positions
-                    .iter()
-                    .map(|p| DVec3::from(p.map(&coordinate)))
-                    .collect();
-                (positions, triangle_list(mode, &decoded.stream))
-            }
-            None => {
-                check_accessor(&accessor, "POSITION", &types, Dimensions::Vec3, buffers).map_err(error)?;
-                if let Some(indices) = primitive.indices() {
-                    let types = [DataType::U8, DataType::U16, DataType::U32];
-                    check_accessor(&indices, "indices", &types, Dimensions::Scalar, buffers).map_err(error)?;
-                }
-                let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-                let positions: Vec<DVec3> = read_vectors::<3>(&accessor, buffers)
-                    .ok_or_else(|| error("POSITION data lies outside its buffer".into()))?
-                    .into_iter()
-                    .map(DVec3::from)
-                    .collect();
-                let stream: Vec<u32> = match reader.read_indices() {
-                    Some(indices) => indices.into_u32().collect(),
-                    None if primitive.indices().is_some() => {
-                        return Err(error("index data lies outside its buffer".into()));
+        // `stored`: the positions are the values the file stores, not
+        // Draco's decoding (rounded by its quantization: [`LooseBounds`]).
+        let (positions, triangles, stored) =
+            match draco.decode(mesh.index(), primitive.index(), buffers, accessor.data_type()) {
+                Some(decoded) => {
+                    if accessor.sparse().is_some() {
+                        return Err(error(format!(
+                            "POSITION has sparse storage, which {DRACO} forbids an accessor it fills"
+                        )));
                     }
-                    None => (0..positions.len() as u32).collect(),
-                };
-                let declared = primitive.indices().map_or(positions.len(), |i| i.count());
-                if positions.len() != accessor.count() || stream.len() != declared {
-                    return Err(error("accessor data is shorter than its declared count".into()));
+                    let decoded = decoded.map_err(error)?;
+                    let coordinate = coordinate(&accessor);
+                    let positions = decoded
+                        .positions
+                        .iter()
+                        .map(|p| DVec3::from(p.map(&coordinate)))
+                        .collect();
+                    (positions, triangle_list(mode, &decoded.stream), false)
                 }
-                let triangles = triangle_list(mode, &stream);
-                (positions, triangles)
-            }
-        };
+                None => {
+                    check_accessor(&accessor, "POSITION", &types, Dimensions::Vec3, buffers).map_err(error)?;
+                    if let Some(indices) = primitive.indices() {
+                        let types = [DataType::U8, DataType::U16, DataType::U32];
+                        check_accessor(&indices, "indices", &types, Dimensions::Scalar, buffers).map_err(error)?;
+                    }
+                    let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+                    let positions: Vec<DVec3> = read_vectors::<3>(&accessor, buffers)
+                        .ok_or_else(|| error("POSITION data lies outside its buffer".into()))?
+                        .into_iter()
+                        .map(DVec3::from)
+                        .collect();
+                    let stream: Vec<u32> = match reader.read_indices() {
+                        Some(indices) => indices.into_u32().collect(),
+                        None if primitive.indices().is_some() => {
+                            return Err(error("index data lies outside its buffer".into()));
+                        }
+                        None => (0..positions.len() as u32).collect(),
+                    };
+                    let declared = primitive.indices().map_or(positions.len(), |i| i.count());
+                    if positions.len() != accessor.count() || stream.len() != declared {
+                        return Err(error("accessor data is shorter than its declared count".into()));
+                    }
+                    let triangles = triangle_list(mode, &stream);
+                    (positions, triangles, true)
+                }
+            };
         let name = if mesh.primitives().len() > 1 {
             format!("{mesh_name}/{}", primitive.index())
         } else {
             mesh_name.clone()
         };
-        loose.check(&name, &accessor, &positions);
+        if stored {
+            loose.check(&name, &accessor, &positions);
+        }
         let group = builder
             .add_mesh(&name, &positions, &triangles)
             .map_err(|error| SceneError::Geometry {
@@ -896,53 +901,71 @@ fn load_mesh(
 
 /// Primitives whose vertices reach beyond the bounds their POSITION
 /// accessor declares. glTF requires `min` and `max` there, equal to the
-/// stored values' extremes (after Draco's decoding and any sparse
-/// substitution; `normalized` does not apply to them), and engines take
-/// them for a mesh's bounds: where a vertex lies beyond them, such an
-/// engine culls the mesh while part of it is in view. occlu bounds meshes
-/// by their vertices; it says so, naming the first such primitive.
-#[derive(Default)]
-struct LooseBounds {
+/// values stored (after any sparse substitution; `normalized` does not
+/// apply to them), and engines take them for a mesh's bounds: where a
+/// vertex lies beyond them, such an engine may cull the mesh while part of
+/// it is in view. occlu bounds meshes by their vertices; it says so, naming
+/// one of them. Values an encoder rounded are not checked (Draco's
+/// quantization, over a range it chose, perhaps the whole scene's;
+/// meshopt's exponential filter): exporters measure bounds before that
+/// rounding, as this repository's compressed fixtures show (theirs lie
+/// 7e-6 and 3e-5 inside vertices near 0.83).
+struct LooseBounds<'a> {
+    /// The document's JSON as written, which says which buffer views
+    /// meshopt's filters rounded (null where no meshopt extension is used).
+    document: &'a serde_json::Value,
     count: usize,
-    first: Option<String>,
+    one: Option<String>,
 }
 
 /// How far beyond a declared bound a vertex may lie and be taken as on it:
-/// this share of the bounds' size, as a bound written from the f64
-/// positions an exporter rounded to f32 differs from the stored extreme by
-/// about 6e-8 of it...
+/// this share of the bounds' largest coordinate, as a bound written from
+/// the f64 positions an exporter rounded to f32 differs from the stored
+/// extreme by at most 6e-8 of it...
 const BOUNDS_ROUNDING: f64 = 1e-6;
-/// ...and this share of the vertices' largest extent, as lossy compression
-/// moves vertices off bounds written from the positions before it, by up
-/// to half a quantization step: 2.4e-4 of the extent at Draco's default of
-/// 11 bits (this repository's compressed fixtures, Draco and meshopt's
-/// exponential filter, lie 7e-6 and 3e-5 beyond bounds of 0.83). An
-/// exporter's error worth telling of is far larger.
+/// ...and this share of the vertices' largest extent: a bound off by less
+/// moves a mesh's culling by less than a pixel wherever its extent spans
+/// fewer than a hundred, and an exporter's error worth telling of is far
+/// larger.
 const BOUNDS_SLACK: f64 = 0.01;
 
-impl LooseBounds {
-    /// Counts primitive `name` if a vertex of `positions` (read through
-    /// `accessor`) lies beyond the bounds it declares, by more than
-    /// [`BOUNDS_ROUNDING`] and [`BOUNDS_SLACK`] allow; bounds the file does
-    /// not give (or not as three numbers each) say nothing.
+impl<'a> LooseBounds<'a> {
+    fn new(document: &'a serde_json::Value) -> Self {
+        LooseBounds {
+            document,
+            count: 0,
+            one: None,
+        }
+    }
+
+    /// Counts mesh `name` (a primitive, as occlu names it) if a vertex of
+    /// `positions` (read through `accessor`, as stored) lies beyond the
+    /// bounds the accessor declares, by more than [`BOUNDS_ROUNDING`] and
+    /// [`BOUNDS_SLACK`] allow; bounds the file does not give (or not as
+    /// three numbers each) say nothing.
     fn check(&mut self, name: &str, accessor: &gltf::Accessor, positions: &[DVec3]) {
-        let declared = |bound: Option<serde_json::Value>| -> Option<DVec3> {
+        let declared = |bound: Option<serde_json::Value>| -> Option<[f64; 3]> {
             let values = bound?
                 .as_array()?
                 .iter()
                 .map(serde_json::Value::as_f64)
                 .collect::<Option<Vec<f64>>>()?;
-            let coordinate = coordinate(accessor);
-            <[f64; 3]>::try_from(values)
-                .ok()
-                .map(|v| DVec3::from(v.map(coordinate)))
+            values.try_into().ok()
         };
         let (Some(min), Some(max)) = (declared(accessor.min()), declared(accessor.max())) else {
             return;
         };
-        if positions.is_empty() {
+        let rounded = accessor
+            .view()
+            .is_some_and(|v| meshopt::rounds_values(self.document, v.index()));
+        if positions.is_empty() || rounded {
             return;
         }
+        // The bounds hold stored values, the positions those values mapped
+        // by `coordinate`, which only ever rises: mapping the bounds too
+        // compares the two in one space.
+        let coordinate = coordinate(accessor);
+        let [min, max] = [min, max].map(|bound| DVec3::from(bound.map(&coordinate)));
         let (low, high) = positions
             .iter()
             .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
@@ -950,41 +973,57 @@ impl LooseBounds {
             });
         let tolerance =
             min.abs().max(max.abs()).max_element() * BOUNDS_ROUNDING + (high - low).max_element() * BOUNDS_SLACK;
-        // Per axis, how far the vertices reach below `min` and above `max`.
-        let below = (min - low) - tolerance;
-        let above = (high - max) - tolerance;
-        let worst = (0..3)
+        // The axis and side where the vertices reach farthest beyond a
+        // bound (the first of equals), if beyond the tolerance anywhere.
+        let beyond = (0..3)
             .flat_map(|axis| {
                 [
-                    (below[axis], axis, "min", low[axis], min[axis]),
-                    (above[axis], axis, "max", high[axis], max[axis]),
+                    (axis, "min", min[axis] - low[axis]),
+                    (axis, "max", high[axis] - max[axis]),
                 ]
             })
-            .filter(|&(beyond, ..)| beyond > 0.0)
-            .max_by(|a, b| a.0.total_cmp(&b.0));
-        if let Some((_, axis, which, reach, bound)) = worst {
-            self.count += 1;
-            self.first.get_or_insert_with(|| {
-                format!(
-                    "'{name}': {} reaches {}, its POSITION {which} {}",
-                    ["x", "y", "z"][axis],
-                    text::number(reach),
-                    text::number(bound)
-                )
-            });
-        }
+            .filter(|&(.., by)| by > tolerance)
+            .reduce(|far, next| if next.2 > far.2 { next } else { far });
+        let Some((axis, side, _)) = beyond else {
+            return;
+        };
+        self.count += 1;
+        self.one.get_or_insert_with(|| {
+            // As the file writes them: stored values.
+            let (reach, bound) = match side {
+                "min" => (low[axis], accessor.min()),
+                _ => (high[axis], accessor.max()),
+            };
+            let stored = match stored_scale(accessor) {
+                Some(scale) => text::number((reach * scale).round()),
+                None if accessor.data_type() == gltf::accessor::DataType::F32 => (reach as f32).to_string(),
+                None => text::number(reach),
+            };
+            let bound = bound.map_or_else(String::new, |b| b[axis].to_string());
+            format!(
+                "'{name}': {} reaches {stored} where its POSITION {side} says {bound}",
+                ["x", "y", "z"][axis]
+            )
+        });
     }
 
+    /// Warns of the meshes counted, naming one.
     fn warn(self, builder: &mut SceneBuilder) {
-        match (self.count, self.first) {
-            (1, Some(first)) => builder.warn(format!(
-                "a mesh has vertices beyond the bounds the file declares for them ({first}): occlu bounds meshes by their vertices, but an engine that takes the file's bounds culls it while it is in view"
-            )),
-            (count, Some(first)) => builder.warn(format!(
-                "{count} meshes have vertices beyond the bounds the file declares for them ({first} the first): occlu bounds meshes by their vertices, but an engine that takes the file's bounds culls them while they are in view"
-            )),
-            _ => {}
-        }
+        let Some(one) = self.one else {
+            return;
+        };
+        let (meshes, have, their, them) = match self.count {
+            1 => ("a mesh".to_string(), "has", "its glTF accessor declares", "it"),
+            n => (format!("{n} meshes"), "have", "their glTF accessors declare", "them"),
+        };
+        let which = if self.count == 1 {
+            one
+        } else {
+            format!("one of them, {one}")
+        };
+        builder.warn(format!(
+            "{meshes} {have} vertices beyond the bounds {their} ({which}): occlu bounds meshes by their vertices, but an engine that takes the file's bounds may cull {them} while in view"
+        ));
     }
 }
 
@@ -1006,16 +1045,22 @@ fn draco_streams(raw: &serde_json::Value, gltf: &gltf::Gltf, options: &LoadOptio
 /// which quantizing exporters set to undo the scaling, apply afterwards as
 /// for any mesh.
 fn coordinate(accessor: &gltf::Accessor) -> impl Fn(f64) -> f64 + use<> {
+    let most = stored_scale(accessor);
+    move |c| most.map_or(c, |most| (c / most).max(-1.0))
+}
+
+/// For a normalized integer accessor, the stored value that means 1 (what
+/// [`coordinate`] divides by); none for others.
+fn stored_scale(accessor: &gltf::Accessor) -> Option<f64> {
     use gltf::accessor::DataType;
-    let most = match accessor.data_type() {
+    match accessor.data_type() {
         _ if !accessor.normalized() => None,
         DataType::I8 => Some(127.0),
         DataType::U8 => Some(255.0),
         DataType::I16 => Some(32767.0),
         DataType::U16 => Some(65535.0),
         DataType::U32 | DataType::F32 => None,
-    };
-    move |c| most.map_or(c, |most| (c / most).max(-1.0))
+    }
 }
 
 /// The elements of a 3- or 4-vector accessor of floats or integers

@@ -116,6 +116,16 @@ fn shortest_stream(mode: Mode, count: usize, stride: usize, version: u8) -> Opti
     }
 }
 
+/// Whether buffer view `view` of a glTF document (its raw JSON) is
+/// decoded through the exponential filter, whose encoder rounds each value
+/// to a mantissa of the bits it chose: the values the file holds are not
+/// the ones its exporter measured bounds on.
+pub fn rounds_values(document: &Value, view: usize) -> bool {
+    [EXT_MESHOPT, KHR_MESHOPT]
+        .iter()
+        .any(|name| document["bufferViews"][view]["extensions"][name]["filter"] == "EXPONENTIAL")
+}
+
 /// The compressed views of a glTF document (its raw JSON, since the gltf
 /// crate drops extensions it does not know).
 pub fn compressed_views(document: &Value) -> Result<Vec<CompressedView>, String> {
