@@ -726,6 +726,70 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
         stdout(&noted)
     );
 
+    // Frame times that vary along the path far more than between runs (a
+    // review's finding: 1.5 times slower on every frame passed as noise,
+    // each run's spread being the path's). Paired frame by frame, the
+    // change stands out; noise of a few percent a frame does not.
+    let varied = dir.path().join("varied");
+    tampered_copy(&base, &varied, &|r| {
+        r.frame_ms = if r.frame % 2 == 0 { 10.0 } else { 50.0 }
+    });
+    let v = varied.to_str().unwrap();
+    let against_varied = |name: &str, edit: &dyn Fn(&mut occlu::measure::FrameStats)| {
+        let new = dir.path().join(name);
+        tampered_copy(&varied, &new, edit);
+        occlu(&["compare", v, new.to_str().unwrap()])
+    };
+    let slower = against_varied("slower", &|r| r.frame_ms *= 1.5);
+    assert_eq!(slower.status.code(), Some(1), "{}", stdout(&slower));
+    assert!(own_stderr(&slower).join(" ").contains("vfc frame_ms +50.0%"));
+    let jittered = against_varied("jittered", &|r| {
+        r.frame_ms *= if r.frame % 3 == 0 { 1.04 } else { 0.99 }
+    });
+    assert_eq!(jittered.status.code(), Some(0), "{}", stdout(&jittered));
+
+    // Runs that measured something else are refused: another warmup, other
+    // mode parameters; one path named two ways (its cameras the same) is
+    // one path, and another is not.
+    let edited_summary = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let copy = dir.path().join(name);
+        tampered_copy(&steady, &copy, &|_| {});
+        let summary_path = copy.join("summary.json");
+        let mut summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&summary_path).unwrap()).unwrap();
+        edit(&mut summary);
+        std::fs::write(&summary_path, summary.to_string()).unwrap();
+        copy
+    };
+    let warm = edited_summary("warm", &|s| s["warmup"] = 0.into());
+    fails_with(
+        &["compare", b, warm.to_str().unwrap()],
+        2,
+        &["their warmup frames: 2 vs 0"],
+    );
+    let tuned = edited_summary("tuned", &|s| {
+        let omq = s["modes"]
+            .as_array_mut()
+            .unwrap()
+            .iter_mut()
+            .find(|m| m["name"] == "omq")
+            .unwrap();
+        omq["parameters"]["om"] = "80x60".into();
+    });
+    fails_with(
+        &["compare", b, tuned.to_str().unwrap()],
+        2,
+        &["their mode parameters", "80x60"],
+    );
+    let renamed = edited_summary("renamed", &|s| s["path"]["source"] = "/ci/checkout/path.json".into());
+    let same_path = occlu(&["compare", b, renamed.to_str().unwrap()]);
+    assert_eq!(same_path.status.code(), Some(0), "{:?}", own_stderr(&same_path));
+    let other = edited_summary("other", &|s| {
+        s["path"]["source"] = "/ci/checkout/other.json".into();
+        s["path"]["cameras"]["fnv1a"] = "0123456789abcdef".into();
+    });
+    fails_with(&["compare", b, other.to_str().unwrap()], 2, &["their paths"]);
+
     fails_with(
         &["compare", b, dir.path().join("absent").to_str().unwrap()],
         2,

@@ -94,8 +94,9 @@ pub enum Command {
     /// Compare two bench runs for CI: exit 1 when a counter (triangles,
     /// queries, round trips, wrong pixels, missed objects) grows, or when the
     /// mean frame time grows beyond --max-regression and beyond the measured
-    /// spread (median ± MAD). Two merged folders (occlu merge) compare run
-    /// by run and adapter by adapter.
+    /// noise (the 95 % interval of the ratio of the means, from frames paired
+    /// along the path). Two merged folders (occlu merge) compare run by run
+    /// and adapter by adapter.
     Compare(CompareArgs),
 }
 

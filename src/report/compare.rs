@@ -7,8 +7,12 @@
 //! Deterministic counters (triangles drawn, box tests, round trips, wrong
 //! pixels, missed objects) do not depend on machine noise: any increase is a
 //! regression. Frame time does: it regresses only when its mean grows beyond
-//! `--max-regression` percent *and* the new median minus its MAD lies above
-//! the base median plus its MAD, so noise within the measured spread passes.
+//! `--max-regression` percent *and* beyond the measured noise: the 95 %
+//! interval of the ratio of the new mean to the base's, from the two runs'
+//! frames paired by their place on the path ([`PairedRatio`]), lies above
+//! one. What a view costs, which varies along a path far more than a run's
+//! noise, cancels in a pair (the spread of either run's own frames measures
+//! the path: a mode three times slower on every frame stayed within it).
 //! Statistics are those [`read_results`] recomputes from each run's
 //! checked frames.csv, as `occlu merge` and `occlu plot` take them.
 //!
@@ -23,10 +27,10 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use super::merge::{Merged, read_merged};
-use super::summary::same_count;
+use super::summary::{Fingerprint, paired_frame_ms, same_count};
 use super::{ReportError, Summary, read_results};
 use crate::cull::{CountKind, ModeId};
-use crate::measure::{Distribution, ModeSummary};
+use crate::measure::{Distribution, ModeSummary, PairedRatio};
 
 /// A metric compare can gate on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -151,15 +155,15 @@ pub struct CompareOptions {
     pub cross_adapter: bool,
 }
 
-/// Frames below which the frame-time noise test (median ± MAD) says
-/// little; comparisons of fewer carry a note.
+/// Frames below which the frame-time noise test (the paired ratio's
+/// interval) says little; comparisons of fewer carry a note.
 pub const FEW_FRAMES: u32 = 30;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CompareError {
     #[error(transparent)]
     Read(#[from] ReportError),
-    #[error("the runs measured different workloads ({0}): their counters are not comparable")]
+    #[error("the runs measured different workloads (their {0}): their counters are not comparable")]
     Different(String),
     #[error("--max-regression must be a percentage of 0 or more, got {0}")]
     Threshold(f64),
@@ -216,22 +220,10 @@ pub fn compare(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comp
 /// Two run folders (not merged ones).
 fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Comparison, CompareError> {
     let max_regression_pct = options.max_regression_pct;
-    let (base_summary, _) = read_results(base)?;
-    let (new_summary, _) = read_results(new)?;
-    let workload = |s: &Summary| {
-        (
-            s.scene.facts.source.clone(),
-            s.path.source.clone(),
-            s.resolution,
-            s.frames,
-        )
-    };
-    let (a, b) = (workload(&base_summary), workload(&new_summary));
-    if a != b {
-        return Err(CompareError::Different(format!(
-            "{} {} {} {} frames vs {} {} {} {} frames",
-            a.0, a.1, a.2, a.3, b.0, b.1, b.2, b.3
-        )));
+    let (base_summary, base_rows) = read_results(base)?;
+    let (new_summary, new_rows) = read_results(new)?;
+    if let Some((what, x, y)) = different_workloads(&base_summary, &new_summary) {
+        return Err(CompareError::Different(format!("{what}: {x} vs {y}")));
     }
     let mut notes = Vec::new();
     // The same names, other contents: a changed model or path file, or a
@@ -273,7 +265,7 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
     let frames = base_summary.frames.min(new_summary.frames);
     if frames < FEW_FRAMES {
         notes.push(format!(
-            "{frames} frames: frame_ms is 'within noise' when the new mean is at most {max_regression_pct}% above the base's or the new median − MAD does not clear the base median + MAD; on fewer than {FEW_FRAMES} frames that spread says little"
+            "{frames} frames: frame_ms is 'within noise' when the new mean is at most {max_regression_pct}% above the base's or the 95 % interval of their ratio, from frames paired by their place on the path, reaches 1; on fewer than {FEW_FRAMES} frames that interval says little"
         ));
     }
     let (base_modes, new_modes) = (&base_summary.modes, &new_summary.modes);
@@ -298,7 +290,12 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
                 {
                     Verdict::NotJudged
                 }
-                (Some(x), Some(y), Some(n)) => verdict(metric, x, y, b, n, max_regression_pct),
+                (Some(x), Some(y), Some(n)) => {
+                    let paired = (metric == Metric::FrameMs)
+                        .then(|| PairedRatio::of(&paired_frame_ms((&new_rows, &n.name), (&base_rows, &b.name))))
+                        .flatten();
+                    verdict(metric, (x, y), (b, n), paired, max_regression_pct)
+                }
                 (Some(_), None, _) => missing.clone(),
                 _ => Verdict::Unmeasured,
             };
@@ -411,6 +408,37 @@ fn columns(dir: &Path, merged: &Merged) -> Result<Vec<(Identity, PathBuf)>, Comp
     Ok(found)
 }
 
+/// The first thing two runs measured differently that makes their
+/// counters incomparable, if any: what it is and each run's value. The
+/// scene and the path are one where their names or their contents'
+/// fingerprints agree (`path.json` and `/ci/checkout/path.json`); one name
+/// with other contents is compared, with a note ([`compare_runs`]). Mode
+/// parameters are those of the modes both ran.
+fn different_workloads(a: &Summary, b: &Summary) -> Option<(&'static str, String, String)> {
+    let one = |(name_a, fa): (&String, Option<Fingerprint>), (name_b, fb): (&String, Option<Fingerprint>)| {
+        name_a == name_b || fa.is_some() && fa == fb
+    };
+    let plain = |what, x: String, y: String| (x != y).then_some((what, x, y));
+    let (scene_a, scene_b) = (&a.scene.facts, &b.scene.facts);
+    let (path_a, path_b) = (&a.path, &b.path);
+    (!one((&scene_a.source, scene_a.geometry), (&scene_b.source, scene_b.geometry)))
+        .then(|| ("scenes", scene_a.source.clone(), scene_b.source.clone()))
+        .or_else(|| {
+            (!one((&path_a.source, path_a.cameras), (&path_b.source, path_b.cameras)))
+                .then(|| ("paths", path_a.source.clone(), path_b.source.clone()))
+        })
+        .or_else(|| plain("resolutions", a.resolution.to_string(), b.resolution.to_string()))
+        .or_else(|| plain("frame counts", a.frames.to_string(), b.frames.to_string()))
+        .or_else(|| plain("warmup frames", a.warmup.to_string(), b.warmup.to_string()))
+        .or_else(|| {
+            plain(
+                "mode parameters",
+                a.parameters_shared_with(b),
+                b.parameters_shared_with(a),
+            )
+        })
+}
+
 /// A run folder's name as changes and notes show it.
 fn label(folder: &Path) -> String {
     folder
@@ -418,7 +446,16 @@ fn label(folder: &Path) -> String {
         .map_or(String::new(), |n| n.to_string_lossy().into_owned())
 }
 
-fn verdict(metric: Metric, base: f64, new: f64, b: &ModeSummary, n: &ModeSummary, pct: f64) -> Verdict {
+/// The verdict on `metric` of mode `b` in the base and `n` in the new run,
+/// `base` and `new` its values; `paired`, the new run's mean frame time
+/// over the base's from their frames paired along the path.
+fn verdict(
+    metric: Metric,
+    (base, new): (f64, f64),
+    (b, n): (&ModeSummary, &ModeSummary),
+    paired: Option<PairedRatio>,
+    pct: f64,
+) -> Verdict {
     if same_count(base, new) {
         return Verdict::Same;
     }
@@ -431,9 +468,15 @@ fn verdict(metric: Metric, base: f64, new: f64, b: &ModeSummary, n: &ModeSummary
     if metric != Metric::FrameMs && !metric.follows_time(&b.name) {
         return Verdict::Regression;
     }
+    // Frame time: beyond the noise of paired frames. A count that follows
+    // the times (or a frame time without pairs, under four frames): the new
+    // median less its MAD above the base median plus its MAD.
     let spread = |m: &ModeSummary| m.stats.get(metric.name()).copied();
-    let beyond_spread = match (spread(b), spread(n)) {
+    let beyond_spread = match (metric, paired, spread(b), spread(n)) {
+        (Metric::FrameMs, Some(paired), ..) => paired.interval[0] > 1.0,
         (
+            _,
+            _,
             Some(Distribution {
                 median: mb, mad: db, ..
             }),

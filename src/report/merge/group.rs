@@ -12,7 +12,7 @@ use super::merged::{
 };
 use super::read::RunFolder;
 use crate::cull::{CountKind, ModeId};
-use crate::report::summary::{Fingerprint, MatrixIdentity, Summary, same_count};
+use crate::report::summary::{Fingerprint, MatrixIdentity, same_count};
 
 impl RunFolder {
     /// Which run it is: its matrix run's name, or its scene's and path's.
@@ -56,14 +56,6 @@ impl RunFolder {
             (!same_thing((source_a, fa), (source_b, fb))).then(|| (what, show(source_a, fa), show(source_b, fb)))
         };
         let plain = |what, x: String, y: String| (x != y).then_some((what, x, y));
-        let params = |s: &Summary, other: &Summary| -> String {
-            s.modes
-                .iter()
-                .filter(|m| other.modes.iter().any(|o| o.name == m.name))
-                .map(|m| format!("{} {}", m.name, m.parameters))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
         let matrices = match (a.matrix, b.matrix) {
             (Some(x), Some(y)) => plain("matrices", x.to_string(), y.to_string()),
             // A file from before matrices were recorded is judged by the rest.
@@ -73,7 +65,13 @@ impl RunFolder {
             .or_else(|| plain("frame counts", a.frames.to_string(), b.frames.to_string()))
             .or_else(|| plain("resolutions", a.resolution.to_string(), b.resolution.to_string()))
             .or_else(|| plain("warmup frames", a.warmup.to_string(), b.warmup.to_string()))
-            .or_else(|| plain("mode parameters", params(a, b), params(b, a)))
+            .or_else(|| {
+                plain(
+                    "mode parameters",
+                    a.parameters_shared_with(b),
+                    b.parameters_shared_with(a),
+                )
+            })
             .or_else(|| {
                 identity(
                     "scenes",
