@@ -412,13 +412,12 @@ fn columns(dir: &Path, merged: &Merged) -> Result<Vec<(Identity, PathBuf)>, Comp
 /// counters incomparable, if any: what it is and each run's value. The
 /// scene and the path are one where their names or their contents'
 /// fingerprints agree (`path.json` and `/ci/checkout/path.json`); one name
-/// with other contents is compared, with a note ([`compare_runs`]). Mode
-/// parameters are those of the modes both ran.
+/// with other contents is compared, with a note ([`compare_runs`]); then
+/// what the user set ([`Summary::settings_differing_from`]).
 fn different_workloads(a: &Summary, b: &Summary) -> Option<(&'static str, String, String)> {
     let one = |(name_a, fa): (&String, Option<Fingerprint>), (name_b, fb): (&String, Option<Fingerprint>)| {
         name_a == name_b || fa.is_some() && fa == fb
     };
-    let plain = |what, x: String, y: String| (x != y).then_some((what, x, y));
     let (scene_a, scene_b) = (&a.scene.facts, &b.scene.facts);
     let (path_a, path_b) = (&a.path, &b.path);
     (!one((&scene_a.source, scene_a.geometry), (&scene_b.source, scene_b.geometry)))
@@ -427,16 +426,7 @@ fn different_workloads(a: &Summary, b: &Summary) -> Option<(&'static str, String
             (!one((&path_a.source, path_a.cameras), (&path_b.source, path_b.cameras)))
                 .then(|| ("paths", path_a.source.clone(), path_b.source.clone()))
         })
-        .or_else(|| plain("resolutions", a.resolution.to_string(), b.resolution.to_string()))
-        .or_else(|| plain("frame counts", a.frames.to_string(), b.frames.to_string()))
-        .or_else(|| plain("warmup frames", a.warmup.to_string(), b.warmup.to_string()))
-        .or_else(|| {
-            plain(
-                "mode parameters",
-                a.parameters_shared_with(b),
-                b.parameters_shared_with(a),
-            )
-        })
+        .or_else(|| a.settings_differing_from(b))
 }
 
 /// A run folder's name as changes and notes show it.

@@ -63,15 +63,27 @@ pub struct Summary {
 }
 
 impl Summary {
-    /// The parameters of its modes that `other` ran too, as one line: runs
-    /// of one workload set the same ones.
-    pub(super) fn parameters_shared_with(&self, other: &Summary) -> String {
-        self.modes
-            .iter()
-            .filter(|m| other.modes.iter().any(|o| o.name == m.name))
-            .map(|m| format!("{} {}", m.name, m.parameters))
-            .collect::<Vec<_>>()
-            .join(", ")
+    /// The first of what a user sets (frames, resolution, warmup, the
+    /// parameters of the modes both ran) that `other` set differently, if
+    /// any: what it is and each run's value. Runs of one workload set them
+    /// alike.
+    pub(super) fn settings_differing_from(&self, other: &Summary) -> Option<(&'static str, String, String)> {
+        let parameters = |s: &Summary, other: &Summary| {
+            s.modes
+                .iter()
+                .filter(|m| other.modes.iter().any(|o| o.name == m.name))
+                .map(|m| format!("{} {}", m.name, m.parameters))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        [
+            ("frame counts", self.frames.to_string(), other.frames.to_string()),
+            ("resolutions", self.resolution.to_string(), other.resolution.to_string()),
+            ("warmup frames", self.warmup.to_string(), other.warmup.to_string()),
+            ("mode parameters", parameters(self, other), parameters(other, self)),
+        ]
+        .into_iter()
+        .find(|(_, x, y)| x != y)
     }
 }
 

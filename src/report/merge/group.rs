@@ -62,16 +62,7 @@ impl RunFolder {
             _ => None,
         };
         matrices
-            .or_else(|| plain("frame counts", a.frames.to_string(), b.frames.to_string()))
-            .or_else(|| plain("resolutions", a.resolution.to_string(), b.resolution.to_string()))
-            .or_else(|| plain("warmup frames", a.warmup.to_string(), b.warmup.to_string()))
-            .or_else(|| {
-                plain(
-                    "mode parameters",
-                    a.parameters_shared_with(b),
-                    b.parameters_shared_with(a),
-                )
-            })
+            .or_else(|| a.settings_differing_from(b))
             .or_else(|| {
                 identity(
                     "scenes",
