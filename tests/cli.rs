@@ -743,17 +743,24 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
     let slower = against_varied("slower", &|r| r.frame_ms *= 1.5);
     assert_eq!(slower.status.code(), Some(1), "{}", stdout(&slower));
     assert!(own_stderr(&slower).join(" ").contains("vfc frame_ms +50.0%"));
-    let jittered = against_varied("jittered", &|r| {
+    // Frames 4 % slower and 1 % faster by turns: within the noise even
+    // with no threshold, the interval reaching 1.
+    let jittered = dir.path().join("jittered");
+    tampered_copy(&varied, &jittered, &|r| {
         r.frame_ms *= if r.frame % 3 == 0 { 1.04 } else { 0.99 }
     });
-    assert_eq!(jittered.status.code(), Some(0), "{}", stdout(&jittered));
+    let jitter = occlu(&["compare", v, jittered.to_str().unwrap(), "--max-regression", "0"]);
+    assert_eq!(jitter.status.code(), Some(0), "{}", stdout(&jitter));
+    assert!(stdout(&jitter).contains("within noise"), "{}", stdout(&jitter));
 
     // Runs that measured something else are refused: another warmup, other
     // mode parameters; one path named two ways (its cameras the same) is
     // one path, and another is not.
-    let edited_summary = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+    // A copy of the steady run with its first `frames` frames, and its
+    // summary edited.
+    let edited_summary_over = |name: &str, frames: u32, edit: &dyn Fn(&mut serde_json::Value)| {
         let copy = dir.path().join(name);
-        tampered_copy(&steady, &copy, &|_| {});
+        common::rewritten_copy(&steady, &copy, &mut |rows| rows.retain(|r| r.frame < frames));
         let summary_path = copy.join("summary.json");
         let mut summary: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&summary_path).unwrap()).unwrap();
@@ -761,6 +768,7 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
         std::fs::write(&summary_path, summary.to_string()).unwrap();
         copy
     };
+    let edited_summary = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| edited_summary_over(name, 8, edit);
     let warm = edited_summary("warm", &|s| s["warmup"] = 0.into());
     fails_with(
         &["compare", b, warm.to_str().unwrap()],
@@ -784,6 +792,18 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
     let renamed = edited_summary("renamed", &|s| s["path"]["source"] = "/ci/checkout/path.json".into());
     let same_path = occlu(&["compare", b, renamed.to_str().unwrap()]);
     assert_eq!(same_path.status.code(), Some(0), "{:?}", own_stderr(&same_path));
+    // Renamed and run over fewer frames (which a path's fingerprint holds):
+    // the frame count is named.
+    let shorter = edited_summary_over("shorter", 7, &|s| {
+        s["path"]["source"] = "/ci/checkout/path.json".into();
+        s["path"]["cameras"]["fnv1a"] = "0123456789abcdef".into();
+        s["frames"] = 7.into();
+    });
+    fails_with(
+        &["compare", b, shorter.to_str().unwrap()],
+        2,
+        &["their frame counts: 8 vs 7"],
+    );
     let other = edited_summary("other", &|s| {
         s["path"]["source"] = "/ci/checkout/other.json".into();
         s["path"]["cameras"]["fnv1a"] = "0123456789abcdef".into();

@@ -8,5 +8,5 @@ mod timeline;
 
 pub use reference::{DepthError, ErrorMeter, ObjectError};
 pub use rows::{FrameStats, MissedObject, RowLimits};
-pub use summary::{Distribution, ModeDescription, ModeSummary, PairedRatio, StrategyShare, summarize};
+pub use summary::{Distribution, LEAST_PAIRS, ModeDescription, ModeSummary, PairedRatio, StrategyShare, summarize};
 pub use timeline::{CpuClock, FrameTimeline, GpuClock, Stretch, Work};

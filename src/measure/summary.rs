@@ -65,7 +65,7 @@ const Z_95: f64 = 1.959_964;
 
 /// Fewest pairs a [`PairedRatio`] is given for: with three degrees of
 /// freedom its interval is already 1.6 times the normal one.
-const LEAST_PAIRS: usize = 4;
+pub const LEAST_PAIRS: usize = 4;
 
 /// The two-sided 95 % quantile of Student's t with `dof` degrees of
 /// freedom, by the expansion of Abramowitz and Stegun 26.7.5 in powers of

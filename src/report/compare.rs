@@ -30,7 +30,7 @@ use super::merge::{Merged, read_merged};
 use super::summary::{Fingerprint, paired_frame_ms, same_count};
 use super::{ReportError, Summary, read_results};
 use crate::cull::{CountKind, ModeId};
-use crate::measure::{Distribution, ModeSummary, PairedRatio};
+use crate::measure::{Distribution, LEAST_PAIRS, ModeSummary, PairedRatio};
 
 /// A metric compare can gate on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -264,8 +264,12 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
     }
     let frames = base_summary.frames.min(new_summary.frames);
     if frames < FEW_FRAMES {
+        let spread = match frames as usize >= LEAST_PAIRS {
+            true => "the 95 % interval of their ratio, from frames paired by their place on the path, reaches 1",
+            false => "the new median − MAD does not clear the base median + MAD (too few frames to pair)",
+        };
         notes.push(format!(
-            "{frames} frames: frame_ms is 'within noise' when the new mean is at most {max_regression_pct}% above the base's or the 95 % interval of their ratio, from frames paired by their place on the path, reaches 1; on fewer than {FEW_FRAMES} frames that interval says little"
+            "{frames} frames: frame_ms is 'within noise' when the new mean is at most {max_regression_pct}% above the base's or {spread}; on fewer than {FEW_FRAMES} frames that says little"
         ));
     }
     let (base_modes, new_modes) = (&base_summary.modes, &new_summary.modes);
@@ -409,24 +413,27 @@ fn columns(dir: &Path, merged: &Merged) -> Result<Vec<(Identity, PathBuf)>, Comp
 }
 
 /// The first thing two runs measured differently that makes their
-/// counters incomparable, if any: what it is and each run's value. The
-/// scene and the path are one where their names or their contents'
-/// fingerprints agree (`path.json` and `/ci/checkout/path.json`); one name
-/// with other contents is compared, with a note ([`compare_runs`]); then
-/// what the user set ([`Summary::settings_differing_from`]).
+/// counters incomparable, if any: what it is and each run's value. What
+/// the user set comes first ([`Summary::settings_differing_from`]): a
+/// path's fingerprint holds its frame count, so the message names the real
+/// difference. The scene and the path are one where their names or their
+/// contents' fingerprints agree (`path.json` and `/ci/checkout/path.json`);
+/// one name with other contents is compared, with a note ([`compare_runs`]).
 fn different_workloads(a: &Summary, b: &Summary) -> Option<(&'static str, String, String)> {
-    let one = |(name_a, fa): (&String, Option<Fingerprint>), (name_b, fb): (&String, Option<Fingerprint>)| {
+    let same_source = |(name_a, fa): (&String, Option<Fingerprint>), (name_b, fb): (&String, Option<Fingerprint>)| {
         name_a == name_b || fa.is_some() && fa == fb
     };
     let (scene_a, scene_b) = (&a.scene.facts, &b.scene.facts);
     let (path_a, path_b) = (&a.path, &b.path);
-    (!one((&scene_a.source, scene_a.geometry), (&scene_b.source, scene_b.geometry)))
-        .then(|| ("scenes", scene_a.source.clone(), scene_b.source.clone()))
+    a.settings_differing_from(b)
         .or_else(|| {
-            (!one((&path_a.source, path_a.cameras), (&path_b.source, path_b.cameras)))
+            (!same_source((&scene_a.source, scene_a.geometry), (&scene_b.source, scene_b.geometry)))
+                .then(|| ("scenes", scene_a.source.clone(), scene_b.source.clone()))
+        })
+        .or_else(|| {
+            (!same_source((&path_a.source, path_a.cameras), (&path_b.source, path_b.cameras)))
                 .then(|| ("paths", path_a.source.clone(), path_b.source.clone()))
         })
-        .or_else(|| a.settings_differing_from(b))
 }
 
 /// A run folder's name as changes and notes show it.
@@ -459,8 +466,9 @@ fn verdict(
         return Verdict::Regression;
     }
     // Frame time: beyond the noise of paired frames. A count that follows
-    // the times (or a frame time without pairs, under four frames): the new
-    // median less its MAD above the base median plus its MAD.
+    // the times, or a frame time with no paired interval (under four
+    // frames): the new median less its MAD above the base median plus its
+    // MAD.
     let spread = |m: &ModeSummary| m.stats.get(metric.name()).copied();
     let beyond_spread = match (metric, paired, spread(b), spread(n)) {
         (Metric::FrameMs, Some(paired), ..) => paired.interval[0] > 1.0,
