@@ -816,6 +816,13 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
         &["summary.json"],
     );
     fails_with(&["compare", b, b, "--max-regression=-3"], 2, &["--max-regression"]);
+    // Written apart from its flag, a negative value is refused by the same
+    // rule (it was taken for an unknown flag).
+    fails_with(
+        &["compare", b, b, "--max-regression", "-3"],
+        2,
+        &["--max-regression must be a percentage of 0 or more, got -3"],
+    );
     fails_with(&["compare", b, b, "--metric", "speed"], 2, &["invalid value 'speed'"]);
 }
 

@@ -457,8 +457,9 @@ pub struct CompareArgs {
     pub base: PathBuf,
     /// The run to judge (or merged folder).
     pub new: PathBuf,
-    /// Allowed growth of mean frame time, percent.
-    #[arg(long, default_value_t = 5.0, value_name = "PCT")]
+    /// Allowed growth of mean frame time, percent. (A negative number is
+    /// taken as its value, to be refused with the rule, not as a flag.)
+    #[arg(long, default_value_t = 5.0, value_name = "PCT", allow_negative_numbers = true)]
     pub max_regression: f64,
     /// Metrics to gate on, comma-separated [default: all].
     #[arg(long, value_enum, value_delimiter = ',')]
