@@ -444,8 +444,8 @@ fn label(folder: &Path) -> String {
 }
 
 /// The verdict on `metric` of mode `b` in the base and `n` in the new run,
-/// `base` and `new` its values; `paired`, the new run's mean frame time
-/// over the base's from their frames paired along the path.
+/// `base` and `new` its values; `paired`, for frame time, the new run's
+/// mean over the base's from their frames paired along the path.
 fn verdict(
     metric: Metric,
     (base, new): (f64, f64),
@@ -470,10 +470,9 @@ fn verdict(
     // frames): the new median less its MAD above the base median plus its
     // MAD.
     let spread = |m: &ModeSummary| m.stats.get(metric.name()).copied();
-    let beyond_spread = match (metric, paired, spread(b), spread(n)) {
-        (Metric::FrameMs, Some(paired), ..) => paired.interval[0] > 1.0,
+    let beyond_spread = match (paired, spread(b), spread(n)) {
+        (Some(paired), ..) => paired.interval[0] > 1.0,
         (
-            _,
             _,
             Some(Distribution {
                 median: mb, mad: db, ..
