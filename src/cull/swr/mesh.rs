@@ -867,6 +867,11 @@ impl Rasteriser {
     /// border edge's margin of it on each axis.
     fn erase(&mut self, grid: &Grid, border: &Border) {
         let Border { p, q, margin } = *border;
+        // The x range an edge reaches in one group row is most often the
+        // last one's (an upright edge: a facade's corner seen level is
+        // most of the city's), so its groups are found again only when
+        // it changes.
+        let mut found: Option<([f64; 2], Range<u32>)> = None;
         for g in grid.down.groups_reaching(p.y.min(q.y) - margin, p.y.max(q.y) + margin, &self.rows) {
             let (row, k, [y0, y1]) = grid.down.group(g);
             // The edge's part within the margin of the group's rows, and
@@ -879,7 +884,15 @@ impl Rasteriser {
                 [s.min(t).max(0.0), s.max(t).min(1.0)]
             };
             let (xa, xb) = (p.x + (q.x - p.x) * from, p.x + (q.x - p.x) * to);
-            let groups = grid.across.groups_reaching(xa.min(xb) - margin, xa.max(xb) + margin, &self.columns);
+            let reach = [xa.min(xb) - margin, xa.max(xb) + margin];
+            let groups = match &found {
+                Some((last, groups)) if *last == reach => groups.clone(),
+                _ => {
+                    let groups = grid.across.groups_reaching(reach[0], reach[1], &self.columns);
+                    found = Some((reach, groups.clone()));
+                    groups
+                }
+            };
             for (column, bits) in grid.across.cells_of(groups) {
                 let i = self.cover_index(column, row);
                 let bits = bits << (k * MASK_SIDE);
