@@ -1,15 +1,18 @@
-//! Work shared over the cores, on rayon's pool of one thread per core:
-//! loading cuts one large job into parts (ranges of vertices, halves of a
-//! mesh) that need no coordination; a culler's frame runs a few jobs, each
-//! taking its share of the work as it goes. The pool's threads outlive
-//! the jobs: a thread started and joined for each job costs about 37 µs
-//! on a 2-core machine here, which `swr` paid three times a frame (some
-//! 3 % of a 3 ms frame on the default city).
+//! Work shared over the cores, on a pool of one thread per core (rayon's,
+//! built here, so that neither `RAYON_NUM_THREADS` nor another library
+//! sizes it): loading cuts one large job into parts (ranges of vertices,
+//! halves of a mesh) that need no coordination; a culler's frame runs a
+//! few jobs, each taking its share of the work as it goes. The pool's
+//! threads outlive the jobs: a thread started and joined for each job
+//! costs about 40 µs on a 2-core machine here (a job handed to the pool,
+//! about 12 µs), which `swr` paid three times a frame (some 3 % of a 3 ms
+//! frame on the default city).
 
 use std::num::NonZero;
 use std::sync::OnceLock;
 
 use rayon::iter::{IntoParallelIterator, ParallelIterator};
+use rayon::{ThreadPool, ThreadPoolBuilder};
 
 /// How many parts to cut `work` units into so that each holds at least
 /// `least` of them: one per core at most, and at least one.
@@ -27,10 +30,27 @@ fn cores() -> usize {
     *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, NonZero::get))
 }
 
+/// The pool, made on first use; none where the system would not start its
+/// threads (then the work runs on the calling thread, in order).
+fn pool() -> Option<&'static ThreadPool> {
+    static POOL: OnceLock<Option<ThreadPool>> = OnceLock::new();
+    POOL.get_or_init(|| {
+        ThreadPoolBuilder::new()
+            .num_threads(cores())
+            .thread_name(|k| format!("occlu-{k}"))
+            .build()
+            .ok()
+    })
+    .as_ref()
+}
+
 /// `work` applied to every part, the parts in parallel, the results in the
 /// parts' order. A panic in any part is raised again here.
 pub fn map<P: Send, R: Send>(parts: Vec<P>, work: impl Fn(P) -> R + Sync + Send) -> Vec<R> {
-    parts.into_par_iter().map(work).collect()
+    match pool() {
+        Some(pool) => pool.install(|| parts.into_par_iter().map(work).collect()),
+        None => parts.into_iter().map(work).collect(),
+    }
 }
 
 /// `work` run on each of `jobs`, the first on the calling thread and the
@@ -38,9 +58,12 @@ pub fn map<P: Send, R: Send>(parts: Vec<P>, work: impl Fn(P) -> R + Sync + Send)
 /// culler's frame calls it, its jobs writing into scratch they own). A
 /// panic in any job is raised again here once every job has ended.
 pub fn each<J: Send>(mut jobs: impl Iterator<Item = J>, work: impl Fn(J) + Sync) {
+    let Some(pool) = pool() else {
+        return jobs.for_each(work);
+    };
     let first = jobs.next();
     let work = &work;
-    rayon::in_place_scope(|scope| {
+    pool.in_place_scope(|scope| {
         for job in jobs {
             scope.spawn(move |_| work(job));
         }
