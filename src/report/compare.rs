@@ -490,6 +490,19 @@ fn verdict(
     }
 }
 
+/// `new`'s change from `base` (not 0) in percent, to a tenth; a change
+/// that rounds to none there (ten triangles more over 3 000 frames of
+/// 400 000), in as many digits as it takes to show, so that no change
+/// reads as "+0.0%".
+fn percent_change(base: f64, new: f64) -> String {
+    let percent = (new - base) / base * 100.0;
+    if percent.abs() >= 0.05 || new == base {
+        format!("{percent:+.1}%")
+    } else {
+        format!("{percent:+.1e}%")
+    }
+}
+
 /// The table printed by `occlu compare`.
 pub fn render(c: &Comparison) -> String {
     let mut out = String::new();
@@ -501,7 +514,7 @@ pub fn render(c: &Comparison) -> String {
     for ch in &c.changes {
         let num = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.2}"));
         let change = match (ch.base, ch.new) {
-            (Some(b), Some(n)) if b != 0.0 => format!("{:+.1}%", (n - b) / b * 100.0),
+            (Some(b), Some(n)) if b != 0.0 => percent_change(b, n),
             (Some(b), Some(n)) if n != b => "new".to_string(),
             (Some(_), Some(_)) => "0.0%".to_string(),
             _ => "–".to_string(),
@@ -529,4 +542,18 @@ pub fn render(c: &Comparison) -> String {
         let _ = writeln!(out, "note: {}", crate::text::one_line(note));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_change_too_small_for_a_tenth_of_a_percent_is_shown_all_the_same() {
+        assert_eq!(percent_change(417_012.33, 417_012.34), "+2.4e-6%");
+        assert_eq!(percent_change(100.0, 99.999), "-1.0e-3%");
+        assert_eq!(percent_change(100.0, 100.0), "+0.0%");
+        assert_eq!(percent_change(100.0, 100.06), "+0.1%");
+        assert_eq!(percent_change(100.0, 150.0), "+50.0%");
+    }
 }
