@@ -54,6 +54,10 @@ fn main() -> ExitCode {
         }
     };
     let done = |()| ExitCode::SUCCESS;
+    // compare's exit 1 is its verdict (a regression), so any failure of its
+    // own is 2, as diff's "trouble" is: a CI gate must not take a full disk
+    // for a slower build.
+    let failure_is_trouble = matches!(cli.command, Command::Compare(_));
     let result = match cli.command {
         Command::Bench(args) => bench::bench(*args).map(done),
         Command::Info(args) => scene::info(&args).map(done),
@@ -76,7 +80,7 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(e) => {
             say!("occlu: error: {e:#}");
-            ExitCode::from(if is_input_error(&e) { 2 } else { 1 })
+            ExitCode::from(if failure_is_trouble || is_input_error(&e) { 2 } else { 1 })
         }
     };
     // Ctrl-C while the results were written: they are whole, and the

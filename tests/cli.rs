@@ -642,6 +642,14 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
     let same = occlu(&["compare", b, b]);
     assert_eq!(same.status.code(), Some(0), "{:?}", own_stderr(&same));
     assert!(stdout(&same).contains("omq") && stdout(&same).contains("same"));
+    // A verdict it cannot write is trouble, not a regression: exit 2.
+    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+    let unwritten = std::process::Command::new(env!("CARGO_BIN_EXE_occlu"))
+        .args(["compare", b, b])
+        .stdout(full)
+        .output()
+        .unwrap();
+    said_one_line(&unwritten, 2, &["cannot write to standard output"], "compare > /dev/full");
 
     let compare_with = |name: &str, edit: &dyn Fn(&mut occlu::measure::FrameStats), extra: &[&str]| {
         let new = dir.path().join(name);

@@ -95,8 +95,9 @@ pub enum Command {
     /// queries, round trips, wrong pixels, missed objects) grows, or when the
     /// mean frame time grows beyond --max-regression and beyond the measured
     /// noise (the 95 % interval of the ratio of the means, from frames paired
-    /// along the path). Two merged folders (occlu merge) compare run by run
-    /// and adapter by adapter.
+    /// along the path); exit 2 when it cannot judge (runs that cannot be
+    /// compared, a verdict it cannot write). Two merged folders (occlu
+    /// merge) compare run by run and adapter by adapter.
     Compare(CompareArgs),
 }
 

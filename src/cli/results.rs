@@ -4,7 +4,7 @@
 
 use std::process::ExitCode;
 
-use occlu::report::compare::{CompareOptions, Metric, Verdict};
+use occlu::report::compare::{CompareOptions, Metric, Verdict, percent_change};
 use occlu::text;
 
 use super::args::{CompareArgs, MergeArgs, PlotArgs};
@@ -78,7 +78,7 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
         .regressions()
         .map(|c| match (c.base, c.new) {
             _ if c.verdict == Verdict::Missing => format!("{} {} missing", c.mode, c.metric),
-            (Some(b), Some(n)) if b != 0.0 => format!("{} {} {:+.1}%", c.mode, c.metric, (n - b) / b * 100.0),
+            (Some(b), Some(n)) if b != 0.0 => format!("{} {} {}", c.mode, c.metric, percent_change(b, n)),
             _ => format!("{} {}", c.mode, c.metric),
         })
         .collect();

@@ -494,7 +494,7 @@ fn verdict(
 /// that rounds to none there (ten triangles more over 3 000 frames of
 /// 400 000), in as many digits as it takes to show, so that no change
 /// reads as "+0.0%".
-fn percent_change(base: f64, new: f64) -> String {
+pub fn percent_change(base: f64, new: f64) -> String {
     let percent = (new - base) / base * 100.0;
     if percent.abs() >= 0.05 || new == base {
         format!("{percent:+.1}%")
