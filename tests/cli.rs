@@ -649,7 +649,12 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
         .stdout(full)
         .output()
         .unwrap();
-    said_one_line(&unwritten, 2, &["cannot write to standard output"], "compare > /dev/full");
+    said_one_line(
+        &unwritten,
+        2,
+        &["cannot write to standard output"],
+        "compare > /dev/full",
+    );
 
     let compare_with = |name: &str, edit: &dyn Fn(&mut occlu::measure::FrameStats), extra: &[&str]| {
         let new = dir.path().join(name);

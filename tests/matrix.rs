@@ -676,6 +676,43 @@ fn merge_refuses_runs_of_two_matrices_and_names_a_frame_count_that_differs() {
 }
 
 #[test]
+fn compare_of_merged_folders_pairs_a_run_that_what_else_was_merged_renamed() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, run) = matrix_of_one(dir.path());
+    // Two runs outside a matrix of one scene and a path of one name, with
+    // other cameras: merged together, each name takes its contents' tag.
+    let single = |folder: &str, cameras: &str| {
+        let to = dir.path().join(folder).join("run");
+        edited_copy(&run, &to, |j| {
+            j["run"] = serde_json::Value::Null;
+            j["matrix"] = serde_json::Value::Null;
+            j["path"]["source"] = "path.json".into();
+            j["path"]["cameras"]["fnv1a"] = cameras.into();
+        });
+        to
+    };
+    let (first, second) = (single("p1", "00000000000000a1"), single("p2", "00000000000000b2"));
+    let (base, new) = (dir.path().join("base"), dir.path().join("new"));
+    assert!(occlu(&["merge", s(&first), "--out", s(&base)]).status.success());
+    let merged_new = occlu(&["merge", s(&first), s(&second), "--out", s(&new)]);
+    assert!(merged_new.status.success(), "{:?}", own_stderr(&merged_new));
+    let names: Vec<String> = merged(&new).runs.iter().map(|r| r.name.clone()).collect();
+    assert!(names.iter().all(|n| n.contains("path.json #")), "{names:?}");
+    assert!(!merged(&base).runs[0].name.contains('#'));
+    // The base's run is the new merge's run of the same contents, not
+    // missing; the other is the new merge's only.
+    let compared = occlu(&["compare", s(&base), s(&new)]);
+    assert_eq!(compared.status.code(), Some(0), "{:?}", own_stderr(&compared));
+    assert!(!stdout(&compared).contains("MISSING"), "{}", stdout(&compared));
+    assert_eq!(
+        stdout(&compared).matches("in the new merge only").count(),
+        1,
+        "{}",
+        stdout(&compared)
+    );
+}
+
+#[test]
 fn compare_of_merged_folders_pairs_runs_by_adapter_not_by_folder_name_and_trusts_no_folder() {
     let dir = tempfile::tempdir().unwrap();
     let (_, run) = matrix_of_one(dir.path());

@@ -26,9 +26,9 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::merge::{Merged, read_merged};
+use super::merge::{Merged, contents_tag, read_merged, untagged};
 use super::summary::{Fingerprint, paired_frame_ms, same_count};
-use super::{ReportError, Summary, read_results};
+use super::{ReportError, Summary, read_results, read_summary};
 use crate::cull::{CountKind, ModeId};
 use crate::measure::{Distribution, LEAST_PAIRS, ModeSummary, PairedRatio};
 
@@ -334,9 +334,14 @@ fn compare_merged(
     let (base_columns, new_columns) = (columns(base_dir, base)?, columns(new_dir, new)?);
     let mut changes = Vec::new();
     let mut notes = Vec::new();
+    let mut paired = Vec::new();
     for (identity, base_folder) in &base_columns {
         let name = label(base_folder);
-        let Some((_, new_folder)) = new_columns.iter().find(|(i, _)| i == identity) else {
+        let found = match new_columns.iter().find(|(i, _)| i == identity) {
+            Some(found) => Some(found),
+            None => renamed(identity, base_folder, &new_columns)?,
+        };
+        let Some((new_identity, new_folder)) = found else {
             notes.push(format!("run {name} is in the base only"));
             changes.push(Change {
                 mode: name,
@@ -351,6 +356,7 @@ fn compare_merged(
             });
             continue;
         };
+        paired.push(new_identity);
         let pair = compare_runs(base_folder, new_folder, options).map_err(|error| CompareError::InRun {
             base: base_folder.clone(),
             new: new_folder.clone(),
@@ -362,13 +368,39 @@ fn compare_merged(
         }));
         notes.extend(pair.notes.into_iter().map(|n| format!("{name}: {n}")));
     }
-    for (_, folder) in new_columns
-        .iter()
-        .filter(|(i, _)| !base_columns.iter().any(|(b, _)| b == i))
-    {
+    for (_, folder) in new_columns.iter().filter(|(i, _)| !paired.contains(&i)) {
         notes.push(format!("run {} is in the new merge only", label(folder)));
     }
     Ok(Comparison { changes, notes })
+}
+
+/// The new merge's run folder of the base's run `identity` (in
+/// `base_folder`) under another name: merge tags a run's name (`#` and a
+/// hash of its scene's and path's contents) only where another run it
+/// merged shares the name, so one run is `city, path.json` in a merge of
+/// it alone and `city, path.json #0a1b2c3d` beside another path of that
+/// name. Found by its untagged name, adapter and backend, and its contents.
+fn renamed<'a>(
+    (name, adapter, backend): &Identity,
+    base_folder: &Path,
+    new_columns: &'a [(Identity, PathBuf)],
+) -> Result<Option<&'a (Identity, PathBuf)>, CompareError> {
+    let plain = untagged(name).0;
+    let mut candidates = new_columns
+        .iter()
+        .filter(|((n, a, b), _)| untagged(n).0 == plain && a == adapter && b == backend)
+        .peekable();
+    if candidates.peek().is_none() {
+        return Ok(None);
+    }
+    let tag = |dir: &Path| read_summary(dir).map(|summary| contents_tag(&summary));
+    let base_tag = tag(base_folder)?;
+    for candidate in candidates {
+        if tag(&candidate.1)? == base_tag {
+            return Ok(Some(candidate));
+        }
+    }
+    Ok(None)
 }
 
 /// What a merged folder's run folder holds: the run's name (unique in a

@@ -61,12 +61,9 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     std::fs::write(path, bytes).map_err(ReportError::at(path))
 }
 
-/// Reads a run directory's summary.json and frames.csv (for `occlu plot`,
-/// `occlu compare` and `occlu merge`): the rows checked against the
-/// summary (every mode's every frame once, every value one a run can
-/// measure), and the summary's statistics recomputed from them, so that
-/// every command that reads a folder judges it by the same numbers.
-pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportError> {
+/// Reads a run directory's summary.json alone, checked as
+/// [`read_results`] checks it (its statistics as written, not recomputed).
+pub fn read_summary(dir: &Path) -> Result<Summary, ReportError> {
     let io = ReportError::at;
     let json_path = dir.join("summary.json");
     let text = crate::input::read_text(&json_path, crate::input::TEXT_LIMIT).map_err(io(&json_path))?;
@@ -89,6 +86,17 @@ pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportErro
             MatrixIdentity::MAX_RUNS
         ))));
     }
+    Ok(summary)
+}
+
+/// Reads a run directory's summary.json and frames.csv (for `occlu plot`,
+/// `occlu compare` and `occlu merge`): the rows checked against the
+/// summary (every mode's every frame once, every value one a run can
+/// measure), and the summary's statistics recomputed from them, so that
+/// every command that reads a folder judges it by the same numbers.
+pub fn read_results(dir: &Path) -> Result<(Summary, Vec<FrameStats>), ReportError> {
+    let io = ReportError::at;
+    let summary = read_summary(dir)?;
     let csv_path = dir.join("frames.csv");
     let bytes = crate::input::read_file(&csv_path, crate::input::MODEL_LIMIT).map_err(io(&csv_path))?;
     if let Some(expected) = summary.frames_csv

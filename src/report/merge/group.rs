@@ -12,7 +12,7 @@ use super::merged::{
 };
 use super::read::RunFolder;
 use crate::cull::{CountKind, ModeId};
-use crate::report::summary::{Fingerprint, MatrixIdentity, same_count};
+use crate::report::summary::{Fingerprint, MatrixIdentity, Summary, same_count};
 
 impl RunFolder {
     /// Which run it is: its matrix run's name, or its scene's and path's.
@@ -150,14 +150,31 @@ pub(super) fn named(groups: Vec<Vec<RunFolder>>) -> Vec<(String, Vec<RunFolder>)
             if plain.iter().filter(|&n| n == name).count() == 1 {
                 return (name.clone(), folders);
             }
-            let s = &folders[0].summary;
-            let identity = format!("{:?}\n{:?}", s.scene.facts.geometry, s.path.cameras);
-            let hash = Fingerprint::of(identity.as_bytes()).fnv1a >> 32;
-            (format!("{name} #{hash:08x}"), folders)
+            (format!("{name} {}", contents_tag(&folders[0].summary)), folders)
         })
         .collect();
     named.sort_by(|a, b| a.0.cmp(&b.0));
     named
+}
+
+/// What [`named`] puts after the name of a run whose name another run
+/// shares: `#` and a hash of its scene's and path's fingerprints.
+pub(crate) fn contents_tag(summary: &Summary) -> String {
+    let identity = format!("{:?}\n{:?}", summary.scene.facts.geometry, summary.path.cameras);
+    format!("#{:08x}", Fingerprint::of(identity.as_bytes()).fnv1a >> 32)
+}
+
+/// A run's name as [`named`] made it, without the tag it may have been
+/// given (`city, path.json #0a1b2c3d` → `city, path.json`), and the tag.
+pub(crate) fn untagged(name: &str) -> (&str, Option<&str>) {
+    match name.rsplit_once(' ') {
+        Some((plain, tag))
+            if tag.len() == 9 && tag.starts_with('#') && tag[1..].bytes().all(|b| b.is_ascii_hexdigit()) =>
+        {
+            (plain, Some(tag))
+        }
+        _ => (name, None),
+    }
 }
 
 /// The runs of each matrix among `runs` that none of them is: by place

@@ -37,6 +37,7 @@ mod render;
 mod write;
 
 pub use error::MergeError;
+pub(crate) use group::{contents_tag, untagged};
 pub use merged::{
     AdapterColumn, Disagreement, MERGED_SCHEMA_VERSION, Merged, MergedRun, MissingRuns, ModeResult, ModeRow,
     read_merged,
