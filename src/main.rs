@@ -38,7 +38,11 @@ fn main() -> ExitCode {
             return match e.print().and_then(|()| std::io::stdout().flush()) {
                 Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {
                     say!("occlu: error: {}", StdoutError(error));
-                    ExitCode::from(1)
+                    ExitCode::from(if std::env::args_os().nth(1).is_some_and(|a| a == "compare") {
+                        2
+                    } else {
+                        1
+                    })
                 }
                 _ => ExitCode::SUCCESS,
             };
@@ -55,8 +59,8 @@ fn main() -> ExitCode {
     };
     let done = |()| ExitCode::SUCCESS;
     // compare's exit 1 is its verdict (a regression), so any failure of its
-    // own is 2, as diff's "trouble" is: a CI gate must not take a full disk
-    // for a slower build.
+    // own is 2, as diff's "trouble" is (its --help's too, above): a CI gate
+    // must not take a full disk for a slower build.
     let failure_is_trouble = matches!(cli.command, Command::Compare(_));
     let result = match cli.command {
         Command::Bench(args) => bench::bench(*args).map(done),

@@ -710,6 +710,26 @@ fn compare_of_merged_folders_pairs_a_run_that_what_else_was_merged_renamed() {
         "{}",
         stdout(&compared)
     );
+    // The other way round: the tagged run of those contents pairs with the
+    // untagged one, the other is missing.
+    let back = occlu(&["compare", s(&new), s(&base)]);
+    assert_eq!(back.status.code(), Some(1), "{:?}", own_stderr(&back));
+    assert_eq!(stdout(&back).matches("MISSING").count(), 1, "{}", stdout(&back));
+    // A run of that name whose contents match neither is missing.
+    let other = dir.path().join("other");
+    assert!(
+        occlu(&["merge", s(&single("p3", "00000000000000c3")), "--out", s(&other)])
+            .status
+            .success()
+    );
+    let unmatched = occlu(&["compare", s(&other), s(&new)]);
+    assert_eq!(unmatched.status.code(), Some(1), "{:?}", own_stderr(&unmatched));
+    assert_eq!(
+        stdout(&unmatched).matches("MISSING").count(),
+        1,
+        "{}",
+        stdout(&unmatched)
+    );
 }
 
 #[test]

@@ -339,7 +339,7 @@ fn compare_merged(
         let name = label(base_folder);
         let found = match new_columns.iter().find(|(i, _)| i == identity) {
             Some(found) => Some(found),
-            None => renamed(identity, base_folder, &new_columns)?,
+            None => renamed(identity, base_folder, &new_columns),
         };
         let Some((new_identity, new_folder)) = found else {
             notes.push(format!("run {name} is in the base only"));
@@ -384,23 +384,20 @@ fn renamed<'a>(
     (name, adapter, backend): &Identity,
     base_folder: &Path,
     new_columns: &'a [(Identity, PathBuf)],
-) -> Result<Option<&'a (Identity, PathBuf)>, CompareError> {
+) -> Option<&'a (Identity, PathBuf)> {
     let plain = untagged(name).0;
     let mut candidates = new_columns
         .iter()
         .filter(|((n, a, b), _)| untagged(n).0 == plain && a == adapter && b == backend)
         .peekable();
-    if candidates.peek().is_none() {
-        return Ok(None);
-    }
-    let tag = |dir: &Path| read_summary(dir).map(|summary| contents_tag(&summary));
-    let base_tag = tag(base_folder)?;
-    for candidate in candidates {
-        if tag(&candidate.1)? == base_tag {
-            return Ok(Some(candidate));
-        }
-    }
-    Ok(None)
+    candidates.peek()?;
+    // A summary that cannot be read matches nothing here: the run is then
+    // missing, or named in a note, as without this search.
+    let tag = |dir: &Path| read_summary(dir).ok().map(|summary| contents_tag(&summary));
+    let Some(base_tag) = tag(base_folder) else {
+        return None;
+    };
+    candidates.find(|(_, folder)| tag(folder).as_ref() == Some(&base_tag))
 }
 
 /// What a merged folder's run folder holds: the run's name (unique in a
