@@ -394,9 +394,7 @@ fn renamed<'a>(
     // A summary that cannot be read matches nothing here: the run is then
     // missing, or named in a note, as without this search.
     let tag = |dir: &Path| read_summary(dir).ok().map(|summary| contents_tag(&summary));
-    let Some(base_tag) = tag(base_folder) else {
-        return None;
-    };
+    let base_tag = tag(base_folder)?;
     candidates.find(|(_, folder)| tag(folder).as_ref() == Some(&base_tag))
 }
 
