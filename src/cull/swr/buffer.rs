@@ -69,6 +69,8 @@ pub(super) struct Axis {
     group_of: Vec<u32>,
     cell_of_group: Vec<u32>,
     group_centres: Vec<[f64; 2]>,
+    /// The least distance from a cell's first pixel centre to its last.
+    narrowest: f64,
 }
 
 /// The pixels cell `c` of `cells` along a side of `pixels` holds: those
@@ -104,6 +106,7 @@ impl Axis {
             group_of: Vec::with_capacity(pixels as usize),
             cell_of_group: Vec::new(),
             group_centres: Vec::new(),
+            narrowest: f64::INFINITY,
         };
         for c in 0..cells {
             let [first, last] = held_pixels(c, cells, pixels);
@@ -117,6 +120,7 @@ impl Axis {
             let start = |k: u32| first + (k * n).div_ceil(groups);
             axis.group_centres.extend((0..groups).map(|k| [start(k), start(k + 1) - 1].map(|p| f64::from(p) + 0.5)));
             axis.first_group.push(base + groups);
+            axis.narrowest = axis.narrowest.min(f64::from(last - first));
         }
         axis
     }
@@ -162,6 +166,12 @@ impl Axis {
     /// The cells whose every pixel centre lies in [`lo`, `hi`], limited to
     /// `cells`.
     pub(super) fn cells_within(&self, lo: f64, hi: f64, cells: &Range<u32>) -> Range<u32> {
+        // A range narrower than every cell holds none whole (most rows of
+        // a thin triangle): told without the pixels' lookups. (Its width
+        // rounded below the true one only leaves out a cell it holds.)
+        if hi - lo < self.narrowest {
+            return 0..0;
+        }
         let groups = self.groups_within(lo, hi, cells);
         if groups.is_empty() {
             return 0..0;
@@ -1073,6 +1083,12 @@ mod tests {
         assert_eq!(axis.groups_within(2.2, 6.7, &all), 2..7);
         assert_eq!(axis.cells_reaching(2.2, 6.7), 0..2);
         assert_eq!(axis.cells_within(2.2, 6.7, &all), 1..2);
+        // The narrowest cells' centres lie 2 apart: a range that wide may
+        // hold one whole, a narrower one none.
+        assert_eq!(axis.cells_within(4.5, 6.5, &all), 1..2);
+        assert_eq!(axis.cells_within(7.5, 9.5, &all), 2..3);
+        assert_eq!(axis.cells_within(4.6, 6.5, &all), 0..0);
+        assert_eq!(axis.cells_within(f64::NAN, 9.5, &all), 0..0);
         assert_eq!(axis.groups_reaching(2.6, 2.9, &all), 0..0, "no centre between");
         assert_eq!(axis.groups_reaching(f64::NAN, 3.0, &all), 0..0);
         assert_eq!(axis.groups_reaching(-1e300, 1e300, &(1..2)), 4..7);
