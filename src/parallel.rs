@@ -2,19 +2,18 @@
 //! (rayon's, built here, so that neither `RAYON_NUM_THREADS` nor another
 //! library sizes it): loading cuts one large job into parts (ranges of
 //! vertices, halves of a mesh) that need no coordination; a culler's frame
-//! runs a few jobs, each taking its share of the work as it goes. The
-//! calling thread takes a part of every step, so the pool holds one thread
-//! fewer than the cores: a thread more would be idle beside it, spinning
-//! while it waits for work, on the core the caller's steps between the
-//! parallel ones run on (on the default city, swr's frame took 3.06–3.14
-//! ms with a pool thread per core, 2.86–2.95 with one fewer, alternating;
-//! 3.02–3.05 against 3.20–3.23 before the pool, with `map` as it is now).
-//! `map` runs its parts as `each` does: run by rayon's parallel iterator
-//! inside the pool, with the caller waiting, it made loading's
-//! closed-solid test of a 16-block city five times slower. A thread
+//! runs a few jobs, each taking its share of the work as it goes. A thread
 //! started and joined for each job costs about 40 µs on a 2-core machine
-//! here (a job handed to the pool, about 12 µs), which `swr` paid three
-//! times a frame.
+//! here, a job handed to the pool about 12 µs; `swr` hands over three a
+//! frame.
+//!
+//! The calling thread takes the first part of every step, `map`'s too, so
+//! the pool holds one thread fewer than the cores: with one per core, swr's
+//! frame on the default city took 3.06–3.14 ms against 2.86–2.95 (most
+//! likely the spare thread spinning for work on the core the caller's
+//! serial steps run on). With the caller waiting instead (rayon's parallel
+//! iterator inside the pool), loading's closed-solid test of a 16-block
+//! city ran five times slower.
 
 use std::num::NonZero;
 use std::sync::OnceLock;
