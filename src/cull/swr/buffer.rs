@@ -163,24 +163,23 @@ impl Axis {
         }
     }
 
-    /// The cells whose every pixel centre lies in [`lo`, `hi`], limited to
-    /// `cells`.
+    /// The cells of `cells` whose every pixel centre lies in [`lo`, `hi`]
+    /// (none for a NaN).
     pub(super) fn cells_within(&self, lo: f64, hi: f64, cells: &Range<u32>) -> Range<u32> {
         // A range narrower than every cell holds none whole (most rows of
-        // a thin triangle): told without the pixels' lookups. (Its width
-        // rounded below the true one only leaves out a cell it holds.)
-        if hi - lo < self.narrowest {
+        // a thin triangle): told without a search. (Its width rounded
+        // below the true one only leaves out a cell it holds.)
+        if hi - lo < self.narrowest || lo.is_nan() || hi.is_nan() {
             return 0..0;
         }
-        let groups = self.groups_within(lo, hi, cells);
-        if groups.is_empty() {
-            return 0..0;
-        }
-        // Cells whose first and last groups are both in.
-        let (first, last) = (self.group(groups.start).0, self.group(groups.end - 1).0);
-        let first = first + u32::from(self.first_group[first as usize] < groups.start);
-        let end = last + u32::from(self.first_group[last as usize + 1] == groups.end);
-        first..end.max(first)
+        // Centres rise cell by cell, so the cells whole are one run: from
+        // the first whose first centre is at `lo` or after, to the last
+        // whose last centre is at `hi` or before. `cells` is most often a
+        // row's few reached cells, so the searches are a step or two.
+        let centres = self.centres(cells.clone());
+        let first = centres.partition_point(|&[first, _]| first < lo);
+        let end = centres.partition_point(|&[_, last]| last <= hi).max(first);
+        cells.start + first as u32..cells.start + end as u32
     }
 
     /// The first and last pixel centre of each group of cell `c`.
@@ -197,20 +196,6 @@ impl Axis {
         }
         let (first, last) = (self.group_of[pixels.start as usize], self.group_of[pixels.end as usize - 1]);
         self.limited(first..last + 1, cells)
-    }
-
-    /// The groups whose every pixel centre lies in [`lo`, `hi`], limited
-    /// to `cells`.
-    pub(super) fn groups_within(&self, lo: f64, hi: f64, cells: &Range<u32>) -> Range<u32> {
-        let pixels = self.pixels_within(lo, hi);
-        if pixels.is_empty() {
-            return 0..0;
-        }
-        let (p, q) = (pixels.start as usize, pixels.end as usize - 1);
-        // A group starts at a pixel whose predecessor is in another group.
-        let first = self.group_of[p] + u32::from(p > 0 && self.group_of[p - 1] == self.group_of[p]);
-        let end = self.group_of[q] + u32::from(q + 1 >= self.group_of.len() || self.group_of[q + 1] != self.group_of[q]);
-        self.limited(first..end.max(first), cells)
     }
 
     fn limited(&self, groups: Range<u32>, cells: &Range<u32>) -> Range<u32> {
@@ -1080,7 +1065,6 @@ mod tests {
         let all = 0..3;
         // Centres 2.5 to 6.5: pixels 2 to 6.
         assert_eq!(axis.groups_reaching(2.2, 6.7, &all), 2..7);
-        assert_eq!(axis.groups_within(2.2, 6.7, &all), 2..7);
         assert_eq!(axis.cells_reaching(2.2, 6.7), 0..2);
         assert_eq!(axis.cells_within(2.2, 6.7, &all), 1..2);
         // The narrowest cells' centres lie 2 apart: a range that wide may
@@ -1089,6 +1073,8 @@ mod tests {
         assert_eq!(axis.cells_within(7.5, 9.5, &all), 2..3);
         assert_eq!(axis.cells_within(4.6, 6.5, &all), 0..0);
         assert_eq!(axis.cells_within(f64::NAN, 9.5, &all), 0..0);
+        assert_eq!(axis.cells_within(0.5, 9.5, &(1..2)), 1..2, "only the cells asked about");
+        assert_eq!(axis.cells_within(0.5, 6.4, &(0..3)), 0..1);
         assert_eq!(axis.groups_reaching(2.6, 2.9, &all), 0..0, "no centre between");
         assert_eq!(axis.groups_reaching(f64::NAN, 3.0, &all), 0..0);
         assert_eq!(axis.groups_reaching(-1e300, 1e300, &(1..2)), 4..7);
@@ -1099,8 +1085,6 @@ mod tests {
         assert_eq!(coarse.group(0), (0, 0, [0.5, 1.5]));
         assert_eq!(coarse.group(1), (0, 1, [2.5, 2.5]));
         assert_eq!(coarse.group(12), (1, 4, [15.5, 16.5]));
-        assert_eq!(coarse.groups_within(0.5, 1.0, &(0..2)), 0..0, "a group needs all its centres");
         assert_eq!(coarse.groups_reaching(0.5, 1.0, &(0..2)), 0..1);
-        assert_eq!(coarse.groups_within(0.5, 2.5, &(0..2)), 0..2);
     }
 }

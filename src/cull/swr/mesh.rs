@@ -729,8 +729,7 @@ impl Rasteriser {
                 // No NaN: a mark's range is empty where an edge gives none.
                 (from, to) = (if range[0] > from { range[0] } else { from }, if range[1] < to { range[1] } else { to });
             }
-            let whole = grid.across.cells_within(from, to, &self.columns);
-            debug_assert!(whole.is_empty() || (reached.start <= whole.start && whole.end <= reached.end));
+            let whole = grid.across.cells_within(from, to, &reached);
             let in_patch = (row - self.rows.start) as usize;
             self.spans[in_patch] = widened(&self.spans[in_patch], &reached);
             if self.add_depth(cells, row, reached.clone(), &whole, (xs, ys), &triangle.plane) {
