@@ -167,8 +167,9 @@ impl Axis {
     /// (none for a NaN).
     pub(super) fn cells_within(&self, lo: f64, hi: f64, cells: &Range<u32>) -> Range<u32> {
         // A range narrower than every cell holds none whole (most rows of
-        // a thin triangle): told without a search. (Its width rounded
-        // below the true one only leaves out a cell it holds.)
+        // a thin triangle): told without a search. (Exact: `narrowest` is
+        // a whole number of pixels, and a width at least that does not
+        // round below it.)
         if hi - lo < self.narrowest || lo.is_nan() || hi.is_nan() {
             return 0..0;
         }
@@ -1086,5 +1087,34 @@ mod tests {
         assert_eq!(coarse.group(1), (0, 1, [2.5, 2.5]));
         assert_eq!(coarse.group(12), (1, 4, [15.5, 16.5]));
         assert_eq!(coarse.groups_reaching(0.5, 1.0, &(0..2)), 0..1);
+    }
+
+    #[test]
+    fn the_cells_within_a_range_are_those_whose_every_pixel_centre_it_holds() {
+        // Cells of one to four pixels, of unlike widths, and ranges
+        // ending on, beside and between centres, just below them by the
+        // least step, beyond the side, infinite and NaN.
+        let ends = [-1e300, -0.5, 0.0, 0.5, 1.0, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.0, 9.5, 20.0, f64::INFINITY, f64::NAN]
+            .into_iter()
+            .flat_map(|v: f64| [v, v.next_down(), v.next_up()]);
+        let ends: Vec<f64> = ends.collect();
+        for (cells, pixels) in [(3, 10), (4, 6), (6, 6), (2, 7)] {
+            let axis = Axis::new(cells, pixels);
+            let held = |c: u32| {
+                let [first, last] = held_pixels(c, cells, pixels);
+                move |lo: f64, hi: f64| (first..=last).all(|p| lo <= f64::from(p) + 0.5 && f64::from(p) + 0.5 <= hi)
+            };
+            for from in 0..cells {
+                for to in from + 1..=cells {
+                    for &lo in &ends {
+                        for &hi in &ends {
+                            let got = axis.cells_within(lo, hi, &(from..to));
+                            let expected: Vec<u32> = (from..to).filter(|&c| held(c)(lo, hi)).collect();
+                            assert_eq!(got.collect::<Vec<_>>(), expected, "{cells} cells over {pixels}: [{lo}, {hi}] in {from}..{to}");
+                        }
+                    }
+                }
+            }
+        }
     }
 }

@@ -730,6 +730,11 @@ impl Rasteriser {
                 (from, to) = (if range[0] > from { range[0] } else { from }, if range[1] < to { range[1] } else { to });
             }
             let whole = grid.across.cells_within(from, to, &reached);
+            // The cells it marks whole lie among those it reaches.
+            debug_assert!({
+                let anywhere = grid.across.cells_within(from, to, &self.columns);
+                anywhere.is_empty() || anywhere == whole
+            });
             let in_patch = (row - self.rows.start) as usize;
             self.spans[in_patch] = widened(&self.spans[in_patch], &reached);
             if self.add_depth(cells, row, reached.clone(), &whole, (xs, ys), &triangle.plane) {
