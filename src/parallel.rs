@@ -4,8 +4,8 @@
 //! vertices, halves of a mesh) that need no coordination; a culler's frame
 //! runs a few jobs, each taking its share of the work as it goes. A thread
 //! started and joined for each job costs about 40 µs on a 2-core machine
-//! here, a job handed to the pool about 12 µs; `swr` hands over three a
-//! frame.
+//! here, a job handed to the pool about 12 µs; `swr` hands jobs over at
+//! three steps a frame.
 //!
 //! The calling thread takes the first part of every step, `map`'s too, so
 //! the pool holds one thread fewer than the cores: with one per core, swr's
@@ -36,17 +36,18 @@ fn cores() -> usize {
     *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, NonZero::get))
 }
 
-/// The pool, made on first use: one thread fewer than the cores, and at
-/// least one; none where the system would not start its threads (then the
+/// The pool, made on first use: one thread fewer than the cores; none on
+/// one core, or where the system would not start its threads (then the
 /// work runs on the calling thread, in order).
 fn pool() -> Option<&'static ThreadPool> {
     static POOL: OnceLock<Option<ThreadPool>> = OnceLock::new();
     POOL.get_or_init(|| {
-        ThreadPoolBuilder::new()
-            .num_threads(cores().saturating_sub(1).max(1))
-            .thread_name(|k| format!("occlu-{k}"))
-            .build()
-            .ok()
+        let threads = cores() - 1;
+        let pool = ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|k| format!("occlu-{k}"));
+        // (Rayon takes 0 threads for one per core.)
+        (threads > 0).then(|| pool.build().ok()).flatten()
     })
     .as_ref()
 }
@@ -60,13 +61,17 @@ pub fn map<P: Send, R: Send>(parts: Vec<P>, work: impl Fn(P) -> R + Sync) -> Vec
         *result = Some(work(part))
     });
     // Every job ran once (a panic in one is raised by `each`).
-    results.into_iter().flatten().collect()
+    results
+        .into_iter()
+        .map(|result| result.expect("each ran every part"))
+        .collect()
 }
 
 /// `work` run on each of `jobs`, the first on the calling thread and the
 /// others on the pool, waiting for them all; it collects no results (a
 /// culler's frame calls it, its jobs writing into scratch they own). A
-/// panic in any job is raised again here once every job has ended.
+/// panic in any job is raised again here: once every job has ended, or,
+/// with no pool, at once (the jobs after it do not run).
 pub fn each<J: Send>(mut jobs: impl Iterator<Item = J>, work: impl Fn(J) + Sync) {
     let Some(pool) = pool() else {
         return jobs.for_each(work);
@@ -91,7 +96,7 @@ mod tests {
     fn parts_hold_at_least_the_least_work_and_results_keep_their_order() {
         assert_eq!(parts_for(10, 100), 1);
         assert_eq!(parts_for(0, 100), 1);
-        assert!(parts_for(1 << 30, 1) >= 1);
+        assert_eq!(parts_for(1 << 30, 1), cores());
         let squares = map((0..9u64).collect(), |k| k * k);
         assert_eq!(squares, [0, 1, 4, 9, 16, 25, 36, 49, 64]);
         assert!(map(Vec::<u8>::new(), |k| k).is_empty());
@@ -107,7 +112,31 @@ mod tests {
         });
         assert!(slots.iter().all(|(runs, _)| *runs == 1), "{slots:?}");
         let on_caller: Vec<_> = slots.iter().map(|(_, here)| *here == Some(true)).collect();
-        assert_eq!(on_caller, [true, false, false, false, false]);
+        // (On one core there is no pool: the caller runs them all.)
+        let pooled = cores() > 1;
+        assert_eq!(on_caller, [true, !pooled, !pooled, !pooled, !pooled]);
         each(std::iter::empty::<u8>(), |_| unreachable!("no job"));
+    }
+
+    #[test]
+    fn a_panic_in_a_job_reaches_the_caller_after_the_jobs_before_it_ran() {
+        let mut runs = [0u32; 4];
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            each(runs.iter_mut().enumerate(), |(k, runs)| {
+                *runs += 1;
+                assert!(k < 3, "job {k} fails on purpose");
+            })
+        }));
+        assert!(result.is_err(), "the panic was lost");
+        assert_eq!(runs, [1; 4]);
+    }
+
+    #[test]
+    fn jobs_may_share_work_themselves() {
+        let mut sums = [0u64; 3];
+        each(sums.iter_mut().enumerate(), |(k, sum)| {
+            *sum = map((0..5u64).collect(), |part| part * k as u64).iter().sum();
+        });
+        assert_eq!(sums, [0, 10, 20]);
     }
 }
