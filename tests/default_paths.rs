@@ -69,9 +69,10 @@ fn default_of(scene: &Scene, frames: u32) -> (Generated, CameraPath) {
 }
 
 /// Every keyframe of `generated` stands inside the model (a ray straight
-/// up meets it, and level rays meet it in at least six of eight directions
-/// within `reach`), `eye` above a floor, looking level and along the route.
-fn assert_walked_inside(scene: &Scene, generated: &Generated, reach: f64, eye: f64) {
+/// up meets it, and level rays meet it in at least `walls` of eight
+/// directions within `reach`), `eye` above a floor, looking level and along
+/// the route.
+fn assert_walked_inside(scene: &Scene, generated: &Generated, reach: f64, eye: f64, walls: usize) {
     let why = &generated.why;
     assert_eq!(generated.kind, PathKind::Walk, "{why}");
     let triangles = world_triangles(scene);
@@ -83,14 +84,14 @@ fn assert_walked_inside(scene: &Scene, generated: &Generated, reach: f64, eye: f
             first_hit(&triangles, p, DVec3::Y, f64::INFINITY).is_some(),
             "key {k} at {p}: open to the sky ({why})"
         );
-        let walls = (0..8)
+        let met = (0..8)
             .filter(|&a| {
                 let angle = std::f64::consts::TAU * f64::from(a) / 8.0;
                 let direction = DVec3::new(angle.cos(), 0.0, angle.sin());
                 first_hit(&triangles, p, direction, reach).is_some()
             })
             .count();
-        assert!(walls >= 6, "key {k} at {p}: walls in {walls} of 8 directions ({why})");
+        assert!(met >= walls, "key {k} at {p}: walls in {met} of 8 directions ({why})");
         let floor = first_hit(&triangles, p, DVec3::NEG_Y, f64::INFINITY);
         assert!(
             floor.is_some_and(|t| (t - eye).abs() < 1e-6),
@@ -109,12 +110,12 @@ fn assert_walked_inside(scene: &Scene, generated: &Generated, reach: f64, eye: f
 }
 
 /// The default path of `scene` (in 120 frames) walks inside it as
-/// [`assert_walked_inside`] says, with walls within `reach`, and comes
+/// [`assert_walked_inside`] says, with `walls` within `reach`, and comes
 /// near no surface; its reason.
-fn walked_inside(scene: &Scene, reach: f64) -> String {
+fn walked_inside(scene: &Scene, reach: f64, walls: usize) -> String {
     let (generated, path) = default_of(scene, 120);
     assert!(generated.why.starts_with("an interior"), "{}", generated.why);
-    assert_walked_inside(scene, &generated, reach, 1.7);
+    assert_walked_inside(scene, &generated, reach, 1.7, walls);
     assert_eq!(frames_too_near(&path, &world_triangles(scene)), Vec::<u32>::new());
     generated.why
 }
@@ -126,7 +127,7 @@ fn hall_walked_inside(beside: Boxes) -> String {
     let mut boxes = hall();
     let reach = box_of(&boxes).extent().length();
     boxes.extend(beside);
-    walked_inside(&load_boxes(dir.path(), &boxes), reach)
+    walked_inside(&load_boxes(dir.path(), &boxes), reach, 6)
 }
 
 #[test]
@@ -139,6 +140,74 @@ fn a_hall_under_a_roof_is_walked_inside() {
     walked_inside(
         &load_obj(dir.path(), one_object(&boxes)),
         box_of(&boxes).extent().length(),
+        6,
+    );
+}
+
+/// One storey of rooms in metres, +Y up, as an office or a flat has them:
+/// 4 × 4 rooms 8 m square under a roof 3 m up, walls 0.2 m thick, each
+/// with a door 1 m wide and 2.1 m tall at the middle of each room's
+/// stretch of it, the outer walls' too (so lines of doors run from wall to
+/// wall); a box a piece.
+fn storey_of_rooms() -> Boxes {
+    let (rooms, side, ceiling, door, lintel, half_wall) = (4, 8.0, 3.0, 1.0, 2.1, 0.1);
+    let span = f64::from(rooms) * side;
+    let mut boxes = vec![
+        part("floor", [0.0, -0.2, 0.0], [span, 0.0, span]),
+        part("roof", [0.0, ceiling, 0.0], [span, ceiling + 0.2, span]),
+    ];
+    for line in 0..=rooms {
+        let at = f64::from(line) * side;
+        for room in 0..rooms {
+            let (from, to) = (f64::from(room) * side, f64::from(room + 1) * side);
+            let middle = (from + to) / 2.0;
+            let pieces = [
+                ("a", from, middle - door / 2.0, 0.0),
+                ("b", middle + door / 2.0, to, 0.0),
+                ("lintel", middle - door / 2.0, middle + door / 2.0, lintel),
+            ];
+            for (piece, a, b, bottom) in pieces {
+                // A wall along x at z = `at`, and one along z at x = `at`.
+                boxes.push(part(
+                    &format!("wall_x{line}_{room}_{piece}"),
+                    [a, bottom, at - half_wall],
+                    [b, ceiling, at + half_wall],
+                ));
+                boxes.push(part(
+                    &format!("wall_z{line}_{room}_{piece}"),
+                    [at - half_wall, bottom, a],
+                    [at + half_wall, ceiling, b],
+                ));
+            }
+        }
+    }
+    boxes
+}
+
+#[test]
+fn a_storey_of_rooms_3_m_tall_with_doors_2_1_m_tall_lined_up_wall_to_wall_is_walked_inside() {
+    let dir = tempfile::tempdir().unwrap();
+    let boxes = storey_of_rooms();
+    // A doorway sees out along its line of doors and, doors being at the
+    // middle of square rooms' walls, along both diagonals through the
+    // neighbours' doors: two walls of eight.
+    walked_inside(&load_boxes(dir.path(), &boxes), box_of(&boxes).extent().length(), 2);
+}
+
+#[test]
+fn a_roof_on_columns_is_circled_saying_how_little_of_it_is_indoors() {
+    let dir = tempfile::tempdir().unwrap();
+    let hall = hall();
+    let canopy: Boxes = hall
+        .into_iter()
+        .filter(|(name, _, _)| !name.starts_with("wall") && name != "lintel")
+        .collect();
+    let (generated, _) = default_of(&load_boxes(dir.path(), &canopy), 10);
+    let why = &generated.why;
+    assert_eq!(generated.kind, PathKind::Orbit, "{why}");
+    assert!(
+        why.contains("% of the walkable floor under a roof and joined, 0% indoors ("),
+        "{why}"
     );
 }
 

@@ -379,14 +379,23 @@ fn default_kind(
             ),
             Some(planned),
         ),
-        None => (
-            PathKind::Orbit,
-            format!(
-                "an object (its longest walk {length:.1} units over {:.0} cells, {open:.0}% under the sky; {roofed:.0}% of the walkable floor under a roof and joined; {unseen}): {circle}",
-                length / planned.cell,
-            ),
-            None,
-        ),
+        None => {
+            // Where most of the floor is roofed, the indoors share (walls
+            // around) is judged too: it tells whether this was near an
+            // interior.
+            let indoors = match planned.roofed >= 0.5 {
+                true => format!(", {indoors:.0}% indoors (walls around in six of eight directions)"),
+                false => String::new(),
+            };
+            (
+                PathKind::Orbit,
+                format!(
+                    "an object (its longest walk {length:.1} units over {:.0} cells, {open:.0}% under the sky; {roofed:.0}% of the walkable floor under a roof and joined{indoors}; {unseen}): {circle}",
+                    length / planned.cell,
+                ),
+                None,
+            )
+        }
     })
 }
 

@@ -7,11 +7,13 @@
 //! focus (its bounds without a huge ground plane or sky dome,
 //! [`crate::scene::Focus`]). Down each cell's vertical line a ray cast finds
 //! every surface; a surface with room for an eye above it (eye height and a
-//! margin up to the next surface) is a floor, unless that room lies inside a
+//! margin up to the next surface: under a door's lintel in metres) is a
+//! floor, unless that room lies inside a
 //! closed part (the ray has crossed its surface an odd number of times:
 //! inside a thick ground slab, a closed building; a closed hall or sky box
 //! around everything is space, not a solid), or the floor is the model's top
-//! (nothing rises two eye heights above it: a tower's roof). Floors of
+//! (open to the sky with nothing rising two eye heights above it: a tower's
+//! roof; a floor under a roof is not, however low the roof). Floors of
 //! neighbouring cells within a step (half the eye height) of each other are
 //! linked, so the ground may slope, climb stairs and lie at several levels
 //! (an island and the sea, storeys). A floor linked on all four sides is
@@ -20,7 +22,8 @@
 //! longest of the shortest routes through the largest joined region (two
 //! breadth-first searches), in cell steps, of the interior (open floors
 //! indoors: a ray up meets the model, and level rays meet it in six of
-//! eight directions) when it holds at least half of the open floors; else
+//! eight directions, or in four in a passage between such floors) when it
+//! holds at least half of the open floors; else
 //! of the streets (open floors with walls near in half the directions)
 //! when they hold a long enough one and a quarter of the open ground
 //! joined to them; else of all open floors.
@@ -73,9 +76,9 @@ pub struct Walk {
     /// The share of the open floors under a roof and joined (the largest
     /// region of them): most of an interior's, none of a town's.
     pub roofed: f64,
-    /// The share of the open floors indoors (under a roof, walls around)
-    /// and joined; judged only where the roofed share is at least half,
-    /// 0 otherwise.
+    /// The share of the open floors indoors (under a roof, walls around),
+    /// of the roofed ones joined; judged only where the roofed share is at
+    /// least half, 0 otherwise.
     pub indoors: f64,
 }
 
@@ -101,18 +104,50 @@ const METRES_EYE_HEIGHT: f64 = 1.7;
 const EYE_FRACTION: f64 = 0.05;
 
 /// The eye height for a model `width` wide and `height` tall, as the
-/// module says: metres assumed for city-sized models, a fraction of the
-/// height otherwise (of the width for a model with no height).
-fn eye_height(width: f64, height: f64) -> f64 {
+/// module says (metres assumed for city-sized models, a fraction of the
+/// height otherwise, of the width for a model with no height); the room a
+/// floor needs above it; and how far below the model's top a floor must
+/// lie not to be its top (a tower's roof). In metres: [`METRES_ROOM`] for
+/// both (a single storey 3 m tall is walked inside); otherwise
+/// [`ROOM_OVER_EYE`] and two eye heights.
+fn scale_of(width: f64, height: f64) -> Scale {
     if width >= METRE_SCALE_WIDTH && height > METRES_EYE_HEIGHT {
-        METRES_EYE_HEIGHT
+        Scale {
+            eye: METRES_EYE_HEIGHT,
+            room: METRES_ROOM,
+            below_top: METRES_ROOM,
+        }
     } else {
-        (EYE_FRACTION * height).max(FLAT_EYE_FRACTION * width)
+        let eye = (EYE_FRACTION * height).max(FLAT_EYE_FRACTION * width);
+        Scale {
+            eye,
+            room: eye * ROOM_OVER_EYE,
+            below_top: 2.0 * eye,
+        }
     }
+}
+
+/// A walk's sizes, in the model's units ([`scale_of`]).
+#[derive(Clone, Copy)]
+struct Scale {
+    eye: f64,
+    room: f64,
+    below_top: f64,
 }
 
 /// The eye height over a flat model's width.
 const FLAT_EYE_FRACTION: f64 = 0.01;
+
+/// The room a floor needs above it in metres: under a door 2 m tall (the
+/// lowest usual) the eye passes. (At 1.5 eye heights, the rule for other
+/// units, a building's 2.1 m doors held no floor and its rooms were never
+/// joined.)
+const METRES_ROOM: f64 = 1.95;
+
+/// The room a floor needs above it in other units, in eye heights: the
+/// eye and half again, so that the hollow inside a thin slab of an open
+/// mesh (a pavement's kerb) is not taken for a storey.
+const ROOM_OVER_EYE: f64 = 1.5;
 
 /// A floor: a surface with room for the eye above it, in a grid cell.
 #[derive(Clone, Copy, Debug)]
@@ -139,7 +174,7 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
     let (through, found) = match (interior.route, streets) {
         (Some(interior), _) => (Through::Interior, Some(interior)),
         (None, Some(streets)) => (Through::Streets, Some(streets)),
-        (None, None) => (Through::OpenGround, ground.longest_route(&ground.open)),
+        (None, None) => (Through::OpenGround, ground.longest_route(&ground.open, |_| true)),
     };
     let Some((route, region)) = found else {
         return Ok(None);
@@ -155,7 +190,7 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
     caster.searching()?;
     Ok(Some(Walk {
         line: turns(&points),
-        eye_height: grid.eye,
+        eye_height: grid.scale.eye,
         cell: grid.cell,
         region: region.len() as f64 / grid.cells() as f64,
         open_sky: sky as f64 / points.len() as f64,
@@ -179,7 +214,7 @@ struct Grid {
     /// Cells along `right` and `ahead`.
     nx: usize,
     ny: usize,
-    eye: f64,
+    scale: Scale,
     /// The model's bottom and top along `up`.
     low: f64,
     high: f64,
@@ -194,7 +229,8 @@ impl Grid {
         let (low, high) = bounds.span_along(up);
         let ((x0, x1), (y0, y1)) = (bounds.span_along(right), bounds.span_along(ahead));
         let (width, depth) = (x1 - x0, y1 - y0);
-        let eye = eye_height(width.max(depth), high - low);
+        let scale = scale_of(width.max(depth), high - low);
+        let eye = scale.eye;
         let side = ((width.max(depth) / eye).ceil() as usize).clamp(MIN_SIDE_CELLS, MAX_SIDE_CELLS);
         let cell = width.max(depth) / side as f64;
         if !(cell > 0.0 && cell.is_finite()) {
@@ -213,7 +249,7 @@ impl Grid {
             cell,
             nx,
             ny,
-            eye,
+            scale,
             low,
             high,
         })
@@ -244,13 +280,12 @@ fn find_floors(
     let Grid {
         up,
         cell,
-        eye,
+        scale: Scale { room, below_top, .. },
         low,
         high,
         ..
     } = *grid;
     let solid = solid_parts(scene, bounds, grid.right, grid.ahead, up);
-    let room = eye * 1.5;
     let mut floors: Vec<Floor> = Vec::new();
     let mut first = Vec::with_capacity(grid.cells() + 1);
     let mut hits: Vec<Hit> = Vec::new();
@@ -268,11 +303,12 @@ fn find_floors(
         let mut above = f64::INFINITY;
         for hit in &hits {
             let height = top - hit.t;
-            if above - height >= room && inside.is_empty() && height + 2.0 * eye <= high {
+            let roofed = above.is_finite();
+            if above - height >= room && inside.is_empty() && height + below_top <= high {
                 floors.push(Floor {
                     cell: k,
                     height,
-                    roofed: above.is_finite(),
+                    roofed,
                 });
             }
             let part = part(hit);
@@ -329,7 +365,7 @@ impl<'c, 'a> Ground<'c, 'a> {
         caster: &'c RayCaster<'a>,
     ) -> Result<Ground<'c, 'a>, Stopped> {
         let (nx, ny) = (grid.nx, grid.ny);
-        let step = 0.5 * grid.eye;
+        let step = 0.5 * grid.scale.eye;
         let links: Vec<[Option<usize>; 4]> = floors
             .iter()
             .map(|f| {
@@ -375,12 +411,15 @@ impl<'c, 'a> Ground<'c, 'a> {
 
     /// Floor `f`'s eye.
     fn point(&self, f: usize) -> DVec3 {
-        self.grid.at(self.floors[f].cell, self.floors[f].height + self.grid.eye)
+        self.grid
+            .at(self.floors[f].cell, self.floors[f].height + self.grid.scale.eye)
     }
 
     /// The longest shortest route through the largest joined region of
-    /// `chosen` open floors, and the region's floors.
-    fn longest_route(&self, chosen: &[bool]) -> Option<Route> {
+    /// `chosen` open floors between two of its floors that `ends` allows
+    /// (the farthest such from one, then the farthest from that), and the
+    /// region's floors.
+    fn longest_route(&self, chosen: &[bool], ends: impl Fn(usize) -> bool) -> Option<Route> {
         let edges: Vec<Vec<usize>> = self
             .open_edges
             .iter()
@@ -391,8 +430,8 @@ impl<'c, 'a> Ground<'c, 'a> {
             })
             .collect();
         let start = largest_region(&edges, chosen)?;
-        let (far, _, _) = farthest(&edges, start);
-        let (end, parents, region) = farthest(&edges, far);
+        let (far, _, _) = farthest(&edges, start, &ends);
+        let (end, parents, region) = farthest(&edges, far, &ends);
         let mut route = vec![end];
         while let Some(previous) = parents[route[route.len() - 1]] {
             route.push(previous);
@@ -427,8 +466,8 @@ impl<'c, 'a> Ground<'c, 'a> {
             .collect();
         self.caster.searching()?;
         let streets = widen(&walled, &self.links, &self.open, STREET_GAP);
-        Ok(self.longest_route(&streets).filter(|(route, region)| {
-            let (_, _, around) = farthest(&self.open_edges, route[0]);
+        Ok(self.longest_route(&streets, |_| true).filter(|(route, region)| {
+            let (_, _, around) = farthest(&self.open_edges, route[0], |_| true);
             route.len() >= LONG_ROUTE && region.len() as f64 >= STREET_SHARE * around.len() as f64
         }))
     }
@@ -436,32 +475,52 @@ impl<'c, 'a> Ground<'c, 'a> {
     /// The interior: open floors indoors, under a roof (the cell's ray met
     /// the model above the floor) with walls around (level rays meet the
     /// model within its size, `bounds`, in six of eight directions), not
-    /// under a porch or a canopy open at the sides. When their largest
+    /// under a porch or a canopy open at the sides, and the passages
+    /// between them (walls in four of eight directions, within an eye
+    /// height of them). When their largest
     /// joined region holds most of the open floor, the walk goes through
     /// it. It lies in one joined region of roofed floors, so only one that
     /// large is searched for walls (the inside of an object is roofed, but
     /// seldom most).
     fn interior(&self, bounds: &Aabb) -> Result<Interior, Stopped> {
         let open_count = self.open.iter().filter(|&&o| o).count();
-        let most = |region: &[usize]| 2 * region.len() >= open_count;
+        let most = |floors: usize| 2 * floors >= open_count;
         let roofed: Vec<bool> = (0..self.floors.len())
             .map(|f| self.open[f] && self.floors[f].roofed)
             .collect();
-        let roofed = self.longest_route(&roofed).map_or_else(Vec::new, |(_, region)| region);
+        let roofed = self
+            .longest_route(&roofed, |_| true)
+            .map_or_else(Vec::new, |(_, region)| region);
+        let mut in_roofed = vec![false; self.floors.len()];
         let mut indoors = vec![false; self.floors.len()];
-        if most(&roofed) {
+        if most(roofed.len()) {
             let reach = bounds.extent().length();
             for &f in &roofed {
+                in_roofed[f] = true;
                 indoors[f] = self.walls(f, reach) >= INTERIOR_WALLS;
             }
             self.caster.searching()?;
         }
-        let interior = self.longest_route(&indoors);
-        let share = |region: &[usize]| region.len() as f64 / open_count.max(1) as f64;
+        let indoor_count = indoors.iter().filter(|&&i| i).count();
+        // Through the indoor floors, where most of them are joined; where
+        // most floors are indoors but no joined part of them is most (rooms
+        // whose doors lie in lines from wall to wall: a doorway in line lets
+        // level rays out along the line and, doors being at the middle of
+        // square rooms' walls, along the diagonals too, so the floors that
+        // join rooms are not indoors themselves), from indoor floor to
+        // indoor floor through the roofed ones.
+        let joined = self.longest_route(&indoors, |_| true);
+        let interior = match joined {
+            Some((_, ref region)) if !most(region.len()) && most(indoor_count) => {
+                self.longest_route(&in_roofed, |f| indoors[f])
+            }
+            joined => joined,
+        };
+        let share = |floors: usize| floors as f64 / open_count.max(1) as f64;
         Ok(Interior {
-            indoors: interior.as_ref().map_or(0.0, |(_, region)| share(region)),
-            route: interior.filter(|(route, region)| route.len() >= LONG_ROUTE && most(region)),
-            roofed: share(&roofed),
+            indoors: share(indoor_count),
+            route: interior.filter(|(route, _)| route.len() >= LONG_ROUTE && most(indoor_count)),
+            roofed: share(roofed.len()),
         })
     }
 }
@@ -558,16 +617,23 @@ fn largest_region(edges: &[Vec<usize>], open: &[bool]) -> Option<usize> {
     best.map(|(seed, _)| seed)
 }
 
-/// The cell farthest from `start` in steps, each reached cell's parent on a
-/// shortest route from `start`, and the cells reached.
-fn farthest(edges: &[Vec<usize>], start: usize) -> (usize, Vec<Option<usize>>, Vec<usize>) {
+/// The cell of `ends` farthest from `start` in steps (`start` where it
+/// reaches none), each reached cell's parent on a shortest route from
+/// `start`, and the cells reached.
+fn farthest(
+    edges: &[Vec<usize>],
+    start: usize,
+    ends: impl Fn(usize) -> bool,
+) -> (usize, Vec<Option<usize>>, Vec<usize>) {
     let mut parent = vec![None; edges.len()];
     let mut seen = vec![false; edges.len()];
     seen[start] = true;
     let (mut last, mut reached) = (start, Vec::new());
     let mut queue = VecDeque::from([start]);
     while let Some(k) = queue.pop_front() {
-        last = k;
+        if ends(k) {
+            last = k;
+        }
         reached.push(k);
         for &n in &edges[k] {
             if !seen[n] {
