@@ -12,8 +12,8 @@
 //! closed part (the ray has crossed its surface an odd number of times:
 //! inside a thick ground slab, a closed building; a closed hall or sky box
 //! around everything is space, not a solid), or the floor is the model's top
-//! (open to the sky with nothing rising two eye heights above it: a tower's
-//! roof; a floor under a roof is not, however low the roof). Floors of
+//! (nothing rises the room above it: 1.95 m in metres, two eye heights in
+//! other units; a tower's roof). Floors of
 //! neighbouring cells within a step (half the eye height) of each other are
 //! linked, so the ground may slope, climb stairs and lie at several levels
 //! (an island and the sea, storeys). A floor linked on all four sides is
@@ -22,8 +22,10 @@
 //! longest of the shortest routes through the largest joined region (two
 //! breadth-first searches), in cell steps, of the interior (open floors
 //! indoors: a ray up meets the model, and level rays meet it in six of
-//! eight directions, or in four in a passage between such floors) when it
-//! holds at least half of the open floors; else
+//! eight directions) when it holds at least half of the open floors, or,
+//! where indoor floors are most but no joined part of them is (doors in
+//! line let rays out of the floors joining rooms), the longest route from
+//! indoor floor to indoor floor through the roofed ones; else
 //! of the streets (open floors with walls near in half the directions)
 //! when they hold a long enough one and a quarter of the open ground
 //! joined to them; else of all open floors.
@@ -475,13 +477,13 @@ impl<'c, 'a> Ground<'c, 'a> {
     /// The interior: open floors indoors, under a roof (the cell's ray met
     /// the model above the floor) with walls around (level rays meet the
     /// model within its size, `bounds`, in six of eight directions), not
-    /// under a porch or a canopy open at the sides, and the passages
-    /// between them (walls in four of eight directions, within an eye
-    /// height of them). When their largest
+    /// under a porch or a canopy open at the sides. When their largest
     /// joined region holds most of the open floor, the walk goes through
-    /// it. It lies in one joined region of roofed floors, so only one that
-    /// large is searched for walls (the inside of an object is roofed, but
-    /// seldom most).
+    /// it; when they are most of it but no joined part of them is, it goes
+    /// from indoor floor to indoor floor through the roofed ones. They lie
+    /// in one joined region of roofed floors, so only one that large is
+    /// searched for walls (the inside of an object is roofed, but seldom
+    /// most).
     fn interior(&self, bounds: &Aabb) -> Result<Interior, Stopped> {
         let open_count = self.open.iter().filter(|&&o| o).count();
         let most = |floors: usize| 2 * floors >= open_count;
