@@ -130,8 +130,9 @@ pub const PLANNING_TESTS: u64 = 1 << 29;
 /// where the scene suggests one (the built-in scenes' streets), where
 /// circling the model would show nothing but one object (a sky dome around
 /// it, or a closed shell hiding everything else), through a place's open
-/// ground, and through an interior (most of the walkable floor indoors
-/// and joined, and most of the model's triangles unseen from the orbit);
+/// ground, and through an interior (most of the walkable floor indoors,
+/// in one roofed region, and most of the model's triangles unseen from the
+/// orbit);
 /// an orbit otherwise. Paths made from the scene's shape frame its focus
 /// ([`Focus`]), not a ground plane or sky dome around it.
 pub fn default_path(scene: &Scene) -> Result<(CameraPath, String), PathError> {
@@ -375,7 +376,7 @@ fn default_kind(
         None if planned.through == Through::Interior && long && sight.misses_most() => (
             PathKind::Walk,
             format!(
-                "an interior ({indoors:.0}% of the walkable floor indoors, under a roof with walls around, and joined; {unseen})"
+                "an interior ({indoors:.0}% of the walkable floor indoors, under a roof with walls around, in one roofed region; {unseen})"
             ),
             Some(planned),
         ),

@@ -13,12 +13,13 @@
 //! inside a thick ground slab, a closed building; a closed hall or sky box
 //! around everything is space, not a solid), or the floor is the model's top
 //! (nothing rises the room above it: 1.95 m in metres, two eye heights in
-//! other units; a tower's roof). Floors of
+//! other units; a tower's roof), or, in metres, it is open to the sky over
+//! another floor (a roof or a bridge over a floor). Floors of
 //! neighbouring cells within a step (half the eye height) of each other are
 //! linked, so the ground may slope, climb stairs and lie at several levels
-//! (an island and the sea, storeys). A floor linked on all four sides is
-//! open (the eye stays a cell from every wall), and two linked open floors
-//! are joined when a ray at eye height passes between them. The walk is the
+//! (an island and the sea, storeys). A floor linked on all four sides, with
+//! a clear ray at eye height to each, is open (the eye stays a cell from
+//! every wall, however thin), and linked open floors are joined. The walk is the
 //! longest of the shortest routes through the largest joined region (two
 //! breadth-first searches), in cell steps, of the interior (open floors
 //! indoors: a ray up meets the model, and level rays meet it in six of
@@ -118,6 +119,7 @@ fn scale_of(width: f64, height: f64) -> Scale {
             eye: METRES_EYE_HEIGHT,
             room: METRES_ROOM,
             below_top: METRES_ROOM,
+            metres: true,
         }
     } else {
         let eye = (EYE_FRACTION * height).max(FLAT_EYE_FRACTION * width);
@@ -125,16 +127,19 @@ fn scale_of(width: f64, height: f64) -> Scale {
             eye,
             room: eye * ROOM_OVER_EYE,
             below_top: 2.0 * eye,
+            metres: false,
         }
     }
 }
 
-/// A walk's sizes, in the model's units ([`scale_of`]).
+/// A walk's sizes, in the model's units ([`scale_of`]), and whether they
+/// are metres.
 #[derive(Clone, Copy)]
 struct Scale {
     eye: f64,
     room: f64,
     below_top: f64,
+    metres: bool,
 }
 
 /// The eye height over a flat model's width.
@@ -194,12 +199,20 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         line: turns(&points),
         eye_height: grid.scale.eye,
         cell: grid.cell,
-        region: region.len() as f64 / grid.cells() as f64,
+        region: cells_of(&ground.floors, &region) as f64 / grid.cells() as f64,
         open_sky: sky as f64 / points.len() as f64,
         through,
         roofed: interior.roofed,
         indoors: interior.indoors,
     }))
+}
+
+/// How many cells `floors` lie in (storeys share cells).
+fn cells_of(all: &[Floor], floors: &[usize]) -> usize {
+    let mut cells: Vec<usize> = floors.iter().map(|&f| all[f].cell).collect();
+    cells.sort_unstable();
+    cells.dedup();
+    cells.len()
 }
 
 /// The ground grid: square cells about an eye height wide over the model's
@@ -282,7 +295,12 @@ fn find_floors(
     let Grid {
         up,
         cell,
-        scale: Scale { room, below_top, .. },
+        scale: Scale {
+            room,
+            below_top,
+            metres,
+            ..
+        },
         low,
         high,
         ..
@@ -324,6 +342,16 @@ fn find_floors(
             }
             above = height;
         }
+        // In metres, a floor open to the sky over another floor is a roof
+        // (or a bridge): the walk stays on the floor under it. (Without
+        // this, a roof more than the room below a chimney's top was open
+        // ground, and a storey of rooms was walked on its roof. In other
+        // units the floor under it may be the hollow of an open mesh's
+        // slab: a pavement tile's.)
+        let start = first[k];
+        if metres && floors.len() - start >= 2 && !floors[start].roofed {
+            floors.remove(start);
+        }
     }
     first.push(floors.len());
     Ok((floors, first))
@@ -333,16 +361,17 @@ fn find_floors(
 /// was taken from.
 type Route = (Vec<usize>, Vec<usize>);
 
-/// The floors linked into ground to walk on: which are open, and which
-/// open ones are joined.
+/// The floors linked into ground to walk on: which are open, and the
+/// links between them.
 struct Ground<'c, 'a> {
     grid: Grid,
     floors: Vec<Floor>,
     /// Each floor's linked floor in the cells on its four sides.
     links: Vec<[Option<usize>; 4]>,
-    /// Floors linked on all four sides.
+    /// Floors linked on all four sides, with a clear ray at eye height to
+    /// each.
     open: Vec<bool>,
-    /// The joined links between open floors: every route takes them.
+    /// The links between open floors (joined): every route takes them.
     open_edges: Vec<Vec<usize>>,
     caster: &'c RayCaster<'a>,
 }
@@ -358,8 +387,7 @@ struct Interior {
 impl<'c, 'a> Ground<'c, 'a> {
     /// Links each floor to the floor of each neighbouring cell within a
     /// step (floors of one cell lie at least the eye's room apart, so at
-    /// most one is), and joins open floors a ray at eye height passes
-    /// between.
+    /// most one is), and finds the open floors and joins them.
     fn link(
         grid: Grid,
         floors: Vec<Floor>,
@@ -384,29 +412,31 @@ impl<'c, 'a> Ground<'c, 'a> {
                 })
             })
             .collect();
-        let open: Vec<bool> = links.iter().map(|l| l.iter().all(Option::is_some)).collect();
         let mut ground = Ground {
             grid,
             floors,
             links,
-            open,
+            open: Vec::new(),
             open_edges: Vec::new(),
             caster,
         };
-        let joined = |a: usize, b: usize| {
+        // Open: linked on all four sides, with a clear line at eye height
+        // to each (a wall thinner than a cell may stand between two cells'
+        // centres, and only that line meets it).
+        let clear = |a: usize, b: usize| {
             let (p, q) = (ground.point(a), ground.point(b));
             caster.first_hit(p, q - p, 1.0).is_none()
         };
+        let open: Vec<bool> = (0..ground.floors.len())
+            .map(|f| ground.links[f].iter().all(|l| l.is_some_and(|g| clear(f, g))))
+            .collect();
         let open_edges = (0..ground.floors.len())
-            .map(|f| {
-                if !ground.open[f] {
-                    return Vec::new();
-                }
-                let linked = ground.links[f].iter().flatten().copied();
-                linked.filter(|&g| ground.open[g] && joined(f, g)).collect()
+            .map(|f| match open[f] {
+                true => ground.links[f].iter().flatten().copied().filter(|&g| open[g]).collect(),
+                false => Vec::new(),
             })
             .collect();
-        ground.open_edges = open_edges;
+        (ground.open, ground.open_edges) = (open, open_edges);
         caster.searching()?;
         Ok(ground)
     }
