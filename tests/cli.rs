@@ -870,7 +870,8 @@ fn render_draws_a_frame_its_overview_and_its_depth_complexity() {
     assert!(colours.iter().any(|c| near(c, [230, 26, 26])), "the red frustum");
 
     let heat = out("heat.png");
-    let r = with(&["--mode", "vfc", "--heat", "-o", &heat]);
+    // `--out`, as bench spells it, names the file too.
+    let r = with(&["--mode", "vfc", "--heat", "--out", &heat]);
     assert!(r.status.success(), "{:?}", own_stderr(&r));
     let (w, h, colours) = png_colours(std::path::Path::new(&heat));
     assert_eq!((w, h), (160, 120));

@@ -235,7 +235,7 @@ pub struct BenchArgs {
     #[arg(long, value_name = "K/N")]
     pub shard: Option<Shard>,
     /// Output directory [default: occlu-out].
-    #[arg(long, short, value_name = "DIR")]
+    #[arg(long, short, visible_alias = "output", value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Skip the reference render and error measure (faster; error columns stay empty).
     #[arg(long)]
@@ -306,7 +306,7 @@ pub struct PictureArgs {
     #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
     pub params: Vec<String>,
     /// Output PNG (animated, for flythrough).
-    #[arg(long, short, value_name = "FILE", value_parser = output_of("PNG", OTHER_IMAGE_KINDS))]
+    #[arg(long, short, visible_alias = "out", value_name = "FILE", value_parser = output_of("PNG", OTHER_IMAGE_KINDS))]
     pub output: PathBuf,
     /// Add a bird's-eye view beside each mode's frame: the frustum in red,
     /// culled objects' boxes in yellow.
@@ -381,7 +381,7 @@ pub struct StressArgs {
     #[arg(long, value_enum)]
     pub backend: Option<BackendChoice>,
     /// Also write stress.md and stress.json here.
-    #[arg(long, short, value_name = "DIR")]
+    #[arg(long, short, visible_alias = "output", value_name = "DIR")]
     pub out: Option<PathBuf>,
 }
 
@@ -416,7 +416,7 @@ pub struct PathGenArgs {
     #[arg(long, value_name = "N", value_parser = frame_count())]
     pub frames: Option<u32>,
     /// Output file.
-    #[arg(long, short, value_name = "FILE")]
+    #[arg(long, short, visible_alias = "out", value_name = "FILE")]
     pub output: PathBuf,
 }
 
@@ -425,7 +425,7 @@ pub struct ExportArgs {
     #[command(flatten)]
     pub scene: SceneAndPath,
     /// Output .glb file.
-    #[arg(long, short, value_name = "FILE", value_parser = output_of("GLB", OTHER_MODEL_KINDS))]
+    #[arg(long, short, visible_alias = "out", value_name = "FILE", value_parser = output_of("GLB", OTHER_MODEL_KINDS))]
     pub output: PathBuf,
 }
 
