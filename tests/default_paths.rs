@@ -10,7 +10,7 @@ mod common;
 
 use common::hall::hall;
 use common::{
-    boxes_obj, cannot_run, first_hit, frames_too_near, occlu, shared_models, shared_models_dir, stderr,
+    boxes_obj, cannot_run, first_hit, frames_too_near, occlu, shared_models, shared_models_dir, stderr, town,
     world_triangles, write,
 };
 use glam::DVec3;
@@ -217,6 +217,28 @@ fn a_storey_of_rooms_with_staggered_doors_is_walked_a_cell_clear_of_its_thin_wal
     let dir = tempfile::tempdir().unwrap();
     let boxes = storey_of_rooms(true);
     walked_inside(&load_boxes(dir.path(), &boxes), box_of(&boxes).extent().length(), 2);
+}
+
+#[test]
+fn a_street_over_a_tunnel_is_walked_as_without_the_tunnel() {
+    // The town is 120 m across, +Y up; the tunnel, four boxes, runs under
+    // the street from z = 56 to 66 the whole width, 5 m high and 2 m down.
+    let mut boxes = town(true);
+    let planned = |boxes: &Boxes| {
+        let dir = tempfile::tempdir().unwrap();
+        let (generated, _) = default_of(&load_boxes(dir.path(), boxes), 10);
+        let keys: Vec<[f64; 3]> = generated.file.keyframes.iter().map(|k| k.position).collect();
+        (generated.why, keys)
+    };
+    let without = planned(&boxes);
+    assert!(without.0.contains("through the streets"), "{}", without.0);
+    boxes.extend([
+        part("tunnel_floor", [0.0, -7.2, 56.0], [120.0, -7.0, 66.0]),
+        part("tunnel_roof", [0.0, -2.2, 56.0], [120.0, -2.0, 66.0]),
+        part("tunnel_wall_a", [0.0, -7.0, 55.8], [120.0, -2.2, 56.0]),
+        part("tunnel_wall_b", [0.0, -7.0, 66.0], [120.0, -2.2, 66.2]),
+    ]);
+    assert_eq!(planned(&boxes), without);
 }
 
 #[test]

@@ -13,13 +13,15 @@
 //! inside a thick ground slab, a closed building; a closed hall or sky box
 //! around everything is space, not a solid), or the floor is the model's top
 //! (nothing rises the room above it: 1.95 m in metres, two eye heights in
-//! other units; a tower's roof), or, in metres, it is open to the sky over
-//! another floor (a roof or a bridge over a floor). Floors of
+//! other units; a tower's roof). Floors of
 //! neighbouring cells within a step (half the eye height) of each other are
 //! linked, so the ground may slope, climb stairs and lie at several levels
 //! (an island and the sea, storeys). A floor linked on all four sides, with
 //! a clear ray at eye height to each, is open (the eye stays a cell from
-//! every wall, however thin), and linked open floors are joined. The walk is the
+//! every wall, however thin), unless it is a roof (in metres, a linked
+//! region of floors open to the sky, most of them over another floor: a
+//! roof over rooms, not a street over a tunnel); linked open floors are
+//! joined. The walk is the
 //! longest of the shortest routes through the largest joined region (two
 //! breadth-first searches), in cell steps, of the interior (open floors
 //! indoors: a ray up meets the model, and level rays meet it in six of
@@ -164,6 +166,8 @@ struct Floor {
     /// The cell's ray met a surface above it (below the model's top): a
     /// roof.
     roofed: bool,
+    /// In metres: open to the sky over another floor of its cell.
+    over_floor: bool,
 }
 
 /// Plans a walk through the part of `scene` within `bounds` (its focus:
@@ -329,6 +333,7 @@ fn find_floors(
                     cell: k,
                     height,
                     roofed,
+                    over_floor: false,
                 });
             }
             let part = part(hit);
@@ -342,15 +347,12 @@ fn find_floors(
             }
             above = height;
         }
-        // In metres, a floor open to the sky over another floor is a roof
-        // (or a bridge): the walk stays on the floor under it. (Without
-        // this, a roof more than the room below a chimney's top was open
-        // ground, and a storey of rooms was walked on its roof. In other
-        // units the floor under it may be the hollow of an open mesh's
-        // slab: a pavement tile's.)
+        // In metres, a floor open to the sky over another floor may be a
+        // roof ([`roofs`]). (In other units the floor under it may be the
+        // hollow of an open mesh's slab: a pavement tile's.)
         let start = first[k];
         if metres && floors.len() - start >= 2 && !floors[start].roofed {
-            floors.remove(start);
+            floors[start].over_floor = true;
         }
     }
     first.push(floors.len());
@@ -420,15 +422,16 @@ impl<'c, 'a> Ground<'c, 'a> {
             open_edges: Vec::new(),
             caster,
         };
-        // Open: linked on all four sides, with a clear line at eye height
-        // to each (a wall thinner than a cell may stand between two cells'
-        // centres, and only that line meets it).
+        // Open: no roof, linked on all four sides, with a clear line at eye
+        // height to each (a wall thinner than a cell may stand between two
+        // cells' centres, and only that line meets it).
         let clear = |a: usize, b: usize| {
             let (p, q) = (ground.point(a), ground.point(b));
             caster.first_hit(p, q - p, 1.0).is_none()
         };
+        let roof = roofs(&ground.floors, &ground.links);
         let open: Vec<bool> = (0..ground.floors.len())
-            .map(|f| ground.links[f].iter().all(|l| l.is_some_and(|g| clear(f, g))))
+            .map(|f| !roof[f] && ground.links[f].iter().all(|l| l.is_some_and(|g| clear(f, g))))
             .collect();
         let open_edges = (0..ground.floors.len())
             .map(|f| match open[f] {
@@ -595,6 +598,43 @@ const STREET_SHARE: f64 = 0.25;
 
 /// Open cells this close (in steps) to a walled one are street too.
 const STREET_GAP: usize = 2;
+
+/// Roofs: the floors of each linked region of floors open to the sky most
+/// of whose floors lie over another floor of their cell (in metres, as a
+/// roof over rooms does); the walk keeps to the floors below. A street over
+/// a tunnel or a car park, or a bridge, lies in a region mostly over the
+/// ground, which stays. (Without roofs, a roof more than the room below a
+/// chimney's top was open ground, and a storey of rooms was walked on its
+/// roof.)
+fn roofs(floors: &[Floor], links: &[[Option<usize>; 4]]) -> Vec<bool> {
+    let sky = |f: usize| !floors[f].roofed;
+    let mut roof = vec![false; floors.len()];
+    let mut seen = vec![false; floors.len()];
+    let mut region = Vec::new();
+    for seed in (0..floors.len()).filter(|&f| sky(f)) {
+        if seen[seed] {
+            continue;
+        }
+        seen[seed] = true;
+        region.clear();
+        region.push(seed);
+        let mut k = 0;
+        while let Some(&f) = region.get(k) {
+            k += 1;
+            for &g in links[f].iter().flatten() {
+                if sky(g) && !seen[g] {
+                    seen[g] = true;
+                    region.push(g);
+                }
+            }
+        }
+        let over = region.iter().filter(|&&f| floors[f].over_floor).count();
+        if 2 * over > region.len() {
+            region.iter().for_each(|&f| roof[f] = true);
+        }
+    }
+    roof
+}
 
 /// `chosen` floors and the `allowed` ones within `steps` links of them.
 fn widen(chosen: &[bool], links: &[[Option<usize>; 4]], allowed: &[bool], steps: usize) -> Vec<bool> {
