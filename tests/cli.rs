@@ -599,6 +599,28 @@ fn help_explains_modes_and_scenes() {
     }
 }
 
+#[test]
+fn every_command_that_writes_takes_out_and_output_alike() {
+    let commands: [&[&str]; 7] = [
+        &["bench"],
+        &["stress"],
+        &["merge"],
+        &["render"],
+        &["flythrough"],
+        &["export"],
+        &["path", "gen"],
+    ];
+    for command in commands {
+        let out = occlu(&[command, &["--help"]].concat());
+        assert!(out.status.success(), "{command:?}");
+        let text = stdout(&out);
+        for spelling in ["--out ", "--output "] {
+            let said = text.contains(spelling) || text.contains(&format!("alias: {}", spelling.trim_end()));
+            assert!(said, "{command:?} --help lacks {spelling}");
+        }
+    }
+}
+
 /// Width, height and distinct colours of an RGB PNG.
 fn png_colours(path: &std::path::Path) -> (u32, u32, std::collections::HashSet<[u8; 3]>) {
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));

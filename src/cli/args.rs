@@ -442,7 +442,7 @@ pub struct MergeArgs {
     #[arg(value_name = "DIR")]
     pub dirs: Vec<PathBuf>,
     /// Where merged.json, report.md, charts/ and runs/ go.
-    #[arg(long, short, value_name = "MERGED")]
+    #[arg(long, short, visible_alias = "output", value_name = "MERGED")]
     pub out: PathBuf,
     /// Merge a matrix that lacks runs (a shard left out, a run that
     /// failed): the runs present are merged and the missing ones named
