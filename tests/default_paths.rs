@@ -190,33 +190,34 @@ fn storey_of_rooms(staggered: bool) -> Boxes {
     boxes
 }
 
+/// [`walked_inside`] for a storey of rooms: a doorway sees out along its
+/// line of doors and, doors being at the middle of square rooms' walls,
+/// along both diagonals through the neighbours' doors, so keyframes on the
+/// way need two walls of eight.
+fn storey_walked_inside(boxes: &Boxes) {
+    let dir = tempfile::tempdir().unwrap();
+    walked_inside(&load_boxes(dir.path(), boxes), box_of(boxes).extent().length(), 2);
+}
+
 #[test]
 fn a_storey_of_rooms_3_m_tall_with_doors_2_1_m_tall_lined_up_wall_to_wall_is_walked_inside() {
-    let dir = tempfile::tempdir().unwrap();
-    let boxes = storey_of_rooms(false);
-    // A doorway sees out along its line of doors and, doors being at the
-    // middle of square rooms' walls, along both diagonals through the
-    // neighbours' doors: two walls of eight.
-    walked_inside(&load_boxes(dir.path(), &boxes), box_of(&boxes).extent().length(), 2);
+    storey_walked_inside(&storey_of_rooms(false));
 }
 
 #[test]
 fn a_storey_of_rooms_with_a_chimney_is_walked_inside_not_on_its_roof() {
     // The chimney rises 2.5 m above the roof, so the roof lies more than
     // the room a floor needs below the model's top.
-    let dir = tempfile::tempdir().unwrap();
     let mut boxes = storey_of_rooms(false);
     boxes.push(part("chimney", [14.0, 3.2, 14.0], [15.0, 5.7, 15.0]));
-    walked_inside(&load_boxes(dir.path(), &boxes), box_of(&boxes).extent().length(), 2);
+    storey_walked_inside(&boxes);
 }
 
 #[test]
 fn a_storey_of_rooms_with_staggered_doors_is_walked_a_cell_clear_of_its_thin_walls() {
     // Walls 0.2 m thick, cells of 0.2 m: a wall may stand between two
     // cells' centres, where no ray down meets it.
-    let dir = tempfile::tempdir().unwrap();
-    let boxes = storey_of_rooms(true);
-    walked_inside(&load_boxes(dir.path(), &boxes), box_of(&boxes).extent().length(), 2);
+    storey_walked_inside(&storey_of_rooms(true));
 }
 
 #[test]
