@@ -221,9 +221,11 @@ fn a_storey_of_rooms_with_staggered_doors_is_walked_a_cell_clear_of_its_thin_wal
 }
 
 #[test]
-fn a_street_over_a_tunnel_is_walked_as_without_the_tunnel() {
-    // The town is 120 m across, +Y up; the tunnel, four boxes, runs under
-    // the street from z = 56 to 66 the whole width, 5 m high and 2 m down.
+fn streets_over_a_metro_under_every_one_of_them_are_walked_as_without_it() {
+    // The town is 120 m across, +Y up, its streets 10 m wide between
+    // blocks 18 m square; a tunnel, four boxes 5 m high and 2 m down, runs
+    // the whole width under each of its six inner streets (two thirds of
+    // the open ground lies over one).
     let mut boxes = town(true);
     let planned = |boxes: &Boxes| {
         let dir = tempfile::tempdir().unwrap();
@@ -233,12 +235,25 @@ fn a_street_over_a_tunnel_is_walked_as_without_the_tunnel() {
     };
     let without = planned(&boxes);
     assert!(without.0.contains("through the streets"), "{}", without.0);
-    boxes.extend([
-        part("tunnel_floor", [0.0, -7.2, 56.0], [120.0, -7.0, 66.0]),
-        part("tunnel_roof", [0.0, -2.2, 56.0], [120.0, -2.0, 66.0]),
-        part("tunnel_wall_a", [0.0, -7.0, 55.8], [120.0, -2.2, 56.0]),
-        part("tunnel_wall_b", [0.0, -7.0, 66.0], [120.0, -2.2, 66.2]),
-    ]);
+    for (k, from) in [28.0, 56.0, 84.0].into_iter().enumerate() {
+        let to = from + 10.0;
+        // Along x at z = from..to, and along z at x = from..to.
+        for along_x in [true, false] {
+            let piece = |name: &str, [y0, y1]: [f64; 2], [a, b]: [f64; 2]| {
+                let name = format!("{name}_{k}_{along_x}");
+                match along_x {
+                    true => part(&name, [0.0, y0, a], [120.0, y1, b]),
+                    false => part(&name, [a, y0, 0.0], [b, y1, 120.0]),
+                }
+            };
+            boxes.extend([
+                piece("floor", [-7.2, -7.0], [from, to]),
+                piece("roof", [-2.2, -2.0], [from, to]),
+                piece("wall_a", [-7.0, -2.2], [from - 0.2, from]),
+                piece("wall_b", [-7.0, -2.2], [to, to + 0.2]),
+            ]);
+        }
+    }
     assert_eq!(planned(&boxes), without);
 }
 

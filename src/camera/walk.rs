@@ -19,9 +19,9 @@
 //! (an island and the sea, storeys). A floor linked on all four sides, with
 //! a clear ray at eye height to each, is open (the eye stays a cell from
 //! every wall, however thin), unless it is a roof (in metres, a linked
-//! region of floors open to the sky, most of them over another floor: a
-//! roof over rooms, not a street over a tunnel); linked open floors are
-//! joined. The walk is the
+//! region of floors open to the sky, most of them over another floor, or
+//! nine tenths for the largest such region: a roof over rooms, not streets
+//! over a metro); linked open floors are joined. The walk is the
 //! longest of the shortest routes through the largest joined region (two
 //! breadth-first searches), in cell steps, of the interior (open floors
 //! indoors: a ray up meets the model, and level rays meet it in six of
@@ -601,40 +601,56 @@ const STREET_GAP: usize = 2;
 
 /// Roofs: the floors of each linked region of floors open to the sky most
 /// of whose floors lie over another floor of their cell (in metres, as a
-/// roof over rooms does); the walk keeps to the floors below. A street over
-/// a tunnel or a car park, or a bridge, lies in a region mostly over the
-/// ground, which stays. (Without roofs, a roof more than the room below a
-/// chimney's top was open ground, and a storey of rooms was walked on its
-/// roof.)
+/// roof over rooms does), but of the largest such region only where nine
+/// tenths of it do (a building's roof, standing alone): the walk keeps to
+/// the floors below. Streets over a tunnel, a car park or a metro under
+/// most of them lie in the largest region, and stay. (Without roofs, a
+/// roof more than the room below a chimney's top was open ground, and a
+/// storey of rooms was walked on its roof.)
 fn roofs(floors: &[Floor], links: &[[Option<usize>; 4]]) -> Vec<bool> {
     let sky = |f: usize| !floors[f].roofed;
-    let mut roof = vec![false; floors.len()];
     let mut seen = vec![false; floors.len()];
-    let mut region = Vec::new();
+    // The regions' floors one after another, and per region where its
+    // floors lie there and how many of them lie over another floor.
+    let mut members: Vec<usize> = Vec::new();
+    let mut regions: Vec<(std::ops::Range<usize>, usize)> = Vec::new();
     for seed in (0..floors.len()).filter(|&f| sky(f)) {
         if seen[seed] {
             continue;
         }
         seen[seed] = true;
-        region.clear();
-        region.push(seed);
-        let mut k = 0;
-        while let Some(&f) = region.get(k) {
+        let start = members.len();
+        members.push(seed);
+        let mut k = start;
+        while let Some(&f) = members.get(k) {
             k += 1;
             for &g in links[f].iter().flatten() {
                 if sky(g) && !seen[g] {
                     seen[g] = true;
-                    region.push(g);
+                    members.push(g);
                 }
             }
         }
-        let over = region.iter().filter(|&&f| floors[f].over_floor).count();
-        if 2 * over > region.len() {
-            region.iter().for_each(|&f| roof[f] = true);
+        let over = members[start..].iter().filter(|&&f| floors[f].over_floor).count();
+        regions.push((start..members.len(), over));
+    }
+    let largest = (0..regions.len()).max_by_key(|&r| regions[r].0.len());
+    let mut roof = vec![false; floors.len()];
+    for (r, (region, over)) in regions.into_iter().enumerate() {
+        let share = match Some(r) == largest {
+            true => LARGEST_ROOF_SHARE,
+            false => 0.5,
+        };
+        if over as f64 > share * region.len() as f64 {
+            members[region].iter().for_each(|&f| roof[f] = true);
         }
     }
     roof
 }
+
+/// The share of the largest region open to the sky that must lie over
+/// other floors for it to be a roof ([`roofs`]).
+const LARGEST_ROOF_SHARE: f64 = 0.9;
 
 /// `chosen` floors and the `allowed` ones within `steps` links of them.
 fn widen(chosen: &[bool], links: &[[Option<usize>; 4]], allowed: &[bool], steps: usize) -> Vec<bool> {
