@@ -425,13 +425,24 @@ impl<'c, 'a> Ground<'c, 'a> {
         // Open: no roof, linked on all four sides, with a clear line at eye
         // height to each (a wall thinner than a cell may stand between two
         // cells' centres, and only that line meets it).
+        // Links are mutual (the neighbour's floor within a step is the only
+        // one), so each line is cast once: from each floor to its links
+        // towards +x and +y (sides 1 and 3), and read from the neighbour's
+        // for sides 0 and 2.
         let clear = |a: usize, b: usize| {
             let (p, q) = (ground.point(a), ground.point(b));
             caster.first_hit(p, q - p, 1.0).is_none()
         };
+        let clear_onwards: Vec<[bool; 2]> = (0..ground.floors.len())
+            .map(|f| [1, 3].map(|side| ground.links[f][side].is_some_and(|g| clear(f, g))))
+            .collect();
+        let clear_to = |f: usize, side: usize| match side % 2 {
+            1 => clear_onwards[f][side / 2],
+            _ => ground.links[f][side].is_some_and(|g| clear_onwards[g][side / 2]),
+        };
         let roof = roofs(&ground.floors, &ground.links);
         let open: Vec<bool> = (0..ground.floors.len())
-            .map(|f| !roof[f] && ground.links[f].iter().all(|l| l.is_some_and(|g| clear(f, g))))
+            .map(|f| !roof[f] && (0..4).all(|side| clear_to(f, side)))
             .collect();
         let open_edges = (0..ground.floors.len())
             .map(|f| match open[f] {
