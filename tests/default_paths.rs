@@ -293,6 +293,18 @@ fn a_hall_on_a_ground_plane_20_times_wider_is_walked_inside() {
 }
 
 #[test]
+fn a_hall_and_a_ground_plane_20_times_wider_in_one_mesh_are_walked_inside() {
+    // As a merged export gives them: the plane is two of the mesh's
+    // triangles, not a part of its own.
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = hall();
+    let reach = box_of(&boxes).extent().length();
+    boxes.push(plane_under(&boxes, 20.0, -0.5));
+    let why = walked_inside(&load_obj(dir.path(), one_object(&boxes)), reach, 6);
+    assert!(why.contains("without the 12 largest triangles of 'model'"), "{why}");
+}
+
+#[test]
 fn path_gen_says_the_class_and_why_and_kind_still_overrides_it() {
     let dir = tempfile::tempdir().unwrap();
     let mut boxes = hall();
