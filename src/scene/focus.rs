@@ -4,20 +4,26 @@
 //! a town, makes the raw bounds many times larger than anything there is to
 //! see, and a path framing them shows a speck.
 //!
-//! The model is weighed in pieces by their triangles: its parts (meshes as
-//! placed), each with its few largest triangles split off where the rest
-//! of the part fits a box at most half as wide without them (a ground quad
-//! exported in one mesh with the house on it, as merged exports and scans
-//! give). The largest pieces are left out when they are huge and nearly
-//! empty: without them the rest fits a box at most half as wide (its
-//! diagonal), and each of them is at least twice as wide as that rest and
-//! holds at most a tenth as many triangles per unit of its box's surface.
-//! A few at most ([`MAX_LEFT_OUT`]), largest first, a group of equals
-//! together (ground and water of one size), each judged against what is
-//! left.
+//! Parts (meshes as placed) are weighed by their triangles. The largest
+//! parts are left out when they are huge and nearly empty: without them
+//! the rest fits a box at most half as wide (its diagonal), and each of
+//! them is at least twice as wide as that rest and holds at most a tenth as
+//! many triangles per unit of its box's surface. A few at most
+//! ([`MAX_LEFT_OUT`]), largest first, a group of equals together (ground
+//! and water of one size), each judged against what is left.
+//!
+//! Then, where a ground was exported in one mesh with what stands on it
+//! (merged exports and scans give such models), the same rule weighs the
+//! parts that stay in pieces: a part at least half as wide as the box,
+//! its few largest triangles apart from the rest of it where each is at
+//! least twice as wide as that rest, the rest fits a box half as wide, and
+//! they rise no higher than the rest (a ground or a sea under the model; a
+//! hall's roof and walls over its furniture stay).
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
+
+use glam::DVec3;
 
 use crate::bounds::Aabb;
 
@@ -33,23 +39,25 @@ const SHRINK: f64 = 0.5;
 /// unit of surface.
 const EMPTIER: f64 = 0.1;
 
-/// The most triangles split off one part ([`largest_triangles`]): a ground,
-/// a sea or a sky of a few hundred quads, not a terrain of fine ones (which
-/// is as dense as what stands on it, and stays).
+/// The most triangles split off one part ([`largest_triangles`]): a ground
+/// or a sea of a few quads, not a terrain of fine ones (which is as dense
+/// as what stands on it, and stays).
 const MOST_SPLIT_OFF: usize = 4096;
 
 /// The box of a scene's detail, and what was left out of it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Focus {
     pub bounds: Aabb,
-    /// What was left out (huge and nearly empty), largest first.
+    /// What was left out (huge and nearly empty): the parts largest first,
+    /// then the parts' largest triangles.
     pub left_out: Vec<LeftOut>,
 }
 
 /// A piece of the model the focus left out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LeftOut {
-    /// A whole part (or all of it but the triangles split off it).
+    /// A part (or all of it but its largest triangles, where those were
+    /// weighed apart).
     Part(u32),
     /// The `count` largest triangles of a part.
     Triangles { part: u32, count: u32 },
@@ -67,7 +75,69 @@ impl Focus {
     /// The focus of `scene`: its bounds without its huge, nearly empty
     /// pieces (the module says which those are).
     pub fn of(scene: &Scene) -> Focus {
-        let mut pieces = pieces(scene);
+        let mut objects = vec![Vec::new(); scene.parts.len()];
+        for (o, object) in scene.objects.iter().enumerate() {
+            objects[object.part as usize].push(o as u32);
+        }
+        let parts: Vec<Piece> = (0..)
+            .zip(&objects)
+            .map(|(part, objects)| Piece {
+                bounds: objects
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, &o| b.union(scene.objects[o as usize].bounds)),
+                triangles: objects
+                    .iter()
+                    .map(|&o| u64::from(scene.objects[o as usize].triangles))
+                    .sum(),
+                what: LeftOut::Part(part),
+            })
+            .collect();
+        let mut focus = Focus::without_the_emptiest(parts.clone(), MAX_LEFT_OUT);
+        // The parts that stay, each in pieces where its largest triangles
+        // are weighed apart.
+        let wide = SHRINK * focus.bounds.extent().length();
+        let up = scene.up.axis.vector();
+        let mut split = false;
+        let mut pieces = Vec::with_capacity(parts.len());
+        for (part, piece) in (0..).zip(parts) {
+            if focus.left_out.contains(&piece.what) {
+                continue;
+            }
+            let wide_enough = piece.bounds.extent().length() >= wide;
+            match wide_enough
+                .then(|| largest_triangles(scene, &objects[part as usize], up))
+                .flatten()
+            {
+                Some(Split { largest, count, rest }) => {
+                    split = true;
+                    pieces.push(Piece {
+                        bounds: largest,
+                        triangles: u64::from(count),
+                        what: LeftOut::Triangles { part, count },
+                    });
+                    pieces.push(Piece {
+                        bounds: rest,
+                        triangles: piece.triangles - u64::from(count),
+                        ..piece
+                    });
+                }
+                None => pieces.push(piece),
+            }
+        }
+        let most = MAX_LEFT_OUT - focus.left_out.len();
+        if split && most > 0 {
+            let within = Focus::without_the_emptiest(pieces, most);
+            if !within.left_out.is_empty() {
+                focus.bounds = within.bounds;
+                focus.left_out.extend(within.left_out);
+            }
+        }
+        focus
+    }
+
+    /// The box of `pieces` without at most `most` of the largest, where
+    /// they are huge and nearly empty (the module says which those are).
+    fn without_the_emptiest(mut pieces: Vec<Piece>, most: usize) -> Focus {
         let size = |p: &Piece| p.bounds.extent().length();
         pieces.sort_by(|a, b| size(b).total_cmp(&size(a)));
         // What is left once the `k` largest are out: its box and triangles.
@@ -82,8 +152,8 @@ impl Focus {
         let density =
             |(bounds, triangles): (Aabb, u64)| triangles as f64 / bounds.surface_area().max(f64::MIN_POSITIVE);
         let mut out = 0;
-        'search: while out < MAX_LEFT_OUT {
-            for k in out + 1..=MAX_LEFT_OUT.min(pieces.len().saturating_sub(1)) {
+        'search: while out < most {
+            for k in out + 1..=most.min(pieces.len().saturating_sub(1)) {
                 let rest = left[k];
                 let shrinks = diagonal(&rest.0) <= SHRINK * diagonal(&left[out].0);
                 let empty = |piece: &Piece| {
@@ -129,45 +199,6 @@ impl Focus {
     }
 }
 
-/// The pieces [`Focus::of`] weighs: each part, or its largest triangles
-/// and the rest of it where [`largest_triangles`] splits them off.
-fn pieces(scene: &Scene) -> Vec<Piece> {
-    let mut objects = vec![Vec::new(); scene.parts.len()];
-    for (o, object) in scene.objects.iter().enumerate() {
-        objects[object.part as usize].push(o as u32);
-    }
-    let mut pieces = Vec::with_capacity(scene.parts.len());
-    for (part, objects) in (0..).zip(&objects) {
-        let bounds = objects
-            .iter()
-            .fold(Aabb::EMPTY, |b, &o| b.union(scene.objects[o as usize].bounds));
-        let triangles: u64 = objects
-            .iter()
-            .map(|&o| u64::from(scene.objects[o as usize].triangles))
-            .sum();
-        match largest_triangles(scene, objects) {
-            Some(Split { largest, count, rest }) => {
-                pieces.push(Piece {
-                    bounds: largest,
-                    triangles: u64::from(count),
-                    what: LeftOut::Triangles { part, count },
-                });
-                pieces.push(Piece {
-                    bounds: rest,
-                    triangles: triangles - u64::from(count),
-                    what: LeftOut::Part(part),
-                });
-            }
-            None => pieces.push(Piece {
-                bounds,
-                triangles,
-                what: LeftOut::Part(part),
-            }),
-        }
-    }
-    pieces
-}
-
 /// A part's largest triangles split off it: their box and count, and the
 /// box of the rest of it.
 struct Split {
@@ -179,10 +210,11 @@ struct Split {
 /// The fewest of the largest triangles (by their box's diagonal, at most
 /// [`MOST_SPLIT_OFF`]) of the part made of `objects` without which the
 /// rest of it fits a box at most [`SHRINK`] as wide, each of them at least
-/// twice as wide as that rest; `None` where there are no such few. The
-/// rest's box is its triangles' as drawn (their corners stored in `f32`),
-/// which may lie an `f32` rounding inside or outside the part's box.
-fn largest_triangles(scene: &Scene, objects: &[u32]) -> Option<Split> {
+/// twice as wide as that rest, and rising no higher along `up` than the
+/// rest; `None` where there are no such few. The rest's box is its
+/// triangles' as drawn (their corners stored in `f32`), which may lie an
+/// `f32` rounding inside or outside the part's box.
+fn largest_triangles(scene: &Scene, objects: &[u32], up: DVec3) -> Option<Split> {
     let triangles = || {
         objects.iter().flat_map(|&o| {
             let object = &scene.objects[o as usize];
@@ -214,21 +246,21 @@ fn largest_triangles(scene: &Scene, objects: &[u32]) -> Option<Split> {
         }
     }
     // Largest first.
-    let largest = heap.into_sorted_vec();
+    let ranked = heap.into_sorted_vec();
     let diagonal = |b: &Aabb| b.extent().length();
     // The `k` largest may be split off only where the k-th is at least
     // twice as wide as the next (which the rest holds): most meshes'
     // triangles have no such gap, and need no second pass.
-    let sizes: Vec<f64> = largest.iter().map(|(Reverse(bits), _)| f64::from_bits(*bits)).collect();
+    let sizes: Vec<f64> = ranked.iter().map(|(Reverse(bits), _)| f64::from_bits(*bits)).collect();
     let next = |k: usize| sizes.get(k).copied().or(largest_other.map(f64::from_bits));
-    let gaps: Vec<usize> = (1..=largest.len())
+    let gaps: Vec<usize> = (1..=ranked.len())
         .filter(|&k| next(k).is_some_and(|next| SHRINK * sizes[k - 1] >= next))
         .collect();
-    let &(Reverse(least_kept), _) = largest.last().filter(|_| !gaps.is_empty())?;
-    let mut by_triangle: Vec<((u32, u32), usize)> = largest.iter().enumerate().map(|(k, &(_, key))| (key, k)).collect();
+    let &(Reverse(least_kept), _) = ranked.last().filter(|_| !gaps.is_empty())?;
+    let mut by_triangle: Vec<((u32, u32), usize)> = ranked.iter().enumerate().map(|(k, &(_, key))| (key, k)).collect();
     by_triangle.sort_unstable();
     // Their boxes, and the box of the others.
-    let mut boxes = vec![Aabb::EMPTY; largest.len()];
+    let mut boxes = vec![Aabb::EMPTY; ranked.len()];
     let mut others = Aabb::EMPTY;
     for (key, bounds) in triangles() {
         let found = match size(&bounds) < least_kept {
@@ -241,18 +273,26 @@ fn largest_triangles(scene: &Scene, objects: &[u32]) -> Option<Split> {
         }
     }
     // What is left without the `k` largest, for each k.
-    let mut rest = vec![others; largest.len() + 1];
-    for k in (0..largest.len()).rev() {
+    let mut rest = vec![others; ranked.len() + 1];
+    for k in (0..ranked.len()).rev() {
         rest[k] = rest[k + 1].union(boxes[k]);
     }
+    // The box of the `k` largest, for each k.
+    let mut split_off = vec![Aabb::EMPTY; boxes.len() + 1];
+    for k in 0..boxes.len() {
+        split_off[k + 1] = split_off[k].union(boxes[k]);
+    }
+    let top = |b: &Aabb| b.span_along(up).1;
     // Each of them at least twice as wide as the rest, as a piece left
     // out must be (not most of a part of like triangles).
     let count = gaps.into_iter().find(|&k| {
         let left = diagonal(&rest[k]);
-        left <= SHRINK * diagonal(&rest[0]) && SHRINK * diagonal(&boxes[k - 1]) >= left
+        left <= SHRINK * diagonal(&rest[0])
+            && SHRINK * diagonal(&boxes[k - 1]) >= left
+            && top(&split_off[k]) <= top(&rest[k])
     })?;
     Some(Split {
-        largest: boxes[..count].iter().fold(Aabb::EMPTY, |b, &bounds| b.union(bounds)),
+        largest: split_off[count],
         count: count as u32,
         rest: rest[count],
     })
@@ -271,40 +311,44 @@ pub(crate) mod fixtures {
     /// made of `cuts`² boxes side by side across the ground (more
     /// triangles, the same box), +Y up.
     pub fn boxes(boxes: &[(&str, DVec3, DVec3, u32)]) -> Scene {
-        let mut builder = SceneBuilder::new("test".into(), 1 << 20);
-        for &(name, min, max, cuts) in boxes {
-            let mut soup = TriangleSoup::default();
-            add_box(&mut soup, min, max, cuts);
-            let group = builder.add_mesh(name, &soup.positions, &soup.indices).unwrap();
-            builder.add_object(name, &group, DAffine3::IDENTITY).unwrap();
-        }
-        builder.finish().unwrap()
+        let parts: Vec<_> = boxes
+            .iter()
+            .map(|&(name, min, max, cuts)| (name, vec![(min, max, cuts)]))
+            .collect();
+        meshes(1 << 20, &parts)
     }
 
     /// [`boxes`] as one mesh named `name`, as a merged export gives a
     /// model, cut into clusters of 64 triangles, as loading cuts a large
     /// one.
     pub fn one_mesh(name: &str, boxes: &[(&str, DVec3, DVec3, u32)]) -> Scene {
-        let mut builder = SceneBuilder::new("test".into(), 64);
-        let mut soup = TriangleSoup::default();
-        for &(_, min, max, cuts) in boxes {
-            add_box(&mut soup, min, max, cuts);
-        }
-        let group = builder.add_mesh(name, &soup.positions, &soup.indices).unwrap();
-        builder.add_object(name, &group, DAffine3::IDENTITY).unwrap();
-        builder.finish().unwrap()
+        let all = boxes.iter().map(|&(_, min, max, cuts)| (min, max, cuts)).collect();
+        meshes(64, &[(name, all)])
     }
 
-    /// The box from `min` to `max` as `cuts`² boxes side by side.
-    fn add_box(soup: &mut TriangleSoup, min: DVec3, max: DVec3, cuts: u32) {
-        let step = (max - min) / f64::from(cuts);
-        for i in 0..cuts {
-            for k in 0..cuts {
-                let corner = min + step * DVec3::new(f64::from(i), 0.0, f64::from(k));
-                let far = corner + step * DVec3::new(1.0, f64::from(cuts), 1.0);
-                cuboid(soup, corner, far);
+    /// A box `(min, max, cuts)` as [`boxes`] makes it.
+    pub type Cuboids = (DVec3, DVec3, u32);
+
+    /// A scene of meshes, each a part of its own made of its boxes, cut
+    /// into clusters of at most `cluster_triangles`.
+    pub fn meshes(cluster_triangles: u32, meshes: &[(&str, Vec<Cuboids>)]) -> Scene {
+        let mut builder = SceneBuilder::new("test".into(), cluster_triangles);
+        for (name, boxes) in meshes {
+            let mut soup = TriangleSoup::default();
+            for &(min, max, cuts) in boxes {
+                let step = (max - min) / f64::from(cuts);
+                for i in 0..cuts {
+                    for k in 0..cuts {
+                        let corner = min + step * DVec3::new(f64::from(i), 0.0, f64::from(k));
+                        let far = corner + step * DVec3::new(1.0, f64::from(cuts), 1.0);
+                        cuboid(&mut soup, corner, far);
+                    }
+                }
             }
+            let group = builder.add_mesh(name, &soup.positions, &soup.indices).unwrap();
+            builder.add_object(name, &group, DAffine3::IDENTITY).unwrap();
         }
+        builder.finish().unwrap()
     }
 
     /// A room's pieces, 10 × 3 × 7 in all ([`ROOM`]).
@@ -337,7 +381,7 @@ pub(crate) mod fixtures {
 mod tests {
     use glam::DVec3;
 
-    use super::fixtures::{ROOM, boxes as scene, ground, one_mesh, room};
+    use super::fixtures::{ROOM, boxes as scene, ground, meshes, one_mesh, room};
     use super::*;
 
     #[test]
@@ -410,5 +454,34 @@ mod tests {
         let mut boxes = room();
         boxes.push(("ground", DVec3::new(-2.0, -0.1, -2.0), DVec3::new(12.0, 0.0, 9.0), 1));
         assert_eq!(Focus::of(&one_mesh("model", &boxes)).left_out, []);
+    }
+
+    #[test]
+    fn a_part_left_out_whole_stays_out_whole_and_a_hall_over_its_furniture_stays() {
+        // A sky box with a sun in it, and a ground with a drain in a
+        // corner: each left out whole, as it would be without them.
+        let sky = (DVec3::splat(-500.0), DVec3::splat(500.0), 2);
+        let sun = (DVec3::new(0.0, 480.0, 0.0), DVec3::new(40.0, 490.0, 40.0), 1);
+        let (_, ground_min, ground_max, cuts) = ground();
+        let drain = (DVec3::new(100.0, -1.0, 100.0), DVec3::new(101.0, 0.0, 101.0), 1);
+        let mut parts: Vec<_> = room()
+            .into_iter()
+            .map(|(name, min, max, cuts)| (name, vec![(min, max, cuts)]))
+            .collect();
+        parts.push(("sky", vec![sky, sun]));
+        parts.push(("ground", vec![(ground_min, ground_max, cuts), drain]));
+        let focus = Focus::of(&meshes(1 << 20, &parts));
+        assert_eq!(focus.bounds, ROOM);
+        assert_eq!(focus.left_out, [LeftOut::Part(3), LeftOut::Part(4)]);
+        // A hall of 12 triangles 60 × 12 × 40 over furniture gathered in
+        // its middle, in one mesh: its walls and roof rise over the
+        // furniture, so they are no ground, and it is framed whole.
+        let hall = ("hall", DVec3::ZERO, DVec3::new(60.0, 12.0, 40.0), 1);
+        let chairs = (1..=4).map(|k| {
+            let at = DVec3::new(24.0 + 2.0 * f64::from(k), 0.0, 18.0);
+            ("chair", at, at + DVec3::new(0.6, 0.8, 0.6), 1)
+        });
+        let hall = one_mesh("model", &std::iter::once(hall).chain(chairs).collect::<Vec<_>>());
+        assert_eq!(Focus::of(&hall).left_out, []);
     }
 }
