@@ -154,6 +154,10 @@ pub struct Painter<'g> {
     /// The overview's targets: the scene from above, drawn once a frame,
     /// and a copy each mode's lines are drawn over.
     overview: Option<(RenderTargets, wgpu::Texture)>,
+    /// Where the overview looks from, found once, on the first frame
+    /// painted: the scene's focus reads every triangle of a large one-mesh
+    /// model, and what moves (a city's cars) is too small to change it.
+    above: Option<Camera>,
 }
 
 impl<'g> Painter<'g> {
@@ -181,6 +185,7 @@ impl<'g> Painter<'g> {
             overview: look
                 .overview
                 .then(|| (RenderTargets::new(gpu, resolution, 1), picture_target(gpu, resolution))),
+            above: None,
         })
     }
 
@@ -298,13 +303,13 @@ impl<'g> Painter<'g> {
     /// of `pictures` (the session's modes'), with the mode's frustum from
     /// `camera` and the boxes it culled inside it: the scene drawn once,
     /// each mode's lines over a copy of it.
-    fn add_overviews(&self, session: &mut Session, scene: &Scene, camera: &Camera, pictures: &mut [Picture]) {
+    fn add_overviews(&mut self, session: &mut Session, scene: &Scene, camera: &Camera, pictures: &mut [Picture]) {
         let Some((targets, picture)) = &self.overview else {
             return;
         };
         let (gpu, resolution) = (self.gpu, self.look.resolution);
         let frustum = camera.frustum();
-        let above = overview_camera(scene, resolution);
+        let above = *self.above.get_or_insert_with(|| overview_camera(scene, resolution));
         session.renderer.set_camera(gpu, &above, resolution, &scene.objects);
         let all: Vec<u32> = (0..scene.objects.len() as u32).collect();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());

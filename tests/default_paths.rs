@@ -294,8 +294,8 @@ fn a_hall_on_a_ground_plane_20_times_wider_is_walked_inside() {
 
 #[test]
 fn a_hall_and_a_ground_plane_20_times_wider_in_one_mesh_are_walked_inside() {
-    // As a merged export gives them: the plane is two of the mesh's
-    // triangles, not a part of its own.
+    // As a merged export gives them: the plane is a slab of 12 of the
+    // mesh's triangles, not a part of its own.
     let dir = tempfile::tempdir().unwrap();
     let mut boxes = hall();
     let reach = box_of(&boxes).extent().length();

@@ -15,10 +15,11 @@
 //! Then, where a ground was exported in one mesh with what stands on it
 //! (merged exports and scans give such models), the same rule weighs the
 //! parts that stay in pieces: a part at least half as wide as the box,
-//! its few largest triangles apart from the rest of it where each is at
-//! least twice as wide as that rest, the rest fits a box half as wide, and
-//! they rise no higher than the rest (a ground or a sea under the model; a
-//! hall's roof and walls over its furniture stay).
+//! its largest triangles apart from the rest of it where each is at least
+//! twice as wide as that rest, the rest fits a box half as wide, and they
+//! rise no higher than the rest (a ground and a sea under the model; a
+//! hall's roof and walls over its furniture stay, and so does a sky box
+//! with the ground in its mesh).
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -48,8 +49,9 @@ const MOST_SPLIT_OFF: usize = 4096;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Focus {
     pub bounds: Aabb,
-    /// What was left out (huge and nearly empty): the parts largest first,
-    /// then the parts' largest triangles.
+    /// What was left out (huge and nearly empty): whole parts, largest
+    /// first; then, largest first, parts' largest triangles and what is
+    /// left of such parts.
     pub left_out: Vec<LeftOut>,
 }
 
@@ -93,9 +95,13 @@ impl Focus {
             })
             .collect();
         let mut focus = Focus::without_the_emptiest(parts.clone(), MAX_LEFT_OUT);
-        // The parts that stay, each in pieces where its largest triangles
-        // are weighed apart.
-        let wide = SHRINK * focus.bounds.extent().length();
+        let most = MAX_LEFT_OUT - focus.left_out.len();
+        if most == 0 {
+            return focus;
+        }
+        // The parts that stay, each in two pieces where its largest
+        // triangles are weighed apart.
+        let wide = SHRINK * diagonal(&focus.bounds);
         let up = scene.up.axis.vector();
         let mut split = false;
         let mut pieces = Vec::with_capacity(parts.len());
@@ -103,11 +109,11 @@ impl Focus {
             if focus.left_out.contains(&piece.what) {
                 continue;
             }
-            let wide_enough = piece.bounds.extent().length() >= wide;
-            match wide_enough
-                .then(|| largest_triangles(scene, &objects[part as usize], up))
-                .flatten()
-            {
+            let split_off = match diagonal(&piece.bounds) >= wide {
+                true => largest_triangles(scene, &objects[part as usize], up),
+                false => None,
+            };
+            match split_off {
                 Some(Split { largest, count, rest }) => {
                     split = true;
                     pieces.push(Piece {
@@ -124,8 +130,7 @@ impl Focus {
                 None => pieces.push(piece),
             }
         }
-        let most = MAX_LEFT_OUT - focus.left_out.len();
-        if split && most > 0 {
+        if split {
             let within = Focus::without_the_emptiest(pieces, most);
             if !within.left_out.is_empty() {
                 focus.bounds = within.bounds;
@@ -138,8 +143,7 @@ impl Focus {
     /// The box of `pieces` without at most `most` of the largest, where
     /// they are huge and nearly empty (the module says which those are).
     fn without_the_emptiest(mut pieces: Vec<Piece>, most: usize) -> Focus {
-        let size = |p: &Piece| p.bounds.extent().length();
-        pieces.sort_by(|a, b| size(b).total_cmp(&size(a)));
+        pieces.sort_by(|a, b| diagonal(&b.bounds).total_cmp(&diagonal(&a.bounds)));
         // What is left once the `k` largest are out: its box and triangles.
         let mut left = vec![(Aabb::EMPTY, 0u64); pieces.len() + 1];
         for k in (0..pieces.len()).rev() {
@@ -148,7 +152,6 @@ impl Focus {
                 left[k + 1].1 + pieces[k].triangles,
             );
         }
-        let diagonal = |b: &Aabb| b.extent().length();
         let density =
             |(bounds, triangles): (Aabb, u64)| triangles as f64 / bounds.surface_area().max(f64::MIN_POSITIVE);
         let mut out = 0;
@@ -207,88 +210,70 @@ struct Split {
     rest: Aabb,
 }
 
-/// The fewest of the largest triangles (by their box's diagonal, at most
+/// The most of the largest triangles (by their box's diagonal, at most
 /// [`MOST_SPLIT_OFF`]) of the part made of `objects` without which the
 /// rest of it fits a box at most [`SHRINK`] as wide, each of them at least
 /// twice as wide as that rest, and rising no higher along `up` than the
-/// rest; `None` where there are no such few. The rest's box is its
-/// triangles' as drawn (their corners stored in `f32`), which may lie an
-/// `f32` rounding inside or outside the part's box.
+/// rest (the most: a ground and a sea together); `None` where there are no
+/// such. The rest's box is its triangles' as drawn (their corners stored
+/// in `f32`), which may lie an `f32` rounding inside or outside the
+/// part's box.
 fn largest_triangles(scene: &Scene, objects: &[u32], up: DVec3) -> Option<Split> {
-    let triangles = || {
-        objects.iter().flat_map(|&o| {
-            let object = &scene.objects[o as usize];
-            (0..object.triangles).map(move |t| {
-                let corners = scene
-                    .triangle(object.mesh, t)
-                    .map(|c| object.transform.transform_point3(c));
-                ((o, t), Aabb::from_points(corners))
-            })
-        })
-    };
-    // Diagonals are finite and not negative, so their bits order them.
-    let size = |b: &Aabb| b.extent().length().to_bits();
-    // The largest, in a heap whose top is the least of them; of equals,
-    // the first triangles (so a split is the same every run). And the
-    // largest of the others.
+    // The largest triangles' boxes, in `boxes`, ranked by a heap whose top
+    // is the least of them (of equals, the later triangle, so a split is
+    // the same every run); and the box of all the others. Diagonals are
+    // finite and not negative, so their bits order them.
+    let mut boxes = Vec::new();
     let mut heap = BinaryHeap::new();
-    let mut largest_other = None;
-    for (key, bounds) in triangles() {
-        let mut entry = (Reverse(size(&bounds)), key);
-        if heap.len() == MOST_SPLIT_OFF {
-            match heap.peek_mut() {
-                Some(mut least) if entry < *least => entry = std::mem::replace(&mut *least, entry),
-                _ => {}
+    let mut others = Aabb::EMPTY;
+    for &o in objects {
+        let object = &scene.objects[o as usize];
+        for t in 0..object.triangles {
+            let corners = scene
+                .triangle(object.mesh, t)
+                .map(|c| object.transform.transform_point3(c));
+            let bounds = Aabb::from_points(corners);
+            let rank = (Reverse(diagonal(&bounds).to_bits()), (o, t));
+            if heap.len() < MOST_SPLIT_OFF {
+                heap.push((rank, boxes.len()));
+                boxes.push(bounds);
+                continue;
             }
-            largest_other = largest_other.max(Some(entry.0.0));
-        } else {
-            heap.push(entry);
+            match heap.peek_mut() {
+                Some(mut least) if rank < least.0 => {
+                    let slot = least.1;
+                    others = others.union(boxes[slot]);
+                    boxes[slot] = bounds;
+                    *least = (rank, slot);
+                }
+                _ => others = others.union(bounds),
+            }
         }
     }
     // Largest first.
-    let ranked = heap.into_sorted_vec();
-    let diagonal = |b: &Aabb| b.extent().length();
-    // The `k` largest may be split off only where the k-th is at least
-    // twice as wide as the next (which the rest holds): most meshes'
-    // triangles have no such gap, and need no second pass.
-    let sizes: Vec<f64> = ranked.iter().map(|(Reverse(bits), _)| f64::from_bits(*bits)).collect();
-    let next = |k: usize| sizes.get(k).copied().or(largest_other.map(f64::from_bits));
-    let gaps: Vec<usize> = (1..=ranked.len())
-        .filter(|&k| next(k).is_some_and(|next| SHRINK * sizes[k - 1] >= next))
+    let ranked: Vec<Aabb> = heap
+        .into_sorted_vec()
+        .into_iter()
+        .map(|(_, slot)| boxes[slot])
         .collect();
-    let &(Reverse(least_kept), _) = ranked.last().filter(|_| !gaps.is_empty())?;
-    let mut by_triangle: Vec<((u32, u32), usize)> = ranked.iter().enumerate().map(|(k, &(_, key))| (key, k)).collect();
-    by_triangle.sort_unstable();
-    // Their boxes, and the box of the others.
-    let mut boxes = vec![Aabb::EMPTY; ranked.len()];
-    let mut others = Aabb::EMPTY;
-    for (key, bounds) in triangles() {
-        let found = match size(&bounds) < least_kept {
-            true => None,
-            false => by_triangle.binary_search_by_key(&key, |&(key, _)| key).ok(),
-        };
-        match found {
-            Some(at) => boxes[by_triangle[at].1] = bounds,
-            None => others = others.union(bounds),
-        }
-    }
-    // What is left without the `k` largest, for each k.
+    // The box of what is left without the `k` largest, and of those `k`,
+    // for each k.
     let mut rest = vec![others; ranked.len() + 1];
     for k in (0..ranked.len()).rev() {
-        rest[k] = rest[k + 1].union(boxes[k]);
+        rest[k] = rest[k + 1].union(ranked[k]);
     }
-    // The box of the `k` largest, for each k.
-    let mut split_off = vec![Aabb::EMPTY; boxes.len() + 1];
-    for k in 0..boxes.len() {
-        split_off[k + 1] = split_off[k].union(boxes[k]);
+    let mut split_off = vec![Aabb::EMPTY; ranked.len() + 1];
+    for k in 0..ranked.len() {
+        split_off[k + 1] = split_off[k].union(ranked[k]);
     }
     let top = |b: &Aabb| b.span_along(up).1;
     // Each of them at least twice as wide as the rest, as a piece left
     // out must be (not most of a part of like triangles).
-    let count = gaps.into_iter().find(|&k| {
+    let count = (1..=ranked.len()).rev().find(|&k| {
         let left = diagonal(&rest[k]);
-        left <= SHRINK * diagonal(&rest[0])
-            && SHRINK * diagonal(&boxes[k - 1]) >= left
+        !rest[k].is_empty()
+            && left <= SHRINK * diagonal(&rest[0])
+            && SHRINK * diagonal(&ranked[k - 1]) >= left
             && top(&split_off[k]) <= top(&rest[k])
     })?;
     Some(Split {
@@ -296,6 +281,11 @@ fn largest_triangles(scene: &Scene, objects: &[u32], up: DVec3) -> Option<Split>
         count: count as u32,
         rest: rest[count],
     })
+}
+
+/// The length of a box's diagonal.
+fn diagonal(b: &Aabb) -> f64 {
+    b.extent().length()
 }
 
 /// Scenes of boxes for the tests of what frames a focus.
@@ -381,6 +371,8 @@ pub(crate) mod fixtures {
 mod tests {
     use glam::DVec3;
 
+    use crate::bounds::Aabb;
+
     use super::fixtures::{ROOM, boxes as scene, ground, meshes, one_mesh, room};
     use super::*;
 
@@ -430,12 +422,15 @@ mod tests {
         boxes.push(ground());
         let s = one_mesh("model", &boxes);
         assert!(s.objects.len() > 1, "the mesh is cut into clusters");
-        let focus = Focus::of(&s);
         // (Its box is the triangles' as drawn, corners stored in f32.)
-        let off = (focus.bounds.min - ROOM.min)
-            .abs()
-            .max((focus.bounds.max - ROOM.max).abs());
-        assert!(off.max_element() < 1e-6, "{:?}", focus.bounds);
+        let framed = |focus: &Focus, frame: Aabb| {
+            let off = (focus.bounds.min - frame.min)
+                .abs()
+                .max((focus.bounds.max - frame.max).abs());
+            assert!(off.max_element() < 1e-6, "{:?}", focus.bounds);
+        };
+        let focus = Focus::of(&s);
+        framed(&focus, ROOM);
         // The ground's box is 12 triangles, each as wide as the ground on
         // one axis at least.
         assert_eq!(focus.left_out, [LeftOut::Triangles { part: 0, count: 12 }]);
@@ -447,6 +442,19 @@ mod tests {
             "{:?}",
             focus.note(&s)
         );
+        // With a pond on the ground too, both go, as they would as parts.
+        let pond = ("pond", DVec3::new(-25.0, -0.3, -25.0), DVec3::new(35.0, -0.2, 35.0), 1);
+        let focus = Focus::of(&one_mesh("model", &[boxes.clone(), vec![pond]].concat()));
+        framed(&focus, ROOM);
+        assert_eq!(focus.left_out, [LeftOut::Triangles { part: 0, count: 24 }]);
+        // More triangles than are ranked, the first and least of them
+        // specks beside the room that the later ones push out of the
+        // ranking: they still frame it.
+        let specks = ("specks", DVec3::new(-3.0, 0.0, 5.0), DVec3::new(-2.5, 0.1, 5.5), 4);
+        let clutter = ("clutter", DVec3::new(0.0, 0.0, 5.0), DVec3::new(10.0, 0.5, 7.0), 20);
+        let focus = Focus::of(&one_mesh("model", &[vec![specks, clutter], boxes.clone()].concat()));
+        framed(&focus, Aabb::new(DVec3::new(-3.0, 0.0, 0.0), ROOM.max));
+        assert_eq!(focus.left_out, [LeftOut::Triangles { part: 0, count: 12 }]);
         // A terrain as dense as the room stays, in one mesh as apart.
         boxes.last_mut().unwrap().3 = 60;
         assert_eq!(Focus::of(&one_mesh("model", &boxes)).bounds.extent().x, 220.0);
