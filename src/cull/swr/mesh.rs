@@ -421,14 +421,15 @@ struct Border {
 }
 
 /// A patch: its triangles and border edges in [`Patches`], the bounds of
-/// its triangles grown by their error (x, y), and its nearest corner's
-/// depth.
+/// its triangles grown by their error (x, y), and its nearest and
+/// farthest corners' depths.
 struct Patch {
     triangles: Range<usize>,
     borders: Range<usize>,
     lo: DVec2,
     hi: DVec2,
     nearest: f64,
+    farthest: f64,
 }
 
 impl Patches {
@@ -450,6 +451,7 @@ impl Patches {
             let end = self.patch_ends[root as usize] as usize;
             let (triangles, borders) = (self.triangles.len(), self.borders.len());
             let (mut lo, mut hi, mut nearest) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
+            let mut farthest = f64::INFINITY;
             for k in start..end {
                 let t = self.by_patch[k].1 as usize;
                 if !polygon.clip(mesh, self.corners[t]) {
@@ -463,6 +465,7 @@ impl Patches {
                     let depth = depth_slack(&c, mesh.snap).unwrap_or(f64::INFINITY);
                     let triangle = Triangle::new(c, mesh.snap, depth, error);
                     nearest = c.iter().fold(nearest, |n, c| n.max(c.at.z));
+                    farthest = c.iter().fold(farthest, |n, c| n.min(c.at.z));
                     let reach = (triangle.lo - triangle.slack, triangle.hi + triangle.slack);
                     (lo, hi) = (lo.min(reach.0), hi.max(reach.1));
                     self.reach_y.push([reach.0.y, reach.1.y]);
@@ -484,9 +487,20 @@ impl Patches {
                 lo,
                 hi,
                 nearest,
+                farthest,
             });
             start = end;
         }
+        // Nearest first by their farthest corner, so that a patch wholly
+        // behind what the ones before it left in the buffer is passed over
+        // (a cluster of a one-mesh building holds the near room's walls
+        // and the far rooms' behind them, in no order), while a patch
+        // running from the eye to the horizon (a ground) comes after what
+        // stands on it: a cell's part of it then joins the nearer
+        // facade's in the merge rather than being replaced by it. (By
+        // nearest corner instead, the default city's swr drew 27 160
+        // triangles a frame against 23 384.)
+        self.patches[first..].sort_unstable_by(|a, b| b.farthest.total_cmp(&a.farthest));
         first..self.patches.len()
     }
 
@@ -1320,22 +1334,29 @@ pub(super) fn rasterise_meshes(buffer: &mut super::buffer::OcclusionBuffer, mesh
     };
     let (mut patches, mut rasteriser) = (Patches::default(), Rasteriser::default());
     for (vertices, indices) in meshes {
-        let placed: Vec<Option<ScreenVertex>> = vertices.iter().map(|&v| Some(v)).collect();
-        let neighbours = super::neighbours::neighbours(indices, |i| [i as f32, 0.0, 0.0]);
-        let mesh = ScreenMesh {
-            vertices: &placed,
-            parts: &[DrawnPart::whole(indices)],
-            indices,
-            neighbours: &neighbours,
-            closed: false,
-            near: None,
-            snap: vertices.iter().map(|v| v.slack).fold(f64::INFINITY, f64::min),
-            depth: larger_margins(),
-        };
         patches.clear();
-        let which = patches.add(&mesh);
+        let which = add_patches(&mut patches, vertices, indices);
         rasteriser.rasterise(&mut cells, &patches, which);
     }
+}
+
+/// Adds to `patches` the patches of one object's screen vertices, all
+/// placed, and three indices per triangle, as [`rasterise_meshes`] takes
+/// them; returns which they are.
+#[cfg(test)]
+fn add_patches(patches: &mut Patches, vertices: &[ScreenVertex], indices: &[u32]) -> Range<usize> {
+    let placed: Vec<Option<ScreenVertex>> = vertices.iter().map(|&v| Some(v)).collect();
+    let neighbours = super::neighbours::neighbours(indices, |i| [i as f32, 0.0, 0.0]);
+    patches.add(&ScreenMesh {
+        vertices: &placed,
+        parts: &[DrawnPart::whole(indices)],
+        indices,
+        neighbours: &neighbours,
+        closed: false,
+        near: None,
+        snap: vertices.iter().map(|v| v.slack).fold(f64::INFINITY, f64::min),
+        depth: larger_margins(),
+    })
 }
 
 /// The depth margins the tests take: GL's, the larger.
@@ -1968,6 +1989,25 @@ mod tests {
 
     fn walls(walls: &[(f64, f64, f64)]) -> OcclusionBuffer {
         walls_at_snap(walls, COARSE_SNAP)
+    }
+
+    #[test]
+    fn an_objects_patches_come_nearest_first_by_their_farthest_corner() {
+        // One mesh of three walls apart, the farthest first among its
+        // triangles and the nearest last, and a ground running from before
+        // the nearest to behind the farthest, first of all.
+        let (mut vertices, mut indices) = (Vec::new(), Vec::new());
+        let ground = grid(DVec2::new(0.0, 40.0), DVec2::splat(40.0), [2, 2], false, |_, y| 0.1 + (y - 40.0) / 50.0);
+        let walls = [0.2, 0.5, 0.8].map(|z| grid(DVec2::new(4.0, 4.0), DVec2::splat(20.0), [2, 2], false, move |_, _| z));
+        for (patch, triangles) in std::iter::once(ground).chain(walls) {
+            let first = vertices.len() as u32;
+            indices.extend(triangles.iter().map(|i| first + i));
+            vertices.extend(patch);
+        }
+        let mut patches = Patches::default();
+        let which = add_patches(&mut patches, &vertices, &indices);
+        let depths: Vec<[f64; 2]> = patches.patches[which].iter().map(|p| [p.farthest, p.nearest]).collect();
+        assert_eq!(depths, [[0.8, 0.8], [0.5, 0.5], [0.2, 0.2], [0.1, 0.9]]);
     }
 
     #[test]
