@@ -2054,6 +2054,31 @@ mod tests {
     }
 
     #[test]
+    fn patches_of_one_object_far_apart_in_depth_fill_a_cell_they_share_nearest_first_by_farthest_corner() {
+        // As the test above, in one object whose far wall (at 0.2, first
+        // in its triangles, as a ground may be) lies so much farther than
+        // its near one (at 0.8) that, merged first, the near one would
+        // take the cells they share from it rather than join it.
+        let (mut vertices, mut indices) = (Vec::new(), Vec::new());
+        for (x0, x1, z) in [(29.2, 70.0, 0.2), (-5.0, 31.2, 0.8)] {
+            let (wall, triangles) = grid(DVec2::new(x0, -5.0), DVec2::new(x1 - x0, 60.0), [2, 2], false, move |_, _| z);
+            let first = vertices.len() as u32;
+            indices.extend(triangles.iter().map(|i| first + i));
+            vertices.extend(wall);
+        }
+        for vertex in &mut vertices {
+            vertex.slack = COARSE_SNAP;
+        }
+        let mut buffer = OcclusionBuffer::new(Resolution { width: 64, height: 48 }, Resolution { width: 16, height: 12 });
+        rasterise_meshes(&mut buffer, &[(vertices, indices)]);
+        let depths = buffer.depths();
+        let at = |column: usize| depths[5 * 16 + column];
+        assert!(at(2) > 0.799 && at(2) <= 0.8, "{}", at(2));
+        assert!(at(7) > 0.199 && at(7) <= 0.2, "{}", at(7));
+        assert!(depths.iter().all(|&d| d > 0.0), "every cell covered");
+    }
+
+    #[test]
     fn a_box_behind_a_walls_outline_within_its_pixels_is_hidden_though_a_farther_wall_fills_the_cell() {
         // A wall at 0.5 ending at x = 30.2, inside the cells of pixels 28
         // to 31, rasterised first (nearest first), and a wall at 0.25
