@@ -497,10 +497,14 @@ impl Patches {
         // and the far rooms' behind them, in no order), while a patch
         // running from the eye to the horizon (a ground) comes after what
         // stands on it: a cell's part of it then joins the nearer
-        // facade's in the merge rather than being replaced by it. (By
-        // nearest corner instead, the default city's swr drew 27 160
-        // triangles a frame against 23 384.)
-        self.patches[first..].sort_unstable_by(|a, b| b.farthest.total_cmp(&a.farthest));
+        // facade's in the merge rather than being replaced by it. (On the
+        // default city swr drew 23 275 triangles a frame so, 23 384 in the
+        // mesh's order, and 27 160 by nearest corner.) A wall receding to
+        // the horizon comes after a far room's wall seen past it, and
+        // may take from it the cells they share; of the two orders tried,
+        // this one lost less. Equals stay in the mesh's order.
+        self.patches[first..]
+            .sort_unstable_by(|a, b| b.farthest.total_cmp(&a.farthest).then(a.triangles.start.cmp(&b.triangles.start)));
         first..self.patches.len()
     }
 
@@ -2054,17 +2058,23 @@ mod tests {
     }
 
     #[test]
-    fn patches_of_one_object_far_apart_in_depth_fill_a_cell_they_share_nearest_first_by_farthest_corner() {
-        // As the test above, in one object whose far wall (at 0.2, first
-        // in its triangles, as a ground may be) lies so much farther than
-        // its near one (at 0.8) that, merged first, the near one would
-        // take the cells they share from it rather than join it.
+    fn a_ground_beside_a_nearer_wall_fills_the_cells_they_share_merged_after_it() {
+        // As the test above, in one object: a wall at 0.8 ending at x =
+        // 31.2, and a ground from x = 29.2, where it lies at 0.2, rising
+        // towards the eye to 0.9 at x = 70 (its nearest corner nearer than
+        // the wall, its part of the cells they share four times farther).
+        // Merged first there, the ground's part would be taken by the
+        // wall's rather than join it.
         let (mut vertices, mut indices) = (Vec::new(), Vec::new());
-        for (x0, x1, z) in [(29.2, 70.0, 0.2), (-5.0, 31.2, 0.8)] {
-            let (wall, triangles) = grid(DVec2::new(x0, -5.0), DVec2::new(x1 - x0, 60.0), [2, 2], false, move |_, _| z);
+        let ground = |x: f64, _: f64| 0.2 + (x - 29.2) * 0.7 / 40.8;
+        let pieces = [
+            grid(DVec2::new(29.2, -5.0), DVec2::new(40.8, 60.0), [2, 2], false, ground),
+            grid(DVec2::new(-5.0, -5.0), DVec2::new(36.2, 60.0), [2, 2], false, |_, _| 0.8),
+        ];
+        for (piece, triangles) in pieces {
             let first = vertices.len() as u32;
             indices.extend(triangles.iter().map(|i| first + i));
-            vertices.extend(wall);
+            vertices.extend(piece);
         }
         for vertex in &mut vertices {
             vertex.slack = COARSE_SNAP;
@@ -2072,9 +2082,10 @@ mod tests {
         let mut buffer = OcclusionBuffer::new(Resolution { width: 64, height: 48 }, Resolution { width: 16, height: 12 });
         rasterise_meshes(&mut buffer, &[(vertices, indices)]);
         let depths = buffer.depths();
-        let at = |column: usize| depths[5 * 16 + column];
-        assert!(at(2) > 0.799 && at(2) <= 0.8, "{}", at(2));
-        assert!(at(7) > 0.199 && at(7) <= 0.2, "{}", at(7));
+        // The cells of pixels 28 to 31, which both cover in part.
+        let shared = depths[5 * 16 + 7];
+        // (Its plane taken below the ground's over the whole cell.)
+        assert!(shared > 0.15 && f64::from(shared) <= ground(32.0, 0.0), "{shared}");
         assert!(depths.iter().all(|&d| d > 0.0), "every cell covered");
     }
 
