@@ -356,6 +356,23 @@ fn furnished_room() -> Boxes {
     ]
 }
 
+/// [`furnished_room`] on a floor and under a ceiling, its walls 3 m
+/// tall: 10.2 wide, too small to be taken as metres by its width.
+fn roofed_room() -> Boxes {
+    let mut boxes = furnished_room();
+    boxes.push(part("floor", [-0.1, -0.2, -0.1], [10.1, 0.0, 10.1]));
+    boxes.push(part("ceiling", [-0.1, 3.0, -0.1], [10.1, 3.2, 10.1]));
+    boxes
+}
+
+#[test]
+fn a_room_10_m_wide_under_its_ceiling_is_walked_at_a_persons_eye_height() {
+    let dir = tempfile::tempdir().unwrap();
+    let boxes = roofed_room();
+    let why = walked_inside(&load_boxes(dir.path(), &boxes), box_of(&boxes).extent().length(), 6);
+    assert!(why.contains("in metres for rooms 3.00 high"), "{why}");
+}
+
 /// Whether the ray `origin + t·direction`, `t >= 0`, meets `b` (slab test).
 fn meets(b: &Aabb, origin: DVec3, direction: DVec3) -> bool {
     let (mut near, mut far) = (0.0f64, f64::INFINITY);

@@ -31,7 +31,10 @@
 //! indoor floor to indoor floor through the roofed ones; else
 //! of the streets (open floors with walls near in half the directions)
 //! when they hold a long enough one and a quarter of the open ground
-//! joined to them; else of all open floors.
+//! joined to them; else of all open floors. The eye is a person's in a
+//! model that is in metres by its width (a town, a building) or by the
+//! height of its rooms (a flat, a room); elsewhere a share of the model's
+//! height.
 
 use std::collections::VecDeque;
 
@@ -85,6 +88,10 @@ pub struct Walk {
     /// of the roofed ones joined; judged only where the roofed share is at
     /// least half, 0 otherwise.
     pub indoors: f64,
+    /// Where the walk is in metres for its interior's height, not the
+    /// model's width: the median height of the roofs over the route's
+    /// floors in the first walk, which found that ([`plan`]).
+    pub metres_from: Option<f64>,
 }
 
 impl Walk {
@@ -103,7 +110,8 @@ const MAX_SIDE_CELLS: usize = 512;
 
 /// Models at least this wide (in their units) are taken to be in metres,
 /// with an eye [`METRES_EYE_HEIGHT`] above the ground; smaller ones get an
-/// eye at [`EYE_FRACTION`] of their height.
+/// eye at [`EYE_FRACTION`] of their height, unless their walk goes through
+/// rooms as high as rooms in metres ([`ROOM_HEIGHTS`]).
 const METRE_SCALE_WIDTH: f64 = 30.0;
 const METRES_EYE_HEIGHT: f64 = 1.7;
 const EYE_FRACTION: f64 = 0.05;
@@ -117,12 +125,7 @@ const EYE_FRACTION: f64 = 0.05;
 /// [`ROOM_OVER_EYE`] and two eye heights.
 fn scale_of(width: f64, height: f64) -> Scale {
     if width >= METRE_SCALE_WIDTH && height > METRES_EYE_HEIGHT {
-        Scale {
-            eye: METRES_EYE_HEIGHT,
-            room: METRES_ROOM,
-            below_top: METRES_ROOM,
-            metres: true,
-        }
+        Scale::METRES
     } else {
         let eye = (EYE_FRACTION * height).max(FLAT_EYE_FRACTION * width);
         Scale {
@@ -143,6 +146,26 @@ struct Scale {
     below_top: f64,
     metres: bool,
 }
+
+impl Scale {
+    const METRES: Scale = Scale {
+        eye: METRES_EYE_HEIGHT,
+        room: METRES_ROOM,
+        below_top: METRES_ROOM,
+        metres: true,
+    };
+}
+
+/// Roof heights over an interior's floors that are a room's in metres:
+/// from the room the eye needs under a door ([`METRES_ROOM`]) to a small
+/// hall's. A model narrower than [`METRE_SCALE_WIDTH`] (a room, a flat, a
+/// house) whose walk goes through rooms this high is in metres (glTF's
+/// unit, and the common one for architecture), and is walked at a
+/// person's eye height, not a share of its height (a knee's, in an 8 m
+/// room). In centimetres or millimetres the same rooms are hundreds or
+/// thousands of units high, and a model in feet (rooms 8 to 10 high) is
+/// walked higher than before but still below a person's eye.
+const ROOM_HEIGHTS: std::ops::RangeInclusive<f64> = METRES_ROOM..=12.0;
 
 /// The eye height over a flat model's width.
 const FLAT_EYE_FRACTION: f64 = 0.01;
@@ -166,6 +189,8 @@ struct Floor {
     /// The cell's ray met a surface above it (below the model's top): a
     /// roof.
     roofed: bool,
+    /// How far above it that surface lies (+∞ where none does).
+    clearance: f64,
     /// In metres: open to the sky over another floor of its cell.
     over_floor: bool,
 }
@@ -173,13 +198,41 @@ struct Floor {
 /// Plans a walk through the part of `scene` within `bounds` (its focus:
 /// the grid covers that box), or `None` when it has no ground with room
 /// to walk (fewer than [`MIN_CELLS`] joined cells); stopped when `caster`
-/// stops (its budget spent, or Ctrl-C).
+/// stops (its budget spent, or Ctrl-C). A model too small to be taken as
+/// metres by its width whose walk goes through an interior as high as a
+/// room in metres ([`ROOM_HEIGHTS`]) is walked again in metres, and that
+/// walk taken where it goes through an interior too.
 pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<Walk>, Stopped> {
-    let Some(grid) = Grid::over(scene, bounds) else {
+    let Some(grid) = Grid::over(scene, bounds, None) else {
         return Ok(None);
     };
-    let (floors, first) = find_floors(scene, bounds, &grid, caster)?;
-    let ground = Ground::link(grid, floors, &first, caster)?;
+    let Some((walk, clearance)) = plan_on(scene, bounds, &grid, caster)? else {
+        return Ok(None);
+    };
+    if grid.scale.metres || walk.through != Through::Interior || !ROOM_HEIGHTS.contains(&clearance) {
+        return Ok(Some(walk));
+    }
+    let in_metres = Grid::over(scene, bounds, Some(Scale::METRES));
+    Ok(Some(
+        match in_metres
+            .map(|grid| plan_on(scene, bounds, &grid, caster))
+            .transpose()?
+            .flatten()
+        {
+            Some((in_metres, _)) if in_metres.through == Through::Interior => Walk {
+                metres_from: Some(clearance),
+                ..in_metres
+            },
+            _ => walk,
+        },
+    ))
+}
+
+/// The walk over `grid`, and the median height of the roofs over its
+/// route's floors (+∞ where most have none).
+fn plan_on(scene: &Scene, bounds: &Aabb, grid: &Grid, caster: &RayCaster) -> Result<Option<(Walk, f64)>, Stopped> {
+    let (floors, first) = find_floors(scene, bounds, grid, caster)?;
+    let ground = Ground::link(*grid, floors, &first, caster)?;
     let streets = ground.street_route()?;
     let interior = ground.interior(bounds)?;
     let (through, found) = match (interior.route, streets) {
@@ -199,7 +252,10 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         .filter(|&&p| caster.first_hit(p, grid.up, f64::INFINITY).is_none())
         .count();
     caster.searching()?;
-    Ok(Some(Walk {
+    let mut clearances: Vec<f64> = route.iter().map(|&f| ground.floors[f].clearance).collect();
+    let middle = clearances.len() / 2;
+    let (_, &mut clearance, _) = clearances.select_nth_unstable_by(middle, f64::total_cmp);
+    let walk = Walk {
         line: turns(&points),
         eye_height: grid.scale.eye,
         cell: grid.cell,
@@ -208,7 +264,9 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         through,
         roofed: interior.roofed,
         indoors: interior.indoors,
-    }))
+        metres_from: None,
+    };
+    Ok(Some((walk, clearance)))
 }
 
 /// How many cells `floors` lie in (storeys share cells).
@@ -240,15 +298,16 @@ struct Grid {
 }
 
 impl Grid {
-    /// The grid over `bounds`, about `scene`'s up axis; `None` when the box
-    /// has no width to lay cells on.
-    fn over(scene: &Scene, bounds: &Aabb) -> Option<Grid> {
+    /// The grid over `bounds`, about `scene`'s up axis, at `scale` (by
+    /// default the one the box's width and height give, [`scale_of`]);
+    /// `None` when the box has no width to lay cells on.
+    fn over(scene: &Scene, bounds: &Aabb, scale: Option<Scale>) -> Option<Grid> {
         let up = scene.up.axis.vector();
         let (right, ahead) = scene.up.axis.ground_axes();
         let (low, high) = bounds.span_along(up);
         let ((x0, x1), (y0, y1)) = (bounds.span_along(right), bounds.span_along(ahead));
         let (width, depth) = (x1 - x0, y1 - y0);
-        let scale = scale_of(width.max(depth), high - low);
+        let scale = scale.unwrap_or_else(|| scale_of(width.max(depth), high - low));
         let eye = scale.eye;
         let side = ((width.max(depth) / eye).ceil() as usize).clamp(MIN_SIDE_CELLS, MAX_SIDE_CELLS);
         let cell = width.max(depth) / side as f64;
@@ -333,6 +392,7 @@ fn find_floors(
                     cell: k,
                     height,
                     roofed,
+                    clearance: above - height,
                     over_floor: false,
                 });
             }
