@@ -370,7 +370,24 @@ fn a_room_10_m_wide_under_its_ceiling_is_walked_at_a_persons_eye_height() {
     let dir = tempfile::tempdir().unwrap();
     let boxes = roofed_room();
     let why = walked_inside(&load_boxes(dir.path(), &boxes), box_of(&boxes).extent().length(), 6);
-    assert!(why.contains("in metres for rooms 3.00 high"), "{why}");
+    assert!(why.contains("in metres for rooms 3.00 m high"), "{why}");
+}
+
+#[test]
+fn the_room_in_centimetres_and_millimetres_is_walked_at_a_persons_eye_height_in_them() {
+    for (per_metre, unit) in [(100.0, "centimetres"), (1000.0, "millimetres")] {
+        let dir = tempfile::tempdir().unwrap();
+        let boxes: Boxes = roofed_room()
+            .into_iter()
+            .map(|(name, min, max)| (name, min * per_metre, max * per_metre))
+            .collect();
+        let scene = load_boxes(dir.path(), &boxes);
+        let (generated, path) = default_of(&scene, 120);
+        let why = &generated.why;
+        assert!(why.contains(&format!("in {unit} for rooms 3.00 m high")), "{why}");
+        assert_walked_inside(&scene, &generated, box_of(&boxes).extent().length(), 1.7 * per_metre, 6);
+        assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+    }
 }
 
 /// Whether the ray `origin + t·direction`, `t >= 0`, meets `b` (slab test).

@@ -538,11 +538,11 @@ fn generate_with(
             _ => match walk() {
                 Ok(Some(w)) => {
                     let length = w.length();
-                    let metres = w.metres_from.map_or(String::new(), |height| {
-                        format!(", in metres for rooms {height:.2} high")
+                    let unit = w.rooms.map_or(String::new(), |rooms| {
+                        format!(", in {} for rooms {:.2} m high", rooms.unit, rooms.height)
                     });
                     note = Some(format!(
-                        "a walk along the longest route through {}, {length:.1} units at eye height {:.3}{metres} (cells of {:.3}, {:.0}% of them joined to it)",
+                        "a walk along the longest route through {}, {length:.1} units at eye height {:.3}{unit} (cells of {:.3}, {:.0}% of them joined to it)",
                         w.through,
                         w.eye_height,
                         w.cell,

@@ -32,9 +32,9 @@
 //! of the streets (open floors with walls near in half the directions)
 //! when they hold a long enough one and a quarter of the open ground
 //! joined to them; else of all open floors. The eye is a person's in a
-//! model that is in metres by its width (a town, a building) or by the
-//! height of its rooms (a flat, a room); elsewhere a share of the model's
-//! height.
+//! model whose unit is known: metres by its width (a town, a building), or
+//! metres, centimetres or millimetres by the height of its rooms (a flat,
+//! a room); elsewhere a share of the model's height.
 
 use std::collections::VecDeque;
 
@@ -88,10 +88,19 @@ pub struct Walk {
     /// of the roofed ones joined; judged only where the roofed share is at
     /// least half, 0 otherwise.
     pub indoors: f64,
-    /// Where the walk is in metres for its interior's height, not the
-    /// model's width: the median height of the roofs over the route's
-    /// floors in the first walk, which found that ([`plan`]).
-    pub metres_from: Option<f64>,
+    /// Where the walk's unit was found from its rooms' height, not the
+    /// model's width ([`plan`]): that unit, and the median headroom over
+    /// the route's floors, in metres.
+    pub rooms: Option<Rooms>,
+}
+
+/// A walk's unit, found from the height of the rooms it goes through.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rooms {
+    /// "metres", "centimetres" or "millimetres".
+    pub unit: &'static str,
+    /// The median headroom over the route's floors, in metres.
+    pub height: f64,
 }
 
 impl Walk {
@@ -110,8 +119,8 @@ const MAX_SIDE_CELLS: usize = 512;
 
 /// Models at least this wide (in their units) are taken to be in metres,
 /// with an eye [`METRES_EYE_HEIGHT`] above the ground; smaller ones get an
-/// eye at [`EYE_FRACTION`] of their height, unless their walk goes through
-/// rooms as high as rooms in metres ([`ROOM_HEIGHTS`]).
+/// eye at [`EYE_FRACTION`] of their height, unless their rooms say their
+/// unit ([`plan`]).
 const METRE_SCALE_WIDTH: f64 = 30.0;
 const METRES_EYE_HEIGHT: f64 = 1.7;
 const EYE_FRACTION: f64 = 0.05;
@@ -125,47 +134,57 @@ const EYE_FRACTION: f64 = 0.05;
 /// [`ROOM_OVER_EYE`] and two eye heights.
 fn scale_of(width: f64, height: f64) -> Scale {
     if width >= METRE_SCALE_WIDTH && height > METRES_EYE_HEIGHT {
-        Scale::METRES
+        Scale::person(1.0)
     } else {
         let eye = (EYE_FRACTION * height).max(FLAT_EYE_FRACTION * width);
         Scale {
             eye,
             room: eye * ROOM_OVER_EYE,
             below_top: 2.0 * eye,
-            metres: false,
+            per_metre: None,
         }
     }
 }
 
-/// A walk's sizes, in the model's units ([`scale_of`]), and whether they
-/// are metres.
+/// A walk's sizes, in the model's units ([`scale_of`]), and how many of
+/// them make a metre where they are a person's sizes.
 #[derive(Clone, Copy)]
 struct Scale {
     eye: f64,
     room: f64,
     below_top: f64,
-    metres: bool,
+    per_metre: Option<f64>,
 }
 
 impl Scale {
-    const METRES: Scale = Scale {
-        eye: METRES_EYE_HEIGHT,
-        room: METRES_ROOM,
-        below_top: METRES_ROOM,
-        metres: true,
-    };
+    /// A person's sizes, in a unit `per_metre` of which make a metre.
+    fn person(per_metre: f64) -> Scale {
+        Scale {
+            eye: METRES_EYE_HEIGHT * per_metre,
+            room: METRES_ROOM * per_metre,
+            below_top: METRES_ROOM * per_metre,
+            per_metre: Some(per_metre),
+        }
+    }
 }
 
-/// Roof heights over an interior's floors that are a room's in metres:
-/// from the room the eye needs under a door ([`METRES_ROOM`]) to a small
-/// hall's. A model narrower than [`METRE_SCALE_WIDTH`] (a room, a flat, a
-/// house) whose walk goes through rooms this high is in metres (glTF's
-/// unit, and the common one for architecture), and is walked at a
-/// person's eye height, not a share of its height (a knee's, in an 8 m
-/// room). In centimetres or millimetres the same rooms are hundreds or
-/// thousands of units high, and a model in feet (rooms 8 to 10 high) is
-/// walked higher than before but still below a person's eye.
-const ROOM_HEIGHTS: std::ops::RangeInclusive<f64> = METRES_ROOM..=12.0;
+/// The units a model of rooms may be in, with how many of each make a
+/// metre: metres (glTF's unit, and the common one for architecture),
+/// centimetres and millimetres (many modelling tools' and CAD's). In
+/// feet a room 8 to 10 high is taken for a room in metres (walked higher
+/// than a share of its height, still below a person's eye); inches are
+/// not told from centimetres.
+const UNITS: [(f64, &str); 3] = [(1.0, "metres"), (100.0, "centimetres"), (1000.0, "millimetres")];
+
+/// The headroom over an interior's floors that is a room's, in metres:
+/// from the room the eye needs under a door ([`METRES_ROOM`]) to a hall's,
+/// below ten times the least, so that a room's height names one of
+/// [`UNITS`] only (a hall 19.5 cm high is not told from a room 1.95 m
+/// high in millimetres). Rooms this high in one of [`UNITS`] tell the
+/// model's unit: an 8 m room in metres was walked at 5 % of its height (a
+/// knee's), and a flat in centimetres, taken for metres by its width, at
+/// 1.7 cm.
+const ROOM_HEIGHTS: std::ops::RangeInclusive<f64> = METRES_ROOM..=19.0;
 
 /// The eye height over a flat model's width.
 const FLAT_EYE_FRACTION: f64 = 0.01;
@@ -189,8 +208,9 @@ struct Floor {
     /// The cell's ray met a surface above it (below the model's top): a
     /// roof.
     roofed: bool,
-    /// How far above it that surface lies (+∞ where none does).
-    clearance: f64,
+    /// How far above it that surface lies (+∞ where none does): its
+    /// headroom.
+    headroom: f64,
     /// In metres: open to the sky over another floor of its cell.
     over_floor: bool,
 }
@@ -198,38 +218,54 @@ struct Floor {
 /// Plans a walk through the part of `scene` within `bounds` (its focus:
 /// the grid covers that box), or `None` when it has no ground with room
 /// to walk (fewer than [`MIN_CELLS`] joined cells); stopped when `caster`
-/// stops (its budget spent, or Ctrl-C). A model too small to be taken as
-/// metres by its width whose walk goes through an interior as high as a
-/// room in metres ([`ROOM_HEIGHTS`]) is walked again in metres, and that
-/// walk taken where it goes through an interior too.
+/// stops (its budget spent, or Ctrl-C). Unless the walk at the scale the
+/// model's size gives ([`scale_of`]) goes through rooms of a room's height
+/// in that scale's unit, each other unit of [`UNITS`] the model is tall
+/// enough for (a room's height in it) is tried in turn, at a person's
+/// sizes in it, and the first whose walk goes through rooms of a room's
+/// height in it is taken; where none does, or the budget is spent trying,
+/// the first walk.
 pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<Walk>, Stopped> {
     let Some(grid) = Grid::over(scene, bounds, None) else {
         return Ok(None);
     };
-    let Some((walk, clearance)) = plan_on(scene, bounds, &grid, caster)? else {
-        return Ok(None);
+    let first = plan_on(scene, bounds, &grid, caster)?;
+    let through_rooms = |planned: &Option<(Walk, f64)>, per_metre: f64| {
+        planned.as_ref().and_then(|(walk, headroom)| {
+            let height = headroom / per_metre;
+            (walk.through == Through::Interior && ROOM_HEIGHTS.contains(&height)).then_some(height)
+        })
     };
-    if grid.scale.metres || walk.through != Through::Interior || !ROOM_HEIGHTS.contains(&clearance) {
-        return Ok(Some(walk));
+    if grid
+        .scale
+        .per_metre
+        .is_some_and(|per_metre| through_rooms(&first, per_metre).is_some())
+    {
+        return Ok(first.map(|(walk, _)| walk));
     }
-    let in_metres = Grid::over(scene, bounds, Some(Scale::METRES));
-    Ok(Some(
-        match in_metres
-            .map(|grid| plan_on(scene, bounds, &grid, caster))
-            .transpose()?
-            .flatten()
-        {
-            Some((in_metres, _)) if in_metres.through == Through::Interior => Walk {
-                metres_from: Some(clearance),
-                ..in_metres
-            },
-            _ => walk,
-        },
-    ))
+    for (per_metre, unit) in UNITS {
+        if grid.scale.per_metre == Some(per_metre) || grid.high - grid.low < METRES_ROOM * per_metre {
+            continue;
+        }
+        let Some(grid) = Grid::over(scene, bounds, Some(Scale::person(per_metre))) else {
+            continue;
+        };
+        let planned = match plan_on(scene, bounds, &grid, caster) {
+            Err(Stopped::Spent) => break,
+            planned => planned?,
+        };
+        if let Some(height) = through_rooms(&planned, per_metre) {
+            return Ok(planned.map(|(walk, _)| Walk {
+                rooms: Some(Rooms { unit, height }),
+                ..walk
+            }));
+        }
+    }
+    Ok(first.map(|(walk, _)| walk))
 }
 
-/// The walk over `grid`, and the median height of the roofs over its
-/// route's floors (+∞ where most have none).
+/// The walk over `grid`, and the median headroom over its route's floors
+/// (+∞ where at least half have nothing above them).
 fn plan_on(scene: &Scene, bounds: &Aabb, grid: &Grid, caster: &RayCaster) -> Result<Option<(Walk, f64)>, Stopped> {
     let (floors, first) = find_floors(scene, bounds, grid, caster)?;
     let ground = Ground::link(*grid, floors, &first, caster)?;
@@ -252,9 +288,9 @@ fn plan_on(scene: &Scene, bounds: &Aabb, grid: &Grid, caster: &RayCaster) -> Res
         .filter(|&&p| caster.first_hit(p, grid.up, f64::INFINITY).is_none())
         .count();
     caster.searching()?;
-    let mut clearances: Vec<f64> = route.iter().map(|&f| ground.floors[f].clearance).collect();
-    let middle = clearances.len() / 2;
-    let (_, &mut clearance, _) = clearances.select_nth_unstable_by(middle, f64::total_cmp);
+    let mut headrooms: Vec<f64> = route.iter().map(|&f| ground.floors[f].headroom).collect();
+    let middle = headrooms.len() / 2;
+    let (_, &mut headroom, _) = headrooms.select_nth_unstable_by(middle, f64::total_cmp);
     let walk = Walk {
         line: turns(&points),
         eye_height: grid.scale.eye,
@@ -264,9 +300,9 @@ fn plan_on(scene: &Scene, bounds: &Aabb, grid: &Grid, caster: &RayCaster) -> Res
         through,
         roofed: interior.roofed,
         indoors: interior.indoors,
-        metres_from: None,
+        rooms: None,
     };
-    Ok(Some((walk, clearance)))
+    Ok(Some((walk, headroom)))
 }
 
 /// How many cells `floors` lie in (storeys share cells).
@@ -361,7 +397,7 @@ fn find_floors(
         scale: Scale {
             room,
             below_top,
-            metres,
+            per_metre,
             ..
         },
         low,
@@ -392,7 +428,7 @@ fn find_floors(
                     cell: k,
                     height,
                     roofed,
-                    clearance: above - height,
+                    headroom: above - height,
                     over_floor: false,
                 });
             }
@@ -411,7 +447,7 @@ fn find_floors(
         // roof ([`roofs`]). (In other units the floor under it may be the
         // hollow of an open mesh's slab: a pavement tile's.)
         let start = first[k];
-        if metres && floors.len() - start >= 2 && !floors[start].roofed {
+        if per_metre.is_some() && floors.len() - start >= 2 && !floors[start].roofed {
             floors[start].over_floor = true;
         }
     }
