@@ -8,6 +8,7 @@
 
 mod common;
 
+use common::gltf_writer::{GltfWriter, cube_indices};
 use common::hall::hall;
 use common::{
     boxes_obj, cannot_run, first_hit, frames_too_near, occlu, shared_models, shared_models_dir, stderr, town,
@@ -18,6 +19,7 @@ use occlu::bounds::Aabb;
 use occlu::camera::generate::{Generated, PathKind, plan};
 use occlu::camera::path::{CameraPath, PathFile};
 use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
+use serde_json::json;
 
 type Boxes = Vec<(String, DVec3, DVec3)>;
 
@@ -43,6 +45,32 @@ fn plane_under(boxes: &[(String, DVec3, DVec3)], times: f64, top: f64) -> (Strin
 
 fn load_boxes(dir: &std::path::Path, boxes: &[(String, DVec3, DVec3)]) -> Scene {
     load_obj(dir, boxes_obj(boxes))
+}
+
+/// `boxes` as a GLB file in `dir`, each box a mesh on a node of its own,
+/// loaded.
+fn load_glb(dir: &std::path::Path, boxes: &[(String, DVec3, DVec3)]) -> Scene {
+    let mut gltf = GltfWriter::default();
+    let roots: Vec<usize> = boxes
+        .iter()
+        .map(|(name, min, max)| {
+            let pick = |corner: usize, bit: usize, lo: f64, hi: f64| if corner & bit == 0 { lo } else { hi } as f32;
+            let corners: Vec<[f32; 3]> = (0..8)
+                .map(|c| {
+                    [
+                        pick(c, 1, min.x, max.x),
+                        pick(c, 2, min.y, max.y),
+                        pick(c, 4, min.z, max.z),
+                    ]
+                })
+                .collect();
+            let mesh = gltf.mesh(name, &[(&corners, Some(&cube_indices()), 4)]);
+            gltf.node(json!({"name": name, "mesh": mesh}))
+        })
+        .collect();
+    let model = dir.join("model.glb");
+    std::fs::write(&model, gltf.glb(&roots)).unwrap();
+    load(&SceneSpec::File(model), &LoadOptions::default()).unwrap()
 }
 
 fn load_obj(dir: &std::path::Path, obj: String) -> Scene {
@@ -371,6 +399,23 @@ fn a_room_10_m_wide_under_its_ceiling_is_walked_at_a_persons_eye_height() {
     let boxes = roofed_room();
     let why = walked_inside(&load_boxes(dir.path(), &boxes), box_of(&boxes).extent().length(), 6);
     assert!(why.contains("in metres for rooms 3.00 m high"), "{why}");
+}
+
+#[test]
+fn the_room_in_centimetres_as_gltf_is_read_in_metres_as_its_format_says() {
+    let dir = tempfile::tempdir().unwrap();
+    let boxes: Boxes = roofed_room()
+        .into_iter()
+        .map(|(name, min, max)| (name, min * 100.0, max * 100.0))
+        .collect();
+    let (generated, _) = default_of(&load_glb(dir.path(), &boxes), 120);
+    // A hall 1 km wide and 300 m high, walked at a person's eye, as a
+    // sky box 300 m high over a town must be.
+    assert!(
+        generated.why.contains("at eye height 1.700 (cells"),
+        "{}",
+        generated.why
+    );
 }
 
 #[test]

@@ -538,8 +538,8 @@ fn generate_with(
             _ => match walk() {
                 Ok(Some(w)) => {
                     let length = w.length();
-                    let unit = w.rooms.map_or(String::new(), |rooms| {
-                        format!(", in {} for rooms {:.2} m high", rooms.unit, rooms.height)
+                    let unit = w.unit.map_or(String::new(), |found| {
+                        format!(", in {} for rooms {:.2} m high", found.unit, found.headroom)
                     });
                     note = Some(format!(
                         "a walk along the longest route through {}, {length:.1} units at eye height {:.3}{unit} (cells of {:.3}, {:.0}% of them joined to it)",

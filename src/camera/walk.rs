@@ -7,34 +7,33 @@
 //! focus (its bounds without a huge ground plane or sky dome,
 //! [`crate::scene::Focus`]). Down each cell's vertical line a ray cast finds
 //! every surface; a surface with room for an eye above it (eye height and a
-//! margin up to the next surface: under a door's lintel in metres) is a
-//! floor, unless that room lies inside a
-//! closed part (the ray has crossed its surface an odd number of times:
-//! inside a thick ground slab, a closed building; a closed hall or sky box
-//! around everything is space, not a solid), or the floor is the model's top
-//! (nothing rises the room above it: 1.95 m in metres, two eye heights in
-//! other units; a tower's roof). Floors of
-//! neighbouring cells within a step (half the eye height) of each other are
-//! linked, so the ground may slope, climb stairs and lie at several levels
-//! (an island and the sea, storeys). A floor linked on all four sides, with
-//! a clear ray at eye height to each, is open (the eye stays a cell from
-//! every wall, however thin), unless it is a roof (in metres, a linked
-//! region of floors open to the sky, most of them over another floor, or
-//! nine tenths for the largest such region: a roof over rooms, not streets
-//! over a metro); linked open floors are joined. The walk is the
-//! longest of the shortest routes through the largest joined region (two
-//! breadth-first searches), in cell steps, of the interior (open floors
-//! indoors: a ray up meets the model, and level rays meet it in six of
-//! eight directions) when it holds at least half of the open floors, or,
-//! where indoor floors are most but no joined part of them is (doors in
-//! line let rays out of the floors joining rooms), the longest route from
-//! indoor floor to indoor floor through the roofed ones; else
-//! of the streets (open floors with walls near in half the directions)
-//! when they hold a long enough one and a quarter of the open ground
-//! joined to them; else of all open floors. The eye is a person's in a
-//! model whose unit is known: metres by its width (a town, a building), or
-//! metres, centimetres or millimetres by the height of its rooms (a flat,
-//! a room); elsewhere a share of the model's height.
+//! margin up to the next surface: under a door's lintel at a person's sizes)
+//! is a floor, unless that room lies inside a closed part (the ray has
+//! crossed its surface an odd number of times: inside a thick ground slab, a
+//! closed building; a closed hall or sky box around everything is space, not
+//! a solid), or the floor is the model's top (nothing rises the room above
+//! it: 1.95 m at a person's sizes, two eye heights where the unit is not
+//! known; a tower's roof). Floors of neighbouring cells within a step (half
+//! the eye height) of each other are linked, so the ground may slope, climb
+//! stairs and lie at several levels (an island and the sea, storeys). A
+//! floor linked on all four sides, with a clear ray at eye height to each,
+//! is open (the eye stays a cell from every wall, however thin), unless it
+//! is a roof (at a person's sizes, a linked region of floors open to the
+//! sky, most of them over another floor, or nine tenths for the largest such
+//! region: a roof over rooms, not streets over a metro); linked open floors
+//! are joined. The walk is the longest of the shortest routes through the
+//! largest joined region (two breadth-first searches), in cell steps, of the
+//! interior (open floors indoors: a ray up meets the model, and level rays
+//! meet it in six of eight directions) when it holds at least half of the
+//! open floors, or, where indoor floors are most but no joined part of them
+//! is (doors in line let rays out of the floors joining rooms), the longest
+//! route from indoor floor to indoor floor through the roofed ones; else of
+//! the streets (open floors with walls near in half the directions) when
+//! they hold a long enough one and a quarter of the open ground joined to
+//! them; else of all open floors. The eye is a person's in a model whose
+//! unit is known: metres by its width (a town, a building), or metres,
+//! centimetres or millimetres by the height of its rooms (a flat, a room);
+//! elsewhere a share of the model's height.
 
 use std::collections::VecDeque;
 
@@ -88,19 +87,18 @@ pub struct Walk {
     /// of the roofed ones joined; judged only where the roofed share is at
     /// least half, 0 otherwise.
     pub indoors: f64,
-    /// Where the walk's unit was found from its rooms' height, not the
-    /// model's width ([`plan`]): that unit, and the median headroom over
-    /// the route's floors, in metres.
-    pub rooms: Option<Rooms>,
+    /// Where the walk's unit was found from its rooms' headroom, not the
+    /// model's width ([`plan`]).
+    pub unit: Option<RoomUnit>,
 }
 
-/// A walk's unit, found from the height of the rooms it goes through.
+/// A walk's unit, found from the headroom of the rooms it goes through.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Rooms {
+pub struct RoomUnit {
     /// "metres", "centimetres" or "millimetres".
     pub unit: &'static str,
     /// The median headroom over the route's floors, in metres.
-    pub height: f64,
+    pub headroom: f64,
 }
 
 impl Walk {
@@ -119,8 +117,8 @@ const MAX_SIDE_CELLS: usize = 512;
 
 /// Models at least this wide (in their units) are taken to be in metres,
 /// with an eye [`METRES_EYE_HEIGHT`] above the ground; smaller ones get an
-/// eye at [`EYE_FRACTION`] of their height, unless their rooms say their
-/// unit ([`plan`]).
+/// eye at [`EYE_FRACTION`] of their height; either unless their rooms say
+/// their unit ([`plan`]).
 const METRE_SCALE_WIDTH: f64 = 30.0;
 const METRES_EYE_HEIGHT: f64 = 1.7;
 const EYE_FRACTION: f64 = 0.05;
@@ -173,17 +171,17 @@ impl Scale {
 /// centimetres and millimetres (many modelling tools' and CAD's). In
 /// feet a room 8 to 10 high is taken for a room in metres (walked higher
 /// than a share of its height, still below a person's eye); inches are
-/// not told from centimetres.
+/// not recognised (rooms 96 to 120 high are too low for centimetres).
 const UNITS: [(f64, &str); 3] = [(1.0, "metres"), (100.0, "centimetres"), (1000.0, "millimetres")];
 
 /// The headroom over an interior's floors that is a room's, in metres:
 /// from the room the eye needs under a door ([`METRES_ROOM`]) to a hall's,
-/// below ten times the least, so that a room's height names one of
-/// [`UNITS`] only (a hall 19.5 cm high is not told from a room 1.95 m
-/// high in millimetres). Rooms this high in one of [`UNITS`] tell the
-/// model's unit: an 8 m room in metres was walked at 5 % of its height (a
-/// knee's), and a flat in centimetres, taken for metres by its width, at
-/// 1.7 cm.
+/// below ten times the least, so that a headroom names one of [`UNITS`]
+/// only (1 950 units is not a hall 19.5 m high in centimetres as well as a
+/// room 1.95 m high in millimetres). Rooms this high in one of [`UNITS`]
+/// tell the model's unit: an 8 m room in metres was walked at 5 % of its
+/// height (a knee's), and a flat in centimetres, taken for metres by its
+/// width, at 1.7 cm.
 const ROOM_HEIGHTS: std::ops::RangeInclusive<f64> = METRES_ROOM..=19.0;
 
 /// The eye height over a flat model's width.
@@ -218,22 +216,24 @@ struct Floor {
 /// Plans a walk through the part of `scene` within `bounds` (its focus:
 /// the grid covers that box), or `None` when it has no ground with room
 /// to walk (fewer than [`MIN_CELLS`] joined cells); stopped when `caster`
-/// stops (its budget spent, or Ctrl-C). Unless the walk at the scale the
-/// model's size gives ([`scale_of`]) goes through rooms of a room's height
-/// in that scale's unit, each other unit of [`UNITS`] the model is tall
-/// enough for (a room's height in it) is tried in turn, at a person's
-/// sizes in it, and the first whose walk goes through rooms of a room's
-/// height in it is taken; where none does, or the budget is spent trying,
-/// the first walk.
+/// stops (its budget spent, or Ctrl-C). The walk is planned at the scale
+/// the model's size gives ([`scale_of`]); unless that scale's unit is
+/// known (metres, by the width) and the walk goes through an interior
+/// whose median headroom is a room's in it ([`ROOM_HEIGHTS`]), each unit
+/// of [`UNITS`] it did not try, that its format allows (glTF: metres only)
+/// and that it is tall enough for (a room's height in it) is tried in
+/// turn, at a person's sizes in it, and the first whose walk goes through
+/// such rooms in it is taken. Where none is, or the budget is spent trying
+/// (the caster is then left spent), the first walk is.
 pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<Walk>, Stopped> {
-    let Some(grid) = Grid::over(scene, bounds, None) else {
+    let Some(grid) = Grid::over(scene, bounds) else {
         return Ok(None);
     };
     let first = plan_on(scene, bounds, &grid, caster)?;
     let through_rooms = |planned: &Option<(Walk, f64)>, per_metre: f64| {
         planned.as_ref().and_then(|(walk, headroom)| {
-            let height = headroom / per_metre;
-            (walk.through == Through::Interior && ROOM_HEIGHTS.contains(&height)).then_some(height)
+            let headroom = headroom / per_metre;
+            (walk.through == Through::Interior && ROOM_HEIGHTS.contains(&headroom)).then_some(headroom)
         })
     };
     if grid
@@ -244,19 +244,20 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         return Ok(first.map(|(walk, _)| walk));
     }
     for (per_metre, unit) in UNITS {
-        if grid.scale.per_metre == Some(per_metre) || grid.high - grid.low < METRES_ROOM * per_metre {
+        let tried = grid.scale.per_metre == Some(per_metre);
+        // A format in metres is read in metres only: a sky box 300 m high
+        // over a town reads as a room 3 m high in centimetres too.
+        let ruled_out = scene.in_metres && per_metre != 1.0;
+        if tried || ruled_out || grid.high - grid.low < METRES_ROOM * per_metre {
             continue;
         }
-        let Some(grid) = Grid::over(scene, bounds, Some(Scale::person(per_metre))) else {
-            continue;
-        };
-        let planned = match plan_on(scene, bounds, &grid, caster) {
+        let planned = match plan_on(scene, bounds, &grid.at_scale(Scale::person(per_metre)), caster) {
             Err(Stopped::Spent) => break,
             planned => planned?,
         };
-        if let Some(height) = through_rooms(&planned, per_metre) {
+        if let Some(headroom) = through_rooms(&planned, per_metre) {
             return Ok(planned.map(|(walk, _)| Walk {
-                rooms: Some(Rooms { unit, height }),
+                unit: Some(RoomUnit { unit, headroom }),
                 ..walk
             }));
         }
@@ -300,7 +301,7 @@ fn plan_on(scene: &Scene, bounds: &Aabb, grid: &Grid, caster: &RayCaster) -> Res
         through,
         roofed: interior.roofed,
         indoors: interior.indoors,
-        rooms: None,
+        unit: None,
     };
     Ok(Some((walk, headroom)))
 }
@@ -320,9 +321,12 @@ struct Grid {
     up: DVec3,
     right: DVec3,
     ahead: DVec3,
-    /// The grid's corner along `right` and `ahead`.
+    /// The grid's corner along `right` and `ahead`, and its extent along
+    /// them.
     x0: f64,
     y0: f64,
+    width: f64,
+    depth: f64,
     cell: f64,
     /// Cells along `right` and `ahead`.
     nx: usize,
@@ -334,39 +338,46 @@ struct Grid {
 }
 
 impl Grid {
-    /// The grid over `bounds`, about `scene`'s up axis, at `scale` (by
-    /// default the one the box's width and height give, [`scale_of`]);
-    /// `None` when the box has no width to lay cells on.
-    fn over(scene: &Scene, bounds: &Aabb, scale: Option<Scale>) -> Option<Grid> {
+    /// The grid over `bounds`, about `scene`'s up axis, at the scale the
+    /// box's width and height give ([`scale_of`]); `None` when the box has
+    /// no width to lay cells on.
+    fn over(scene: &Scene, bounds: &Aabb) -> Option<Grid> {
         let up = scene.up.axis.vector();
         let (right, ahead) = scene.up.axis.ground_axes();
         let (low, high) = bounds.span_along(up);
         let ((x0, x1), (y0, y1)) = (bounds.span_along(right), bounds.span_along(ahead));
         let (width, depth) = (x1 - x0, y1 - y0);
-        let scale = scale.unwrap_or_else(|| scale_of(width.max(depth), high - low));
-        let eye = scale.eye;
-        let side = ((width.max(depth) / eye).ceil() as usize).clamp(MIN_SIDE_CELLS, MAX_SIDE_CELLS);
-        let cell = width.max(depth) / side as f64;
-        if !(cell > 0.0 && cell.is_finite()) {
-            return None;
-        }
-        let (nx, ny) = (
-            ((width / cell).ceil() as usize).max(1),
-            ((depth / cell).ceil() as usize).max(1),
-        );
-        Some(Grid {
+        let grid = Grid {
             up,
             right,
             ahead,
             x0,
             y0,
-            cell,
-            nx,
-            ny,
-            scale,
+            width,
+            depth,
+            cell: 0.0,
+            nx: 0,
+            ny: 0,
+            scale: scale_of(width.max(depth), high - low),
             low,
             high,
-        })
+        };
+        let grid = grid.at_scale(grid.scale);
+        (grid.cell > 0.0 && grid.cell.is_finite()).then_some(grid)
+    }
+
+    /// The same ground in cells for `scale`'s eye.
+    fn at_scale(&self, scale: Scale) -> Grid {
+        let longer = self.width.max(self.depth);
+        let side = ((longer / scale.eye).ceil() as usize).clamp(MIN_SIDE_CELLS, MAX_SIDE_CELLS);
+        let cell = longer / side as f64;
+        Grid {
+            cell,
+            nx: ((self.width / cell).ceil() as usize).max(1),
+            ny: ((self.depth / cell).ceil() as usize).max(1),
+            scale,
+            ..*self
+        }
     }
 
     fn cells(&self) -> usize {
@@ -443,8 +454,8 @@ fn find_floors(
             }
             above = height;
         }
-        // In metres, a floor open to the sky over another floor may be a
-        // roof ([`roofs`]). (In other units the floor under it may be the
+        // At a person's sizes, a floor open to the sky over another floor
+        // may be a roof ([`roofs`]). (In other units the floor under it may be the
         // hollow of an open mesh's slab: a pavement tile's.)
         let start = first[k];
         if per_metre.is_some() && floors.len() - start >= 2 && !floors[start].roofed {

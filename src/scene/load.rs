@@ -21,6 +21,7 @@ pub fn load(spec: &SceneSpec, options: &LoadOptions) -> Result<Scene, SceneError
             let started = Instant::now();
             let mut scene = builtin::build(name, options)?;
             scene.up = choose(options.up, Source::Builtin, &scene);
+            scene.in_metres = true;
             scene.phases.parse_is_the_rest_of(started.elapsed());
             Ok(scene)
         }
@@ -56,6 +57,7 @@ pub fn load_bytes(path: &Path, bytes: &[u8], options: &LoadOptions) -> Result<Sc
         .finish()
         .ok_or_else(|| SceneError::Empty { path: path.into() })?;
     scene.up = choose(options.up, source, &scene);
+    scene.in_metres = source == Source::Gltf;
     scene.phases.parse_is_the_rest_of(started.elapsed());
     Ok(scene)
 }

@@ -130,6 +130,10 @@ pub struct Scene {
     pub movers: Vec<Mover>,
     /// Which way is up, for generated paths and the overview picture.
     pub up: Up,
+    /// Whether its format fixes its unit to the metre: glTF 2.0's does
+    /// ("the units for all linear distances are meters"), as the built-in
+    /// scenes do; an OBJ file's unit is its author's.
+    pub in_metres: bool,
     /// The file's own cameras (glTF), in node order.
     pub cameras: Vec<FileCamera>,
     /// The file's animations (glTF), with the poses of the cameras they move.
@@ -424,6 +428,7 @@ impl SceneBuilder {
             warnings,
             walk_hint: self.walk_hint,
             up: Up::default(),
+            in_metres: false,
             cameras: self.cameras,
             animations: self.animations,
             movers: self.movers,
