@@ -435,6 +435,90 @@ fn the_room_in_centimetres_and_millimetres_is_walked_at_a_persons_eye_height_in_
     }
 }
 
+/// `boxes` as an OBJ file whose boxes of one name in a row are one object.
+fn grouped_obj(boxes: &[(String, DVec3, DVec3)]) -> String {
+    let mut last = None;
+    boxes_obj(boxes)
+        .lines()
+        .filter(|line| match line.strip_prefix("o ") {
+            Some(name) => last.replace(name) != Some(name),
+            None => true,
+        })
+        .map(|line| format!("{line}\n"))
+        .collect()
+}
+
+/// A room 8 × 6 m and 3 m high whose shell (floor, ceiling, and walls with
+/// a door) is one object, with twelve chairs gathered in its middle, each
+/// an object: the shell is huge and nearly empty beside them.
+fn room_round_its_chairs() -> Boxes {
+    let (w, d, h, t) = (8.0, 6.0, 3.0, 0.2);
+    let mut boxes = vec![
+        part("shell", [-t, -t, -t], [w + t, 0.0, d + t]),
+        part("shell", [-t, h, -t], [w + t, h + t, d + t]),
+        part("shell", [-t, 0.0, -t], [0.0, h, d + t]),
+        part("shell", [w, 0.0, -t], [w + t, h, d + t]),
+        part("shell", [0.0, 0.0, d], [w, h, d + t]),
+        part("shell", [0.0, 0.0, -t], [w / 2.0 - 0.5, h, 0.0]),
+        part("shell", [w / 2.0 + 0.5, 0.0, -t], [w, h, 0.0]),
+        part("shell", [w / 2.0 - 0.5, 2.1, -t], [w / 2.0 + 0.5, h, 0.0]),
+    ];
+    for k in 0..12 {
+        let (x, z) = (2.8 + 0.8 * f64::from(k % 4), 2.0 + 0.8 * f64::from(k / 4));
+        let chair = format!("chair_{k}");
+        for (a, b) in [
+            ([0.0, 0.0], [0.05, 0.05]),
+            ([0.4, 0.0], [0.45, 0.05]),
+            ([0.0, 0.4], [0.05, 0.45]),
+            ([0.4, 0.4], [0.45, 0.45]),
+        ] {
+            boxes.push(part(&chair, [x + a[0], 0.0, z + a[1]], [x + b[0], 0.45, z + b[1]]));
+        }
+        boxes.push(part(&chair, [x, 0.45, z], [x + 0.45, 0.5, z + 0.45]));
+        boxes.push(part(&chair, [x, 0.5, z + 0.4], [x + 0.45, 0.9, z + 0.45]));
+    }
+    boxes
+}
+
+#[test]
+fn a_room_whose_shell_is_one_object_round_its_gathered_chairs_is_walked_inside_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let boxes = room_round_its_chairs();
+    let scene = load_obj(dir.path(), grouped_obj(&boxes));
+    let (generated, path) = default_of(&scene, 120);
+    let why = &generated.why;
+    assert!(
+        why.contains("'shell' hides") && why.contains("which stand on it"),
+        "{why}"
+    );
+    assert!(why.contains("in metres for rooms 3.00 m high"), "{why}");
+    assert_walked_inside(&scene, &generated, box_of(&boxes).extent().length(), 1.7, 6);
+    assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
+}
+
+#[test]
+fn a_town_in_a_sky_box_is_framed_without_the_sky_it_does_not_stand_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = town(true);
+    // A closed box 20 times the town's width round it, one object.
+    let (c, half) = (box_of(&boxes).center(), 10.0 * box_of(&boxes).extent().x);
+    let (lo, hi) = (c - DVec3::splat(half), c + DVec3::splat(half));
+    for (a, b) in [
+        ([lo.x, lo.y, lo.z], [hi.x, lo.y + 1.0, hi.z]),
+        ([lo.x, hi.y - 1.0, lo.z], [hi.x, hi.y, hi.z]),
+        ([lo.x, lo.y, lo.z], [lo.x + 1.0, hi.y, hi.z]),
+        ([hi.x - 1.0, lo.y, lo.z], [hi.x, hi.y, hi.z]),
+        ([lo.x, lo.y, lo.z], [hi.x, hi.y, lo.z + 1.0]),
+        ([lo.x, lo.y, hi.z - 1.0], [hi.x, hi.y, hi.z]),
+    ] {
+        boxes.push(part("sky", a, b));
+    }
+    let (generated, _) = default_of(&load_obj(dir.path(), grouped_obj(&boxes)), 60);
+    let why = &generated.why;
+    assert!(why.contains("'sky' hides") && why.contains("without 'sky'"), "{why}");
+    assert!(!why.contains("stand on it"), "{why}");
+}
+
 /// Whether the ray `origin + t·direction`, `t >= 0`, meets `b` (slab test).
 fn meets(b: &Aabb, origin: DVec3, direction: DVec3) -> bool {
     let (mut near, mut far) = (0.0f64, f64::INFINITY);

@@ -12,7 +12,7 @@ use super::walk::{self, Through, Walk};
 use crate::bounds::Aabb;
 use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::scene::cameras::{CameraPose, FileAnimation, SAMPLES_PER_SECOND};
-use crate::scene::{Focus, Scene};
+use crate::scene::{Focus, LeftOut, Scene};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PathKind {
@@ -168,15 +168,15 @@ pub fn plan_heard(
         listener,
     };
     let caster = RayCaster::with_budget(scene, budget);
-    let focus = Focus::of(scene);
-    let walk = || walk::plan(scene, &focus.bounds, &caster);
+    let mut focus = Focus::of(scene);
     let (kind, why, planned) = match request {
         Some(r) => (r.kind, "asked for".to_string(), None),
-        None => match default_kind(scene, &caster, walk) {
+        None => match default_kind(scene, &caster, &mut focus) {
             Err(Stopped::Spent) => (PathKind::Orbit, format!("{}: circled from outside", spent()), None),
             chosen => chosen.map_err(interrupted)?,
         },
     };
+    let walk = || walk::plan(scene, &focus.bounds, &caster);
     let shape_frames = frames.unwrap_or(DEFAULT_FRAMES);
     if kind.shape().is_some() {
         sized_for_a_path(scene, &focus)?;
@@ -335,11 +335,14 @@ fn interrupted(_: Stopped) -> PathError {
     PathError::Interrupted
 }
 
-/// The default kind for `scene`, why, and the walk planned to decide it.
+/// The default kind for `scene`, why, and the walk planned to decide it
+/// over `focus`. A part the focus left out that encloses the rest and that
+/// the rest stands on is its room's shell, not a sky, and `focus` takes it
+/// back.
 fn default_kind(
     scene: &Scene,
     caster: &RayCaster,
-    walk: impl Fn() -> Result<Option<Walk>, Stopped>,
+    focus: &mut Focus,
 ) -> Result<(PathKind, String, Option<Walk>), Stopped> {
     if scene.walk_hint.is_some() {
         return Ok((PathKind::Walk, "the scene's streets".into(), None));
@@ -353,8 +356,15 @@ fn default_kind(
     }
     let circle = "circled from outside";
     let sight = Sight::from_orbit(scene, caster)?;
-    let enclosed = sight.enclosure(scene);
-    let Some(planned) = walk()? else {
+    let mut enclosed = sight.enclosure(scene);
+    if let Some(shell) = sight.encloser()
+        && focus.left_out.contains(&LeftOut::Part(shell))
+        && stands_on(scene, caster, focus, shell)?
+    {
+        *focus = focus.keeping(scene, shell);
+        enclosed = enclosed.map(|why| format!("{why}, which stand on it"));
+    }
+    let Some(planned) = walk::plan(scene, &focus.bounds, caster)? else {
         let why = enclosed.map_or("a model".to_string(), |e| format!("{e}, but"));
         return Ok((PathKind::Orbit, format!("{why} with no ground to walk: {circle}"), None));
     };
@@ -487,18 +497,24 @@ impl Sight {
         })
     }
 
-    /// Why circling `scene` would show one object only, if it would: one
-    /// object is the first thing met on the way to nearly every other (a
-    /// sky dome or a closed shell around the rest).
-    fn enclosure(&self, scene: &Scene) -> Option<String> {
+    /// The part circling the scene would show alone, if one would: it is
+    /// the first thing met on the way to nearly every other object (a sky
+    /// dome or a closed shell around the rest).
+    fn encloser(&self) -> Option<u32> {
         let (hider, n) = self.hider?;
+        (self.targets > 1 && 10 * n >= 9 * self.rays).then_some(hider)
+    }
+
+    /// Why circling `scene` would show one part only ([`Self::encloser`]),
+    /// if it would.
+    fn enclosure(&self, scene: &Scene) -> Option<String> {
+        let hider = self.encloser()?;
+        let n = self.hider.map_or(0, |(_, n)| n);
         let name = &scene.parts[hider as usize].name;
-        (self.targets > 1 && 10 * n >= 9 * self.rays).then(|| {
-            format!(
-                "from the orbit, '{name}' hides {n} of {} lines of sight to the other objects",
-                self.rays
-            )
-        })
+        Some(format!(
+            "from the orbit, '{name}' hides {n} of {} lines of sight to the other objects",
+            self.rays
+        ))
     }
 
     /// Whether the orbit would miss most of the model: most of its
@@ -515,6 +531,43 @@ impl Sight {
             100.0 * self.unseen as f64 / self.sampled.max(1) as f64
         )
     }
+}
+
+/// How far below an object's box a surface may lie for the object to
+/// stand on it, as a share of the focus's height.
+const STANDING_GAP: f64 = 0.01;
+
+/// Whether most of the objects in `focus` that stand on something (a
+/// surface of another part within [`STANDING_GAP`] below their box's
+/// lowest middle) stand on `part`: the floor of a room whose shell is one
+/// part with its walls and ceiling, where a town stands on its ground, not
+/// on the sky box around it. Up to 64 objects are tried, spread over the
+/// scene's order, as [`Sight`] aims at them.
+fn stands_on(scene: &Scene, caster: &RayCaster, focus: &Focus, part: u32) -> Result<bool, Stopped> {
+    let up = scene.up.axis.vector();
+    let (low, high) = focus.bounds.span_along(up);
+    let gap = STANDING_GAP * (high - low);
+    let in_focus: Vec<usize> = (0..scene.objects.len())
+        .filter(|&o| !focus.left_out.contains(&LeftOut::Part(scene.objects[o].part)))
+        .collect();
+    let (mut standing, mut on_part) = (0, 0);
+    let mut hits = Vec::new();
+    for &o in in_focus.iter().step_by(in_focus.len().div_ceil(64).max(1)) {
+        let object = &scene.objects[o];
+        let b = object.bounds;
+        let (bottom, _) = b.span_along(up);
+        let middle = b.center() + up * (bottom + gap - b.center().dot(up));
+        caster.all_hits(middle, -up, 2.0 * gap, &mut hits);
+        if let Some(hit) = hits
+            .iter()
+            .find(|hit| scene.objects[hit.object as usize].part != object.part)
+        {
+            standing += 1;
+            on_part += usize::from(scene.objects[hit.object as usize].part == part);
+        }
+    }
+    caster.searching()?;
+    Ok(on_part > 0 && 2 * on_part > standing)
 }
 
 /// [`generate`], with `walk` planning the walk a scene without streets

@@ -176,6 +176,22 @@ impl Focus {
         }
     }
 
+    /// The focus with `part`, which it left out whole, taken back (a
+    /// room's shell that the rest stands in: camera/generate.rs).
+    pub fn keeping(&self, scene: &Scene, part: u32) -> Focus {
+        Focus {
+            bounds: (scene.objects.iter())
+                .filter(|o| o.part == part)
+                .fold(self.bounds, |b, o| b.union(o.bounds)),
+            left_out: self
+                .left_out
+                .iter()
+                .copied()
+                .filter(|&w| w != LeftOut::Part(part))
+                .collect(),
+        }
+    }
+
     /// What the focus leaves out, for a path's reason; `None` when nothing.
     pub fn note(&self, scene: &Scene) -> Option<String> {
         if self.left_out.is_empty() {

@@ -27,9 +27,9 @@ mod source;
 pub mod up;
 mod validate;
 
-pub use focus::Focus;
 #[cfg(test)]
 pub(crate) use focus::fixtures;
+pub use focus::{Focus, LeftOut};
 pub use load::{load, load_bytes, looks_z_up};
 pub use model::{DEFAULT_CLUSTER_TRIANGLES, Mesh, MeshGroup, Object, Part, Scene, SceneBuilder, TriangleSoup};
 pub use phases::LoadPhases;
