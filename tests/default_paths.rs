@@ -497,26 +497,33 @@ fn a_room_whose_shell_is_one_object_round_its_gathered_chairs_is_walked_inside_i
 }
 
 #[test]
-fn a_town_in_a_sky_box_is_framed_without_the_sky_it_does_not_stand_on() {
-    let dir = tempfile::tempdir().unwrap();
-    let mut boxes = town(true);
-    // A closed box 20 times the town's width round it, one object.
-    let (c, half) = (box_of(&boxes).center(), 10.0 * box_of(&boxes).extent().x);
-    let (lo, hi) = (c - DVec3::splat(half), c + DVec3::splat(half));
-    for (a, b) in [
-        ([lo.x, lo.y, lo.z], [hi.x, lo.y + 1.0, hi.z]),
-        ([lo.x, hi.y - 1.0, lo.z], [hi.x, hi.y, hi.z]),
-        ([lo.x, lo.y, lo.z], [lo.x + 1.0, hi.y, hi.z]),
-        ([hi.x - 1.0, lo.y, lo.z], [hi.x, hi.y, hi.z]),
-        ([lo.x, lo.y, lo.z], [hi.x, hi.y, lo.z + 1.0]),
-        ([lo.x, lo.y, hi.z - 1.0], [hi.x, hi.y, hi.z]),
-    ] {
-        boxes.push(part("sky", a, b));
+fn a_town_in_a_sky_box_is_framed_without_the_sky_even_where_it_stands_on_its_floor() {
+    for on_its_floor in [false, true] {
+        let dir = tempfile::tempdir().unwrap();
+        let mut boxes = town(true);
+        // A closed box 20 times the town's width round it, one object:
+        // centred on the town, or with its floor as the town's ground.
+        let (c, half) = (box_of(&boxes).center(), 10.0 * box_of(&boxes).extent().x);
+        let (mut lo, mut hi) = (c - DVec3::splat(half), c + DVec3::splat(half));
+        if on_its_floor {
+            boxes.retain(|(name, _, _)| name != "ground");
+            (lo.y, hi.y) = (-1.0, 2.0 * half);
+        }
+        for (a, b) in [
+            ([lo.x, lo.y, lo.z], [hi.x, lo.y + 1.0, hi.z]),
+            ([lo.x, hi.y - 1.0, lo.z], [hi.x, hi.y, hi.z]),
+            ([lo.x, lo.y, lo.z], [lo.x + 1.0, hi.y, hi.z]),
+            ([hi.x - 1.0, lo.y, lo.z], [hi.x, hi.y, hi.z]),
+            ([lo.x, lo.y, lo.z], [hi.x, hi.y, lo.z + 1.0]),
+            ([lo.x, lo.y, hi.z - 1.0], [hi.x, hi.y, hi.z]),
+        ] {
+            boxes.push(part("sky", a, b));
+        }
+        let (generated, _) = default_of(&load_obj(dir.path(), grouped_obj(&boxes)), 60);
+        let why = &generated.why;
+        assert!(why.contains("'sky' hides") && why.contains("without 'sky'"), "{why}");
+        assert!(why.contains("at eye height 1.700 (cells"), "{why}");
     }
-    let (generated, _) = default_of(&load_obj(dir.path(), grouped_obj(&boxes)), 60);
-    let why = &generated.why;
-    assert!(why.contains("'sky' hides") && why.contains("without 'sky'"), "{why}");
-    assert!(!why.contains("stand on it"), "{why}");
 }
 
 /// Whether the ray `origin + t·direction`, `t >= 0`, meets `b` (slab test).

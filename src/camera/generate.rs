@@ -10,7 +10,7 @@ use glam::DVec3;
 use super::path::{CameraPath, DEFAULT_FOV_Y_DEG, Interpolation, KeyframeFile, NEAR_RANGE, PathError, PathFile};
 use super::walk::{self, Through, Walk};
 use crate::bounds::Aabb;
-use crate::raycast::{Budget, RayCaster, Stopped};
+use crate::raycast::{Budget, Hit, RayCaster, Stopped};
 use crate::scene::cameras::{CameraPose, FileAnimation, SAMPLES_PER_SECOND};
 use crate::scene::{Focus, LeftOut, Scene};
 
@@ -337,8 +337,8 @@ fn interrupted(_: Stopped) -> PathError {
 
 /// The default kind for `scene`, why, and the walk planned to decide it
 /// over `focus`. A part the focus left out that encloses the rest and that
-/// the rest stands on is its room's shell, not a sky, and `focus` takes it
-/// back.
+/// the rest stands on may be its room's shell, not a sky: `focus` takes it
+/// back where the walk inside it goes through rooms.
 fn default_kind(
     scene: &Scene,
     caster: &RayCaster,
@@ -357,14 +357,25 @@ fn default_kind(
     let circle = "circled from outside";
     let sight = Sight::from_orbit(scene, caster)?;
     let mut enclosed = sight.enclosure(scene);
+    let mut planned = walk::plan(scene, &focus.bounds, caster)?;
     if let Some(shell) = sight.encloser()
         && focus.left_out.contains(&LeftOut::Part(shell))
-        && stands_on(scene, caster, focus, shell)?
+        && rest_stands_on(scene, caster, focus, shell)?
     {
-        *focus = focus.keeping(scene, shell);
-        enclosed = enclosed.map(|why| format!("{why}, which stand on it"));
+        let room = focus.taking_back(scene, shell);
+        // Walked inside, it must be a room in a person's unit, the one the
+        // rest was read in where that was known: a town standing on a
+        // sky box's floor is in metres, and inside the box reads as rooms
+        // in centimetres.
+        let read_in = planned.as_ref().and_then(|walk| walk.unit);
+        let inside = walk::plan(scene, &room.bounds, caster)?
+            .filter(|walk| walk.rooms.is_some() && read_in.is_none_or(|unit| walk.unit == Some(unit)));
+        if inside.is_some() {
+            (*focus, planned) = (room, inside);
+            enclosed = enclosed.map(|why| format!("{why}, which stand on it"));
+        }
     }
-    let Some(planned) = walk::plan(scene, &focus.bounds, caster)? else {
+    let Some(planned) = planned else {
         let why = enclosed.map_or("a model".to_string(), |e| format!("{e}, but"));
         return Ok((PathKind::Orbit, format!("{why} with no ground to walk: {circle}"), None));
     };
@@ -533,23 +544,25 @@ impl Sight {
     }
 }
 
-/// How far below an object's box a surface may lie for the object to
-/// stand on it, as a share of the focus's height.
+/// How far from an object's box's bottom a surface may lie for the object
+/// to stand on it, as a share of the focus's height.
 const STANDING_GAP: f64 = 0.01;
 
-/// Whether most of the objects in `focus` that stand on something (a
-/// surface of another part within [`STANDING_GAP`] below their box's
-/// lowest middle) stand on `part`: the floor of a room whose shell is one
-/// part with its walls and ceiling, where a town stands on its ground, not
-/// on the sky box around it. Up to 64 objects are tried, spread over the
-/// scene's order, as [`Sight`] aims at them.
-fn stands_on(scene: &Scene, caster: &RayCaster, focus: &Focus, part: u32) -> Result<bool, Stopped> {
+/// Whether most of the objects in `focus` that stand on something (the
+/// nearest surface of another part within [`STANDING_GAP`] above or below
+/// the middle of their box's bottom; a tie goes to a part other than
+/// `part`) stand on `part`: the floor of a room whose shell is one part
+/// with its walls and ceiling, where a town stands on its ground, not on
+/// the sky box around it. Up to 64 objects are tried, spread over the
+/// scene's order.
+fn rest_stands_on(scene: &Scene, caster: &RayCaster, focus: &Focus, part: u32) -> Result<bool, Stopped> {
     let up = scene.up.axis.vector();
     let (low, high) = focus.bounds.span_along(up);
     let gap = STANDING_GAP * (high - low);
     let in_focus: Vec<usize> = (0..scene.objects.len())
         .filter(|&o| !focus.left_out.contains(&LeftOut::Part(scene.objects[o].part)))
         .collect();
+    let part_of = |hit: &Hit| scene.objects[hit.object as usize].part;
     let (mut standing, mut on_part) = (0, 0);
     let mut hits = Vec::new();
     for &o in in_focus.iter().step_by(in_focus.len().div_ceil(64).max(1)) {
@@ -558,17 +571,19 @@ fn stands_on(scene: &Scene, caster: &RayCaster, focus: &Focus, part: u32) -> Res
         let (bottom, _) = b.span_along(up);
         let middle = b.center() + up * (bottom + gap - b.center().dot(up));
         caster.all_hits(middle, -up, 2.0 * gap, &mut hits);
-        if let Some(hit) = hits
-            .iter()
-            .find(|hit| scene.objects[hit.object as usize].part != object.part)
-        {
+        let mut under = hits.iter().filter(|hit| part_of(hit) != object.part).peekable();
+        if let Some(&&nearest) = under.peek() {
             standing += 1;
-            on_part += usize::from(scene.objects[hit.object as usize].part == part);
+            let tied = |hit: &&Hit| hit.t <= nearest.t + TIED * gap;
+            on_part += usize::from(under.take_while(tied).all(|hit| part_of(hit) == part));
         }
     }
     caster.searching()?;
-    Ok(on_part > 0 && 2 * on_part > standing)
+    Ok(2 * on_part > standing)
 }
+
+/// Surfaces this share of [`STANDING_GAP`] apart are equally near.
+const TIED: f64 = 1e-6;
 
 /// [`generate`], with `walk` planning the walk a scene without streets
 /// gets; for such a walk also what it rests on. A planning that spent its
@@ -591,9 +606,10 @@ fn generate_with(
             _ => match walk() {
                 Ok(Some(w)) => {
                     let length = w.length();
-                    let unit = w.unit.map_or(String::new(), |found| {
-                        format!(", in {} for rooms {:.2} m high", found.unit, found.headroom)
-                    });
+                    let unit = match (w.unit_from_rooms, w.unit, w.rooms) {
+                        (true, Some(unit), Some(headroom)) => format!(", in {unit} for rooms {headroom:.2} m high"),
+                        _ => String::new(),
+                    };
                     note = Some(format!(
                         "a walk along the longest route through {}, {length:.1} units at eye height {:.3}{unit} (cells of {:.3}, {:.0}% of them joined to it)",
                         w.through,

@@ -87,18 +87,15 @@ pub struct Walk {
     /// of the roofed ones joined; judged only where the roofed share is at
     /// least half, 0 otherwise.
     pub indoors: f64,
-    /// Where the walk's unit was found from its rooms' headroom, not the
-    /// model's width ([`plan`]).
-    pub unit: Option<RoomUnit>,
-}
-
-/// A walk's unit, found from the headroom of the rooms it goes through.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RoomUnit {
-    /// "metres", "centimetres" or "millimetres".
-    pub unit: &'static str,
-    /// The median headroom over the route's floors, in metres.
-    pub headroom: f64,
+    /// The unit its sizes are a person's in ("metres", "centimetres" or
+    /// "millimetres"); `None` where they are a share of the model's height.
+    pub unit: Option<&'static str>,
+    /// Where the route goes through an interior whose median headroom is a
+    /// room's in `unit` ([`ROOM_HEIGHTS`]): that headroom, in metres.
+    pub rooms: Option<f64>,
+    /// Whether `unit` was found from `rooms`, not from the model's width
+    /// ([`plan`]).
+    pub unit_from_rooms: bool,
 }
 
 impl Walk {
@@ -230,20 +227,13 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         return Ok(None);
     };
     let first = plan_on(scene, bounds, &grid, caster)?;
-    let through_rooms = |planned: &Option<(Walk, f64)>, per_metre: f64| {
-        planned.as_ref().and_then(|(walk, headroom)| {
-            let headroom = headroom / per_metre;
-            (walk.through == Through::Interior && ROOM_HEIGHTS.contains(&headroom)).then_some(headroom)
-        })
-    };
-    if grid
-        .scale
-        .per_metre
-        .is_some_and(|per_metre| through_rooms(&first, per_metre).is_some())
+    if first
+        .as_ref()
+        .is_some_and(|walk| walk.unit.is_some() && walk.rooms.is_some())
     {
-        return Ok(first.map(|(walk, _)| walk));
+        return Ok(first);
     }
-    for (per_metre, unit) in UNITS {
+    for (per_metre, _) in UNITS {
         let tried = grid.scale.per_metre == Some(per_metre);
         // A format in metres is read in metres only: a sky box 300 m high
         // over a town reads as a room 3 m high in centimetres too.
@@ -255,19 +245,19 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
             Err(Stopped::Spent) => break,
             planned => planned?,
         };
-        if let Some(headroom) = through_rooms(&planned, per_metre) {
-            return Ok(planned.map(|(walk, _)| Walk {
-                unit: Some(RoomUnit { unit, headroom }),
+        if let Some(walk) = planned.filter(|walk| walk.rooms.is_some()) {
+            return Ok(Some(Walk {
+                unit_from_rooms: true,
                 ..walk
             }));
         }
     }
-    Ok(first.map(|(walk, _)| walk))
+    Ok(first)
 }
 
-/// The walk over `grid`, and the median headroom over its route's floors
-/// (+∞ where at least half have nothing above them).
-fn plan_on(scene: &Scene, bounds: &Aabb, grid: &Grid, caster: &RayCaster) -> Result<Option<(Walk, f64)>, Stopped> {
+/// The walk over `grid`, with the median headroom over its route's floors
+/// where that is a room's in a person's unit.
+fn plan_on(scene: &Scene, bounds: &Aabb, grid: &Grid, caster: &RayCaster) -> Result<Option<Walk>, Stopped> {
     let (floors, first) = find_floors(scene, bounds, grid, caster)?;
     let ground = Ground::link(*grid, floors, &first, caster)?;
     let streets = ground.street_route()?;
@@ -289,10 +279,19 @@ fn plan_on(scene: &Scene, bounds: &Aabb, grid: &Grid, caster: &RayCaster) -> Res
         .filter(|&&p| caster.first_hit(p, grid.up, f64::INFINITY).is_none())
         .count();
     caster.searching()?;
+    // The median headroom (+∞ where at least half the floors have nothing
+    // above them), in metres where the sizes are a person's.
     let mut headrooms: Vec<f64> = route.iter().map(|&f| ground.floors[f].headroom).collect();
     let middle = headrooms.len() / 2;
     let (_, &mut headroom, _) = headrooms.select_nth_unstable_by(middle, f64::total_cmp);
-    let walk = Walk {
+    let unit = grid
+        .scale
+        .per_metre
+        .and_then(|per_metre| UNITS.iter().find(|(k, _)| *k == per_metre));
+    let rooms = unit
+        .map(|(per_metre, _)| headroom / per_metre)
+        .filter(|headroom| through == Through::Interior && ROOM_HEIGHTS.contains(headroom));
+    Ok(Some(Walk {
         line: turns(&points),
         eye_height: grid.scale.eye,
         cell: grid.cell,
@@ -301,9 +300,10 @@ fn plan_on(scene: &Scene, bounds: &Aabb, grid: &Grid, caster: &RayCaster) -> Res
         through,
         roofed: interior.roofed,
         indoors: interior.indoors,
-        unit: None,
-    };
-    Ok(Some((walk, headroom)))
+        unit: unit.map(|(_, name)| *name),
+        rooms,
+        unit_from_rooms: false,
+    }))
 }
 
 /// How many cells `floors` lie in (storeys share cells).

@@ -178,7 +178,7 @@ impl Focus {
 
     /// The focus with `part`, which it left out whole, taken back (a
     /// room's shell that the rest stands in: camera/generate.rs).
-    pub fn keeping(&self, scene: &Scene, part: u32) -> Focus {
+    pub fn taking_back(&self, scene: &Scene, part: u32) -> Focus {
         Focus {
             bounds: (scene.objects.iter())
                 .filter(|o| o.part == part)
