@@ -129,36 +129,37 @@ const EYE_FRACTION: f64 = 0.05;
 /// [`ROOM_OVER_EYE`] and two eye heights.
 fn scale_of(width: f64, height: f64) -> Scale {
     if width >= METRE_SCALE_WIDTH && height > METRES_EYE_HEIGHT {
-        Scale::person(1.0)
+        Scale::person(UNITS[0])
     } else {
         let eye = (EYE_FRACTION * height).max(FLAT_EYE_FRACTION * width);
         Scale {
             eye,
             room: eye * ROOM_OVER_EYE,
             below_top: 2.0 * eye,
-            per_metre: None,
+            unit: None,
         }
     }
 }
 
-/// A walk's sizes, in the model's units ([`scale_of`]), and how many of
-/// them make a metre where they are a person's sizes.
+/// A walk's sizes, in the model's units ([`scale_of`]), and the unit (of
+/// [`UNITS`]) where they are a person's sizes.
 #[derive(Clone, Copy)]
 struct Scale {
     eye: f64,
     room: f64,
     below_top: f64,
-    per_metre: Option<f64>,
+    unit: Option<Unit>,
 }
 
 impl Scale {
-    /// A person's sizes, in a unit `per_metre` of which make a metre.
-    fn person(per_metre: f64) -> Scale {
+    /// A person's sizes, in `unit`.
+    fn person(unit: Unit) -> Scale {
+        let (per_metre, _) = unit;
         Scale {
             eye: METRES_EYE_HEIGHT * per_metre,
             room: METRES_ROOM * per_metre,
             below_top: METRES_ROOM * per_metre,
-            per_metre: Some(per_metre),
+            unit: Some(unit),
         }
     }
 }
@@ -169,7 +170,10 @@ impl Scale {
 /// feet a room 8 to 10 high is taken for a room in metres (walked higher
 /// than a share of its height, still below a person's eye); inches are
 /// not recognised (rooms 96 to 120 high are too low for centimetres).
-const UNITS: [(f64, &str); 3] = [(1.0, "metres"), (100.0, "centimetres"), (1000.0, "millimetres")];
+const UNITS: [Unit; 3] = [(1.0, "metres"), (100.0, "centimetres"), (1000.0, "millimetres")];
+
+/// A unit: how many of it make a metre, and its name.
+type Unit = (f64, &'static str);
 
 /// The headroom over an interior's floors that is a room's, in metres:
 /// from the room the eye needs under a door ([`METRES_ROOM`]) to a hall's,
@@ -206,7 +210,7 @@ struct Floor {
     /// How far above it that surface lies (+∞ where none does): its
     /// headroom.
     headroom: f64,
-    /// In metres: open to the sky over another floor of its cell.
+    /// At a person's sizes: open to the sky over another floor of its cell.
     over_floor: bool,
 }
 
@@ -233,15 +237,16 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
     {
         return Ok(first);
     }
-    for (per_metre, _) in UNITS {
-        let tried = grid.scale.per_metre == Some(per_metre);
+    for unit in UNITS {
+        let (per_metre, _) = unit;
+        let tried = grid.scale.unit == Some(unit);
         // A format in metres is read in metres only: a sky box 300 m high
         // over a town reads as a room 3 m high in centimetres too.
-        let ruled_out = scene.in_metres && per_metre != 1.0;
+        let ruled_out = scene.in_metres && unit != UNITS[0];
         if tried || ruled_out || grid.high - grid.low < METRES_ROOM * per_metre {
             continue;
         }
-        let planned = match plan_on(scene, bounds, &grid.at_scale(Scale::person(per_metre)), caster) {
+        let planned = match plan_on(scene, bounds, &grid.at_scale(Scale::person(unit)), caster) {
             Err(Stopped::Spent) => break,
             planned => planned?,
         };
@@ -284,10 +289,7 @@ fn plan_on(scene: &Scene, bounds: &Aabb, grid: &Grid, caster: &RayCaster) -> Res
     let mut headrooms: Vec<f64> = route.iter().map(|&f| ground.floors[f].headroom).collect();
     let middle = headrooms.len() / 2;
     let (_, &mut headroom, _) = headrooms.select_nth_unstable_by(middle, f64::total_cmp);
-    let unit = grid
-        .scale
-        .per_metre
-        .and_then(|per_metre| UNITS.iter().find(|(k, _)| *k == per_metre));
+    let unit = grid.scale.unit;
     let rooms = unit
         .map(|(per_metre, _)| headroom / per_metre)
         .filter(|headroom| through == Through::Interior && ROOM_HEIGHTS.contains(headroom));
@@ -300,7 +302,7 @@ fn plan_on(scene: &Scene, bounds: &Aabb, grid: &Grid, caster: &RayCaster) -> Res
         through,
         roofed: interior.roofed,
         indoors: interior.indoors,
-        unit: unit.map(|(_, name)| *name),
+        unit: unit.map(|(_, name)| name),
         rooms,
         unit_from_rooms: false,
     }))
@@ -406,10 +408,7 @@ fn find_floors(
         up,
         cell,
         scale: Scale {
-            room,
-            below_top,
-            per_metre,
-            ..
+            room, below_top, unit, ..
         },
         low,
         high,
@@ -458,7 +457,7 @@ fn find_floors(
         // may be a roof ([`roofs`]). (In other units the floor under it may be the
         // hollow of an open mesh's slab: a pavement tile's.)
         let start = first[k];
-        if per_metre.is_some() && floors.len() - start >= 2 && !floors[start].roofed {
+        if unit.is_some() && floors.len() - start >= 2 && !floors[start].roofed {
             floors[start].over_floor = true;
         }
     }
