@@ -496,6 +496,51 @@ fn a_room_whose_shell_is_one_object_round_its_gathered_chairs_is_walked_inside_i
     assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
 }
 
+/// A chair of legs, a seat 0.45–0.5 m up and a back, its corner at `x`,
+/// `z`, one object named `name`.
+fn chair(name: &str, x: f64, z: f64) -> Boxes {
+    let legs = [(0.0, 0.0), (0.4, 0.0), (0.0, 0.4), (0.4, 0.4)];
+    let mut boxes: Boxes = legs
+        .iter()
+        .map(|&(a, b)| part(name, [x + a, 0.0, z + b], [x + a + 0.05, 0.45, z + b + 0.05]))
+        .collect();
+    boxes.push(part(name, [x, 0.45, z], [x + 0.45, 0.5, z + 0.45]));
+    boxes.push(part(name, [x, 0.5, z + 0.4], [x + 0.45, 0.9, z + 0.45]));
+    boxes
+}
+
+#[test]
+fn a_hall_in_metres_is_walked_on_its_floor_not_over_its_chairs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, d, h, t) = (20.0, 15.0, 10.0, 0.2);
+    let mut boxes = vec![
+        part("floor", [-t, -t, -t], [w + t, 0.0, d + t]),
+        part("roof", [-t, h, -t], [w + t, h + t, d + t]),
+        part("wall_west", [-t, 0.0, -t], [0.0, h, d + t]),
+        part("wall_east", [w, 0.0, -t], [w + t, h, d + t]),
+        part("wall_north", [0.0, 0.0, d], [w, h, d + t]),
+        part("wall_south_a", [0.0, 0.0, -t], [w / 2.0 - 1.0, h, 0.0]),
+        part("wall_south_b", [w / 2.0 + 1.0, 0.0, -t], [w, h, 0.0]),
+        part("lintel", [w / 2.0 - 1.0, 3.0, -t], [w / 2.0 + 1.0, h, 0.0]),
+    ];
+    for k in 0..12 {
+        let (i, j) = (f64::from(k % 4), f64::from(k / 4));
+        boxes.extend(chair(&format!("chair_{k}"), 0.6 + i * 6.1, 0.6 + j * 6.7));
+    }
+    let scene = load_obj(dir.path(), grouped_obj(&boxes));
+    let (generated, _) = default_of(&scene, 120);
+    let why = &generated.why;
+    assert!(why.contains("through the interior"), "{why}");
+    for (k, key) in generated.file.keyframes.iter().enumerate() {
+        let y = key.position[1];
+        assert!(
+            (y - 1.7).abs() < 1e-6,
+            "key {k} at {:?}: the eye {y} over the floor ({why})",
+            key.position
+        );
+    }
+}
+
 #[test]
 fn a_town_in_a_sky_box_is_framed_without_the_sky_even_where_it_stands_on_its_floor() {
     for on_its_floor in [false, true] {

@@ -14,9 +14,10 @@
 //! a solid), or the floor is the model's top (nothing rises the room above
 //! it: 1.95 m at a person's sizes, two eye heights where the unit is not
 //! known; a tower's roof). Floors of neighbouring cells within a step (half
-//! the eye height) of each other are linked, so the ground may slope, climb
-//! stairs and lie at several levels (an island and the sea, storeys). A
-//! floor linked on all four sides, with a clear ray at eye height to each,
+//! the eye height; at a person's sizes at most [`PERSON_STEP`] and a slope
+//! of one across a cell) of each other are linked, so the ground may slope,
+//! climb stairs and lie at several levels (an island and the sea, storeys).
+//! A floor linked on all four sides, with a clear ray at eye height to each,
 //! is open (the eye stays a cell from every wall, however thin), unless it
 //! is a roof (at a person's sizes, a linked region of floors open to the
 //! sky, most of them over another floor, or nine tenths for the largest such
@@ -184,6 +185,11 @@ type Unit = (f64, &'static str);
 /// height (a knee's), and a flat in centimetres, taken for metres by its
 /// width, at 1.7 cm.
 const ROOM_HEIGHTS: std::ops::RangeInclusive<f64> = METRES_ROOM..=19.0;
+
+/// The most a person steps up between neighbouring cells, in metres,
+/// besides a slope of one across a cell: a stair's riser or a kerb, not a
+/// chair's seat (0.45 m) or a bed (0.5 m). At most half the eye height.
+const PERSON_STEP: f64 = 0.3;
 
 /// The eye height over a flat model's width.
 const FLAT_EYE_FRACTION: f64 = 0.01;
@@ -503,7 +509,10 @@ impl<'c, 'a> Ground<'c, 'a> {
         caster: &'c RayCaster<'a>,
     ) -> Result<Ground<'c, 'a>, Stopped> {
         let (nx, ny) = (grid.nx, grid.ny);
-        let step = 0.5 * grid.scale.eye;
+        let step = match grid.scale.unit {
+            Some((per_metre, _)) => (0.5 * grid.scale.eye).min(PERSON_STEP * per_metre + grid.cell),
+            None => 0.5 * grid.scale.eye,
+        };
         let links: Vec<[Option<usize>; 4]> = floors
             .iter()
             .map(|f| {
