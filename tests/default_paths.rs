@@ -448,34 +448,49 @@ fn grouped_obj(boxes: &[(String, DVec3, DVec3)]) -> String {
         .collect()
 }
 
-/// A room 8 × 6 m and 3 m high whose shell (floor, ceiling, and walls with
-/// a door) is one object, with twelve chairs gathered in its middle, each
-/// an object: the shell is huge and nearly empty beside them.
-fn room_round_its_chairs() -> Boxes {
-    let (w, d, h, t) = (8.0, 6.0, 3.0, 0.2);
-    let mut boxes = vec![
-        part("shell", [-t, -t, -t], [w + t, 0.0, d + t]),
-        part("shell", [-t, h, -t], [w + t, h + t, d + t]),
-        part("shell", [-t, 0.0, -t], [0.0, h, d + t]),
-        part("shell", [w, 0.0, -t], [w + t, h, d + t]),
-        part("shell", [0.0, 0.0, d], [w, h, d + t]),
-        part("shell", [0.0, 0.0, -t], [w / 2.0 - 0.5, h, 0.0]),
-        part("shell", [w / 2.0 + 0.5, 0.0, -t], [w, h, 0.0]),
-        part("shell", [w / 2.0 - 0.5, 2.1, -t], [w / 2.0 + 0.5, h, 0.0]),
+/// The shell of a room `w` × `d` and `h` high in metres, its walls and
+/// slabs 0.2 thick: floor, ceiling, and walls with a door `door` wide
+/// under a lintel at `lintel`, each piece an object, or all one object
+/// named "shell".
+fn room_shell(w: f64, d: f64, h: f64, [door, lintel]: [f64; 2], one_object: bool) -> Boxes {
+    let t = 0.2;
+    let pieces = [
+        ("floor", [-t, -t, -t], [w + t, 0.0, d + t]),
+        ("ceiling", [-t, h, -t], [w + t, h + t, d + t]),
+        ("wall_west", [-t, 0.0, -t], [0.0, h, d + t]),
+        ("wall_east", [w, 0.0, -t], [w + t, h, d + t]),
+        ("wall_north", [0.0, 0.0, d], [w, h, d + t]),
+        ("wall_south_a", [0.0, 0.0, -t], [(w - door) / 2.0, h, 0.0]),
+        ("wall_south_b", [(w + door) / 2.0, 0.0, -t], [w, h, 0.0]),
+        ("lintel", [(w - door) / 2.0, lintel, -t], [(w + door) / 2.0, h, 0.0]),
     ];
+    pieces
+        .into_iter()
+        .map(|(name, min, max)| part(if one_object { "shell" } else { name }, min, max))
+        .collect()
+}
+
+/// A chair of legs, a seat 0.45–0.5 m up and a back, its corner at `x`,
+/// `z`, one object named `name`.
+fn chair(name: &str, x: f64, z: f64) -> Boxes {
+    let legs = [(0.0, 0.0), (0.4, 0.0), (0.0, 0.4), (0.4, 0.4)];
+    let mut boxes: Boxes = legs
+        .iter()
+        .map(|&(a, b)| part(name, [x + a, 0.0, z + b], [x + a + 0.05, 0.45, z + b + 0.05]))
+        .collect();
+    boxes.push(part(name, [x, 0.45, z], [x + 0.45, 0.5, z + 0.45]));
+    boxes.push(part(name, [x, 0.5, z + 0.4], [x + 0.45, 0.9, z + 0.45]));
+    boxes
+}
+
+/// A room 8 × 6 m and 3 m high whose shell is one object, with twelve
+/// chairs gathered in its middle, each an object: the shell is huge and
+/// nearly empty beside them.
+fn room_round_its_chairs() -> Boxes {
+    let mut boxes = room_shell(8.0, 6.0, 3.0, [1.0, 2.1], true);
     for k in 0..12 {
         let (x, z) = (2.8 + 0.8 * f64::from(k % 4), 2.0 + 0.8 * f64::from(k / 4));
-        let chair = format!("chair_{k}");
-        for (a, b) in [
-            ([0.0, 0.0], [0.05, 0.05]),
-            ([0.4, 0.0], [0.45, 0.05]),
-            ([0.0, 0.4], [0.05, 0.45]),
-            ([0.4, 0.4], [0.45, 0.45]),
-        ] {
-            boxes.push(part(&chair, [x + a[0], 0.0, z + a[1]], [x + b[0], 0.45, z + b[1]]));
-        }
-        boxes.push(part(&chair, [x, 0.45, z], [x + 0.45, 0.5, z + 0.45]));
-        boxes.push(part(&chair, [x, 0.5, z + 0.4], [x + 0.45, 0.9, z + 0.45]));
+        boxes.extend(chair(&format!("chair_{k}"), x, z));
     }
     boxes
 }
@@ -496,33 +511,10 @@ fn a_room_whose_shell_is_one_object_round_its_gathered_chairs_is_walked_inside_i
     assert_eq!(frames_too_near(&path, &world_triangles(&scene)), Vec::<u32>::new());
 }
 
-/// A chair of legs, a seat 0.45–0.5 m up and a back, its corner at `x`,
-/// `z`, one object named `name`.
-fn chair(name: &str, x: f64, z: f64) -> Boxes {
-    let legs = [(0.0, 0.0), (0.4, 0.0), (0.0, 0.4), (0.4, 0.4)];
-    let mut boxes: Boxes = legs
-        .iter()
-        .map(|&(a, b)| part(name, [x + a, 0.0, z + b], [x + a + 0.05, 0.45, z + b + 0.05]))
-        .collect();
-    boxes.push(part(name, [x, 0.45, z], [x + 0.45, 0.5, z + 0.45]));
-    boxes.push(part(name, [x, 0.5, z + 0.4], [x + 0.45, 0.9, z + 0.45]));
-    boxes
-}
-
 #[test]
 fn a_hall_in_metres_is_walked_on_its_floor_not_over_its_chairs() {
     let dir = tempfile::tempdir().unwrap();
-    let (w, d, h, t) = (20.0, 15.0, 10.0, 0.2);
-    let mut boxes = vec![
-        part("floor", [-t, -t, -t], [w + t, 0.0, d + t]),
-        part("roof", [-t, h, -t], [w + t, h + t, d + t]),
-        part("wall_west", [-t, 0.0, -t], [0.0, h, d + t]),
-        part("wall_east", [w, 0.0, -t], [w + t, h, d + t]),
-        part("wall_north", [0.0, 0.0, d], [w, h, d + t]),
-        part("wall_south_a", [0.0, 0.0, -t], [w / 2.0 - 1.0, h, 0.0]),
-        part("wall_south_b", [w / 2.0 + 1.0, 0.0, -t], [w, h, 0.0]),
-        part("lintel", [w / 2.0 - 1.0, 3.0, -t], [w / 2.0 + 1.0, h, 0.0]),
-    ];
+    let mut boxes = room_shell(20.0, 15.0, 10.0, [2.0, 3.0], false);
     for k in 0..12 {
         let (i, j) = (f64::from(k % 4), f64::from(k / 4));
         boxes.extend(chair(&format!("chair_{k}"), 0.6 + i * 6.1, 0.6 + j * 6.7));
