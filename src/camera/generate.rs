@@ -358,7 +358,7 @@ fn default_kind(
     let sight = Sight::from_orbit(scene, caster)?;
     let mut enclosed = sight.enclosure(scene);
     let mut planned = walk::plan(scene, &focus.bounds, caster)?;
-    if let Some(shell) = sight.encloser()
+    if let Some((shell, _)) = sight.encloser()
         && focus.left_out.contains(&LeftOut::Part(shell))
         && rest_stands_on(scene, caster, focus, shell)?
     {
@@ -510,17 +510,17 @@ impl Sight {
 
     /// The part circling the scene would show alone, if one would: it is
     /// the first thing met on the way to nearly every other object (a sky
-    /// dome or a closed shell around the rest).
-    fn encloser(&self) -> Option<u32> {
+    /// dome or a closed shell around the rest), and the lines of sight it
+    /// hides.
+    fn encloser(&self) -> Option<(u32, usize)> {
         let (hider, n) = self.hider?;
-        (self.targets > 1 && 10 * n >= 9 * self.rays).then_some(hider)
+        (self.targets > 1 && 10 * n >= 9 * self.rays).then_some((hider, n))
     }
 
     /// Why circling `scene` would show one part only ([`Self::encloser`]),
     /// if it would.
     fn enclosure(&self, scene: &Scene) -> Option<String> {
-        let hider = self.encloser()?;
-        let n = self.hider.map_or(0, |(_, n)| n);
+        let (hider, n) = self.encloser()?;
         let name = &scene.parts[hider as usize].name;
         Some(format!(
             "from the orbit, '{name}' hides {n} of {} lines of sight to the other objects",

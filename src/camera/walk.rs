@@ -237,10 +237,7 @@ pub fn plan(scene: &Scene, bounds: &Aabb, caster: &RayCaster) -> Result<Option<W
         return Ok(None);
     };
     let first = plan_on(scene, bounds, &grid, caster)?;
-    if first
-        .as_ref()
-        .is_some_and(|walk| walk.unit.is_some() && walk.rooms.is_some())
-    {
+    if first.as_ref().is_some_and(|walk| walk.rooms.is_some()) {
         return Ok(first);
     }
     for unit in UNITS {
