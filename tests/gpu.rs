@@ -12,6 +12,8 @@ use occlu::cull::{Culler, FrameInput, ModeParams, TraversalStats, create};
 use occlu::gpu::{BackendChoice, Frame, GpuContext, GpuError, Resolution};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::object_set::ObjectSet;
+use occlu::session::{RunOptions, Session};
+use occlu::world::World;
 
 /// Draws nothing: every visible pixel is an error.
 struct DrawNothing;
@@ -81,6 +83,59 @@ fn missing_quad_costs_exactly_its_rasterised_pixels() {
         assert_eq!(nothing.visible_objects, Some(1));
         assert_eq!(dr.error_pixels, Some(0), "{}", gpu.adapter);
         assert_eq!((dr.objects_drawn, dr.triangles_drawn), (1, 12));
+    }
+}
+
+#[test]
+fn every_mode_draws_nearest_first_so_where_two_objects_tie_in_depth_the_nearer_one_shows() {
+    // Two thin boxes whose fronts lie in one plane 10 units ahead (90° fov
+    // at 100 × 100: a unit is 5 pixels), overlapping over x in [-1, 1]. At
+    // equal depth the strict depth test keeps what was drawn first, so the
+    // overlap shows which went first. The small box's centre (10.0 from
+    // the eye) is nearer than the wide one's (10.8), whichever the scene
+    // lists first, and whichever order a mode hands them over in.
+    let (w, h) = (100u32, 100u32);
+    let small = (DVec3::new(-2.0, -1.0, -10.0), DVec3::new(1.0, 1.0, -9.999));
+    let wide = (DVec3::new(-1.0, -1.0, -10.0), DVec3::new(9.0, 1.0, -9.999));
+    let path = still(DVec3::ZERO, DVec3::NEG_Z, 90.0);
+    let options = RunOptions {
+        warmup: 0,
+        resolution: Resolution { width: w, height: h },
+        measure_error: false,
+    };
+    let camera = path.camera(0, options.resolution.aspect());
+    // Row 50's pixels at x = -1.5 (the small box alone), 0 (both) and 5
+    // (the wide box alone).
+    let rgb = |image: &[u8], x: f64| {
+        let i = (50 * w as usize + (50.0 + 5.0 * x) as usize) * 3;
+        [image[i], image[i + 1], image[i + 2]].map(f64::from)
+    };
+    let apart = |a: [f64; 3], b: [f64; 3]| (0..3).map(|c| (a[c] - b[c]).abs()).sum::<f64>();
+    for gpu in common::gpus() {
+        for list in [[wide, small], [small, wide]] {
+            let scene = boxes(&list);
+            let mut world = World::new(scene.clone(), common::hierarchy(&scene));
+            let mut cullers: Vec<Box<dyn Culler>> = ["dr", "vfc", "oracle"]
+                .iter()
+                .map(|m| create(m, &scene, &ModeParams::default()).unwrap())
+                .collect();
+            let mut session = Session::new(&gpu, &world, &mut cullers, true, &options).unwrap();
+            session.keep_colours();
+            session.frame(0, &camera, &mut world, &mut cullers, 0).unwrap();
+            for (k, culler) in cullers.iter().enumerate() {
+                let image = session.colour(k).unwrap();
+                let (alone, both, other) = (rgb(&image, -1.5), rgb(&image, 0.0), rgb(&image, 5.0));
+                // The two boxes' colours differ far more than one box's
+                // shading does over a few pixels.
+                assert!(apart(alone, other) > 30.0, "{}: {alone:?} {other:?}", gpu.adapter);
+                assert!(
+                    apart(both, alone) < apart(both, other) / 4.0,
+                    "{} on {}: the overlap is {both:?}, the small box {alone:?}, the wide one {other:?}",
+                    culler.name(),
+                    gpu.adapter
+                );
+            }
+        }
     }
 }
 

@@ -219,8 +219,9 @@ pub struct FrameCtx<'a> {
     depth: &'a wgpu::TextureView,
     timer: Option<(&'a GpuTimer, usize)>,
     encoder: wgpu::CommandEncoder,
-    /// Objects drawn but not yet encoded: they are encoded as one pass before
-    /// the next query batch or at the end of the frame.
+    /// Objects drawn but not yet encoded: they are encoded as one pass,
+    /// nearest first, before the next query batch or at the end of the
+    /// frame.
     queued: &'a mut Vec<u32>,
     counters: FrameCounters,
     drawn: &'a mut ObjectSet,
@@ -325,6 +326,7 @@ impl<'a> FrameCtx<'a> {
 
     fn encode_queued_draws(&mut self) {
         if !self.queued.is_empty() {
+            self.renderer.order_nearest_first(self.queued);
             self.renderer.encode_shaded(
                 &mut self.encoder,
                 self.targets,

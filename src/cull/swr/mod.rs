@@ -7,7 +7,7 @@
 //! objects as occluders, rasterises them conservatively into the buffer's
 //! masked cells (mesh.rs, buffer.rs), builds a pyramid of its farthest
 //! depths, walks the hierarchy node by node testing each box in the
-//! frustum against it, and draws what is visible, occluders first; a
+//! frustum against it, and draws what is visible; a
 //! frame whose buffer rests is `vfc`'s own.
 //!
 //! Departures from MOC: its coverage is the pixels whose centres its own
@@ -243,12 +243,7 @@ pub struct SoftwareOcclusionCulling {
     /// This frame's occluders, each some of `candidates`.
     units: Vec<OccluderUnit>,
     occluders: Vec<u32>,
-    /// Per object of the scene (sized in the first frame), whether it is
-    /// one of this frame's occluders, and whether it was found visible.
-    is_occluder: Vec<bool>,
-    is_found: Vec<bool>,
     found: Vec<u32>,
-    to_draw: Vec<u32>,
     /// Step 4's threads' scratch.
     walkers: Walkers,
     /// Frustum culling's, while the buffer rests.
@@ -276,10 +271,7 @@ impl SoftwareOcclusionCulling {
             candidates: Vec::new(),
             units: Vec::new(),
             occluders: Vec::new(),
-            is_occluder: Vec::new(),
-            is_found: Vec::new(),
             found: Vec::new(),
-            to_draw: Vec::new(),
             walkers: Walkers::default(),
             stack: Vec::new(),
         }
@@ -699,9 +691,8 @@ impl Culler for SoftwareOcclusionCulling {
     ///    reference at the rest, each part over its own rectangle. A hidden
     ///    node stops its subtree; a box reaching the near plane is visible.
     ///    A leaf's objects are tested one by one.
-    /// 5. **Draw** the visible objects, the occluders among them first (in
-    ///    their order, nearest first, for the GPU's early depth test); they are
-    ///    next frame's occluder candidates. An occluder found hidden is not
+    /// 5. **Draw** the visible objects (nearest first, as every mode's
+    ///    drawing is ordered); they are next frame's occluder candidates. An occluder found hidden is not
     ///    drawn, and what the buffer vouches for is still drawn: where a
     ///    layer vouches for a depth at a pixel centre, an occluder merged
     ///    into it draws that centre at least that near. If that occluder is
@@ -721,8 +712,6 @@ impl Culler for SoftwareOcclusionCulling {
         }
         let frustum = camera.frustum();
 
-        self.is_occluder.resize(scene.objects.len(), false);
-        self.is_found.resize(scene.objects.len(), false);
         // 1. Occluders: last frame's visible objects still on screen,
         // largest first; none while the buffer rests (which keeps its
         // cells: a resting buffer holds nothing to choose them by).
@@ -738,7 +727,7 @@ impl Culler for SoftwareOcclusionCulling {
             self.buffer_holds = false;
         }
         // A resting buffer tests nothing: the frame is frustum culling's,
-        // its fully-inside shortcut and its order of drawing included, so
+        // its fully-inside shortcut included, so
         // that it costs what `vfc` costs. (Walked node by node, den-haag's
         // orbit took 0.4–0.5 ms of CPU and 0.3–1.1 ms more of GPU a frame
         // than `vfc`, whose frame there is 10–14 ms.)
@@ -784,7 +773,6 @@ impl Culler for SoftwareOcclusionCulling {
         for unit in &self.units {
             for c in &self.candidates[unit.candidates.clone()] {
                 self.occluders.push(c.object);
-                self.is_occluder[c.object as usize] = true;
             }
         }
 
@@ -851,23 +839,8 @@ impl Culler for SoftwareOcclusionCulling {
             self.rest.after(pays(hidden_triangles, spent_ms, input.previous), cost);
         }
 
-        // 5. The visible objects, occluders first; they are next frame's
-        // candidates.
-        for &o in &self.found {
-            self.is_found[o as usize] = true;
-        }
-        self.to_draw.clear();
-        self.to_draw
-            .extend(self.occluders.iter().filter(|&&o| self.is_found[o as usize]));
-        self.to_draw
-            .extend(self.found.iter().filter(|&&o| !self.is_occluder[o as usize]));
-        ctx.draw(&self.to_draw);
-        for &o in &self.occluders {
-            self.is_occluder[o as usize] = false;
-        }
-        for &o in &self.found {
-            self.is_found[o as usize] = false;
-        }
+        // 5. The visible objects; they are next frame's candidates.
+        ctx.draw(&self.found);
         std::mem::swap(&mut self.visible, &mut self.found);
         stats
     }
