@@ -115,7 +115,8 @@ impl<'a> Session<'a> {
     /// mode, in the [`balanced_order`] numbered `order`, and returns one row
     /// per mode in the order of `cullers`.
     ///
-    /// Untimed: the per-object matrix upload, the reference, GPU times and
+    /// Untimed: the per-object matrix upload (and each object's distance
+    /// from the eye, which orders the draws), the reference, GPU times and
     /// errors. Timed, per mode: from the start of its frame on the CPU until
     /// the GPU finished it, including the refit of the hierarchy around
     /// moved objects for modes that traverse it.

@@ -87,7 +87,7 @@ fn missing_quad_costs_exactly_its_rasterised_pixels() {
 }
 
 #[test]
-fn every_mode_draws_nearest_first_so_where_two_objects_tie_in_depth_the_nearer_one_shows() {
+fn a_modes_draws_go_nearest_first_so_where_two_objects_tie_in_depth_the_nearer_one_shows() {
     // Two thin boxes whose fronts lie in one plane 10 units ahead (90° fov
     // at 100 × 100: a unit is 5 pixels), overlapping over x in [-1, 1]. At
     // equal depth the strict depth test keeps what was drawn first, so the
@@ -106,8 +106,9 @@ fn every_mode_draws_nearest_first_so_where_two_objects_tie_in_depth_the_nearer_o
     let camera = path.camera(0, options.resolution.aspect());
     // Row 50's pixels at x = -1.5 (the small box alone), 0 (both) and 5
     // (the wide box alone).
+    let pixel = |x: f64| 50 * w as usize + (50.0 + 5.0 * x) as usize;
     let rgb = |image: &[u8], x: f64| {
-        let i = (50 * w as usize + (50.0 + 5.0 * x) as usize) * 3;
+        let i = pixel(x) * 3;
         [image[i], image[i + 1], image[i + 2]].map(f64::from)
     };
     let apart = |a: [f64; 3], b: [f64; 3]| (0..3).map(|c| (a[c] - b[c]).abs()).sum::<f64>();
@@ -123,6 +124,14 @@ fn every_mode_draws_nearest_first_so_where_two_objects_tie_in_depth_the_nearer_o
             session.keep_colours();
             session.frame(0, &camera, &mut world, &mut cullers, 0).unwrap();
             for (k, culler) in cullers.iter().enumerate() {
+                // The premise: both fronts draw one depth, bit for bit.
+                let depth = session.mode_depth(k).unwrap();
+                let [alone, both, other] = [-1.5, 0.0, 5.0].map(|x| depth[pixel(x)].to_bits());
+                assert!(
+                    alone == both && both == other && alone != 0,
+                    "{}: {alone} {both} {other}",
+                    gpu.adapter
+                );
                 let image = session.colour(k).unwrap();
                 let (alone, both, other) = (rgb(&image, -1.5), rgb(&image, 0.0), rgb(&image, 5.0));
                 // The two boxes' colours differ far more than one box's

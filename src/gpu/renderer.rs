@@ -325,7 +325,9 @@ impl SceneRenderer {
     /// 0.97–1.01.)
     pub fn order_nearest_first(&self, objects: &mut [u32]) {
         let distances = &self.scene.distances;
-        objects.sort_unstable_by_key(|&o| (distances[o as usize].to_bits(), o));
+        debug_assert_eq!(distances.len(), self.scene.draws.len(), "set_camera comes first");
+        // A distance is never negative, so its bits sort as it does.
+        objects.sort_unstable_by_key(|&o| (u64::from(distances[o as usize].to_bits()) << 32) | u64::from(o));
     }
 
     /// Records a shaded pass into `depth` drawing `draws`, clearing first

@@ -521,11 +521,6 @@ impl Chooser {
         });
     }
 
-    /// Whether occlusion culler `s` has been shown coarse ([`Record::coarse`]).
-    pub fn coarse(&self, s: usize) -> bool {
-        self.records[s].coarse
-    }
-
     /// Learns from a warm-up frame in which every strategy rendered the
     /// same view in turn, strategy `s` taking `log_ms[s]` (log of its
     /// milliseconds): the cheapest over the warm-up frames so far becomes

@@ -26,9 +26,9 @@
 //!   walks share one set of visible lists, so a walk takes over the visible
 //!   set the last one found, as if it had run all along; after a frame an
 //!   occlusion culler drew on the CPU, the lists take what it drew, after
-//!   the frame and untimed (not where the culler is coarse:
-//!   [`lists_take_drawn`]); after `vfc` (everything in the frustum), the
-//!   walks start from their own lists, even stale ones, but from
+//!   the frame and untimed (not where it holds more triangles than the
+//!   lists drew: [`lists_take_drawn`]); after `vfc` (everything in the
+//!   frustum), the walks start from their own lists, even stale ones, but from
 //!   everything in the frustum where the view has outgrown them (which
 //!   their test against its depth sorts out in one frame); a walk's first
 //!   frame from stale lists only settles it and is not measured. A culler
@@ -190,12 +190,14 @@ struct Ran {
 }
 
 /// The frame that last wrote the visible lists the GPU walks share (a
-/// walk's, or one whose drawn set they took: [`lists_take_drawn`]), and
-/// where it looked.
+/// walk's, or one whose drawn set they took: [`lists_take_drawn`]), where
+/// it looked, and the triangles of what it drew (not counted in warm-up,
+/// whose walks draw indirectly while the others draw on the CPU).
 #[derive(Clone, Copy, Debug)]
 struct Lists {
     frame: u64,
     view: View,
+    drew: Option<u64>,
 }
 
 /// How a GPU walk starts a frame in `view` (frame number `frame`), its
@@ -214,8 +216,9 @@ struct WalkStart {
     /// written in a frustum `view` outgrew. A walk that starts from
     /// everything in the frustum tests against its depth and knows what is
     /// visible after one frame; one that starts from another view's lists
-    /// needs two. (After a frame of a culler that draws on the CPU and is
-    /// not coarse, the lists took its drawn set already, untimed.)
+    /// needs two. (After a frame of a culler that draws on the CPU, the
+    /// lists took its drawn set already, untimed, where it held no more
+    /// triangles than they drew.)
     upload: bool,
     /// It starts from a visible set of this view ([`Ran::fresh`]).
     fresh: bool,
@@ -240,20 +243,26 @@ fn walk_start(written: Option<Lists>, frame: u64, view: &View, handed_by: Option
 
 /// Whether the walks' lists take the drawn set of a recorded frame that
 /// ran a culler `carrying` its visible set as it does, as family `ran_as`
-/// ([`Ran::family`]), `coarse` or not ([`Chooser::coarse`]), `fresh` or
-/// not ([`Ran::fresh`]), after the frame and untimed: where an occlusion
-/// culler that draws on the CPU drew it from a visible set of this view
-/// (not one that settled, drawing everything in the frustum it was
-/// handed), and is not coarse, the set is of this view, and a walk that starts
-/// from it in the next frame draws no more than it needs (on the
-/// two-cylinder engine's orbit, a walk started from its own lists of two
-/// frames before, after an `omq` probe, drew 2.3 % more triangles on
-/// average and up to 28 % more than where it had run the frame before
-/// itself). A walk writes them itself; `vfc`'s set is the whole frustum,
-/// and so is a coarse culler's (`chc`'s on a scan whose clusters its
-/// leaves join), which the lists of two frames before beat.
-fn lists_take_drawn(carrying: Carries, ran_as: Family, coarse: bool, fresh: bool) -> bool {
-    carrying != Carries::VisibleOnGpu && ran_as == Family::Occlusion && !coarse && fresh
+/// ([`Ran::family`]), `fresh` or not ([`Ran::fresh`]), which drew `drew`
+/// triangles, the lists last written by a frame that drew `lists_drew`;
+/// after the frame and untimed. Where an occlusion culler that draws on
+/// the CPU drew it from a visible set of this view (not one that settled,
+/// drawing everything in the frustum it was handed), the set is of this
+/// view, and a walk that starts from it in the next frame draws no more
+/// than it needs (on the two-cylinder engine's orbit, a walk started from
+/// its own lists of two frames before, after an `omq` probe, drew 2.3 %
+/// more triangles on average and up to 28 % more than where it had run
+/// the frame before itself); but only where it holds no more triangles
+/// than the lists drew, since a walk draws its lists before it tests
+/// anything: with cars driving through the city on llvmpipe, `swr`'s
+/// probes drew 24–54 % more than the walks, and the walk's frame after
+/// each, started from what they drew, drew 14 000 triangles more than its
+/// own run did at that frame, up to 1.6 times its time. A walk writes
+/// them itself; `vfc`'s set is the whole frustum, and so is a coarse
+/// culler's (`chc`'s on a scan whose clusters its leaves join), which the
+/// lists beat by their triangles.
+fn lists_take_drawn(carrying: Carries, ran_as: Family, fresh: bool, drew: u64, lists_drew: Option<u64>) -> bool {
+    carrying != Carries::VisibleOnGpu && ran_as == Family::Occlusion && fresh && lists_drew.is_none_or(|l| drew <= l)
 }
 
 /// How a culler that keeps its visible set on the CPU (`carries`, one of
@@ -468,12 +477,22 @@ impl AutoCulling {
         }
         let k = ran.turn.strategy;
         let carries = self.candidates[k].carries();
-        let coarse = self.chooser.as_ref().is_some_and(|c| c.coarse(k));
-        let take = self.lists.is_some() && lists_take_drawn(carries, ran.family, coarse, ran.fresh);
+        let objects = &input.scene.objects;
+        let drew = drawn.iter().map(|o| u64::from(objects[o as usize].triangles)).sum();
+        // Lists stale by the next frame are replaced whatever they drew:
+        // kept, a walk would upload the same set in its timed frame.
+        let stale_next = walk_start(self.lists_written, self.frames + 1, &ran.view, None).stale;
+        let lists_drew = self.lists_written.and_then(|l| l.drew).filter(|_| !stale_next);
+        let take = self.lists.is_some() && lists_take_drawn(carries, ran.family, ran.fresh, drew, lists_drew);
         if carries == Carries::VisibleOnGpu || take {
+            // A walk that started from everything in the frustum drew it
+            // all, far more than the visible lists it leaves: the bar stays
+            // what the lists drew before.
+            let fresh_walk = carries != Carries::VisibleOnGpu || ran.fresh;
             self.lists_written = Some(Lists {
                 frame: self.frames,
                 view: ran.view,
+                drew: if fresh_walk { Some(drew) } else { self.lists_written.and_then(|l| l.drew) },
             });
         }
         take
@@ -541,6 +560,7 @@ impl AutoCulling {
                 self.lists_written = Some(Lists {
                     frame: self.frames,
                     view,
+                    drew: None,
                 });
             } else if view.frustum_triangles > 0 {
                 chooser.calibrate_hidden(k, 1.0 - drawn as f64 / view.frustum_triangles as f64, &view);
@@ -866,7 +886,7 @@ mod tests {
     #[test]
     fn a_walk_s_lists_go_stale_with_time_or_where_the_view_outgrew_them_not_where_it_moved() {
         let streets = view(0.0, DVec3::NEG_Z, 10_000);
-        let start = |frame, view, handed_by| walk_start(Some(Lists { frame, view }), 10, &streets, handed_by);
+        let start = |frame, view, handed_by| walk_start(Some(Lists { frame, view, drew: None }), 10, &streets, handed_by);
         let walk = |stale, upload, fresh| WalkStart { stale, upload, fresh };
         // An orbit: written two frames ago, far away and turned 45°, over as
         // many triangles. The lists are kept after vfc, and what the walk
@@ -914,21 +934,25 @@ mod tests {
     }
 
     #[test]
-    fn the_walks_lists_take_what_a_cpu_culler_drew_unless_it_drew_the_whole_frustum_or_is_coarse() {
+    fn the_walks_lists_take_what_a_cpu_culler_drew_unless_it_drew_the_whole_frustum_or_more_than_they_did() {
         use Carries::*;
         use Family::*;
         // omq decides afresh, chc carries what it found visible, swr its
         // occluders: each drew a visible set of this view.
         for carrying in [Nothing, VisibleOnCpu, OccludersOnCpu] {
-            assert!(lists_take_drawn(carrying, Occlusion, false, true), "{carrying:?}");
-            // Not a coarse culler's, nor a frame drawn as vfc's (swr
+            assert!(lists_take_drawn(carrying, Occlusion, true, 900, Some(1_000)), "{carrying:?}");
+            assert!(lists_take_drawn(carrying, Occlusion, true, 1_000, Some(1_000)), "{carrying:?}");
+            // Lists whose triangles no frame counted (warm-up's).
+            assert!(lists_take_drawn(carrying, Occlusion, true, 1_000, None), "{carrying:?}");
+            // Not a set of more triangles than the lists drew (swr's,
+            // coarser than the walks'), nor a frame drawn as vfc's (swr
             // resting), nor vfc's own, nor a frame that settled (chc
             // drawing the whole frustum it was handed).
-            assert!(!lists_take_drawn(carrying, Occlusion, true, true), "{carrying:?}");
-            assert!(!lists_take_drawn(carrying, Frustum, false, true), "{carrying:?}");
-            assert!(!lists_take_drawn(carrying, Occlusion, false, false), "{carrying:?}");
+            assert!(!lists_take_drawn(carrying, Occlusion, true, 1_001, Some(1_000)), "{carrying:?}");
+            assert!(!lists_take_drawn(carrying, Frustum, true, 900, Some(1_000)), "{carrying:?}");
+            assert!(!lists_take_drawn(carrying, Occlusion, false, 900, Some(1_000)), "{carrying:?}");
         }
         // A walk's frame wrote the lists itself.
-        assert!(!lists_take_drawn(VisibleOnGpu, Occlusion, false, true));
+        assert!(!lists_take_drawn(VisibleOnGpu, Occlusion, true, 900, Some(1_000)));
     }
 }

@@ -691,8 +691,9 @@ impl Culler for SoftwareOcclusionCulling {
     ///    reference at the rest, each part over its own rectangle. A hidden
     ///    node stops its subtree; a box reaching the near plane is visible.
     ///    A leaf's objects are tested one by one.
-    /// 5. **Draw** the visible objects (nearest first, as every mode's
-    ///    drawing is ordered); they are next frame's occluder candidates. An occluder found hidden is not
+    /// 5. **Draw** the visible objects (the renderer orders them nearest
+    ///    first, as it does every list a mode draws); they are next
+    ///    frame's occluder candidates. An occluder found hidden is not
     ///    drawn, and what the buffer vouches for is still drawn: where a
     ///    layer vouches for a depth at a pixel centre, an occluder merged
     ///    into it draws that centre at least that near. If that occluder is
