@@ -7,8 +7,8 @@
 //! objects as occluders, rasterises them conservatively into the buffer's
 //! masked cells (mesh.rs, buffer.rs), builds a pyramid of its farthest
 //! depths, walks the hierarchy node by node testing each box in the
-//! frustum against it, and draws what is visible; a
-//! frame whose buffer rests is `vfc`'s own.
+//! frustum against it, and draws what is visible; a frame whose buffer
+//! rests is `vfc`'s own.
 //!
 //! Departures from MOC: its coverage is the pixels whose centres its own
 //! rasteriser puts inside a triangle; here it is the centres the GPU is
@@ -728,10 +728,10 @@ impl Culler for SoftwareOcclusionCulling {
             self.buffer_holds = false;
         }
         // A resting buffer tests nothing: the frame is frustum culling's,
-        // its fully-inside shortcut included, so
-        // that it costs what `vfc` costs. (Walked node by node, den-haag's
-        // orbit took 0.4–0.5 ms of CPU and 0.3–1.1 ms more of GPU a frame
-        // than `vfc`, whose frame there is 10–14 ms.)
+        // its fully-inside shortcut included, so that it costs what `vfc`
+        // costs. (Walked node by node, den-haag's orbit took 0.4–0.5 ms of
+        // CPU and 0.3–1.1 ms more of GPU a frame than `vfc`, whose frame
+        // there is 10–14 ms.)
         if resting {
             self.found.clear();
             frustum_cull_subtree(scene, input.hierarchy, 0, &frustum, &mut self.stack, &mut self.found, &mut stats);
