@@ -265,6 +265,32 @@ fn lists_take_drawn(carrying: Carries, ran_as: Family, fresh: bool, drew: u64, l
     carrying != Carries::VisibleOnGpu && ran_as == Family::Occlusion && fresh && lists_drew.is_none_or(|l| drew <= l)
 }
 
+/// The walks' lists after recorded frame `frame`, which `ran` a culler
+/// `carrying` its visible set as it does and drew `drew` triangles, the
+/// lists as last `written`: whether they take its drawn set
+/// ([`lists_take_drawn`]), and what has then last written them.
+fn lists_after(written: Option<Lists>, frame: u64, ran: &Ran, carrying: Carries, drew: u64) -> (bool, Option<Lists>) {
+    // Lists stale by the next frame are replaced whatever they drew: kept,
+    // a walk would upload the same set in its timed frame.
+    let stale_next = walk_start(written, frame + 1, &ran.view, None).stale;
+    let lists_drew = written.and_then(|l| l.drew).filter(|_| !stale_next);
+    let take = lists_take_drawn(carrying, ran.family, ran.fresh, drew, lists_drew);
+    if carrying != Carries::VisibleOnGpu && !take {
+        return (false, written);
+    }
+    // A walk that started from everything in the frustum drew it all, far
+    // more than the visible lists it leaves: the bar stays what the lists
+    // drew before.
+    let fresh = carrying != Carries::VisibleOnGpu || ran.fresh;
+    let bar = if fresh { Some(drew) } else { written.and_then(|l| l.drew) };
+    let lists = Lists {
+        frame,
+        view: ran.view,
+        drew: bar,
+    };
+    (take, Some(lists))
+}
+
 /// How a culler that keeps its visible set on the CPU (`carries`, one of
 /// [`Carries::OccludersOnCpu`] and [`Carries::VisibleOnCpu`]) starts a
 /// frame, handed the last frame's drawn set by a frame of family
@@ -475,26 +501,14 @@ impl AutoCulling {
             ran.recount = false;
             self.ran = Some(ran);
         }
-        let k = ran.turn.strategy;
-        let carries = self.candidates[k].carries();
+        if self.lists.is_none() {
+            return false;
+        }
+        let carries = self.candidates[ran.turn.strategy].carries();
         let objects = &input.scene.objects;
         let drew = drawn.iter().map(|o| u64::from(objects[o as usize].triangles)).sum();
-        // Lists stale by the next frame are replaced whatever they drew:
-        // kept, a walk would upload the same set in its timed frame.
-        let stale_next = walk_start(self.lists_written, self.frames + 1, &ran.view, None).stale;
-        let lists_drew = self.lists_written.and_then(|l| l.drew).filter(|_| !stale_next);
-        let take = self.lists.is_some() && lists_take_drawn(carries, ran.family, ran.fresh, drew, lists_drew);
-        if carries == Carries::VisibleOnGpu || take {
-            // A walk that started from everything in the frustum drew it
-            // all, far more than the visible lists it leaves: the bar stays
-            // what the lists drew before.
-            let fresh_walk = carries != Carries::VisibleOnGpu || ran.fresh;
-            self.lists_written = Some(Lists {
-                frame: self.frames,
-                view: ran.view,
-                drew: if fresh_walk { Some(drew) } else { self.lists_written.and_then(|l| l.drew) },
-            });
-        }
+        let (take, written) = lists_after(self.lists_written, self.frames, &ran, carries, drew);
+        self.lists_written = written;
         take
     }
 
@@ -931,6 +945,50 @@ mod tests {
         assert_eq!(auto.cpu_handed_to(chc), Some(Family::Frustum));
         assert_eq!(auto.cpu_handed_to(swr), Some(Family::Frustum));
         assert!(auto.settles(chc, &still));
+    }
+
+    #[test]
+    fn the_lists_bar_is_what_their_last_fresh_writer_drew_and_lists_stale_by_the_next_frame_take_any_set() {
+        use Carries::*;
+        let here = view(0.0, DVec3::NEG_Z, 10_000);
+        let ran = |fresh| Ran {
+            turn: Turn {
+                strategy: 0,
+                probe: true,
+                measured: true,
+                recheck: false,
+            },
+            view: here,
+            family: Family::Occlusion,
+            counted: true,
+            recount: false,
+            fresh,
+        };
+        let written = |frame, drew| {
+            Some(Lists {
+                frame,
+                view: here,
+                drew: Some(drew),
+            })
+        };
+        let after = |written, ran: &Ran, carrying, drew| {
+            let (take, lists) = lists_after(written, 9, ran, carrying, drew);
+            (take, lists.map(|l: Lists| (l.frame, l.drew)))
+        };
+        // A walk's frame from a visible set of this view: what it drew is
+        // the bar; one that started from everything in the frustum keeps
+        // the bar there was.
+        assert_eq!(after(written(8, 1_000), &ran(true), VisibleOnGpu, 1_200), (false, Some((9, Some(1_200)))));
+        assert_eq!(after(written(8, 1_000), &ran(false), VisibleOnGpu, 9_000), (false, Some((9, Some(1_000)))));
+        // A swr probe that drew more than the lists of the frame before:
+        // they stay as they are. Fewer: taken, and the new bar.
+        assert_eq!(after(written(8, 1_000), &ran(true), OccludersOnCpu, 1_300), (false, Some((8, Some(1_000)))));
+        assert_eq!(after(written(8, 1_000), &ran(true), Nothing, 900), (true, Some((9, Some(900)))));
+        // Lists stale by the next frame (written three frames before it):
+        // replaced whatever they drew.
+        assert_eq!(after(written(7, 1_000), &ran(true), OccludersOnCpu, 1_300), (true, Some((9, Some(1_300)))));
+        // None written yet (no walk has run): taken.
+        assert_eq!(after(None, &ran(true), OccludersOnCpu, 1_300), (true, Some((9, Some(1_300)))));
     }
 
     #[test]
