@@ -27,7 +27,8 @@
 //!   set the last one found, as if it had run all along; after a frame an
 //!   occlusion culler drew on the CPU, the lists take what it drew, after
 //!   the frame and untimed (not where it holds more triangles than the
-//!   lists drew: [`lists_take_drawn`]); after `vfc` (everything in the
+//!   lists' last fresh writer drew, unless they would be stale by the
+//!   next frame: [`lists_after`]); after `vfc` (everything in the
 //!   frustum), the walks start from their own lists, even stale ones, but from
 //!   everything in the frustum where the view has outgrown them (which
 //!   their test against its depth sorts out in one frame); a walk's first
@@ -191,8 +192,10 @@ struct Ran {
 
 /// The frame that last wrote the visible lists the GPU walks share (a
 /// walk's, or one whose drawn set they took: [`lists_take_drawn`]), where
-/// it looked, and the triangles of what it drew (not counted in warm-up,
-/// whose walks draw indirectly while the others draw on the CPU).
+/// it looked, and the bar a CPU culler's drawn set is held to: the
+/// triangles the last writer that started from a visible set of its view
+/// drew ([`lists_after`]; none counted in warm-up, whose walks draw
+/// indirectly while the others draw on the CPU).
 #[derive(Clone, Copy, Debug)]
 struct Lists {
     frame: u64,
@@ -278,9 +281,14 @@ fn lists_after(written: Option<Lists>, frame: u64, ran: &Ran, carrying: Carries,
     if carrying != Carries::VisibleOnGpu && !take {
         return (false, written);
     }
-    // A walk that started from everything in the frustum drew it all, far
-    // more than the visible lists it leaves: the bar stays what the lists
-    // drew before.
+    // A walk that did not start from a visible set of its view (everything
+    // in the frustum after `vfc`, or lists gone stale) drew far more than
+    // the visible lists it leaves: the bar stays the last fresh writer's,
+    // though of an older view, until a fresh frame sets it again. (A
+    // settling frame, `chc` drawing the whole frustum it was handed, is not
+    // taken even where the lists are stale: the walk after it uploads that
+    // set in its timed frame, as after `vfc`; a settling frame is followed
+    // by its culler's measured one, so a walk seldom comes next.)
     let fresh = carrying != Carries::VisibleOnGpu || ran.fresh;
     let bar = if fresh { Some(drew) } else { written.and_then(|l| l.drew) };
     let lists = Lists {
@@ -484,8 +492,8 @@ impl AutoCulling {
     /// After a frame (`input`), untimed: remembers what it drew, `drawn`,
     /// and the family that drew it, for the next hand-over; counts the
     /// frustum's triangles where a recorded frame was to be counted
-    /// ([`Ran::recount`]); and notes the frame that wrote the walks'
-    /// lists. Whether the lists take its drawn set ([`lists_take_drawn`]).
+    /// ([`Ran::recount`]); and notes what the walks' lists then hold
+    /// ([`lists_after`]). Whether the lists take its drawn set.
     /// After a warm-up frame, which every candidate ran from its own state,
     /// none is handed what they drew together.
     fn after_frame(&mut self, input: &FrameInput, drawn: &ObjectSet) -> bool {
@@ -948,10 +956,10 @@ mod tests {
     }
 
     #[test]
-    fn the_lists_bar_is_what_their_last_fresh_writer_drew_and_lists_stale_by_the_next_frame_take_any_set() {
+    fn the_lists_bar_is_what_their_last_fresh_writer_drew_and_lists_stale_by_the_next_frame_take_any_fresh_occlusion_set() {
         use Carries::*;
         let here = view(0.0, DVec3::NEG_Z, 10_000);
-        let ran = |fresh| Ran {
+        let ran = |family, fresh| Ran {
             turn: Turn {
                 strategy: 0,
                 probe: true,
@@ -959,36 +967,43 @@ mod tests {
                 recheck: false,
             },
             view: here,
-            family: Family::Occlusion,
+            family,
             counted: true,
             recount: false,
             fresh,
         };
-        let written = |frame, drew| {
-            Some(Lists {
-                frame,
-                view: here,
-                drew: Some(drew),
-            })
-        };
+        let (occlusion, settling, frustum) = (
+            ran(Family::Occlusion, true),
+            ran(Family::Occlusion, false),
+            ran(Family::Frustum, true),
+        );
+        let written = |frame, view, drew| Some(Lists { frame, view, drew: Some(drew) });
         let after = |written, ran: &Ran, carrying, drew| {
             let (take, lists) = lists_after(written, 9, ran, carrying, drew);
             (take, lists.map(|l: Lists| (l.frame, l.drew)))
         };
         // A walk's frame from a visible set of this view: what it drew is
-        // the bar; one that started from everything in the frustum keeps
-        // the bar there was.
-        assert_eq!(after(written(8, 1_000), &ran(true), VisibleOnGpu, 1_200), (false, Some((9, Some(1_200)))));
-        assert_eq!(after(written(8, 1_000), &ran(false), VisibleOnGpu, 9_000), (false, Some((9, Some(1_000)))));
+        // the bar. One that started from everything in the frustum (after
+        // `vfc`, its lists stale: written three frames before) keeps the
+        // bar there was.
+        assert_eq!(after(written(8, here, 1_000), &occlusion, VisibleOnGpu, 1_200), (false, Some((9, Some(1_200)))));
+        assert_eq!(after(written(6, here, 1_000), &settling, VisibleOnGpu, 9_000), (false, Some((9, Some(1_000)))));
         // A swr probe that drew more than the lists of the frame before:
-        // they stay as they are. Fewer: taken, and the new bar.
-        assert_eq!(after(written(8, 1_000), &ran(true), OccludersOnCpu, 1_300), (false, Some((8, Some(1_000)))));
-        assert_eq!(after(written(8, 1_000), &ran(true), Nothing, 900), (true, Some((9, Some(900)))));
-        // Lists stale by the next frame (written three frames before it):
-        // replaced whatever they drew.
-        assert_eq!(after(written(7, 1_000), &ran(true), OccludersOnCpu, 1_300), (true, Some((9, Some(1_300)))));
-        // None written yet (no walk has run): taken.
-        assert_eq!(after(None, &ran(true), OccludersOnCpu, 1_300), (true, Some((9, Some(1_300)))));
+        // they stay as they are. An omq probe that drew fewer: taken, and
+        // the new bar.
+        assert_eq!(after(written(8, here, 1_000), &occlusion, OccludersOnCpu, 1_300), (false, Some((8, Some(1_000)))));
+        assert_eq!(after(written(8, here, 1_000), &occlusion, Nothing, 900), (true, Some((9, Some(900)))));
+        // Lists stale by the next frame, written three frames before it or
+        // in a view this one outgrew (four times the triangles): replaced
+        // whatever they drew; and where none were written yet.
+        let small = view(0.0, DVec3::NEG_Z, 1_000);
+        for stale in [written(7, here, 1_000), written(8, small, 1_000), None] {
+            assert_eq!(after(stale, &occlusion, OccludersOnCpu, 1_300), (true, Some((9, Some(1_300)))));
+            // But not by a set drawn as frustum culling's, nor by chc
+            // settling on everything in the frustum it was handed.
+            assert_eq!(after(stale, &frustum, OccludersOnCpu, 1_300), (false, stale.map(|l| (l.frame, l.drew))));
+            assert_eq!(after(stale, &settling, VisibleOnCpu, 1_300), (false, stale.map(|l| (l.frame, l.drew))));
+        }
     }
 
     #[test]
