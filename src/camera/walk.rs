@@ -457,8 +457,9 @@ fn find_floors(
             above = height;
         }
         // At a person's sizes, a floor open to the sky over another floor
-        // may be a roof ([`roofs`]). (In other units the floor under it may be the
-        // hollow of an open mesh's slab: a pavement tile's.)
+        // may be a roof ([`roofs`]). (At a share of the model's height the
+        // floor under it may be the hollow of an open mesh's slab: a
+        // pavement tile's.)
         let start = first[k];
         if unit.is_some() && floors.len() - start >= 2 && !floors[start].roofed {
             floors[start].over_floor = true;
