@@ -245,6 +245,7 @@ pub fn execute(
             facts,
             hierarchy_params: params,
             upload_ms: output.upload_ms,
+            cluster_triangles: Some(plan.load.cluster_triangles),
         },
         path: path_summary,
         resolution: plan.resolution,

@@ -810,6 +810,13 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
         2,
         &["their warmup frames: 2 vs 0"],
     );
+    // Clusters of another size are other objects to cull.
+    let clustered = edited_summary("clustered", &|s| s["scene"]["cluster_triangles"] = 16.into());
+    fails_with(
+        &["compare", b, clustered.to_str().unwrap()],
+        2,
+        &["their cluster sizes (--cluster-triangles): 4096 vs 16"],
+    );
     let tuned = edited_summary("tuned", &|s| {
         let omq = s["modes"]
             .as_array_mut()
@@ -824,7 +831,11 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
         2,
         &["their mode parameters", "80x60"],
     );
-    let renamed = edited_summary("renamed", &|s| s["path"]["source"] = "/ci/checkout/path.json".into());
+    // (From before the cluster size was recorded, too.)
+    let renamed = edited_summary("renamed", &|s| {
+        s["path"]["source"] = "/ci/checkout/path.json".into();
+        s["scene"].as_object_mut().unwrap().remove("cluster_triangles");
+    });
     let same_path = occlu(&["compare", b, renamed.to_str().unwrap()]);
     assert_eq!(same_path.status.code(), Some(0), "{:?}", own_stderr(&same_path));
     // Renamed and run over fewer frames (which a path's fingerprint holds):
@@ -1181,6 +1192,57 @@ fn compare_fails_on_what_the_new_run_leaves_out_and_refuses_other_adapters() {
         assert_eq!(c["verdict"], expected, "{c}");
     }
     assert!(verdicts["notes"][0].as_str().unwrap().contains("Another GPU"));
+    // More drawn there: judged where the adapters work alike, and not where
+    // they work otherwise (another backend, whose depth precision moves
+    // what box tests hide), where only what the modes got wrong compares.
+    let differently = |name: &str, backend: Option<&str>| {
+        let to = dir.path().join(name);
+        tampered_copy(std::path::Path::new(&base), &to, &|r| {
+            r.frame_ms *= 3.0;
+            r.triangles_drawn += 1000;
+        });
+        let summary = std::fs::read_to_string(to.join("summary.json")).unwrap();
+        let mut summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
+        summary["adapter"]["name"] = "Another GPU".into();
+        if let Some(backend) = backend {
+            summary["adapter"]["backend"] = backend.into();
+        }
+        std::fs::write(to.join("summary.json"), summary.to_string()).unwrap();
+        to.to_str().unwrap().to_string()
+    };
+    let alike = differently("alike", None);
+    let more = occlu(&["compare", &base, &alike, "--cross-adapter"]);
+    assert_eq!(more.status.code(), Some(1), "{}", stdout(&more));
+    assert!(own_stderr(&more).join(" ").contains("vfc triangles_drawn"));
+    let base_backend = serde_json::from_str::<serde_json::Value>(
+        &std::fs::read_to_string(std::path::Path::new(&base).join("summary.json")).unwrap(),
+    )
+    .unwrap()["adapter"]["backend"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let other_backend = if base_backend == "gl" { "vulkan" } else { "gl" };
+    let unlike = differently("unlike", Some(other_backend));
+    let crossed = occlu(&["compare", &base, &unlike, "--cross-adapter", "--json"]);
+    assert_eq!(crossed.status.code(), Some(0), "{:?}", own_stderr(&crossed));
+    let verdicts: serde_json::Value = serde_json::from_str(&stdout(&crossed)).unwrap();
+    for c in verdicts["changes"].as_array().unwrap() {
+        let error = c["metric"] == "error_pixels" || c["metric"] == "missed_objects";
+        assert_eq!(c["verdict"], if error { "same" } else { "not_judged" }, "{c}");
+    }
+    assert!(verdicts["notes"][0].as_str().unwrap().contains("backends differ"));
+    fails_with(
+        &[
+            "compare",
+            &base,
+            &unlike,
+            "--cross-adapter",
+            "--metric",
+            "frame_ms,triangles_drawn",
+        ],
+        2,
+        &["only error counters compare", "nothing would be judged"],
+    );
     // A gate on frame time alone would judge nothing there: refused.
     fails_with(
         &["compare", &base, other, "--cross-adapter", "--metric", "frame_ms"],

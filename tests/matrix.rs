@@ -572,7 +572,17 @@ fn merge_refuses_to_write_over_its_input_or_a_partial_matrix_and_takes_odd_names
     let dir = tempfile::tempdir().unwrap();
     let (full, run) = matrix_of_one(dir.path());
     let report = std::fs::read_to_string(run.join("report.md")).unwrap();
-    for out in [&run, &run.join("merged"), &full, &dir.path().to_path_buf()] {
+    // Named through a folder the merge would make and `..` out of it, too:
+    // the system puts it where that leads.
+    let through_missing = dir.path().join("missing/../full/01-city-blocks-1-generated");
+    for out in [
+        &run,
+        &run.join("merged"),
+        &full,
+        &dir.path().to_path_buf(),
+        &through_missing,
+        &run.join("x/.."),
+    ] {
         refused(
             &["merge", s(&run), "--out", s(out)],
             &["write over what it reads", "choose another --out"],
@@ -600,6 +610,17 @@ fn merge_refuses_to_write_over_its_input_or_a_partial_matrix_and_takes_odd_names
         &["02-forest-generated", "without summary.json"],
     );
     std::fs::remove_dir(partial.join("02-forest-generated")).unwrap();
+    // A folder that holds another run is refused as --out, however named.
+    for out in [
+        partial.join("01-city-blocks-1-generated"),
+        dir.path().join("gone/../partial/01-city-blocks-1-generated"),
+    ] {
+        refused(
+            &["merge", s(&run), "--out", s(&out)],
+            &["holds a bench run", "choose another --out"],
+        );
+    }
+    assert!(!dir.path().join("gone").exists());
     let merged_ok = occlu(&["merge", s(&partial), "--out", s(&out)]);
     assert!(merged_ok.status.success(), "{:?}", own_stderr(&merged_ok));
     assert!(stdout(&merged_ok).starts_with("# occlu: merged results\n\n1 run on 1 adapter."));
@@ -681,16 +702,17 @@ fn compare_of_merged_folders_pairs_a_run_that_what_else_was_merged_renamed() {
     let (_, run) = matrix_of_one(dir.path());
     // Two runs outside a matrix of one scene and a path of one name, with
     // other cameras: merged together, each name takes its contents' tag.
-    let single = |folder: &str, cameras: &str| {
+    let single_named = |folder: &str, path: &str, cameras: &str| {
         let to = dir.path().join(folder).join("run");
         edited_copy(&run, &to, |j| {
             j["run"] = serde_json::Value::Null;
             j["matrix"] = serde_json::Value::Null;
-            j["path"]["source"] = "path.json".into();
+            j["path"]["source"] = path.into();
             j["path"]["cameras"]["fnv1a"] = cameras.into();
         });
         to
     };
+    let single = |folder: &str, cameras: &str| single_named(folder, "path.json", cameras);
     let (first, second) = (single("p1", "00000000000000a1"), single("p2", "00000000000000b2"));
     let (base, new) = (dir.path().join("base"), dir.path().join("new"));
     assert!(occlu(&["merge", s(&first), "--out", s(&base)]).status.success());
@@ -730,6 +752,14 @@ fn compare_of_merged_folders_pairs_a_run_that_what_else_was_merged_renamed() {
         "{}",
         stdout(&unmatched)
     );
+    // The path of those contents named another way (given as an absolute
+    // path in another checkout) is that run too, as merge would take it.
+    let elsewhere = dir.path().join("elsewhere");
+    let moved = single_named("p4", "/ci/checkout/path.json", "00000000000000a1");
+    assert!(occlu(&["merge", s(&moved), "--out", s(&elsewhere)]).status.success());
+    let paired = occlu(&["compare", s(&elsewhere), s(&new)]);
+    assert_eq!(paired.status.code(), Some(0), "{}", stdout(&paired));
+    assert!(!stdout(&paired).contains("MISSING"), "{}", stdout(&paired));
 }
 
 #[test]

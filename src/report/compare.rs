@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::merge::{Merged, contents_tag, read_merged, untagged};
+use super::merge::{Merged, one_run, read_merged};
 use super::summary::{Fingerprint, paired_frame_ms, same_count};
 use super::{ReportError, Summary, read_results, read_summary};
 use crate::cull::{CountKind, ModeId};
@@ -70,12 +70,17 @@ impl Metric {
     /// the mode measured ([`ModeId::counts_follow_time`]): it varies from
     /// run to run as they do.
     fn follows_time(self, label: &str) -> bool {
-        let kind = match self {
-            Metric::FrameMs => return false,
-            Metric::TrianglesDrawn | Metric::Queries | Metric::QueryBatches => CountKind::Work,
-            Metric::ErrorPixels | Metric::MissedObjects => CountKind::Error,
-        };
-        ModeId::counts_follow_time(label, kind)
+        self.count_kind()
+            .is_some_and(|kind| ModeId::counts_follow_time(label, kind))
+    }
+
+    /// What a count measures; `None` for the frame time.
+    fn count_kind(self) -> Option<CountKind> {
+        match self {
+            Metric::FrameMs => None,
+            Metric::TrianglesDrawn | Metric::Queries | Metric::QueryBatches => Some(CountKind::Work),
+            Metric::ErrorPixels | Metric::MissedObjects => Some(CountKind::Error),
+        }
     }
 
     /// What is compared: the mean per frame, or the total over the run for
@@ -172,9 +177,13 @@ pub enum CompareError {
     )]
     Adapters { base: String, new: String },
     #[error(
-        "the runs used different adapters ({base} vs {new}), where only counters compare, and --metric names frame_ms alone: nothing would be judged"
+        "the runs used different adapters ({base} vs {new}), where only {judged} compare, and --metric names none of them: nothing would be judged"
     )]
-    NothingToJudge { base: String, new: String },
+    NothingToJudge {
+        base: String,
+        new: String,
+        judged: &'static str,
+    },
     #[error("{} is a merged folder and {} is not: compare two runs, or two merged folders", merged.display(), single.display())]
     MergedWithSingle { merged: PathBuf, single: PathBuf },
     #[error(
@@ -250,17 +259,33 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
     }
     let (adapter_a, adapter_b) = (&base_summary.adapter, &new_summary.adapter);
     let same_adapter = adapter_a.times_compare_with(adapter_b);
+    // On adapters that work differently, what a mode does differs too:
+    // only what it got wrong compares.
+    let work_apart = adapter_a.work_differs_from(adapter_b);
+    let compares = |metric: Metric| match metric.count_kind() {
+        None => same_adapter,
+        Some(CountKind::Work) => work_apart.is_none(),
+        Some(CountKind::Error) => true,
+    };
     if !same_adapter {
         let (base, new) = (adapter_a.to_string(), adapter_b.to_string());
         if !options.cross_adapter {
             return Err(CompareError::Adapters { base, new });
         }
-        if options.metrics.iter().all(|&m| m == Metric::FrameMs) {
-            return Err(CompareError::NothingToJudge { base, new });
+        let judged = match work_apart {
+            None => "counters",
+            Some(_) => "error counters",
+        };
+        if !options.metrics.iter().any(|&m| compares(m)) {
+            return Err(CompareError::NothingToJudge { base, new, judged });
         }
-        notes.push(format!(
-            "different adapters ({adapter_a} vs {adapter_b}): frame times are shown but not judged; counters are"
-        ));
+        let shown = match work_apart {
+            None => "frame times are shown but not judged; counters are".to_string(),
+            Some(what) => format!(
+                "frame times and the counts of work are shown but not judged (the adapters' {what} differ, which changes what the modes do); error counters are judged"
+            ),
+        };
+        notes.push(format!("different adapters ({adapter_a} vs {adapter_b}): {shown}"));
     }
     let frames = base_summary.frames.min(new_summary.frames);
     if frames < FEW_FRAMES {
@@ -289,9 +314,7 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
             let verdict = match (base_value, new_value, n) {
                 // Times on two adapters measure the adapters, not a change,
                 // and so do the counts that follow them.
-                (Some(_), Some(_), Some(_))
-                    if !same_adapter && (metric == Metric::FrameMs || metric.follows_time(&b.name)) =>
-                {
+                (Some(_), Some(_), Some(_)) if !same_adapter && (!compares(metric) || metric.follows_time(&b.name)) => {
                     Verdict::NotJudged
                 }
                 (Some(x), Some(y), Some(n)) => {
@@ -323,7 +346,8 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
 
 /// Two merged folders, run folder by run folder: every change and note of
 /// each pair, named by the base's folder. Folders pair by what they hold
-/// (run name, adapter and backend as merged.json records them), never by
+/// (run name, adapter and backend as merged.json records them, or else
+/// the same run as merge tells it on that adapter: [`renamed`]), never by
 /// their folder names; a run of the base that the new merge lacks is
 /// missing (a failure unless `allow_missing`).
 fn compare_merged(
@@ -375,27 +399,24 @@ fn compare_merged(
 }
 
 /// The new merge's run folder of the base's run `identity` (in
-/// `base_folder`) under another name: merge tags a run's name (`#` and a
-/// hash of its scene's and path's contents) only where another run it
-/// merged shares the name, so one run is `city, path.json` in a merge of
-/// it alone and `city, path.json #0a1b2c3d` beside another path of that
-/// name. Found by its untagged name, adapter and backend, and its contents.
+/// `base_folder`) under another name, on its adapter and backend: the one
+/// merge would take for the same run ([`one_run`]). Merge names a run
+/// outside a matrix by its scene's and path's sources as they were given
+/// (`city, path.json` in one merge, `city, /ci/checkout/path.json` in
+/// another), and tags the name (`#` and a hash of their contents) where
+/// another run it merged shares it.
 fn renamed<'a>(
-    (name, adapter, backend): &Identity,
+    (_, adapter, backend): &Identity,
     base_folder: &Path,
     new_columns: &'a [(Identity, PathBuf)],
 ) -> Option<&'a (Identity, PathBuf)> {
-    let plain = untagged(name).0;
-    let mut candidates = new_columns
-        .iter()
-        .filter(|((n, a, b), _)| untagged(n).0 == plain && a == adapter && b == backend)
-        .peekable();
-    candidates.peek()?;
     // A summary that cannot be read matches nothing here: the run is then
     // missing, or named in a note, as without this search.
-    let tag = |dir: &Path| read_summary(dir).ok().map(|summary| contents_tag(&summary));
-    let base_tag = tag(base_folder)?;
-    candidates.find(|(_, folder)| tag(folder).as_ref() == Some(&base_tag))
+    let base = read_summary(base_folder).ok()?;
+    new_columns
+        .iter()
+        .filter(|((_, a, b), _)| a == adapter && b == backend)
+        .find(|(_, folder)| read_summary(folder).is_ok_and(|new| one_run(&base, &new)))
 }
 
 /// What a merged folder's run folder holds: the run's name (unique in a

@@ -143,7 +143,7 @@ pub fn refuse_one_file_twice(first: &Path, second: &Path) -> Result<(), ReportEr
 /// where it leads (a link to what it names), each that does not, which a
 /// run may yet make (its --out), taken as written, `..` going back a
 /// folder from where the path has led.
-fn where_written(output: &Path) -> Option<PathBuf> {
+pub(super) fn where_written(output: &Path) -> Option<PathBuf> {
     let mut resolved = PathBuf::new();
     for part in std::path::absolute(output).ok()?.components() {
         match part {

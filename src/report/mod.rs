@@ -22,6 +22,7 @@ use crate::text;
 
 use claim::{LOCK, STAGING, claim, staging};
 pub use claim::{OutputLock, abandon_unfinished};
+use files::where_written;
 pub use files::{ReportError, check_writable, refuse_input_as_output, refuse_one_file_twice, write_png, write_whole};
 pub use markdown::render as render_markdown;
 pub use summary::{

@@ -63,11 +63,16 @@ pub struct Summary {
 }
 
 impl Summary {
-    /// The first of what a user sets (frames, resolution, warmup, the
-    /// parameters of the modes both ran) that `other` set differently, if
-    /// any: what it is and each run's value. Runs of one workload set them
-    /// alike.
+    /// The first of what a user sets (frames, resolution, warmup, cluster
+    /// size, the parameters of the modes both ran) that `other` set
+    /// differently, if any: what it is and each run's value. Runs of one
+    /// workload set them alike.
     pub(super) fn settings_differing_from(&self, other: &Summary) -> Option<(&'static str, String, String)> {
+        // Where both files record it.
+        let clusters = |s: &Summary, other: &Summary| match (s.scene.cluster_triangles, other.scene.cluster_triangles) {
+            (Some(triangles), Some(_)) => triangles.to_string(),
+            _ => String::new(),
+        };
         let parameters = |s: &Summary, other: &Summary| {
             s.modes
                 .iter()
@@ -80,6 +85,11 @@ impl Summary {
             ("frame counts", self.frames.to_string(), other.frames.to_string()),
             ("resolutions", self.resolution.to_string(), other.resolution.to_string()),
             ("warmup frames", self.warmup.to_string(), other.warmup.to_string()),
+            (
+                "cluster sizes (--cluster-triangles)",
+                clusters(self, other),
+                clusters(other, self),
+            ),
             ("mode parameters", parameters(self, other), parameters(other, self)),
         ]
         .into_iter()
@@ -247,6 +257,11 @@ pub struct SceneSummary {
     pub facts: SceneFacts,
     pub hierarchy_params: HierarchyParams,
     pub upload_ms: f64,
+    /// The most triangles of a mesh's cluster (`--cluster-triangles`): it
+    /// sets the objects the modes cull (absent in files from before it was
+    /// recorded).
+    #[serde(default)]
+    pub cluster_triangles: Option<u32>,
 }
 
 /// What `occlu info` says of a scene, and summary.json records.

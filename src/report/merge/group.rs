@@ -23,22 +23,9 @@ impl RunFolder {
             .unwrap_or_else(|| format!("{}, {}", s.scene.facts.source, s.path.source))
     }
 
-    /// Whether `other` is the same run: the same matrix run by name, or,
-    /// outside a matrix, the same scene and path by their fingerprints (by
-    /// their sources' names for files from before fingerprints, so that
-    /// `held.json` and `/abs/held.json` are one path when they can be told).
+    /// Whether `other` is the same run ([`one_run`]).
     fn same_run(&self, other: &RunFolder) -> bool {
-        let (a, b) = (&self.summary, &other.summary);
-        match (&a.run, &b.run) {
-            (Some(x), Some(y)) => x == y,
-            (None, None) => {
-                same_thing(
-                    (&a.scene.facts.source, a.scene.facts.geometry),
-                    (&b.scene.facts.source, b.scene.facts.geometry),
-                ) && same_thing((&a.path.source, a.path.cameras), (&b.path.source, b.path.cameras))
-            }
-            _ => false,
-        }
+        one_run(&self.summary, &other.summary)
     }
 
     /// The first thing `other`, the same run, measured differently, if
@@ -81,6 +68,24 @@ impl RunFolder {
 
     fn adapter(&self) -> (String, String) {
         (self.summary.adapter.name.clone(), self.summary.adapter.backend.clone())
+    }
+}
+
+/// Whether the results `a` and `b` are of one run: the same matrix run by
+/// name, or, outside a matrix, the same scene and path by their
+/// fingerprints (by their sources' names for files from before
+/// fingerprints, so that `held.json` and `/abs/held.json` are one path when
+/// they can be told).
+pub(crate) fn one_run(a: &Summary, b: &Summary) -> bool {
+    match (&a.run, &b.run) {
+        (Some(x), Some(y)) => x == y,
+        (None, None) => {
+            same_thing(
+                (&a.scene.facts.source, a.scene.facts.geometry),
+                (&b.scene.facts.source, b.scene.facts.geometry),
+            ) && same_thing((&a.path.source, a.path.cameras), (&b.path.source, b.path.cameras))
+        }
+        _ => false,
     }
 }
 
@@ -159,22 +164,9 @@ pub(super) fn named(groups: Vec<Vec<RunFolder>>) -> Vec<(String, Vec<RunFolder>)
 
 /// What [`named`] puts after the name of a run whose name another run
 /// shares: `#` and a hash of its scene's and path's fingerprints.
-pub(crate) fn contents_tag(summary: &Summary) -> String {
+fn contents_tag(summary: &Summary) -> String {
     let identity = format!("{:?}\n{:?}", summary.scene.facts.geometry, summary.path.cameras);
     format!("#{:08x}", Fingerprint::of(identity.as_bytes()).fnv1a >> 32)
-}
-
-/// A run's name as [`named`] made it, without the tag it may have been
-/// given (`city, path.json #0a1b2c3d` → `city, path.json`), and the tag.
-pub(crate) fn untagged(name: &str) -> (&str, Option<&str>) {
-    match name.rsplit_once(' ') {
-        Some((plain, tag))
-            if tag.len() == 9 && tag.starts_with('#') && tag[1..].bytes().all(|b| b.is_ascii_hexdigit()) =>
-        {
-            (plain, Some(tag))
-        }
-        _ => (name, None),
-    }
 }
 
 /// The runs of each matrix among `runs` that none of them is: by place

@@ -37,7 +37,7 @@ mod render;
 mod write;
 
 pub use error::MergeError;
-pub(crate) use group::{contents_tag, untagged};
+pub(crate) use group::one_run;
 pub use merged::{
     AdapterColumn, Disagreement, MERGED_SCHEMA_VERSION, Merged, MergedRun, MissingRuns, ModeResult, ModeRow,
     read_merged,

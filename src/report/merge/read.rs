@@ -9,7 +9,7 @@ use super::error::MergeError;
 use crate::report::charts::CHARTS;
 use crate::report::files::ReportError;
 use crate::report::summary::Summary;
-use crate::report::{RESULT_FILES, read_results};
+use crate::report::{RESULT_FILES, read_results, where_written};
 
 /// One result folder read for the merge.
 pub(super) struct RunFolder {
@@ -51,28 +51,13 @@ pub(super) fn read_run_folders(dirs: &[PathBuf], out: &Path) -> Result<Vec<RunFo
 
 /// Refuses an `out` that is `input`, lies inside it or holds it: the merge
 /// would write over (or into) what it reads. `out` need not exist yet, so
-/// its nearest existing ancestor is resolved and the rest appended.
+/// it is taken where the system will put it ([`where_written`]: `..` after
+/// a folder the merge makes goes back to where it was made).
 fn refuse_overlap(input: &Path, out: &Path) -> Result<(), MergeError> {
     let input_path = std::fs::canonicalize(input).map_err(ReportError::at(input))?;
-    let mut existing = out;
-    let mut rest = Vec::new();
-    let out_path = loop {
-        match std::fs::canonicalize(if existing.as_os_str().is_empty() {
-            Path::new(".")
-        } else {
-            existing
-        }) {
-            Ok(path) => break rest.iter().rev().fold(path, |path: PathBuf, part| path.join(part)),
-            Err(_) => match (existing.parent(), existing.file_name()) {
-                (Some(parent), Some(name)) => {
-                    rest.push(name.to_owned());
-                    existing = parent;
-                }
-                // Nothing of it exists (or `..` past the root): it cannot
-                // be an input.
-                _ => return Ok(()),
-            },
-        }
+    let Some(out_path) = where_written(out) else {
+        // No current folder to put a relative `out` in: nothing is written.
+        return Ok(());
     };
     if out_path.starts_with(&input_path) || input_path.starts_with(&out_path) {
         return Err(MergeError::OutOverlapsInput {

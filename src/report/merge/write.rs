@@ -13,7 +13,7 @@ use super::read::{RunFolder, read_run_folders};
 use super::render::{draw_chart, render};
 use crate::report::files::ReportError;
 use crate::report::summary::ToolInfo;
-use crate::report::{prepare_output, publish};
+use crate::report::{prepare_output, publish, where_written};
 
 /// Reads every run folder in `dirs` (each one, or the folders in it that
 /// hold a run), checks that the folders of each run agree, and writes the
@@ -27,7 +27,8 @@ pub fn merge(dirs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Merged
     let folders = read_run_folders(dirs, out)?;
     // A run's report.md and the merged one would share a name (a merged
     // folder, which holds neither of these, may be merged into again).
-    if ["summary.json", "frames.csv"].iter().any(|f| out.join(f).exists()) {
+    let lands = where_written(out).unwrap_or_else(|| out.to_path_buf());
+    if ["summary.json", "frames.csv"].iter().any(|f| lands.join(f).exists()) {
         return Err(MergeError::OutHoldsRun(out.to_path_buf()));
     }
     let groups = named(group(folders)?);
