@@ -297,7 +297,7 @@ fn a_camera_or_animation_occlu_cannot_use_is_left_out_with_a_warning() {
     );
     assert!(
         said.contains(
-            "camera 'flat view' is left out: its yfov is 0°: occlu's views take fields of view from 0.001° to 179.9°"
+            "camera 'flat view' is left out: its yfov is 0°: occlu's views take fields of view from 1° to 179.9°"
         ),
         "{said}"
     );

@@ -574,6 +574,8 @@ mod tests {
         );
         assert!(err(r#"{"frames": 2, "keyframes": [{"time": -1e308, "position": [0, 0, 0], "target": [0, 0, -1]}, {"time": 1e308, "position": [1, 0, 0], "target": [0, 0, -1]}]}"#).contains("span"));
         assert!(err(r#"{"frames": 2, "keyframes": [{"time": 0, "position": [0, 0, 0], "target": [0, 0, 1], "fov_y_deg": 1e-300}]}"#).contains("fov_y_deg"));
+        // Narrower than the adapters draw a view exactly (FOV_RANGE).
+        assert!(err(r#"{"frames": 2, "keyframes": [{"time": 0, "position": [0, 0, 0], "target": [0, 0, 1], "fov_y_deg": 0.5}]}"#).contains("fov_y_deg must be in 1..=179.9, got 0.5"));
         assert!(
             err(r#"{"frames": 2, "keyframes": [{"time": 0, "position": [1e300, 0, 0], "target": [0, 0, 1]}]}"#)
                 .contains("within")

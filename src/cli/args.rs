@@ -73,9 +73,10 @@ pub enum Command {
     Flythrough(Box<FlythroughArgs>),
     /// Run the built-in matrix of numerically hard cases (eye inside boxes,
     /// near-plane crossings, 1e7 offsets, tiny and huge scales, flat boxes,
-    /// coplanar walls, 1° and 170° fields of view, vertical views,
-    /// teleports) through every mode against the DR reference; exit 1 when a
-    /// conservative mode shows any error or a moved case renders differently.
+    /// coplanar walls, 1° and 170° fields of view, 1° with the eye nearly
+    /// touching a wall, vertical views, teleports) through every mode
+    /// against the DR reference; exit 1 when a conservative mode shows any
+    /// error or a moved case renders differently.
     Stress(StressArgs),
     /// Write a scene as occlu holds it (after clustering) and a camera path
     /// (as a camera animation) to a GLB, to replay them in another engine.

@@ -366,9 +366,16 @@ fn replay(
 /// farthest renderable geometry (`MAX_COORDINATE`) leaves f32's normal
 /// range, or culls everything.
 pub const NEAR_RANGE: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
-/// The vertical fields of view a view takes, degrees: narrower or wider
-/// would make the projection degenerate in f32.
-pub const FOV_RANGE: std::ops::RangeInclusive<f64> = 1e-3..=179.9;
+/// The vertical fields of view a view takes, degrees: wider would make
+/// the projection degenerate in f32; narrower magnifies the adapters'
+/// rounding past what any mode's margins hold. Measured (`occlu stress
+/// --cases fov-narrowest`, and a wall 0.1 mm to 67 mm before the eye
+/// hiding another, 400x300): llvmpipe and lavapipe leave columns of the
+/// wall at the view's edge undrawn at 0.5° and narrower (0.001° to 0.5°:
+/// 300 to 9 900 pixels of the wall behind shown), which a box test or
+/// `swr`'s buffer, taking the wall as drawn, cannot know; from 1° to 60°,
+/// the eye down to 10⁻⁷ before the wall, never.
+pub const FOV_RANGE: std::ops::RangeInclusive<f64> = 1.0..=179.9;
 
 /// Why `camera`'s projection gives no view occlu can take, if it does not:
 /// a near plane in [`NEAR_RANGE`] (glTF lets an orthographic one's znear

@@ -17,6 +17,7 @@ use crate::camera::{Camera, look_rotation};
 use crate::gpu::Resolution;
 use crate::rng::Rng;
 use crate::scene::builtin::shapes::cuboid;
+use crate::scene::cameras::FOV_RANGE;
 use crate::scene::{SceneBuilder, TriangleSoup};
 
 /// Buildings per side of the town's grid.
@@ -246,6 +247,7 @@ pub fn all() -> Vec<StressCase> {
         flat_boxes(),
         coplanar(),
         vertical(),
+        narrowest_view(),
         occluder_crowd(),
         teleport(),
         distant_plaques(),
@@ -575,6 +577,29 @@ fn vertical() -> StressCase {
     Draft::new(town(), shots).case(
         "vertical",
         "straight down and straight up (up vector parallel to the view)",
+    )
+}
+
+/// The narrowest field of view a path may take ([`FOV_RANGE`]), the eye
+/// just before a wall 20 m long that hides a thinner one behind it (found
+/// by a review: at 0.001° to 0.5°, llvmpipe and lavapipe leave columns of
+/// such a wall at the view's edge undrawn, showing the wall behind).
+fn narrowest_view() -> StressCase {
+    let shapes = vec![
+        cuboid_shape("wall".into(), v(-0.15, -0.15, 0.0), v(0.0, 6.15, 20.0)),
+        cuboid_shape("behind".into(), v(0.0, 0.0, 9.925), v(2.263818, 3.0, 10.075)),
+    ];
+    let shots = [0.067, 1e-3, 1e-4]
+        .map(|away| looking(v(-0.15 - away, 1.6, 10.0), DVec3::X))
+        .to_vec();
+    let draft = Draft {
+        near: 5e-5,
+        fov_deg: *FOV_RANGE.start(),
+        ..Draft::new(shapes, shots)
+    };
+    draft.case(
+        "fov-narrowest",
+        "the narrowest field of view a path takes, the eye 0.1 mm to 67 mm before a wall hiding another",
     )
 }
 
