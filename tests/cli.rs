@@ -1231,6 +1231,34 @@ fn compare_fails_on_what_the_new_run_leaves_out_and_refuses_other_adapters() {
         assert_eq!(c["verdict"], if error { "same" } else { "not_judged" }, "{c}");
     }
     assert!(verdicts["notes"][0].as_str().unwrap().contains("backends differ"));
+    // Where only indirect counts differ, the GPU walks' round trips alone
+    // are not judged (they read their lists' lengths back without them).
+    let walks = run("walks", &["--modes", "vfc,roc"]);
+    let readback = dir.path().join("readback");
+    tampered_copy(std::path::Path::new(&walks), &readback, &|r| {
+        r.frame_ms *= 3.0;
+        if r.mode == "roc" {
+            r.query_batches += 1;
+        }
+    });
+    let summary = std::fs::read_to_string(readback.join("summary.json")).unwrap();
+    let mut summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    summary["adapter"]["name"] = "Another GPU".into();
+    summary["adapter"]["indirect_count"] = (!summary["adapter"]["indirect_count"].as_bool().unwrap()).into();
+    std::fs::write(readback.join("summary.json"), summary.to_string()).unwrap();
+    let trips = occlu(&[
+        "compare",
+        &walks,
+        readback.to_str().unwrap(),
+        "--cross-adapter",
+        "--json",
+    ]);
+    assert_eq!(trips.status.code(), Some(0), "{:?}", own_stderr(&trips));
+    let verdicts: serde_json::Value = serde_json::from_str(&stdout(&trips)).unwrap();
+    for c in verdicts["changes"].as_array().unwrap() {
+        let timed = c["metric"] == "frame_ms" || c["metric"] == "query_batches" && c["mode"] == "roc";
+        assert_eq!(c["verdict"], if timed { "not_judged" } else { "same" }, "{c}");
+    }
     fails_with(
         &[
             "compare",

@@ -403,6 +403,14 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
     edited_copy(&more_triangles, &same_backend, |j| {
         j["adapter"]["name"] = "Other GPU".into();
     });
+    // One of that backend at another sub-pixel precision does other work
+    // (its box tests' margins): its triangles are not held against the
+    // others'.
+    let coarse = dir.path().join("coarse-gpu");
+    edited_copy(&more_triangles, &coarse, |j| {
+        j["adapter"]["name"] = "Coarse GPU".into();
+        j["adapter"]["subpixel_bits"] = (j["adapter"]["subpixel_bits"].as_u64().unwrap() - 4).into();
+    });
     let other_backend = dir.path().join("other-backend");
     edited_copy(&same_backend, &other_backend, |j| {
         j["adapter"]["backend"] = "Metal".into()
@@ -421,6 +429,7 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
         "merge",
         s(&small),
         s(&same_backend),
+        s(&coarse),
         s(&other_backend),
         s(&old),
         "--out",
@@ -429,7 +438,7 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
     assert!(run.status.success(), "{:?}", own_stderr(&run));
     let m = merged(&merged_out);
     assert_eq!(m.runs.len(), 1);
-    assert_eq!(m.runs[0].adapters.len(), 4);
+    assert_eq!(m.runs[0].adapters.len(), 5);
     let flagged: Vec<(&str, &str, &str)> = m.runs[0]
         .disagreements
         .iter()
@@ -438,6 +447,15 @@ fn merge_refuses_what_is_not_one_run_and_flags_counters_one_backend_disagrees_on
     assert_eq!(
         flagged,
         [("vfc", "triangles_drawn", summary(&small).adapter.backend.as_str())]
+    );
+    let named: Vec<&str> = m.runs[0].disagreements[0]
+        .values
+        .iter()
+        .map(|(a, _)| a.as_str())
+        .collect();
+    assert!(
+        named.contains(&"Other GPU") && !named.contains(&"Coarse GPU"),
+        "{named:?}"
     );
     let warnings: Vec<String> = own_stderr(&run)
         .into_iter()
@@ -760,6 +778,22 @@ fn compare_of_merged_folders_pairs_a_run_that_what_else_was_merged_renamed() {
     let paired = occlu(&["compare", s(&elsewhere), s(&new)]);
     assert_eq!(paired.status.code(), Some(0), "{}", stdout(&paired));
     assert!(!stdout(&paired).contains("MISSING"), "{}", stdout(&paired));
+    // A new run that pairs with a base run by name pairs with no other: a
+    // base run of its contents under another name is missing, not the
+    // same run compared twice.
+    let (two, one) = (dir.path().join("two"), dir.path().join("one"));
+    let first = single_named("q1", "path.json", "00000000000000a1");
+    let second = single_named("q2", "p2.json", "00000000000000b2");
+    assert!(
+        occlu(&["merge", s(&first), s(&second), "--out", s(&two)])
+            .status
+            .success()
+    );
+    let moved = single_named("q3", "path.json", "00000000000000b2");
+    assert!(occlu(&["merge", s(&moved), "--out", s(&one)]).status.success());
+    let once = occlu(&["compare", s(&two), s(&one)]);
+    assert_eq!(once.status.code(), Some(1), "{}", stdout(&once));
+    assert_eq!(stdout(&once).matches("MISSING").count(), 1, "{}", stdout(&once));
 }
 
 #[test]

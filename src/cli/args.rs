@@ -472,8 +472,8 @@ pub struct CompareArgs {
     pub allow_missing: bool,
     /// Compare runs from different adapters or backends (counters only:
     /// frame times are not comparable across them; where the adapters work
-    /// differently, as another backend does, only wrong pixels and missed
-    /// objects).
+    /// differently, as another backend or sub-pixel precision does, only
+    /// wrong pixels and missed objects).
     #[arg(long)]
     pub cross_adapter: bool,
     /// Print the verdicts as JSON (for machines) instead of the table.

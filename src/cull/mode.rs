@@ -61,6 +61,13 @@ impl ModeId {
             info.draws_by_time && (what == CountKind::Work || !info.conservative)
         })
     }
+
+    /// Whether the mode labelled `label` culls on the GPU alone: where the
+    /// adapter has no indirect counts, it reads its lists' lengths back, a
+    /// round trip a frame.
+    pub fn walks_on_gpu(label: &str) -> bool {
+        ModeId::of_label(label).is_some_and(|m| m.info().needs == Needs::GpuCulling)
+    }
 }
 
 /// What a summary's count measures: the work a mode did, or its error.

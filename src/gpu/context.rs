@@ -108,24 +108,25 @@ impl AdapterReport {
         (&self.name, &self.backend, &self.lp_num_threads) == (&other.name, &other.backend, &other.lp_num_threads)
     }
 
-    /// What, if anything, makes the modes do different work on `self` and
+    /// What, if anything, makes every mode's work differ on `self` and
     /// `other` whatever the code: another backend (GL's depth range keeps
-    /// less precision than the others', which moves what box tests hide) or
-    /// another feature a mode uses (GL reads the GPU walks' list lengths
-    /// back, a round trip a frame; sub-pixel precision sets box tests'
-    /// margins and `swr`'s occluders; without pixel counts or GPU-driven
-    /// culling, the modes that need them do not run, and `auto` has fewer
-    /// to choose from). The first that differs.
+    /// less precision than the others', which moves what box tests hide)
+    /// or another sub-pixel precision (it sets box tests' margins and what
+    /// `swr`'s occluders vouch for). The first that differs.
     pub fn work_differs_from(&self, other: &AdapterReport) -> Option<&'static str> {
         [
             ("backends", self.backend != other.backend),
-            ("indirect counts", self.indirect_count != other.indirect_count),
             ("sub-pixel precisions", self.subpixel_bits != other.subpixel_bits),
-            ("pixel counts", self.pixel_counts != other.pixel_counts),
-            ("GPU-driven culling", self.gpu_driven != other.gpu_driven),
         ]
         .into_iter()
         .find_map(|(what, differs)| differs.then_some(what))
+    }
+
+    /// Whether the GPU walks' round trips differ on `self` and `other`
+    /// whatever the code: without indirect counts they read their lists'
+    /// lengths back, one a frame.
+    pub fn round_trips_differ_from(&self, other: &AdapterReport) -> bool {
+        self.indirect_count != other.indirect_count
     }
 }
 

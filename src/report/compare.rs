@@ -260,11 +260,15 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
     let (adapter_a, adapter_b) = (&base_summary.adapter, &new_summary.adapter);
     let same_adapter = adapter_a.times_compare_with(adapter_b);
     // On adapters that work differently, what a mode does differs too:
-    // only what it got wrong compares.
+    // only what it got wrong compares (or, where only the GPU walks'
+    // read-backs differ, all but their round trips).
     let work_apart = adapter_a.work_differs_from(adapter_b);
-    let compares = |metric: Metric| match metric.count_kind() {
+    let trips_apart = adapter_a.round_trips_differ_from(adapter_b);
+    let compares = |metric: Metric, label: &str| match metric.count_kind() {
         None => same_adapter,
-        Some(CountKind::Work) => work_apart.is_none(),
+        Some(CountKind::Work) => {
+            work_apart.is_none() && !(trips_apart && metric == Metric::QueryBatches && ModeId::walks_on_gpu(label))
+        }
         Some(CountKind::Error) => true,
     };
     if !same_adapter {
@@ -272,19 +276,23 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
         if !options.cross_adapter {
             return Err(CompareError::Adapters { base, new });
         }
-        let judged = match work_apart {
-            None => "counters",
-            Some(_) => "error counters",
+        let (judged, shown) = match (work_apart, trips_apart) {
+            (Some(what), _) => (
+                "error counters",
+                format!(
+                    "frame times and the counts of work are shown but not judged (the adapters' {what} differ, which changes what the modes do); error counters are judged"
+                ),
+            ),
+            (None, true) => (
+                "counters other than the GPU walks' round trips",
+                "frame times and the GPU walks' round trips are shown but not judged (one adapter has no indirect counts: they read their lists' lengths back, a round trip a frame); the other counters are judged".to_string(),
+            ),
+            (None, false) => ("counters", "frame times are shown but not judged; counters are".to_string()),
         };
-        if !options.metrics.iter().any(|&m| compares(m)) {
+        let judged_somewhere = |m: Metric| base_summary.modes.iter().any(|b| compares(m, &b.name));
+        if !options.metrics.iter().any(|&m| judged_somewhere(m)) {
             return Err(CompareError::NothingToJudge { base, new, judged });
         }
-        let shown = match work_apart {
-            None => "frame times are shown but not judged; counters are".to_string(),
-            Some(what) => format!(
-                "frame times and the counts of work are shown but not judged (the adapters' {what} differ, which changes what the modes do); error counters are judged"
-            ),
-        };
         notes.push(format!("different adapters ({adapter_a} vs {adapter_b}): {shown}"));
     }
     let frames = base_summary.frames.min(new_summary.frames);
@@ -314,7 +322,9 @@ fn compare_runs(base: &Path, new: &Path, options: &CompareOptions) -> Result<Com
             let verdict = match (base_value, new_value, n) {
                 // Times on two adapters measure the adapters, not a change,
                 // and so do the counts that follow them.
-                (Some(_), Some(_), Some(_)) if !same_adapter && (!compares(metric) || metric.follows_time(&b.name)) => {
+                (Some(_), Some(_), Some(_))
+                    if !same_adapter && (!compares(metric, &b.name) || metric.follows_time(&b.name)) =>
+                {
                     Verdict::NotJudged
                 }
                 (Some(x), Some(y), Some(n)) => {
@@ -359,11 +369,14 @@ fn compare_merged(
     let mut changes = Vec::new();
     let mut notes = Vec::new();
     let mut paired = Vec::new();
+    // A new run folder named as a base one pairs with it alone.
+    let named_alike = |i: &Identity| base_columns.iter().any(|(b, _)| b == i);
+    let unnamed: Vec<(Identity, PathBuf)> = new_columns.iter().filter(|(i, _)| !named_alike(i)).cloned().collect();
     for (identity, base_folder) in &base_columns {
         let name = label(base_folder);
         let found = match new_columns.iter().find(|(i, _)| i == identity) {
             Some(found) => Some(found),
-            None => renamed(identity, base_folder, &new_columns),
+            None => renamed(identity, base_folder, &unnamed).filter(|(i, _)| !paired.contains(&i)),
         };
         let Some((new_identity, new_folder)) = found else {
             notes.push(format!("run {name} is in the base only"));

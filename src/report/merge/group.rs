@@ -12,6 +12,7 @@ use super::merged::{
 };
 use super::read::RunFolder;
 use crate::cull::{CountKind, ModeId};
+use crate::gpu::AdapterReport;
 use crate::report::summary::{Fingerprint, MatrixIdentity, Summary, same_count};
 
 impl RunFolder {
@@ -30,9 +31,9 @@ impl RunFolder {
 
     /// The first thing `other`, the same run, measured differently, if
     /// any: what it is and each folder's value. What a user sets (frames,
-    /// resolution, warmup, mode parameters) comes before the fingerprints,
-    /// which a different frame count changes too, so the message names the
-    /// real difference.
+    /// resolution, warmup, cluster size, mode parameters) comes before the
+    /// fingerprints, which a different frame count changes too, so the
+    /// message names the real difference.
     fn differs_from(&self, other: &RunFolder) -> Option<(&'static str, String, String)> {
         let (a, b) = (&self.summary, &other.summary);
         let identity = |what, (source_a, fa): (&String, Option<Fingerprint>), (source_b, fb)| {
@@ -240,7 +241,8 @@ pub(super) fn merged_run(name: &str, folders: &[RunFolder], used: &mut BTreeSet<
                 .collect(),
         })
         .collect();
-    let disagreements = cross_check(&adapters, &modes);
+    let reports: Vec<&AdapterReport> = folders.iter().map(|f| &f.summary.adapter).collect();
+    let disagreements = cross_check(&reports, &modes);
     MergedRun {
         name: name.to_string(),
         scene: first.scene.facts.source.clone(),
@@ -266,8 +268,21 @@ const SAME_ON_EVERY_ADAPTER: [(&str, Counter); 4] = [
 ];
 
 /// The counters of [`SAME_ON_EVERY_ADAPTER`] that differ between adapters
-/// of one backend.
-fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreement> {
+/// (`adapters`, in the columns' order) of one backend: what a mode got
+/// wrong on every adapter of it, what it did on those that do alike work
+/// ([`AdapterReport::work_differs_from`]: sub-pixel precision sets box
+/// tests' margins).
+fn cross_check(adapters: &[&AdapterReport], modes: &[ModeRow]) -> Vec<Disagreement> {
+    // The adapters a counter of `kind` compares adapter `i` with, named
+    // by the first of them.
+    let group_of = |kind: CountKind, i: usize| {
+        (0..i)
+            .find(|&j| match kind {
+                CountKind::Error => adapters[j].backend == adapters[i].backend,
+                CountKind::Work => adapters[j].work_differs_from(adapters[i]).is_none(),
+            })
+            .unwrap_or(i)
+    };
     let backends: BTreeSet<&str> = adapters.iter().map(|a| a.backend.as_str()).collect();
     let mut found = Vec::new();
     for row in modes {
@@ -283,20 +298,23 @@ fn cross_check(adapters: &[AdapterColumn], modes: &[ModeRow]) -> Vec<Disagreemen
                 if ModeId::counts_follow_time(&row.mode, kind) {
                     continue;
                 }
-                let values: Vec<(String, f64)> = adapters
-                    .iter()
-                    .zip(&row.results)
-                    .filter(|(a, _)| a.backend == backend)
-                    .filter_map(|(a, r)| Some((a.name.clone(), value(r.as_ref()?)?)))
+                let groups: BTreeSet<usize> = (0..adapters.len())
+                    .filter(|&i| adapters[i].backend == backend)
+                    .map(|i| group_of(kind, i))
                     .collect();
-                let differ = values.iter().any(|(_, v)| !same_count(values[0].1, *v));
-                if differ {
-                    found.push(Disagreement {
-                        mode: row.mode.clone(),
-                        counter: counter.into(),
-                        backend: backend.into(),
-                        values,
-                    });
+                for group in groups {
+                    let values: Vec<(String, f64)> = (0..adapters.len())
+                        .filter(|&i| group_of(kind, i) == group)
+                        .filter_map(|i| Some((adapters[i].name.clone(), value(row.results[i].as_ref()?)?)))
+                        .collect();
+                    if values.iter().any(|(_, v)| !same_count(values[0].1, *v)) {
+                        found.push(Disagreement {
+                            mode: row.mode.clone(),
+                            counter: counter.into(),
+                            backend: backend.into(),
+                            values,
+                        });
+                    }
                 }
             }
         }
