@@ -161,6 +161,18 @@ fn bad_input_gets_one_clear_line() {
     let started = std::time::Instant::now();
     fails_with(&["bench", "--out", &blocked], 2, &["blocker"]);
     assert!(started.elapsed().as_secs() < 5, "refused before loading the city");
+    // So is the output of a command that loads a model and plans a path,
+    // before the model is read (this one does not exist: its error would
+    // name it).
+    let absent = d("absent.obj");
+    for command in [&["path", "gen"][..], &["render", "--frame", "0", "--mode", "vfc"][..]] {
+        let file = format!("{blocked}/out.png");
+        let said = own_stderr(&occlu(&[command, &[absent.as_str(), "-o", &file]].concat())).join(" ");
+        assert!(
+            said.contains("blocker") && !said.contains("absent.obj"),
+            "{command:?}: {said}"
+        );
+    }
     fails_with(
         &["stress", "--cases", "bogus"],
         2,

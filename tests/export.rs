@@ -97,3 +97,64 @@ fn a_z_up_model_is_exported_y_up_as_gltf_expects() {
         );
     }
 }
+
+#[test]
+fn an_export_of_a_path_whose_field_of_view_changes_says_it_keeps_frame_0s() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str, last_fov: f64| {
+        let text = format!(
+            r#"{{"frames": 4, "keyframes": [
+                {{"time": 0, "position": [2, 1.7, 2], "target": [20, 1.7, 15], "fov_y_deg": 90}},
+                {{"time": 1, "position": [3, 1.7, 2], "target": [20, 1.7, 15], "fov_y_deg": {last_fov}}}]}}"#
+        );
+        common::write(dir.path(), name, text)
+    };
+    let export = |path: &std::path::Path| {
+        let glb = dir.path().join("out.glb");
+        let out = common::occlu(&[
+            "export",
+            "--scene",
+            "city:blocks=1",
+            "--path",
+            path.to_str().unwrap(),
+            "-o",
+            glb.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{:?}", common::own_stderr(&out));
+        common::own_stderr(&out).join("\n")
+    };
+    let said = export(&path("zoom.json", 10.0));
+    assert!(
+        said.contains(
+            "warning: the path's field of view changes (10° to 90°): the export keeps frame 0's, 90°, throughout"
+        ),
+        "{said}"
+    );
+    let said = export(&path("steady.json", 90.0));
+    assert!(!said.contains("field of view"), "{said}");
+}
+
+#[test]
+fn a_path_at_the_narrowest_field_of_view_exports_and_replays_at_it() {
+    // 1° in f32 radians reads back as 0.99999997°: still the path's 1°.
+    let dir = tempfile::tempdir().unwrap();
+    let path = common::write(
+        dir.path(),
+        "narrow.json",
+        r#"{"frames": 3, "fov_y_deg": 1, "keyframes": [
+            {"time": 0, "position": [2, 1.7, 2], "target": [20, 1.7, 15]},
+            {"time": 1, "position": [3, 1.7, 2], "target": [20, 1.7, 15]}]}"#,
+    );
+    let path = occlu::camera::path::CameraPath::load(&path).unwrap();
+    let city = load(&SceneSpec::Builtin("city:blocks=1".into()), &LoadOptions::default()).unwrap();
+    let file = common::write(
+        dir.path(),
+        "narrow.glb",
+        occlu::export::glb(&city, &path, 4.0 / 3.0).unwrap(),
+    );
+    let back = load(&SceneSpec::File(file), &LoadOptions::default()).unwrap();
+    assert_eq!(back.cameras.len(), 1, "{:?}", back.warnings);
+    let (replay, why) = default_path(&back).unwrap();
+    assert!(why.contains("'occlu path'"), "{why}");
+    assert_eq!(replay.camera(1, 4.0 / 3.0).fov_y, 1f64.to_radians());
+}

@@ -108,6 +108,23 @@ fn a_case_at_a_size_the_adapter_cannot_hold_is_skipped_and_the_run_goes_on() {
         );
         assert_eq!(report.rows.len(), 1, "the other case ran");
         assert!(occlu::stress::render_markdown(&report).contains("skipped case: too wide: 1048576x1"));
+        // The run's own size the adapter cannot hold is refused: every case
+        // without a size of its own would be skipped, checking nothing.
+        let refused = occlu::stress::run(
+            &gpu,
+            &cases[1..],
+            &[ModeId::Vfc],
+            Resolution {
+                width: 1 << 20,
+                height: 1,
+            },
+            &mut |_| ControlFlow::Continue(()),
+        );
+        let Err(error) = refused else { panic!("refused") };
+        assert!(
+            error.is_input_error() && error.to_string().contains("render target side"),
+            "{error}"
+        );
     }
 }
 

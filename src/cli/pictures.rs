@@ -20,6 +20,8 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     };
     let params = ModeParams::parse(&args.picture.params, &modes)?;
     args.scene.refuse_as_output(&args.picture.output)?;
+    // Refused before a long load and path planning, not after.
+    occlu::report::check_writable(&args.picture.output)?;
     let backend = args.picture.backend.unwrap_or_default();
     backend.backends()?;
     let (scene, path) = args.scene.load(&args.picture.output)?;

@@ -6,12 +6,13 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use occlu::camera::generate::plan_heard;
-use occlu::camera::path::{CameraPath, PathError};
+use occlu::camera::path::{CameraPath, Keyframe, PathError};
 use occlu::gpu::Resolution;
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::raycast::{Budget, RayCaster, Stopped};
 use occlu::report::SceneFacts;
 use occlu::scene::{Scene, load};
+use occlu::text::number;
 
 use super::args::{ExportArgs, InfoArgs, PathGenArgs};
 use super::output::{emit, say};
@@ -100,6 +101,22 @@ pub fn export(args: &ExportArgs) -> anyhow::Result<()> {
             scene.movers.len()
         );
     }
+    // A camera's field of view is not a glTF animation target: the export
+    // keeps the first keyframe's, which frame 0 has.
+    let degrees = |k: &Keyframe| k.fov_y.to_degrees();
+    let (narrowest, widest) = path
+        .keyframes
+        .iter()
+        .map(degrees)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+    if narrowest < widest {
+        say!(
+            "warning: the path's field of view changes ({}° to {}°): the export keeps frame 0's, {}°, throughout (glTF animates a camera's place and turn, not its field of view)",
+            number(narrowest),
+            number(widest),
+            number(degrees(&path.keyframes[0]))
+        );
+    }
     let bytes = occlu::export::glb(&scene, &path, Resolution::DEFAULT.aspect())?;
     occlu::report::write_whole(output, &bytes)?;
     say!(
@@ -119,6 +136,8 @@ pub fn path_gen(args: &PathGenArgs) -> anyhow::Result<()> {
     if let Some(model) = &scene_args.model {
         occlu::report::refuse_input_as_output(output, &[model])?;
     }
+    // Refused before a long load and path planning, not after.
+    occlu::report::check_writable(output)?;
     let scene: Scene = load(&scene_args.spec()?, &scene_args.options())?;
     occlu::report::refuse_input_as_output(output, &scene.files)?;
     let mut progress = Progress::new(false, 0, String::new());

@@ -367,14 +367,14 @@ fn replay(
 /// range, or culls everything.
 pub const NEAR_RANGE: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
 /// The vertical fields of view a view takes, degrees: wider would make
-/// the projection degenerate in f32; narrower magnifies the adapters'
-/// rounding past what any mode's margins hold. Measured (`occlu stress
-/// --cases fov-narrowest`, and a wall 0.1 mm to 67 mm before the eye
-/// hiding another, 400x300): llvmpipe and lavapipe leave columns of the
-/// wall at the view's edge undrawn at 0.5° and narrower (0.001° to 0.5°:
-/// 300 to 9 900 pixels of the wall behind shown), which a box test or
-/// `swr`'s buffer, taking the wall as drawn, cannot know; from 1° to 60°,
-/// the eye down to 10⁻⁷ before the wall, never.
+/// the projection degenerate in f32; narrower, the adapters do not draw
+/// what they are given. Measured (`occlu stress --cases fov-narrowest`,
+/// and a wall 0.1 mm to 67 mm before the eye hiding another, one frame at
+/// 400x300): at 0.5° and narrower, llvmpipe and lavapipe leave columns of
+/// the wall at the view's edge undrawn (up to 15), so 300 to 9 900 pixels
+/// of the wall behind show, which a box test or `swr`'s buffer, taking
+/// the wall as drawn, cannot know; from 1° to 60°, the eye down to 10⁻⁷
+/// before the wall, never.
 pub const FOV_RANGE: std::ops::RangeInclusive<f64> = 1.0..=179.9;
 
 /// Why `camera`'s projection gives no view occlu can take, if it does not:
@@ -395,15 +395,29 @@ fn projection_fault(camera: &gltf::Camera) -> Option<String> {
             NEAR_RANGE.end()
         ));
     }
-    match yfov.map(|yfov| f64::from(yfov).to_degrees()) {
-        Some(degrees) if !FOV_RANGE.contains(&degrees) => Some(format!(
+    match yfov {
+        Some(yfov) if fov_degrees(yfov).is_none() => Some(format!(
             "its yfov is {}°: occlu's views take fields of view from {}° to {}°",
-            number((degrees * 1e3).round() / 1e3),
+            number((f64::from(yfov).to_degrees() * 1e3).round() / 1e3),
             FOV_RANGE.start(),
             FOV_RANGE.end()
         )),
         _ => None,
     }
+}
+
+/// The field of view in degrees, within [`FOV_RANGE`], that a glTF
+/// camera's `yfov` (radians in f32, read as the shortest decimal that
+/// writes it) names; `None` outside the range. An end of the range put
+/// into f32 reads back a hair beyond it (1° is 0.99999997°, as `occlu
+/// export` writes a 1° path): what rounds to an end's f32 is that end.
+fn fov_degrees(yfov: f32) -> Option<f64> {
+    let (least, most) = (*FOV_RANGE.start(), *FOV_RANGE.end());
+    let in_f32 = |degrees: f64| degrees.to_radians() as f32;
+    // JSON holds no NaN: the numbers compare.
+    (in_f32(least)..=in_f32(most))
+        .contains(&yfov)
+        .then(|| decimal(yfov).to_degrees().clamp(least, most))
 }
 
 /// A camera's pose under `world`, or `None` when the transform cannot place
@@ -414,7 +428,7 @@ fn pose_of(camera: &gltf::Camera, world: DMat4) -> Option<CameraPose> {
         return None;
     }
     let (fov_y_deg, near) = match camera.projection() {
-        gltf::camera::Projection::Perspective(p) => (Some(decimal(p.yfov()).to_degrees()), Some(decimal(p.znear()))),
+        gltf::camera::Projection::Perspective(p) => (fov_degrees(p.yfov()), Some(decimal(p.znear()))),
         gltf::camera::Projection::Orthographic(o) => (None, Some(decimal(o.znear()))),
     };
     Some(CameraPose {

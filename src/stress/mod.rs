@@ -172,6 +172,10 @@ pub enum StressError {
     Gpu(#[from] GpuError),
     #[error("unknown stress case '{name}' (cases: {known})")]
     UnknownCase { name: String, known: String },
+    /// Every mode asked for is one the adapter cannot run: the run would
+    /// check nothing.
+    #[error("no mode of --modes runs on {adapter} ({skipped}): nothing would be checked")]
+    NoModeRuns { adapter: String, skipped: String },
     /// The caller asked the run to stop (Ctrl-C).
     #[error("interrupted: no results written")]
     Interrupted,
@@ -183,7 +187,7 @@ impl StressError {
         match self {
             StressError::Gpu(e) => e.is_input_error(),
             StressError::Interrupted => false,
-            StressError::Mode(_) | StressError::UnknownCase { .. } => true,
+            StressError::Mode(_) | StressError::UnknownCase { .. } | StressError::NoModeRuns { .. } => true,
         }
     }
 }
@@ -251,6 +255,16 @@ pub fn run(
             None => true,
         })
         .collect();
+    if modes.is_empty() {
+        let skipped = skipped.iter().map(|s| format!("{}: {}", s.mode, s.reason));
+        return Err(StressError::NoModeRuns {
+            adapter: gpu.adapter.to_string(),
+            skipped: skipped.collect::<Vec<_>>().join("; "),
+        });
+    }
+    // The run's own size must fit the adapter: every case but those at a
+    // size of their own is drawn at it.
+    RenderTargets::check(gpu, resolution)?;
     let total: u32 = cases.iter().map(|c| c.cameras.len() as u32).sum();
     let mut done = 0;
     let mut rows = Vec::new();
@@ -271,7 +285,7 @@ pub fn run(
         // A case at a size of its own (8191×3) may exceed a small adapter:
         // that case is skipped, the run goes on.
         if let Err(e) = RenderTargets::check(gpu, size) {
-            if e.is_input_error() {
+            if e.is_input_error() && case.resolution.is_some() {
                 let reason = format!("{size}: {e}");
                 events(StressEvent::CaseSkipped {
                     case: &case.name,
