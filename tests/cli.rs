@@ -155,6 +155,11 @@ fn bad_input_gets_one_clear_line() {
         2,
         &["--warmup", "4294967295 is not in 0..=10000"],
     );
+    fails_with(
+        &["info", "--cluster-triangles", "99999999999"],
+        2,
+        &["99999999999 is not in 1..=4294967295"],
+    );
     // An unwritable output directory is refused before any work.
     let blocker = write(dir.path(), "blocker", "a file, not a directory");
     let blocked = format!("{}/sub", blocker.display());
@@ -535,6 +540,16 @@ fn bench_writes_the_three_result_files_with_the_adapter() {
         report.contains(&format!("**Fastest conservative mode: {fastest}**")),
         "{report}"
     );
+    // A folder where a chart goes is refused before any file is replaced:
+    // the folder's set of files stays one run's.
+    use std::os::unix::fs::MetadataExt as _;
+    let [first, .., last] = occlu::report::charts::CHARTS;
+    std::fs::remove_file(out.join(last)).unwrap();
+    std::fs::create_dir(out.join(last)).unwrap();
+    let inode = |name: &str| std::fs::metadata(out.join(name)).unwrap().ino();
+    let before = [inode(first), inode("report.md")];
+    fails_with(&["plot", out_s], 2, &[last, "is a folder where occlu writes a file"]);
+    assert_eq!([inode(first), inode("report.md")], before, "nothing replaced");
 }
 
 #[test]

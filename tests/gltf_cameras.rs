@@ -253,6 +253,8 @@ fn a_camera_or_animation_occlu_cannot_use_is_left_out_with_a_warning() {
     // Valid glTF, but wider than a view takes (179.989°), or nearer.
     let wide = w.node(json!({"name": "wide", "camera": 3}));
     let near = w.node(json!({"name": "near", "camera": 4}));
+    // Kept, drawn in perspective, with a warning that says so.
+    let ortho = w.node(json!({"name": "ortho", "camera": 5, "translation": [0.0, 0.0, 5.0]}));
     // Keys out of order, and keys at -0 and +0 in two channels.
     let backwards = w.floats(&[0.0, 2.0, 1.0], "SCALAR");
     let moves = w.floats(&[0.0; 9], "VEC3");
@@ -267,7 +269,8 @@ fn a_camera_or_animation_occlu_cannot_use_is_left_out_with_a_warning() {
             {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.0}},
             {"type": "perspective", "perspective": {"yfov": 0.0, "znear": 0.05}},
             {"type": "perspective", "perspective": {"yfov": 3.1414, "znear": 0.05}},
-            {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 1e-12}}
+            {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 1e-12}},
+            {"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.05, "zfar": 100.0}}
         ]),
     );
     w.extra.insert(
@@ -284,12 +287,16 @@ fn a_camera_or_animation_occlu_cannot_use_is_left_out_with_a_warning() {
     let model = write(
         dir.path(),
         "odd.glb",
-        w.glb(&[cube_node, flat, kept, blind, flat_view, wide, near]),
+        w.glb(&[cube_node, flat, kept, blind, flat_view, wide, near, ortho]),
     );
     let scene = load(&SceneSpec::File(model), &LoadOptions::default()).unwrap();
     let names: Vec<&str> = scene.cameras.iter().map(|c| c.name.as_str()).collect();
-    assert_eq!(names, ["kept"]);
+    assert_eq!(names, ["kept", "ortho"]);
     let said = scene.warnings.join(" | ");
+    assert!(
+        said.contains("camera 'ortho' is orthographic: occlu draws it in perspective"),
+        "{said}"
+    );
     assert!(said.contains("camera 'lost' is left out"), "{said}");
     assert!(
         said.contains("camera 'blind' is left out: its znear is 0: occlu's views take near planes from 1e-9 to 1e9"),

@@ -152,7 +152,7 @@ pub struct SceneArgs {
     #[arg(long, value_name = "N", conflicts_with = "model")]
     pub movers: Option<u32>,
     /// Meshes with more triangles than this are split into clusters [default: 4096].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub cluster_triangles: Option<u32>,
     /// Largest model or glTF buffer file read, e.g. 512M or 16G; larger
     /// files, and files that grow past it while read, are refused [default: 4G].

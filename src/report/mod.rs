@@ -251,6 +251,21 @@ fn publish(
         .map_err(ReportError::at(&staging))
         .and_then(|()| write(&staging));
     let moved = staged.and_then(|names| {
+        // A name that holds what the staged one cannot replace (a folder
+        // where a file goes, or the reverse) is refused before anything
+        // moves, so `out` is left as it was, not half replaced.
+        for name in &names {
+            let (staged, target) = (staging.join(name), out.join(name));
+            if let Ok(held) = std::fs::symlink_metadata(&target)
+                && held.is_dir() != staged.is_dir()
+            {
+                let what = match held.is_dir() {
+                    true => "is a folder where occlu writes a file",
+                    false => "is not a folder, where occlu writes one",
+                };
+                return Err(ReportError::at(&target)(std::io::Error::other(what)));
+            }
+        }
         for name in stale {
             let path = out.join(name);
             match std::fs::remove_file(&path) {

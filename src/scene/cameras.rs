@@ -229,6 +229,11 @@ pub fn read(gltf: &gltf::Gltf, buffers: &[Vec<u8>], reached: &[bool], check: &Ch
                 for &n in &chain {
                     moves_a_camera[n] = true;
                 }
+                if let gltf::camera::Projection::Orthographic(_) = camera.projection() {
+                    warnings.push(format!(
+                        "camera '{name}' is orthographic: occlu draws it in perspective from where it stands, at a path's default field of view"
+                    ));
+                }
                 cameras.push(FileCamera {
                     name,
                     node: node.index(),
