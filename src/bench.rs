@@ -13,6 +13,7 @@
 //! recorded.
 
 use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::animation::{Animation, AnimationError, AnimationOptions, DEFAULT_SCALE, Filmstrip, FrameRange, Reel};
@@ -26,9 +27,10 @@ use crate::measure::{FrameStats, FrameTimeline, MissedObject, ModeDescription, M
 use crate::picture::Look;
 use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::report::{
-    Fingerprint, MissedSummary, OutputLock, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION, SceneFacts,
-    SceneSummary, SkippedMode, Summary, SweepSummary, ToolInfo, Verdict, check_writable, prepare_output,
-    refuse_input_among_results, refuse_input_as_output, refuse_result_file, trace_json, write_results, write_whole,
+    Fingerprint, MatrixIdentity, MissedSummary, OutputLock, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION,
+    SceneFacts, SceneSummary, SkippedMode, Staged, Summary, SweepSummary, ToolInfo, Verdict, check_writable,
+    prepare_output, read_summary, refuse_input_among_results, refuse_input_as_output, refuse_result_file, stage_whole,
+    trace_json, write_results,
 };
 use crate::scene::{Scene, SceneError, SceneSpec};
 use crate::session::{RunOptions, Session, ms};
@@ -264,25 +266,45 @@ pub fn execute(
         frames_csv: None,
         animation: None,
     };
-    // The extras first: a run that cannot write one (a full disk) fails
-    // with the results folder as it was.
-    write_extras(plan, &summary, &output)?;
+    // The extras are written first and put in place last: a run that
+    // cannot write one (a full disk) fails with the results folder as it
+    // was, and one whose results cannot be written with the extras as they
+    // were.
+    let extras = extras(plan, &summary, &output);
+    let staged = extras
+        .iter()
+        .map(|(path, bytes)| stage_whole(path, bytes))
+        .collect::<Result<Vec<Staged>, ReportError>>()?;
     let png = animation.as_ref().map(|a| a.png.as_slice());
     let files = write_results(&plan.out, &mut summary, &output.rows, &output.missed, png)?;
+    for extra in staged {
+        extra.publish()?;
+    }
     Ok(BenchOutcome { summary, files })
 }
 
 /// Claims `plan`'s --out for the run (refused when it holds a merged
-/// result) and checks that --export-github-benchmark and --trace can be
-/// written, and not over one of the run's own result files.
+/// result, or, for a run outside a matrix, a matrix's run folders) and
+/// checks that --export-github-benchmark and --trace can be written, and
+/// not over one of the run's own result files.
 fn claim_outputs(plan: &BenchPlan) -> Result<OutputLock, BenchError> {
     // A merged folder's report.md and this run's would share a name.
     let merged = plan.out.join("merged.json");
     if merged.exists() {
-        let error = std::io::Error::other(
+        return Err(refused(
+            &merged,
             "--out holds a merged result: a run there would replace its report.md; choose another --out",
-        );
-        return Err(ReportError::at(&merged)(error).into());
+        ));
+    }
+    // Merge reads a folder that holds a run as that run alone: the
+    // matrix's runs beside it would be left out.
+    if plan.matrix.is_none()
+        && let Some(folder) = run_folders_in(&plan.out).next()
+    {
+        return Err(refused(
+            &folder,
+            "is a matrix's run folder in --out: a single run's results beside it would hide the matrix's runs from merge; choose another --out",
+        ));
     }
     let model = match &plan.scene {
         SceneSpec::File(model) => Some(model),
@@ -297,6 +319,48 @@ fn claim_outputs(plan: &BenchPlan) -> Result<OutputLock, BenchError> {
         check_writable(path)?;
     }
     Ok(claim)
+}
+
+/// Refuses a matrix's --out (`out`, for the matrix `matrix`) that holds a
+/// single run's results, which merge would read instead of the matrix's
+/// run folders, or run folders of another matrix (one whose runs, or
+/// their order, have changed since), which merge would count besides this
+/// one's. Run once before a matrix's runs (reading every run folder's
+/// summary.json), not by each run.
+pub fn refuse_other_results_in_matrix_out(out: &Path, matrix: MatrixIdentity) -> Result<(), BenchError> {
+    let single = out.join("summary.json");
+    if single.exists() {
+        return Err(refused(
+            &single,
+            "is a single run's result in the matrix's --out: merge would read it alone and leave the matrix's runs out; choose another --out",
+        ));
+    }
+    for folder in run_folders_in(out) {
+        if read_summary(&folder)?.matrix != Some(matrix) {
+            return Err(refused(
+                &folder,
+                "is a run of another matrix (its runs, or their order, differ from this one's) in --out: merge would count its runs besides this matrix's; empty --out or choose another",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The folders directly in `dir` that hold a run's summary.json (hidden
+/// ones, a run's staging, left out); none where `dir` cannot be read.
+fn run_folders_in(dir: &Path) -> impl Iterator<Item = PathBuf> {
+    std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .filter_map(Result::ok)
+        .filter(|entry| !entry.file_name().as_encoded_bytes().starts_with(b"."))
+        .map(|entry| entry.path())
+        .filter(|path| path.join("summary.json").is_file())
+}
+
+/// A bench refused at `path`, saying `why`.
+fn refused(path: &Path, why: &str) -> BenchError {
+    ReportError::at(path)(std::io::Error::other(why.to_string())).into()
 }
 
 /// The scene loaded and its hierarchy built with `params`, and how many
@@ -488,23 +552,22 @@ fn mode_summaries(
     (modes, verdict)
 }
 
-/// The files `plan` asks for beside the results: github-action-benchmark's
-/// entries and the trace.
-fn write_extras(plan: &BenchPlan, summary: &Summary, output: &RunOutput) -> Result<(), BenchError> {
+/// The files `plan` asks for beside the results, each with its contents:
+/// github-action-benchmark's entries and the trace.
+fn extras(plan: &BenchPlan, summary: &Summary, output: &RunOutput) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut extras = Vec::new();
     if let Some(path) = &plan.export_github_benchmark {
         let entries = crate::report::github::entries(summary);
         let json = serde_json::to_string_pretty(&entries).expect("entries serialise: strings and numbers") + "\n";
-        write_whole(path, json.as_bytes())?;
+        extras.push((path.clone(), json.into_bytes()));
     }
     if let Some(path) = &plan.trace {
         let run = format!(
             "{} along {}, {} frames at {}",
             summary.scene.facts.source, summary.path.source, summary.frames, summary.resolution
         );
-        write_whole(
-            path,
-            trace_json(&summary.adapter, &run, &output.rows, &output.timelines).as_bytes(),
-        )?;
+        let trace = trace_json(&summary.adapter, &run, &output.rows, &output.timelines);
+        extras.push((path.clone(), trace.into_bytes()));
     }
-    Ok(())
+    extras
 }

@@ -280,14 +280,19 @@ impl BenchConfig {
     }
 
     /// `self` with every unset field taken from `fallback`. A model or scene
-    /// given here replaces both of the fallback's, so a flag can switch a
-    /// configured scene to a model.
+    /// given here replaces both of the fallback's, and its movers (the
+    /// configured scene's), so a flag can switch a configured scene to a
+    /// model.
     pub fn or(self, fallback: BenchConfig) -> BenchConfig {
         let source_given = self.model.is_some() || self.scene.is_some();
         BenchConfig {
             model: if source_given { self.model } else { fallback.model },
             scene: if source_given { self.scene } else { fallback.scene },
-            movers: self.movers.or(fallback.movers),
+            movers: if source_given {
+                self.movers
+            } else {
+                self.movers.or(fallback.movers)
+            },
             path: self.path.or(fallback.path),
             modes: self.modes.or(fallback.modes),
             frames: self.frames.or(fallback.frames),
@@ -520,6 +525,12 @@ mod tests {
             params: Some(vec!["omq.factor=0.9".into(), "omq.om=32x24".into()]),
             ..file
         };
+        let file = BenchConfig {
+            movers: Some(3),
+            ..file
+        };
+        // The file's movers go with its scene (a model has none).
+        assert_eq!(flags.clone().or(file.clone()).movers, None);
         let p = flags.or(file).plan().unwrap();
         assert_eq!(p.scene, SceneSpec::File("m.obj".into()));
         assert_eq!((p.frames, p.warmup), (Some(20), 1));

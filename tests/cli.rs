@@ -1690,3 +1690,41 @@ fn external_buffers_before_the_model_leaves_the_model_alone() {
         assert!(stdout(&info).contains("m.obj"), "{flag}: {}", stdout(&info));
     }
 }
+
+#[test]
+fn a_run_whose_results_cannot_be_written_leaves_its_extra_files_as_they_were() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    // A folder where a chart goes: the results are refused whole.
+    std::fs::create_dir_all(out.join("summary.png")).unwrap();
+    let (github, trace) = (write(dir.path(), "gh.json", "OLD"), write(dir.path(), "t.json", "OLD"));
+    let run = occlu(&[
+        "bench",
+        "--scene",
+        "city:blocks=1",
+        "--frames",
+        "2",
+        "--warmup",
+        "0",
+        "--resolution",
+        "64x48",
+        "--modes",
+        "vfc",
+        "--out",
+        out.to_str().unwrap(),
+        "--export-github-benchmark",
+        github.to_str().unwrap(),
+        "--trace",
+        trace.to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(2), "{:?}", own_stderr(&run));
+    assert!(own_stderr(&run).join(" ").contains("summary.png"));
+    for file in [&github, &trace] {
+        assert_eq!(std::fs::read_to_string(file).unwrap(), "OLD", "{}", file.display());
+    }
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left.len(), 3, "no temporary file left: {left:?}");
+}

@@ -843,3 +843,52 @@ fn compare_of_merged_folders_pairs_runs_by_adapter_not_by_folder_name_and_trusts
         );
     }
 }
+
+#[test]
+fn a_matrix_and_a_single_run_or_another_matrix_never_share_an_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let backend = &common::backends()[0];
+    let matrix = tiny_matrix(dir.path(), "m.json", r#"["city:blocks=1"]"#);
+    let single = |out: &Path| {
+        let args = [
+            &[
+                "bench",
+                "--backend",
+                backend.as_str(),
+                "--modes",
+                "vfc",
+                "--resolution",
+                "64x48",
+                "-q",
+                "--out",
+                s(out),
+            ][..],
+            TINY_RUN,
+        ]
+        .concat();
+        occlu(&args)
+    };
+    // A single run's folder takes no matrix: merge would read the run alone.
+    let one = dir.path().join("one");
+    assert!(single(&one).status.success());
+    refused(
+        &["bench", "--config", s(&matrix), "--backend", backend, "--out", s(&one)],
+        &["summary.json", "is a single run's result in the matrix's --out"],
+    );
+    // A matrix's folder takes no single run, which would hide its runs.
+    let many = dir.path().join("many");
+    bench_matrix(&matrix, backend, &many, &["--quiet"]);
+    let out = single(&many);
+    assert_eq!(out.status.code(), Some(2), "{:?}", own_stderr(&out));
+    assert!(own_stderr(&out)[0].contains("is a matrix's run folder in --out"));
+    assert!(!many.join("summary.json").exists());
+    // The same matrix runs there again; another (a run added in front
+    // renames the rest) is refused, as merge would count both.
+    bench_matrix(&matrix, backend, &many, &["--quiet"]);
+    let grown = tiny_matrix(dir.path(), "grown.json", r#"["city:blocks=2", "city:blocks=1"]"#);
+    refused(
+        &["bench", "--config", s(&grown), "--backend", backend, "--out", s(&many)],
+        &["01-city-blocks-1-generated", "is a run of another matrix"],
+    );
+    assert_eq!(run_folders(&many), ["01-city-blocks-1-generated"]);
+}

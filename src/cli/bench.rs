@@ -108,6 +108,10 @@ fn bench_shard(runs: &[MatrixRun], shard: Shard, note: &dyn Fn(String), quiet: b
         // --json still prints a list, of no summaries.
         return if json { emit("[]\n") } else { Ok(()) };
     }
+    // Every run of a matrix shares its --out and identity.
+    if let Some((out, matrix)) = mine[0].plan.out.parent().zip(mine[0].plan.matrix) {
+        occlu::bench::refuse_other_results_in_matrix_out(out, matrix)?;
+    }
     let mut summaries = Vec::new();
     let mut table = String::from("| run | scene | path | adapter | folder |\n|---|---|---|---|---|\n");
     for (k, run) in mine.iter().enumerate() {

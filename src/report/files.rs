@@ -37,11 +37,26 @@ impl ReportError {
 /// nowhere is refused, [`landing`]), and a path that is not a regular file
 /// (`/dev/stdout`, a pipe) is written in place.
 pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
+    stage_whole(path, bytes)?.publish()
+}
+
+/// [`write_whole`]'s first half: `bytes` written whole beside `path`, to be
+/// put in place by [`Staged::publish`] once the rest of a run's output is
+/// (dropped unpublished, the file is removed and `path` left as it was).
+/// A path that is not a regular file (`/dev/stdout`, a pipe) has nothing
+/// to stand in for it: it is written now, so that a fault there (a full
+/// device) comes before the rest is written.
+pub fn stage_whole(path: &Path, bytes: &[u8]) -> Result<Staged, ReportError> {
     let fail = ReportError::at(path);
     let target = landing(path).map_err(&fail)?;
     let existing = std::fs::metadata(&target).ok();
     if existing.as_ref().is_some_and(|m| !m.is_file()) {
-        return std::fs::write(&target, bytes).map_err(fail);
+        std::fs::write(&target, bytes).map_err(&fail)?;
+        return Ok(Staged {
+            path: path.to_path_buf(),
+            target,
+            temporary: None,
+        });
     }
     let temporary = partial(&target);
     let written = create_partial(&temporary)
@@ -49,12 +64,47 @@ pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
         .and_then(|()| match &existing {
             Some(m) => std::fs::set_permissions(&temporary, m.permissions()),
             None => Ok(()),
-        })
-        .and_then(|()| std::fs::rename(&temporary, &target));
-    if written.is_err() {
+        });
+    if let Err(e) = written {
         let _ = std::fs::remove_file(&temporary);
+        return Err(fail(e));
     }
-    written.map_err(fail)
+    Ok(Staged {
+        path: path.to_path_buf(),
+        target,
+        temporary: Some(temporary),
+    })
+}
+
+/// A file [`stage_whole`] wrote, not yet in place.
+pub struct Staged {
+    /// As the caller named it, for errors.
+    path: PathBuf,
+    target: PathBuf,
+    /// Written beside the target, to be renamed over it (`None` where the
+    /// target was written in place, and once it is renamed).
+    temporary: Option<PathBuf>,
+}
+
+impl Staged {
+    /// Puts the file in place.
+    pub fn publish(mut self) -> Result<(), ReportError> {
+        let Some(temporary) = self.temporary.take() else {
+            return Ok(());
+        };
+        std::fs::rename(&temporary, &self.target).map_err(|e| {
+            let _ = std::fs::remove_file(&temporary);
+            ReportError::at(&self.path)(e)
+        })
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if let Some(temporary) = &self.temporary {
+            let _ = std::fs::remove_file(temporary);
+        }
+    }
 }
 
 /// Where writing `path` lands: where it leads, if it exists (through

@@ -23,7 +23,10 @@ use crate::text;
 use claim::{LOCK, STAGING, claim, staging};
 pub use claim::{OutputLock, abandon_unfinished};
 use files::where_written;
-pub use files::{ReportError, check_writable, refuse_input_as_output, refuse_one_file_twice, write_png, write_whole};
+pub use files::{
+    ReportError, Staged, check_writable, refuse_input_as_output, refuse_one_file_twice, stage_whole, write_png,
+    write_whole,
+};
 pub use markdown::render as render_markdown;
 pub use summary::{
     AnimationFact, CameraFact, Fingerprint, MatrixIdentity, MissedSummary, PathSummary, SCHEMA_VERSION, SceneFacts,
