@@ -322,12 +322,20 @@ fn claim_outputs(plan: &BenchPlan) -> Result<OutputLock, BenchError> {
 }
 
 /// Refuses a matrix's --out (`out`, for the matrix `matrix`) that holds a
-/// single run's results, which merge would read instead of the matrix's
-/// run folders, or run folders of another matrix (one whose runs, or
-/// their order, have changed since), which merge would count besides this
-/// one's. Run once before a matrix's runs (reading every run folder's
-/// summary.json), not by each run.
+/// merged result, a single run's results (which merge would read instead
+/// of the matrix's run folders), or run folders of another matrix (one
+/// whose runs, or their order, have changed since; merge would count them
+/// besides this one's). Run once before a matrix's runs (reading every
+/// run folder's summary.json), not by each run.
 pub fn refuse_other_results_in_matrix_out(out: &Path, matrix: MatrixIdentity) -> Result<(), BenchError> {
+    // A merged folder's runs/ and charts/ are no matrix's run folders.
+    let merged = out.join("merged.json");
+    if merged.exists() {
+        return Err(refused(
+            &merged,
+            "--out holds a merged result: a matrix's runs there would be read as part of it; choose another --out",
+        ));
+    }
     let single = out.join("summary.json");
     if single.exists() {
         return Err(refused(

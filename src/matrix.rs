@@ -76,6 +76,19 @@ pub enum MatrixError {
     },
 }
 
+/// `json` where it is an object, as a run's configuration is; refused
+/// otherwise (serde would read an array's elements as the fields in
+/// order, past the check of their names).
+fn object(file: &Path, at: &str, json: serde_json::Value) -> Result<serde_json::Value, ConfigError> {
+    match json.is_object() {
+        true => Ok(json),
+        false => Err(ConfigError::Json {
+            path: file.display().to_string(),
+            message: format!("{at}a configuration is a JSON object of fields (\"frames\": 30, ...), not {json:.40}"),
+        }),
+    }
+}
+
 /// The keys of a configuration file that list runs rather than set one.
 const LISTS: [&str; 4] = ["runs", "models", "scenes", "paths"];
 
@@ -84,7 +97,7 @@ impl Matrix {
     /// `models`, `scenes` or `paths`, else one run. Relative paths are
     /// relative to the file.
     pub fn load(file: &Path) -> Result<Matrix, MatrixError> {
-        let mut json = read_json(file)?;
+        let mut json = object(file, "", read_json(file)?)?;
         if let Some(fields) = json.as_object() {
             refuse_unknown_fields(file, fields)?;
         }
@@ -96,7 +109,8 @@ impl Matrix {
         let defaults = from_json::<BenchConfig>(file, "", json)?.relative_to(file);
         let mut entries = Vec::new();
         for (index, run) in list::<serde_json::Value>(file, "runs", runs)?.into_iter().enumerate() {
-            let entry: BenchConfig = from_json(file, &format!("runs[{index}]: "), run)?;
+            let at = format!("runs[{index}]: ");
+            let entry: BenchConfig = from_json(file, &at, object(file, &at, run)?)?;
             if entry.out.is_some() {
                 return Err(MatrixError::OutInRun {
                     path: file.display().to_string(),

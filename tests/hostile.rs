@@ -1160,6 +1160,18 @@ fn a_configuration_value_of_the_wrong_type_is_named_by_its_field() {
             r#"{"runs": [{"scene": "city:blocks=1"}, {"warmup": -1}]}"#,
             "runs[1]: warmup: invalid value: integer `-1`",
         ),
+        // Fields by position would pass the check of their names.
+        (
+            "array.json",
+            r#"[null, "city:blocks=1", null, null, ["vfc"], 2, null, null, null, null,
+                null, null, null, null, null, null, null, null, null, null]"#,
+            "a configuration is a JSON object of fields",
+        ),
+        (
+            "run-array.json",
+            r#"{"runs": [[null, "city:blocks=1"]]}"#,
+            "runs[0]: a configuration is a JSON object of fields",
+        ),
     ] {
         let config = write(dir.path(), name, json);
         refused(&tiny_bench(&out, &["--config", s(&config)]), &[name, field]);

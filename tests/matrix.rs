@@ -891,4 +891,19 @@ fn a_matrix_and_a_single_run_or_another_matrix_never_share_an_out() {
         &["01-city-blocks-1-generated", "is a run of another matrix"],
     );
     assert_eq!(run_folders(&many), ["01-city-blocks-1-generated"]);
+    // Nor does a merged folder take one.
+    let merged_out = dir.path().join("merged");
+    assert!(occlu(&["merge", s(&many), "--out", s(&merged_out)]).status.success());
+    refused(
+        &[
+            "bench",
+            "--config",
+            s(&matrix),
+            "--backend",
+            backend,
+            "--out",
+            s(&merged_out),
+        ],
+        &["merged.json", "holds a merged result"],
+    );
 }
