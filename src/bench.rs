@@ -29,8 +29,8 @@ use crate::raycast::{Budget, RayCaster, Stopped};
 use crate::report::{
     Fingerprint, MatrixIdentity, MissedSummary, OutputLock, PathSummary, ReportError, ResultFiles, SCHEMA_VERSION,
     SceneFacts, SceneSummary, SkippedMode, Staged, Summary, SweepSummary, ToolInfo, Verdict, check_writable,
-    prepare_output, read_summary, refuse_input_among_results, refuse_input_as_output, refuse_result_file, stage_whole,
-    trace_json, write_results,
+    prepare_output, refuse_input_among_results, refuse_input_as_output, refuse_result_file, stage_whole, trace_json,
+    write_results,
 };
 use crate::scene::{Scene, SceneError, SceneSpec};
 use crate::session::{RunOptions, Session, ms};
@@ -299,7 +299,7 @@ fn claim_outputs(plan: &BenchPlan) -> Result<OutputLock, BenchError> {
     // Merge reads a folder that holds a run as that run alone: the
     // matrix's runs beside it would be left out.
     if plan.matrix.is_none()
-        && let Some(folder) = run_folders_in(&plan.out).next()
+        && let Some((folder, _)) = run_folders_in(&plan.out).find(|(_, matrix)| matrix.is_some())
     {
         return Err(refused(
             &folder,
@@ -343,27 +343,44 @@ pub fn refuse_other_results_in_matrix_out(out: &Path, matrix: MatrixIdentity) ->
             "is a single run's result in the matrix's --out: merge would read it alone and leave the matrix's runs out; choose another --out",
         ));
     }
-    for folder in run_folders_in(out) {
-        if read_summary(&folder)?.matrix != Some(matrix) {
-            return Err(refused(
-                &folder,
-                "is a run of another matrix (its runs, or their order, differ from this one's) in --out: merge would count its runs besides this matrix's; empty --out or choose another",
-            ));
-        }
+    for (folder, theirs) in run_folders_in(out) {
+        let why = match theirs {
+            Some(theirs) if theirs == matrix => continue,
+            Some(_) => {
+                "is a run of another matrix (its runs, or their order, differ from this one's) in --out: merge would count its runs besides this matrix's; empty --out or choose another"
+            }
+            None => {
+                "is a single run's folder in the matrix's --out: merge would take it for one of the matrix's runs; empty --out or choose another"
+            }
+        };
+        return Err(refused(&folder, why));
     }
     Ok(())
 }
 
 /// The folders directly in `dir` that hold a run's summary.json (hidden
-/// ones, a run's staging, left out); none where `dir` cannot be read.
-fn run_folders_in(dir: &Path) -> impl Iterator<Item = PathBuf> {
+/// ones, a run's staging, left out), each with the matrix its summary
+/// names (`None` for a single run); none where `dir` cannot be read. A
+/// summary.json that cannot be read (damaged, or of another schema) is
+/// passed over: merge refuses it by name, and a run of this matrix
+/// replaces it.
+fn run_folders_in(dir: &Path) -> impl Iterator<Item = (PathBuf, Option<MatrixIdentity>)> {
+    /// A summary's `matrix` alone, read whatever else it holds.
+    #[derive(serde::Deserialize)]
+    struct MatrixOf {
+        matrix: Option<MatrixIdentity>,
+    }
     std::fs::read_dir(dir)
         .into_iter()
         .flatten()
         .filter_map(Result::ok)
         .filter(|entry| !entry.file_name().as_encoded_bytes().starts_with(b"."))
         .map(|entry| entry.path())
-        .filter(|path| path.join("summary.json").is_file())
+        .filter_map(|path| {
+            let text = crate::input::read_text(&path.join("summary.json"), crate::input::TEXT_LIMIT).ok()?;
+            let summary: MatrixOf = serde_json::from_str(&text).ok()?;
+            Some((path, summary.matrix))
+        })
 }
 
 /// A bench refused at `path`, saying `why`.

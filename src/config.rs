@@ -280,15 +280,16 @@ impl BenchConfig {
     }
 
     /// `self` with every unset field taken from `fallback`. A model or scene
-    /// given here replaces both of the fallback's, and its movers (the
-    /// configured scene's), so a flag can switch a configured scene to a
-    /// model.
+    /// given here replaces both of the fallback's, so a flag can switch a
+    /// configured scene to a model; a model drops the fallback's movers
+    /// too (a model has none), while a scene keeps them (a matrix's
+    /// top-level movers are every scene's).
     pub fn or(self, fallback: BenchConfig) -> BenchConfig {
-        let source_given = self.model.is_some() || self.scene.is_some();
+        let (source_given, model_given) = (self.model.is_some() || self.scene.is_some(), self.model.is_some());
         BenchConfig {
             model: if source_given { self.model } else { fallback.model },
             scene: if source_given { self.scene } else { fallback.scene },
-            movers: if source_given {
+            movers: if model_given {
                 self.movers
             } else {
                 self.movers.or(fallback.movers)
@@ -529,8 +530,14 @@ mod tests {
             movers: Some(3),
             ..file
         };
-        // The file's movers go with its scene (a model has none).
+        // The file's movers go with its scene when a model replaces it (a
+        // model has none); another scene takes them.
         assert_eq!(flags.clone().or(file.clone()).movers, None);
+        let scene_flag = BenchConfig {
+            scene: Some("city:blocks=1".into()),
+            ..Default::default()
+        };
+        assert_eq!(scene_flag.or(file.clone()).movers, Some(3));
         let p = flags.or(file).plan().unwrap();
         assert_eq!(p.scene, SceneSpec::File("m.obj".into()));
         assert_eq!((p.frames, p.warmup), (Some(20), 1));

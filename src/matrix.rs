@@ -79,14 +79,24 @@ pub enum MatrixError {
 /// `json` where it is an object, as a run's configuration is; refused
 /// otherwise (serde would read an array's elements as the fields in
 /// order, past the check of their names).
-fn object(file: &Path, at: &str, json: serde_json::Value) -> Result<serde_json::Value, ConfigError> {
-    match json.is_object() {
-        true => Ok(json),
-        false => Err(ConfigError::Json {
-            path: file.display().to_string(),
-            message: format!("{at}a configuration is a JSON object of fields (\"frames\": 30, ...), not {json:.40}"),
-        }),
-    }
+fn object(
+    file: &Path,
+    at: &str,
+    json: serde_json::Value,
+) -> Result<serde_json::Map<String, serde_json::Value>, ConfigError> {
+    use serde_json::Value;
+    let kind = match json {
+        Value::Object(fields) => return Ok(fields),
+        Value::Array(_) => "an array",
+        Value::String(_) => "a string",
+        Value::Number(_) => "a number",
+        Value::Bool(_) => "true or false",
+        Value::Null => "null",
+    };
+    Err(ConfigError::Json {
+        path: file.display().to_string(),
+        message: format!("{at}a configuration is a JSON object of fields ({{\"frames\": 30, ...}}), not {kind}"),
+    })
 }
 
 /// The keys of a configuration file that list runs rather than set one.
@@ -97,20 +107,16 @@ impl Matrix {
     /// `models`, `scenes` or `paths`, else one run. Relative paths are
     /// relative to the file.
     pub fn load(file: &Path) -> Result<Matrix, MatrixError> {
-        let mut json = object(file, "", read_json(file)?)?;
-        if let Some(fields) = json.as_object() {
-            refuse_unknown_fields(file, fields)?;
-        }
-        let [runs, models, scenes, paths] = match json.as_object_mut() {
-            Some(fields) => LISTS.map(|key| fields.remove(key)),
-            None => [None, None, None, None],
-        };
+        let mut fields = object(file, "", read_json(file)?)?;
+        refuse_unknown_fields(file, &fields)?;
+        let [runs, models, scenes, paths] = LISTS.map(|key| fields.remove(key));
+        let json = serde_json::Value::Object(fields);
         let listed = [&runs, &models, &scenes, &paths].iter().any(|l| l.is_some());
         let defaults = from_json::<BenchConfig>(file, "", json)?.relative_to(file);
         let mut entries = Vec::new();
         for (index, run) in list::<serde_json::Value>(file, "runs", runs)?.into_iter().enumerate() {
             let at = format!("runs[{index}]: ");
-            let entry: BenchConfig = from_json(file, &at, object(file, &at, run)?)?;
+            let entry: BenchConfig = from_json(file, &at, serde_json::Value::Object(object(file, &at, run)?))?;
             if entry.out.is_some() {
                 return Err(MatrixError::OutInRun {
                     path: file.display().to_string(),
@@ -434,6 +440,24 @@ mod tests {
     }
 
     #[test]
+    fn a_matrixs_top_level_movers_are_every_scenes() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = matrix(
+            dir.path(),
+            r#"{"movers": 3, "scenes": ["city:blocks=1"], "runs": [{"scene": "city:blocks=2"}]}"#,
+        );
+        let runs = m.unwrap().plan(&BenchConfig::default()).unwrap();
+        let scenes: Vec<SceneSpec> = runs.into_iter().map(|r| r.plan.scene).collect();
+        assert_eq!(
+            scenes,
+            [
+                SceneSpec::Builtin("city:blocks=2,movers=3".into()),
+                SceneSpec::Builtin("city:blocks=1,movers=3".into())
+            ]
+        );
+    }
+
+    #[test]
     fn runs_then_models_and_scenes_by_paths_in_order_with_names_and_defaults() {
         let dir = tempfile::tempdir().unwrap();
         for p in ["a.json", "b.json"] {
@@ -595,7 +619,10 @@ mod tests {
         let error = |json: &str| matrix(dir.path(), json).unwrap_err().to_string();
         assert!(error(r#"{"resolutoin": "320x240"}"#).contains("unknown field `resolutoin`"));
         assert!(error(r#"{"resolution": "320"}"#).contains("WIDTHxHEIGHT"));
-        assert!(error("[1, 2]").contains("invalid type"));
+        assert!(
+            error("[1, 2]")
+                .contains("a configuration is a JSON object of fields ({\"frames\": 30, ...}), not an array")
+        );
         assert!(error("{ not json").contains("m.json"));
     }
 }

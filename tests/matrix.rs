@@ -641,6 +641,14 @@ fn merge_refuses_to_write_over_its_input_or_a_partial_matrix_and_takes_odd_names
     assert!(!dir.path().join("gone").exists());
     let merged_ok = occlu(&["merge", s(&partial), "--out", s(&out)]);
     assert!(merged_ok.status.success(), "{:?}", own_stderr(&merged_ok));
+    // A link to a folder where the merge writes one (its charts/) is
+    // replaced as the folder would be.
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::rename(out.join("charts"), &elsewhere).unwrap();
+    std::os::unix::fs::symlink(&elsewhere, out.join("charts")).unwrap();
+    let again = occlu(&["merge", s(&partial), "--out", s(&out)]);
+    assert!(again.status.success(), "{:?}", own_stderr(&again));
+    assert!(out.join("charts").is_dir() && !out.join("charts").is_symlink());
     assert!(stdout(&merged_ok).starts_with("# occlu: merged results\n\n1 run on 1 adapter."));
     // A merged folder given to merge says what it is.
     refused(
@@ -891,6 +899,25 @@ fn a_matrix_and_a_single_run_or_another_matrix_never_share_an_out() {
         &["01-city-blocks-1-generated", "is a run of another matrix"],
     );
     assert_eq!(run_folders(&many), ["01-city-blocks-1-generated"]);
+    // A single run's folder inside another's --out is no matrix's: a
+    // single run may stand beside it, a matrix may not.
+    let nest = dir.path().join("nest");
+    assert!(single(&nest.join("baseline")).status.success());
+    assert!(single(&nest).status.success());
+    let mixed = dir.path().join("mixed");
+    assert!(single(&mixed.join("baseline")).status.success());
+    refused(
+        &[
+            "bench",
+            "--config",
+            s(&matrix),
+            "--backend",
+            backend,
+            "--out",
+            s(&mixed),
+        ],
+        &["baseline", "is a single run's folder in the matrix's --out"],
+    );
     // Nor does a merged folder take one.
     let merged_out = dir.path().join("merged");
     assert!(occlu(&["merge", s(&many), "--out", s(&merged_out)]).status.success());

@@ -254,12 +254,13 @@ fn publish(
         .map_err(ReportError::at(&staging))
         .and_then(|()| write(&staging));
     let moved = staged.and_then(|names| {
-        // A name that holds what the staged one cannot replace (a folder
-        // where a file goes, or the reverse) is refused before anything
-        // moves, so `out` is left as it was, not half replaced.
+        // A name that holds what the staged one cannot replace (a folder,
+        // or a link to one, where a file goes, or the reverse) is refused
+        // before anything moves, so `out` is left as it was, not half
+        // replaced.
         for name in &names {
             let (staged, target) = (staging.join(name), out.join(name));
-            if let Ok(held) = std::fs::symlink_metadata(&target)
+            if let Ok(held) = std::fs::metadata(&target)
                 && held.is_dir() != staged.is_dir()
             {
                 let what = match held.is_dir() {
