@@ -259,24 +259,30 @@ pub struct BenchPlan {
 
 impl BenchConfig {
     /// `self` with its relative paths taken as relative to the folder of
-    /// the configuration file `file`.
-    pub fn relative_to(mut self, file: &Path) -> BenchConfig {
+    /// the configuration file `file`; an empty one, which would name that
+    /// folder, is refused (the flags take none), naming the field after
+    /// `at`.
+    pub fn relative_to(mut self, file: &Path, at: &str) -> Result<BenchConfig, ConfigError> {
         let base = file.parent().unwrap_or(Path::new(""));
-        for p in [
-            &mut self.model,
-            &mut self.path,
-            &mut self.out,
-            &mut self.trace,
-            &mut self.export_github_benchmark,
-        ]
-        .into_iter()
-        .flatten()
-        {
+        for (name, p) in [
+            ("model", &mut self.model),
+            ("path", &mut self.path),
+            ("out", &mut self.out),
+            ("trace", &mut self.trace),
+            ("export_github_benchmark", &mut self.export_github_benchmark),
+        ] {
+            let Some(p) = p else { continue };
+            if p.as_os_str().is_empty() {
+                return Err(ConfigError::Json {
+                    path: file.display().to_string(),
+                    message: format!("{at}{name}: an empty path names no file"),
+                });
+            }
             if p.is_relative() {
                 *p = base.join(&*p);
             }
         }
-        self
+        Ok(self)
     }
 
     /// `self` with every unset field taken from `fallback`. A model or scene

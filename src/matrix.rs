@@ -112,7 +112,7 @@ impl Matrix {
         let [runs, models, scenes, paths] = LISTS.map(|key| fields.remove(key));
         let json = serde_json::Value::Object(fields);
         let listed = [&runs, &models, &scenes, &paths].iter().any(|l| l.is_some());
-        let defaults = from_json::<BenchConfig>(file, "", json)?.relative_to(file);
+        let defaults = from_json::<BenchConfig>(file, "", json)?.relative_to(file, "")?;
         let mut entries = Vec::new();
         for (index, run) in list::<serde_json::Value>(file, "runs", runs)?.into_iter().enumerate() {
             let at = format!("runs[{index}]: ");
@@ -123,7 +123,7 @@ impl Matrix {
                     index,
                 });
             }
-            entries.push(entry.relative_to(file));
+            entries.push(entry.relative_to(file, &at)?);
         }
         let models: Vec<PathBuf> = list(file, "models", models)?;
         let scenes: Vec<String> = list(file, "scenes", scenes)?;
@@ -173,7 +173,7 @@ impl Matrix {
                         path: path.clone(),
                         ..source.clone()
                     };
-                    entries.push(entry.relative_to(file));
+                    entries.push(entry.relative_to(file, "models, scenes or paths: ")?);
                 }
             }
         }

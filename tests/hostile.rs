@@ -1172,6 +1172,13 @@ fn a_configuration_value_of_the_wrong_type_is_named_by_its_field() {
             r#"{"runs": [[null, "city:blocks=1"]]}"#,
             "runs[0]: a configuration is a JSON object of fields",
         ),
+        // An empty path would name the configuration's own folder.
+        ("empty-out.json", r#"{"out": ""}"#, "out: an empty path names no file"),
+        (
+            "empty-path.json",
+            r#"{"runs": [{"path": ""}]}"#,
+            "runs[0]: path: an empty path names no file",
+        ),
     ] {
         let config = write(dir.path(), name, json);
         refused(&tiny_bench(&out, &["--config", s(&config)]), &[name, field]);
