@@ -563,6 +563,37 @@ fn a_bad_run_fails_every_shard_up_front_and_a_failing_run_leaves_no_folder() {
         &["garbage.obj"],
     );
     assert!(!out.join("01-garbage-generated").exists());
+    // It ends itself, not the matrix: the runs after it run, their table
+    // is printed, and the exit status is the failed run's.
+    let mixed = write(
+        dir.path(),
+        "mixed.json",
+        r#"{"models": ["garbage.obj"], "scenes": ["city:blocks=1"], "modes": ["vfc"], "frames": 3, "warmup": 0, "resolution": "64x48"}"#,
+    );
+    let mixed_out = dir.path().join("mixed");
+    let run = occlu(&[
+        "bench",
+        "--config",
+        s(&mixed),
+        "--backend",
+        backend,
+        "--out",
+        s(&mixed_out),
+        "--quiet",
+    ]);
+    assert_eq!(run.status.code(), Some(2), "{:?}", own_stderr(&run));
+    let said = own_stderr(&run);
+    assert_eq!(said.len(), 1, "{said:?}");
+    assert!(
+        said[0].contains("1 of this shard's 2 runs failed (01-garbage-generated") && said[0].contains("garbage.obj"),
+        "{said:?}"
+    );
+    assert_eq!(run_folders(&mixed_out), ["02-city-blocks-1-generated"]);
+    assert!(
+        stdout(&run).contains("| 02-city-blocks-1-generated |"),
+        "{}",
+        stdout(&run)
+    );
     // A shard with no run prints an empty list for --json.
     let one = tiny_matrix(dir.path(), "one.json", r#"["city:blocks=1"]"#);
     let idle = bench_matrix(&one, backend, &out, &["--shard", "2/2", "--json"]);

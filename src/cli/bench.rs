@@ -5,7 +5,6 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::Context as _;
 use occlu::bench::{BenchOutcome, execute};
 use occlu::config::{BenchConfig, BenchPlan};
 use occlu::matrix::{Matrix, MatrixRun, Shard};
@@ -14,7 +13,7 @@ use occlu::scene::SceneSpec;
 use super::args::BenchArgs;
 use super::output::{emit, say};
 use super::progress::{Progress, heard};
-use super::signals::go_on;
+use super::signals::{self, go_on};
 
 /// `occlu bench`: one run (its report.md or summary.json on stdout), or a
 /// matrix's (a table of its runs, or their summaries, on stdout).
@@ -114,6 +113,7 @@ fn bench_shard(runs: &[MatrixRun], shard: Shard, note: &dyn Fn(String), quiet: b
     }
     let mut summaries = Vec::new();
     let mut table = String::from("| run | scene | path | adapter | folder |\n|---|---|---|---|---|\n");
+    let mut failed: Vec<(&str, anyhow::Error)> = Vec::new();
     for (k, run) in mine.iter().enumerate() {
         note(format!(
             "run {} of {} (shard {shard} of a matrix of {}): {}",
@@ -122,8 +122,21 @@ fn bench_shard(runs: &[MatrixRun], shard: Shard, note: &dyn Fn(String), quiet: b
             runs.len(),
             run.name
         ));
-        let outcome =
-            bench_one(&run.plan, note, quiet, run.name.clone()).with_context(|| format!("run {}", run.name))?;
+        // A run that fails (a model that only loading finds broken) ends
+        // itself, not the matrix: the others run, and merge names it
+        // missing. Ctrl-C ends the matrix.
+        let outcome = match bench_one(&run.plan, note, quiet, run.name.clone()) {
+            Ok(outcome) => outcome,
+            Err(e) if !signals::heard() => {
+                // The first is said with the matrix's error, at the end.
+                if !failed.is_empty() {
+                    say!("occlu: run {} failed: {e:#}", run.name);
+                }
+                failed.push((&run.name, e));
+                continue;
+            }
+            Err(e) => return Err(e.context(format!("run {}", run.name))),
+        };
         let s = &outcome.summary;
         let _ = writeln!(
             table,
@@ -137,9 +150,20 @@ fn bench_shard(runs: &[MatrixRun], shard: Shard, note: &dyn Fn(String), quiet: b
         summaries.push(outcome.summary);
     }
     if json {
-        emit(&(serde_json::to_string_pretty(&summaries)? + "\n"))
-    } else {
-        emit(&table)
+        emit(&(serde_json::to_string_pretty(&summaries)? + "\n"))?;
+    } else if !summaries.is_empty() {
+        emit(&table)?;
+    }
+    // The first failure's error decides the exit status.
+    let names: Vec<&str> = failed.iter().map(|(name, _)| *name).collect();
+    match failed.into_iter().next() {
+        None => Ok(()),
+        Some((name, first)) => Err(first.context(format!(
+            "{} of this shard's {} failed ({}; the others' results are written): run {name}",
+            names.len(),
+            occlu::text::count(mine.len(), "run"),
+            names.join(", ")
+        ))),
     }
 }
 
