@@ -907,11 +907,19 @@ fn a_matrix_and_a_single_run_or_another_matrix_never_share_an_out() {
         .concat();
         occlu(&args)
     };
+    // `config`'s matrix into `out`, refused saying `needles`.
+    let matrix_into = |config: &Path, out: &Path, needles: &[&str]| {
+        refused(
+            &["bench", "--config", s(config), "--backend", backend, "--out", s(out)],
+            needles,
+        )
+    };
     // A single run's folder takes no matrix: merge would read the run alone.
     let one = dir.path().join("one");
     assert!(single(&one).status.success());
-    refused(
-        &["bench", "--config", s(&matrix), "--backend", backend, "--out", s(&one)],
+    matrix_into(
+        &matrix,
+        &one,
         &["summary.json", "is a single run's result in the matrix's --out"],
     );
     // A matrix's folder takes no single run, which would hide its runs.
@@ -925,8 +933,9 @@ fn a_matrix_and_a_single_run_or_another_matrix_never_share_an_out() {
     // renames the rest) is refused, as merge would count both.
     bench_matrix(&matrix, backend, &many, &["--quiet"]);
     let grown = tiny_matrix(dir.path(), "grown.json", r#"["city:blocks=2", "city:blocks=1"]"#);
-    refused(
-        &["bench", "--config", s(&grown), "--backend", backend, "--out", s(&many)],
+    matrix_into(
+        &grown,
+        &many,
         &["01-city-blocks-1-generated", "is a run of another matrix"],
     );
     assert_eq!(run_folders(&many), ["01-city-blocks-1-generated"]);
@@ -937,31 +946,13 @@ fn a_matrix_and_a_single_run_or_another_matrix_never_share_an_out() {
     assert!(single(&nest).status.success());
     let mixed = dir.path().join("mixed");
     assert!(single(&mixed.join("baseline")).status.success());
-    refused(
-        &[
-            "bench",
-            "--config",
-            s(&matrix),
-            "--backend",
-            backend,
-            "--out",
-            s(&mixed),
-        ],
+    matrix_into(
+        &matrix,
+        &mixed,
         &["baseline", "is a single run's folder in the matrix's --out"],
     );
     // Nor does a merged folder take one.
     let merged_out = dir.path().join("merged");
     assert!(occlu(&["merge", s(&many), "--out", s(&merged_out)]).status.success());
-    refused(
-        &[
-            "bench",
-            "--config",
-            s(&matrix),
-            "--backend",
-            backend,
-            "--out",
-            s(&merged_out),
-        ],
-        &["merged.json", "holds a merged result"],
-    );
+    matrix_into(&matrix, &merged_out, &["merged.json", "holds a merged result"]);
 }
