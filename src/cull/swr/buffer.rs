@@ -2,40 +2,41 @@
 //! Culling lays out its own (Hasselgren, Andersson, Akenine-Möller, HPG
 //! 2016, section 3): cells of a few pixels, each with a **reference
 //! layer**, a depth every pixel centre of the cell is drawn at or nearer,
-//! and a **working layer**, a coverage mask of the cell's pixels (up to
-//! 8 × 8 groups of them) with the farthest depth of the occluders that
-//! covered them. Occluders that each cover part of a cell merge in the
-//! working layer; once its mask is full, its depth becomes the reference
-//! (section 3.2's update). A pyramid of the reference layer's farthest
-//! depths serves the box test. Screen positions are framebuffer pixels
-//! (x right, y down); depth is reverse-Z (`near / distance`, 0 = nothing
-//! drawn).
+//! and **working layers** (MOC keeps one), each a coverage mask of the
+//! cell's pixels (up to 8 × 8 groups of them) with the farthest depth of
+//! the occluders that covered them. Occluders that each cover part of a
+//! cell merge in the working layers; once their masks together fill it,
+//! the farthest of their depths becomes the reference (section 3.2's
+//! update). A pyramid of the reference layer's farthest depths serves the
+//! box test. Screen positions are framebuffer pixels (x right, y down);
+//! depth is reverse-Z (`near / distance`, 0 = nothing drawn).
 //!
 //! Why it is conservative. A box is hidden when, at every pixel centre its
 //! rectangle covers, it lies behind what one of the cell's layers holds
-//! there (its depth, or its plane; the working layer only at the centres
-//! of its mask; [`OcclusionBuffer::hides`]), or its pixel ray misses it.
+//! there (its depth, or its plane; a working layer only at the centres of
+//! its mask; [`OcclusionBuffer::hides`]), or its pixel ray misses it.
 //! That is safe if, at every pixel centre a layer holds, an occluder drawn
 //! this frame (the mode's step 5) is drawn no farther than the layer's
 //! depth and its plane. Each occluder object hands its cells a mask of the
 //! pixel groups it is sure to draw, with a depth and plane it is sure to
 //! draw them at or nearer (mesh.rs says how, from the GPU's placement and
-//! rounding); a cell's working layer keeps the least of the depths merged
-//! into it, so its mask's every centre is drawn at least that near, and a
-//! full mask vouches for the whole cell. A layer is dropped, never
-//! narrowed, when it stops paying (MOC's heuristic, [`Cells::merge`]):
-//! dropping what is known is always safe. A pyramid level keeps the least
-//! of the 2×2 texels below it.
+//! rounding); a working layer keeps the least of the depths merged into
+//! it, so its mask's every centre is drawn at least that near, and masks
+//! that together fill the cell vouch for the whole cell at the least of
+//! their depths. A layer is dropped, never narrowed, when it stops paying
+//! (MOC's heuristic, [`Cells::merge`]): dropping what is known is always
+//! safe. A pyramid level keeps the least of the 2×2 texels below it.
 //!
-//! Departure from MOC: its box test reads the reference layer alone, and
-//! it clears the working layer when that becomes the reference. Here a
-//! working layer that a farther occluder completed stays, still vouching
-//! for its own mask, and a box test that fails at a cell tries its layers
-//! part by part: the box's centres in the working layer's mask behind
-//! either layer, the others behind the reference, each part over the
-//! bounding rectangle of its pixel groups. So a box just behind a wall's
-//! outline is hidden though the cell's reference is what lies beyond the
-//! wall.
+//! Departures from MOC: its box test reads the reference layer alone, it
+//! keeps one working layer, and it clears that when it becomes the
+//! reference. Here a cell keeps as many working layers as `swr.layers`
+//! asks, so that where several surfaces meet in a cell each keeps its own
+//! depth; those nearer than a new reference stay, still vouching for their
+//! own masks; and a box test that fails at a cell tries its layers part by
+//! part: the box's centres in each working layer's mask behind it, the
+//! rest behind the reference, each part over the bounding rectangle of its
+//! pixel groups. So a box just behind a wall's outline is hidden though
+//! the cell's reference is what lies beyond the wall.
 
 use std::ops::Range;
 
@@ -49,6 +50,17 @@ pub(super) const MASK_SIDE: u32 = 8;
 /// Texels across a box's rectangle may span at the pyramid level it is
 /// read at.
 const TEST_SPAN: u32 = 8;
+
+/// A working layer of a cell, besides its mask of the pixel groups it
+/// vouches for (kept apart, so that clearing the buffer writes masks
+/// alone): a depth and a plane each of their centres is drawn at or
+/// nearer. It holds nothing where its mask is empty, or where its depth is
+/// no nearer than the cell's reference (which then vouches for more).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct WorkingDepth {
+    depth: f32,
+    plane: ScreenPlane,
+}
 
 /// One level of the buffer's pyramid.
 struct Level {
@@ -316,12 +328,12 @@ pub struct Cells<'a> {
     /// The rows of cells it holds.
     rows: Range<u32>,
     /// Per cell, row by row from `rows.start`: the reference layer's depth
-    /// and plane, and the working layer's mask, depth and plane.
+    /// and plane, and its `per_cell` working layers.
     depth: &'a mut [f32],
     planes: &'a mut [ScreenPlane],
     masks: &'a mut [u64],
-    working: &'a mut [f32],
-    working_planes: &'a mut [ScreenPlane],
+    working: &'a mut [WorkingDepth],
+    per_cell: usize,
     #[cfg(test)]
     careless: bool,
 }
@@ -385,20 +397,23 @@ impl Cells<'_> {
     }
 
     /// Merges `coverage` into cell (`column`, `row`), as MOC updates a
-    /// tile (section 3.2), in reverse-Z: a cell the occluder covers whole
-    /// takes its depth and plane where they are nearer than its reference
-    /// layer; otherwise the occluder joins the working layer, which keeps
-    /// the union of the masks, the least of the depths and a plane below
-    /// all of theirs, and becomes the reference once its mask is full.
-    /// The working layer is dropped first when it has fallen behind the
-    /// reference, or when the occluder lies nearer than it by more than it
-    /// lies nearer than the reference (merging would pull the new layer
-    /// back to a depth nearly no better than the reference's). Departure
-    /// from MOC, which clears the working layer once it becomes the
-    /// reference: where the occluder that filled it lies farther than the
-    /// layer it joined, that layer stays as it was, still vouching for its
-    /// own mask and nearer than the new reference (so a box just behind a
-    /// wall's outline, within the wall's pixels of the cell, is hidden).
+    /// tile (section 3.2), in reverse-Z, with as many working layers as
+    /// the buffer keeps: a cell the occluder covers whole takes its depth
+    /// and plane where they are nearer than its reference layer. Otherwise
+    /// the occluder takes a working layer that holds nothing, or else
+    /// joins the one nearest its depth, which then keeps the union of the
+    /// masks, the least of the depths and a plane below both; where the
+    /// occluder lies nearer than that layer by more than the layer lies
+    /// nearer than the reference (merging would pull the new layer back to
+    /// a depth nearly no better than the reference's), it takes the
+    /// farthest layer's place instead. Once the working layers' masks and
+    /// the occluder's fill the cell, the reference becomes the least of
+    /// their depths, with a plane below all of theirs. Departure from MOC,
+    /// which clears its one working layer then: the layers nearer than the
+    /// new reference stay, each still vouching for its own mask (so a box
+    /// just behind a wall's outline, within the wall's pixels of the cell,
+    /// is hidden), and the occluder takes the place of one that fell
+    /// behind.
     #[inline]
     pub(super) fn merge(&mut self, column: u32, row: u32, coverage: &Coverage) {
         let full = self.grid.full_mask(column, row);
@@ -415,31 +430,69 @@ impl Cells<'_> {
             self.planes[index] = coverage.plane;
             return;
         }
-        let (working, held) = (self.working[index], self.masks[index]);
-        let joins = held != 0 && working > reference && depth - working <= working - reference;
-        let (merged_depth, merged_plane, merged_mask) = match joins {
-            true => {
-                let centres = (self.grid.across.cell(column), self.grid.down.cell(row));
-                let plane = below_both(self.working_planes[index], &coverage.plane, centres);
-                (working.min(depth), plane, held | mask)
-            }
-            false => (depth, coverage.plane, mask),
+        let centres = (self.grid.across.cell(column), self.grid.down.cell(row));
+        let slots = index * self.per_cell..(index + 1) * self.per_cell;
+        let (masks, layers) = (&mut self.masks[slots.clone()], &mut self.working[slots]);
+        let joined = WorkingDepth {
+            depth,
+            plane: coverage.plane,
         };
         #[cfg(test)]
         let careless = self.careless;
         #[cfg(not(test))]
         let careless = false;
-        if merged_mask == full || careless {
-            (self.depth[index], self.planes[index]) = (merged_depth, merged_plane);
-            if !(joins && depth < working) {
-                self.masks[index] = 0;
+        let covered = holding(masks, layers, reference).fold(mask, |covered, k| covered | masks[k]);
+        if covered == full || careless {
+            let (least, plane) = {
+                let mut held = holding(masks, layers, reference).map(|k| &layers[k]);
+                match held.next() {
+                    Some(first) => held.chain([&joined]).fold((first.depth, first.plane), |(least, plane), l| {
+                        (least.min(l.depth), below_both(plane, &l.plane, centres))
+                    }),
+                    None => (depth, coverage.plane),
+                }
+            };
+            (self.depth[index], self.planes[index]) = (least, plane);
+            // The occluder keeps a layer where it lies nearer than the new
+            // reference (a layer at that depth no longer holds anything).
+            if depth > least
+                && let Some(free) = (0..masks.len()).find(|&k| !holds(masks[k], &layers[k], least))
+            {
+                (masks[free], layers[free]) = (mask, joined);
             }
-        } else {
-            self.working[index] = merged_depth;
-            self.working_planes[index] = merged_plane;
-            self.masks[index] = merged_mask;
+            return;
+        }
+        if let Some(free) = (0..masks.len()).find(|&k| !holds(masks[k], &layers[k], reference)) {
+            (masks[free], layers[free]) = (mask, joined);
+            return;
+        }
+        let gap = |k: &usize| (layers[*k].depth - depth).abs();
+        let Some(nearest) = (0..masks.len()).min_by(|a, b| gap(a).total_cmp(&gap(b))) else {
+            return;
+        };
+        let held = layers[nearest];
+        if depth - held.depth <= held.depth - reference {
+            masks[nearest] |= mask;
+            layers[nearest] = WorkingDepth {
+                depth: held.depth.min(depth),
+                plane: below_both(held.plane, &coverage.plane, centres),
+            };
+        } else if let Some(farthest) = (0..masks.len()).min_by(|a, b| layers[*a].depth.total_cmp(&layers[*b].depth)) {
+            (masks[farthest], layers[farthest]) = (mask, joined);
         }
     }
+}
+
+/// Whether a working layer of mask `mask` vouches for anything a
+/// reference at `reference` does not.
+fn holds(mask: u64, layer: &WorkingDepth, reference: f32) -> bool {
+    mask != 0 && layer.depth > reference
+}
+
+/// The working layers among `masks` and `layers` (one cell's) that hold
+/// anything ([`holds`]) beside the reference `reference`.
+fn holding<'a>(masks: &'a [u64], layers: &'a [WorkingDepth], reference: f32) -> impl Iterator<Item = usize> + 'a {
+    (0..masks.len()).filter(move |&k| holds(masks[k], &layers[k], reference))
 }
 
 /// `held` lowered, where it is not already, to lie below `other` over
@@ -475,10 +528,10 @@ pub struct OcclusionBuffer {
     /// even where the wall's depth changes across the cell by more than
     /// the gap; meaningless where the cell holds no depth.
     planes: Vec<ScreenPlane>,
-    /// Per cell, its working layer's mask, depth and plane.
+    /// Per cell, its `per_cell` working layers.
     masks: Vec<u64>,
-    working: Vec<f32>,
-    working_planes: Vec<ScreenPlane>,
+    working: Vec<WorkingDepth>,
+    per_cell: usize,
     /// Breaks the conservative rule on purpose, for the test that sees the
     /// error meter catch it: a working layer becomes the reference as soon
     /// as it holds anything, whether or not its mask is full.
@@ -488,8 +541,17 @@ pub struct OcclusionBuffer {
 
 impl OcclusionBuffer {
     /// A buffer of `cells` (at most the target's size on each side) over a
-    /// target of `target` pixels.
+    /// target of `target` pixels, with MOC's two layers a cell: a
+    /// reference and one working layer.
+    #[cfg(test)]
     pub fn new(target: Resolution, cells: Resolution) -> OcclusionBuffer {
+        OcclusionBuffer::with_layers(target, cells, 2)
+    }
+
+    /// A buffer of `cells` (at most the target's size on each side) over a
+    /// target of `target` pixels, whose cells keep `layers` layers each
+    /// (at least 1: the reference).
+    pub fn with_layers(target: Resolution, cells: Resolution, layers: u32) -> OcclusionBuffer {
         let grid = Grid::new(target, cells);
         let (width, height) = (grid.cells.width, grid.cells.height);
         let mut levels = Vec::new();
@@ -506,13 +568,14 @@ impl OcclusionBuffer {
             (w, h) = (w.div_ceil(2), h.div_ceil(2));
         }
         let count = (width * height) as usize;
+        let per_cell = layers.max(1) as usize - 1;
         OcclusionBuffer {
             grid,
             levels,
             planes: vec![ScreenPlane::default(); count],
-            masks: vec![0; count],
-            working: vec![0.0; count],
-            working_planes: vec![ScreenPlane::default(); count],
+            masks: vec![0; count * per_cell],
+            working: vec![WorkingDepth::default(); count * per_cell],
+            per_cell,
             #[cfg(test)]
             careless: false,
         }
@@ -560,10 +623,10 @@ impl OcclusionBuffer {
                 let (column, j, _) = across.group(gx);
                 let cell = (row * self.grid.cells.width + column) as usize;
                 let reference = self.levels[0].depth[cell];
-                let working = match self.masks[cell] & 1 << (k * MASK_SIDE + j) {
-                    0 => 0.0,
-                    _ => self.working[cell],
-                };
+                let working = self
+                    .layers_of(cell)
+                    .filter(|(mask, _)| mask & 1 << (k * MASK_SIDE + j) != 0)
+                    .fold(0.0, |nearest: f32, (_, l)| nearest.max(l.depth));
                 picture.depths.push(reference.max(working));
                 picture.partial.push(working > reference);
             }
@@ -595,9 +658,20 @@ impl OcclusionBuffer {
             depth => depth.max(plane.at(x, y)),
         };
         let reference = layer(self.levels[0].depth[index], &self.planes[index]);
-        let in_mask = (self.grid.groups_holding(column, row, [x, x], [y, y])).is_some_and(|g| g & self.masks[index] != 0);
-        let working = in_mask.then(|| layer(self.working[index], &self.working_planes[index]));
+        let groups = self.grid.groups_holding(column, row, [x, x], [y, y]).unwrap_or(0);
+        let working = self
+            .layers_of(index)
+            .filter(|(mask, _)| mask & groups != 0)
+            .map(|(_, l)| layer(l.depth, &l.plane))
+            .reduce(f64::max);
         (reference, working)
+    }
+
+    /// The working layers of cell `index` (row by row): each one's mask,
+    /// depth and plane.
+    fn layers_of(&self, index: usize) -> impl Iterator<Item = (u64, &WorkingDepth)> {
+        let slots = index * self.per_cell..(index + 1) * self.per_cell;
+        self.masks[slots.clone()].iter().copied().zip(&self.working[slots])
     }
 
     /// The cells, cleared, in bands of `rows_per_band` rows of cells (the
@@ -606,17 +680,21 @@ impl OcclusionBuffer {
         let grid = &self.grid;
         let width = grid.cells.width as usize;
         let chunk = width * rows_per_band.max(1) as usize;
+        let per_cell = self.per_cell;
         #[cfg(test)]
         let careless = self.careless;
+        // Each band's working layers split off the rest in turn (a chunk of
+        // them may be empty: a buffer of one layer keeps none).
+        let (mut masks_left, mut working_left) = (&mut self.masks[..], &mut self.working[..]);
         self.levels[0]
             .depth
             .chunks_mut(chunk)
             .zip(self.planes.chunks_mut(chunk))
-            .zip(self.masks.chunks_mut(chunk))
-            .zip(self.working.chunks_mut(chunk))
-            .zip(self.working_planes.chunks_mut(chunk))
             .enumerate()
-            .map(move |(k, ((((depth, planes), masks), working), working_planes))| {
+            .map(move |(k, (depth, planes))| {
+                let (masks, working);
+                (masks, masks_left) = std::mem::take(&mut masks_left).split_at_mut(depth.len() * per_cell);
+                (working, working_left) = std::mem::take(&mut working_left).split_at_mut(depth.len() * per_cell);
                 let first = (k * chunk / width) as u32;
                 let mut cells = Cells {
                     grid,
@@ -625,7 +703,7 @@ impl OcclusionBuffer {
                     planes,
                     masks,
                     working,
-                    working_planes,
+                    per_cell,
                     #[cfg(test)]
                     careless,
                 };
@@ -760,17 +838,13 @@ impl BoxQuery<'_> {
         // behind the reference, each part over the rectangle of its pixel
         // groups (the working layer vouches for its depth and plane at its
         // mask's centres as the reference does everywhere).
-        let mask = self.buffer.masks[index];
-        if mask == 0 {
+        let covered = self.buffer.layers_of(index).fold(0, |covered, (mask, _)| covered | mask);
+        if covered == 0 {
             return false;
         }
         let grid = &self.buffer.grid;
         let Some(groups) = grid.groups_holding(x, y, xs, ys) else {
             return false;
-        };
-        let working = Layer {
-            depth: f64::from(self.buffer.working[index]),
-            plane: self.buffer.working_planes[index],
         };
         let hidden_by = |layer: &Layer, (xs, ys): ([f64; 2], [f64; 2])| {
             layer.depth > 0.0
@@ -778,14 +852,29 @@ impl BoxQuery<'_> {
                     || self.nearest_over(xs, ys) < layer.depth
                     || self.behind_plane(&layer.plane, xs, ys))
         };
-        // The part outside first: the reference just failed over the
-        // whole cell, so that is where the test most often ends.
-        let (inside, outside) = (groups & mask, groups & !mask);
-        (outside == 0 || hidden_by(&reference, grid.centres_of(x, y, outside, xs, ys)))
-            && (inside == 0 || {
-                let part = grid.centres_of(x, y, inside, xs, ys);
-                hidden_by(&working, part) || hidden_by(&reference, part)
-            })
+        // The part no working layer holds first: the reference just failed
+        // over the whole cell, so that is where the test most often ends.
+        let outside = groups & !covered;
+        if outside != 0 && !hidden_by(&reference, grid.centres_of(x, y, outside, xs, ys)) {
+            return false;
+        }
+        // Then each working layer's part that no layer before it hid; what
+        // none of them hides, behind the reference.
+        let mut left = groups & covered;
+        for (mask, layer) in self.buffer.layers_of(index) {
+            let part = left & mask;
+            if part == 0 {
+                continue;
+            }
+            let working = Layer {
+                depth: f64::from(layer.depth),
+                plane: layer.plane,
+            };
+            if hidden_by(&working, grid.centres_of(x, y, part, xs, ys)) {
+                left &= !part;
+            }
+        }
+        left == 0 || hidden_by(&reference, grid.centres_of(x, y, left, xs, ys))
     }
 
     /// The nearest the box may be at the pixel centres `xs` × `ys`, by its
@@ -857,12 +946,13 @@ mod tests {
             // The other half at 0.375: the cell holds the farther, 0.375.
             cells.merge(2, 1, &flat(0.375, right));
             assert_eq!(cells.reference(2, 1), 0.375);
-            // Half again at 0.4375, then at 0.875: 0.875 lies nearer than the
-            // working layer by more than that lies before the reference, so
-            // the layer starts again from it; the other half at 0.75 fills
-            // it.
+            // Half again at 0.4375, joining the left half's layer, then the
+            // other half at 0.875: together they fill the cell, which takes
+            // the farther, 0.4375, and 0.875 keeps the working layer; the
+            // left half at 0.75 fills it again.
             cells.merge(2, 1, &flat(0.4375, left));
             cells.merge(2, 1, &flat(0.875, right));
+            assert_eq!(cells.reference(2, 1), 0.4375);
             cells.merge(2, 1, &flat(0.75, left));
             assert_eq!(cells.reference(2, 1), 0.75);
             // Nothing behind the reference changes it, whole or in part.
@@ -943,11 +1033,12 @@ mod tests {
         let mut rng = Rng::new(32);
         let target = Resolution { width: 31, height: 23 };
         // Cells of 10 or 11 pixels (8 groups of 1 or 2 a side), and of 4
-        // or 5 (as many groups).
+        // or 5 (as many groups); one layer a cell to four.
         let (mut hidden, mut by_both_layers) = (0, 0);
-        for cells in [Resolution { width: 3, height: 2 }, Resolution { width: 7, height: 5 }] {
+        let shapes = [Resolution { width: 3, height: 2 }, Resolution { width: 7, height: 5 }];
+        for (cells, layers) in shapes.into_iter().flat_map(|cells| (1..=4).map(move |layers| (cells, layers))) {
             let grid = Grid::new(target, cells);
-            for _ in 0..300 {
+            for _ in 0..150 {
                 // Coverages: a rectangle of groups, some groups, or all.
                 let coverages: Vec<(u32, u32, Coverage)> = (0..rng.int(1, 16))
                     .map(|_| {
@@ -971,7 +1062,7 @@ mod tests {
                         (column, row, Coverage { mask: mask & full, depth: rng.range(0.1, 0.9), plane })
                     })
                     .collect();
-                let mut buffer = OcclusionBuffer::new(target, cells);
+                let mut buffer = OcclusionBuffer::with_layers(target, cells, layers);
                 {
                     let mut band = buffer.cleared_bands(cells.height).next().unwrap();
                     for (column, row, coverage) in &coverages {
@@ -992,7 +1083,7 @@ mod tests {
                         })
                         .map(|(_, _, c)| c.depth.max(c.plane.at(x, y)))
                         .fold(0.0, f64::max);
-                    assert!(buffer.vouched_at(x, y) <= claimed, "({x}, {y}) {cells:?}");
+                    assert!(buffer.vouched_at(x, y) <= claimed, "({x}, {y}) {cells:?} {layers} layers");
                 }
                 for _ in 0..40 {
                     let first = [rng.int(0, 30), rng.int(0, 22)];
@@ -1011,7 +1102,7 @@ mod tests {
                     let mut needs = [false; 2];
                     for (x, y) in centres(first, last) {
                         let (reference, working) = buffer.layers_at(x, y);
-                        assert!(entry.at(x, y) < buffer.vouched_at(x, y), "({x}, {y}) {cells:?}");
+                        assert!(entry.at(x, y) < buffer.vouched_at(x, y), "({x}, {y}) {cells:?} {layers} layers");
                         needs[usize::from(working.is_some())] |= entry.at(x, y) >= reference;
                         needs[0] |= working.is_none();
                     }
@@ -1020,6 +1111,48 @@ mod tests {
             }
         }
         assert!(hidden > 1000 && by_both_layers > 30, "{hidden} hidden, {by_both_layers} by both layers");
+    }
+
+    #[test]
+    fn a_cell_keeps_as_many_surfaces_apart_as_it_has_layers() {
+        // Cell (2, 1) of 4 × 4 pixels: its left half at 0.25, its right
+        // half's top at 0.75 and bottom at 0.5 (masks row by row, a byte a
+        // row of four groups).
+        let (left, right_top, right_bottom) = (0x0303_0303, 0x0c0c, 0x0c0c_0000);
+        let merged = |layers: u32| {
+            let mut buffer = OcclusionBuffer::with_layers(Resolution { width: 20, height: 12 }, Resolution { width: 5, height: 3 }, layers);
+            {
+                let mut cells = buffer.cleared_bands(3).next().unwrap();
+                for (depth, mask) in [(0.25, left), (0.75, right_top), (0.5, right_bottom)] {
+                    cells.merge(2, 1, &flat(depth, mask));
+                }
+            }
+            buffer.build_pyramid();
+            buffer
+        };
+        let hides = |buffer: &OcclusionBuffer, first, last, nearest| buffer.hides(first, last, nearest, &BoxPlanes::default());
+        // Three layers: the three parts fill the cell, which takes the
+        // farthest, 0.25; the two nearer stay as working layers.
+        let three = merged(3);
+        assert!(hides(&three, [8, 4], [11, 7], 0.2), "behind the whole cell");
+        assert!(hides(&three, [10, 4], [11, 5], 0.7), "behind the right half's top");
+        assert!(hides(&three, [10, 4], [11, 7], 0.45), "behind the right half");
+        assert!(!hides(&three, [8, 4], [11, 7], 0.3), "in front of the left half");
+        // Two (MOC's): the right half's top lies so far before the left
+        // half that it takes the working layer's place, and the bottom
+        // joins it at the farther 0.5; the left half is lost and the cell
+        // never filled.
+        let two = merged(2);
+        assert!(!hides(&two, [8, 4], [11, 7], 0.2), "the left half is not held");
+        assert!(!hides(&two, [10, 4], [11, 5], 0.7), "the top is held at 0.5 only");
+        assert!(hides(&two, [10, 4], [11, 7], 0.45), "behind the right half");
+        // One: a reference only, which no part fills.
+        let one = merged(1);
+        assert!(!hides(&one, [10, 4], [11, 7], 0.2));
+        let centres = [(9.5, 6.5), (10.5, 4.5), (10.5, 6.5)];
+        assert_eq!(centres.map(|(x, y)| three.vouched_at(x, y)), [0.25, 0.75, 0.5]);
+        assert_eq!(centres.map(|(x, y)| two.vouched_at(x, y)), [0.0, 0.5, 0.5]);
+        assert_eq!(centres.map(|(x, y)| one.vouched_at(x, y)), [0.0; 3]);
     }
 
     #[test]

@@ -19,9 +19,12 @@
 //! to, since they report none), which costs the seams between objects. A
 //! cell keeps a depth plane besides its depth (the occluders' own, lowered
 //! below each other's where several fill it); MOC keeps one depth per
-//! tile. A working layer that a farther occluder completed stays, and a
-//! box's test at a cell takes it at the box's pixels in its mask; MOC
-//! clears it, and tests boxes against the reference layer alone. A buffer
+//! tile. A cell may keep more than MOC's one working layer
+//! (`swr.layers`), so that where several surfaces meet in it each keeps
+//! its own depth over its own pixels; working layers nearer than the
+//! reference stay once their masks fill the cell, and a box's test at a
+//! cell takes each at the box's pixels in its mask; MOC clears its one,
+//! and tests boxes against the reference layer alone. A buffer
 //! that hid nothing, or saved less drawing than it cost, rests for a few
 //! frames, and longer each time it fails again, or as long as 1.5 % of
 //! the frames' time pays for where it costs much of a frame (MOC leaves
@@ -74,7 +77,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
     chart_colour: [140, 86, 75],
     conservative: true,
     draws_by_time: true,
-    params: &[RESOLUTION, TRIANGLES, PIXELS_PER_TRIANGLE, THREADS, RESTS],
+    params: &[RESOLUTION, LAYERS, TRIANGLES, PIXELS_PER_TRIANGLE, THREADS, RESTS],
     exercised_with: &[("rests", "false")],
     needs: Needs::Nothing,
     carries: Carries::OccludersOnCpu,
@@ -86,7 +89,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
 const RESOLUTION: ParamInfo = ParamInfo {
     key: "resolution",
     default: "auto",
-    summary: "cells of the CPU depth buffer, WxH (at most the render size on each side); auto: 400x300, or 800x600 where the last buffer held a depth over at most a quarter of the screen (the finer buffer then has no more cells to fill)",
+    summary: "cells of the CPU depth buffer, WxH (at most the render size on each side); auto: 400x300, or 800x600 where the last buffer held a depth over at most a quarter of the screen (the finer buffer then has no more cells to fill), each with half the rows where the camera looks level, so the scene's upright lines stay upright on screen",
 };
 
 /// `swr.resolution=auto`'s cells: [`COARSE_CELLS`], or twice as many on
@@ -104,6 +107,31 @@ const COARSE_CELLS: Resolution = Resolution { width: 400, height: 300 };
 const FINE_CELLS: Resolution = Resolution { width: 800, height: 600 };
 const FINE_WHERE_HELD: f64 = 0.25;
 const FINE_FROM_COARSE: f64 = 0.2;
+
+/// `swr.resolution=auto` takes half the rows of cells (each cell twice as
+/// tall as wide) where no upright line of the scene leans on screen by
+/// more than this, in pixels across a pixel down ([`looks_level`]): then
+/// an upright edge that crosses a cell moves across it by at most a pixel.
+/// A scene that stands on a ground (streets, rooms, machines on a floor),
+/// seen by a camera that looks neither up nor down, shows most of its
+/// outlines upright (a building's corner, a door's frame, a column), and
+/// where they are the buffer's columns of cells matter more than its rows.
+/// Measured on the default city's street walk (120 frames, Vulkan, buffers
+/// every frame, 4 layers): 400x150 cells cull a share of 0.977 of what
+/// `roc` culls against 400x300's 0.985, for 23 % less CPU (`cargo bench
+/// --bench swr`, six alternating rounds); on den-haag.obj's orbit, which
+/// looks down on its district, the same cells cull 0.844 against 0.973,
+/// and this rule keeps them square there.
+const UPRIGHT_LEAN: f64 = 0.25;
+
+const LAYERS: ParamInfo = ParamInfo {
+    key: "layers",
+    default: "4",
+    summary: "depth layers a cell keeps, 1 to 8: a reference every pixel of the cell is drawn at or nearer, and working layers each holding the pixels its occluders cover (MOC's two); more keep more of a cell where several surfaces meet in it",
+};
+
+/// The most layers `swr.layers` may ask for.
+const MAX_LAYERS: u32 = 8;
 
 const TRIANGLES: ParamInfo = ParamInfo {
     key: "triangles",
@@ -148,6 +176,8 @@ const MAX_THREADS: usize = 64;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SwrParams {
     pub resolution: AutoOr<Resolution>,
+    /// Depth layers a cell keeps (buffer.rs).
+    pub layers: u32,
     pub triangles: u64,
     /// The least pixels an occluder's box covers per triangle of it.
     pub pixels_per_triangle: f64,
@@ -167,6 +197,10 @@ impl SwrParams {
                 format!("{threads}: at most {MAX_THREADS} (0: one per core)"),
             ));
         }
+        let layers = params.get(ModeId::Swr, &LAYERS)?;
+        if !(1..=MAX_LAYERS).contains(&layers) {
+            return Err(ModeError::bad(ModeId::Swr, &LAYERS, format!("{layers}: from 1 to {MAX_LAYERS}")));
+        }
         let pixels_per_triangle: f64 = params.get(ModeId::Swr, &PIXELS_PER_TRIANGLE)?;
         if !(pixels_per_triangle >= 0.0 && pixels_per_triangle.is_finite()) {
             let reason = format!("must be a number at least 0, got {pixels_per_triangle}");
@@ -174,6 +208,7 @@ impl SwrParams {
         }
         Ok(SwrParams {
             resolution: params.get(ModeId::Swr, &RESOLUTION)?,
+            layers,
             triangles: params.get(ModeId::Swr, &TRIANGLES)?,
             pixels_per_triangle,
             threads,
@@ -294,21 +329,30 @@ impl SoftwareOcclusionCulling {
     }
 
     /// The cells a buffer for render size `size` has: those asked for, or
-    /// `auto`'s choice ([`FINE_WHERE_HELD`]), at most `size` on each side.
-    fn cells_for(&self, size: Resolution) -> Resolution {
+    /// `auto`'s choice ([`FINE_WHERE_HELD`]; half the rows where the
+    /// camera looks `level`, [`UPRIGHT_LEAN`]), at most `size` on each
+    /// side.
+    fn cells_for(&self, size: Resolution, level: bool) -> Resolution {
         let within = |cells: Resolution| Resolution {
             width: cells.width.min(size.width),
             height: cells.height.min(size.height),
         };
-        let fine = within(FINE_CELLS);
-        let at_most = match self.buffer.as_ref().is_some_and(|b| b.cells() == fine) {
+        let shaped = |cells: Resolution| match level {
+            true => within(Resolution {
+                height: cells.height / 2,
+                ..cells
+            }),
+            false => within(cells),
+        };
+        let fine = shaped(FINE_CELLS);
+        let at_most = match self.buffer.as_ref().is_some_and(|b| b.cells().width == fine.width) {
             true => FINE_WHERE_HELD,
             false => FINE_FROM_COARSE,
         };
         match self.params.resolution {
             AutoOr::Given(cells) => within(cells),
             AutoOr::Auto if self.held <= at_most => fine,
-            AutoOr::Auto => within(COARSE_CELLS),
+            AutoOr::Auto => shaped(COARSE_CELLS),
         }
     }
 
@@ -323,7 +367,7 @@ impl SoftwareOcclusionCulling {
         }
         let next = match fits(&self.spare) {
             true => self.spare.take(),
-            false => Some(OcclusionBuffer::new(size, cells)),
+            false => Some(OcclusionBuffer::with_layers(size, cells, self.params.layers)),
         };
         self.spare = std::mem::replace(&mut self.buffer, next);
         self.buffer_holds = true;
@@ -548,6 +592,26 @@ impl Projector {
     }
 }
 
+/// Whether every line along `up` (the scene's up) that `camera` sees
+/// leans on screen by at most [`UPRIGHT_LEAN`] pixels across a pixel down.
+/// In the camera's frame (x right, y up, looking down -z), such a line
+/// through a point seen at (px, py) (its x and y over its distance) runs
+/// on screen along (ux + px uz, uy + py uz), u being `up` in that frame:
+/// its lean is a ratio of two affine functions of (px, py), so over the
+/// view, where the second keeps its sign, it is greatest at a corner.
+fn looks_level(camera: &Camera, up: DVec3) -> bool {
+    let u = camera.view_rotation() * up;
+    let half_y = (camera.fov_y / 2.0).tan();
+    let half_x = half_y * camera.aspect;
+    let corners = [[-half_x, -half_y], [half_x, -half_y], [-half_x, half_y], [half_x, half_y]];
+    let down = corners.map(|[_, py]| u.y + py * u.z);
+    let across = corners.map(|[px, _]| u.x + px * u.z);
+    // Upright lines point one way (up or down) on screen everywhere, and
+    // lean little at every corner.
+    (down.iter().all(|&d| d > 0.0) || down.iter().all(|&d| d < 0.0))
+        && across.iter().zip(&down).all(|(a, d)| a.abs() <= UPRIGHT_LEAN * d.abs())
+}
+
 /// A tested box on screen.
 #[derive(Clone)]
 struct BoxOnScreen {
@@ -644,7 +708,7 @@ impl Culler for SoftwareOcclusionCulling {
         self.depth_margins = setup.gpu.depth_margins;
         self.subpixel = setup.gpu.subpixel;
         self.make_scratch();
-        self.use_buffer(setup.resolution, self.cells_for(setup.resolution));
+        self.use_buffer(setup.resolution, self.cells_for(setup.resolution, false));
         // Every object that may be an occluder: one of more triangles than
         // the budget never is.
         let scene = setup.scene;
@@ -719,7 +783,8 @@ impl Culler for SoftwareOcclusionCulling {
         let resting = self.rest.take();
         self.rested = resting;
         if !resting || self.buffer.as_ref().is_none_or(|b| b.target() != size) {
-            self.use_buffer(size, self.cells_for(size));
+            let level = looks_level(camera, scene.up.axis.vector());
+            self.use_buffer(size, self.cells_for(size, level));
         }
         // A resting buffer holds nothing (what it shows is what the frame
         // used).
@@ -1285,7 +1350,8 @@ mod tests {
         // at the box, the buffer holds its pixels and a strip of the far
         // floor; looking ahead, the floor holds most of the screen below
         // the horizon. Frame 0 knows no occluder, and each frame's cells
-        // follow what the last buffer held.
+        // follow what the last buffer held; looking ahead, level, they are
+        // twice as tall as wide.
         let (scene, hierarchy) = cuboids(&[
             (DVec3::new(-60.0, -1.5, -60.0), DVec3::new(60.0, -1.0, 60.0)),
             (DVec3::new(-1.0, 11.0, -31.0), DVec3::new(1.0, 13.0, -29.0)),
@@ -1309,16 +1375,48 @@ mod tests {
             })
             .collect();
         let (coarse, fine) = (COARSE_CELLS, FINE_CELLS);
+        let tall = |cells: Resolution| Resolution {
+            height: cells.height / 2,
+            ..cells
+        };
         assert_eq!(
             frames.iter().map(|f| f.0).collect::<Vec<_>>(),
-            [coarse, coarse, fine, fine, coarse, coarse],
+            [coarse, coarse, fine, tall(fine), tall(coarse), tall(coarse)],
             "{frames:?}"
         );
         assert!(frames[1].1 > 0.0 && frames[1].1 <= FINE_FROM_COARSE, "{frames:?}");
         assert!(frames[3].1 > FINE_WHERE_HELD, "{frames:?}");
-        // The coarse buffer came back from the spare, and the fine one
-        // waits there.
-        assert_eq!(swr.spare.as_ref().map(OcclusionBuffer::cells), Some(fine));
+        // The fine buffer waits as the spare.
+        assert_eq!(swr.spare.as_ref().map(OcclusionBuffer::cells), Some(tall(fine)));
+    }
+
+    #[test]
+    fn a_camera_looks_level_where_the_scenes_upright_lines_lean_little_anywhere_on_screen() {
+        // 60° high at 4:3: the corners lie 0.77 across and 0.58 up or
+        // down of the centre, over distance.
+        let ahead = camera_down_z();
+        let turned = |x: f64, y: f64, z: f64| Camera {
+            rotation: glam::DQuat::from_euler(glam::EulerRot::YXZ, y.to_radians(), x.to_radians(), z.to_radians()),
+            ..ahead
+        };
+        assert!(looks_level(&ahead, DVec3::Y));
+        assert!(looks_level(&ahead, DVec3::NEG_Y), "upside down, upright lines stay upright");
+        assert!(looks_level(&turned(0.0, 70.0, 0.0), DVec3::Y), "turned about the up axis");
+        // Looking 10° down, a line at a corner leans 0.77 sin 10° over
+        // cos 10° - 0.58 sin 10°: 0.15; 20° down, 0.35.
+        assert!(looks_level(&turned(-10.0, 0.0, 0.0), DVec3::Y));
+        assert!(!looks_level(&turned(-20.0, 0.0, 0.0), DVec3::Y));
+        assert!(!looks_level(&turned(20.0, 0.0, 0.0), DVec3::Y));
+        // Rolled, every upright line leans by the roll's tangent: 0.18 at
+        // 10°, 0.36 at 20°.
+        assert!(looks_level(&turned(0.0, 0.0, 10.0), DVec3::Y));
+        assert!(!looks_level(&turned(0.0, 0.0, 20.0), DVec3::Y));
+        // Looking straight down, upright lines meet on screen.
+        assert!(!looks_level(&turned(-90.0, 0.0, 0.0), DVec3::Y));
+        // A Z-up scene: looking along -z is looking straight down on it,
+        // and along +y (pitched up 90°, so the camera's up is +z) level.
+        assert!(!looks_level(&ahead, DVec3::Z));
+        assert!(looks_level(&turned(90.0, 0.0, 0.0), DVec3::Z));
     }
 
     #[test]
