@@ -65,7 +65,7 @@ use crate::gpu::{
 };
 use crate::parallel;
 use crate::scene::{Object, Scene};
-use buffer::{Cells, OcclusionBuffer};
+use buffer::{Cells, MAX_LAYERS, OcclusionBuffer};
 use mesh::{DrawnPart, NearLimit, Patches, Rasteriser, ScreenMesh, ScreenVertex};
 use neighbours::{RunNeighbours, run_indices};
 use walk::{Walk, Walkers};
@@ -111,7 +111,8 @@ const FINE_FROM_COARSE: f64 = 0.2;
 /// `swr.resolution=auto` takes half the rows of cells (each cell twice as
 /// tall as wide) where no upright line of the scene leans on screen by
 /// more than this, in pixels across a pixel down ([`looks_level`]): then
-/// an upright edge that crosses a cell moves across it by at most a pixel.
+/// an upright edge that crosses a cell moves across it by at most a quarter
+/// of the cell's height (a pixel, in cells of 2 × 4 pixels at 800x600).
 /// A scene that stands on a ground (streets, rooms, machines on a floor),
 /// seen by a camera that looks neither up nor down, shows most of its
 /// outlines upright (a building's corner, a door's frame, a column), and
@@ -129,9 +130,6 @@ const LAYERS: ParamInfo = ParamInfo {
     default: "4",
     summary: "depth layers a cell keeps, 1 to 8: a reference every pixel of the cell is drawn at or nearer, and working layers each holding the pixels its occluders cover (MOC's two); more keep more of a cell where several surfaces meet in it",
 };
-
-/// The most layers `swr.layers` may ask for.
-const MAX_LAYERS: u32 = 8;
 
 const TRIANGLES: ParamInfo = ParamInfo {
     key: "triangles",
@@ -245,6 +243,8 @@ pub struct SoftwareOcclusionCulling {
     /// held a depth (all of it before the first), by which `auto` chooses
     /// the cells.
     held: f64,
+    /// Whether `auto` last chose its finer cells ([`FINE_WHERE_HELD`]).
+    fine: bool,
     /// What each thread rasterising occluders works with.
     preparers: Vec<Preparer>,
     rasterisers: Vec<Rasteriser>,
@@ -292,6 +292,7 @@ impl SoftwareOcclusionCulling {
             buffer: None,
             spare: None,
             held: 1.0,
+            fine: false,
             preparers: Vec::new(),
             rasterisers: Vec::new(),
             neighbours: RunNeighbours::default(),
@@ -332,7 +333,7 @@ impl SoftwareOcclusionCulling {
     /// `auto`'s choice ([`FINE_WHERE_HELD`]; half the rows where the
     /// camera looks `level`, [`UPRIGHT_LEAN`]), at most `size` on each
     /// side.
-    fn cells_for(&self, size: Resolution, level: bool) -> Resolution {
+    fn cells_for(&mut self, size: Resolution, level: bool) -> Resolution {
         let within = |cells: Resolution| Resolution {
             width: cells.width.min(size.width),
             height: cells.height.min(size.height),
@@ -344,16 +345,15 @@ impl SoftwareOcclusionCulling {
             }),
             false => within(cells),
         };
-        let fine = shaped(FINE_CELLS);
-        let at_most = match self.buffer.as_ref().is_some_and(|b| b.cells().width == fine.width) {
+        if let AutoOr::Given(cells) = self.params.resolution {
+            return within(cells);
+        }
+        let at_most = match self.fine {
             true => FINE_WHERE_HELD,
             false => FINE_FROM_COARSE,
         };
-        match self.params.resolution {
-            AutoOr::Given(cells) => within(cells),
-            AutoOr::Auto if self.held <= at_most => fine,
-            AutoOr::Auto => shaped(COARSE_CELLS),
-        }
+        self.fine = self.held <= at_most;
+        shaped(if self.fine { FINE_CELLS } else { COARSE_CELLS })
     }
 
     /// Makes `buffer` one for render size `size` with `cells`: as it is,
@@ -708,7 +708,8 @@ impl Culler for SoftwareOcclusionCulling {
         self.depth_margins = setup.gpu.depth_margins;
         self.subpixel = setup.gpu.subpixel;
         self.make_scratch();
-        self.use_buffer(setup.resolution, self.cells_for(setup.resolution, false));
+        let cells = self.cells_for(setup.resolution, false);
+        self.use_buffer(setup.resolution, cells);
         // Every object that may be an occluder: one of more triangles than
         // the budget never is.
         let scene = setup.scene;
@@ -731,7 +732,7 @@ impl Culler for SoftwareOcclusionCulling {
     ///    mesh.rs): it marks the pixel groups of a cell the GPU is sure to draw
     ///    it over, with the GPU's snapping and f32 error as margins from its
     ///    outline, and the least depth it may draw there. A cell merges the
-    ///    patches' marks (buffer.rs, MOC's working layer) and takes the
+    ///    patches' marks (buffer.rs, MOC's working layers) and takes the
     ///    farthest of their depths once every pixel is marked, with a depth
     ///    plane below theirs, so a box can be compared with it centre by
     ///    centre. A triangle reaching the near plane keeps its part beyond it
@@ -750,7 +751,7 @@ impl Culler for SoftwareOcclusionCulling {
     ///    it (`BoxPlanes`: a box seen at a slant is far nearer at one end), or
     ///    no ray through the texel's pixel centres may meet it; a texel that
     ///    fails is tried again by its children, down to the cells, where the box
-    ///    may also lie behind the cell's plane, or behind its working layer
+    ///    may also lie behind the cell's plane, or behind a working layer
     ///    or the reference at its pixels in the layer's mask and behind the
     ///    reference at the rest, each part over its own rectangle. A hidden
     ///    node stops its subtree; a box reaching the near plane is visible.
@@ -783,8 +784,8 @@ impl Culler for SoftwareOcclusionCulling {
         let resting = self.rest.take();
         self.rested = resting;
         if !resting || self.buffer.as_ref().is_none_or(|b| b.target() != size) {
-            let level = looks_level(camera, scene.up.axis.vector());
-            self.use_buffer(size, self.cells_for(size, level));
+            let cells = self.cells_for(size, looks_level(camera, scene.up.axis.vector()));
+            self.use_buffer(size, cells);
         }
         // A resting buffer holds nothing (what it shows is what the frame
         // used).
@@ -1402,6 +1403,9 @@ mod tests {
         assert!(looks_level(&ahead, DVec3::Y));
         assert!(looks_level(&ahead, DVec3::NEG_Y), "upside down, upright lines stay upright");
         assert!(looks_level(&turned(0.0, 70.0, 0.0), DVec3::Y), "turned about the up axis");
+        // Turned and looking down 12°: 0.19 (taken the wrong way round,
+        // camera to world, the turn would tilt it to 0.28).
+        assert!(looks_level(&turned(-12.0, 60.0, 0.0), DVec3::Y));
         // Looking 10° down, a line at a corner leans 0.77 sin 10° over
         // cos 10° - 0.58 sin 10°: 0.15; 20° down, 0.35.
         assert!(looks_level(&turned(-10.0, 0.0, 0.0), DVec3::Y));
@@ -1790,7 +1794,7 @@ mod tests {
     }
 
     #[test]
-    fn threads_are_refused_beyond_the_cap_and_used_only_where_the_budget_gives_them_work() {
+    fn threads_and_layers_are_refused_beyond_their_caps_and_threads_used_only_where_the_budget_gives_them_work() {
         let params = |items: &[&str]| {
             let items: Vec<String> = items.iter().map(|s| s.to_string()).collect();
             let parsed = ModeParams::parse(&items, &[ModeId::Swr]).map_err(|e| e.to_string())?;
@@ -1808,6 +1812,11 @@ mod tests {
             1
         );
         assert_eq!(params(&["swr.threads=3"]).unwrap().threads_used(), 3);
+        for refused in ["swr.layers=0", "swr.layers=9"] {
+            let error = params(&[refused]).unwrap_err();
+            assert!(error.contains("from 1 to 8"), "{error}");
+        }
+        assert_eq!(params(&["swr.layers=8"]).unwrap().layers, 8);
     }
 
     #[test]
