@@ -118,11 +118,11 @@ const FINE_FROM_COARSE: f64 = 0.2;
 /// outlines upright (a building's corner, a door's frame, a column), and
 /// where they are the buffer's columns of cells matter more than its rows.
 /// Measured on the default city's street walk (120 frames, Vulkan, buffers
-/// every frame, 4 layers): 400x150 cells cull a share of 0.977 of what
-/// `roc` culls against 400x300's 0.985, for 23 % less CPU (`cargo bench
-/// --bench swr`, six alternating rounds); on den-haag.obj's orbit, which
-/// looks down on its district, the same cells cull 0.844 against 0.973,
-/// and this rule keeps them square there.
+/// every frame, 4 layers): 400x150 cells cull a share of 0.976 of what
+/// `roc` culls against 400x300's 0.984, for a fifth less CPU (`cargo
+/// bench --bench swr`, six alternating rounds); on den-haag.obj's orbit,
+/// which looks down on its district, the same cells cull 0.843 against
+/// 0.972, and this rule keeps them square there.
 const UPRIGHT_LEAN: f64 = 0.25;
 
 const LAYERS: ParamInfo = ParamInfo {
