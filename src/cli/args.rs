@@ -164,7 +164,8 @@ pub struct SceneArgs {
     /// value needs its `=`, so `--external-buffers MODEL` reads MODEL).
     #[arg(long, value_name = "BOOL", num_args = 0..=1, require_equals = true, default_missing_value = "true")]
     pub external_buffers: Option<bool>,
-    /// The scene's up axis, for generated paths and the overview: x, y, z,
+    /// The scene's up axis, for generated paths, the overview and swr's
+    /// cells (taller where the camera looks level in it): x, y, z,
     /// -x, -y, -z, or auto (+Y for glTF and built-in scenes; for OBJ, +Z
     /// when the model is at least twice as flat in Z as across and stands
     /// on its Z minimum, else +Y) [default: auto].

@@ -170,6 +170,16 @@ pub enum GpuError {
     /// device lost), caught instead of wgpu's default panic.
     #[error("the GPU failed: {0}")]
     Failed(String),
+    /// A mode's own memory on the CPU (swr's buffer) more than the system
+    /// says this process may still take: refused before it is allocated,
+    /// where allocating would end the process.
+    #[error("{what} needs {need} MB, and this machine lets occlu take {left} MB more: {hint}")]
+    HostMemory {
+        what: &'static str,
+        need: u64,
+        left: u64,
+        hint: &'static str,
+    },
 }
 
 impl GpuError {
@@ -179,7 +189,10 @@ impl GpuError {
     pub fn is_input_error(&self) -> bool {
         matches!(
             self,
-            GpuError::TooLarge { .. } | GpuError::UnknownBackend(_) | GpuError::NotOnThisSystem(..)
+            GpuError::TooLarge { .. }
+                | GpuError::UnknownBackend(_)
+                | GpuError::NotOnThisSystem(..)
+                | GpuError::HostMemory { .. }
         )
     }
 }

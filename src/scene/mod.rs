@@ -17,7 +17,7 @@ mod gltf;
 mod gltf_json;
 mod instancing;
 mod load;
-mod memory;
+pub(crate) mod memory;
 mod meshopt;
 mod model;
 pub mod motion;

@@ -619,6 +619,17 @@ impl OcclusionBuffer {
         }
     }
 
+    /// The bytes a buffer of `cells` with `layers` layers a cell takes (its
+    /// pyramid of depths, a third more than its cells; its reference
+    /// planes; its working layers' masks, depths and planes).
+    pub fn bytes(cells: Resolution, layers: u32) -> u64 {
+        let count = u64::from(cells.width) * u64::from(cells.height);
+        let per_cell = u64::from(layers.max(1) - 1);
+        let pyramid = count * 4 * 4 / 3;
+        let working = (std::mem::size_of::<u64>() + std::mem::size_of::<WorkingDepth>()) as u64;
+        pyramid + count * std::mem::size_of::<ScreenPlane>() as u64 + count * per_cell * working
+    }
+
     /// The render size it was made for.
     pub fn target(&self) -> Resolution {
         self.grid.target

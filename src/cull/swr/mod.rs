@@ -89,7 +89,7 @@ pub(super) const MODE: ModeInfo = ModeInfo {
 const RESOLUTION: ParamInfo = ParamInfo {
     key: "resolution",
     default: "auto",
-    summary: "cells of the CPU depth buffer, WxH (at most the render size on each side); auto: 400x300, or 800x600 where the last buffer held a depth over at most a quarter of the screen (the finer buffer then has no more cells to fill), each with half the rows where the camera looks level, so the scene's upright lines stay upright on screen",
+    summary: "cells of the CPU depth buffer, WxH (at most the render size on each side); auto: 400x300, or 800x600 where the last buffer held a depth over at most a quarter of the screen (the finer buffer then has no more cells to fill), each with half the rows where the camera looks level (the scene's upright lines then stay upright on screen, and columns of cells matter more than rows)",
 };
 
 /// `swr.resolution=auto`'s cells: [`COARSE_CELLS`], or twice as many on
@@ -128,7 +128,7 @@ const UPRIGHT_LEAN: f64 = 0.25;
 const LAYERS: ParamInfo = ParamInfo {
     key: "layers",
     default: "4",
-    summary: "depth layers a cell keeps, 1 to 8: a reference every pixel of the cell is drawn at or nearer, and working layers each holding the pixels its occluders cover (MOC's two); more keep more of a cell where several surfaces meet in it",
+    summary: "depth layers a cell keeps, 1 to 8: a reference every pixel of the cell is drawn at or nearer, and working layers each holding the pixels its occluders cover (MOC's two: a reference and one working layer); more keep more of a cell where several surfaces meet in it",
 };
 
 const TRIANGLES: ParamInfo = ParamInfo {
@@ -354,6 +354,21 @@ impl SoftwareOcclusionCulling {
         };
         self.fine = self.held <= at_most;
         shaped(if self.fine { FINE_CELLS } else { COARSE_CELLS })
+    }
+
+    /// The most bytes its buffers may take at render size `size`: the cells
+    /// given, or `auto`'s finest and coarsest together (one of them the
+    /// spare).
+    fn buffers_need(&self, size: Resolution) -> u64 {
+        let within = |cells: Resolution| Resolution {
+            width: cells.width.min(size.width),
+            height: cells.height.min(size.height),
+        };
+        let bytes = |cells: Resolution| OcclusionBuffer::bytes(within(cells), self.params.layers);
+        match self.params.resolution {
+            AutoOr::Given(cells) => bytes(cells),
+            AutoOr::Auto => bytes(FINE_CELLS) + bytes(COARSE_CELLS),
+        }
     }
 
     /// Makes `buffer` one for render size `size` with `cells`: as it is,
@@ -592,6 +607,21 @@ impl Projector {
     }
 }
 
+/// Refuses buffers of `need` bytes where the system says this process may
+/// take only `left` more (unknown: taken as enough), before allocating
+/// them ends the process.
+fn buffers_fit(need: u64, left: Option<u64>) -> Result<(), GpuError> {
+    match left {
+        Some(left) if need > left => Err(GpuError::HostMemory {
+            what: "swr's CPU depth buffer",
+            need: need.div_ceil(1 << 20),
+            left: left / (1 << 20),
+            hint: "take fewer swr.layers or a coarser swr.resolution",
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// Whether every line along `up` (the scene's up) that `camera` sees
 /// leans on screen by at most [`UPRIGHT_LEAN`] pixels across a pixel down.
 /// In the camera's frame (x right, y up, looking down -z), such a line
@@ -708,6 +738,7 @@ impl Culler for SoftwareOcclusionCulling {
         self.depth_margins = setup.gpu.depth_margins;
         self.subpixel = setup.gpu.subpixel;
         self.make_scratch();
+        buffers_fit(self.buffers_need(setup.resolution), crate::scene::memory::available())?;
         let cells = self.cells_for(setup.resolution, false);
         self.use_buffer(setup.resolution, cells);
         // Every object that may be an occluder: one of more triangles than
@@ -1389,6 +1420,32 @@ mod tests {
         assert!(frames[3].1 > FINE_WHERE_HELD, "{frames:?}");
         // The fine buffer waits as the spare.
         assert_eq!(swr.spare.as_ref().map(OcclusionBuffer::cells), Some(tall(fine)));
+    }
+
+    #[test]
+    fn buffers_the_machine_cannot_hold_are_refused_before_they_are_allocated() {
+        // 8192 × 8192 cells (2^26) of 8 layers: a pyramid of 16/3 bytes a
+        // cell, a reference plane of 24, and 7 working layers of 40.
+        let params = |items: &[&str]| {
+            let items: Vec<String> = items.iter().map(|s| s.to_string()).collect();
+            SwrParams::from_params(&ModeParams::parse(&items, &[ModeId::Swr]).unwrap()).unwrap()
+        };
+        let size = Resolution { width: 8192, height: 8192 };
+        let huge = SoftwareOcclusionCulling::new(params(&["swr.resolution=8192x8192", "swr.layers=8"]));
+        let need = huge.buffers_need(size);
+        assert_eq!(need, (1u64 << 26) * 16 / 3 + (1 << 26) * (24 + 7 * 40));
+        let error = buffers_fit(need, Some(4 << 30)).unwrap_err();
+        assert!(error.is_input_error());
+        assert_eq!(
+            error.to_string(),
+            "swr's CPU depth buffer needs 19798 MB, and this machine lets occlu take 4096 MB more: take fewer swr.layers or a coarser swr.resolution"
+        );
+        assert!(buffers_fit(need, None).is_ok(), "where the system does not say, allocation decides");
+        // auto's two buffers at 800x600 with 4 layers: 68 and 17 MiB.
+        let auto = SoftwareOcclusionCulling::new(params(&[]));
+        let need = auto.buffers_need(Resolution::DEFAULT);
+        assert_eq!(need.div_ceil(1 << 20), 86);
+        assert!(buffers_fit(need, Some(4 << 30)).is_ok());
     }
 
     #[test]
