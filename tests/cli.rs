@@ -844,19 +844,32 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
         2,
         &["their cluster sizes (--cluster-triangles): 4096 vs 16"],
     );
-    let tuned = edited_summary("tuned", &|s| {
-        let omq = s["modes"]
-            .as_array_mut()
-            .unwrap()
-            .iter_mut()
-            .find(|m| m["name"] == "omq")
-            .unwrap();
-        omq["parameters"]["om"] = "80x60".into();
-    });
+    // A copy whose omq parameters `edit` changed.
+    let omq_edited = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        edited_summary(name, &|s| {
+            let omq = s["modes"]
+                .as_array_mut()
+                .unwrap()
+                .iter_mut()
+                .find(|m| m["name"] == "omq")
+                .unwrap();
+            edit(&mut omq["parameters"]);
+        })
+    };
+    let tuned = omq_edited("tuned", &|p| p["om"] = "80x60".into());
     fails_with(
         &["compare", b, tuned.to_str().unwrap()],
         2,
-        &["their mode parameters", "80x60"],
+        &["their mode parameters: omq.om=64x48 vs omq.om=80x60)"],
+    );
+    // A parameter a run from an older occlu did not record is named too.
+    let older = omq_edited("older", &|p| {
+        p.as_object_mut().unwrap().remove("om");
+    });
+    fails_with(
+        &["compare", b, older.to_str().unwrap()],
+        2,
+        &["their mode parameters: omq.om=64x48 vs omq.om not recorded)"],
     );
     // (From before the cluster size was recorded, too.)
     let renamed = edited_summary("renamed", &|s| {

@@ -73,13 +73,43 @@ impl Summary {
             (Some(triangles), Some(_)) => triangles.to_string(),
             _ => String::new(),
         };
+        // Each parameter of a mode both ran that the two set differently,
+        // as MODE.KEY=VALUE (or "not recorded", in a file from an occlu
+        // that had no such parameter).
         let parameters = |s: &Summary, other: &Summary| {
-            s.modes
+            let mut differing = Vec::new();
+            for (mode, theirs) in s
+                .modes
                 .iter()
-                .filter(|m| other.modes.iter().any(|o| o.name == m.name))
-                .map(|m| format!("{} {}", m.name, m.parameters))
-                .collect::<Vec<_>>()
-                .join(", ")
+                .filter_map(|m| Some((m, other.modes.iter().find(|o| o.name == m.name)?)))
+            {
+                let keys = |p: &serde_json::Value| {
+                    p.as_object()
+                        .map(|o| o.keys().cloned().collect::<Vec<_>>())
+                        .unwrap_or_default()
+                };
+                let mut all = keys(&mode.parameters);
+                all.extend(keys(&theirs.parameters));
+                all.sort();
+                all.dedup();
+                for key in all
+                    .iter()
+                    .filter(|k| mode.parameters.get(k) != theirs.parameters.get(k))
+                {
+                    differing.push(match mode.parameters.get(key) {
+                        Some(value) => format!(
+                            "{}.{key}={}",
+                            mode.name,
+                            value.as_str().map_or(value.to_string(), str::to_string)
+                        ),
+                        None => format!("{}.{key} not recorded", mode.name),
+                    });
+                }
+                if all.is_empty() && mode.parameters != theirs.parameters {
+                    differing.push(format!("{} {}", mode.name, mode.parameters));
+                }
+            }
+            differing.join(", ")
         };
         [
             ("frame counts", self.frames.to_string(), other.frames.to_string()),
