@@ -108,8 +108,8 @@ const FINE_CELLS: Resolution = Resolution { width: 800, height: 600 };
 const FINE_WHERE_HELD: f64 = 0.25;
 const FINE_FROM_COARSE: f64 = 0.2;
 
-/// `swr.resolution=auto` takes half the rows of cells (each cell twice as
-/// tall as wide) where no upright line of the scene leans on screen by
+/// `swr.resolution=auto` takes half the rows of cells (at a 4:3 render,
+/// each cell twice as tall as wide) where no upright line of the scene leans on screen by
 /// more than this, in pixels across a pixel down ([`looks_level`]): then
 /// an upright edge that crosses a cell moves across it by at most a quarter
 /// of the cell's height (a pixel, in cells of 2 × 4 pixels at 800x600).
@@ -334,19 +334,18 @@ impl SoftwareOcclusionCulling {
     /// camera looks `level`, [`UPRIGHT_LEAN`]), at most `size` on each
     /// side.
     fn cells_for(&mut self, size: Resolution, level: bool) -> Resolution {
-        let within = |cells: Resolution| Resolution {
-            width: cells.width.min(size.width),
-            height: cells.height.min(size.height),
-        };
         let shaped = |cells: Resolution| match level {
-            true => within(Resolution {
-                height: cells.height / 2,
-                ..cells
-            }),
-            false => within(cells),
+            true => within(
+                Resolution {
+                    height: cells.height / 2,
+                    ..cells
+                },
+                size,
+            ),
+            false => within(cells, size),
         };
         if let AutoOr::Given(cells) = self.params.resolution {
-            return within(cells);
+            return within(cells, size);
         }
         let at_most = match self.fine {
             true => FINE_WHERE_HELD,
@@ -360,11 +359,7 @@ impl SoftwareOcclusionCulling {
     /// given, or `auto`'s finest and coarsest together (one of them the
     /// spare).
     fn buffers_need(&self, size: Resolution) -> u64 {
-        let within = |cells: Resolution| Resolution {
-            width: cells.width.min(size.width),
-            height: cells.height.min(size.height),
-        };
-        let bytes = |cells: Resolution| OcclusionBuffer::bytes(within(cells), self.params.layers);
+        let bytes = |cells: Resolution| OcclusionBuffer::bytes(within(cells, size), self.params.layers);
         match self.params.resolution {
             AutoOr::Given(cells) => bytes(cells),
             AutoOr::Auto => bytes(FINE_CELLS) + bytes(COARSE_CELLS),
@@ -604,6 +599,15 @@ impl Projector {
             area: seen.x * seen.y,
             nearest,
         })
+    }
+}
+
+/// `cells`, at most `size` on each side: a buffer has no more cells than
+/// the render has pixels.
+fn within(cells: Resolution, size: Resolution) -> Resolution {
+    Resolution {
+        width: cells.width.min(size.width),
+        height: cells.height.min(size.height),
     }
 }
 
