@@ -871,6 +871,14 @@ fn compare_passes_a_run_against_itself_and_names_regressions() {
         2,
         &["their mode parameters: omq.om=64x48 vs omq.om not recorded)"],
     );
+    // A value that differs in its type alone is told apart.
+    let as_text = omq_edited("as_text", &|p| p["om"] = "7".into());
+    let as_number = omq_edited("as_number", &|p| p["om"] = 7.into());
+    fails_with(
+        &["compare", as_text.to_str().unwrap(), as_number.to_str().unwrap()],
+        2,
+        &["their mode parameters: omq.om=\"7\" vs omq.om=7)"],
+    );
     // (From before the cluster size was recorded, too.)
     let renamed = edited_summary("renamed", &|s| {
         s["path"]["source"] = "/ci/checkout/path.json".into();

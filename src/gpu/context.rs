@@ -173,7 +173,7 @@ pub enum GpuError {
     /// A mode's own memory on the CPU (swr's buffer) more than the system
     /// says this process may still take: refused before it is allocated,
     /// where allocating would end the process.
-    #[error("{what} needs {need} MB, and this machine lets occlu take {left} MB more: {hint}")]
+    #[error("{what} need about {need} MiB, and this machine lets occlu take {left} MiB more: {hint}")]
     HostMemory {
         what: &'static str,
         need: u64,

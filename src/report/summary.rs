@@ -96,12 +96,14 @@ impl Summary {
                     .iter()
                     .filter(|k| mode.parameters.get(k) != theirs.parameters.get(k))
                 {
+                    // A string shown bare unless the other run's value is
+                    // no string (4 against "4" must read differently).
+                    let theirs = theirs.parameters.get(key);
                     differing.push(match mode.parameters.get(key) {
-                        Some(value) => format!(
-                            "{}.{key}={}",
-                            mode.name,
-                            value.as_str().map_or(value.to_string(), str::to_string)
-                        ),
+                        Some(serde_json::Value::String(text)) if theirs.is_none_or(serde_json::Value::is_string) => {
+                            format!("{}.{key}={text}", mode.name)
+                        }
+                        Some(value) => format!("{}.{key}={value}", mode.name),
                         None => format!("{}.{key} not recorded", mode.name),
                     });
                 }

@@ -6,8 +6,8 @@
 //! cell's pixels (up to 8 × 8 groups of them) with the farthest depth of
 //! the occluders that covered them. Occluders that each cover part of a
 //! cell merge in the working layers; once their masks together fill it,
-//! the farthest of their depths becomes the reference (section 3.2's
-//! update). A pyramid of the reference layer's farthest depths serves the
+//! the farthest depth of the nearest of them that fill it becomes the
+//! reference (section 3.2's update). A pyramid of the reference layer's farthest depths serves the
 //! box test. Screen positions are framebuffer pixels (x right, y down);
 //! depth is reverse-Z (`near / distance`, 0 = nothing drawn).
 //!
@@ -606,7 +606,7 @@ impl OcclusionBuffer {
             (w, h) = (w.div_ceil(2), h.div_ceil(2));
         }
         let count = (width * height) as usize;
-        let per_cell = layers.max(1) as usize - 1;
+        let per_cell = layers.clamp(1, MAX_LAYERS) as usize - 1;
         OcclusionBuffer {
             grid,
             levels,
@@ -619,12 +619,12 @@ impl OcclusionBuffer {
         }
     }
 
-    /// The bytes a buffer of `cells` with `layers` layers a cell takes (its
-    /// pyramid of depths, a third more than its cells; its reference
+    /// About the bytes a buffer of `cells` with `layers` layers a cell takes
+    /// (its pyramid of depths, about a third more than its cells; its reference
     /// planes; its working layers' masks, depths and planes).
     pub fn bytes(cells: Resolution, layers: u32) -> u64 {
         let count = u64::from(cells.width) * u64::from(cells.height);
-        let per_cell = u64::from(layers.max(1) - 1);
+        let per_cell = u64::from(layers.clamp(1, MAX_LAYERS) - 1);
         let pyramid = count * 4 * 4 / 3;
         let working = (std::mem::size_of::<u64>() + std::mem::size_of::<WorkingDepth>()) as u64;
         pyramid + count * std::mem::size_of::<ScreenPlane>() as u64 + count * per_cell * working

@@ -374,9 +374,15 @@ impl SoftwareOcclusionCulling {
         if fits(&self.buffer) {
             return;
         }
-        let next = match fits(&self.spare) {
-            true => self.spare.take(),
-            false => Some(OcclusionBuffer::with_layers(size, cells, self.params.layers)),
+        // A spare that does not fit goes before another is made, so that
+        // no more than two buffers are ever held (`buffers_need`).
+        let spare = self.spare.take();
+        let next = match fits(&spare) {
+            true => spare,
+            false => {
+                drop(spare);
+                Some(OcclusionBuffer::with_layers(size, cells, self.params.layers))
+            }
         };
         self.spare = std::mem::replace(&mut self.buffer, next);
         self.buffer_holds = true;
@@ -616,7 +622,7 @@ fn within(cells: Resolution, size: Resolution) -> Resolution {
 fn buffers_fit(need: u64, left: Option<u64>) -> Result<(), GpuError> {
     match left {
         Some(left) if need > left => Err(GpuError::HostMemory {
-            what: "swr's CPU depth buffer",
+            what: "swr's CPU depth buffers",
             need: need.div_ceil(1 << 20),
             left: left / (1 << 20),
             hint: "take fewer swr.layers or a coarser swr.resolution",
@@ -766,9 +772,9 @@ impl Culler for SoftwareOcclusionCulling {
     ///    mesh.rs): it marks the pixel groups of a cell the GPU is sure to draw
     ///    it over, with the GPU's snapping and f32 error as margins from its
     ///    outline, and the least depth it may draw there. A cell merges the
-    ///    patches' marks (buffer.rs, MOC's working layers) and takes the
-    ///    farthest of their depths once every pixel is marked, with a depth
-    ///    plane below theirs, so a box can be compared with it centre by
+    ///    patches' marks (buffer.rs, MOC's working layers) and, once every
+    ///    pixel is marked, takes the farthest depth of the nearest marks
+    ///    that fill it, with a depth plane below theirs, so a box can be compared with it centre by
     ///    centre. A triangle reaching the near plane keeps its part beyond it
     ///    (clipped, as MOC clips; its cut sides border its patch), so a floor
     ///    or a wall that runs past the eye hides what lies behind it.
@@ -1437,7 +1443,7 @@ mod tests {
         assert!(error.is_input_error());
         assert_eq!(
             error.to_string(),
-            "swr's CPU depth buffer needs 19798 MB, and this machine lets occlu take 4096 MB more: take fewer swr.layers or a coarser swr.resolution"
+            "swr's CPU depth buffers need about 19798 MiB, and this machine lets occlu take 4096 MiB more: take fewer swr.layers or a coarser swr.resolution"
         );
         assert!(buffers_fit(need, None).is_ok(), "where the system does not say, allocation decides");
         // auto's two buffers at 800x600 with 4 layers: 68 and 17 MiB.
