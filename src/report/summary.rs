@@ -98,9 +98,11 @@ impl Summary {
                 {
                     // A string shown bare unless the other run's value is
                     // no string (4 against "4" must read differently).
-                    let theirs = theirs.parameters.get(key);
+                    let their_value = theirs.parameters.get(key);
                     differing.push(match mode.parameters.get(key) {
-                        Some(serde_json::Value::String(text)) if theirs.is_none_or(serde_json::Value::is_string) => {
+                        Some(serde_json::Value::String(text))
+                            if their_value.is_none_or(serde_json::Value::is_string) =>
+                        {
                             format!("{}.{key}={text}", mode.name)
                         }
                         Some(value) => format!("{}.{key}={value}", mode.name),

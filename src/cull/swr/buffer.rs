@@ -482,6 +482,12 @@ impl Cells<'_> {
     }
 }
 
+/// The working layers a cell of `layers` layers keeps: all but the
+/// reference, of at most [`MAX_LAYERS`] (so that [`filling`]'s parts fit).
+fn working_layers(layers: u32) -> u32 {
+    layers.clamp(1, MAX_LAYERS) - 1
+}
+
 /// Whether a working layer of mask `mask` vouches for anything a
 /// reference at `reference` does not ([`WorkingDepth`]).
 fn holds(mask: u64, layer: &WorkingDepth, reference: f32) -> bool {
@@ -606,7 +612,7 @@ impl OcclusionBuffer {
             (w, h) = (w.div_ceil(2), h.div_ceil(2));
         }
         let count = (width * height) as usize;
-        let per_cell = layers.clamp(1, MAX_LAYERS) as usize - 1;
+        let per_cell = working_layers(layers) as usize;
         OcclusionBuffer {
             grid,
             levels,
@@ -624,7 +630,7 @@ impl OcclusionBuffer {
     /// planes; its working layers' masks, depths and planes).
     pub fn bytes(cells: Resolution, layers: u32) -> u64 {
         let count = u64::from(cells.width) * u64::from(cells.height);
-        let per_cell = u64::from(layers.clamp(1, MAX_LAYERS) - 1);
+        let per_cell = u64::from(working_layers(layers));
         let pyramid = count * 4 * 4 / 3;
         let working = (std::mem::size_of::<u64>() + std::mem::size_of::<WorkingDepth>()) as u64;
         pyramid + count * std::mem::size_of::<ScreenPlane>() as u64 + count * per_cell * working
