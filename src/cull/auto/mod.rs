@@ -47,13 +47,15 @@
 //!   hides.
 //! - **Warm-up**: in a warm-up frame every candidate renders the frame in
 //!   turn, from a cleared target, so none pays its first frame (pipelines
-//!   compiled on first use) in a recorded one. From the second warm-up
-//!   frame on, each is timed from its start to the GPU's end of its work,
-//!   and the chooser is calibrated with these paired times of one view:
-//!   the cheapest runs from the first recorded frame, and a rival shown
-//!   far dearer is not explored in recorded frames (only rechecked within
-//!   the budget). What each occlusion culler that draws on the CPU drew
-//!   there says what it hides, so that where nothing seems hidden the
+//!   compiled on first use) in a recorded one; each walk starts from the
+//!   shared lists as the frame found them, as it would in a recorded frame,
+//!   not from those a walk before it wrote in the frame. From the second
+//!   warm-up frame on, each is timed from its start to the GPU's end of its
+//!   work, and the chooser is calibrated with these paired times of one
+//!   view: the cheapest runs from the first recorded frame, and a rival
+//!   shown far dearer is not explored in recorded frames (only rechecked
+//!   within the budget). What each occlusion culler that draws on the CPU
+//!   drew there says what it hides, so that where nothing seems hidden the
 //!   culler that looks again is not one that hides nothing where another
 //!   hides something.
 //!
@@ -547,7 +549,9 @@ impl AutoCulling {
     /// the next ([`balanced_order`]). From the second warm-up frame on (the
     /// first compiles pipelines), each one's time, from its start to the
     /// GPU's end of its work, calibrates the chooser; without a GPU (a test
-    /// double) nothing is timed.
+    /// double) nothing is timed. Each walk starts from the shared lists as
+    /// the frame found them, not as a walk before it in the frame left
+    /// them ([`VisibleLists::keep`]).
     fn warm_up(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let warm_ups = self.warm_ups;
         self.warm_ups += 1;
@@ -561,9 +565,18 @@ impl AutoCulling {
         self.running.extend(balanced_order(warm_ups, self.candidates.len()));
         let mut log_ms = vec![f64::NAN; self.candidates.len()];
         let mut stats = TraversalStats::default();
+        let mut walked = false;
         for (place, &k) in self.running.iter().enumerate() {
             if let (true, Some(gpu)) = (place > 0, ctx.on_gpu()) {
                 gpu.clear();
+            }
+            let walks = self.candidates[k].carries() == Carries::VisibleOnGpu;
+            if let (true, Some(lists), Some(gpu)) = (walks, &self.lists, ctx.on_gpu()) {
+                match walked {
+                    false => lists.keep(gpu.gpu()),
+                    true => lists.restore(gpu.gpu()),
+                }
+                walked = true;
             }
             let start = Instant::now();
             let mut counting = Counting {
