@@ -427,6 +427,22 @@ impl GpuContext {
         buffer
     }
 
+    /// Every backend that has an adapter here, for unit tests that run on
+    /// each (Vulkan and GL on the reference machine). Fails where there is
+    /// none: they need a GPU or a software rasteriser.
+    #[cfg(test)]
+    pub(crate) fn every_adapter() -> Vec<GpuContext> {
+        let found: Vec<GpuContext> = [BackendChoice::Vulkan, BackendChoice::Gl]
+            .into_iter()
+            .filter_map(|b| GpuContext::new(b).ok())
+            .collect();
+        assert!(
+            !found.is_empty(),
+            "no Vulkan or GL adapter: install Mesa (scripts/install-deps)"
+        );
+        found
+    }
+
     /// Blocks until the GPU has finished everything submitted so far.
     pub fn wait_idle(&self) {
         // A lost device is recorded by the device-lost callback and reported

@@ -248,7 +248,6 @@ mod tests {
     use crate::cull::create;
     use crate::cull::culler::Culler;
     use crate::cull::gpu_walk::layout::shader_constants;
-    use crate::gpu::BackendChoice;
     use crate::gpu::wgsl::{parse, struct_layout};
     use crate::gpu::{BOXES_WGSL, CAMERA_WGSL};
     use crate::hierarchy::{Hierarchy, HierarchyParams};
@@ -350,14 +349,7 @@ mod tests {
 
     #[test]
     fn every_texel_is_the_farthest_depth_in_its_footprint_at_any_size() {
-        let gpus: Vec<GpuContext> = [BackendChoice::Vulkan, BackendChoice::Gl]
-            .into_iter()
-            .filter_map(|b| GpuContext::new(b).ok())
-            .collect();
-        assert!(
-            !gpus.is_empty(),
-            "no Vulkan or GL adapter: install Mesa (scripts/install-deps)"
-        );
+        let gpus = GpuContext::every_adapter();
         let scene = load(&SceneSpec::Builtin("city:blocks=1".into()), &LoadOptions::default()).unwrap();
         let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
         let (path, _) = default_path(&scene).unwrap();

@@ -342,8 +342,8 @@ mod tests {
     use crate::cull::gpu_walk::pyramid::DepthPyramid;
     use crate::cull::gpu_walk::roc::raster_occlusion_culling;
     use crate::gpu::{
-        BackendChoice, GpuContext, Readback, assert_planes_bound, camera_buffer, random_boxes_in_view, storage_buffer,
-        test_camera, texture_2d,
+        GpuContext, Readback, assert_planes_bound, camera_buffer, random_boxes_in_view, storage_buffer, test_camera,
+        texture_2d,
     };
     use crate::hierarchy::{Hierarchy, HierarchyParams};
     use crate::scene::{LoadOptions, SceneSpec, load};
@@ -766,9 +766,8 @@ mod tests {
 
     /// Every adapter here that culls on the GPU, of Vulkan and GL.
     fn gpu_driven_adapters() -> Vec<GpuContext> {
-        let gpus: Vec<GpuContext> = [BackendChoice::Vulkan, BackendChoice::Gl]
+        let gpus: Vec<GpuContext> = GpuContext::every_adapter()
             .into_iter()
-            .filter_map(|b| GpuContext::new(b).ok())
             .filter(|g| g.gpu_driven)
             .collect();
         // Needs a GPU: scripts/test installs Mesa's software ones, which

@@ -1884,7 +1884,7 @@ mod tests {
     #[test]
     fn the_error_meter_catches_a_buffer_that_breaks_the_conservative_rule() {
         use crate::cull::culler::Labeled;
-        use crate::gpu::{BackendChoice, GpuContext};
+        use crate::gpu::GpuContext;
         use crate::hierarchy::HierarchyParams;
         use crate::stress::{cases, run_case};
         // Cubes seen only through slits 1.2 pixels wide (stress case
@@ -1892,12 +1892,7 @@ mod tests {
         // but not at the slit.
         let case = cases::all().into_iter().find(|c| c.name == "slits").unwrap();
         let size = case.resolution.unwrap();
-        let gpus: Vec<GpuContext> = [BackendChoice::Vulkan, BackendChoice::Gl]
-            .into_iter()
-            .filter_map(|b| GpuContext::new(b).ok())
-            .collect();
-        assert!(!gpus.is_empty(), "no adapter: install Mesa (scripts/install-deps)");
-        for gpu in &gpus {
+        for gpu in &GpuContext::every_adapter() {
             // Buffers built every frame, whatever they cost.
             let params = SwrParams {
                 rests: false,
