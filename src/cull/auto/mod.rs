@@ -565,18 +565,21 @@ impl AutoCulling {
         self.running.extend(balanced_order(warm_ups, self.candidates.len()));
         let mut log_ms = vec![f64::NAN; self.candidates.len()];
         let mut stats = TraversalStats::default();
-        let mut walked = false;
+        // Lists to put back only where a walk may follow another.
+        let walks_on_gpu = |c: &Candidate| c.carries() == Carries::VisibleOnGpu;
+        let several_walks = self.candidates.iter().filter(|c| walks_on_gpu(c)).count() > 1;
+        let mut kept = false;
         for (place, &k) in self.running.iter().enumerate() {
             if let (true, Some(gpu)) = (place > 0, ctx.on_gpu()) {
                 gpu.clear();
             }
-            let walks = self.candidates[k].carries() == Carries::VisibleOnGpu;
-            if let (true, Some(lists), Some(gpu)) = (walks, &self.lists, ctx.on_gpu()) {
-                match walked {
+            let walk = several_walks && walks_on_gpu(&self.candidates[k]);
+            if let (true, Some(lists), Some(gpu)) = (walk, &self.lists, ctx.on_gpu()) {
+                match kept {
                     false => lists.keep(gpu.gpu()),
                     true => lists.restore(gpu.gpu()),
                 }
-                walked = true;
+                kept = true;
             }
             let start = Instant::now();
             let mut counting = Counting {

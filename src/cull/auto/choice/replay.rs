@@ -18,16 +18,18 @@
 //! it hid, which the mode does not count), and warm-up (the path's first
 //! two frames calibrate, as two warm-up frames of its first view would).
 //!
-//! So the replay judges a rule on how it explores and switches, not on
-//! how far it trusts warm-up: a rule that leans harder on warm-up's pairs
-//! gains here what it may lose in a run. A chooser that explored a rival
-//! only while its expected improvement over 30 frames paid for the probe
-//! replayed at 1.015 on the 28 traces of the time (this one 1.021), and at
-//! 1.021 against 1.028 on 60 other recorded runs, yet in two rounds of
-//! live runs of every scene and backend came within 1.05 of the fastest
-//! mode in 16 of 28 runs against this one's 21 (geometric means 1.044 and
-//! 1.034, 1.2 standard errors apart in that noise): it left rivals
-//! unexplored after warm-up that were cheaper along the path.
+//! So the replay judges how a rule explores and switches on the costs of
+//! recorded frames; warm-up's own pairs it does not replay (the path's
+//! first two frames stand in for them), and a rule's gain here is to be
+//! confirmed in live runs. A chooser that explored a rival only while its
+//! expected improvement over 30 frames paid for the probe replayed at 1.015
+//! on the first 28 traces (this one 1.021), and at 1.021 against 1.028 on
+//! 60 other runs of earlier stops (made into traces, not kept), yet in two
+//! rounds of live runs of every scene and backend (before warm-up's walks
+//! started from the lists the frame found) it came within 1.05 of the
+//! fastest mode in 16 of 28 runs against this one's 21 (geometric means
+//! 1.044 and 1.034, 1.2 standard errors apart in that noise): it left
+//! rivals unexplored after warm-up that were cheaper along the path.
 
 use glam::DVec3;
 
@@ -36,10 +38,11 @@ use crate::cull::auto::{COUNT_EVERY, REACH};
 
 /// The traces: the default city, `--movers 200`, `--scene forest` and the
 /// models of `../shared/models` along their README's paths, each on
-/// lavapipe (Vulkan) and llvmpipe (GL), two runs of each; and one run on
-/// each of the default city along a flyover (furniture hidden inside
-/// buildings: the oracle draws a tenth of what `vfc` draws) and a city of
-/// 16 blocks walked.
+/// lavapipe (Vulkan) and llvmpipe (GL), two runs of each; and one run per
+/// backend of the default city along a flyover (`paths/city-flyover.json`:
+/// furniture hidden inside buildings, the oracle draws a tenth of what
+/// `vfc` draws) and of a city of 16 blocks walked
+/// (`paths/city16-walk.json`).
 const TRACES: [(&str, &str); 32] = [
     ("city-vulkan-1", include_str!("traces/city-vulkan-1.csv")),
     ("city-vulkan-2", include_str!("traces/city-vulkan-2.csv")),
