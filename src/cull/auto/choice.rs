@@ -20,14 +20,19 @@
 //! - Successive elimination with hysteresis: the incumbent is replaced only
 //!   by a strategy cheaper at confidence (its upper bound below the
 //!   incumbent) whose estimate is cheaper by more than [`HYSTERESIS`]. A
-//!   strategy that may still be cheaper by that much is probed every
-//!   [`EXPLORE`] frames; one known not to be is probed again only as often
-//!   as a budget (`auto.budget`) of the run's time, shared among them, pays
-//!   for at what a probe of it costs (so the dearer a strategy, the rarer
-//!   its rechecks, and a cheap rival's drift is still seen), and only
-//!   while what rechecks have cost so far, settling frames included, with
-//!   what the next one is expected to cost, fits that share of the frames
-//!   so far.
+//!   strategy is explored, probed every [`EXPLORE`] frames, while what it
+//!   may save over the next [`HORIZON`] frames (the expected improvement
+//!   beyond the hysteresis, from its estimate and error) exceeds what a
+//!   probe of it is expected to cost, its settling frame counted
+//!   ([`probe_value`]); and once a window of samples is in, only while they
+//!   show it cheaper by more than the hysteresis. Of the strategies due,
+//!   the one whose probe is worth most runs first. One known not to be
+//!   cheaper is probed again only as often as a budget (`auto.budget`) of
+//!   the run's time, shared among them, pays for at what a probe of it
+//!   costs (so the dearer a strategy, the rarer its rechecks, and a cheap
+//!   rival's drift is still seen), and only while what rechecks have cost
+//!   so far, settling frames included, with what the next one is expected
+//!   to cost, fits that share of the frames so far.
 //! - One sample shows a strategy dearer only where a hiccup of the machine
 //!   cannot explain it: far dearer ([`FAR_DEARER`]), or dearer while it
 //!   drew more triangles than the incumbent's frames beside it (a hiccup
@@ -76,6 +81,18 @@ const HYSTERESIS: f64 = 0.03;
 const Z: f64 = 1.64;
 /// Frames between probes of a strategy that may still be cheaper.
 const EXPLORE: u64 = 3;
+/// Frames over which what a probe finds is taken to pay: a strategy is
+/// explored while what it may save over so many frames exceeds what its
+/// probe costs ([`probe_value`]). Chosen on the replay of 88 recorded runs
+/// (the first 28 traces of `choice/replay.rs` and 60 runs of earlier stops
+/// made into traces, not kept): 20, 30, 40 and 60 frames replay at 1.021,
+/// 1.015, 1.015 and 1.020 on the 28 and 1.023, 1.021, 1.024 and 1.027 on
+/// the 60 (the rule before it: 1.021 and 1.028).
+const HORIZON: f64 = 30.0;
+/// What any probe costs besides its frames' time, in frames of the
+/// incumbent: a probe of a strategy as cheap as the incumbent is not free
+/// (a hand-over, the incumbent's state left a frame behind).
+const PROBE_OVERHEAD: f64 = 0.005;
 /// Lower bound (log) above which one sample shows a strategy dearer
 /// (about 1.5×).
 const FAR_DEARER: f64 = 0.4;
@@ -916,14 +933,15 @@ impl Chooser {
     }
 
     /// The due strategy whose probe promises most: frustum culling first
-    /// where occlusion hid nothing, then the lowest optimistic bound (an
-    /// unknown strategy's is lowest), the first of equals.
+    /// where occlusion hid nothing, then the one whose probe is worth most
+    /// ([`probe_value`]; an unknown strategy's is worth most), the first
+    /// of equals.
     fn most_promising_due(&self, view: &View, settles: &[bool]) -> Option<(usize, Due)> {
         let nothing_hidden = self.nothing_hidden() == Some(true);
         let priority = |s: usize| {
             let frustum_first = nothing_hidden && self.records[s].family == Family::Frustum;
-            let bound = self.estimate(s).map_or(f64::NEG_INFINITY, |(m, se)| m - Z * se);
-            (!frustum_first, bound)
+            let value = self.estimate(s).map_or(f64::INFINITY, |(m, se)| probe_value(m, se, settles[s]));
+            (!frustum_first, -value)
         };
         (0..self.records.len())
             .filter(|&s| s != self.incumbent)
@@ -988,13 +1006,15 @@ impl Chooser {
         if nothing_hidden && self.records[s].family == Family::Frustum && m - Z * se < -HYSTERESIS && n < WINDOW {
             return (1, Due::Explore);
         }
-        // May still be cheaper by the hysteresis: explore, until a full
-        // window shows it no cheaper than the incumbent in the median. One
-        // sample settles nothing unless it is far dearer, or drew more than
-        // the incumbent (a single frame may have met a hiccup of the
-        // machine, which slows a frame without making it draw more).
+        // Explore while a probe may pay for itself ([`probe_value`]), until
+        // a full window shows it no cheaper than the incumbent by the
+        // hysteresis. One sample settles nothing unless it is far dearer,
+        // or drew more than the incumbent (a single frame may have met a
+        // hiccup of the machine, which slows a frame without making it draw
+        // more).
         let r = &self.records[s];
-        let may_be_cheaper = m - Z * se < -HYSTERESIS && (n < WINDOW || m < 0.0);
+        let shown_no_cheaper = n >= WINDOW && m >= -HYSTERESIS;
+        let may_be_cheaper = probe_value(m, se, settles) > 0.0 && !shown_no_cheaper;
         let one_sample_too_few = n == 1 && r.drew != Drew::More && m - Z * se < FAR_DEARER;
         if may_be_cheaper || one_sample_too_few {
             return (EXPLORE, Due::Explore);
@@ -1006,7 +1026,7 @@ impl Chooser {
     /// its share of the budget (split `sharing` ways) pays for at what a
     /// probe of it costs.
     fn recheck(&self, s: usize, settles: bool, sharing: usize) -> u64 {
-        let cost = self.recheck_cost(s, settles) + 0.005;
+        let cost = self.recheck_cost(s, settles) + PROBE_OVERHEAD;
         ((sharing as f64 * cost / self.budget).ceil() as u64).max(RECHECK)
     }
 
@@ -1020,9 +1040,7 @@ impl Chooser {
     /// the incumbent's frames (as the chooser counts them) against a
     /// budget of 0.9 for the whole run.
     fn recheck_cost(&self, s: usize, settles: bool) -> f64 {
-        let m = self.estimate(s).map_or(UNMEASURED, |(m, _)| m);
-        let frames = if settles { 2.0 } else { 1.0 };
-        frames * (m.exp() - 1.0).max(0.0)
+        probe_cost(self.estimate(s).map_or(UNMEASURED, |(m, _)| m), settles)
     }
 
     /// The occlusion culler estimated cheapest in this view, else over the
@@ -1063,6 +1081,39 @@ impl Chooser {
 pub(super) fn frustum_estimate(share: f64, drawing: f64) -> f64 {
     let share = share.clamp(0.0, 0.999);
     drawing.clamp(0.01, 1.0).ln() + (HIDDEN_TRIANGLE_COST * share / (1.0 - share)).ln_1p()
+}
+
+/// What a probe of a strategy costing `m` (log) relative to the incumbent
+/// is expected to cost beyond the incumbent's frames, in frames of the
+/// incumbent: its settling frame too.
+fn probe_cost(m: f64, settles: bool) -> f64 {
+    let frames = if settles { 2.0 } else { 1.0 };
+    frames * (m.exp() - 1.0).max(0.0)
+}
+
+/// What probing a strategy is worth, in frames of the incumbent: what it
+/// may save over the next [`HORIZON`] frames ([`expected_gain`]), less
+/// what the probe is expected to cost ([`probe_cost`], [`PROBE_OVERHEAD`]);
+/// its estimate relative to the incumbent is `m` (log) with standard error
+/// `se`.
+fn probe_value(m: f64, se: f64, settles: bool) -> f64 {
+    expected_gain(m, se) * HORIZON - probe_cost(m, settles) - PROBE_OVERHEAD
+}
+
+/// What a strategy whose log cost relative to the incumbent is taken to be
+/// N(`m`, `se`²) saves a frame (log) on average, counting only where it is
+/// cheaper by more than [`HYSTERESIS`] (where it would take over):
+/// E[max(0, −r − HYSTERESIS)], the expected improvement of Bayesian
+/// optimisation with the hysteresis as its margin.
+fn expected_gain(m: f64, se: f64) -> f64 {
+    let gain = -(m + HYSTERESIS);
+    if se <= 0.0 {
+        return gain.max(0.0);
+    }
+    let z = gain / se;
+    let below = 0.5 * libm::erfc(-z / std::f64::consts::SQRT_2);
+    let density = (-0.5 * z * z).exp() / std::f64::consts::TAU.sqrt();
+    gain * below + se * density
 }
 
 /// The mean of the middle half of `values` (their interquartile mean): as
@@ -1437,6 +1488,49 @@ mod tests {
         assert_eq!(at(&[0, 0, 3, 6]), 1);
         assert_eq!(at(&[9, 0, 7, 3]), 2);
         assert_eq!(at(&[0, 7, 14]), 3);
+    }
+
+    #[test]
+    fn a_rival_whose_probe_must_settle_is_explored_only_where_what_it_may_save_pays_for_both_frames() {
+        // Two probes, at two places, show the rival 11 % dearer; the noise
+        // as first assumed. It may still be cheaper: one frame of it is
+        // worth a look, two (a walk whose lists went stale) are not.
+        let mut chooser = Chooser::new(&[Occlusion, Occlusion], 0, 10.0, 0.015);
+        let dearer = |frame| Sample {
+            log_ratio: 0.11,
+            hidden: None,
+            frame,
+        };
+        chooser.records[1].samples.extend([dearer(1), dearer(9)]);
+        let (m, se) = chooser.estimate(1).unwrap();
+        assert!((m - 0.11).abs() < 1e-9 && se > 0.1, "{m} ± {se}");
+        assert_eq!(chooser.interval(1, false).1, Due::Explore);
+        assert_eq!(chooser.interval(1, true).1, Due::Recheck);
+        // Cheaper in the estimate, it is worth its frames either way.
+        chooser.records[1].samples = [1, 9].map(|f| Sample { log_ratio: -0.02, ..dearer(f) }).into();
+        assert_eq!(chooser.interval(1, true).1, Due::Explore);
+    }
+
+    #[test]
+    fn the_expected_gain_is_what_a_rival_saves_beyond_the_hysteresis_on_average() {
+        // Known exactly: the gain beyond the hysteresis, or nothing.
+        assert_eq!(expected_gain(-0.10, 0.0), 0.10 - HYSTERESIS);
+        assert_eq!(expected_gain(0.10, 0.0), 0.0);
+        // Against the mean of max(0, -r - hysteresis) over a fine grid of r.
+        for (m, se) in [(0.0, 0.1), (0.1, 0.05), (-0.2, 0.3), (0.3, 0.1)] {
+            let steps = 200_000;
+            let (lo, hi) = (m - 10.0 * se, m + 10.0 * se);
+            let dr = (hi - lo) / steps as f64;
+            let numeric: f64 = (0..steps)
+                .map(|k| {
+                    let r = lo + (k as f64 + 0.5) * dr;
+                    let density = (-0.5 * ((r - m) / se).powi(2)).exp() / (se * std::f64::consts::TAU.sqrt());
+                    (-r - HYSTERESIS).max(0.0) * density * dr
+                })
+                .sum();
+            let closed = expected_gain(m, se);
+            assert!((closed - numeric).abs() < 1e-6, "N({m}, {se}²): {closed} against {numeric}");
+        }
     }
 
     #[test]

@@ -21,15 +21,19 @@
 //! So the replay judges how a rule explores and switches on the costs of
 //! recorded frames; warm-up's own pairs it does not replay (the path's
 //! first two frames stand in for them), and a rule's gain here is to be
-//! confirmed in live runs. A chooser that explored a rival only while its
-//! expected improvement over 30 frames paid for the probe replayed at 1.015
-//! on the first 28 traces (this one 1.021), and at 1.021 against 1.028 on
-//! 60 other runs of earlier stops (made into traces, not kept), yet in two
-//! rounds of live runs of every scene and backend (before warm-up's walks
-//! started from the lists the frame found) it came within 1.05 of the
-//! fastest mode in 16 of 28 runs against this one's 21 (geometric means
-//! 1.044 and 1.034, 1.2 standard errors apart in that noise): it left
-//! rivals unexplored after warm-up that were cheaper along the path.
+//! confirmed in live runs. The rule that explores a rival while its
+//! expected improvement pays for its probe ([`super::HORIZON`]) replayed at
+//! 1.015 on the first 28 traces against the rule before it at 1.021, and at
+//! 1.021 against 1.028 on 60 runs of earlier stops (made into traces, not
+//! kept). In live runs of every scene and backend, two rounds of each (the
+//! two binaries one after the other, scene by scene), it came within 1.05
+//! of the fastest mode's mean in 16 of 28 runs against the rule before it's
+//! 21 while warm-up timed a walk after another on the set that one had just
+//! found (geometric means 1.044 and 1.034), and in 26 of 28 against 21 once
+//! each walk started from the lists the frame found (1.023 and 1.032); each
+//! difference 1.2 standard errors of that noise. A rule that leans on
+//! warm-up's pairs gains in the replay what a flaw in warm-up takes from it
+//! in a run.
 
 use glam::DVec3;
 
@@ -240,7 +244,8 @@ fn replay(trace: &Trace) -> f64 {
 /// A guard against a chooser gone wrong, not a measure of small changes:
 /// between versions that differ by a rule, the runs' own noise moves the
 /// geometric mean by about half a percent either way. The chooser of this
-/// test's commit replays at 1.023 here (worst 1.075: the engine's orbit on
+/// test's commit replays at 1.018 here (worst 1.058: the teapot on GL; the
+/// rule before [`super::HORIZON`] 1.023, worst 1.075, the engine's orbit on
 /// Vulkan). A chooser that keeps throughout the mode cheapest over each
 /// trace's first two frames, as warm-up would pick it, replays at 1.028
 /// (worst 1.145: the 16-block city on Vulkan): close on average, so it is
