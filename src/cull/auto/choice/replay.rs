@@ -245,13 +245,14 @@ fn replay(trace: &Trace) -> f64 {
 /// between versions that differ by a rule, the runs' own noise moves the
 /// geometric mean by about half a percent either way. The chooser of this
 /// test's commit replays at 1.018 here (worst 1.058: the teapot on GL; the
-/// rule before [`super::HORIZON`] 1.023, worst 1.075, the engine's orbit on
-/// Vulkan). A chooser that keeps throughout the mode cheapest over each
+/// rule before exploring by expected improvement, [`super::HORIZON`], 1.023,
+/// worst 1.075, the engine's orbit on Vulkan: a difference within that
+/// noise). A chooser that keeps throughout the mode cheapest over each
 /// trace's first two frames, as warm-up would pick it, replays at 1.028
 /// (worst 1.145: the 16-block city on Vulkan): close on average, so it is
 /// the worst run that tells it from one that learns, as the test checks.
 /// (On the 28 traces before the flyover and the 16-block city: the chooser
-/// 1.021, the kept pick 1.025, worst 1.140; on the traces recorded before
+/// 1.015, the rule before it 1.021, the kept pick 1.025, worst 1.140; on the traces recorded before
 /// draws went nearest first: the chooser 1.025, worst 1.080; the kept pick
 /// 1.041, worst 1.247.)
 #[test]
