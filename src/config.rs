@@ -589,6 +589,12 @@ mod tests {
         };
         assert!(!flags.or(file).plan().unwrap().load.external_buffers);
         assert!(serde_json::from_str::<BenchConfig>(r#"{"max_file_size": "lots"}"#).is_err());
+        // A fraction or a negative number says what a size may be.
+        for written in ["1.5", "-3"] {
+            let text = format!(r#"{{"max_file_size": {written}}}"#);
+            let error = serde_json::from_str::<BenchConfig>(&text).unwrap_err().to_string();
+            assert!(error.contains("expected a whole number of bytes"), "{error}");
+        }
     }
 
     #[test]

@@ -66,19 +66,24 @@ impl serde::Serialize for ByteSize {
 }
 
 /// In a config file: a number of bytes, or a string as on the command line.
+/// Anything else (a fraction, a negative number) is refused by what it is,
+/// against what a size may be.
 impl<'de> serde::Deserialize<'de> for ByteSize {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<ByteSize, D::Error> {
-        #[derive(serde::Deserialize)]
-        #[serde(untagged)]
-        enum Written {
-            Bytes(u64),
-            Text(String),
+        struct Size;
+        impl serde::de::Visitor<'_> for Size {
+            type Value = ByteSize;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a whole number of bytes, or a size with K, M, G or T such as \"512M\" or \"8G\"")
+            }
+            fn visit_u64<E: serde::de::Error>(self, bytes: u64) -> Result<ByteSize, E> {
+                self.visit_str(&bytes.to_string())
+            }
+            fn visit_str<E: serde::de::Error>(self, text: &str) -> Result<ByteSize, E> {
+                text.parse().map_err(E::custom)
+            }
         }
-        let text = match Written::deserialize(d)? {
-            Written::Bytes(bytes) => bytes.to_string(),
-            Written::Text(text) => text,
-        };
-        text.parse().map_err(serde::de::Error::custom)
+        d.deserialize_any(Size)
     }
 }
 
