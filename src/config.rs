@@ -58,7 +58,9 @@ pub struct BenchConfig {
     pub sweep: Option<String>,
 }
 
-pub const DEFAULT_WARMUP: u32 = 3;
+/// Three frames calibrate `auto` after the two it does not time
+/// (`UNCALIBRATED_WARM_UPS` in src/cull/auto/mod.rs).
+pub const DEFAULT_WARMUP: u32 = 5;
 /// Warm-up frames beyond this are surely a mistake.
 pub const MAX_WARMUP: u32 = 10_000;
 pub const DEFAULT_OUT: &str = "occlu-out";

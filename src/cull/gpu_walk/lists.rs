@@ -157,6 +157,21 @@ impl VisibleLists {
     fn visible_set(&self) -> [&wgpu::Buffer; 3] {
         [&self.object_state, &self.commands, &self.counts]
     }
+
+    /// The visible set's buffers, read back: the object words, the draw
+    /// lists and their two lengths.
+    #[cfg(test)]
+    pub(crate) fn read_back(&self, gpu: &GpuContext) -> [Vec<u32>; 3] {
+        self.visible_set().map(|buffer| {
+            let readback = crate::gpu::Readback::new(gpu, "visible set", buffer.size());
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            readback.copy(&mut encoder, buffer, 0, 0, buffer.size());
+            gpu.queue.submit([encoder.finish()]);
+            let mut words = Vec::new();
+            readback.read(gpu, buffer.size(), &mut words);
+            words
+        })
+    }
 }
 
 /// Copies each of `from` into the buffer of `to` in its place, and waits for
@@ -175,20 +190,7 @@ fn copy_all(gpu: &GpuContext, from: [&wgpu::Buffer; 3], to: [&wgpu::Buffer; 3]) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gpu::{DrawRange, Readback};
-
-    /// The buffers of the visible set, read back.
-    fn read(lists: &VisibleLists, gpu: &GpuContext) -> [Vec<u32>; 3] {
-        lists.visible_set().map(|buffer| {
-            let readback = Readback::new(gpu, "visible set", buffer.size());
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            readback.copy(&mut encoder, buffer, 0, 0, buffer.size());
-            gpu.queue.submit([encoder.finish()]);
-            let mut words = Vec::new();
-            readback.read(gpu, buffer.size(), &mut words);
-            words
-        })
-    }
+    use crate::gpu::DrawRange;
 
     #[test]
     fn a_kept_visible_set_comes_back_whatever_was_written_since() {
@@ -205,13 +207,13 @@ mod tests {
             lists.restore(gpu);
             assert_eq!(lists.known_counts(), [1, 0]);
             lists.upload(gpu, &[1, 4, 5]);
-            let uploaded = read(&lists, gpu);
+            let uploaded = lists.read_back(gpu);
             lists.keep(gpu);
             // What a walk before it in the frame would have left.
             lists.upload(gpu, &[0, 2]);
-            assert_ne!(read(&lists, gpu), uploaded);
+            assert_ne!(lists.read_back(gpu), uploaded);
             lists.restore(gpu);
-            assert_eq!(read(&lists, gpu), uploaded, "{}", gpu.adapter.backend);
+            assert_eq!(lists.read_back(gpu), uploaded, "{}", gpu.adapter.backend);
             assert_eq!(lists.known_counts(), [3, 0]);
             gpu.check().expect("no GPU error");
         }
