@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use super::culler::Culler;
-use super::mode::{ModeError, ModeId, ModeInfo, ModeParams};
+use super::mode::{Candidacy, ModeError, ModeId, ModeInfo, ModeParams};
 use crate::scene::Scene;
 
 /// Declares [`ModeId::info`] from `mode_table!`'s lines (cull/mod.rs): an
@@ -43,7 +43,18 @@ impl ModeParams {
         })
     }
 
+    /// Parses `items` (`MODE.KEY=VALUE`) for a run of `modes`: each names a
+    /// parameter of a mode that runs, or of one `auto` builds as a
+    /// candidate where `auto` runs (it builds them with the run's
+    /// parameters, so `--modes auto --param swr.threads=1` tunes its
+    /// `swr`). Every value is parsed now.
     pub fn parse(items: &[String], modes: &[ModeId]) -> Result<ModeParams, ModeError> {
+        let auto_runs = modes.contains(&ModeId::Auto);
+        let built: Vec<ModeId> = ModeId::ALL
+            .iter()
+            .copied()
+            .filter(|m| modes.contains(m) || (auto_runs && m.info().auto != Candidacy::Never))
+            .collect();
         let mut values = BTreeMap::new();
         for item in items {
             let (key, value) = item
@@ -54,7 +65,7 @@ impl ModeParams {
             let info = mode
                 .parse::<ModeId>()
                 .ok()
-                .filter(|m| modes.contains(m))
+                .filter(|m| built.contains(m))
                 .map(ModeId::info);
             if !info.is_some_and(|m| m.params.iter().any(|p| p.key == name)) {
                 let known = match info {
@@ -63,6 +74,7 @@ impl ModeParams {
                         let keys: Vec<String> = m.params.iter().map(|p| format!("{mode}.{}", p.key)).collect();
                         format!("{mode} takes {}", keys.join(", "))
                     }
+                    None if auto_runs => format!("mode '{mode}' is not being run, nor a candidate of auto"),
                     None => format!("mode '{mode}' is not being run"),
                 };
                 return Err(ModeError::UnknownParam {
@@ -77,7 +89,7 @@ impl ModeParams {
         let params = ModeParams { values };
         // Parse every typed value now, so a bad one is reported before a
         // long scene load rather than after it.
-        for mode in modes {
+        for mode in built {
             (mode.info().check)(&params)?;
         }
         Ok(params)
@@ -185,5 +197,12 @@ mod tests {
             "values are parsed up front"
         );
         assert!(err(&["omq.factor=-1"], &[ModeId::Omq]).contains("positive"));
+        // auto builds its candidates with the run's parameters: theirs are
+        // taken, and checked, where it runs; a mode that is never one is
+        // refused.
+        let p = ModeParams::parse(&items(&["omq.factor=0.5"]), &[ModeId::Auto]).unwrap();
+        assert_eq!(p.get(ModeId::Omq, ModeId::Omq.info().param("factor").unwrap()), Ok(0.5));
+        assert!(err(&["omq.factor=-1"], &[ModeId::Auto]).contains("positive"));
+        assert!(err(&["ac.x=1"], &[ModeId::Auto]).contains("'ac' is not being run, nor a candidate of auto"));
     }
 }
