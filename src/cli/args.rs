@@ -265,7 +265,8 @@ pub struct BenchArgs {
     #[arg(long, short)]
     pub quiet: bool,
     /// A mode parameter, MODE.KEY=VALUE (repeatable, each key once), e.g.
-    /// omq.om=80x60.
+    /// omq.om=80x60; of a mode that runs, or of one of auto's candidates
+    /// where auto runs.
     #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
     pub params: Vec<String>,
     /// Run one mode at several values of a parameter in the same run, e.g.

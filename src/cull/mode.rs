@@ -247,6 +247,15 @@ impl ModeParams {
         self.values.contains_key(key)
     }
 
+    /// The parameters given for `mode`, as `MODE.KEY` and value.
+    pub fn given_for(&self, mode: ModeId) -> impl Iterator<Item = (&str, &str)> {
+        let prefix = format!("{mode}.");
+        self.values
+            .iter()
+            .filter(move |(key, _)| key.starts_with(&prefix))
+            .map(|(key, value)| (key.as_str(), value.as_str()))
+    }
+
     /// These parameters with `key` (`MODE.KEY`) set to `value`.
     pub fn with(&self, key: &str, value: &str) -> ModeParams {
         let mut values = self.values.clone();

@@ -88,6 +88,7 @@
 
 mod choice;
 
+use std::collections::BTreeMap;
 use std::rc::Rc;
 use std::time::Instant;
 
@@ -382,6 +383,10 @@ const UNCALIBRATED_WARM_UPS: usize = 2;
 
 pub struct AutoCulling {
     params: AutoParams,
+    /// The run's parameters given for the modes it may run (`MODE.KEY`,
+    /// value): recorded with its own, so that a run of tuned candidates
+    /// is not compared with one of default candidates as the same work.
+    candidate_params: BTreeMap<String, String>,
     /// Every candidate built; `prepare` keeps those this adapter runs.
     candidates: Vec<Candidate>,
     /// Made in `prepare`, once the candidates are known.
@@ -419,7 +424,7 @@ impl AutoCulling {
     /// nothing else can hide.
     pub fn new(scene: &Scene, params: &ModeParams) -> Result<AutoCulling, ModeError> {
         let something_may_hide = scene.objects.len() >= 2;
-        let candidates = ModeId::ALL
+        let candidates: Vec<Candidate> = ModeId::ALL
             .iter()
             .filter(|id| id.info().auto != Candidacy::Never)
             .filter(|&&id| something_may_hide || family(id) == Family::Frustum)
@@ -433,6 +438,11 @@ impl AutoCulling {
             .collect::<Result<_, ModeError>>()?;
         Ok(AutoCulling {
             params: AutoParams::from_params(params)?,
+            candidate_params: candidates
+                .iter()
+                .flat_map(|c| params.given_for(c.id))
+                .map(|(key, value)| (key.to_string(), value.to_string()))
+                .collect(),
             candidates,
             chooser: None,
             lists: None,
@@ -663,9 +673,23 @@ impl Culler for AutoCulling {
         ModeId::Auto.name()
     }
 
+    /// Its budget, its candidates, and, where any were given, the
+    /// parameters of the candidates it kept (none where none were, so
+    /// that a run with default candidates reads as one before them).
     fn parameters(&self) -> serde_json::Value {
         let candidates: Vec<&str> = self.candidates.iter().map(|c| c.id.name()).collect();
-        serde_json::json!({ "budget": self.params.budget, "candidates": candidates })
+        let mut recorded = serde_json::json!({ "budget": self.params.budget, "candidates": candidates });
+        let kept = |key: &&String| candidates.iter().any(|c| key.split_once('.').is_some_and(|(mode, _)| mode == *c));
+        let given: serde_json::Map<String, serde_json::Value> = self
+            .candidate_params
+            .iter()
+            .filter(|(key, _)| kept(key))
+            .map(|(key, value)| (key.clone(), value.as_str().into()))
+            .collect();
+        if !given.is_empty() {
+            recorded["candidate_params"] = given.into();
+        }
+        recorded
     }
 
     fn traverses_hierarchy(&self) -> bool {
@@ -898,6 +922,20 @@ mod tests {
             }
             assert_eq!(calibrating_frames(&auto), Some(1), "{}", gpu.adapter.backend);
         }
+    }
+
+    #[test]
+    fn the_parameters_given_for_its_candidates_are_recorded_with_its_own_and_none_where_none_were() {
+        use crate::cull::recording::cubes;
+        let (scene, _) = cubes(&[DVec3::ZERO, DVec3::X * 3.0]);
+        let default = AutoCulling::new(&scene, &ModeParams::default()).unwrap().parameters();
+        assert_eq!(default.get("candidate_params"), None, "{default}");
+        let items = ["swr.threads=1".to_string(), "omq.factor=0.5".to_string()];
+        let tuned = ModeParams::parse(&items, &[ModeId::Auto]).unwrap();
+        let recorded = AutoCulling::new(&scene, &tuned).unwrap().parameters();
+        let given = serde_json::json!({ "omq.factor": "0.5", "swr.threads": "1" });
+        assert_eq!(recorded["candidate_params"], given, "{recorded}");
+        assert_eq!(recorded["budget"], default["budget"]);
     }
 
     #[test]
