@@ -77,7 +77,7 @@ pub fn run(
         let frame = if recording {
             step - options.warmup
         } else {
-            step % frames
+            warm_up_frame(step, options.warmup, frames)
         };
         let camera = path.camera(frame, options.resolution.aspect());
         world.advance(frame);
@@ -146,6 +146,18 @@ impl BenchError {
 
 /// Whether the caller let the run go on: [`BenchError::Interrupted`] when
 /// it asked to stop.
+/// The path frame that warm-up frame `step` of `warmup` renders on a path
+/// of `frames`: the path's first frames, last to first, so that warm-up
+/// ends on the first recorded view, as an engine's loading frames look
+/// from where the player starts. Run first to last, the last would be
+/// `warmup` − 1 frames along the path, and every mode that carries state
+/// from frame to frame (`chc`, the GPU walks, `swr`, `auto`'s calibrated
+/// view) would start recording from a view the path has not reached: on
+/// the engine's 40-frame orbit, 36° away with the default warm-up.
+fn warm_up_frame(step: u32, warmup: u32, frames: u32) -> u32 {
+    (warmup - 1 - step) % frames
+}
+
 fn go_on(flow: ControlFlow<()>) -> Result<(), BenchError> {
     match flow {
         ControlFlow::Continue(()) => Ok(()),
@@ -595,4 +607,22 @@ fn extras(plan: &BenchPlan, summary: &Summary, output: &RunOutput) -> Vec<(PathB
         extras.push((path.clone(), trace.into_bytes()));
     }
     extras
+}
+
+#[cfg(test)]
+mod tests {
+    use super::warm_up_frame;
+
+    #[test]
+    fn warm_up_runs_the_path_s_first_frames_last_to_first_ending_on_the_first_recorded_view() {
+        let order = |warmup: u32, frames: u32| {
+            (0..warmup)
+                .map(|s| warm_up_frame(s, warmup, frames))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(order(5, 40), [4, 3, 2, 1, 0]);
+        assert_eq!(order(1, 40), [0]);
+        // A path shorter than warm-up goes round it.
+        assert_eq!(order(5, 2), [0, 1, 0, 1, 0]);
+    }
 }
