@@ -58,8 +58,8 @@ pub struct BenchConfig {
     pub sweep: Option<String>,
 }
 
-/// Three frames calibrate `auto` after the two it does not time
-/// (`UNCALIBRATED_WARM_UPS` in src/cull/auto/mod.rs).
+/// Three frames calibrate `auto` after the two whose times it does not
+/// take (`UNCALIBRATED_WARM_UPS` in src/cull/auto/mod.rs).
 pub const DEFAULT_WARMUP: u32 = 5;
 /// Warm-up frames beyond this are surely a mistake.
 pub const MAX_WARMUP: u32 = 10_000;

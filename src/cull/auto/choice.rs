@@ -28,8 +28,9 @@
 //!   while they show it cheaper by more than the hysteresis (one shown
 //!   cheaper by more, but not at confidence, stays explored: its probes
 //!   cost nothing). Of the strategies due, the one whose probe is worth
-//!   most runs first. So a rival that warm-up's two frames showed 15 %
-//!   dearer or more (12 % where its probe must settle) is not explored but
+//!   most runs first. So a rival that two warm-up frames showed 15 %
+//!   dearer or more (12 % where its probe must settle; a little less over
+//!   the default three) is not explored but
 //!   rechecked, where the rule before this one explored up to 19 %. One not
 //!   worth exploring is probed again only as often as a budget
 //!   (`auto.budget`) of the run's time, shared among them, pays for at what
@@ -601,12 +602,14 @@ impl Chooser {
     /// What occlusion hid of the calibrating frame's `view`: the most any
     /// occlusion culler that drew on the CPU hid of it ([`Chooser::calibrate_hidden`];
     /// a coarse one hides less); `None` where none did. It is the view of
-    /// the frame's samples ([`Sample::hidden`]): where the first recorded
-    /// frames look from elsewhere (an orbit moves the eye a sixth of its
-    /// radius a frame), samples of a view not known would be [`apart`]
-    /// from every view measured after, and frustum culling, which warm-up
-    /// had timed, was explored again: three probes of `vfc`, each about
-    /// twice `omq`'s frame, on the two-cylinder engine's 40-frame orbit.
+    /// the frame's samples ([`Sample::hidden`]): where the first measured
+    /// occlusion frame looks from elsewhere (a probe after frustum culling
+    /// ran a while; an orbit's first recorded frame, which moves the eye a
+    /// sixth of its radius a frame, while warm-up ran the path first to
+    /// last), samples of a view not known would be [`apart`] from every
+    /// view measured after, and frustum culling, which warm-up had timed,
+    /// was explored again: three probes of `vfc`, each about twice `omq`'s
+    /// frame, on the two-cylinder engine's 40-frame orbit.
     fn hidden_in_calibration(&self, view: &View) -> Option<f64> {
         let here = |r: &Record| r.hid.filter(|h| h.frame == self.frame && h.view == *view);
         self.records.iter().filter_map(here).map(|h| h.share).reduce(f64::max)
@@ -1470,11 +1473,13 @@ mod tests {
 
     #[test]
     fn frustum_culling_timed_in_warm_up_on_an_orbit_is_not_explored_where_the_recorded_frames_look_from_elsewhere() {
-        // The two-cylinder engine's 40-frame orbit on llvmpipe: warm-up
-        // renders the path's frames 0 to 2 and times every strategy on the
-        // last two; vfc (0) takes about twice the frame of omq (1), which
-        // hides three fifths of the frustum and draws on the CPU, and of a
-        // GPU walk (2). The eye moves 15.7 a frame, beyond the reach of 10.
+        // The two-cylinder engine's 40-frame orbit on llvmpipe, calibrated
+        // from views the recorded frames do not look from (as when warm-up
+        // ran the path's first frames first to last, the recorded frames
+        // starting two to four frames back): vfc (0) takes about twice the
+        // frame of omq (1), which hides three fifths of the frustum and
+        // draws on the CPU, and of a GPU walk (2). The eye moves 15.7 a
+        // frame, beyond the reach of 10.
         let orbit = |frame: u64| {
             let angle = (frame as f64 * 9.0).to_radians();
             let eye = 100.0 * DVec3::new(angle.cos(), 0.0, angle.sin());
@@ -1486,7 +1491,7 @@ mod tests {
         };
         let relative = [1.9, 1.0, 1.05];
         let mut chooser = Chooser::new(&[Frustum, Occlusion, Occlusion], 1, 10.0, 0.015);
-        for f in 1..=2 {
+        for f in 2..=4 {
             chooser.calibrate_hidden(1, 0.6, &orbit(f));
             chooser.calibrate(&relative.map(f64::ln), &orbit(f));
         }

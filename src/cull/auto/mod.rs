@@ -77,14 +77,10 @@
 //! include, as an engine would calibrate in its loading frames. It times
 //! each candidate's own work, without the refit of the hierarchy around
 //! movers that every candidate would share, so with movers its ratios come
-//! out a little wider than probes measure. The GPU walks after the first in
-//! a warm-up frame read the visible lists another walk wrote for the same
-//! view, not last frame's, a start slightly kinder than a recorded frame
-//! gives them; over the default two calibrating frames the order is not yet
-//! balanced, so which walks get that start is uneven. Samples from the
-//! calibration and from probes share a window, each read as having a
-//! probe's spread. With fewer than two warm-up frames `auto` learns by
-//! probing alone.
+//! out a little wider than probes measure. Samples from the calibration
+//! and from probes share a window, each read as having a probe's spread.
+//! With fewer than three warm-up frames (the default is five) `auto`
+//! learns by probing alone.
 
 mod choice;
 

@@ -82,8 +82,9 @@ const TRACES: [(&str, &str); 32] = [
     ("city16-gl-1", include_str!("traces/city16-gl-1.csv")),
 ];
 
-/// Warm-up frames of the runs the traces come from: the bench's default
-/// (`--warmup`).
+/// Warm-up frames of the runs the traces come from (`--warmup`, the
+/// bench's default when they were recorded; a new trace is to be recorded
+/// with as many, as `scripts/auto-trace` says).
 const WARM_UPS: u64 = 3;
 
 /// One recorded run: the diagonal of its scene's bounds, frame by frame
