@@ -1239,6 +1239,19 @@ mod tests {
         (turns, costs)
     }
 
+    /// An orbit of 40 frames, 100 from its centre, looking at it: the eye
+    /// moves 15.7 a frame, beyond the chooser's reach of 10 in the tests,
+    /// and turns 9°.
+    fn orbit(frame: u64) -> View {
+        let angle = (frame as f64 * 9.0).to_radians();
+        let eye = 100.0 * DVec3::new(angle.cos(), 0.0, angle.sin());
+        View {
+            eye,
+            forward: -eye / 100.0,
+            frustum_triangles: 1000,
+        }
+    }
+
     fn still(_: u64) -> View {
         View {
             eye: DVec3::ZERO,
@@ -1478,17 +1491,7 @@ mod tests {
         // ran the path's first frames first to last, the recorded frames
         // starting two to four frames back): vfc (0) takes about twice the
         // frame of omq (1), which hides three fifths of the frustum and
-        // draws on the CPU, and of a GPU walk (2). The eye moves 15.7 a
-        // frame, beyond the reach of 10.
-        let orbit = |frame: u64| {
-            let angle = (frame as f64 * 9.0).to_radians();
-            let eye = 100.0 * DVec3::new(angle.cos(), 0.0, angle.sin());
-            View {
-                eye,
-                forward: -eye / 100.0,
-                frustum_triangles: 1000,
-            }
-        };
+        // draws on the CPU, and of a GPU walk (2), along [`orbit`].
         let relative = [1.9, 1.0, 1.05];
         let mut chooser = Chooser::new(&[Frustum, Occlusion, Occlusion], 1, 10.0, 0.015);
         for f in 2..=4 {
@@ -1643,17 +1646,7 @@ mod tests {
 
     #[test]
     fn on_an_orbit_that_moves_the_eye_beyond_the_reach_each_frame_probes_still_pair_and_a_cheaper_rival_takes_over() {
-        // An orbit of 40 frames, 100 from its centre: the eye moves 15.7 a
-        // frame, beyond the chooser's reach of 10, and turns 9°.
-        let orbit = |frame: u64| {
-            let angle = (frame as f64 * 9.0).to_radians();
-            let eye = 100.0 * DVec3::new(angle.cos(), 0.0, angle.sin());
-            View {
-                eye,
-                forward: -eye / 100.0,
-                frustum_triangles: 1000,
-            }
-        };
+        // [`orbit`]: the eye moves beyond the reach each frame.
         let (turns, _) = simulate(&[Occlusion, Occlusion], 40, 0.05, (0.5, vec![500, 500]), orbit, |_, s| {
             [1.0, 0.8][s]
         });
