@@ -185,6 +185,17 @@ fn bad_input_gets_one_clear_line() {
     );
     fails_with(&["stress", "--modes", "dr,nope"], 2, &["unknown mode 'nope'"]);
     fails_with(&["stress", "--resolution", "0x3"], 2, &["resolution"]);
+    // A parameter is checked against the modes and parsed before a case runs.
+    fails_with(
+        &["stress", "--modes", "vfc", "--param", "hiz.texels=2"],
+        2,
+        &["'hiz' is not being run"],
+    );
+    fails_with(
+        &["stress", "--modes", "hiz", "--param", "hiz.texels=17"],
+        2,
+        &["within 2 to 16"],
+    );
     fails_with(&["stress", "--out", &blocked], 2, &["blocker"]);
     // A name with a newline in a file stays on the error's one line.
     let newline_path = write(

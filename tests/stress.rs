@@ -60,6 +60,29 @@ fn occlu_stress_passes_on_every_backend() {
 }
 
 #[test]
+fn a_parameter_set_for_stress_runs_and_the_report_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = occlu(&[
+        "stress",
+        "--modes",
+        "hiz",
+        "--cases",
+        "slits",
+        "--param",
+        "hiz.texels=2",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    let text = stdout(&out);
+    assert!(out.status.success(), "{text}\n{:?}", own_stderr(&out));
+    assert!(text.contains("parameters set: hiz.texels=2"), "{text}");
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("stress.json")).unwrap()).unwrap();
+    assert_eq!(report["params"], serde_json::json!(["hiz.texels=2"]));
+    assert_eq!(report["rows"][0]["error_pixels"], 0, "{report}");
+}
+
+#[test]
 fn the_scene_at_1e7_renders_the_image_at_the_origin_bit_for_bit() {
     let cases = select(&["offset-1e7".to_string()]).unwrap();
     let (origin, far) = (&cases[0], &cases[1]);
@@ -97,8 +120,10 @@ fn a_case_at_a_size_the_adapter_cannot_hold_is_skipped_and_the_run_goes_on() {
     });
     let cases = [too_wide, select(&["vertical".to_string()]).unwrap().remove(0)];
     for gpu in gpus() {
-        let report =
-            occlu::stress::run(&gpu, &cases, &[ModeId::Vfc], SIZE, &mut |_| ControlFlow::Continue(())).unwrap();
+        let report = occlu::stress::run(&gpu, &cases, &[ModeId::Vfc], &ModeParams::default(), SIZE, &mut |_| {
+            ControlFlow::Continue(())
+        })
+        .unwrap();
         assert_eq!(report.skipped_cases.len(), 1, "{}", gpu.adapter.backend);
         assert_eq!(report.skipped_cases[0].case, "too wide");
         assert!(
@@ -114,6 +139,7 @@ fn a_case_at_a_size_the_adapter_cannot_hold_is_skipped_and_the_run_goes_on() {
             &gpu,
             &cases[1..],
             &[ModeId::Vfc],
+            &ModeParams::default(),
             Resolution {
                 width: 1 << 20,
                 height: 1,

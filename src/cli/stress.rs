@@ -4,7 +4,7 @@
 use std::process::ExitCode;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use occlu::cull::parse_modes;
+use occlu::cull::{ModeParams, parse_modes};
 use occlu::gpu::Resolution;
 use occlu::stress::StressEvent;
 
@@ -15,6 +15,7 @@ use super::signals::go_on;
 /// `occlu stress`: the cases' report; exit 1 when any failed.
 pub fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
     let modes = parse_modes(args.modes.as_deref().unwrap_or(&["all".to_string()]))?;
+    let given = ModeParams::parse(&args.params, &modes)?;
     let cases = occlu::stress::select(&args.cases)?;
     if args.list {
         let list: String = cases
@@ -35,7 +36,7 @@ pub fn stress(args: StressArgs) -> anyhow::Result<ExitCode> {
             .progress_chars("=> "),
     );
     let resolution = args.resolution.unwrap_or(STRESS_RESOLUTION);
-    let report = occlu::stress::run(&gpu, &cases, &modes, resolution, &mut |event| {
+    let report = occlu::stress::run(&gpu, &cases, &modes, &given, resolution, &mut |event| {
         match event {
             StressEvent::Skipped { mode, reason } => say!("skipped: {mode}: {reason}"),
             StressEvent::CaseSkipped { case, reason } => say!("skipped case: {case}: {reason}"),

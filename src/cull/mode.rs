@@ -247,13 +247,22 @@ impl ModeParams {
         self.values.contains_key(key)
     }
 
+    /// The parameters given, as `MODE.KEY` and value, in key order.
+    pub fn given(&self) -> impl Iterator<Item = (&str, &str)> {
+        self.values.iter().map(|(key, value)| (key.as_str(), value.as_str()))
+    }
+
     /// The parameters given for `mode`, as `MODE.KEY` and value.
     pub fn given_for(&self, mode: ModeId) -> impl Iterator<Item = (&str, &str)> {
         let prefix = format!("{mode}.");
-        self.values
-            .iter()
-            .filter(move |(key, _)| key.starts_with(&prefix))
-            .map(|(key, value)| (key.as_str(), value.as_str()))
+        self.given().filter(move |(key, _)| key.starts_with(&prefix))
+    }
+
+    /// These parameters with `over`'s set over them, key by key.
+    pub fn overridden_by(&self, over: &ModeParams) -> ModeParams {
+        let mut values = self.values.clone();
+        values.extend(over.values.iter().map(|(k, v)| (k.clone(), v.clone())));
+        ModeParams { values }
     }
 
     /// These parameters with `key` (`MODE.KEY`) set to `value`.

@@ -146,6 +146,12 @@ mod tests {
         }
         let swr = crate::cull::swr::SwrParams::from_params(&params).unwrap();
         assert!(!swr.rests, "swr builds its buffer every frame");
+        // A value the user sets wins over the exercising one (`occlu stress
+        // --param`); the others stay.
+        let given = ModeParams::parse(&["swr.rests=true".to_string()], &[ModeId::Swr]).unwrap();
+        let over = params.overridden_by(&given);
+        assert!(crate::cull::swr::SwrParams::from_params(&over).unwrap().rests);
+        assert_eq!(over.given().count(), params.given().count());
     }
 
     #[test]

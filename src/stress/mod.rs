@@ -128,6 +128,9 @@ impl InvarianceCheck {
 pub struct StressReport {
     pub adapter: AdapterReport,
     pub resolution: Resolution,
+    /// The parameters the user set over those the modes ran with
+    /// (`--param`, MODE.KEY=VALUE).
+    pub params: Vec<String>,
     pub rows: Vec<StressRow>,
     pub invariance: Vec<InvarianceCheck>,
     pub skipped: Vec<SkippedMode>,
@@ -220,13 +223,16 @@ pub fn select(names: &[String]) -> Result<Vec<StressCase>, StressError> {
         .collect())
 }
 
-/// Runs `modes` over `cases` (baselines before the cases that name them).
+/// Runs `modes` over `cases` (baselines before the cases that name them),
+/// with the parameters that exercise every frame and, over them, those
+/// `given`.
 /// When `events` breaks, the run stops at the end of the case it is in with
 /// [`StressError::Interrupted`].
 pub fn run(
     gpu: &GpuContext,
     cases: &[StressCase],
     modes: &[ModeId],
+    given: &ModeParams,
     resolution: Resolution,
     events: &mut dyn FnMut(StressEvent) -> ControlFlow<()>,
 ) -> Result<StressReport, StressError> {
@@ -267,6 +273,8 @@ pub fn run(
     if cases.iter().any(|c| c.resolution.is_none()) {
         RenderTargets::check(gpu, resolution)?;
     }
+    // Every frame exercised, but for what the user set.
+    let params = ModeParams::exercising_every_frame().overridden_by(given);
     let total: u32 = cases.iter().map(|c| c.cameras.len() as u32).sum();
     let mut done = 0;
     let mut rows = Vec::new();
@@ -304,7 +312,7 @@ pub fn run(
         }
         let mut cullers = modes
             .iter()
-            .map(|m| m.id.create(&case.scene, &ModeParams::exercising_every_frame()))
+            .map(|m| m.id.create(&case.scene, &params))
             .collect::<Result<Vec<_>, _>>()?;
         let keep_depth = case.baseline.is_some() || is_baseline(case);
         let hierarchy = HierarchyParams::default();
@@ -345,6 +353,7 @@ pub fn run(
     Ok(StressReport {
         adapter: gpu.adapter.clone(),
         resolution,
+        params: given.given().map(|(key, value)| format!("{key}={value}")).collect(),
         rows,
         invariance,
         skipped,
@@ -409,8 +418,12 @@ pub fn run_case(
 /// The report as Markdown: the case × mode table, the invariance table and
 /// the verdict line.
 pub fn render_markdown(report: &StressReport) -> String {
+    let params = match report.params.is_empty() {
+        true => String::new(),
+        false => format!("\nparameters set: {}\n", report.params.join(", ")),
+    };
     let mut out = format!(
-        "# occlu stress\n\nadapter: {}, {} (a case at a size of its own names it)\n\n| case | mode | frames | error px | missed | max \\|Δdepth\\| | verdict |\n|---|---|---:|---:|---:|---:|---|\n",
+        "# occlu stress\n\nadapter: {}, {} (a case at a size of its own names it)\n{params}\n| case | mode | frames | error px | missed | max \\|Δdepth\\| | verdict |\n|---|---|---:|---:|---:|---:|---|\n",
         report.adapter, report.resolution
     );
     for r in &report.rows {
