@@ -83,6 +83,21 @@ fn a_parameter_set_for_stress_runs_and_the_report_says_so() {
 }
 
 #[test]
+fn a_parameter_given_to_stress_reaches_every_culler_it_builds() {
+    // hiz.texels=1 is out of hiz's range: only a culler built with it
+    // refuses it, before anything renders.
+    let cases = select(&["slits".to_string()]).unwrap();
+    let given = ModeParams::default().with("hiz.texels", "1");
+    for gpu in gpus().into_iter().filter(|g| g.gpu_driven) {
+        let run = occlu::stress::run(&gpu, &cases, &[ModeId::Hiz], &given, SIZE, &mut |_| {
+            ControlFlow::Continue(())
+        });
+        let error = run.err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(error.contains("hiz.texels"), "{}: {error}", gpu.adapter.backend);
+    }
+}
+
+#[test]
 fn the_scene_at_1e7_renders_the_image_at_the_origin_bit_for_bit() {
     let cases = select(&["offset-1e7".to_string()]).unwrap();
     let (origin, far) = (&cases[0], &cases[1]);

@@ -386,9 +386,11 @@ pub struct StressArgs {
     /// Also write stress.md and stress.json here.
     #[arg(long, short, visible_alias = "output", value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// A mode parameter, MODE.KEY=VALUE (repeatable, each key once), over
-    /// those stress runs every mode with (the ones that exercise every
-    /// frame: swr.rests=false), e.g. hiz.texels=2 to check a tuned mode.
+    /// A mode parameter, MODE.KEY=VALUE (repeatable, each key once), of a
+    /// mode that runs (or of auto's candidates where auto runs), e.g.
+    /// hiz.texels=2 to check a tuned mode. It is set over the values that
+    /// exercise every frame (swr.rests=false, chc.visible_for=1), which
+    /// the other keys keep.
     #[arg(long = "param", value_name = "MODE.KEY=VALUE")]
     pub params: Vec<String>,
 }

@@ -247,15 +247,15 @@ impl ModeParams {
         self.values.contains_key(key)
     }
 
-    /// The parameters given, as `MODE.KEY` and value, in key order.
-    pub fn given(&self) -> impl Iterator<Item = (&str, &str)> {
+    /// Every parameter set, as `MODE.KEY` and value, in key order.
+    pub fn entries(&self) -> impl Iterator<Item = (&str, &str)> {
         self.values.iter().map(|(key, value)| (key.as_str(), value.as_str()))
     }
 
     /// The parameters given for `mode`, as `MODE.KEY` and value.
     pub fn given_for(&self, mode: ModeId) -> impl Iterator<Item = (&str, &str)> {
         let prefix = format!("{mode}.");
-        self.given().filter(move |(key, _)| key.starts_with(&prefix))
+        self.entries().filter(move |(key, _)| key.starts_with(&prefix))
     }
 
     /// These parameters with `over`'s set over them, key by key.

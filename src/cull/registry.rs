@@ -146,12 +146,15 @@ mod tests {
         }
         let swr = crate::cull::swr::SwrParams::from_params(&params).unwrap();
         assert!(!swr.rests, "swr builds its buffer every frame");
-        // A value the user sets wins over the exercising one (`occlu stress
-        // --param`); the others stay.
+    }
+
+    #[test]
+    fn a_value_set_over_the_exercising_ones_wins_and_the_others_stay() {
+        // `occlu stress --param`.
         let given = ModeParams::parse(&["swr.rests=true".to_string()], &[ModeId::Swr]).unwrap();
-        let over = params.overridden_by(&given);
+        let over = ModeParams::exercising_every_frame().overridden_by(&given);
         assert!(crate::cull::swr::SwrParams::from_params(&over).unwrap().rests);
-        assert_eq!(over.given().count(), params.given().count());
+        assert_eq!(crate::cull::ChcParams::from_params(&over).unwrap().visible_for, 1);
     }
 
     #[test]

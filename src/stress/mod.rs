@@ -353,7 +353,7 @@ pub fn run(
     Ok(StressReport {
         adapter: gpu.adapter.clone(),
         resolution,
-        params: given.given().map(|(key, value)| format!("{key}={value}")).collect(),
+        params: given.entries().map(|(key, value)| format!("{key}={value}")).collect(),
         rows,
         invariance,
         skipped,
