@@ -584,7 +584,7 @@ impl Chooser {
             .min_by(|&a, &b| total(a).total_cmp(&total(b)))
             .unwrap_or(self.incumbent);
         self.incumbent = cheapest;
-        let hidden = self.hidden_in_calibration(view).or(self.hidden.map(|h| h.share));
+        let hidden = self.hidden_in_calibration(view);
         for (s, record) in self.records.iter_mut().enumerate() {
             record.samples.clear();
             record.drew = Drew::Alike;

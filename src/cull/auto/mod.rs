@@ -84,7 +84,6 @@
 
 mod choice;
 
-use std::collections::BTreeMap;
 use std::rc::Rc;
 use std::time::Instant;
 
@@ -379,10 +378,10 @@ const UNCALIBRATED_WARM_UPS: usize = 2;
 
 pub struct AutoCulling {
     params: AutoParams,
-    /// The run's parameters given for the modes it may run (`MODE.KEY`,
-    /// value): recorded with its own, so that a run of tuned candidates
-    /// is not compared with one of default candidates as the same work.
-    candidate_params: BTreeMap<String, String>,
+    /// The run's parameters, those of its candidates recorded with its own
+    /// ([`Culler::parameters`]), so that a run of tuned candidates is not
+    /// compared with one of default candidates as the same work.
+    run_params: ModeParams,
     /// Every candidate built; `prepare` keeps those this adapter runs.
     candidates: Vec<Candidate>,
     /// Made in `prepare`, once the candidates are known.
@@ -420,7 +419,7 @@ impl AutoCulling {
     /// nothing else can hide.
     pub fn new(scene: &Scene, params: &ModeParams) -> Result<AutoCulling, ModeError> {
         let something_may_hide = scene.objects.len() >= 2;
-        let candidates: Vec<Candidate> = ModeId::ALL
+        let candidates = ModeId::ALL
             .iter()
             .filter(|id| id.info().auto != Candidacy::Never)
             .filter(|&&id| something_may_hide || family(id) == Family::Frustum)
@@ -434,11 +433,7 @@ impl AutoCulling {
             .collect::<Result<_, ModeError>>()?;
         Ok(AutoCulling {
             params: AutoParams::from_params(params)?,
-            candidate_params: candidates
-                .iter()
-                .flat_map(|c| params.given_for(c.id))
-                .map(|(key, value)| (key.to_string(), value.to_string()))
-                .collect(),
+            run_params: params.clone(),
             candidates,
             chooser: None,
             lists: None,
@@ -675,12 +670,11 @@ impl Culler for AutoCulling {
     fn parameters(&self) -> serde_json::Value {
         let candidates: Vec<&str> = self.candidates.iter().map(|c| c.id.name()).collect();
         let mut recorded = serde_json::json!({ "budget": self.params.budget, "candidates": candidates });
-        let kept = |key: &&String| candidates.iter().any(|c| key.split_once('.').is_some_and(|(mode, _)| mode == *c));
         let given: serde_json::Map<String, serde_json::Value> = self
-            .candidate_params
+            .candidates
             .iter()
-            .filter(|(key, _)| kept(key))
-            .map(|(key, value)| (key.clone(), value.as_str().into()))
+            .flat_map(|c| self.run_params.given_for(c.id))
+            .map(|(key, value)| (key.to_string(), value.into()))
             .collect();
         if !given.is_empty() {
             recorded["candidate_params"] = given.into();
