@@ -425,8 +425,8 @@ pub(super) struct Chooser {
     /// The frame of the finding of nothing hidden after which the view last
     /// outgrew it and occlusion looked ([`Due::Outgrown`]).
     looked_outgrown: Option<u64>,
-    /// The log times of every strategy in each round of the calibrating
-    /// warm-up frames ([`Chooser::calibrate`]), the last [`WINDOW`].
+    /// The log times of every strategy in each calibrating warm-up frame
+    /// ([`Chooser::calibrate`]), the last [`WINDOW`].
     calibration: VecDeque<Vec<f64>>,
     /// Where the calibrating frames looked from.
     calibrated_view: Option<View>,
@@ -545,14 +545,14 @@ impl Chooser {
         });
     }
 
-    /// Learns from a round of a warm-up frame in which every strategy
-    /// rendered the same view in turn, strategy `s` taking `log_ms[s]` (log
-    /// of its milliseconds): the cheapest over the rounds so far (the last
-    /// [`WINDOW`]) becomes the incumbent, and each other strategy's samples
-    /// are its times over the incumbent's in the same rounds. Such a sample
-    /// pairs two frames of one view, as a probe's does, without a recorded
-    /// frame paying for it; the rivals they show far dearer need no
-    /// exploring. A round that did not time every strategy is ignored. Calibration precedes the
+    /// Learns from a warm-up frame in which every strategy rendered the
+    /// same view in turn, strategy `s` taking `log_ms[s]` (log of its
+    /// milliseconds): the cheapest over the warm-up frames so far becomes
+    /// the incumbent, and each other strategy's samples are its times over
+    /// the incumbent's in the same frames. Such a sample pairs two frames
+    /// of one view, as a probe's does, without a recorded frame paying for
+    /// it; the rivals they show far dearer need no exploring. A frame that
+    /// did not time every strategy is ignored. Calibration precedes the
     /// recorded frames: the incumbent's last frames and any probe under way
     /// are dropped with the old incumbent. `view` is where the frame looks
     /// from: the samples are of what occlusion hid there
@@ -615,10 +615,10 @@ impl Chooser {
         self.records.iter().filter_map(here).map(|h| h.share).reduce(f64::max)
     }
 
-    /// How many rounds of warm-up frames calibrated it
-    /// ([`Chooser::calibrate`]; the last [`WINDOW`]).
+    /// How many warm-up frames calibrated it ([`Chooser::calibrate`]; the
+    /// last [`WINDOW`]).
     #[cfg(test)]
-    pub fn calibrating_rounds(&self) -> usize {
+    pub fn calibrating_frames(&self) -> usize {
         self.calibration.len()
     }
 

@@ -53,11 +53,10 @@
 //!   warm-up frame a walk runs twice before any candidate renders it, so
 //!   that the lists hold a visible set of a view, not everything in the
 //!   frustum, which a walk finds visible from empty lists). From the third
-//!   warm-up frame on (the first two pay for first uses), every candidate
-//!   runs [`ROUNDS`] times, each round in another order, each run timed
-//!   from its start to the GPU's end of its work, and the chooser is
-//!   calibrated with these paired times of one view, a row a round: the
-//!   cheapest runs from the first recorded frame, and a rival
+//!   warm-up frame on (the first two pay for first uses), each is timed
+//!   from its start to the GPU's end of its
+//!   work, and the chooser is calibrated with these paired times of one
+//!   view: the cheapest runs from the first recorded frame, and a rival
 //!   shown far dearer is not explored in recorded frames (only rechecked
 //!   within the budget). What each occlusion culler that draws on the CPU
 //!   drew there says what it hides: the most any of them hid is the share
@@ -80,10 +79,6 @@
 //! movers that every candidate would share, so with movers its ratios come
 //! out a little wider than probes measure. Samples from the calibration
 //! and from probes share a window, each read as having a probe's spread.
-//! In a calibrating frame's later rounds a culler that keeps its own state
-//! on the CPU (`chc`, `swr`) starts from what it found of that very view,
-//! where the walks start from the lists as the frame found them, as in a
-//! recorded frame.
 //! With fewer than three warm-up frames (the default is five) `auto`
 //! learns by probing alone.
 
@@ -381,24 +376,6 @@ const REACH: f64 = 0.1;
 /// single frames' noise (`--warmup 6`, six runs).
 const UNCALIBRATED_WARM_UPS: usize = 2;
 
-/// Times every candidate runs in a calibrating warm-up frame, each round
-/// in its own order ([`balanced_order`]), each a row of paired times
-/// ([`Chooser::calibrate`]). Which candidate starts decides most runs
-/// among near equals: over 84 runs of every scene and backend of issue 31
-/// (six rounds, with the builds of two stops), the strategy `auto` started
-/// with ran most of the frames in 57, and where it was within 2 % of the
-/// fastest mode's mean `auto` came to 1.018 times that mean, else 1.041.
-/// Where one frame in 25 takes over 1.5 times its neighbours (the 2-core
-/// machine), one time a candidate in each of three frames picks among
-/// modes within 6 % of each other by chance: on the bunny on lavapipe,
-/// `omq` 6 % cheaper than `vfc`, `roc`, `ioc` and `swr` in three runs out
-/// of three (medians too), `auto` started on `chc`, `vfc` and `ioc`. With
-/// three rounds it started within 2 % of the fastest mode in 29 of 42 runs,
-/// with one in 22 (three rounds of every scene and backend, the two builds
-/// side by side). Rounds cost warm-up time only, which no mode's figures
-/// include.
-const ROUNDS: usize = 3;
-
 pub struct AutoCulling {
     params: AutoParams,
     /// The run's parameters, those of its candidates recorded with its own
@@ -583,49 +560,15 @@ impl AutoCulling {
             .sum()
     }
 
-    /// Candidate `k` renders a warm-up frame, timed from its start to the
-    /// GPU's end of its work: the log of its milliseconds (NaN without a
-    /// GPU, a test double) and its counters; what a culler that draws on
-    /// the CPU hid of `view` goes to the chooser (a walk's indirect draws
-    /// are not counted here).
-    fn time_candidate(&mut self, k: usize, ctx: &mut dyn Frame, input: &FrameInput, view: &View) -> (f64, TraversalStats) {
-        let start = Instant::now();
-        let mut counting = Counting {
-            frame: &mut *ctx,
-            scene: input.scene,
-            triangles: 0,
-        };
-        let stats = self.candidates[k].culler.frame(&mut counting, input);
-        let drawn = counting.triangles;
-        let log_ms = match ctx.on_gpu() {
-            Some(gpu) => {
-                gpu.wait_for_gpu();
-                (start.elapsed().as_secs_f64() * 1e3).ln()
-            }
-            None => f64::NAN,
-        };
-        self.candidates[k].last_ran = Some(self.frames);
-        if self.candidates[k].carries() == Carries::VisibleOnGpu {
-            self.lists_written = Some(Lists {
-                frame: self.frames,
-                view: *view,
-                drew: None,
-            });
-        } else if view.frustum_triangles > 0 {
-            let chooser = self.chooser.as_mut().expect("the session prepared the mode");
-            chooser.calibrate_hidden(k, 1.0 - drawn as f64 / view.frustum_triangles as f64, view);
-        }
-        (log_ms, stats)
-    }
-
     /// A warm-up frame: every candidate renders the frame from a cleared
-    /// target, in turn, in an order that changes from one round to the
-    /// next ([`balanced_order`]). After the first [`UNCALIBRATED_WARM_UPS`],
-    /// in [`ROUNDS`] rounds, their times ([`Self::time_candidate`])
-    /// calibrate the chooser, a row a round. Each walk starts from the
-    /// shared lists as the frame found them, not as a walk before it in the
-    /// frame left them ([`VisibleLists::keep`]), and they hold a visible
-    /// set of a view from the first warm-up frame on.
+    /// target, in turn, in an order that changes from one warm-up frame to
+    /// the next ([`balanced_order`]). After the first
+    /// [`UNCALIBRATED_WARM_UPS`], each one's time, from its start to the
+    /// GPU's end of its work, calibrates the chooser; without a GPU (a test
+    /// double) nothing is timed. Each walk starts from the shared lists as
+    /// the frame found them, not as a walk before it in the frame left
+    /// them ([`VisibleLists::keep`]), and they hold a visible set of a view
+    /// from the first warm-up frame on.
     fn warm_up(&mut self, ctx: &mut dyn Frame, input: &FrameInput) -> TraversalStats {
         let warm_ups = self.warm_ups;
         self.warm_ups += 1;
@@ -635,8 +578,9 @@ impl AutoCulling {
             frustum_triangles: self.count_frustum_triangles(input),
         };
         self.frustum_triangles = view.frustum_triangles;
-        let calibrating = warm_ups >= UNCALIBRATED_WARM_UPS;
-        let rounds = if calibrating { ROUNDS } else { 1 };
+        self.running.clear();
+        self.running.extend(balanced_order(warm_ups, self.candidates.len()));
+        let mut log_ms = vec![f64::NAN; self.candidates.len()];
         let mut stats = TraversalStats::default();
         // Lists to put back only where a walk may follow another.
         let walks_on_gpu = |c: &Candidate| c.carries() == Carries::VisibleOnGpu;
@@ -666,34 +610,49 @@ impl AutoCulling {
             }
         }
         let mut kept = false;
-        for round in 0..rounds {
-            self.running.clear();
-            self.running
-                .extend(balanced_order(warm_ups * ROUNDS + round, self.candidates.len()));
-            let mut log_ms = vec![f64::NAN; self.candidates.len()];
-            for place in 0..self.running.len() {
-                let k = self.running[place];
-                if let (true, Some(gpu)) = (round > 0 || place > 0 || seeding_walk.is_some(), ctx.on_gpu()) {
-                    gpu.clear();
-                }
-                let walk = several_walks && walks_on_gpu(&self.candidates[k]);
-                if let (true, Some(lists), Some(gpu)) = (walk, &self.lists, ctx.on_gpu()) {
-                    match kept {
-                        false => lists.keep(gpu.gpu()),
-                        true => lists.restore(gpu.gpu()),
-                    }
-                    kept = true;
-                }
-                let (time, frame_stats) = self.time_candidate(k, ctx, input, &view);
-                log_ms[k] = time;
-                stats = frame_stats;
+        for (place, &k) in self.running.iter().enumerate() {
+            if let (true, Some(gpu)) = (place > 0 || seeding_walk.is_some(), ctx.on_gpu()) {
+                gpu.clear();
             }
-            if calibrating {
-                self.chooser
-                    .as_mut()
-                    .expect("the session prepared the mode")
-                    .calibrate(&log_ms, &view);
+            let walk = several_walks && walks_on_gpu(&self.candidates[k]);
+            if let (true, Some(lists), Some(gpu)) = (walk, &self.lists, ctx.on_gpu()) {
+                match kept {
+                    false => lists.keep(gpu.gpu()),
+                    true => lists.restore(gpu.gpu()),
+                }
+                kept = true;
             }
+            let start = Instant::now();
+            let mut counting = Counting {
+                frame: &mut *ctx,
+                scene: input.scene,
+                triangles: 0,
+            };
+            stats = self.candidates[k].culler.frame(&mut counting, input);
+            let drawn = counting.triangles;
+            if let Some(gpu) = ctx.on_gpu() {
+                gpu.wait_for_gpu();
+                log_ms[k] = (start.elapsed().as_secs_f64() * 1e3).ln();
+            }
+            let chooser = self.chooser.as_mut().expect("the session prepared the mode");
+            self.candidates[k].last_ran = Some(self.frames);
+            // What a culler that draws on the CPU hid (a walk's indirect
+            // draws are not counted here).
+            if self.candidates[k].carries() == Carries::VisibleOnGpu {
+                self.lists_written = Some(Lists {
+                    frame: self.frames,
+                    view,
+                    drew: None,
+                });
+            } else if view.frustum_triangles > 0 {
+                chooser.calibrate_hidden(k, 1.0 - drawn as f64 / view.frustum_triangles as f64, &view);
+            }
+        }
+        if warm_ups >= UNCALIBRATED_WARM_UPS {
+            self.chooser
+                .as_mut()
+                .expect("the session prepared the mode")
+                .calibrate(&log_ms, &view);
         }
         self.ran = None;
         stats
@@ -943,16 +902,15 @@ mod tests {
                 in_frustum.len(),
                 gpu.adapter.backend
             );
-            let calibrating_rounds = |auto: &AutoCulling| auto.chooser.as_ref().map(Chooser::calibrating_rounds);
+            let calibrating_frames = |auto: &AutoCulling| auto.chooser.as_ref().map(Chooser::calibrating_frames);
             for frame in 1..=2 {
-                assert_eq!(calibrating_rounds(&auto), Some(0), "before warm-up frame {frame}");
+                assert_eq!(calibrating_frames(&auto), Some(0), "before warm-up frame {frame}");
                 let camera = path.camera(frame, options.resolution.aspect());
                 session
                     .warm_up_frame(frame, &camera, &mut world, &mut [Box::new(&mut auto)], frame as usize)
                     .unwrap();
             }
-            // Every candidate timed ROUNDS times in the third warm-up frame.
-            assert_eq!(calibrating_rounds(&auto), Some(ROUNDS), "{}", gpu.adapter.backend);
+            assert_eq!(calibrating_frames(&auto), Some(1), "{}", gpu.adapter.backend);
         }
     }
 
