@@ -105,7 +105,7 @@ const PROBE_OVERHEAD: f64 = 0.005;
 const FAR_DEARER: f64 = 0.4;
 /// What a recheck of a strategy not yet measured in the view is taken to
 /// cost (log, about 1.5×): charged as free, it would run at once, whatever
-/// it costs ([`Chooser::recheck_cost`]).
+/// it costs ([`recheck_cost`]).
 const UNMEASURED: f64 = 0.4;
 /// Frames whose eye steps tell how fast the path moves ([`Chooser::one_view`]).
 const STEPS: usize = 6;
@@ -136,6 +136,10 @@ const PLACE: u64 = 7;
 /// full-screen work): a guess on the cheap side, so that frustum culling is
 /// measured early wherever it may pay.
 const HIDDEN_TRIANGLE_COST: f64 = 0.25;
+
+/// A strategy's cost relative to the incumbent (log) and its standard
+/// error ([`Chooser::estimate`]); `None` when unknown.
+type Estimate = Option<(f64, f64)>;
 
 /// What kind of strategy.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -492,13 +496,21 @@ impl Chooser {
                 recheck: probing.recheck,
             };
         }
-        if self.pending.is_none()
-            && let Some(better) = self.cheaper_than_incumbent()
-        {
-            self.switch_to(better);
+        // Every estimate, once: taken again only after a switch, which
+        // re-expresses them all.
+        let mut estimates = None;
+        if self.pending.is_none() {
+            let known = self.estimates();
+            match self.cheaper_than_incumbent(&known) {
+                Some(better) => self.switch_to(better),
+                None => estimates = Some(known),
+            }
         }
         let after_probe = self.last.is_some_and(|t| t.probe);
-        if !after_probe && let Some((s, due)) = self.most_promising_due(view, settles) {
+        if !after_probe
+            && let Some((s, due)) =
+                self.most_promising_due(view, settles, &estimates.unwrap_or_else(|| self.estimates()))
+        {
             let settling = u32::from(settles[s]);
             let recheck = due != Due::Explore;
             if due == Due::Outgrown {
@@ -841,7 +853,7 @@ impl Chooser {
     ///
     /// The error has two parts. Frame-to-frame noise: the samples' spread
     /// (MAD) once there are three, never less than what the incumbent's
-    /// own noise puts in one sample. And the ratio's wander along the path:
+    /// own noise (`noise`, [`Chooser::noise`]) puts in one sample. And the ratio's wander along the path:
     /// two strategies' costs turn on different things (one on triangles
     /// drawn, another on tests), so their ratio moves from place to place
     /// by more than a frame's noise. Samples from three places or more
@@ -850,9 +862,9 @@ impl Chooser {
     /// it is taken to be [`WANDER`], each place giving one look at it. The
     /// guess at frustum culling's cost is no place: alone it settles
     /// nothing ([`Chooser::cheaper_than_incumbent`] asks for measurements).
-    fn estimate(&self, s: usize) -> Option<(f64, f64)> {
+    fn estimate(&self, s: usize, noise: f64) -> Estimate {
         // A sample is one probe frame over the mean of two incumbent frames.
-        let one = self.noise() * 1.5f64.sqrt();
+        let one = noise * 1.5f64.sqrt();
         let measured: Vec<&Sample> = self.samples(s).collect();
         let places = places(measured.iter().copied());
         let incumbent_occludes = self.records[self.incumbent].family == Family::Occlusion;
@@ -896,8 +908,9 @@ impl Chooser {
     /// samples of this view show it cheaper at all (the guess from what
     /// occlusion hid does not count here). Otherwise near equals within the
     /// noise would keep the occlusion culler running, and frustum culling
-    /// probed, for the rest of the path.
-    fn cheaper_than_incumbent(&self) -> Option<usize> {
+    /// probed, for the rest of the path. `estimates` are
+    /// [`Chooser::estimates`].
+    fn cheaper_than_incumbent(&self, estimates: &[Estimate]) -> Option<usize> {
         // Not `Self::nothing_to_skip`, which asks the reverse: whether an
         // occlusion culler may look again while frustum culling runs.
         let burden_on_incumbent = |s: usize| {
@@ -917,7 +930,7 @@ impl Chooser {
         };
         (0..self.records.len())
             .filter(|&s| s != self.incumbent)
-            .filter_map(|s| self.estimate(s).map(|(m, se)| (s, m, se)))
+            .filter_map(|s| estimates[s].map(|(m, se)| (s, m, se)))
             .filter(|&(s, m, _)| measured(s, m))
             .filter(|&(s, m, se)| (m < -HYSTERESIS && m + Z * se < 0.0) || (burden_on_incumbent(s) && shown_cheaper(s)))
             .min_by(|a, b| a.1.total_cmp(&b.1))
@@ -964,24 +977,36 @@ impl Chooser {
         self.incumbent_earlier = None;
     }
 
+    /// Every strategy's estimate ([`Chooser::estimate`]), by strategy,
+    /// each with the incumbent's noise taken once: a plan asks for each
+    /// several times (whether a rival is cheaper, due, worth most), and each
+    /// sorts its samples and the incumbent's residuals. Taken afresh at
+    /// each ask, a plan took a median 21–22 µs on the teapot and 15–17 µs
+    /// on the default city (lavapipe, the 2-core machine); taken once, 7–10
+    /// and 10–11 µs: from 1.5–2 % of a frame a GPU draws in a millisecond
+    /// to about 1 %.
+    fn estimates(&self) -> Vec<Estimate> {
+        let noise = self.noise();
+        (0..self.records.len()).map(|s| self.estimate(s, noise)).collect()
+    }
+
     /// The due strategy whose probe promises most: frustum culling first
     /// where occlusion hid nothing, then the one whose probe is worth most
     /// ([`probe_value`]; an unknown strategy's is worth most), the first
     /// of equals.
-    fn most_promising_due(&self, view: &View, settles: &[bool]) -> Option<(usize, Due)> {
+    /// `estimates` are [`Chooser::estimates`].
+    fn most_promising_due(&self, view: &View, settles: &[bool], estimates: &[Estimate]) -> Option<(usize, Due)> {
         let nothing_hidden = self.nothing_hidden() == Some(true);
         let priority = |s: usize| {
             let frustum_first = nothing_hidden && self.records[s].family == Family::Frustum;
-            let value = self.estimate(s).map_or(f64::INFINITY, |(m, se)| probe_value(m, se, settles[s]));
+            let value = estimates[s].map_or(f64::INFINITY, |(m, se)| probe_value(m, se, settles[s]));
             (!frustum_first, -value)
         };
         (0..self.records.len())
             .filter(|&s| s != self.incumbent)
-            .filter_map(|s| Some((s, self.due(s, view, settles[s])?)))
-            .min_by(|&(a, _), &(b, _)| {
-                let (pa, pb) = (priority(a), priority(b));
-                pa.0.cmp(&pb.0).then(pa.1.total_cmp(&pb.1))
-            })
+            .filter_map(|s| Some((s, self.due(s, view, settles[s], estimates)?, priority(s))))
+            .min_by(|(_, _, pa), (_, _, pb)| pa.0.cmp(&pb.0).then(pa.1.total_cmp(&pb.1)))
+            .map(|(s, due, _)| (s, due))
     }
 
     /// Whether a probe of `s` is due, and of which kind. A recheck is due
@@ -990,25 +1015,26 @@ impl Chooser {
     /// intervals aim at that share from each strategy's estimate, which
     /// does not see a cost that one lucky sample understated, and on a
     /// short path the first recheck alone may cost more than the share.
-    fn due(&self, s: usize, view: &View, settles: bool) -> Option<Due> {
+    /// `estimates` are [`Chooser::estimates`].
+    fn due(&self, s: usize, view: &View, settles: bool, estimates: &[Estimate]) -> Option<Due> {
         let (waited, wait, due) = if let Some(h) = self.nothing_to_skip(s) {
             // One occlusion culler, the most promising, looks again once
             // the view has changed since the last look, and no more often
             // than the budget pays for; at once where the view outgrew the
             // one that hid nothing, which says nothing of it.
-            if !view.differs(&h.view, self.reach) || Some(s) != self.most_promising_occlusion() {
+            if !view.differs(&h.view, self.reach) || Some(s) != self.most_promising_occlusion(estimates) {
                 return None;
             }
             if view.outgrew(&h.view) && self.looked_outgrown != Some(h.frame) {
                 return Some(Due::Outgrown);
             }
-            (self.frame - h.frame, self.recheck(s, settles, 1), Due::Recheck)
+            (self.frame - h.frame, self.recheck(estimates[s], settles, 1), Due::Recheck)
         } else {
-            let (wait, due) = self.interval(s, settles);
+            let (wait, due) = self.interval(s, settles, estimates[s]);
             (self.frame - self.records[s].last_run.unwrap_or(0), wait, due)
         };
         let affordable = due == Due::Explore
-            || self.recheck_spent + self.recheck_cost(s, settles) <= self.budget * self.frame as f64;
+            || self.recheck_spent + recheck_cost(estimates[s], settles) <= self.budget * self.frame as f64;
         (waited >= wait && affordable).then_some(due)
     }
 
@@ -1021,9 +1047,10 @@ impl Chooser {
             .filter(|h| h.share < NOTHING_HIDDEN)
     }
 
-    /// Frames between probes of `s`, and which kind they are.
-    fn interval(&self, s: usize, settles: bool) -> (u64, Due) {
-        let Some((m, se)) = self.estimate(s) else {
+    /// Frames between probes of `s`, whose estimate is `estimate`, and
+    /// which kind they are.
+    fn interval(&self, s: usize, settles: bool, estimate: Estimate) -> (u64, Due) {
+        let Some((m, se)) = estimate else {
             return (EXPLORE, Due::Explore);
         };
         // Nothing hidden: frustum culling is likely the cheapest, and every
@@ -1051,28 +1078,15 @@ impl Chooser {
         if worth_exploring || one_sample_too_few {
             return (EXPLORE, Due::Explore);
         }
-        (self.recheck(s, settles, self.records.len() - 1), Due::Recheck)
+        (self.recheck(estimate, settles, self.records.len() - 1), Due::Recheck)
     }
 
-    /// Frames between rechecks of `s`, not worth exploring: as often as
-    /// its share of the budget (split `sharing` ways) pays for at what a
-    /// probe of it costs.
-    fn recheck(&self, s: usize, settles: bool, sharing: usize) -> u64 {
-        let cost = self.recheck_cost(s, settles) + PROBE_OVERHEAD;
+    /// Frames between rechecks of a strategy not worth exploring, whose
+    /// estimate is `estimate`: as often as its share of the budget (split
+    /// `sharing` ways) pays for at what a probe of it costs.
+    fn recheck(&self, estimate: Estimate, settles: bool, sharing: usize) -> u64 {
+        let cost = recheck_cost(estimate, settles) + PROBE_OVERHEAD;
         ((sharing as f64 * cost / self.budget).ceil() as u64).max(RECHECK)
-    }
-
-    /// What a recheck of `s` is expected to cost beyond the incumbent's
-    /// frames, in frames of the incumbent: its settling frame too. One
-    /// with no estimate in this view (an occlusion culler looking again
-    /// where frustum culling runs, its samples taken where occlusion hid
-    /// much) is taken to cost [`UNMEASURED`]: taken as free, its first
-    /// recheck on a 60-frame orbit of den-haag.obj (Vulkan) ran at once,
-    /// two frames of `hiz` at about 1.7 times `vfc`'s, and spent 2.07 of
-    /// the incumbent's frames (as the chooser counts them) against a
-    /// budget of 0.9 for the whole run.
-    fn recheck_cost(&self, s: usize, settles: bool) -> f64 {
-        probe_cost(self.estimate(s).map_or(UNMEASURED, |(m, _)| m), settles)
     }
 
     /// The occlusion culler estimated cheapest in this view, else over the
@@ -1086,7 +1100,8 @@ impl Chooser {
     /// nothing where a finer one hides a seventh (`chc`, whose leaves hold
     /// several of a scan's clusters, against `omq` on the bunny), and,
     /// were it the cheapest, would say so at every look.
-    fn most_promising_occlusion(&self) -> Option<usize> {
+    /// `estimates` are [`Chooser::estimates`].
+    fn most_promising_occlusion(&self, estimates: &[Estimate]) -> Option<usize> {
         let occlusion = || (0..self.records.len()).filter(|&s| self.records[s].family == Family::Occlusion);
         let most = occlusion().filter_map(|s| self.records[s].hid).fold(0.0, |most, h| f64::max(most, h.share));
         let tells = |s: usize| most < NOTHING_HIDDEN || self.records[s].hid.is_none_or(|h| !clearly_nothing_hidden(h.share));
@@ -1098,7 +1113,7 @@ impl Chooser {
                         let all: Vec<f64> = self.records[s].samples.iter().map(|x| x.log_ratio).collect();
                         (!all.is_empty()).then(|| central(&all))
                     };
-                    self.estimate(s).map(|(m, _)| m).or_else(anywhere).unwrap_or(f64::INFINITY)
+                    estimates[s].map(|(m, _)| m).or_else(anywhere).unwrap_or(f64::INFINITY)
                 };
                 m(a).total_cmp(&m(b))
             })
@@ -1113,6 +1128,19 @@ impl Chooser {
 pub(super) fn frustum_estimate(share: f64, drawing: f64) -> f64 {
     let share = share.clamp(0.0, 0.999);
     drawing.clamp(0.01, 1.0).ln() + (HIDDEN_TRIANGLE_COST * share / (1.0 - share)).ln_1p()
+}
+
+/// What a recheck of a strategy whose estimate is `estimate` is expected
+/// to cost beyond the incumbent's frames, in frames of the incumbent: its
+/// settling frame too. One with no estimate in this view (an occlusion
+/// culler looking again where frustum culling runs, its samples taken
+/// where occlusion hid much) is taken to cost [`UNMEASURED`]: taken as
+/// free, its first recheck on a 60-frame orbit of den-haag.obj (Vulkan)
+/// ran at once, two frames of `hiz` at about 1.7 times `vfc`'s, and spent
+/// 2.07 of the incumbent's frames (as the chooser counts them) against a
+/// budget of 0.9 for the whole run.
+fn recheck_cost(estimate: Estimate, settles: bool) -> f64 {
+    probe_cost(estimate.map_or(UNMEASURED, |(m, _)| m), settles)
 }
 
 /// What a probe of a strategy costing `m` (log) relative to the incumbent
@@ -1300,15 +1328,15 @@ mod tests {
         // vfc, a cheap culler and a dearer one, as calibrated.
         let mut chooser = Chooser::new(&[Frustum, Occlusion, Occlusion], 1, 10.0, 0.015);
         chooser.calibrate(&[1.0f64.ln(), 1.1f64.ln(), 1.2f64.ln()], &still(0));
-        assert_eq!(chooser.most_promising_occlusion(), Some(1), "the cheaper, nothing known");
+        assert_eq!(chooser.most_promising_occlusion(&chooser.estimates()), Some(1), "the cheaper, nothing known");
         // Neither hides anything: the cheaper.
         chooser.calibrate_hidden(1, 0.0, &still(0));
         chooser.calibrate_hidden(2, 0.03, &still(0));
-        assert_eq!(chooser.most_promising_occlusion(), Some(1));
+        assert_eq!(chooser.most_promising_occlusion(&chooser.estimates()), Some(1));
         // The dearer one hides a seventh (as omq hides the bunny's clusters,
         // where chc, whose leaves hold several, hides none).
         chooser.calibrate_hidden(2, 0.14, &still(0));
-        assert_eq!(chooser.most_promising_occlusion(), Some(2));
+        assert_eq!(chooser.most_promising_occlusion(&chooser.estimates()), Some(2));
         // A measured frame of the cheaper one that hid a seventh too.
         let turn = Turn {
             strategy: 1,
@@ -1321,7 +1349,7 @@ mod tests {
             triangles: 860,
         };
         chooser.learn(turn, cost, Some(Occluded { hidden: 0.14, drawing: 0.9 }), &still(0));
-        assert_eq!(chooser.most_promising_occlusion(), Some(1));
+        assert_eq!(chooser.most_promising_occlusion(&chooser.estimates()), Some(1));
     }
 
     /// The bunny as warm-up found it, in [`still`]'s view: `vfc` (0) runs
@@ -1510,7 +1538,7 @@ mod tests {
             ran.push(turn.strategy);
         }
         assert!(!ran.contains(&0), "vfc probed: {ran:?}");
-        let (m, _) = chooser.estimate(0).expect("warm-up's samples of vfc count");
+        let (m, _) = chooser.estimates()[0].expect("warm-up's samples of vfc count");
         assert!((m - 1.9f64.ln()).abs() < 1e-9, "{m}");
     }
 
@@ -1527,7 +1555,7 @@ mod tests {
         }
         assert_eq!(chooser.incumbent, 0);
         chooser.residuals.extend([0.035 / 1.4826; 8]);
-        let explored = |chooser: &Chooser| chooser.interval(1, false).1 == Due::Explore;
+        let explored = |chooser: &Chooser| chooser.interval(1, false, chooser.estimates()[1]).1 == Due::Explore;
         let probe = |frame| Sample {
             log_ratio: dearer,
             hidden: None,
@@ -1535,15 +1563,15 @@ mod tests {
         };
         // Four warm-up frames of one view are one place: the ratio may
         // wander below the incumbent's along the path.
-        assert!(explored(&chooser), "{:?}", chooser.estimate(1));
+        assert!(explored(&chooser), "{:?}", chooser.estimates()[1]);
         // A probe two frames after the first is still that place; one
         // seven frames after it is a second.
         chooser.records[1].samples.push_back(probe(3));
         chooser.records[1].samples.push_back(probe(8));
-        assert!(explored(&chooser), "{:?}", chooser.estimate(1));
+        assert!(explored(&chooser), "{:?}", chooser.estimates()[1]);
         // A third place showing it as dear settles it.
         chooser.records[1].samples.push_back(probe(15));
-        assert!(!explored(&chooser), "{:?}", chooser.estimate(1));
+        assert!(!explored(&chooser), "{:?}", chooser.estimates()[1]);
     }
 
     #[test]
@@ -1578,18 +1606,18 @@ mod tests {
             frame,
         };
         chooser.records[1].samples.extend([dearer(1), dearer(9)]);
-        let (m, se) = chooser.estimate(1).unwrap();
+        let (m, se) = chooser.estimates()[1].unwrap();
         assert!((m - 0.11).abs() < 1e-9 && se > 0.1, "{m} ± {se}");
         // Worth +0.05 frames in one frame, -0.07 in two, with HORIZON 30
         // and DEFAULT_NOISE 0.1 (the signs hold for a horizon of 22 to 42
         // frames): retuned, the figures here move with them.
         let (one, two) = (probe_value(m, se, false), probe_value(m, se, true));
         assert!(one > 0.0 && two < 0.0, "{one}, {two}");
-        assert_eq!(chooser.interval(1, false).1, Due::Explore);
-        assert_eq!(chooser.interval(1, true).1, Due::Recheck);
+        assert_eq!(chooser.interval(1, false, chooser.estimates()[1]).1, Due::Explore);
+        assert_eq!(chooser.interval(1, true, chooser.estimates()[1]).1, Due::Recheck);
         // Cheaper in the estimate, it is worth its frames either way.
         chooser.records[1].samples = [1, 9].map(|f| Sample { log_ratio: -0.02, ..dearer(f) }).into();
-        assert_eq!(chooser.interval(1, true).1, Due::Explore);
+        assert_eq!(chooser.interval(1, true, chooser.estimates()[1]).1, Due::Explore);
     }
 
     #[test]
@@ -1603,11 +1631,11 @@ mod tests {
             frame: 1 + 4 * k,
         });
         chooser.records[1].samples = window(-0.02).collect();
-        assert_eq!(chooser.interval(1, false).1, Due::Recheck, "{:?}", chooser.estimate(1));
+        assert_eq!(chooser.interval(1, false, chooser.estimates()[1]).1, Due::Recheck, "{:?}", chooser.estimates()[1]);
         // 5 % cheaper but not yet at confidence: explored still.
         chooser.records[1].samples = window(-0.05).collect();
-        assert_eq!(chooser.cheaper_than_incumbent(), None);
-        assert_eq!(chooser.interval(1, false).1, Due::Explore, "{:?}", chooser.estimate(1));
+        assert_eq!(chooser.cheaper_than_incumbent(&chooser.estimates()), None);
+        assert_eq!(chooser.interval(1, false, chooser.estimates()[1]).1, Due::Explore, "{:?}", chooser.estimates()[1]);
     }
 
     #[test]
@@ -1779,7 +1807,7 @@ mod tests {
         // Unmeasured, frustum culling is the guess from what occlusion hid.
         chooser.hidden = Some(hid(0.5));
         let guess = frustum_estimate(0.5, 0.9);
-        assert_eq!(chooser.estimate(0).map(|e| e.0), Some(guess));
+        assert_eq!(chooser.estimates()[0].map(|e| e.0), Some(guess));
         // Measured 1.5× dearer where half is hidden: the measurement alone,
         // not pulled toward the guess (on the cheap side by design).
         let measured = |hidden| Sample {
@@ -1788,15 +1816,15 @@ mod tests {
             frame: 0,
         };
         chooser.records[0].samples.push_back(measured(0.5));
-        assert_eq!(chooser.estimate(0).map(|e| e.0), Some(0.4));
+        assert_eq!(chooser.estimates()[0].map(|e| e.0), Some(0.4));
         // Where nothing is hidden, that measurement says nothing: the guess.
         chooser.hidden = Some(hid(0.02));
         let guess = frustum_estimate(0.02, 0.9);
-        assert_eq!(chooser.estimate(0).map(|e| e.0), Some(guess));
+        assert_eq!(chooser.estimates()[0].map(|e| e.0), Some(guess));
         // Measured there too, the guess still counts beside it, so that
         // frustum culling takes over sooner.
         chooser.records[0].samples.push_back(measured(0.02));
-        let beside = chooser.estimate(0).map(|e| e.0);
+        let beside = chooser.estimates()[0].map(|e| e.0);
         assert_eq!(beside, Some((0.4 + guess) / 2.0));
         // Where a tenth is hidden, a view could be either: both count.
         chooser.hidden = Some(hid(0.08));
