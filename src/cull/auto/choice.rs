@@ -138,7 +138,8 @@ const PLACE: u64 = 7;
 const HIDDEN_TRIANGLE_COST: f64 = 0.25;
 
 /// A strategy's cost relative to the incumbent (log) and its standard
-/// error ([`Chooser::estimate`]); `None` when unknown.
+/// error ([`Chooser::estimate`]); `None` when unknown (the incumbent's
+/// own, too).
 type Estimate = Option<(f64, f64)>;
 
 /// What kind of strategy.
@@ -852,8 +853,8 @@ impl Chooser {
     /// measurements show); `None` when unknown.
     ///
     /// The error has two parts. Frame-to-frame noise: the samples' spread
-    /// (MAD) once there are three, never less than what the incumbent's
-    /// own noise (`noise`, [`Chooser::noise`]) puts in one sample. And the ratio's wander along the path:
+    /// (MAD) once there are three, never less than what `noise`, the
+    /// incumbent's own ([`Chooser::noise`]), puts in one sample. And the ratio's wander along the path:
     /// two strategies' costs turn on different things (one on triangles
     /// drawn, another on tests), so their ratio moves from place to place
     /// by more than a frame's noise. Samples from three places or more
@@ -978,13 +979,13 @@ impl Chooser {
     }
 
     /// Every strategy's estimate ([`Chooser::estimate`]), by strategy,
-    /// each with the incumbent's noise taken once: a plan asks for each
-    /// several times (whether a rival is cheaper, due, worth most), and each
-    /// sorts its samples and the incumbent's residuals. Taken afresh at
-    /// each ask, a plan took a median 21–22 µs on the teapot and 15–17 µs
-    /// on the default city (lavapipe, the 2-core machine); taken once, 7–10
-    /// and 10–11 µs: from 1.5–2 % of a frame a GPU draws in a millisecond
-    /// to about 1 %.
+    /// with the incumbent's noise taken once: a plan asks for each several
+    /// times (whether a rival is cheaper, due, worth most), and each
+    /// estimate sorts its samples, and the noise the incumbent's residuals.
+    /// Taken at each ask, a plan took a median 21–22 µs on the teapot and
+    /// 15–17 µs on the default city (lavapipe on a 2-core machine); taken
+    /// once, 7–10 and 10–11 µs: from 1.5–2.2 % of a frame a GPU draws in a
+    /// millisecond to about 1 %.
     fn estimates(&self) -> Vec<Estimate> {
         let noise = self.noise();
         (0..self.records.len()).map(|s| self.estimate(s, noise)).collect()
@@ -993,8 +994,7 @@ impl Chooser {
     /// The due strategy whose probe promises most: frustum culling first
     /// where occlusion hid nothing, then the one whose probe is worth most
     /// ([`probe_value`]; an unknown strategy's is worth most), the first
-    /// of equals.
-    /// `estimates` are [`Chooser::estimates`].
+    /// of equals. `estimates` are [`Chooser::estimates`].
     fn most_promising_due(&self, view: &View, settles: &[bool], estimates: &[Estimate]) -> Option<(usize, Due)> {
         let nothing_hidden = self.nothing_hidden() == Some(true);
         let priority = |s: usize| {
@@ -1030,7 +1030,7 @@ impl Chooser {
             }
             (self.frame - h.frame, self.recheck(estimates[s], settles, 1), Due::Recheck)
         } else {
-            let (wait, due) = self.interval(s, settles, estimates[s]);
+            let (wait, due) = self.interval(s, settles, estimates);
             (self.frame - self.records[s].last_run.unwrap_or(0), wait, due)
         };
         let affordable = due == Due::Explore
@@ -1047,10 +1047,10 @@ impl Chooser {
             .filter(|h| h.share < NOTHING_HIDDEN)
     }
 
-    /// Frames between probes of `s`, whose estimate is `estimate`, and
-    /// which kind they are.
-    fn interval(&self, s: usize, settles: bool, estimate: Estimate) -> (u64, Due) {
-        let Some((m, se)) = estimate else {
+    /// Frames between probes of `s`, and which kind they are. `estimates`
+    /// are [`Chooser::estimates`].
+    fn interval(&self, s: usize, settles: bool, estimates: &[Estimate]) -> (u64, Due) {
+        let Some((m, se)) = estimates[s] else {
             return (EXPLORE, Due::Explore);
         };
         // Nothing hidden: frustum culling is likely the cheapest, and every
@@ -1078,7 +1078,7 @@ impl Chooser {
         if worth_exploring || one_sample_too_few {
             return (EXPLORE, Due::Explore);
         }
-        (self.recheck(estimate, settles, self.records.len() - 1), Due::Recheck)
+        (self.recheck(estimates[s], settles, self.records.len() - 1), Due::Recheck)
     }
 
     /// Frames between rechecks of a strategy not worth exploring, whose
@@ -1099,8 +1099,8 @@ impl Chooser {
     /// another hid at least [`NOTHING_HIDDEN`]: a coarse culler may hide
     /// nothing where a finer one hides a seventh (`chc`, whose leaves hold
     /// several of a scan's clusters, against `omq` on the bunny), and,
-    /// were it the cheapest, would say so at every look.
-    /// `estimates` are [`Chooser::estimates`].
+    /// were it the cheapest, would say so at every look. `estimates` are
+    /// [`Chooser::estimates`].
     fn most_promising_occlusion(&self, estimates: &[Estimate]) -> Option<usize> {
         let occlusion = || (0..self.records.len()).filter(|&s| self.records[s].family == Family::Occlusion);
         let most = occlusion().filter_map(|s| self.records[s].hid).fold(0.0, |most, h| f64::max(most, h.share));
@@ -1555,7 +1555,7 @@ mod tests {
         }
         assert_eq!(chooser.incumbent, 0);
         chooser.residuals.extend([0.035 / 1.4826; 8]);
-        let explored = |chooser: &Chooser| chooser.interval(1, false, chooser.estimates()[1]).1 == Due::Explore;
+        let explored = |chooser: &Chooser| chooser.interval(1, false, &chooser.estimates()).1 == Due::Explore;
         let probe = |frame| Sample {
             log_ratio: dearer,
             hidden: None,
@@ -1613,11 +1613,11 @@ mod tests {
         // frames): retuned, the figures here move with them.
         let (one, two) = (probe_value(m, se, false), probe_value(m, se, true));
         assert!(one > 0.0 && two < 0.0, "{one}, {two}");
-        assert_eq!(chooser.interval(1, false, chooser.estimates()[1]).1, Due::Explore);
-        assert_eq!(chooser.interval(1, true, chooser.estimates()[1]).1, Due::Recheck);
+        assert_eq!(chooser.interval(1, false, &chooser.estimates()).1, Due::Explore);
+        assert_eq!(chooser.interval(1, true, &chooser.estimates()).1, Due::Recheck);
         // Cheaper in the estimate, it is worth its frames either way.
         chooser.records[1].samples = [1, 9].map(|f| Sample { log_ratio: -0.02, ..dearer(f) }).into();
-        assert_eq!(chooser.interval(1, true, chooser.estimates()[1]).1, Due::Explore);
+        assert_eq!(chooser.interval(1, true, &chooser.estimates()).1, Due::Explore);
     }
 
     #[test]
@@ -1631,11 +1631,11 @@ mod tests {
             frame: 1 + 4 * k,
         });
         chooser.records[1].samples = window(-0.02).collect();
-        assert_eq!(chooser.interval(1, false, chooser.estimates()[1]).1, Due::Recheck, "{:?}", chooser.estimates()[1]);
+        assert_eq!(chooser.interval(1, false, &chooser.estimates()).1, Due::Recheck, "{:?}", chooser.estimates()[1]);
         // 5 % cheaper but not yet at confidence: explored still.
         chooser.records[1].samples = window(-0.05).collect();
         assert_eq!(chooser.cheaper_than_incumbent(&chooser.estimates()), None);
-        assert_eq!(chooser.interval(1, false, chooser.estimates()[1]).1, Due::Explore, "{:?}", chooser.estimates()[1]);
+        assert_eq!(chooser.interval(1, false, &chooser.estimates()).1, Due::Explore, "{:?}", chooser.estimates()[1]);
     }
 
     #[test]
