@@ -554,7 +554,11 @@ impl Chooser {
             share,
             view: *view,
             frame: self.frame,
-            hid_much_at: if share >= NOTHING_HIDDEN { Some(self.frame) } else { before },
+            hid_much_at: if share >= NOTHING_HIDDEN {
+                Some(self.frame)
+            } else {
+                before
+            },
         });
     }
 
@@ -780,7 +784,8 @@ impl Chooser {
             })
         };
         clearly_nothing_hidden(hidden)
-            && (0..self.records.len()).any(|k| k != s && self.records[k].family == Family::Occlusion && hid_more_here(k))
+            && (0..self.records.len())
+                .any(|k| k != s && self.records[k].family == Family::Occlusion && hid_more_here(k))
     }
 
     /// Whether frames `apart` frames apart that looked from `a` and `b` saw
@@ -1028,7 +1033,11 @@ impl Chooser {
             if view.outgrew(&h.view) && self.looked_outgrown != Some(h.frame) {
                 return Some(Due::Outgrown);
             }
-            (self.frame - h.frame, self.recheck(estimates[s], settles, 1), Due::Recheck)
+            (
+                self.frame - h.frame,
+                self.recheck(estimates[s], settles, 1),
+                Due::Recheck,
+            )
         } else {
             let (wait, due) = self.interval(s, settles, estimates);
             (self.frame - self.records[s].last_run.unwrap_or(0), wait, due)
@@ -1078,7 +1087,10 @@ impl Chooser {
         if worth_exploring || one_sample_too_few {
             return (EXPLORE, Due::Explore);
         }
-        (self.recheck(estimates[s], settles, self.records.len() - 1), Due::Recheck)
+        (
+            self.recheck(estimates[s], settles, self.records.len() - 1),
+            Due::Recheck,
+        )
     }
 
     /// Frames between rechecks of a strategy not worth exploring, whose
@@ -1103,20 +1115,21 @@ impl Chooser {
     /// [`Chooser::estimates`].
     fn most_promising_occlusion(&self, estimates: &[Estimate]) -> Option<usize> {
         let occlusion = || (0..self.records.len()).filter(|&s| self.records[s].family == Family::Occlusion);
-        let most = occlusion().filter_map(|s| self.records[s].hid).fold(0.0, |most, h| f64::max(most, h.share));
-        let tells = |s: usize| most < NOTHING_HIDDEN || self.records[s].hid.is_none_or(|h| !clearly_nothing_hidden(h.share));
-        occlusion()
-            .filter(|&s| tells(s))
-            .min_by(|&a, &b| {
-                let m = |s: usize| {
-                    let anywhere = || {
-                        let all: Vec<f64> = self.records[s].samples.iter().map(|x| x.log_ratio).collect();
-                        (!all.is_empty()).then(|| central(&all))
-                    };
-                    estimates[s].map(|(m, _)| m).or_else(anywhere).unwrap_or(f64::INFINITY)
+        let most = occlusion()
+            .filter_map(|s| self.records[s].hid)
+            .fold(0.0, |most, h| f64::max(most, h.share));
+        let tells =
+            |s: usize| most < NOTHING_HIDDEN || self.records[s].hid.is_none_or(|h| !clearly_nothing_hidden(h.share));
+        occlusion().filter(|&s| tells(s)).min_by(|&a, &b| {
+            let m = |s: usize| {
+                let anywhere = || {
+                    let all: Vec<f64> = self.records[s].samples.iter().map(|x| x.log_ratio).collect();
+                    (!all.is_empty()).then(|| central(&all))
                 };
-                m(a).total_cmp(&m(b))
-            })
+                estimates[s].map(|(m, _)| m).or_else(anywhere).unwrap_or(f64::INFINITY)
+            };
+            m(a).total_cmp(&m(b))
+        })
     }
 }
 
@@ -1246,7 +1259,9 @@ mod tests {
         let mut normal =
             || (-2.0 * rng.range(1e-12, 1.0).ln()).sqrt() * (std::f64::consts::TAU * rng.range(0.0, 1.0)).cos();
         for _ in 0..calibrating {
-            let log_ms: Vec<f64> = (0..families.len()).map(|s| cost(0, s).ln() + noise * normal()).collect();
+            let log_ms: Vec<f64> = (0..families.len())
+                .map(|s| cost(0, s).ln() + noise * normal())
+                .collect();
             chooser.calibrate(&log_ms, &view(0));
         }
         let settles = vec![false; families.len()];
@@ -1328,7 +1343,11 @@ mod tests {
         // vfc, a cheap culler and a dearer one, as calibrated.
         let mut chooser = Chooser::new(&[Frustum, Occlusion, Occlusion], 1, 10.0, 0.015);
         chooser.calibrate(&[1.0f64.ln(), 1.1f64.ln(), 1.2f64.ln()], &still(0));
-        assert_eq!(chooser.most_promising_occlusion(&chooser.estimates()), Some(1), "the cheaper, nothing known");
+        assert_eq!(
+            chooser.most_promising_occlusion(&chooser.estimates()),
+            Some(1),
+            "the cheaper, nothing known"
+        );
         // Neither hides anything: the cheaper.
         chooser.calibrate_hidden(1, 0.0, &still(0));
         chooser.calibrate_hidden(2, 0.03, &still(0));
@@ -1348,7 +1367,15 @@ mod tests {
             frame_ms: 1.0,
             triangles: 860,
         };
-        chooser.learn(turn, cost, Some(Occluded { hidden: 0.14, drawing: 0.9 }), &still(0));
+        chooser.learn(
+            turn,
+            cost,
+            Some(Occluded {
+                hidden: 0.14,
+                drawing: 0.9,
+            }),
+            &still(0),
+        );
         assert_eq!(chooser.most_promising_occlusion(&chooser.estimates()), Some(1));
     }
 
@@ -1481,9 +1508,15 @@ mod tests {
         // A 40-frame path, 10 % noise.
         let relative = [1.4, 1.0, 1.0, 1.15, 1.5];
         let run = |calibrating| {
-            simulate_after_calibrating(calibrating, &FIVE, 40, (0.1, 0.8), |_| hides(0.5), still, |f, s| {
-                street(f) * relative[s]
-            })
+            simulate_after_calibrating(
+                calibrating,
+                &FIVE,
+                40,
+                (0.1, 0.8),
+                |_| hides(0.5),
+                still,
+                |f, s| street(f) * relative[s],
+            )
         };
         let (turns, costs) = run(2);
         let s = strategies(&turns);
@@ -1500,9 +1533,15 @@ mod tests {
     fn calibrated_where_nothing_is_hidden_frustum_culling_runs_and_the_walks_far_dearer_are_not_explored() {
         // The teapot: every occlusion culler costs 1.4–1.8× vfc.
         let relative = [1.0, 1.4, 1.4, 1.8, 1.1];
-        let (turns, costs) = simulate_after_calibrating(2, &FIVE, 120, (0.1, 0.8), |_| hides(0.0), still, |f, s| {
-            street(f) * relative[s]
-        });
+        let (turns, costs) = simulate_after_calibrating(
+            2,
+            &FIVE,
+            120,
+            (0.1, 0.8),
+            |_| hides(0.0),
+            still,
+            |f, s| street(f) * relative[s],
+        );
         let s = strategies(&turns);
         // The CPU culler, 1.1×, may come out cheapest in two noisy warm-up
         // frames; the walks, 1.4× and more, do not, and are not probed.
@@ -1533,7 +1572,10 @@ mod tests {
                 frame_ms: relative[turn.strategy],
                 triangles: [1000, 400, 400][turn.strategy],
             };
-            let occluded = (turn.strategy != 0).then_some(Occluded { hidden: 0.6, drawing: 0.8 });
+            let occluded = (turn.strategy != 0).then_some(Occluded {
+                hidden: 0.6,
+                drawing: 0.8,
+            });
             chooser.learn(turn, cost, occluded, &orbit(f));
             ran.push(turn.strategy);
         }
@@ -1616,7 +1658,12 @@ mod tests {
         assert_eq!(chooser.interval(1, false, &chooser.estimates()).1, Due::Explore);
         assert_eq!(chooser.interval(1, true, &chooser.estimates()).1, Due::Recheck);
         // Cheaper in the estimate, it is worth its frames either way.
-        chooser.records[1].samples = [1, 9].map(|f| Sample { log_ratio: -0.02, ..dearer(f) }).into();
+        chooser.records[1].samples = [1, 9]
+            .map(|f| Sample {
+                log_ratio: -0.02,
+                ..dearer(f)
+            })
+            .into();
         assert_eq!(chooser.interval(1, true, &chooser.estimates()).1, Due::Explore);
     }
 
@@ -1625,17 +1672,29 @@ mod tests {
         // Eight samples from three places and more: the rule before kept
         // exploring any rival cheaper at all, here 2 %, for the whole path.
         let mut chooser = Chooser::new(&[Occlusion, Occlusion], 0, 10.0, 0.015);
-        let window = |ratio: f64| (0..WINDOW as u64).map(move |k| Sample {
-            log_ratio: ratio,
-            hidden: None,
-            frame: 1 + 4 * k,
-        });
+        let window = |ratio: f64| {
+            (0..WINDOW as u64).map(move |k| Sample {
+                log_ratio: ratio,
+                hidden: None,
+                frame: 1 + 4 * k,
+            })
+        };
         chooser.records[1].samples = window(-0.02).collect();
-        assert_eq!(chooser.interval(1, false, &chooser.estimates()).1, Due::Recheck, "{:?}", chooser.estimates()[1]);
+        assert_eq!(
+            chooser.interval(1, false, &chooser.estimates()).1,
+            Due::Recheck,
+            "{:?}",
+            chooser.estimates()[1]
+        );
         // 5 % cheaper but not yet at confidence: explored still.
         chooser.records[1].samples = window(-0.05).collect();
         assert_eq!(chooser.cheaper_than_incumbent(&chooser.estimates()), None);
-        assert_eq!(chooser.interval(1, false, &chooser.estimates()).1, Due::Explore, "{:?}", chooser.estimates()[1]);
+        assert_eq!(
+            chooser.interval(1, false, &chooser.estimates()).1,
+            Due::Explore,
+            "{:?}",
+            chooser.estimates()[1]
+        );
     }
 
     #[test]
@@ -1656,7 +1715,10 @@ mod tests {
                 })
                 .sum();
             let closed = expected_gain(m, se);
-            assert!((closed - numeric).abs() < 1e-8 * numeric, "N({m}, {se}²): {closed} against {numeric}");
+            assert!(
+                (closed - numeric).abs() < 1e-8 * numeric,
+                "N({m}, {se}²): {closed} against {numeric}"
+            );
         }
     }
 
@@ -1665,21 +1727,37 @@ mod tests {
         // The default city on Vulkan, where warm-up's few frames started
         // the pyramid test: roc is 9 % cheaper than it. Settling that gain
         // itself at confidence would take more samples than a window holds.
-        let (turns, _) = simulate(&[Occlusion, Occlusion], 120, 0.1, (0.9, vec![100, 100]), still, |f, s| {
-            street(f) * [1.0, 1.0 / 1.09][s]
-        });
+        let (turns, _) = simulate(
+            &[Occlusion, Occlusion],
+            120,
+            0.1,
+            (0.9, vec![100, 100]),
+            still,
+            |f, s| street(f) * [1.0, 1.0 / 1.09][s],
+        );
         let incumbents = strategies(turns.iter().filter(|t| !t.probe));
-        assert!(incumbents[incumbents.len() / 2..].iter().all(|&s| s == 1), "{incumbents:?}");
+        assert!(
+            incumbents[incumbents.len() / 2..].iter().all(|&s| s == 1),
+            "{incumbents:?}"
+        );
     }
 
     #[test]
     fn on_an_orbit_that_moves_the_eye_beyond_the_reach_each_frame_probes_still_pair_and_a_cheaper_rival_takes_over() {
         // [`orbit`]: the eye moves beyond the reach each frame.
-        let (turns, _) = simulate(&[Occlusion, Occlusion], 40, 0.05, (0.5, vec![500, 500]), orbit, |_, s| {
-            [1.0, 0.8][s]
-        });
+        let (turns, _) = simulate(
+            &[Occlusion, Occlusion],
+            40,
+            0.05,
+            (0.5, vec![500, 500]),
+            orbit,
+            |_, s| [1.0, 0.8][s],
+        );
         let incumbents = strategies(turns.iter().filter(|t| !t.probe));
-        assert!(incumbents[incumbents.len() / 2..].iter().all(|&s| s == 1), "{incumbents:?}");
+        assert!(
+            incumbents[incumbents.len() / 2..].iter().all(|&s| s == 1),
+            "{incumbents:?}"
+        );
     }
 
     #[test]
@@ -1696,9 +1774,14 @@ mod tests {
             forward: DVec3::NEG_Z,
             frustum_triangles: 1000,
         };
-        let (turns, _) = simulate(&[Occlusion, Occlusion], 120, 0.02, (0.5, vec![500, 400]), cuts, |f, s| {
-            [4.0, 1.0][place(f) as usize] * [1.0, 1.2][s]
-        });
+        let (turns, _) = simulate(
+            &[Occlusion, Occlusion],
+            120,
+            0.02,
+            (0.5, vec![500, 400]),
+            cuts,
+            |f, s| [4.0, 1.0][place(f) as usize] * [1.0, 1.2][s],
+        );
         let incumbents = strategies(turns.iter().filter(|t| !t.probe));
         assert!(incumbents.iter().all(|&s| s == 0), "{incumbents:?}");
     }
@@ -1752,11 +1835,13 @@ mod tests {
                 ..still(f)
             }
         };
-        let (turns, costs) = simulate_after_calibrating(2, &FIVE, 120, (0.1, 0.8), hidden, orbit, |f, s| {
-            street(f) * relative[s]
-        });
+        let (turns, costs) =
+            simulate_after_calibrating(2, &FIVE, 120, (0.1, 0.8), hidden, orbit, |f, s| street(f) * relative[s]);
         let s = strategies(&turns);
-        let vfc_runs = strategies(turns.iter().filter(|t| !t.probe)).iter().filter(|&&x| x == 0).count();
+        let vfc_runs = strategies(turns.iter().filter(|t| !t.probe))
+            .iter()
+            .filter(|&&x| x == 0)
+            .count();
         assert!(vfc_runs <= 3, "vfc runs as the incumbent {vfc_runs} frames: {s:?}");
         let mean = over_best(&costs, 1.0, 0.1);
         assert!(mean < 1.05, "{mean:.3}× the best: {s:?}");
@@ -1779,8 +1864,12 @@ mod tests {
             hidden: Some(hidden),
             frame: 0,
         };
-        chooser.records[0].samples.extend([sample(0.9, 0.01), sample(1.35, 0.5)]);
-        chooser.records[2].samples.extend([sample(1.05, 0.02), sample(1.05, 0.45)]);
+        chooser.records[0]
+            .samples
+            .extend([sample(0.9, 0.01), sample(1.35, 0.5)]);
+        chooser.records[2]
+            .samples
+            .extend([sample(1.05, 0.02), sample(1.05, 0.45)]);
         chooser.hidden = Some(hid(0.01));
         chooser.switch_to(0);
         let close = |chooser: &Chooser, s: usize, ratio: f64| {
@@ -1934,18 +2023,28 @@ mod tests {
         // Its first frames also look at each near rival walk in three
         // places ([`WANDER`]).
         let relative = [1.0, 1.04, 1.06, 1.8, 1.2];
-        let (turns, costs) = simulate_after_calibrating(0, &FIVE, 60, (0.15, 0.97), |_| hides(0.0), still, |f, s| {
-            street(f) * relative[s]
-        });
+        let (turns, costs) = simulate_after_calibrating(
+            0,
+            &FIVE,
+            60,
+            (0.15, 0.97),
+            |_| hides(0.0),
+            still,
+            |f, s| street(f) * relative[s],
+        );
         let s = strategies(&turns);
         let vfc_from = (0..60).find(|&f| s[f..].iter().all(|&x| x == 0));
-        assert!(vfc_from.is_some_and(|f| f <= 36), "vfc alone from frame 36 at the latest: {s:?}");
+        assert!(
+            vfc_from.is_some_and(|f| f <= 36),
+            "vfc alone from frame 36 at the latest: {s:?}"
+        );
         let mean = over_best(&costs, 1.0, 0.15);
         assert!(mean < 1.03, "{mean:.3}× vfc: {s:?}");
     }
 
     #[test]
-    fn where_occlusion_hides_a_little_and_costs_what_frustum_culling_does_frustum_culling_is_not_probed_every_other_frame() {
+    fn where_occlusion_hides_a_little_and_costs_what_frustum_culling_does_frustum_culling_is_not_probed_every_other_frame()
+     {
         // A dense scan in 16 clusters: the walks hide 7 % of the frustum
         // and cost what vfc costs, in the 20 % noise of a shared machine.
         // No window settles which is cheaper. (With vfc probed every other
@@ -1965,7 +2064,8 @@ mod tests {
     }
 
     #[test]
-    fn where_what_occlusion_hides_wavers_about_a_tenth_one_frame_that_hid_nothing_does_not_hand_the_view_to_frustum_culling() {
+    fn where_what_occlusion_hides_wavers_about_a_tenth_one_frame_that_hid_nothing_does_not_hand_the_view_to_frustum_culling()
+     {
         // The dense scan on GL: frame by frame the walks hide none, one,
         // two or three of its 16 clusters (0 to 19 % of the frustum, a
         // tenth about), and the cheapest walk costs 7 % less than vfc.
@@ -2051,9 +2151,15 @@ mod tests {
             |f, s| street(f) * relative(f)[s],
         );
         let s = strategies(&turns);
-        assert!(s[10..30].iter().filter(|&&x| x == 0).count() >= 15, "vfc runs in the square: {s:?}");
+        assert!(
+            s[10..30].iter().filter(|&&x| x == 0).count() >= 15,
+            "vfc runs in the square: {s:?}"
+        );
         let incumbents = strategies(turns[90..].iter().filter(|t| !t.probe));
-        assert!(incumbents.iter().all(|&x| x == 1 || x == 2), "a walk runs in the streets: {s:?}");
+        assert!(
+            incumbents.iter().all(|&x| x == 1 || x == 2),
+            "a walk runs in the streets: {s:?}"
+        );
         let best: f64 = (70..120).map(|f| street(f) * relative(f)[1]).sum();
         let mean = costs[70..].iter().sum::<f64>() / best / (0.1f64 * 0.1 / 2.0).exp();
         assert!(mean < 1.1, "{mean:.3}× the best in the streets: {s:?}");
@@ -2130,7 +2236,10 @@ mod tests {
             chooser.learn(turn, cost, Some(occluded), &still(f));
         }
         assert!(probes > 3, "hiz is rechecked ({probes} probes)");
-        assert!(spent <= budget * frames as f64, "rechecks cost {spent:.1} frames in {frames}");
+        assert!(
+            spent <= budget * frames as f64,
+            "rechecks cost {spent:.1} frames in {frames}"
+        );
     }
 
     #[test]
@@ -2171,7 +2280,11 @@ mod tests {
                 strategies(&turns)
             );
         }
-        assert!(turns[10..].iter().any(|t| t.recheck), "occlusion looks again: {:?}", strategies(&turns));
+        assert!(
+            turns[10..].iter().any(|t| t.recheck),
+            "occlusion looks again: {:?}",
+            strategies(&turns)
+        );
     }
 
     #[test]
@@ -2188,12 +2301,7 @@ mod tests {
                 frame_ms: if turn.strategy == 0 { 1.0 } else { 2.0 },
                 triangles: 1000,
             };
-            chooser.learn(
-                turn,
-                cost,
-                Some(occluded),
-                &still(0),
-            );
+            chooser.learn(turn, cost, Some(occluded), &still(0));
             turns.push(turn);
         }
         // roc (incumbent) hid 2 %: vfc, which needs no settling, is

@@ -90,11 +90,11 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::balanced_order::balanced_order;
+use crate::bounds::Aabb;
 use crate::cull::culler::{Culler, FrameInput, Pick, TraversalStats};
 use crate::cull::gpu_walk::VisibleLists;
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 use crate::cull::traversal::frustum_cull_subtree;
-use crate::bounds::Aabb;
 use crate::gpu::{BoxTest, BoxVisibility, Frame, GpuAudit, GpuContext, GpuError, GpuFrame, GpuSetup};
 use crate::object_set::ObjectSet;
 use crate::scene::Scene;
@@ -296,7 +296,11 @@ fn lists_after(written: Option<Lists>, frame: u64, ran: &Ran, carrying: Carries,
     // set in its timed frame, as after `vfc`; a settling frame is followed
     // by its culler's measured one, so a walk seldom comes next.)
     let fresh = carrying != Carries::VisibleOnGpu || ran.fresh;
-    let bar = if fresh { Some(drew) } else { written.and_then(|l| l.drew) };
+    let bar = if fresh {
+        Some(drew)
+    } else {
+        written.and_then(|l| l.drew)
+    };
     let lists = Lists {
         frame,
         view: ran.view,
@@ -343,14 +347,22 @@ struct Counting<'a> {
 
 impl Frame for Counting<'_> {
     fn draw(&mut self, objects: &[u32]) {
-        let triangles = objects.iter().map(|&o| u64::from(self.scene.objects[o as usize].triangles));
+        let triangles = objects
+            .iter()
+            .map(|&o| u64::from(self.scene.objects[o as usize].triangles));
         self.triangles += triangles.sum::<u64>();
         self.frame.draw(objects);
     }
     fn test_boxes(&mut self, boxes: &[Aabb], kind: BoxTest, out: &mut Vec<BoxVisibility>) {
         self.frame.test_boxes(boxes, kind, out);
     }
-    fn test_boxes_with_totals(&mut self, boxes: &[Aabb], sampling: u32, out: &mut Vec<BoxVisibility>, totals: &mut Vec<u64>) {
+    fn test_boxes_with_totals(
+        &mut self,
+        boxes: &[Aabb],
+        sampling: u32,
+        out: &mut Vec<BoxVisibility>,
+        totals: &mut Vec<u64>,
+    ) {
         self.frame.test_boxes_with_totals(boxes, sampling, out, totals);
     }
     fn on_gpu(&mut self) -> Option<&mut dyn GpuFrame> {
@@ -459,7 +471,8 @@ impl AutoCulling {
     /// The family the last frame ran as, where candidate `k` did not run
     /// it: what `k` is handed ([`Self::hand_over`]).
     fn handed_to(&self, k: usize) -> Option<Family> {
-        self.last_drawn_by.filter(|_| self.ran.is_none_or(|r| r.turn.strategy != k))
+        self.last_drawn_by
+            .filter(|_| self.ran.is_none_or(|r| r.turn.strategy != k))
     }
 
     /// What CPU culler `k` is handed ([`Self::handed_to`]) where it did not
@@ -880,9 +893,23 @@ mod tests {
         let camera = path.camera(0, options.resolution.aspect());
         let mut in_frustum = Vec::new();
         let mut stats = TraversalStats::default();
-        frustum_cull_subtree(&scene, &hierarchy, 0, &camera.frustum(), &mut Vec::new(), &mut in_frustum, &mut stats);
-        let gpus: Vec<GpuContext> = GpuContext::every_adapter().into_iter().filter(|g| g.gpu_driven).collect();
-        assert!(!gpus.is_empty(), "no adapter culls on the GPU: install Mesa (scripts/install-deps)");
+        frustum_cull_subtree(
+            &scene,
+            &hierarchy,
+            0,
+            &camera.frustum(),
+            &mut Vec::new(),
+            &mut in_frustum,
+            &mut stats,
+        );
+        let gpus: Vec<GpuContext> = GpuContext::every_adapter()
+            .into_iter()
+            .filter(|g| g.gpu_driven)
+            .collect();
+        assert!(
+            !gpus.is_empty(),
+            "no adapter culls on the GPU: install Mesa (scripts/install-deps)"
+        );
         for gpu in &gpus {
             let mut world = World::new(scene.clone(), hierarchy.clone());
             let mut auto = AutoCulling::new(&scene, &ModeParams::default()).unwrap();
@@ -892,7 +919,10 @@ mod tests {
             session
                 .warm_up_frame(0, &camera, &mut world, &mut [Box::new(&mut auto)], 0)
                 .unwrap();
-            let lists = auto.lists.as_ref().expect("an adapter that culls on the GPU runs the walks");
+            let lists = auto
+                .lists
+                .as_ref()
+                .expect("an adapter that culls on the GPU runs the walks");
             gpu.check().expect("no GPU error");
             let [_, _, lengths] = lists.read_back(gpu);
             let visible = lengths[0] as usize;
@@ -1046,14 +1076,31 @@ mod tests {
                 assert_eq!(auto.last_drawn_by, Some(Family::Occlusion), "frame {frame}");
             }
         }
-        assert!(rested >= 6 && tried >= 3, "the incumbent rested {rested} and tried {tried} of 24 frames");
-        assert!(settling > 0, "chc, not run lately, was looked at after no resting frame");
+        assert!(
+            rested >= 6 && tried >= 3,
+            "the incumbent rested {rested} and tried {tried} of 24 frames"
+        );
+        assert!(
+            settling > 0,
+            "chc, not run lately, was looked at after no resting frame"
+        );
     }
 
     #[test]
     fn a_walk_s_lists_go_stale_with_time_or_where_the_view_outgrew_them_not_where_it_moved() {
         let streets = view(0.0, DVec3::NEG_Z, 10_000);
-        let start = |frame, view, handed_by| walk_start(Some(Lists { frame, view, drew: None }), 10, &streets, handed_by);
+        let start = |frame, view, handed_by| {
+            walk_start(
+                Some(Lists {
+                    frame,
+                    view,
+                    drew: None,
+                }),
+                10,
+                &streets,
+                handed_by,
+            )
+        };
         let walk = |stale, upload, fresh| WalkStart { stale, upload, fresh };
         // An orbit: written two frames ago, far away and turned 45°, over as
         // many triangles. The lists are kept after vfc, and what the walk
@@ -1101,7 +1148,8 @@ mod tests {
     }
 
     #[test]
-    fn the_lists_bar_is_what_their_last_fresh_writer_drew_and_lists_stale_by_the_next_frame_take_any_fresh_occlusion_set() {
+    fn the_lists_bar_is_what_their_last_fresh_writer_drew_and_lists_stale_by_the_next_frame_take_any_fresh_occlusion_set()
+     {
         use Carries::*;
         let here = view(0.0, DVec3::NEG_Z, 10_000);
         let ran = |family, fresh| Ran {
@@ -1122,7 +1170,13 @@ mod tests {
             ran(Family::Occlusion, false),
             ran(Family::Frustum, true),
         );
-        let written = |frame, view, drew| Some(Lists { frame, view, drew: Some(drew) });
+        let written = |frame, view, drew| {
+            Some(Lists {
+                frame,
+                view,
+                drew: Some(drew),
+            })
+        };
         let after = |written, ran: &Ran, carrying, drew| {
             let (take, lists) = lists_after(written, 9, ran, carrying, drew);
             (take, lists.map(|l: Lists| (l.frame, l.drew)))
@@ -1131,23 +1185,44 @@ mod tests {
         // the bar. One that started from everything in the frustum (after
         // `vfc`, its lists stale: written three frames before) keeps the
         // bar there was.
-        assert_eq!(after(written(8, here, 1_000), &occlusion, VisibleOnGpu, 1_200), (false, Some((9, Some(1_200)))));
-        assert_eq!(after(written(6, here, 1_000), &settling, VisibleOnGpu, 9_000), (false, Some((9, Some(1_000)))));
+        assert_eq!(
+            after(written(8, here, 1_000), &occlusion, VisibleOnGpu, 1_200),
+            (false, Some((9, Some(1_200))))
+        );
+        assert_eq!(
+            after(written(6, here, 1_000), &settling, VisibleOnGpu, 9_000),
+            (false, Some((9, Some(1_000))))
+        );
         // A swr probe that drew more than the lists of the frame before:
         // they stay as they are. An omq probe that drew fewer: taken, and
         // the new bar.
-        assert_eq!(after(written(8, here, 1_000), &occlusion, OccludersOnCpu, 1_300), (false, Some((8, Some(1_000)))));
-        assert_eq!(after(written(8, here, 1_000), &occlusion, Nothing, 900), (true, Some((9, Some(900)))));
+        assert_eq!(
+            after(written(8, here, 1_000), &occlusion, OccludersOnCpu, 1_300),
+            (false, Some((8, Some(1_000))))
+        );
+        assert_eq!(
+            after(written(8, here, 1_000), &occlusion, Nothing, 900),
+            (true, Some((9, Some(900))))
+        );
         // Lists stale by the next frame, written three frames before it or
         // in a view this one outgrew (four times the triangles): replaced
         // whatever they drew; and where none were written yet.
         let small = view(0.0, DVec3::NEG_Z, 1_000);
         for stale in [written(7, here, 1_000), written(8, small, 1_000), None] {
-            assert_eq!(after(stale, &occlusion, OccludersOnCpu, 1_300), (true, Some((9, Some(1_300)))));
+            assert_eq!(
+                after(stale, &occlusion, OccludersOnCpu, 1_300),
+                (true, Some((9, Some(1_300))))
+            );
             // But not by a set drawn as frustum culling's, nor by chc
             // settling on everything in the frustum it was handed.
-            assert_eq!(after(stale, &frustum, OccludersOnCpu, 1_300), (false, stale.map(|l| (l.frame, l.drew))));
-            assert_eq!(after(stale, &settling, VisibleOnCpu, 1_300), (false, stale.map(|l| (l.frame, l.drew))));
+            assert_eq!(
+                after(stale, &frustum, OccludersOnCpu, 1_300),
+                (false, stale.map(|l| (l.frame, l.drew)))
+            );
+            assert_eq!(
+                after(stale, &settling, VisibleOnCpu, 1_300),
+                (false, stale.map(|l| (l.frame, l.drew)))
+            );
         }
     }
 
@@ -1158,17 +1233,32 @@ mod tests {
         // omq decides afresh, chc carries what it found visible, swr its
         // occluders: each drew a visible set of this view.
         for carrying in [Nothing, VisibleOnCpu, OccludersOnCpu] {
-            assert!(lists_take_drawn(carrying, Occlusion, true, 900, Some(1_000)), "{carrying:?}");
-            assert!(lists_take_drawn(carrying, Occlusion, true, 1_000, Some(1_000)), "{carrying:?}");
+            assert!(
+                lists_take_drawn(carrying, Occlusion, true, 900, Some(1_000)),
+                "{carrying:?}"
+            );
+            assert!(
+                lists_take_drawn(carrying, Occlusion, true, 1_000, Some(1_000)),
+                "{carrying:?}"
+            );
             // Lists whose triangles no frame counted (warm-up's).
             assert!(lists_take_drawn(carrying, Occlusion, true, 1_000, None), "{carrying:?}");
             // Not a set of more triangles than the lists drew (swr's,
             // coarser than the walks'), nor a frame drawn as vfc's (swr
             // resting), nor vfc's own, nor a frame that settled (chc
             // drawing the whole frustum it was handed).
-            assert!(!lists_take_drawn(carrying, Occlusion, true, 1_001, Some(1_000)), "{carrying:?}");
-            assert!(!lists_take_drawn(carrying, Frustum, true, 900, Some(1_000)), "{carrying:?}");
-            assert!(!lists_take_drawn(carrying, Occlusion, false, 900, Some(1_000)), "{carrying:?}");
+            assert!(
+                !lists_take_drawn(carrying, Occlusion, true, 1_001, Some(1_000)),
+                "{carrying:?}"
+            );
+            assert!(
+                !lists_take_drawn(carrying, Frustum, true, 900, Some(1_000)),
+                "{carrying:?}"
+            );
+            assert!(
+                !lists_take_drawn(carrying, Occlusion, false, 900, Some(1_000)),
+                "{carrying:?}"
+            );
         }
         // A walk's frame wrote the lists itself.
         assert!(!lists_take_drawn(VisibleOnGpu, Occlusion, true, 900, Some(1_000)));

@@ -568,14 +568,21 @@ mod tests {
             (DVec3::new(-0.5, -0.5, -9.0), DVec3::new(0.5, 0.5, -8.0)),
         ]);
         let route = crate::scene::motion::Route::closed(vec![DVec3::ZERO, DVec3::X]).expect("a route");
-        scene.movers.push(crate::scene::motion::Mover::new(1, route, 0.0, 0.0, glam::DAffine3::IDENTITY));
+        scene.movers.push(crate::scene::motion::Mover::new(
+            1,
+            route,
+            0.0,
+            0.0,
+            glam::DAffine3::IDENTITY,
+        ));
         let camera = camera_down_z();
         let wall = scene.objects[0].bounds;
         let mut chc = CoherentCulling::new(&scene, one_object_a_leaf());
         let car = std::cell::Cell::new(scene.objects[1].bounds);
         let overlaps = |a: &Aabb, b: &Aabb| a.min.cmple(b.max).all() && b.min.cmple(a.max).all();
         // What shows: the wall, and the car once it is out beside it.
-        let mut double = Recording::new(|b: &Aabb| overlaps(b, &wall) || (car.get().min.x > 3.0 && overlaps(b, &car.get())));
+        let mut double =
+            Recording::new(|b: &Aabb| overlaps(b, &wall) || (car.get().min.x > 3.0 && overlaps(b, &car.get())));
         chc.frame(&mut double, &input(0, &camera, &scene, &hierarchy));
         assert_eq!(double.drawn(), [0], "the car hidden behind the wall");
         let out = Aabb {

@@ -134,7 +134,8 @@ impl Axis {
             axis.cell_of_group.extend((0..groups).map(|_| c));
             // Group k holds the pixels p with ⌊p · groups / n⌋ = k.
             let start = |k: u32| first + (k * n).div_ceil(groups);
-            axis.group_centres.extend((0..groups).map(|k| [start(k), start(k + 1) - 1].map(|p| f64::from(p) + 0.5)));
+            axis.group_centres
+                .extend((0..groups).map(|k| [start(k), start(k + 1) - 1].map(|p| f64::from(p) + 0.5)));
             axis.first_group.push(base + groups);
             axis.narrowest = axis.narrowest.min(f64::from(last - first));
         }
@@ -211,12 +212,18 @@ impl Axis {
         if pixels.is_empty() {
             return 0..0;
         }
-        let (first, last) = (self.group_of[pixels.start as usize], self.group_of[pixels.end as usize - 1]);
+        let (first, last) = (
+            self.group_of[pixels.start as usize],
+            self.group_of[pixels.end as usize - 1],
+        );
         self.limited(first..last + 1, cells)
     }
 
     fn limited(&self, groups: Range<u32>, cells: &Range<u32>) -> Range<u32> {
-        let (from, to) = (self.first_group[cells.start as usize], self.first_group[cells.end as usize]);
+        let (from, to) = (
+            self.first_group[cells.start as usize],
+            self.first_group[cells.end as usize],
+        );
         let start = groups.start.max(from);
         start..groups.end.min(to).max(start)
     }
@@ -254,7 +261,11 @@ impl Axis {
     /// pixel centre.
     pub(super) fn group(&self, g: u32) -> (u32, u32, [f64; 2]) {
         let cell = self.cell_of_group[g as usize];
-        (cell, g - self.first_group[cell as usize], self.group_centres[g as usize])
+        (
+            cell,
+            g - self.first_group[cell as usize],
+            self.group_centres[g as usize],
+        )
     }
 }
 
@@ -302,7 +313,9 @@ impl Grid {
     /// centre in `xs` × `ys`; none where they hold none.
     fn groups_holding(&self, column: u32, row: u32, xs: [f64; 2], ys: [f64; 2]) -> Option<u64> {
         let bits = |axis: &Axis, c: u32, [lo, hi]: [f64; 2]| {
-            axis.cells_of(axis.groups_reaching(lo, hi, &(c..c + 1))).next().map(|(_, bits)| bits)
+            axis.cells_of(axis.groups_reaching(lo, hi, &(c..c + 1)))
+                .next()
+                .map(|(_, bits)| bits)
         };
         Some(bits(&self.across, column, xs)? * row_starts(bits(&self.down, row, ys)?))
     }
@@ -315,8 +328,13 @@ impl Grid {
         debug_assert!(bits != 0, "a rectangle of no groups");
         let row_of = |k: u32| bits >> (k * MASK_SIDE) & ((1 << MASK_SIDE) - 1);
         let columns = (0..MASK_SIDE).fold(0, |columns, k| columns | row_of(k));
-        let rows = (0..MASK_SIDE).filter(|&k| row_of(k) != 0).fold(0, |rows, k| rows | 1 << k);
-        (self.across.centres_of(column, columns, xs), self.down.centres_of(row, rows, ys))
+        let rows = (0..MASK_SIDE)
+            .filter(|&k| row_of(k) != 0)
+            .fold(0, |rows, k| rows | 1 << k);
+        (
+            self.across.centres_of(column, columns, xs),
+            self.down.centres_of(row, rows, ys),
+        )
     }
 
     /// The mask of every group of cell (`column`, `row`).
@@ -396,8 +414,11 @@ impl Cells<'_> {
     /// layer of every cell of `columns` × `rows` in these rows.
     pub(super) fn cells_behind(&self, columns: Range<u32>, rows: Range<u32>, nearest: f64) -> bool {
         let rows = rows.start.max(self.rows.start)..rows.end.min(self.rows.end);
-        rows.into_iter()
-            .all(|row| columns.clone().all(|column| nearest < f64::from(self.reference(column, row))))
+        rows.into_iter().all(|row| {
+            columns
+                .clone()
+                .all(|column| nearest < f64::from(self.reference(column, row)))
+        })
     }
 
     /// Merges `coverage` into cell (`column`, `row`), as MOC updates a
@@ -894,7 +915,10 @@ impl BoxQuery<'_> {
         // others behind the reference, each part over the rectangle of its
         // pixel groups (a working layer vouches for its depth and plane at
         // its mask's centres as the reference does everywhere).
-        let covered = self.buffer.layers_of(index).fold(0, |covered, (mask, _)| covered | mask);
+        let covered = self
+            .buffer
+            .layers_of(index)
+            .fold(0, |covered, (mask, _)| covered | mask);
         if covered == 0 {
             return false;
         }
@@ -961,14 +985,16 @@ pub(super) fn f32_at_most(v: f64) -> f32 {
     if f64::from(f) > v { f.next_down() } else { f }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn held_is_the_share_of_cells_holding_a_depth() {
-        let mut buffer = OcclusionBuffer::new(Resolution { width: 64, height: 48 }, Resolution { width: 16, height: 12 });
+        let mut buffer = OcclusionBuffer::new(
+            Resolution { width: 64, height: 48 },
+            Resolution { width: 16, height: 12 },
+        );
         assert_eq!(buffer.held(), 0.0);
         buffer.levels[0].depth[..48].fill(0.5);
         assert_eq!(buffer.held(), 0.25);
@@ -1044,7 +1070,10 @@ mod tests {
         buffer.build_pyramid();
         let hides = |first, last, nearest| buffer.hides(first, last, nearest, &BoxPlanes::default());
         assert!(hides([8, 4], [9, 7], 0.375), "behind the left half, within it");
-        assert!(!hides([8, 4], [10, 7], 0.375), "reaching into the right half, in front of it");
+        assert!(
+            !hides([8, 4], [10, 7], 0.375),
+            "reaching into the right half, in front of it"
+        );
         assert!(!hides([8, 4], [9, 7], 0.625), "in front of the left half");
         assert!(hides([8, 4], [10, 7], 0.125), "behind the whole cell");
         assert_eq!([9.5, 10.5].map(|x| buffer.vouched_at(x, 5.5)), [0.5, 0.25]);
@@ -1064,7 +1093,15 @@ mod tests {
                 per_y: 0.0,
                 constant: -0.6,
             };
-            cells.merge(2, 1, &Coverage { mask: 0x0f0f_0f0f, depth: 0.25, plane: rising });
+            cells.merge(
+                2,
+                1,
+                &Coverage {
+                    mask: 0x0f0f_0f0f,
+                    depth: 0.25,
+                    plane: rising,
+                },
+            );
         }
         buffer.build_pyramid();
         // A box over the whole cell at most `depth` deep everywhere: at
@@ -1084,7 +1121,8 @@ mod tests {
     }
 
     #[test]
-    fn a_box_the_buffer_hides_lies_behind_what_it_vouches_for_at_every_centre_and_that_no_nearer_than_the_occluders_merged() {
+    fn a_box_the_buffer_hides_lies_behind_what_it_vouches_for_at_every_centre_and_that_no_nearer_than_the_occluders_merged()
+     {
         use crate::rng::Rng;
         let mut rng = Rng::new(32);
         let target = Resolution { width: 31, height: 23 };
@@ -1115,7 +1153,15 @@ mod tests {
                             per_y: rng.range(-0.02, 0.02),
                             constant: rng.range(0.0, 0.9),
                         };
-                        (column, row, Coverage { mask: mask & full, depth: rng.range(0.1, 0.9), plane })
+                        (
+                            column,
+                            row,
+                            Coverage {
+                                mask: mask & full,
+                                depth: rng.range(0.1, 0.9),
+                                plane,
+                            },
+                        )
                     })
                     .collect();
                 // Boxes: a rectangle of pixels, and a plane the box's depth
@@ -1123,7 +1169,10 @@ mod tests {
                 let boxes: Vec<([u32; 2], [u32; 2], ScreenPlane)> = (0..40)
                     .map(|_| {
                         let first = [rng.int(0, 30), rng.int(0, 22)];
-                        let last = [rng.int(first[0], (first[0] + 12).min(30)), rng.int(first[1], (first[1] + 12).min(22))];
+                        let last = [
+                            rng.int(first[0], (first[0] + 12).min(30)),
+                            rng.int(first[1], (first[1] + 12).min(22)),
+                        ];
                         let entry = ScreenPlane {
                             per_x: rng.range(-0.02, 0.02),
                             per_y: rng.range(-0.02, 0.02),
@@ -1142,7 +1191,9 @@ mod tests {
                     }
                     buffer.build_pyramid();
                     let centres = |first: [u32; 2], last: [u32; 2]| {
-                        (first[1]..=last[1]).flat_map(move |y| (first[0]..=last[0]).map(move |x| (f64::from(x) + 0.5, f64::from(y) + 0.5)))
+                        (first[1]..=last[1]).flat_map(move |y| {
+                            (first[0]..=last[0]).map(move |x| (f64::from(x) + 0.5, f64::from(y) + 0.5))
+                        })
                     };
                     // What the buffer vouches for, no nearer than some
                     // coverage of that centre's group claims there.
@@ -1150,15 +1201,22 @@ mod tests {
                         let claimed = coverages
                             .iter()
                             .filter(|(column, row, c)| {
-                                buffer.grid.groups_holding(*column, *row, [x, x], [y, y]).is_some_and(|g| g & c.mask != 0)
+                                buffer
+                                    .grid
+                                    .groups_holding(*column, *row, [x, x], [y, y])
+                                    .is_some_and(|g| g & c.mask != 0)
                             })
                             .map(|(_, _, c)| c.depth.max(c.plane.at(x, y)))
                             .fold(0.0, f64::max);
-                        assert!(buffer.vouched_at(x, y) <= claimed, "({x}, {y}) {cells:?} {layers} layers");
+                        assert!(
+                            buffer.vouched_at(x, y) <= claimed,
+                            "({x}, {y}) {cells:?} {layers} layers"
+                        );
                     }
                     for &(first, last, entry) in &boxes {
                         let rectangle = [first, last].map(|p| p.map(|v| f64::from(v) + 0.5));
-                        let nearest = entry.max_over([rectangle[0][0], rectangle[1][0]], [rectangle[0][1], rectangle[1][1]]);
+                        let nearest =
+                            entry.max_over([rectangle[0][0], rectangle[1][0]], [rectangle[0][1], rectangle[1][1]]);
                         if !buffer.hides(first, last, nearest, &BoxPlanes::entering_at(entry)) {
                             continue;
                         }
@@ -1166,7 +1224,10 @@ mod tests {
                         let mut needs = [false; 2];
                         for (x, y) in centres(first, last) {
                             let (reference, working) = buffer.layers_at(x, y);
-                            assert!(entry.at(x, y) < buffer.vouched_at(x, y), "({x}, {y}) {cells:?} {layers} layers");
+                            assert!(
+                                entry.at(x, y) < buffer.vouched_at(x, y),
+                                "({x}, {y}) {cells:?} {layers} layers"
+                            );
                             needs[usize::from(working.is_some())] |= entry.at(x, y) >= reference;
                             needs[0] |= working.is_none();
                         }
@@ -1176,8 +1237,14 @@ mod tests {
             }
         }
         // More layers keep more of what the occluders vouch for.
-        assert!(hidden[0] > 500 && by_both_layers > 30, "{hidden:?} hidden, {by_both_layers} by both layers");
-        assert!(hidden.windows(2).all(|pair| pair[0] < pair[1]), "hidden with 1 to 4 layers: {hidden:?}");
+        assert!(
+            hidden[0] > 500 && by_both_layers > 30,
+            "{hidden:?} hidden, {by_both_layers} by both layers"
+        );
+        assert!(
+            hidden.windows(2).all(|pair| pair[0] < pair[1]),
+            "hidden with 1 to 4 layers: {hidden:?}"
+        );
     }
 
     #[test]
@@ -1187,7 +1254,11 @@ mod tests {
         // row of four groups).
         let (left, right_top, right_bottom) = (0x0303_0303, 0x0c0c, 0x0c0c_0000);
         let merged = |layers: u32| {
-            let mut buffer = OcclusionBuffer::with_layers(Resolution { width: 20, height: 12 }, Resolution { width: 5, height: 3 }, layers);
+            let mut buffer = OcclusionBuffer::with_layers(
+                Resolution { width: 20, height: 12 },
+                Resolution { width: 5, height: 3 },
+                layers,
+            );
             {
                 let mut cells = buffer.cleared_bands(3).next().unwrap();
                 for (depth, mask) in [(0.25, left), (0.75, right_top), (0.5, right_bottom)] {
@@ -1197,7 +1268,8 @@ mod tests {
             buffer.build_pyramid();
             buffer
         };
-        let hides = |buffer: &OcclusionBuffer, first, last, nearest| buffer.hides(first, last, nearest, &BoxPlanes::default());
+        let hides =
+            |buffer: &OcclusionBuffer, first, last, nearest| buffer.hides(first, last, nearest, &BoxPlanes::default());
         // Three layers: the three parts fill the cell, which takes the
         // farthest, 0.25; the two nearer stay as working layers.
         let three = merged(3);
@@ -1230,7 +1302,11 @@ mod tests {
         // the cell. The nearer two fill it alone: the reference is 0.75,
         // not the far left half's 0.25, and the bottom keeps a layer.
         let (left, right_top, right_bottom) = (0x0303_0303, 0x0c0c, 0x0c0c_0000);
-        let mut buffer = OcclusionBuffer::with_layers(Resolution { width: 20, height: 12 }, Resolution { width: 5, height: 3 }, 3);
+        let mut buffer = OcclusionBuffer::with_layers(
+            Resolution { width: 20, height: 12 },
+            Resolution { width: 5, height: 3 },
+            3,
+        );
         {
             let mut cells = buffer.cleared_bands(3).next().unwrap();
             for (depth, mask) in [(0.25, left), (0.75, right_top), (0.875, left), (0.8125, right_bottom)] {
@@ -1271,7 +1347,11 @@ mod tests {
                     let farthest = children
                         .map(|(by, bx)| below.depth[(by * below.width + bx) as usize])
                         .fold(f32::INFINITY, f32::min);
-                    assert_eq!(level.depth[(y * level.width + x) as usize], farthest, "level {k} texel ({x}, {y})");
+                    assert_eq!(
+                        level.depth[(y * level.width + x) as usize],
+                        farthest,
+                        "level {k} texel ({x}, {y})"
+                    );
                 }
             }
         }
@@ -1299,7 +1379,10 @@ mod tests {
         assert_eq!(axis.groups_reaching(2.6, 2.9, &all), 0..0, "no centre between");
         assert_eq!(axis.groups_reaching(f64::NAN, 3.0, &all), 0..0);
         assert_eq!(axis.groups_reaching(-1e300, 1e300, &(1..2)), 4..7);
-        assert_eq!(axis.cells_of(2..8).collect::<Vec<_>>(), [(0, 0b1100), (1, 0b111), (2, 0b1)]);
+        assert_eq!(
+            axis.cells_of(2..8).collect::<Vec<_>>(),
+            [(0, 0b1100), (1, 0b111), (2, 0b1)]
+        );
         // 20 pixels in 2 cells: 10 each, in 8 groups of 1 or 2 pixels.
         let coarse = Axis::new(2, 20);
         assert_eq!(coarse.first_group, [0, 8, 16]);
@@ -1314,9 +1397,26 @@ mod tests {
         // Cells of one to four pixels, of unlike widths, and ranges
         // ending on, beside and between centres, just below them by the
         // least step, beyond the side, infinite and NaN.
-        let ends = [-1e300, -0.5, 0.0, 0.5, 1.0, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.0, 9.5, 20.0, f64::INFINITY, f64::NAN]
-            .into_iter()
-            .flat_map(|v: f64| [v, v.next_down(), v.next_up()]);
+        let ends = [
+            -1e300,
+            -0.5,
+            0.0,
+            0.5,
+            1.0,
+            1.5,
+            2.5,
+            3.5,
+            4.5,
+            5.5,
+            6.5,
+            7.0,
+            9.5,
+            20.0,
+            f64::INFINITY,
+            f64::NAN,
+        ]
+        .into_iter()
+        .flat_map(|v: f64| [v, v.next_down(), v.next_up()]);
         let ends: Vec<f64> = ends.collect();
         for (cells, pixels) in [(3, 10), (4, 6), (6, 6), (2, 7)] {
             let axis = Axis::new(cells, pixels);
@@ -1330,7 +1430,11 @@ mod tests {
                         for &hi in &ends {
                             let got = axis.cells_within(lo, hi, &(from..to));
                             let expected: Vec<u32> = (from..to).filter(|&c| held(c)(lo, hi)).collect();
-                            assert_eq!(got.collect::<Vec<_>>(), expected, "{cells} cells over {pixels}: [{lo}, {hi}] in {from}..{to}");
+                            assert_eq!(
+                                got.collect::<Vec<_>>(),
+                                expected,
+                                "{cells} cells over {pixels}: [{lo}, {hi}] in {from}..{to}"
+                            );
                         }
                     }
                 }

@@ -292,7 +292,9 @@ impl Polygon {
                 self.push(corner, side);
             }
             if let Some((placed, not)) = crossing {
-                let Some(corner) = (near.crossing)(placed, not) else { return false };
+                let Some(corner) = (near.crossing)(placed, not) else {
+                    return false;
+                };
                 self.push(corner, None);
             }
         }
@@ -331,14 +333,21 @@ impl Polygon {
             _ => Turn::Excluded,
         });
         let first = turns.next().unwrap_or(Turn::Excluded);
-        if turns.all(|t| t == first) { first } else { Turn::Excluded }
+        if turns.all(|t| t == first) {
+            first
+        } else {
+            Turn::Excluded
+        }
     }
 
     /// The nearest depth of what the GPU draws: its nearest corner's, or
     /// the near plane's (depth 1) where the GPU clips it there.
     fn nearest_depth(&self) -> f64 {
         if self.whole() {
-            self.corners[..3].iter().map(|c| c.at.z).fold(f64::NEG_INFINITY, f64::max)
+            self.corners[..3]
+                .iter()
+                .map(|c| c.at.z)
+                .fold(f64::NEG_INFINITY, f64::max)
         } else {
             1.0
         }
@@ -503,8 +512,11 @@ impl Patches {
         // the horizon comes after a far room's wall seen past it, and
         // may take from it the cells they share; of the two orders tried,
         // this one lost less. Equals stay in the mesh's order.
-        self.patches[first..]
-            .sort_unstable_by(|a, b| b.farthest.total_cmp(&a.farthest).then(a.triangles.start.cmp(&b.triangles.start)));
+        self.patches[first..].sort_unstable_by(|a, b| {
+            b.farthest
+                .total_cmp(&a.farthest)
+                .then(a.triangles.start.cmp(&b.triangles.start))
+        });
         first..self.patches.len()
     }
 
@@ -521,7 +533,7 @@ impl Patches {
             && self.turns[across as usize] == self.turns[t]
             && placed(edge)
             && placed(edge + 1))
-            .then_some(across as usize)
+        .then_some(across as usize)
     }
 
     /// Sorts the drawn triangles into patches: those turning one way,
@@ -561,7 +573,11 @@ impl Patches {
         }
         // Where the near plane clips a closed solid, its near side has a
         // hole its far side may be seen through.
-        let behind = if mesh.closed && !clipped { behind_turn(mesh, &self.corners, &self.turns) } else { None };
+        let behind = if mesh.closed && !clipped {
+            behind_turn(mesh, &self.corners, &self.turns)
+        } else {
+            None
+        };
         // Patch by patch, each patch's triangles in order: sorted by root
         // (a triangle) by counting, in time linear in the triangles. The
         // entry after a root's counts its patch's triangles; summed, a
@@ -584,7 +600,12 @@ impl Patches {
         }
         self.by_patch.clear();
         self.by_patch.resize(self.patch_ends[count] as usize, (0, 0));
-        for (t, root) in self.roots.iter().enumerate().filter_map(|(t, root)| Some((t, (*root)?))) {
+        for (t, root) in self
+            .roots
+            .iter()
+            .enumerate()
+            .filter_map(|(t, root)| Some((t, (*root)?)))
+        {
             let slot = &mut self.patch_ends[root as usize];
             self.by_patch[*slot as usize] = (root, t as u32);
             *slot += 1;
@@ -688,7 +709,9 @@ impl Rasteriser {
     /// Makes ready for a patch over the cells `columns` × `rows`.
     fn begin_patch(&mut self, columns: Range<u32>, rows: Range<u32>) {
         debug_assert!(
-            self.cover.iter().all(|c| c.mask == 0 && c.erased == 0 && matches!(c.depth, CellDepth::Unreached)),
+            self.cover
+                .iter()
+                .all(|c| c.mask == 0 && c.erased == 0 && matches!(c.depth, CellDepth::Unreached)),
             "every entry of the last patch emptied"
         );
         let cells_held = columns.len() * rows.len();
@@ -745,7 +768,10 @@ impl Rasteriser {
             for (range, &ys) in group_row_ranges.iter_mut().zip(group_rows) {
                 *range = triangle.marked_x_range(ys);
                 // No NaN: a mark's range is empty where an edge gives none.
-                (from, to) = (if range[0] > from { range[0] } else { from }, if range[1] < to { range[1] } else { to });
+                (from, to) = (
+                    if range[0] > from { range[0] } else { from },
+                    if range[1] < to { range[1] } else { to },
+                );
             }
             let whole = grid.across.cells_within(from, to, &reached);
             // The cells it marks whole lie among those it reaches.
@@ -791,7 +817,11 @@ impl Rasteriser {
         // takes it (the same products and sums), with what stays the same
         // along the row taken once.
         let rising = plane.per_x > 0.0;
-        let (y_high, y_low) = if plane.per_y > 0.0 { (ys[1], ys[0]) } else { (ys[0], ys[1]) };
+        let (y_high, y_low) = if plane.per_y > 0.0 {
+            (ys[1], ys[0])
+        } else {
+            (ys[0], ys[1])
+        };
         let (high_by_y, low_by_y) = (plane.per_y * y_high, plane.per_y * y_low);
         let mut vouched = false;
         for (k, ((cover, &reference), &[x0, x1])) in covers.iter_mut().zip(references).zip(centres).enumerate() {
@@ -812,7 +842,10 @@ impl Rasteriser {
                 continue;
             }
             cover.depth = match cover.depth {
-                CellDepth::AtLeast { least: held, plane: below } => CellDepth::AtLeast {
+                CellDepth::AtLeast {
+                    least: held,
+                    plane: below,
+                } => CellDepth::AtLeast {
                     least: if least < held { least } else { held },
                     plane: below_both(below, plane, ([x0, x1], ys)),
                 },
@@ -832,7 +865,14 @@ impl Rasteriser {
     /// `whole` (marked whole) that vouch for a depth, each group whose
     /// every centre lies within its group row's x range (one per row of
     /// `row`'s groups, in `group_row_ranges`).
-    fn mark_sides(&mut self, grid: &Grid, row: u32, reached: &Range<u32>, whole: &Range<u32>, group_row_ranges: &[[f64; 2]]) {
+    fn mark_sides(
+        &mut self,
+        grid: &Grid,
+        row: u32,
+        reached: &Range<u32>,
+        whole: &Range<u32>,
+        group_row_ranges: &[[f64; 2]],
+    ) {
         let sides = match whole.is_empty() {
             true => [reached.clone(), 0..0],
             false => [reached.start..whole.start, whole.end..reached.end],
@@ -843,7 +883,13 @@ impl Rasteriser {
     /// Marks, in the cells `columns` of `row` that vouch for a depth, each
     /// group whose every centre lies within its group row's x range (as
     /// [`Self::mark_sides`]).
-    fn mark_groups(&mut self, grid: &Grid, row: u32, columns: impl Iterator<Item = u32>, group_row_ranges: &[[f64; 2]]) {
+    fn mark_groups(
+        &mut self,
+        grid: &Grid,
+        row: u32,
+        columns: impl Iterator<Item = u32>,
+        group_row_ranges: &[[f64; 2]],
+    ) {
         for column in columns {
             let i = self.cover_index(column, row);
             let cover = &mut self.cover[i];
@@ -880,7 +926,12 @@ impl Rasteriser {
                     }
                     solved = true;
                 }
-                self.mark_groups(grid, row, std::iter::once(column), &group_row_ranges[..group_rows.len()]);
+                self.mark_groups(
+                    grid,
+                    row,
+                    std::iter::once(column),
+                    &group_row_ranges[..group_rows.len()],
+                );
             }
         }
     }
@@ -894,7 +945,10 @@ impl Rasteriser {
         // most of the city's), so its groups are found again only when
         // it changes.
         let mut found: Option<([f64; 2], Range<u32>)> = None;
-        for g in grid.down.groups_reaching(p.y.min(q.y) - margin, p.y.max(q.y) + margin, &self.rows) {
+        for g in grid
+            .down
+            .groups_reaching(p.y.min(q.y) - margin, p.y.max(q.y) + margin, &self.rows)
+        {
             let (row, k, [y0, y1]) = grid.down.group(g);
             // The edge's part within the margin of the group's rows, and
             // its x range.
@@ -941,7 +995,10 @@ fn widened(span: &Range<u32>, by: &Range<u32>) -> Range<u32> {
 /// The bits of one row of a cell's groups (`groups`, each its first and
 /// last centre) whose every centre lies within `[from, to]`.
 fn groups_within(groups: &[[f64; 2]], [from, to]: [f64; 2]) -> u64 {
-    groups.iter().rev().fold(0, |bits, &[g0, g1]| bits << 1 | u64::from(from <= g0 && g1 <= to))
+    groups
+        .iter()
+        .rev()
+        .fold(0, |bits, &[g0, g1]| bits << 1 | u64::from(from <= g0 && g1 <= to))
 }
 
 /// One edge of a triangle as a limit on x along rows of pixel centres:
@@ -991,7 +1048,10 @@ impl Limit {
 /// 1e-308) gives no number at some rows: the reach passes it over there
 /// (it may only grow), and the mark holds nothing (it may only shrink).
 fn x_range(limits: &[Limit; 3], ys: [f64; 2], margin: usize, every: bool) -> [f64; 2] {
-    debug_assert!(ys[0].partial_cmp(&ys[1]).is_none_or(|o| o.is_le()), "rows {ys:?} out of order");
+    debug_assert!(
+        ys[0].partial_cmp(&ys[1]).is_none_or(|o| o.is_le()),
+        "rows {ys:?} out of order"
+    );
     const NONE: [f64; 2] = [f64::INFINITY, f64::NEG_INFINITY];
     let (mut from, mut to) = (f64::NEG_INFINITY, f64::INFINITY);
     // The ends of `ys` where a line of `slope` is least, and greatest.
@@ -1419,7 +1479,6 @@ mod tests {
         (vertices, indices)
     }
 
-
     /// `pieces` (each its vertices and three indices a triangle) as one
     /// mesh, in their order: one object's disjoint patches.
     fn one_mesh(pieces: impl IntoIterator<Item = (Vec<ScreenVertex>, Vec<u32>)>) -> (Vec<ScreenVertex>, Vec<u32>) {
@@ -1469,7 +1528,11 @@ mod tests {
                     1 => {
                         for v in vertices.iter_mut() {
                             v.at.x += step.x * rng.range(-0.3, 0.3);
-                            v.at.y += if rng.range(0.0, 1.0) < 0.05 { 0.0 } else { step.y * rng.range(-0.3, 0.3) };
+                            v.at.y += if rng.range(0.0, 1.0) < 0.05 {
+                                0.0
+                            } else {
+                                step.y * rng.range(-0.3, 0.3)
+                            };
                         }
                     }
                     // Loose triangles: every corner its own.
@@ -1532,12 +1595,18 @@ mod tests {
             return;
         }
         let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
-        let ys = (lo.y - 0.5).ceil().max(0.0) as u32..((hi.y - 0.5).floor() + 1.0).clamp(0.0, f64::from(size.height)) as u32;
-        let xs = (lo.x - 0.5).ceil().max(0.0) as u32..((hi.x - 0.5).floor() + 1.0).clamp(0.0, f64::from(size.width)) as u32;
+        let ys =
+            (lo.y - 0.5).ceil().max(0.0) as u32..((hi.y - 0.5).floor() + 1.0).clamp(0.0, f64::from(size.height)) as u32;
+        let xs =
+            (lo.x - 0.5).ceil().max(0.0) as u32..((hi.x - 0.5).floor() + 1.0).clamp(0.0, f64::from(size.width)) as u32;
         for py in ys {
             for px in xs.clone() {
                 let p = DVec3::new(f64::from(px) + 0.5, f64::from(py) + 0.5, 0.0);
-                let (wa, wb, wc) = (twice_area(p, b, c) / area, twice_area(a, p, c) / area, twice_area(a, b, p) / area);
+                let (wa, wb, wc) = (
+                    twice_area(p, b, c) / area,
+                    twice_area(a, p, c) / area,
+                    twice_area(a, b, p) / area,
+                );
                 if wa >= 0.0 && wb >= 0.0 && wc >= 0.0 {
                     let depth = wa * a.z + wb * b.z + wc * c.z;
                     let at = &mut nearest[(py * size.width + px) as usize];
@@ -1558,11 +1627,17 @@ mod tests {
     /// buffer vouches for held against what it may draw, pixel by pixel.
     fn assert_vouches_no_nearer_on_random_meshes(snap: f64) {
         let mut rng = Rng::new(32);
-        let size = Resolution { width: 160, height: 120 };
+        let size = Resolution {
+            width: 160,
+            height: 120,
+        };
         let (mut vouched, mut small) = (0u64, 0u64);
         for cells in [
             Resolution { width: 53, height: 40 },
-            Resolution { width: 160, height: 120 },
+            Resolution {
+                width: 160,
+                height: 120,
+            },
             Resolution { width: 16, height: 12 },
         ] {
             for _ in 0..6 {
@@ -1577,7 +1652,11 @@ mod tests {
                     assert_vouches_no_nearer(&buffer, &nearest, cells);
                 }
                 vouched += buffer.depths().iter().filter(|&&d| d > 0.0).count() as u64;
-                small += u64::from(meshes.iter().any(|(v, _)| v.len() > 3 && (v[1].at - v[0].at).length() < 1.0));
+                small += u64::from(
+                    meshes
+                        .iter()
+                        .any(|(v, _)| v.len() > 3 && (v[1].at - v[0].at).length() < 1.0),
+                );
             }
         }
         assert!(vouched > 3000, "cells vouched for ({vouched})");
@@ -1603,21 +1682,34 @@ mod tests {
         (0..10)
             .map(|_| {
                 let ahead = DVec3::new(rng.range(-0.3, 0.3), rng.range(-0.3, 0.3), rng.range(4.0, 9.0));
-                let across = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0).normalize() * rng.range(0.4, 3.0);
+                let across =
+                    DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0).normalize() * rng.range(0.4, 3.0);
                 let start = DVec3::new(rng.range(-1.5, 1.5), rng.range(-1.5, 1.5), rng.range(-1.0, 0.05));
                 let (n, m) = (rng.range(3.0, 16.0) as u32, rng.range(2.0, 8.0) as u32);
                 let mut vertices = Vec::new();
                 for i in 0..=n {
                     for j in 0..=m {
                         let jitter = DVec3::new(rng.range(-0.01, 0.01), rng.range(-0.01, 0.01), rng.range(-0.01, 0.01));
-                        vertices.push(start + ahead * (f64::from(i) / f64::from(n)) + across * (f64::from(j) / f64::from(m)) + jitter);
+                        vertices.push(
+                            start
+                                + ahead * (f64::from(i) / f64::from(n))
+                                + across * (f64::from(j) / f64::from(m))
+                                + jitter,
+                        );
                     }
                 }
                 let at = |i: u32, j: u32| i * (m + 1) + j;
                 let mut indices = Vec::new();
                 for i in 0..n {
                     for j in 0..m {
-                        indices.extend([at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+                        indices.extend([
+                            at(i, j),
+                            at(i + 1, j),
+                            at(i + 1, j + 1),
+                            at(i, j),
+                            at(i + 1, j + 1),
+                            at(i, j + 1),
+                        ]);
                     }
                 }
                 (vertices, indices)
@@ -1637,7 +1729,10 @@ mod tests {
     /// it may draw, pixel by pixel.
     fn assert_vouches_no_nearer_past_the_eye(snap: f64) {
         let mut rng = Rng::new(41);
-        let size = Resolution { width: 160, height: 120 };
+        let size = Resolution {
+            width: 160,
+            height: 120,
+        };
         let limit = NEAR * (1.0 + 1.0 / 1024.0);
         let placed = |p: DVec3| ScreenVertex {
             at: on_screen(p),
@@ -1650,13 +1745,16 @@ mod tests {
                 let meshes = grids_past_the_eye(&mut rng);
                 let mut buffer = OcclusionBuffer::new(size, cells);
                 {
-                    let Some(mut band) = buffer.cleared_bands(u32::MAX).next() else { unreachable!() };
+                    let Some(mut band) = buffer.cleared_bands(u32::MAX).next() else {
+                        unreachable!()
+                    };
                     let (mut patches, mut rasteriser) = (Patches::default(), Rasteriser::default());
                     for (points, indices) in &meshes {
                         let vertices: Vec<Option<ScreenVertex>> =
                             points.iter().map(|&p| (p.z >= limit).then(|| placed(p))).collect();
                         let cross = |p: usize, q: usize| Some(placed(crossing(points[p], points[q], limit)));
-                        let neighbours = super::super::neighbours::neighbours(indices, |i| points[i as usize].as_vec3().to_array());
+                        let neighbours =
+                            super::super::neighbours::neighbours(indices, |i| points[i as usize].as_vec3().to_array());
                         let mesh = ScreenMesh {
                             vertices: &vertices,
                             parts: &[DrawnPart::whole(indices)],
@@ -1787,7 +1885,11 @@ mod tests {
                     side(centre) * side(r).signum() > 1e-9 * (q - p).length()
                 });
                 let cover = &rasteriser.cover[x / 4 + 16 * (y / 4)];
-                assert!(!inside || cover.mask >> (x % 4 + 8 * (y % 4)) & 1 == 1, "{:?} leaves {centre} unmarked", [a, b, c]);
+                assert!(
+                    !inside || cover.mask >> (x % 4 + 8 * (y % 4)) & 1 == 1,
+                    "{:?} leaves {centre} unmarked",
+                    [a, b, c]
+                );
                 inside_checked += usize::from(inside);
             }
             for (i, cover) in rasteriser.cover.iter().enumerate() {
@@ -1805,7 +1907,10 @@ mod tests {
             }
             rasteriser.cover.fill(EMPTY);
         }
-        assert!(marked > 10_000 && sharp_checked > least_sharp, "{marked} marks, {sharp_checked} of sharp triangles");
+        assert!(
+            marked > 10_000 && sharp_checked > least_sharp,
+            "{marked} marks, {sharp_checked} of sharp triangles"
+        );
         assert!(inside_checked > 10_000, "{inside_checked} centres inside");
     }
 
@@ -1820,7 +1925,10 @@ mod tests {
         let ys = [4.5, 5.5];
         for margin in [MARKED, HELD] {
             let [from, to] = x_range(&limits, ys, margin, true);
-            assert!(from.partial_cmp(&to).is_none_or(|o| o.is_gt()), "marks [{from}, {to}] below the edge");
+            assert!(
+                from.partial_cmp(&to).is_none_or(|o| o.is_gt()),
+                "marks [{from}, {to}] below the edge"
+            );
         }
         let [from, to] = x_range(&limits, ys, REACHED, false);
         assert!(from <= 0.0 && to == f64::INFINITY, "reaches only [{from}, {to}]");
@@ -1835,7 +1943,11 @@ mod tests {
                 .iter()
                 .map(|&(x, y)| Some(vertex(x, y, near)))
                 .collect();
-            vertices.extend([(2.0, 2.0), (8.0, 2.0), (8.0, 8.0), (2.0, 8.0)].iter().map(|&(x, y)| Some(vertex(x, y, far))));
+            vertices.extend(
+                [(2.0, 2.0), (8.0, 2.0), (8.0, 8.0), (2.0, 8.0)]
+                    .iter()
+                    .map(|&(x, y)| Some(vertex(x, y, far))),
+            );
             let indices = [0, 1, 2, 0, 2, 3, 4, 6, 5, 4, 7, 6];
             let neighbours = super::super::neighbours::neighbours(&indices, |i| [i as f32, 0.0, 0.0]);
             let mesh = ScreenMesh {
@@ -1894,7 +2006,12 @@ mod tests {
         let mut apart = OcclusionBuffer::new(size, Resolution { width: 24, height: 18 });
         rasterise_meshes(&mut apart, &[(loose, (0..count).collect())]);
         let filled = |b: &OcclusionBuffer| b.depths().iter().filter(|&&d| d > 0.0).count();
-        assert!(filled(&apart) * 10 < filled(&buffer), "{} cells apart, {} joined", filled(&apart), filled(&buffer));
+        assert!(
+            filled(&apart) * 10 < filled(&buffer),
+            "{} cells apart, {} joined",
+            filled(&apart),
+            filled(&buffer)
+        );
     }
 
     /// The 1.5-pixel grid of the test above cut into three strips of
@@ -1955,7 +2072,9 @@ mod tests {
         };
         let mut buffer = OcclusionBuffer::new(size, Resolution { width: 24, height: 18 });
         {
-            let Some(mut cells) = buffer.cleared_bands(u32::MAX).next() else { unreachable!() };
+            let Some(mut cells) = buffer.cleared_bands(u32::MAX).next() else {
+                unreachable!()
+            };
             let (mut patches, mut rasteriser) = (Patches::default(), Rasteriser::default());
             let which = patches.add(&mesh);
             rasteriser.rasterise(&mut cells, &patches, which);
@@ -1969,7 +2088,16 @@ mod tests {
         // All three strips drawn fill the same cells, at the same depth, as
         // the grid in one piece.
         let mut whole = OcclusionBuffer::new(size, Resolution { width: 24, height: 18 });
-        rasterise_meshes(&mut whole, &[grid(DVec2::new(10.0, 10.0), DVec2::splat(1.5), [53, 37], false, |_, _| 0.5)]);
+        rasterise_meshes(
+            &mut whole,
+            &[grid(
+                DVec2::new(10.0, 10.0),
+                DVec2::splat(1.5),
+                [53, 37],
+                false,
+                |_, _| 0.5,
+            )],
+        );
         let (strips, _) = grid_in_strips(size, &[0, 1, 2]);
         assert_eq!(strips.depths(), whole.depths());
         // The outer strips alone vouch for nothing the GPU may leave undrawn
@@ -1978,7 +2106,11 @@ mod tests {
         let (outer, meshes) = grid_in_strips(size, &[0, 2]);
         let mut rng = Rng::new(7);
         for _ in 0..8 {
-            assert_vouches_no_nearer(&outer, &drawn(&meshes, size, &mut rng), Resolution { width: 24, height: 18 });
+            assert_vouches_no_nearer(
+                &outer,
+                &drawn(&meshes, size, &mut rng),
+                Resolution { width: 24, height: 18 },
+            );
         }
         let filled = outer.depths().iter().filter(|&&d| d > 0.0).count();
         assert!(filled > 100, "{filled} cells filled by the outer strips");
@@ -1991,10 +2123,21 @@ mod tests {
     /// target (cells of 4 × 4 pixels), each an object of its own, whose
     /// corners the GPU places within `snap`.
     fn walls_at_snap(walls: &[(f64, f64, f64)], snap: f64) -> OcclusionBuffer {
-        let mut buffer = OcclusionBuffer::new(Resolution { width: 64, height: 48 }, Resolution { width: 16, height: 12 });
+        let mut buffer = OcclusionBuffer::new(
+            Resolution { width: 64, height: 48 },
+            Resolution { width: 16, height: 12 },
+        );
         let mut meshes: Vec<_> = walls
             .iter()
-            .map(|&(x0, x1, z)| grid(DVec2::new(x0, -5.0), DVec2::new(x1 - x0, 60.0), [2, 2], false, move |_, _| z))
+            .map(|&(x0, x1, z)| {
+                grid(
+                    DVec2::new(x0, -5.0),
+                    DVec2::new(x1 - x0, 60.0),
+                    [2, 2],
+                    false,
+                    move |_, _| z,
+                )
+            })
             .collect();
         for vertex in meshes.iter_mut().flat_map(|(vertices, _)| vertices) {
             vertex.slack = snap;
@@ -2012,8 +2155,11 @@ mod tests {
         // One mesh of three walls apart, the farthest first among its
         // triangles and the nearest last, and a ground running from before
         // the nearest to behind the farthest, first of all.
-        let ground = grid(DVec2::new(0.0, 40.0), DVec2::splat(40.0), [2, 2], false, |_, y| 0.1 + (y - 40.0) / 50.0);
-        let walls = [0.2, 0.5, 0.8].map(|z| grid(DVec2::new(4.0, 4.0), DVec2::splat(20.0), [2, 2], false, move |_, _| z));
+        let ground = grid(DVec2::new(0.0, 40.0), DVec2::splat(40.0), [2, 2], false, |_, y| {
+            0.1 + (y - 40.0) / 50.0
+        });
+        let walls =
+            [0.2, 0.5, 0.8].map(|z| grid(DVec2::new(4.0, 4.0), DVec2::splat(20.0), [2, 2], false, move |_, _| z));
         let (vertices, indices) = one_mesh(std::iter::once(ground).chain(walls));
         let mut patches = Patches::default();
         let which = add_patches(&mut patches, &vertices, &indices);
@@ -2028,9 +2174,16 @@ mod tests {
         // where the GPU may leave them undrawn, and clear of a snap of
         // 1/256 pixel. Cell column 7 holds pixels 28 to 31.
         let seam_cell = |snap| walls_at_snap(&[(-5.0, 30.45, 0.5), (30.45, 70.0, 0.5)], snap).depths()[5 * 16 + 7];
-        assert_eq!(seam_cell(COARSE_SNAP), 0.0, "a coarse snap leaves the seam's centres in doubt");
+        assert_eq!(
+            seam_cell(COARSE_SNAP),
+            0.0,
+            "a coarse snap leaves the seam's centres in doubt"
+        );
         let fine = seam_cell(FINE_SNAP);
-        assert!(fine > 0.499 && fine <= 0.5, "a fine snap fills the cell across the seam: {fine}");
+        assert!(
+            fine > 0.499 && fine <= 0.5,
+            "a fine snap fills the cell across the seam: {fine}"
+        );
     }
 
     #[test]
@@ -2075,12 +2228,17 @@ mod tests {
         let ground = |x: f64, _: f64| 0.2 + (x - 29.2) * 0.7 / 40.8;
         let (mut vertices, indices) = one_mesh([
             grid(DVec2::new(29.2, -5.0), DVec2::new(40.8, 60.0), [2, 2], false, ground),
-            grid(DVec2::new(-5.0, -5.0), DVec2::new(36.2, 60.0), [2, 2], false, |_, _| 0.8),
+            grid(DVec2::new(-5.0, -5.0), DVec2::new(36.2, 60.0), [2, 2], false, |_, _| {
+                0.8
+            }),
         ]);
         for vertex in &mut vertices {
             vertex.slack = COARSE_SNAP;
         }
-        let mut buffer = OcclusionBuffer::new(Resolution { width: 64, height: 48 }, Resolution { width: 16, height: 12 });
+        let mut buffer = OcclusionBuffer::new(
+            Resolution { width: 64, height: 48 },
+            Resolution { width: 16, height: 12 },
+        );
         rasterise_meshes(&mut buffer, &[(vertices, indices)]);
         let depths = buffer.depths();
         // The cells of pixels 28 to 31, which both cover in part.
@@ -2100,8 +2258,14 @@ mod tests {
         let mut buffer = walls(&[(-5.0, 30.2, 0.5), (29.8, 70.0, 0.25)]);
         buffer.build_pyramid();
         let hides = |first, last, nearest| buffer.hides(first, last, nearest, &crate::gpu::BoxPlanes::default());
-        assert!(hides([26, 20], [29, 27], 0.4), "just behind the near wall, within its pixels");
-        assert!(!hides([26, 20], [30, 27], 0.4), "reaching past its outline, in front of the far wall");
+        assert!(
+            hides([26, 20], [29, 27], 0.4),
+            "just behind the near wall, within its pixels"
+        );
+        assert!(
+            !hides([26, 20], [30, 27], 0.4),
+            "reaching past its outline, in front of the far wall"
+        );
         assert!(hides([26, 20], [34, 27], 0.2), "behind both");
     }
 
@@ -2133,7 +2297,10 @@ mod tests {
         let at = |x: f64, y: f64| vertex(x, y, 0.5 - 0.2 * x / 64.0);
         rasterise_meshes(
             &mut buffer,
-            &[(vec![at(-100.0, -100.0), at(300.0, -100.0), at(-100.0, 300.0)], vec![0, 1, 2])],
+            &[(
+                vec![at(-100.0, -100.0), at(300.0, -100.0), at(-100.0, 300.0)],
+                vec![0, 1, 2],
+            )],
         );
         // Column 0 holds pixels 0..=3, centres 0.5 to 3.5: its farthest is
         // where the GPU may sample beside 3.5.
@@ -2236,7 +2403,10 @@ mod tests {
             let depth = f64::from(depths[24 * 64 + x]);
             let along = (x as f64 + 0.5 - 32.5) * 10f64.to_radians().cos();
             let fourth = 0.5 - 0.2 * along / (20.0 * 50f64.to_radians().cos());
-            assert!(depth > 0.3 && depth < fourth, "pixel ({x}, 24) holds {depth}, the fourth triangle {fourth}");
+            assert!(
+                depth > 0.3 && depth < fourth,
+                "pixel ({x}, 24) holds {depth}, the fourth triangle {fourth}"
+            );
         }
         let mut rng = Rng::new(7);
         for _ in 0..8 {

@@ -57,8 +57,8 @@ use crate::auto_or::AutoOr;
 use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
 use crate::cull::culler::{Culler, FrameInput, OccluderDepths, PreviousFrame, TraversalStats};
-use crate::cull::traversal::frustum_cull_subtree;
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
+use crate::cull::traversal::frustum_cull_subtree;
 use crate::gpu::{
     BoxMargins, BoxPlanes, DepthMargins, EyeBox, FacingFace, Frame, GpuError, GpuSetup, PixelRays, QueryBox,
     Resolution, SubpixelPrecision, eye_relative_box,
@@ -103,8 +103,14 @@ const RESOLUTION: ParamInfo = ParamInfo {
 /// coarse buffer holds no depth in the cells its occluders' outlines cross
 /// (a finer one holds most of their pixels), so it turns finer only at
 /// [`FINE_FROM_COARSE`], lest the two take turns frame by frame.
-const COARSE_CELLS: Resolution = Resolution { width: 400, height: 300 };
-const FINE_CELLS: Resolution = Resolution { width: 800, height: 600 };
+const COARSE_CELLS: Resolution = Resolution {
+    width: 400,
+    height: 300,
+};
+const FINE_CELLS: Resolution = Resolution {
+    width: 800,
+    height: 600,
+};
 const FINE_WHERE_HELD: f64 = 0.25;
 const FINE_FROM_COARSE: f64 = 0.2;
 
@@ -127,7 +133,10 @@ const FINE_FROM_COARSE: f64 = 0.2;
 /// little, and on bunny.obj's orbit made level, 800x300 culled 0.910
 /// against 800x600's 0.920.
 const UPRIGHT_LEAN: f64 = 0.25;
-const LEVEL_CELLS: Resolution = Resolution { width: 400, height: 150 };
+const LEVEL_CELLS: Resolution = Resolution {
+    width: 400,
+    height: 150,
+};
 
 const LAYERS: ParamInfo = ParamInfo {
     key: "layers",
@@ -201,7 +210,11 @@ impl SwrParams {
         }
         let layers = params.get(ModeId::Swr, &LAYERS)?;
         if !(1..=MAX_LAYERS).contains(&layers) {
-            return Err(ModeError::bad(ModeId::Swr, &LAYERS, format!("{layers}: from 1 to {MAX_LAYERS}")));
+            return Err(ModeError::bad(
+                ModeId::Swr,
+                &LAYERS,
+                format!("{layers}: from 1 to {MAX_LAYERS}"),
+            ));
         }
         let pixels_per_triangle: f64 = params.get(ModeId::Swr, &PIXELS_PER_TRIANGLE)?;
         if !(pixels_per_triangle >= 0.0 && pixels_per_triangle.is_finite()) {
@@ -223,7 +236,9 @@ impl SwrParams {
     /// to (walk.rs).
     fn threads_asked(&self) -> usize {
         match self.threads {
-            0 => std::thread::available_parallelism().map_or(1, usize::from).min(MAX_THREADS),
+            0 => std::thread::available_parallelism()
+                .map_or(1, usize::from)
+                .min(MAX_THREADS),
             n => n,
         }
     }
@@ -416,8 +431,11 @@ impl SoftwareOcclusionCulling {
             }
         }
         let first_object = |u: &OccluderUnit| self.candidates[u.candidates.start].object;
-        self.units
-            .sort_unstable_by(|a, b| b.nearest().total_cmp(&a.nearest()).then(first_object(a).cmp(&first_object(b))));
+        self.units.sort_unstable_by(|a, b| {
+            b.nearest()
+                .total_cmp(&a.nearest())
+                .then(first_object(a).cmp(&first_object(b)))
+        });
     }
 }
 
@@ -642,7 +660,12 @@ fn looks_level(camera: &Camera, up: DVec3) -> bool {
     let u = camera.view_rotation() * up;
     let half_y = (camera.fov_y / 2.0).tan();
     let half_x = half_y * camera.aspect;
-    let corners = [[-half_x, -half_y], [half_x, -half_y], [-half_x, half_y], [half_x, half_y]];
+    let corners = [
+        [-half_x, -half_y],
+        [half_x, -half_y],
+        [-half_x, half_y],
+        [half_x, half_y],
+    ];
     let down = corners.map(|[_, py]| u.y + py * u.z);
     let across = corners.map(|[px, _]| u.x + px * u.z);
     // Upright lines point one way (up or down) on screen everywhere, and
@@ -754,7 +777,8 @@ impl Culler for SoftwareOcclusionCulling {
         // the budget never is.
         let scene = setup.scene;
         let budget = self.params.triangles;
-        let may_occlude = (0..scene.objects.len() as u32).filter(|&o| u64::from(scene.objects[o as usize].triangles) <= budget);
+        let may_occlude =
+            (0..scene.objects.len() as u32).filter(|&o| u64::from(scene.objects[o as usize].triangles) <= budget);
         self.neighbours.make(scene, may_occlude);
         Ok(())
     }
@@ -840,7 +864,15 @@ impl Culler for SoftwareOcclusionCulling {
         // there is 10–14 ms.)
         if resting {
             self.found.clear();
-            frustum_cull_subtree(scene, input.hierarchy, 0, &frustum, &mut self.stack, &mut self.found, &mut stats);
+            frustum_cull_subtree(
+                scene,
+                input.hierarchy,
+                0,
+                &frustum,
+                &mut self.stack,
+                &mut self.found,
+                &mut stats,
+            );
             ctx.draw(&self.found);
             std::mem::swap(&mut self.visible, &mut self.found);
             return stats;
@@ -936,8 +968,15 @@ impl Culler for SoftwareOcclusionCulling {
         };
         let walked = self.walkers.walk(&walk, &mut self.found);
         let hidden_triangles = walked.hidden_triangles;
-        (stats.nodes_visited, stats.nodes_culled_frustum, stats.nodes_culled_occlusion) =
-            (walked.nodes_visited, walked.nodes_culled_frustum, walked.nodes_culled_occlusion);
+        (
+            stats.nodes_visited,
+            stats.nodes_culled_frustum,
+            stats.nodes_culled_occlusion,
+        ) = (
+            walked.nodes_visited,
+            walked.nodes_culled_frustum,
+            walked.nodes_culled_occlusion,
+        );
         // A buffer of occluders that did not pay rests the next frames (a
         // warm-up frame's time, compiling and filling caches, says nothing).
         if !self.occluders.is_empty() && self.params.rests && !input.warm_up {
@@ -1178,15 +1217,19 @@ fn prepare_occluder(preparer: &mut Preparer, occluders: &Occluders, occluder: &O
             let local = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
             let position = object.transform.transform_point3(local) - camera.eye;
             preparer.positions.push(position);
-            preparer.vertices.push(projector.project(position, near).map(|(at, view_depth)| {
-                // Off the view's axis, an error in view depth moves it too.
-                let off_axis = (at.x - projector.size.x / 2.0).abs().max((at.y - projector.size.y / 2.0).abs());
-                ScreenVertex {
-                    at,
-                    slack: occluders.snap + position_error * (pixels_at_unit_depth + off_axis) / view_depth,
-                    depth_error: position_error / view_depth,
-                }
-            }));
+            preparer
+                .vertices
+                .push(projector.project(position, near).map(|(at, view_depth)| {
+                    // Off the view's axis, an error in view depth moves it too.
+                    let off_axis = (at.x - projector.size.x / 2.0)
+                        .abs()
+                        .max((at.y - projector.size.y / 2.0).abs());
+                    ScreenVertex {
+                        at,
+                        slack: occluders.snap + position_error * (pixels_at_unit_depth + off_axis) / view_depth,
+                        depth_error: position_error / view_depth,
+                    }
+                }));
         }
     }
     // An error d in eye space moves a point at view depth w on screen by up
@@ -1240,7 +1283,10 @@ mod tests {
         let (scene, hierarchy) = cubes(&[DVec3::new(-0.5, -0.5, -4.0), DVec3::new(-500.0, -0.5, -1000.0)]);
         let camera = camera_down_z();
         let occluder_triangles = |pixels_per_triangle: &str| {
-            let given = ModeParams::parse(&[format!("swr.pixels_per_triangle={pixels_per_triangle}")], &[ModeId::Swr]);
+            let given = ModeParams::parse(
+                &[format!("swr.pixels_per_triangle={pixels_per_triangle}")],
+                &[ModeId::Swr],
+            );
             let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&given.unwrap()).unwrap());
             let mut frame_calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
             let stats: Vec<TraversalStats> = (0..2)
@@ -1312,7 +1358,10 @@ mod tests {
         let (distance, near) = (1000.0, camera_down_z().near);
         let gap = 5.0 / f64::from(1u32 << 24) * distance * distance / near;
         let (scene, hierarchy) = cuboids(&[
-            (DVec3::new(-200.0, -200.0, -distance - 1.0), DVec3::new(200.0, 200.0, -distance)),
+            (
+                DVec3::new(-200.0, -200.0, -distance - 1.0),
+                DVec3::new(200.0, 200.0, -distance),
+            ),
             (
                 DVec3::new(-5.0, -5.0, -distance - gap - 10.0),
                 DVec3::new(5.0, 5.0, -distance - gap),
@@ -1326,7 +1375,13 @@ mod tests {
 
     /// The objects `swr` drew (sorted) in each of `frames` frames of `scene`
     /// seen by `camera`.
-    fn drawn_over(swr: &mut SoftwareOcclusionCulling, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera, frames: u32) -> Vec<Vec<u32>> {
+    fn drawn_over(
+        swr: &mut SoftwareOcclusionCulling,
+        scene: &Scene,
+        hierarchy: &Hierarchy,
+        camera: &Camera,
+        frames: u32,
+    ) -> Vec<Vec<u32>> {
         (0..frames)
             .map(|frame| {
                 let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
@@ -1351,9 +1406,15 @@ mod tests {
             for px in 0..size.width {
                 let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
                 let ray = pixel_ray(camera, size, x, y);
-                let drawn = solids.iter().filter_map(|b| entry_depth(camera, b, ray)).fold(0.0, f64::max);
+                let drawn = solids
+                    .iter()
+                    .filter_map(|b| entry_depth(camera, b, ray))
+                    .fold(0.0, f64::max);
                 let vouched = buffer.vouched_at(x, y);
-                assert!(vouched <= drawn, "({x}, {y}): the buffer vouches for {vouched}, the surface is at {drawn}");
+                assert!(
+                    vouched <= drawn,
+                    "({x}, {y}): the buffer vouches for {vouched}, the surface is at {drawn}"
+                );
                 vouching += u32::from(vouched > 0.0);
             }
         }
@@ -1382,11 +1443,15 @@ mod tests {
         let solids = boxes.map(|(min, max)| Aabb::new(min, max));
         let floor_pixels = assert_vouches_no_nearer_than(&swr, &camera, &solids);
         let size = Resolution::DEFAULT;
-        assert!(floor_pixels > size.width * size.height * 2 / 5, "{floor_pixels} pixels hold the floor");
+        assert!(
+            floor_pixels > size.width * size.height * 2 / 5,
+            "{floor_pixels} pixels hold the floor"
+        );
     }
 
     #[test]
-    fn auto_cells_are_a_pixel_each_after_a_buffer_that_held_little_of_the_screen_and_coarse_again_after_one_that_held_much() {
+    fn auto_cells_are_a_pixel_each_after_a_buffer_that_held_little_of_the_screen_and_coarse_again_after_one_that_held_much()
+     {
         // A floor under the eye and a box 30 m ahead, 12 m up. Looking up
         // at the box, the buffer holds its pixels and a strip of the far
         // floor; looking ahead, the floor holds most of the screen below
@@ -1435,7 +1500,10 @@ mod tests {
             let items: Vec<String> = items.iter().map(|s| s.to_string()).collect();
             SwrParams::from_params(&ModeParams::parse(&items, &[ModeId::Swr]).unwrap()).unwrap()
         };
-        let size = Resolution { width: 8192, height: 8192 };
+        let size = Resolution {
+            width: 8192,
+            height: 8192,
+        };
         let huge = SoftwareOcclusionCulling::new(params(&["swr.resolution=8192x8192", "swr.layers=8"]));
         let need = huge.buffers_need(size);
         assert_eq!(need, (1u64 << 26) * 16 / 3 + (1 << 26) * (24 + 7 * 40));
@@ -1445,7 +1513,10 @@ mod tests {
             error.to_string(),
             "swr's CPU depth buffers need about 19798 MiB, and this machine lets occlu take 4096 MiB more: take fewer swr.layers or a coarser swr.resolution"
         );
-        assert!(buffers_fit(need, None).is_ok(), "where the system does not say, allocation decides");
+        assert!(
+            buffers_fit(need, None).is_ok(),
+            "where the system does not say, allocation decides"
+        );
         // auto's two buffers at 800x600 with 4 layers: 68 and 17 MiB.
         let auto = SoftwareOcclusionCulling::new(params(&[]));
         let need = auto.buffers_need(Resolution::DEFAULT);
@@ -1463,8 +1534,14 @@ mod tests {
             ..ahead
         };
         assert!(looks_level(&ahead, DVec3::Y));
-        assert!(looks_level(&ahead, DVec3::NEG_Y), "upside down, upright lines stay upright");
-        assert!(looks_level(&turned(0.0, 70.0, 0.0), DVec3::Y), "turned about the up axis");
+        assert!(
+            looks_level(&ahead, DVec3::NEG_Y),
+            "upside down, upright lines stay upright"
+        );
+        assert!(
+            looks_level(&turned(0.0, 70.0, 0.0), DVec3::Y),
+            "turned about the up axis"
+        );
         // Turned and looking down 12°: 0.19 (taken the wrong way round,
         // camera to world, the turn would tilt it to 0.28).
         assert!(looks_level(&turned(-12.0, 60.0, 0.0), DVec3::Y));
@@ -1518,7 +1595,10 @@ mod tests {
         assert_eq!(box_drawn, [true, false]);
         // And at every pixel centre the buffer vouches for no depth nearer
         // than where the pixel's ray first meets the wall or the box.
-        let solids = [Aabb::new(corner, corner + DVec3::new(4.0, 3.0, 0.0)), Aabb::new(box_min, box_max)];
+        let solids = [
+            Aabb::new(corner, corner + DVec3::new(4.0, 3.0, 0.0)),
+            Aabb::new(box_min, box_max),
+        ];
         assert_vouches_no_nearer_than(&swr, &camera, &solids);
     }
 
@@ -1567,7 +1647,10 @@ mod tests {
             drawn.push(objects);
         }
         if rasterised.last() == Some(&0) {
-            assert!(swr.buffer.as_ref().unwrap().depths().iter().all(|&d| d == 0.0), "a resting buffer is empty");
+            assert!(
+                swr.buffer.as_ref().unwrap().depths().iter().all(|&d| d == 0.0),
+                "a resting buffer is empty"
+            );
         }
         (rasterised, drawn)
     }

@@ -92,7 +92,9 @@ pub fn neighbours(indices: &[u32], position: impl Fn(u32) -> [f32; 3]) -> Vec<[u
     // of the same bits, which is harmless: no patch holds its triangles,
     // the GPU placing them nowhere).
     let key = |i: u32| position(i).map(|c| if c == 0.0 { 0 } else { c.to_bits() });
-    let mut by_position: Vec<([u32; 3], u32)> = (0..indices.len() as u32).map(|s| (key(indices[s as usize]), s)).collect();
+    let mut by_position: Vec<([u32; 3], u32)> = (0..indices.len() as u32)
+        .map(|s| (key(indices[s as usize]), s))
+        .collect();
     by_position.sort_unstable();
     let mut point = vec![0u32; indices.len()];
     let mut next = 0;

@@ -129,7 +129,8 @@ impl Walkers {
         found.extend_from_slice(&walkers[0].found[..head]);
         self.walked.clear();
         for (w, walker) in walkers.iter().enumerate() {
-            self.walked.extend(walker.walked.iter().map(|(k, range)| (*k, w, range.clone())));
+            self.walked
+                .extend(walker.walked.iter().map(|(k, range)| (*k, w, range.clone())));
         }
         self.walked.sort_unstable_by_key(|(k, _, _)| *k);
         for (_, w, range) in &self.walked {
@@ -175,7 +176,12 @@ impl Walk<'_> {
         let triangles = |o: u32| u64::from(self.scene.objects[o as usize].triangles);
         if hidden(&node.bounds) {
             walker.tally.nodes_culled_occlusion += 1;
-            walker.tally.hidden_triangles += self.hierarchy.subtree_objects(node).iter().map(|&o| triangles(o)).sum::<u64>();
+            walker.tally.hidden_triangles += self
+                .hierarchy
+                .subtree_objects(node)
+                .iter()
+                .map(|&o| triangles(o))
+                .sum::<u64>();
             return;
         }
         if !node.is_leaf() {
@@ -245,7 +251,11 @@ mod tests {
     fn threads_find_what_a_plain_walk_finds_in_one_order_whatever_their_count() {
         let scene = load(&SceneSpec::Builtin("city:blocks=8".into()), &LoadOptions::default()).unwrap();
         let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-        assert!(hierarchy.nodes.len() >= 4 * NODES_PER_THREAD, "{} nodes", hierarchy.nodes.len());
+        assert!(
+            hierarchy.nodes.len() >= 4 * NODES_PER_THREAD,
+            "{} nodes",
+            hierarchy.nodes.len()
+        );
         let path = default_path(&scene).and_then(|(p, _)| p.with_frames(6)).unwrap();
         // Boxes hidden by a rule of their own, at every level of the tree.
         let hides = |bounds: &Aabb| (bounds.min.x * 0.37 + bounds.min.z * 0.21 + bounds.max.y).sin() > 0.2;
@@ -266,8 +276,16 @@ mod tests {
                 for walkers in &mut walkers {
                     let mut found = Vec::new();
                     let walked = walkers.walk(&walk, &mut found);
-                    let got = [walked.nodes_visited, walked.nodes_culled_frustum, walked.nodes_culled_occlusion];
-                    assert_eq!((got, walked.hidden_triangles), (counts, hidden_triangles), "frame {frame}");
+                    let got = [
+                        walked.nodes_visited,
+                        walked.nodes_culled_frustum,
+                        walked.nodes_culled_occlusion,
+                    ];
+                    assert_eq!(
+                        (got, walked.hidden_triangles),
+                        (counts, hidden_triangles),
+                        "frame {frame}"
+                    );
                     orders.push(found.clone());
                     found.sort_unstable();
                     assert_eq!(found, expected, "frame {frame}: each object found once");
@@ -276,6 +294,9 @@ mod tests {
                 threads_found_hidden += usize::from(hiding && hidden_triangles > 0 && !expected.is_empty());
             }
         }
-        assert!(threads_found_hidden >= 3, "{threads_found_hidden} frames both hid and found objects");
+        assert!(
+            threads_found_hidden >= 3,
+            "{threads_found_hidden} frames both hid and found objects"
+        );
     }
 }

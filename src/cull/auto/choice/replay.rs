@@ -76,7 +76,10 @@ const TRACES: [(&str, &str); 32] = [
     ("teapot-vulkan-2", include_str!("traces/teapot-vulkan-2.csv")),
     ("teapot-gl-1", include_str!("traces/teapot-gl-1.csv")),
     ("teapot-gl-2", include_str!("traces/teapot-gl-2.csv")),
-    ("city-flyover-vulkan-1", include_str!("traces/city-flyover-vulkan-1.csv")),
+    (
+        "city-flyover-vulkan-1",
+        include_str!("traces/city-flyover-vulkan-1.csv"),
+    ),
     ("city-flyover-gl-1", include_str!("traces/city-flyover-gl-1.csv")),
     ("city16-vulkan-1", include_str!("traces/city16-vulkan-1.csv")),
     ("city16-gl-1", include_str!("traces/city16-gl-1.csv")),
@@ -102,7 +105,15 @@ struct Trace {
 
 /// The columns before the candidates': the frame, then where its camera
 /// stood and looked.
-const LEADING_COLUMNS: [&str; 7] = ["frame", "eye_x", "eye_y", "eye_z", "forward_x", "forward_y", "forward_z"];
+const LEADING_COLUMNS: [&str; 7] = [
+    "frame",
+    "eye_x",
+    "eye_y",
+    "eye_z",
+    "forward_x",
+    "forward_y",
+    "forward_z",
+];
 
 impl Trace {
     /// A trace's text (`scripts/auto-trace`): a `#` line saying which run,
@@ -118,7 +129,11 @@ impl Trace {
             .parse()
             .expect("a number");
         let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
-        assert_eq!(header[..LEADING_COLUMNS.len()], LEADING_COLUMNS, "the frame and its camera first");
+        assert_eq!(
+            header[..LEADING_COLUMNS.len()],
+            LEADING_COLUMNS,
+            "the frame and its camera first"
+        );
         let names: Vec<String> = header[LEADING_COLUMNS.len()..]
             .chunks(2)
             .map(|c| c[0].trim_end_matches("_ms").to_string())
@@ -279,5 +294,8 @@ fn on_recorded_costs_of_thirty_two_runs_auto_keeps_within_a_few_percent_of_the_f
         })
         .collect();
     let (holds, geomean, worst) = guard(&kept);
-    assert!(!holds, "warm-up's pick kept passes too: {geomean:.4}, worst {worst:.3}: {kept:.3?}");
+    assert!(
+        !holds,
+        "warm-up's pick kept passes too: {geomean:.4}, worst {worst:.3}: {kept:.3?}"
+    );
 }
