@@ -859,10 +859,10 @@ impl Chooser {
     ///
     /// The error has two parts. Frame-to-frame noise: the samples' spread
     /// (MAD) once there are three, never less than what `noise`, the
-    /// incumbent's own ([`Chooser::noise`]), puts in one sample. And the ratio's wander along the path:
-    /// two strategies' costs turn on different things (one on triangles
-    /// drawn, another on tests), so their ratio moves from place to place
-    /// by more than a frame's noise. Samples from three places or more
+    /// incumbent's own ([`Chooser::noise`]), puts in one sample. And the
+    /// ratio's wander along the path: two strategies' costs turn on
+    /// different things (one on triangles drawn, another on tests), so
+    /// their ratio moves from place to place by more than a frame's noise. Samples from three places or more
     /// ([`places`]) show that wander in their spread (warm-up's, all of one
     /// view, weigh in it as often as there were warm-up frames); from fewer
     /// it is taken to be [`WANDER`], each place giving one look at it. The
