@@ -443,6 +443,22 @@ impl GpuContext {
         found
     }
 
+    /// Every adapter here that culls on the GPU, of Vulkan and GL. Fails
+    /// where there is none: Mesa's software ones, which scripts/test
+    /// installs, cull on the GPU.
+    #[cfg(test)]
+    pub(crate) fn every_gpu_driven_adapter() -> Vec<GpuContext> {
+        let gpus: Vec<GpuContext> = GpuContext::every_adapter()
+            .into_iter()
+            .filter(|g| g.gpu_driven)
+            .collect();
+        assert!(
+            !gpus.is_empty(),
+            "no adapter culls on the GPU: install Mesa (scripts/install-deps)"
+        );
+        gpus
+    }
+
     /// Blocks until the GPU has finished everything submitted so far.
     pub fn wait_idle(&self) {
         // A lost device is recorded by the device-lost callback and reported

@@ -583,7 +583,7 @@ mod tests {
         let path = path.with_frames(12).unwrap();
         let path: Vec<Camera> = (0..path.frames).map(|f| path.camera(f, RESOLUTION.aspect())).collect();
         let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
-        let gpus = gpu_driven_adapters();
+        let gpus = GpuContext::every_gpu_driven_adapter();
         // roc's and hiz's flat tree, and ioc's and hiz's hierarchy cut from
         // depth 2 to 6.
         let flat = CullTree::flat(scene.objects.len() as u32);
@@ -727,7 +727,7 @@ mod tests {
             min: glam::Vec3::from(min).extend(1e-7),
             max: glam::Vec3::from(max).extend(0.0),
         }));
-        for gpu in &gpu_driven_adapters() {
+        for gpu in &GpuContext::every_gpu_driven_adapter() {
             let made = box_planes_on_the_gpu(gpu, &camera, target, &boxes);
             let mut compared = 0;
             for (q, gpu_planes) in boxes.iter().zip(&made) {
@@ -764,21 +764,6 @@ mod tests {
         }
     }
 
-    /// Every adapter here that culls on the GPU, of Vulkan and GL.
-    fn gpu_driven_adapters() -> Vec<GpuContext> {
-        let gpus: Vec<GpuContext> = GpuContext::every_adapter()
-            .into_iter()
-            .filter(|g| g.gpu_driven)
-            .collect();
-        // Needs a GPU: scripts/test installs Mesa's software ones, which
-        // cull on the GPU.
-        assert!(
-            !gpus.is_empty(),
-            "no adapter culls on the GPU: install Mesa (scripts/install-deps)"
-        );
-        gpus
-    }
-
     #[test]
     fn boxes_made_on_the_gpu_hold_the_cpus_far_from_the_origin() {
         // The stress case whose town lies 1e7 from the origin, where f32
@@ -806,7 +791,7 @@ mod tests {
             start: AutoOr::Given(Level(1)),
             bottom: AutoOr::Given(Level(4)),
         };
-        for gpu in gpu_driven_adapters() {
+        for gpu in GpuContext::every_gpu_driven_adapter() {
             let world = || World::new(case.scene.clone(), hierarchy.clone());
             compare(&gpu, world(), &cameras, raster_occlusion_culling(), (&flat, None), None);
             let ioc = iterative_occlusion_culling(nodes);
