@@ -144,8 +144,6 @@ impl BenchError {
     }
 }
 
-/// Whether the caller let the run go on: [`BenchError::Interrupted`] when
-/// it asked to stop.
 /// The path frame that warm-up frame `step` of `warmup` renders on a path
 /// of `frames`: the path's first frames, last to first, so that warm-up
 /// ends on the first recorded view, as an engine's loading frames look
@@ -153,11 +151,13 @@ impl BenchError {
 /// `warmup` − 1 frames along the path, and every mode that carries state
 /// from frame to frame (`chc`, the GPU walks, `swr`, `auto`'s calibrated
 /// view) would start recording from a view the path has not reached: on
-/// the engine's 40-frame orbit, 36° away with the default warm-up.
+/// the engine's 40-frame orbit, 36° away with five warm-up frames.
 fn warm_up_frame(step: u32, warmup: u32, frames: u32) -> u32 {
     (warmup - 1 - step) % frames
 }
 
+/// Whether the caller let the run go on: [`BenchError::Interrupted`] when
+/// it asked to stop.
 fn go_on(flow: ControlFlow<()>) -> Result<(), BenchError> {
     match flow {
         ControlFlow::Continue(()) => Ok(()),
