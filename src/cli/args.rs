@@ -216,7 +216,7 @@ pub struct BenchArgs {
     /// Frames to record; resamples the path [default: the path's].
     #[arg(long, value_name = "N", value_parser = frame_count())]
     pub frames: Option<u32>,
-    /// Frames run before recording starts [default: 5].
+    /// Frames run before recording starts [default: 10].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=i64::from(occlu::config::MAX_WARMUP)))]
     pub warmup: Option<u32>,
     /// Render size [default: 800x600].

@@ -29,9 +29,13 @@
 //!   cheaper by more, but not at confidence, stays explored: its probes
 //!   cost nothing). Of the strategies due, the one whose probe is worth
 //!   most runs first. So a rival that two warm-up frames showed 15 %
-//!   dearer or more (12 % where its probe must settle; a little less over
-//!   the default three) is not explored but
-//!   rechecked, where the rule before this one explored up to 19 %. One not
+//!   dearer or more (12 % where its probe must settle) is not explored but
+//!   rechecked, where the rule before this one explored up to 19 %; the
+//!   default warm-up's eight calibrating frames fill a window, so no rival
+//!   they show dearer than the incumbent is explored: each is rechecked,
+//!   a near equal as often as [`RECHECK`] allows (its probes cost the
+//!   budget next to nothing), which follows a ratio that wanders along the
+//!   path at a probe in 12 frames a rival. One not
 //!   worth exploring is probed again only as often as a budget
 //!   (`auto.budget`) of the run's time, shared among them, pays for at what
 //!   a probe of it costs (so the dearer a strategy, the rarer its rechecks,

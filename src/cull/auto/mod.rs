@@ -79,7 +79,8 @@
 //! movers that every candidate would share, so with movers its ratios come
 //! out a little wider than probes measure. Samples from the calibration
 //! and from probes share a window, each read as having a probe's spread.
-//! With fewer than three warm-up frames (the default is five) `auto`
+//! The default warm-up (`--warmup 10`) calibrates on the path's first
+//! eight views, a full window; with fewer than three warm-up frames `auto`
 //! learns by probing alone.
 
 mod choice;
