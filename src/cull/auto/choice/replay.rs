@@ -276,7 +276,7 @@ fn calibrating_frames(trace: &Trace) -> usize {
 /// between versions that differ by a rule, the runs' own noise moves the
 /// geometric mean by about half a percent either way. The chooser of this
 /// test's commit, calibrated on the first eight frames as the default
-/// warm-up's eight calibrating frames would be, replays at 1.012 here
+/// warm-up's eight calibrating frames would be, replays at 1.013 here
 /// (worst 1.056: the forest on Vulkan); calibrated on the first two, as
 /// the traces' own three warm-up frames were, at 1.017 (worst 1.058). A
 /// chooser that keeps throughout the mode cheapest over the calibrating
