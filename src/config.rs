@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::cull::{ModeError, ModeId, ModeParams, parse_modes};
+use crate::cull::{FULL_CALIBRATION_WARM_UPS, ModeError, ModeId, ModeParams, parse_modes};
 use crate::gpu::{BackendChoice, Resolution};
 use crate::input::ByteSize;
 use crate::scene::builtin::with_movers;
@@ -58,19 +58,12 @@ pub struct BenchConfig {
     pub sweep: Option<String>,
 }
 
-/// Eight frames calibrate `auto` after the two whose times it does not
-/// take (`UNCALIBRATED_WARM_UPS` in src/cull/auto/mod.rs): the path's first
-/// eight views, a full window of samples (`WINDOW` in its choice.rs).
-/// Which mode is cheapest over a path's first views foretells the path
-/// better the more views: over 168 recorded runs, the cheapest over the
-/// first 3 frames was a geometric 1.031 times the fastest mode's mean,
-/// over the first 8, 1.024; `auto` replayed on 308 runs' recorded costs
-/// came to 1.023 calibrated on 3 views, 1.016 on 8; and in live runs of
-/// every scene and backend of issue 31, side by side with five warm-up
-/// frames, ten brought `auto` closer to the fastest mode by 1.45 % ± 0.81 %
-/// (28 pairs). Each mode pays five frames more before recording; `auto`,
-/// which runs every candidate in a warm-up frame, a few times that.
-pub const DEFAULT_WARMUP: u32 = 10;
+/// Warm-up frames where none are set: as many as calibrate `auto` fully
+/// ([`FULL_CALIBRATION_WARM_UPS`]: ten, eight of them calibrating), where
+/// the default of five before calibrated it on three views:
+/// each mode pays five frames more before recording, and `auto`, which
+/// runs every candidate in a warm-up frame, a few times that.
+pub const DEFAULT_WARMUP: u32 = FULL_CALIBRATION_WARM_UPS;
 /// Warm-up frames beyond this are surely a mistake.
 pub const MAX_WARMUP: u32 = 10_000;
 pub const DEFAULT_OUT: &str = "occlu-out";

@@ -67,7 +67,7 @@ mod registry;
 pub mod traversal;
 
 pub use ac::{AcParams, AdaptiveCulling, EyeDistance, Threshold};
-pub use auto::{AutoCulling, AutoParams};
+pub use auto::{AutoCulling, AutoParams, FULL_CALIBRATION_WARM_UPS};
 pub use chc::{ChcParams, CoherentCulling};
 pub use culler::{Culler, FrameInput, Labeled, OccluderDepths, Pick, PreviousFrame, TraversalStats};
 pub use dr::DirectRendering;

@@ -59,8 +59,9 @@
 //!   it hides that much itself: [`Record::coarse`]),
 //!   and frustum culling's cost is estimated from it ([`frustum_estimate`])
 //!   until measured; where that share is under [`NOTHING_HIDDEN`], frustum
-//!   culling is probed every other frame until a window of samples of the
-//!   view has measured it, and then as any rival is. Where occlusion hides
+//!   culling is probed every other frame until a window of samples of
+//!   views where occlusion did not hide much ([`hid_much`]) has measured
+//!   it, and then as any rival is. Where occlusion hides
 //!   less than [`NOTHING_HIDDEN`] of the frustum, there is nothing to
 //!   skip: once frustum culling is the incumbent, occlusion is checked
 //!   again only when the view has changed materially since
@@ -81,7 +82,7 @@ use std::collections::VecDeque;
 use glam::DVec3;
 
 /// Samples a strategy keeps.
-const WINDOW: usize = 8;
+pub(super) const WINDOW: usize = 8;
 /// Gain (log of the cost ratio, about 3 %) a strategy's estimate must show,
 /// besides being cheaper at confidence, before it replaces the incumbent;
 /// and the margin of the gain a probe is expected to find
@@ -236,17 +237,24 @@ fn places<'a>(samples: impl Iterator<Item = &'a Sample>) -> usize {
 
 /// Whether views where occlusion hid `a` and `b` of the frustum lie on
 /// either side of [`NOTHING_HIDDEN`] by a margin: one hiding clearly
-/// nothing ([`clearly_nothing_hidden`]), the other over one and a half
-/// times it. Frustum culling's ratio to an
+/// nothing ([`clearly_nothing_hidden`]), the other much ([`hid_much`]).
+/// Frustum culling's ratio to an
 /// occlusion culler measured in one says nothing of the other; between,
 /// where the share of a view such as a dense scan's wavers frame by frame
 /// about a tenth, a view could be either, and a ratio measured there holds.
 /// A share not known is apart from every known one.
 fn apart(a: Option<f64>, b: Option<f64>) -> bool {
     match (a, b) {
-        (Some(a), Some(b)) => clearly_nothing_hidden(a.min(b)) && a.max(b) > 1.5 * NOTHING_HIDDEN,
+        (Some(a), Some(b)) => clearly_nothing_hidden(a.min(b)) && hid_much(a.max(b)),
         (a, b) => a.is_some() != b.is_some(),
     }
+}
+
+/// Whether occlusion that hid `share` of the frustum hid much: over one and
+/// a half times [`NOTHING_HIDDEN`], clear of the views where it wavers
+/// about that line.
+fn hid_much(share: f64) -> bool {
+    share > 1.5 * NOTHING_HIDDEN
 }
 
 /// Whether occlusion that hid `share` of the frustum hid clearly next to
@@ -572,7 +580,8 @@ impl Chooser {
     /// the incumbent, and each other strategy's samples are its times over
     /// the incumbent's in the same frames. Such a sample pairs two frames
     /// of one view, as a probe's does, without a recorded frame paying for
-    /// it; the rivals they show far dearer need no exploring. A frame that
+    /// it; the rivals they show dearer (far dearer, from fewer frames than
+    /// a window) need no exploring. A frame that
     /// did not time every strategy is ignored. Calibration precedes the
     /// recorded frames: the incumbent's last frames and any probe under way
     /// are dropped with the old incumbent. `view` is where the frame looks
@@ -778,7 +787,7 @@ impl Chooser {
     /// the same view. A coarse culler (`chc`, whose leaves hold several of
     /// a scan's clusters) says that of itself, not of the view; one that
     /// hid that much after the other last looked says the view changed.
-    /// Readings of warm-up's one frame are all of frame 0: two cullers that
+    /// Readings of warm-up's frames are all of frame 0: two cullers that
     /// both hid much there count each other's "nothing" after it.
     fn coarser_than_another(&self, s: usize, hidden: f64, view: &View) -> bool {
         let since = self.records[s].hid.and_then(|h| h.hid_much_at);
@@ -867,8 +876,9 @@ impl Chooser {
     /// ratio's wander along the path: two strategies' costs turn on
     /// different things (one on triangles drawn, another on tests), so
     /// their ratio moves from place to place by more than a frame's noise. Samples from three places or more
-    /// ([`places`]) show that wander in their spread (warm-up's, all of one
-    /// view, weigh in it as often as there were warm-up frames); from fewer
+    /// ([`places`]) show that wander in their spread (warm-up's, of the
+    /// path's first views and taken as one place, weigh in it as often as
+    /// there were calibrating frames); from fewer
     /// it is taken to be [`WANDER`], each place giving one look at it. The
     /// guess at frustum culling's cost is no place: alone it settles
     /// nothing ([`Chooser::cheaper_than_incumbent`] asks for measurements).
@@ -1066,32 +1076,35 @@ impl Chooser {
         let Some((m, se)) = estimates[s] else {
             return (EXPLORE, Due::Explore);
         };
-        // Nothing hidden: frustum culling is likely the cheapest, and every
-        // frame until it is known costs the occlusion culler's tests; so it
-        // is probed every other frame until a window of samples taken where
-        // nothing was hidden has measured it, and then as any rival is
-        // (where it and the occlusion culler are equals within the noise,
-        // no window settles which is cheaper, and probing on every other
-        // frame would last the whole path). Samples of views where
-        // occlusion hid over one and a half times [`NOTHING_HIDDEN`] (the
-        // far side of [`apart`]'s margin), though not apart from this one,
-        // do not settle it: the default warm-up's eight calibrating frames
-        // fill a window. In the forest on lavapipe, whose first view `omq`
-        // hid 16 % of (the calibration's samples are of that view) and
-        // `roc` 2–9 % of each of the next 30, five runs started `roc`, and
-        // `vfc` was probed every other frame only once occlusion hid
-        // clearly nothing, from frame 23 or later, and took over at frames
-        // 27–34; in three runs with this rule, from frames 11–14, taking
-        // over at 19–24 (in its own runs `vfc` took 1.01–1.02 times
-        // `roc`'s time over the first eight frames, 0.96 over the next 22).
+        // Nothing hidden: frustum culling is likely the cheapest, and
+        // every frame until it is known costs the occlusion culler's
+        // tests; so it is probed every other frame until a window of
+        // samples of views where occlusion did not hide much
+        // ([`hid_much`]) has measured it, and then as any rival is
+        // (where it and the occlusion culler are equals within the
+        // noise, no window settles which is cheaper, and probing on
+        // every other frame would last the whole path). Samples of
+        // views where it hid much, though not [`apart`] from this one,
+        // do not settle it: the default warm-up's eight calibrating
+        // frames fill a window, all tagged with what occlusion hid in
+        // the path's first view. In the forest on lavapipe, whose first
+        // view `omq` hid 16 % of and `roc` 2–9 % of each of the next
+        // 30, five runs started `roc`, and `vfc` was probed every other
+        // frame only once occlusion hid clearly nothing, from frame 23
+        // or later, and took over at frames 27–34; in three runs with
+        // this rule, from frames 11–14, taking over at 19–24 (in its
+        // own runs `vfc` took 1.01–1.02 times `roc`'s time over the
+        // first eight frames, 0.96 over the next 22). A first view that
+        // hid a little less than [`hid_much`] leaves warm-up's samples
+        // to settle it, as before.
         let n = self.samples(s).count();
         let nothing_hidden = self.nothing_hidden() == Some(true);
         if nothing_hidden && self.records[s].family == Family::Frustum && m - Z * se < -HYSTERESIS {
-            let where_nothing_hidden = self
+            let of_views_hiding_little = self
                 .samples(s)
-                .filter(|x| x.hidden.is_some_and(|h| h <= 1.5 * NOTHING_HIDDEN))
+                .filter(|x| x.hidden.is_some_and(|h| !hid_much(h)))
                 .count();
-            if where_nothing_hidden < WINDOW {
+            if of_views_hiding_little < WINDOW {
                 return (1, Due::Explore);
             }
         }
@@ -1640,7 +1653,8 @@ mod tests {
         // The default city's walk on Vulkan: warm-up's frames, at the
         // path's start, find roc 7 % dearer than the pyramid test, which
         // starts (8 % was measured: [`WANDER`]); along the walk it is 6 %
-        // cheaper in the median. Frames 3.5 % apart in noise.
+        // cheaper in the median. Frames 3.5 % apart in noise. Four
+        // calibrating frames, fewer than a window (`--warmup 6`).
         let mut chooser = Chooser::new(&[Occlusion, Occlusion], 0, 10.0, 0.015);
         let dearer = 0.07;
         for _ in 0..4 {
@@ -1665,6 +1679,21 @@ mod tests {
         // A third place showing it as dear settles it.
         chooser.records[1].samples.push_back(probe(15));
         assert!(!explored(&chooser), "{:?}", chooser.estimates()[1]);
+    }
+
+    #[test]
+    fn a_rival_that_a_full_window_of_warm_up_frames_shows_dearer_is_rechecked_not_explored() {
+        // The default warm-up's eight calibrating frames, the path's first
+        // views, find roc 2 % dearer than the pyramid test: a window within
+        // the hysteresis, so roc is only rechecked, however far its ratio
+        // may wander from the place they were taken in.
+        let mut chooser = Chooser::new(&[Occlusion, Occlusion], 0, 10.0, 0.015);
+        for _ in 0..WINDOW {
+            chooser.calibrate(&[0.0, 0.02], &still(0));
+        }
+        let (m, se) = chooser.estimates()[1].expect("warm-up's samples");
+        assert!(probe_value(m, se, false) > 0.0, "its probe would pay: ({m}, {se})");
+        assert_eq!(chooser.interval(1, false, &chooser.estimates()).1, Due::Recheck);
     }
 
     #[test]

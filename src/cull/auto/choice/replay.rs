@@ -16,8 +16,9 @@
 //! had run the frame before; a walk's settling frame costs the same; and
 //! a walk that starts from lists gone stale after `vfc` still tells what
 //! it hid, which the mode does not count), and warm-up (the path's first
-//! frames calibrate, as many as the default warm-up times, each of its own
-//! view, last to first, as warm-up frames of them would).
+//! frames calibrate, a window of them as the default warm-up times, last
+//! to first, as warm-up frames of them would; the two frames before them
+//! that warm-up runs untimed are not replayed).
 //!
 //! So the replay judges how a rule explores and switches on the costs of
 //! recorded frames; warm-up's own pairs it does not replay (the path's
@@ -40,9 +41,8 @@
 
 use glam::DVec3;
 
-use super::{Chooser, Cost, Family, Occluded, View};
-use crate::config::DEFAULT_WARMUP;
-use crate::cull::auto::{COUNT_EVERY, REACH, UNCALIBRATED_WARM_UPS};
+use super::{Chooser, Cost, Family, Occluded, View, WINDOW};
+use crate::cull::auto::{COUNT_EVERY, REACH};
 
 /// The traces: the default city, `--movers 200`, `--scene forest` and the
 /// models of `../shared/models` along their README's paths, each on
@@ -190,9 +190,11 @@ impl Trace {
 /// `auto`'s mean frame time over the fastest candidate's, replayed on
 /// `trace` as the mode runs (mod.rs), its frames numbered as the mode's
 /// after the [`WARM_UPS`] warm-up frames the traces were recorded with:
-/// the path's first frames calibrate, as many as the default warm-up
-/// times, last to first, each with its own view and what each culler
-/// drawing on the CPU hid of it, as warm-up frames of those views would;
+/// the path's first frames calibrate, a window of them as the default
+/// warm-up times, last to first, each with its view and what each culler
+/// drawing on the CPU hid of it, as warm-up frames of those views would
+/// (the chooser tags every calibrating sample with what the last of them,
+/// the path's first frame, hid);
 /// a walk settles where no walk wrote the lists
 /// (warm-up's last frame did) in the last two frames, `chc` after `vfc`;
 /// the frustum's triangles are those last counted (warm-up counts the
@@ -214,7 +216,7 @@ fn replay(trace: &Trace) -> f64 {
         frustum_triangles: frustum as u64,
     };
     let mut chooser = Chooser::new(&families, 1, reach, 0.015);
-    for frame in (0..calibrating_frames(trace)).rev() {
+    for frame in (0..calibrated_path_frames(trace)).rev() {
         let frustum = trace.triangles[0][frame];
         for k in (1..families.len()).filter(|&k| !trace.walks(k)) {
             if let Some(hidden) = trace.hidden(k, frame, frustum) {
@@ -264,12 +266,11 @@ fn replay(trace: &Trace) -> f64 {
     total / trace.frames() as f64 / trace.fastest_mean()
 }
 
-/// The path frames the default warm-up times (`auto`'s calibrating
-/// frames), from the first.
-fn calibrating_frames(trace: &Trace) -> usize {
-    (DEFAULT_WARMUP as usize)
-        .saturating_sub(UNCALIBRATED_WARM_UPS)
-        .min(trace.frames())
+/// How many of the path's first frames the default warm-up calibrates on
+/// ([`crate::cull::FULL_CALIBRATION_WARM_UPS`]: a window), as many as the
+/// trace holds.
+fn calibrated_path_frames(trace: &Trace) -> usize {
+    WINDOW.min(trace.frames())
 }
 
 /// A guard against a chooser gone wrong, not a measure of small changes:
@@ -278,7 +279,7 @@ fn calibrating_frames(trace: &Trace) -> usize {
 /// test's commit, calibrated on the first eight frames as the default
 /// warm-up's eight calibrating frames would be, replays at 1.013 here
 /// (worst 1.056: the forest on Vulkan); calibrated on the first two, as
-/// the traces' own three warm-up frames were, at 1.017 (worst 1.058). A
+/// the build that recorded the traces did, at 1.017 (worst 1.058). A
 /// chooser that keeps throughout the mode cheapest over the calibrating
 /// frames, as warm-up would pick it, replays at 1.019 (worst 1.123: the
 /// forest on Vulkan; over the first two frames, 1.028, worst 1.145):
@@ -305,7 +306,7 @@ fn on_recorded_costs_of_thirty_two_runs_auto_keeps_within_a_few_percent_of_the_f
         .iter()
         .map(|(name, trace)| {
             let calibrated = |k: usize| {
-                trace.ms[k][..calibrating_frames(trace)]
+                trace.ms[k][..calibrated_path_frames(trace)]
                     .iter()
                     .map(|t| t.ln())
                     .sum::<f64>()
