@@ -42,7 +42,7 @@
 use glam::DVec3;
 
 use super::{Chooser, Cost, Family, Occluded, View, WINDOW};
-use crate::cull::auto::{COUNT_EVERY, REACH};
+use crate::cull::auto::REACH;
 
 /// The traces: the default city, `--movers 200`, `--scene forest` and the
 /// models of `../shared/models` along their README's paths, each on
@@ -198,10 +198,10 @@ impl Trace {
 /// a walk settles where no walk wrote the lists
 /// (warm-up's last frame did) in the last two frames, `chc` after `vfc`;
 /// the frustum's triangles are those last counted (warm-up counts the
-/// first view's; an occlusion frame counts them on a probe, every
-/// [`COUNT_EVERY`] frames and the first; a frame of `vfc` draws them, and
-/// the occlusion frame after it takes that count); a counted occlusion
-/// frame tells what it hid of them, with a share of its frame drawing of
+/// first view's; every measured occlusion frame counts them; a frame of
+/// `vfc` draws them, and the occlusion frame after it takes that count);
+/// a measured occlusion frame tells what it hid of them, with a share of
+/// its frame drawing of
 /// 0.8 (the mode takes it from the frame's render time, which a trace does
 /// not hold).
 fn replay(trace: &Trace) -> f64 {
@@ -246,9 +246,7 @@ fn replay(trace: &Trace) -> f64 {
             triangles: trace.triangles[k][frame] as u64,
         };
         let after_vfc = last == Some(0);
-        let counted = k > 0
-            && turn.measured
-            && (turn.probe || after_vfc || mode_frame(frame).is_multiple_of(COUNT_EVERY) || last.is_none());
+        let counted = k > 0 && turn.measured;
         if k == 0 || (counted && !after_vfc) {
             frustum = trace.triangles[0][frame];
         }
@@ -277,8 +275,8 @@ fn calibrated_path_frames(trace: &Trace) -> usize {
 /// between versions that differ by a rule, the runs' own noise moves the
 /// geometric mean by about half a percent either way. The chooser of this
 /// test's commit, calibrated on the first eight frames as the default
-/// warm-up's eight calibrating frames would be, replays at 1.013 here
-/// (worst 1.056: the forest on Vulkan); calibrated on the first two, as
+/// warm-up's eight calibrating frames would be, replays at 1.011 here
+/// (worst 1.051: `--movers 200` on GL); calibrated on the first two, as
 /// the build that recorded the traces did, at 1.017 (worst 1.058). A
 /// chooser that keeps throughout the mode cheapest over the calibrating
 /// frames, as warm-up would pick it, replays at 1.019 (worst 1.123: the
