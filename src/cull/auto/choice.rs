@@ -387,9 +387,12 @@ const SHARES: usize = 5;
 /// What occlusion hides in the view of the last measured occlusion frame,
 /// where that frame looked from, and when.
 ///
-/// Taken over the last [`SHARES`] measured occlusion frames, by their
-/// medians; they are forgotten when one looks from a view that differs
-/// materially from the last one's ([`View::differs`]). One frame's share
+/// Taken over the last [`SHARES`] measured occlusion frames whose views do
+/// not differ materially from this one's ([`View::differs`]), by their
+/// medians: every measured occlusion frame is counted, and a path that
+/// moves a little each frame leaves a view only over several, so each
+/// share is kept with its view and dropped once the view has moved on
+/// from it. One frame's share
 /// wavers where the view's does not: a dense scan in 16 clusters hides
 /// none of them in one frame and three in the next, 0 to 19 % of the
 /// frustum about a tenth. Taken frame by frame, it said "clearly nothing
@@ -425,8 +428,9 @@ pub(super) struct Chooser {
     pending: Option<Pending>,
     probing: Option<Probing>,
     hidden: Option<Hidden>,
-    /// The occlusion frames [`Hidden`] is the median of, newest last.
-    shares: VecDeque<Occluded>,
+    /// The occlusion frames [`Hidden`] is the median of, and where each
+    /// looked from, newest last.
+    shares: VecDeque<(Occluded, View)>,
     /// A move farther than this changes the view materially.
     reach: f64,
     /// How far the eye moved in each of the last [`STEPS`] frames, and
@@ -755,16 +759,15 @@ impl Chooser {
     /// occlusion frame showed ([`Hidden`]).
     fn learn_hidden(&mut self, o: Occluded, view: &View) {
         let first = self.hidden.is_none();
-        if self.hidden.is_some_and(|h| view.differs(&h.view, self.reach)) {
-            self.shares.clear();
-        }
+        let reach = self.reach;
+        self.shares.retain(|(_, seen)| !view.differs(seen, reach));
         if self.shares.len() == SHARES {
             self.shares.pop_front();
         }
-        self.shares.push_back(o);
+        self.shares.push_back((o, *view));
         let hidden = Hidden {
-            share: median(self.shares.iter().map(|o| o.hidden)),
-            drawing: median(self.shares.iter().map(|o| o.drawing)),
+            share: median(self.shares.iter().map(|(o, _)| o.hidden)),
+            drawing: median(self.shares.iter().map(|(o, _)| o.drawing)),
             view: *view,
             frame: self.frame,
         };
@@ -1092,11 +1095,12 @@ impl Chooser {
         // 30, five runs started `roc`, and `vfc` was probed every other
         // frame only once occlusion hid clearly nothing, from frame 23
         // or later, and took over at frames 27–34; in three runs with
-        // this rule, from frames 11–14, taking over at 19–24 (in its
-        // own runs `vfc` took 1.01–1.02 times `roc`'s time over the
-        // first eight frames, 0.96 over the next 22). A first view that
-        // hid a little less than [`hid_much`] leaves warm-up's samples
-        // to settle it, as before.
+        // this rule, from frames 11–14, taking over at 19–24; and once
+        // what occlusion hides was counted every frame, from frame 4,
+        // taking over at 24 (in its own runs `vfc` took 1.01–1.02 times
+        // `roc`'s time over the first eight frames, 0.96 over the next
+        // 22). A first view that hid a little less than [`hid_much`]
+        // leaves warm-up's samples to settle it, as before.
         let n = self.samples(s).count();
         let nothing_hidden = self.nothing_hidden() == Some(true);
         if nothing_hidden && self.records[s].family == Family::Frustum && m - Z * se < -HYSTERESIS {
@@ -1462,7 +1466,7 @@ mod tests {
         }
         assert_eq!(chooser.nothing_hidden(), Some(true), "{:?}", chooser.hidden);
         // omq hides a seventh again, and chc's next "nothing" is chc's...
-        let newest = |chooser: &Chooser| chooser.shares.back().map(|o| o.hidden);
+        let newest = |chooser: &Chooser| chooser.shares.back().map(|(o, _)| o.hidden);
         frame(&mut chooser, 1, 0.14);
         frame(&mut chooser, 2, 0.0);
         assert_eq!(newest(&chooser), Some(0.14));
@@ -1487,7 +1491,7 @@ mod tests {
         frame(&mut chooser, 2, 0.0);
         frame(&mut chooser, 0, 0.0);
         assert_eq!(chooser.nothing_hidden(), None, "{:?}", chooser.hidden);
-        let newest = |chooser: &Chooser| chooser.shares.back().map(|o| o.hidden);
+        let newest = |chooser: &Chooser| chooser.shares.back().map(|(o, _)| o.hidden);
         frame(&mut chooser, 1, 0.14);
         for _ in 0..3 {
             frame(&mut chooser, 0, 0.0);

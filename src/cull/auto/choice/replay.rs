@@ -13,9 +13,12 @@
 //! the view rules (which samples pair, when the view changed materially
 //! or outgrew another) are judged too. What a replay leaves out:
 //! hand-over (a probe costs what its mode cost in its own run, where it
-//! had run the frame before; a walk's settling frame costs the same; and
-//! a walk that starts from lists gone stale after `vfc` still tells what
-//! it hid, which the mode does not count), and warm-up (the path's first
+//! had run the frame before; a walk's settling frame costs the same; the
+//! incumbent's frame after a probe costs and draws what it did in its own
+//! run, where a walk's frame in the mode, its lists two frames old, draws
+//! a little more and reads as hiding a little less; and a walk that
+//! starts from lists gone stale after `vfc` still tells what it hid,
+//! which the mode does not count), and warm-up (the path's first
 //! frames calibrate, a window of them as the default warm-up times, last
 //! to first, as warm-up frames of them would; the two frames before them
 //! that warm-up runs untimed are not replayed).
@@ -189,21 +192,19 @@ impl Trace {
 
 /// `auto`'s mean frame time over the fastest candidate's, replayed on
 /// `trace` as the mode runs (mod.rs), its frames numbered as the mode's
-/// after the [`WARM_UPS`] warm-up frames the traces were recorded with:
-/// the path's first frames calibrate, a window of them as the default
-/// warm-up times, last to first, each with its view and what each culler
-/// drawing on the CPU hid of it, as warm-up frames of those views would
-/// (the chooser tags every calibrating sample with what the last of them,
-/// the path's first frame, hid);
-/// a walk settles where no walk wrote the lists
+/// after the [`WARM_UPS`] warm-up frames the traces were recorded with: the
+/// path's first frames calibrate, a window of them as the default warm-up
+/// times, last to first, each with its view and what each culler drawing on
+/// the CPU hid of it, as warm-up frames of those views would (the chooser
+/// tags every calibrating sample with what the last of them, the path's
+/// first frame, hid); a walk settles where no walk wrote the lists
 /// (warm-up's last frame did) in the last two frames, `chc` after `vfc`;
-/// the frustum's triangles are those last counted (warm-up counts the
-/// first view's; every measured occlusion frame counts them; a frame of
-/// `vfc` draws them, and the occlusion frame after it takes that count);
-/// a measured occlusion frame tells what it hid of them, with a share of
-/// its frame drawing of
-/// 0.8 (the mode takes it from the frame's render time, which a trace does
-/// not hold).
+/// the frustum's triangles are those last counted (warm-up counts the first
+/// view's; every measured occlusion frame counts them; a frame of `vfc`
+/// draws them, and the occlusion frame after it takes that count); a
+/// measured occlusion frame tells what it hid of them, with a share of its
+/// frame drawing of 0.8 (the mode takes it from the frame's render time,
+/// which a trace does not hold).
 fn replay(trace: &Trace) -> f64 {
     let families: Vec<Family> = (0..trace.names.len())
         .map(|k| if k == 0 { Family::Frustum } else { Family::Occlusion })
@@ -275,7 +276,7 @@ fn calibrated_path_frames(trace: &Trace) -> usize {
 /// between versions that differ by a rule, the runs' own noise moves the
 /// geometric mean by about half a percent either way. The chooser of this
 /// test's commit, calibrated on the first eight frames as the default
-/// warm-up's eight calibrating frames would be, replays at 1.011 here
+/// warm-up's eight calibrating frames would be, replays at 1.010 here
 /// (worst 1.051: `--movers 200` on GL); calibrated on the first two, as
 /// the build that recorded the traces did, at 1.017 (worst 1.058). A
 /// chooser that keeps throughout the mode cheapest over the calibrating
