@@ -847,6 +847,8 @@ mod tests {
     use glam::DVec3;
 
     use super::*;
+    use crate::camera::Camera;
+    use crate::hierarchy::Hierarchy;
 
     /// A view from `eye` looking along `forward` at `triangles` triangles.
     fn view(eye: f64, forward: DVec3, triangles: u64) -> View {
@@ -855,6 +857,43 @@ mod tests {
             forward,
             frustum_triangles: triangles,
         }
+    }
+
+    /// Three cubes side by side, all in view of
+    /// [`crate::cull::recording::camera_down_z`]: 36 triangles.
+    fn three_cubes_in_view() -> (Scene, Hierarchy) {
+        let corners = [-2.5, -0.5, 1.5].map(|x| DVec3::new(x, -0.5, -10.0));
+        crate::cull::recording::cubes(&corners)
+    }
+
+    /// `auto`'s recorded frame `frame` of `scene` seen by `camera`, on the
+    /// recording double (every box visible), after a frame that took 10 ms
+    /// and drew `drawn` triangles, with its untimed work after it: what it
+    /// ran.
+    fn record_frame(
+        auto: &mut AutoCulling,
+        frame: u32,
+        camera: &Camera,
+        (scene, hierarchy): (&Scene, &Hierarchy),
+        drawn: u64,
+    ) -> Ran {
+        use crate::cull::PreviousFrame;
+        use crate::cull::recording::{Recording, input};
+        let previous = (frame > 0).then_some(PreviousFrame {
+            frame_ms: 10.0,
+            render_ms: 9.0,
+            triangles_drawn: drawn,
+        });
+        let frame_input = FrameInput {
+            previous,
+            ..input(frame, camera, scene, hierarchy)
+        };
+        let mut calls = Recording::new(|_: &Aabb| true);
+        auto.frame(&mut calls, &frame_input);
+        let mut objects = ObjectSet::new(scene.objects.len());
+        calls.drawn().into_iter().for_each(|o| objects.insert(o));
+        auto.after_frame(&frame_input, &objects);
+        auto.ran.expect("a recorded frame ran")
     }
 
     #[test]
@@ -881,7 +920,7 @@ mod tests {
     fn in_warm_up_every_walk_starts_from_a_visible_set_and_the_third_frame_calibrates_first() {
         use crate::camera::generate::default_path;
         use crate::gpu::Resolution;
-        use crate::hierarchy::{Hierarchy, HierarchyParams};
+        use crate::hierarchy::HierarchyParams;
         use crate::scene::{LoadOptions, SceneSpec, load};
         use crate::session::{RunOptions, Session};
         use crate::world::World;
@@ -998,11 +1037,10 @@ mod tests {
 
     #[test]
     fn a_frame_an_occlusion_culler_ran_as_frustum_culling_is_read_as_vfc_s_and_its_next_try_tells_what_is_hidden() {
-        use crate::cull::recording::{Recording, camera_down_z, cubes, input};
-        use crate::cull::{FrustumCulling, PreviousFrame};
+        use crate::cull::FrustumCulling;
+        use crate::cull::recording::camera_down_z;
         // Nothing hidden: three cubes side by side, all in view.
-        let corners = [-2.5, -0.5, 1.5].map(|x| DVec3::new(x, -0.5, -10.0));
-        let (scene, hierarchy) = cubes(&corners);
+        let (scene, hierarchy) = three_cubes_in_view();
         let camera = camera_down_z();
         let params = ModeParams::default();
         let mut auto = AutoCulling::new(&scene, &params).unwrap();
@@ -1032,22 +1070,8 @@ mod tests {
         let all_in_frustum = 3 * u64::from(scene.objects[0].triangles);
         let (mut rested, mut tried, mut settling) = (0, 0, 0);
         for frame in 0..24 {
-            let mut calls = Recording::new(|_: &Aabb| true);
-            let previous = (frame > 0).then_some(PreviousFrame {
-                frame_ms: 10.0,
-                render_ms: 9.0,
-                triangles_drawn: all_in_frustum,
-            });
-            let frame_input = FrameInput {
-                previous,
-                ..input(frame, &camera, &scene, &hierarchy)
-            };
             let before = auto.ran;
-            auto.frame(&mut calls, &frame_input);
-            let mut drawn = ObjectSet::new(scene.objects.len());
-            calls.drawn().into_iter().for_each(|o| drawn.insert(o));
-            auto.after_frame(&frame_input, &drawn);
-            let ran = auto.ran.unwrap();
+            let ran = record_frame(&mut auto, frame, &camera, (&scene, &hierarchy), all_in_frustum);
             if ran.turn.strategy != 1 {
                 continue;
             }
@@ -1087,11 +1111,8 @@ mod tests {
 
     #[test]
     fn every_measured_frame_of_an_occlusion_culler_tells_what_occlusion_hides() {
-        use crate::cull::PreviousFrame;
-        use crate::cull::recording::{Recording, camera_down_z, cubes, input};
-        let corners = [-2.5, -0.5, 1.5].map(|x| DVec3::new(x, -0.5, -10.0));
-        let (scene, hierarchy) = cubes(&corners);
-        let camera = camera_down_z();
+        let (scene, hierarchy) = three_cubes_in_view();
+        let camera = crate::cull::recording::camera_down_z();
         let params = ModeParams::default();
         let mut auto = AutoCulling::new(&scene, &params).unwrap();
         auto.candidates.retain(|c| [ModeId::Vfc, ModeId::Chc].contains(&c.id));
@@ -1112,21 +1133,7 @@ mod tests {
         auto.chooser = Some(chooser);
         let mut measured = 0;
         for frame in 0..16 {
-            let previous = (frame > 0).then_some(PreviousFrame {
-                frame_ms: 10.0,
-                render_ms: 9.0,
-                triangles_drawn: 36,
-            });
-            let frame_input = FrameInput {
-                previous,
-                ..input(frame, &camera, &scene, &hierarchy)
-            };
-            let mut calls = Recording::new(|_: &Aabb| true);
-            auto.frame(&mut calls, &frame_input);
-            let mut drawn = ObjectSet::new(scene.objects.len());
-            calls.drawn().into_iter().for_each(|o| drawn.insert(o));
-            auto.after_frame(&frame_input, &drawn);
-            let ran = auto.ran.unwrap();
+            let ran = record_frame(&mut auto, frame, &camera, (&scene, &hierarchy), 36);
             if ran.turn.strategy == chc && ran.turn.measured {
                 measured += 1;
                 // What the next frame tells the chooser it hid, as
