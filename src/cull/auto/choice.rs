@@ -35,7 +35,7 @@
 //!   they show dearer than the incumbent is explored: each is rechecked,
 //!   a near equal as often as [`RECHECK`] allows (its probes cost the
 //!   budget next to nothing), which follows a ratio that wanders along the
-//!   path at a probe in 12 frames a rival. One not
+//!   path with a probe of each such rival every 12 frames. One not
 //!   worth exploring is probed again only as often as a budget
 //!   (`auto.budget`) of the run's time, shared among them, pays for at what
 //!   a probe of it costs (so the dearer a strategy, the rarer its rechecks,

@@ -783,22 +783,23 @@ impl Culler for AutoCulling {
         };
         self.candidates[k].last_ran = Some(self.frames);
         // What occlusion hides is counted after every measured occlusion
-        // frame, untimed (a frustum traversal in a timed frame would weigh
-        // on its time: `vfc`'s traversal of the default city takes
-        // 0.05–0.08 ms here, 4–8 % of a frame of 1–2 ms on a fast GPU,
-        // worked out, not timed; an engine takes the count from its
-        // culling's frustum test); after a frame drawn as frustum
-        // culling's, whose triangles are the count already, it is not
-        // counted again. Counted only on probes and every eighth frame,
-        // what occlusion hides was known late where it changes early: in
-        // the forest, whose first view `roc` hid a fifth of and the next
-        // ones 2–9 %, the median of its last five counts fell under a
-        // tenth at frame 13, and `vfc`, 0.82–0.83 of `roc`'s time over
-        // the path (one run on each backend), was first probed after it; counted every frame, at frame 3
-        // (worked out from `roc`'s own recorded frames; `vfc` was probed
-        // at frame 14 in the run). Replayed on the recorded costs
-        // of 336 runs, 1.0151 against 1.0156 (the replay test's 32:
-        // 1.0107, worst 1.051, against 1.0130, worst 1.056).
+        // frame, untimed (a frustum traversal in a timed frame would weigh on
+        // its time: `vfc`'s traversal of the default city takes 0.05–0.08 ms
+        // here, 4–8 % of a frame of 1–2 ms on a fast GPU, worked out, not
+        // timed; an engine takes the count from its culling's frustum test);
+        // after a frame drawn as frustum culling's, whose triangles are the
+        // count already, it is not counted again. Counted only on probes and
+        // every eighth frame, what occlusion hides was known late where it
+        // changes early: in the forest, whose first view `roc` hid a fifth of
+        // and the next ones 2–9 %, the median of its last five counts fell
+        // under a tenth at frame 13, and `vfc`, 0.82–0.83 of `roc`'s time
+        // over the path (one run on each backend), was first probed after it
+        // (at frame 14 in the run); counted every frame, at frame 3 (both
+        // worked out from `roc`'s own recorded frames), and `vfc` was probed
+        // from frame 4 in the next run. Replayed on the recorded costs of 336
+        // runs, 1.0151 against 1.0156; on the replay test's 32, 1.0107 (worst
+        // 1.051) against 1.0130 (worst 1.056), and 1.0104 once the shares
+        // were kept with their views.
         let after_frustum = self.ran.is_some_and(|r| r.family == Family::Frustum);
         let counted = turn.measured && family == Family::Occlusion;
         self.running.clear();
