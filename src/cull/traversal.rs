@@ -81,6 +81,20 @@ impl DepthQueue {
     }
 }
 
+/// How many times the triangles of a frustum where occlusion culling
+/// found nothing worth its cost another must hold to be tried again at
+/// once ([`outgrew`]).
+pub const OUTGROWN: f64 = 4.0;
+
+/// Whether a frustum holding `now` triangles outgrew one that held `then`:
+/// more than [`OUTGROWN`] times as many. What occlusion culling hid or
+/// cost in the smaller says nothing of the larger: a camera that faced a
+/// wall in a doorway, or looked out over an empty edge, turning into a
+/// room or a city.
+pub fn outgrew(now: u64, then: u64) -> bool {
+    now as f64 > OUTGROWN * then.max(1) as f64
+}
+
 /// View-frustum culling of the subtree under `node` (002 §4.1): appends
 /// the objects it does not exclude, accepting a fully-inside node's whole
 /// subtree without further tests.

@@ -81,6 +81,8 @@ use std::collections::VecDeque;
 
 use glam::DVec3;
 
+use crate::cull::traversal::outgrew;
+
 /// Samples a strategy keeps.
 pub(super) const WINDOW: usize = 8;
 /// Gain (log of the cost ratio, about 3 %) a strategy's estimate must show,
@@ -119,9 +121,6 @@ const RECHECK: u64 = 12;
 /// Share of the frustum's triangles below which occlusion culling has
 /// nothing to skip.
 const NOTHING_HIDDEN: f64 = 0.1;
-/// How many times the frustum's triangles of a view where nothing was
-/// hidden another must hold to be looked at again at once ([`View::outgrew`]).
-const OUTGROWN: f64 = 4.0;
 /// Frame-to-frame noise (log) assumed before the incumbent has shown its
 /// own.
 const DEFAULT_NOISE: f64 = 0.1;
@@ -197,11 +196,12 @@ impl View {
         self.forward.dot(other.forward) < 30f64.to_radians().cos() || a.max(b) > 1.5 * a.min(b)
     }
 
-    /// Holding more than [`OUTGROWN`] times the triangles of `other`: what
-    /// culling `other` cost or spared says nothing of this view (a camera
-    /// that looked out over an empty edge turning back into the city).
+    /// Holding more than [`OUTGROWN`](crate::cull::traversal::OUTGROWN)
+    /// times the triangles of `other` ([`outgrew`]): what culling `other`
+    /// cost or spared says nothing of this view (a camera that looked out
+    /// over an empty edge turning back into the city).
     pub fn outgrew(&self, other: &View) -> bool {
-        self.frustum_triangles as f64 > OUTGROWN * other.frustum_triangles.max(1) as f64
+        outgrew(self.frustum_triangles, other.frustum_triangles)
     }
 }
 

@@ -28,8 +28,10 @@
 //! that hid nothing, or saved less drawing than it cost, rests for a few
 //! frames, and longer each time it fails again, or as long as 1.5 % of
 //! the frames' time pays for where it costs much of a frame (MOC leaves
-//! that to its caller). Occluders are whole visible objects (the clusters of one mesh
-//! taken together, so that a mesh cut into clusters is one surface), their
+//! that to its caller), until the frustum holds several times the
+//! triangles it held then (a camera through a doorway). Occluders are
+//! whole visible objects (the clusters of one mesh taken together, so
+//! that a mesh cut into clusters is one surface), their
 //! triangles taken in the f64 projection (MOC and Godot take authored
 //! occluder meshes, rasterised in f32 with SIMD: here it is scalar); which
 //! of a mesh's triangles share an edge is found for every mesh that may
@@ -58,7 +60,7 @@ use crate::bounds::Aabb;
 use crate::camera::{Camera, Containment};
 use crate::cull::culler::{Culler, FrameInput, OccluderDepths, PreviousFrame, TraversalStats};
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
-use crate::cull::traversal::frustum_cull_subtree;
+use crate::cull::traversal::{frustum_cull_subtree, outgrew};
 use crate::gpu::{
     BoxMargins, BoxPlanes, DepthMargins, EyeBox, FacingFace, Frame, GpuError, GpuSetup, PixelRays, QueryBox,
     Resolution, SubpixelPrecision, eye_relative_box,
@@ -177,7 +179,7 @@ const THREADS: ParamInfo = ParamInfo {
 const RESTS: ParamInfo = ParamInfo {
     key: "rests",
     default: "true",
-    summary: "let a buffer that spared less drawing than it cost rest (7 frames, then 15, then 31 while it keeps failing, or as many as 1.5 % of the frames' time pays for its cost, up to 127: a frustum traversal only); false builds one every frame",
+    summary: "let a buffer that spared less drawing than it cost rest (7 frames, then 15, then 31 while it keeps failing, or as many as 1.5 % of the frames' time pays for its cost, up to 127: a frustum traversal only), until the frustum holds over 4 times the triangles it held then; false builds one every frame",
 };
 
 /// The most threads `swr.threads` may ask for (or a frame use): each holds
@@ -450,14 +452,26 @@ impl SoftwareOcclusionCulling {
 /// rivals known to be dearer), so that where a buffer costs about a frame
 /// (a dense model's, on a light frame) its tries cost not 5 % of the run
 /// but 1.5 % (more for one dearer than about 2.6 frames, which the
-/// longest rest caps). Leaving
-/// occlusion out is always safe.
+/// longest rest caps). A rest ends early where the frustum comes to hold
+/// several times the triangles it held when the buffer did not pay
+/// ([`outgrew`]): a camera passing a doorway faces a wall, where a buffer
+/// hides nothing, then a room, where it hides most. Walking 120 frames
+/// through an office floor of 10 × 10 rooms with doorways (two runs on
+/// each of lavapipe and llvmpipe), `swr` rested in 30–33 frames where
+/// `roc` hid more than a tenth of the frustum and took 0.81–0.86 of
+/// `roc`'s time; ending a rest where the frustum outgrew the failed one,
+/// in 24 frames, and 0.73–0.77 of `roc`'s time (the rests left are
+/// those of a camera walking on into a room from a doorway, whose frustum
+/// shrinks as its walls come nearer). Leaving occlusion out is always
+/// safe.
 #[derive(Clone, Copy, Debug)]
 struct Rest {
     /// Frames left of the current rest.
     left: u32,
     /// How long the next rest is.
     next: u32,
+    /// The triangles in the frustum when the last buffer did not pay.
+    failed_with: u64,
 }
 
 const REST_FRAMES: u32 = 7;
@@ -473,6 +487,7 @@ impl Default for Rest {
         Rest {
             left: 0,
             next: REST_FRAMES,
+            failed_with: 0,
         }
     }
 }
@@ -485,19 +500,40 @@ impl Rest {
         resting
     }
 
+    /// Ends the rest where the frustum, now holding `in_frustum`
+    /// triangles, outgrew the one whose buffer did not pay; whether it
+    /// did.
+    fn ends_where_outgrown(&mut self, in_frustum: u64) -> bool {
+        let outgrown = outgrew(in_frustum, self.failed_with);
+        if outgrown {
+            self.left = 0;
+        }
+        outgrown
+    }
+
     /// After a frame's buffer that cost `cost` frames (its time, with the
     /// box tests through it, over the previous frame's; 0 where not
-    /// known): rests from the next frame on unless it `paid`.
-    fn after(&mut self, paid: bool, cost: f64) {
+    /// known), in a frustum holding `in_frustum` triangles: rests from the
+    /// next frame on unless it `paid`.
+    fn after(&mut self, paid: bool, cost: f64, in_frustum: u64) {
         if paid {
             self.next = REST_FRAMES;
         } else {
+            self.failed_with = in_frustum;
             // A NaN stays one through the clamp, and is 0 frames.
             let paid_for = (cost / TRY_BUDGET).ceil().clamp(0.0, f64::from(LONGEST_DEAR_REST)) as u32;
             self.left = self.next.max(paid_for);
             self.next = (2 * self.next + 1).min(LONGEST_REST);
         }
     }
+}
+
+/// The triangles of `objects`.
+fn triangles_of(scene: &Scene, objects: &[u32]) -> u64 {
+    objects
+        .iter()
+        .map(|&o| u64::from(scene.objects[o as usize].triangles))
+        .sum()
 }
 
 /// Whether a buffer that hid `hidden` triangles, at a cost of `spent_ms`
@@ -842,11 +878,37 @@ impl Culler for SoftwareOcclusionCulling {
         }
         let frustum = camera.frustum();
 
+        // A resting buffer tests nothing: the frame is frustum culling's,
+        // its fully-inside shortcut included, so that it costs what `vfc`
+        // costs. (Walked node by node, den-haag's orbit took 0.4–0.5 ms of
+        // CPU and 0.3–1.1 ms more of GPU a frame than `vfc`, whose frame
+        // there is 10–14 ms.) Unless the frustum has outgrown the one
+        // whose buffer did not pay: then the rest ends, and this frame
+        // builds a buffer.
+        let mut resting = self.rest.take();
+        if resting {
+            self.found.clear();
+            let mut frustum_stats = TraversalStats::default();
+            let root = 0;
+            frustum_cull_subtree(
+                scene,
+                input.hierarchy,
+                root,
+                &frustum,
+                &mut self.stack,
+                &mut self.found,
+                &mut frustum_stats,
+            );
+            resting = !self.rest.ends_where_outgrown(triangles_of(scene, &self.found));
+            if resting {
+                stats = frustum_stats;
+            }
+        }
+        self.rested = resting;
+
         // 1. Occluders: last frame's visible objects still on screen,
         // largest first; none while the buffer rests (which keeps its
         // cells: a resting buffer holds nothing to choose them by).
-        let resting = self.rest.take();
-        self.rested = resting;
         if !resting || self.buffer.as_ref().is_none_or(|b| b.target() != size) {
             let cells = self.cells_for(size, looks_level(camera, scene.up.axis.vector()));
             self.use_buffer(size, cells);
@@ -857,22 +919,7 @@ impl Culler for SoftwareOcclusionCulling {
             buffer.cleared_bands(u32::MAX).for_each(drop);
             self.buffer_holds = false;
         }
-        // A resting buffer tests nothing: the frame is frustum culling's,
-        // its fully-inside shortcut included, so that it costs what `vfc`
-        // costs. (Walked node by node, den-haag's orbit took 0.4–0.5 ms of
-        // CPU and 0.3–1.1 ms more of GPU a frame than `vfc`, whose frame
-        // there is 10–14 ms.)
         if resting {
-            self.found.clear();
-            frustum_cull_subtree(
-                scene,
-                input.hierarchy,
-                0,
-                &frustum,
-                &mut self.stack,
-                &mut self.found,
-                &mut stats,
-            );
             ctx.draw(&self.found);
             std::mem::swap(&mut self.visible, &mut self.found);
             return stats;
@@ -982,7 +1029,17 @@ impl Culler for SoftwareOcclusionCulling {
         if !self.occluders.is_empty() && self.params.rests && !input.warm_up {
             let spent_ms = started.elapsed().as_secs_f64() * 1e3;
             let cost = input.previous.map_or(0.0, |p| spent_ms / p.frame_ms);
-            self.rest.after(pays(hidden_triangles, spent_ms, input.previous), cost);
+            let paid = pays(hidden_triangles, spent_ms, input.previous);
+            // What the frustum held: what was found visible and what was
+            // hidden (a hidden node's objects counted whole, even where
+            // they reach past the frustum, which only makes the rest end
+            // later).
+            let in_frustum = if paid {
+                0
+            } else {
+                hidden_triangles + triangles_of(scene, &self.found)
+            };
+            self.rest.after(paid, cost, in_frustum);
         }
 
         // 5. The visible objects; they are next frame's candidates.
@@ -1707,6 +1764,40 @@ mod tests {
     }
 
     #[test]
+    fn a_rest_ends_where_the_frustum_outgrows_the_one_whose_buffer_did_not_pay() {
+        // Looking down −Z, one cube, nothing behind it: frame 1's buffer
+        // hides nothing, so 2 to 8 would rest. From frame 3 the camera
+        // looks down −X along a column of six cubes (six times the
+        // triangles), the nearest hiding the rest.
+        let column = (0..6).map(|k| DVec3::new(-3.0 - 2.0 * f64::from(k), -0.5, -0.5));
+        let corners: Vec<DVec3> = std::iter::once(DVec3::new(-0.5, -0.5, -3.0)).chain(column).collect();
+        let (scene, hierarchy) = cubes(&corners);
+        let ahead = camera_down_z();
+        let left = Camera {
+            rotation: glam::DQuat::from_rotation_y(90f64.to_radians()),
+            ..ahead
+        };
+        let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
+        let mut drawn = Vec::new();
+        let mut rested = Vec::new();
+        for frame in 0..6 {
+            let camera = if frame < 3 { &ahead } else { &left };
+            let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
+            swr.frame(&mut calls, &input(frame, camera, &scene, &hierarchy));
+            let mut objects = calls.drawn();
+            objects.sort_unstable();
+            drawn.push(objects);
+            rested.push(swr.frustum_only());
+        }
+        assert_eq!(rested, [false, false, true, false, false, false]);
+        // Frame 3 has no occluder on screen and draws the column; frame 4
+        // takes it as occluders, and the nearest cube hides the others.
+        assert_eq!(drawn[3], [1, 2, 3, 4, 5, 6]);
+        assert_eq!(drawn[4], [1]);
+        assert_eq!(drawn[5], [1]);
+    }
+
+    #[test]
     fn a_buffer_that_pays_brings_the_rests_back_to_the_shortest() {
         let mut rest = Rest::default();
         // Which frames of `frames` rest, each buffer paying as `pays` says.
@@ -1715,7 +1806,7 @@ mod tests {
                 .filter(|&f| {
                     let resting = rest.take();
                     if !resting {
-                        rest.after(pays(f), 0.0);
+                        rest.after(pays(f), 0.0, 0);
                     }
                     resting
                 })
@@ -1728,7 +1819,7 @@ mod tests {
         assert_eq!(resting, expected);
         // Told to start over (a culler seeded by another), it rests no more.
         let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
-        swr.rest.after(false, 0.0);
+        swr.rest.after(false, 0.0, 0);
         swr.seed_visible(&[]);
         assert!(!swr.rest.take());
     }
@@ -1739,7 +1830,7 @@ mod tests {
         // schedule's 7; a NaN, the schedule too.
         for (cost, rest) in [(0.5, 34), (0.01, 7), (f64::NAN, 7)] {
             let mut rests = Rest::default();
-            rests.after(false, cost);
+            rests.after(false, cost, 0);
             assert_eq!(rests.left, rest, "{cost}");
         }
         // The cubes side by side hide nothing, on frames so light that a
