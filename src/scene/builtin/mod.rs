@@ -5,6 +5,7 @@
 mod build;
 mod city;
 mod forest;
+mod office;
 pub(crate) mod shapes;
 
 use super::model::{Scene, SceneBuilder};
@@ -13,6 +14,7 @@ use build::Params;
 
 pub use city::{CityParams, EYE_HEIGHT};
 pub use forest::ForestParams;
+pub use office::OfficeParams;
 
 /// The scenes `--scene` accepts, with a one-line description each.
 pub const SCENES: &[(&str, &str)] = &[
@@ -24,12 +26,17 @@ pub const SCENES: &[(&str, &str)] = &[
         "forest",
         "scattered trees with see-through crowns: little occlusion, where culling must not cost more than it saves (params: trees, seed)",
     ),
+    (
+        "office",
+        "an office floor of rooms joined by doorways, on a large ground plane: walls hide most of it, and at each doorway the view changes at once (params: rooms, seed)",
+    ),
 ];
 
 /// A built-in scene with its parameters, parsed and checked.
 enum Builtin {
     City(CityParams),
     Forest(ForestParams),
+    Office(OfficeParams),
 }
 
 /// Parses and checks a spec without building it: what a matrix checks of
@@ -44,6 +51,7 @@ pub fn build(spec: &str, options: &LoadOptions) -> Result<Scene, SceneError> {
     let name = match &builtin {
         Builtin::City(p) => p.spec(),
         Builtin::Forest(p) => p.spec(),
+        Builtin::Office(p) => p.spec(),
     };
     let mut builder = SceneBuilder::new(format!("builtin:{name}"), options.cluster_triangles);
     let error = |message: String| SceneError::Builtin {
@@ -53,6 +61,7 @@ pub fn build(spec: &str, options: &LoadOptions) -> Result<Scene, SceneError> {
     match &builtin {
         Builtin::City(p) => city::generate(p, &mut builder),
         Builtin::Forest(p) => forest::generate(p, &mut builder),
+        Builtin::Office(p) => office::generate(p, &mut builder),
     }
     .map_err(|e| error(e.to_string()))?;
     builder.finish().ok_or_else(|| error("generated no geometry".into()))
@@ -67,6 +76,7 @@ fn parse(spec: &str) -> Result<Builtin, SceneError> {
     match name {
         "city" => CityParams::from_params(&params).map(Builtin::City).map_err(error),
         "forest" => ForestParams::from_params(&params).map(Builtin::Forest).map_err(error),
+        "office" => OfficeParams::from_params(&params).map(Builtin::Office).map_err(error),
         other => Err(error(format!(
             "unknown scene '{other}' (built-in scenes: {})",
             SCENES.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
@@ -120,7 +130,7 @@ mod tests {
     fn unknown_scene_and_bad_params_are_clear_errors() {
         let o = LoadOptions::default();
         let msg = |s: &str| build(s, &o).err().unwrap().to_string();
-        assert!(msg("desert").contains("unknown scene 'desert' (built-in scenes: city, forest)"));
+        assert!(msg("desert").contains("unknown scene 'desert' (built-in scenes: city, forest, office)"));
         assert!(msg("city:size=3").contains("unknown parameter 'size'"));
         assert!(msg("city:blocks=x").contains("whole number"));
         assert!(msg("city:blocks=0").contains("must be in"));

@@ -60,6 +60,44 @@ pub fn cylinder(soup: &mut TriangleSoup, base: DVec3, axis: DVec3, radius: f64, 
     soup.append(&positions, indices);
 }
 
+/// A closed UV sphere: `segments` around, `segments / 2` rings from pole
+/// to pole, each pole a fan (no triangle of zero area).
+pub fn sphere(soup: &mut TriangleSoup, centre: DVec3, radius: f64, segments: u32) {
+    let rings = (segments / 2).max(2);
+    let at = |ring: u32, k: u32| {
+        let polar = std::f64::consts::PI * f64::from(ring) / f64::from(rings);
+        let around = std::f64::consts::TAU * f64::from(k) / f64::from(segments);
+        centre + radius * DVec3::new(polar.sin() * around.cos(), polar.cos(), polar.sin() * around.sin())
+    };
+    // The rings between the poles, then the two poles.
+    let mut positions: Vec<DVec3> = (1..rings)
+        .flat_map(|ring| (0..segments).map(move |k| at(ring, k)))
+        .collect();
+    positions.push(centre + DVec3::Y * radius);
+    positions.push(centre - DVec3::Y * radius);
+    let (north, south) = ((rings - 1) * segments, (rings - 1) * segments + 1);
+    let vertex = |ring: u32, k: u32| (ring - 1) * segments + k % segments;
+    let caps = (0..segments).flat_map(|k| {
+        [
+            north,
+            vertex(1, k),
+            vertex(1, k + 1),
+            south,
+            vertex(rings - 1, k + 1),
+            vertex(rings - 1, k),
+        ]
+    });
+    let bands = (1..rings - 1).flat_map(|ring| {
+        (0..segments).flat_map(move |k| {
+            let (a, b) = (vertex(ring, k), vertex(ring, k + 1));
+            let (c, d) = (vertex(ring + 1, k), vertex(ring + 1, k + 1));
+            [a, d, b, a, c, d]
+        })
+    });
+    let indices: Vec<u32> = caps.chain(bands).collect();
+    soup.append(&positions, indices);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -84,6 +122,34 @@ mod tests {
         let b = Aabb::from_points(s.positions.iter().copied());
         assert!((b.max.y - 2.0).abs() < 1e-12 && b.min.y.abs() < 1e-12);
         assert!(b.max.x <= 0.5 + 1e-12 && b.max.x > 0.49);
+    }
+
+    #[test]
+    fn sphere_is_closed_and_bounded_and_encloses_a_ball() {
+        let mut s = TriangleSoup::default();
+        sphere(&mut s, DVec3::new(1.0, 2.0, 3.0), 0.5, 16);
+        // Two fans of 16 and 6 bands of 32.
+        assert_eq!(s.triangles(), 2 * 16 + 6 * 32);
+        assert_closed(&s);
+        let b = Aabb::from_points(s.positions.iter().copied());
+        assert!((b.max.y - 2.5).abs() < 1e-12 && (b.min.y - 1.5).abs() < 1e-12);
+        assert!(b.max.x <= 1.5 + 1e-12 && b.max.x > 1.49);
+        // Its triangles all turn one way (each edge's twin runs the other
+        // way, above) and enclose about the ball's volume.
+        let ball = 4.0 / 3.0 * std::f64::consts::PI * 0.125;
+        assert!((0.9 * ball..ball).contains(&volume(&s).abs()), "{}", volume(&s));
+    }
+
+    /// The signed volume the triangles enclose (its sign says which way
+    /// they turn).
+    fn volume(s: &TriangleSoup) -> f64 {
+        s.indices
+            .chunks(3)
+            .map(|t| {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|i| s.positions[i as usize]);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
     }
 
     fn area(s: &TriangleSoup) -> f64 {
