@@ -661,7 +661,7 @@ const SHARED_KINDS: &[(&str, PathKind)] = &[
 
 #[test]
 fn every_shared_model_and_built_in_scene_keeps_its_kind_of_path() {
-    for spec in ["city", "forest"] {
+    for spec in ["city", "forest", "office"] {
         let mut scene = load(&SceneSpec::Builtin(spec.into()), &LoadOptions::default()).unwrap();
         let generated = plan(None, &scene, Some(10)).unwrap();
         assert_eq!(generated.kind, PathKind::Walk, "{spec}: {}", generated.why);

@@ -348,7 +348,10 @@ fn objects_are_circled_and_built_in_streets_are_kept() {
     assert_eq!(generated.kind, PathKind::Orbit, "{}", generated.why);
     let city = load(&SceneSpec::Builtin("city:blocks=2".into()), &LoadOptions::default()).unwrap();
     let (path, why) = default_path(&city).unwrap();
-    assert!(path.source.ends_with("walk") && why == "the scene's streets", "{why}");
+    assert!(
+        path.source.ends_with("walk") && why == "the walk the scene was built with",
+        "{why}"
+    );
     let path = path.with_frames(40).unwrap();
     assert_eq!(frames_too_near(&path, &world_triangles(&city)), Vec::<u32>::new());
 }

@@ -9,8 +9,8 @@ use occlu::gpu::Resolution;
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::scene::{LoadOptions, Scene, SceneSpec, load};
 
-/// Heavy occlusion at two sizes, and little occlusion.
-pub const SCENES: [&str; 3] = ["city:blocks=8", "city:blocks=16", "forest"];
+/// Heavy occlusion at two sizes, little occlusion, and an interior.
+pub const SCENES: [&str; 4] = ["city:blocks=8", "city:blocks=16", "forest", "office"];
 
 /// Frames of each walk.
 pub const FRAMES: u32 = 120;

@@ -345,7 +345,7 @@ fn default_kind(
     focus: &mut Focus,
 ) -> Result<(PathKind, String, Option<Walk>), Stopped> {
     if scene.walk_hint.is_some() {
-        return Ok((PathKind::Walk, "the scene's streets".into(), None));
+        return Ok((PathKind::Walk, "the walk the scene was built with".into(), None));
     }
     if let Some(camera) = scene.animations.iter().find_map(|a| a.camera.as_ref()) {
         return Ok((

@@ -59,6 +59,7 @@ impl OfficeParams {
         let (mut rooms, mut seed) = (u64::from(d.rooms), d.seed);
         read_params(
             params,
+            // Two rows at least: the walk goes back along the second.
             &mut [("rooms", &mut rooms, 2..=64), ("seed", &mut seed, 0..=u64::MAX)],
         )?;
         Ok(OfficeParams {
@@ -169,8 +170,8 @@ impl Walls {
 }
 
 /// A room's furniture, its lowest corner at `corner`: a desk, a shelf of
-/// boxes along the far wall, and balls at random, on the floor or above
-/// it, in the corner the walk
+/// boxes along the far wall, and balls at random above the floor, in the
+/// corner the walk
 /// does not cross (it runs through the room's centre along x, and along z
 /// from the centre on in the rooms where it turns).
 fn furnish(builder: &mut SceneBuilder, name: &str, corner: DVec3, rng: &mut Rng) -> Result<(), GeometryError> {

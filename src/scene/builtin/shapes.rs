@@ -135,7 +135,11 @@ mod tests {
         assert!((b.max.y - 2.5).abs() < 1e-12 && (b.min.y - 1.5).abs() < 1e-12);
         assert!(b.max.x <= 1.5 + 1e-12 && b.max.x > 1.49);
         // Its triangles all turn one way (each edge's twin runs the other
-        // way, above) and enclose about the ball's volume.
+        // way, above), the cuboid's way, and enclose about the ball's
+        // volume.
+        let mut cube = TriangleSoup::default();
+        cuboid(&mut cube, DVec3::ZERO, DVec3::ONE);
+        assert_eq!(volume(&s).signum(), volume(&cube).signum());
         let ball = 4.0 / 3.0 * std::f64::consts::PI * 0.125;
         assert!((0.9 * ball..ball).contains(&volume(&s).abs()), "{}", volume(&s));
     }
