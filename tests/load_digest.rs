@@ -38,8 +38,8 @@ const BUILTIN_DIGESTS: &[&str] = &[
     "city:blocks=1,seed=7 @64 | 26320 triangles, 548 objects, 492 meshes, 48 parts, 48 closed | dbe6fbd4fa348d5a cdda60044daa414c",
     "forest | 495952 triangles, 2016 objects, 2016 meshes, 2016 parts, 2016 closed | 0d1a03b2c7ec4409 c30a4d4ab1ed1e17",
     "forest:trees=200,seed=3 @32 | 49744 triangles, 2384 objects, 2384 meshes, 216 parts, 216 closed | c90bf1f44df7cc22 2ad91e88f90718be",
-    "office | 108996 triangles, 721 objects, 721 meshes, 721 parts, 721 closed | ba185ebf4dd2597a 50ec84b2f33d987b",
-    "office:rooms=2,seed=3 @32 | 4356 triangles, 186 objects, 186 meshes, 33 parts, 33 closed | 341644ec60d82847 8ba6474fd996d452",
+    "office | 108996 triangles, 721 objects, 721 meshes, 721 parts, 721 closed | 2f20ba67bc1dbd86 753348661d7dd84f",
+    "office:rooms=2,seed=3 @32 | 4356 triangles, 186 objects, 186 meshes, 33 parts, 33 closed | c18af39b8cc65ac3 6701123650971ae8",
 ];
 
 /// Shared models loaded with a small cluster budget too, besides the

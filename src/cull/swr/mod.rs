@@ -1771,66 +1771,40 @@ mod tests {
         assert!(tried.iter().all(|&f| rasterised[f] == 36));
     }
 
-    #[test]
-    fn a_rest_ends_where_the_frustum_outgrows_the_one_whose_buffer_did_not_pay() {
-        // Looking down −Z, one cube, nothing behind it: frame 1's buffer
-        // hides nothing, so 2 to 8 would rest. From frame 3 the camera
-        // looks down −X along a column of six cubes (six times the
-        // triangles), the nearest hiding the rest.
-        let column = (0..6).map(|k| DVec3::new(-3.0 - 2.0 * f64::from(k), -0.5, -0.5));
-        let corners: Vec<DVec3> = std::iter::once(DVec3::new(-0.5, -0.5, -3.0)).chain(column).collect();
-        let (scene, hierarchy) = cubes(&corners);
-        let ahead = camera_down_z();
-        let left = Camera {
-            rotation: glam::DQuat::from_rotation_y(90f64.to_radians()),
-            ..ahead
-        };
-        let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
-        let mut drawn = Vec::new();
-        let mut rested = Vec::new();
-        for frame in 0..6 {
-            let camera = if frame < 3 { &ahead } else { &left };
-            let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
-            swr.frame(&mut calls, &input(frame, camera, &scene, &hierarchy));
-            let mut objects = calls.drawn();
-            objects.sort_unstable();
-            drawn.push(objects);
-            rested.push(swr.frustum_only());
-        }
-        assert_eq!(rested, [false, false, true, false, false, false]);
-        // Frame 3 takes the column in its frustum as occluders (last
-        // frame's cube is off screen), and the nearest cube hides the rest.
-        assert!(drawn[3..].iter().all(|objects| objects == &[1]), "{drawn:?}");
+    /// Six cubes in a column down −X from the eye, the nearest hiding the
+    /// rest.
+    fn column_down_x() -> impl Iterator<Item = DVec3> {
+        (0..6).map(|k| DVec3::new(-3.0 - 2.0 * f64::from(k), -0.5, -0.5))
     }
 
-    #[test]
-    fn a_rest_counts_what_the_failed_buffer_hid_as_in_its_frustum() {
-        // Down −X, a column of six cubes: the nearest hides five, but
-        // drawing costs next to nothing, so the buffer does not pay (frame
-        // 1) and 2 to 8 rest. Its frustum held the six (72 triangles),
-        // twelve of them drawn. From frame 3 the camera looks down −Z at
-        // five cubes side by side (60 triangles): over four times what was
-        // drawn, not over four times what the frustum held, so the rest
-        // goes on.
-        let column = (0..6).map(|k| DVec3::new(-3.0 - 2.0 * f64::from(k), -0.5, -0.5));
-        let row = (0..5).map(|k| DVec3::new(-4.0 + 2.0 * f64::from(k), -0.5, -10.0));
-        let corners: Vec<DVec3> = column.chain(row).collect();
-        let (scene, hierarchy) = cubes(&corners);
-        let ahead = camera_down_z();
-        let left = Camera {
+    /// Which of `frames` frames `swr` rested in, and what each drew, over
+    /// cubes at `corners`, the eye at the origin looking down −X where
+    /// `looks_down_x` says and down −Z elsewhere; every frame takes 10 ms,
+    /// and drawing a triangle `ms_a_triangle` of it.
+    fn rests_while_turning(
+        corners: &[DVec3],
+        frames: u32,
+        looks_down_x: impl Fn(u32) -> bool,
+        ms_a_triangle: f64,
+    ) -> (Vec<bool>, Vec<Vec<u32>>) {
+        let (scene, hierarchy) = cubes(corners);
+        let down_z = camera_down_z();
+        let down_x = Camera {
             rotation: glam::DQuat::from_rotation_y(90f64.to_radians()),
-            ..ahead
+            ..down_z
         };
         let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
-        let mut rested = Vec::new();
-        let mut drawn_triangles = None;
-        for frame in 0..5 {
-            let camera = if frame < 3 { &left } else { &ahead };
+        let (mut rested, mut drawn) = (Vec::new(), Vec::<Vec<u32>>::new());
+        for frame in 0..frames {
+            let camera = if looks_down_x(frame) { &down_x } else { &down_z };
             let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
-            let previous = drawn_triangles.map(|triangles| PreviousFrame {
-                frame_ms: 10.0,
-                render_ms: 1e-9,
-                triangles_drawn: triangles,
+            let previous = drawn.last().map(|objects| {
+                let triangles = 12 * objects.len() as u64;
+                PreviousFrame {
+                    frame_ms: 10.0,
+                    render_ms: triangles as f64 * ms_a_triangle,
+                    triangles_drawn: triangles,
+                }
             });
             swr.frame(
                 &mut calls,
@@ -1839,9 +1813,40 @@ mod tests {
                     ..input(frame, camera, &scene, &hierarchy)
                 },
             );
-            drawn_triangles = Some(12 * calls.drawn().len() as u64);
+            let mut objects = calls.drawn();
+            objects.sort_unstable();
+            drawn.push(objects);
             rested.push(swr.frustum_only());
         }
+        (rested, drawn)
+    }
+
+    #[test]
+    fn a_rest_ends_where_the_frustum_outgrows_the_one_whose_buffer_did_not_pay() {
+        // Down −Z, one cube, nothing behind it: frame 1's buffer hides
+        // nothing, so 2 to 8 would rest. From frame 3 the eye looks down
+        // −X along the column (six times the triangles).
+        let corners: Vec<DVec3> = std::iter::once(DVec3::new(-0.5, -0.5, -3.0))
+            .chain(column_down_x())
+            .collect();
+        let (rested, drawn) = rests_while_turning(&corners, 6, |frame| frame >= 3, 1.0);
+        assert_eq!(rested, [false, false, true, false, false, false]);
+        // Frame 3 takes the column in its frustum as occluders (last
+        // frame's cube is off screen), and the nearest cube hides the rest.
+        assert!(drawn[3..].iter().all(|objects| objects == &[1]), "{drawn:?}");
+    }
+
+    #[test]
+    fn a_rest_counts_what_the_failed_buffer_hid_as_in_its_frustum() {
+        // Down −X, the column: the nearest cube hides five, but drawing
+        // costs next to nothing, so the buffer does not pay (frame 1) and
+        // 2 to 8 rest. Its frustum held the six (72 triangles), twelve of
+        // them drawn. From frame 3 the eye looks down −Z at five cubes
+        // side by side (60 triangles): over four times what was drawn,
+        // not over four times what the frustum held, so the rest goes on.
+        let row = (0..5).map(|k| DVec3::new(-4.0 + 2.0 * f64::from(k), -0.5, -10.0));
+        let corners: Vec<DVec3> = column_down_x().chain(row).collect();
+        let (rested, _) = rests_while_turning(&corners, 5, |frame| frame < 3, 1e-12);
         assert_eq!(rested, [false, false, true, true, true]);
     }
 

@@ -89,29 +89,19 @@ pub fn generate(p: &OfficeParams, builder: &mut SceneBuilder) -> Result<(), Geom
         DVec3::new(side + reach, 0.0, side + reach),
     );
     add(builder, "ground", &ground)?;
-    // Walls along x at z = row · ROOM, one per room they close; then along
-    // z. A wall between two rooms has a doorway, as has the first room's
-    // wall to the outside at x = 0.
-    for row in 0..=n {
+    // At each line between rooms (and the floor's edges), a wall per room
+    // along x (at z = line · ROOM) and one along z (at x = line · ROOM). A
+    // wall between two rooms has a doorway, as has the first room's wall
+    // to the outside at x = 0.
+    for line in 0..=n {
         for room in 0..n {
-            let door = (1..n).contains(&row);
-            let wall = wall(f64::from(row) * ROOM, f64::from(room) * ROOM, door);
-            add(
-                builder,
-                &format!("wall_x{row}_{room}"),
-                &wall.map(|v| DVec3::new(v.y, v.z, v.x)),
-            )?;
-        }
-    }
-    for column in 0..=n {
-        for room in 0..n {
-            let door = (1..n).contains(&column) || (column == 0 && room == 0);
-            let wall = wall(f64::from(column) * ROOM, f64::from(room) * ROOM, door);
-            add(
-                builder,
-                &format!("wall_z{column}_{room}"),
-                &wall.map(|v| DVec3::new(v.x, v.z, v.y)),
-            )?;
+            let (across, along) = (f64::from(line) * ROOM, f64::from(room) * ROOM);
+            let between = (1..n).contains(&line);
+            let along_x = wall(across, along, between).map(|v| DVec3::new(v.y, v.z, v.x));
+            add(builder, &format!("wall_x{line}_{room}"), &along_x)?;
+            let entrance = line == 0 && room == 0;
+            let along_z = wall(across, along, between || entrance).map(|v| DVec3::new(v.x, v.z, v.y));
+            add(builder, &format!("wall_z{line}_{room}"), &along_z)?;
         }
     }
     let mut rng = Rng::new(p.seed);
