@@ -29,7 +29,8 @@
 //! frames, and longer each time it fails again, or as long as 1.5 % of
 //! the frames' time pays for where it costs much of a frame (MOC leaves
 //! that to its caller), until the frustum holds several times the
-//! triangles it held then (a camera through a doorway). Occluders are
+//! triangles it held then (a camera turning from a wall into a room).
+//! Occluders are
 //! whole visible objects (the clusters of one mesh taken together, so
 //! that a mesh cut into clusters is one surface), their
 //! triangles taken in the f64 projection (MOC and Godot take authored
@@ -454,18 +455,20 @@ impl SoftwareOcclusionCulling {
 /// but 1.5 % (more for one dearer than about 2.6 frames, which the
 /// longest rest caps). A rest ends early where the frustum comes to hold
 /// several times the triangles it held when the buffer did not pay
-/// ([`outgrew`]): a camera passing a doorway faces a wall, where a buffer
-/// hides nothing, then a room, where it hides most; the frame that ends
+/// ([`outgrew`]): a camera that faced a wall, where a buffer hides
+/// nothing, turning into a room, where it hides most; the frame that ends
 /// the rest takes the objects in its frustum as occluders, as the frame
 /// after a resting one does. Walking 120 frames through an office floor
-/// of 10 × 10 rooms with doorways (two runs on each of lavapipe and
-/// llvmpipe, alternating with the rule before), `swr` rested in 29–49
+/// of 10 × 10 rooms with doorways (turning at the floor's outer walls,
+/// and passing through balls in its way; two runs on each of lavapipe
+/// and llvmpipe, alternating with the rule before), `swr` rested in 29–49
 /// frames where `roc` hid more than a tenth of the frustum and took
 /// 0.76–0.96 of `roc`'s time; with rests ending where the frustum outgrew
 /// the failed one, it rested in 24 such frames and took 0.73–0.76 of
-/// `roc`'s time (the rests left are those of a camera walking on into a
-/// room from a doorway, whose frustum shrinks as its walls come nearer).
-/// Leaving occlusion out is always safe.
+/// `roc`'s time (the rests left mostly follow a frame in which a ball the
+/// eye then passed filled the view: past it, last frame's visible set,
+/// the ball, hides nothing, and the frustum ahead shrinks as the walls
+/// come nearer). Leaving occlusion out is always safe.
 #[derive(Clone, Copy, Debug)]
 struct Rest {
     /// Frames left of the current rest.
