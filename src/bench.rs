@@ -507,20 +507,28 @@ fn skipped_modes(runs: &[ModeRun], unsupported: impl Fn(ModeId) -> Option<&'stat
             });
         }
     };
+    // The runs' own modes first, so that a mode both run and an `auto`
+    // candidate is skipped for itself, whatever the order of `--modes`.
     for run in runs {
         if let Some(reason) = unsupported(run.mode) {
             skip(run.mode, reason.to_string());
         }
-        if run.mode != ModeId::Auto {
-            continue;
-        }
-        for &candidate in ModeId::ALL.iter().filter(|m| m.info().auto != Candidacy::Never) {
+    }
+    let candidates = || {
+        ModeId::ALL
+            .iter()
+            .copied()
+            .filter(|m| m.info().auto != Candidacy::Never)
+    };
+    for run in runs.iter().filter(|run| run.mode == ModeId::Auto) {
+        for candidate in candidates() {
             let given: Vec<&str> = run.params.given_for(candidate).map(|(key, _)| key).collect();
             if let (Some(reason), false) = (unsupported(candidate), given.is_empty()) {
+                let verb = if given.len() == 1 { "is" } else { "are" };
                 let unused = given.join(", ");
                 skip(
                     candidate,
-                    format!("{reason}: auto runs without it, so {unused} is not used"),
+                    format!("{reason}: auto runs without it, so {unused} {verb} not used"),
                 );
             }
         }
@@ -663,11 +671,20 @@ mod tests {
         );
         // Not given one, auto's summary says which candidates ran: no note.
         assert!(skipped_modes(&[run(ModeId::Auto, ModeParams::default())], no_pixel_counts).is_empty());
-        // Run itself too, chc is skipped once, for itself.
-        let both = [run(ModeId::Chc, given.clone()), run(ModeId::Auto, given)];
-        let skipped = skipped_modes(&both, no_pixel_counts);
-        assert_eq!(skipped.len(), 1);
-        assert_eq!(skipped[0].reason, "no pixel counts");
+        // Run itself too, chc is skipped once, for itself, in either order.
+        let chc = || run(ModeId::Chc, given.clone());
+        let auto = || run(ModeId::Auto, given.with("chc.r_split", "1"));
+        for both in [[chc(), auto()], [auto(), chc()]] {
+            let skipped = skipped_modes(&both, no_pixel_counts);
+            assert_eq!(skipped.len(), 1);
+            assert_eq!(skipped[0].reason, "no pixel counts");
+        }
+        // Several parameters unused.
+        let skipped = skipped_modes(&[auto()], no_pixel_counts);
+        assert_eq!(
+            skipped[0].reason,
+            "no pixel counts: auto runs without it, so chc.r_split, chc.visible_for are not used"
+        );
     }
 
     #[test]
