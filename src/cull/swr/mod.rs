@@ -29,11 +29,9 @@
 //! frames, and longer each time it fails again, or as long as 1.5 % of
 //! the frames' time pays for where it costs much of a frame (MOC leaves
 //! that to its caller), until the frustum holds several times the
-//! triangles it held then (a camera turning from a wall into a room); a
-//! buffer built of a set the eye has left (the frame found visible
-//! several times what it was built of) does not rest. Occluders are
-//! whole visible objects (the clusters of one mesh taken together, so
-//! that a mesh cut into clusters is one surface), their
+//! triangles it held then (a camera turning from a wall into a room).
+//! Occluders are whole visible objects (the clusters of one mesh taken
+//! together, so that a mesh cut into clusters is one surface), their
 //! triangles taken in the f64 projection (MOC and Godot take authored
 //! occluder meshes, rasterised in f32 with SIMD: here it is scalar); which
 //! of a mesh's triangles share an edge is found for every mesh that may
@@ -181,7 +179,7 @@ const THREADS: ParamInfo = ParamInfo {
 const RESTS: ParamInfo = ParamInfo {
     key: "rests",
     default: "true",
-    summary: "let a buffer that spared less drawing than it cost rest (7 frames, then 15, then 31 while it keeps failing, or as many as 1.5 % of the frames' time pays for its cost, up to 127: a frustum traversal only), until the frustum holds over 4 times the triangles it held then, and not after a buffer built of a set the eye has left; false builds one every frame",
+    summary: "let a buffer that spared less drawing than it cost rest (7 frames, then 15, then 31 while it keeps failing, or as many as 1.5 % of the frames' time pays for its cost, up to 127: a frustum traversal only), until the frustum holds over 4 times the triangles it held then; false builds one every frame",
 };
 
 /// The most threads `swr.threads` may ask for (or a frame use): each holds
@@ -459,24 +457,17 @@ impl SoftwareOcclusionCulling {
 /// ([`outgrew`]): a camera that faced a wall, where a buffer hides
 /// nothing, turning into a room, where it hides most; the frame that ends
 /// the rest takes the objects in its frustum as occluders, as the frame
-/// after a resting one does. And a buffer that did not pay rests only
-/// where it was built of about what the frame found visible: where the
-/// frame found over [`OUTGROWN`](crate::cull::traversal::OUTGROWN) times
-/// the triangles of its candidates (last frame's visible objects still
-/// on screen), they were a set the eye has left (a ball it walked past,
-/// which filled the frame before), and the next frame builds a buffer of
-/// what this one found instead. Walking 120 frames through an office
-/// floor of 10 × 10 rooms with doorways (turning at the floor's outer
-/// walls, and passing through balls in its way; two runs on each of
-/// lavapipe and llvmpipe, alternating with the rule before), `swr` rested
-/// in 29–49 frames where `roc` hid more than a tenth of the frustum and
-/// took 0.76–0.96 of `roc`'s time; with rests ending where the frustum
-/// outgrew the failed one, 24 such frames and 0.73–0.76; with neither
-/// begun after a buffer of a set the eye has left, 3 such frames and
-/// 0.70–0.76 (against 0.71–0.80 in the same runs of the rule before).
-/// Where `swr` rests in its own runs of the other scenes (the bunny, the
-/// engine's and den-haag's orbits, the forest), it rests in as many
-/// frames as before, within two. Leaving occlusion out is always safe.
+/// after a resting one does. Walking 120 frames through an office floor
+/// of 10 × 10 rooms with doorways (turning at the floor's outer walls,
+/// and passing through balls in its way; two runs on each of lavapipe
+/// and llvmpipe, alternating with the rule before), `swr` rested in 29–49
+/// frames where `roc` hid more than a tenth of the frustum and took
+/// 0.76–0.96 of `roc`'s time; with rests ending where the frustum outgrew
+/// the failed one, it rested in 24 such frames and took 0.73–0.76 of
+/// `roc`'s time (the rests left mostly follow a frame in which a ball the
+/// eye then passed filled the view: past it, last frame's visible set,
+/// the ball, hides nothing, and the frustum ahead shrinks as the walls
+/// come nearer). Leaving occlusion out is always safe.
 #[derive(Clone, Copy, Debug)]
 struct Rest {
     /// Frames left of the current rest.
@@ -963,11 +954,6 @@ impl Culler for SoftwareOcclusionCulling {
             };
             self.candidates.push(Candidate { on_screen, object: o });
         }
-        // What the buffer is built of, before the budget picks occluders
-        // among it ([`Rest`]).
-        let built_of: u64 = (self.candidates.iter())
-            .map(|c| u64::from(scene.objects[c.object as usize].triangles))
-            .sum();
         self.candidates
             .sort_unstable_by(|a, b| b.area().total_cmp(&a.area()).then(a.object.cmp(&b.object)));
         let mut budget = self.params.triangles;
@@ -1053,22 +1039,17 @@ impl Culler for SoftwareOcclusionCulling {
         if !self.occluders.is_empty() && self.params.rests && !input.warm_up {
             let spent_ms = started.elapsed().as_secs_f64() * 1e3;
             let cost = input.previous.map_or(0.0, |p| spent_ms / p.frame_ms);
-            if pays(hidden_triangles, spent_ms, input.previous) {
-                self.rest.after(true, cost, 0);
+            let paid = pays(hidden_triangles, spent_ms, input.previous);
+            // What the frustum held: what was found visible and what was
+            // hidden (a hidden node's objects counted whole, even where
+            // they reach past the frustum, which only makes the rest end
+            // later).
+            let in_frustum = if paid {
+                0
             } else {
-                let found = triangles_of(scene, &self.found);
-                // A buffer of a set the eye has left (last frame saw one
-                // object, which it has since passed) says nothing of
-                // occlusion here: where the frame found visible several
-                // times what it was built of, the next frame builds one
-                // of that instead of resting. What the frustum held is
-                // what was found and what was hidden (a hidden node's
-                // objects counted whole, even where they reach past the
-                // frustum, which only makes the rest end later).
-                if !outgrew(found, built_of) {
-                    self.rest.after(false, cost, hidden_triangles + found);
-                }
-            }
+                hidden_triangles + triangles_of(scene, &self.found)
+            };
+            self.rest.after(paid, cost, in_frustum);
         }
 
         // 5. The visible objects; they are next frame's candidates.
@@ -1869,54 +1850,6 @@ mod tests {
         let corners: Vec<DVec3> = column_down_x().chain(row).collect();
         let (rested, _) = rests_while_turning(&corners, 5, |frame| frame < 3, 1e-12);
         assert_eq!(rested, [false, false, true, true, true]);
-    }
-
-    #[test]
-    fn a_buffer_of_a_set_the_eye_has_left_does_not_rest() {
-        // Down −Z, a column of four cubes (the nearest hides the rest) and
-        // one aside. Handed the cube aside alone as last frame's visible
-        // set, frame 0's buffer hides nothing, while it finds five times
-        // its occluders' triangles visible: frame 1 builds a buffer of
-        // those instead of resting, and hides the column's back three.
-        let column = (0..4).map(|k| DVec3::new(-0.5, -0.5, -3.0 - 2.0 * f64::from(k)));
-        let corners: Vec<DVec3> = column.chain([DVec3::new(3.0, -0.5, -10.0)]).collect();
-        let (scene, hierarchy) = cubes(&corners);
-        let camera = camera_down_z();
-        let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&ModeParams::default()).unwrap());
-        swr.seed_visible(&[4]);
-        let mut drawn = Vec::new();
-        for frame in 0..3 {
-            let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
-            swr.frame(&mut calls, &input(frame, &camera, &scene, &hierarchy));
-            let mut objects = calls.drawn();
-            objects.sort_unstable();
-            drawn.push(objects);
-        }
-        assert_eq!(drawn, [vec![0, 1, 2, 3, 4], vec![0, 4], vec![0, 4]]);
-    }
-
-    #[test]
-    fn a_buffer_rests_where_it_was_built_of_what_the_frame_found_however_few_occluders_it_took() {
-        // Five cubes side by side, nothing hidden, occluders one cube's
-        // triangles at most: the buffer is built of the five (last
-        // frame's visible objects on screen) and takes one; it hides
-        // nothing of the five the frame finds, so frames 2 to 8 rest.
-        let corners: Vec<DVec3> = (0..5)
-            .map(|k| DVec3::new(-6.0 + 2.5 * f64::from(k), -0.5, -12.0))
-            .collect();
-        let (scene, hierarchy) = cubes(&corners);
-        let camera = camera_down_z();
-        let params = ModeParams::default().with("swr.triangles", "12");
-        let mut swr = SoftwareOcclusionCulling::new(SwrParams::from_params(&params).unwrap());
-        let rested: Vec<bool> = (0..4)
-            .map(|frame| {
-                let mut calls = Recording::new(|_: &Aabb| -> bool { panic!("swr asks the GPU nothing") });
-                let stats = swr.frame(&mut calls, &input(frame, &camera, &scene, &hierarchy));
-                assert!(stats.occluder_triangles <= 12);
-                swr.frustum_only()
-            })
-            .collect();
-        assert_eq!(rested, [false, false, true, true]);
     }
 
     #[test]
