@@ -20,7 +20,7 @@ use crate::animation::{Animation, AnimationError, AnimationOptions, DEFAULT_SCAL
 use crate::camera::generate::{PLANNING_TESTS, default_path_heard};
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::{BenchPlan, ModeRun};
-use crate::cull::{Candidacy, Culler, Labeled, ModeError, ModeId};
+use crate::cull::{Culler, Labeled, ModeError, ModeId, auto_candidates};
 use crate::gpu::{AdapterReport, GpuContext, GpuError};
 use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{FrameStats, FrameTimeline, MissedObject, ModeDescription, ModeSummary, summarize};
@@ -514,14 +514,8 @@ fn skipped_modes(runs: &[ModeRun], unsupported: impl Fn(ModeId) -> Option<&'stat
             skip(run.mode, reason.to_string());
         }
     }
-    let candidates = || {
-        ModeId::ALL
-            .iter()
-            .copied()
-            .filter(|m| m.info().auto != Candidacy::Never)
-    };
     for run in runs.iter().filter(|run| run.mode == ModeId::Auto) {
-        for candidate in candidates() {
+        for candidate in auto_candidates() {
             let given: Vec<&str> = run.params.given_for(candidate).map(|(key, _)| key).collect();
             if let (Some(reason), false) = (unsupported(candidate), given.is_empty()) {
                 let verb = if given.len() == 1 { "is" } else { "are" };

@@ -50,10 +50,11 @@ impl ModeParams {
     /// `swr`). Every value is parsed now.
     pub fn parse(items: &[String], modes: &[ModeId]) -> Result<ModeParams, ModeError> {
         let auto_runs = modes.contains(&ModeId::Auto);
+        let candidates: Vec<ModeId> = auto_candidates().filter(|_| auto_runs).collect();
         let built: Vec<ModeId> = ModeId::ALL
             .iter()
             .copied()
-            .filter(|m| modes.contains(m) || (auto_runs && m.info().auto != Candidacy::Never))
+            .filter(|m| modes.contains(m) || candidates.contains(m))
             .collect();
         let mut values = BTreeMap::new();
         for item in items {
@@ -94,6 +95,15 @@ impl ModeParams {
         }
         Ok(params)
     }
+}
+
+/// The modes `auto` may run, those whose entry allows it ([`Candidacy`]),
+/// in [`ModeId::ALL`]'s order; which of them it runs, the adapter decides.
+pub fn auto_candidates() -> impl Iterator<Item = ModeId> {
+    ModeId::ALL
+        .iter()
+        .copied()
+        .filter(|m| m.info().auto != Candidacy::Never)
 }
 
 /// Every mode's registry entry, in [`ModeId::ALL`]'s order.

@@ -87,10 +87,7 @@ impl Focus {
                 bounds: objects
                     .iter()
                     .fold(Aabb::EMPTY, |b, &o| b.union(scene.objects[o as usize].bounds)),
-                triangles: objects
-                    .iter()
-                    .map(|&o| u64::from(scene.objects[o as usize].triangles))
-                    .sum(),
+                triangles: scene.triangles_of(objects),
                 what: LeftOut::Part(part),
             })
             .collect();

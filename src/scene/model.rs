@@ -151,6 +151,14 @@ impl Scene {
         self.objects.iter().map(|o| u64::from(o.triangles)).sum()
     }
 
+    /// The triangles of `objects` (indices into [`Scene::objects`]).
+    pub fn triangles_of(&self, objects: &[u32]) -> u64 {
+        objects
+            .iter()
+            .map(|&o| u64::from(self.objects[o as usize].triangles))
+            .sum()
+    }
+
     /// The corners of triangle `triangle` of mesh `mesh`, in the mesh's
     /// local frame.
     pub fn triangle(&self, mesh: u32, triangle: u32) -> [DVec3; 3] {

@@ -97,6 +97,7 @@ use crate::bounds::Aabb;
 use crate::cull::culler::{Culler, FrameInput, Pick, TraversalStats};
 use crate::cull::gpu_walk::VisibleLists;
 use crate::cull::mode::{Candidacy, Carries, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
+use crate::cull::registry::auto_candidates;
 use crate::cull::traversal::frustum_cull_subtree;
 use crate::gpu::{BoxTest, BoxVisibility, Frame, GpuAudit, GpuContext, GpuError, GpuFrame, GpuSetup};
 use crate::object_set::ObjectSet;
@@ -442,11 +443,9 @@ impl AutoCulling {
     /// nothing else can hide.
     pub fn new(scene: &Scene, params: &ModeParams) -> Result<AutoCulling, ModeError> {
         let something_may_hide = scene.objects.len() >= 2;
-        let candidates = ModeId::ALL
-            .iter()
-            .filter(|id| id.info().auto != Candidacy::Never)
-            .filter(|&&id| something_may_hide || family(id) == Family::Frustum)
-            .map(|&id| {
+        let candidates = auto_candidates()
+            .filter(|&id| something_may_hide || family(id) == Family::Frustum)
+            .map(|id| {
                 Ok(Candidate {
                     id,
                     culler: id.create(scene, params)?,
@@ -577,11 +576,7 @@ impl AutoCulling {
             &mut self.in_frustum,
             &mut TraversalStats::default(),
         );
-        let objects = &input.scene.objects;
-        self.in_frustum
-            .iter()
-            .map(|&o| u64::from(objects[o as usize].triangles))
-            .sum()
+        input.scene.triangles_of(&self.in_frustum)
     }
 
     /// A warm-up frame: every candidate renders the frame from a cleared

@@ -532,14 +532,6 @@ impl Rest {
     }
 }
 
-/// The triangles of `objects`.
-fn triangles_of(scene: &Scene, objects: &[u32]) -> u64 {
-    objects
-        .iter()
-        .map(|&o| u64::from(scene.objects[o as usize].triangles))
-        .sum()
-}
-
 /// Whether a buffer that hid `hidden` triangles, at a cost of `spent_ms`
 /// of this frame's CPU time, pays for itself: it hid something and, where
 /// the mode's previous frame says what its drawing cost a triangle, the
@@ -904,7 +896,7 @@ impl Culler for SoftwareOcclusionCulling {
             );
             // One pass over the objects found, which a resting frame
             // draws anyway.
-            resting = !self.rest.ends_where_outgrown(triangles_of(scene, &self.found));
+            resting = !self.rest.ends_where_outgrown(scene.triangles_of(&self.found));
             if resting {
                 stats = frustum_stats;
             } else {
@@ -1047,7 +1039,7 @@ impl Culler for SoftwareOcclusionCulling {
             let in_frustum = if paid {
                 0
             } else {
-                hidden_triangles + triangles_of(scene, &self.found)
+                hidden_triangles + scene.triangles_of(&self.found)
             };
             self.rest.after(paid, cost, in_frustum);
         }

@@ -97,10 +97,10 @@ pub fn generate(p: &OfficeParams, builder: &mut SceneBuilder) -> Result<(), Geom
         for room in 0..n {
             let (across, along) = (f64::from(line) * ROOM, f64::from(room) * ROOM);
             let between = (1..n).contains(&line);
-            let along_x = wall(across, along, between).map(|v| DVec3::new(v.y, v.z, v.x));
+            let along_x = wall(across, along, between, |v| DVec3::new(v.y, v.z, v.x));
             add(builder, &format!("wall_x{line}_{room}"), &along_x)?;
             let entrance = line == 0 && room == 0;
-            let along_z = wall(across, along, between || entrance).map(|v| DVec3::new(v.x, v.z, v.y));
+            let along_z = wall(across, along, between || entrance, |v| DVec3::new(v.x, v.z, v.y));
             add(builder, &format!("wall_z{line}_{room}"), &along_z)?;
         }
     }
@@ -116,47 +116,33 @@ pub fn generate(p: &OfficeParams, builder: &mut SceneBuilder) -> Result<(), Geom
 }
 
 /// A wall across at `across`, along one room from `along`, with a doorway
-/// in its middle where `door`: its boxes in (across, along, up)
-/// coordinates, which the caller turns into the scene's.
-fn wall(across: f64, along: f64, door: bool) -> Walls {
-    let span = |a: f64, b: f64, low: f64, high: f64| {
-        (
+/// in its middle where `door`, as one mesh: its boxes made in (across,
+/// along, up) coordinates and placed by `to_scene` (which swaps axes
+/// only, so a box stays a box).
+fn wall(across: f64, along: f64, door: bool, to_scene: impl Fn(DVec3) -> DVec3) -> TriangleSoup {
+    let mut soup = TriangleSoup::default();
+    let mut span = |a: f64, b: f64, low: f64, high: f64| {
+        let corners = [
             DVec3::new(across - WALL / 2.0, a, low),
             DVec3::new(across + WALL / 2.0, b, high),
-        )
+        ]
+        .map(&to_scene);
+        cuboid(&mut soup, corners[0].min(corners[1]), corners[0].max(corners[1]));
     };
     let middle = along + ROOM / 2.0;
-    let boxes = if door {
-        vec![
-            span(along, middle - DOOR_WIDTH / 2.0, 0.0, WALL_HEIGHT),
-            span(middle + DOOR_WIDTH / 2.0, along + ROOM, 0.0, WALL_HEIGHT),
-            span(
-                middle - DOOR_WIDTH / 2.0,
-                middle + DOOR_WIDTH / 2.0,
-                DOOR_HEIGHT,
-                WALL_HEIGHT,
-            ),
-        ]
+    if door {
+        span(along, middle - DOOR_WIDTH / 2.0, 0.0, WALL_HEIGHT);
+        span(middle + DOOR_WIDTH / 2.0, along + ROOM, 0.0, WALL_HEIGHT);
+        span(
+            middle - DOOR_WIDTH / 2.0,
+            middle + DOOR_WIDTH / 2.0,
+            DOOR_HEIGHT,
+            WALL_HEIGHT,
+        );
     } else {
-        vec![span(along, along + ROOM, 0.0, WALL_HEIGHT)]
-    };
-    Walls(boxes)
-}
-
-/// A wall's boxes, corner to corner, in (across, along, up) coordinates.
-struct Walls(Vec<(DVec3, DVec3)>);
-
-impl Walls {
-    /// Its boxes as one mesh, each corner mapped by `to_scene` (which
-    /// swaps axes only, so a box stays a box).
-    fn map(&self, to_scene: impl Fn(DVec3) -> DVec3) -> TriangleSoup {
-        let mut soup = TriangleSoup::default();
-        for &(a, b) in &self.0 {
-            let (a, b) = (to_scene(a), to_scene(b));
-            cuboid(&mut soup, a.min(b), a.max(b));
-        }
-        soup
+        span(along, along + ROOM, 0.0, WALL_HEIGHT);
     }
+    soup
 }
 
 /// A room's furniture, its lowest corner at `corner`: a desk, a shelf of
