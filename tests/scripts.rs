@@ -134,6 +134,40 @@ fn traced_run(dir: &Path, name: &str, summary: &str, rows: &[&str]) -> std::path
 /// diagonal of 13.
 const SUMMARY: &str = "{\n  \"scene\": {\n    \"bounds_min\": [\n      -1,\n      0.5,\n      -1.2e1\n    ],\n    \"bounds_max\": [\n      2,\n      4.5,\n      0\n    ]\n  }\n}\n";
 
+/// [`SUMMARY`] with `swr` among its modes, with `rests` as its parameter
+/// (pretty, as a bench writes it).
+fn summary_with_swr(rests: bool) -> String {
+    let mode = format!(
+        "  \"modes\": [\n    {{\n      \"name\": \"swr\",\n      \"conservative\": true,\n      \"parameters\": {{\n        \"layers\": 4,\n        \"rests\": {rests},\n        \"threads\": 0\n      }},\n      \"frames\": 1\n    }}\n  ],\n"
+    );
+    SUMMARY.replacen("{\n", &format!("{{\n{mode}"), 1)
+}
+
+#[test]
+fn auto_trace_takes_swr_only_from_a_run_whose_buffer_never_rested() {
+    let dir = tempfile::tempdir().unwrap();
+    let trace = dir.path().join("trace.csv");
+    let rows = ["vfc,0,5.0,100,1,2,3,0,0,-1", "swr,0,3.0,40,1,2,3,0,0,-1"];
+    let header = "frame,eye_x,eye_y,eye_z,forward_x,forward_y,forward_z,vfc_ms,vfc_triangles";
+    for (rests, expected) in [
+        (
+            false,
+            format!("{header},swr_ms,swr_triangles\n0,1,2,3,0,0,-1,5.000,100,3.000,40\n"),
+        ),
+        (true, format!("{header}\n0,1,2,3,0,0,-1,5.000,100\n")),
+    ] {
+        let run = traced_run(dir.path(), &format!("rests-{rests}"), &summary_with_swr(rests), &rows);
+        let (code, err) = auto_trace(&run, &trace);
+        assert_eq!(code, 0, "{err}");
+        let text = std::fs::read_to_string(&trace).unwrap();
+        assert_eq!(
+            text.lines().skip(2).collect::<Vec<_>>().join("\n") + "\n",
+            expected,
+            "swr.rests={rests}"
+        );
+    }
+}
+
 #[test]
 fn auto_trace_keeps_the_replayed_candidates_and_the_camera_frame_by_frame_and_refuses_a_run_it_cannot_trace() {
     let dir = tempfile::tempdir().unwrap();
