@@ -149,16 +149,19 @@ fn auto_trace_takes_swr_only_from_a_run_whose_buffer_never_rested() {
     let trace = dir.path().join("trace.csv");
     let rows = ["vfc,0,5.0,100,1,2,3,0,0,-1", "swr,0,3.0,40,1,2,3,0,0,-1"];
     let header = "frame,eye_x,eye_y,eye_z,forward_x,forward_y,forward_z,vfc_ms,vfc_triangles";
-    for (rests, expected) in [
+    let rested = "auto-trace: swr left out: its buffer rested in this run (record it with --param swr.rests=false)\n";
+    for (rests, expected, note) in [
         (
             false,
             format!("{header},swr_ms,swr_triangles\n0,1,2,3,0,0,-1,5.000,100,3.000,40\n"),
+            "",
         ),
-        (true, format!("{header}\n0,1,2,3,0,0,-1,5.000,100\n")),
+        (true, format!("{header}\n0,1,2,3,0,0,-1,5.000,100\n"), rested),
     ] {
         let run = traced_run(dir.path(), &format!("rests-{rests}"), &summary_with_swr(rests), &rows);
         let (code, err) = auto_trace(&run, &trace);
         assert_eq!(code, 0, "{err}");
+        assert_eq!(err, note, "swr.rests={rests}");
         let text = std::fs::read_to_string(&trace).unwrap();
         assert_eq!(
             text.lines().skip(2).collect::<Vec<_>>().join("\n") + "\n",
