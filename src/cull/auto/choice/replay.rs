@@ -59,9 +59,11 @@ use crate::cull::auto::REACH;
 /// `vfc` draws) and of a city of 16 blocks walked
 /// (`paths/city16-walk.json`); and one run per backend, `swr` among the
 /// candidates, of two scenes none of the chooser's rules was tuned on
-/// before them: a city of 12 blocks (`--scene city:blocks=12,seed=5`),
-/// where `swr` became 10–35 % cheaper than the walks along the path
-/// after warm-up found them equal, and `--scene office`.
+/// before them (the drift's alarm, [`super::DRIFT_ALARM`], was chosen
+/// with them among others): a city of 12 blocks (`--scene
+/// city:blocks=12,seed=5`), where `swr` became 10–35 % cheaper than the
+/// walks along the path after warm-up found them equal, and `--scene
+/// office`.
 const TRACES: [(&str, &str); 36] = [
     ("city-vulkan-1", include_str!("traces/city-vulkan-1.csv")),
     ("city-vulkan-2", include_str!("traces/city-vulkan-2.csv")),
