@@ -20,7 +20,7 @@ use crate::animation::{Animation, AnimationError, AnimationOptions, DEFAULT_SCAL
 use crate::camera::generate::{PLANNING_TESTS, default_path_heard};
 use crate::camera::path::{CameraPath, PathError};
 use crate::config::{BenchPlan, ModeRun};
-use crate::cull::{Culler, Labeled, ModeError, ModeId, auto_candidates};
+use crate::cull::{Culler, Labeled, ModeError, ModeId, ModeParams, unrunnable};
 use crate::gpu::{AdapterReport, GpuContext, GpuError};
 use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{FrameStats, FrameTimeline, MissedObject, ModeDescription, ModeSummary, summarize};
@@ -483,51 +483,18 @@ fn camera_path(
 }
 
 /// The plan's runs the adapter can run, and the modes it cannot, each once
-/// with why ([`skipped_modes`]).
+/// with why ([`unrunnable`]: an `auto` candidate too, where it was given
+/// parameters).
 fn runs_on(plan: &BenchPlan, gpu: &GpuContext) -> (Vec<ModeRun>, Vec<SkippedMode>) {
     let unsupported = |mode: ModeId| mode.info().unsupported_on(gpu);
     let mut runs = plan.runs();
-    let skipped = skipped_modes(&runs, unsupported);
+    let named: Vec<(ModeId, &ModeParams)> = runs.iter().map(|run| (run.mode, &run.params)).collect();
+    let skipped = unrunnable(&named, unsupported)
+        .into_iter()
+        .map(SkippedMode::from)
+        .collect();
     runs.retain(|run| unsupported(run.mode).is_none());
     (runs, skipped)
-}
-
-/// The modes of `runs` the adapter cannot run (`unsupported` says why),
-/// each once; and the candidates of an `auto` run that it cannot run and
-/// that were given parameters: `auto` runs without them, which its
-/// summary's candidates show, but a parameter given and not used is said
-/// so, not dropped unsaid.
-fn skipped_modes(runs: &[ModeRun], unsupported: impl Fn(ModeId) -> Option<&'static str>) -> Vec<SkippedMode> {
-    let mut skipped: Vec<SkippedMode> = Vec::new();
-    let mut skip = |mode: ModeId, reason: String| {
-        if !skipped.iter().any(|s| s.mode == mode.name()) {
-            skipped.push(SkippedMode {
-                mode: mode.to_string(),
-                reason,
-            });
-        }
-    };
-    // The runs' own modes first, so that a mode both run and an `auto`
-    // candidate is skipped for itself, whatever the order of `--modes`.
-    for run in runs {
-        if let Some(reason) = unsupported(run.mode) {
-            skip(run.mode, reason.to_string());
-        }
-    }
-    for run in runs.iter().filter(|run| run.mode == ModeId::Auto) {
-        for candidate in auto_candidates() {
-            let given: Vec<&str> = run.params.given_for(candidate).map(|(key, _)| key).collect();
-            if let (Some(reason), false) = (unsupported(candidate), given.is_empty()) {
-                let verb = if given.len() == 1 { "is" } else { "are" };
-                let unused = given.join(", ");
-                skip(
-                    candidate,
-                    format!("{reason}: auto runs without it, so {unused} {verb} not used"),
-                );
-            }
-        }
-    }
-    skipped
 }
 
 /// A culler for each run, under the run's label when it is not the mode's
@@ -640,46 +607,6 @@ fn extras(plan: &BenchPlan, summary: &Summary, output: &RunOutput) -> Vec<(PathB
 #[cfg(test)]
 mod tests {
     use super::warm_up_frame;
-
-    #[test]
-    fn an_auto_candidate_the_adapter_cannot_run_is_skipped_where_it_was_given_parameters() {
-        use super::skipped_modes;
-        use crate::config::ModeRun;
-        use crate::cull::{ModeId, ModeParams};
-        let run = |mode: ModeId, params: ModeParams| ModeRun {
-            label: mode.to_string(),
-            mode,
-            params,
-        };
-        let no_pixel_counts = |mode: ModeId| (mode == ModeId::Chc).then_some("no pixel counts");
-        let given = ModeParams::default()
-            .with("chc.visible_for", "3")
-            .with("omq.batch", "8");
-        // auto alone, chc given a parameter: chc is skipped, and why.
-        let skipped = skipped_modes(&[run(ModeId::Auto, given.clone())], no_pixel_counts);
-        assert_eq!(skipped.len(), 1);
-        assert_eq!(skipped[0].mode, "chc");
-        assert_eq!(
-            skipped[0].reason,
-            "no pixel counts: auto runs without it, so chc.visible_for is not used"
-        );
-        // Not given one, auto's summary says which candidates ran: no note.
-        assert!(skipped_modes(&[run(ModeId::Auto, ModeParams::default())], no_pixel_counts).is_empty());
-        // Run itself too, chc is skipped once, for itself, in either order.
-        let chc = || run(ModeId::Chc, given.clone());
-        let auto = || run(ModeId::Auto, given.with("chc.r_split", "1"));
-        for both in [[chc(), auto()], [auto(), chc()]] {
-            let skipped = skipped_modes(&both, no_pixel_counts);
-            assert_eq!(skipped.len(), 1);
-            assert_eq!(skipped[0].reason, "no pixel counts");
-        }
-        // Several parameters unused.
-        let skipped = skipped_modes(&[auto()], no_pixel_counts);
-        assert_eq!(
-            skipped[0].reason,
-            "no pixel counts: auto runs without it, so chc.r_split, chc.visible_for are not used"
-        );
-    }
 
     #[test]
     fn warm_up_runs_the_path_s_first_frames_last_to_first_ending_on_the_first_recorded_view() {

@@ -2,7 +2,7 @@
 //! (a range of frames in many modes as an animated PNG).
 
 use occlu::animation::{AnimationOptions, DEFAULT_SCALE, FrameRange};
-use occlu::cull::{ModeError, ModeParams, parse_modes};
+use occlu::cull::{ModeError, ModeId, ModeParams, parse_modes, unrunnable};
 use occlu::hierarchy::{Hierarchy, HierarchyParams};
 use occlu::picture::LEAD_IN;
 use occlu::world::World;
@@ -29,6 +29,10 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let gpu = occlu::gpu::GpuContext::new(backend)?;
     if let Some(reason) = mode.info().unsupported_on(&gpu) {
         anyhow::bail!("mode '{mode}' cannot run on {}: {reason}", gpu.adapter);
+    }
+    // An `auto` candidate it cannot run, given parameters.
+    for skipped in unrunnable(&[(mode, &params)], |m| m.info().unsupported_on(&gpu)) {
+        say!("skipped: {}: {}", skipped.mode, skipped.reason);
     }
     let culler = mode.create(&scene, &params)?;
     let mut world = World::new(scene, hierarchy);
@@ -93,12 +97,14 @@ pub fn flythrough(args: FlythroughArgs) -> anyhow::Result<()> {
     let hierarchy = Hierarchy::build(&scene.objects, &HierarchyParams::default());
     let gpu = occlu::gpu::GpuContext::new(backend)?;
     note(format!("adapter: {}", gpu.adapter));
+    let unsupported = |mode: ModeId| mode.info().unsupported_on(&gpu);
+    let named: Vec<(ModeId, &ModeParams)> = modes.iter().map(|&mode| (mode, &params)).collect();
+    for skipped in unrunnable(&named, unsupported) {
+        note(format!("skipped: {}: {}", skipped.mode, skipped.reason));
+    }
     let mut cullers = Vec::new();
-    for mode in modes {
-        match mode.info().unsupported_on(&gpu) {
-            Some(reason) => note(format!("skipped: {mode}: {reason}")),
-            None => cullers.push(mode.create(&scene, &params)?),
-        }
+    for &mode in modes.iter().filter(|&&mode| unsupported(mode).is_none()) {
+        cullers.push(mode.create(&scene, &params)?);
     }
     anyhow::ensure!(!cullers.is_empty(), "no mode of --modes runs on {}", gpu.adapter);
     let mut world = World::new(scene, hierarchy);

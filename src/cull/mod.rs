@@ -79,7 +79,7 @@ pub use gpu_walk::{GpuCulling, VisibleLists, Walked};
 pub use mode::{BuildCuller, Candidacy, Carries, CountKind, ModeError, ModeId, ModeInfo, ModeParams, Needs, ParamInfo};
 pub use omq::{OccupancyMapQueries, OmqParams};
 pub use oracle::Oracle;
-pub use registry::{auto_candidates, create, modes, parse_modes};
+pub use registry::{Unrunnable, auto_candidates, create, modes, parse_modes, unrunnable};
 pub use sq::SingleQueries;
 pub use swr::{SoftwareOcclusionCulling, SwrParams};
 pub use vfc::FrustumCulling;

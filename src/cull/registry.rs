@@ -106,6 +106,53 @@ pub fn auto_candidates() -> impl Iterator<Item = ModeId> {
         .filter(|m| m.info().auto != Candidacy::Never)
 }
 
+/// A mode a run names that the adapter cannot run, and why.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Unrunnable {
+    pub mode: ModeId,
+    pub reason: String,
+}
+
+/// The modes of `runs` (each a mode and the parameters it is built with)
+/// that the adapter cannot run (`unsupported` says why: its
+/// [`ModeInfo::unsupported_on`]), each once; and the candidates of an
+/// `auto` among them that the adapter cannot run and that were given
+/// parameters: `auto` runs without them, which its summary's candidates
+/// show, but a parameter given and not used is said so, not dropped
+/// unsaid. The runs' own modes come first, so that a mode both run and
+/// an `auto` candidate is skipped for itself, whatever the order of
+/// `--modes`.
+pub fn unrunnable(
+    runs: &[(ModeId, &ModeParams)],
+    unsupported: impl Fn(ModeId) -> Option<&'static str>,
+) -> Vec<Unrunnable> {
+    let mut skipped: Vec<Unrunnable> = Vec::new();
+    let mut skip = |mode: ModeId, reason: String| {
+        if !skipped.iter().any(|s| s.mode == mode) {
+            skipped.push(Unrunnable { mode, reason });
+        }
+    };
+    for &(mode, _) in runs {
+        if let Some(reason) = unsupported(mode) {
+            skip(mode, reason.to_string());
+        }
+    }
+    for &(_, params) in runs.iter().filter(|(mode, _)| *mode == ModeId::Auto) {
+        for candidate in auto_candidates() {
+            let given: Vec<&str> = params.given_for(candidate).map(|(key, _)| key).collect();
+            if let (Some(reason), false) = (unsupported(candidate), given.is_empty()) {
+                let verb = if given.len() == 1 { "is" } else { "are" };
+                let unused = given.join(", ");
+                skip(
+                    candidate,
+                    format!("{reason}: auto runs without it, so {unused} {verb} not used"),
+                );
+            }
+        }
+    }
+    skipped
+}
+
 /// Every mode's registry entry, in [`ModeId::ALL`]'s order.
 pub fn modes() -> impl Iterator<Item = &'static ModeInfo> {
     ModeId::ALL.iter().map(|m| m.info())
@@ -165,6 +212,46 @@ mod tests {
         let over = ModeParams::exercising_every_frame().overridden_by(&given);
         assert!(crate::cull::swr::SwrParams::from_params(&over).unwrap().rests);
         assert_eq!(crate::cull::ChcParams::from_params(&over).unwrap().visible_for, 1);
+    }
+
+    #[test]
+    fn an_auto_candidate_the_adapter_cannot_run_is_unrunnable_where_it_was_given_parameters() {
+        let no_pixel_counts = |mode: ModeId| (mode == ModeId::Chc).then_some("no pixel counts");
+        let given = ModeParams::default()
+            .with("chc.visible_for", "3")
+            .with("omq.batch", "8");
+        let unrunnable_of = |runs: &[(ModeId, &ModeParams)]| -> Vec<(String, String)> {
+            unrunnable(runs, no_pixel_counts)
+                .into_iter()
+                .map(|u| (u.mode.to_string(), u.reason))
+                .collect()
+        };
+        // auto alone, chc given a parameter: chc is skipped, and why.
+        assert_eq!(
+            unrunnable_of(&[(ModeId::Auto, &given)]),
+            [(
+                "chc".to_string(),
+                "no pixel counts: auto runs without it, so chc.visible_for is not used".to_string()
+            )]
+        );
+        // Not given one, auto's summary says which candidates ran: no note.
+        assert!(unrunnable_of(&[(ModeId::Auto, &ModeParams::default())]).is_empty());
+        // Run itself too, chc is skipped once, for itself, in either order.
+        let more = given.with("chc.r_split", "1");
+        for both in [
+            [(ModeId::Chc, &given), (ModeId::Auto, &more)],
+            [(ModeId::Auto, &more), (ModeId::Chc, &given)],
+        ] {
+            assert_eq!(
+                unrunnable_of(&both),
+                [("chc".to_string(), "no pixel counts".to_string())]
+            );
+        }
+        // Several parameters unused.
+        assert_eq!(
+            unrunnable_of(&[(ModeId::Auto, &more)])[0].1,
+            "no pixel counts: auto runs without it, so chc.r_split, chc.visible_for are not used"
+        );
     }
 
     #[test]

@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use serde::{Deserialize, Serialize};
 
 use crate::camera::path::CameraPath;
-use crate::cull::ModeId;
+use crate::cull::{ModeId, Unrunnable};
 use crate::gpu::{AdapterReport, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams, HierarchyStats};
 use crate::measure::{Distribution, FrameStats, MissedObject, ModeSummary, PairedRatio};
@@ -255,6 +255,15 @@ impl MissedSummary {
 pub struct SkippedMode {
     pub mode: String,
     pub reason: String,
+}
+
+impl From<Unrunnable> for SkippedMode {
+    fn from(skipped: Unrunnable) -> SkippedMode {
+        SkippedMode {
+            mode: skipped.mode.to_string(),
+            reason: skipped.reason,
+        }
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]

@@ -17,7 +17,7 @@ use std::ops::ControlFlow;
 use serde::Serialize;
 
 use crate::camera::Camera;
-use crate::cull::{Culler, ModeError, ModeId, ModeInfo, ModeParams};
+use crate::cull::{Culler, ModeError, ModeId, ModeInfo, ModeParams, unrunnable};
 use crate::gpu::{AdapterReport, GpuContext, GpuError, RenderTargets, Resolution};
 use crate::hierarchy::{Hierarchy, HierarchyParams};
 use crate::measure::{FrameStats, MissedObject};
@@ -242,24 +242,22 @@ pub fn run(
             stop.set(true);
         }
     };
-    let mut skipped = Vec::new();
+    let unsupported = |mode: ModeId| mode.info().unsupported_on(gpu);
+    let named: Vec<(ModeId, &ModeParams)> = modes.iter().map(|&mode| (mode, given)).collect();
+    let skipped: Vec<SkippedMode> = unrunnable(&named, unsupported)
+        .into_iter()
+        .map(SkippedMode::from)
+        .collect();
+    for s in &skipped {
+        events(StressEvent::Skipped {
+            mode: &s.mode,
+            reason: &s.reason,
+        });
+    }
     let modes: Vec<&'static ModeInfo> = modes
         .iter()
-        .map(|&m| m.info())
-        .filter(|m| match m.unsupported_on(gpu) {
-            Some(reason) => {
-                events(StressEvent::Skipped {
-                    mode: m.id.name(),
-                    reason,
-                });
-                skipped.push(SkippedMode {
-                    mode: m.id.name().to_string(),
-                    reason: reason.to_string(),
-                });
-                false
-            }
-            None => true,
-        })
+        .filter(|&&mode| unsupported(mode).is_none())
+        .map(|&mode| mode.info())
         .collect();
     if modes.is_empty() {
         let skipped = skipped.iter().map(|s| format!("{}: {}", s.mode, s.reason));
