@@ -170,6 +170,42 @@ fn a_case_at_a_size_the_adapter_cannot_hold_is_skipped_and_the_run_goes_on() {
 }
 
 #[test]
+fn an_auto_candidate_the_adapter_cannot_run_given_a_parameter_is_reported_skipped() {
+    let cases = select(&["vertical".to_string()]).unwrap();
+    let given = ModeParams::default().with("chc.visible_for", "3");
+    for mut gpu in gpus() {
+        // An adapter that cannot count visible pixels, as some GL ones.
+        gpu.pixel_counts = false;
+        let stress = |modes: &[ModeId], given: &ModeParams| {
+            occlu::stress::run(&gpu, &cases, modes, given, SIZE, &mut |_| ControlFlow::Continue(()))
+        };
+        let report = stress(&[ModeId::Auto], &given).unwrap();
+        let skipped: Vec<(&str, &str)> = report
+            .skipped
+            .iter()
+            .map(|s| (s.mode.as_str(), s.reason.as_str()))
+            .collect();
+        assert_eq!(skipped.len(), 1, "{}: {skipped:?}", gpu.adapter.backend);
+        assert_eq!(skipped[0].0, "chc");
+        assert!(
+            skipped[0]
+                .1
+                .ends_with(": auto runs without it, so chc.visible_for is not used")
+        );
+        assert!(occlu::stress::render_markdown(&report).contains("skipped: chc: "));
+        // Not given one, auto's candidates say which ran: nothing skipped.
+        assert!(
+            stress(&[ModeId::Auto], &ModeParams::default())
+                .unwrap()
+                .skipped
+                .is_empty()
+        );
+        // chc alone cannot run: nothing would be checked.
+        assert!(stress(&[ModeId::Chc], &given).is_err());
+    }
+}
+
+#[test]
 fn a_culler_that_drops_a_visible_object_fails_the_stress_verdict() {
     let case = select(&["on-face".to_string()]).unwrap().remove(0);
     for gpu in gpus() {
