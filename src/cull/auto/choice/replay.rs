@@ -293,10 +293,10 @@ fn calibrated_path_frames(trace: &Trace) -> usize {
 /// warm-up's eight calibrating frames would be, replays at 1.010 here
 /// (worst 1.052: the city of 12 blocks on GL, then 1.051, `--movers 200`
 /// on GL); without the drift that tells a rival's changed cost
-/// ([`super::DRIFT_ALARM`]), at 1.013, worst 1.110 (that city, where it
-/// kept a walk for 60 frames while `swr` was cheaper). A chooser that
-/// keeps throughout the mode cheapest over the calibrating frames, as
-/// warm-up would pick it, replays at 1.021 (worst 1.136: that city):
+/// ([`super::DRIFT_ALARM`]), at 1.013, worst 1.110 (that city on GL). A
+/// chooser that keeps throughout the mode cheapest over the calibrating
+/// frames, as warm-up would pick it, replays at 1.021 (worst 1.136: that
+/// city):
 /// close on average, so it is the worst run that tells it from one that
 /// learns, as the test checks. (On the 32 traces before that city and
 /// the office: the chooser 1.009, before the drift 1.010, worst 1.051;
