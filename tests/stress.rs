@@ -201,7 +201,12 @@ fn an_auto_candidate_the_adapter_cannot_run_given_a_parameter_is_reported_skippe
                 .is_empty()
         );
         // chc alone cannot run: nothing would be checked.
-        assert!(stress(&[ModeId::Chc], &given).is_err());
+        let refused = stress(&[ModeId::Chc], &given);
+        assert!(
+            matches!(refused, Err(occlu::stress::StressError::NoModeRuns { .. })),
+            "{:?}",
+            refused.err().map(|e| e.to_string())
+        );
     }
 }
 

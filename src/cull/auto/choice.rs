@@ -54,7 +54,10 @@
 //!   cost since ([`Drift`]). Warm-up's frames fill a rival's window and a
 //!   recheck replaces one sample of it, so without this a rival that
 //!   warm-up showed equal and that became a quarter cheaper took four
-//!   rechecks to show it; with it, one recheck and one probe.
+//!   rechecks to show it; with it, in this file's test of that case, one
+//!   recheck and one probe (on the replay of a larger city, where the
+//!   rival was 13 % cheaper, 30 frames of probes after the alarm: its
+//!   bound stays wide until samples from three places are in).
 //!   Only among occlusion cullers: frustum culling's ratio to one turns on
 //!   what occlusion hides, which [`Hidden`] follows.
 //! - One sample shows a strategy dearer only where a hiccup of the machine
